@@ -1,0 +1,1 @@
+"""simlunar.planner"""

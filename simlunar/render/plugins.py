@@ -1,0 +1,3 @@
+"""Registers simlunar's Mitsuba plugins once the variant is set (see backend.init)."""
+
+from __future__ import annotations
