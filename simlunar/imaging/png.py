@@ -1,0 +1,89 @@
+"""8-bit sRGB PNG previews of linear radiance images (colour-science encoding, Pillow writer)."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+#: auto exposure maps this percentile of the finite pixel values ...
+AUTO_PERCENTILE = 99.0
+#: ... to this linear value (before the sRGB curve), leaving a little headroom for highlights
+AUTO_TARGET = 0.9
+
+
+def auto_exposure(image: np.ndarray) -> float:
+    """Scale factor mapping the 99th percentile of finite, positive values to 0.9.
+
+    Returns 1.0 for an image with no positive finite value (all black stays black).
+    """
+    a = np.asarray(image, dtype=np.float64)
+    vals = a[np.isfinite(a) & (a > 0)]
+    if vals.size == 0:
+        return 1.0
+    p = float(np.percentile(vals, AUTO_PERCENTILE))
+    return AUTO_TARGET / p if p > 0 else 1.0
+
+
+def to_srgb8(image: np.ndarray, *, exposure: float | None = None) -> np.ndarray:
+    """Linear radiance -> 8-bit sRGB.
+
+    Parameters
+    ----------
+    image : (rows, cols) or (rows, cols, 3) array
+        Linear values (any unit); NaN and negative values show as black.
+    exposure : float, optional
+        Multiplier applied before encoding; ``None`` picks :func:`auto_exposure`.
+
+    Returns
+    -------
+    (rows, cols) or (rows, cols, 3) uint8 array
+    """
+    import colour
+
+    a = np.asarray(image, dtype=np.float64)
+    if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] == 3)):
+        raise ValueError(f"a preview image must be (rows, cols) or (rows, cols, 3), got {a.shape}")
+    k = auto_exposure(a) if exposure is None else float(exposure)
+    if not (np.isfinite(k) and k > 0):
+        raise ValueError(f"exposure must be a positive number, got {exposure}")
+    lin = np.clip(np.nan_to_num(a * k, nan=0.0, posinf=1.0, neginf=0.0), 0.0, 1.0)
+    enc = colour.cctf_encoding(lin, function="sRGB")
+    return np.round(np.clip(enc, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def write_png_preview(path, image: np.ndarray, *, exposure: float | None = None) -> Path:
+    """Write a linear radiance image as an 8-bit sRGB PNG, atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        Target ``.png`` file; its folder must exist.
+    image : (rows, cols) or (rows, cols, 3) array
+        Linear radiance (grey or RGB).
+    exposure : float, optional
+        Linear multiplier; ``None`` maps the 99th percentile to 0.9 (auto exposure).
+
+    Returns
+    -------
+    Path
+        The written path.
+    """
+    from PIL import Image
+
+    path = Path(path)
+    px = to_srgb8(image, exposure=exposure)
+    if not path.parent.exists():
+        raise FileNotFoundError(f"folder for {path} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp.png", dir=path.parent)
+    os.close(fd)
+    try:
+        Image.fromarray(px).save(tmp, format="PNG")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
