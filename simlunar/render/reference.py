@@ -1,0 +1,401 @@
+"""Pure-NumPy reference BRDFs: Lambert, Oren-Nayar (1994) and Hapke (2002/2012 form).
+
+These are the ground truth the Mitsuba plugins (:mod:`simlunar.render.bsdfs`) are tested
+against, and they can be used on their own (e.g. to shade a DEM analytically).
+
+Conventions shared by every function here
+-----------------------------------------
+- ``wi`` points from the surface towards the light, ``wo`` from the surface towards the viewer;
+  both are unit vectors, shape ``(..., 3)``, in any frame (local or world) as long as ``n`` (the
+  unit surface normal, ``(..., 3)`` or ``(3,)``) is given in the same frame. Arrays broadcast.
+- The returned value is the BRDF ``f`` in 1/sr, *without* the cosine factor: the reflected
+  radiance is ``L_o = f * E_perp * cos(theta_i)`` for a collimated beam of irradiance ``E_perp``
+  (normal to the beam). Mitsuba's ``BSDF.eval`` returns ``f * cos(theta_o)``; the plugins follow
+  Mitsuba, these functions do not.
+- ``f = 0`` where the light or the viewer is below the surface (``cos <= 0``).
+- Angles are in radians.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "LUNAR_HAPKE",
+    "HapkeParams",
+    "hapke",
+    "hapke_h_function",
+    "hapke_normal_albedo",
+    "hapke_phase",
+    "hapke_w_from_normal_albedo",
+    "lambert",
+    "local_angles",
+    "oren_nayar",
+]
+
+_EPS = 1e-12
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    v = np.asarray(v, dtype=np.float64)
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), _EPS)
+
+
+def local_angles(wi, wo, n) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cosines of incidence and emission and the cosine of the azimuth difference.
+
+    Parameters
+    ----------
+    wi, wo : (..., 3) array
+        Unit directions towards the light and towards the viewer.
+    n : (..., 3) or (3,) array
+        Unit surface normal in the same frame.
+
+    Returns
+    -------
+    cos_i, cos_o, cos_dphi : (...) arrays
+        ``cos_dphi`` is the cosine of the angle between the projections of ``wi`` and ``wo``
+        on the tangent plane (1: same side, i.e. backscatter; -1: opposite sides). Where a
+        projection vanishes (a direction along the normal) the azimuth is undefined and
+        ``cos_dphi`` is set to 0; every model here is independent of it there.
+    """
+    wi, wo, n = _unit(wi), _unit(wo), _unit(n)
+    cos_i = np.sum(wi * n, axis=-1)
+    cos_o = np.sum(wo * n, axis=-1)
+    ti = wi - cos_i[..., None] * n
+    to = wo - cos_o[..., None] * n
+    ni = np.linalg.norm(ti, axis=-1)
+    no = np.linalg.norm(to, axis=-1)
+    ok = (ni > 1e-9) & (no > 1e-9)
+    dot = np.sum(ti * to, axis=-1)
+    cos_dphi = np.where(ok, dot / np.where(ok, ni * no, 1.0), 0.0)
+    return cos_i, cos_o, np.clip(cos_dphi, -1.0, 1.0)
+
+
+def lambert(wi, wo, n, albedo=1.0) -> np.ndarray:
+    """Lambertian BRDF ``albedo / pi`` above the surface, 0 below.
+
+    Parameters
+    ----------
+    wi, wo, n : (..., 3) arrays
+        See the module conventions.
+    albedo : float or (...) array
+        Hemispherical (= normal) albedo in [0, 1].
+
+    Returns
+    -------
+    (...) float64 array, 1/sr.
+    """
+    cos_i, cos_o, _ = local_angles(wi, wo, n)
+    up = (cos_i > 0) & (cos_o > 0)
+    return np.where(up, np.asarray(albedo, dtype=np.float64) / np.pi, 0.0)
+
+
+def oren_nayar(wi, wo, n, albedo=1.0, sigma=0.0, model: str = "full") -> np.ndarray:
+    """Oren-Nayar rough diffuse BRDF (Oren & Nayar, SIGGRAPH 1994, "Generalization of
+    Lambert's reflectance model").
+
+    The surface is made of long symmetric V-cavities with Lambertian facets whose slopes are
+    normally distributed with zero mean and standard deviation ``sigma`` (radians). With
+    ``alpha = max(theta_i, theta_o)``, ``beta = min(theta_i, theta_o)``, ``dphi`` the azimuth
+    difference and ``s2 = sigma**2``:
+
+    ``model="full"`` (the paper's functional approximation, including inter-reflections)::
+
+        C1 = 1 - 0.5 s2 / (s2 + 0.33)
+        C2 = 0.45 s2/(s2 + 0.09) sin(alpha)                        if cos(dphi) >= 0
+             0.45 s2/(s2 + 0.09) (sin(alpha) - (2 beta/pi)^3)      otherwise
+        C3 = 0.125 s2/(s2 + 0.09) (4 alpha beta / pi^2)^2
+        f1 = rho/pi [C1 + cos(dphi) C2 tan(beta)
+                     + (1 - |cos(dphi)|) C3 tan((alpha + beta)/2)]
+        f2 = 0.17 rho^2/pi s2/(s2 + 0.13) [1 - cos(dphi) (2 beta/pi)^2]
+        f  = f1 + f2
+
+    ``model="qualitative"`` (the paper's simplified form)::
+
+        A = 1 - 0.5 s2/(s2 + 0.33),  B = 0.45 s2/(s2 + 0.09)
+        f = rho/pi [A + B max(0, cos(dphi)) sin(alpha) tan(beta)]
+
+    Both reduce to Lambert (``rho / pi``) at ``sigma = 0`` and are reciprocal.
+
+    Roughness convention: ``sigma`` is the standard deviation of facet slope *angles* in
+    radians, as in the paper. Mitsuba 0.6's ``roughdiffuse`` took a Beckmann-style roughness
+    ``alpha`` and used ``sigma = alpha / sqrt(2)``; pass ``sigma = alpha / np.sqrt(2)`` to
+    reproduce it.
+
+    Parameters
+    ----------
+    wi, wo, n : (..., 3) arrays
+        See the module conventions.
+    albedo : float or (...) array
+        Facet albedo ``rho`` in [0, 1].
+    sigma : float
+        Facet slope standard deviation in radians, ``0 <= sigma < pi/2``.
+    model : {"full", "qualitative"}
+
+    Returns
+    -------
+    (...) float64 array, 1/sr.
+    """
+    if model not in ("full", "qualitative"):
+        raise ValueError(f"unknown Oren-Nayar model {model!r}; valid: full, qualitative")
+    sigma = float(sigma)
+    if not (0.0 <= sigma < np.pi / 2):
+        raise ValueError(f"sigma must be in [0, pi/2) radians, got {sigma}")
+    rho = np.asarray(albedo, dtype=np.float64)
+    cos_i, cos_o, cdp = local_angles(wi, wo, n)
+    up = (cos_i > 0) & (cos_o > 0)
+    ti = np.arccos(np.clip(cos_i, -1.0, 1.0))
+    to = np.arccos(np.clip(cos_o, -1.0, 1.0))
+    alpha = np.maximum(ti, to)
+    beta = np.minimum(ti, to)
+    # beta < pi/2 wherever up holds; clip keeps tan finite on the masked-out entries
+    tan_beta = np.tan(np.minimum(beta, np.pi / 2 - 1e-9))
+    s2 = sigma * sigma
+    if model == "qualitative":
+        a = 1.0 - 0.5 * s2 / (s2 + 0.33)
+        b = 0.45 * s2 / (s2 + 0.09)
+        f = rho / np.pi * (a + b * np.maximum(cdp, 0.0) * np.sin(alpha) * tan_beta)
+    else:
+        c1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
+        k = s2 / (s2 + 0.09)
+        c2 = np.where(
+            cdp >= 0,
+            0.45 * k * np.sin(alpha),
+            0.45 * k * (np.sin(alpha) - (2.0 * beta / np.pi) ** 3),
+        )
+        c3 = 0.125 * k * (4.0 * alpha * beta / np.pi**2) ** 2
+        tan_mid = np.tan(np.minimum((alpha + beta) / 2.0, np.pi / 2 - 1e-9))
+        f1 = rho / np.pi * (c1 + cdp * c2 * tan_beta + (1.0 - np.abs(cdp)) * c3 * tan_mid)
+        f2 = 0.17 * rho**2 / np.pi * s2 / (s2 + 0.13) * (1.0 - cdp * (2.0 * beta / np.pi) ** 2)
+        f = f1 + f2
+    return np.where(up, f, 0.0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Hapke
+
+
+@dataclass(frozen=True)
+class HapkeParams:
+    """Hapke model parameters (angles in radians).
+
+    Attributes
+    ----------
+    w : float
+        Single-scattering albedo in [0, 1].
+    b : float
+        Henyey-Greenstein lobe width parameter in [0, 1).
+    c : float
+        Lobe weight in [-1, 1]: backscatter lobe weight (1 + c)/2, forward (1 - c)/2
+        (Hapke 2012 convention).
+    B0 : float
+        Shadow-hiding opposition surge amplitude (>= 0).
+    h : float
+        Shadow-hiding opposition surge angular width (> 0).
+    theta_bar : float
+        Mean macroscopic slope angle in radians, [0, pi/2).
+    """
+
+    w: float
+    b: float
+    c: float
+    B0: float
+    h: float
+    theta_bar: float
+
+
+#: Lunar defaults. Provenance and honesty about each number:
+#:
+#: - ``theta_bar = 23.657 deg``: the mean slope held fixed for every tile of the LROC WAC Hapke
+#:   parameter maps (Sato, Robinson, Hapke, Denevi & Boyd 2014, "Resolved Hapke parameter maps
+#:   of the Moon", JGR Planets 119, 1775-1805, doi:10.1002/2013JE004580). Read from secondary
+#:   sources quoting the map product's README (WAC_HAPKEPARAMMAP), not from the paper itself.
+#:   Those maps also fix the coherent-backscatter amplitude to 0 and the porosity factor K to 1,
+#:   which is the form implemented here (shadow hiding only, K = 1).
+#: - ``b = 0.26, c = 0.08``: mare values at 643 nm attributed to Sato et al. (2014) by a
+#:   secondary source; NOT verified against the paper's tables. They are consistent with
+#:   Hapke's (2012, Icarus 221, 1079) "hockey stick" relation c = 3.29 exp(-17.4 b^2) - 0.908
+#:   (which gives c = 0.11 at b = 0.26; the relation is quoted from memory, unverified).
+#: - ``B0 = 1.0, h = 0.07``: typical of published lunar shadow-hiding fits (unverified; Sato et
+#:   al. fit Bs0 and hs per tile and their medians could not be checked here).
+#: - ``w = 0.25``: a visible-light lunar single-scattering albedo of the right order
+#:   (unverified). In scenes ``w`` normally comes from the terrain albedo grid instead
+#:   (see :func:`hapke_w_from_normal_albedo`).
+LUNAR_HAPKE = HapkeParams(
+    w=0.25, b=0.26, c=0.08, B0=1.0, h=0.07, theta_bar=float(np.deg2rad(23.657))
+)
+
+
+def hapke_phase(cos_g, b, c) -> np.ndarray:
+    """Double Henyey-Greenstein particle phase function ``p(g)`` (Hapke 2012 convention).
+
+    ``p = (1+c)/2 (1-b^2)/(1 - 2b cos g + b^2)^1.5 + (1-c)/2 (1-b^2)/(1 + 2b cos g + b^2)^1.5``
+    with ``g`` the phase angle (0 = backscatter). Normalised so that its mean over the sphere
+    is 1.
+    """
+    cg = np.asarray(cos_g, dtype=np.float64)
+    b2 = b * b
+    back = (1 - b2) / (1 - 2 * b * cg + b2) ** 1.5
+    fwd = (1 - b2) / (1 + 2 * b * cg + b2) ** 1.5
+    return (1 + c) / 2 * back + (1 - c) / 2 * fwd
+
+
+def hapke_h_function(x, w) -> np.ndarray:
+    """Hapke's (2002, Icarus 157, 523) approximation of Chandrasekhar's H function.
+
+    ``H(x) = 1 / (1 - w x [r0 + (1 - 2 r0 x)/2 ln((1 + x)/x)])`` with
+    ``r0 = (1 - gamma)/(1 + gamma)``, ``gamma = sqrt(1 - w)``; accurate to about 1 %.
+    """
+    x = np.maximum(np.asarray(x, dtype=np.float64), 1e-9)
+    w = np.asarray(w, dtype=np.float64)
+    gamma = np.sqrt(np.clip(1.0 - w, 0.0, 1.0))
+    r0 = (1 - gamma) / (1 + gamma)
+    return 1.0 / (1.0 - w * x * (r0 + (1 - 2 * r0 * x) / 2 * np.log((1 + x) / x)))
+
+
+def _roughness(cos_i, cos_e, cos_psi, theta_bar):
+    """Hapke (1984, Icarus 59, 41) macroscopic roughness: effective cosines and shadowing S.
+
+    Returns ``(mu0e, mue, S)``. ``cos_psi`` is the cosine of the azimuth difference
+    (1 = same side). Both of Hapke's cases (i <= e and e <= i) are evaluated and the right
+    one is selected, which keeps the expression reciprocal.
+    """
+    mu0 = np.clip(cos_i, 1e-9, 1.0)
+    mu = np.clip(cos_e, 1e-9, 1.0)
+    if theta_bar <= 0.0:
+        one = np.ones(np.broadcast(mu0, mu, cos_psi).shape)
+        return mu0 * one, mu * one, one
+    si = np.sqrt(1 - mu0**2)
+    se = np.sqrt(1 - mu**2)
+    psi = np.arccos(np.clip(cos_psi, -1.0, 1.0))
+    tb = np.tan(theta_bar)
+    cot_tb = 1.0 / tb
+    chi = 1.0 / np.sqrt(1.0 + np.pi * tb * tb)
+    cot_i = mu0 / np.maximum(si, 1e-9)
+    cot_e = mu / np.maximum(se, 1e-9)
+    e1i = np.exp(-2.0 / np.pi * cot_tb * cot_i)
+    e1e = np.exp(-2.0 / np.pi * cot_tb * cot_e)
+    e2i = np.exp(-1.0 / np.pi * cot_tb**2 * cot_i**2)
+    e2e = np.exp(-1.0 / np.pi * cot_tb**2 * cot_e**2)
+    eta_i = chi * (mu0 + si * tb * e2i / (2.0 - e1i))
+    eta_e = chi * (mu + se * tb * e2e / (2.0 - e1e))
+    s2 = np.sin(psi / 2) ** 2
+    f = np.exp(-2.0 * np.tan(np.minimum(psi, np.pi - 1e-6) / 2))
+    cpsi = np.cos(psi)
+    # case i <= e
+    d1 = 2.0 - e1e - psi / np.pi * e1i
+    mu0e_1 = chi * (mu0 + si * tb * (cpsi * e2e + s2 * e2i) / d1)
+    mue_1 = chi * (mu + se * tb * (e2e - s2 * e2i) / d1)
+    s_1 = mue_1 / eta_e * mu0 / eta_i * chi / (1 - f + f * chi * mu0 / eta_i)
+    # case e <= i
+    d2 = 2.0 - e1i - psi / np.pi * e1e
+    mu0e_2 = chi * (mu0 + si * tb * (e2i - s2 * e2e) / d2)
+    mue_2 = chi * (mu + se * tb * (cpsi * e2i + s2 * e2e) / d2)
+    s_2 = mue_2 / eta_e * mu0 / eta_i * chi / (1 - f + f * chi * mu / eta_e)
+    first = mu0 >= mu  # i <= e
+    return (
+        np.where(first, mu0e_1, mu0e_2),
+        np.where(first, mue_1, mue_2),
+        np.where(first, s_1, s_2),
+    )
+
+
+def hapke(
+    wi,
+    wo,
+    n,
+    w=LUNAR_HAPKE.w,
+    b=LUNAR_HAPKE.b,
+    c=LUNAR_HAPKE.c,
+    B0=LUNAR_HAPKE.B0,
+    h=LUNAR_HAPKE.h,
+    theta_bar=LUNAR_HAPKE.theta_bar,
+) -> np.ndarray:
+    """Hapke BRDF in the form used for the LROC WAC Hapke maps (Sato et al. 2014).
+
+    Bidirectional reflectance (Hapke 2012, with shadow-hiding opposition effect only, porosity
+    factor K = 1 and the 1984 macroscopic-roughness correction)::
+
+        r = w/(4 pi) mu0e/(mu0e + mue) [p(g) (1 + B0 B(g)) + H(mu0e) H(mue) - 1] S(i, e, psi)
+        B(g) = 1 / (1 + tan(g/2) / h)
+
+    and the BRDF is ``f = r / cos(i)``. ``g`` is the phase angle between ``wi`` and ``wo``
+    (``cos g = wi . wo``), so the opposition surge peaks when light and viewer coincide
+    (camera-centred light). The model is reciprocal.
+
+    Parameters
+    ----------
+    wi, wo, n : (..., 3) arrays
+        See the module conventions.
+    w : float or (...) array
+        Single-scattering albedo in [0, 1].
+    b, c : float
+        Double Henyey-Greenstein parameters (:func:`hapke_phase`).
+    B0, h : float
+        Opposition surge amplitude (>= 0) and width (> 0).
+    theta_bar : float
+        Mean macroscopic slope angle in radians.
+
+    Returns
+    -------
+    (...) float64 array, 1/sr.
+    """
+    wi_u, wo_u = _unit(wi), _unit(wo)
+    cos_i, cos_e, cos_psi = local_angles(wi_u, wo_u, n)
+    up = (cos_i > 0) & (cos_e > 0)
+    cos_g = np.clip(np.sum(wi_u * wo_u, axis=-1), -1.0, 1.0)
+    mu0e, mue, S = _roughness(cos_i, cos_e, cos_psi, float(theta_bar))
+    w = np.asarray(w, dtype=np.float64)
+    # |wi - wo| / |wi + wo| = tan(g/2), accurate near g = 0 where the surge peaks
+    tan_half_g = np.linalg.norm(wi_u - wo_u, axis=-1) / np.maximum(
+        np.linalg.norm(wi_u + wo_u, axis=-1), 1e-12
+    )
+    surge = 1.0 + B0 / (1.0 + tan_half_g / h)
+    multiple = hapke_h_function(mu0e, w) * hapke_h_function(mue, w) - 1.0
+    r = w / (4 * np.pi) * mu0e / (mu0e + mue) * (hapke_phase(cos_g, b, c) * surge + multiple) * S
+    return np.where(up, r / np.maximum(cos_i, 1e-9), 0.0)
+
+
+def hapke_normal_albedo(
+    w,
+    b=LUNAR_HAPKE.b,
+    c=LUNAR_HAPKE.c,
+    B0=LUNAR_HAPKE.B0,
+    h=LUNAR_HAPKE.h,
+    theta_bar=LUNAR_HAPKE.theta_bar,
+) -> np.ndarray:
+    """Normal albedo ``pi * f`` at ``i = e = g = 0`` (radiance factor of a surface seen and
+    lit from straight above), as a function of the single-scattering albedo ``w``.
+
+    At normal incidence the roughness correction gives ``mu0e = mue = chi(theta_bar)`` and
+    ``S = 1``, so ``A_n = w/8 [p(0)(1 + B0) + H(chi)^2 - 1]``; increasing in ``w``.
+    """
+    del h  # B(0) = 1 whatever the width
+    w = np.asarray(w, dtype=np.float64)
+    chi = 1.0 / np.sqrt(1.0 + np.pi * np.tan(theta_bar) ** 2)
+    return w / 8.0 * (hapke_phase(1.0, b, c) * (1 + B0) + hapke_h_function(chi, w) ** 2 - 1.0)
+
+
+def hapke_w_from_normal_albedo(
+    albedo,
+    b=LUNAR_HAPKE.b,
+    c=LUNAR_HAPKE.c,
+    B0=LUNAR_HAPKE.B0,
+    h=LUNAR_HAPKE.h,
+    theta_bar=LUNAR_HAPKE.theta_bar,
+    n_table: int = 4097,
+) -> np.ndarray:
+    """Single-scattering albedo whose Hapke normal albedo equals ``albedo``.
+
+    This is how a terrain albedo grid (normal albedo per cell) drives the Hapke BSDF: each
+    point gets the ``w`` that reproduces its normal albedo, the remaining parameters set the
+    angular behaviour. Inverted by interpolation in a dense monotone table of
+    :func:`hapke_normal_albedo` over ``w`` in [0, 1]; albedos above the largest reachable
+    value give ``w = 1``.
+    """
+    ws = np.linspace(0.0, 1.0, n_table)
+    an = hapke_normal_albedo(ws, b, c, B0, h, theta_bar)
+    return np.interp(np.asarray(albedo, dtype=np.float64), an, ws)
