@@ -1,0 +1,138 @@
+"""Delaunay triangulation of scattered samples and linear interpolation back to the grid.
+
+This is the reconstruction of the paper's sampling protocol (section 4.1): the k sampled depths
+are Delaunay-triangulated and linearly interpolated to every cell of the native grid.
+
+Fast path: the triangulation comes from Shewchuk's Triangle (the ``triangle`` package,
+divide and conquer, exact predicates) and each triangle is filled by a compiled rasteriser
+(:mod:`._raster`), instead of locating every one of the rows * cols cells in the triangulation
+as scipy's ``LinearNDInterpolator`` does (measured numbers in ``shared/REFERENCES.md`` and in
+``benchmarks/bench_sampling.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import triangle
+from scipy.spatial import cKDTree
+
+from simlunar.reconstruction._raster import rasterise_linear
+
+OUTSIDE_POLICIES = ("nearest", "nan")
+
+
+def _check_inputs(points_rc, values, shape):
+    pts = np.asarray(points_rc, dtype=np.float64)
+    vals = np.asarray(values, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise ValueError(f"points_rc must have shape (k, 2), got {pts.shape}")
+    if vals.shape != (pts.shape[0],):
+        raise ValueError(
+            f"values must have shape ({pts.shape[0]},) to match points_rc, got {vals.shape}"
+        )
+    if pts.shape[0] == 0:
+        raise ValueError("points_rc is empty: at least one sample is needed")
+    if not np.all(np.isfinite(pts)):
+        raise ValueError("points_rc contains NaN or infinite coordinates")
+    if not np.all(np.isfinite(vals)):
+        raise ValueError("values contains NaN or infinite entries")
+    try:
+        rows, cols = (int(s) for s in shape)
+    except (TypeError, ValueError):
+        raise ValueError(f"shape must be (rows, cols), got {shape!r}") from None
+    if rows < 1 or cols < 1:
+        raise ValueError(f"shape must be positive, got {shape!r}")
+    return pts, vals, (rows, cols)
+
+
+def _merge_duplicates(pts, vals):
+    """Collapse samples at identical positions into one whose value is their mean."""
+    uniq, inverse, counts = np.unique(pts, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    sums = np.bincount(inverse, weights=vals, minlength=len(uniq))
+    return uniq, sums / counts
+
+
+def triangulate(points_rc) -> np.ndarray:
+    """Delaunay triangles of the points (Triangle, exact predicates).
+
+    Parameters
+    ----------
+    points_rc : ndarray, shape (k, 2)
+        Distinct points (row, col).
+
+    Returns
+    -------
+    ndarray of int32, shape (m, 3)
+        Vertex indices of each triangle; empty (0, 3) when the points are collinear or k < 3.
+    """
+    pts = np.ascontiguousarray(points_rc, dtype=np.float64)
+    if len(pts) < 3:
+        return np.empty((0, 3), dtype=np.int32)
+    out = triangle.triangulate({"vertices": pts}, "Q")
+    tris = out.get("triangles")
+    if tris is None:
+        return np.empty((0, 3), dtype=np.int32)
+    return np.ascontiguousarray(tris, dtype=np.int32)
+
+
+def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.ndarray:
+    """Delaunay-linear reconstruction of scattered samples on a (rows, cols) grid.
+
+    Coordinate convention: ``points_rc`` are (row, col) *index* coordinates, so the cell (r, c)
+    sits at (r, c); this is the pixel centre (u, v) = (c + 0.5, r + 0.5) of the project-wide
+    convention. Integer sample plans (``SamplePlan.rc``) pass directly. Non-integer points are
+    allowed (e.g. triangulated scanner points projected to the grid).
+
+    Parameters
+    ----------
+    points_rc : array_like, shape (k, 2)
+        Sample positions (row, col), any real values (samples outside the grid still shape the
+        triangulation).
+    values : array_like, shape (k,)
+        Sample values (e.g. depth in m).
+    shape : tuple of int
+        Output grid (rows, cols).
+    outside : {"nearest", "nan"}
+        Policy for cells outside the convex hull of the samples: ``"nearest"`` (default) takes
+        the value of the nearest sample (Euclidean, ties broken by the k-d tree), ``"nan"`` leaves
+        NaN (the metrics then exclude those cells). The same policy applies to every strategy.
+
+    Returns
+    -------
+    ndarray of float64, shape (rows, cols)
+
+    Notes
+    -----
+    - Duplicated positions are merged into one sample with the mean of their values.
+    - Collinear (or fewer than three distinct) samples span no triangle: every cell counts as
+      outside the hull, so ``"nearest"`` fills the grid from the nearest sample and ``"nan"``
+      returns all NaN.
+    - Inside the hull the result equals scipy's ``LinearNDInterpolator`` to rounding whenever the
+      Delaunay triangulation is unique. Integer points are often co-circular (four points of a
+      lattice square): both triangulations are then valid but may pick different diagonals, and
+      values inside such a square differ by up to the difference of the two planes.
+    """
+    if outside not in OUTSIDE_POLICIES:
+        raise ValueError(
+            f"unknown outside policy {outside!r}; valid: {', '.join(OUTSIDE_POLICIES)}"
+        )
+    pts, vals, (rows, cols) = _check_inputs(points_rc, values, shape)
+    tris = triangulate(pts)
+    # Triangle leaves duplicated vertices out of every triangle: an unused vertex while
+    # triangles exist means duplicates (every distinct point is a Delaunay vertex in 2-D).
+    if len(tris) == 0 or np.bincount(tris.ravel(), minlength=len(pts)).min() == 0:
+        merged, mvals = _merge_duplicates(pts, vals)
+        if len(merged) != len(pts):
+            pts, vals = merged, mvals
+            tris = triangulate(pts)
+    out = np.full((rows, cols), np.nan)
+    covered = np.zeros((rows, cols), dtype=bool)
+    if len(tris):
+        rasterise_linear(pts, vals, tris, out, covered)
+    if outside == "nearest" and not covered.all():
+        holes = np.flatnonzero(~covered.ravel())
+        cells = np.column_stack((holes // cols, holes % cols)).astype(np.float64)
+        _, nearest = cKDTree(pts).query(cells)
+        out.ravel()[holes] = vals[nearest]
+    return out

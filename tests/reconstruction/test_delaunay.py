@@ -1,0 +1,100 @@
+"""Delaunay-linear reconstruction: parity with scipy, exact planes, hull policy, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.interpolate import LinearNDInterpolator
+
+from simlunar.reconstruction import reconstruct, triangulate
+
+
+def _grid_cells(shape):
+    rr, cc = np.mgrid[0 : shape[0], 0 : shape[1]]
+    return np.column_stack((rr.ravel(), cc.ravel())).astype(float)
+
+
+@pytest.mark.parametrize("k", [5, 60, 2000])
+def test_matches_linear_nd_interpolator_inside_hull(rng, k):
+    # Random non-integer points: the Delaunay triangulation is unique (no co-circular sets),
+    # so scipy (Qhull) and Triangle must build the same triangles and agree to rounding.
+    shape = (48, 71)
+    pts = rng.uniform([-2.0, -3.0], [shape[0] + 1.0, shape[1] + 2.0], size=(k, 2))
+    vals = rng.normal(size=k) * 10.0
+    ours = reconstruct(pts, vals, shape, outside="nan")
+    ref = LinearNDInterpolator(pts, vals)(_grid_cells(shape)).reshape(shape)
+    inside = np.isfinite(ref)
+    assert inside.sum() > 100
+    np.testing.assert_allclose(ours[inside], ref[inside], rtol=0, atol=1e-9)
+    # Outside the hull both leave NaN (up to cells within rounding of the hull boundary).
+    assert np.mean(np.isnan(ours) == ~inside) > 0.995
+
+
+def test_plane_is_reproduced_exactly(rng):
+    # Linear interpolation of samples of a plane is the plane itself inside the hull.
+    shape = (30, 40)
+    pts = np.vstack([[0, 0], [0, 39], [29, 0], [29, 39], rng.uniform(0, [29, 39], (50, 2))])
+    vals = 2.5 * pts[:, 0] - 0.75 * pts[:, 1] + 3.0
+    rec = reconstruct(pts, vals, shape)
+    rr, cc = np.mgrid[0:30, 0:40]
+    np.testing.assert_allclose(rec, 2.5 * rr - 0.75 * cc + 3.0, atol=1e-9)
+
+
+def test_hand_computed_triangle():
+    # One triangle (0,0), (0,4), (4,0) with values 0, 4, 8: f(r, c) = 2 r + c inside.
+    pts = np.array([[0.0, 0.0], [0.0, 4.0], [4.0, 0.0]])
+    vals = np.array([0.0, 4.0, 8.0])
+    rec = reconstruct(pts, vals, (5, 5), outside="nan")
+    assert rec[1, 1] == pytest.approx(3.0)
+    assert rec[2, 2] == pytest.approx(6.0)  # on the hypotenuse
+    assert rec[0, 4] == pytest.approx(4.0)
+    assert np.isnan(rec[3, 3]) and np.isnan(rec[4, 4])
+    nearest = reconstruct(pts, vals, (5, 5))
+    # (4, 4): distances to (0,4) and (4,0) are 4 each; (4, 3) is nearer to (4, 0) -> 8.
+    assert nearest[4, 3] == 8.0
+    assert nearest[3, 4] == 4.0
+
+
+def test_integer_plan_passes_directly():
+    pts = np.array([[0, 0], [0, 9], [9, 0], [9, 9], [4, 5]])
+    vals = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
+    rec = reconstruct(pts, vals, (10, 10))
+    for (r, c), v in zip(pts, vals):
+        assert rec[r, c] == v
+
+
+def test_duplicates_are_averaged():
+    pts = np.array([[0.0, 0.0], [0.0, 4.0], [4.0, 0.0], [4.0, 0.0], [4.0, 4.0]])
+    vals = np.array([0.0, 0.0, 2.0, 4.0, 0.0])
+    rec = reconstruct(pts, vals, (5, 5))
+    assert rec[4, 0] == pytest.approx(3.0)
+    assert np.all(np.isfinite(rec))
+
+
+def test_collinear_samples_fall_back_to_policy():
+    pts = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]])
+    vals = np.array([0.0, 1.0, 2.0, 3.0])
+    assert triangulate(pts).shape == (0, 3)
+    rec = reconstruct(pts, vals, (4, 4))
+    np.testing.assert_array_equal(np.diag(rec), vals)
+    # (0, 3) is sqrt(5) from both (1, 1) and (2, 2) and 3 from the ends: a tie of the two
+    assert rec[0, 3] in (1.0, 2.0)
+    assert np.isnan(reconstruct(pts, vals, (4, 4), outside="nan")).all()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"points_rc": np.zeros((3, 3)), "values": np.zeros(3)}, "shape \\(k, 2\\)"),
+        ({"points_rc": np.zeros((3, 2)), "values": np.zeros(4)}, "values must have shape"),
+        ({"points_rc": np.zeros((0, 2)), "values": np.zeros(0)}, "empty"),
+        ({"points_rc": np.array([[0, np.nan]] * 3), "values": np.zeros(3)}, "points_rc contains"),
+        ({"points_rc": np.eye(3)[:, :2], "values": [0, np.nan, 1]}, "values contains NaN"),
+        ({"points_rc": np.eye(3)[:, :2], "values": np.zeros(3), "shape": (0, 3)}, "positive"),
+        ({"points_rc": np.eye(3)[:, :2], "values": np.zeros(3), "outside": "zero"}, "outside"),
+    ],
+)
+def test_bad_input(kwargs, match):
+    kwargs = {"shape": (4, 4), **kwargs}
+    with pytest.raises(ValueError, match=match):
+        reconstruct(**kwargs)
