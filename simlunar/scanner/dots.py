@@ -1,0 +1,292 @@
+"""Dot patterns, dot detection with sub-pixel centroids, ghost rejection and multiplexed scheduling.
+
+A dot is one projector pixel (or a small disk of them). Several dots share one projected frame
+when the camera cannot confuse them: their projector positions are at least
+``min_proj_spacing`` pixels apart and the segments of the camera epipolar lines on which they
+can appear (for the scene's depth range) stay at least ``min_cam_spacing`` camera pixels apart.
+A blob is assigned to the one dot whose segment it lies on; blobs on no segment and dimmer blobs
+on an already-claimed segment are interreflection ghosts and are rejected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+from simlunar.geometry import Rig
+from simlunar.scanner.triangulate import check_rig
+
+
+def _as_uv(uv, name: str) -> np.ndarray:
+    a = np.asarray(uv, dtype=float)
+    if a.ndim != 2 or a.shape[1] != 2:
+        raise ValueError(
+            f"{name} must be an (n, 2) array of (u, v) pixel coordinates, got {a.shape}"
+        )
+    if len(a) == 0:
+        raise ValueError(f"{name} is empty: at least one dot is needed")
+    return a
+
+
+def dot_pattern(shape: tuple[int, int], uv, *, radius: float = 0.0) -> np.ndarray:
+    """Projector frame with dots lit.
+
+    Parameters
+    ----------
+    shape : (H, W) projector pattern shape
+    uv : (n, 2) dot centres in projector pixel coordinates
+    radius : float
+        0 lights the single pixel containing each centre; > 0 lights every pixel whose centre
+        lies within ``radius`` pixels of it (a small disk).
+
+    Returns
+    -------
+    (H, W) float32 in {0, 1}
+    """
+    uv = _as_uv(uv, "dot positions")
+    H, W = shape
+    if np.any((uv[:, 0] < 0) | (uv[:, 0] >= W) | (uv[:, 1] < 0) | (uv[:, 1] >= H)):
+        raise ValueError(f"dot positions must lie inside the {W}x{H} projector")
+    out = np.zeros((H, W), np.float32)
+    if radius <= 0:
+        out[np.floor(uv[:, 1]).astype(int), np.floor(uv[:, 0]).astype(int)] = 1.0
+        return out
+    r = int(np.ceil(radius))
+    dv, du = np.mgrid[-r : r + 1, -r : r + 1]
+    for u, v in uv:
+        cc = np.floor(u).astype(int) + du
+        rr = np.floor(v).astype(int) + dv
+        inside = (np.hypot(cc + 0.5 - u, rr + 0.5 - v) <= radius) & (cc >= 0) & (cc < W)
+        inside &= (rr >= 0) & (rr < H)
+        out[rr[inside], cc[inside]] = 1.0
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Detections:
+    """Bright blobs found in one camera frame.
+
+    Attributes
+    ----------
+    uv : (m, 2) float64 sub-pixel centroids (u, v) in camera pixel coordinates
+    flux : (m,) float64 summed background-subtracted intensity
+    peak : (m,) float64 brightest pixel minus background
+    """
+
+    uv: np.ndarray
+    flux: np.ndarray
+    peak: np.ndarray
+
+    def __len__(self) -> int:
+        return self.uv.shape[0]
+
+
+def detect_dots(
+    image: np.ndarray,
+    *,
+    background=None,
+    rel_threshold: float = 0.2,
+    abs_threshold: float = 0.0,
+    grow: int = 2,
+) -> Detections:
+    """Detect blobs and their intensity-weighted sub-pixel centroids.
+
+    Pixels brighter than ``background + max(abs_threshold, rel_threshold * peak)`` (``peak`` = the
+    brightest pixel above background) form 8-connected blobs; each blob's centroid is the
+    intensity-weighted mean of pixel centres over the blob dilated by ``grow`` pixels, with
+    weights ``max(image - background, 0)`` so the faint wings of a blurred spot count too.
+
+    Parameters
+    ----------
+    image : (rows, cols) float
+    background : float or (rows, cols) array, optional
+        Image without the dots (e.g. the black frame); default the image median.
+    rel_threshold, abs_threshold : float
+    grow : int
+
+    Returns
+    -------
+    Detections
+    """
+    img = np.asarray(image, float)
+    if img.ndim != 2:
+        raise ValueError(f"image must be 2-D (rows, cols), got {img.shape}")
+    bg = np.median(img) if background is None else np.asarray(background, float)
+    sig = np.maximum(img - bg, 0.0)
+    peak = float(sig.max()) if sig.size else 0.0
+    thr = max(abs_threshold, rel_threshold * peak)
+    empty = Detections(np.empty((0, 2)), np.empty(0), np.empty(0))
+    if peak <= 0 or peak <= abs_threshold:
+        return empty
+    labels, n = ndimage.label(sig > thr, structure=np.ones((3, 3), bool))
+    if n == 0:
+        return empty
+    if grow > 0:
+        # grow blobs without merging them: each pixel goes to the nearest label
+        dist, (ir, ic) = ndimage.distance_transform_edt(labels == 0, return_indices=True)
+        labels = np.where(dist <= grow, labels[ir, ic], 0)
+    idx = np.arange(1, n + 1)
+    rows, cols = np.mgrid[0 : img.shape[0], 0 : img.shape[1]]
+    flux = ndimage.sum(sig, labels, idx)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = ndimage.sum(sig * (cols + 0.5), labels, idx) / flux
+        v = ndimage.sum(sig * (rows + 0.5), labels, idx) / flux
+    pk = ndimage.maximum(sig, labels, idx)
+    ok = flux > 0
+    return Detections(np.stack([u, v], axis=-1)[ok], np.asarray(flux)[ok], np.asarray(pk)[ok])
+
+
+def epipolar_segments(rig: Rig, proj_uv, depth_range: tuple[float, float]) -> np.ndarray:
+    """Camera-image segments on which projector dots can appear.
+
+    Parameters
+    ----------
+    rig : Rig
+    proj_uv : (n, 2) projector pixel coordinates
+    depth_range : (z_near, z_far) projector z-depths (m) bounding the scene
+
+    Returns
+    -------
+    (n, 2, 2) float64: for each dot the camera (u, v) of its near and far ends
+    """
+    check_rig(rig)
+    proj_uv = _as_uv(proj_uv, "dot positions")
+    z0, z1 = float(depth_range[0]), float(depth_range[1])
+    if not 0 < z0 < z1:
+        raise ValueError(f"depth_range must be 0 < near < far (m), got {depth_range}")
+    d = rig.projector.directions_device(proj_uv)
+    ends = []
+    for z in (z0, z1):
+        pw = rig.projector.pose.device_to_world(d * z)
+        uv, zc = rig.camera.project(pw)
+        if np.any(zc <= 0):
+            raise ValueError(
+                "the camera does not see the projected area: projected points lie "
+                "behind the triangulation camera"
+            )
+        ends.append(uv)
+    return np.stack(ends, axis=1)
+
+
+def point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """Distances between points (m, 2) and segments (k, 2, 2): (m, k)."""
+    a = seg[None, :, 0]
+    ab = seg[None, :, 1] - a
+    ap = p[:, None] - a
+    L2 = np.sum(ab * ab, axis=-1)
+    t = np.clip(np.sum(ap * ab, axis=-1) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+    return np.linalg.norm(ap - t[..., None] * ab, axis=-1)
+
+
+def _segment_conflicts(seg: np.ndarray, sep: float) -> set[tuple[int, int]]:
+    """Pairs of segments closer than ``sep`` (conservative by at most half the sampling step)."""
+    h = sep / 2.0
+    lengths = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=-1)
+    counts = np.ceil(lengths / h).astype(int) + 1
+    owner = np.repeat(np.arange(len(seg)), counts)
+    t = np.concatenate([np.linspace(0.0, 1.0, c) for c in counts])
+    pts = seg[owner, 0] + t[:, None] * (seg[owner, 1] - seg[owner, 0])
+    pairs = cKDTree(pts).query_pairs(sep + h, output_type="ndarray")
+    a, b = owner[pairs[:, 0]], owner[pairs[:, 1]]
+    keep = a != b
+    return {(int(min(x, y)), int(max(x, y))) for x, y in zip(a[keep], b[keep])}
+
+
+def schedule_dots(
+    rig: Rig,
+    proj_uv,
+    *,
+    depth_range: tuple[float, float],
+    min_proj_spacing: float = 8.0,
+    min_cam_spacing: float = 6.0,
+    exact: bool = False,
+) -> list[np.ndarray]:
+    """Group dots into frames that the camera can decode without confusion.
+
+    Greedy graph colouring of the conflict graph: two dots conflict if they are closer than
+    ``min_proj_spacing`` projector pixels or their camera epipolar segments (for
+    ``depth_range``) come within ``min_cam_spacing`` camera pixels.
+
+    Parameters
+    ----------
+    rig : Rig
+    proj_uv : (n, 2) projector pixel coordinates of the dots
+    depth_range : (near, far) projector z-depth bounds of the scene (m)
+    min_proj_spacing, min_cam_spacing : float
+    exact : bool
+        One dot per frame (the reference mode that multiplexing is checked against).
+
+    Returns
+    -------
+    list of int arrays, indices into ``proj_uv``; every dot appears exactly once
+    """
+    proj_uv = _as_uv(proj_uv, "dot positions")
+    n = len(proj_uv)
+    if exact:
+        return [np.array([i]) for i in range(n)]
+    seg = epipolar_segments(rig, proj_uv, depth_range)
+    conflicts = _segment_conflicts(seg, float(min_cam_spacing))
+    for a, b in cKDTree(proj_uv).query_pairs(float(min_proj_spacing), output_type="ndarray"):
+        conflicts.add((int(min(a, b)), int(max(a, b))))
+    neighbours: list[list[int]] = [[] for _ in range(n)]
+    for a, b in conflicts:
+        neighbours[a].append(b)
+        neighbours[b].append(a)
+    colour = np.full(n, -1, dtype=np.int64)
+    for i in range(n):
+        used = {int(colour[j]) for j in neighbours[i] if colour[j] >= 0}
+        c = 0
+        while c in used:
+            c += 1
+        colour[i] = c
+    return [np.flatnonzero(colour == c) for c in range(int(colour.max()) + 1)]
+
+
+@dataclass(frozen=True, eq=False)
+class DotMatches:
+    """Dots found in one frame.
+
+    Attributes
+    ----------
+    dot : (m,) int indices (into the frame's dot list) of the dots found
+    cam_uv : (m, 2) camera centroids of those dots
+    n_ghosts : int blobs rejected (off every segment, or dimmer duplicates on a claimed one)
+    """
+
+    dot: np.ndarray
+    cam_uv: np.ndarray
+    n_ghosts: int
+
+
+def match_dots(det: Detections, segments: np.ndarray, *, tol: float = 2.0) -> DotMatches:
+    """Assign detected blobs to scheduled dots through their epipolar segments.
+
+    A blob within ``tol`` camera pixels of exactly one segment belongs to that dot; of several
+    blobs on one segment the one with the largest flux is kept (an interreflection ghost is
+    dimmer than the directly lit spot). Blobs near no segment or near several are rejected.
+
+    Parameters
+    ----------
+    det : Detections
+    segments : (k, 2, 2) camera segments of the frame's dots (:func:`epipolar_segments`)
+    tol : float camera pixels
+    """
+    if len(det) == 0:
+        return DotMatches(np.empty(0, np.int64), np.empty((0, 2)), 0)
+    d = point_segment_distance(det.uv, segments)
+    near = d <= tol
+    single = near.sum(axis=1) == 1
+    cand = np.where(single, np.argmax(near, axis=1), -1)
+    dots, uvs = [], []
+    for k in np.unique(cand[cand >= 0]):
+        blobs = np.flatnonzero(cand == k)
+        best = blobs[np.argmax(det.flux[blobs])]
+        dots.append(int(k))
+        uvs.append(det.uv[best])
+    n_found = len(dots)
+    return DotMatches(
+        np.asarray(dots, np.int64), np.asarray(uvs, float).reshape(-1, 2), len(det) - n_found
+    )

@@ -1,0 +1,303 @@
+"""Binary-reflected gray-code patterns and their decoder (NumPy only).
+
+The stack layout, bit order and decision rules follow OpenCV contrib
+``structured_light.GrayCodePattern`` (../shared/REFERENCES.md, "Structured light"), so stacks made
+here decode with OpenCV and the other way round:
+
+* ``ceil(log2 W)`` column bits, then ``ceil(log2 H)`` row bits, most significant bit first;
+* images are (pattern, inverse) pairs, columns first; white and black frames are separate;
+* a pattern pixel is lit (255) where the gray-code bit of its column (row) is 1;
+* a camera pixel is valid if ``white - black > black_threshold``; a bit is 1 if
+  ``pattern > inverse`` and unreliable if ``|pattern - inverse| < white_threshold``;
+* gray to binary by cumulative XOR; a decoded index outside the pattern is invalid.
+
+Thresholds are in the units of the images passed in (OpenCV's defaults 40 and 5 are for 8-bit
+images; for float images in [0, 1] use about 40/255 and 5/255).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def num_bits(n: int) -> int:
+    """Bits OpenCV uses for ``n`` columns or rows: ``ceil(log2 n)``.
+
+    Parameters
+    ----------
+    n : int
+        Number of projector columns (or rows), >= 2.
+    """
+    n = int(n)
+    if n < 2:
+        raise ValueError(f"a gray-code pattern needs at least 2 columns and rows, got {n}")
+    return int(np.ceil(np.log2(n)))
+
+
+def gray(values) -> np.ndarray:
+    """Binary-reflected gray code ``x ^ (x >> 1)`` of non-negative integers."""
+    v = np.asarray(values, dtype=np.int64)
+    return v ^ (v >> 1)
+
+
+def gray_to_binary(bits: np.ndarray) -> np.ndarray:
+    """Integers from gray-code bit planes by cumulative XOR.
+
+    Parameters
+    ----------
+    bits : (n_bits, ...) array of 0/1
+        Gray-code bits, most significant first.
+
+    Returns
+    -------
+    (...) int64 array
+    """
+    bits = np.asarray(bits).astype(np.int64)
+    binary = np.bitwise_xor.accumulate(bits, axis=0)
+    n = bits.shape[0]
+    weights = (1 << np.arange(n - 1, -1, -1, dtype=np.int64)).reshape((n,) + (1,) * (bits.ndim - 1))
+    return np.sum(binary * weights, axis=0)
+
+
+def bit_planes(values, n: int) -> np.ndarray:
+    """Gray-code bits of ``values`` as (n, ...) uint8 planes, most significant first."""
+    g = gray(values)
+    shifts = np.arange(n - 1, -1, -1, dtype=np.int64).reshape((n,) + (1,) * g.ndim)
+    return ((g[None] >> shifts) & 1).astype(np.uint8)
+
+
+def encode(width: int, height: int) -> np.ndarray:
+    """Gray-code pattern stack in OpenCV ``GrayCodePattern.generate`` order.
+
+    Parameters
+    ----------
+    width, height : int
+        Projector resolution in pixels (any size >= 2, powers of two not required).
+
+    Returns
+    -------
+    (2 * (num_bits(width) + num_bits(height)), height, width) uint8
+        Values 0 or 255: column (pattern, inverse) pairs MSB first, then row pairs.
+    """
+    ncb, nrb = num_bits(width), num_bits(height)
+    col_bits = bit_planes(np.arange(width), ncb)  # (ncb, W)
+    row_bits = bit_planes(np.arange(height), nrb)  # (nrb, H)
+    out = np.empty((2 * (ncb + nrb), height, width), dtype=np.uint8)
+    out[0 : 2 * ncb : 2] = (col_bits * 255)[:, None, :]
+    out[2 * ncb :: 2] = (row_bits * 255)[:, :, None]
+    out[1::2] = 255 - out[0::2]
+    return out
+
+
+def white_black(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """All-white and all-black uint8 frames of shape (height, width)."""
+    return (np.full((height, width), 255, np.uint8), np.zeros((height, width), np.uint8))
+
+
+def positive_patterns(width: int, height: int) -> np.ndarray:
+    """Only the non-inverted patterns, (num_bits(width) + num_bits(height), height, width) uint8.
+
+    A scan that obtains inverses by linearity of light transport renders these plus white and
+    black: ``bits + 2`` renders instead of ``2 * bits + 2``.
+    """
+    return encode(width, height)[0::2]
+
+
+def inverses_by_linearity(patterns: np.ndarray, white: np.ndarray, black: np.ndarray) -> np.ndarray:
+    """Noise-free images of the inverse patterns from pattern, white and black images.
+
+    Light transport is linear in the projector's emission, and a pattern plus its inverse is the
+    white frame, so ``I(inverse) = I(white) - I(pattern) + I(black)``; the black frame carries any
+    light that is not the projector's (sun, ambient) and would otherwise be counted twice.
+
+    Parameters
+    ----------
+    patterns : (n, rows, cols) float
+    white, black : (rows, cols) float
+
+    Returns
+    -------
+    (n, rows, cols) float
+    """
+    patterns = np.asarray(patterns)
+    if (
+        patterns.ndim != 3
+        or patterns.shape[1:] != np.shape(white)
+        or np.shape(white) != np.shape(black)
+    ):
+        raise ValueError(
+            f"patterns must be (n, rows, cols) matching white/black (rows, cols); got "
+            f"{patterns.shape}, {np.shape(white)}, {np.shape(black)}"
+        )
+    return np.asarray(white)[None] + np.asarray(black)[None] - patterns
+
+
+def interleave(patterns: np.ndarray, inverses: np.ndarray) -> np.ndarray:
+    """(pattern, inverse) pairs as one (2n, rows, cols) stack in OpenCV order."""
+    patterns = np.asarray(patterns)
+    out = np.empty(
+        (2 * patterns.shape[0], *patterns.shape[1:]), dtype=np.result_type(patterns, inverses)
+    )
+    out[0::2] = patterns
+    out[1::2] = inverses
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class GrayDecode:
+    """Dense result of decoding a gray-code stack seen by a camera.
+
+    All arrays are over camera pixels (rows, cols).
+
+    Attributes
+    ----------
+    col, row : int64
+        Decoded projector column and row; -1 where ``valid`` is False.
+    valid : bool
+        Lit (``white - black > black_threshold``), every bit reliable and the decoded index
+        inside the projector.
+    lit : bool
+        ``white - black > black_threshold`` (False in projector shadow / outside the projection).
+    bits : (n_col_bits + n_row_bits, rows, cols) uint8
+        Decoded gray-code bits (MSB first, columns then rows).
+    reliable : (n_col_bits + n_row_bits, rows, cols) bool
+        ``|pattern - inverse| >= white_threshold`` per bit.
+    n_col_bits, n_row_bits : int
+    proj_shape : (int, int)
+        Projector (height, width).
+    """
+
+    col: np.ndarray
+    row: np.ndarray
+    valid: np.ndarray
+    lit: np.ndarray
+    bits: np.ndarray
+    reliable: np.ndarray
+    n_col_bits: int
+    n_row_bits: int
+    proj_shape: tuple[int, int]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.valid.shape  # type: ignore[return-value]
+
+    def proj_uv(self) -> np.ndarray:
+        """(rows, cols, 2) projector pixel-centre coordinates (u, v); NaN where invalid."""
+        uv = np.stack([self.col + 0.5, self.row + 0.5], axis=-1).astype(float)
+        uv[~self.valid] = np.nan
+        return uv
+
+
+def decode(
+    images: np.ndarray,
+    white: np.ndarray,
+    black: np.ndarray,
+    *,
+    proj_shape: tuple[int, int],
+    black_threshold: float = 40.0,
+    white_threshold: float = 5.0,
+    require_reliable: bool = True,
+) -> GrayDecode:
+    """Decode a gray-code image stack into per-pixel projector correspondences.
+
+    Parameters
+    ----------
+    images : (2 * (num_bits(W) + num_bits(H)), rows, cols) array
+        Captured (pattern, inverse) pairs in :func:`encode` order.
+    white, black : (rows, cols) array
+        Captured all-white and all-black frames.
+    proj_shape : (H, W)
+        Projector pattern shape (height, width).
+    black_threshold, white_threshold : float
+        OpenCV's thresholds, in the units of the images.
+    require_reliable : bool
+        If True (OpenCV's behaviour) a pixel with any unreliable bit is invalid.
+
+    Returns
+    -------
+    GrayDecode
+    """
+    H, W = (int(proj_shape[0]), int(proj_shape[1]))
+    ncb, nrb = num_bits(W), num_bits(H)
+    images = np.asarray(images, dtype=np.float64)
+    white = np.asarray(white, dtype=np.float64)
+    black = np.asarray(black, dtype=np.float64)
+    n_expected = 2 * (ncb + nrb)
+    if images.ndim != 3 or images.shape[0] != n_expected:
+        raise ValueError(
+            f"images must be a ({n_expected}, rows, cols) gray-code stack for a {W}x{H} projector "
+            f"({ncb} column + {nrb} row bits, pattern and inverse each), got shape {images.shape}"
+        )
+    if white.shape != images.shape[1:] or black.shape != images.shape[1:]:
+        raise ValueError(
+            f"white {white.shape} and black {black.shape} frames must match the "
+            f"camera shape {images.shape[1:]}"
+        )
+    pat, inv = images[0::2], images[1::2]
+    bits = (pat > inv).astype(np.uint8)
+    reliable = np.abs(pat - inv) >= white_threshold
+    lit = (white - black) > black_threshold
+    col = gray_to_binary(bits[:ncb])
+    row = gray_to_binary(bits[ncb:])
+    valid = lit & (col < W) & (row < H)
+    if require_reliable:
+        valid &= np.all(reliable, axis=0)
+    col = np.where(valid, col, -1)
+    row = np.where(valid, row, -1)
+    return GrayDecode(
+        col=col,
+        row=row,
+        valid=valid,
+        lit=lit,
+        bits=bits,
+        reliable=reliable,
+        n_col_bits=ncb,
+        n_row_bits=nrb,
+        proj_shape=(H, W),
+    )
+
+
+def bit_errors(
+    result: GrayDecode, true_col: np.ndarray, true_row: np.ndarray, mask: np.ndarray | None = None
+) -> np.ndarray:
+    """Per-bit error maps against ground-truth correspondences.
+
+    Parameters
+    ----------
+    result : GrayDecode
+    true_col, true_row : (rows, cols) int
+        True projector column and row of the surface point each camera pixel sees (-1 where the
+        point is not lit by the projector).
+    mask : (rows, cols) bool, optional
+        Pixels to score; default: lit in the decode and with a true correspondence.
+
+    Returns
+    -------
+    (n_col_bits + n_row_bits, rows, cols) bool
+        True where the decoded gray bit differs from the true one (False outside ``mask``).
+    """
+    true_col = np.asarray(true_col)
+    true_row = np.asarray(true_row)
+    if true_col.shape != result.shape or true_row.shape != result.shape:
+        raise ValueError(
+            f"true correspondences {true_col.shape} must match the decode {result.shape}"
+        )
+    if mask is None:
+        mask = result.lit & (true_col >= 0) & (true_row >= 0)
+    tb = np.concatenate(
+        [
+            bit_planes(np.clip(true_col, 0, None), result.n_col_bits),
+            bit_planes(np.clip(true_row, 0, None), result.n_row_bits),
+        ]
+    )
+    return (tb != result.bits) & mask[None]
+
+
+def bit_error_rates(errors: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Fraction of ``mask`` pixels with an error, per bit: (n_bits,) float64 (NaN if mask empty)."""
+    n = int(np.count_nonzero(mask))
+    if n == 0:
+        return np.full(errors.shape[0], np.nan)
+    return errors[:, mask].sum(axis=1) / n

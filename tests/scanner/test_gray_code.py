@@ -1,0 +1,114 @@
+"""Gray-code encode/decode: OpenCV layout, hand cases, round trips, decision rules."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.scanner import gray_code as gc
+
+
+def test_num_bits_matches_ceil_log2():
+    assert [gc.num_bits(n) for n in (2, 3, 4, 5, 768, 1024, 1025)] == [1, 2, 2, 3, 10, 10, 11]
+    with pytest.raises(ValueError, match="at least 2"):
+        gc.num_bits(1)
+
+
+def test_encode_hand_case_width4_height2():
+    # columns 0..3 have gray codes 00, 01, 11, 10 (MSB first): OpenCV image 0 is the MSB
+    # pattern, image 1 its inverse, image 2 the LSB; the single row bit follows.
+    p = gc.encode(4, 2)
+    assert p.shape == (2 * (2 + 1), 2, 4) and p.dtype == np.uint8
+    np.testing.assert_array_equal(p[0, 0], [0, 0, 255, 255])
+    np.testing.assert_array_equal(p[2, 1], [0, 255, 255, 0])
+    np.testing.assert_array_equal(p[4][:, 0], [0, 255])
+    np.testing.assert_array_equal(p[1::2], 255 - p[0::2])
+
+
+def test_opencv_stack_size_for_1024x768():
+    assert gc.encode(1024, 768).shape == (40, 768, 1024)
+    assert gc.positive_patterns(1024, 768).shape == (20, 768, 1024)
+
+
+def test_gray_to_binary_inverts_gray(rng):
+    x = rng.integers(0, 2**12, size=500)
+    np.testing.assert_array_equal(gc.gray_to_binary(gc.bit_planes(x, 12)), x)
+    # adjacent integers differ in exactly one gray bit
+    diff = gc.bit_planes(np.arange(1, 4096), 12) != gc.bit_planes(np.arange(4095), 12)
+    assert np.all(diff.sum(axis=0) == 1)
+
+
+@pytest.mark.parametrize("size", [(37, 23), (100, 61), (64, 48), (3, 2)])
+def test_decode_encode_round_trip_non_power_of_two(size):
+    W, H = size
+    stack = gc.encode(W, H)
+    white, black = gc.white_black(W, H)
+    res = gc.decode(stack, white, black, proj_shape=(H, W))
+    assert res.valid.all()
+    rows, cols = np.mgrid[0:H, 0:W]
+    np.testing.assert_array_equal(res.col, cols)
+    np.testing.assert_array_equal(res.row, rows)
+
+
+def test_decode_rules_shadow_unreliable_and_out_of_range():
+    W, H = 5, 3  # 3 column bits: codes 5..7 are outside the projector
+    stack = gc.encode(W, H).astype(float)
+    white, black = (a.astype(float) for a in gc.white_black(W, H))
+    black[0, 0] = 230.0  # white - black = 25 <= 40: shadow
+    stack[2, 1, 1] = 128.0
+    stack[3, 1, 1] = 125.0  # |pattern - inverse| = 3 < 5: unreliable bit
+    res = gc.decode(stack, white, black, proj_shape=(H, W))
+    assert not res.lit[0, 0] and not res.valid[0, 0] and res.col[0, 0] == -1
+    assert res.lit[1, 1] and not res.reliable[1, 1, 1] and not res.valid[1, 1]
+    relaxed = gc.decode(stack, white, black, proj_shape=(H, W), require_reliable=False)
+    assert relaxed.valid[1, 1]
+    # gray 100 (binary 7) is outside a 5-column projector
+    col7 = gc.bit_planes(np.array([7]), 3)[:, 0] * 255.0
+    stack[0:6:2, 2, 2] = col7
+    stack[1:6:2, 2, 2] = 255 - col7
+    assert not gc.decode(stack, white, black, proj_shape=(H, W)).valid[2, 2]
+
+
+def test_decode_wrong_stack_shape_names_the_expected_shape():
+    stack = gc.encode(16, 8)
+    w, b = gc.white_black(16, 8)
+    with pytest.raises(ValueError, match=r"\(14, rows, cols\) gray-code stack"):
+        gc.decode(stack[:-2], w, b, proj_shape=(8, 16))
+    with pytest.raises(ValueError, match="white"):
+        gc.decode(stack, w[:, :3], b, proj_shape=(8, 16))
+
+
+def test_inverses_by_linearity_equal_rendered_inverses(rng):
+    # a linear light-transport matrix T (camera pixels x projector pixels) plus ambient light
+    W, H, n_cam = 6, 4, 30
+    T = rng.random((n_cam, W * H))
+    ambient = rng.random(n_cam)
+    pats = gc.encode(W, H).astype(float) / 255
+
+    def image(p):
+        return T @ p.reshape(-1) + ambient
+
+    imgs = np.stack([image(p) for p in pats])
+    white = image(np.ones((H, W)))
+    black = image(np.zeros((H, W)))
+    inv = gc.inverses_by_linearity(imgs[0::2, :, None], white[:, None], black[:, None])[..., 0]
+    np.testing.assert_allclose(inv, imgs[1::2], rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="matching white/black"):
+        gc.inverses_by_linearity(imgs[0::2, :, None], white[:5, None], black[:, None])
+
+
+def test_bit_errors_locate_flipped_bits():
+    W, H = 20, 10
+    stack = gc.encode(W, H)
+    w, b = gc.white_black(W, H)
+    stack[[0, 1]] = stack[[1, 0]]  # swap MSB pattern and inverse: flips bit 0 everywhere
+    stack[6, 3, 4], stack[7, 3, 4] = stack[7, 3, 4], stack[6, 3, 4]  # flip bit 3 at (3, 4)
+    res = gc.decode(stack, w, b, proj_shape=(H, W))
+    rows, cols = np.mgrid[0:H, 0:W]
+    err = gc.bit_errors(res, cols, rows)
+    assert err.shape == (5 + 4, H, W)
+    assert err[0].all()
+    assert np.argwhere(err[3]).tolist() == [[3, 4]]
+    assert not err[[1, 2, 4, 5, 6, 7, 8]].any()
+    rates = gc.bit_error_rates(err, np.ones((H, W), bool))
+    np.testing.assert_allclose(rates[:4], [1.0, 0, 0, 1 / (W * H)])
