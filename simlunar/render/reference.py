@@ -118,7 +118,10 @@ def oren_nayar(wi, wo, n, albedo=1.0, sigma=0.0, model: str = "full") -> np.ndar
         A = 1 - 0.5 s2/(s2 + 0.33),  B = 0.45 s2/(s2 + 0.09)
         f = rho/pi [A + B max(0, cos(dphi)) sin(alpha) tan(beta)]
 
-    Both reduce to Lambert (``rho / pi``) at ``sigma = 0`` and are reciprocal.
+    Both reduce to Lambert (``rho / pi``) at ``sigma = 0`` and are reciprocal. Neither is
+    exactly energy conserving: near grazing incidence with ``sigma`` about 0.15-0.26 the
+    directional albedo exceeds ``rho`` by up to ~4 % (full) or ~1.3 % (qualitative), so it
+    stays below 1 only for ``rho <= 0.95`` (tested), which covers real regolith.
 
     Roughness convention: ``sigma`` is the standard deviation of facet slope *angles* in
     radians, as in the paper. Mitsuba 0.6's ``roughdiffuse`` took a Beckmann-style roughness
@@ -324,7 +327,9 @@ def hapke(
 
     and the BRDF is ``f = r / cos(i)``. ``g`` is the phase angle between ``wi`` and ``wo``
     (``cos g = wi . wo``), so the opposition surge peaks when light and viewer coincide
-    (camera-centred light). The model is reciprocal.
+    (camera-centred light). The model is reciprocal. It is not strictly energy conserving:
+    the surge adds light, so with ``w = 1`` and a strong backscatter lobe the directional
+    albedo can exceed 1; for ``w <= 0.95`` it stays below 1 (tested).
 
     Parameters
     ----------
