@@ -69,6 +69,69 @@ def doctor(short: bool = typer.Option(False, "--short", help="One line only.")) 
     typer.echo(f"  {'GPU':<15} {gpu}")
 
 
+_SET_OPTION = typer.Option(None, "--set", help="override a key: --set render.spp=32 (repeatable)")
+
+
+@app.command()
+@user_errors
+def run(
+    experiment: str = typer.Argument(..., help="experiment YAML (see experiments/)"),
+    out: str = typer.Option(None, "--out", help="result folder [default: results/<name>]"),
+    workers: int = typer.Option(None, "--workers", help="local worker processes [default: 1]"),
+    scheduler: str = typer.Option(None, "--scheduler",
+                                  help="Dask scheduler address, e.g. tcp://host:8786"),
+    set_: list[str] | None = _SET_OPTION,
+    no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar"),
+    no_figures: bool = typer.Option(False, "--no-figures", help="skip figures/"),
+) -> None:
+    """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
+    from pathlib import Path
+
+    from simlunar.pipeline.config import load_experiment, parse_set
+    from simlunar.pipeline.executors import make_executor
+    from simlunar.pipeline.runner import run_experiment
+
+    cfg = load_experiment(experiment, parse_set(set_ or []))
+    executor = make_executor(workers=workers, scheduler=scheduler)
+    out_dir = Path(out) if out else Path("results") / cfg.name
+    summary = run_experiment(cfg, out_dir, executor=executor, progress=not no_progress,
+                             figures=not no_figures)
+    typer.echo(summary.scores_markdown)
+    typer.echo(f"units: {summary.units_total} ({summary.units_cached} cached, "
+               f"{summary.units_computed} computed) in {summary.elapsed_s:.1f} s")
+    typer.echo(f"results: {out_dir}")
+    if summary.figures:
+        typer.echo(f"figures: {summary.figures_dir}")
+
+
+@app.command()
+@user_errors
+def figures(results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`")) -> None:
+    """Redraw the figures of a result folder (PNG and PDF) without recomputing."""
+    from simlunar.pipeline.figures import write_figures
+
+    paths = write_figures(results_dir)
+    for p in paths:
+        typer.echo(str(p))
+
+
+@app.command()
+@user_errors
+def schema(out: str = typer.Option(None, "--out", help="write to this file instead of stdout")) -> None:
+    """JSON Schema of experiment YAMLs (for editors: yaml-language-server)."""
+    import json
+
+    from simlunar.pipeline.config import json_schema
+
+    text = json.dumps(json_schema(), indent=2)
+    if out:
+        from simlunar.pipeline.store import atomic_write_text
+
+        atomic_write_text(out, text + "\n")
+    else:
+        typer.echo(text)
+
+
 def main() -> None:
     app(prog_name="simlunar")
 

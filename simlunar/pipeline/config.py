@@ -1,0 +1,592 @@
+"""The experiment schema: typed pydantic v2 models of an experiment YAML.
+
+Unknown keys are rejected everywhere (``extra="forbid"``). Keys carry their unit as a suffix
+(``_deg``, ``_m``); values may be plain numbers in that unit or strings with an explicit unit
+(``"0.5 rad"``, ``"20 cm"``), converted once here. Properties without the suffix
+(``SunLightCfg.elevation``) give SI units / radians for the library.
+
+Every problem is reported as a :class:`simlunar.errors.ConfigError` whose one-line message
+names the key path (``render.light.elevation_deg: ...``); see :func:`load_experiment`.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+
+from simlunar.errors import ConfigError
+from simlunar.pipeline.units import log_spaced, parse_fraction, parse_quantity
+
+Deg = Annotated[float, BeforeValidator(lambda v: parse_quantity(v, "deg"))]
+Metres = Annotated[float, BeforeValidator(lambda v: parse_quantity(v, "m"))]
+Density = Annotated[float, BeforeValidator(parse_fraction)]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+def _tagged_union(default: str | None, *members: type[BaseModel]):
+    """A union chosen by its ``kind`` key; a missing ``kind`` means ``default``."""
+    tags = [m.model_fields["kind"].annotation.__args__[0] for m in members]
+
+    def pick(v):
+        if isinstance(v, dict):
+            return v.get("kind", default)
+        return getattr(v, "kind", default)
+
+    union = Union[tuple(Annotated[m, Tag(t)] for m, t in zip(members, tags))]  # noqa: UP007
+    return Annotated[
+        union,
+        Discriminator(
+            pick,
+            custom_error_type="bad_kind",
+            custom_error_message=f"kind must be one of {', '.join(tags)}",
+        ),
+    ]
+
+
+# --------------------------------------------------------------------------- terrain
+class TerrainCfg(_Model):
+    """Terrain: a named preset (``scenes/<name>.yaml``) or a DEM file."""
+
+    preset: str | None = Field(None, description="terrain preset name, e.g. aerial_1, moonyard")
+    scale: float = Field(1.0, gt=0, le=1, description="preset resolution scale (1/8 = small)")
+    file: Path | None = Field(None, description="DEM file (.npy, .tif, .exr); relative to the YAML")
+    spacing_m: Metres | None = Field(None, gt=0, description="DEM cell size (m), for file")
+    albedo_file: Path | None = Field(None, description="optional albedo grid file")
+    albedo: float | None = Field(
+        None, ge=0, le=1, description="replace the albedo by this uniform value (ablation)"
+    )
+
+    @model_validator(mode="after")
+    def _one_source(self) -> TerrainCfg:
+        if (self.preset is None) == (self.file is None):
+            raise ValueError("give exactly one of preset or file")
+        if self.file is not None and self.spacing_m is None:
+            raise ValueError("a DEM file needs spacing_m")
+        return self
+
+
+# --------------------------------------------------------------------------- render
+class OrthoNadirCfg(_Model):
+    """Orthographic nadir camera whose pixel (r, c) sees DEM cell (r, c) (aerial view)."""
+
+    kind: Literal["orthographic_nadir"] = "orthographic_nadir"
+    altitude_m: Metres = Field(50.0, gt=0, description="camera height above z = 0 (m)")
+
+
+class PerspectiveCfg(_Model):
+    """Pinhole camera at ``position_m`` looking at ``look_at_m``."""
+
+    kind: Literal["perspective"]
+    width: int = Field(gt=0)
+    height: int = Field(gt=0)
+    fov_deg: Deg = Field(gt=0, lt=180, description="horizontal field of view")
+    position_m: tuple[float, float, float]
+    look_at_m: tuple[float, float, float]
+
+
+CameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveCfg)
+
+
+class SunLightCfg(_Model):
+    """A distant sun. Azimuth from +y (north) clockwise towards +x (east)."""
+
+    kind: Literal["sun"] = "sun"
+    elevation_deg: Deg = Field(30.0, ge=0, le=90)
+    azimuth_deg: Deg = Field(135.0, ge=-360, le=360)
+    irradiance: float = Field(1.0, gt=0, description="W/m^2 at normal incidence (relative)")
+
+    @property
+    def elevation(self) -> float:
+        return math.radians(self.elevation_deg)
+
+    @property
+    def azimuth(self) -> float:
+        return math.radians(self.azimuth_deg)
+
+
+class CameraLightCfg(_Model):
+    """A point light at the camera's centre (no visible shadows)."""
+
+    kind: Literal["camera"]
+    intensity: float = Field(1.0, gt=0)
+
+
+LightCfg = _tagged_union("sun", SunLightCfg, CameraLightCfg)
+
+
+class LambertCfg(_Model):
+    kind: Literal["lambert"]
+
+
+class OrenNayarCfg(_Model):
+    """Oren-Nayar (1994); ``sigma_deg`` is the slope standard deviation."""
+
+    kind: Literal["oren_nayar"]
+    sigma_deg: Deg = Field(20.0, ge=0, le=90)
+    model: Literal["full", "qualitative"] = "full"
+
+    @property
+    def sigma(self) -> float:
+        return math.radians(self.sigma_deg)
+
+
+class HapkeCfg(_Model):
+    """Hapke; unset parameters take the render package's lunar defaults."""
+
+    kind: Literal["hapke"]
+    w: float | None = Field(None, gt=0, le=1, description="single-scattering albedo")
+    b: float | None = Field(None, ge=0, le=1)
+    c: float | None = Field(None, ge=-1, le=1)
+    B0: float | None = Field(None, ge=0)
+    h: float | None = Field(None, gt=0)
+    theta_bar_deg: Deg | None = Field(None, ge=0, le=60)
+
+
+BsdfCfg = _tagged_union(None, LambertCfg, OrenNayarCfg, HapkeCfg)
+
+
+class SensorCfg(_Model):
+    """Camera sensor (:class:`simlunar.imaging.sensor.SensorModel`): shot noise, read noise, ADC."""
+
+    full_well_e: float = Field(20000.0, gt=0, description="saturation capacity (electrons)")
+    read_noise_e: float = Field(5.0, ge=0, description="read noise std (electrons)")
+    bits: int = Field(12, ge=1, le=16, description="ADC resolution")
+    exposure_e: float | None = Field(
+        None,
+        gt=0,
+        description="electrons per unit linear radiance; null = auto: the 99.5th "
+        "percentile radiance fills 80% of the well",
+    )
+    response: Literal["linear", "gamma"] = "linear"
+    gamma: float = Field(2.2, gt=0)
+
+
+class RenderCfg(_Model):
+    camera: CameraCfg = Field(default_factory=OrthoNadirCfg)
+    light: LightCfg = Field(default_factory=SunLightCfg)
+    bsdf: BsdfCfg = Field(default_factory=lambda: OrenNayarCfg(kind="oren_nayar"))
+    spp: int = Field(16, ge=1, le=4096)
+    max_depth: int = Field(3, ge=2, le=16, description="path depth (2 = direct light only)")
+    sensor: SensorCfg | None = Field(
+        default_factory=SensorCfg, description="null = use noiseless radiance"
+    )
+
+
+# --------------------------------------------------------------------------- studies
+class DensityRange(_Model):
+    """``count`` densities log-spaced from ``from`` to ``to`` (ends included)."""
+
+    start: Density = Field(alias="from")
+    stop: Density = Field(alias="to")
+    count: int = Field(ge=1, le=64)
+
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=False)
+
+    def values(self) -> list[float]:
+        return log_spaced(self.start, self.stop, self.count)
+
+
+def _densities(value):
+    if isinstance(value, dict):
+        return DensityRange.model_validate(value).values()
+    return value
+
+
+class SamplingStudyCfg(_Model):
+    """The sampling study of the paper's section 4."""
+
+    kind: Literal["sampling"] = "sampling"
+    strategies: list[str] = Field(
+        default_factory=lambda: ["random", "grid", "gradient", "entropy", "wavelet"], min_length=1
+    )
+    densities: Annotated[list[Density], BeforeValidator(_densities)] = Field(min_length=1)
+    trials: int = Field(20, ge=1, le=1000)
+    metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
+    range_noise_std_m: Metres = Field(0.0, ge=0, description="range-sensor noise (m)")
+    strategy_options: dict[str, dict[str, Any]] = Field(default_factory=dict)
+
+    @field_validator("strategies", "metrics")
+    @classmethod
+    def _unique(cls, v: list[str]) -> list[str]:
+        if len(set(v)) != len(v):
+            raise ValueError(f"names must be unique, got {v}")
+        return v
+
+
+class ScannerStudyCfg(_Model):
+    """The structured-light scanner study of the paper's section 5."""
+
+    kind: Literal["scanner"]
+    mode: str = Field(description="ambiguity_enhancement, data_reduction or full_gray_code")
+    rig: str = Field("default", description="rig preset name")
+    planner: str = Field("wavelet", description="strategy that picks the dots to scan")
+    budget: Density = Field(0.1, description="fraction of pixels rescanned / sampled")
+    trials: int = Field(1, ge=1, le=100)
+    metrics: list[str] = Field(default_factory=lambda: ["mse"], min_length=1)
+    options: dict[str, Any] = Field(default_factory=dict)
+
+
+StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg)
+
+
+class FiguresCfg(_Model):
+    enabled: bool = True
+    formats: list[Literal["png", "pdf"]] = Field(default_factory=lambda: ["png", "pdf"])
+    panel_density: Density = Field(1 / 64, description="density shown in the image panels")
+
+
+class ExperimentCfg(_Model):
+    """One experiment: a scene, a study, and optional sweep axes (cartesian product)."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
+    description: str = ""
+    seed: int = Field(0, ge=0)
+    terrain: TerrainCfg
+    render: RenderCfg = Field(default_factory=RenderCfg)
+    study: StudyCfg
+    sweep: dict[str, list[Any]] = Field(
+        default_factory=dict,
+        description="dotted key path -> values; the cartesian product becomes work units",
+    )
+    figures: FiguresCfg = Field(default_factory=FiguresCfg)
+
+
+# --------------------------------------------------------------------------- loading
+def _loc_path(loc: tuple, data: Any) -> str:
+    """Key path of a pydantic error location, dropping union tags that are not real keys."""
+    parts: list[str] = []
+    cur = data
+    for item in loc:
+        if isinstance(cur, dict) and item in cur:
+            parts.append(str(item))
+            cur = cur[item]
+        elif isinstance(cur, list) and isinstance(item, int):
+            parts.append(f"[{item}]")
+            cur = cur[item] if item < len(cur) else None
+        elif isinstance(item, int):
+            parts.append(f"[{item}]")
+            cur = None
+        elif _is_field_name(str(item)):
+            parts.append(str(item))
+            cur = None
+    return ".".join(parts).replace(".[", "[") or "<root>"
+
+
+_TAGS = {
+    "orthographic_nadir",
+    "perspective",
+    "sun",
+    "camera",
+    "lambert",
+    "oren_nayar",
+    "hapke",
+    "sampling",
+    "scanner",
+}
+
+
+def _is_field_name(item: str) -> bool:
+    return item not in _TAGS and "[" not in item
+
+
+def _message(err: dict) -> str:
+    msg = err["msg"]
+    if err["type"] == "extra_forbidden":
+        return "unknown key"
+    if msg.startswith("Value error, "):
+        msg = msg[len("Value error, ") :]
+    if msg.startswith("Assertion failed, "):
+        msg = msg[len("Assertion failed, ") :]
+    return msg
+
+
+def _unknown_key_hint(path: str, data: dict) -> str:
+    """Suggest the valid keys where an unknown key was found."""
+    parent = path.rsplit(".", 1)[0] if "." in path else ""
+    try:
+        keys = valid_keys(parent, data)
+    except ConfigError:
+        return ""
+    return f" (valid keys: {', '.join(keys)})" if keys else ""
+
+
+def format_validation_error(exc: ValidationError, data: Any, prefix: str = "") -> str:
+    """One line for the first error of ``exc``: ``<key.path>: <problem>``."""
+    err = exc.errors()[0]
+    path = _loc_path(tuple(err["loc"]), data)
+    if prefix:
+        path = f"{prefix}.{path}" if path != "<root>" else prefix
+    msg = _message(err)
+    if err["type"] == "extra_forbidden" and isinstance(data, dict):
+        msg += _unknown_key_hint(_loc_path(tuple(err["loc"]), data), data)
+    return f"{path}: {msg}"
+
+
+def _model_at(path: str, data: dict) -> type[BaseModel] | None:
+    """The model class that holds the keys under ``path`` (``""`` = root) for this data."""
+    model: type[BaseModel] = ExperimentCfg
+    cur: Any = data
+    if not path:
+        return model
+    for part in path.split("."):
+        if part not in model.model_fields:
+            raise ConfigError(f"{path}: no such key {part!r}")
+        ann = model.model_fields[part].annotation
+        cur = cur.get(part) if isinstance(cur, dict) else None
+        model = _resolve_model(ann, cur, part)
+        if model is None:
+            return None
+    return model
+
+
+def _resolve_model(ann: Any, value: Any, name: str) -> type[BaseModel] | None:
+    """The concrete model of a field annotation, choosing union members by ``kind``."""
+    args = getattr(ann, "__args__", None)
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return ann
+    if args:
+        members = [a for a in _flatten(ann) if isinstance(a, type) and issubclass(a, BaseModel)]
+        if not members:
+            return None
+        kind = value.get("kind") if isinstance(value, dict) else None
+        if kind is not None:
+            for m in members:
+                if m.model_fields.get("kind") and kind in _literal_values(m.model_fields["kind"]):
+                    return m
+        # no kind given: the member with a default kind
+        for m in members:
+            f = m.model_fields.get("kind")
+            if f is None or (f.default is not None and not f.is_required()):
+                return m
+        return members[0]
+    return None
+
+
+def _flatten(ann: Any) -> list:
+    out = []
+    for a in getattr(ann, "__args__", ()) or ():
+        if getattr(a, "__args__", None) and not (isinstance(a, type) and issubclass(a, BaseModel)):
+            out.extend(_flatten(a))
+        else:
+            out.append(a)
+    meta = getattr(ann, "__metadata__", None)
+    if meta is not None and hasattr(ann, "__origin__"):
+        out.extend(_flatten(ann.__origin__))
+    return out
+
+
+def _literal_values(field) -> tuple:
+    return getattr(field.annotation, "__args__", ())
+
+
+def valid_keys(path: str, data: dict) -> list[str]:
+    """Keys allowed under the dotted ``path`` for this data (``kind`` picks union members)."""
+    model = _model_at(path, data)
+    if model is None:
+        return []
+    return [f.alias or name for name, f in model.model_fields.items()]
+
+
+def get_path(data: dict, path: str) -> Any:
+    cur: Any = data
+    for part in path.split("."):
+        if not isinstance(cur, dict) or part not in cur:
+            return None
+        cur = cur[part]
+    return cur
+
+
+def set_path(data: dict, path: str, value: Any) -> dict:
+    """A deep copy of ``data`` with the dotted ``path`` set to ``value`` (parents created)."""
+    out = copy.deepcopy(data)
+    cur = out
+    parts = path.split(".")
+    for part in parts[:-1]:
+        nxt = cur.get(part)
+        if not isinstance(nxt, dict):
+            nxt = {}
+            cur[part] = nxt
+        cur = nxt
+    cur[parts[-1]] = value
+    return out
+
+
+def apply_sweep_value(data: dict, path: str, value: Any) -> dict:
+    """``data`` with one sweep (or ``--set``) value applied.
+
+    Setting a ``kind`` resets its section to that kind's defaults, because the other keys of
+    the old kind (``elevation_deg`` of a sun) are not valid for the new one (a camera light).
+    """
+    parts = path.split(".")
+    if parts[-1] == "kind" and len(parts) > 1:
+        return set_path(data, ".".join(parts[:-1]), {"kind": value})
+    return set_path(data, path, value)
+
+
+def check_key_path(path: str, data: dict) -> None:
+    """Raise ConfigError unless ``path`` names a settable key of the schema for this data."""
+    parts = path.split(".")
+    parent = ".".join(parts[:-1])
+    try:
+        keys = valid_keys(parent, data)
+        model = _model_at(parent, data)
+    except ConfigError:
+        raise ConfigError(f"sweep.{path}: no such key in the experiment schema") from None
+    if model is None or parts[-1] not in keys:
+        hint = f" (valid keys under {parent or 'the root'}: {', '.join(keys)})" if keys else ""
+        raise ConfigError(f"sweep.{path}: no such key in the experiment schema{hint}")
+    if parts[0] in ("sweep", "name"):
+        raise ConfigError(f"sweep.{path}: this key cannot be swept")
+
+
+def validate_data(data: Any, *, base_dir: Path | None = None) -> ExperimentCfg:
+    """Validate a parsed YAML mapping, including every sweep point and referenced files.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the key path and the problem.
+    """
+    if not isinstance(data, dict):
+        raise ConfigError(f"<root>: expected a mapping of keys, got {type(data).__name__}")
+    try:
+        cfg = ExperimentCfg.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, data)) from None
+    for path, values in cfg.sweep.items():
+        check_key_path(path, data)
+        if not values:
+            raise ConfigError(f"sweep.{path}: give at least one value")
+        for i, v in enumerate(values):
+            point = apply_sweep_value({k: x for k, x in data.items() if k != "sweep"}, path, v)
+            try:
+                ExperimentCfg.model_validate(point)
+            except ValidationError as exc:
+                raise ConfigError(
+                    f"sweep.{path}[{i}]: " + format_validation_error(exc, point)
+                ) from None
+    _check_registries(cfg, data)
+    return _resolve_files(cfg, base_dir)
+
+
+def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
+    """Names that select code (preset, strategy, metric) must exist."""
+    from simlunar.pipeline import registry
+
+    points = [cfg]
+    for path, values in cfg.sweep.items():
+        for v in values:
+            points.append(
+                ExperimentCfg.model_validate(
+                    apply_sweep_value({k: x for k, x in data.items() if k != "sweep"}, path, v)
+                )
+            )
+    for p in points:
+        if p.terrain.preset is not None:
+            registry.check_preset(p.terrain.preset, "terrain.preset")
+        if isinstance(p.study, SamplingStudyCfg):
+            for i, s in enumerate(p.study.strategies):
+                registry.check_strategy(s, f"study.strategies[{i}]")
+            for i, m in enumerate(p.study.metrics):
+                registry.check_metric(m, f"study.metrics[{i}]")
+
+
+def _resolve_files(cfg: ExperimentCfg, base_dir: Path | None) -> ExperimentCfg:
+    t = cfg.terrain
+    updates = {}
+    for key in ("file", "albedo_file"):
+        p = getattr(t, key)
+        if p is None:
+            continue
+        full = (base_dir / p) if (base_dir is not None and not p.is_absolute()) else p
+        if not full.is_file():
+            raise ConfigError(f"terrain.{key}: file not found: {full}")
+        updates[key] = full.resolve()
+    if updates:
+        cfg = cfg.model_copy(update={"terrain": t.model_copy(update=updates)})
+    return cfg
+
+
+def parse_set(items: list[str]) -> dict[str, Any]:
+    """``--set key.path=value`` overrides; values parsed as YAML (``5``, ``[1, 2]``, ``lambert``)."""
+    out = {}
+    for item in items:
+        if "=" not in item:
+            raise ConfigError(f"--set {item}: expected key.path=value")
+        key, raw = item.split("=", 1)
+        try:
+            out[key.strip()] = yaml.safe_load(raw)
+        except yaml.YAMLError as exc:
+            raise ConfigError(f"--set {key}: value is not valid YAML ({exc.problem})") from None
+    return out
+
+
+def load_yaml(path: str | Path) -> dict:
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"experiment file not found: {path}")
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark else ""
+        raise ConfigError(f"{path}: not valid YAML{where}") from None
+    return data if data is not None else {}
+
+
+def load_experiment(path: str | Path, overrides: dict[str, Any] | None = None) -> ExperimentCfg:
+    """Read, override (dotted keys) and validate an experiment YAML.
+
+    Raises
+    ------
+    FileNotFoundError
+        The YAML (or a file it names) does not exist.
+    ConfigError
+        ``<file>: <key.path>: <problem>`` on one line.
+    """
+    path = Path(path)
+    data = load_yaml(path)
+    for key, value in (overrides or {}).items():
+        if not isinstance(data, dict):
+            break
+        if key.split(".")[0] != "sweep":
+            try:
+                check_key_path(key, data)
+            except ConfigError as exc:
+                raise ConfigError(f"{path}: --set " + str(exc).removeprefix("sweep.")) from None
+        data = apply_sweep_value(data, key, value)
+    try:
+        return validate_data(data, base_dir=path.parent)
+    except ConfigError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
+
+
+def to_plain(cfg: ExperimentCfg) -> dict:
+    """JSON/YAML-safe dict of a config (paths as strings, aliases used)."""
+    return cfg.model_dump(mode="json", by_alias=True)
+
+
+def json_schema() -> dict:
+    """JSON Schema of the experiment YAML (for editors: yaml-language-server)."""
+    schema = ExperimentCfg.model_json_schema(by_alias=True)
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["title"] = "simlunar experiment"
+    return schema

@@ -1,0 +1,144 @@
+"""Executors that run work units: in-process, a local process pool, or a Dask cluster.
+
+All three expose one method, :meth:`Executor.run`, that yields ``(index, result)`` as units
+finish (in any order); the runner writes each result to the cache as soon as it arrives, in
+the parent process, so the cache logic is the same whichever executor computed it.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import multiprocessing as mp
+import os
+import uuid
+from collections.abc import Callable, Iterator
+from typing import Any
+
+
+def default_workers() -> int:
+    """Worker count when none is given: 1 (rendering already uses every core)."""
+    return 1
+
+
+class Executor:
+    """Base: runs ``fn(payload)`` for each payload and yields ``(index, result)``."""
+
+    name = "base"
+
+    def run(self, fn: Callable[[Any], Any], payloads: list[Any]) -> Iterator[tuple[int, Any]]:
+        raise NotImplementedError
+
+    def describe(self) -> dict:
+        return {"executor": self.name}
+
+    def close(self) -> None:
+        pass
+
+
+class SerialExecutor(Executor):
+    """Runs units one after another in this process."""
+
+    name = "serial"
+
+    def run(self, fn, payloads):
+        for i, p in enumerate(payloads):
+            yield i, fn(p)
+
+
+def _worker_init(threads: int) -> None:
+    # each worker gets its share of the cores: renders in N workers each using every core
+    # would oversubscribe the machine and make the pool slower than one process
+    os.environ["SIMLUNAR_RENDER_THREADS"] = str(threads)
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        os.environ[var] = str(threads)
+
+
+class LocalPoolExecutor(Executor):
+    """A pool of ``workers`` fresh processes (spawned: Mitsuba's JIT does not survive fork)."""
+
+    name = "local"
+
+    def __init__(self, workers: int):
+        if workers < 1:
+            raise ValueError(f"--workers must be >= 1, got {workers}")
+        self.workers = workers
+
+    def describe(self) -> dict:
+        return {"executor": self.name, "workers": self.workers}
+
+    def run(self, fn, payloads):
+        if self.workers == 1 or len(payloads) <= 1:
+            yield from SerialExecutor().run(fn, payloads)
+            return
+        n = min(self.workers, len(payloads))
+        threads = max(1, (os.cpu_count() or 1) // n)
+        ctx = mp.get_context("spawn")
+        with cf.ProcessPoolExecutor(
+            max_workers=n, mp_context=ctx, initializer=_worker_init, initargs=(threads,)
+        ) as pool:
+            futs = {pool.submit(fn, p): i for i, p in enumerate(payloads)}
+            try:
+                for fut in cf.as_completed(futs):
+                    yield futs[fut], fut.result()
+            except BaseException:
+                for f in futs:
+                    f.cancel()
+                raise
+
+
+class DaskExecutor(Executor):
+    """Units as tasks on a Dask distributed scheduler (``tcp://host:8786``)."""
+
+    name = "dask"
+
+    def __init__(self, address: str, *, timeout_s: float = 30.0):
+        self.address = address
+        self.timeout_s = timeout_s
+
+    def describe(self) -> dict:
+        return {"executor": self.name, "scheduler": self.address}
+
+    def open(self) -> None:
+        """Connect to the scheduler (raises ValueError naming the address if it cannot)."""
+        if getattr(self, "_client", None) is not None:
+            return
+        from distributed import Client
+
+        try:
+            self._client = Client(self.address, timeout=self.timeout_s, set_as_default=False)
+        except (OSError, TimeoutError) as exc:
+            raise ValueError(f"--scheduler {self.address}: cannot connect ({exc})") from None
+
+    def run(self, fn, payloads):
+        from distributed import as_completed
+
+        self.open()
+        client = self._client
+        try:
+            run_id = uuid.uuid4().hex[:12]
+            futs = client.map(
+                fn,
+                payloads,
+                pure=False,
+                key=[f"simlunar-unit-{run_id}-{i}" for i in range(len(payloads))],
+            )
+            index = {f.key: i for i, f in enumerate(futs)}
+            for fut in as_completed(futs):
+                yield index[fut.key], fut.result()
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        client = getattr(self, "_client", None)
+        self._client = None
+        if client is not None:
+            client.close()
+
+
+def make_executor(*, workers: int | None = None, scheduler: str | None = None) -> Executor:
+    """The executor for the CLI options ``--workers`` / ``--scheduler``."""
+    if scheduler:
+        if workers not in (None, 1):
+            raise ValueError("give either --workers or --scheduler, not both")
+        return DaskExecutor(scheduler)
+    return LocalPoolExecutor(workers if workers is not None else default_workers())

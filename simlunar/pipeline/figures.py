@@ -1,0 +1,168 @@
+"""Write a result folder's ``figures/`` from its ``results.csv`` and cached unit arrays.
+
+Used by ``simlunar run`` at the end of a run and by ``simlunar figures RESULTS_DIR`` (which
+redraws without recomputing anything).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import yaml
+
+from simlunar.pipeline.store import UnitCache, atomic_write_bytes, read_csv
+
+MAX_UNIT_PANELS = 6
+
+
+def load_results(out_dir: str | Path) -> dict:
+    """Everything a figure needs from a result folder.
+
+    Returns
+    -------
+    dict
+        ``config`` (dict), ``rows`` (list of dict, strings as in the CSV), ``units`` (list of
+        unit records in results order: sweep, scores, config, key) and ``dir`` (Path).
+
+    Raises
+    ------
+    FileNotFoundError
+        ``out_dir`` is not a finished result folder.
+    """
+    out = Path(out_dir)
+    for name in ("config.yaml", "results.csv", "provenance.json"):
+        if not (out / name).is_file():
+            raise FileNotFoundError(
+                f"{out}: not a result folder (missing {name}); "
+                "run `simlunar run EXPERIMENT.yaml` first"
+            )
+    config = yaml.safe_load((out / "config.yaml").read_text())
+    prov = json.loads((out / "provenance.json").read_text())
+    cache = UnitCache(out)
+    units = []
+    for key in prov["unit_keys"]:
+        rec = cache.load(key)
+        if rec is None:
+            raise FileNotFoundError(f"{out}: unit {key} is missing from units/")
+        units.append(rec)
+    return {
+        "config": config,
+        "rows": read_csv(out / "results.csv"),
+        "units": units,
+        "dir": out,
+        "provenance": prov,
+    }
+
+
+def _label(rec: dict) -> str:
+    from simlunar.pipeline.runner import WorkUnit, unit_label
+
+    return unit_label(
+        WorkUnit(rec.get("index", 0), rec["key"], rec.get("sweep", {}), rec.get("config", {}))
+    )
+
+
+def write_figures(out_dir: str | Path) -> list[Path]:
+    """Draw every figure the results support; returns the written paths (PNG and PDF)."""
+    import matplotlib.pyplot as plt
+
+    from simlunar.plotting import figures as F
+
+    res = load_results(out_dir)
+    out = res["dir"]
+    cfg = res["config"]
+    formats = (cfg.get("figures") or {}).get("formats") or ["png", "pdf"]
+    fig_dir = out / "figures"
+    written: list[Path] = []
+
+    def emit(fig, stem):
+        for suffix, data in F.save(fig, stem, formats):
+            path = fig_dir / f"{stem}.{suffix}"
+            atomic_write_bytes(path, data)
+            written.append(path)
+        plt.close(fig)
+
+    study = cfg.get("study", {})
+    if study.get("kind", "sampling") != "sampling":
+        _scanner_figures(res, emit)
+        return written
+    strategies = list(study.get("strategies") or [])
+    metrics = list(study.get("metrics") or [])
+    units = res["units"]
+    shown = units[:MAX_UNIT_PANELS]
+
+    for m in metrics:
+        fig, axes = plt.subplots(
+            1,
+            len(shown),
+            figsize=(F.COLUMN_W * min(len(shown), 3), 2.6),
+            constrained_layout=True,
+            squeeze=False,
+        )
+        for ax, rec in zip(axes[0], shown):
+            F.error_vs_density(
+                res["rows"],
+                metric=m,
+                strategies=strategies,
+                ax=ax,
+                where={"unit": rec.get("index", 0)},
+                title=_label(rec) if len(units) > 1 else None,
+            )
+        emit(fig, f"error_vs_density_{m}")
+
+    cache = UnitCache(out)
+    for rec in shown:
+        arr = cache.load_arrays(rec["key"])
+        if not {"image", "wavelet_energy", "plan_rows", "reconstruction", "depth"} <= set(arr):
+            continue
+        density = (rec.get("config", {}).get("figures") or {}).get("panel_density")
+        label = f"(k/N = 1/{round(1 / density)})" if density else ""
+        fig, _ = F.image_panels(
+            arr["image"],
+            arr["wavelet_energy"],
+            arr["plan_rows"],
+            arr["plan_cols"],
+            arr["reconstruction"],
+            arr["depth"],
+            density_label=label,
+        )
+        emit(fig, f"panels_unit{rec.get('index', 0)}")
+
+    sweep = cfg.get("sweep") or {}
+    if len(sweep) == 1 and len(units) > 1:
+        (path,) = sweep
+        points = []
+        for rec in units:
+            v = rec["sweep"][path]
+            if isinstance(v, dict):
+                v = v.get("kind", json.dumps(v, sort_keys=True))
+            points.append((v, rec.get("scores", {})))
+        axis = path.rsplit(".", 1)[-1]
+        for m in metrics:
+            fig, _ = F.score_vs_sweep(points, metric=m, strategies=strategies, axis_label=path)
+            emit(fig, f"score_vs_{axis}_{m}")
+    return written
+
+
+def _scanner_figures(res: dict, emit) -> None:
+    import matplotlib.pyplot as plt
+
+    from simlunar.plotting import figures as F
+
+    rows = res["rows"]
+    metrics = list(dict.fromkeys(r["metric"] for r in rows if "metric" in r))
+    for m in metrics:
+        fig, ax = plt.subplots(figsize=(F.COLUMN_W, 2.6), constrained_layout=True)
+        labels, vals = [], []
+        for r in rows:
+            if r.get("metric") == m:
+                labels.append(
+                    " ".join(str(r.get(k, "")) for k in ("mode", "method", "strategy") if r.get(k))
+                    or str(r.get("unit"))
+                )
+                vals.append(float(r["value"]))
+        ax.bar(range(len(vals)), vals, color="#1f77b4")
+        ax.set_xticks(range(len(vals)), labels, rotation=30, fontsize=6)
+        ax.set_ylabel(m)
+        emit(fig, f"scanner_{m}")

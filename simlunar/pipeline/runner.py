@@ -1,0 +1,341 @@
+"""Run an experiment: expand sweeps into work units, compute missing ones, write the results.
+
+A work unit is one point of the sweep's cartesian product (one scene rendered once, shared by
+all strategies, densities and trials). Finished units are cached in ``<out>/units/`` under the
+SHA-256 of their resolved configuration, so an interrupted run resumes where it stopped and a
+finished one reruns instantly. ``results.csv`` is assembled in a fixed order (units in sweep
+order; rows by strategy, density, trial and metric in config order) from the cache, so the
+same seed always gives a byte-identical file whatever the executor or completion order.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from simlunar.pipeline.config import ExperimentCfg, apply_sweep_value, to_plain
+from simlunar.pipeline.executors import Executor, LocalPoolExecutor
+from simlunar.pipeline.stages import CACHE_VERSION, compute_unit
+from simlunar.pipeline.store import (
+    UnitCache,
+    atomic_write_json,
+    atomic_write_text,
+    csv_text,
+    fmt_value,
+)
+
+#: keys that do not change a unit's numbers (excluded from its cache key)
+_NON_RESULT_KEYS = ("name", "description", "sweep")
+ROW_COLUMNS = ("strategy", "density", "k", "trial", "metric", "value")
+
+
+@dataclass(frozen=True)
+class WorkUnit:
+    """One sweep point.
+
+    Attributes
+    ----------
+    index : int
+        Position in the sweep's cartesian product (results order).
+    key : str
+        SHA-256 (hex, 16 chars) of the resolved configuration: the cache key.
+    sweep : dict
+        Dotted key path -> value of this point (empty without a sweep).
+    config : dict
+        The full resolved configuration (plain, JSON-safe) without ``sweep``.
+    """
+
+    index: int
+    key: str
+    sweep: dict[str, Any]
+    config: dict[str, Any]
+
+
+def unit_key(config: dict[str, Any]) -> str:
+    """Cache key of a resolved unit config: what determines its numbers, and nothing else."""
+    relevant = {k: v for k, v in config.items() if k not in _NON_RESULT_KEYS}
+    relevant.pop("figures", None)
+    figures = config.get("figures") or {}
+    # the panel arrays depend on these two, the file formats do not
+    relevant["_figures"] = {k: figures.get(k) for k in ("enabled", "panel_density")}
+    blob = json.dumps({"cache_version": CACHE_VERSION, "config": relevant}, sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
+    """The work units of an experiment (cartesian product of its sweep axes, in order)."""
+    base = {k: v for k, v in to_plain(cfg).items() if k != "sweep"}
+    axes = list(cfg.sweep.items())
+    units = []
+    for i, combo in enumerate(itertools.product(*[vals for _, vals in axes])):
+        point = base
+        # a kind resets its section, so kinds go first and the other axes refine them
+        ordered = sorted(zip(axes, combo), key=lambda av: av[0][0].split(".")[-1] != "kind")
+        for (path, _), value in ordered:
+            point = apply_sweep_value(point, path, value)
+        resolved = to_plain(ExperimentCfg.model_validate(point))
+        resolved.pop("sweep", None)
+        units.append(
+            WorkUnit(i, unit_key(resolved), {p: v for (p, _), v in zip(axes, combo)}, resolved)
+        )
+    return units
+
+
+@dataclass
+class RunSummary:
+    out_dir: Path
+    units_total: int
+    units_cached: int
+    units_computed: int
+    elapsed_s: float
+    scores_markdown: str
+    figures: list[Path] = field(default_factory=list)
+
+    @property
+    def figures_dir(self) -> Path:
+        return self.out_dir / "figures"
+
+
+def _git_commit() -> dict[str, Any]:
+    root = Path(__file__).resolve().parents[2]
+    try:
+        head = subprocess.run(
+            ["git", "-C", str(root), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout.strip()
+        dirty = (
+            subprocess.run(
+                ["git", "-C", str(root), "status", "--porcelain", "--", "simlunar"],
+                capture_output=True,
+                text=True,
+                timeout=10,
+            ).stdout.strip()
+            != ""
+        )
+        return {"commit": head, "dirty": dirty}
+    except (OSError, subprocess.SubprocessError):
+        return {"commit": None, "dirty": None}
+
+
+def _sort_rows(rows: list[dict], config: dict) -> list[dict]:
+    study = config.get("study", {})
+    strategies = list(study.get("strategies") or [])
+    metrics = list(study.get("metrics") or [])
+
+    def order(seq, v):
+        return seq.index(v) if v in seq else len(seq)
+
+    def key(r):
+        return (
+            order(strategies, r.get("strategy")),
+            str(r.get("strategy", "")),
+            -float(r.get("density", 0.0) or 0.0),
+            int(r.get("trial", 0) or 0),
+            order(metrics, r.get("metric")),
+            str(r.get("metric", "")),
+        )
+
+    return sorted(rows, key=key)
+
+
+def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[dict], list[str]]:
+    """All tidy rows in the fixed results order, and the CSV columns."""
+    sweep_cols = list(units[0].sweep) if units else []
+    extra: list[str] = []
+    rows: list[dict] = []
+    for u in units:
+        for r in _sort_rows(records[u.key]["rows"], u.config):
+            for c in r:
+                if c not in ROW_COLUMNS and c not in extra:
+                    extra.append(c)
+            rows.append({"unit": u.index, **{c: u.sweep[c] for c in sweep_cols}, **r})
+    return rows, ["unit", *sweep_cols, *[c for c in ROW_COLUMNS if c != "value"], *extra, "value"]
+
+
+def unit_label(u: WorkUnit) -> str:
+    """Short human label of a sweep point (``elevation_deg=30``)."""
+    if not u.sweep:
+        return u.config.get("name", f"unit {u.index}")
+    parts = []
+    for path, v in u.sweep.items():
+        name = path.rsplit(".", 1)[-1]
+        if isinstance(v, dict):
+            v = v.get("kind", json.dumps(v, sort_keys=True))
+        parts.append(f"{name}={fmt_value(v)}")
+    return ", ".join(parts)
+
+
+def run_experiment(
+    cfg: ExperimentCfg,
+    out_dir: str | Path,
+    *,
+    executor: Executor | None = None,
+    compute: Callable[[dict], dict] = compute_unit,
+    progress: bool = True,
+    figures: bool = True,
+) -> RunSummary:
+    """Run (or resume) an experiment into ``out_dir``.
+
+    Parameters
+    ----------
+    cfg : ExperimentCfg
+        A validated experiment.
+    out_dir : path
+        Result folder (created). Finished units already cached there are not recomputed.
+    executor : Executor, optional
+        Where units run; default: serial in this process.
+    compute : callable
+        ``payload -> record`` for one unit (default :func:`stages.compute_unit`); must be
+        picklable by reference for process pools and Dask.
+    progress : bool
+        Show a progress bar with ETA on stderr.
+    figures : bool
+        Write ``figures/`` (when the experiment enables them).
+    """
+    t_start = time.perf_counter()
+    executor = executor or LocalPoolExecutor(1)
+    executor_open = getattr(executor, "open", None)
+    if executor_open is not None:
+        executor_open()  # connect before writing anything: a bad address leaves no folder
+    units = expand(cfg)
+    out = Path(out_dir)
+    cache = UnitCache(out)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(
+        out / "config.yaml", yaml.safe_dump(to_plain(cfg), sort_keys=False, allow_unicode=True)
+    )
+
+    records: dict[str, dict] = {}
+    todo: list[WorkUnit] = []
+    for u in units:
+        rec = cache.load(u.key)
+        if rec is not None:
+            records[u.key] = rec
+        elif u.key not in {t.key for t in todo}:
+            todo.append(u)
+    n_cached = len(units) - len(todo)
+
+    bar = _progress(progress, len(units), n_cached, cfg.name)
+    try:
+        payloads = [{"config": u.config} for u in todo]
+        for i, result in executor.run(compute, payloads):
+            u = todo[i]
+            arrays = result.pop("arrays", {}) or {}
+            record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
+            cache.save(u.key, record, arrays)
+            records[u.key] = json.loads(json.dumps(record, default=float))
+            if bar is not None:
+                bar.advance()
+    finally:
+        if bar is not None:
+            bar.stop()
+
+    rows, columns = collect_rows(units, records)
+    atomic_write_text(out / "results.csv", csv_text(rows, columns))
+
+    from simlunar.plotting.tables import score_tables
+
+    labelled = [(unit_label(u), records[u.key].get("scores", {})) for u in units]
+    strategies = _names(units, "strategies")
+    metrics = _names(units, "metrics")
+    md, tex = score_tables(labelled, strategies=strategies, metrics=metrics, title=cfg.name)
+    atomic_write_text(out / "scores.md", md)
+    atomic_write_text(out / "scores.tex", tex)
+
+    elapsed = time.perf_counter() - t_start
+    _write_provenance(out, cfg, units, records, executor, n_cached, elapsed)
+
+    written: list[Path] = []
+    if figures and cfg.figures.enabled:
+        from simlunar.pipeline.figures import write_figures
+
+        written = write_figures(out)
+    return RunSummary(
+        out, len(units), n_cached, len(todo), time.perf_counter() - t_start, md, written
+    )
+
+
+def _names(units: list[WorkUnit], key: str) -> list[str]:
+    out: list[str] = []
+    for u in units:
+        for n in u.config.get("study", {}).get(key) or []:
+            if n not in out:
+                out.append(n)
+    return out
+
+
+def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapsed) -> None:
+    from simlunar.render.backend import versions
+
+    variants = sorted(
+        {
+            str(r.get("meta", {}).get("variant"))
+            for r in records.values()
+            if r.get("meta", {}).get("variant")
+        }
+    )
+    prov = {
+        "experiment": cfg.name,
+        "seed": cfg.seed,
+        "versions": versions(),
+        "variant": variants[0] if len(variants) == 1 else variants,
+        "git": _git_commit(),
+        "python": sys.version.split()[0],
+        "executor": executor.describe(),
+        "units": {"total": len(units), "cached": n_cached, "computed": len(units) - n_cached},
+        "timings": {
+            "run_s": round(elapsed, 3),
+            "units": {u.key: records[u.key].get("timings", {}) for u in units},
+        },
+        "unit_keys": [u.key for u in units],
+    }
+    atomic_write_json(out / "provenance.json", prov)
+
+
+class _Bar:
+    def __init__(self, total: int, done: int, name: str):
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self.p = Progress(
+            TextColumn(f"[bold]{name}[/] units"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+            transient=False,
+        )
+        self.task = self.p.add_task("units", total=total, completed=done)
+        self.p.start()
+
+    def advance(self) -> None:
+        self.p.advance(self.task)
+
+    def stop(self) -> None:
+        self.p.stop()
+
+
+def _progress(enabled: bool, total: int, done: int, name: str) -> _Bar | None:
+    return _Bar(total, done, name) if enabled else None

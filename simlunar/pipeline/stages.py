@@ -1,0 +1,305 @@
+"""One work unit, end to end: terrain -> render -> sensor -> study (the real components).
+
+A work unit is one resolved experiment configuration (one sweep point). It renders its scene
+once and shares the image and ground truth across every strategy, density and trial of the
+study. Random streams are split per stage from the experiment seed with
+``SeedSequence(seed).spawn`` so that changing, say, the planner never changes the terrain, and
+every sweep point of an ablation sees the same terrain and the same sampling trials (common
+random numbers make the comparison sharper).
+
+This module converts YAML units (``_deg``, ``_m``) into the library's SI units and radians; the
+library functions it calls take arrays and keyword-only options, never config objects.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from simlunar.pipeline.config import (
+    CameraLightCfg,
+    ExperimentCfg,
+    HapkeCfg,
+    LambertCfg,
+    OrenNayarCfg,
+    OrthoNadirCfg,
+    SamplingStudyCfg,
+    SensorCfg,
+    SunLightCfg,
+)
+
+#: stage name -> spawn index; append only (reordering would change every result)
+STAGES = ("terrain", "render", "sensor", "study", "panels")
+
+#: bump when a change makes cached unit results invalid
+CACHE_VERSION = 1
+
+
+def stage_seeds(seed: int) -> dict[str, np.random.SeedSequence]:
+    """Independent seed sequences per stage, derived from the experiment seed only."""
+    children = np.random.SeedSequence(seed).spawn(len(STAGES))
+    return dict(zip(STAGES, children))
+
+
+def _int_seed(ss: np.random.SeedSequence) -> int:
+    """A 31-bit integer seed for code that wants an int (Mitsuba's sampler)."""
+    return int(ss.generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF)
+
+
+# --------------------------------------------------------------------------- terrain
+def build_terrain(cfg, *, rng):
+    """The :class:`~simlunar.terrain.Terrain` of a :class:`TerrainCfg`."""
+    if cfg.preset is not None:
+        from simlunar.terrain import generate
+        from simlunar.terrain.presets import load_preset
+
+        params = load_preset(cfg.preset, scale=cfg.scale)
+        terrain = generate(params, rng=rng).terrain
+    else:
+        from simlunar.terrain.io import load_dem
+
+        kw = {"spacing": cfg.spacing_m}
+        if cfg.albedo_file is not None:
+            kw["albedo_file"] = cfg.albedo_file
+        terrain = load_dem(cfg.file, **kw)
+    if cfg.albedo is not None:
+        from simlunar.terrain.types import Terrain
+
+        terrain = Terrain(
+            terrain.heights,
+            np.full(terrain.shape, cfg.albedo, np.float32),
+            terrain.spacing,
+            terrain.origin,
+        )
+    return terrain
+
+
+# --------------------------------------------------------------------------- render
+def build_camera(cfg, terrain):
+    from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose
+
+    if isinstance(cfg, OrthoNadirCfg):
+        return OrthoCamera.nadir_for_grid(
+            terrain.shape, terrain.spacing, terrain.origin, altitude=cfg.altitude_m
+        )
+    intr = Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg)
+    return Camera(intr, Pose.look_at(cfg.position_m, cfg.look_at_m))
+
+
+def build_lights(cfg) -> list:
+    from simlunar.render.lights import make_light
+
+    if isinstance(cfg, SunLightCfg):
+        return [
+            make_light(
+                "sun", elevation=cfg.elevation, azimuth=cfg.azimuth, irradiance=cfg.irradiance
+            )
+        ]
+    if isinstance(cfg, CameraLightCfg):
+        return [make_light("camera", intensity=cfg.intensity)]
+    raise ValueError(f"render.light: unsupported light {cfg!r}")
+
+
+def build_bsdf(cfg):
+    from simlunar.render.materials import make_bsdf
+
+    if isinstance(cfg, LambertCfg):
+        return make_bsdf("lambert")
+    if isinstance(cfg, OrenNayarCfg):
+        return make_bsdf("oren_nayar", sigma=cfg.sigma, model=cfg.model)
+    if isinstance(cfg, HapkeCfg):
+        kw = {k: getattr(cfg, k) for k in ("w", "b", "c", "B0", "h") if getattr(cfg, k) is not None}
+        if cfg.theta_bar_deg is not None:
+            kw["theta_bar"] = float(np.radians(cfg.theta_bar_deg))
+        return make_bsdf("hapke", **kw)
+    raise ValueError(f"render.bsdf: unsupported BSDF {cfg!r}")
+
+
+def luminance(image: np.ndarray) -> np.ndarray:
+    """Rec. 709 luminance of a linear RGB image (rows, cols, 3) -> (rows, cols) float32."""
+    image = np.asarray(image, np.float32)
+    if image.ndim == 2:
+        return image
+    return (image[..., :3] @ np.array([0.2126, 0.7152, 0.0722], np.float32)).astype(np.float32)
+
+
+def sensor_image(radiance: np.ndarray, cfg: SensorCfg | None, *, rng) -> np.ndarray:
+    """Radiance (rows, cols) -> sensor image in [0, 1] (float32); None = normalised radiance."""
+    finite = np.nan_to_num(radiance, nan=0.0)
+    if cfg is None:
+        top = float(np.percentile(finite, 99.5)) or 1.0
+        return np.clip(finite / top, 0, 1).astype(np.float32)
+    from simlunar.imaging.sensor import SensorModel, apply_sensor
+
+    exposure = cfg.exposure_e
+    if exposure is None:
+        top = float(np.percentile(finite, 99.5))
+        exposure = 0.8 * cfg.full_well_e / top if top > 0 else 1.0
+    model = SensorModel(
+        exposure=exposure,
+        full_well_e=cfg.full_well_e,
+        read_noise_e=cfg.read_noise_e,
+        bits=cfg.bits,
+        response=cfg.response,
+        gamma=cfg.gamma,
+    )
+    return apply_sensor(finite, model, rng=rng).astype(np.float32)
+
+
+# --------------------------------------------------------------------------- study
+def _panel_arrays(image, depth, study: SamplingStudyCfg, density: float, *, rng) -> dict:
+    """Arrays for the image panels: wavelet energy, one wavelet plan and its reconstruction."""
+    from simlunar.features import feature_map
+    from simlunar.planner import plan
+    from simlunar.reconstruction import reconstruct
+
+    energy = feature_map("wavelet", image)
+    n = image.size
+    k = max(3, round(density * n))
+    p = plan("wavelet", k, image=image, rng=rng)
+    pts = np.stack([p.rows, p.cols], axis=1).astype(np.float64) + 0.5
+    filled = np.where(np.isfinite(depth), depth, np.nanmean(depth))
+    recon = reconstruct(pts, filled[p.rows, p.cols], image.shape)
+    return {
+        "wavelet_energy": energy.astype(np.float32),
+        "plan_rows": np.asarray(p.rows, np.int32),
+        "plan_cols": np.asarray(p.cols, np.int32),
+        "reconstruction": recon.astype(np.float64),
+    }
+
+
+def compute_unit(payload: dict[str, Any]) -> dict[str, Any]:
+    """Run one work unit; picklable entry point for every executor.
+
+    Parameters
+    ----------
+    payload : dict
+        ``{"config": <plain resolved experiment dict without sweep>}``.
+
+    Returns
+    -------
+    dict
+        ``rows`` (tidy dicts: strategy, density, k, trial, metric, value), ``scores``
+        ({metric: {strategy: score}}), ``arrays`` (name -> ndarray, for figures) and
+        ``timings`` (stage -> seconds).
+    """
+    cfg = ExperimentCfg.model_validate(payload["config"])
+    seeds = stage_seeds(cfg.seed)
+    timings: dict[str, float] = {}
+    t = time.perf_counter()
+
+    terrain = build_terrain(cfg.terrain, rng=np.random.default_rng(seeds["terrain"]))
+    timings["terrain_s"] = time.perf_counter() - t
+
+    if not isinstance(cfg.study, SamplingStudyCfg):
+        return _compute_scanner_unit(cfg, terrain, seeds, timings)
+
+    t = time.perf_counter()
+    from simlunar.render import render
+
+    camera = build_camera(cfg.render.camera, terrain)
+    r = cfg.render
+    result = render(
+        terrain,
+        camera,
+        lights=build_lights(r.light),
+        bsdf=build_bsdf(r.bsdf),
+        spp=r.spp,
+        seed=_int_seed(seeds["render"]),
+        max_depth=r.max_depth,
+    )
+    timings["render_s"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    radiance = luminance(result.image)
+    image = sensor_image(radiance, r.sensor, rng=np.random.default_rng(seeds["sensor"]))
+    depth = np.where(result.gt.valid, result.gt.depth, np.nan).astype(np.float64)
+    timings["sensor_s"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    from simlunar.study.sampling import run_sampling_study
+
+    s = cfg.study
+    kw = {}
+    if s.strategy_options:
+        kw["strategy_options"] = s.strategy_options
+    study = run_sampling_study(
+        depth,
+        image,
+        strategies=list(s.strategies),
+        densities=list(s.densities),
+        trials=s.trials,
+        metrics=list(s.metrics),
+        rng=np.random.default_rng(seeds["study"]),
+        range_noise_std=s.range_noise_std_m,
+        **kw,
+    )
+    timings["study_s"] = time.perf_counter() - t
+
+    arrays = {
+        "image": image,
+        "radiance": radiance,
+        "depth": depth,
+        "heights": np.asarray(terrain.heights, np.float64),
+        "albedo": np.asarray(terrain.albedo, np.float32),
+    }
+    if cfg.figures.enabled:
+        arrays.update(
+            _panel_arrays(
+                image,
+                depth,
+                s,
+                cfg.figures.panel_density,
+                rng=np.random.default_rng(seeds["panels"]),
+            )
+        )
+    return {
+        "rows": [dict(r) for r in study.rows],
+        "scores": _plain_scores(study.scores),
+        "arrays": arrays,
+        "timings": timings,
+        "meta": {"shape": list(image.shape), "spacing_m": terrain.spacing},
+    }
+
+
+def _plain_scores(scores) -> dict:
+    """Scores as {metric: {strategy: float}} whatever mapping shape the study returns."""
+    out: dict[str, dict[str, float]] = {}
+    for key, val in dict(scores).items():
+        if isinstance(val, dict):
+            for k2, v in val.items():
+                out.setdefault(str(key), {})[str(k2)] = float(v)
+        elif isinstance(key, tuple) and len(key) == 2:
+            strategy, metric = key
+            out.setdefault(str(metric), {})[str(strategy)] = float(val)
+        else:
+            raise ValueError(f"unexpected score entry {key!r}: {val!r}")
+    return out
+
+
+def _compute_scanner_unit(cfg: ExperimentCfg, terrain, seeds, timings) -> dict[str, Any]:
+    from simlunar.scanner.rigs import make_rig
+    from simlunar.study.scanner import run_scanner_study
+
+    s = cfg.study
+    t = time.perf_counter()
+    rig = make_rig(s.rig, terrain=terrain)
+    res = run_scanner_study(
+        terrain,
+        rig,
+        mode=s.mode,
+        planner=s.planner,
+        budget=s.budget,
+        rng=np.random.default_rng(seeds["study"]),
+        **s.options,
+    )
+    timings["study_s"] = time.perf_counter() - t
+    return {
+        "rows": [dict(r) for r in res.rows],
+        "scores": _plain_scores(getattr(res, "scores", {})),
+        "arrays": {},
+        "timings": timings,
+        "meta": {"shape": list(terrain.shape)},
+    }

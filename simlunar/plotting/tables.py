@@ -1,0 +1,130 @@
+"""Score tables in the layout of the paper's Tables 1 and 2 (Markdown and LaTeX).
+
+Scores follow the paper's eq. 4.3: the inverse-density-weighted mean of e_random / e_strategy,
+so random scores exactly 1 and higher is better.
+
+* One scene (paper Table 2): rows are metrics (MSE, GRAD, SAL), columns strategies.
+* Several scenes or sweep points (paper Table 1): one table per metric, rows are the scenes /
+  sweep points, columns strategies.
+"""
+
+from __future__ import annotations
+
+import math
+
+#: display names of strategies and metrics (paper spelling)
+STRATEGY_NAMES = {
+    "random": "Random",
+    "grid": "Grid",
+    "gradient": "Gradient",
+    "entropy": "Entropy",
+    "wavelet": "Wavelet",
+    "saliency": "Saliency",
+    "blue_noise": "Blue noise",
+    "combined": "Combined",
+}
+METRIC_NAMES = {"mse": "MSE", "grad": "GRAD", "sal": "SAL", "rmse": "RMSE", "mae": "MAE"}
+
+
+def _name(table: dict, key: str) -> str:
+    return table.get(key, key.replace("_", " ").capitalize())
+
+
+def _fmt(v) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "–"
+    return f"{float(v):.2f}"
+
+
+def _best(values: list) -> int | None:
+    finite = [(v, i) for i, v in enumerate(values) if v is not None and math.isfinite(v)]
+    return max(finite)[1] if finite else None
+
+
+def _md_table(header: list[str], rows: list[tuple[str, list]]) -> str:
+    lines = [
+        "| " + " | ".join(header) + " |",
+        "|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|",
+    ]
+    for label, vals in rows:
+        b = _best(vals)
+        cells = [f"**{_fmt(v)}**" if i == b else _fmt(v) for i, v in enumerate(vals)]
+        lines.append("| " + " | ".join([label, *cells]) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _tex_escape(s: str) -> str:
+    for a, b in (
+        ("\\", r"\textbackslash{}"),
+        ("_", r"\_"),
+        ("&", r"\&"),
+        ("%", r"\%"),
+        ("#", r"\#"),
+        ("$", r"\$"),
+        ("{", r"\{"),
+        ("}", r"\}"),
+    ):
+        s = s.replace(a, b)
+    return s
+
+
+def _tex_table(header: list[str], rows: list[tuple[str, list]], caption: str) -> str:
+    cols = "l" + "r" * (len(header) - 1)
+    out = [
+        "\\begin{table}[t]",
+        "\\centering",
+        f"\\caption{{{_tex_escape(caption)}}}",
+        f"\\begin{{tabular}}{{{cols}}}",
+        "\\toprule",
+        " & ".join(_tex_escape(h) for h in header) + " \\\\",
+        "\\midrule",
+    ]
+    for label, vals in rows:
+        b = _best(vals)
+        cells = [f"\\textbf{{{_fmt(v)}}}" if i == b else _fmt(v) for i, v in enumerate(vals)]
+        out.append(" & ".join([_tex_escape(label), *cells]) + " \\\\")
+    out += ["\\bottomrule", "\\end{tabular}", "\\end{table}"]
+    return "\n".join(out).replace("–", "--") + "\n"
+
+
+def score_tables(
+    units: list[tuple[str, dict]], *, strategies: list[str], metrics: list[str], title: str = ""
+) -> tuple[str, str]:
+    """Markdown and LaTeX score tables.
+
+    Parameters
+    ----------
+    units : list of (label, scores)
+        ``scores`` maps metric -> strategy -> score (eq. 4.3); one entry per scene / sweep point.
+    strategies, metrics : list of str
+        Column and row order.
+    title : str
+        Caption prefix (the experiment name).
+
+    Returns
+    -------
+    (markdown, latex) : tuple of str
+        The best score of each row is bold.
+    """
+    header = ["", *[_name(STRATEGY_NAMES, s) for s in strategies]]
+    md, tex = [], []
+    if len(units) == 1:
+        _, scores = units[0]
+        rows = [
+            (_name(METRIC_NAMES, m), [scores.get(m, {}).get(s) for s in strategies])
+            for m in metrics
+        ]
+        cap = f"{title}: scores (eq. 4.3, random = 1, higher is better)"
+        md.append(f"### {cap}\n\n" + _md_table(["Metric", *header[1:]], rows))
+        tex.append(_tex_table(["Metric", *header[1:]], rows, cap))
+    else:
+        for m in metrics:
+            rows = [
+                (label, [scores.get(m, {}).get(s) for s in strategies]) for label, scores in units
+            ]
+            cap = (
+                f"{title}: {_name(METRIC_NAMES, m)} scores (eq. 4.3, random = 1, higher is better)"
+            )
+            md.append(f"### {cap}\n\n" + _md_table(["Scene", *header[1:]], rows))
+            tex.append(_tex_table(["Scene", *header[1:]], rows, cap))
+    return "\n".join(md), "\n".join(tex)

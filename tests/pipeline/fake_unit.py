@@ -1,0 +1,65 @@
+"""A cheap, deterministic stand-in for a work unit (runner tests that are not about rendering).
+
+It depends on the unit's config and seed exactly as a real unit does (rows per strategy,
+density, trial and metric; the light elevation shifts the numbers), and counts its calls in a
+folder given by ``SIMLUNAR_TEST_CALLS`` so tests can prove which units were recomputed.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import uuid
+from pathlib import Path
+
+import numpy as np
+
+from simlunar.pipeline.config import ExperimentCfg
+from simlunar.pipeline.stages import stage_seeds
+
+
+def fake_unit(payload: dict) -> dict:
+    cfg = ExperimentCfg.model_validate(payload["config"])
+    calls = os.environ.get("SIMLUNAR_TEST_CALLS")
+    if calls:
+        Path(calls).mkdir(parents=True, exist_ok=True)
+        (Path(calls) / f"{uuid.uuid4().hex}.call").write_text(payload["config"]["name"])
+    delay = float(os.environ.get("SIMLUNAR_TEST_DELAY", "0"))
+    if delay:
+        time.sleep(delay)
+    s = cfg.study
+    rng = np.random.default_rng(stage_seeds(cfg.seed)["study"])
+    shift = getattr(cfg.render.light, "elevation_deg", 45.0) / 90.0
+    rows = []
+    for strategy in s.strategies:
+        for d in s.densities:
+            for t in range(s.trials):
+                for m in s.metrics:
+                    rows.append(
+                        {
+                            "strategy": strategy,
+                            "density": d,
+                            "k": max(3, round(d * 1024)),
+                            "trial": t,
+                            "metric": m,
+                            "value": float((1 + shift) * (1 / d) ** 0.5 * rng.gamma(4.0)),
+                        }
+                    )
+    scores = {
+        m: {st: 1.0 + 0.1 * i + shift for i, st in enumerate(s.strategies)} for m in s.metrics
+    }
+    img = rng.random((16, 16)).astype(np.float32)
+    return {
+        "rows": rows,
+        "scores": scores,
+        "timings": {"study_s": 0.0},
+        "arrays": {
+            "image": img,
+            "depth": img.astype(np.float64) * 2,
+            "wavelet_energy": img**2,
+            "plan_rows": np.arange(8, dtype=np.int32),
+            "plan_cols": np.arange(8, dtype=np.int32),
+            "reconstruction": img.astype(np.float64) * 2.1,
+        },
+        "meta": {"variant": "fake"},
+    }
