@@ -224,7 +224,7 @@ def epipolar_distance(F: np.ndarray, cam_uv, proj_uv) -> np.ndarray:
     """Distance (camera pixels) from ``cam_uv`` to the epipolar line of ``proj_uv``; (...) float."""
     cam = np.asarray(cam_uv, float)
     proj = np.asarray(proj_uv, float)
-    xp = np.concatenate([proj, np.ones(proj.shape[:-1] + (1,))], axis=-1)
+    xp = np.concatenate([proj, np.ones((*proj.shape[:-1], 1))], axis=-1)
     line = xp @ F.T
     num = line[..., 0] * cam[..., 0] + line[..., 1] * cam[..., 1] + line[..., 2]
     return np.abs(num) / np.hypot(line[..., 0], line[..., 1])

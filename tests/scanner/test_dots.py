@@ -69,8 +69,7 @@ def test_ghosts_are_rejected(rig):
     true_uv, _ = rig.camera.project(X)
     seg = dots.epipolar_segments(rig, proj_uv, (1.0, 3.0))
     off_line = true_uv[0] + np.array([0.0, 25.0])  # interreflection 25 px off the epipolar line
-    a, b = seg[0]
-    on_line = a  # a dimmer ghost lying on the segment (at its near end)
+    on_line = seg[0, 0]  # a dimmer ghost lying on the segment (at its near end)
     assert np.hypot(*(on_line - true_uv[0])) > 8
     img = (
         gaussian_spots((120, 160), true_uv, 1.0)
@@ -154,7 +153,8 @@ def test_camera_that_does_not_see_the_projection_is_rejected():
     from simlunar.geometry import Camera, Pose, Rig
 
     away = Camera(
-        r.camera.intrinsics, Pose.look_at(r.camera.position, r.camera.position + [0, 0, 1.0])
+        r.camera.intrinsics,
+        Pose.look_at(r.camera.position, r.camera.position + np.array([0, 0, 1.0])),
     )
     bad = Rig(r.projector, away)
     with pytest.raises(ValueError, match="does not see the projected area"):

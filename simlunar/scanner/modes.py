@@ -1,0 +1,398 @@
+"""Scan modes: full gray code, ambiguity enhancement (gray code + planned dot rescans), data reduction.
+
+The modes are NumPy-only and drive any *capture* object with two methods:
+
+``capture.render(patterns) -> (n, rows, cols) float``
+    Noise-free camera images of the scene under ``n`` projector patterns (projector shape
+    (H, W), values in [0, 1]). Each pattern counts as one render.
+``capture.sense(images) -> (n, rows, cols) float``
+    Captured frames: sensor noise, quantisation and response applied per frame.
+
+:mod:`simlunar.study.scanner` provides the Mitsuba-backed capture; tests use NumPy ones.
+Inverse patterns come from linearity of light transport (``bits + 2`` renders instead of
+``2 * bits + 2``) unless ``inverses="render"``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.geometry import Rig
+from simlunar.scanner import dots as _dots
+from simlunar.scanner import gray_code as gc
+from simlunar.scanner.triangulate import (
+    Correspondences,
+    PointCloud,
+    check_rig,
+    depth_at_proj_pixels,
+    triangulate,
+)
+
+
+@dataclass(frozen=True, eq=False)
+class GrayScan:
+    """Result of a full gray-code scan.
+
+    Attributes
+    ----------
+    decode : GrayDecode (camera view)
+    cloud : PointCloud of every valid camera pixel
+    depth : (H, W) float64 z-depth in the guide (projector) view, NaN holes
+    renders : int number of rendered frames
+    frames : dict of the captured 'images' (OpenCV-ordered stack), 'white', 'black'
+    """
+
+    decode: gc.GrayDecode
+    cloud: PointCloud
+    depth: np.ndarray
+    renders: int
+    frames: dict = field(repr=False)
+
+
+@dataclass(frozen=True, eq=False)
+class DotScan:
+    """Result of scanning a set of dots.
+
+    Attributes
+    ----------
+    proj_uv : (n, 2) projector coordinates of the dots asked for
+    found : (n,) bool dots detected and triangulated
+    cam_uv : (n, 2) camera centroids (NaN where not found)
+    cloud : PointCloud of the found dots
+    depth : (H, W) guide-view depth with only the found dots' pixels set (NaN elsewhere)
+    renders : int frames rendered (dot frames + one black frame)
+    frames_per_dot : list of index arrays (the schedule)
+    n_ghosts : int blobs rejected as interreflection ghosts or ambiguities
+    """
+
+    proj_uv: np.ndarray
+    found: np.ndarray
+    cam_uv: np.ndarray
+    cloud: PointCloud
+    depth: np.ndarray
+    renders: int
+    frames_per_dot: list
+    n_ghosts: int
+
+
+def _check_patterns(capture, patterns: np.ndarray) -> np.ndarray:
+    imgs = np.asarray(capture.render(patterns), dtype=np.float64)
+    if imgs.ndim != 3 or imgs.shape[0] != len(patterns):
+        raise ValueError(f"capture.render returned shape {imgs.shape} for {len(patterns)} patterns")
+    return imgs
+
+
+def gray_code_scan(
+    capture,
+    rig: Rig,
+    *,
+    black_threshold: float = 0.05,
+    white_threshold: float = 0.01,
+    inverses: str = "linearity",
+    method: str = "plane",
+    require_reliable: bool = True,
+) -> GrayScan:
+    """Full gray-code scan (columns and rows) decoded and triangulated.
+
+    Parameters
+    ----------
+    capture : object with ``render`` and ``sense`` (module docstring)
+    rig : Rig
+    black_threshold, white_threshold : float
+        OpenCV's validity and bit-reliability thresholds in captured-frame units ([0, 1]).
+    inverses : "linearity" or "render"
+        Obtain inverse-pattern images from white, black and pattern renders, or render them.
+    method : "plane" (camera ray x projector column plane) or "rays" (column and row rays)
+
+    Returns
+    -------
+    GrayScan
+    """
+    check_rig(rig)
+    H, W = rig.projector.intrinsics.shape
+    stack = gc.encode(W, H).astype(np.float32) / 255.0
+    ones = np.ones((1, H, W), np.float32)
+    zeros = np.zeros((1, H, W), np.float32)
+    if inverses == "linearity":
+        pos = stack[0::2]
+        radiance = _check_patterns(capture, np.concatenate([pos, ones, zeros]))
+        white_r, black_r = radiance[-2], radiance[-1]
+        inv = gc.inverses_by_linearity(radiance[:-2], white_r, black_r)
+        radiance = np.concatenate([gc.interleave(radiance[:-2], inv), radiance[-2:]])
+        renders = len(pos) + 2
+    elif inverses == "render":
+        radiance = _check_patterns(capture, np.concatenate([stack, ones, zeros]))
+        renders = len(stack) + 2
+    else:
+        raise ValueError(f"unknown inverses option {inverses!r}; valid: 'linearity', 'render'")
+    frames = np.asarray(capture.sense(radiance), dtype=np.float64)
+    images, white, black = frames[:-2], frames[-2], frames[-1]
+    dec = gc.decode(
+        images,
+        white,
+        black,
+        proj_shape=(H, W),
+        black_threshold=black_threshold,
+        white_threshold=white_threshold,
+        require_reliable=require_reliable,
+    )
+    cloud = triangulate(rig, Correspondences.from_gray(dec), method=method)
+    depth = depth_at_proj_pixels(cloud, rig.guide)
+    return GrayScan(
+        decode=dec,
+        cloud=cloud,
+        depth=depth,
+        renders=renders,
+        frames={"images": images, "white": white, "black": black},
+    )
+
+
+def dot_scan(
+    capture,
+    rig: Rig,
+    proj_uv,
+    *,
+    depth_range: tuple[float, float],
+    exact: bool = False,
+    radius: float = 0.0,
+    min_proj_spacing: float = 8.0,
+    min_cam_spacing: float = 6.0,
+    tol: float = 2.0,
+    rel_threshold: float = 0.2,
+    abs_threshold: float = 0.02,
+    batch: int = 32,
+) -> DotScan:
+    """Scan dots (one projector pixel or a small disk each), multiplexed or one per frame.
+
+    Parameters
+    ----------
+    capture : object with ``render`` and ``sense``
+    rig : Rig
+    proj_uv : (n, 2) projector pixel coordinates of the dots (n >= 1)
+    depth_range : (near, far) projector z-depths bounding the scene (m): sets the epipolar
+        segments used for scheduling and matching
+    exact : bool
+        One dot per frame (reference mode) instead of multiplexed frames.
+    radius : float
+        Dot radius in projector pixels (0 = one pixel).
+    min_proj_spacing, min_cam_spacing, tol : float
+        Scheduling spacings (projector px, camera px) and the matching tolerance (camera px).
+    rel_threshold, abs_threshold : float
+        Blob detection thresholds (relative to the frame's brightest dot; absolute in frame units).
+    batch : int
+        Frames rendered per ``capture.render`` call (memory bound only).
+
+    Returns
+    -------
+    DotScan
+    """
+    check_rig(rig)
+    proj_uv = np.asarray(proj_uv, float)
+    if proj_uv.ndim != 2 or proj_uv.shape[1] != 2 or len(proj_uv) == 0:
+        raise ValueError(
+            f"dot set is empty or not (n, 2): got shape {proj_uv.shape}; a dot scan "
+            "needs at least one dot"
+        )
+    H, W = rig.projector.intrinsics.shape
+    schedule = _dots.schedule_dots(
+        rig,
+        proj_uv,
+        depth_range=depth_range,
+        min_proj_spacing=min_proj_spacing,
+        min_cam_spacing=min_cam_spacing,
+        exact=exact,
+    )
+    black = np.asarray(capture.sense(_check_patterns(capture, np.zeros((1, H, W), np.float32))))[0]
+    segments = _dots.epipolar_segments(rig, proj_uv, depth_range)
+    cam_uv = np.full((len(proj_uv), 2), np.nan)
+    n_ghosts = 0
+    for start in range(0, len(schedule), batch):
+        group = schedule[start : start + batch]
+        pats = np.stack([_dots.dot_pattern((H, W), proj_uv[f], radius=radius) for f in group])
+        frames = np.asarray(capture.sense(_check_patterns(capture, pats)), dtype=np.float64)
+        for f, frame in zip(group, frames):
+            det = _dots.detect_dots(
+                frame, background=black, rel_threshold=rel_threshold, abs_threshold=abs_threshold
+            )
+            m = _dots.match_dots(det, segments[f], tol=tol)
+            cam_uv[f[m.dot]] = m.cam_uv
+            n_ghosts += m.n_ghosts
+    found = np.isfinite(cam_uv).all(axis=1)
+    cloud = triangulate(rig, Correspondences(cam_uv[found], proj_uv[found]), method="rays")
+    depth = depth_at_proj_pixels(cloud, rig.guide)
+    return DotScan(
+        proj_uv=proj_uv,
+        found=found,
+        cam_uv=cam_uv,
+        cloud=cloud,
+        depth=depth,
+        renders=len(schedule) + 1,
+        frames_per_dot=schedule,
+        n_ghosts=n_ghosts,
+    )
+
+
+def plan_pixels(
+    guide_image: np.ndarray, k: int, *, planner: str, rng, valid=None, **opts
+) -> np.ndarray:
+    """Guide pixels (rows, cols) chosen by a sampling-study planner: (k, 2) int (row, col).
+
+    ``valid`` (bool (H, W)) restricts the choice, e.g. to pixels the projector can light.
+    """
+    from simlunar.planner import plan
+
+    img = np.asarray(guide_image, float)
+    if valid is not None:
+        # planners see a zero image where nothing can be measured
+        img = np.where(valid, img, 0.0)
+    p = plan(planner, int(k), image=img, shape=img.shape, rng=rng, **opts)
+    rc = np.stack([np.asarray(p.rows), np.asarray(p.cols)], axis=-1).astype(np.int64)
+    return rc
+
+
+def fill_holes(depth: np.ndarray, *, outside: str = "nearest") -> np.ndarray:
+    """Delaunay-linear reconstruction of a depth map with NaN holes to the full grid."""
+    from simlunar.reconstruction import reconstruct
+
+    r, c = np.nonzero(np.isfinite(depth))
+    if len(r) == 0:
+        raise ValueError("depth map has no measured pixel to reconstruct from")
+    return reconstruct(
+        np.stack([r, c], axis=-1).astype(float), depth[r, c], depth.shape, outside=outside
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class ScanResult:
+    """Output of a scan mode.
+
+    Attributes
+    ----------
+    mode : str
+    depth : (H, W) guide-view depth, reconstructed to the full grid (m)
+    measured : (H, W) guide-view depth of the measured pixels only (NaN holes)
+    renders : int total rendered frames
+    gray : GrayScan or None
+    dots : DotScan or None
+    planned_rc : (k, 2) int or None guide pixels chosen by the planner
+    """
+
+    mode: str
+    depth: np.ndarray
+    measured: np.ndarray
+    renders: int
+    gray: GrayScan | None = None
+    dots: DotScan | None = None
+    planned_rc: np.ndarray | None = None
+
+
+def scan_gray_code(
+    capture, rig: Rig, *, gray_opts: dict | None = None, outside: str = "nearest"
+) -> ScanResult:
+    """Mode ``gray_code``: full scan, holes filled by Delaunay-linear reconstruction."""
+    g = gray_code_scan(capture, rig, **(gray_opts or {}))
+    return ScanResult("gray_code", fill_holes(g.depth, outside=outside), g.depth, g.renders, gray=g)
+
+
+def scan_ambiguity_enhancement(
+    capture,
+    rig: Rig,
+    *,
+    guide_image: np.ndarray,
+    planner: str,
+    rng,
+    depth_range: tuple[float, float],
+    budget: float = 0.1,
+    gray: GrayScan | None = None,
+    gray_opts: dict | None = None,
+    dot_opts: dict | None = None,
+    planner_opts: dict | None = None,
+    outside: str = "nearest",
+) -> ScanResult:
+    """Mode ``ambiguity_enhancement``: gray code, then rescan a planned ``budget`` of pixels with dots.
+
+    The dots replace the gray-code depth where they were found; the fused map is reconstructed
+    to the full grid. ``budget`` is the fraction of guide pixels rescanned (paper: ~10%).
+    """
+    g = gray if gray is not None else gray_code_scan(capture, rig, **(gray_opts or {}))
+    H, W = rig.projector.intrinsics.shape
+    k = _budget_k(budget, H * W)
+    rc = plan_pixels(guide_image, k, planner=planner, rng=rng, **(planner_opts or {}))
+    d = dot_scan(
+        capture,
+        rig,
+        np.c_[rc[:, 1] + 0.5, rc[:, 0] + 0.5],
+        depth_range=depth_range,
+        **(dot_opts or {}),
+    )
+    fused = g.depth.copy()
+    hit = np.isfinite(d.depth)
+    fused[hit] = d.depth[hit]
+    renders = d.renders + (g.renders if gray is None else 0)
+    return ScanResult(
+        "ambiguity_enhancement",
+        fill_holes(fused, outside=outside),
+        fused,
+        renders,
+        gray=g,
+        dots=d,
+        planned_rc=rc,
+    )
+
+
+def scan_data_reduction(
+    capture,
+    rig: Rig,
+    *,
+    guide_image: np.ndarray,
+    planner: str,
+    rng,
+    depth_range: tuple[float, float],
+    budget: float = 0.1,
+    dot_opts: dict | None = None,
+    planner_opts: dict | None = None,
+    outside: str = "nearest",
+) -> ScanResult:
+    """Mode ``data_reduction``: only a planned sparse dot set, reconstructed Delaunay-linearly."""
+    H, W = rig.projector.intrinsics.shape
+    k = _budget_k(budget, H * W)
+    rc = plan_pixels(guide_image, k, planner=planner, rng=rng, **(planner_opts or {}))
+    d = dot_scan(
+        capture,
+        rig,
+        np.c_[rc[:, 1] + 0.5, rc[:, 0] + 0.5],
+        depth_range=depth_range,
+        **(dot_opts or {}),
+    )
+    return ScanResult(
+        "data_reduction",
+        fill_holes(d.depth, outside=outside),
+        d.depth,
+        d.renders,
+        dots=d,
+        planned_rc=rc,
+    )
+
+
+def _budget_k(budget: float, n: int) -> int:
+    if not 0 < budget <= 1:
+        raise ValueError(f"budget must be a fraction in (0, 1], got {budget}")
+    return max(1, round(budget * n))
+
+
+MODES = {
+    "gray_code": scan_gray_code,
+    "ambiguity_enhancement": scan_ambiguity_enhancement,
+    "data_reduction": scan_data_reduction,
+}
+
+
+def scan(mode: str, capture, rig: Rig, **kw) -> ScanResult:
+    """Run a scan mode by name (``gray_code``, ``ambiguity_enhancement``, ``data_reduction``)."""
+    try:
+        fn = MODES[mode]
+    except KeyError:
+        raise ValueError(f"unknown scan mode {mode!r}; valid: {sorted(MODES)}") from None
+    return fn(capture, rig, **kw)
