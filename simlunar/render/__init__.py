@@ -1,4 +1,48 @@
 """Rendering with Mitsuba 3: the only package of simlunar that imports mitsuba or drjit.
 
-Importing this package does not import Mitsuba; :func:`simlunar.render.backend.init` does.
+Importing this package does not import Mitsuba; :func:`simlunar.render.backend.init` does
+(called on first use of anything that renders). Public names are resolved lazily:
+
+- lights (NumPy specs): ``SunLight``, ``CameraLight``, ``ProjectorLight``, ``AmbientLight``,
+  ``LIGHTS``, ``make_light``
+- scene: ``TerrainScene``, ``render``, ``RenderResult``, ``inverse_by_linearity``,
+  ``luminance``
+- mesh / cameras: ``terrain_mesh``, ``sensor_dict``
 """
+
+from __future__ import annotations
+
+import importlib
+
+_EXPORTS = {
+    "SunLight": "lights",
+    "CameraLight": "lights",
+    "ProjectorLight": "lights",
+    "AmbientLight": "lights",
+    "LIGHTS": "lights",
+    "make_light": "lights",
+    "SUN_ANGULAR_DIAMETER": "lights",
+    "TerrainScene": "scene",
+    "render": "scene",
+    "RenderResult": "scene",
+    "inverse_by_linearity": "scene",
+    "luminance": "scene",
+    "terrain_mesh": "mesh",
+    "sensor_dict": "cameras",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module 'simlunar.render' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(f"simlunar.render.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))
