@@ -105,7 +105,7 @@ def _register(mi) -> None:
     flags_glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
 
     def _scalar(props, key, default):
-        return float(props.get(key, default)) if props.has_property(key) else float(default)
+        return float(props.get(key, default))
 
     def _opaque(value) -> Any:
         v = mi.Float(value)
@@ -188,7 +188,7 @@ def _register(mi) -> None:
             sigma = _scalar(props, "sigma", 0.0)
             if not (math.isfinite(sigma) and 0.0 <= sigma < math.pi / 2):
                 raise ValueError(f"oren_nayar: sigma must be in [0, pi/2) radians, got {sigma}")
-            model = str(props.get("model", "full")) if props.has_property("model") else "full"
+            model = str(props.get("model", "full"))
             if model not in ("full", "qualitative"):
                 raise ValueError(f"oren_nayar: model must be full or qualitative, got {model!r}")
             self.model = model
@@ -245,11 +245,7 @@ def _register(mi) -> None:
         def __init__(self, props):
             super().__init__(props)
             self.reflectance = props.get_texture("reflectance", 0.12)
-            mode = (
-                str(props.get("albedo_mode", "normal"))
-                if props.has_property("albedo_mode")
-                else "normal"
-            )
+            mode = str(props.get("albedo_mode", "normal"))
             if mode not in ("normal", "w"):
                 raise ValueError(f"hapke: albedo_mode must be normal or w, got {mode!r}")
             self.albedo_mode = mode

@@ -1,0 +1,366 @@
+"""Mitsuba plugins ``oren_nayar`` and ``hapke`` against the NumPy references."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.render import reference as R
+from simlunar.render.bsdfs import HAPKE_TABLE_SIZE, bsdf_dict
+from simlunar.render.materials import make_bsdf
+
+N_UP = np.array([0.0, 0.0, 1.0])
+
+
+def sph(theta, phi=0.0):
+    theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
+    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
+
+
+def angle_grid():
+    """(wi, wo) pairs over theta_i, theta_o in 5..85 deg and azimuth differences 0..180."""
+    t = np.radians(np.arange(5, 90, 10))
+    p = np.radians(np.arange(0, 181, 30))
+    ti, to, dp = (a.ravel() for a in np.meshgrid(t, t, p, indexing="ij"))
+    return sph(ti, 0.3), sph(to, 0.3 + dp)
+
+
+def eval_plugin(mi, bsdf, wi, wo, uv=None):
+    """bsdf.eval in the local frame (z = normal) -> (n, 3) numpy (f * cos_o)."""
+    import drjit as dr
+
+    n = len(wi)
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    si.wi = mi.Vector3f(np.ascontiguousarray(wi.T, dtype=np.float32))
+    si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    si.n = mi.Normal3f(0, 0, 1)
+    if uv is not None:
+        si.uv = mi.Point2f(np.ascontiguousarray(uv.T, dtype=np.float32))
+    wo_m = mi.Vector3f(np.ascontiguousarray(wo.T, dtype=np.float32))
+    return np.array(bsdf.eval(mi.BSDFContext(), si, wo_m)).T.astype(np.float64)
+
+
+def reference_for(d, wi, wo, albedo):
+    """Reference f * cos_o for a plugin dict."""
+    cos_o = wo[..., 2]
+    if d["type"] == "oren_nayar":
+        f = R.oren_nayar(wi, wo, N_UP, albedo, d["sigma"], d.get("model", "full"))
+    elif d["type"] == "diffuse":
+        f = R.lambert(wi, wo, N_UP, albedo)
+    else:
+        p = {k: d[k] for k in ("b", "c", "B0", "h", "theta_bar")}
+        w = albedo if d["albedo_mode"] == "w" else R.hapke_w_from_normal_albedo(albedo, **p)
+        f = R.hapke(wi, wo, N_UP, w=w, **p)
+    return f * cos_o
+
+
+SPECS = [
+    (make_bsdf("oren_nayar", sigma=0.0), 0.7),
+    (make_bsdf("oren_nayar", sigma=0.3), 0.7),
+    (make_bsdf("oren_nayar", sigma=1.0), 0.9),
+    (make_bsdf("oren_nayar", sigma=1.0, model="qualitative"), 0.9),
+    (make_bsdf("hapke"), 0.12),
+    (make_bsdf("hapke", B0=0.0, theta_bar=0.0, b=0.5, c=-0.4), 0.3),
+    (make_bsdf("hapke", w=0.6, theta_bar=0.4), 0.0),
+]
+
+
+@pytest.mark.parametrize(("spec", "albedo"), SPECS)
+def test_plugin_eval_matches_reference(mi, spec, albedo):
+    d = bsdf_dict(spec, albedo)
+    bsdf = mi.load_dict(d)
+    wi, wo = angle_grid()
+    got = eval_plugin(mi, bsdf, wi, wo)
+    want = reference_for(d, wi, wo, albedo if spec.name != "hapke" or spec.w is None else spec.w)
+    assert got.shape == (len(wi), 3)
+    np.testing.assert_allclose(got, np.repeat(want[:, None], 3, 1), rtol=2e-4, atol=1e-7)
+
+
+def test_oren_nayar_sigma_zero_equals_builtin_diffuse(mi):
+    wi, wo = angle_grid()
+    ours = eval_plugin(mi, mi.load_dict(bsdf_dict(make_bsdf("oren_nayar", sigma=0.0), 0.6)), wi, wo)
+    builtin = eval_plugin(mi, mi.load_dict(bsdf_dict(make_bsdf("lambert"), 0.6)), wi, wo)
+    np.testing.assert_allclose(ours, builtin, rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(builtin[:, 0], 0.6 / np.pi * wo[:, 2], rtol=1e-6)
+
+
+@pytest.mark.parametrize(("spec", "albedo"), SPECS)
+def test_plugin_reciprocity(mi, spec, albedo):
+    bsdf = mi.load_dict(bsdf_dict(spec, albedo))
+    wi, wo = angle_grid()
+    a = eval_plugin(mi, bsdf, wi, wo)[:, 0] / wo[:, 2]
+    b = eval_plugin(mi, bsdf, wo, wi)[:, 0] / wi[:, 2]
+    np.testing.assert_allclose(a, b, rtol=5e-4, atol=1e-7)
+
+
+def test_plugin_zero_below_horizon(mi):
+    for spec, albedo in SPECS[1:5]:
+        bsdf = mi.load_dict(bsdf_dict(spec, albedo))
+        wi = sph([0.3, 1.9, 0.3])
+        wo = sph([0.5, 0.5, 2.0])
+        v = eval_plugin(mi, bsdf, wi, wo)[:, 0]
+        assert v[0] > 0 and v[1] == 0 and v[2] == 0
+
+
+def _sample(mi, bsdf, theta_i, n=200_000, seed=1):
+    import drjit as dr
+
+    rng = np.random.default_rng(seed)
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    si.wi = mi.Vector3f(*(float(x) for x in sph(theta_i)))
+    si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    u = rng.random((3, n)).astype(np.float32)
+    bs, weight = bsdf.sample(mi.BSDFContext(), si, mi.Float(u[0]), mi.Point2f(u[1], u[2]))
+    return np.array(bs.wo).T, np.array(bs.pdf), np.array(weight).T
+
+
+@pytest.mark.parametrize(("spec", "albedo"), [SPECS[2], SPECS[3], SPECS[4], SPECS[6]])
+def test_sample_weight_is_eval_over_pdf_and_albedo_at_most_one(mi, spec, albedo):
+    bsdf = mi.load_dict(bsdf_dict(spec, albedo if spec.name != "hapke" or spec.w is None else 0))
+    for theta_i in (0.2, 1.0, 1.45):
+        wo, pdf, weight = _sample(mi, bsdf, theta_i, n=100_000)
+        ok = pdf > 0
+        assert ok.mean() > 0.999
+        np.testing.assert_allclose(pdf[ok], wo[ok, 2] / np.pi, rtol=1e-5)
+        ev = eval_plugin(mi, bsdf, np.broadcast_to(sph(theta_i), wo.shape), wo)
+        np.testing.assert_allclose(weight[ok], ev[ok] / pdf[ok, None], rtol=1e-4, atol=1e-6)
+        # the mean weight estimates the directional albedo; 100k samples, std error < 0.5 %
+        assert weight[:, 0].mean() <= 1.0
+
+
+def test_directional_albedo_from_sampling_matches_quadrature(mi):
+    spec = make_bsdf("oren_nayar", sigma=0.8)
+    bsdf = mi.load_dict(bsdf_dict(spec, 0.9))
+    _, _, weight = _sample(mi, bsdf, 1.0, n=400_000, seed=7)
+    # midpoint quadrature of the reference (as in test_brdf_reference)
+    n = 256
+    mu = (np.arange(n) + 0.5) / n
+    ph = (np.arange(2 * n) + 0.5) / (2 * n) * 2 * np.pi
+    M, P = np.meshgrid(mu, ph, indexing="ij")
+    s = np.sqrt(1 - M**2)
+    wo = np.stack([s * np.cos(P), s * np.sin(P), M], -1)
+    f = R.oren_nayar(np.broadcast_to(sph(1.0), wo.shape), wo, N_UP, 0.9, 0.8)
+    quad = np.sum(f * M) / n * (np.pi / n)
+    est = weight[:, 0].mean()
+    sem = weight[:, 0].std() / np.sqrt(len(weight))
+    assert abs(est - quad) < 4 * sem, (est, quad, sem)
+
+
+@pytest.mark.parametrize(
+    ("d", "theta_i"),
+    [
+        ({"type": "oren_nayar", "reflectance": 0.8, "sigma": 0.7}, 0.5),
+        ({"type": "oren_nayar", "reflectance": 0.8, "sigma": 1.2, "model": "qualitative"}, 1.2),
+        ({"type": "hapke", "reflectance": 0.2}, 0.8),
+    ],
+)
+def test_chi2_sampling(mi, d, theta_i):
+    chi2 = mi.chi2
+    sample_func, pdf_func = chi2.BSDFAdapter(d["type"], d, wi=sph(theta_i).tolist())
+    test = chi2.ChiSquareTest(
+        domain=chi2.SphericalDomain(),
+        sample_func=sample_func,
+        pdf_func=pdf_func,
+        sample_dim=3,
+        sample_count=200_000,
+        res=51,
+        seed=3,
+    )
+    assert test.run(0.01, quiet=True), test.messages
+
+
+def test_chi2_detects_a_wrong_pdf(mi):
+    """The chi-square machinery must be able to fail: a pdf that disagrees with the sampler."""
+    chi2 = mi.chi2
+    d = {"type": "oren_nayar", "reflectance": 0.8, "sigma": 0.7}
+    sample_func, pdf_func = chi2.BSDFAdapter("oren_nayar", d, wi=sph(0.5).tolist())
+
+    def wrong_pdf(wo, *args):  # uniform hemisphere instead of cosine
+        return pdf_func(wo, *args) * 0 + mi.Float(1 / (2 * np.pi)) * (wo.z > 0)
+
+    test = chi2.ChiSquareTest(
+        domain=chi2.SphericalDomain(),
+        sample_func=sample_func,
+        pdf_func=wrong_pdf,
+        sample_dim=3,
+        sample_count=50_000,
+        res=31,
+        seed=3,
+    )
+    assert not test.run(0.01, quiet=True)
+
+
+# --- Hapke specifics ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("albedo", [0.03, 0.12, 0.3, 0.7])
+def test_hapke_normal_albedo_matches_grid_value(mi, albedo):
+    bsdf = mi.load_dict(bsdf_dict(make_bsdf("hapke"), albedo))
+    v = eval_plugin(mi, bsdf, sph(np.array([0.0])), sph(np.array([0.0])))
+    # pi f(0, 0) is the normal albedo; f*cos_o with cos_o = 1; table interpolation error only
+    assert np.pi * v[0, 0] == pytest.approx(albedo, rel=2e-3)
+    assert HAPKE_TABLE_SIZE >= 256
+
+
+def test_hapke_plugin_opposition_surge(mi):
+    theta = np.pi / 6
+
+    def pair(g_deg):
+        cpsi = (np.cos(np.radians(g_deg)) - np.cos(theta) ** 2) / np.sin(theta) ** 2
+        return sph(np.array([theta])), sph(np.array([theta]), np.arccos(cpsi))
+
+    ratio = {}
+    for B0 in (1.0, 0.0):
+        bsdf = mi.load_dict(bsdf_dict(make_bsdf("hapke", B0=B0), 0.12))
+        v0 = eval_plugin(mi, bsdf, *pair(0.0))[0, 0]
+        v10 = eval_plugin(mi, bsdf, *pair(10.0))[0, 0]
+        ratio[B0] = v0 / v10
+        wi, wo = pair(0.0)
+        w = R.hapke_w_from_normal_albedo(0.12, B0=B0)
+        assert v0 == pytest.approx(R.hapke(wi, wo, N_UP, w=w, B0=B0)[0] * wo[0, 2], rel=2e-3)
+    assert ratio[1.0] > 1.2  # the surge: brighter at zero phase
+    assert ratio[0.0] < 1.05  # no peak without it
+
+
+def test_reflectance_texture_varies_per_point(mi):
+    """An albedo grid as a bitmap texture drives each point (the terrain path)."""
+    grid = np.array([[0.05], [0.4]], dtype=np.float32)  # 2 rows x 1 col
+    tex = {
+        "type": "bitmap",
+        "bitmap": mi.Bitmap(grid[..., None]),
+        "raw": True,
+        "filter_type": "nearest",
+    }
+    wi = sph(np.array([0.4, 0.4]))
+    wo = sph(np.array([0.7, 0.7]), 2.0)
+    uv = np.array([[0.5, 0.25], [0.5, 0.75]])
+    for spec in (make_bsdf("oren_nayar", sigma=0.5), make_bsdf("hapke"), make_bsdf("lambert")):
+        d = bsdf_dict(spec, tex)
+        got = eval_plugin(mi, mi.load_dict(d), wi, wo, uv=uv)[:, 0]
+        want = [
+            reference_for(d, wi[k : k + 1], wo[k : k + 1], float(grid[k, 0]))[0] for k in range(2)
+        ]
+        np.testing.assert_allclose(got, want, rtol=2e-3)
+
+
+# --- parameters, kernels, errors ------------------------------------------------------------
+
+
+def test_traverse_updates_without_recompiling(mi):
+    import drjit as dr
+
+    bsdf = mi.load_dict(bsdf_dict(make_bsdf("oren_nayar", sigma=0.2), 0.5))
+    wi, wo = angle_grid()
+    params = mi.traverse(bsdf)
+    assert "sigma" in params and "reflectance.value" in params
+
+    def jit_kernels(fn):
+        dr.set_flag(dr.JitFlag.KernelHistory, True)
+        try:
+            dr.kernel_history()  # clear
+            out = fn()
+            hist = [k for k in dr.kernel_history() if k.get("type") == dr.KernelType.JIT]
+        finally:
+            dr.set_flag(dr.JitFlag.KernelHistory, False)
+        return out, {k["hash"] for k in hist}
+
+    before, k_before = jit_kernels(lambda: eval_plugin(mi, bsdf, wi, wo))
+    params["sigma"] = 0.9
+    params.update()
+    after, k_after = jit_kernels(lambda: eval_plugin(mi, bsdf, wi, wo))
+    np.testing.assert_allclose(
+        after[:, 0],
+        reference_for({"type": "oren_nayar", "sigma": 0.9}, wi, wo, 0.5),
+        rtol=2e-4,
+        atol=1e-7,
+    )
+    assert not np.allclose(before, after)
+    # sigma is opaque: the new value runs through the very same kernel (same hash)
+    assert k_before and k_after == k_before
+
+
+def test_hapke_traverse_rebuilds_albedo_table(mi):
+    bsdf = mi.load_dict(bsdf_dict(make_bsdf("hapke"), 0.12))
+    params = mi.traverse(bsdf)
+    for key in ("b", "c", "B0", "h", "theta_bar", "reflectance.value"):
+        assert key in params
+    params["B0"] = 0.0
+    params.update()
+    v = eval_plugin(mi, bsdf, sph(np.array([0.0])), sph(np.array([0.0])))
+    assert np.pi * v[0, 0] == pytest.approx(0.12, rel=2e-3)  # still the grid's normal albedo
+
+
+@pytest.mark.parametrize(
+    ("d", "msg"),
+    [
+        ({"type": "oren_nayar", "sigma": 2.0}, "sigma"),
+        ({"type": "oren_nayar", "sigma": -0.5}, "sigma"),
+        ({"type": "oren_nayar", "model": "nope"}, "model"),
+        ({"type": "hapke", "h": 0.0}, "h must be"),
+        ({"type": "hapke", "b": 1.2}, "b must be"),
+        ({"type": "hapke", "albedo_mode": "x"}, "albedo_mode"),
+    ],
+)
+def test_plugin_errors_name_the_field(mi, d, msg):
+    with pytest.raises(Exception, match=msg):  # Mitsuba may re-raise our ValueError
+        mi.load_dict(d)
+
+
+def test_bsdf_dict_shapes_and_errors():
+    assert bsdf_dict(make_bsdf("lambert"), 0.3) == {"type": "diffuse", "reflectance": 0.3}
+    on = bsdf_dict(make_bsdf("oren_nayar", sigma=0.25, model="qualitative"), {"type": "bitmap"})
+    assert on == {
+        "type": "oren_nayar",
+        "reflectance": {"type": "bitmap"},
+        "sigma": 0.25,
+        "model": "qualitative",
+    }
+    h = bsdf_dict(make_bsdf("hapke"), 0.1)
+    assert h["albedo_mode"] == "normal" and h["reflectance"] == 0.1
+    hw = bsdf_dict(make_bsdf("hapke", w=0.4), 0.1)
+    assert hw["albedo_mode"] == "w" and hw["reflectance"] == 0.4
+    with pytest.raises(ValueError, match="reflectance"):
+        bsdf_dict(make_bsdf("lambert"), 1.5)
+    with pytest.raises(ValueError, match="LambertBSDF, OrenNayarBSDF or HapkeBSDF"):
+        bsdf_dict("diffuse", 0.5)  # type: ignore[arg-type]
+
+
+@pytest.mark.render
+def test_render_plane_matches_reference(mi):
+    """End to end: a plane under a directional light seen by an orthographic camera.
+
+    With a delta light and direct illumination the pixel radiance is exactly
+    E * f(wi, wo) * cos(theta_i), with no sampling noise.
+    """
+    theta_i = np.radians(50.0)
+    wi = sph(theta_i, 0.0)
+    for spec in (make_bsdf("oren_nayar", sigma=0.6), make_bsdf("hapke"), make_bsdf("lambert")):
+        scene = mi.load_dict(
+            {
+                "type": "scene",
+                "integrator": {"type": "direct"},
+                "plane": {
+                    "type": "rectangle",
+                    "bsdf": bsdf_dict(spec, 0.3),
+                    "to_world": mi.ScalarTransform4f().scale([10, 10, 1]),
+                },
+                "sun": {"type": "directional", "direction": (-wi).tolist(), "irradiance": 2.0},
+                "cam": {
+                    "type": "orthographic",
+                    "to_world": mi.ScalarTransform4f().look_at(
+                        origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]
+                    ),
+                    "film": {
+                        "type": "hdrfilm",
+                        "width": 4,
+                        "height": 4,
+                        "rfilter": {"type": "box"},
+                    },
+                    "sampler": {"type": "independent", "sample_count": 4},
+                },
+            }
+        )
+        img = np.array(mi.render(scene, spp=4))
+        d = bsdf_dict(spec, 0.3)
+        want = 2.0 * reference_for(d, wi[None], N_UP[None], 0.3)[0] * np.cos(theta_i)
+        np.testing.assert_allclose(img[..., 0], want, rtol=2e-3)
