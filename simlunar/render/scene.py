@@ -71,24 +71,11 @@ def _check_int(name: str, value, minimum: int) -> int:
 
 
 def _bsdf_dict(bsdf, albedo: np.ndarray) -> dict:
+    from simlunar.render.bsdfs import bsdf_dict
+    from simlunar.render.materials import LambertBSDF
     from simlunar.render.mesh import albedo_texture
 
-    tex = albedo_texture(albedo)
-    try:
-        from simlunar.render.bsdfs import bsdf_dict
-    except ImportError:  # the BSDF plugins module has not landed: built-in Lambert only
-        name = getattr(bsdf, "name", None)
-        if bsdf is None or name == "lambert":
-            return {"type": "diffuse", "reflectance": tex}
-        raise ValueError(
-            f"bsdf: {name or type(bsdf).__name__} needs simlunar.render.bsdfs, "
-            "which is not available"
-        ) from None
-    if bsdf is None:
-        from simlunar.render.materials import LambertBSDF
-
-        bsdf = LambertBSDF()
-    return bsdf_dict(bsdf, tex)
+    return bsdf_dict(LambertBSDF() if bsdf is None else bsdf, albedo_texture(albedo))
 
 
 def _bounds(terrain) -> tuple[np.ndarray, np.ndarray]:

@@ -259,3 +259,22 @@ def test_importing_render_api_does_not_import_mitsuba():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "False"]
+
+
+def test_oren_nayar_sigma_zero_renders_like_lambert(mi, rng):
+    from simlunar.render.materials import LambertBSDF, OrenNayarBSDF
+
+    t = smooth_dem(rng, shape=(16, 16), amplitude=0.2)
+    cam = OrthoCamera.nadir_for_grid(t.shape, t.spacing, t.origin, altitude=5.0)
+    sun = [SunLight(np.radians(35), np.radians(80))]
+    a = TerrainScene(t, cam, lights=sun, bsdf=LambertBSDF(), max_depth=2, spp=4).render()
+    b = TerrainScene(t, cam, lights=sun, bsdf=OrenNayarBSDF(0.0), max_depth=2, spp=4).render()
+    c = TerrainScene(t, cam, lights=sun, bsdf=OrenNayarBSDF(0.5), max_depth=2, spp=4).render()
+    np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-7)
+    assert not np.allclose(a, c, rtol=1e-2)
+
+
+def test_bad_bsdf(mi, small):
+    t, cam = small
+    with pytest.raises(ValueError, match="bsdf must be a LambertBSDF"):
+        TerrainScene(t, cam, lights=[AmbientLight(1.0)], bsdf="oren_nayar")
