@@ -1,0 +1,192 @@
+"""Procedural lunar terrain: fBm base + undulating bed + craters + rocks, and albedo.
+
+Order: base surface (fBm + bed) -> craters (oldest first, each partly erasing what lies in its
+bowl) -> rocks on top -> albedo. One seed drives everything; each stage gets its own child
+stream (``SeedSequence.spawn``) so turning rocks off does not move the craters.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from simlunar.terrain import sfd
+from simlunar.terrain.craters import Crater, extent_radii, place_craters, stamp_craters
+from simlunar.terrain.fractal import fbm, undulating_bed
+from simlunar.terrain.params import AlbedoParams, TerrainParams
+from simlunar.terrain.rocks import Rock, place_rocks, stamp_rocks
+from simlunar.terrain.types import Terrain
+
+
+@dataclass(frozen=True, eq=False)
+class TerrainResult:
+    """A generated terrain and the features placed on it (for labels and checks)."""
+
+    terrain: Terrain
+    craters: list[Crater]
+    rocks: list[Rock]
+    params: TerrainParams
+
+
+def _seeds(rng, n):
+    if isinstance(rng, np.random.Generator):
+        return [np.random.default_rng(s) for s in rng.bit_generator.seed_seq.spawn(n)]
+    ss = rng if isinstance(rng, np.random.SeedSequence) else np.random.SeedSequence(rng)
+    return [np.random.default_rng(s) for s in ss.spawn(n)]
+
+
+def make_albedo(
+    shape,
+    *,
+    spacing: float,
+    params: AlbedoParams,
+    freshness: np.ndarray | None = None,
+    rock_factor: np.ndarray | None = None,
+    rng=None,
+) -> np.ndarray:
+    """Albedo grid: lunar mean with mild variation, brighter fresh ejecta, rock contrast.
+
+    ``a = mean (1 + variation F) (1 + noise N) (1 + ejecta_brightening freshness) rock_factor``,
+    clipped to [0.01, 1], with F a unit-RMS fBm field (H = 0.5, roll-off at 64 cells) and N
+    per-cell standard normal noise (the paper's terrains carry independent colour per voxel).
+    The default mean 0.12 is a typical normal albedo of lunar soil (mare ~0.07-0.10, highlands
+    ~0.15-0.2). ``uniform=True`` returns the mean everywhere (ablations).
+
+    Returns
+    -------
+    (rows, cols) float32 albedo.
+    """
+    gen = np.random.default_rng(rng)
+    rows, cols = shape
+    if params.uniform:
+        return np.full((rows, cols), params.mean, dtype=np.float32)
+    a = np.full((rows, cols), params.mean)
+    if params.variation > 0:
+        f = fbm(
+            (rows, cols),
+            spacing=spacing,
+            hurst=0.5,
+            rms=1.0,
+            periodic=False,
+            rolloff_m=64 * spacing,
+            rng=gen,
+        )
+        a *= np.clip(1.0 + params.variation * f, 0.2, None)
+    if params.noise > 0:
+        a *= np.clip(1.0 + params.noise * gen.standard_normal((rows, cols)), 0.2, None)
+    if freshness is not None and params.ejecta_brightening > 0:
+        a *= 1.0 + params.ejecta_brightening * freshness
+    if rock_factor is not None:
+        a *= rock_factor
+    return np.clip(a, 0.01, 1.0).astype(np.float32)
+
+
+def generate(params, *, rng=None, scale: float = 1.0) -> TerrainResult:
+    """Generate a terrain from a preset name, a preset YAML path, or :class:`TerrainParams`.
+
+    Parameters
+    ----------
+    params : str, Path or TerrainParams
+        ``"aerial_1"`` etc. (see ``scenes/``), a YAML file, or parameters.
+    rng : seed or Generator
+        Same seed -> bit-identical result.
+    scale : float in (0, 1]
+        Shrink the grid (same spacing, smaller area); see ``TerrainParams.scaled``.
+
+    Returns
+    -------
+    TerrainResult
+        ``terrain`` (heights float64 m, albedo float32), ``craters`` (oldest first, including the
+        ones centred outside the grid whose blanket reaches in, and invisible degraded ones) and
+        ``rocks``.
+    """
+    if isinstance(params, (str, Path)):
+        from simlunar.terrain.presets import load_preset
+
+        params = load_preset(params, scale=scale)
+    elif isinstance(params, TerrainParams):
+        params = params.scaled(scale)
+    else:
+        raise ValueError(
+            f"generate needs a preset name, a YAML path or TerrainParams, got {type(params).__name__}"
+        )
+    p = params
+    g_base, g_bed, g_crd, g_crp, g_rkd, g_rkp, g_rks, g_alb = _seeds(rng, 8)
+    shape = (p.rows, p.cols)
+    h = fbm(
+        shape,
+        spacing=p.spacing,
+        hurst=p.fractal.hurst,
+        rms=p.fractal.rms,
+        periodic=p.fractal.periodic,
+        rolloff_m=p.fractal.rolloff,
+        rng=g_base,
+    )
+    if p.bed.amplitude > 0:
+        h += undulating_bed(
+            shape,
+            spacing=p.spacing,
+            amplitude=p.bed.amplitude,
+            wavelength=p.bed.wavelength,
+            rng=g_bed,
+        )
+    xmin, xmax, ymin, ymax = p.extent
+    craters: list[Crater] = []
+    fresh = np.zeros(shape) if p.albedo.ejecta_brightening > 0 else None
+    if p.craters.enabled:
+        c = p.craters
+        # craters centred up to one ejecta radius outside the grid still cut into it
+        m = extent_radii(0.0) * c.d_max / 2.0
+        ext = (xmin - m, xmax + m, ymin - m, ymax + m)
+        area = (ext[1] - ext[0]) * (ext[3] - ext[2])
+        d = sfd.sample_diameters(c.law_fn(), area, c.d_min, c.d_max, rng=g_crd, what="craters")
+        craters = place_craters(
+            d, extent=ext, diffusivity=c.diffusivity, max_age_myr=c.max_age_myr, rng=g_crp
+        )
+        # drop the ones whose footprint misses the grid entirely (cheaper lists, same terrain)
+        craters = [
+            k
+            for k in craters
+            if (
+                xmin - extent_radii(0.0) * k.diameter / 2
+                <= k.x
+                <= xmax + extent_radii(0.0) * k.diameter / 2
+            )
+            and (
+                ymin - extent_radii(0.0) * k.diameter / 2
+                <= k.y
+                <= ymax + extent_radii(0.0) * k.diameter / 2
+            )
+        ]
+        stamp_craters(h, craters, spacing=p.spacing, origin=p.origin, freshness=fresh)
+    rocks: list[Rock] = []
+    rock_factor = None
+    if p.rocks.enabled:
+        r = p.rocks
+        # rocks centred just outside the grid still show their part inside it
+        m = 0.7 * r.d_max
+        ext = (xmin - m, xmax + m, ymin - m, ymax + m)
+        area = (ext[1] - ext[0]) * (ext[3] - ext[2])
+        d = sfd.sample_diameters(r.law_fn(), area, r.d_min, r.d_max, rng=g_rkd, what="rocks")
+        rocks = place_rocks(
+            d,
+            extent=ext,
+            cluster_fraction=r.cluster_fraction,
+            cluster_radius_m=r.cluster_radius,
+            mean_per_cluster=r.mean_per_cluster,
+            albedo_contrast=r.albedo_contrast,
+            rng=g_rkp,
+        )
+        rock_factor = np.ones(shape)
+        stamp_rocks(h, rock_factor, rocks, spacing=p.spacing, origin=p.origin, rng=g_rks)
+    alb = make_albedo(
+        shape,
+        spacing=p.spacing,
+        params=p.albedo,
+        freshness=fresh,
+        rock_factor=rock_factor,
+        rng=g_alb,
+    )
+    return TerrainResult(Terrain(h, alb, p.spacing, p.origin), craters, rocks, p)

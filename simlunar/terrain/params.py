@@ -1,0 +1,253 @@
+"""Validated terrain parameters (SI units) and their construction from a plain dict.
+
+YAML presets use unit suffixes (``spacing_m``, ``d_min_m``, ``diffusivity_m2_per_myr``);
+:func:`params_from_dict` converts them to these fields once. Every error names the field
+(``craters.d_max_m`` ...).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+
+import numpy as np
+
+from simlunar.terrain import sfd
+
+
+def _num(v, name, *, lo=None, lo_open=False, hi=None, hi_open=False) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be a number, got {v!r}")
+    v = float(v)
+    bad = not np.isfinite(v)
+    if lo is not None:
+        bad |= v <= lo if lo_open else v < lo
+    if hi is not None:
+        bad |= v >= hi if hi_open else v > hi
+    if bad:
+        lo_s = "" if lo is None else f"{'(' if lo_open else '['}{lo}"
+        hi_s = "" if hi is None else f"{hi}{')' if hi_open else ']'}"
+        raise ValueError(
+            f"{name} must be a finite number in {lo_s or '(-inf'}, {hi_s or 'inf)'}, got {v!r}"
+        )
+    return v
+
+
+@dataclass(frozen=True)
+class FractalParams:
+    """fBm base: Hurst exponent in (0, 1), RMS height (m), periodic, roll-off wavelength (m)."""
+
+    hurst: float = 0.8
+    rms: float = 0.2
+    periodic: bool = False
+    rolloff: float | None = None
+
+    def __post_init__(self):
+        _num(self.hurst, "fractal.hurst", lo=0.0, lo_open=True, hi=1.0, hi_open=True)
+        _num(self.rms, "fractal.rms_m", lo=0.0)
+        if self.rolloff is not None:
+            _num(self.rolloff, "fractal.rolloff_m", lo=0.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class BedParams:
+    """Low-frequency undulating bed: RMS amplitude (m; 0 = none) and wavelength (m)."""
+
+    amplitude: float = 0.0
+    wavelength: float = 1.0
+
+    def __post_init__(self):
+        _num(self.amplitude, "bed.amplitude_m", lo=0.0)
+        _num(self.wavelength, "bed.wavelength_m", lo=0.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class CraterParams:
+    """Crater population: cumulative law, diameter range (m), diffusion degradation."""
+
+    enabled: bool = True
+    law: str = "trask"
+    d_min: float = 1.0
+    d_max: float = 30.0
+    coefficient: float | None = None
+    exponent: float | None = None
+    diffusivity: float = 5.5  # m^2/Myr, Fassett & Thomson 2014
+    max_age_myr: float = 20.0
+
+    def __post_init__(self):
+        _num(self.d_min, "craters.d_min_m", lo=0.0, lo_open=True)
+        _num(self.d_max, "craters.d_max_m", lo=0.0, lo_open=True)
+        if self.d_max <= self.d_min:
+            raise ValueError(
+                f"craters diameter range is empty: craters.d_max_m ({self.d_max}) must exceed "
+                f"craters.d_min_m ({self.d_min})"
+            )
+        _num(self.diffusivity, "craters.diffusivity_m2_per_myr", lo=0.0)
+        _num(self.max_age_myr, "craters.max_age_myr", lo=0.0)
+        self.law_fn()  # unknown law / bad power-law parameters fail here
+
+    def law_fn(self):
+        return sfd.get_law(
+            "craters", self.law, coefficient=self.coefficient, exponent=self.exponent
+        )
+
+
+@dataclass(frozen=True)
+class RockParams:
+    """Rock population: cumulative law, diameter range (m), clustering, albedo contrast."""
+
+    enabled: bool = True
+    law: str = "intercrater"
+    d_min: float = 0.3
+    d_max: float = 3.0
+    coefficient: float | None = None
+    exponent: float | None = None
+    cluster_fraction: float = 0.5
+    cluster_radius: float = 3.0
+    mean_per_cluster: float = 8.0
+    albedo_contrast: float = 0.1
+
+    def __post_init__(self):
+        _num(self.d_min, "rocks.d_min_m", lo=0.0, lo_open=True)
+        _num(self.d_max, "rocks.d_max_m", lo=0.0, lo_open=True)
+        if self.d_max <= self.d_min:
+            raise ValueError(
+                f"rocks diameter range is empty: rocks.d_max_m ({self.d_max}) must exceed "
+                f"rocks.d_min_m ({self.d_min})"
+            )
+        _num(self.cluster_fraction, "rocks.cluster_fraction", lo=0.0, hi=1.0)
+        _num(self.cluster_radius, "rocks.cluster_radius_m", lo=0.0, lo_open=True)
+        _num(self.mean_per_cluster, "rocks.mean_per_cluster", lo=1.0)
+        _num(self.albedo_contrast, "rocks.albedo_contrast", lo=-0.9, hi=5.0)
+        self.law_fn()
+
+    def law_fn(self):
+        return sfd.get_law("rocks", self.law, coefficient=self.coefficient, exponent=self.exponent)
+
+
+@dataclass(frozen=True)
+class AlbedoParams:
+    """Albedo: mean, relative low-frequency variation, relative per-cell noise, ejecta brightening."""
+
+    mean: float = 0.12
+    variation: float = 0.08
+    noise: float = 0.02
+    ejecta_brightening: float = 0.25
+    uniform: bool = False
+
+    def __post_init__(self):
+        _num(self.mean, "albedo.mean", lo=0.0, lo_open=True, hi=1.0)
+        _num(self.variation, "albedo.variation", lo=0.0, hi=1.0)
+        _num(self.noise, "albedo.noise", lo=0.0, hi=1.0)
+        _num(self.ejecta_brightening, "albedo.ejecta_brightening", lo=0.0, hi=5.0)
+
+
+@dataclass(frozen=True)
+class TerrainParams:
+    """Everything :func:`simlunar.terrain.generate` needs (SI units)."""
+
+    rows: int = 256
+    cols: int = 256
+    spacing: float = 0.2
+    origin: tuple[float, float] = (0.0, 0.0)
+    fractal: FractalParams = field(default_factory=FractalParams)
+    bed: BedParams = field(default_factory=BedParams)
+    craters: CraterParams = field(default_factory=CraterParams)
+    rocks: RockParams = field(default_factory=RockParams)
+    albedo: AlbedoParams = field(default_factory=AlbedoParams)
+    name: str = "custom"
+    description: str = ""
+
+    def __post_init__(self):
+        for key in ("rows", "cols"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 16:
+                raise ValueError(f"grid.{key} must be an integer >= 16, got {v!r}")
+        _num(self.spacing, "grid.spacing_m", lo=0.0, lo_open=True)
+        if len(self.origin) != 2:
+            raise ValueError(f"grid.origin_m must be [x, y], got {self.origin!r}")
+        object.__setattr__(
+            self,
+            "origin",
+            (_num(self.origin[0], "grid.origin_m"), _num(self.origin[1], "grid.origin_m")),
+        )
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(xmin, xmax, ymin, ymax) of the grid in metres."""
+        x0, y0 = self.origin
+        return (x0, x0 + self.cols * self.spacing, y0 - self.rows * self.spacing, y0)
+
+    def scaled(self, scale: float) -> TerrainParams:
+        """Same spacing and statistics on a grid ``scale`` times as long on each side (>= 16)."""
+        s = _num(scale, "scale", lo=0.0, lo_open=True, hi=1.0)
+        if s == 1.0:
+            return self
+        return replace(self, rows=max(16, round(self.rows * s)), cols=max(16, round(self.cols * s)))
+
+
+_SECTIONS = {
+    "fractal": FractalParams,
+    "bed": BedParams,
+    "craters": CraterParams,
+    "rocks": RockParams,
+    "albedo": AlbedoParams,
+}
+# YAML key (with unit suffix) -> field name
+_RENAMES = {
+    "rms_m": "rms",
+    "rolloff_m": "rolloff",
+    "amplitude_m": "amplitude",
+    "wavelength_m": "wavelength",
+    "d_min_m": "d_min",
+    "d_max_m": "d_max",
+    "diffusivity_m2_per_myr": "diffusivity",
+    "cluster_radius_m": "cluster_radius",
+}
+
+
+def params_from_dict(d: dict, *, where: str = "terrain") -> TerrainParams:
+    """Build :class:`TerrainParams` from a preset-style dict (YAML keys with unit suffixes).
+
+    Top-level keys: ``name``, ``description``, ``sources``, ``grid`` (``rows``, ``cols``,
+    ``spacing_m``, ``origin_m``) and the sections ``fractal``, ``bed``, ``craters``, ``rocks``,
+    ``albedo``. Unknown keys raise ``ValueError`` naming them (``where`` prefixes the message).
+    """
+    if not isinstance(d, dict):
+        raise ValueError(f"{where}: a terrain preset must be a mapping, got {type(d).__name__}")
+    allowed = {"name", "description", "sources", "grid", *_SECTIONS}
+    unknown = sorted(set(d) - allowed)
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {unknown}; valid: {sorted(allowed)}")
+    kw: dict = {}
+    grid = d.get("grid", {}) or {}
+    if not isinstance(grid, dict):
+        raise ValueError(f"{where}: grid must be a mapping")
+    gmap = {"rows": "rows", "cols": "cols", "spacing_m": "spacing", "origin_m": "origin"}
+    bad = sorted(set(grid) - set(gmap))
+    if bad:
+        raise ValueError(f"{where}: unknown key(s) grid.{bad}; valid: {sorted(gmap)}")
+    for k, v in grid.items():
+        kw[gmap[k]] = tuple(v) if k == "origin_m" and isinstance(v, list) else v
+    for sec, cls in _SECTIONS.items():
+        sub = d.get(sec)
+        if sub is None:
+            continue
+        if not isinstance(sub, dict):
+            raise ValueError(f"{where}: {sec} must be a mapping, got {type(sub).__name__}")
+        valid = {f.name for f in fields(cls)}
+        inv = {v: k for k, v in _RENAMES.items()}
+        args = {}
+        for k, v in sub.items():
+            name = _RENAMES.get(k, k)
+            if name not in valid or (name in inv and k != inv[name]):
+                shown = sorted(inv.get(f, f) for f in valid)
+                raise ValueError(f"{where}: unknown key {sec}.{k}; valid: {shown}")
+            args[name] = v
+        kw[sec] = cls(**args)
+    for k in ("name", "description"):
+        if k in d:
+            kw[k] = str(d[k])
+    try:
+        return TerrainParams(**kw)
+    except TypeError as exc:  # pragma: no cover - guarded by the key checks above
+        raise ValueError(f"{where}: {exc}") from None
