@@ -483,8 +483,9 @@ def validate_data(data: Any, *, base_dir: Path | None = None) -> ExperimentCfg:
                 raise ConfigError(
                     f"sweep.{path}[{i}]: " + format_validation_error(exc, point)
                 ) from None
+    cfg = _resolve_files(cfg, base_dir)
     _check_registries(cfg, data)
-    return _resolve_files(cfg, base_dir)
+    return cfg
 
 
 def _check_registries(cfg: ExperimentCfg, data: dict) -> None:

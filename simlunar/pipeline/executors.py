@@ -123,7 +123,9 @@ class DaskExecutor(Executor):
                 key=[f"simlunar-unit-{run_id}-{i}" for i in range(len(payloads))],
             )
             index = {f.key: i for i, f in enumerate(futs)}
-            for fut in as_completed(futs):
+            # set_as_default=False keeps the user's own default client untouched, so the
+            # loop is passed explicitly
+            for fut in as_completed(futs, loop=client.loop):
                 yield index[fut.key], fut.result()
         finally:
             self.close()

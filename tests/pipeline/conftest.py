@@ -1,0 +1,10 @@
+"""Make the fake work unit importable by name (spawned pool workers unpickle it by reference)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+HERE = str(Path(__file__).resolve().parent)
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)

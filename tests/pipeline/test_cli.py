@@ -1,0 +1,120 @@
+"""CLI `run`, `schema`, `figures`: bad input gives one line, exit code 2, and writes nothing."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from simlunar.cli import app
+
+GOOD = {
+    "name": "cli_test",
+    "seed": 1,
+    "terrain": {"preset": "aerial_1", "scale": 0.125},
+    "study": {"strategies": ["random", "wavelet"], "densities": ["1/2", "1/8"], "trials": 2,
+              "metrics": ["mse"]},
+}
+
+
+def invoke(*args):
+    return CliRunner().invoke(app, list(args))
+
+
+def write(tmp_path, data) -> str:
+    p = tmp_path / "exp.yaml"
+    p.write_text(yaml.safe_dump(data) if not isinstance(data, str) else data)
+    return str(p)
+
+
+def _with(path: str, value):
+    from simlunar.pipeline.config import set_path
+
+    return set_path(GOOD, path, value)
+
+
+BAD = [
+    ("unknown key", _with("render.light.elevation_rad", 0.3),
+     "render.light.elevation_rad: unknown key"),
+    ("wrong type", _with("study.trials", "twenty"), "study.trials: Input should be a valid integer"),
+    ("bad unit", _with("render.light.elevation_deg", "30 parsec"),
+     "render.light.elevation_deg: bad unit 'parsec'"),
+    ("sweep over a missing key", {**GOOD, "sweep": {"render.light.zenith_deg": [1, 2]}},
+     "sweep.render.light.zenith_deg: no such key"),
+    ("missing file", {**GOOD, "terrain": {"file": "no_such_dem.npy", "spacing_m": 0.2}},
+     "terrain.file: file not found"),
+]
+BAD_REGISTRY = [
+    ("unknown preset", _with("terrain.preset", "aerial_9"),
+     "terrain.preset: unknown terrain preset 'aerial_9'"),
+    ("unknown strategy", _with("study.strategies", ["random", "wavelets"]),
+     "study.strategies[1]: unknown strategy 'wavelets'"),
+]
+
+
+def _check_one_line_error(result, expected: str, yaml_path: str, out) -> None:
+    assert result.exit_code == 2, result.output
+    lines = [ln for ln in result.output.splitlines() if ln.strip()]
+    assert len(lines) == 1, result.output
+    assert lines[0].startswith(f"error: {yaml_path}: {expected}"), lines[0]
+    assert "Traceback" not in result.output
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(("case", "data", "expected"), BAD, ids=[b[0] for b in BAD])
+def test_bad_config_is_one_line_exit_2_nothing_written(case, data, expected, tmp_path):
+    path = write(tmp_path, data)
+    out = tmp_path / "results"
+    _check_one_line_error(invoke("run", path, "--out", str(out)), expected, path, out)
+
+
+@pytest.mark.parametrize(("case", "data", "expected"), BAD_REGISTRY, ids=[b[0] for b in BAD_REGISTRY])
+def test_unknown_names_are_one_line_exit_2(case, data, expected, tmp_path):
+    pytest.importorskip("simlunar.planner.strategies")
+    path = write(tmp_path, data)
+    out = tmp_path / "results"
+    _check_one_line_error(invoke("run", path, "--out", str(out)), expected, path, out)
+
+
+def test_missing_yaml_and_bad_set_and_bad_scheduler(tmp_path):
+    out = tmp_path / "results"
+    r = invoke("run", str(tmp_path / "nope.yaml"), "--out", str(out))
+    assert r.exit_code == 2 and "error: experiment file not found" in r.output
+    path = write(tmp_path, GOOD)
+    r = invoke("run", path, "--out", str(out), "--set", "render.spq=3")
+    _check_one_line_error(r, "--set render.spq: no such key", path, out)
+    r = invoke("run", path, "--out", str(out), "--set", "render.spp=0")
+    _check_one_line_error(r, "render.spp: Input should be greater than or equal to 1", path, out)
+
+
+def test_unreachable_scheduler_writes_nothing(tmp_path, monkeypatch):
+    pytest.importorskip("simlunar.planner.strategies")
+    import simlunar.pipeline.executors as ex
+
+    monkeypatch.setattr(ex.DaskExecutor, "__init__",
+                        lambda self, address, timeout_s=1.0: (setattr(self, "address", address),
+                                                              setattr(self, "timeout_s", 1.0))[0])
+    path = write(tmp_path, GOOD)
+    out = tmp_path / "results"
+    r = invoke("run", path, "--out", str(out), "--scheduler", "tcp://127.0.0.1:9")
+    assert r.exit_code == 2, r.output
+    assert r.output.startswith("error: --scheduler tcp://127.0.0.1:9: cannot connect")
+    assert not out.exists()
+
+
+def test_schema_command(tmp_path):
+    r = invoke("schema")
+    assert r.exit_code == 0
+    s = json.loads(r.output)
+    assert s["title"] == "simlunar experiment"
+    out = tmp_path / "schema.json"
+    assert invoke("schema", "--out", str(out)).exit_code == 0
+    assert json.loads(out.read_text()) == s
+
+
+def test_figures_on_a_non_result_folder(tmp_path):
+    r = invoke("figures", str(tmp_path))
+    assert r.exit_code == 2
+    assert "not a result folder (missing config.yaml)" in r.output

@@ -1,0 +1,141 @@
+"""The experiment schema: defaults, unit conversion, sweeps and one-line errors with key paths."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+import yaml
+
+from simlunar.errors import ConfigError
+from simlunar.pipeline.config import (
+    ExperimentCfg,
+    apply_sweep_value,
+    json_schema,
+    load_experiment,
+    parse_set,
+    validate_data,
+)
+
+
+def base(**over) -> dict:
+    d = {
+        "name": "t",
+        "seed": 1,
+        "terrain": {"preset": "aerial_1", "scale": 0.125},
+        "study": {"strategies": ["random", "wavelet"], "densities": ["1/2", "1/8"], "trials": 2,
+                  "metrics": ["mse"]},
+    }
+    d.update(over)
+    return d
+
+
+def model(d: dict) -> ExperimentCfg:
+    """Schema-level validation only (no registry look-ups)."""
+    return ExperimentCfg.model_validate(d)
+
+
+def test_defaults_and_units_are_converted_once():
+    cfg = model(base(render={"light": {"elevation_deg": "0.5 rad", "azimuth_deg": 90},
+                             "bsdf": {"kind": "oren_nayar", "sigma_deg": 20}}))
+    assert cfg.render.light.kind == "sun"
+    assert cfg.render.light.elevation_deg == pytest.approx(math.degrees(0.5))
+    assert cfg.render.light.elevation == pytest.approx(0.5)
+    assert cfg.render.light.azimuth == pytest.approx(math.pi / 2)
+    assert cfg.render.bsdf.sigma == pytest.approx(math.radians(20))
+    assert cfg.render.camera.kind == "orthographic_nadir"
+    assert cfg.study.kind == "sampling"
+    assert cfg.study.densities == [0.5, 0.125]
+
+
+def test_density_range_form():
+    cfg = model(base(study={"densities": {"from": "1/2", "to": "1/2048", "count": 11}}))
+    assert cfg.study.densities == [2.0**-i for i in range(1, 12)]
+
+
+def test_sweeping_a_kind_resets_its_section():
+    d = base(render={"light": {"kind": "sun", "elevation_deg": 30}})
+    out = apply_sweep_value(d, "render.light.kind", "camera")
+    assert out["render"]["light"] == {"kind": "camera"}
+    assert d["render"]["light"]["elevation_deg"] == 30  # the input is not modified
+    assert model(out).render.light.kind == "camera"
+
+
+def test_parse_set_reads_yaml_values():
+    assert parse_set(["render.spp=32", "study.strategies=[grid, random]", "render.bsdf.kind=lambert"]) == {
+        "render.spp": 32, "study.strategies": ["grid", "random"], "render.bsdf.kind": "lambert"}
+    with pytest.raises(ConfigError, match="expected key.path=value"):
+        parse_set(["render.spp"])
+
+
+@pytest.mark.parametrize(
+    ("mutate", "message"),
+    [
+        (lambda d: d["render"].update(light={"elevation_rad": 0.3}),
+         "render.light.elevation_rad: unknown key (valid keys: kind, elevation_deg, azimuth_deg"),
+        (lambda d: d.update(colour="red"), "colour: unknown key"),
+        (lambda d: d["render"].update(spp="many"), "render.spp: Input should be a valid integer"),
+        (lambda d: d["render"].update(light={"elevation_deg": "30 furlong"}),
+         "render.light.elevation_deg: bad unit 'furlong'"),
+        (lambda d: d["render"].update(light={"elevation_deg": 120}),
+         "render.light.elevation_deg: Input should be less than or equal to 90"),
+        (lambda d: d["render"].update(light={"kind": "moon"}),
+         "render.light: kind must be one of sun, camera"),
+        (lambda d: d["study"].update(densities=["1/2", "3/2"]),
+         "study.densities[1]: a density must lie in (0, 1]"),
+        (lambda d: d["study"].update(densities={"from": "1/2", "to": "1/8"}),
+         "study.densities.count: Field required"),
+        (lambda d: d.update(terrain={"preset": "aerial_1", "file": "x.npy"}),
+         "terrain: give exactly one of preset or file"),
+        (lambda d: d.update(sweep={"render.light.elevation": [5, 10]}),
+         "sweep.render.light.elevation: no such key in the experiment schema (valid keys under "
+         "render.light: kind, elevation_deg"),
+        (lambda d: d.update(sweep={"render.lamp.elevation_deg": [5]}),
+         "sweep.render.lamp.elevation_deg: no such key"),
+        (lambda d: d.update(sweep={"render.light.elevation_deg": [5, 95]}),
+         "sweep.render.light.elevation_deg[1]: render.light.elevation_deg: Input should be less"),
+        (lambda d: d.update(terrain={"file": "nowhere.npy", "spacing_m": 0.2}),
+         "terrain.file: file not found"),
+    ],
+)
+def test_errors_name_the_key_path(mutate, message, tmp_path):
+    d = base(render={})
+    mutate(d)
+    with pytest.raises(ConfigError) as exc:
+        validate_data(d, base_dir=tmp_path)
+    text = str(exc.value)
+    assert "\n" not in text
+    assert text.startswith(message), text
+
+
+def test_registry_names_are_checked():
+    pytest.importorskip("simlunar.planner")
+    with pytest.raises(ConfigError, match=r"^terrain.preset: unknown terrain preset 'mars_1' \(valid: .*aerial_1"):
+        validate_data(base(terrain={"preset": "mars_1"}))
+    with pytest.raises(ConfigError, match=r"^study.strategies\[1\]: unknown strategy 'wavlet' \(valid: .*wavelet"):
+        validate_data(base(study={"strategies": ["random", "wavlet"], "densities": [0.5]}))
+    with pytest.raises(ConfigError, match=r"^study.metrics\[0\]: unknown metric 'psnr'"):
+        validate_data(base(study={"metrics": ["psnr"], "densities": [0.5]}))
+
+
+def test_load_experiment_prefixes_the_file_and_applies_overrides(tmp_path):
+    p = tmp_path / "e.yaml"
+    p.write_text(yaml.safe_dump(base()))
+    cfg = load_experiment(p, {"render.spp": 4, "render.light.kind": "camera"})
+    assert cfg.render.spp == 4 and cfg.render.light.kind == "camera"
+    with pytest.raises(ConfigError, match=rf"^{p}: --set render.spq: no such key"):
+        load_experiment(p, {"render.spq": 4})
+    p.write_text("name: [unclosed\n")
+    with pytest.raises(ConfigError, match="not valid YAML at line"):
+        load_experiment(p)
+    with pytest.raises(FileNotFoundError, match="experiment file not found"):
+        load_experiment(tmp_path / "missing.yaml")
+
+
+def test_json_schema_forbids_unknown_keys():
+    s = json_schema()
+    assert s["title"] == "simlunar experiment"
+    assert s["additionalProperties"] is False
+    assert set(s["required"]) == {"name", "terrain", "study"}
+    assert s["$defs"]["SunLightCfg"]["additionalProperties"] is False
+    assert "elevation_deg" in s["$defs"]["SunLightCfg"]["properties"]

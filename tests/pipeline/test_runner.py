@@ -1,0 +1,194 @@
+"""The runner: sweep expansion, cache keys, resume, determinism and executors.
+
+These tests use :mod:`fake_unit` (cheap and deterministic) because they are about the
+runner's bookkeeping; ``test_end_to_end.py`` runs real units (terrain, Mitsuba, study).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+from fake_unit import fake_unit
+
+from simlunar.pipeline.config import ExperimentCfg
+from simlunar.pipeline.executors import LocalPoolExecutor, make_executor
+from simlunar.pipeline.runner import expand, run_experiment, unit_key
+
+HERE = Path(__file__).resolve().parent
+
+
+def cfg(**over) -> ExperimentCfg:
+    d = {
+        "name": "sweep_test",
+        "seed": 7,
+        "terrain": {"preset": "aerial_1", "scale": 0.125},
+        "study": {"strategies": ["random", "grid", "wavelet"],
+                  "densities": {"from": "1/2", "to": "1/32", "count": 5}, "trials": 3,
+                  "metrics": ["mse", "grad"]},
+        "sweep": {"render.light.elevation_deg": [10, 30, 60, 90]},
+    }
+    d.update(over)
+    return ExperimentCfg.model_validate(d)
+
+
+def test_expand_is_the_cartesian_product_in_order():
+    c = cfg(sweep={"render.light.elevation_deg": [10, 30], "render.bsdf.kind": ["lambert", "hapke"]})
+    units = expand(c)
+    assert [u.sweep for u in units] == [
+        {"render.light.elevation_deg": 10, "render.bsdf.kind": "lambert"},
+        {"render.light.elevation_deg": 10, "render.bsdf.kind": "hapke"},
+        {"render.light.elevation_deg": 30, "render.bsdf.kind": "lambert"},
+        {"render.light.elevation_deg": 30, "render.bsdf.kind": "hapke"},
+    ]
+    assert units[1].config["render"]["bsdf"]["kind"] == "hapke"
+    assert units[2].config["render"]["light"]["elevation_deg"] == 30
+    assert len({u.key for u in units}) == 4
+    assert "sweep" not in units[0].config
+
+
+def test_kind_axes_apply_before_their_fields():
+    units = expand(cfg(sweep={"render.light.elevation_deg": [10, 50], "render.light.kind": ["sun"]}))
+    assert [u.config["render"]["light"]["elevation_deg"] for u in units] == [10, 50]
+
+
+def test_cache_key_ignores_name_and_figure_formats_but_not_numbers():
+    a = expand(cfg(sweep={}))[0]
+    b = expand(cfg(sweep={}, name="renamed", description="x",
+                   figures={"formats": ["png"]}))[0]
+    c = expand(cfg(sweep={}, seed=8))[0]
+    d = expand(cfg(sweep={}, render={"spp": 17}))[0]
+    assert a.key == b.key
+    assert len({a.key, c.key, d.key}) == 3
+    assert unit_key(a.config) == a.key
+
+
+def _run(c, out, **kw):
+    return run_experiment(c, out, compute=fake_unit, progress=False, figures=False, **kw)
+
+
+def test_same_seed_twice_is_byte_identical_and_rerun_is_cached(tmp_path, monkeypatch):
+    calls = tmp_path / "calls"
+    monkeypatch.setenv("SIMLUNAR_TEST_CALLS", str(calls))
+    s1 = _run(cfg(), tmp_path / "a")
+    s2 = _run(cfg(), tmp_path / "b")
+    a = (tmp_path / "a" / "results.csv").read_bytes()
+    assert a == (tmp_path / "b" / "results.csv").read_bytes()
+    assert (s1.units_computed, s2.units_computed) == (4, 4)
+    assert len(list(calls.iterdir())) == 8
+    s3 = _run(cfg(), tmp_path / "a")
+    assert (s3.units_cached, s3.units_computed) == (4, 0)
+    assert len(list(calls.iterdir())) == 8
+    assert (tmp_path / "a" / "results.csv").read_bytes() == a
+    # 4 units x 3 strategies x 5 densities x 3 trials x 2 metrics, plus the header
+    lines = a.decode().splitlines()
+    assert len(lines) == 1 + 4 * 3 * 5 * 3 * 2
+    assert lines[0] == "unit,render.light.elevation_deg,strategy,density,k,trial,metric,value"
+    prov = json.loads((tmp_path / "a" / "provenance.json").read_text())
+    assert prov["units"] == {"total": 4, "cached": 4, "computed": 0}
+    assert prov["seed"] == 7 and "numpy" in prov["versions"]
+    # a different seed changes the numbers
+    _run(cfg(seed=8), tmp_path / "c")
+    assert (tmp_path / "c" / "results.csv").read_bytes() != a
+
+
+def test_results_order_does_not_depend_on_completion_order(tmp_path):
+    serial = _run(cfg(), tmp_path / "serial")
+    units = expand(cfg())
+
+    class Reversed:
+        name = "reversed"
+
+        def run(self, fn, payloads):
+            for i in reversed(range(len(payloads))):
+                yield i, fn(payloads[i])
+
+        def describe(self):
+            return {"executor": self.name}
+
+    _run(cfg(), tmp_path / "rev", executor=Reversed())
+    assert serial.units_total == len(units)
+    assert ((tmp_path / "serial" / "results.csv").read_bytes()
+            == (tmp_path / "rev" / "results.csv").read_bytes())
+
+
+def test_local_pool_gives_the_serial_results(tmp_path):
+    _run(cfg(), tmp_path / "serial")
+    _run(cfg(), tmp_path / "pool", executor=LocalPoolExecutor(2))
+    assert ((tmp_path / "serial" / "results.csv").read_bytes()
+            == (tmp_path / "pool" / "results.csv").read_bytes())
+
+
+@pytest.mark.slow
+def test_sigkill_then_resume_recomputes_nothing_finished(tmp_path, monkeypatch):
+    """Kill the run part-way (SIGKILL, no cleanup), resume, compare with an uninterrupted run."""
+    c = cfg(sweep={"render.light.elevation_deg": [5, 15, 30, 45, 60, 90]})
+    _run(c, tmp_path / "ref")
+    out, calls = tmp_path / "killed", tmp_path / "calls"
+    script = textwrap.dedent(f"""
+        import sys
+        sys.path.insert(0, {str(HERE)!r})
+        from fake_unit import fake_unit
+        from simlunar.pipeline.config import ExperimentCfg
+        from simlunar.pipeline.runner import run_experiment
+        cfg = ExperimentCfg.model_validate_json({c.model_dump_json(by_alias=True)!r})
+        run_experiment(cfg, {str(out)!r}, compute=fake_unit, progress=False, figures=False)
+    """)
+    env = {**os.environ, "SIMLUNAR_TEST_CALLS": str(calls), "SIMLUNAR_TEST_DELAY": "0.4"}
+    proc = subprocess.Popen([sys.executable, "-c", script], env=env, start_new_session=True)
+    units_dir = out / "units"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        if units_dir.is_dir() and len(list(units_dir.glob("*.json"))) >= 2:
+            break
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    done = sorted(p.name for p in units_dir.glob("*.json"))
+    assert 2 <= len(done) < 6, done
+    mtimes = {p.name: p.stat().st_mtime_ns for p in units_dir.glob("*.json")}
+    assert not (out / "results.csv").exists()
+    n_calls_before = len(list(calls.iterdir()))
+
+    monkeypatch.setenv("SIMLUNAR_TEST_CALLS", str(calls))
+    s = _run(c, out)
+    assert s.units_cached == len(done)
+    assert s.units_computed == 6 - len(done)
+    # finished units were neither recomputed nor rewritten
+    assert len(list(calls.iterdir())) == n_calls_before + 6 - len(done)
+    for name, t in mtimes.items():
+        assert (units_dir / name).stat().st_mtime_ns == t
+    # a write cut short leaves at most a hidden temporary file, never a partial unit
+    assert all(p.suffix in (".json", ".npz") or p.name.startswith(".") for p in units_dir.iterdir())
+    assert (out / "results.csv").read_bytes() == (tmp_path / "ref" / "results.csv").read_bytes()
+
+
+@pytest.mark.slow
+def test_dask_local_cluster_through_the_scheduler_path_matches_the_pool(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    _run(cfg(), tmp_path / "local", executor=LocalPoolExecutor(1))
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        ex = make_executor(scheduler=cluster.scheduler_address)
+        s = _run(cfg(), tmp_path / "dask", executor=ex)
+    assert s.units_computed == 4
+    assert ((tmp_path / "local" / "results.csv").read_bytes()
+            == (tmp_path / "dask" / "results.csv").read_bytes())
+    prov = json.loads((tmp_path / "dask" / "provenance.json").read_text())
+    assert prov["executor"]["executor"] == "dask"
+
+
+def test_executor_options():
+    assert make_executor().describe() == {"executor": "local", "workers": 1}
+    assert make_executor(workers=3).describe() == {"executor": "local", "workers": 3}
+    with pytest.raises(ValueError, match="either --workers or --scheduler"):
+        make_executor(workers=2, scheduler="tcp://localhost:1")
+    with pytest.raises(ValueError, match="--workers must be >= 1"):
+        make_executor(workers=0)
