@@ -132,6 +132,25 @@ def schema(out: str = typer.Option(None, "--out", help="write to this file inste
         typer.echo(text)
 
 
+@app.command()
+@user_errors
+def render(
+    scene: str = typer.Argument(..., help="scene YAML (e.g. scenes/quickstart_scene.yaml)"),
+    out: str = typer.Option(None, "--out", help="output folder [default: results/render/<name>]"),
+) -> None:
+    """Render a scene: radiance.exr (linear), preview.png, ground_truth.exr/.npz, scene.json."""
+    from pathlib import Path
+
+    from simlunar.pipeline.scene import load_scene, render_scene
+
+    cfg = load_scene(scene)
+    out_dir = Path(out) if out else Path("results") / "render" / cfg.name
+    paths = render_scene(cfg, out_dir)
+    for name, path in paths.items():
+        typer.echo(f"{name:<17} {path}")
+    typer.echo(f"rendered {cfg.name} into {out_dir}")
+
+
 def main() -> None:
     app(prog_name="simlunar")
 
