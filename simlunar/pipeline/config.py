@@ -232,16 +232,36 @@ class SamplingStudyCfg(_Model):
 
 
 class ScannerStudyCfg(_Model):
-    """The structured-light scanner study of the paper's section 5."""
+    """The structured-light scanner study of the paper's section 5
+    (:func:`simlunar.study.scanner.run_scanner_study`)."""
 
     kind: Literal["scanner"]
-    mode: str = Field(description="ambiguity_enhancement, data_reduction or full_gray_code")
-    rig: str = Field("default", description="rig preset name")
-    planner: str = Field("wavelet", description="strategy that picks the dots to scan")
-    budget: Density = Field(0.1, description="fraction of pixels rescanned / sampled")
+    modes: list[str] = Field(
+        default_factory=lambda: ["gray_code", "ambiguity_enhancement"],
+        min_length=1,
+        description="scan modes: gray_code, ambiguity_enhancement, data_reduction, ...",
+    )
+    planners: list[str] = Field(
+        default_factory=lambda: ["wavelet", "random"],
+        min_length=1,
+        description="strategies that pick the dots (dot modes)",
+    )
+    budget: Density = Field(0.1, description="fraction of guide pixels rescanned / sampled")
     trials: int = Field(1, ge=1, le=100)
-    metrics: list[str] = Field(default_factory=lambda: ["mse"], min_length=1)
-    options: dict[str, Any] = Field(default_factory=dict)
+    metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
+    rig: Literal["moonyard", "aerial"] = Field("moonyard", description="rig preset")
+    projector_px: tuple[int, int] = Field((256, 192), description="projector (width, height)")
+    camera_px: tuple[int, int] = Field((256, 192), description="camera (width, height)")
+    guide_light: Literal["projector", "sun"] = Field(
+        "projector", description="guide image light: camera-centred projector or render.light"
+    )
+    projector_gamma: float = Field(1.0, gt=0)
+    projector_blur_px: float = Field(0.0, ge=0, description="projector defocus sigma (px)")
+    options: dict[str, Any] = Field(
+        default_factory=dict,
+        description="extra keyword options of run_scanner_study "
+        "(gray_opts, dot_opts, planner_opts, rig keywords under 'rig')",
+    )
 
 
 StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg)
@@ -508,6 +528,11 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
                 registry.check_strategy(s, f"study.strategies[{i}]")
             for i, m in enumerate(p.study.metrics):
                 registry.check_metric(m, f"study.metrics[{i}]")
+        if isinstance(p.study, ScannerStudyCfg):
+            for i, s in enumerate(p.study.planners):
+                registry.check_strategy(s, f"study.planners[{i}]")
+            for i, m in enumerate(p.study.modes):
+                registry.check_scan_mode(m, f"study.modes[{i}]")
 
 
 def _resolve_files(cfg: ExperimentCfg, base_dir: Path | None) -> ExperimentCfg:

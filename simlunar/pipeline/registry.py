@@ -71,3 +71,9 @@ def metric_names() -> list[str]:
 
 def check_metric(name: str, path: str) -> None:
     _check(name, metric_names(), path, "metric")
+
+
+def check_scan_mode(name: str, path: str) -> None:
+    from simlunar.scanner import modes
+
+    _check(name, list(modes.MODES), path, "scan mode")

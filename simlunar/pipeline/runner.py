@@ -162,7 +162,9 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
                 if c not in ROW_COLUMNS and c not in extra:
                     extra.append(c)
             rows.append({"unit": u.index, **{c: u.sweep[c] for c in sweep_cols}, **r})
-    return rows, ["unit", *sweep_cols, *[c for c in ROW_COLUMNS if c != "value"], *extra, "value"]
+    present = {c for r in rows for c in r}
+    known = [c for c in ROW_COLUMNS if c != "value" and c in present]
+    return rows, ["unit", *sweep_cols, *known, *extra, "value"]
 
 
 def unit_label(u: WorkUnit) -> str:
@@ -174,6 +176,8 @@ def unit_label(u: WorkUnit) -> str:
         name = path.rsplit(".", 1)[-1]
         if isinstance(v, dict):
             v = v.get("kind", json.dumps(v, sort_keys=True))
+        elif v is None:
+            v = "default"
         parts.append(f"{name}={fmt_value(v)}")
     return ", ".join(parts)
 

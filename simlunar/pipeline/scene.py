@@ -92,9 +92,14 @@ def _union(default: str, *members):
         return v.get("kind", default) if isinstance(v, dict) else getattr(v, "kind", default)
 
     union = Union[tuple(Annotated[m, Tag(t)] for m, t in zip(members, tags))]  # noqa: UP007
-    return Annotated[union, Discriminator(pick, custom_error_type="bad_kind",
-                                          custom_error_message=f"kind must be one of "
-                                                               f"{', '.join(tags)}")]
+    return Annotated[
+        union,
+        Discriminator(
+            pick,
+            custom_error_type="bad_kind",
+            custom_error_message=f"kind must be one of {', '.join(tags)}",
+        ),
+    ]
 
 
 SceneCameraCfg = _union("orthographic_nadir", OrthoNadirCfg, PerspectiveSceneCfg)
@@ -168,14 +173,19 @@ def build_camera(cfg, terrain):
     from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose
 
     if isinstance(cfg, OrthoNadirCfg):
-        return OrthoCamera.nadir_for_grid(terrain.shape, terrain.spacing, terrain.origin,
-                                          altitude=cfg.altitude_m)
+        return OrthoCamera.nadir_for_grid(
+            terrain.shape, terrain.spacing, terrain.origin, altitude=cfg.altitude_m
+        )
     if cfg.fov_deg is not None:
         k = Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg)
     else:
         k = Intrinsics(cfg.fx, cfg.fy, cfg.cx, cfg.cy, cfg.width, cfg.height)
-    return Camera(k, Pose.look_at(cfg.position_m, cfg.look_at_m, cfg.up),
-                  aperture_radius=cfg.aperture_radius_m, focus_distance=cfg.focus_distance_m)
+    return Camera(
+        k,
+        Pose.look_at(cfg.position_m, cfg.look_at_m, cfg.up),
+        aperture_radius=cfg.aperture_radius_m,
+        focus_distance=cfg.focus_distance_m,
+    )
 
 
 def build_lights(cfg: SceneCfg) -> list:
@@ -184,9 +194,15 @@ def build_lights(cfg: SceneCfg) -> list:
 
     light = cfg.light
     if isinstance(light, SunSceneCfg):
-        out = [make_light("sun", elevation=light.elevation, azimuth=light.azimuth,
-                          irradiance=light.irradiance,
-                          angular_diameter=light.angular_diameter)]
+        out = [
+            make_light(
+                "sun",
+                elevation=light.elevation,
+                azimuth=light.azimuth,
+                irradiance=light.irradiance,
+                angular_diameter=light.angular_diameter,
+            )
+        ]
     else:
         out = [make_light("camera", intensity=light.intensity)]
     if cfg.ambient_radiance > 0:
@@ -229,8 +245,15 @@ def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
     terrain, camera, lights, bsdf = build_scene_inputs(cfg)
     t1 = time.perf_counter()
     _, render_seed = _seeds(cfg.seed)
-    res = render(terrain, camera, lights=lights, bsdf=bsdf, spp=cfg.spp, seed=render_seed,
-                 max_depth=cfg.max_depth)
+    res = render(
+        terrain,
+        camera,
+        lights=lights,
+        bsdf=bsdf,
+        spp=cfg.spp,
+        seed=render_seed,
+        max_depth=cfg.max_depth,
+    )
     t2 = time.perf_counter()
     gt = res.gt
     attrs = {"scene": cfg.name, "spp": cfg.spp, "seed": cfg.seed}
@@ -243,17 +266,25 @@ def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
         channels[f"position.{ax}"] = gt.position[..., i]
         channels[f"normal.{ax}"] = gt.normal[..., i]
     paths["ground_truth"] = write_exr(out / "ground_truth.exr", channels, attrs=attrs)
-    paths["ground_truth_npz"] = _write_npz(out / "ground_truth.npz", depth=gt.depth,
-                                           position=gt.position, normal=gt.normal,
-                                           valid=gt.valid)
+    paths["ground_truth_npz"] = _write_npz(
+        out / "ground_truth.npz",
+        depth=gt.depth,
+        position=gt.position,
+        normal=gt.normal,
+        valid=gt.valid,
+    )
     if cfg.sensor is not None:
         from simlunar.pipeline.stages import luminance, sensor_image, stage_seeds
 
         rng = np.random.default_rng(stage_seeds(cfg.seed)["sensor"])
         img = sensor_image(luminance(res.image), cfg.sensor, rng=rng)
         paths["sensor"] = write_png_preview(out / "sensor.png", img, exposure=1.0)
-    meta = {"config": cfg.model_dump(mode="json"), "terrain_s": round(t1 - t0, 3),
-            "render_s": round(t2 - t1, 3), "shape": list(res.image.shape[:2])}
+    meta = {
+        "config": cfg.model_dump(mode="json"),
+        "terrain_s": round(t1 - t0, 3),
+        "render_s": round(t2 - t1, 3),
+        "shape": list(res.image.shape[:2]),
+    }
     paths["scene"] = _write_text(out / "scene.json", json.dumps(meta, indent=1))
     return paths
 

@@ -280,26 +280,71 @@ def _plain_scores(scores) -> dict:
 
 
 def _compute_scanner_unit(cfg: ExperimentCfg, terrain, seeds, timings) -> dict[str, Any]:
-    from simlunar.scanner.rigs import make_rig
+    from simlunar.scanner.rigs import rig_preset
     from simlunar.study.scanner import run_scanner_study
 
     s = cfg.study
+    r = cfg.render
     t = time.perf_counter()
-    rig = make_rig(s.rig, terrain=terrain)
+    x0, x1, y0, y1 = terrain.extent
+    target = ((x0 + x1) / 2, (y0 + y1) / 2, float(np.nanmedian(terrain.heights)))
+    opts = dict(s.options)
+    rig = rig_preset(
+        s.rig,
+        target=target,
+        proj_size=tuple(s.projector_px),
+        cam_size=tuple(s.camera_px),
+        **opts.pop("rig", {}),
+    )
+    sensor = None
+    if r.sensor is not None:
+        from simlunar.imaging.sensor import SensorModel
+
+        sensor = SensorModel(
+            exposure=r.sensor.exposure_e or 1000.0,
+            full_well_e=r.sensor.full_well_e,
+            read_noise_e=r.sensor.read_noise_e,
+            bits=r.sensor.bits,
+            response=r.sensor.response,
+            gamma=r.sensor.gamma,
+        )
+    sun = build_lights(r.light)[0] if isinstance(r.light, SunLightCfg) else None
     res = run_scanner_study(
         terrain,
         rig,
-        mode=s.mode,
-        planner=s.planner,
+        modes=tuple(s.modes),
+        planners=tuple(s.planners),
         budget=s.budget,
-        rng=np.random.default_rng(seeds["study"]),
-        **s.options,
+        trials=s.trials,
+        metrics=tuple(s.metrics),
+        rng=seeds["study"],
+        max_depth=r.max_depth,
+        spp=r.spp,
+        seed=_int_seed(seeds["render"]),
+        sensor=sensor,
+        bsdf=build_bsdf(r.bsdf),
+        guide_light=s.guide_light,
+        sun=sun,
+        projector_gamma=s.projector_gamma,
+        projector_blur=s.projector_blur_px,
+        **opts,
     )
     timings["study_s"] = time.perf_counter() - t
-    return {
-        "rows": [dict(r) for r in res.rows],
-        "scores": _plain_scores(getattr(res, "scores", {})),
-        "arrays": {},
-        "timings": timings,
-        "meta": {"shape": list(terrain.shape)},
+    guide = res.guide
+    arrays = {
+        "image": np.asarray(guide.image, np.float32),
+        "depth": np.where(guide.valid, guide.depth, np.nan).astype(np.float64),
     }
+    return {
+        "rows": [dict(row) for row in res.rows],
+        "scores": {},
+        "arrays": arrays,
+        "timings": timings,
+        "meta": {"shape": list(terrain.shape), "variant": _variant()},
+    }
+
+
+def _variant() -> str:
+    from simlunar.render import backend
+
+    return backend.info().variant

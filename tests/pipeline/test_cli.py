@@ -14,8 +14,12 @@ GOOD = {
     "name": "cli_test",
     "seed": 1,
     "terrain": {"preset": "aerial_1", "scale": 0.125},
-    "study": {"strategies": ["random", "wavelet"], "densities": ["1/2", "1/8"], "trials": 2,
-              "metrics": ["mse"]},
+    "study": {
+        "strategies": ["random", "wavelet"],
+        "densities": ["1/2", "1/8"],
+        "trials": 2,
+        "metrics": ["mse"],
+    },
 }
 
 
@@ -36,21 +40,43 @@ def _with(path: str, value):
 
 
 BAD = [
-    ("unknown key", _with("render.light.elevation_rad", 0.3),
-     "render.light.elevation_rad: unknown key"),
-    ("wrong type", _with("study.trials", "twenty"), "study.trials: Input should be a valid integer"),
-    ("bad unit", _with("render.light.elevation_deg", "30 parsec"),
-     "render.light.elevation_deg: bad unit 'parsec'"),
-    ("sweep over a missing key", {**GOOD, "sweep": {"render.light.zenith_deg": [1, 2]}},
-     "sweep.render.light.zenith_deg: no such key"),
-    ("missing file", {**GOOD, "terrain": {"file": "no_such_dem.npy", "spacing_m": 0.2}},
-     "terrain.file: file not found"),
+    (
+        "unknown key",
+        _with("render.light.elevation_rad", 0.3),
+        "render.light.elevation_rad: unknown key",
+    ),
+    (
+        "wrong type",
+        _with("study.trials", "twenty"),
+        "study.trials: Input should be a valid integer",
+    ),
+    (
+        "bad unit",
+        _with("render.light.elevation_deg", "30 parsec"),
+        "render.light.elevation_deg: bad unit 'parsec'",
+    ),
+    (
+        "sweep over a missing key",
+        {**GOOD, "sweep": {"render.light.zenith_deg": [1, 2]}},
+        "sweep.render.light.zenith_deg: no such key",
+    ),
+    (
+        "missing file",
+        {**GOOD, "terrain": {"file": "no_such_dem.npy", "spacing_m": 0.2}},
+        "terrain.file: file not found",
+    ),
 ]
 BAD_REGISTRY = [
-    ("unknown preset", _with("terrain.preset", "aerial_9"),
-     "terrain.preset: unknown terrain preset 'aerial_9'"),
-    ("unknown strategy", _with("study.strategies", ["random", "wavelets"]),
-     "study.strategies[1]: unknown strategy 'wavelets'"),
+    (
+        "unknown preset",
+        _with("terrain.preset", "aerial_9"),
+        "terrain.preset: unknown terrain preset 'aerial_9'",
+    ),
+    (
+        "unknown strategy",
+        _with("study.strategies", ["random", "wavelets"]),
+        "study.strategies[1]: unknown strategy 'wavelets'",
+    ),
 ]
 
 
@@ -70,7 +96,9 @@ def test_bad_config_is_one_line_exit_2_nothing_written(case, data, expected, tmp
     _check_one_line_error(invoke("run", path, "--out", str(out)), expected, path, out)
 
 
-@pytest.mark.parametrize(("case", "data", "expected"), BAD_REGISTRY, ids=[b[0] for b in BAD_REGISTRY])
+@pytest.mark.parametrize(
+    ("case", "data", "expected"), BAD_REGISTRY, ids=[b[0] for b in BAD_REGISTRY]
+)
 def test_unknown_names_are_one_line_exit_2(case, data, expected, tmp_path):
     pytest.importorskip("simlunar.planner.strategies")
     path = write(tmp_path, data)
@@ -93,9 +121,14 @@ def test_unreachable_scheduler_writes_nothing(tmp_path, monkeypatch):
     pytest.importorskip("simlunar.planner.strategies")
     import simlunar.pipeline.executors as ex
 
-    monkeypatch.setattr(ex.DaskExecutor, "__init__",
-                        lambda self, address, timeout_s=1.0: (setattr(self, "address", address),
-                                                              setattr(self, "timeout_s", 1.0))[0])
+    monkeypatch.setattr(
+        ex.DaskExecutor,
+        "__init__",
+        lambda self, address, timeout_s=1.0: (
+            setattr(self, "address", address),
+            setattr(self, "timeout_s", 1.0),
+        )[0],
+    )
     path = write(tmp_path, GOOD)
     out = tmp_path / "results"
     r = invoke("run", path, "--out", str(out), "--scheduler", "tcp://127.0.0.1:9")

@@ -23,8 +23,12 @@ def base(**over) -> dict:
         "name": "t",
         "seed": 1,
         "terrain": {"preset": "aerial_1", "scale": 0.125},
-        "study": {"strategies": ["random", "wavelet"], "densities": ["1/2", "1/8"], "trials": 2,
-                  "metrics": ["mse"]},
+        "study": {
+            "strategies": ["random", "wavelet"],
+            "densities": ["1/2", "1/8"],
+            "trials": 2,
+            "metrics": ["mse"],
+        },
     }
     d.update(over)
     return d
@@ -36,8 +40,14 @@ def model(d: dict) -> ExperimentCfg:
 
 
 def test_defaults_and_units_are_converted_once():
-    cfg = model(base(render={"light": {"elevation_deg": "0.5 rad", "azimuth_deg": 90},
-                             "bsdf": {"kind": "oren_nayar", "sigma_deg": 20}}))
+    cfg = model(
+        base(
+            render={
+                "light": {"elevation_deg": "0.5 rad", "azimuth_deg": 90},
+                "bsdf": {"kind": "oren_nayar", "sigma_deg": 20},
+            }
+        )
+    )
     assert cfg.render.light.kind == "sun"
     assert cfg.render.light.elevation_deg == pytest.approx(math.degrees(0.5))
     assert cfg.render.light.elevation == pytest.approx(0.5)
@@ -62,40 +72,63 @@ def test_sweeping_a_kind_resets_its_section():
 
 
 def test_parse_set_reads_yaml_values():
-    assert parse_set(["render.spp=32", "study.strategies=[grid, random]", "render.bsdf.kind=lambert"]) == {
-        "render.spp": 32, "study.strategies": ["grid", "random"], "render.bsdf.kind": "lambert"}
-    with pytest.raises(ConfigError, match="expected key.path=value"):
+    assert parse_set(
+        ["render.spp=32", "study.strategies=[grid, random]", "render.bsdf.kind=lambert"]
+    ) == {"render.spp": 32, "study.strategies": ["grid", "random"], "render.bsdf.kind": "lambert"}
+    with pytest.raises(ConfigError, match=r"expected key\.path=value"):
         parse_set(["render.spp"])
 
 
 @pytest.mark.parametrize(
     ("mutate", "message"),
     [
-        (lambda d: d["render"].update(light={"elevation_rad": 0.3}),
-         "render.light.elevation_rad: unknown key (valid keys: kind, elevation_deg, azimuth_deg"),
+        (
+            lambda d: d["render"].update(light={"elevation_rad": 0.3}),
+            "render.light.elevation_rad: unknown key (valid keys: kind, elevation_deg, azimuth_deg",
+        ),
         (lambda d: d.update(colour="red"), "colour: unknown key"),
         (lambda d: d["render"].update(spp="many"), "render.spp: Input should be a valid integer"),
-        (lambda d: d["render"].update(light={"elevation_deg": "30 furlong"}),
-         "render.light.elevation_deg: bad unit 'furlong'"),
-        (lambda d: d["render"].update(light={"elevation_deg": 120}),
-         "render.light.elevation_deg: Input should be less than or equal to 90"),
-        (lambda d: d["render"].update(light={"kind": "moon"}),
-         "render.light: kind must be one of sun, camera"),
-        (lambda d: d["study"].update(densities=["1/2", "3/2"]),
-         "study.densities[1]: a density must lie in (0, 1]"),
-        (lambda d: d["study"].update(densities={"from": "1/2", "to": "1/8"}),
-         "study.densities.count: Field required"),
-        (lambda d: d.update(terrain={"preset": "aerial_1", "file": "x.npy"}),
-         "terrain: give exactly one of preset or file"),
-        (lambda d: d.update(sweep={"render.light.elevation": [5, 10]}),
-         "sweep.render.light.elevation: no such key in the experiment schema (valid keys under "
-         "render.light: kind, elevation_deg"),
-        (lambda d: d.update(sweep={"render.lamp.elevation_deg": [5]}),
-         "sweep.render.lamp.elevation_deg: no such key"),
-        (lambda d: d.update(sweep={"render.light.elevation_deg": [5, 95]}),
-         "sweep.render.light.elevation_deg[1]: render.light.elevation_deg: Input should be less"),
-        (lambda d: d.update(terrain={"file": "nowhere.npy", "spacing_m": 0.2}),
-         "terrain.file: file not found"),
+        (
+            lambda d: d["render"].update(light={"elevation_deg": "30 furlong"}),
+            "render.light.elevation_deg: bad unit 'furlong'",
+        ),
+        (
+            lambda d: d["render"].update(light={"elevation_deg": 120}),
+            "render.light.elevation_deg: Input should be less than or equal to 90",
+        ),
+        (
+            lambda d: d["render"].update(light={"kind": "moon"}),
+            "render.light: kind must be one of sun, camera",
+        ),
+        (
+            lambda d: d["study"].update(densities=["1/2", "3/2"]),
+            "study.densities[1]: a density must lie in (0, 1]",
+        ),
+        (
+            lambda d: d["study"].update(densities={"from": "1/2", "to": "1/8"}),
+            "study.densities.count: Field required",
+        ),
+        (
+            lambda d: d.update(terrain={"preset": "aerial_1", "file": "x.npy"}),
+            "terrain: give exactly one of preset or file",
+        ),
+        (
+            lambda d: d.update(sweep={"render.light.elevation": [5, 10]}),
+            "sweep.render.light.elevation: no such key in the experiment schema (valid keys under "
+            "render.light: kind, elevation_deg",
+        ),
+        (
+            lambda d: d.update(sweep={"render.lamp.elevation_deg": [5]}),
+            "sweep.render.lamp.elevation_deg: no such key",
+        ),
+        (
+            lambda d: d.update(sweep={"render.light.elevation_deg": [5, 95]}),
+            "sweep.render.light.elevation_deg[1]: render.light.elevation_deg: Input should be less",
+        ),
+        (
+            lambda d: d.update(terrain={"file": "nowhere.npy", "spacing_m": 0.2}),
+            "terrain.file: file not found",
+        ),
     ],
 )
 def test_errors_name_the_key_path(mutate, message, tmp_path):
@@ -110,9 +143,13 @@ def test_errors_name_the_key_path(mutate, message, tmp_path):
 
 def test_registry_names_are_checked():
     pytest.importorskip("simlunar.planner")
-    with pytest.raises(ConfigError, match=r"^terrain.preset: unknown terrain preset 'mars_1' \(valid: .*aerial_1"):
+    with pytest.raises(
+        ConfigError, match=r"^terrain.preset: unknown terrain preset 'mars_1' \(valid: .*aerial_1"
+    ):
         validate_data(base(terrain={"preset": "mars_1"}))
-    with pytest.raises(ConfigError, match=r"^study.strategies\[1\]: unknown strategy 'wavlet' \(valid: .*wavelet"):
+    with pytest.raises(
+        ConfigError, match=r"^study.strategies\[1\]: unknown strategy 'wavlet' \(valid: .*wavelet"
+    ):
         validate_data(base(study={"strategies": ["random", "wavlet"], "densities": [0.5]}))
     with pytest.raises(ConfigError, match=r"^study.metrics\[0\]: unknown metric 'psnr'"):
         validate_data(base(study={"metrics": ["psnr"], "densities": [0.5]}))

@@ -30,9 +30,12 @@ def cfg(**over) -> ExperimentCfg:
         "name": "sweep_test",
         "seed": 7,
         "terrain": {"preset": "aerial_1", "scale": 0.125},
-        "study": {"strategies": ["random", "grid", "wavelet"],
-                  "densities": {"from": "1/2", "to": "1/32", "count": 5}, "trials": 3,
-                  "metrics": ["mse", "grad"]},
+        "study": {
+            "strategies": ["random", "grid", "wavelet"],
+            "densities": {"from": "1/2", "to": "1/32", "count": 5},
+            "trials": 3,
+            "metrics": ["mse", "grad"],
+        },
         "sweep": {"render.light.elevation_deg": [10, 30, 60, 90]},
     }
     d.update(over)
@@ -40,7 +43,9 @@ def cfg(**over) -> ExperimentCfg:
 
 
 def test_expand_is_the_cartesian_product_in_order():
-    c = cfg(sweep={"render.light.elevation_deg": [10, 30], "render.bsdf.kind": ["lambert", "hapke"]})
+    c = cfg(
+        sweep={"render.light.elevation_deg": [10, 30], "render.bsdf.kind": ["lambert", "hapke"]}
+    )
     units = expand(c)
     assert [u.sweep for u in units] == [
         {"render.light.elevation_deg": 10, "render.bsdf.kind": "lambert"},
@@ -55,14 +60,15 @@ def test_expand_is_the_cartesian_product_in_order():
 
 
 def test_kind_axes_apply_before_their_fields():
-    units = expand(cfg(sweep={"render.light.elevation_deg": [10, 50], "render.light.kind": ["sun"]}))
+    units = expand(
+        cfg(sweep={"render.light.elevation_deg": [10, 50], "render.light.kind": ["sun"]})
+    )
     assert [u.config["render"]["light"]["elevation_deg"] for u in units] == [10, 50]
 
 
 def test_cache_key_ignores_name_and_figure_formats_but_not_numbers():
     a = expand(cfg(sweep={}))[0]
-    b = expand(cfg(sweep={}, name="renamed", description="x",
-                   figures={"formats": ["png"]}))[0]
+    b = expand(cfg(sweep={}, name="renamed", description="x", figures={"formats": ["png"]}))[0]
     c = expand(cfg(sweep={}, seed=8))[0]
     d = expand(cfg(sweep={}, render={"spp": 17}))[0]
     assert a.key == b.key
@@ -115,15 +121,17 @@ def test_results_order_does_not_depend_on_completion_order(tmp_path):
 
     _run(cfg(), tmp_path / "rev", executor=Reversed())
     assert serial.units_total == len(units)
-    assert ((tmp_path / "serial" / "results.csv").read_bytes()
-            == (tmp_path / "rev" / "results.csv").read_bytes())
+    assert (tmp_path / "serial" / "results.csv").read_bytes() == (
+        tmp_path / "rev" / "results.csv"
+    ).read_bytes()
 
 
 def test_local_pool_gives_the_serial_results(tmp_path):
     _run(cfg(), tmp_path / "serial")
     _run(cfg(), tmp_path / "pool", executor=LocalPoolExecutor(2))
-    assert ((tmp_path / "serial" / "results.csv").read_bytes()
-            == (tmp_path / "pool" / "results.csv").read_bytes())
+    assert (tmp_path / "serial" / "results.csv").read_bytes() == (
+        tmp_path / "pool" / "results.csv"
+    ).read_bytes()
 
 
 @pytest.mark.slow
@@ -174,13 +182,15 @@ def test_sigkill_then_resume_recomputes_nothing_finished(tmp_path, monkeypatch):
 def test_dask_local_cluster_through_the_scheduler_path_matches_the_pool(tmp_path):
     distributed = pytest.importorskip("distributed")
     _run(cfg(), tmp_path / "local", executor=LocalPoolExecutor(1))
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster:
         ex = make_executor(scheduler=cluster.scheduler_address)
         s = _run(cfg(), tmp_path / "dask", executor=ex)
     assert s.units_computed == 4
-    assert ((tmp_path / "local" / "results.csv").read_bytes()
-            == (tmp_path / "dask" / "results.csv").read_bytes())
+    assert (tmp_path / "local" / "results.csv").read_bytes() == (
+        tmp_path / "dask" / "results.csv"
+    ).read_bytes()
     prov = json.loads((tmp_path / "dask" / "provenance.json").read_text())
     assert prov["executor"]["executor"] == "dask"
 
