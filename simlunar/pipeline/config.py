@@ -112,6 +112,8 @@ class SunLightCfg(_Model):
     elevation_deg: Deg = Field(30.0, ge=0, le=90)
     azimuth_deg: Deg = Field(135.0, ge=-360, le=360)
     irradiance: float = Field(1.0, gt=0, description="W/m^2 at normal incidence (relative)")
+    angular_diameter_deg: Deg = Field(
+        0.0, ge=0, lt=90, description="solar disk; 0.53 = the real sun (soft shadow edges)")
 
     @property
     def elevation(self) -> float:
@@ -183,6 +185,7 @@ class RenderCfg(_Model):
     camera: CameraCfg = Field(default_factory=OrthoNadirCfg)
     light: LightCfg = Field(default_factory=SunLightCfg)
     bsdf: BsdfCfg = Field(default_factory=lambda: OrenNayarCfg(kind="oren_nayar"))
+    ambient_radiance: float = Field(0.0, ge=0, description="constant sky radiance (0 = off)")
     spp: int = Field(16, ge=1, le=4096)
     max_depth: int = Field(3, ge=2, le=16, description="path depth (2 = direct light only)")
     sensor: SensorCfg | None = Field(
@@ -278,7 +281,7 @@ class ExperimentCfg(_Model):
 
     name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$")
     description: str = ""
-    seed: int = Field(0, ge=0)
+    seed: int = Field(0, ge=0, lt=2**31)
     terrain: TerrainCfg
     render: RenderCfg = Field(default_factory=RenderCfg)
     study: StudyCfg

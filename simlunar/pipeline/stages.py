@@ -19,12 +19,10 @@ from typing import Any
 import numpy as np
 
 from simlunar.pipeline.config import (
-    CameraLightCfg,
     ExperimentCfg,
     HapkeCfg,
     LambertCfg,
     OrenNayarCfg,
-    OrthoNadirCfg,
     SamplingStudyCfg,
     SensorCfg,
     SunLightCfg,
@@ -77,29 +75,20 @@ def build_terrain(cfg, *, rng):
 
 
 # --------------------------------------------------------------------------- render
-def build_camera(cfg, terrain):
-    from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose
+def scene_inputs(cfg: ExperimentCfg):
+    """``(terrain, camera, lights, bsdf)`` of an experiment, through the scene builder.
 
-    if isinstance(cfg, OrthoNadirCfg):
-        return OrthoCamera.nadir_for_grid(
-            terrain.shape, terrain.spacing, terrain.origin, altitude=cfg.altitude_m
-        )
-    intr = Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg)
-    return Camera(intr, Pose.look_at(cfg.position_m, cfg.look_at_m))
+    The experiment's ``terrain`` and ``render`` sections are a subset of the scene schema
+    (:class:`simlunar.pipeline.scene.SceneCfg`), so one builder serves ``simlunar render`` and
+    ``simlunar run`` and both give the same terrain for the same seed.
+    """
+    from simlunar.pipeline.scene import SceneCfg, build_scene_inputs
 
-
-def build_lights(cfg) -> list:
-    from simlunar.render.lights import make_light
-
-    if isinstance(cfg, SunLightCfg):
-        return [
-            make_light(
-                "sun", elevation=cfg.elevation, azimuth=cfg.azimuth, irradiance=cfg.irradiance
-            )
-        ]
-    if isinstance(cfg, CameraLightCfg):
-        return [make_light("camera", intensity=cfg.intensity)]
-    raise ValueError(f"render.light: unsupported light {cfg!r}")
+    r = cfg.render.model_dump(mode="json", by_alias=True)
+    r.pop("sensor", None)
+    scene = SceneCfg.model_validate({"terrain": cfg.terrain.model_dump(mode="json"),
+                                     "seed": cfg.seed, **r})
+    return build_scene_inputs(scene)
 
 
 def build_bsdf(cfg):
@@ -190,26 +179,18 @@ def compute_unit(payload: dict[str, Any]) -> dict[str, Any]:
     timings: dict[str, float] = {}
     t = time.perf_counter()
 
-    terrain = build_terrain(cfg.terrain, rng=np.random.default_rng(seeds["terrain"]))
+    terrain, camera, lights, bsdf = scene_inputs(cfg)
     timings["terrain_s"] = time.perf_counter() - t
 
     if not isinstance(cfg.study, SamplingStudyCfg):
-        return _compute_scanner_unit(cfg, terrain, seeds, timings)
+        return _compute_scanner_unit(cfg, terrain, lights, bsdf, seeds, timings)
 
     t = time.perf_counter()
     from simlunar.render import render
 
-    camera = build_camera(cfg.render.camera, terrain)
     r = cfg.render
-    result = render(
-        terrain,
-        camera,
-        lights=build_lights(r.light),
-        bsdf=build_bsdf(r.bsdf),
-        spp=r.spp,
-        seed=_int_seed(seeds["render"]),
-        max_depth=r.max_depth,
-    )
+    result = render(terrain, camera, lights=lights, bsdf=bsdf, spp=r.spp,
+                    seed=_int_seed(seeds["render"]), max_depth=r.max_depth)
     timings["render_s"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -279,7 +260,8 @@ def _plain_scores(scores) -> dict:
     return out
 
 
-def _compute_scanner_unit(cfg: ExperimentCfg, terrain, seeds, timings) -> dict[str, Any]:
+def _compute_scanner_unit(cfg: ExperimentCfg, terrain, lights, bsdf, seeds,
+                          timings) -> dict[str, Any]:
     from simlunar.scanner.rigs import rig_preset
     from simlunar.study.scanner import run_scanner_study
 
@@ -308,7 +290,7 @@ def _compute_scanner_unit(cfg: ExperimentCfg, terrain, seeds, timings) -> dict[s
             response=r.sensor.response,
             gamma=r.sensor.gamma,
         )
-    sun = build_lights(r.light)[0] if isinstance(r.light, SunLightCfg) else None
+    sun = lights[0] if isinstance(r.light, SunLightCfg) else None
     res = run_scanner_study(
         terrain,
         rig,
