@@ -151,6 +151,36 @@ def render(
     typer.echo(f"rendered {cfg.name} into {out_dir}")
 
 
+@app.command()
+@user_errors
+def terrain(
+    preset: str = typer.Argument(..., help="preset name (aerial_1..3, moonyard) or a terrain YAML"),
+    out: str = typer.Option(..., "--out", help="output folder"),
+    seed: int = typer.Option(0, "--seed", help="random seed (same seed, same terrain)"),
+    scale: float = typer.Option(1.0, "--scale", help="shrink the grid (same spacing), in (0, 1]"),
+    dem_format: str = typer.Option("exr", "--format", help="DEM file: exr, npz, npy or tif"),
+    mesh: str = typer.Option("ply", "--mesh", help="mesh file: ply, obj or none"),
+) -> None:
+    """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""
+    import time
+
+    from simlunar.terrain import generate
+    from simlunar.terrain.io import write_terrain_outputs
+
+    if mesh.lower() not in ("ply", "obj", "none"):
+        raise ValueError(f"--mesh must be ply, obj or none, got {mesh!r}")
+    t0 = time.perf_counter()
+    res = generate(preset, rng=seed, scale=scale)
+    t_gen = time.perf_counter() - t0
+    files = write_terrain_outputs(res, out, dem_format=dem_format,
+                                  mesh_format=None if mesh.lower() == "none" else mesh)
+    rows, cols = res.terrain.shape
+    typer.echo(f"{res.params.name}: {rows} x {cols} cells at {res.terrain.spacing} m, "
+               f"{len(res.craters)} craters, {len(res.rocks)} rocks, generated in {t_gen:.2f} s")
+    for name, path in files.items():
+        typer.echo(f"{name:<10} {path}")
+
+
 def main() -> None:
     app(prog_name="simlunar")
 
