@@ -285,6 +285,8 @@ class TerrainScene:
 
     def _cast(self, u: np.ndarray, v: np.ndarray):
         """Intersect the sensor's rays through pixel coordinates (u, v) (n,) with the scene."""
+        import drjit as dr
+
         mi = self._mi
         rows, cols = self.shape
         n = len(u)
@@ -297,10 +299,12 @@ class TerrainScene:
             mi.Point2f(half, half),
         )
         si = self._scene.ray_intersect(ray)
-        valid = np.array(si.is_valid(), bool).reshape(-1)
+        hit, p, nrm = si.is_valid(), si.p, si.sh_frame.n
+        dr.eval(hit, p, nrm)  # one kernel for the three outputs (else one trace per output)
+        valid = np.array(hit, bool).reshape(-1)
         valid = np.broadcast_to(valid, (n,)).copy()
-        pos = np.array(si.p, np.float64).reshape(3, -1).T
-        nrm = np.array(si.sh_frame.n, np.float32).reshape(3, -1).T
+        pos = np.array(p, np.float64).reshape(3, -1).T
+        nrm = np.array(nrm, np.float32).reshape(3, -1).T
         return valid, np.broadcast_to(pos, (n, 3)).copy(), np.broadcast_to(nrm, (n, 3)).copy()
 
 
