@@ -102,6 +102,7 @@ def write_exr(path, channels, *, attrs: dict | None = None) -> Path:
     try:
         with OpenEXR.File(header, chans) as f:
             f.write(tmp)
+            os.chmod(tmp, 0o644)  # mkstemp makes 0600; results are shared files
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -81,6 +81,7 @@ def write_png_preview(path, image: np.ndarray, *, exposure: float | None = None)
     os.close(fd)
     try:
         Image.fromarray(px).save(tmp, format="PNG")
+        os.chmod(tmp, 0o644)  # mkstemp makes 0600; results are shared files
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

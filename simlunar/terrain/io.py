@@ -45,6 +45,7 @@ def _atomic(path: Path, write, suffix: str) -> None:
     os.close(fd)
     try:
         write(tmp)
+        os.chmod(tmp, 0o644)  # mkstemp makes 0600; results are shared files
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -300,3 +301,48 @@ def hillshade_png(
         m = float(np.nanmean(a)) or 1.0
         img = img * a / m * 0.8
     return write_png_preview(path, img, exposure=1.0)
+
+
+def features_json(result) -> dict:
+    """JSON-ready summary of a generated terrain: grid, preset name, craters and rocks."""
+    t = result.terrain
+    return {
+        "name": result.params.name,
+        "description": result.params.description,
+        "shape": list(t.shape),
+        "spacing": t.spacing,
+        "origin": list(t.origin),
+        "craters": [c.to_dict() for c in result.craters],
+        "rocks": [r.to_dict() for r in result.rocks],
+    }
+
+
+def write_terrain_outputs(
+    result, out_dir, *, dem_format: str = "exr", mesh_format: str | None = "ply"
+) -> dict[str, Path]:
+    """Write a generated terrain's files into ``out_dir`` (created if needed).
+
+    Files: ``dem.<fmt>`` (heights + albedo + spacing), ``albedo.png`` (sRGB preview),
+    ``hillshade.png``, ``mesh.<ply|obj>`` (unless ``mesh_format`` is None) and
+    ``features.json`` (placed craters and rocks, world metres).
+
+    Returns
+    -------
+    dict name -> Path of the files written.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    fmt = dem_format.lower().lstrip(".")
+    if f".{fmt}" not in FORMATS:
+        raise ValueError(f"unknown DEM format {dem_format!r}; valid: npy, npz, exr, tif")
+    from simlunar.imaging.png import write_png_preview
+
+    files = {"dem": save_dem(out / f"dem.{fmt}", result.terrain)}
+    files["albedo"] = write_png_preview(out / "albedo.png", result.terrain.albedo, exposure=1.0)
+    files["hillshade"] = hillshade_png(result.terrain, out / "hillshade.png")
+    if mesh_format is not None:
+        files["mesh"] = export_mesh(result.terrain, out / f"mesh.{mesh_format.lower().lstrip('.')}")
+    blob = json.dumps(features_json(result), indent=1)
+    _atomic(out / "features.json", lambda t: Path(t).write_text(blob), ".json")
+    files["features"] = out / "features.json"
+    return files
