@@ -241,7 +241,7 @@ def compute_unit(payload: dict[str, Any]) -> dict[str, Any]:
         "scores": _plain_scores(study.scores),
         "arrays": arrays,
         "timings": timings,
-        "meta": {"shape": list(image.shape), "spacing_m": terrain.spacing},
+        "meta": {"shape": list(image.shape), "spacing_m": terrain.spacing, "variant": _variant()},
     }
 
 
