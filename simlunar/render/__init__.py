@@ -7,7 +7,9 @@ Importing this package does not import Mitsuba; :func:`simlunar.render.backend.i
   ``LIGHTS``, ``make_light``
 - scene: ``TerrainScene``, ``render``, ``RenderResult``, ``inverse_by_linearity``,
   ``luminance``
+- BSDF specs: ``LambertBSDF``, ``OrenNayarBSDF``, ``HapkeBSDF``, ``make_bsdf``
 - mesh / cameras: ``terrain_mesh``, ``sensor_dict``
+- :mod:`simlunar.render.specs` gathers every light and BSDF spec (NumPy only)
 """
 
 from __future__ import annotations
@@ -27,6 +29,10 @@ _EXPORTS = {
     "RenderResult": "scene",
     "inverse_by_linearity": "scene",
     "luminance": "scene",
+    "LambertBSDF": "materials",
+    "OrenNayarBSDF": "materials",
+    "HapkeBSDF": "materials",
+    "make_bsdf": "materials",
     "terrain_mesh": "mesh",
     "sensor_dict": "cameras",
 }

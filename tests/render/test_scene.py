@@ -278,3 +278,25 @@ def test_bad_bsdf(mi, small):
     t, cam = small
     with pytest.raises(ValueError, match="bsdf must be a LambertBSDF"):
         TerrainScene(t, cam, lights=[AmbientLight(1.0)], bsdf="oren_nayar")
+
+
+def test_thin_lens_defocuses_out_of_focus_plane(mi, rng):
+    # a random-albedo plane at 4 m: sharp through a pinhole, blurred by a lens focused at 1 m
+    # (circle of confusion ~ f * A * |1/1 - 1/4| = 40 px * 0.05 m * 0.75 = 1.5 px radius)
+    shape = (48, 48)
+    t = Terrain(np.zeros(shape), rng.random(shape).astype(np.float32), 0.1, (-2.4, 2.4))
+    k = Intrinsics.from_fov(32, 32, 43.6)
+    pose = Pose.look_at([0.0, 0.0, 4.0], [0.0, 0.0, 0.0])
+    imgs = [
+        TerrainScene(
+            t,
+            Camera(k, pose, aperture_radius=a, focus_distance=f),
+            lights=[AmbientLight(1.0)],
+            max_depth=2,
+            spp=64,
+        ).render()[..., 0]
+        for a, f in ((0.0, None), (0.05, 1.0), (0.05, 4.0))
+    ]
+    pinhole, defocused, focused = (np.abs(np.diff(i, axis=1)).mean() for i in imgs)
+    assert defocused < 0.6 * pinhole
+    assert focused > 0.8 * pinhole  # in focus at the plane's distance: sharp again
