@@ -1,0 +1,124 @@
+"""Real work units end to end: terrain, Mitsuba render, sensor, sampling study, figures.
+
+A shrunken quickstart (1/16-scale aerial scene 1: 62 x 100 cells, 4 spp, 3 strategies,
+3 densities, 2 trials) keeps each unit to a few seconds on 2 cores.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from simlunar.cli import app
+
+pytestmark = pytest.mark.render
+
+ROOT = Path(__file__).resolve().parents[2]
+QUICKSTART = str(ROOT / "experiments" / "quickstart.yaml")
+SMALL = [
+    "--set",
+    "terrain.scale=0.0625",
+    "--set",
+    "render.spp=4",
+    "--set",
+    "study.strategies=[random, grid, wavelet]",
+    "--set",
+    "study.densities=[1/4, 1/16, 1/64]",
+    "--set",
+    "study.trials=2",
+    "--set",
+    "study.metrics=[mse, grad]",
+]
+
+
+def run_cli(*args):
+    r = CliRunner().invoke(app, ["run", *args, "--no-progress"])
+    assert r.exit_code == 0, r.output
+    return r
+
+
+@pytest.mark.slow
+def test_quickstart_variant_end_to_end(tmp_path):
+    out = tmp_path / "qs"
+    r = run_cli(QUICKSTART, "--out", str(out), *SMALL)
+    assert "| Metric | Random | Grid | Wavelet |" in r.output
+    assert f"figures: {out / 'figures'}" in r.output
+    with (out / "results.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 3 * 3 * 2 * 2
+    assert {row["strategy"] for row in rows} == {"random", "grid", "wavelet"}
+    # k = round(density * N) of the 62 x 100 grid
+    n = 62 * 100
+    assert {(float(row["density"]), int(row["k"])) for row in rows} == {
+        (0.25, round(n / 4)),
+        (1 / 16, round(n / 16)),
+        (1 / 64, round(n / 64)),
+    }
+    assert all(float(row["value"]) > 0 for row in rows)
+    scores = (out / "scores.md").read_text()
+    assert "| MSE | 1.00 |" in scores  # random is the reference: exactly 1 (eq. 4.3)
+    assert "\\begin{tabular}{lrrr}" in (out / "scores.tex").read_text()
+    prov = json.loads((out / "provenance.json").read_text())
+    assert prov["variant"] in ("llvm_ad_rgb", "scalar_rgb", "cuda_ad_rgb")
+    assert set(prov["timings"]["units"][prov["unit_keys"][0]]) >= {"render_s", "study_s"}
+    figs = {p.name for p in (out / "figures").iterdir()}
+    assert {"error_vs_density_mse.png", "error_vs_density_mse.pdf", "panels_unit0.png"} <= figs
+
+    # rerun: cached, identical; a fresh folder with the same seed: byte-identical
+    r2 = run_cli(QUICKSTART, "--out", str(out), *SMALL, "--no-figures")
+    assert "units: 1 (1 cached, 0 computed)" in r2.output
+    run_cli(QUICKSTART, "--out", str(tmp_path / "again"), *SMALL, "--no-figures")
+    assert (out / "results.csv").read_bytes() == (tmp_path / "again" / "results.csv").read_bytes()
+
+    # `simlunar figures` redraws from the folder alone
+    r3 = CliRunner().invoke(app, ["figures", str(out)])
+    assert r3.exit_code == 0 and "panels_unit0.pdf" in r3.output
+
+
+@pytest.mark.slow
+def test_real_sweep_sigkill_then_resume(tmp_path):
+    args = [*SMALL, "--set", "sweep={render.light.elevation_deg: [10, 40, 70]}", "--no-figures"]
+    ref = tmp_path / "ref"
+    run_cli(QUICKSTART, "--out", str(ref), *args)
+    out = tmp_path / "killed"
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "simlunar.cli",
+            "run",
+            QUICKSTART,
+            "--out",
+            str(out),
+            "--no-progress",
+            *args,
+        ],
+        cwd=ROOT,
+        start_new_session=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    deadline = time.monotonic() + 240
+    units = out / "units"
+    while time.monotonic() < deadline and proc.poll() is None:
+        if units.is_dir() and list(units.glob("*.json")):
+            break
+        time.sleep(0.05)
+    assert proc.poll() is None, "the run finished before it could be killed"
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    done = {p.name: p.stat().st_mtime_ns for p in units.glob("*.json")}
+    assert 1 <= len(done) < 3
+    r = run_cli(QUICKSTART, "--out", str(out), *args)
+    assert f"units: 3 ({len(done)} cached, {3 - len(done)} computed)" in r.output
+    assert {p.name: p.stat().st_mtime_ns for p in units.glob("*.json") if p.name in done} == done
+    assert (out / "results.csv").read_bytes() == (ref / "results.csv").read_bytes()
