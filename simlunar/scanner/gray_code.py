@@ -295,9 +295,46 @@ def bit_errors(
     return (tb != result.bits) & mask[None]
 
 
+def stable_bits(
+    true_col: np.ndarray, true_row: np.ndarray, n_col_bits: int, n_row_bits: int, *, margin: int = 1
+) -> np.ndarray:
+    """Pixels away from each bit's stripe edges in the camera image.
+
+    A camera pixel integrates light over its area, so where the true bit changes inside the
+    pixel its decoded value is a coin toss, not an error of the light transport. This is True
+    where the true bit is the same over the ``(2 margin + 1)^2`` neighbourhood (and the
+    neighbourhood has true correspondences).
+
+    Returns
+    -------
+    (n_col_bits + n_row_bits, rows, cols) bool
+    """
+    from scipy import ndimage
+
+    true_col = np.asarray(true_col)
+    has = (true_col >= 0) & (np.asarray(true_row) >= 0)
+    tb = np.concatenate(
+        [
+            bit_planes(np.clip(true_col, 0, None), n_col_bits),
+            bit_planes(np.clip(true_row, 0, None), n_row_bits),
+        ]
+    ).astype(np.int8)
+    size = 2 * int(margin) + 1
+    out = np.empty(tb.shape, bool)
+    all_has = ndimage.minimum_filter(has.astype(np.int8), size=size, mode="constant", cval=0) > 0
+    for i, b in enumerate(tb):
+        lo = ndimage.minimum_filter(b, size=size, mode="nearest")
+        hi = ndimage.maximum_filter(b, size=size, mode="nearest")
+        out[i] = (lo == hi) & all_has
+    return out
+
+
 def bit_error_rates(errors: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Fraction of ``mask`` pixels with an error, per bit: (n_bits,) float64 (NaN if mask empty)."""
-    n = int(np.count_nonzero(mask))
-    if n == 0:
-        return np.full(errors.shape[0], np.nan)
-    return errors[:, mask].sum(axis=1) / n
+    """Fraction of masked pixels with an error, per bit: (n_bits,) float64 (NaN if none).
+
+    ``mask`` is (rows, cols) for all bits or (n_bits, rows, cols) per bit.
+    """
+    mask = np.broadcast_to(np.asarray(mask, bool), errors.shape)
+    n = mask.sum(axis=(1, 2))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, (errors & mask).sum(axis=(1, 2)) / np.maximum(n, 1), np.nan)

@@ -260,12 +260,21 @@ def true_correspondences(
 
 
 def projector_visibility(
-    positions: np.ndarray, projector: Camera, guide_depth: np.ndarray, *, rel_tol: float = 0.01
+    positions: np.ndarray,
+    projector: Camera,
+    guide_depth: np.ndarray,
+    *,
+    rel_tol: float = 0.01,
+    window: int = 3,
 ) -> np.ndarray:
     """Which world points the projector lights directly (not in its cast shadow).
 
-    A point is lit if the guide view (same centre and intrinsics as the projector) sees it:
-    its projector depth equals the guide's ground-truth depth at its pixel within ``rel_tol``.
+    The guide view has the projector's centre and intrinsics, so a point is lit if nothing in
+    the guide view lies in front of it: its projector depth is at most the largest guide
+    ground-truth depth over the ``window x window`` pixels around its projector pixel, plus
+    ``rel_tol``. The window keeps surfaces lit at grazing incidence (whose depth changes a lot
+    within one pixel) lit; a point in a cast shadow is behind the occluder over the whole window
+    (except within ``window // 2`` pixels of the shadow's edge).
 
     Parameters
     ----------
@@ -277,19 +286,24 @@ def projector_visibility(
     -------
     (...) bool
     """
+    from scipy import ndimage
+
     guide_depth = np.asarray(guide_depth, float)
     if guide_depth.shape != projector.intrinsics.shape:
         raise ValueError(
             f"guide_depth {guide_depth.shape} must have the projector shape "
             f"{projector.intrinsics.shape}"
         )
+    far = ndimage.maximum_filter(
+        np.nan_to_num(guide_depth, nan=-np.inf), size=window, mode="nearest"
+    )
     col, row = true_correspondences(positions, projector)
     _, z = projector.project(positions)
     ok = col >= 0
     gd = np.full(col.shape, np.nan)
-    gd[ok] = guide_depth[row[ok], col[ok]]
+    gd[ok] = far[row[ok], col[ok]]
     with np.errstate(invalid="ignore"):
-        return ok & (np.abs(z - gd) <= rel_tol * np.abs(gd))
+        return ok & (z <= gd * (1 + rel_tol))
 
 
 def depth_in_view(points: np.ndarray, view: Camera, *, reduce: str = "mean") -> np.ndarray:

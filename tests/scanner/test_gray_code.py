@@ -112,3 +112,18 @@ def test_bit_errors_locate_flipped_bits():
     assert not err[[1, 2, 4, 5, 6, 7, 8]].any()
     rates = gc.bit_error_rates(err, np.ones((H, W), bool))
     np.testing.assert_allclose(rates[:4], [1.0, 0, 0, 1 / (W * H)])
+
+
+def test_stable_bits_exclude_stripe_edges():
+    W, H = 8, 4
+    rows, cols = np.mgrid[0:H, 0:W]
+    st = gc.stable_bits(cols, rows, 3, 2, margin=1)
+    # MSB of columns changes between columns 3 and 4, so the 3x3 window excludes columns 3
+    # and 4; columns 0 and 7 touch the border (no correspondence outside)
+    np.testing.assert_array_equal(st[0, 1], [False, True, True, False, False, True, True, False])
+    # image borders: the window is padded with 'no correspondence', so borders are excluded
+    assert not st[:, 0].any() and not st[:, :, 0].any()
+    errs = np.zeros((5, H, W), bool)
+    errs[0, 1, 1] = True
+    rates = gc.bit_error_rates(errs, st)
+    assert rates[0] == pytest.approx(1 / st[0].sum())

@@ -71,15 +71,17 @@ def test_depth_in_view_and_at_projector_pixels(rig, rng):
 def test_true_correspondences_and_visibility(rig):
     guide = rig.guide
     depth = np.full((48, 64), 1.6)
-    depth[5, 7] = 1.2  # an occluder in front of pixel (5, 7)
+    depth[5:10, 7:12] = 1.2  # an occluder in front of a 5 x 5 pixel patch
     pts = guide.unproject_depth(np.full((48, 64), 1.6))
     col, row = tri.true_correspondences(pts, rig.projector)
     np.testing.assert_array_equal(col, np.broadcast_to(np.arange(64), (48, 64)))
     np.testing.assert_array_equal(row, np.broadcast_to(np.arange(48)[:, None], (48, 64)))
     lit = tri.projector_visibility(pts, rig.projector, depth)
-    assert lit.sum() == 48 * 64 - 1 and not lit[5, 7]
+    # the 3 x 3 window keeps a one-pixel rim of the shadow lit: 3 x 3 pixels stay dark
+    assert lit.sum() == 48 * 64 - 9 and not lit[6:9, 8:11].any()
     col2, _ = tri.true_correspondences(pts, rig.projector, lit=lit)
-    assert col2[5, 7] == -1
+    assert col2[7, 9] == -1
+    assert tri.projector_visibility(pts, rig.projector, depth, window=1).sum() == 48 * 64 - 25
 
 
 def test_zero_baseline_and_off_centre_projector_are_rejected():

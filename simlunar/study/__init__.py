@@ -1,0 +1,1 @@
+"""Studies that run the library's stages end to end on arrays (no files, no YAML)."""
