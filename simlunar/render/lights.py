@@ -128,8 +128,10 @@ class ProjectorLight:
         Relative irradiance per projector pixel, usually in [0, 1]; row 0 is the top row,
         column 0 the left column of the projector image (same convention as a camera).
     scale : float
-        Multiplies the pattern (Mitsuba's ``scale``): the irradiance on a plane facing the
-        projector at 1 m is ``scale * pattern`` (Mitsuba's convention for ``projector``).
+        Irradiance (W/m^2) per unit pattern value on a plane parallel to the projector's
+        image plane at depth 1 m; at depth z it is ``scale * pattern / z^2`` (no cos^3
+        fall-off on such a plane). Mitsuba's ``projector`` delivers ``pi * scale`` there
+        (measured, ``tests/render/test_lights.py``), so its ``scale`` is ours / pi.
     """
 
     projector: Projector
@@ -245,7 +247,7 @@ def emitter_dicts(light, camera, *, index: int = 0) -> dict[str, dict]:
                 "type": "projector",
                 "fov": k.fov_x_deg,
                 "to_world": mi.ScalarTransform4f(to_world_matrix(light.projector.pose)),
-                "scale": float(light.scale),
+                "scale": float(light.scale) / np.pi,  # Mitsuba's texture value 1 gives E = pi
                 "irradiance": {
                     "type": "bitmap",
                     "data": mi.TensorXf(np.ascontiguousarray(light.pattern[..., None])),

@@ -206,3 +206,21 @@ def test_finite_sun_gives_penumbra(mi):
     np.testing.assert_allclose(frac_soft[-5:], frac_hard[-5:], rtol=0.015)
     assert frac_soft[-5:].mean() == pytest.approx(1.0, rel=5e-3)
     assert frac_soft[0] == pytest.approx(0.0, abs=1e-6)
+
+
+@pytest.mark.render
+def test_projector_irradiance_convention(mi):
+    # projector looking straight down from depth H: E = scale * pattern / H^2 on the plane
+    # (parallel to its image plane), so a Lambert plane shows L = albedo * E / pi
+    t = _plane(albedo=0.8, n=64, spacing=0.05)
+    cam = OrthoCamera.nadir_for_grid(t.shape, t.spacing, t.origin, altitude=4.0)
+    H, scale = 2.0, 5.0
+    proj = Projector(Intrinsics.from_fov(16, 12, 60.0), Pose.look_at([0, 0, H], [0, 0, 0]))
+    pattern = np.full((12, 16), 0.5, np.float32)
+    img = TerrainScene(
+        t, cam, lights=[ProjectorLight(proj, pattern, scale=scale)], max_depth=2, spp=4
+    ).render()[..., 0]
+    expected = 0.8 * scale * 0.5 / H**2 / np.pi
+    # lit footprint: |x| < H tan(30 deg) = 1.15 m, |y| < 0.87 m; check a central block
+    np.testing.assert_allclose(img[24:40, 20:44], expected, rtol=1e-5)
+    assert img[0, 0] == 0.0  # outside the projector's frustum
