@@ -32,7 +32,7 @@ class TerrainResult:
 
 def _seeds(rng, n):
     if isinstance(rng, np.random.Generator):
-        return [np.random.default_rng(s) for s in rng.bit_generator.seed_seq.spawn(n)]
+        return rng.spawn(n)
     ss = rng if isinstance(rng, np.random.SeedSequence) else np.random.SeedSequence(rng)
     return [np.random.default_rng(s) for s in ss.spawn(n)]
 
@@ -83,7 +83,7 @@ def make_albedo(
     return np.clip(a, 0.01, 1.0).astype(np.float32)
 
 
-def generate(params, *, rng=None, scale: float = 1.0) -> TerrainResult:
+def generate(params, *, rng=None, scale: float = 1.0, nodata=None) -> TerrainResult:
     """Generate a terrain from a preset name, a preset YAML path, or :class:`TerrainParams`.
 
     Parameters
@@ -94,6 +94,9 @@ def generate(params, *, rng=None, scale: float = 1.0) -> TerrainResult:
         Same seed -> bit-identical result.
     scale : float in (0, 1]
         Shrink the grid (same spacing, smaller area); see ``TerrainParams.scaled``.
+    nodata : (rows, cols) bool array, optional
+        Cells to mark as nodata (NaN heights), e.g. to mimic a real DEM's gaps; without it the
+        heights are finite everywhere.
 
     Returns
     -------
@@ -181,6 +184,13 @@ def generate(params, *, rng=None, scale: float = 1.0) -> TerrainResult:
         )
         rock_factor = np.ones(shape)
         stamp_rocks(h, rock_factor, rocks, spacing=p.spacing, origin=p.origin, rng=g_rks)
+    if nodata is not None:
+        mask = np.asarray(nodata)
+        if mask.shape != shape or mask.dtype != bool:
+            raise ValueError(
+                f"nodata must be a boolean mask of shape {shape}, got {mask.dtype} {mask.shape}"
+            )
+        h[mask] = np.nan
     alb = make_albedo(
         shape,
         spacing=p.spacing,

@@ -151,3 +151,16 @@ def test_fractal_params_flow_through():
     )
     h = generate(p, rng=0).terrain.heights
     assert h.std() == pytest.approx(0.7)
+
+
+def test_generator_rng_and_nodata_mask():
+    a = generate(_small(), rng=np.random.default_rng(5)).terrain
+    b = generate(_small(), rng=np.random.default_rng(5)).terrain
+    np.testing.assert_array_equal(a.heights, b.heights)
+    mask = np.zeros((120, 160), bool)
+    mask[10:20, 30:40] = True
+    t = generate(_small(), rng=5, nodata=mask).terrain
+    np.testing.assert_array_equal(t.nodata, mask)
+    assert np.isfinite(t.heights[~mask]).all() and np.isfinite(t.albedo).all()
+    with pytest.raises(ValueError, match="nodata"):
+        generate(_small(), rng=5, nodata=np.zeros((3, 3), bool))
