@@ -28,9 +28,9 @@ def grid_faces(shape: tuple[int, int], nodata: np.ndarray | None = None) -> np.n
         raise ValueError(f"a mesh needs at least 2x2 cells, got {rows}x{cols}")
     idx = np.arange(rows * cols).reshape(rows, cols)
     a = idx[:-1, :-1].ravel()  # (r, c)      north-west
-    b = idx[:-1, 1:].ravel()   # (r, c+1)    north-east
-    c = idx[1:, :-1].ravel()   # (r+1, c)    south-west
-    d = idx[1:, 1:].ravel()    # (r+1, c+1)  south-east
+    b = idx[:-1, 1:].ravel()  # (r, c+1)    north-east
+    c = idx[1:, :-1].ravel()  # (r+1, c)    south-west
+    d = idx[1:, 1:].ravel()  # (r+1, c+1)  south-east
     # rows run to -y: (a, c, b) and (b, c, d) are counter-clockwise in the x-y plane
     faces = np.concatenate([np.stack([a, c, b], 1), np.stack([b, c, d], 1)])
     if nodata is not None and np.any(nodata):
