@@ -113,7 +113,8 @@ class SunLightCfg(_Model):
     azimuth_deg: Deg = Field(135.0, ge=-360, le=360)
     irradiance: float = Field(1.0, gt=0, description="W/m^2 at normal incidence (relative)")
     angular_diameter_deg: Deg = Field(
-        0.0, ge=0, lt=90, description="solar disk; 0.53 = the real sun (soft shadow edges)")
+        0.0, ge=0, lt=90, description="solar disk; 0.53 = the real sun (soft shadow edges)"
+    )
 
     @property
     def elevation(self) -> float:
@@ -274,6 +275,11 @@ class FiguresCfg(_Model):
     enabled: bool = True
     formats: list[Literal["png", "pdf"]] = Field(default_factory=lambda: ["png", "pdf"])
     panel_density: Density = Field(1 / 64, description="density shown in the image panels")
+    sparse_mesh_density: Density | None = Field(
+        1 / 80,
+        description="Fig. 4: render the mesh reconstructed from this density of "
+        "wavelet-planned samples (paper: 80x reduction); null = skip",
+    )
 
 
 class ExperimentCfg(_Model):

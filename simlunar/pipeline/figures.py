@@ -129,6 +129,17 @@ def write_figures(out_dir: str | Path) -> list[Path]:
         )
         emit(fig, f"panels_unit{rec.get('index', 0)}")
 
+    for rec in shown:
+        arr = cache.load_arrays(rec["key"])
+        if "sparse_mesh_render" not in arr or "radiance" not in arr:
+            continue
+        dens = (rec.get("config", {}).get("figures") or {}).get("sparse_mesh_density")
+        n = round(dens * arr["radiance"].size) if dens else None
+        fig, _ = F.sparse_mesh_panels(
+            arr["sparse_mesh_render"], arr["radiance"], arr.get("wavelet_energy"), n_samples=n
+        )
+        emit(fig, f"sparse_mesh_unit{rec.get('index', 0)}")
+
     sweep = cfg.get("sweep") or {}
     if len(sweep) == 1 and len(units) > 1:
         (path,) = sweep

@@ -67,7 +67,9 @@ def unit_key(config: dict[str, Any]) -> str:
     relevant.pop("figures", None)
     figures = config.get("figures") or {}
     # the panel arrays depend on these two, the file formats do not
-    relevant["_figures"] = {k: figures.get(k) for k in ("enabled", "panel_density")}
+    relevant["_figures"] = {
+        k: figures.get(k) for k in ("enabled", "panel_density", "sparse_mesh_density")
+    }
     blob = json.dumps({"cache_version": CACHE_VERSION, "config": relevant}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
