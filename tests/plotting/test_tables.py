@@ -1,0 +1,43 @@
+"""Score tables in the paper's Table 1 / Table 2 layouts."""
+
+from __future__ import annotations
+
+from simlunar.plotting.tables import score_tables
+
+# paper Table 2 (moonyard), MSE/GRAD/SAL rows, Grid/Random/Gradient/Entropy/Wavelet
+PAPER_T2 = {
+    "mse": {"grid": 1.1, "random": 1.0, "gradient": 1.09, "entropy": 1.15, "wavelet": 1.33},
+    "grad": {"grid": 0.82, "random": 1.0, "gradient": 1.21, "entropy": 1.32, "wavelet": 1.42},
+}
+STRATS = ["random", "grid", "gradient", "entropy", "wavelet"]
+
+
+def test_single_scene_is_table2_layout():
+    md, tex = score_tables([("moonyard", PAPER_T2)], strategies=STRATS, metrics=["mse", "grad"],
+                           title="t2")
+    lines = md.splitlines()
+    assert "| Metric | Random | Grid | Gradient | Entropy | Wavelet |" in lines
+    assert "| MSE | 1.00 | 1.10 | 1.09 | 1.15 | **1.33** |" in lines
+    assert "| GRAD | 1.00 | 0.82 | 1.21 | 1.32 | **1.42** |" in lines
+    assert "MSE & 1.00 & 1.10 & 1.09 & 1.15 & \\textbf{1.33} \\\\" in tex
+    assert tex.count("\\begin{tabular}{lrrrrr}") == 1
+    assert "\\toprule" in tex and "\\bottomrule" in tex
+
+
+def test_several_scenes_is_table1_layout_per_metric():
+    # paper Table 1, MSE: scene 1 1/1.02/0.88/0.87/1.11, scene 3 1/0.91/0.83/0.80/1.21
+    s1 = {"mse": dict(zip(STRATS, [1, 1.02, 0.88, 0.87, 1.11]))}
+    s3 = {"mse": dict(zip(STRATS, [1, 0.91, 0.83, 0.80, 1.21]))}
+    md, tex = score_tables([("aerial_1", s1), ("aerial_3", s3)], strategies=STRATS,
+                           metrics=["mse"], title="t1")
+    assert "| Scene | Random | Grid | Gradient | Entropy | Wavelet |" in md
+    assert "| aerial_1 | 1.00 | 1.02 | 0.88 | 0.87 | **1.11** |" in md
+    assert "| aerial_3 | 1.00 | 0.91 | 0.83 | 0.80 | **1.21** |" in md
+    assert "aerial\\_1 &" in tex  # escaped for LaTeX
+
+
+def test_missing_scores_show_a_dash():
+    md, tex = score_tables([("x", {"mse": {"random": 1.0}})], strategies=["random", "grid"],
+                           metrics=["mse"])
+    assert "| MSE | **1.00** | – |" in md
+    assert "--" in tex and "–" not in tex
