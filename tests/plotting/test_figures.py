@@ -18,8 +18,16 @@ def rows():
     for s, scale in (("random", 2.0), ("wavelet", 1.0)):
         for d in (0.5, 0.25, 0.125):
             for t, noise in enumerate((0.9, 1.1)):
-                out.append({"strategy": s, "density": str(d), "trial": str(t), "metric": "mse",
-                            "value": str(scale / d * noise), "unit": "0"})
+                out.append(
+                    {
+                        "strategy": s,
+                        "density": str(d),
+                        "trial": str(t),
+                        "metric": "mse",
+                        "value": str(scale / d * noise),
+                        "unit": "0",
+                    }
+                )
     return out
 
 
@@ -34,13 +42,12 @@ def test_mean_error_by_density_is_the_trial_mean():
     assert d.tolist() == [0.5, 0.25, 0.125]
     np.testing.assert_allclose(m, [2.0, 4.0, 8.0])  # mean of 0.9x and 1.1x
     np.testing.assert_allclose(sd, np.array([2.0, 4.0, 8.0]) * np.std([0.9, 1.1], ddof=1))
-    d, m, _ = F.mean_error_by_density(rows(), metric="mse", strategy="wavelet",
-                                      where={"unit": 1})
+    d, m, _ = F.mean_error_by_density(rows(), metric="mse", strategy="wavelet", where={"unit": 1})
     assert d.size == 0
 
 
 def test_error_vs_density_plots_each_strategy_on_log_axes():
-    fig, ax = F.error_vs_density(rows(), metric="mse")
+    _fig, ax = F.error_vs_density(rows(), metric="mse")
     lines = {ln.get_label(): ln for ln in ax.get_lines()}
     assert set(lines) == {"Random", "Wavelet"}
     np.testing.assert_allclose(lines["Random"].get_ydata(), [4.0, 8.0, 16.0])
@@ -52,8 +59,11 @@ def test_ax_argument_draws_into_the_given_axes():
     fig, axes = plt.subplots(1, 2)
     f2, a2 = F.error_vs_density(rows(), metric="mse", ax=axes[1])
     assert f2 is fig and a2 is axes[1]
-    f3, a3 = F.score_vs_sweep([(5, {"mse": {"wavelet": 1.2}}), (30, {"mse": {"wavelet": 1.4}})],
-                              ax=axes[0], axis_label="elevation")
+    _f3, a3 = F.score_vs_sweep(
+        [(5, {"mse": {"wavelet": 1.2}}), (30, {"mse": {"wavelet": 1.4}})],
+        ax=axes[0],
+        axis_label="elevation",
+    )
     assert a3 is axes[0]
     (line,) = [ln for ln in a3.get_lines() if ln.get_label() == "Wavelet"]
     assert line.get_xdata().tolist() == [5.0, 30.0]
@@ -61,19 +71,21 @@ def test_ax_argument_draws_into_the_given_axes():
 
 
 def test_score_vs_sweep_with_labels():
-    fig, ax = F.score_vs_sweep([("lambert", {"mse": {"grid": 0.9}}), ("hapke", {"mse": {"grid": 1.1}})])
+    _fig, ax = F.score_vs_sweep(
+        [("lambert", {"mse": {"grid": 0.9}}), ("hapke", {"mse": {"grid": 1.1}})]
+    )
     assert [t.get_text() for t in ax.get_xticklabels()] == ["lambert", "hapke"]
 
 
 def test_image_panels_and_sparse_mesh(rng):
     img = rng.random((20, 30))
-    fig, axes = F.image_panels(img, img**2, np.array([1, 2]), np.array([3, 4]), img * 2, img * 2.1)
+    _fig, axes = F.image_panels(img, img**2, np.array([1, 2]), np.array([3, 4]), img * 2, img * 2.1)
     assert len(axes) == 5
     offsets = axes[2].collections[0].get_offsets()
     np.testing.assert_array_equal(np.asarray(offsets), [[3, 1], [4, 2]])  # (x=col, y=row)
     err = axes[4].images[0].get_array()
     np.testing.assert_allclose(err, img * 2 - img * 2.1)
-    fig, axes = F.sparse_mesh_panels(img, img, img, n_samples=7)
+    _fig, axes = F.sparse_mesh_panels(img, img, img, n_samples=7)
     assert axes[0].get_title() == "sparse mesh (7 samples)"
 
 

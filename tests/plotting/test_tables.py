@@ -13,8 +13,9 @@ STRATS = ["random", "grid", "gradient", "entropy", "wavelet"]
 
 
 def test_single_scene_is_table2_layout():
-    md, tex = score_tables([("moonyard", PAPER_T2)], strategies=STRATS, metrics=["mse", "grad"],
-                           title="t2")
+    md, tex = score_tables(
+        [("moonyard", PAPER_T2)], strategies=STRATS, metrics=["mse", "grad"], title="t2"
+    )
     lines = md.splitlines()
     assert "| Metric | Random | Grid | Gradient | Entropy | Wavelet |" in lines
     assert "| MSE | 1.00 | 1.10 | 1.09 | 1.15 | **1.33** |" in lines
@@ -28,8 +29,9 @@ def test_several_scenes_is_table1_layout_per_metric():
     # paper Table 1, MSE: scene 1 1/1.02/0.88/0.87/1.11, scene 3 1/0.91/0.83/0.80/1.21
     s1 = {"mse": dict(zip(STRATS, [1, 1.02, 0.88, 0.87, 1.11]))}
     s3 = {"mse": dict(zip(STRATS, [1, 0.91, 0.83, 0.80, 1.21]))}
-    md, tex = score_tables([("aerial_1", s1), ("aerial_3", s3)], strategies=STRATS,
-                           metrics=["mse"], title="t1")
+    md, tex = score_tables(
+        [("aerial_1", s1), ("aerial_3", s3)], strategies=STRATS, metrics=["mse"], title="t1"
+    )
     assert "| Scene | Random | Grid | Gradient | Entropy | Wavelet |" in md
     assert "| aerial_1 | 1.00 | 1.02 | 0.88 | 0.87 | **1.11** |" in md
     assert "| aerial_3 | 1.00 | 0.91 | 0.83 | 0.80 | **1.21** |" in md
@@ -37,7 +39,8 @@ def test_several_scenes_is_table1_layout_per_metric():
 
 
 def test_missing_scores_show_a_dash():
-    md, tex = score_tables([("x", {"mse": {"random": 1.0}})], strategies=["random", "grid"],
-                           metrics=["mse"])
+    md, tex = score_tables(
+        [("x", {"mse": {"random": 1.0}})], strategies=["random", "grid"], metrics=["mse"]
+    )
     assert "| MSE | **1.00** | – |" in md
     assert "--" in tex and "–" not in tex
