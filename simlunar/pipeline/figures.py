@@ -55,6 +55,13 @@ def load_results(out_dir: str | Path) -> dict:
     }
 
 
+def load_unit_arrays(out_dir: str | Path, index: int = 0) -> dict:
+    """The arrays of unit ``index`` of a result folder (image, depth, wavelet_energy, ...)."""
+    res = load_results(out_dir)
+    rec = res["units"][index]
+    return UnitCache(res["dir"]).load_arrays(rec["key"])
+
+
 def _label(rec: dict) -> str:
     from simlunar.pipeline.runner import WorkUnit, unit_label
 
