@@ -114,14 +114,15 @@ def _register(mi) -> None:
 
     def _local(si, wo):
         """cos_i, cos_o, sin_i, sin_o, cos(phi_i - phi_o) in the local frame."""
-        cos_i = mi.Frame3f.cos_theta(si.wi)
-        cos_o = mi.Frame3f.cos_theta(wo)
-        sin_i = mi.Frame3f.sin_theta(si.wi)
-        sin_o = mi.Frame3f.sin_theta(wo)
-        sp_i, cp_i = mi.Frame3f.sincos_phi(si.wi)
-        sp_o, cp_o = mi.Frame3f.sincos_phi(wo)
-        cdp = dr.clip(cp_i * cp_o + sp_i * sp_o, -1.0, 1.0)
-        return cos_i, cos_o, sin_i, sin_o, cdp
+        wi = si.wi
+        cos_i, cos_o = wi.z, wo.z
+        sin_i = dr.safe_sqrt(dr.fma(-cos_i, cos_i, 1.0))
+        sin_o = dr.safe_sqrt(dr.fma(-cos_o, cos_o, 1.0))
+        # cos of the azimuth difference = (xy . xy) / (sin sin); 0 where an azimuth is
+        # undefined (direction along the normal), where every model is independent of it
+        ss = sin_i * sin_o
+        cdp = dr.select(ss > 1e-7, (wi.x * wo.x + wi.y * wo.y) / ss, 0.0)
+        return cos_i, cos_o, sin_i, sin_o, dr.clip(cdp, -1.0, 1.0)
 
     class _CosineBSDF(mi.BSDF):
         """Shared cosine-hemisphere sampling; subclasses define ``_f`` (BRDF, no cosine)."""
@@ -193,31 +194,44 @@ def _register(mi) -> None:
                 raise ValueError(f"oren_nayar: model must be full or qualitative, got {model!r}")
             self.model = model
             self.sigma = _opaque(sigma)
+            self._constants()
 
         def _f(self, si, wo, active):
             rho = self.reflectance.eval(si, active)
             cos_i, cos_o, sin_i, sin_o, cdp = _local(si, wo)
+            # alpha = max(theta_i, theta_o), beta = min(theta_i, theta_o)
+            sin_a = dr.maximum(sin_i, sin_o)
+            sin_b = dr.minimum(sin_i, sin_o)
+            cos_a = dr.minimum(cos_i, cos_o)
+            cos_b = dr.maximum(cos_i, cos_o)
+            tan_b = sin_b / dr.maximum(cos_b, 1e-7)
+            if self.model == "qualitative":
+                g = self.c1 + self.c2k * dr.maximum(cdp, 0.0) * sin_a * tan_b
+                return rho * (inv_pi * g)
+            alpha = dr.safe_acos(cos_a)
+            beta = dr.safe_acos(cos_b)
+            two_b_pi = 2.0 * inv_pi * beta
+            c2 = self.c2k * dr.select(cdp >= 0, sin_a, sin_a - two_b_pi * two_b_pi * two_b_pi)
+            q = alpha * beta
+            # tan((alpha + beta)/2) = (sin a + sin b) / (cos a + cos b): no tan needed
+            tan_mid = (sin_a + sin_b) / dr.maximum(cos_a + cos_b, 1e-7)
+            g1 = self.c1 + cdp * c2 * tan_b + (1.0 - dr.abs(cdp)) * (self.c3k * q * q) * tan_mid
+            g2 = self.c4 * (1.0 - cdp * two_b_pi * two_b_pi)
+            return inv_pi * (rho * g1 + rho * rho * g2)
+
+        def _constants(self):
+            """sigma-only factors, computed once (opaque: a new sigma reuses the kernels)."""
             s2 = self.sigma * self.sigma
             k = s2 / (s2 + 0.09)
-            c1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
-            sin_a = dr.maximum(sin_i, sin_o)
-            # tan(beta) for the smaller polar angle = sin/cos of the larger cosine
-            cmax = dr.maximum(cos_i, cos_o)
-            tan_b = dr.select(
-                cos_i > cos_o, sin_i / dr.maximum(cos_i, 1e-7), sin_o / dr.maximum(cos_o, 1e-7)
-            )
-            if self.model == "qualitative":
-                return rho * (inv_pi * (c1 + 0.45 * k * dr.maximum(cdp, 0.0) * sin_a * tan_b))
-            alpha = dr.safe_acos(dr.minimum(cos_i, cos_o))
-            beta = dr.safe_acos(cmax)
-            two_b_pi = 2.0 * beta * inv_pi
-            c2 = 0.45 * k * dr.select(cdp >= 0, sin_a, sin_a - two_b_pi * two_b_pi * two_b_pi)
-            q = 4.0 * alpha * beta * inv_pi * inv_pi
-            c3 = 0.125 * k * q * q
-            tan_mid = dr.tan(dr.minimum(0.5 * (alpha + beta), 0.5 * math.pi - 1e-4))
-            g1 = c1 + cdp * c2 * tan_b + (1.0 - dr.abs(cdp)) * c3 * tan_mid
-            g2 = 0.17 * s2 / (s2 + 0.13) * (1.0 - cdp * two_b_pi * two_b_pi)
-            return inv_pi * (rho * g1 + rho * rho * g2)
+            self.c1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
+            self.c2k = 0.45 * k
+            # C3 = 0.125 k (4 alpha beta / pi^2)^2
+            self.c3k = 0.125 * k * 16.0 * inv_pi**4
+            self.c4 = 0.17 * s2 / (s2 + 0.13)
+            for name in ("sigma", "c1", "c2k", "c3k", "c4"):
+                value = getattr(self, name)
+                dr.eval(value)
+                dr.make_opaque(value)
 
         def traverse(self, callback):
             callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
@@ -227,7 +241,7 @@ def _register(mi) -> None:
             s = float(self.sigma[0])
             if not (math.isfinite(s) and 0.0 <= s < math.pi / 2):
                 raise ValueError(f"oren_nayar: sigma must be in [0, pi/2) radians, got {s}")
-            dr.make_opaque(self.sigma)
+            self._constants()
 
         def to_string(self):
             return (
