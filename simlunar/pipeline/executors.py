@@ -48,7 +48,6 @@ class SerialExecutor(Executor):
 def _worker_init(threads: int) -> None:
     # each worker gets its share of the cores: renders in N workers each using every core
     # would oversubscribe the machine and make the pool slower than one process
-    os.environ["SIMLUNAR_RENDER_THREADS"] = str(threads)
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
         os.environ[var] = str(threads)
 
