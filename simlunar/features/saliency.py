@@ -21,12 +21,19 @@ _ANGLES = (0.0, np.pi / 4, np.pi / 2, 3 * np.pi / 4)
 
 
 def _pyramid(img: np.ndarray, levels: int) -> list[np.ndarray]:
-    """Dyadic Gaussian pyramid (5-tap binomial low-pass, subsample by 2), level 0 = input."""
+    """Dyadic Gaussian pyramid, level 0 = input.
+
+    Each level is the 5-tap binomial low-pass of the previous one averaged over 2 x 2 blocks
+    (odd sizes padded by edge replication), so pixel i of level l covers input pixels
+    [2^l i, 2^l (i + 1)) and its centre agrees with :func:`_resize`'s pixel-centre alignment;
+    plain [::2] decimation would shift level l by (2^l - 1) / 2 pixels.
+    """
     pyr = [img]
     for _ in range(levels):
         low = ndimage.correlate1d(pyr[-1], _BINOMIAL, axis=0, mode="reflect")
         low = ndimage.correlate1d(low, _BINOMIAL, axis=1, mode="reflect")
-        pyr.append(low[::2, ::2])
+        low = np.pad(low, ((0, low.shape[0] % 2), (0, low.shape[1] % 2)), mode="edge")
+        pyr.append(0.25 * (low[0::2, 0::2] + low[1::2, 0::2] + low[0::2, 1::2] + low[1::2, 1::2]))
     return pyr
 
 

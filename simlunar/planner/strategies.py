@@ -1,0 +1,316 @@
+"""Sampling strategies: choose k of the rows * cols pixels of the native grid.
+
+Strategies (``STRATEGIES``): ``grid`` (N x M lattice shifted at random per call), ``random``
+(uniform without replacement) and the feature-weighted ones ``gradient``, ``entropy``,
+``wavelet``, ``saliency`` and ``combination`` (a linear combination of feature maps), which
+draw without replacement with probability proportional to the map (paper section 4.1).
+
+Options of the weighted strategies (keyword arguments of :func:`plan`):
+
+``uniform_mix`` (float in [0, 1], default 0)
+    Mixture with uniform sampling: weights (1 - m) w / sum(w) + m / N.
+``density_cap`` (float >= 1, default None)
+    Maximum regional density: no ``cap_block`` x ``cap_block`` block receives more than
+    ceil(density_cap * (k / N) * block area) samples (a multiple of the mean density).
+``cap_block`` (int, default 16)
+    Block side in pixels for ``density_cap``.
+``blue_noise`` (bool, default False)
+    Poisson-disk-like weighted sampling: candidates in weighted-random priority order are
+    accepted only if no accepted sample lies within r(p) = blue_noise_radius / sqrt(rho(p)),
+    where rho(p) = k w(p) / sum(w) is the target local density (samples per pixel).
+``blue_noise_radius`` (float > 0, default 0.5)
+    The radius factor above (0.5 keeps clumps apart without starving dense regions).
+``feature_opts`` (dict)
+    Options for :func:`simlunar.features.feature_map` when the map is computed from ``image``.
+``coefficients`` (dict name -> float)
+    For ``combination``: the weight of each feature map (each map normalised to mean 1 first).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from simlunar.features import FEATURES, check_image, feature_map
+from simlunar.planner._bluenoise import poisson_accept
+from simlunar.planner.types import SamplePlan
+
+WEIGHTED = ("gradient", "entropy", "wavelet", "saliency", "combination")
+_WEIGHTED_OPTS = (
+    "uniform_mix",
+    "density_cap",
+    "cap_block",
+    "blue_noise",
+    "blue_noise_radius",
+    "feature_opts",
+    "coefficients",
+)
+
+
+def check_k(k, n: int) -> int:
+    """Validate the sample count against the number of pixels ``n``."""
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
+        raise ValueError(f"k must be an integer, got {k!r}")
+    k = int(k)
+    if k < 3:
+        raise ValueError(f"k must be >= 3 (a triangle needs three samples), got {k}")
+    if k > n:
+        raise ValueError(f"k = {k} exceeds the number of pixels N = {n}")
+    return k
+
+
+def normalised_map(m: np.ndarray) -> np.ndarray:
+    """Map scaled to mean 1 (all zeros stays zeros)."""
+    mean = float(m.mean())
+    return m / mean if mean > 0 else np.zeros_like(m)
+
+
+def combine_maps(maps: dict[str, np.ndarray], coefficients: dict[str, float]) -> np.ndarray:
+    """Linear combination sum_i |a_i| m_i / mean(m_i) of feature maps.
+
+    Absolute values keep the weights non-negative whatever the optimiser proposes.
+    """
+    unknown = sorted(set(coefficients) - set(FEATURES))
+    if unknown:
+        raise ValueError(
+            f"unknown feature(s) {unknown} in coefficients; valid: {', '.join(FEATURES)}"
+        )
+    if not coefficients:
+        raise ValueError("coefficients must name at least one feature map")
+    shape = next(iter(maps.values())).shape
+    total = np.zeros(shape)
+    for name, a in coefficients.items():
+        total += abs(float(a)) * normalised_map(maps[name])
+    return total
+
+
+def strategy_weights(
+    strategy: str, image, *, feature_opts: dict | None = None, coefficients: dict | None = None
+) -> np.ndarray | None:
+    """The importance map a strategy samples from (None for ``grid`` and ``random``).
+
+    This is the expensive part of a weighted plan; compute it once per image and pass it to
+    :func:`plan` as ``weights=``.
+    """
+    base = _resolve(strategy)
+    if base in ("grid", "random"):
+        return None
+    feature_opts = feature_opts or {}
+    if base == "combination":
+        if not coefficients:
+            raise ValueError("strategy 'combination' needs coefficients={feature: weight}")
+        maps = {n: feature_map(n, image, **feature_opts.get(n, {})) for n in coefficients}
+        return combine_maps(maps, coefficients)
+    return feature_map(base, image, **feature_opts)
+
+
+def _resolve(strategy: str) -> str:
+    if strategy not in STRATEGIES:
+        raise ValueError(f"unknown strategy {strategy!r}; valid: {', '.join(STRATEGIES)}")
+    return strategy
+
+
+def _grid(k: int, shape, rng: np.random.Generator) -> np.ndarray:
+    """n_r x n_c lattice (n_r n_c >= k, aspect ~ the grid's) with a random sub-cell shift.
+
+    Lattice positions floor(offset + i * pitch) with pitch = rows / n_r >= 1 are distinct; the
+    n_r n_c - k surplus points (fewer than one lattice row or column) are dropped at random.
+    """
+    nr_px, nc_px = shape
+    n_r = int(np.clip(round(np.sqrt(k * nr_px / nc_px)), 1, nr_px))
+    n_c = -(-k // n_r)
+    if n_c > nc_px:
+        n_c = nc_px
+        n_r = -(-k // nc_px)
+    pitch_r, pitch_c = nr_px / n_r, nc_px / n_c
+    off_r, off_c = rng.uniform(0.0, pitch_r), rng.uniform(0.0, pitch_c)
+    rows = np.minimum(np.floor(off_r + pitch_r * np.arange(n_r)).astype(np.int64), nr_px - 1)
+    cols = np.minimum(np.floor(off_c + pitch_c * np.arange(n_c)).astype(np.int64), nc_px - 1)
+    flat = (rows[:, None] * nc_px + cols[None, :]).ravel()
+    if flat.size > k:
+        flat = np.delete(flat, rng.choice(flat.size, flat.size - k, replace=False))
+    return flat
+
+
+def _priority_keys(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Efraimidis-Spirakis keys E / w (E ~ Exp(1)): the k smallest are a weighted sample
+    without replacement (Efraimidis & Spirakis, Inf. Proc. Letters 97(5), 2006).
+
+    Zero-weight pixels get keys above every positive-weight key, in random order, so they are
+    only drawn (uniformly) once the positive-weight pixels are exhausted.
+    """
+    e = rng.standard_exponential(w.size)
+    pos = w > 0
+    keys = np.empty(w.size)
+    keys[pos] = e[pos] / w[pos]
+    if not pos.all():
+        top = keys[pos].max() if pos.any() else 0.0
+        keys[~pos] = 2.0 * top + 1.0 + e[~pos]
+    return keys
+
+
+def _capped(keys: np.ndarray, k: int, shape, cap: float, block: int) -> np.ndarray:
+    nr_px, nc_px = shape
+    n = nr_px * nc_px
+    per_block = int(np.ceil(cap * k / n * block * block))
+    order = np.argsort(keys, kind="stable")
+    r, c = np.divmod(order, nc_px)
+    blocks = (r // block) * (-(-nc_px // block)) + c // block
+    # rank of each candidate inside its block in priority order (greedy acceptance)
+    by_block = np.argsort(blocks, kind="stable")
+    sorted_blocks = blocks[by_block]
+    starts = np.flatnonzero(np.r_[True, sorted_blocks[1:] != sorted_blocks[:-1]])
+    first = np.repeat(starts, np.diff(np.r_[starts, n]))
+    rank = np.empty(n, dtype=np.int64)
+    rank[by_block] = np.arange(n) - first
+    accepted = order[rank < per_block]
+    if accepted.size < k:
+        raise ValueError(
+            f"density_cap={cap} with cap_block={block} leaves room for only {accepted.size} < k = {k} samples"
+        )
+    return accepted[:k]
+
+
+def _weighted(
+    k: int,
+    shape,
+    w: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    uniform_mix: float = 0.0,
+    density_cap: float | None = None,
+    cap_block: int = 16,
+    blue_noise: bool = False,
+    blue_noise_radius: float = 0.5,
+) -> np.ndarray:
+    n = w.size
+    if not 0.0 <= uniform_mix <= 1.0:
+        raise ValueError(f"uniform_mix must be in [0, 1], got {uniform_mix}")
+    total = float(w.sum())
+    # Constant (or all-zero) maps carry no information: sample uniformly.
+    if total <= 0 or float(w.max()) == float(w.min()):
+        w = np.full(n, 1.0 / n)
+    else:
+        w = w / total
+    if uniform_mix > 0:
+        w = (1.0 - uniform_mix) * w + uniform_mix / n
+    keys = _priority_keys(w, rng)
+    if density_cap is not None:
+        if density_cap < 1 or cap_block < 1:
+            raise ValueError(
+                f"density_cap must be >= 1 and cap_block >= 1, got {density_cap}, {cap_block}"
+            )
+        return _capped(keys, k, shape, float(density_cap), int(cap_block))
+    if blue_noise:
+        if blue_noise_radius <= 0:
+            raise ValueError(f"blue_noise_radius must be > 0, got {blue_noise_radius}")
+        m = min(n, 8 * k)
+        cand = np.argpartition(keys, m - 1)[:m] if m < n else np.arange(n)
+        cand = cand[np.argsort(keys[cand], kind="stable")]
+        rho = np.maximum(k * w, 1e-12)
+        # cap the radius at 4 lattice spacings so near-zero weights do not search the image
+        radius = np.minimum(blue_noise_radius / np.sqrt(rho), 4.0 * np.sqrt(n / k))
+        return poisson_accept(cand, radius, np.asarray(shape, dtype=np.int64), k)
+    if k == n:
+        return np.arange(n)
+    return np.argpartition(keys, k - 1)[:k]
+
+
+def _grid_strategy(k, shape, weights, rng, **opts):
+    return _grid(k, shape, rng)
+
+
+def _random_strategy(k, shape, weights, rng, **opts):
+    return rng.choice(shape[0] * shape[1], size=k, replace=False)
+
+
+def _weighted_strategy(k, shape, weights, rng, **opts):
+    opts.pop("feature_opts", None)
+    opts.pop("coefficients", None)
+    return _weighted(k, shape, weights.ravel(), rng, **opts)
+
+
+STRATEGIES: dict[str, Callable[..., np.ndarray]] = {
+    "grid": _grid_strategy,
+    "random": _random_strategy,
+    **{name: _weighted_strategy for name in WEIGHTED},
+}
+
+
+def plan(
+    strategy: str,
+    k: int,
+    *,
+    image=None,
+    weights=None,
+    shape=None,
+    rng,
+    **opts,
+) -> SamplePlan:
+    """Choose ``k`` distinct pixels with the named strategy.
+
+    Parameters
+    ----------
+    strategy : str
+        One of ``STRATEGIES``.
+    k : int
+        Number of samples, 3 <= k <= rows * cols.
+    image : ndarray, shape (rows, cols) or (rows, cols, 3), optional
+        Guide image; weighted strategies compute their map from it unless ``weights`` is given.
+    weights : ndarray, shape (rows, cols), optional
+        Precomputed importance map (>= 0, finite), e.g. from :func:`strategy_weights`.
+    shape : tuple of int, optional
+        Grid shape when neither image nor weights is given (grid and random).
+    rng : None, int, SeedSequence or Generator
+        Randomness (the grid shift, the draws).
+    **opts
+        Strategy options, see the module docstring.
+
+    Returns
+    -------
+    SamplePlan
+        Exactly k distinct in-bounds pixels, in row-major order.
+    """
+    base = _resolve(strategy)
+    rng = np.random.default_rng(rng)
+    allowed = _WEIGHTED_OPTS if base in WEIGHTED else ()
+    bad = sorted(set(opts) - set(allowed))
+    if bad:
+        raise ValueError(
+            f"unknown option(s) {bad} for strategy {strategy!r}; valid: {', '.join(allowed) or 'none'}"
+        )
+    shapes = {}
+    if image is not None:
+        image = check_image(image)
+        shapes["image"] = image.shape[:2]
+    if weights is not None:
+        weights = np.asarray(weights, dtype=np.float64)
+        if weights.ndim != 2:
+            raise ValueError(f"weights must have shape (rows, cols), got {weights.shape}")
+        if not np.all(np.isfinite(weights)) or weights.min() < 0:
+            raise ValueError("weights must be finite and >= 0")
+        shapes["weights"] = weights.shape
+    if shape is not None:
+        shapes["shape"] = tuple(int(s) for s in shape)
+    if not shapes:
+        raise ValueError("plan needs one of image, weights or shape to know the grid")
+    if len(set(shapes.values())) > 1:
+        raise ValueError(f"mismatched grid shapes: {shapes}")
+    grid_shape = next(iter(shapes.values()))
+    if len(grid_shape) != 2 or min(grid_shape) < 1:
+        raise ValueError(f"shape must be (rows, cols) > 0, got {grid_shape}")
+    k = check_k(k, grid_shape[0] * grid_shape[1])
+    if base in WEIGHTED and weights is None:
+        if image is None:
+            raise ValueError(f"strategy {strategy!r} needs image= or weights=")
+        weights = strategy_weights(
+            base,
+            image,
+            feature_opts=opts.get("feature_opts"),
+            coefficients=opts.get("coefficients"),
+        )
+    flat = STRATEGIES[base](k, grid_shape, weights, rng, **opts)
+    # canonical row-major order: plans compare as sets, and sorted samples keep the
+    # reconstruction's memory access coherent
+    return SamplePlan.from_flat(np.sort(flat), grid_shape)
