@@ -1,1 +1,13 @@
-"""simlunar.metrics"""
+"""Error metrics of a reconstruction and the paper's strategy score."""
+
+from simlunar.metrics.errors import METRICS, depth_gradient_weights, metric
+from simlunar.metrics.score import check_densities, samples_for_equal_error, score
+
+__all__ = [
+    "METRICS",
+    "check_densities",
+    "depth_gradient_weights",
+    "metric",
+    "samples_for_equal_error",
+    "score",
+]

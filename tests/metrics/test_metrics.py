@@ -1,0 +1,137 @@
+"""Error metrics, the paper's score (eq. 4.3) and samples-for-equal-error."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.metrics import METRICS, metric, samples_for_equal_error, score
+from simlunar.metrics._fast import error_sums
+
+TRUTH = np.array([[0.0, 1.0, 2.0], [0.0, 1.0, 4.0]])
+RECON = np.array([[1.0, 1.0, 2.0], [0.0, 3.0, 4.0]])  # errors 1, 0, 0 / 0, 2, 0
+
+
+def test_plain_metrics_hand_computed():
+    assert metric("mse", RECON, TRUTH) == pytest.approx(5 / 6)
+    assert metric("rmse", RECON, TRUTH) == pytest.approx(np.sqrt(5 / 6))
+    assert metric("mae", RECON, TRUTH) == pytest.approx(3 / 6)
+
+
+def test_grad_weights_from_truth_gradient():
+    # numpy.gradient of TRUTH: d/dcol rows [1,1,1] and [1,2,3]; d/drow [0,0,2] twice.
+    # |grad| = [[1,1,sqrt5],[1,2,sqrt13]]; weighted errors 1*1 (cell 0,0) + 2*4 (cell 1,1)
+    w = np.array([[1, 1, np.sqrt(5)], [1, 2, np.sqrt(13)]])
+    expected = (1 * 1 + 2 * 4) / w.sum()
+    assert metric("grad", RECON, TRUTH) == pytest.approx(expected)
+    assert metric("grad", RECON, TRUTH, weights=np.ones_like(TRUTH)) == pytest.approx(5 / 6)
+
+
+def test_sal_needs_weights_and_uses_them():
+    with pytest.raises(ValueError, match="needs weights="):
+        metric("sal", RECON, TRUTH)
+    w = np.zeros_like(TRUTH)
+    w[1, 1] = 3.0
+    assert metric("sal", RECON, TRUTH, weights=w) == pytest.approx(4.0)
+
+
+def test_mask_and_nan_cells_are_excluded():
+    recon = RECON.copy()
+    recon[1, 1] = np.nan
+    assert metric("mse", recon, TRUTH) == pytest.approx(1 / 5)
+    mask = np.ones_like(TRUTH, dtype=bool)
+    mask[0, 0] = False
+    assert metric("mse", RECON, TRUTH, mask=mask) == pytest.approx(4 / 5)
+    with pytest.raises(ValueError, match="no cell"):
+        metric("mse", RECON, TRUTH, mask=np.zeros_like(TRUTH, dtype=bool))
+
+
+def test_fast_sums_match_metric(rng):
+    truth = rng.random((20, 30))
+    recon = truth + rng.normal(size=truth.shape)
+    recon[3, 4] = np.nan
+    w = rng.random((2, truth.size))
+    count, sse, sae, wse, wsum = error_sums(recon.ravel(), truth.ravel(), w)
+    assert count == truth.size - 1
+    assert sse / count == pytest.approx(metric("mse", recon, truth), rel=1e-12)
+    assert sae / count == pytest.approx(metric("mae", recon, truth), rel=1e-12)
+    assert wse[1] / wsum[1] == pytest.approx(
+        metric("sal", recon, truth, weights=w[1].reshape(truth.shape)), rel=1e-12
+    )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"name": "psnr"}, "unknown metric 'psnr'; valid: mse, rmse, mae, grad, sal"),
+        ({"recon": np.zeros((2, 2))}, "equal 2-D shapes"),
+        ({"truth": np.where(TRUTH > 3, np.nan, TRUTH)}, "truth contains NaN"),
+        ({"name": "sal", "weights": -np.ones_like(TRUTH)}, "finite and >= 0"),
+        ({"name": "sal", "weights": np.ones((3, 3))}, "weights shape"),
+        ({"name": "grad", "truth": np.ones_like(TRUTH)}, "sum to zero"),
+    ],
+)
+def test_metric_bad_input(kwargs, match):
+    args = {"name": "mse", "recon": RECON, "truth": TRUTH, **kwargs}
+    name = args.pop("name")
+    with pytest.raises(ValueError, match=match):
+        metric(name, **args)
+
+
+def test_registry():
+    assert list(METRICS) == ["mse", "rmse", "mae", "grad", "sal"]
+
+
+def test_score_random_against_itself_is_exactly_one(rng):
+    dens = [2.0**-i for i in range(1, 12)]
+    errs = {"random": rng.random((11, 20)) + 0.1, "other": rng.random(11)}
+    assert score(errs, dens)["random"] == 1.0
+
+
+def test_score_hand_computed():
+    # densities 1/2, 1/4 -> weights 2, 4; ratios e_ref / e = 2, 1 -> (2*2 + 4*1) / 6 = 4/3
+    s = score({"random": [1.0, 1.0], "wavelet": [0.5, 1.0]}, [0.5, 0.25])
+    assert s["wavelet"] == pytest.approx(4 / 3)
+    # trials are averaged before the ratio: mean([0.25, 0.75]) = 0.5
+    s2 = score({"random": [1.0, 1.0], "wavelet": [[0.25, 0.75], [1.0, 1.0]]}, [0.5, 0.25])
+    assert s2["wavelet"] == pytest.approx(4 / 3)
+    # the sparse density dominates: better only at 1/4 scores higher than better only at 1/2
+    a = score({"random": [1.0, 1.0], "s": [0.5, 1.0]}, [0.5, 0.25])["s"]
+    b = score({"random": [1.0, 1.0], "s": [1.0, 0.5]}, [0.5, 0.25])["s"]
+    assert b > a
+
+
+def test_score_edge_cases():
+    s = score({"random": [0.0, 1.0], "exact": [0.0, 0.0]}, [0.5, 0.25])
+    assert s["random"] == 1.0 and s["exact"] == np.inf
+
+
+@pytest.mark.parametrize(
+    ("errs", "dens", "match"),
+    [
+        ({"random": [1.0, 1.0]}, [0.5, 0.0], r"densities must lie in \(0, 1\]"),
+        ({"random": [1.0, 1.0]}, [1.5, 0.5], r"densities must lie in \(0, 1\]"),
+        ({"random": [1.0, 1.0]}, [], "empty"),
+        ({"grid": [1.0, 1.0]}, [0.5, 0.25], "reference 'random' missing"),
+        ({"random": [1.0, 1.0, 1.0]}, [0.5, 0.25], "must have shape"),
+        ({"random": [1.0, np.nan]}, [0.5, 0.25], "finite"),
+    ],
+)
+def test_score_bad_input(errs, dens, match):
+    with pytest.raises(ValueError, match=match):
+        score(errs, dens)
+
+
+def test_samples_for_equal_error_power_law():
+    # e_random = k^-1, e_s = 0.5 k^-1: the strategy reaches e_random(k) with k / 2 samples.
+    ks = np.array([100.0, 200.0, 400.0, 800.0, 1600.0])
+    out = samples_for_equal_error({"random": 1 / ks, "s": 0.5 / ks}, ks)
+    np.testing.assert_allclose(out["random"], 1.0)
+    # e_random(100) = 0.01 is above the strategy's largest error 0.005: no extrapolation
+    assert np.isnan(out["s"][0])
+    np.testing.assert_allclose(out["s"][1:], 0.5, rtol=1e-12)
+
+
+def test_samples_for_equal_error_bad_ks():
+    with pytest.raises(ValueError, match="distinct positive"):
+        samples_for_equal_error({"random": [1.0, 2.0]}, [100, 100])
