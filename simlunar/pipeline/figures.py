@@ -165,22 +165,29 @@ def write_figures(out_dir: str | Path) -> list[Path]:
 
 def _scanner_figures(res: dict, emit) -> None:
     import matplotlib.pyplot as plt
+    import numpy as np
 
     from simlunar.plotting import figures as F
+    from simlunar.plotting.tables import scanner_summary
 
     rows = res["rows"]
-    metrics = list(dict.fromkeys(r["metric"] for r in rows if "metric" in r))
-    for m in metrics:
-        fig, ax = plt.subplots(figsize=(F.COLUMN_W, 2.6), constrained_layout=True)
-        labels, vals = [], []
-        for r in rows:
-            if r.get("metric") == m:
-                labels.append(
-                    " ".join(str(r.get(k, "")) for k in ("mode", "method", "strategy") if r.get(k))
-                    or str(r.get("unit"))
-                )
-                vals.append(float(r["value"]))
-        ax.bar(range(len(vals)), vals, color="#1f77b4")
-        ax.set_xticks(range(len(vals)), labels, rotation=30, fontsize=6)
-        ax.set_ylabel(m)
-        emit(fig, f"scanner_{m}")
+    metrics = list(res["config"]["study"].get("metrics") or [])
+    summary = scanner_summary(rows, metrics=metrics)
+    fig, axes = plt.subplots(
+        1,
+        len(metrics),
+        figsize=(F.COLUMN_W * len(metrics), 2.6),
+        constrained_layout=True,
+        squeeze=False,
+    )
+    for ax, m in zip(axes[0], metrics):
+        F.scanner_bars(summary, metric=m, ax=ax)
+    emit(fig, "scanner_errors")
+    ber = sorted(
+        {r["metric"] for r in rows if r["metric"].startswith("ber_")},
+        key=lambda n: (n[4], int(n[5:])),
+    )
+    if ber:
+        vals = {n: np.mean([float(r["value"]) for r in rows if r["metric"] == n]) for n in ber}
+        fig, ax = F.bit_error_rates(vals)
+        emit(fig, "gray_code_bit_errors")

@@ -36,7 +36,7 @@ from simlunar.pipeline.store import (
 
 #: keys that do not change a unit's numbers (excluded from its cache key)
 _NON_RESULT_KEYS = ("name", "description", "sweep")
-ROW_COLUMNS = ("strategy", "density", "k", "trial", "metric", "value")
+ROW_COLUMNS = ("mode", "planner", "budget", "strategy", "density", "k", "trial", "metric", "value")
 
 
 @dataclass(frozen=True)
@@ -254,10 +254,15 @@ def run_experiment(
 
     from simlunar.plotting.tables import score_tables
 
-    labelled = [(unit_label(u), records[u.key].get("scores", {})) for u in units]
-    strategies = _names(units, "strategies")
-    metrics = _names(units, "metrics")
-    md, tex = score_tables(labelled, strategies=strategies, metrics=metrics, title=cfg.name)
+    if cfg.study.kind == "scanner":
+        from simlunar.plotting.tables import scanner_tables
+
+        md, tex = scanner_tables(rows, metrics=_names(units, "metrics"), title=cfg.name)
+    else:
+        labelled = [(unit_label(u), records[u.key].get("scores", {})) for u in units]
+        strategies = _names(units, "strategies")
+        metrics = _names(units, "metrics")
+        md, tex = score_tables(labelled, strategies=strategies, metrics=metrics, title=cfg.name)
     atomic_write_text(out / "scores.md", md)
     atomic_write_text(out / "scores.tex", tex)
 

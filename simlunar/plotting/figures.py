@@ -258,6 +258,43 @@ def sparse_mesh_panels(
     return fig, axes
 
 
+def scanner_bars(summary: Sequence[dict], *, metric: str = "mse", ax=None):
+    """Bar chart of a scanner-study metric per (mode, planner) (means over trials)."""
+    fig, ax = _axes(ax, (COLUMN_W, 2.6))
+    labels = [e["label"] for e in summary]
+    vals = [e.get(metric) if e.get(metric) is not None else math.nan for e in summary]
+    colors = [STRATEGY_COLORS.get(e.get("planner") or "", "#1f77b4") for e in summary]
+    ax.bar(range(len(vals)), vals, color=colors)
+    ax.set_xticks(range(len(vals)), labels, rotation=25, ha="right", fontsize=6)
+    ax.set_ylabel(f"{METRIC_NAMES.get(metric, metric)} error")
+    ax.grid(True, axis="y", alpha=0.3)
+    return fig, ax
+
+
+def bit_error_rates(rates: dict[str, float], *, ax=None):
+    """Gray-code bit error rate per bit (``ber_c<i>`` columns, ``ber_r<i>`` rows; MSB = 0)."""
+    fig, ax = _axes(ax, (COLUMN_W, 2.4))
+    for prefix, label, color in (
+        ("ber_c", "column bits", "#1f77b4"),
+        ("ber_r", "row bits", "#ff7f0e"),
+    ):
+        items = sorted((int(k[len(prefix) :]), v) for k, v in rates.items() if k.startswith(prefix))
+        if items:
+            ax.plot(
+                [i for i, _ in items],
+                [v for _, v in items],
+                marker="o",
+                ms=3,
+                color=color,
+                label=label,
+            )
+    ax.set_xlabel("bit (0 = most significant)")
+    ax.set_ylabel("bit error rate")
+    ax.legend(fontsize=7, frameon=False)
+    ax.grid(True, alpha=0.3)
+    return fig, ax
+
+
 def save(fig: Figure, path_stem, formats: Sequence[str] = ("png", "pdf"), dpi: int = 300) -> list:
     """Render a figure to bytes per format: returns [(suffix, bytes)] (the caller writes them)."""
     import io

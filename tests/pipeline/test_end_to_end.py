@@ -122,3 +122,33 @@ def test_real_sweep_sigkill_then_resume(tmp_path):
     assert f"units: 3 ({len(done)} cached, {3 - len(done)} computed)" in r.output
     assert {p.name: p.stat().st_mtime_ns for p in units.glob("*.json") if p.name in done} == done
     assert (out / "results.csv").read_bytes() == (ref / "results.csv").read_bytes()
+
+
+@pytest.mark.slow
+def test_scanner_experiment_end_to_end(tmp_path):
+    out = tmp_path / "scan"
+    r = run_cli(
+        str(ROOT / "experiments" / "scanner_ambiguity.yaml"),
+        "--out",
+        str(out),
+        "--set",
+        "terrain.scale=0.125",
+        "--set",
+        "study.projector_px=[128, 96]",
+        "--set",
+        "study.camera_px=[128, 96]",
+        "--set",
+        "render.spp=4",
+        "--set",
+        "study.planners=[wavelet]",
+        "--set",
+        "study.metrics=[mse]",
+    )
+    assert "| gray_code |" in r.output and "| ambiguity_enhancement / wavelet |" in r.output
+    with (out / "results.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert {row["mode"] for row in rows} == {"gray_code", "ambiguity_enhancement"}
+    # 7 column bits + 7 row bits for a 128 x 96 projector, MSB first
+    assert sum(row["metric"].startswith("ber_") for row in rows) == 14
+    figs = {p.name for p in (out / "figures").iterdir()}
+    assert {"scanner_errors.png", "gray_code_bit_errors.pdf"} <= figs

@@ -44,3 +44,42 @@ def test_missing_scores_show_a_dash():
     )
     assert "| MSE | **1.00** | – |" in md
     assert "--" in tex and "–" not in tex
+
+
+def test_scanner_table_means_and_ratio_to_gray_code():
+    from simlunar.plotting.tables import scanner_tables
+
+    rows = [
+        {
+            "unit": "0",
+            "mode": "gray_code",
+            "planner": "",
+            "trial": "0",
+            "metric": "mse",
+            "value": "4.0",
+            "renders": "18",
+        },
+        {
+            "unit": "0",
+            "mode": "ambiguity_enhancement",
+            "planner": "wavelet",
+            "trial": "0",
+            "metric": "mse",
+            "value": "2.0",
+            "renders": "100",
+        },
+        {
+            "unit": "0",
+            "mode": "ambiguity_enhancement",
+            "planner": "wavelet",
+            "trial": "1",
+            "metric": "mse",
+            "value": "4.0",
+            "renders": "120",
+        },
+    ]
+    md, tex = scanner_tables(rows, metrics=["mse"], title="s")
+    assert "| gray_code | 4 | – | 18 | 1.00 |" in md
+    # mean MSE 3.0 over two trials -> 3/4 of the gray-code MSE; mean frames 110
+    assert "| ambiguity_enhancement / wavelet | 3 | – | 110 | 0.75 |" in md
+    assert "ambiguity\\_enhancement / wavelet & 3 & -- & 110 & 0.75 \\\\" in tex
