@@ -1,5 +1,6 @@
 """Sample planners: which k pixels of the native grid a range sensor should measure."""
 
+from simlunar.planner.combination import CombinationFit, fit_combination
 from simlunar.planner.strategies import (
     STRATEGIES,
     WEIGHTED,
@@ -13,9 +14,11 @@ from simlunar.planner.types import SamplePlan
 __all__ = [
     "STRATEGIES",
     "WEIGHTED",
+    "CombinationFit",
     "SamplePlan",
     "check_k",
     "combine_maps",
+    "fit_combination",
     "plan",
     "strategy_weights",
 ]
