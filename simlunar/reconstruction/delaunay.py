@@ -13,8 +13,8 @@ as scipy's ``LinearNDInterpolator`` does (measured numbers in ``shared/REFERENCE
 from __future__ import annotations
 
 import numpy as np
-import triangle
 from scipy.spatial import cKDTree
+from triangle.core import triang
 
 from simlunar.reconstruction._raster import rasterise_linear
 
@@ -69,8 +69,9 @@ def triangulate(points_rc) -> np.ndarray:
     pts = np.ascontiguousarray(points_rc, dtype=np.float64)
     if len(pts) < 3:
         return np.empty((0, 3), dtype=np.int32)
-    out = triangle.triangulate({"vertices": pts}, "Q")
-    tris = out.get("triangles")
+    # Q quiet, z zero-based, B and N skip the boundary markers and the copy of the vertices
+    out, _ = triang({"pointlist": pts}, "QzBN")
+    tris = out.get("trianglelist")
     if tris is None:
         return np.empty((0, 3), dtype=np.int32)
     return np.ascontiguousarray(tris, dtype=np.int32)
@@ -118,6 +119,12 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
             f"unknown outside policy {outside!r}; valid: {', '.join(OUTSIDE_POLICIES)}"
         )
     pts, vals, (rows, cols) = _check_inputs(points_rc, values, shape)
+    # Row-major order of the samples keeps the rasteriser's vertex and cell accesses local
+    # (about 4x faster at k = 400 k); sorted input (e.g. a SamplePlan) skips the sort.
+    key = np.floor(pts[:, 0]) * (cols + 2.0) + np.floor(pts[:, 1])
+    if len(key) > 1 and not np.all(key[1:] >= key[:-1]):
+        order = np.argsort(key, kind="stable")
+        pts, vals = pts[order], vals[order]
     tris = triangulate(pts)
     # Triangle leaves duplicated vertices out of every triangle: an unused vertex while
     # triangles exist means duplicates (every distinct point is a Delaunay vertex in 2-D).
