@@ -152,3 +152,28 @@ def test_scanner_experiment_end_to_end(tmp_path):
     assert sum(row["metric"].startswith("ber_") for row in rows) == 14
     figs = {p.name for p in (out / "figures").iterdir()}
     assert {"scanner_errors.png", "gray_code_bit_errors.pdf"} <= figs
+
+
+@pytest.mark.slow
+def test_real_sweep_on_dask_through_the_cli_matches_the_local_pool(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    args = [*SMALL, "--set", "sweep={render.light.elevation_deg: [15, 60]}", "--no-figures"]
+    run_cli(QUICKSTART, "--out", str(tmp_path / "pool"), "--workers", "2", *args)
+    # one worker thread: Mitsuba renders one scene at a time inside the worker
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster:
+        r = run_cli(
+            QUICKSTART,
+            "--out",
+            str(tmp_path / "dask"),
+            "--scheduler",
+            cluster.scheduler_address,
+            *args,
+        )
+    assert "units: 2 (0 cached, 2 computed)" in r.output
+    assert (tmp_path / "pool" / "results.csv").read_bytes() == (
+        tmp_path / "dask" / "results.csv"
+    ).read_bytes()
+    prov = json.loads((tmp_path / "dask" / "provenance.json").read_text())
+    assert prov["executor"] == {"executor": "dask", "scheduler": cluster.scheduler_address}
