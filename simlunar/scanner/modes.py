@@ -160,7 +160,7 @@ def dot_scan(
     min_proj_spacing: float = 8.0,
     min_cam_spacing: float = 6.0,
     tol: float = 2.0,
-    rel_threshold: float = 0.2,
+    rel_threshold: float = 0.02,
     abs_threshold: float = 0.02,
     batch: int = 32,
 ) -> DotScan:
@@ -180,7 +180,9 @@ def dot_scan(
     min_proj_spacing, min_cam_spacing, tol : float
         Scheduling spacings (projector px, camera px) and the matching tolerance (camera px).
     rel_threshold, abs_threshold : float
-        Blob detection thresholds (relative to the frame's brightest dot; absolute in frame units).
+        Blob detection thresholds (relative to the frame's brightest dot; absolute in frame
+        units). The relative one stays low because a multiplexed frame mixes bright and dark
+        surfaces: a dot on dark soil must not be lost next to one on a bright rock.
     batch : int
         Frames rendered per ``capture.render`` call (memory bound only).
 
