@@ -161,6 +161,38 @@ def _panel_arrays(image, depth, study: SamplingStudyCfg, density: float, *, rng)
     }
 
 
+def fill_invalid(depth: np.ndarray) -> tuple[np.ndarray, int]:
+    """Fill pixels without a ground-truth hit from their nearest valid pixel.
+
+    A nadir ray through a pixel centre passes exactly through a mesh vertex, and a few such
+    rays (about 1 in 10^4 on a 1.6 M-pixel view) miss the watertight-in-theory mesh, so the
+    ground truth has isolated holes. The sampling study needs a finite depth everywhere; a
+    hole takes its nearest neighbour's depth (the count is kept in the unit's ``meta``).
+
+    Parameters
+    ----------
+    depth : (rows, cols) float
+        Depth in metres, NaN where invalid.
+
+    Returns
+    -------
+    filled : (rows, cols) float64
+    n_invalid : int
+        Number of filled pixels.
+    """
+    from scipy import ndimage
+
+    depth = np.asarray(depth, np.float64)
+    bad = ~np.isfinite(depth)
+    n = int(bad.sum())
+    if n == 0:
+        return depth, 0
+    if n == depth.size:
+        raise ValueError("render: no pixel of the view sees the terrain (check the camera)")
+    idx = ndimage.distance_transform_edt(bad, return_distances=False, return_indices=True)
+    return depth[tuple(idx)], n
+
+
 def sparse_mesh_render(
     terrain,
     camera,
@@ -245,7 +277,7 @@ def compute_unit(payload: dict[str, Any]) -> dict[str, Any]:
     t = time.perf_counter()
     radiance = luminance(result.image)
     image = sensor_image(radiance, r.sensor, rng=np.random.default_rng(seeds["sensor"]))
-    depth = np.where(result.gt.valid, result.gt.depth, np.nan).astype(np.float64)
+    depth, n_invalid = fill_invalid(np.where(result.gt.valid, result.gt.depth, np.nan))
     timings["sensor_s"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -303,7 +335,12 @@ def compute_unit(payload: dict[str, Any]) -> dict[str, Any]:
         "scores": _plain_scores(study.scores),
         "arrays": arrays,
         "timings": timings,
-        "meta": {"shape": list(image.shape), "spacing_m": terrain.spacing, "variant": _variant()},
+        "meta": {
+            "shape": list(image.shape),
+            "spacing_m": terrain.spacing,
+            "variant": _variant(),
+            "invalid_pixels_filled": n_invalid,
+        },
     }
 
 
