@@ -520,6 +520,7 @@ def scanner_ambiguity_experiment(
     spp: int = 8,
     max_depth: int = 3,
     sensor: bool = True,
+    projector_blur: float = 0.0,
     metrics=("mse", "grad", "sal"),
     progress=None,
 ) -> list[dict]:
@@ -553,6 +554,7 @@ def scanner_ambiguity_experiment(
         spp=spp,
         seed=seed,
         sensor=sens,
+        projector_blur=projector_blur,
         progress=progress,
     )
     return res.rows
