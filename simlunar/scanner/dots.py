@@ -91,6 +91,7 @@ def detect_dots(
     rel_threshold: float = 0.2,
     abs_threshold: float = 0.0,
     grow: int = 2,
+    reject_border: bool = True,
 ) -> Detections:
     """Detect blobs and their intensity-weighted sub-pixel centroids.
 
@@ -106,6 +107,8 @@ def detect_dots(
         Image without the dots (e.g. the black frame); default the image median.
     rel_threshold, abs_threshold : float
     grow : int
+    reject_border : bool
+        Drop blobs whose grown region touches the image border (truncated spots).
 
     Returns
     -------
@@ -136,6 +139,10 @@ def detect_dots(
         v = ndimage.sum(sig * (rows + 0.5), labels, idx) / flux
     pk = ndimage.maximum(sig, labels, idx)
     ok = flux > 0
+    if reject_border:
+        # a spot cut by the image border has a biased centroid
+        edge = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
+        ok &= ~np.isin(idx, edge)
     return Detections(np.stack([u, v], axis=-1)[ok], np.asarray(flux)[ok], np.asarray(pk)[ok])
 
 

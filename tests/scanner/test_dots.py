@@ -133,7 +133,9 @@ def test_multiplexed_frames_decode_like_one_dot_frames(rig, rng):
     exact = dots.schedule_dots(rig, proj_uv, depth_range=rng_z, exact=True)
     fm, fe = run(multi), run(exact)
     ok = np.isfinite(fm).all(1) & np.isfinite(fe).all(1)
-    assert ok.mean() > 0.95
+    # spots within a few pixels of the image border are dropped (truncated centroids)
+    inner = np.all((cam_uv > 4) & (cam_uv < np.array([160, 120]) - 4), axis=1)
+    assert ok[inner].mean() > 0.95
     assert len(multi) * 5 < k
     assert np.median(np.linalg.norm(fm[ok] - fe[ok], axis=1)) < 0.01
     pts, _ = tri.triangulate_rays(rig, fm[ok], proj_uv[ok])
@@ -161,3 +163,10 @@ def test_camera_that_does_not_see_the_projection_is_rejected():
         dots.epipolar_segments(bad, [[16.0, 12.0]], (0.5, 1.5))
     with pytest.raises(ValueError, match="empty"):
         dots.schedule_dots(r, np.empty((0, 2)), depth_range=(0.5, 1.5))
+
+
+def test_spots_cut_by_the_image_border_are_dropped():
+    img = gaussian_spots((30, 40), [(0.8, 15.0), (20.0, 15.0)], sigma=1.0)
+    det = dots.detect_dots(img, background=0.0)
+    assert len(det) == 1 and np.hypot(*(det.uv[0] - (20.0, 15.0))) < 0.05
+    assert len(dots.detect_dots(img, background=0.0, reject_border=False)) == 2
