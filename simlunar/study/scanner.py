@@ -11,207 +11,39 @@ modes of :mod:`simlunar.scanner.modes` and scores the depth in the guide view.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
 from simlunar.geometry import Rig
 from simlunar.scanner import gray_code as gc
 from simlunar.scanner import modes as scan_modes
-from simlunar.scanner.triangulate import check_rig, projector_visibility, true_correspondences
+from simlunar.scanner.triangulate import true_correspondences
+from simlunar.study.scanner_capture import (
+    EXPOSURE_PERCENTILE,
+    GuideView,
+    RenderCapture,
+    camera_truth,
+    render_guide,
+)
 
-#: white-frame radiance percentile mapped to ``target_level`` by the auto exposure
-EXPOSURE_PERCENTILE = 99.0
-
-
-class RenderCapture:
-    """Mitsuba-backed capture for :mod:`simlunar.scanner.modes`.
-
-    Parameters
-    ----------
-    terrain : Terrain
-    rig : Rig
-    bsdf : BSDF spec or None (Lambert)
-    max_depth : int
-        Path depth (2 = direct only; >= 3 includes interreflections).
-    spp, seed : int
-        Samples per pixel and sampler seed for every pattern.
-    sensor : SensorModel or None
-        Per-frame noise, quantisation and response; None returns noise-free frames.
-    rng : seed or Generator
-        Noise stream (separate from the renderer's seed).
-    extra_lights : sequence of light specs
-        Sun or ambient light that stays on during the scan (appears in the black frame).
-    projector_scale : float
-        Projector irradiance scale (Mitsuba ``scale``).
-    projector_gamma : float
-        Projector response: pattern values ``p`` are emitted as ``p ** projector_gamma``.
-    projector_blur : float
-        Gaussian blur (sigma, projector pixels) of every emitted pattern (projector defocus).
-    target_level : float
-        The auto exposure maps the white frame's 99th-percentile radiance to this fraction of
-        the sensor range (or of 1 without a sensor), so thresholds are in [0, 1] frame units.
-    """
-
-    def __init__(
-        self,
-        terrain,
-        rig: Rig,
-        *,
-        bsdf=None,
-        max_depth: int = 3,
-        spp: int = 16,
-        seed: int = 0,
-        sensor=None,
-        rng=None,
-        extra_lights=(),
-        projector_scale: float = 1.0,
-        projector_gamma: float = 1.0,
-        projector_blur: float = 0.0,
-        target_level: float = 0.8,
-    ) -> None:
-        from simlunar.render.lights import ProjectorLight
-        from simlunar.render.scene import TerrainScene
-
-        check_rig(rig)
-        if not projector_gamma > 0:
-            raise ValueError(f"projector_gamma must be > 0, got {projector_gamma}")
-        if projector_blur < 0:
-            raise ValueError(f"projector_blur must be >= 0 px, got {projector_blur}")
-        self.rig = rig
-        self.proj_shape = rig.projector.intrinsics.shape
-        self.gamma = float(projector_gamma)
-        self.blur = float(projector_blur)
-        self.scene = TerrainScene(
-            terrain,
-            rig.camera,
-            lights=[
-                ProjectorLight(
-                    rig.projector, np.ones(self.proj_shape, np.float32), scale=projector_scale
-                ),
-                *extra_lights,
-            ],
-            bsdf=bsdf,
-            max_depth=max_depth,
-            spp=spp,
-            seed=seed,
-        )
-        self.rng = np.random.default_rng(rng)
-        self.renders = 0
-        # calibration frame (not counted as a scan render): sets the exposure
-        white = self.scene.render_patterns(np.ones((1, *self.proj_shape), np.float32))[0]
-        ref = float(np.percentile(white, EXPOSURE_PERCENTILE))
-        if not ref > 0:
-            raise ValueError(
-                "the camera does not see the projected area: the white frame is "
-                "black in the triangulation camera"
-            )
-        self.gain = target_level / ref
-        self.sensor = None
-        if sensor is not None:
-            # electrons per unit radiance so that radiance * gain = 1 is the top of the ADC range
-            self.sensor = dataclasses.replace(
-                sensor, exposure=self.gain * sensor.max_dn * sensor.gain_e_per_dn
-            )
-
-    def emitted(self, patterns: np.ndarray) -> np.ndarray:
-        """What the projector emits for digital patterns in [0, 1]: response then optics blur."""
-        p = np.clip(np.asarray(patterns, np.float32), 0.0, 1.0) ** self.gamma
-        if self.blur > 0:
-            p = np.stack([ndimage.gaussian_filter(x, self.blur, mode="nearest") for x in p])
-        return p
-
-    def render(self, patterns) -> np.ndarray:
-        """Noise-free luminance (n, rows, cols) under ``patterns`` (n, H, W)."""
-        pats = np.asarray(patterns, np.float32)
-        if pats.ndim != 3 or pats.shape[1:] != tuple(self.proj_shape):
-            raise ValueError(
-                f"patterns must have shape (n, {self.proj_shape[0]}, "
-                f"{self.proj_shape[1]}) for this projector, got {pats.shape}"
-            )
-        self.renders += len(pats)
-        return self.scene.render_patterns(self.emitted(pats)).astype(np.float64)
-
-    def sense(self, images) -> np.ndarray:
-        """Captured frames in [0, 1]-ish units: exposure, then sensor noise per frame."""
-        imgs = np.asarray(images, np.float64)
-        if self.sensor is None:
-            return imgs * self.gain
-        from simlunar.imaging.sensor import apply_sensor
-
-        # one noise draw per captured frame (inverses by linearity included)
-        return np.stack([apply_sensor(im, self.sensor, rng=self.rng) for im in imgs]).astype(
-            np.float64
-        )
-
-
-@dataclass(frozen=True, eq=False)
-class GuideView:
-    """The co-located guide camera's image and ground truth.
-
-    Attributes
-    ----------
-    image : (H, W) float64 luminance (planner input)
-    depth : (H, W) float64 ground-truth z-depth (NaN off the terrain)
-    valid : (H, W) bool
-    """
-
-    image: np.ndarray
-    depth: np.ndarray
-    valid: np.ndarray
-
-
-def render_guide(
-    terrain,
-    rig: Rig,
-    *,
-    light: str = "projector",
-    sun=None,
-    bsdf=None,
-    max_depth: int = 3,
-    spp: int = 16,
-    seed: int = 0,
-) -> GuideView:
-    """Render the guide image (projector all-white frame or sun) and its ground-truth depth.
-
-    Parameters
-    ----------
-    light : "projector" or "sun"
-        ``projector``: lit by the co-located projector's all-white frame, a camera-centred
-        light, so no cast shadows are visible; ``sun``: lit by ``sun`` (a ``SunLight`` spec).
-    """
-    from simlunar.render.lights import ProjectorLight, SunLight
-    from simlunar.render.scene import TerrainScene, luminance
-
-    H, W = rig.projector.intrinsics.shape
-    if light == "projector":
-        lights = [ProjectorLight(rig.projector, np.ones((H, W), np.float32))]
-    elif light == "sun":
-        if not isinstance(sun, SunLight):
-            raise ValueError("light='sun' needs sun=SunLight(...)")
-        lights = [sun]
-    else:
-        raise ValueError(f"unknown guide light {light!r}; valid: 'projector', 'sun'")
-    scene = TerrainScene(
-        terrain, rig.guide, lights=lights, bsdf=bsdf, max_depth=max_depth, spp=spp, seed=seed
-    )
-    img = luminance(scene.render()).astype(np.float64)
-    gt = scene.ground_truth()
-    return GuideView(image=img, depth=np.asarray(gt.depth, float), valid=np.asarray(gt.valid))
-
-
-def camera_truth(capture: RenderCapture, guide: GuideView) -> dict:
-    """Ground truth in the triangulation camera: true projector column/row and projector light.
-
-    Returns a dict with ``col``, ``row`` ((rows, cols) int, -1 where not lit) and ``lit``
-    (the surface point each camera pixel sees is lit directly by the projector).
-    """
-    gt = capture.scene.ground_truth()
-    lit = projector_visibility(gt.position, capture.rig.projector, guide.depth)
-    col, row = true_correspondences(gt.position, capture.rig.projector, lit=lit)
-    return {"col": col, "row": row, "lit": lit, "valid": np.asarray(gt.valid)}
+__all__ = [
+    "EXPOSURE_PERCENTILE",
+    "GuideView",
+    "RenderCapture",
+    "ScannerStudyResult",
+    "aim_rig_at_terrain",
+    "bit_error_table",
+    "camera_truth",
+    "depth_range_from_terrain",
+    "interreflection_comparison",
+    "render_guide",
+    "run_scanner_study",
+    "scanner_ambiguity_experiment",
+    "score_depth",
+    "summarize",
+    "true_correspondences",
+]
 
 
 def depth_range_from_terrain(terrain, rig: Rig, *, margin: float = 0.05) -> tuple[float, float]:

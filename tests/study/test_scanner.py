@@ -161,3 +161,35 @@ def test_run_scanner_study_rows_and_modes(rig):
     assert ae.renders == ae.dots.renders  # the gray-code scan is shared, not counted again
     with pytest.raises(ValueError, match="unknown scan mode"):
         st.run_scanner_study(terrain(h), rig, modes=("lidar",))
+
+
+def test_scanner_ambiguity_experiment_plain_arguments():
+    rows = st.scanner_ambiguity_experiment(
+        terrain_scale=0.08,
+        proj_size=(32, 24),
+        cam_size=(64, 48),
+        trials=1,
+        spp=4,
+        seed=2,
+        metrics=("mse",),
+    )
+    mse = st.summarize(rows, "mse")
+    assert set(mse) == {
+        "gray_code",
+        "ambiguity_enhancement/wavelet",
+        "ambiguity_enhancement/random",
+    }
+    assert all(v > 0 for v in mse.values())
+    gray = [r for r in rows if r["mode"] == "gray_code"]
+    assert {r["renders"] for r in gray} == {5 + 5 + 2}
+    # same seed, same rows (terrain, noise and planner streams are all seeded)
+    again = st.scanner_ambiguity_experiment(
+        terrain_scale=0.08,
+        proj_size=(32, 24),
+        cam_size=(64, 48),
+        trials=1,
+        spp=4,
+        seed=2,
+        metrics=("mse",),
+    )
+    assert st.summarize(again, "mse") == mse
