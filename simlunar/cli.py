@@ -78,8 +78,9 @@ def run(
     experiment: str = typer.Argument(..., help="experiment YAML (see experiments/)"),
     out: str = typer.Option(None, "--out", help="result folder [default: results/<name>]"),
     workers: int = typer.Option(None, "--workers", help="local worker processes [default: 1]"),
-    scheduler: str = typer.Option(None, "--scheduler",
-                                  help="Dask scheduler address, e.g. tcp://host:8786"),
+    scheduler: str = typer.Option(
+        None, "--scheduler", help="Dask scheduler address, e.g. tcp://host:8786"
+    ),
     set_: list[str] | None = _SET_OPTION,
     no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar"),
     no_figures: bool = typer.Option(False, "--no-figures", help="skip figures/"),
@@ -94,11 +95,14 @@ def run(
     cfg = load_experiment(experiment, parse_set(set_ or []))
     executor = make_executor(workers=workers, scheduler=scheduler)
     out_dir = Path(out) if out else Path("results") / cfg.name
-    summary = run_experiment(cfg, out_dir, executor=executor, progress=not no_progress,
-                             figures=not no_figures)
+    summary = run_experiment(
+        cfg, out_dir, executor=executor, progress=not no_progress, figures=not no_figures
+    )
     typer.echo(summary.scores_markdown)
-    typer.echo(f"units: {summary.units_total} ({summary.units_cached} cached, "
-               f"{summary.units_computed} computed) in {summary.elapsed_s:.1f} s")
+    typer.echo(
+        f"units: {summary.units_total} ({summary.units_cached} cached, "
+        f"{summary.units_computed} computed) in {summary.elapsed_s:.1f} s"
+    )
     typer.echo(f"results: {out_dir}")
     if summary.figures:
         typer.echo(f"figures: {summary.figures_dir}")
@@ -106,7 +110,9 @@ def run(
 
 @app.command()
 @user_errors
-def figures(results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`")) -> None:
+def figures(
+    results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`"),
+) -> None:
     """Redraw the figures of a result folder (PNG and PDF) without recomputing."""
     from simlunar.pipeline.figures import write_figures
 
@@ -117,7 +123,9 @@ def figures(results_dir: str = typer.Argument(..., help="a result folder of `sim
 
 @app.command()
 @user_errors
-def schema(out: str = typer.Option(None, "--out", help="write to this file instead of stdout")) -> None:
+def schema(
+    out: str = typer.Option(None, "--out", help="write to this file instead of stdout"),
+) -> None:
     """JSON Schema of experiment YAMLs (for editors: yaml-language-server)."""
     import json
 
