@@ -25,7 +25,14 @@ class Executor:
 
     name = "base"
 
-    def run(self, fn: Callable[[Any], Any], payloads: list[Any]) -> Iterator[tuple[int, Any]]:
+    def run(
+        self, fn: Callable[[Any], Any], payloads: list[Any], *, progress: Callable | None = None
+    ) -> Iterator[tuple[int, Any]]:
+        """Yield ``(index, fn(payload))`` as units finish.
+
+        ``progress`` (a within-unit callback ``(stage, done, total)``) is passed to ``fn`` as
+        a keyword only by in-process executors: callbacks do not cross process boundaries.
+        """
         raise NotImplementedError
 
     def describe(self) -> dict:
@@ -40,9 +47,9 @@ class SerialExecutor(Executor):
 
     name = "serial"
 
-    def run(self, fn, payloads):
+    def run(self, fn, payloads, *, progress=None):
         for i, p in enumerate(payloads):
-            yield i, fn(p)
+            yield i, (fn(p) if progress is None else fn(p, progress=progress))
 
 
 def _worker_init(threads: int) -> None:
@@ -65,9 +72,9 @@ class LocalPoolExecutor(Executor):
     def describe(self) -> dict:
         return {"executor": self.name, "workers": self.workers}
 
-    def run(self, fn, payloads):
+    def run(self, fn, payloads, *, progress=None):
         if self.workers == 1 or len(payloads) <= 1:
-            yield from SerialExecutor().run(fn, payloads)
+            yield from SerialExecutor().run(fn, payloads, progress=progress)
             return
         n = min(self.workers, len(payloads))
         threads = max(1, (os.cpu_count() or 1) // n)
@@ -108,7 +115,7 @@ class DaskExecutor(Executor):
         except (OSError, TimeoutError) as exc:
             raise ValueError(f"--scheduler {self.address}: cannot connect ({exc})") from None
 
-    def run(self, fn, payloads):
+    def run(self, fn, payloads, *, progress=None):
         from distributed import as_completed
 
         self.open()

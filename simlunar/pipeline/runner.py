@@ -237,7 +237,8 @@ def run_experiment(
     bar = _progress(progress, len(units), n_cached, cfg.name)
     try:
         payloads = [{"config": u.config} for u in todo]
-        for i, result in executor.run(compute, payloads):
+        hook = bar.stage if bar is not None and _accepts_progress(compute) else None
+        for i, result in executor.run(compute, payloads, progress=hook):
             u = todo[i]
             arrays = result.pop("arrays", {}) or {}
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
@@ -316,6 +317,15 @@ def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapse
     atomic_write_json(out / "provenance.json", prov)
 
 
+def _accepts_progress(fn) -> bool:
+    import inspect
+
+    try:
+        return "progress" in inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return False
+
+
 class _Bar:
     def __init__(self, total: int, done: int, name: str):
         from rich.console import Console
@@ -339,10 +349,20 @@ class _Bar:
             transient=False,
         )
         self.task = self.p.add_task("units", total=total, completed=done)
+        self.sub = None
         self.p.start()
+
+    def stage(self, name: str, done: int, total: int) -> None:
+        """Within-unit progress (in-process runs only): a second bar for the current stage."""
+        if self.sub is None:
+            self.sub = self.p.add_task(name, total=total)
+        self.p.update(self.sub, completed=done, total=total, description=name)
 
     def advance(self) -> None:
         self.p.advance(self.task)
+        if self.sub is not None:
+            self.p.remove_task(self.sub)
+            self.sub = None
 
     def stop(self) -> None:
         self.p.stop()

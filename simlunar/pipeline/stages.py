@@ -233,13 +233,15 @@ def sparse_mesh_render(
     return luminance(out.image)
 
 
-def compute_unit(payload: dict[str, Any]) -> dict[str, Any]:
+def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
     """Run one work unit; picklable entry point for every executor.
 
     Parameters
     ----------
     payload : dict
         ``{"config": <plain resolved experiment dict without sweep>}``.
+    progress : callable(stage, done, total), optional
+        Within-unit progress of the sampling study (in-process executors pass it).
 
     Returns
     -------
@@ -296,6 +298,7 @@ def compute_unit(payload: dict[str, Any]) -> dict[str, Any]:
         metrics=list(s.metrics),
         rng=np.random.default_rng(seeds["study"]),
         range_noise_std=s.range_noise_std_m,
+        progress=None if progress is None else (lambda d, n: progress("sampling study", d, n)),
         **kw,
     )
     timings["study_s"] = time.perf_counter() - t

@@ -63,3 +63,15 @@ def fake_unit(payload: dict) -> dict:
         },
         "meta": {"variant": "fake"},
     }
+
+
+PROGRESS_CALLS: list[tuple] = []
+
+
+def fake_unit_with_progress(payload: dict, *, progress=None) -> dict:
+    """``fake_unit`` that reports within-unit progress, as ``stages.compute_unit`` does."""
+    if progress is not None:
+        for done in range(3):
+            progress("study", done + 1, 3)
+            PROGRESS_CALLS.append((payload["config"]["render"]["light"]["elevation_deg"], done + 1))
+    return fake_unit(payload)

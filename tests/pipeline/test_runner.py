@@ -202,3 +202,21 @@ def test_executor_options():
         make_executor(workers=2, scheduler="tcp://localhost:1")
     with pytest.raises(ValueError, match="--workers must be >= 1"):
         make_executor(workers=0)
+
+
+def test_progress_bar_gets_within_unit_progress_in_process(tmp_path, capsys):
+    import fake_unit as fu
+
+    fu.PROGRESS_CALLS.clear()
+    s = run_experiment(
+        cfg(), tmp_path / "p", compute=fu.fake_unit_with_progress, progress=True, figures=False
+    )
+    assert s.units_computed == 4
+    assert fu.PROGRESS_CALLS == [(e, d) for e in (10, 30, 60, 90) for d in (1, 2, 3)]
+    assert "sweep_test units" in capsys.readouterr().err
+    # without a bar, the unit function is called without a callback
+    fu.PROGRESS_CALLS.clear()
+    run_experiment(
+        cfg(), tmp_path / "q", compute=fu.fake_unit_with_progress, progress=False, figures=False
+    )
+    assert fu.PROGRESS_CALLS == []
