@@ -238,7 +238,9 @@ def run_experiment(
     try:
         payloads = [{"config": u.config} for u in todo]
         hook = bar.stage if bar is not None and _accepts_progress(compute) else None
-        for i, result in executor.run(compute, payloads, progress=hook):
+        # executors written against the older two-argument run() still work without a hook
+        kw = {"progress": hook} if hook is not None else {}
+        for i, result in executor.run(compute, payloads, **kw):
             u = todo[i]
             arrays = result.pop("arrays", {}) or {}
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
