@@ -365,18 +365,17 @@ def _plain_scores(scores) -> dict:
 def _compute_scanner_unit(
     cfg: ExperimentCfg, terrain, lights, bsdf, seeds, timings
 ) -> dict[str, Any]:
-    from simlunar.scanner.rigs import rig_preset
-    from simlunar.study.scanner import run_scanner_study
+    from simlunar.study.scanner import aim_rig_at_terrain, run_scanner_study
 
     s = cfg.study
     r = cfg.render
     t = time.perf_counter()
-    x0, x1, y0, y1 = terrain.extent
-    target = ((x0 + x1) / 2, (y0 + y1) / 2, float(np.nanmedian(terrain.heights)))
     opts = dict(s.options)
-    rig = rig_preset(
-        s.rig,
-        target=target,
+    # the scanner package aims the preset rig at the terrain's centre at the standoff that
+    # fits the projection inside it, so every guide pixel sees terrain at any terrain scale
+    rig = aim_rig_at_terrain(
+        terrain,
+        preset=s.rig,
         proj_size=tuple(s.projector_px),
         cam_size=tuple(s.camera_px),
         **opts.pop("rig", {}),
