@@ -60,7 +60,13 @@ def _worker_init(threads: int) -> None:
 
 
 class LocalPoolExecutor(Executor):
-    """A pool of ``workers`` fresh processes (spawned: Mitsuba's JIT does not survive fork)."""
+    """``workers`` local workers: this process plus ``workers - 1`` spawned processes.
+
+    The parent process works too (in a thread), because it has already paid for importing
+    Mitsuba and warming its kernels; each spawned process pays that once (about 2 s), which
+    is what limits the speed-up on short units. Processes are spawned, not forked: Mitsuba's
+    JIT state does not survive ``fork``. Units are handed out in order as workers free up.
+    """
 
     name = "local"
 
@@ -79,16 +85,34 @@ class LocalPoolExecutor(Executor):
         n = min(self.workers, len(payloads))
         threads = max(1, (os.cpu_count() or 1) // n)
         ctx = mp.get_context("spawn")
-        with cf.ProcessPoolExecutor(
-            max_workers=n, mp_context=ctx, initializer=_worker_init, initargs=(threads,)
-        ) as pool:
-            futs = {pool.submit(fn, p): i for i, p in enumerate(payloads)}
+        pending = list(range(len(payloads)))
+        running: dict[cf.Future, tuple[int, cf.Executor]] = {}
+        with (
+            cf.ThreadPoolExecutor(max_workers=1) as local,
+            cf.ProcessPoolExecutor(
+                max_workers=n - 1, mp_context=ctx, initializer=_worker_init, initargs=(threads,)
+            ) as pool,
+        ):
+
+            def submit(ex: cf.Executor) -> None:
+                i = pending.pop(0)
+                running[ex.submit(fn, payloads[i])] = (i, ex)
+
+            submit(local)
+            for _ in range(n - 1):
+                if pending:
+                    submit(pool)
             try:
-                for fut in cf.as_completed(futs):
-                    yield futs[fut], fut.result()
+                while running:
+                    done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+                    for fut in sorted(done, key=lambda f: running[f][0]):
+                        i, ex = running.pop(fut)
+                        if pending:
+                            submit(ex)
+                        yield i, fut.result()
             except BaseException:
-                for f in futs:
-                    f.cancel()
+                for fut in running:
+                    fut.cancel()
                 raise
 
 
