@@ -1,0 +1,60 @@
+"""Atomic writes and the unit cache."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import numpy as np
+import pytest
+
+from simlunar.pipeline import store
+from simlunar.pipeline.store import UnitCache, atomic_write_text, csv_text, fmt_value
+
+
+def test_atomic_write_replaces_and_leaves_no_temporary(tmp_path):
+    p = tmp_path / "sub" / "a.txt"
+    atomic_write_text(p, "one")
+    atomic_write_text(p, "two")
+    assert p.read_text() == "two"
+    assert [q.name for q in p.parent.iterdir()] == ["a.txt"]
+    mask = os.umask(0)
+    os.umask(mask)
+    assert stat.S_IMODE(p.stat().st_mode) == 0o666 & ~mask
+
+
+def test_a_failed_write_keeps_the_old_file(tmp_path, monkeypatch):
+    p = tmp_path / "a.txt"
+    atomic_write_text(p, "old")
+
+    def boom(*a, **k):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(store.os, "replace", boom)
+    with pytest.raises(OSError, match="disk full"):
+        atomic_write_text(p, "new")
+    assert p.read_text() == "old"
+    assert [q.name for q in tmp_path.iterdir()] == ["a.txt"]
+
+
+def test_fmt_value_round_trips_floats():
+    for v in (0.1, 1 / 3, 2.0**-11, 1e-300, 12345.678):
+        assert float(fmt_value(v)) == v
+    assert fmt_value(np.float32(0.5)) == "0.5"
+    assert fmt_value(np.int64(3)) == "3"
+    assert fmt_value(None) == ""
+    assert fmt_value(True) == "true"
+    assert fmt_value({"kind": "sun"}) == '{"kind": "sun"}'
+    assert csv_text([{"a": 1, "b": "x,y"}], ["a", "b"]) == 'a,b\n1,"x,y"\n'
+
+
+def test_unit_cache_round_trip_and_corrupt_entries(tmp_path):
+    c = UnitCache(tmp_path)
+    assert not c.has("k1") and c.load("k1") is None
+    c.save("k1", {"rows": [{"v": 1.5}]}, {"image": np.arange(6, dtype=np.float32).reshape(2, 3)})
+    assert c.load("k1") == {"rows": [{"v": 1.5}], "key": "k1"}
+    np.testing.assert_array_equal(c.load_arrays("k1")["image"], np.arange(6).reshape(2, 3))
+    c.json_path("k2").write_text("{truncated")
+    assert c.load("k2") is None  # unreadable -> recomputed, never trusted
+    c.json_path("k3").write_text('{"key": "other"}')
+    assert c.load("k3") is None
