@@ -119,20 +119,16 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
             f"unknown outside policy {outside!r}; valid: {', '.join(OUTSIDE_POLICIES)}"
         )
     pts, vals, (rows, cols) = _check_inputs(points_rc, values, shape)
-    # Row-major order of the samples keeps the rasteriser's vertex and cell accesses local
-    # (about 4x faster at k = 400 k); sorted input (e.g. a SamplePlan) skips the sort.
-    key = np.floor(pts[:, 0]) * (cols + 2.0) + np.floor(pts[:, 1])
-    if len(key) > 1 and not np.all(key[1:] >= key[:-1]):
-        order = np.argsort(key, kind="stable")
+    # Lexicographic (row, col) order keeps the rasteriser's vertex and cell accesses local
+    # (about 4x faster at k = 400 k) and puts duplicates next to each other; sorted input
+    # (e.g. a SamplePlan) skips the sort.
+    r, c = pts[:, 0], pts[:, 1]
+    if len(pts) > 1 and not np.all((r[1:] > r[:-1]) | ((r[1:] == r[:-1]) & (c[1:] >= c[:-1]))):
+        order = np.lexsort((c, r))
         pts, vals = pts[order], vals[order]
+    if len(pts) > 1 and np.any(np.all(pts[1:] == pts[:-1], axis=1)):
+        pts, vals = _merge_duplicates(pts, vals)
     tris = triangulate(pts)
-    # Triangle leaves duplicated vertices out of every triangle: an unused vertex while
-    # triangles exist means duplicates (every distinct point is a Delaunay vertex in 2-D).
-    if len(tris) == 0 or np.bincount(tris.ravel(), minlength=len(pts)).min() == 0:
-        merged, mvals = _merge_duplicates(pts, vals)
-        if len(merged) != len(pts):
-            pts, vals = merged, mvals
-            tris = triangulate(pts)
     out = np.full((rows, cols), np.nan)
     covered = np.zeros((rows, cols), dtype=bool)
     if len(tris):
