@@ -4,8 +4,9 @@ Scores follow the paper's eq. 4.3: the inverse-density-weighted mean of e_random
 so random scores exactly 1 and higher is better.
 
 * One scene (paper Table 2): rows are metrics (MSE, GRAD, SAL), columns strategies.
-* Several scenes or sweep points (paper Table 1): one table per metric, rows are the scenes /
-  sweep points, columns strategies.
+* Several scenes or sweep points (paper Table 1): one block per scene (its name heading the
+  strategy columns, one row per metric), then one table per metric with the scenes / sweep
+  points as rows, for side-by-side comparison.
 """
 
 from __future__ import annotations
@@ -87,6 +88,28 @@ def _tex_table(header: list[str], rows: list[tuple[str, list]], caption: str) ->
     return "\n".join(out).replace("–", "--") + "\n"
 
 
+def _tex_blocks(blocks: list[tuple[list[str], list[tuple[str, list]]]], caption: str) -> str:
+    """One tabular of stacked blocks, each with its own header row (paper Table 1)."""
+    ncols = len(blocks[0][0])
+    out = [
+        "\\begin{table}[t]",
+        "\\centering",
+        f"\\caption{{{_tex_escape(caption)}}}",
+        f"\\begin{{tabular}}{{l{'r' * (ncols - 1)}}}",
+        "\\toprule",
+    ]
+    for k, (header, rows) in enumerate(blocks):
+        if k:
+            out.append("\\midrule")
+        out += [" & ".join(_tex_escape(h) for h in header) + " \\\\", "\\midrule"]
+        for label, vals in rows:
+            b = _best(vals)
+            cells = [f"\\textbf{{{_fmt(v)}}}" if i == b else _fmt(v) for i, v in enumerate(vals)]
+            out.append(" & ".join([_tex_escape(label), *cells]) + " \\\\")
+    out += ["\\bottomrule", "\\end{tabular}", "\\end{table}"]
+    return "\n".join(out).replace("–", "--") + "\n"
+
+
 def score_tables(
     units: list[tuple[str, dict]], *, strategies: list[str], metrics: list[str], title: str = ""
 ) -> tuple[str, str]:
@@ -118,6 +141,20 @@ def score_tables(
         md.append(f"### {cap}\n\n" + _md_table(["Metric", *header[1:]], rows))
         tex.append(_tex_table(["Metric", *header[1:]], rows, cap))
     else:
+        # paper Table 1: one block per scene, the scene's name heading its strategy columns,
+        # one row per metric
+        cap = f"{title}: scores (eq. 4.3, random = 1, higher is better)"
+        blocks = []
+        md.append(f"### {cap}\n")
+        for label, scores in units:
+            rows = [
+                (_name(METRIC_NAMES, m), [scores.get(m, {}).get(s) for s in strategies])
+                for m in metrics
+            ]
+            md.append(_md_table([label, *header[1:]], rows))
+            blocks.append(([label, *header[1:]], rows))
+        tex.append(_tex_blocks(blocks, cap))
+        # and per metric, the scenes / sweep points side by side (easier to compare)
         for m in metrics:
             rows = [
                 (label, [scores.get(m, {}).get(s) for s in strategies]) for label, scores in units

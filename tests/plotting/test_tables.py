@@ -32,6 +32,16 @@ def test_several_scenes_is_table1_layout_per_metric():
     md, tex = score_tables(
         [("aerial_1", s1), ("aerial_3", s3)], strategies=STRATS, metrics=["mse"], title="t1"
     )
+    # paper Table 1 blocks: the scene names its columns, one row per metric
+    assert (
+        "| aerial_1 | Random | Grid | Gradient | Entropy | Wavelet |\n|---|---:|---:|---:|---:|---:|\n| MSE | 1.00 | 1.02 | 0.88 | 0.87 | **1.11** |"
+        in md
+    )
+    assert (
+        "aerial\\_3 & Random & Grid & Gradient & Entropy & Wavelet \\\\\n\\midrule\nMSE & 1.00 & 0.91 & 0.83 & 0.80 & \\textbf{1.21} \\\\"
+        in tex
+    )
+    # then per metric, scenes as rows
     assert "| Scene | Random | Grid | Gradient | Entropy | Wavelet |" in md
     assert "| aerial_1 | 1.00 | 1.02 | 0.88 | 0.87 | **1.11** |" in md
     assert "| aerial_3 | 1.00 | 0.91 | 0.83 | 0.80 | **1.21** |" in md
