@@ -121,7 +121,7 @@ class DaskExecutor(Executor):
 
     name = "dask"
 
-    def __init__(self, address: str, *, timeout_s: float = 30.0):
+    def __init__(self, address: str, *, timeout_s: float = 10.0):
         self.address = address
         self.timeout_s = timeout_s
 
