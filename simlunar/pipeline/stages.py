@@ -164,9 +164,9 @@ def _panel_arrays(image, depth, study: SamplingStudyCfg, density: float, *, rng)
 def fill_invalid(depth: np.ndarray) -> tuple[np.ndarray, int]:
     """Fill pixels without a ground-truth hit from their nearest valid pixel.
 
-    A nadir ray through a pixel centre passes exactly through a mesh vertex, and a few such
-    rays (about 1 in 10^4 on a 1.6 M-pixel view) miss the watertight-in-theory mesh, so the
-    ground truth has isolated holes. The sampling study needs a finite depth everywhere; a
+    A nadir ray through a pixel centre passes exactly through a mesh vertex (one vertex per
+    cell centre), and some such rays miss the mesh (measured: 144 of 1.6 M pixels on the full
+    moonyard, about 3,450 on each full aerial scene), so the ground truth has isolated holes. The sampling study needs a finite depth everywhere; a
     hole takes its nearest neighbour's depth (the count is kept in the unit's ``meta``).
 
     Parameters
