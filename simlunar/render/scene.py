@@ -264,17 +264,29 @@ class TerrainScene:
         u, v = (u + 0.5).ravel(), (v + 0.5).ravel()
         valid, pos, nrm = self._cast(u, v)
         # A nadir camera's pixel centres fall exactly on mesh vertices (one vertex per cell
-        # centre), where the watertight ray/triangle test may let a ray slip between the
-        # triangles. Retry misses 2e-5 px off the centre (a height error below 2e-5 * slope
-        # * spacing); this also counts pixel centres on the terrain's outer edge as hits.
-        eps = 2e-5
-        for du, dv in ((eps, eps), (-eps, eps), (eps, -eps), (-eps, -eps)):
-            miss = np.flatnonzero(~valid)
-            if miss.size == 0:
-                break
-            ok, p2, n2 = self._cast(u[miss] + du, v[miss] + dv)
+        # centre), where the ray/triangle test may let a ray slip between the triangles, and
+        # the terrain's outer cell centres lie exactly on the mesh boundary. Retry each miss
+        # with four rays (+-e, +-e) px around the centre and average the hits: symmetric
+        # offsets cancel the first-order position error, so the result is exact on planar
+        # patches (border pixels only have inward hits: error e * spacing * slope there).
+        # e must exceed float32's resolution of u / cols (2^-24 * cols px: 1e-4 px at 1600).
+        miss = np.flatnonzero(~valid)
+        if miss.size:
+            e = max(2e-5, 8 * max(rows, cols) * 2.0**-24)
+            acc_p = np.zeros((miss.size, 3))
+            acc_n = np.zeros((miss.size, 3))
+            count = np.zeros(miss.size)
+            for du, dv in ((e, e), (-e, e), (e, -e), (-e, -e)):
+                ok, p2, n2 = self._cast(u[miss] + du, v[miss] + dv)
+                acc_p[ok] += p2[ok]
+                acc_n[ok] += n2[ok]
+                count[ok] += 1
+            ok = count > 0
             hit = miss[ok]
-            valid[hit], pos[hit], nrm[hit] = True, p2[ok], n2[ok]
+            valid[hit] = True
+            pos[hit] = acc_p[ok] / count[ok, None]
+            n_avg = acc_n[ok] / np.linalg.norm(acc_n[ok], axis=1, keepdims=True)
+            nrm[hit] = n_avg.astype(np.float32)
         valid = valid.reshape(rows, cols)
         pos = pos.reshape(rows, cols, 3)
         nrm = nrm.reshape(rows, cols, 3)
