@@ -234,3 +234,27 @@ def test_wavelet_beats_random_on_lambert_dem(seed):
     me = res.mean_errors()["mse"]
     # at the densest four densities the advantage is large
     assert np.all(me["random"][:4] > 1.5 * me["wavelet"][:4])
+
+
+def test_progress_and_nan_policy(scene):
+    depth, image = scene
+    seen = []
+    res = run_sampling_study(
+        depth, image, densities=DENS, trials=2, rng=0, metrics=["mse"],
+        strategies=["random", "wavelet"], outside="nan",
+        progress=lambda done, total: seen.append((done, total)),
+    )  # fmt: skip
+    assert seen == [(3, 12), (6, 12), (9, 12), (12, 12)]
+    # NaN outside the hull is excluded, never propagated into the errors
+    assert all(np.isfinite(r["value"]) for r in res.rows)
+    near = run_sampling_study(
+        depth, image, densities=DENS, trials=2, rng=0, metrics=["mse"],
+        strategies=["random", "wavelet"],
+    )  # fmt: skip
+    # same samples (same seeds), only the hull policy differs: the densest level covers
+    # nearly all cells, so both policies agree closely there
+    a = res.errors("mse")["random"][0]
+    b = near.errors("mse")["random"][0]
+    np.testing.assert_allclose(a, b, rtol=0.5)
+    # at the sparsest level the hull leaves cells out, so the policies do differ
+    assert not np.array_equal(res.errors("mse")["random"][2], near.errors("mse")["random"][2])
