@@ -136,6 +136,9 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
     if outside == "nearest" and not covered.all():
         holes = np.flatnonzero(~covered.ravel())
         cells = np.column_stack((holes // cols, holes % cols)).astype(np.float64)
-        _, nearest = cKDTree(pts).query(cells)
+        # an unbalanced tree builds ~4x faster (175 -> 47 ms at k = 800 k) and the queries
+        # (few cells at dense k) are as fast
+        tree = cKDTree(pts, leafsize=64, balanced_tree=False, compact_nodes=False)
+        _, nearest = tree.query(cells)
         out.ravel()[holes] = vals[nearest]
     return out
