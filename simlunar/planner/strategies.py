@@ -141,12 +141,13 @@ def _priority_keys(w: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     only drawn (uniformly) once the positive-weight pixels are exhausted.
     """
     e = rng.standard_exponential(w.size)
-    pos = w > 0
-    keys = np.empty(w.size)
-    keys[pos] = e[pos] / w[pos]
-    if not pos.all():
+    with np.errstate(divide="ignore", invalid="ignore"):
+        keys = e / w
+    zero = w == 0
+    if zero.any():
+        pos = ~zero
         top = keys[pos].max() if pos.any() else 0.0
-        keys[~pos] = 2.0 * top + 1.0 + e[~pos]
+        keys[zero] = 2.0 * top + 1.0 + e[zero]
     return keys
 
 
