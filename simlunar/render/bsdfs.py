@@ -13,8 +13,14 @@ Model constants are kept opaque (``dr.make_opaque``), so changing them through
 
 Plugin parameters
 -----------------
-``oren_nayar``: ``reflectance`` (texture or float, the facet albedo rho), ``sigma`` (float,
-radians), ``model`` (string, ``"full"`` or ``"qualitative"``).
+``oren_nayar``: ``reflectance`` (texture or float, the facet albedo rho), ``sigma`` (float or
+texture, radians), ``model`` (string, ``"full"`` or ``"qualitative"``). A float ``sigma`` keeps
+the sigma-only factors as opaque constants computed once (one kernel for any sigma); a
+texture ``sigma`` (e.g. a ``bitmap`` of per-cell roughness, read with ``eval_1`` at the
+surface interaction like the reflectance) computes them per lane with the same formulas,
+so a constant texture gives the same image as the float. Texture values are checked to lie
+in ``[0, pi/2)`` (every ``data``/``value`` parameter of the texture) at load and on
+``parameters_changed``.
 
 ``hapke``: ``reflectance`` (texture or float), ``albedo_mode`` (``"normal"``: the reflectance is
 the normal albedo and the single-scattering albedo w is derived per point so the normal
@@ -59,6 +65,9 @@ def bsdf_dict(spec: LambertBSDF | OrenNayarBSDF | HapkeBSDF, reflectance: Any = 
         The albedo: a constant in [0, 1], a Mitsuba texture dict (e.g. a ``bitmap`` of the
         terrain albedo grid) or a loaded texture. Lambert: diffuse reflectance;
         Oren-Nayar: facet albedo; Hapke: normal albedo (ignored when ``spec.w`` is set).
+        An ``OrenNayarBSDF`` with a ``sigma_map`` gets that grid as a ``bitmap`` ``sigma``
+        texture with the same addressing as a grid albedo (texel (r, c) at terrain vertex
+        (r, c), nearest filter: :func:`simlunar.render.mesh.grid_texture`).
 
     Returns
     -------
@@ -70,7 +79,12 @@ def bsdf_dict(spec: LambertBSDF | OrenNayarBSDF | HapkeBSDF, reflectance: Any = 
     if isinstance(spec, LambertBSDF):
         return {"type": "diffuse", "reflectance": tex}
     if isinstance(spec, OrenNayarBSDF):
-        return {"type": "oren_nayar", "reflectance": tex, "sigma": spec.sigma, "model": spec.model}
+        sigma: Any = spec.sigma
+        if spec.sigma_map is not None:
+            from simlunar.render.mesh import grid_texture
+
+            sigma = grid_texture(spec.sigma_map)
+        return {"type": "oren_nayar", "reflectance": tex, "sigma": sigma, "model": spec.model}
     if isinstance(spec, HapkeBSDF):
         d = {
             "type": "hapke",
@@ -180,24 +194,59 @@ def _register(mi) -> None:
             value = dr.select(ok, self._f(si, wo, ok) * cos_o, 0.0)
             return value, dr.select(ok, cos_o * inv_pi, 0.0)
 
+    def _on_factors(sigma):
+        """sigma-only factors of the full / qualitative model: C1, C2 / k, C3 / k', C4."""
+        s2 = sigma * sigma
+        k = s2 / (s2 + 0.09)
+        c1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
+        c2k = 0.45 * k
+        # C3 = 0.125 k (4 alpha beta / pi^2)^2
+        c3k = 0.125 * k * 16.0 * inv_pi**4
+        c4 = 0.17 * s2 / (s2 + 0.13)
+        return c1, c2k, c3k, c4
+
+    def _check_sigma_texture(tex) -> None:
+        """Every float parameter of a sigma texture (``data``, ``value``) in [0, pi/2)."""
+        params = mi.traverse(tex)
+        for key in params.keys():
+            if not (key == "data" or key == "value" or key.endswith((".data", ".value"))):
+                continue
+            v = np.asarray(params[key], dtype=np.float64).ravel()
+            if v.size and (not np.isfinite(v).all() or v.min() < 0.0 or v.max() >= math.pi / 2):
+                raise ValueError(
+                    f"oren_nayar: sigma texture values must be finite and in [0, pi/2) "
+                    f"radians; {key} has range [{np.nanmin(v):.6g}, {np.nanmax(v):.6g}]"
+                )
+
     class OrenNayarPlugin(_CosineBSDF):
         """Oren-Nayar (1994) BRDF; see :func:`simlunar.render.reference.oren_nayar`."""
 
         def __init__(self, props):
             super().__init__(props)
             self.reflectance = props.get_texture("reflectance", 0.5)
-            sigma = _scalar(props, "sigma", 0.0)
-            if not (math.isfinite(sigma) and 0.0 <= sigma < math.pi / 2):
-                raise ValueError(f"oren_nayar: sigma must be in [0, pi/2) radians, got {sigma}")
             model = str(props.get("model", "full"))
             if model not in ("full", "qualitative"):
                 raise ValueError(f"oren_nayar: model must be full or qualitative, got {model!r}")
             self.model = model
+            raw = props.get("sigma", 0.0)
+            if isinstance(raw, mi.Texture):
+                _check_sigma_texture(raw)
+                self.sigma_texture = raw
+                self.sigma = None
+                return
+            self.sigma_texture = None
+            sigma = float(raw)
+            if not (math.isfinite(sigma) and 0.0 <= sigma < math.pi / 2):
+                raise ValueError(f"oren_nayar: sigma must be in [0, pi/2) radians, got {sigma}")
             self.sigma = _opaque(sigma)
             self._constants()
 
         def _f(self, si, wo, active):
             rho = self.reflectance.eval(si, active)
+            if self.sigma_texture is None:
+                c1, c2k, c3k, c4 = self.c1, self.c2k, self.c3k, self.c4
+            else:
+                c1, c2k, c3k, c4 = _on_factors(self.sigma_texture.eval_1(si, active))
             cos_i, cos_o, sin_i, sin_o, cdp = _local(si, wo)
             # alpha = max(theta_i, theta_o), beta = min(theta_i, theta_o)
             sin_a = dr.maximum(sin_i, sin_o)
@@ -206,28 +255,22 @@ def _register(mi) -> None:
             cos_b = dr.maximum(cos_i, cos_o)
             tan_b = sin_b / dr.maximum(cos_b, 1e-7)
             if self.model == "qualitative":
-                g = self.c1 + self.c2k * dr.maximum(cdp, 0.0) * sin_a * tan_b
+                g = c1 + c2k * dr.maximum(cdp, 0.0) * sin_a * tan_b
                 return rho * (inv_pi * g)
             alpha = dr.safe_acos(cos_a)
             beta = dr.safe_acos(cos_b)
             two_b_pi = 2.0 * inv_pi * beta
-            c2 = self.c2k * dr.select(cdp >= 0, sin_a, sin_a - two_b_pi * two_b_pi * two_b_pi)
+            c2 = c2k * dr.select(cdp >= 0, sin_a, sin_a - two_b_pi * two_b_pi * two_b_pi)
             q = alpha * beta
             # tan((alpha + beta)/2) = (sin a + sin b) / (cos a + cos b): no tan needed
             tan_mid = (sin_a + sin_b) / dr.maximum(cos_a + cos_b, 1e-7)
-            g1 = self.c1 + cdp * c2 * tan_b + (1.0 - dr.abs(cdp)) * (self.c3k * q * q) * tan_mid
-            g2 = self.c4 * (1.0 - cdp * two_b_pi * two_b_pi)
+            g1 = c1 + cdp * c2 * tan_b + (1.0 - dr.abs(cdp)) * (c3k * q * q) * tan_mid
+            g2 = c4 * (1.0 - cdp * two_b_pi * two_b_pi)
             return inv_pi * (rho * g1 + rho * rho * g2)
 
         def _constants(self):
             """sigma-only factors, computed once (opaque: a new sigma reuses the kernels)."""
-            s2 = self.sigma * self.sigma
-            k = s2 / (s2 + 0.09)
-            self.c1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
-            self.c2k = 0.45 * k
-            # C3 = 0.125 k (4 alpha beta / pi^2)^2
-            self.c3k = 0.125 * k * 16.0 * inv_pi**4
-            self.c4 = 0.17 * s2 / (s2 + 0.13)
+            self.c1, self.c2k, self.c3k, self.c4 = _on_factors(self.sigma)
             for name in ("sigma", "c1", "c2k", "c3k", "c4"):
                 value = getattr(self, name)
                 dr.eval(value)
@@ -235,19 +278,25 @@ def _register(mi) -> None:
 
         def traverse(self, callback):
             callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
-            callback.put("sigma", self.sigma, mi.ParamFlags.NonDifferentiable)
+            if self.sigma_texture is None:
+                callback.put("sigma", self.sigma, mi.ParamFlags.NonDifferentiable)
+            else:
+                callback.put("sigma", self.sigma_texture, mi.ParamFlags.NonDifferentiable)
 
         def parameters_changed(self, keys):
+            if self.sigma_texture is not None:
+                _check_sigma_texture(self.sigma_texture)
+                return
             s = float(self.sigma[0])
             if not (math.isfinite(s) and 0.0 <= s < math.pi / 2):
                 raise ValueError(f"oren_nayar: sigma must be in [0, pi/2) radians, got {s}")
             self._constants()
 
         def to_string(self):
-            return (
-                f"OrenNayar[sigma={float(self.sigma[0]):.6g}, model={self.model}, "
-                f"reflectance={self.reflectance}]"
+            sigma = (
+                f"{float(self.sigma[0]):.6g}" if self.sigma_texture is None else self.sigma_texture
             )
+            return f"OrenNayar[sigma={sigma}, model={self.model}, reflectance={self.reflectance}]"
 
     class HapkePlugin(_CosineBSDF):
         """Hapke BRDF; see :func:`simlunar.render.reference.hapke`."""

@@ -17,12 +17,22 @@ cell) and is attached at scene build time as a Mitsuba texture by
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
+
+import numpy as np
 
 from simlunar.render.reference import LUNAR_HAPKE
 
-__all__ = ["BSDFS", "HapkeBSDF", "LambertBSDF", "OrenNayarBSDF", "make_bsdf"]
+__all__ = [
+    "BSDFS",
+    "HapkeBSDF",
+    "LambertBSDF",
+    "OrenNayarBSDF",
+    "check_sigma_map",
+    "make_bsdf",
+    "sigma_map_from_energy",
+]
 
 
 def _finite(name: str, value: Any) -> float:
@@ -55,10 +65,18 @@ class OrenNayarBSDF:
     model : {"full", "qualitative"}
         The full 1994 model (C1..C3 terms and the inter-reflection term) or the simplified
         A/B form.
+    sigma_map : (rows, cols) float array or None
+        Spatially varying roughness (radians, each in ``[0, pi/2)``), one value per terrain
+        cell, attached like the albedo grid (texel (r, c) at vertex (r, c), nearest filter:
+        :mod:`simlunar.render.mesh`). When given it replaces ``sigma`` at render time
+        (``sigma`` stays the nominal value). ``None`` (default) renders the scalar ``sigma``
+        through the original constant-folded kernel. Stored as a read-only float64 copy;
+        specs compare equal when ``sigma``, ``model`` and the map's values are equal.
     """
 
     sigma: float = 0.0
     model: str = "full"
+    sigma_map: np.ndarray | None = field(default=None, compare=False, repr=False)
     name = "oren_nayar"
 
     def __post_init__(self) -> None:
@@ -68,6 +86,121 @@ class OrenNayarBSDF:
         if self.model not in ("full", "qualitative"):
             raise ValueError(f"model must be one of full, qualitative; got {self.model!r}")
         object.__setattr__(self, "sigma", s)
+        if self.sigma_map is not None:
+            m = check_sigma_map(self.sigma_map).copy()
+            m.flags.writeable = False
+            object.__setattr__(self, "sigma_map", m)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, OrenNayarBSDF):
+            return NotImplemented
+        a, b = self.sigma_map, other.sigma_map
+        same_map = (a is None and b is None) or (
+            a is not None and b is not None and a.shape == b.shape and np.array_equal(a, b)
+        )
+        return self.sigma == other.sigma and self.model == other.model and same_map
+
+
+def check_sigma_map(sigma_map: Any, name: str = "sigma_map") -> np.ndarray:
+    """Validate a per-cell Oren-Nayar roughness grid.
+
+    Parameters
+    ----------
+    sigma_map : (rows, cols) array_like
+        Facet slope standard deviations in radians.
+    name : str
+        Field name used in error messages.
+
+    Returns
+    -------
+    (rows, cols) float64
+
+    Raises
+    ------
+    ValueError
+        Not 2-D, empty, non-finite, or a value outside ``[0, pi/2)`` (the message names the
+        field, the offending range and the first offending cell).
+    """
+    try:
+        m = np.asarray(sigma_map, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a 2-D array of numbers") from None
+    if m.ndim != 2 or m.size == 0:
+        raise ValueError(f"{name} must be a non-empty 2-D (rows, cols) array, got shape {m.shape}")
+    bad = ~np.isfinite(m) | (m < 0.0) | (m >= math.pi / 2)
+    if bad.any():
+        r, c = (int(i) for i in np.argwhere(bad)[0])
+        raise ValueError(
+            f"{name} values must be finite and in [0, pi/2) radians; got range "
+            f"[{np.nanmin(m):.6g}, {np.nanmax(m):.6g}] (first bad cell ({r}, {c}) = {float(m[r, c])!r})"
+        )
+    return m
+
+
+def sigma_map_from_energy(
+    energy: np.ndarray,
+    *,
+    sigma_min: float,
+    sigma_max: float,
+    threshold: float | None = None,
+    percentile: float = 99.0,
+) -> np.ndarray:
+    """Per-cell Oren-Nayar roughness from a frequency (wavelet energy) map (paper Fig. 4).
+
+    The energy is normalised robustly, ``e = clip(energy / P, 0, 1)`` with ``P`` its
+    ``percentile``-th percentile (so a few crater rims do not flatten the rest), and mapped
+    linearly, ``sigma = sigma_min + (sigma_max - sigma_min) * e``: the more high-frequency
+    detail a cell had, the rougher the downsampled surface is shaded, standing in for the
+    relief the sparse mesh lost. Cells with ``e >= threshold`` are the major features: the
+    wavelet planner concentrates its samples there, so the reconstructed mesh already carries
+    their relief metrically and they get ``sigma_min`` (no roughness on top of real geometry).
+
+    Parameters
+    ----------
+    energy : (rows, cols) float
+        Non-negative frequency map, e.g. ``simlunar.features.feature_map("wavelet", image)``
+        of the nadir guide image (pixel (r, c) = terrain cell (r, c)).
+    sigma_min, sigma_max : float
+        Roughness range in radians, ``0 <= sigma_min <= sigma_max < pi/2``.
+    threshold : float in (0, 1] or None
+        Normalised energy at and above which the geometry is kept metric; ``None`` disables.
+    percentile : float in (0, 100]
+        Normalisation percentile of the energy.
+
+    Returns
+    -------
+    (rows, cols) float64
+        Roughness in radians, within ``[sigma_min, sigma_max]``. An all-zero energy map gives
+        ``sigma_min`` everywhere.
+
+    Raises
+    ------
+    ValueError
+        Bad range, threshold, percentile, or an energy map that is not 2-D, finite and >= 0.
+    """
+    e = np.asarray(energy, dtype=np.float64)
+    if e.ndim != 2 or e.size == 0:
+        raise ValueError(f"energy must be a non-empty 2-D array, got shape {e.shape}")
+    if not np.isfinite(e).all() or (e < 0).any():
+        raise ValueError("energy must be finite and >= 0")
+    lo, hi = _finite("sigma_min", sigma_min), _finite("sigma_max", sigma_max)
+    if not (0.0 <= lo <= hi < math.pi / 2):
+        raise ValueError(
+            f"sigma_min, sigma_max must satisfy 0 <= sigma_min <= sigma_max < pi/2 radians, "
+            f"got {sigma_min!r}, {sigma_max!r}"
+        )
+    if threshold is not None and not (0.0 < _finite("threshold", threshold) <= 1.0):
+        raise ValueError(f"threshold must be in (0, 1] or None, got {threshold!r}")
+    if not (0.0 < _finite("percentile", percentile) <= 100.0):
+        raise ValueError(f"percentile must be in (0, 100], got {percentile!r}")
+    ref = float(np.percentile(e, percentile))
+    if ref <= 0.0:
+        ref = float(e.max())
+    norm = np.clip(e / ref, 0.0, 1.0) if ref > 0.0 else np.zeros_like(e)
+    sigma = lo + (hi - lo) * norm
+    if threshold is not None:
+        sigma[norm >= threshold] = lo
+    return sigma
 
 
 @dataclass(frozen=True)

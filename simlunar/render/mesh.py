@@ -8,13 +8,20 @@ row 0 of its data at v = 0 (no flip for meshes built in memory; only its OBJ/PLY
 v), so the albedo array is handed over unflipped; with ``filter_type: nearest`` every point
 of the surface whose nadir projection lies in cell (r, c) gets albedo[r, c]
 (tested with a checkerboard in ``tests/render/test_mesh.py``).
+
+The rendered mesh adds a one-cell skirt: a ring of vertices half a cell outside the outer cell
+centres, i.e. on the grid's outer cell edges, with the edge cells' heights (and texture
+coordinates extrapolated, which the clamped texture maps to the edge texels). Without it the
+mesh would end at the outer cell centres, so a nadir view's border pixels would be half
+terrain, half void: a dark one-pixel frame that every image feature (gradient, entropy,
+wavelet) fires on. With it every pixel of ``OrthoCamera.nadir_for_grid`` sees only its cell.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from simlunar.terrain.mesh import grid_faces, grid_uv, grid_vertices
+from simlunar.terrain.mesh import grid_faces, grid_vertices
 
 
 def terrain_mesh(terrain, *, name: str = "terrain", bsdf=None):
@@ -32,7 +39,8 @@ def terrain_mesh(terrain, *, name: str = "terrain", bsdf=None):
     Returns
     -------
     mi.Mesh
-        With ``vertex_positions`` (rows*cols*3), ``faces`` and ``vertex_texcoords``.
+        With ``vertex_positions`` ((rows+2)*(cols+2)*3: the grid plus the skirt ring; cell
+        (r, c) is vertex (r + 1) * (cols + 2) + c + 1), ``faces`` and ``vertex_texcoords``.
 
     Raises
     ------
@@ -46,14 +54,25 @@ def terrain_mesh(terrain, *, name: str = "terrain", bsdf=None):
     nodata = np.isnan(heights)
     if nodata.all():
         raise ValueError("terrain.heights: every cell is nodata (NaN); nothing to render")
-    faces = grid_faces(heights.shape, nodata)
-    if len(faces) == 0:
+    if len(grid_faces(heights.shape, nodata)) == 0:
         raise ValueError("terrain.heights: no 2x2 block of valid cells; no triangle to render")
-    # unreferenced nodata vertices are kept (index = r * cols + c) but must not poison the
-    # bounding box with NaN
-    filled = np.where(nodata, np.nanmin(heights), heights)
-    verts = grid_vertices(filled, terrain.spacing, terrain.origin)
-    uv = grid_uv(heights.shape)
+    rows, cols = heights.shape
+    s = terrain.spacing
+    padded = np.pad(heights, 1, mode="edge")  # the skirt ring (see module docstring)
+    pad_nodata = np.isnan(padded)
+    faces = grid_faces(padded.shape, pad_nodata)
+    # unreferenced nodata vertices are kept but must not poison the bounding box with NaN
+    filled = np.where(pad_nodata, np.nanmin(heights), padded)
+    x0, y0 = terrain.origin
+    verts = grid_vertices(filled, s, (x0 - s, y0 + s))
+    # the ring sits on the outer cell edges, half a cell outside the outer cell centres
+    verts[:, 0] = np.clip(verts[:, 0], x0, x0 + cols * s)
+    verts[:, 1] = np.clip(verts[:, 1], y0 - rows * s, y0)
+    # texel (r, c) at cell (r, c): u = (c + 1/2) / cols for c = -1 .. cols (clamped outside)
+    u = (np.arange(-1, cols + 1) + 0.5) / cols
+    v = (np.arange(-1, rows + 1) + 0.5) / rows
+    U, V = np.meshgrid(u, v)
+    uv = np.stack([U.ravel(), V.ravel()], axis=1)
     props = mi.Properties()
     if bsdf is not None:
         props["bsdf"] = bsdf
@@ -73,12 +92,16 @@ def terrain_mesh(terrain, *, name: str = "terrain", bsdf=None):
     return mesh
 
 
-def albedo_texture(albedo: np.ndarray) -> dict:
-    """``bitmap`` texture dictionary of an albedo grid (rows, cols), nearest, raw, clamped."""
+def grid_texture(values: np.ndarray) -> dict:
+    """``bitmap`` texture dictionary of a per-cell grid (rows, cols): nearest, raw, clamped.
+
+    With the terrain UVs every surface point whose nadir projection lies in cell (r, c) reads
+    ``values[r, c]`` (albedo, Oren-Nayar roughness, ...).
+    """
     from simlunar.render import backend
 
     mi = backend.mitsuba()
-    a = np.ascontiguousarray(np.asarray(albedo, np.float32)[..., None])
+    a = np.ascontiguousarray(np.asarray(values, np.float32)[..., None])
     return {
         "type": "bitmap",
         "data": mi.TensorXf(a),
@@ -86,3 +109,8 @@ def albedo_texture(albedo: np.ndarray) -> dict:
         "raw": True,
         "wrap_mode": "clamp",
     }
+
+
+def albedo_texture(albedo: np.ndarray) -> dict:
+    """``bitmap`` texture dictionary of an albedo grid (rows, cols), nearest, raw, clamped."""
+    return grid_texture(albedo)

@@ -75,6 +75,12 @@ def _bsdf_dict(bsdf, albedo: np.ndarray) -> dict:
     from simlunar.render.materials import LambertBSDF
     from simlunar.render.mesh import albedo_texture
 
+    sigma_map = getattr(bsdf, "sigma_map", None)
+    if sigma_map is not None and sigma_map.shape != np.shape(albedo):
+        raise ValueError(
+            f"bsdf.sigma_map has shape {sigma_map.shape}; it must match the terrain grid "
+            f"{np.shape(albedo)} (one roughness per cell)"
+        )
     return bsdf_dict(LambertBSDF() if bsdf is None else bsdf, albedo_texture(albedo))
 
 
@@ -98,6 +104,7 @@ class TerrainScene:
         :class:`AmbientLight`. At least one.
     bsdf : BSDF spec or None
         ``materials.LambertBSDF`` / ``OrenNayarBSDF`` / ``HapkeBSDF``; None means Lambert.
+        An ``OrenNayarBSDF`` with a ``sigma_map`` (terrain shape) gets per-cell roughness.
     max_depth : int
         Longest path (Mitsuba convention: 2 = direct light only, 3 = one interreflection,
         -1 = unbounded).
