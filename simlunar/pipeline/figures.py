@@ -143,7 +143,11 @@ def write_figures(out_dir: str | Path) -> list[Path]:
         dens = (rec.get("config", {}).get("figures") or {}).get("sparse_mesh_density")
         n = round(dens * arr["radiance"].size) if dens else None
         fig, _ = F.sparse_mesh_panels(
-            arr["sparse_mesh_render"], arr["radiance"], arr.get("wavelet_energy"), n_samples=n
+            arr["sparse_mesh_render"],
+            arr["radiance"],
+            arr.get("wavelet_energy"),
+            rough=arr.get("sparse_mesh_render_rough"),
+            n_samples=n,
         )
         emit(fig, f"sparse_mesh_unit{rec.get('index', 0)}")
 

@@ -66,9 +66,16 @@ def unit_key(config: dict[str, Any]) -> str:
     relevant = {k: v for k, v in config.items() if k not in _NON_RESULT_KEYS}
     relevant.pop("figures", None)
     figures = config.get("figures") or {}
-    # the panel arrays depend on these two, the file formats do not
+    # the panel arrays depend on these, the file formats do not
     relevant["_figures"] = {
-        k: figures.get(k) for k in ("enabled", "panel_density", "sparse_mesh_density")
+        k: figures.get(k)
+        for k in (
+            "enabled",
+            "panel_density",
+            "sparse_mesh_density",
+            "sparse_mesh_sigma_deg",
+            "sparse_mesh_roughness_threshold",
+        )
     }
     blob = json.dumps({"cache_version": CACHE_VERSION, "config": relevant}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]

@@ -274,6 +274,34 @@ class FiguresCfg(_Model):
         description="Fig. 4: render the mesh reconstructed from this density of "
         "wavelet-planned samples (paper: 80x reduction); null = skip",
     )
+    sparse_mesh_sigma_deg: tuple[Deg, Deg] | None = Field(
+        (20.0, 45.0),
+        description="Fig. 4: Oren-Nayar roughness range [min, max] that the normalised "
+        "wavelet energy maps to per cell of the sparse mesh (oren_nayar scenes only); "
+        "null = no roughness-modulated render",
+    )
+    sparse_mesh_roughness_threshold: float | None = Field(
+        0.8,
+        gt=0,
+        le=1,
+        description="Fig. 4: normalised wavelet energy at and above which the sparse mesh "
+        "is kept metric (those cells get the minimum roughness); null = no threshold",
+    )
+
+    @field_validator("sparse_mesh_sigma_deg")
+    @classmethod
+    def _sigma_range(cls, v):
+        if v is not None and not (0.0 <= v[0] <= v[1] < 90.0):
+            raise ValueError(f"must satisfy 0 <= min <= max < 90 degrees, got {list(v)}")
+        return v
+
+    @property
+    def sparse_mesh_sigma(self) -> tuple[float, float] | None:
+        """The roughness range in radians (None = no modulated render)."""
+        if self.sparse_mesh_sigma_deg is None:
+            return None
+        lo, hi = self.sparse_mesh_sigma_deg
+        return math.radians(lo), math.radians(hi)
 
 
 class ExperimentCfg(_Model):

@@ -205,22 +205,53 @@ def sparse_mesh_render(
     seed: int,
     max_depth: int,
     rng,
-) -> np.ndarray:
+    sigma_range: tuple[float, float] | None = None,
+    threshold: float | None = None,
+    energy: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
     """Paper Fig. 4: render the terrain rebuilt from wavelet-planned samples of ``image``.
 
     ``density * N`` pixels are planned by wavelet energy; for the nadir orthographic camera
     pixel (r, c) is cell (r, c), so those cells' heights are Delaunay-interpolated back to the
-    grid and the rebuilt terrain is rendered with the same camera, lights, BSDF and seed.
-    The paper also modulated the Oren-Nayar roughness per vertex by wavelet energy; the
-    ``oren_nayar`` plugin takes one scalar sigma, so this render uses the scene's sigma.
+    grid and the rebuilt terrain is rendered with the same camera, lights, BSDF and seed
+    (constant roughness). With ``sigma_range`` and an Oren-Nayar ``bsdf`` it is rendered a
+    second time with the paper's inferred roughness: per cell of the rebuilt DEM (= per mesh
+    vertex, through the terrain UVs) the Oren-Nayar sigma is
+    :func:`simlunar.render.materials.sigma_map_from_energy` of the guide image's wavelet
+    energy, in ``sigma_range``; cells with normalised energy >= ``threshold`` keep the minimum
+    (the planner sampled them densely, so their relief is real geometry).
+
+    Parameters
+    ----------
+    terrain, camera, lights, bsdf
+        The scene of the full-resolution render (nadir orthographic camera).
+    image : (rows, cols) float
+        Guide image (pixel (r, c) = cell (r, c)).
+    density : float
+        Sample fraction k / N.
+    spp, seed, max_depth : int
+        Render settings (the same as the full-resolution render).
+    rng : numpy Generator
+        Drives the wavelet plan.
+    sigma_range : (float, float) or None
+        ``(sigma_min, sigma_max)`` radians; None (or a non-Oren-Nayar ``bsdf``) skips the
+        modulated render.
+    threshold : float or None
+        Normalised-energy threshold above which the geometry is kept metric.
+    energy : (rows, cols) float or None
+        ``feature_map("wavelet", image)`` when already computed.
 
     Returns
     -------
-    (rows, cols) float32 linear luminance
+    dict
+        ``sparse_mesh_render`` (rows, cols) float32 linear luminance (constant roughness);
+        with modulation also ``sparse_mesh_render_rough`` (same, per-cell roughness) and
+        ``sparse_mesh_sigma`` (rows, cols) float32 radians.
     """
     from simlunar.planner import plan
     from simlunar.reconstruction import reconstruct
     from simlunar.render import render
+    from simlunar.render.materials import OrenNayarBSDF, sigma_map_from_energy
     from simlunar.terrain.types import Terrain
 
     k = max(3, round(density * image.size))
@@ -229,8 +260,20 @@ def sparse_mesh_render(
     heights = np.asarray(terrain.heights, np.float64)
     recon = reconstruct(pts, heights[p.rows, p.cols], heights.shape)
     sparse = Terrain(recon, terrain.albedo, terrain.spacing, terrain.origin)
-    out = render(sparse, camera, lights=lights, bsdf=bsdf, spp=spp, seed=seed, max_depth=max_depth)
-    return luminance(out.image)
+    kw = {"lights": lights, "spp": spp, "seed": seed, "max_depth": max_depth}
+    out = {"sparse_mesh_render": luminance(render(sparse, camera, bsdf=bsdf, **kw).image)}
+    if sigma_range is None or not isinstance(bsdf, OrenNayarBSDF):
+        return out
+    if energy is None:
+        from simlunar.features import feature_map
+
+        energy = feature_map("wavelet", image)
+    lo, hi = sigma_range
+    sigma = sigma_map_from_energy(energy, sigma_min=lo, sigma_max=hi, threshold=threshold)
+    rough = OrenNayarBSDF(bsdf.sigma, bsdf.model, sigma_map=sigma)
+    out["sparse_mesh_render_rough"] = luminance(render(sparse, camera, bsdf=rough, **kw).image)
+    out["sparse_mesh_sigma"] = sigma.astype(np.float32)
+    return out
 
 
 def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
@@ -320,17 +363,22 @@ def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
         density = cfg.figures.sparse_mesh_density
         if density is not None and isinstance(cfg.render.camera, OrthoNadirCfg):
             t = time.perf_counter()
-            arrays["sparse_mesh_render"] = sparse_mesh_render(
-                terrain,
-                camera,
-                lights,
-                bsdf,
-                image,
-                density=density,
-                spp=r.spp,
-                seed=_int_seed(seeds["render"]),
-                max_depth=r.max_depth,
-                rng=np.random.default_rng(mesh_ss),
+            arrays.update(
+                sparse_mesh_render(
+                    terrain,
+                    camera,
+                    lights,
+                    bsdf,
+                    image,
+                    density=density,
+                    spp=r.spp,
+                    seed=_int_seed(seeds["render"]),
+                    max_depth=r.max_depth,
+                    rng=np.random.default_rng(mesh_ss),
+                    sigma_range=cfg.figures.sparse_mesh_sigma,
+                    threshold=cfg.figures.sparse_mesh_roughness_threshold,
+                    energy=arrays["wavelet_energy"],
+                )
             )
             timings["sparse_mesh_s"] = time.perf_counter() - t
     return {

@@ -228,34 +228,53 @@ def sparse_mesh_panels(
     full: np.ndarray,
     energy: np.ndarray | None = None,
     *,
+    rough: np.ndarray | None = None,
     axes=None,
     n_samples: int | None = None,
 ):
-    """Paper Fig. 4: the sparse-mesh rendering next to the full-resolution ground truth.
+    """Paper Fig. 4: sparse-mesh renderings next to the full-resolution ground truth.
+
+    Panels, left to right: the sparse mesh with roughness modulated by wavelet energy (when
+    ``rough`` is given), the sparse mesh with constant roughness, the full-resolution render,
+    and the frequency map (when ``energy`` is given). All renders share one exposure (the
+    99.5th percentile of ``full``), so brightness differences are real.
 
     Parameters
     ----------
     sparse, full : (rows, cols) or (rows, cols, 3) float
-        Renders of the reconstructed (sparse) mesh and of the full-resolution terrain, linear.
+        Renders of the reconstructed (sparse) mesh with constant roughness and of the
+        full-resolution terrain, linear.
     energy : (rows, cols) float, optional
-        The frequency map that modulated the roughness (shown as a third panel).
+        The frequency map that modulated the roughness (log scale).
+    rough : (rows, cols) or (rows, cols, 3) float, optional
+        Render of the sparse mesh with per-cell roughness from ``energy``, linear.
+    axes : sequence of Axes, optional
+        One per panel.
+    n_samples : int, optional
+        Number of samples of the sparse mesh (shown in the titles).
     """
-    n = 3 if energy is not None else 2
+    n = 2 + (rough is not None) + (energy is not None)
     if axes is None:
         fig, axes = plt.subplots(1, n, figsize=(PAGE_W, PAGE_W / n), constrained_layout=True)
     else:
         fig = axes[0].figure
-    axes = np.asarray(axes).ravel()
+    axes = list(np.asarray(axes).ravel())
+    if len(axes) < n:
+        raise ValueError(f"axes: {n} panels need {n} axes, got {len(axes)}")
     top = max(float(np.nanpercentile(full, 99.5)), 1e-12)
     label = f"sparse mesh ({n_samples} samples)" if n_samples else "sparse mesh"
-    _show(axes[0], np.clip(sparse / top, 0, 1), label)
-    _show(axes[1], np.clip(full / top, 0, 1), "full resolution")
+    i = 0
+    if rough is not None:
+        _show(axes[i], np.clip(rough / top, 0, 1), f"{label},\nroughness from energy")
+        i += 1
+    _show(axes[i], np.clip(sparse / top, 0, 1), f"{label},\nconstant roughness")
+    _show(axes[i + 1], np.clip(full / top, 0, 1), "full resolution")
     if energy is not None:
         e = np.asarray(energy, float)
         pos = e[e > 0]
         floor = float(np.percentile(pos, 1)) if pos.size else 1e-12
-        _show(axes[2], np.log10(np.maximum(e, floor)), "frequency map", cmap="magma")
-    return fig, axes
+        _show(axes[i + 2], np.log10(np.maximum(e, floor)), "frequency map", cmap="magma")
+    return fig, np.asarray(axes[:n])
 
 
 def scanner_bars(summary: Sequence[dict], *, metric: str = "mse", ax=None):

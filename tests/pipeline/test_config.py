@@ -176,3 +176,21 @@ def test_json_schema_forbids_unknown_keys():
     assert set(s["required"]) == {"name", "terrain", "study"}
     assert s["$defs"]["SunLightCfg"]["additionalProperties"] is False
     assert "elevation_deg" in s["$defs"]["SunLightCfg"]["properties"]
+
+
+def test_fig4_roughness_options_defaults_units_and_errors():
+    import math as m
+
+    from simlunar.pipeline.schema import FiguresCfg
+
+    f = FiguresCfg()
+    assert f.sparse_mesh_sigma_deg == (20.0, 45.0) and f.sparse_mesh_roughness_threshold == 0.8
+    assert f.sparse_mesh_sigma == pytest.approx((m.radians(20.0), m.radians(45.0)))
+    g = FiguresCfg(sparse_mesh_sigma_deg=["0.1 rad", 30], sparse_mesh_roughness_threshold=None)
+    assert g.sparse_mesh_sigma == pytest.approx((0.1, m.radians(30.0)))
+    assert FiguresCfg(sparse_mesh_sigma_deg=None).sparse_mesh_sigma is None
+    for bad in ([50, 30], [10, 90], [-1, 10]):
+        with pytest.raises(ValueError, match="sparse_mesh_sigma_deg"):
+            FiguresCfg(sparse_mesh_sigma_deg=bad)
+    with pytest.raises(ValueError, match="sparse_mesh_roughness_threshold"):
+        FiguresCfg(sparse_mesh_roughness_threshold=1.5)

@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -72,6 +73,14 @@ def test_quickstart_variant_end_to_end(tmp_path):
     assert set(prov["timings"]["units"][prov["unit_keys"][0]]) >= {"render_s", "study_s"}
     figs = {p.name for p in (out / "figures").iterdir()}
     assert {"error_vs_density_mse.png", "error_vs_density_mse.pdf", "panels_unit0.png"} <= figs
+    assert "sparse_mesh_unit0.png" in figs  # Fig. 4
+    from simlunar.pipeline.store import UnitCache
+
+    arr = UnitCache(out).load_arrays(prov["unit_keys"][0])
+    # quickstart is Oren-Nayar: constant and energy-modulated renders of the sparse mesh
+    assert arr["sparse_mesh_render_rough"].shape == arr["sparse_mesh_render"].shape
+    sigma = arr["sparse_mesh_sigma"]
+    assert np.radians(20) - 1e-6 <= sigma.min() and sigma.max() <= np.radians(45) + 1e-6
 
     # rerun: cached, identical; a fresh folder with the same seed: byte-identical
     r2 = run_cli(QUICKSTART, "--out", str(out), *SMALL, "--no-figures")

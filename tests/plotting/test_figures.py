@@ -86,7 +86,33 @@ def test_image_panels_and_sparse_mesh(rng):
     err = axes[4].images[0].get_array()
     np.testing.assert_allclose(err, img * 2 - img * 2.1)
     _fig, axes = F.sparse_mesh_panels(img, img, img, n_samples=7)
-    assert axes[0].get_title() == "sparse mesh (7 samples)"
+    assert len(axes) == 3
+    assert axes[0].get_title() == "sparse mesh (7 samples),\nconstant roughness"
+
+
+def test_sparse_mesh_panels_with_roughness_modulated_render(rng):
+    full = rng.random((20, 30)) + 0.5
+    sparse, rough, energy = 0.9 * full, 0.7 * full, rng.random((20, 30))
+    _fig, axes = F.sparse_mesh_panels(sparse, full, energy, rough=rough, n_samples=9)
+    titles = [a.get_title() for a in axes]
+    assert titles == [
+        "sparse mesh (9 samples),\nroughness from energy",
+        "sparse mesh (9 samples),\nconstant roughness",
+        "full resolution",
+        "frequency map",
+    ]
+    # one exposure for the three renders: the 99.5th percentile of the full render
+    top = np.percentile(full, 99.5)
+    np.testing.assert_allclose(axes[0].images[0].get_array(), np.clip(rough / top, 0, 1))
+    np.testing.assert_allclose(axes[1].images[0].get_array(), np.clip(sparse / top, 0, 1))
+    # log scale floored at the 1st percentile of the positive energies
+    logged = np.log10(np.maximum(energy, np.percentile(energy, 1)))
+    np.testing.assert_allclose(axes[3].images[0].get_array(), logged, rtol=1e-12)
+    # without the frequency map: three panels
+    _fig, axes = F.sparse_mesh_panels(sparse, full, rough=rough)
+    assert len(axes) == 3 and axes[2].get_title() == "full resolution"
+    with pytest.raises(ValueError, match="4 panels need 4 axes"):
+        F.sparse_mesh_panels(sparse, full, energy, rough=rough, axes=axes)
 
 
 def test_save_is_deterministic():
