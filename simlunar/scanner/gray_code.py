@@ -167,6 +167,10 @@ class GrayDecode:
     n_col_bits, n_row_bits : int
     proj_shape : (int, int)
         Projector (height, width).
+    subpixel : (rows, cols, 2) float64 or None
+        Sub-pixel projector coordinates (u, v) from stripe-edge refinement
+        (:func:`refine_subpixel`), each inside its decoded pixel; NaN where a pixel could not be
+        refined (its pixel centre is used). None: not refined.
     """
 
     col: np.ndarray
@@ -178,14 +182,21 @@ class GrayDecode:
     n_col_bits: int
     n_row_bits: int
     proj_shape: tuple[int, int]
+    subpixel: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
         return self.valid.shape  # type: ignore[return-value]
 
     def proj_uv(self) -> np.ndarray:
-        """(rows, cols, 2) projector pixel-centre coordinates (u, v); NaN where invalid."""
+        """(rows, cols, 2) projector coordinates (u, v); NaN where invalid.
+
+        Pixel centres ``(col + 0.5, row + 0.5)``, or the refined coordinates where
+        ``subpixel`` has them.
+        """
         uv = np.stack([self.col + 0.5, self.row + 0.5], axis=-1).astype(float)
+        if self.subpixel is not None:
+            uv = np.where(np.isfinite(self.subpixel), self.subpixel, uv)
         uv[~self.valid] = np.nan
         return uv
 
@@ -338,3 +349,102 @@ def bit_error_rates(errors: np.ndarray, mask: np.ndarray) -> np.ndarray:
     n = mask.sum(axis=(1, 2))
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(n > 0, (errors & mask).sum(axis=(1, 2)) / np.maximum(n, 1), np.nan)
+
+
+def _edges_along_rows(index: np.ndarray, valid: np.ndarray, diff: np.ndarray, n_bits: int):
+    """Stripe edges between horizontally adjacent camera pixels (helper of refine_subpixel).
+
+    ``index`` (rows, cols) decoded projector index, ``diff`` (n_bits, rows, cols) the
+    pattern-minus-inverse signal of each gray bit. An edge lies between pixels x and x + 1
+    where both are valid and their indices differ by exactly one: consecutive gray codes
+    differ in one bit, whose signal changes sign across the edge; the zero crossing of that
+    signal, linear between the two pixel centres, is the edge's camera position.
+
+    Returns
+    -------
+    ok : (rows, cols - 1) bool
+    pos : (rows, cols - 1) float64 camera coordinate of the edge (pixel centres at x + 0.5)
+    u : (rows, cols - 1) float64 projector coordinate of the edge (the boundary ``max(i, j)``)
+    """
+    a, b = index[:, :-1], index[:, 1:]
+    ok = valid[:, :-1] & valid[:, 1:] & (np.abs(a - b) == 1)
+    lo = np.minimum(a, b)
+    flip = gray(np.where(ok, lo, 0)) ^ gray(np.where(ok, lo + 1, 1))
+    # bit position (MSB first) of the one gray bit that changes between lo and lo + 1
+    k = n_bits - 1 - np.log2(np.maximum(flip, 1)).astype(np.int64)
+    k = np.clip(k, 0, n_bits - 1)
+    r, c = np.indices(a.shape)
+    s0 = diff[k, r, c]
+    s1 = diff[k, r, c + 1]
+    ok &= (s0 * s1) < 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.clip(s0 / (s0 - s1), 0.0, 1.0)
+    pos = c + 0.5 + t
+    return ok, pos, (lo + 1).astype(np.float64)
+
+
+def _refine_along_rows(index, valid, diff, n_bits) -> np.ndarray:
+    """Sub-pixel projector index per camera pixel from the edges left and right of it."""
+    ok, pos, u = _edges_along_rows(index, valid, diff, n_bits)
+    rows, cols = index.shape
+    e = np.arange(cols - 1)
+    # edge x - 1 is the one just left of pixel x, edge x the one just right of it
+    left = np.maximum.accumulate(np.where(ok, e, -1), axis=1)
+    right = np.minimum.accumulate(np.where(ok, e, cols)[:, ::-1], axis=1)[:, ::-1]
+    li = np.full((rows, cols), -1)
+    li[:, 1:] = left
+    ri = np.full((rows, cols), cols)
+    ri[:, :-1] = right
+    has = (li >= 0) & (ri < cols - 1) & valid
+    r = np.indices((rows, cols))[0]
+    lp = np.where(has, pos[r, np.clip(li, 0, cols - 2)], np.nan)
+    rp = np.where(has, pos[r, np.clip(ri, 0, cols - 2)], np.nan)
+    lu = np.where(has, u[r, np.clip(li, 0, cols - 2)], np.nan)
+    ru = np.where(has, u[r, np.clip(ri, 0, cols - 2)], np.nan)
+    # the pixel must lie in the one projector stripe bounded by the two edges
+    has &= (np.abs(ru - lu) == 1) & (np.minimum(lu, ru) == index)
+    xc = np.arange(cols) + 0.5
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = lu + (ru - lu) * (xc[None] - lp) / (rp - lp)
+    out = np.clip(out, index, index + 1 - 1e-9)
+    return np.where(has, out, np.nan)
+
+
+def refine_subpixel(result: GrayDecode, images: np.ndarray) -> GrayDecode:
+    """Sub-pixel stripe-edge refinement of a gray-code decode.
+
+    Along each camera row, the boundary between projector columns ``c`` and ``c + 1`` is
+    located at the zero crossing of ``pattern - inverse`` of the one gray bit that changes
+    there (linear interpolation between the two pixel centres); a camera pixel between two
+    such edges gets the projector column interpolated linearly in its camera position. Rows
+    are refined the same way along camera columns with the row bits. This removes most of the
+    +-0.5 projector pixel quantisation of the integer decode on smooth surfaces; it assumes the
+    camera resolves each projector stripe by at least about one pixel.
+
+    Parameters
+    ----------
+    result : GrayDecode from :func:`decode`
+    images : (2 * n_bits, rows, cols) the same captured stack
+
+    Returns
+    -------
+    GrayDecode
+        ``result`` with ``subpixel`` set: (rows, cols, 2) projector (u, v) inside each decoded
+        pixel, NaN where no edge pair brackets the pixel (the pixel centre is used there).
+    """
+    images = np.asarray(images, dtype=np.float64)
+    nb = result.n_col_bits + result.n_row_bits
+    if images.ndim != 3 or images.shape[0] != 2 * nb or images.shape[1:] != result.shape:
+        raise ValueError(
+            f"images must be the decoded ({2 * nb}, {result.shape[0]}, {result.shape[1]}) "
+            f"gray-code stack, got shape {images.shape}"
+        )
+    diff = images[0::2] - images[1::2]
+    ncb = result.n_col_bits
+    u = _refine_along_rows(result.col, result.valid, diff[:ncb], ncb)
+    v = _refine_along_rows(
+        result.row.T, result.valid.T, diff[ncb:].transpose(0, 2, 1), result.n_row_bits
+    ).T
+    import dataclasses
+
+    return dataclasses.replace(result, subpixel=np.stack([u, v], axis=-1))

@@ -93,6 +93,7 @@ def gray_code_scan(
     inverses: str = "linearity",
     method: str = "plane",
     require_reliable: bool = True,
+    subpixel: bool = False,
 ) -> GrayScan:
     """Full gray-code scan (columns and rows) decoded and triangulated.
 
@@ -105,6 +106,11 @@ def gray_code_scan(
     inverses : "linearity" or "render"
         Obtain inverse-pattern images from white, black and pattern renders, or render them.
     method : "plane" (camera ray x projector column plane) or "rays" (column and row rays)
+    require_reliable : bool
+        A pixel with any unreliable bit is invalid (OpenCV's behaviour).
+    subpixel : bool
+        Sub-pixel stripe-edge refinement of the decoded columns and rows
+        (:func:`simlunar.scanner.gray_code.refine_subpixel`) instead of projector pixel centres.
 
     Returns
     -------
@@ -138,6 +144,8 @@ def gray_code_scan(
         white_threshold=white_threshold,
         require_reliable=require_reliable,
     )
+    if subpixel:
+        dec = gc.refine_subpixel(dec, images)
     cloud = triangulate(rig, Correspondences.from_gray(dec), method=method)
     depth = depth_at_proj_pixels(cloud, rig.guide)
     return GrayScan(

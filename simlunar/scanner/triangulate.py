@@ -47,11 +47,14 @@ class Correspondences:
 
     @classmethod
     def from_gray(cls, result) -> Correspondences:
-        """Valid pixels of a :class:`~simlunar.scanner.gray_code.GrayDecode` (projector pixel centres)."""
+        """Valid pixels of a :class:`~simlunar.scanner.gray_code.GrayDecode`.
+
+        Projector coordinates are pixel centres, or the sub-pixel stripe-edge refinement where
+        the decode has one (:meth:`GrayDecode.proj_uv`).
+        """
         r, c = np.nonzero(result.valid)
         cam = np.stack([c + 0.5, r + 0.5], axis=-1)
-        proj = np.stack([result.col[r, c] + 0.5, result.row[r, c] + 0.5], axis=-1)
-        return cls(cam, proj)
+        return cls(cam, result.proj_uv()[r, c])
 
 
 @dataclass(frozen=True, eq=False)

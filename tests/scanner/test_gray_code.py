@@ -127,3 +127,76 @@ def test_stable_bits_exclude_stripe_edges():
     errs[0, 1, 1] = True
     rates = gc.bit_error_rates(errs, st)
     assert rates[0] == pytest.approx(1 / st[0].sum())
+
+
+def _ramp_stack(u, v, W, H):
+    """Gray-code stack seen by a camera whose pixels see projector coordinates (u, v).
+
+    Every pattern is a linear ramp of half-width 0.5 projector px across each stripe edge
+    (value 0.5 + signed distance to the edge), so pattern - inverse is linear in u (or v)
+    between the two camera pixels next to an edge and the zero crossing sits at the edge.
+    """
+    ncb, nrb = gc.num_bits(W), gc.num_bits(H)
+
+    def planes(coord, nbits):
+        base = np.floor(coord).astype(np.int64)
+        out = []
+        for b in range(nbits):
+            bit = gc.bit_planes(np.clip(base, 0, None), nbits)[b].astype(float)
+            dist = np.full(coord.shape, 3.0)
+            for off in range(-3, 5):
+                n = base + off
+                left = gc.bit_planes(np.clip(n - 1, 0, None), nbits)[b]
+                right = gc.bit_planes(np.clip(n, 0, None), nbits)[b]
+                flips = (left != right) & (n >= 1)
+                dist = np.where(flips, np.minimum(dist, np.abs(coord - n)), dist)
+            sign = np.where(bit > 0, 1.0, -1.0)
+            out.append(np.clip(0.5 + sign * dist, 0.0, 1.0))
+        return out
+
+    pats = planes(u, ncb) + planes(v, nrb)
+    stack = []
+    for p in pats:
+        stack += [p, 1.0 - p]
+    return np.stack(stack), np.ones_like(u), np.zeros_like(u)
+
+
+def test_refine_subpixel_recovers_linear_projector_coordinates():
+    # camera 2x finer than a 20 x 13 projector, tilted mapping with sub-pixel offsets
+    W, H = 20, 13
+    y, x = np.mgrid[0:24, 0:38] + 0.5
+    u = 0.31 + 0.5 * x + 0.02 * y
+    v = 0.17 + 0.5 * y - 0.01 * x
+    images, white, black = _ramp_stack(u, v, W, H)
+    dec = gc.decode(
+        images, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.0
+    )
+    assert np.array_equal(dec.col[dec.valid], np.floor(u).astype(int)[dec.valid])
+    ref = gc.refine_subpixel(dec, images)
+    sub = ref.subpixel
+    refined = np.isfinite(sub).all(axis=-1) & dec.valid
+    # every pixel bracketed by two edges in its row and column: all but the image borders
+    assert refined[2:-2, 2:-2].all()
+    np.testing.assert_allclose(sub[..., 0][refined], u[refined], atol=1e-9)
+    np.testing.assert_allclose(sub[..., 1][refined], v[refined], atol=1e-9)
+    # the integer decode is off by up to half a projector pixel; proj_uv uses the refinement
+    assert np.abs(dec.proj_uv()[..., 0] - u)[refined].max() > 0.4
+    np.testing.assert_allclose(ref.proj_uv()[refined], np.stack([u, v], -1)[refined], atol=1e-9)
+
+
+def test_refine_subpixel_stays_inside_the_decoded_pixel_and_rejects_wrong_stack():
+    W, H = 8, 4
+    y, x = np.mgrid[0:6, 0:14] + 0.5
+    u, v = 0.4 + 0.55 * x, 0.2 + 0.6 * y
+    images, white, black = _ramp_stack(u, v, W, H)
+    rng = np.random.default_rng(3)
+    noisy = images + 0.05 * rng.standard_normal(images.shape)
+    dec = gc.decode(
+        noisy, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.0
+    )
+    sub = gc.refine_subpixel(dec, noisy).subpixel
+    ok = np.isfinite(sub[..., 0])
+    assert ok.any()
+    assert np.all(np.floor(sub[..., 0][ok]) == dec.col[ok])
+    with pytest.raises(ValueError, match="gray-code stack"):
+        gc.refine_subpixel(dec, noisy[:-2])
