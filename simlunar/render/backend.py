@@ -116,7 +116,9 @@ def _drjit_version() -> str:
         return "?"
 
 
-def _probe(variant: str, lib: str | None, cache_dir: Path, timeout: float = 180.0) -> tuple[bool, str]:
+def _probe(
+    variant: str, lib: str | None, cache_dir: Path, timeout: float = 180.0
+) -> tuple[bool, str]:
     """Try ``variant`` in a child process (an old LLVM aborts the process, not us)."""
     cache_file = cache_dir / "simlunar-probes.json"
     key = _probe_key(variant, lib)
@@ -134,7 +136,11 @@ def _probe(variant: str, lib: str | None, cache_dir: Path, timeout: float = 180.
     try:
         res = subprocess.run(
             [sys.executable, "-c", _PROBE, variant],
-            env=env, capture_output=True, text=True, timeout=timeout, check=False,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            check=False,
         )
         ok = res.returncode == 0 and res.stdout.strip().endswith("ok")
         tail = (res.stdout + res.stderr).strip().splitlines()
@@ -164,8 +170,9 @@ def choose_variant(prefer: str | None = None, cache_dir: Path | None = None) -> 
         raise ValueError(f"unknown variant {prefer!r}; valid: {', '.join(KNOWN_VARIANTS)}")
     probes: dict[str, str] = {}
     if prefer == SCALAR_VARIANT:
-        return BackendInfo(SCALAR_VARIANT, "forced by SIMLUNAR_VARIANT/prefer",
-                           cache_dir=str(cache_dir))
+        return BackendInfo(
+            SCALAR_VARIANT, "forced by SIMLUNAR_VARIANT/prefer", cache_dir=str(cache_dir)
+        )
 
     if prefer in (None, "cuda_ad_rgb"):
         if _cuda_present():
@@ -195,8 +202,13 @@ def choose_variant(prefer: str | None = None, cache_dir: Path | None = None) -> 
     probes["llvm_ad_rgb"] = "; ".join(tried) or "no libLLVM found"
     if prefer == "llvm_ad_rgb":
         raise RuntimeError(f"llvm_ad_rgb requested but unusable: {probes['llvm_ad_rgb']}")
-    return BackendInfo(SCALAR_VARIANT, "no usable JIT backend: " + probes["llvm_ad_rgb"],
-                       None, str(cache_dir), probes)
+    return BackendInfo(
+        SCALAR_VARIANT,
+        "no usable JIT backend: " + probes["llvm_ad_rgb"],
+        None,
+        str(cache_dir),
+        probes,
+    )
 
 
 def register_plugin_hook(fn) -> None:
@@ -216,7 +228,8 @@ def init(prefer: str | None = None) -> BackendInfo:
         if prefer is not None and prefer != _INFO.variant:
             raise RuntimeError(
                 f"Mitsuba already initialised with {_INFO.variant}; cannot switch to {prefer} "
-                "in the same process")
+                "in the same process"
+            )
         return _INFO
     info = choose_variant(prefer)
     cache_dir = Path(info.cache_dir or default_cache_dir())
@@ -232,7 +245,9 @@ def init(prefer: str | None = None) -> BackendInfo:
             "simlunar: rendering with the slow scalar_rgb variant "
             f"({info.reason}); install libLLVM >= 16 (`apt-get install libllvm19` or "
             "`pip install karellen-llvm-core`) or set DRJIT_LIBLLVM_PATH, then rerun `make setup`",
-            ScalarFallbackWarning, stacklevel=2)
+            ScalarFallbackWarning,
+            stacklevel=2,
+        )
     _INFO, _MI = info, mi
     # the variant is set: now plugins that subclass mi.BSDF may be defined and registered
     import simlunar.render.plugins  # noqa: F401  (registers its hooks on import)
@@ -260,8 +275,18 @@ def info() -> BackendInfo:
 def versions() -> dict[str, str]:
     """Versions of the packages that shape results (for provenance and ``doctor``)."""
     out = {"python": sys.version.split()[0]}
-    for pkg in ("simlunar", "mitsuba", "drjit", "numpy", "scipy", "PyWavelets", "OpenEXR",
-                "colour-science", "trimesh", "pydantic"):
+    for pkg in (
+        "simlunar",
+        "mitsuba",
+        "drjit",
+        "numpy",
+        "scipy",
+        "PyWavelets",
+        "OpenEXR",
+        "colour-science",
+        "trimesh",
+        "pydantic",
+    ):
         try:
             out[pkg] = metadata.version(pkg)
         except metadata.PackageNotFoundError:
