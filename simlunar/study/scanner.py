@@ -159,6 +159,7 @@ def run_scanner_study(
     extra_lights=(),
     projector_gamma: float = 1.0,
     projector_blur: float = 0.0,
+    camera_blur: float = 0.0,
     gray_opts: dict | None = None,
     dot_opts: dict | None = None,
     planner_opts: dict | None = None,
@@ -182,7 +183,12 @@ def run_scanner_study(
     guide_light : "projector" (all-white frame, camera-centred) or "sun" (then ``sun``)
     extra_lights : lights on during the scan (sun, ambient)
     projector_gamma, projector_blur : projector response and defocus (sigma, projector px)
-    gray_opts, dot_opts, planner_opts : options for the gray-code scan, dot scans, planners
+    camera_blur : camera lens point-spread function (Gaussian sigma, camera px)
+    gray_opts, dot_opts : options for the gray-code scan and the dot scans
+    planner_opts : dict, optional
+        Planner options (:func:`simlunar.planner.plan`) by planner name, e.g.
+        ``{"wavelet": {"feature_opts": {"levels": 1}}}``; planners not named get none (the
+        ``random`` planner takes no options).
     progress : callable(str) or None
 
     Returns
@@ -192,6 +198,13 @@ def run_scanner_study(
     unknown = [m for m in modes if m not in scan_modes.MODES]
     if unknown:
         raise ValueError(f"unknown scan mode(s) {unknown}; valid: {sorted(scan_modes.MODES)}")
+    planner_opts = dict(planner_opts or {})
+    stray = sorted(set(planner_opts) - set(planners))
+    if stray or not all(isinstance(v, dict) for v in planner_opts.values()):
+        raise ValueError(
+            f"planner_opts must map planner names {list(planners)} to option dicts, got keys "
+            f"{sorted(planner_opts)}"
+        )
     if int(trials) < 1:
         raise ValueError(f"trials must be >= 1, got {trials}")
     say = progress or (lambda _msg: None)
@@ -208,6 +221,7 @@ def run_scanner_study(
         extra_lights=extra_lights,
         projector_gamma=projector_gamma,
         projector_blur=projector_blur,
+        camera_blur=camera_blur,
     )
     guide = render_guide(
         terrain, rig, light=guide_light, sun=sun, bsdf=bsdf, max_depth=max_depth, spp=spp, seed=seed
@@ -259,7 +273,7 @@ def run_scanner_study(
                     "depth_range": depth_range,
                     "budget": budget,
                     "dot_opts": dot_opts,
-                    "planner_opts": planner_opts,
+                    "planner_opts": planner_opts.get(planner),
                 }
                 if mode == "ambiguity_enhancement":
                     kw["gray"] = gray

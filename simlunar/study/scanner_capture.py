@@ -42,6 +42,10 @@ class RenderCapture:
         Projector response: pattern values ``p`` are emitted as ``p ** projector_gamma``.
     projector_blur : float
         Gaussian blur (sigma, projector pixels) of every emitted pattern (projector defocus).
+    camera_blur : float
+        Gaussian point-spread function (sigma, camera pixels) of the camera lens applied to every
+        rendered frame before the sensor: the finite resolving power of the lens (diffraction
+        and aberrations), independent of depth, unlike the thin-lens defocus of ``rig.camera``.
     target_level : float
         The auto exposure maps the white frame's 99th-percentile radiance to this fraction of
         the sensor range (or of 1 without a sensor), so thresholds are in [0, 1] frame units.
@@ -62,6 +66,7 @@ class RenderCapture:
         projector_scale: float = 1.0,
         projector_gamma: float = 1.0,
         projector_blur: float = 0.0,
+        camera_blur: float = 0.0,
         target_level: float = 0.8,
     ) -> None:
         from simlunar.render.lights import ProjectorLight
@@ -72,6 +77,9 @@ class RenderCapture:
             raise ValueError(f"projector_gamma must be > 0, got {projector_gamma}")
         if projector_blur < 0:
             raise ValueError(f"projector_blur must be >= 0 px, got {projector_blur}")
+        if camera_blur < 0:
+            raise ValueError(f"camera_blur must be >= 0 px, got {camera_blur}")
+        self.camera_blur = float(camera_blur)
         self.rig = rig
         self.proj_shape = rig.projector.intrinsics.shape
         self.gamma = float(projector_gamma)
@@ -93,7 +101,9 @@ class RenderCapture:
         self.rng = np.random.default_rng(rng)
         self.renders = 0
         # calibration frame (not counted as a scan render): sets the exposure
-        white = self.scene.render_patterns(np.ones((1, *self.proj_shape), np.float32))[0]
+        white = self._lens(self.scene.render_patterns(np.ones((1, *self.proj_shape), np.float32)))[
+            0
+        ]
         ref = float(np.percentile(white, EXPOSURE_PERCENTILE))
         if not ref > 0:
             raise ValueError(
@@ -124,7 +134,17 @@ class RenderCapture:
                 f"{self.proj_shape[1]}) for this projector, got {pats.shape}"
             )
         self.renders += len(pats)
-        return self.scene.render_patterns(self.emitted(pats)).astype(np.float64)
+        return self._lens(self.scene.render_patterns(self.emitted(pats)).astype(np.float64))
+
+    def _lens(self, frames) -> np.ndarray:
+        """Camera lens point-spread function (Gaussian, ``camera_blur`` px) on (n, rows, cols)."""
+        frames = np.asarray(frames, np.float64)
+        if self.camera_blur <= 0:
+            return frames
+        # sigma 0 along the frame axis: each frame is blurred on its own
+        return ndimage.gaussian_filter(
+            frames, (0, self.camera_blur, self.camera_blur), mode="nearest"
+        )
 
     def sense(self, images) -> np.ndarray:
         """Captured frames in [0, 1]-ish units: exposure, then sensor noise per frame."""
