@@ -351,56 +351,83 @@ def bit_error_rates(errors: np.ndarray, mask: np.ndarray) -> np.ndarray:
         return np.where(n > 0, (errors & mask).sum(axis=(1, 2)) / np.maximum(n, 1), np.nan)
 
 
-def _edges_along_rows(index: np.ndarray, valid: np.ndarray, diff: np.ndarray, n_bits: int):
-    """Stripe edges between horizontally adjacent camera pixels (helper of refine_subpixel).
+def _edges_along_rows(
+    index: np.ndarray,
+    valid: np.ndarray,
+    lit: np.ndarray,
+    diff: np.ndarray,
+    n_bits: int,
+    max_gap: int,
+):
+    """Stripe edges between horizontally consecutive valid camera pixels (refine_subpixel helper).
 
     ``index`` (rows, cols) decoded projector index, ``diff`` (n_bits, rows, cols) the
-    pattern-minus-inverse signal of each gray bit. An edge lies between pixels x and x + 1
-    where both are valid and their indices differ by exactly one: consecutive gray codes
-    differ in one bit, whose signal changes sign across the edge; the zero crossing of that
-    signal, linear between the two pixel centres, is the edge's camera position.
+    pattern-minus-inverse signal of each gray bit. An edge follows valid pixel x when the next
+    valid pixel x' in its row is at most ``max_gap + 1`` pixels on, every pixel between them is
+    lit (they only failed the reliability test, as a pixel straddling a stripe edge does) and
+    the two indices differ by exactly one: consecutive gray codes differ in one bit, whose
+    signal changes sign across the edge. The first zero crossing of that signal from x to x',
+    linear between pixel centres, is the edge's camera position.
 
     Returns
     -------
-    ok : (rows, cols - 1) bool
-    pos : (rows, cols - 1) float64 camera coordinate of the edge (pixel centres at x + 0.5)
-    u : (rows, cols - 1) float64 projector coordinate of the edge (the boundary ``max(i, j)``)
+    ok : (rows, cols) bool, keyed by the left pixel x
+    pos : (rows, cols) float64 camera coordinate of the edge (pixel centres at x + 0.5)
+    u : (rows, cols) float64 projector coordinate of the edge (the boundary ``max(i, i')``)
     """
-    a, b = index[:, :-1], index[:, 1:]
-    ok = valid[:, :-1] & valid[:, 1:] & (np.abs(a - b) == 1)
-    lo = np.minimum(a, b)
-    flip = gray(np.where(ok, lo, 0)) ^ gray(np.where(ok, lo + 1, 1))
-    # bit position (MSB first) of the one gray bit that changes between lo and lo + 1
-    k = n_bits - 1 - np.log2(np.maximum(flip, 1)).astype(np.int64)
-    k = np.clip(k, 0, n_bits - 1)
-    r, c = np.indices(a.shape)
-    s0 = diff[k, r, c]
-    s1 = diff[k, r, c + 1]
-    ok &= (s0 * s1) < 0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.clip(s0 / (s0 - s1), 0.0, 1.0)
-    pos = c + 0.5 + t
-    return ok, pos, (lo + 1).astype(np.float64)
-
-
-def _refine_along_rows(index, valid, diff, n_bits) -> np.ndarray:
-    """Sub-pixel projector index per camera pixel from the edges left and right of it."""
-    ok, pos, u = _edges_along_rows(index, valid, diff, n_bits)
     rows, cols = index.shape
-    e = np.arange(cols - 1)
-    # edge x - 1 is the one just left of pixel x, edge x the one just right of it
+    r, c = np.indices((rows, cols))
+    ok = np.zeros((rows, cols), bool)
+    pos = np.full((rows, cols), np.nan)
+    u = np.full((rows, cols), np.nan)
+    between = np.ones((rows, cols), bool)  # every pixel from x + 1 to x + g - 1 is lit, invalid
+    for g in range(1, max_gap + 2):
+        if g >= cols:
+            break
+        a, b = index[:, :-g], index[:, g:]
+        pair = valid[:, :-g] & valid[:, g:] & between[:, :-g] & ~ok[:, :-g]
+        step = pair & (np.abs(a - b) == 1)
+        lo = np.minimum(a, b)
+        flip = gray(np.where(step, lo, 0)) ^ gray(np.where(step, lo + 1, 1))
+        # bit position (MSB first) of the one gray bit that changes between lo and lo + 1
+        k = np.clip(n_bits - 1 - np.log2(np.maximum(flip, 1)).astype(np.int64), 0, n_bits - 1)
+        rr, cc = r[:, :-g], c[:, :-g]
+        s_start = diff[k, rr, cc]
+        found = np.zeros(step.shape, bool)
+        where = np.full(step.shape, np.nan)
+        for j in range(g):
+            s0, s1 = diff[k, rr, cc + j], diff[k, rr, cc + j + 1]
+            cross = step & ~found & (s0 * s_start > 0) & (s1 * s_start <= 0) & (s0 != s1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = np.clip(s0 / (s0 - s1), 0.0, 1.0)
+            where = np.where(cross, cc + j + 0.5 + t, where)
+            found |= cross
+        ok[:, :-g] |= found
+        pos[:, :-g] = np.where(found, where, pos[:, :-g])
+        u[:, :-g] = np.where(found, lo + 1.0, u[:, :-g])
+        # the next gap size needs pixel x + g to be lit and invalid, and x' = x + g + 1 valid
+        between[:, :-g] &= lit[:, g:] & ~valid[:, g:]
+    return ok, pos, u
+
+
+def _refine_along_rows(index, valid, lit, diff, n_bits, max_gap) -> np.ndarray:
+    """Sub-pixel projector index per camera pixel from the edges left and right of it."""
+    ok, pos, u = _edges_along_rows(index, valid, lit, diff, n_bits, max_gap)
+    rows, cols = index.shape
+    e = np.arange(cols)
+    # edges keyed by their left pixel: those keyed < x lie left of valid pixel x's centre,
+    # those keyed >= x right of it
     left = np.maximum.accumulate(np.where(ok, e, -1), axis=1)
     right = np.minimum.accumulate(np.where(ok, e, cols)[:, ::-1], axis=1)[:, ::-1]
     li = np.full((rows, cols), -1)
-    li[:, 1:] = left
-    ri = np.full((rows, cols), cols)
-    ri[:, :-1] = right
-    has = (li >= 0) & (ri < cols - 1) & valid
+    li[:, 1:] = left[:, :-1]
+    ri = right
+    has = (li >= 0) & (ri < cols) & valid
     r = np.indices((rows, cols))[0]
-    lp = np.where(has, pos[r, np.clip(li, 0, cols - 2)], np.nan)
-    rp = np.where(has, pos[r, np.clip(ri, 0, cols - 2)], np.nan)
-    lu = np.where(has, u[r, np.clip(li, 0, cols - 2)], np.nan)
-    ru = np.where(has, u[r, np.clip(ri, 0, cols - 2)], np.nan)
+    lp = np.where(has, pos[r, np.clip(li, 0, cols - 1)], np.nan)
+    rp = np.where(has, pos[r, np.clip(ri, 0, cols - 1)], np.nan)
+    lu = np.where(has, u[r, np.clip(li, 0, cols - 1)], np.nan)
+    ru = np.where(has, u[r, np.clip(ri, 0, cols - 1)], np.nan)
     # the pixel must lie in the one projector stripe bounded by the two edges
     has &= (np.abs(ru - lu) == 1) & (np.minimum(lu, ru) == index)
     xc = np.arange(cols) + 0.5
@@ -410,7 +437,7 @@ def _refine_along_rows(index, valid, diff, n_bits) -> np.ndarray:
     return np.where(has, out, np.nan)
 
 
-def refine_subpixel(result: GrayDecode, images: np.ndarray) -> GrayDecode:
+def refine_subpixel(result: GrayDecode, images: np.ndarray, *, max_gap: int = 2) -> GrayDecode:
     """Sub-pixel stripe-edge refinement of a gray-code decode.
 
     Along each camera row, the boundary between projector columns ``c`` and ``c + 1`` is
@@ -425,6 +452,11 @@ def refine_subpixel(result: GrayDecode, images: np.ndarray) -> GrayDecode:
     ----------
     result : GrayDecode from :func:`decode`
     images : (2 * n_bits, rows, cols) the same captured stack
+    max_gap : int
+        Most lit but unreliable pixels allowed between the two valid pixels on either side of
+        an edge (a camera pixel straddling a stripe edge sees both stripes, so its
+        pattern - inverse is near zero and it fails the reliability test; the edge is then
+        found in the signal across it).
 
     Returns
     -------
@@ -441,9 +473,16 @@ def refine_subpixel(result: GrayDecode, images: np.ndarray) -> GrayDecode:
         )
     diff = images[0::2] - images[1::2]
     ncb = result.n_col_bits
-    u = _refine_along_rows(result.col, result.valid, diff[:ncb], ncb)
+    if int(max_gap) < 0:
+        raise ValueError(f"max_gap must be >= 0 pixels, got {max_gap}")
+    u = _refine_along_rows(result.col, result.valid, result.lit, diff[:ncb], ncb, int(max_gap))
     v = _refine_along_rows(
-        result.row.T, result.valid.T, diff[ncb:].transpose(0, 2, 1), result.n_row_bits
+        result.row.T,
+        result.valid.T,
+        result.lit.T,
+        diff[ncb:].transpose(0, 2, 1),
+        result.n_row_bits,
+        int(max_gap),
     ).T
     import dataclasses
 

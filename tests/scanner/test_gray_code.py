@@ -129,12 +129,12 @@ def test_stable_bits_exclude_stripe_edges():
     assert rates[0] == pytest.approx(1 / st[0].sum())
 
 
-def _ramp_stack(u, v, W, H):
+def _ramp_stack(u, v, W, H, slope=1.0):
     """Gray-code stack seen by a camera whose pixels see projector coordinates (u, v).
 
-    Every pattern is a linear ramp of half-width 0.5 projector px across each stripe edge
-    (value 0.5 + signed distance to the edge), so pattern - inverse is linear in u (or v)
-    between the two camera pixels next to an edge and the zero crossing sits at the edge.
+    Every pattern is a linear ramp of half-width 0.5 / slope projector px across each stripe
+    edge (value 0.5 + slope * signed distance to the edge), so pattern - inverse is linear in u
+    (or v) near an edge and its zero crossing sits at the edge.
     """
     ncb, nrb = gc.num_bits(W), gc.num_bits(H)
 
@@ -151,7 +151,7 @@ def _ramp_stack(u, v, W, H):
                 flips = (left != right) & (n >= 1)
                 dist = np.where(flips, np.minimum(dist, np.abs(coord - n)), dist)
             sign = np.where(bit > 0, 1.0, -1.0)
-            out.append(np.clip(0.5 + sign * dist, 0.0, 1.0))
+            out.append(np.clip(0.5 + slope * sign * dist, 0.0, 1.0))
         return out
 
     pats = planes(u, ncb) + planes(v, nrb)
@@ -200,3 +200,26 @@ def test_refine_subpixel_stays_inside_the_decoded_pixel_and_rejects_wrong_stack(
     assert np.all(np.floor(sub[..., 0][ok]) == dec.col[ok])
     with pytest.raises(ValueError, match="gray-code stack"):
         gc.refine_subpixel(dec, noisy[:-2])
+
+
+def test_refine_subpixel_finds_edges_across_unreliable_edge_pixels():
+    # ramps 1 projector px wide each side: pattern - inverse = 2 * 0.5 * distance, so a pixel
+    # within 0.15 projector px of any stripe edge fails a 0.15 reliability threshold
+    W, H = 20, 13
+    y, x = np.mgrid[0:24, 0:38] + 0.5
+    u = 0.31 + 0.5 * x + 0.02 * y
+    v = 0.17 + 0.5 * y - 0.01 * x
+    images, white, black = _ramp_stack(u, v, W, H, slope=0.5)
+    dec = gc.decode(
+        images, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.15
+    )
+    assert (dec.lit & ~dec.valid).sum() > 50  # lit but unreliable pixels at stripe edges
+    adjacent = gc.refine_subpixel(dec, images, max_gap=0).subpixel
+    across = gc.refine_subpixel(dec, images, max_gap=2).subpixel
+    n_adj = np.isfinite(adjacent).all(-1).sum()
+    ok = np.isfinite(across).all(-1)
+    assert ok.sum() > n_adj + 50
+    # the zero crossing is found in the unreliable pixel's signal: still exact on ramps
+    np.testing.assert_allclose(across[ok], np.stack([u, v], -1)[ok], atol=1e-9)
+    with pytest.raises(ValueError, match="max_gap must be >= 0"):
+        gc.refine_subpixel(dec, images, max_gap=-1)

@@ -68,13 +68,13 @@ def test_subpixel_refinement_cuts_the_column_quantisation_on_a_tilted_plane():
     true_uv = rig.projector.project(pos.reshape(-1, 3))[0].reshape(*pos.shape[:2], 2)
     for axis in (0, 1):
         ref = np.isfinite(sub.decode.subpixel[..., axis]) & sub.decode.valid
-        # edges missing where a stripe-edge pixel fails the reliability test (measured: 58%
-        # of valid pixels refined in u, 55% in v)
-        assert ref.sum() > 0.4 * sub.decode.valid.sum()
+        # measured: 94% of valid pixels refined in u, 92% in v (edges are found across
+        # unreliable stripe-edge pixels; missing next to shadow and border)
+        assert ref.sum() > 0.85 * sub.decode.valid.sum()
         err_whole = whole.decode.proj_uv()[..., axis][ref] - true_uv[..., axis][ref]
         err_sub = sub.decode.proj_uv()[..., axis][ref] - true_uv[..., axis][ref]
-        # pixel centres: uniform quantisation, RMS 1 / sqrt(12) = 0.289 px (measured 0.293,
-        # 0.294); refined: measured 0.074, 0.078 px (pixel integration and 4-spp noise)
+        # pixel centres: uniform quantisation, RMS 1 / sqrt(12) = 0.289 px (measured 0.278,
+        # 0.277); refined: measured 0.071, 0.073 px (pixel integration and 4-spp noise)
         assert abs(np.sqrt(np.mean(err_whole**2)) - 0.289) < 0.03
         assert np.sqrt(np.mean(err_sub**2)) < 0.1
 
