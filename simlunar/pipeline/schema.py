@@ -255,6 +255,9 @@ class ScannerStudyCfg(_Model):
     )
     projector_gamma: float = Field(1.0, gt=0)
     projector_blur_px: float = Field(0.0, ge=0, description="projector defocus sigma (px)")
+    camera_blur_px: float = Field(
+        0.0, ge=0, description="camera lens point-spread function, Gaussian sigma (camera px)"
+    )
     options: dict[str, Any] = Field(
         default_factory=dict,
         description="extra keyword options of run_scanner_study "

@@ -459,6 +459,7 @@ def _compute_scanner_unit(
         sun=sun,
         projector_gamma=s.projector_gamma,
         projector_blur=s.projector_blur_px,
+        camera_blur=s.camera_blur_px,
         **opts,
     )
     timings["study_s"] = time.perf_counter() - t

@@ -1,0 +1,31 @@
+"""The shipped scanner experiment's configuration and the scanner study's config options."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from simlunar.errors import ConfigError
+from simlunar.pipeline.config import load_experiment, parse_set
+from simlunar.pipeline.schema import ScannerStudyCfg
+
+EXPERIMENT = Path(__file__).resolve().parents[2] / "experiments" / "scanner_ambiguity.yaml"
+
+
+def test_scanner_experiment_uses_the_documented_scanner_conditions():
+    cfg = load_experiment(EXPERIMENT)
+    s = cfg.study
+    assert s.kind == "scanner" and s.budget == 0.1 and s.planners == ["wavelet", "random"]
+    assert s.camera_blur_px == 1.0
+    assert s.options["gray_opts"] == {"subpixel": True}
+    assert s.options["planner_opts"] == {"wavelet": {"feature_opts": {"levels": 1}}}
+    assert s.options["rig"] == {"cam_fov_x": pytest.approx(1.0472)}
+
+
+def test_camera_blur_defaults_to_a_sharp_lens_and_rejects_negative_sigma():
+    assert ScannerStudyCfg(kind="scanner").camera_blur_px == 0.0
+    cfg = load_experiment(EXPERIMENT, parse_set(["study.camera_blur_px=0"]))
+    assert cfg.study.camera_blur_px == 0.0
+    with pytest.raises(ConfigError, match=r"study\.camera_blur_px"):
+        load_experiment(EXPERIMENT, parse_set(["study.camera_blur_px=-0.5"]))
