@@ -363,10 +363,14 @@ def scanner_ambiguity_experiment(
     budget: float = 0.1,
     planners=("wavelet", "random"),
     trials: int = 3,
-    spp: int = 8,
+    spp: int = 32,
     max_depth: int = 3,
     sensor: bool = True,
     projector_blur: float = 0.0,
+    camera_blur: float = 1.0,
+    subpixel: bool = True,
+    cam_fov_x_deg: float | None = 60.0,
+    wavelet_levels: int | None = 1,
     metrics=("mse", "grad", "sal"),
     progress=None,
 ) -> list[dict]:
@@ -376,12 +380,24 @@ def scanner_ambiguity_experiment(
     it, scans with full gray code and then rescans ``budget`` of the guide pixels with dots
     chosen by each planner, and returns tidy rows (see :func:`run_scanner_study`). With
     ``sensor`` a 12-bit sensor with shot and read noise captures every frame.
+
+    The defaults are the conditions of ``experiments/scanner_ambiguity.yaml``: a camera lens
+    PSF of ``camera_blur`` px (sigma), sub-pixel stripe-edge refinement (``subpixel``), a
+    triangulation camera field of view of ``cam_fov_x_deg`` (None: the projector's) so it sees
+    the whole projection, and the wavelet planner's map restricted to the finest
+    ``wavelet_levels`` levels (None: all levels).
     """
     from simlunar.terrain import generate
 
     t_rng, s_rng = np.random.default_rng(seed).spawn(2)
     terr = generate(terrain, rng=t_rng, scale=terrain_scale).terrain
-    rig = aim_rig_at_terrain(terr, preset=rig_preset, proj_size=proj_size, cam_size=cam_size)
+    rig_kw = {} if cam_fov_x_deg is None else {"cam_fov_x": np.radians(cam_fov_x_deg)}
+    rig = aim_rig_at_terrain(
+        terr, preset=rig_preset, proj_size=proj_size, cam_size=cam_size, **rig_kw
+    )
+    planner_opts = {}
+    if wavelet_levels is not None and "wavelet" in planners:
+        planner_opts["wavelet"] = {"feature_opts": {"levels": int(wavelet_levels)}}
     sens = None
     if sensor:
         from simlunar.imaging.sensor import SensorModel
@@ -401,6 +417,9 @@ def scanner_ambiguity_experiment(
         seed=seed,
         sensor=sens,
         projector_blur=projector_blur,
+        camera_blur=camera_blur,
+        gray_opts={"subpixel": bool(subpixel)},
+        planner_opts=planner_opts,
         progress=progress,
     )
     return res.rows
