@@ -8,6 +8,7 @@ reported as a :class:`simlunar.errors.ConfigError` whose one-line message names 
 from __future__ import annotations
 
 import copy
+import re
 from pathlib import Path
 from typing import Any
 
@@ -101,13 +102,34 @@ def _unknown_key_hint(path: str, data: dict) -> str:
     return f" (valid keys: {', '.join(keys)})" if keys else ""
 
 
+def _nested_key(loc: tuple, data: Any, msg: str) -> tuple[str, str] | None:
+    """``(sub.path, problem)`` when a validator reported a key inside its own mapping value.
+
+    A validator of a free-form mapping (``terrain.overrides``) says ``"fractal.rms_m: ..."``;
+    when that key path exists in the data under the error's location, it belongs to the path.
+    """
+    m = re.match(r"^([A-Za-z_]\w*(?:\.\w+)*): (.+)$", msg)
+    if m is None:
+        return None
+    cur: Any = data
+    for item in (*loc, *m.group(1).split(".")):
+        if not isinstance(cur, dict) or item not in cur:
+            return None
+        cur = cur[item]
+    return m.group(1), m.group(2)
+
+
 def format_validation_error(exc: ValidationError, data: Any, prefix: str = "") -> str:
     """One line for the first error of ``exc``: ``<key.path>: <problem>``."""
     err = exc.errors()[0]
     path = _loc_path(tuple(err["loc"]), data)
+    msg = _message(err)
+    nested = _nested_key(tuple(err["loc"]), data, msg) if err["type"] == "value_error" else None
+    if nested is not None:
+        path = nested[0] if path == "<root>" else f"{path}.{nested[0]}"
+        msg = nested[1]
     if prefix:
         path = f"{prefix}.{path}" if path != "<root>" else prefix
-    msg = _message(err)
     if err["type"] == "extra_forbidden" and isinstance(data, dict):
         msg += _unknown_key_hint(_loc_path(tuple(err["loc"]), data), data)
     return f"{path}: {msg}"
@@ -214,8 +236,38 @@ def apply_sweep_value(data: dict, path: str, value: Any) -> dict:
     return set_path(data, path, value)
 
 
+_OVERRIDES = "terrain.overrides."
+
+
+def _check_override_path(path: str) -> None:
+    """``terrain.overrides.<section>[.<key>]`` must name a terrain preset parameter."""
+    from simlunar.terrain.params import override_keys
+
+    valid = override_keys()
+    parts = path[len(_OVERRIDES) :].split(".")
+    sec = parts[0]
+    if sec not in valid:
+        raise ConfigError(
+            f"sweep.{path}: no such terrain parameter section {sec!r} "
+            f"(valid under terrain.overrides: {', '.join(valid)})"
+        )
+    if len(parts) > 2 or (len(parts) == 2 and parts[1] not in valid[sec]):
+        raise ConfigError(
+            f"sweep.{path}: no such terrain parameter "
+            f"(valid keys under terrain.overrides.{sec}: {', '.join(valid[sec])})"
+        )
+
+
 def check_key_path(path: str, data: dict) -> None:
-    """Raise ConfigError unless ``path`` names a settable key of the schema for this data."""
+    """Raise ConfigError unless ``path`` names a settable key of the schema for this data.
+
+    Under ``terrain.overrides`` (a free mapping in the schema) the keys are the terrain preset
+    parameters (:func:`simlunar.terrain.params.override_keys`): ``terrain.overrides.fractal``
+    or ``terrain.overrides.fractal.rms_m``.
+    """
+    if path.startswith(_OVERRIDES):
+        _check_override_path(path)
+        return
     parts = path.split(".")
     parent = ".".join(parts[:-1])
     try:

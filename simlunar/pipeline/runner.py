@@ -65,6 +65,11 @@ def unit_key(config: dict[str, Any]) -> str:
     """Cache key of a resolved unit config: what determines its numbers, and nothing else."""
     relevant = {k: v for k, v in config.items() if k not in _NON_RESULT_KEYS}
     relevant.pop("figures", None)
+    terrain = relevant.get("terrain")
+    if isinstance(terrain, dict) and not terrain.get("overrides"):
+        # no overrides = the preset as shipped: keep the keys of caches made before the
+        # overrides key existed
+        relevant["terrain"] = {k: v for k, v in terrain.items() if k != "overrides"}
     figures = config.get("figures") or {}
     # the panel arrays depend on these, the file formats do not
     relevant["_figures"] = {

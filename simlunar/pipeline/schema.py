@@ -20,6 +20,7 @@ from pydantic import (
     Discriminator,
     Field,
     Tag,
+    ValidationInfo,
     field_validator,
     model_validator,
 )
@@ -67,6 +68,37 @@ class TerrainCfg(_Model):
     albedo: float | None = Field(
         None, ge=0, le=1, description="replace the albedo by this uniform value (ablation)"
     )
+    overrides: dict[str, Any] = Field(
+        default_factory=dict,
+        description="preset parameters to change, deep-merged into the preset before its "
+        "validation: {section: {key: value}}, e.g. {fractal: {rms_m: 0.05}}; sections grid, "
+        "fractal, bed, craters, rocks, albedo with the preset YAML's keys",
+    )
+
+    @field_validator("overrides")
+    @classmethod
+    def _valid_overrides(cls, v: dict[str, Any], info: ValidationInfo) -> dict[str, Any]:
+        # The terrain package validates (merge_overrides + params_from_dict), so the rules are
+        # the presets' own. A ParamError names its key; it is reported as "<key>: <problem>",
+        # which format_validation_error appends to this field's path
+        # (terrain.overrides.fractal.rms_m: ...).
+        if not v:
+            return v
+        from simlunar.terrain.params import ParamError
+        from simlunar.terrain.presets import load_preset
+
+        preset = info.data.get("preset")
+        if preset is None:
+            raise ValueError("overrides apply to a preset only (give terrain.preset)")
+        try:
+            load_preset(preset)
+        except (ValueError, FileNotFoundError):
+            return v  # a bad preset name is reported at terrain.preset
+        try:
+            load_preset(preset, overrides=v)
+        except ParamError as exc:
+            raise ValueError(f"{exc.key}: {exc.problem}" if exc.key else exc.problem) from None
+        return v
 
     @model_validator(mode="after")
     def _one_source(self) -> TerrainCfg:

@@ -54,7 +54,7 @@ def build_terrain(cfg, *, rng):
         from simlunar.terrain import generate
         from simlunar.terrain.presets import load_preset
 
-        params = load_preset(cfg.preset, scale=cfg.scale)
+        params = load_preset(cfg.preset, scale=cfg.scale, overrides=cfg.overrides or None)
         terrain = generate(params, rng=rng).terrain
     else:
         from simlunar.terrain.io import load_dem

@@ -14,9 +14,22 @@ import numpy as np
 from simlunar.terrain import sfd
 
 
+class ParamError(ValueError):
+    """An invalid terrain parameter: ``key`` is its YAML path (``fractal.rms_m``).
+
+    ``str()`` reads ``"<key> <problem>"``; callers that report key paths themselves (the
+    experiment schema's ``terrain.overrides``) use ``key`` and ``problem`` separately.
+    """
+
+    def __init__(self, key: str, problem: str):
+        super().__init__(f"{key} {problem}")
+        self.key = key
+        self.problem = problem
+
+
 def _num(v, name, *, lo=None, lo_open=False, hi=None, hi_open=False) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name} must be a number, got {v!r}")
+        raise ParamError(name, f"must be a number, got {v!r}")
     v = float(v)
     bad = not np.isfinite(v)
     if lo is not None:
@@ -26,8 +39,8 @@ def _num(v, name, *, lo=None, lo_open=False, hi=None, hi_open=False) -> float:
     if bad:
         lo_s = "" if lo is None else f"{'(' if lo_open else '['}{lo}"
         hi_s = "" if hi is None else f"{hi}{')' if hi_open else ']'}"
-        raise ValueError(
-            f"{name} must be a finite number in {lo_s or '(-inf'}, {hi_s or 'inf)'}, got {v!r}"
+        raise ParamError(
+            name, f"must be a finite number in {lo_s or '(-inf'}, {hi_s or 'inf)'}, got {v!r}"
         )
     return v
 
@@ -161,7 +174,7 @@ class TerrainParams:
         for key in ("rows", "cols"):
             v = getattr(self, key)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 16:
-                raise ValueError(f"grid.{key} must be an integer >= 16, got {v!r}")
+                raise ParamError(f"grid.{key}", f"must be an integer >= 16, got {v!r}")
         _num(self.spacing, "grid.spacing_m", lo=0.0, lo_open=True)
         if len(self.origin) != 2:
             raise ValueError(f"grid.origin_m must be [x, y], got {self.origin!r}")
@@ -251,3 +264,55 @@ def params_from_dict(d: dict, *, where: str = "terrain") -> TerrainParams:
         return TerrainParams(**kw)
     except TypeError as exc:  # pragma: no cover - guarded by the key checks above
         raise ValueError(f"{where}: {exc}") from None
+
+
+_GRID_KEYS = ("rows", "cols", "spacing_m", "origin_m")
+
+
+def override_keys() -> dict[str, list[str]]:
+    """The preset keys an override may set: section -> YAML keys (with unit suffixes).
+
+    Sections are ``grid`` and the parameter sections (``fractal``, ``bed``, ``craters``,
+    ``rocks``, ``albedo``); ``name``, ``description`` and ``sources`` are not parameters.
+    """
+    inv = {v: k for k, v in _RENAMES.items()}
+    out = {"grid": list(_GRID_KEYS)}
+    for sec, cls in _SECTIONS.items():
+        out[sec] = [inv.get(f.name, f.name) for f in fields(cls)]
+    return out
+
+
+def merge_overrides(data: dict, overrides: dict) -> dict:
+    """A preset dict with ``overrides`` deep-merged in (``data`` is not modified).
+
+    Parameters
+    ----------
+    data : dict
+        A preset-style mapping (as read from ``scenes/<name>.yaml``).
+    overrides : dict
+        ``{section: {key: value}}`` with the keys of :func:`override_keys`, e.g.
+        ``{"fractal": {"rms_m": 0.05}}``. Values replace the preset's; other keys are kept.
+
+    Raises
+    ------
+    ParamError
+        An unknown section or key, or a section that is not a mapping; ``key`` is the path
+        (``fractal.rms_mm``) and the message lists the valid keys. Values are checked by
+        :func:`params_from_dict` on the merged dict, not here.
+    """
+    valid = override_keys()
+    if not isinstance(overrides, dict):
+        raise ParamError("", f"must be a mapping of sections, got {type(overrides).__name__}")
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
+    for sec, sub in overrides.items():
+        if sec not in valid:
+            raise ParamError(str(sec), f"unknown key (valid keys: {', '.join(valid)})")
+        if not isinstance(sub, dict):
+            raise ParamError(str(sec), f"must be a mapping of keys, got {type(sub).__name__}")
+        for k in sub:
+            if k not in valid[sec]:
+                raise ParamError(f"{sec}.{k}", f"unknown key (valid keys: {', '.join(valid[sec])})")
+        merged = dict(out.get(sec) or {})
+        merged.update(sub)
+        out[sec] = merged
+    return out

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from simlunar.terrain.params import TerrainParams, params_from_dict
+from simlunar.terrain.params import TerrainParams, merge_overrides, params_from_dict
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
@@ -29,7 +29,9 @@ def preset_names() -> list[str]:
     return out
 
 
-def load_preset(name_or_path, *, scale: float = 1.0) -> TerrainParams:
+def load_preset(
+    name_or_path, *, scale: float = 1.0, overrides: dict | None = None
+) -> TerrainParams:
     """Validated :class:`TerrainParams` from a preset name or a YAML file.
 
     Parameters
@@ -38,12 +40,18 @@ def load_preset(name_or_path, *, scale: float = 1.0) -> TerrainParams:
         A preset name (``aerial_1``, ``aerial_2``, ``aerial_3``, ``moonyard``) or a YAML path.
     scale : float in (0, 1]
         Multiply rows and cols by ``scale`` (at least 16 each), keeping the spacing.
+    overrides : dict, optional
+        ``{section: {key: value}}`` deep-merged into the preset before validation, e.g.
+        ``{"fractal": {"rms_m": 0.05}}`` (keys: :func:`simlunar.terrain.params.override_keys`).
 
     Raises
     ------
     ValueError
         Unknown preset (lists the valid names), unparsable YAML, or an invalid field (named,
         prefixed with the file).
+    simlunar.terrain.params.ParamError
+        An unknown override key or a bad override value: a ``ValueError`` whose ``key`` is the
+        override's path (``fractal.rms_m``), not prefixed with the file.
     FileNotFoundError
         A path that does not exist.
     """
@@ -65,7 +73,13 @@ def load_preset(name_or_path, *, scale: float = 1.0) -> TerrainParams:
         raise ValueError(f"{path}: not valid YAML ({exc})") from None
     try:
         params = params_from_dict(data, where=str(path))
-        return params.scaled(scale)
     except ValueError as exc:
         msg = str(exc)
         raise ValueError(msg if msg.startswith(str(path)) else f"{path}: {msg}") from None
+    if overrides:
+        # the preset itself is valid (above), so any error now comes from an override
+        params = params_from_dict(merge_overrides(data, overrides), where="overrides")
+    try:
+        return params.scaled(scale)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
