@@ -167,18 +167,23 @@ def score_tables(
     return "\n".join(md), "\n".join(tex)
 
 
+_SCANNER_ROW_KEYS = {"unit", "mode", "planner", "budget", "trial", "metric", "value", "renders"}
+
+
 def scanner_summary(rows: list[dict], *, metrics: list[str]) -> list[dict]:
     """Mean of each metric over trials per (unit, mode, planner), in first-seen order.
 
     Returns
     -------
     list of dict
-        ``label``, ``mode``, ``planner``, ``renders`` (mean frames) and one key per metric.
+        ``label``, ``unit``, ``point`` (the unit's sweep values as ``key=value`` text, empty
+        without a sweep), ``mode``, ``planner``, ``renders`` (mean frames) and one key per metric.
     """
     groups: dict[tuple, dict] = {}
     for r in rows:
         key = (str(r.get("unit", "0")), r["mode"], r.get("planner") or "")
-        g = groups.setdefault(key, {"values": {}, "renders": []})
+        point = ", ".join(f"{k}={r[k]}" for k in r if k not in _SCANNER_ROW_KEYS)
+        g = groups.setdefault(key, {"values": {}, "renders": [], "point": point})
         g["values"].setdefault(r["metric"], []).append(float(r["value"]))
         if r.get("renders") not in (None, ""):
             g["renders"].append(float(r["renders"]))
@@ -188,6 +193,7 @@ def scanner_summary(rows: list[dict], *, metrics: list[str]) -> list[dict]:
         entry = {
             "label": label,
             "unit": unit,
+            "point": g["point"],
             "mode": mode,
             "planner": planner,
             "renders": sum(g["renders"]) / len(g["renders"]) if g["renders"] else None,
@@ -200,14 +206,41 @@ def scanner_summary(rows: list[dict], *, metrics: list[str]) -> list[dict]:
 
 
 def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> tuple[str, str]:
-    """Scanner-study tables: one row per (mode, planner), metric means over trials.
+    """Scanner-study tables: one row per (sweep point, mode, planner), metric means over trials.
 
     ``MSE / gray code`` is each row's MSE over the plain gray-code scan's MSE of the same unit
-    (the paper reports ambiguity enhancement lowering MSE by about 25%, i.e. 0.75).
+    (the paper reports ambiguity enhancement lowering MSE by about 25%, i.e. 0.75). With
+    several units (a sweep, e.g. over terrain seeds) each row is labelled by its sweep point,
+    and closing rows give the mean over units of each metric and of the per-unit ratio.
     """
     summary = scanner_summary(rows, metrics=[*metrics, "valid_fraction"])
     base = {e["unit"]: e.get("mse") for e in summary if e["mode"] == "gray_code"}
+    for e in summary:
+        e["base_label"] = e["label"]
+        e["ratio"] = (
+            e["mse"] / base[e["unit"]] if e.get("mse") is not None and base.get(e["unit"]) else None
+        )
+        if e["point"]:
+            e["label"] = f"{e['point']}: {e['label']}"
     cols = [*metrics, "valid_fraction"]
+    if len({e["unit"] for e in summary}) > 1:
+        pooled: dict[str, list[dict]] = {}
+        for e in summary:
+            pooled.setdefault(e["base_label"], []).append(e)
+        for label, group in pooled.items():
+
+            def mean(key, group=group):
+                vals = [g[key] for g in group if g.get(key) is not None]
+                return sum(vals) / len(vals) if vals else None
+
+            summary.append(
+                {
+                    "label": f"mean of {len(group)} units: {label}",
+                    "renders": mean("renders"),
+                    "ratio": mean("ratio"),
+                    **{c: mean(c) for c in cols},
+                }
+            )
     header = [
         "Mode / planner",
         *[_name(METRIC_NAMES, m) for m in metrics],
@@ -222,12 +255,10 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
     md_lines = ["| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]
     tex_rows = []
     for e in summary:
-        ratio = (
-            e.get("mse") / base[e["unit"]]
-            if e.get("mse") is not None and base.get(e["unit"])
-            else None
-        )
-        cells = [cell(e[c]) for c in cols] + [cell(e["renders"], "{:.0f}"), cell(ratio, "{:.2f}")]
+        cells = [cell(e[c]) for c in cols] + [
+            cell(e["renders"], "{:.0f}"),
+            cell(e["ratio"], "{:.3f}"),
+        ]
         md_lines.append("| " + " | ".join([e["label"], *cells]) + " |")
         tex_rows.append(" & ".join([_tex_escape(e["label"]), *cells]) + " \\\\")
     cap = f"{title}: scanner study (means over trials; lower error is better)"

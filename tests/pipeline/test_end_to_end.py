@@ -152,6 +152,8 @@ def test_scanner_experiment_end_to_end(tmp_path):
         "study.planners=[wavelet]",
         "--set",
         "study.metrics=[mse]",
+        "--set",
+        "sweep={}",
     )
     assert "| gray_code |" in r.output and "| ambiguity_enhancement / wavelet |" in r.output
     with (out / "results.csv").open() as f:

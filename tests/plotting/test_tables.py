@@ -89,7 +89,37 @@ def test_scanner_table_means_and_ratio_to_gray_code():
         },
     ]
     md, tex = scanner_tables(rows, metrics=["mse"], title="s")
-    assert "| gray_code | 4 | – | 18 | 1.00 |" in md
+    assert "| gray_code | 4 | – | 18 | 1.000 |" in md
     # mean MSE 3.0 over two trials -> 3/4 of the gray-code MSE; mean frames 110
-    assert "| ambiguity_enhancement / wavelet | 3 | – | 110 | 0.75 |" in md
-    assert "ambiguity\\_enhancement / wavelet & 3 & -- & 110 & 0.75 \\\\" in tex
+    assert "| ambiguity_enhancement / wavelet | 3 | – | 110 | 0.750 |" in md
+    assert "ambiguity\\_enhancement / wavelet & 3 & -- & 110 & 0.750 \\\\" in tex
+    assert "mean of" not in md  # one unit: no pooled rows
+
+
+def test_scanner_table_labels_sweep_points_and_pools_units():
+    from simlunar.plotting.tables import scanner_tables
+
+    def row(unit, seed, mode, planner, value):
+        return {
+            "unit": unit,
+            "seed": seed,
+            "mode": mode,
+            "planner": planner,
+            "trial": "0",
+            "metric": "mse",
+            "value": value,
+            "renders": "10",
+        }
+
+    rows = [
+        row("0", "5", "gray_code", "", "4.0"),
+        row("0", "5", "ambiguity_enhancement", "wavelet", "3.0"),
+        row("1", "6", "gray_code", "", "2.0"),
+        row("1", "6", "ambiguity_enhancement", "wavelet", "1.0"),
+    ]
+    md, _ = scanner_tables(rows, metrics=["mse"], title="s")
+    assert "| seed=5: ambiguity_enhancement / wavelet | 3 | – | 10 | 0.750 |" in md
+    assert "| seed=6: ambiguity_enhancement / wavelet | 1 | – | 10 | 0.500 |" in md
+    # pooled: mean MSE (3 + 1) / 2 = 2 and mean of the per-unit ratios (0.75 + 0.5) / 2
+    assert "| mean of 2 units: ambiguity_enhancement / wavelet | 2 | – | 10 | 0.625 |" in md
+    assert "| mean of 2 units: gray_code | 3 | – | 10 | 1.000 |" in md
