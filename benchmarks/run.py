@@ -50,8 +50,9 @@ def main(argv=None) -> int:
         wanted = [w.strip() for w in args.only.split(",") if w.strip()]
         names = [n for n in names if any(n == w or n.startswith(w) for w in wanted)]
         if not names:
-            print(f"no benchmark matches {args.only!r}; known: {', '.join(benches)}",
-                  file=sys.stderr)
+            print(
+                f"no benchmark matches {args.only!r}; known: {', '.join(benches)}", file=sys.stderr
+            )
             return 2
     try:
         results = json.loads(OUT.read_text())
@@ -73,8 +74,11 @@ def main(argv=None) -> int:
             if ref is not None and ours:
                 fig["ratio"] = round(ref / ours, 3)
             fig["wall_s"] = round(time.perf_counter() - t0, 3)
-            extras = ", ".join(f"{k}={v}" for k, v in fig.items()
-                               if k not in ("ratio",) and not isinstance(v, (dict, list)))
+            extras = ", ".join(
+                f"{k}={v}"
+                for k, v in fig.items()
+                if k not in ("ratio",) and not isinstance(v, (dict, list))
+            )
             ratio = f"{fig['ratio']}x" if "ratio" in fig else "n/a"
             print(f"{sub}: {ratio}  ({extras})", flush=True)
             results[sub] = fig

@@ -13,16 +13,25 @@ import sys
 
 import typer
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="simlunar: image-directed range scanning of lunar terrain, simulated.")
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="simlunar: image-directed range scanning of lunar terrain, simulated.",
+)
+
 
 @app.callback()
 def _root() -> None:
     """simlunar: image-directed range scanning of lunar terrain, simulated."""
 
 
-USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, FileNotFoundError, KeyError,
-                                                 IsADirectoryError, PermissionError)
+USER_ERRORS: tuple[type[BaseException], ...] = (
+    ValueError,
+    FileNotFoundError,
+    KeyError,
+    IsADirectoryError,
+    PermissionError,
+)
 
 
 def user_errors(fn):
@@ -36,8 +45,7 @@ def user_errors(fn):
             raise
         except USER_ERRORS as exc:
             msg = str(exc).strip().splitlines()
-            typer.echo(f"error: {' '.join(m.strip() for m in msg) or type(exc).__name__}",
-                       err=True)
+            typer.echo(f"error: {' '.join(m.strip() for m in msg) or type(exc).__name__}", err=True)
             raise typer.Exit(2) from None
 
     return wrapper
@@ -180,11 +188,14 @@ def terrain(
     t0 = time.perf_counter()
     res = generate(preset, rng=seed, scale=scale)
     t_gen = time.perf_counter() - t0
-    files = write_terrain_outputs(res, out, dem_format=dem_format,
-                                  mesh_format=None if mesh.lower() == "none" else mesh)
+    files = write_terrain_outputs(
+        res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
+    )
     rows, cols = res.terrain.shape
-    typer.echo(f"{res.params.name}: {rows} x {cols} cells at {res.terrain.spacing} m, "
-               f"{len(res.craters)} craters, {len(res.rocks)} rocks, generated in {t_gen:.2f} s")
+    typer.echo(
+        f"{res.params.name}: {rows} x {cols} cells at {res.terrain.spacing} m, "
+        f"{len(res.craters)} craters, {len(res.rocks)} rocks, generated in {t_gen:.2f} s"
+    )
     for name, path in files.items():
         typer.echo(f"{name:<10} {path}")
 

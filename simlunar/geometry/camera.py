@@ -100,9 +100,14 @@ class Intrinsics:
 
     def scaled(self, factor: float) -> Intrinsics:
         """Same field of view at ``factor`` times the resolution."""
-        return Intrinsics(self.fx * factor, self.fy * factor, self.cx * factor,
-                          self.cy * factor, round(self.width * factor),
-                          round(self.height * factor))
+        return Intrinsics(
+            self.fx * factor,
+            self.fy * factor,
+            self.cx * factor,
+            self.cy * factor,
+            round(self.width * factor),
+            round(self.height * factor),
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,7 +129,9 @@ class Pose:
         R = _ro(self.rotation)
         t = _ro(self.position)
         if R.shape != (3, 3) or t.shape != (3,):
-            raise ValueError(f"rotation must be 3x3 and position length 3, got {R.shape}, {t.shape}")
+            raise ValueError(
+                f"rotation must be 3x3 and position length 3, got {R.shape}, {t.shape}"
+            )
         if not np.allclose(R.T @ R, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
             raise ValueError("rotation must be a proper orthonormal matrix")
         object.__setattr__(self, "rotation", R)
@@ -240,7 +247,8 @@ class Projector(Camera):
                 "projector principal point must be centred "
                 f"(cx, cy) = ({self.intrinsics.width / 2}, {self.intrinsics.height / 2}), got "
                 f"({self.intrinsics.cx}, {self.intrinsics.cy}): Mitsuba's projector emitter "
-                "cannot shift it")
+                "cannot shift it"
+            )
         if not np.isclose(self.intrinsics.fx, self.intrinsics.fy):
             raise ValueError("projector pixels must be square (fx == fy)")
 
@@ -266,8 +274,9 @@ class OrthoCamera:
             raise ValueError(f"image size must be positive, got {self.width}x{self.height}")
 
     @classmethod
-    def nadir_for_grid(cls, shape: tuple[int, int], spacing: float,
-                       origin=(0.0, 0.0), altitude: float = 1000.0) -> OrthoCamera:
+    def nadir_for_grid(
+        cls, shape: tuple[int, int], spacing: float, origin=(0.0, 0.0), altitude: float = 1000.0
+    ) -> OrthoCamera:
         """Nadir camera whose pixel (r, c) looks straight down at the centre of grid cell (r, c).
 
         The grid convention is that of :class:`simlunar.terrain.Terrain`: ``origin`` is the
@@ -291,9 +300,14 @@ class OrthoCamera:
 
     def rays(self, uv) -> tuple[np.ndarray, np.ndarray]:
         uv = np.asarray(uv, float)
-        pd = np.stack([(uv[..., 0] - self.width / 2) * self.pixel_size,
-                       (uv[..., 1] - self.height / 2) * self.pixel_size,
-                       np.zeros(uv.shape[:-1])], axis=-1)
+        pd = np.stack(
+            [
+                (uv[..., 0] - self.width / 2) * self.pixel_size,
+                (uv[..., 1] - self.height / 2) * self.pixel_size,
+                np.zeros(uv.shape[:-1]),
+            ],
+            axis=-1,
+        )
         o = self.pose.device_to_world(pd)
         d = np.broadcast_to(self.pose.forward, o.shape).copy()
         return o, d
@@ -322,11 +336,14 @@ class Rig:
 
     def __post_init__(self) -> None:
         if self.guide is None:
-            object.__setattr__(self, "guide", Camera(self.projector.intrinsics, self.projector.pose))
+            object.__setattr__(
+                self, "guide", Camera(self.projector.intrinsics, self.projector.pose)
+            )
         baseline = float(np.linalg.norm(self.camera.position - self.projector.position))
         if baseline < 1e-9:
-            raise ValueError("rig baseline is zero: the triangulation camera must be offset "
-                             "from the projector")
+            raise ValueError(
+                "rig baseline is zero: the triangulation camera must be offset from the projector"
+            )
 
     @property
     def baseline(self) -> float:

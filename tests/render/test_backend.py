@@ -24,8 +24,11 @@ def test_env_override_is_searched_first(monkeypatch, tmp_path):
 
 def test_old_llvm_is_never_loaded(monkeypatch, tmp_path):
     # Only an LLVM 15 is offered: the chooser must skip it without probing (probing would abort).
-    monkeypatch.setattr(llvm, "candidates",
-                        lambda: [llvm.LLVMCandidate(str(tmp_path / "libLLVM-15.so"), 15, "system")])
+    monkeypatch.setattr(
+        llvm,
+        "candidates",
+        lambda: [llvm.LLVMCandidate(str(tmp_path / "libLLVM-15.so"), 15, "system")],
+    )
     (tmp_path / "libLLVM-15.so").write_bytes(b"")
     monkeypatch.setattr(backend, "_cuda_present", lambda: False)
 
