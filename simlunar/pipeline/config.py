@@ -330,7 +330,7 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
             registry.check_preset(p.terrain.preset, "terrain.preset")
         if isinstance(p.study, SamplingStudyCfg):
             for i, s in enumerate(p.study.strategies):
-                registry.check_strategy(s, f"study.strategies[{i}]")
+                registry.check_strategy(s, f"study.strategies[{i}]", p.study.strategy_options)
             for i, m in enumerate(p.study.metrics):
                 registry.check_metric(m, f"study.metrics[{i}]")
         if isinstance(p.study, ScannerStudyCfg):

@@ -21,18 +21,9 @@ def _check(name: str, valid: Iterable[str], path: str, what: str) -> None:
 
 def preset_names() -> list[str]:
     """Terrain preset names (``scenes/*.yaml`` via :mod:`simlunar.terrain.presets`)."""
-    from simlunar.terrain import presets
+    from simlunar.terrain.presets import preset_names as names
 
-    for attr in ("list_presets", "preset_names", "available"):
-        fn = getattr(presets, attr, None)
-        if callable(fn):
-            return list(fn())
-    for attr in ("PRESETS",):
-        reg = getattr(presets, attr, None)
-        if reg is not None:
-            return list(reg)
-    scenes = Path(__file__).resolve().parents[2] / "scenes"
-    return sorted(p.stem for p in scenes.glob("*.yaml"))
+    return list(names())
 
 
 def check_preset(name: str, path: str) -> None:
@@ -44,29 +35,30 @@ def check_preset(name: str, path: str) -> None:
 
 
 def strategy_names() -> list[str]:
-    from simlunar import planner
+    from simlunar.planner import STRATEGIES
 
-    for attr in ("STRATEGIES", "REGISTRY"):
-        reg = getattr(planner, attr, None)
-        if reg is not None:
-            return list(reg)
-    fn = getattr(planner, "strategy_names", None)
-    return list(fn()) if callable(fn) else []
+    return list(STRATEGIES)
 
 
-def check_strategy(name: str, path: str) -> None:
+def check_strategy(name: str, path: str, options: dict | None = None) -> None:
+    """A registered strategy, or a label whose ``options[name]["strategy"]`` is one.
+
+    Labels let one study compare variants of a strategy, e.g.
+    ``strategy_options: {wavelet_bn: {strategy: wavelet, blue_noise: true}}``.
+    """
+    label_opts = (options or {}).get(name) or {}
+    if "strategy" in label_opts:
+        _check(
+            str(label_opts["strategy"]), strategy_names(), f"{path} ({name}).strategy", "strategy"
+        )
+        return
     _check(name, strategy_names(), path, "strategy")
 
 
 def metric_names() -> list[str]:
-    from simlunar import metrics
+    from simlunar.metrics import METRICS
 
-    for attr in ("METRICS", "REGISTRY"):
-        reg = getattr(metrics, attr, None)
-        if reg is not None:
-            return list(reg)
-    fn = getattr(metrics, "metric_names", None)
-    return list(fn()) if callable(fn) else []
+    return list(METRICS)
 
 
 def check_metric(name: str, path: str) -> None:

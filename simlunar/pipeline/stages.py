@@ -330,8 +330,11 @@ def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
 
     s = cfg.study
     kw = {}
-    if s.strategy_options:
-        kw["strategy_options"] = s.strategy_options
+    # strategy_options define labels; pass the ones in use, so `--set study.strategies=[...]`
+    # may run a subset of an experiment's strategies
+    used = {k: v for k, v in s.strategy_options.items() if k in s.strategies}
+    if used:
+        kw["strategy_options"] = used
     study = run_sampling_study(
         depth,
         image,

@@ -155,6 +155,37 @@ def test_registry_names_are_checked():
         validate_data(base(study={"metrics": ["psnr"], "densities": [0.5]}))
 
 
+def test_labelled_strategy_variants_are_checked_by_their_base():
+    opts = {"wavelet_bn": {"strategy": "wavelet", "blue_noise": True}}
+    cfg = validate_data(
+        base(
+            study={
+                "strategies": ["random", "wavelet_bn"],
+                "densities": [0.5],
+                "strategy_options": opts,
+            }
+        )
+    )
+    assert cfg.study.strategy_options == opts
+    # a label without a base strategy is an unknown strategy; a bad base names the label
+    with pytest.raises(ConfigError, match=r"^study.strategies\[1\]: unknown strategy 'wavelet_bn'"):
+        validate_data(base(study={"strategies": ["random", "wavelet_bn"], "densities": [0.5]}))
+    bad = {"wavelet_bn": {"strategy": "wavlet"}}
+    with pytest.raises(
+        ConfigError,
+        match=r"^study.strategies\[1\] \(wavelet_bn\).strategy: unknown strategy 'wavlet'",
+    ):
+        validate_data(
+            base(
+                study={
+                    "strategies": ["random", "wavelet_bn"],
+                    "densities": [0.5],
+                    "strategy_options": bad,
+                }
+            )
+        )
+
+
 def test_load_experiment_prefixes_the_file_and_applies_overrides(tmp_path):
     p = tmp_path / "e.yaml"
     p.write_text(yaml.safe_dump(base()))

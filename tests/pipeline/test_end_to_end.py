@@ -192,10 +192,13 @@ def test_real_sweep_on_dask_through_the_cli_matches_the_local_pool(tmp_path):
 
 @pytest.mark.slow
 def test_the_quickstart_itself_runs(tmp_path):
-    """`make run` runs exactly this file: 1 unit, 5 strategies x 7 densities x 3 trials x 3 metrics."""
+    """`make run` runs exactly this file: 1 unit, 7 strategies x 7 densities x 3 trials x 3 metrics."""
     out = tmp_path / "quickstart"
     r = run_cli(QUICKSTART, "--out", str(out), "--no-figures")
-    assert "| Metric | Random | Grid | Gradient | Entropy | Wavelet |" in r.output
+    header = (
+        "| Metric | Random | Grid | Gradient | Entropy | Wavelet | Wavelet bn | Wavelet bn mix |"
+    )
+    assert header in r.output
     assert "| MSE | 1.00 |" in r.output
     with (out / "results.csv").open() as f:
-        assert sum(1 for _ in f) == 1 + 5 * 7 * 3 * 3
+        assert sum(1 for _ in f) == 1 + 7 * 7 * 3 * 3
