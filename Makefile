@@ -23,7 +23,9 @@ $(STAMP): pyproject.toml scripts/ensure_llvm.sh
 	$(VPY) -m simlunar.cli doctor --short
 	@touch $(STAMP)
 
+# the quickstart scene (EXR radiance, PNG preview, ground truth), then the quickstart experiment
 run: setup
+	$(VPY) -m simlunar.cli render scenes/quickstart_scene.yaml --out results/quickstart_render
 	$(VPY) -m simlunar.cli run $(EXPERIMENT)
 
 test: setup
