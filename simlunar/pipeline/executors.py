@@ -8,6 +8,7 @@ the parent process, so the cache logic is the same whichever executor computed i
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import multiprocessing as mp
 import os
 import uuid
@@ -55,8 +56,27 @@ class SerialExecutor(Executor):
 def _worker_init(threads: int) -> None:
     # each worker gets its share of the cores: renders in N workers each using every core
     # would oversubscribe the machine and make the pool slower than one process
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    for var in (
+        "OMP_NUM_THREADS",
+        "OPENBLAS_NUM_THREADS",
+        "MKL_NUM_THREADS",
+        "NUMBA_NUM_THREADS",
+        "SIMLUNAR_RENDER_THREADS",  # Dr.Jit's render thread pool (simlunar.render.backend)
+    ):
         os.environ[var] = str(threads)
+
+
+@contextlib.contextmanager
+def _parent_render_threads(threads: int):
+    """The parent works as one of the pool's workers: give its renders their share of cores."""
+    from simlunar.render import backend
+
+    old = backend.set_render_threads(threads) if backend.is_initialised() else None
+    try:
+        yield
+    finally:
+        if old is not None:
+            backend.set_render_threads(old)
 
 
 class LocalPoolExecutor(Executor):
@@ -84,6 +104,10 @@ class LocalPoolExecutor(Executor):
             return
         n = min(self.workers, len(payloads))
         threads = max(1, (os.cpu_count() or 1) // n)
+        with _parent_render_threads(threads):
+            yield from self._run_pool(fn, payloads, n, threads)
+
+    def _run_pool(self, fn, payloads, n, threads):
         ctx = mp.get_context("spawn")
         pending = list(range(len(payloads)))
         running: dict[cf.Future, tuple[int, cf.Executor]] = {}

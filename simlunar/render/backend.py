@@ -249,6 +249,8 @@ def init(prefer: str | None = None) -> BackendInfo:
             stacklevel=2,
         )
     _INFO, _MI = info, mi
+    if os.environ.get("SIMLUNAR_RENDER_THREADS"):
+        set_render_threads(int(os.environ["SIMLUNAR_RENDER_THREADS"]))
     # the variant is set: now plugins that subclass mi.BSDF may be defined and registered
     import simlunar.render.plugins  # noqa: F401  (registers its hooks on import)
 
@@ -257,11 +259,30 @@ def init(prefer: str | None = None) -> BackendInfo:
     return info
 
 
+def set_render_threads(n: int | None) -> int:
+    """Limit Dr.Jit's CPU thread pool to ``n`` threads (``None``: one per core).
+
+    Parallel sweeps run one unit per worker process; each worker rendering on every core would
+    oversubscribe the machine. Returns the previous thread count. Worker processes pick the
+    limit up from ``SIMLUNAR_RENDER_THREADS`` when they initialise Mitsuba.
+    """
+    import drjit as dr
+
+    old = int(dr.thread_count())
+    dr.set_thread_count(int(n) if n else (os.cpu_count() or 1))
+    return old
+
+
 def mitsuba():
     """The Mitsuba module with the variant set (initialising on first use)."""
     if _MI is None:
         init()
     return _MI
+
+
+def is_initialised() -> bool:
+    """Whether :func:`init` has run in this process (Mitsuba imported, variant set)."""
+    return _MI is not None
 
 
 def info() -> BackendInfo:
