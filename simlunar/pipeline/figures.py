@@ -72,8 +72,6 @@ def _label(rec: dict) -> str:
 
 def write_figures(out_dir: str | Path) -> list[Path]:
     """Draw every figure the results support; returns the written paths (PNG and PDF)."""
-    import matplotlib.pyplot as plt
-
     from simlunar.plotting import figures as F
 
     res = load_results(out_dir)
@@ -88,7 +86,7 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             path = fig_dir / f"{stem}.{suffix}"
             atomic_write_bytes(path, data)
             written.append(path)
-        plt.close(fig)
+        F.close(fig)
 
     study = cfg.get("study", {})
     if study.get("kind", "sampling") != "sampling":
@@ -100,14 +98,8 @@ def write_figures(out_dir: str | Path) -> list[Path]:
     shown = units[:MAX_UNIT_PANELS]
 
     for m in metrics:
-        fig, axes = plt.subplots(
-            1,
-            len(shown),
-            figsize=(F.COLUMN_W * min(len(shown), 3), 2.6),
-            constrained_layout=True,
-            squeeze=False,
-        )
-        for ax, rec in zip(axes[0], shown):
+        fig, axes = F.panel_row(len(shown), width=F.COLUMN_W * min(len(shown), 3))
+        for ax, rec in zip(axes, shown):
             F.error_vs_density(
                 res["rows"],
                 metric=m,
@@ -168,7 +160,6 @@ def write_figures(out_dir: str | Path) -> list[Path]:
 
 
 def _scanner_figures(res: dict, emit) -> None:
-    import matplotlib.pyplot as plt
     import numpy as np
 
     from simlunar.plotting import figures as F
@@ -177,14 +168,8 @@ def _scanner_figures(res: dict, emit) -> None:
     rows = res["rows"]
     metrics = list(res["config"]["study"].get("metrics") or [])
     summary = scanner_summary(rows, metrics=metrics)
-    fig, axes = plt.subplots(
-        1,
-        len(metrics),
-        figsize=(F.COLUMN_W * len(metrics), 2.6),
-        constrained_layout=True,
-        squeeze=False,
-    )
-    for ax, m in zip(axes[0], metrics):
+    fig, axes = F.panel_row(len(metrics))
+    for ax, m in zip(axes, metrics):
         F.scanner_bars(summary, metric=m, ax=ax)
     emit(fig, "scanner_errors")
     ber = sorted(

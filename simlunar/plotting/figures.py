@@ -314,6 +314,26 @@ def bit_error_rates(rates: dict[str, float], *, ax=None):
     return fig, ax
 
 
+def panel_row(n: int, *, width: float | None = None, height: float = 2.6):
+    """A figure with ``n`` panels side by side: (Figure, list of Axes).
+
+    ``width`` defaults to one column width per panel.
+    """
+    fig, axes = plt.subplots(
+        1,
+        n,
+        figsize=(width if width is not None else COLUMN_W * n, height),
+        constrained_layout=True,
+        squeeze=False,
+    )
+    return fig, list(axes[0])
+
+
+def close(fig: Figure) -> None:
+    """Free a figure's memory once it has been saved."""
+    plt.close(fig)
+
+
 def save(fig: Figure, path_stem, formats: Sequence[str] = ("png", "pdf"), dpi: int = 300) -> list:
     """Render a figure to bytes per format: returns [(suffix, bytes)] (the caller writes them)."""
     import io
