@@ -327,15 +327,8 @@ def scan_ambiguity_enhancement(
     to the full grid. ``budget`` is the fraction of guide pixels rescanned (paper: ~10%).
     """
     g = gray if gray is not None else gray_code_scan(capture, rig, **(gray_opts or {}))
-    H, W = rig.projector.intrinsics.shape
-    k = _budget_k(budget, H * W)
-    rc = plan_pixels(guide_image, k, planner=planner, rng=rng, **(planner_opts or {}))
-    d = dot_scan(
-        capture,
-        rig,
-        np.c_[rc[:, 1] + 0.5, rc[:, 0] + 0.5],
-        depth_range=depth_range,
-        **(dot_opts or {}),
+    rc, d = _planned_dot_scan(
+        capture, rig, guide_image, planner, rng, depth_range, budget, dot_opts, planner_opts
     )
     fused = g.depth.copy()
     hit = np.isfinite(d.depth)
@@ -366,15 +359,8 @@ def scan_data_reduction(
     outside: str = "nearest",
 ) -> ScanResult:
     """Mode ``data_reduction``: only a planned sparse dot set, reconstructed Delaunay-linearly."""
-    H, W = rig.projector.intrinsics.shape
-    k = _budget_k(budget, H * W)
-    rc = plan_pixels(guide_image, k, planner=planner, rng=rng, **(planner_opts or {}))
-    d = dot_scan(
-        capture,
-        rig,
-        np.c_[rc[:, 1] + 0.5, rc[:, 0] + 0.5],
-        depth_range=depth_range,
-        **(dot_opts or {}),
+    rc, d = _planned_dot_scan(
+        capture, rig, guide_image, planner, rng, depth_range, budget, dot_opts, planner_opts
     )
     return ScanResult(
         "data_reduction",
@@ -384,6 +370,27 @@ def scan_data_reduction(
         dots=d,
         planned_rc=rc,
     )
+
+
+def _planned_dot_scan(
+    capture, rig, guide_image, planner, rng, depth_range, budget, dot_opts, planner_opts
+):
+    """Plan ``budget`` of the guide pixels from the guide image and scan them with dots.
+
+    Returns the planned pixels (k, 2) as (row, col) and the :class:`DotScan`.
+    """
+    H, W = rig.projector.intrinsics.shape
+    k = _budget_k(budget, H * W)
+    rc = plan_pixels(guide_image, k, planner=planner, rng=rng, **(planner_opts or {}))
+    # guide pixel (r, c) is projector pixel (r, c): its centre is (u, v) = (c + .5, r + .5)
+    d = dot_scan(
+        capture,
+        rig,
+        np.c_[rc[:, 1] + 0.5, rc[:, 0] + 0.5],
+        depth_range=depth_range,
+        **(dot_opts or {}),
+    )
+    return rc, d
 
 
 def _budget_k(budget: float, n: int) -> int:

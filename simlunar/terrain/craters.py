@@ -26,6 +26,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from simlunar.terrain._window import feature_window
+
 #: ejecta taper radius (in crater radii)
 EJECTA_END = 3.0
 #: largest tabulated relative diffusion length s = sqrt(2 kappa t) / R; beyond it the crater is
@@ -203,30 +205,17 @@ def stamp_craters(
     ``(1 - s / S_MAX)**3`` fading linearly from the rim to the end of the ejecta blanket
     (immature, fresh ejecta is brighter than mature soil).
     """
-    rows, cols = heights.shape
-    x0, y0 = origin
     for c in craters:
         if not c.visible:
             continue
         R = c.diameter / 2.0
         ext = extent_radii(c.degradation) * R
-        # cell centre (r, col) at (x0 + (col + .5) s, y0 - (r + .5) s)
-        cc = (c.x - x0) / spacing - 0.5
-        rc = (y0 - c.y) / spacing - 0.5
-        c_lo, c_hi = (
-            max(int(np.floor(cc - ext / spacing)), 0),
-            min(int(np.ceil(cc + ext / spacing)) + 1, cols),
-        )
-        r_lo, r_hi = (
-            max(int(np.floor(rc - ext / spacing)), 0),
-            min(int(np.ceil(rc + ext / spacing)) + 1, rows),
-        )
-        if c_lo >= c_hi or r_lo >= r_hi:
+        w = feature_window(c.x, c.y, ext, heights.shape, spacing, origin)
+        if w is None:
             continue
-        dx = (np.arange(c_lo, c_hi) - cc) * spacing
-        dy = (np.arange(r_lo, r_hi) - rc) * spacing
+        rs, cs, dx, dy = w
         r = np.hypot(dy[:, None], dx[None, :]) / R
-        win = heights[r_lo:r_hi, c_lo:c_hi]
+        win = heights[rs, cs]
         delta = crater_profile(r, c.diameter, c.degradation)
         inside = r < 1.0
         if np.any(inside):
@@ -239,6 +228,6 @@ def stamp_craters(
             f = (1.0 - c.degradation / S_MAX) ** 3
             if f > 0.01:
                 fw = f * np.clip((EJECTA_END - r) / (EJECTA_END - 1.0), 0.0, 1.0)
-                fwin = freshness[r_lo:r_hi, c_lo:c_hi]
+                fwin = freshness[rs, cs]
                 np.maximum(fwin, fw, out=fwin)
     return heights

@@ -18,6 +18,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from simlunar.terrain._window import feature_window
+
 _HARMONICS = (2, 3, 4)
 
 
@@ -112,8 +114,6 @@ def stamp_rocks(
     Each rock touches only its bounding window. ``rng`` draws the outline harmonics.
     """
     gen = np.random.default_rng(rng)
-    rows, cols = heights.shape
-    x0, y0 = origin
     nh = len(_HARMONICS)
     amps = gen.uniform(0.0, 0.12, (len(rocks), nh))
     phases = gen.uniform(0, 2 * np.pi, (len(rocks), nh))
@@ -121,20 +121,11 @@ def stamp_rocks(
     for i, rk in enumerate(rocks):
         a = rk.diameter / 2.0
         ext = a * 1.4  # outline perturbation is at most +36 %
-        cc = (rk.x - x0) / spacing - 0.5
-        rc = (y0 - rk.y) / spacing - 0.5
-        c_lo, c_hi = (
-            max(int(np.floor(cc - ext / spacing)), 0),
-            min(int(np.ceil(cc + ext / spacing)) + 1, cols),
-        )
-        r_lo, r_hi = (
-            max(int(np.floor(rc - ext / spacing)), 0),
-            min(int(np.ceil(rc + ext / spacing)) + 1, rows),
-        )
-        if c_lo >= c_hi or r_lo >= r_hi:
+        w = feature_window(rk.x, rk.y, ext, heights.shape, spacing, origin)
+        if w is None:
             continue
-        dx = ((np.arange(c_lo, c_hi) - cc) * spacing)[None, :]
-        dy = ((rc - np.arange(r_lo, r_hi)) * spacing)[:, None]  # rows run to -y
+        rs, cs, dx, dy = w
+        dx, dy = dx[None, :], dy[:, None]
         co, si = np.cos(rk.orientation), np.sin(rk.orientation)
         u = (dx * co + dy * si) / a
         v = (-dx * si + dy * co) / (a * rk.elongation)
@@ -146,7 +137,7 @@ def stamp_rocks(
         foot = q > 0
         if not np.any(foot):
             continue
-        win = heights[r_lo:r_hi, c_lo:c_hi]
+        win = heights[rs, cs]
         top = win[foot].min() + rk.height * np.sqrt(np.where(foot, q, 0.0))
         np.maximum(win, np.where(foot, top, -np.inf), out=win)
-        albedo_factor[r_lo:r_hi, c_lo:c_hi][foot] = rk.albedo_factor
+        albedo_factor[rs, cs][foot] = rk.albedo_factor
