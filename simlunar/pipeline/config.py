@@ -308,7 +308,7 @@ def validate_data(data: Any, *, base_dir: Path | None = None) -> ExperimentCfg:
                 raise ConfigError(
                     f"sweep.{path}[{i}]: " + format_validation_error(exc, point)
                 ) from None
-    cfg = _resolve_files(cfg, base_dir)
+    cfg = resolve_terrain_files(cfg, base_dir)
     _check_registries(cfg, data)
     return cfg
 
@@ -340,7 +340,9 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
                 registry.check_scan_mode(m, f"study.modes[{i}]")
 
 
-def _resolve_files(cfg: ExperimentCfg, base_dir: Path | None) -> ExperimentCfg:
+def resolve_terrain_files(cfg, base_dir: Path | None):
+    """Resolve ``terrain.file`` / ``terrain.albedo_file`` relative to ``base_dir`` (the YAML's
+    folder) and check they exist; works on any config model with a ``terrain`` section."""
     t = cfg.terrain
     updates = {}
     for key in ("file", "albedo_file"):

@@ -145,19 +145,9 @@ def load_scene(path) -> SceneCfg:
         cfg = SceneCfg.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(f"{path}: {format_validation_error(exc, data)}") from None
-    t = cfg.terrain
-    updates = {}
-    for key in ("file", "albedo_file"):
-        p = getattr(t, key)
-        if p is None:
-            continue
-        full = p if p.is_absolute() else path.parent / p
-        if not full.is_file():
-            raise FileNotFoundError(f"terrain.{key}: file not found: {full}")
-        updates[key] = full.resolve()
-    if updates:
-        cfg = cfg.model_copy(update={"terrain": t.model_copy(update=updates)})
-    return cfg
+    from simlunar.pipeline.config import resolve_terrain_files
+
+    return resolve_terrain_files(cfg, path.parent)
 
 
 def _seeds(seed: int) -> tuple[np.random.SeedSequence, int]:
