@@ -9,11 +9,11 @@ floats round-trip exactly (native EXR float attributes are only 32-bit).
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from simlunar.atomic import atomic_write
 
 _ATTR_KEY = "simlunar_attrs"
 # standard EXR header entries: structure, not user metadata
@@ -95,19 +95,12 @@ def write_exr(path, channels, *, attrs: dict | None = None) -> Path:
             header[_ATTR_KEY] = json.dumps(attrs, allow_nan=True)
         except TypeError as exc:
             raise ValueError(f"EXR attrs for {path} must be JSON-serialisable: {exc}") from None
-    if not path.parent.exists():
-        raise FileNotFoundError(f"folder for {path} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp.exr", dir=path.parent)
-    os.close(fd)
-    try:
+
+    def write(tmp: str) -> None:
         with OpenEXR.File(header, chans) as f:
             f.write(tmp)
-            os.chmod(tmp, 0o644)  # mkstemp makes 0600; results are shared files
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+
+    atomic_write(path, write)
     return path
 
 

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from simlunar.atomic import atomic_write
 
 #: auto exposure maps this percentile of the finite pixel values ...
 AUTO_PERCENTILE = 99.0
@@ -75,16 +75,5 @@ def write_png_preview(path, image: np.ndarray, *, exposure: float | None = None)
 
     path = Path(path)
     px = to_srgb8(image, exposure=exposure)
-    if not path.parent.exists():
-        raise FileNotFoundError(f"folder for {path} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp.png", dir=path.parent)
-    os.close(fd)
-    try:
-        Image.fromarray(px).save(tmp, format="PNG")
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600; results are shared files
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    atomic_write(path, lambda tmp: Image.fromarray(px).save(tmp, format="PNG"))
     return path

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 from typing import Annotated, Literal, Union
 
@@ -24,6 +23,7 @@ import numpy as np
 import yaml
 from pydantic import Discriminator, Field, Tag, ValidationError, model_validator
 
+from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
 from simlunar.pipeline.config import (
     BsdfCfg,
@@ -280,21 +280,8 @@ def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
 
 
 def _write_npz(path: Path, **arrays) -> Path:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
+    return atomic_write(path, lambda tmp: np.savez_compressed(tmp, **arrays))
 
 
 def _write_text(path: Path, text: str) -> Path:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return path
+    return atomic_write(path, lambda tmp: Path(tmp).write_text(text))

@@ -15,12 +15,11 @@ a (2, rows, cols) float32 stack.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from simlunar.atomic import atomic_write
 from simlunar.terrain.mesh import grid_faces, grid_vertices
 from simlunar.terrain.types import Terrain
 
@@ -36,21 +35,6 @@ def _suffix(path: Path) -> str:
             f"unsupported DEM format {suf or '(none)'!r} for {path}; valid: {', '.join(FORMATS)}"
         )
     return suf
-
-
-def _atomic(path: Path, write, suffix: str) -> None:
-    if not path.parent.exists():
-        raise FileNotFoundError(f"folder for {path} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".tmp{suffix}", dir=path.parent)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600; results are shared files
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def _meta(terrain: Terrain) -> dict:
@@ -76,11 +60,11 @@ def save_dem(path, terrain: Terrain) -> Path:
     a = terrain.albedo.astype(np.float32)
     meta = _meta(terrain)
     if suf == ".npy":
-        _atomic(path, lambda t: np.save(t, np.stack([h, a])), ".npy")
+        atomic_write(path, lambda t: np.save(t, np.stack([h, a])))
         side = path.with_name(path.name + ".json")
-        _atomic(side, lambda t: Path(t).write_text(json.dumps(meta)), ".json")
+        atomic_write(side, lambda t: Path(t).write_text(json.dumps(meta)))
     elif suf == ".npz":
-        _atomic(
+        atomic_write(
             path,
             lambda t: np.savez_compressed(
                 t,
@@ -89,7 +73,6 @@ def save_dem(path, terrain: Terrain) -> Path:
                 spacing=np.float64(terrain.spacing),
                 origin=np.array(terrain.origin, dtype=np.float64),
             ),
-            ".npz",
         )
     elif suf == ".exr":
         from simlunar.imaging.exr import write_exr
@@ -98,7 +81,7 @@ def save_dem(path, terrain: Terrain) -> Path:
     else:
         import tifffile
 
-        _atomic(
+        atomic_write(
             path,
             lambda t: tifffile.imwrite(
                 t,
@@ -106,7 +89,6 @@ def save_dem(path, terrain: Terrain) -> Path:
                 photometric="minisblack",
                 metadata={"simlunar": json.dumps(meta)},
             ),
-            suf,
         )
     return path
 
@@ -247,7 +229,7 @@ def export_mesh(terrain: Terrain, path) -> Path:
     mesh = trimesh.Trimesh(vertices=v, faces=f, vertex_colors=colors, process=False, validate=False)
     data = mesh.export(file_type=suf[1:])
     blob = data if isinstance(data, bytes) else data.encode()
-    _atomic(path, lambda t: Path(t).write_bytes(blob), suf)
+    atomic_write(path, lambda t: Path(t).write_bytes(blob))
     return path
 
 
@@ -343,6 +325,6 @@ def write_terrain_outputs(
     if mesh_format is not None:
         files["mesh"] = export_mesh(result.terrain, out / f"mesh.{mesh_format.lower().lstrip('.')}")
     blob = json.dumps(features_json(result), indent=1)
-    _atomic(out / "features.json", lambda t: Path(t).write_text(blob), ".json")
+    atomic_write(out / "features.json", lambda t: Path(t).write_text(blob))
     files["features"] = out / "features.json"
     return files

@@ -8,7 +8,7 @@ import stat
 import numpy as np
 import pytest
 
-from simlunar.pipeline import store
+from simlunar import atomic
 from simlunar.pipeline.store import UnitCache, atomic_write_text, csv_text, fmt_value
 
 
@@ -30,7 +30,7 @@ def test_a_failed_write_keeps_the_old_file(tmp_path, monkeypatch):
     def boom(*a, **k):
         raise OSError("disk full")
 
-    monkeypatch.setattr(store.os, "replace", boom)
+    monkeypatch.setattr(atomic.os, "replace", boom)
     with pytest.raises(OSError, match="disk full"):
         atomic_write_text(p, "new")
     assert p.read_text() == "old"

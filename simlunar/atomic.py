@@ -1,0 +1,60 @@
+"""Atomic file writes, shared by every package that writes results.
+
+A file is written to a temporary name in its target folder, then renamed over the target
+(``os.replace`` is atomic on POSIX), so an interrupt never leaves a half-written EXR, DEM or
+cache entry: readers see the old file or the new one. On failure the temporary file is removed.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def atomic_write(
+    path: str | Path, write: Callable[[str], None], *, make_parents: bool = False
+) -> Path:
+    """Call ``write(tmp_path)`` to fill a temporary file, then move it to ``path``.
+
+    The temporary file keeps ``path``'s suffix (writers such as OpenEXR or Pillow pick the
+    format from it) and gets ordinary permissions (0666 minus the umask; ``mkstemp`` makes
+    0600). Without ``make_parents`` a missing folder raises ``FileNotFoundError`` naming it.
+    """
+    path = Path(path)
+    if make_parents:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    elif not path.parent.exists():
+        raise FileNotFoundError(f"folder for {path} does not exist")
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{path.name}.", suffix=f".tmp{path.suffix}", dir=path.parent
+    )
+    os.close(fd)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def atomic_write_bytes(path: str | Path, data: bytes, *, make_parents: bool = True) -> Path:
+    """Write ``data`` atomically and ``fsync`` it (cache entries must survive a power cut)."""
+
+    def write(tmp: str) -> None:
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+
+    return atomic_write(path, write, make_parents=make_parents)
