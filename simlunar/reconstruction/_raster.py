@@ -1,17 +1,68 @@
-"""Compiled per-triangle rasteriser behind :func:`simlunar.reconstruction.reconstruct`.
+"""Compiled kernels behind :func:`simlunar.reconstruction.reconstruct`.
 
-Kept in its own module so the Numba compilation (cached on disk) happens only when the
+Kept in their own module so the Numba compilation (cached on disk) happens only when the
 reconstruction is first used.
 """
 
 from __future__ import annotations
 
-import numba
-import numpy as np
+import math
 
-# Barycentric tolerance: a cell whose barycentric coordinates are all >= -_EPS is inside.
-# Cells on an edge shared by two triangles are written twice with values equal to rounding.
-_EPS = 1e-10
+import numba
+
+# Tolerance (in cells) of the span test: a cell within _EPS of a triangle's edge counts as
+# inside, so cells on an edge shared by two triangles (or on the hull) are always covered; they
+# are written twice with values equal to rounding.
+_EPS = 1e-9
+
+
+@numba.njit(cache=True, nogil=True)
+def scan_points(pts):  # pragma: no cover - compiled
+    """One pass over (k, 2) float64 points: what :func:`reconstruct` needs to know.
+
+    Returns ``(finite, lex_sorted, has_duplicates, integer, extent)``: all coordinates finite;
+    rows non-decreasing and columns non-decreasing within a row; two consecutive points equal
+    (only meaningful when sorted); every coordinate an integer; the larger of the row and
+    column extents (max - min).
+    """
+    k = pts.shape[0]
+    finite = True
+    lex_sorted = True
+    dup = False
+    integer = True
+    rmin = cmin = math.inf
+    rmax = cmax = -math.inf
+    for i in range(k):
+        r, c = pts[i, 0], pts[i, 1]
+        if not (math.isfinite(r) and math.isfinite(c)):
+            finite = False
+            continue
+        if integer and (r != math.floor(r) or c != math.floor(c)):
+            integer = False
+        rmin, rmax = min(rmin, r), max(rmax, r)
+        cmin, cmax = min(cmin, c), max(cmax, c)
+        if i > 0:
+            pr, pc = pts[i - 1, 0], pts[i - 1, 1]
+            if r < pr or (r == pr and c < pc):
+                lex_sorted = False
+            elif r == pr and c == pc:
+                dup = True
+    extent = max(rmax - rmin, cmax - cmin) if k > 0 else 0.0
+    return finite, lex_sorted, dup, integer, extent
+
+
+@numba.njit(cache=True, nogil=True)
+def _span(ra, ca, rb, cb, r):  # pragma: no cover - compiled
+    """Column where the edge (ra, ca)-(rb, cb), ra <= rb, crosses row r (clamped to the edge).
+
+    A horizontal edge (ra == rb) gives cb: the callers pass b as the endpoint that the
+    triangle's long edge does not reach.
+    """
+    if rb == ra:
+        return cb
+    t = (r - ra) / (rb - ra)
+    t = min(max(t, 0.0), 1.0)
+    return ca + t * (cb - ca)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -20,6 +71,10 @@ def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compi
 
     ``pts`` (k, 2) float64 (row, col) index coordinates, ``vals`` (k,), ``tris`` (m, 3) int,
     ``out`` (rows, cols) float64 written in place, ``covered`` (rows, cols) bool set in place.
+
+    Scan conversion: for each row a triangle spans, the two edges crossing that row bound a
+    run of cells, each set from the triangle's plane ``v0 + gr (r - r0) + gc (c - c0)`` (one
+    multiply-add per cell). A sample that sits exactly on a cell sets that cell to its own value.
     """
     nr, nc = out.shape
     for t in range(tris.shape[0]):
@@ -31,19 +86,38 @@ def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compi
         if det == 0.0:
             continue
         inv = 1.0 / det
-        v0, v1, v2 = vals[i0], vals[i1], vals[i2]
-        rlo = max(int(np.ceil(min(r0, r1, r2) - 1e-9)), 0)
-        rhi = min(int(np.floor(max(r0, r1, r2) + 1e-9)), nr - 1)
-        clo = max(int(np.ceil(min(c0, c1, c2) - 1e-9)), 0)
-        chi = min(int(np.floor(max(c0, c1, c2) + 1e-9)), nc - 1)
+        v0 = vals[i0]
+        d1, d2 = vals[i1] - v0, vals[i2] - v0
+        gr = (d1 * (c2 - c0) - d2 * (c1 - c0)) * inv
+        gc = (d2 * (r1 - r0) - d1 * (r2 - r0)) * inv
+        # vertices ordered by row: a (top) <= b <= c (bottom)
+        ra, ca, rb, cb, rc, cc = r0, c0, r1, c1, r2, c2
+        if rb < ra:
+            ra, ca, rb, cb = rb, cb, ra, ca
+        if rc < rb:
+            rb, cb, rc, cc = rc, cc, rb, cb
+            if rb < ra:
+                ra, ca, rb, cb = rb, cb, ra, ca
+        rlo = max(int(math.ceil(ra - _EPS)), 0)
+        rhi = min(int(math.floor(rc + _EPS)), nr - 1)
         for r in range(rlo, rhi + 1):
-            dr = r - r0
+            x1 = _span(ra, ca, rc, cc, r)
+            # the other edge: a-b above b, b-c from b down; a horizontal edge reaches b
+            if r < rb or rc == rb:
+                x2 = _span(ra, ca, rb, cb, r)
+            else:
+                x2 = _span(rb, cb, rc, cc, r)
+            lo, hi = min(x1, x2), max(x1, x2)
+            clo = max(int(math.ceil(lo - _EPS)), 0)
+            chi = min(int(math.floor(hi + _EPS)), nc - 1)
+            base = v0 + gr * (r - r0)
             for c in range(clo, chi + 1):
-                dc = c - c0
-                # barycentric coordinates of (r, c) with respect to vertices 1 and 2
-                b1 = (dr * (c2 - c0) - (r2 - r0) * dc) * inv
-                b2 = ((r1 - r0) * dc - dr * (c1 - c0)) * inv
-                b0 = 1.0 - b1 - b2
-                if b0 >= -_EPS and b1 >= -_EPS and b2 >= -_EPS:
-                    out[r, c] = b0 * v0 + b1 * v1 + b2 * v2
-                    covered[r, c] = True
+                out[r, c] = base + gc * (c - c0)
+                covered[r, c] = True
+    # a sample on a cell is that cell's value, not the plane's rounding of it
+    for i in range(pts.shape[0]):
+        r, c = pts[i, 0], pts[i, 1]
+        if 0.0 <= r < nr and 0.0 <= c < nc and r == math.floor(r) and c == math.floor(c):
+            ri, ci = int(r), int(c)
+            if covered[ri, ci]:
+                out[ri, ci] = vals[i]

@@ -16,13 +16,13 @@ import numpy as np
 from scipy.spatial import cKDTree
 from triangle.core import triang
 
-from simlunar.reconstruction._raster import rasterise_linear
+from simlunar.reconstruction._raster import rasterise_linear, scan_points
 
 OUTSIDE_POLICIES = ("nearest", "nan")
 
 
 def _check_inputs(points_rc, values, shape):
-    pts = np.asarray(points_rc, dtype=np.float64)
+    pts = np.ascontiguousarray(points_rc, dtype=np.float64)
     vals = np.asarray(values, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 2:
         raise ValueError(f"points_rc must have shape (k, 2), got {pts.shape}")
@@ -32,9 +32,7 @@ def _check_inputs(points_rc, values, shape):
         )
     if pts.shape[0] == 0:
         raise ValueError("points_rc is empty: at least one sample is needed")
-    if not np.all(np.isfinite(pts)):
-        raise ValueError("points_rc contains NaN or infinite coordinates")
-    if not np.all(np.isfinite(vals)):
+    if not np.isfinite(vals).all():
         raise ValueError("values contains NaN or infinite entries")
     try:
         rows, cols = (int(s) for s in shape)
@@ -53,6 +51,28 @@ def _merge_duplicates(pts, vals):
     return uniq, sums / counts
 
 
+#: Largest coordinate extent for which Triangle's floating-point predicates are exact on
+#: integer points: the incircle determinant is a sum of three products of integers bounded by
+#: 2 W^2 each, so every intermediate is an integer below 12 W^4 < 2^53 for W <= 5234.
+EXACT_INTEGER_EXTENT = 4096
+
+
+def _triangle_switches(integer: bool, extent: float) -> str:
+    """Triangle's switches for points that are all ``integer`` (or not) with this extent.
+
+    ``Q`` quiet, ``z`` zero-based, ``B`` and ``N`` skip the boundary markers and the copy of
+    the vertices, ``l`` divide and conquer with vertical cuts only (alternating cuts cost about
+    1.8x more on pixel-lattice points). ``X`` turns off the adaptive exact arithmetic; it is
+    only used on integer points of extent at most :data:`EXACT_INTEGER_EXTENT`, where plain
+    double arithmetic already computes both predicates exactly (so the triangulation is the
+    one exact arithmetic gives), which covers every sample plan. Together 3x faster at
+    k = 800 k on a 1000 x 1600 grid (0.55 -> 0.18 s).
+    """
+    if integer and extent <= EXACT_INTEGER_EXTENT:
+        return "QzBNlX"
+    return "QzBNl"
+
+
 def triangulate(points_rc) -> np.ndarray:
     """Delaunay triangles of the points (Triangle, exact predicates).
 
@@ -69,8 +89,14 @@ def triangulate(points_rc) -> np.ndarray:
     pts = np.ascontiguousarray(points_rc, dtype=np.float64)
     if len(pts) < 3:
         return np.empty((0, 3), dtype=np.int32)
-    # Q quiet, z zero-based, B and N skip the boundary markers and the copy of the vertices
-    out, _ = triang({"pointlist": pts}, "QzBN")
+    finite, _, _, integer, extent = scan_points(pts)
+    if not finite:
+        raise ValueError("points_rc contains NaN or infinite coordinates")
+    return _triangulate(pts, _triangle_switches(integer, extent))
+
+
+def _triangulate(pts: np.ndarray, switches: str) -> np.ndarray:
+    out, _ = triang({"pointlist": pts}, switches)
     tris = out.get("trianglelist")
     if tris is None:
         return np.empty((0, 3), dtype=np.int32)
@@ -122,13 +148,19 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
     # Lexicographic (row, col) order keeps the rasteriser's vertex and cell accesses local
     # (about 4x faster at k = 400 k) and puts duplicates next to each other; sorted input
     # (e.g. a SamplePlan) skips the sort.
-    r, c = pts[:, 0], pts[:, 1]
-    if len(pts) > 1 and not np.all((r[1:] > r[:-1]) | ((r[1:] == r[:-1]) & (c[1:] >= c[:-1]))):
-        order = np.lexsort((c, r))
+    finite, lex_sorted, duplicates, integer, extent = scan_points(pts)
+    if not finite:
+        raise ValueError("points_rc contains NaN or infinite coordinates")
+    if not lex_sorted:
+        order = np.lexsort((pts[:, 1], pts[:, 0]))
         pts, vals = pts[order], vals[order]
-    if len(pts) > 1 and np.any(np.all(pts[1:] == pts[:-1], axis=1)):
+        duplicates = bool(np.any(np.all(pts[1:] == pts[:-1], axis=1)))
+    if duplicates:
         pts, vals = _merge_duplicates(pts, vals)
-    tris = triangulate(pts)
+    if len(pts) >= 3:
+        tris = _triangulate(pts, _triangle_switches(integer, extent))
+    else:
+        tris = np.empty((0, 3), dtype=np.int32)
     out = np.full((rows, cols), np.nan)
     covered = np.zeros((rows, cols), dtype=bool)
     if len(tris):

@@ -98,3 +98,88 @@ def test_bad_input(kwargs, match):
     kwargs = {"shape": (4, 4), **kwargs}
     with pytest.raises(ValueError, match=match):
         reconstruct(**kwargs)
+
+
+def _incircle_exact(a, b, c, d):
+    """Sign of the incircle determinant of d against ccw (a, b, c), in exact integers."""
+    adx, ady = a[..., 0] - d[..., 0], a[..., 1] - d[..., 1]
+    bdx, bdy = b[..., 0] - d[..., 0], b[..., 1] - d[..., 1]
+    cdx, cdy = c[..., 0] - d[..., 0], c[..., 1] - d[..., 1]
+    alift, blift, clift = adx * adx + ady * ady, bdx * bdx + bdy * bdy, cdx * cdx + cdy * cdy
+    return (
+        alift * (bdx * cdy - cdx * bdy)
+        + blift * (cdx * ady - adx * cdy)
+        + clift * (adx * bdy - bdx * ady)
+    )
+
+
+@pytest.mark.parametrize("density", [0.5, 0.05])
+def test_lattice_triangulation_is_delaunay(density):
+    # Integer points take Triangle's fast switches (no adaptive exact arithmetic): check the
+    # result independently, in int64 arithmetic. Every edge must be locally Delaunay (the
+    # opposite vertex never strictly inside the circumcircle), which makes the whole
+    # triangulation Delaunay, and the triangles must tile the convex hull exactly.
+    from scipy.spatial import ConvexHull
+
+    gen = np.random.default_rng(7)
+    rows, cols = 60, 90
+    flat = np.sort(gen.choice(rows * cols, int(density * rows * cols), replace=False))
+    pts = np.column_stack((flat // cols, flat % cols))
+    tris = triangulate(pts.astype(float)).astype(np.int64)
+    p = pts.astype(np.int64)
+    a, b, c = p[tris[:, 0]], p[tris[:, 1]], p[tris[:, 2]]
+    orient = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
+    assert np.all(orient != 0)
+    # make every triangle counter-clockwise in (row, col) so the incircle sign is meaningful
+    flip = orient < 0
+    tris[flip] = tris[flip][:, [0, 2, 1]]
+    a, b, c = p[tris[:, 0]], p[tris[:, 1]], p[tris[:, 2]]
+    area2 = np.abs(orient).sum()
+    hull = ConvexHull(pts.astype(float))
+    assert area2 == pytest.approx(2.0 * hull.volume, abs=1e-9)
+    # opposite vertex across each shared edge
+    edges = {}
+    for t, tri in enumerate(tris):
+        for j in range(3):
+            e = tuple(sorted((tri[j], tri[(j + 1) % 3])))
+            edges.setdefault(e, []).append((t, tri[(j + 2) % 3]))
+    pairs = [(v[0][0], v[1][1]) for v in edges.values() if len(v) == 2]
+    pairs += [(v[1][0], v[0][1]) for v in edges.values() if len(v) == 2]
+    assert all(len(v) <= 2 for v in edges.values())
+    t_idx, opp = np.array(pairs).T
+    s = _incircle_exact(p[tris[t_idx, 0]], p[tris[t_idx, 1]], p[tris[t_idx, 2]], p[opp])
+    assert np.all(s <= 0), "an opposite vertex lies strictly inside a circumcircle"
+
+
+def _reference_raster(pts, vals, tris, shape):
+    """Barycentric test of every cell against every triangle (slow, obviously right)."""
+    rr, cc = np.mgrid[0 : shape[0], 0 : shape[1]]
+    out = np.full(shape, np.nan)
+    for i0, i1, i2 in tris:
+        (r0, c0), (r1, c1), (r2, c2) = pts[i0], pts[i1], pts[i2]
+        det = (r1 - r0) * (c2 - c0) - (r2 - r0) * (c1 - c0)
+        b1 = ((rr - r0) * (c2 - c0) - (r2 - r0) * (cc - c0)) / det
+        b2 = ((r1 - r0) * (cc - c0) - (rr - r0) * (c1 - c0)) / det
+        b0 = 1.0 - b1 - b2
+        inside = (b0 >= -1e-12) & (b1 >= -1e-12) & (b2 >= -1e-12)
+        out[inside] = (b0 * vals[i0] + b1 * vals[i1] + b2 * vals[i2])[inside]
+    return out
+
+
+@pytest.mark.parametrize("integer", [True, False])
+def test_scanline_raster_matches_barycentric_reference(integer):
+    # The scan-converting rasteriser against a per-cell barycentric test on the same triangles,
+    # with lattice points (horizontal and vertical edges, cells on shared edges) and with
+    # non-integer points (edges between cells).
+    gen = np.random.default_rng(3)
+    shape = (23, 31)
+    if integer:
+        flat = np.sort(gen.choice(shape[0] * shape[1], 60, replace=False))
+        pts = np.column_stack((flat // shape[1], flat % shape[1])).astype(float)
+    else:
+        pts = gen.uniform([-1.5, -1.5], [shape[0] + 0.5, shape[1] + 0.5], size=(60, 2))
+    vals = gen.normal(size=len(pts))
+    ours = reconstruct(pts, vals, shape, outside="nan")
+    ref = _reference_raster(pts, vals, triangulate(pts), shape)
+    np.testing.assert_array_equal(np.isnan(ours), np.isnan(ref))
+    np.testing.assert_allclose(ours, ref, rtol=0, atol=1e-12)
