@@ -24,7 +24,9 @@ def _weighted_mse(err, w):
     total = float(w.sum())
     if total <= 0:
         raise ValueError("metric weights sum to zero over the evaluated cells")
-    return float(np.dot(w, err * err) / total)
+    # np.sum (pairwise) rather than np.dot: BLAS splits a dot product over its threads, so
+    # the last bits would depend on the thread count (a run with --workers 2 would differ)
+    return float(np.sum(w * (err * err)) / total)
 
 
 def _mse(err, w, truth_w):

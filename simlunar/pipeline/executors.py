@@ -1,4 +1,4 @@
-"""Executors that run work units: in-process, a local process pool, or a Dask cluster.
+"""Executors that run work units: in-process, a local pool, or a Dask cluster.
 
 All three expose one method, :meth:`Executor.run`, that yields ``(index, result)`` as units
 finish (in any order); the runner writes each result to the cache as soon as it arrives, in
@@ -8,16 +8,14 @@ the parent process, so the cache logic is the same whichever executor computed i
 from __future__ import annotations
 
 import concurrent.futures as cf
-import contextlib
-import multiprocessing as mp
-import os
 import uuid
 from collections.abc import Callable, Iterator
 from typing import Any
 
 
 def default_workers() -> int:
-    """Worker count when none is given: 1 (rendering already uses every core)."""
+    """Worker count when none is given: 1 (rendering already uses every core; ``--workers``
+    adds parallel sampling studies)."""
     return 1
 
 
@@ -53,39 +51,31 @@ class SerialExecutor(Executor):
             yield i, (fn(p) if progress is None else fn(p, progress=progress))
 
 
-def _worker_init(threads: int) -> None:
-    # each worker gets its share of the cores: renders in N workers each using every core
-    # would oversubscribe the machine and make the pool slower than one process
-    for var in (
-        "OMP_NUM_THREADS",
-        "OPENBLAS_NUM_THREADS",
-        "MKL_NUM_THREADS",
-        "NUMBA_NUM_THREADS",
-        "SIMLUNAR_RENDER_THREADS",  # Dr.Jit's render thread pool (simlunar.render.backend)
-    ):
-        os.environ[var] = str(threads)
+def _accepts(fn, name: str) -> bool:
+    import inspect
 
-
-@contextlib.contextmanager
-def _parent_render_threads(threads: int):
-    """The parent works as one of the pool's workers: give its renders their share of cores."""
-    from simlunar.render import backend
-
-    old = backend.set_render_threads(threads) if backend.is_initialised() else None
     try:
-        yield
-    finally:
-        if old is not None:
-            backend.set_render_threads(old)
+        return name in inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return False
 
 
 class LocalPoolExecutor(Executor):
-    """``workers`` local workers: this process plus ``workers - 1`` spawned processes.
+    """``workers`` units at a time in this process; their sampling studies on forked processes.
 
-    The parent process works too (in a thread), because it has already paid for importing
-    Mitsuba and warming its kernels; each spawned process pays that once (about 2 s), which
-    is what limits the speed-up on short units. Processes are spawned, not forked: Mitsuba's
-    JIT state does not survive ``fork``. Units are handed out in order as workers free up.
+    Each unit runs in a thread of this process, so nothing is imported, initialised or
+    compiled twice, and each render still uses every core: renders of concurrent units take
+    turns (a lock in :mod:`simlunar.pipeline.stages`), which costs nothing because a render
+    already keeps every core busy. The single-threaded part of a unit, the sampling study,
+    runs its (strategy, trial) tasks on ``workers`` forked processes
+    (:func:`simlunar.study.sampling.run_sampling_study`), which is where the cores are gained;
+    while one unit waits for its study, another renders. Forking is safe here because the
+    forked processes only run NumPy/Numba code and never touch Mitsuba's JIT state. A sweep
+    with a single unit is parallel too (its study is). Results do not depend on ``workers``.
+
+    ``fn`` gets ``study_workers=workers`` when its signature has that parameter (as
+    :func:`simlunar.pipeline.stages.compute_unit` does); other functions simply run
+    ``workers`` at a time in threads.
     """
 
     name = "local"
@@ -99,44 +89,26 @@ class LocalPoolExecutor(Executor):
         return {"executor": self.name, "workers": self.workers}
 
     def run(self, fn, payloads, *, progress=None):
-        if self.workers == 1 or len(payloads) <= 1:
+        if self.workers == 1:
             yield from SerialExecutor().run(fn, payloads, progress=progress)
             return
+        kw = {"study_workers": self.workers} if _accepts(fn, "study_workers") else {}
+        if len(payloads) <= 1:
+            # one unit: its study is still parallel, and its progress can be shown
+            if progress is not None:
+                kw["progress"] = progress
+            for i, p in enumerate(payloads):
+                yield i, fn(p, **kw)
+            return
         n = min(self.workers, len(payloads))
-        threads = max(1, (os.cpu_count() or 1) // n)
-        with _parent_render_threads(threads):
-            yield from self._run_pool(fn, payloads, n, threads)
-
-    def _run_pool(self, fn, payloads, n, threads):
-        ctx = mp.get_context("spawn")
-        pending = list(range(len(payloads)))
-        running: dict[cf.Future, tuple[int, cf.Executor]] = {}
-        with (
-            cf.ThreadPoolExecutor(max_workers=1) as local,
-            cf.ProcessPoolExecutor(
-                max_workers=n - 1, mp_context=ctx, initializer=_worker_init, initargs=(threads,)
-            ) as pool,
-        ):
-
-            def submit(ex: cf.Executor) -> None:
-                i = pending.pop(0)
-                running[ex.submit(fn, payloads[i])] = (i, ex)
-
-            submit(local)
-            for _ in range(n - 1):
-                if pending:
-                    submit(pool)
+        with cf.ThreadPoolExecutor(max_workers=n, thread_name_prefix="simlunar-unit") as pool:
+            futures = {pool.submit(fn, p, **kw): i for i, p in enumerate(payloads)}
             try:
-                while running:
-                    done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
-                    for fut in sorted(done, key=lambda f: running[f][0]):
-                        i, ex = running.pop(fut)
-                        if pending:
-                            submit(ex)
-                        yield i, fut.result()
+                for fut in cf.as_completed(futures):
+                    yield futures[fut], fut.result()
             except BaseException:
-                for fut in running:
-                    fut.cancel()
+                # units not started yet are dropped; running ones finish in the background
+                pool.shutdown(wait=False, cancel_futures=True)
                 raise
 
 

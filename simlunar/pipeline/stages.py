@@ -13,6 +13,7 @@ library functions it calls take arrays and keyword-only options, never config ob
 
 from __future__ import annotations
 
+import threading
 import time
 from typing import Any
 
@@ -34,6 +35,11 @@ STAGES = ("terrain", "render", "sensor", "study", "panels")
 
 #: bump when a change makes cached unit results invalid
 CACHE_VERSION = 1
+
+
+#: Renders of units running concurrently in threads (``LocalPoolExecutor``) take turns: each
+#: render already uses every core, and Mitsuba scenes are built and rendered one at a time.
+RENDER_LOCK = threading.RLock()
 
 
 def stage_seeds(seed: int) -> dict[str, np.random.SeedSequence]:
@@ -276,7 +282,9 @@ def sparse_mesh_render(
     return out
 
 
-def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
+def compute_unit(
+    payload: dict[str, Any], *, progress=None, study_workers: int = 1
+) -> dict[str, Any]:
     """Run one work unit; picklable entry point for every executor.
 
     Parameters
@@ -285,6 +293,9 @@ def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
         ``{"config": <plain resolved experiment dict without sweep>}``.
     progress : callable(stage, done, total), optional
         Within-unit progress of the sampling study (in-process executors pass it).
+    study_workers : int
+        Forked processes for the sampling study's (strategy, trial) tasks; the results do not
+        depend on it.
 
     Returns
     -------
@@ -302,21 +313,24 @@ def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
     timings["terrain_s"] = time.perf_counter() - t
 
     if not isinstance(cfg.study, SamplingStudyCfg):
-        return _compute_scanner_unit(cfg, terrain, lights, bsdf, seeds, timings)
+        # the scanner study renders throughout (one scene per pattern sequence)
+        with RENDER_LOCK:
+            return _compute_scanner_unit(cfg, terrain, lights, bsdf, seeds, timings)
 
     t = time.perf_counter()
     from simlunar.render import render
 
     r = cfg.render
-    result = render(
-        terrain,
-        camera,
-        lights=lights,
-        bsdf=bsdf,
-        spp=r.spp,
-        seed=_int_seed(seeds["render"]),
-        max_depth=r.max_depth,
-    )
+    with RENDER_LOCK:
+        result = render(
+            terrain,
+            camera,
+            lights=lights,
+            bsdf=bsdf,
+            spp=r.spp,
+            seed=_int_seed(seeds["render"]),
+            max_depth=r.max_depth,
+        )
     timings["render_s"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -325,6 +339,48 @@ def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
     depth, n_invalid = fill_invalid(np.where(result.gt.valid, result.gt.depth, np.nan))
     timings["sensor_s"] = time.perf_counter() - t
 
+    # Figure arrays first (their seeds are their own, so the order changes no number): a
+    # unit's last step is then its study, whose tasks spread over every worker, instead of a
+    # render that leaves the other cores idle at the end of a parallel sweep.
+    arrays = {
+        "image": image,
+        "radiance": radiance,
+        "depth": depth,
+        "heights": np.asarray(terrain.heights, np.float64),
+        "albedo": np.asarray(terrain.albedo, np.float32),
+    }
+    if cfg.figures.enabled:
+        panel_ss, mesh_ss = seeds["panels"].spawn(2)
+        arrays.update(
+            _panel_arrays(
+                image,
+                depth,
+                cfg.study,
+                cfg.figures.panel_density,
+                rng=np.random.default_rng(panel_ss),
+            )
+        )
+        density = cfg.figures.sparse_mesh_density
+        if density is not None and isinstance(cfg.render.camera, OrthoNadirCfg):
+            t = time.perf_counter()
+            with RENDER_LOCK:
+                mesh = sparse_mesh_render(
+                    terrain,
+                    camera,
+                    lights,
+                    bsdf,
+                    image,
+                    density=density,
+                    spp=r.spp,
+                    seed=_int_seed(seeds["render"]),
+                    max_depth=r.max_depth,
+                    rng=np.random.default_rng(mesh_ss),
+                    sigma_range=cfg.figures.sparse_mesh_sigma,
+                    threshold=cfg.figures.sparse_mesh_roughness_threshold,
+                    energy=arrays["wavelet_energy"],
+                )
+            arrays.update(mesh)
+            timings["sparse_mesh_s"] = time.perf_counter() - t
     t = time.perf_counter()
     from simlunar.study.sampling import run_sampling_study
 
@@ -344,46 +400,12 @@ def compute_unit(payload: dict[str, Any], *, progress=None) -> dict[str, Any]:
         metrics=list(s.metrics),
         rng=np.random.default_rng(seeds["study"]),
         range_noise_std=s.range_noise_std_m,
+        workers=study_workers,
         progress=None if progress is None else (lambda d, n: progress("sampling study", d, n)),
         **kw,
     )
     timings["study_s"] = time.perf_counter() - t
 
-    arrays = {
-        "image": image,
-        "radiance": radiance,
-        "depth": depth,
-        "heights": np.asarray(terrain.heights, np.float64),
-        "albedo": np.asarray(terrain.albedo, np.float32),
-    }
-    if cfg.figures.enabled:
-        panel_ss, mesh_ss = seeds["panels"].spawn(2)
-        arrays.update(
-            _panel_arrays(
-                image, depth, s, cfg.figures.panel_density, rng=np.random.default_rng(panel_ss)
-            )
-        )
-        density = cfg.figures.sparse_mesh_density
-        if density is not None and isinstance(cfg.render.camera, OrthoNadirCfg):
-            t = time.perf_counter()
-            arrays.update(
-                sparse_mesh_render(
-                    terrain,
-                    camera,
-                    lights,
-                    bsdf,
-                    image,
-                    density=density,
-                    spp=r.spp,
-                    seed=_int_seed(seeds["render"]),
-                    max_depth=r.max_depth,
-                    rng=np.random.default_rng(mesh_ss),
-                    sigma_range=cfg.figures.sparse_mesh_sigma,
-                    threshold=cfg.figures.sparse_mesh_roughness_threshold,
-                    energy=arrays["wavelet_energy"],
-                )
-            )
-            timings["sparse_mesh_s"] = time.perf_counter() - t
     return {
         "rows": [dict(r) for r in study.rows],
         "scores": _plain_scores(study.scores),

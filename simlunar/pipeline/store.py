@@ -21,6 +21,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -68,6 +69,21 @@ def read_csv(path: str | Path) -> list[dict[str, str]]:
         return list(csv.DictReader(f))
 
 
+def npz_bytes(arrays: dict[str, np.ndarray], *, level: int = 1) -> bytes:
+    """An ``.npz`` archive (what ``np.load`` reads) deflated at zlib ``level``.
+
+    ``np.savez_compressed`` always uses zlib's default level 6; on float rasters level 1
+    compresses almost as well (within a few per cent) in about a quarter of the time, and the
+    cache write sits on the runner's critical path once per unit.
+    """
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=level) as zf:
+        for name, value in arrays.items():
+            with zf.open(f"{name}.npy", "w", force_zip64=True) as f:
+                np.lib.format.write_array(f, np.asarray(value), allow_pickle=False)
+    return buf.getvalue()
+
+
 class UnitCache:
     """Finished units of a result folder, keyed by the hash of their resolved config."""
 
@@ -101,7 +117,5 @@ class UnitCache:
             return {}
 
     def save(self, key: str, record: dict, arrays: dict[str, np.ndarray]) -> None:
-        buf = io.BytesIO()
-        np.savez_compressed(buf, **{k: np.asarray(v) for k, v in arrays.items()})
-        atomic_write_bytes(self.npz_path(key), buf.getvalue())
+        atomic_write_bytes(self.npz_path(key), npz_bytes(arrays))
         atomic_write_json(self.json_path(key), {**record, "key": key})

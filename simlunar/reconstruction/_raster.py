@@ -98,8 +98,8 @@ def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compi
             rb, cb, rc, cc = rc, cc, rb, cb
             if rb < ra:
                 ra, ca, rb, cb = rb, cb, ra, ca
-        rlo = max(int(math.ceil(ra - _EPS)), 0)
-        rhi = min(int(math.floor(rc + _EPS)), nr - 1)
+        rlo = max(math.ceil(ra - _EPS), 0)
+        rhi = min(math.floor(rc + _EPS), nr - 1)
         for r in range(rlo, rhi + 1):
             x1 = _span(ra, ca, rc, cc, r)
             # the other edge: a-b above b, b-c from b down; a horizontal edge reaches b
@@ -108,8 +108,8 @@ def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compi
             else:
                 x2 = _span(rb, cb, rc, cc, r)
             lo, hi = min(x1, x2), max(x1, x2)
-            clo = max(int(math.ceil(lo - _EPS)), 0)
-            chi = min(int(math.floor(hi + _EPS)), nc - 1)
+            clo = max(math.ceil(lo - _EPS), 0)
+            chi = min(math.floor(hi + _EPS), nc - 1)
             base = v0 + gr * (r - r0)
             for c in range(clo, chi + 1):
                 out[r, c] = base + gc * (c - c0)

@@ -344,8 +344,20 @@ def _map_tasks(state, tasks, workers):
     methods = multiprocessing.get_all_start_methods()
     # fork shares the arrays with the workers without pickling them
     ctx = multiprocessing.get_context("fork" if "fork" in methods else None)
+    # Load the compiled kernels the tasks call before forking: the children then never enter
+    # Numba's dispatcher lock, which another thread of this process (a concurrent unit of
+    # LocalPoolExecutor) may hold at the moment of the fork.
+    _warm_kernels(state)
     with ctx.Pool(min(workers, len(tasks)), initializer=_init_worker, initargs=(state,)) as pool:
         return pool.map(_task, tasks, chunksize=1)
+
+
+def _warm_kernels(state) -> None:
+    """Call every compiled kernel of a task once, on tiny inputs of the same types."""
+    pts = np.array([[0, 0], [0, 2], [2, 0], [2, 2]])
+    recon = reconstruct(pts, np.arange(4.0), (3, 3), outside=state["outside"]).ravel()
+    rows = state["weight_rows"]
+    error_sums(recon, recon, np.ones((rows.shape[0], recon.size), dtype=rows.dtype))
 
 
 def _trial_errors(state, label, trial) -> list[dict[str, float]]:

@@ -68,20 +68,3 @@ def test_render_thread_limit_round_trips(mi):
     finally:
         assert backend.set_render_threads(old) == 1
     assert dr.thread_count() == old
-
-
-def test_pool_gives_the_parent_and_workers_their_share_of_cores(mi, monkeypatch):
-    import drjit as dr
-
-    from simlunar.pipeline import executors
-
-    before = dr.thread_count()
-    with executors._parent_render_threads(1):
-        assert dr.thread_count() == 1
-    assert dr.thread_count() == before
-    # what each spawned worker runs first (on a copy of the environment: NUMBA_NUM_THREADS must
-    # not change under this process's numba)
-    env = {k: v for k, v in os.environ.items() if k != "SIMLUNAR_RENDER_THREADS"}
-    monkeypatch.setattr(os, "environ", env)
-    executors._worker_init(1)
-    assert env["SIMLUNAR_RENDER_THREADS"] == "1" and env["NUMBA_NUM_THREADS"] == "1"
