@@ -51,7 +51,8 @@ class SerialExecutor(Executor):
             yield i, (fn(p) if progress is None else fn(p, progress=progress))
 
 
-def _accepts(fn, name: str) -> bool:
+def accepts_keyword(fn, name: str) -> bool:
+    """Whether ``fn``'s signature has a parameter ``name`` (False when it has no signature)."""
     import inspect
 
     try:
@@ -92,7 +93,7 @@ class LocalPoolExecutor(Executor):
         if self.workers == 1:
             yield from SerialExecutor().run(fn, payloads, progress=progress)
             return
-        kw = {"study_workers": self.workers} if _accepts(fn, "study_workers") else {}
+        kw = {"study_workers": self.workers} if accepts_keyword(fn, "study_workers") else {}
         if len(payloads) <= 1:
             # one unit: its study is still parallel, and its progress can be shown
             if progress is not None:

@@ -24,7 +24,7 @@ from typing import Any
 import yaml
 
 from simlunar.pipeline.config import ExperimentCfg, apply_sweep_value, to_plain
-from simlunar.pipeline.executors import Executor, LocalPoolExecutor
+from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.stages import CACHE_VERSION, compute_unit
 from simlunar.pipeline.store import (
     UnitCache,
@@ -249,7 +249,7 @@ def run_experiment(
     bar = _progress(progress, len(units), n_cached, cfg.name)
     try:
         payloads = [{"config": u.config} for u in todo]
-        hook = bar.stage if bar is not None and _accepts_progress(compute) else None
+        hook = bar.stage if bar is not None and accepts_keyword(compute, "progress") else None
         # executors written against the older two-argument run() still work without a hook
         kw = {"progress": hook} if hook is not None else {}
         for i, result in executor.run(compute, payloads, **kw):
@@ -329,15 +329,6 @@ def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapse
         "unit_keys": [u.key for u in units],
     }
     atomic_write_json(out / "provenance.json", prov)
-
-
-def _accepts_progress(fn) -> bool:
-    import inspect
-
-    try:
-        return "progress" in inspect.signature(fn).parameters
-    except (TypeError, ValueError):
-        return False
 
 
 class _Bar:
