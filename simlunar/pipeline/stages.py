@@ -267,18 +267,23 @@ def sparse_mesh_render(
     recon = reconstruct(pts, heights[p.rows, p.cols], heights.shape)
     sparse = Terrain(recon, terrain.albedo, terrain.spacing, terrain.origin)
     kw = {"lights": lights, "spp": spp, "seed": seed, "max_depth": max_depth}
-    out = {"sparse_mesh_render": luminance(render(sparse, camera, bsdf=bsdf, **kw).image)}
-    if sigma_range is None or not isinstance(bsdf, OrenNayarBSDF):
-        return out
-    if energy is None:
-        from simlunar.features import feature_map
+    bsdfs = {"sparse_mesh_render": bsdf}
+    out = {}
+    if sigma_range is not None and isinstance(bsdf, OrenNayarBSDF):
+        if energy is None:
+            from simlunar.features import feature_map
 
-        energy = feature_map("wavelet", image)
-    lo, hi = sigma_range
-    sigma = sigma_map_from_energy(energy, sigma_min=lo, sigma_max=hi, threshold=threshold)
-    rough = OrenNayarBSDF(bsdf.sigma, bsdf.model, sigma_map=sigma)
-    out["sparse_mesh_render_rough"] = luminance(render(sparse, camera, bsdf=rough, **kw).image)
-    out["sparse_mesh_sigma"] = sigma.astype(np.float32)
+            energy = feature_map("wavelet", image)
+        lo, hi = sigma_range
+        sigma = sigma_map_from_energy(energy, sigma_min=lo, sigma_max=hi, threshold=threshold)
+        bsdfs["sparse_mesh_render_rough"] = OrenNayarBSDF(bsdf.sigma, bsdf.model, sigma_map=sigma)
+        out["sparse_mesh_sigma"] = sigma.astype(np.float32)
+    # only the renders take the lock: the plan and the reconstruction above run while another
+    # unit of a parallel sweep renders
+    for name, b in bsdfs.items():
+        with RENDER_LOCK:
+            radiance = render(sparse, camera, bsdf=b, **kw).image
+        out[name] = luminance(radiance)
     return out
 
 
@@ -363,22 +368,21 @@ def compute_unit(
         density = cfg.figures.sparse_mesh_density
         if density is not None and isinstance(cfg.render.camera, OrthoNadirCfg):
             t = time.perf_counter()
-            with RENDER_LOCK:
-                mesh = sparse_mesh_render(
-                    terrain,
-                    camera,
-                    lights,
-                    bsdf,
-                    image,
-                    density=density,
-                    spp=r.spp,
-                    seed=_int_seed(seeds["render"]),
-                    max_depth=r.max_depth,
-                    rng=np.random.default_rng(mesh_ss),
-                    sigma_range=cfg.figures.sparse_mesh_sigma,
-                    threshold=cfg.figures.sparse_mesh_roughness_threshold,
-                    energy=arrays["wavelet_energy"],
-                )
+            mesh = sparse_mesh_render(  # takes RENDER_LOCK around its renders only
+                terrain,
+                camera,
+                lights,
+                bsdf,
+                image,
+                density=density,
+                spp=r.spp,
+                seed=_int_seed(seeds["render"]),
+                max_depth=r.max_depth,
+                rng=np.random.default_rng(mesh_ss),
+                sigma_range=cfg.figures.sparse_mesh_sigma,
+                threshold=cfg.figures.sparse_mesh_roughness_threshold,
+                energy=arrays["wavelet_energy"],
+            )
             arrays.update(mesh)
             timings["sparse_mesh_s"] = time.perf_counter() - t
     t = time.perf_counter()
