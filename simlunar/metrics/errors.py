@@ -61,6 +61,8 @@ METRICS: dict[str, Callable] = {
     "grad": _grad,
     "sal": _sal,
 }
+#: display names of the metrics (paper spelling), for tables and axis labels
+METRIC_NAMES = {"mse": "MSE", "grad": "GRAD", "sal": "SAL", "rmse": "RMSE", "mae": "MAE"}
 
 
 def depth_gradient_weights(truth) -> np.ndarray:

@@ -3,6 +3,7 @@
 from simlunar.planner.combination import CombinationFit, fit_combination
 from simlunar.planner.strategies import (
     STRATEGIES,
+    STRATEGY_NAMES,
     WEIGHTED,
     check_k,
     combine_maps,
@@ -13,6 +14,7 @@ from simlunar.planner.types import SamplePlan
 
 __all__ = [
     "STRATEGIES",
+    "STRATEGY_NAMES",
     "WEIGHTED",
     "CombinationFit",
     "SamplePlan",

@@ -37,6 +37,16 @@ from simlunar.planner._bluenoise import poisson_accept
 from simlunar.planner.types import SamplePlan
 
 WEIGHTED = ("gradient", "entropy", "wavelet", "saliency", "combination")
+#: display names of the strategies (paper spelling), for tables and figure legends
+STRATEGY_NAMES = {
+    "random": "Random",
+    "grid": "Grid",
+    "gradient": "Gradient",
+    "entropy": "Entropy",
+    "wavelet": "Wavelet",
+    "saliency": "Saliency",
+    "combination": "Combination",
+}
 _WEIGHTED_OPTS = (
     "uniform_mix",
     "density_cap",

@@ -13,18 +13,8 @@ from __future__ import annotations
 
 import math
 
-#: display names of strategies and metrics (paper spelling)
-STRATEGY_NAMES = {
-    "random": "Random",
-    "grid": "Grid",
-    "gradient": "Gradient",
-    "entropy": "Entropy",
-    "wavelet": "Wavelet",
-    "saliency": "Saliency",
-    "blue_noise": "Blue noise",
-    "combined": "Combined",
-}
-METRIC_NAMES = {"mse": "MSE", "grad": "GRAD", "sal": "SAL", "rmse": "RMSE", "mae": "MAE"}
+from simlunar.metrics import METRIC_NAMES
+from simlunar.planner import STRATEGY_NAMES
 
 
 def _name(table: dict, key: str) -> str:

@@ -15,23 +15,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.features import check_image, feature_map
-from simlunar.metrics import METRICS, check_densities, depth_gradient_weights
+from simlunar.metrics import METRIC_NAMES, METRICS, check_densities, depth_gradient_weights
 from simlunar.metrics import samples_for_equal_error as _samples_for_equal_error
 from simlunar.metrics import score as _score
 from simlunar.metrics._fast import error_sums
-from simlunar.planner import STRATEGIES, check_k, plan, strategy_weights
+from simlunar.planner import STRATEGIES, STRATEGY_NAMES, check_k, plan, strategy_weights
 from simlunar.reconstruction import OUTSIDE_POLICIES, reconstruct
 
-METRIC_LABELS = {"mse": "MSE", "grad": "GRAD", "sal": "SAL", "rmse": "RMSE", "mae": "MAE"}
-STRATEGY_LABELS = {
-    "random": "Random",
-    "grid": "Grid",
-    "gradient": "Gradient",
-    "entropy": "Entropy",
-    "wavelet": "Wavelet",
-    "saliency": "Saliency",
-    "combination": "Combination",
-}
 PAPER_STRATEGIES = ("grid", "random", "gradient", "entropy", "wavelet")
 
 
@@ -98,11 +88,11 @@ class SamplingStudyResult:
 
     def _table(self):
         cols = [s for s in self.strategies]
-        header = [STRATEGY_LABELS.get(s, s) for s in cols]
+        header = [STRATEGY_NAMES.get(s, s) for s in cols]
         body = []
         for m in self.metrics:
             if m in self.scores:
-                body.append((METRIC_LABELS.get(m, m), [self.scores[m][s] for s in cols]))
+                body.append((METRIC_NAMES.get(m, m), [self.scores[m][s] for s in cols]))
         return header, body
 
     def score_table_markdown(self, digits: int = 2) -> str:
