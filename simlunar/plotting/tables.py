@@ -60,44 +60,47 @@ def _tex_escape(s: str) -> str:
 
 
 def _tex_table(header: list[str], rows: list[tuple[str, list]], caption: str) -> str:
-    cols = "l" + "r" * (len(header) - 1)
-    out = [
-        "\\begin{table}[t]",
-        "\\centering",
-        f"\\caption{{{_tex_escape(caption)}}}",
-        f"\\begin{{tabular}}{{{cols}}}",
-        "\\toprule",
-        " & ".join(_tex_escape(h) for h in header) + " \\\\",
-        "\\midrule",
-    ]
-    for label, vals in rows:
-        b = _best(vals)
-        cells = [f"\\textbf{{{_fmt(v)}}}" if i == b else _fmt(v) for i, v in enumerate(vals)]
-        out.append(" & ".join([_tex_escape(label), *cells]) + " \\\\")
-    out += ["\\bottomrule", "\\end{tabular}", "\\end{table}"]
-    return "\n".join(out).replace("–", "--") + "\n"
+    out = _tex_begin(caption, len(header))
+    out += [" & ".join(_tex_escape(h) for h in header) + " \\\\", "\\midrule"]
+    out += _tex_rows(rows)
+    return _tex_end(out)
 
 
-def _tex_blocks(blocks: list[tuple[list[str], list[tuple[str, list]]]], caption: str) -> str:
-    """One tabular of stacked blocks, each with its own header row (paper Table 1)."""
-    ncols = len(blocks[0][0])
-    out = [
+def _tex_begin(caption: str, ncols: int) -> list[str]:
+    """Opening lines of a booktabs table: a label column, then ncols - 1 numeric ones."""
+    return [
         "\\begin{table}[t]",
         "\\centering",
         f"\\caption{{{_tex_escape(caption)}}}",
         f"\\begin{{tabular}}{{l{'r' * (ncols - 1)}}}",
         "\\toprule",
     ]
+
+
+def _tex_rows(rows: list[tuple[str, list]]) -> list[str]:
+    """Body lines of a LaTeX table, the best value of each row in bold."""
+    out = []
+    for label, vals in rows:
+        b = _best(vals)
+        cells = [f"\\textbf{{{_fmt(v)}}}" if i == b else _fmt(v) for i, v in enumerate(vals)]
+        out.append(" & ".join([_tex_escape(label), *cells]) + " \\\\")
+    return out
+
+
+def _tex_end(out: list[str]) -> str:
+    out += ["\\bottomrule", "\\end{tabular}", "\\end{table}"]
+    return "\n".join(out).replace("–", "--") + "\n"
+
+
+def _tex_blocks(blocks: list[tuple[list[str], list[tuple[str, list]]]], caption: str) -> str:
+    """One tabular of stacked blocks, each with its own header row (paper Table 1)."""
+    out = _tex_begin(caption, len(blocks[0][0]))
     for k, (header, rows) in enumerate(blocks):
         if k:
             out.append("\\midrule")
         out += [" & ".join(_tex_escape(h) for h in header) + " \\\\", "\\midrule"]
-        for label, vals in rows:
-            b = _best(vals)
-            cells = [f"\\textbf{{{_fmt(v)}}}" if i == b else _fmt(v) for i, v in enumerate(vals)]
-            out.append(" & ".join([_tex_escape(label), *cells]) + " \\\\")
-    out += ["\\bottomrule", "\\end{tabular}", "\\end{table}"]
-    return "\n".join(out).replace("–", "--") + "\n"
+        out += _tex_rows(rows)
+    return _tex_end(out)
 
 
 def score_tables(
