@@ -17,11 +17,11 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Annotated, Literal, Union
+from typing import Literal
 
 import numpy as np
 import yaml
-from pydantic import Discriminator, Field, Tag, ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
@@ -38,6 +38,7 @@ from simlunar.pipeline.config import (
     _Model,
     format_validation_error,
 )
+from simlunar.pipeline.schema import _tagged_union
 
 Vec3 = tuple[float, float, float]
 
@@ -85,25 +86,8 @@ class SunSceneCfg(SunLightCfg):
         return math.radians(self.angular_diameter_deg)
 
 
-def _union(default: str, *members):
-    tags = [m.model_fields["kind"].annotation.__args__[0] for m in members]
-
-    def pick(v):
-        return v.get("kind", default) if isinstance(v, dict) else getattr(v, "kind", default)
-
-    union = Union[tuple(Annotated[m, Tag(t)] for m, t in zip(members, tags))]  # noqa: UP007
-    return Annotated[
-        union,
-        Discriminator(
-            pick,
-            custom_error_type="bad_kind",
-            custom_error_message=f"kind must be one of {', '.join(tags)}",
-        ),
-    ]
-
-
-SceneCameraCfg = _union("orthographic_nadir", OrthoNadirCfg, PerspectiveSceneCfg)
-SceneLightCfg = _union("sun", SunSceneCfg, CameraLightCfg)
+SceneCameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveSceneCfg)
+SceneLightCfg = _tagged_union("sun", SunSceneCfg, CameraLightCfg)
 
 
 class SceneCfg(_Model):
