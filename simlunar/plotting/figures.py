@@ -15,7 +15,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from simlunar.plotting.tables import METRIC_NAMES, STRATEGY_NAMES
+from simlunar.metrics import METRIC_NAMES
+from simlunar.planner import STRATEGY_NAMES
 
 COLUMN_W = 3.4  # in, one column of a two-column paper
 PAGE_W = 7.0  # in, full page width
