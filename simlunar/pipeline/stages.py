@@ -146,16 +146,17 @@ def sensor_image(radiance: np.ndarray, cfg: SensorCfg | None, *, rng) -> np.ndar
 
 
 # --------------------------------------------------------------------------- study
-def _panel_arrays(image, depth, study: SamplingStudyCfg, density: float, *, rng) -> dict:
-    """Arrays for the image panels: wavelet energy, one wavelet plan and its reconstruction."""
-    from simlunar.features import feature_map
+def _panel_arrays(image, depth, energy, density: float, *, rng) -> dict:
+    """Arrays for the image panels: wavelet energy, one wavelet plan and its reconstruction.
+
+    ``energy`` is ``feature_map("wavelet", image)`` (float64), the map the plan samples from.
+    """
     from simlunar.planner import plan
     from simlunar.reconstruction import reconstruct
 
-    energy = feature_map("wavelet", image)
     n = image.size
     k = max(3, round(density * n))
-    p = plan("wavelet", k, image=image, rng=rng)
+    p = plan("wavelet", k, weights=energy, rng=rng)
     pts = np.stack([p.rows, p.cols], axis=1).astype(np.float64) + 0.5
     filled = np.where(np.isfinite(depth), depth, np.nanmean(depth))
     recon = reconstruct(pts, filled[p.rows, p.cols], image.shape)
@@ -244,8 +245,8 @@ def sparse_mesh_render(
         modulated render.
     threshold : float or None
         Normalised-energy threshold above which the geometry is kept metric.
-    energy : (rows, cols) float or None
-        ``feature_map("wavelet", image)`` when already computed.
+    energy : (rows, cols) float64 or None
+        ``feature_map("wavelet", image)`` when already computed (the plan samples from it).
 
     Returns
     -------
@@ -260,8 +261,12 @@ def sparse_mesh_render(
     from simlunar.render.materials import OrenNayarBSDF, sigma_map_from_energy
     from simlunar.terrain.types import Terrain
 
+    if energy is None:
+        from simlunar.features import feature_map
+
+        energy = feature_map("wavelet", image)
     k = max(3, round(density * image.size))
-    p = plan("wavelet", k, image=image, rng=rng)
+    p = plan("wavelet", k, weights=energy, rng=rng)
     pts = np.stack([p.rows, p.cols], axis=1).astype(np.float64) + 0.5
     heights = np.asarray(terrain.heights, np.float64)
     recon = reconstruct(pts, heights[p.rows, p.cols], heights.shape)
@@ -270,10 +275,6 @@ def sparse_mesh_render(
     bsdfs = {"sparse_mesh_render": bsdf}
     out = {}
     if sigma_range is not None and isinstance(bsdf, OrenNayarBSDF):
-        if energy is None:
-            from simlunar.features import feature_map
-
-            energy = feature_map("wavelet", image)
         lo, hi = sigma_range
         sigma = sigma_map_from_energy(energy, sigma_min=lo, sigma_max=hi, threshold=threshold)
         bsdfs["sparse_mesh_render_rough"] = OrenNayarBSDF(bsdf.sigma, bsdf.model, sigma_map=sigma)
@@ -355,12 +356,15 @@ def compute_unit(
         "albedo": np.asarray(terrain.albedo, np.float32),
     }
     if cfg.figures.enabled:
+        from simlunar.features import feature_map
+
         panel_ss, mesh_ss = seeds["panels"].spawn(2)
+        energy = feature_map("wavelet", image)  # once, for the panels and the sparse mesh
         arrays.update(
             _panel_arrays(
                 image,
                 depth,
-                cfg.study,
+                energy,
                 cfg.figures.panel_density,
                 rng=np.random.default_rng(panel_ss),
             )
@@ -381,7 +385,7 @@ def compute_unit(
                 rng=np.random.default_rng(mesh_ss),
                 sigma_range=cfg.figures.sparse_mesh_sigma,
                 threshold=cfg.figures.sparse_mesh_roughness_threshold,
-                energy=arrays["wavelet_energy"],
+                energy=energy,
             )
             arrays.update(mesh)
             timings["sparse_mesh_s"] = time.perf_counter() - t
@@ -483,7 +487,7 @@ def _compute_scanner_unit(
         spp=r.spp,
         seed=_int_seed(seeds["render"]),
         sensor=sensor,
-        bsdf=build_bsdf(r.bsdf),
+        bsdf=bsdf,
         guide_light=s.guide_light,
         sun=sun,
         projector_gamma=s.projector_gamma,
