@@ -157,7 +157,7 @@ def _panel_arrays(image, depth, energy, density: float, *, rng) -> dict:
     n = image.size
     k = max(3, round(density * n))
     p = plan("wavelet", k, weights=energy, rng=rng)
-    pts = np.stack([p.rows, p.cols], axis=1).astype(np.float64) + 0.5
+    pts = p.rc  # index coordinates: cell (r, c) sits at (r, c)
     filled = np.where(np.isfinite(depth), depth, np.nanmean(depth))
     recon = reconstruct(pts, filled[p.rows, p.cols], image.shape)
     return {
@@ -267,7 +267,7 @@ def sparse_mesh_render(
         energy = feature_map("wavelet", image)
     k = max(3, round(density * image.size))
     p = plan("wavelet", k, weights=energy, rng=rng)
-    pts = np.stack([p.rows, p.cols], axis=1).astype(np.float64) + 0.5
+    pts = p.rc  # index coordinates: cell (r, c) sits at (r, c)
     heights = np.asarray(terrain.heights, np.float64)
     recon = reconstruct(pts, heights[p.rows, p.cols], heights.shape)
     sparse = Terrain(recon, terrain.albedo, terrain.spacing, terrain.origin)
