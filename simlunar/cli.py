@@ -85,7 +85,11 @@ _SET_OPTION = typer.Option(None, "--set", help="override a key: --set render.spp
 def run(
     experiment: str = typer.Argument(..., help="experiment YAML (see experiments/)"),
     out: str = typer.Option(None, "--out", help="result folder [default: results/<name>]"),
-    workers: int = typer.Option(None, "--workers", help="local worker processes [default: 1]"),
+    workers: int = typer.Option(
+        None,
+        "--workers",
+        help="units at a time, as threads of this process; each sampling study on N forked processes [default: 1]",
+    ),
     scheduler: str = typer.Option(
         None, "--scheduler", help="Dask scheduler address, e.g. tcp://host:8786"
     ),

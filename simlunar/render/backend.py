@@ -146,7 +146,8 @@ def _probe(
         tail = (res.stdout + res.stderr).strip().splitlines()
         msg = "ok" if ok else f"exit {res.returncode}: {tail[-1] if tail else 'no output'}"
     except subprocess.TimeoutExpired:
-        ok, msg = False, f"probe timed out after {timeout:.0f} s"
+        # not cached: a slow start on a loaded machine says nothing about the library
+        return False, f"probe timed out after {timeout:.0f} s"
     cache[key] = [ok, msg]
     try:
         cache_dir.mkdir(parents=True, exist_ok=True)
@@ -249,8 +250,6 @@ def init(prefer: str | None = None) -> BackendInfo:
             stacklevel=2,
         )
     _INFO, _MI = info, mi
-    if os.environ.get("SIMLUNAR_RENDER_THREADS"):
-        set_render_threads(int(os.environ["SIMLUNAR_RENDER_THREADS"]))
     # the variant is set: now plugins that subclass mi.BSDF may be defined and registered
     import simlunar.render.plugins  # noqa: F401  (registers its hooks on import)
 
@@ -262,9 +261,7 @@ def init(prefer: str | None = None) -> BackendInfo:
 def set_render_threads(n: int | None) -> int:
     """Limit Dr.Jit's CPU thread pool to ``n`` threads (``None``: one per core).
 
-    Parallel sweeps run one unit per worker process; each worker rendering on every core would
-    oversubscribe the machine. Returns the previous thread count. Worker processes pick the
-    limit up from ``SIMLUNAR_RENDER_THREADS`` when they initialise Mitsuba.
+    Returns the previous thread count.
     """
     import drjit as dr
 

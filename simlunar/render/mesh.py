@@ -54,7 +54,8 @@ def terrain_mesh(terrain, *, name: str = "terrain", bsdf=None):
     nodata = np.isnan(heights)
     if nodata.all():
         raise ValueError("terrain.heights: every cell is nodata (NaN); nothing to render")
-    if len(grid_faces(heights.shape, nodata)) == 0:
+    ok = ~nodata
+    if not (ok[:-1, :-1] & ok[1:, :-1] & ok[:-1, 1:] & ok[1:, 1:]).any():
         raise ValueError("terrain.heights: no 2x2 block of valid cells; no triangle to render")
     rows, cols = heights.shape
     s = terrain.spacing
