@@ -34,7 +34,7 @@ from simlunar.pipeline.config import (
 STAGES = ("terrain", "render", "sensor", "study", "panels")
 
 #: bump when a change makes cached unit results invalid
-CACHE_VERSION = 1
+CACHE_VERSION = 2  # 2: figure arrays use index coordinates (no half-cell offset)
 
 
 #: Renders of units running concurrently in threads (``LocalPoolExecutor``) take turns: each
