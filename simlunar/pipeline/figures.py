@@ -111,8 +111,8 @@ def write_figures(out_dir: str | Path) -> list[Path]:
         emit(fig, f"error_vs_density_{m}")
 
     cache = UnitCache(out)
-    for rec in shown:
-        arr = cache.load_arrays(rec["key"])
+    shown_arrays = [cache.load_arrays(rec["key"]) for rec in shown]  # each .npz read once
+    for rec, arr in zip(shown, shown_arrays):
         if not {"image", "wavelet_energy", "plan_rows", "reconstruction", "depth"} <= set(arr):
             continue
         density = (rec.get("config", {}).get("figures") or {}).get("panel_density")
@@ -128,8 +128,7 @@ def write_figures(out_dir: str | Path) -> list[Path]:
         )
         emit(fig, f"panels_unit{rec.get('index', 0)}")
 
-    for rec in shown:
-        arr = cache.load_arrays(rec["key"])
+    for rec, arr in zip(shown, shown_arrays):
         if "sparse_mesh_render" not in arr or "radiance" not in arr:
             continue
         dens = (rec.get("config", {}).get("figures") or {}).get("sparse_mesh_density")
