@@ -1,7 +1,7 @@
 """All rendering specs in one place (NumPy only, importable without Mitsuba).
 
 Light specs come from :mod:`simlunar.render.lights`, BSDF specs from
-:mod:`simlunar.render.materials`; this module only gathers them (docs/interfaces.md).
+:mod:`simlunar.render.materials`; this module only gathers them (CONTRIBUTING.md).
 """
 
 from __future__ import annotations
