@@ -64,21 +64,21 @@ def _loc_path(loc: tuple, data: Any) -> str:
     return ".".join(parts).replace(".[", "[") or "<root>"
 
 
-_TAGS = {
-    "orthographic_nadir",
-    "perspective",
-    "sun",
-    "camera",
-    "lambert",
-    "oren_nayar",
-    "hapke",
-    "sampling",
-    "scanner",
-}
+def _union_tags() -> frozenset[str]:
+    """The ``kind`` values of every model (pydantic puts them in error locations of unions)."""
+    tags: set[str] = set()
+    todo = list(_Model.__subclasses__())
+    while todo:
+        m = todo.pop()
+        todo.extend(m.__subclasses__())
+        f = m.model_fields.get("kind")
+        if f is not None:
+            tags.update(a for a in getattr(f.annotation, "__args__", ()) if isinstance(a, str))
+    return frozenset(tags)
 
 
 def _is_field_name(item: str) -> bool:
-    return item not in _TAGS and "[" not in item
+    return item not in _union_tags() and "[" not in item
 
 
 def _message(err: dict) -> str:
@@ -236,47 +236,32 @@ def apply_sweep_value(data: dict, path: str, value: Any) -> dict:
     return set_path(data, path, value)
 
 
-_OVERRIDES = "terrain.overrides."
-
-
-def _check_override_path(path: str) -> None:
-    """``terrain.overrides.<section>[.<key>]`` must name a terrain preset parameter."""
-    from simlunar.terrain.params import override_keys
-
-    valid = override_keys()
-    parts = path[len(_OVERRIDES) :].split(".")
-    sec = parts[0]
-    if sec not in valid:
-        raise ConfigError(
-            f"sweep.{path}: no such terrain parameter section {sec!r} "
-            f"(valid under terrain.overrides: {', '.join(valid)})"
-        )
-    if len(parts) > 2 or (len(parts) == 2 and parts[1] not in valid[sec]):
-        raise ConfigError(
-            f"sweep.{path}: no such terrain parameter "
-            f"(valid keys under terrain.overrides.{sec}: {', '.join(valid[sec])})"
-        )
-
-
 def check_key_path(path: str, data: dict) -> None:
-    """Raise ConfigError unless ``path`` names a settable key of the schema for this data.
+    """Raise ConfigError unless ``path`` names a settable key of the schema for this data
+    (``terrain.overrides.fractal.rms_m`` included: the overrides are typed preset sections).
 
-    Under ``terrain.overrides`` (a free mapping in the schema) the keys are the terrain preset
-    parameters (:func:`simlunar.terrain.params.override_keys`): ``terrain.overrides.fractal``
-    or ``terrain.overrides.fractal.rms_m``.
+    Keys inside mappings with free labels (``study.strategy_options.<label>``) are not
+    settable one by one; set the whole mapping.
     """
-    if path.startswith(_OVERRIDES):
-        _check_override_path(path)
-        return
     parts = path.split(".")
     parent = ".".join(parts[:-1])
     try:
         keys = valid_keys(parent, data)
         model = _model_at(parent, data)
     except ConfigError:
-        raise ConfigError(f"sweep.{path}: no such key in the experiment schema") from None
+        keys, model = [], None
     if model is None or parts[-1] not in keys:
-        hint = f" (valid keys under {parent or 'the root'}: {', '.join(keys)})" if keys else ""
+        # name the keys of the deepest section of the path that exists
+        hint = ""
+        for n in range(len(parts) - 1, -1, -1):
+            prefix = ".".join(parts[:n])
+            try:
+                keys = valid_keys(prefix, data) if _model_at(prefix, data) is not None else []
+            except ConfigError:
+                continue
+            if keys:
+                hint = f" (valid keys under {prefix or 'the root'}: {', '.join(keys)})"
+                break
         raise ConfigError(f"sweep.{path}: no such key in the experiment schema{hint}")
     if parts[0] in ("sweep", "name"):
         raise ConfigError(f"sweep.{path}: this key cannot be swept")
@@ -296,21 +281,48 @@ def validate_data(data: Any, *, base_dir: Path | None = None) -> ExperimentCfg:
         cfg = ExperimentCfg.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(format_validation_error(exc, data)) from None
+    normalised: dict[str, list] = {}
     for path, values in cfg.sweep.items():
         check_key_path(path, data)
         if not values:
             raise ConfigError(f"sweep.{path}: give at least one value")
+        normalised[path] = []
         for i, v in enumerate(values):
             point = apply_sweep_value({k: x for k, x in data.items() if k != "sweep"}, path, v)
             try:
-                ExperimentCfg.model_validate(point)
+                model = ExperimentCfg.model_validate(point)
             except ValidationError as exc:
                 raise ConfigError(
                     f"sweep.{path}[{i}]: " + format_validation_error(exc, point)
                 ) from None
+            normalised[path].append(_normalised_value(v, model, path))
+    if normalised != cfg.sweep:
+        cfg = cfg.model_copy(update={"sweep": normalised})
     cfg = resolve_terrain_files(cfg, base_dir)
     _check_registries(cfg, data)
     return cfg
+
+
+def _has_text(v: Any) -> bool:
+    if isinstance(v, str):
+        return True
+    return isinstance(v, list) and any(isinstance(x, str) for x in v)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _normalised_value(raw: Any, point: ExperimentCfg, path: str) -> Any:
+    """A sweep value as the model holds it when the YAML gave text for a number
+    (``"0.5 rad"`` -> 28.64..., ``"1/32"`` -> 0.03125); other values as written, so
+    results.csv keeps ``30`` (not ``30.0``) in the column of a plain number."""
+    if not _has_text(raw):
+        return raw
+    value = get_path(point.model_dump(mode="json", by_alias=True), path)
+    if _is_number(value) or (isinstance(value, list) and value and all(map(_is_number, value))):
+        return value
+    return raw
 
 
 def _check_registries(cfg: ExperimentCfg, data: dict) -> None:

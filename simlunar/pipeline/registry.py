@@ -7,7 +7,7 @@ themselves (never a copy kept here), so a new strategy is usable as soon as it i
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from simlunar.errors import ConfigError
@@ -40,17 +40,17 @@ def strategy_names() -> list[str]:
     return list(STRATEGIES)
 
 
-def check_strategy(name: str, path: str, options: dict | None = None) -> None:
-    """A registered strategy, or a label whose ``options[name]["strategy"]`` is one.
+def check_strategy(name: str, path: str, options: Mapping | None = None) -> None:
+    """A registered strategy, or a label whose ``options[name].strategy`` is one.
 
     Labels let one study compare variants of a strategy, e.g.
     ``strategy_options: {wavelet_bn: {strategy: wavelet, blue_noise: true}}``.
+    ``options`` maps labels to :class:`~simlunar.pipeline.schema.StrategyOptionsCfg`.
     """
-    label_opts = (options or {}).get(name) or {}
-    if "strategy" in label_opts:
-        _check(
-            str(label_opts["strategy"]), strategy_names(), f"{path} ({name}).strategy", "strategy"
-        )
+    label_opts = (options or {}).get(name)
+    base = getattr(label_opts, "strategy", None)
+    if base is not None:
+        _check(str(base), strategy_names(), f"{path} ({name}).strategy", "strategy")
         return
     _check(name, strategy_names(), path, "strategy")
 

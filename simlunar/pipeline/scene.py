@@ -1,12 +1,9 @@
 """Scene description files for ``simlunar render SCENE.yaml --out DIR``.
 
-A scene YAML says what to render: ``terrain`` (the experiment schema's
-:class:`~simlunar.pipeline.config.TerrainCfg`: a preset or a DEM file), ``camera``,
-``light``, ``bsdf`` (the experiment schema's BSDF models), ``spp``, ``max_depth``, ``seed`` and
-an optional ``sensor``. Keys carry unit suffixes (``_deg``, ``_m``); unknown keys are errors.
-The camera and light models here are supersets of the experiment schema's (perspective
-cameras from ``fx/fy/cx/cy`` or thin lens; the finite solar disk; an ambient term), so the
-experiment schema can adopt them unchanged.
+A scene YAML says what to render: ``terrain``, ``camera``, ``light``, ``bsdf``, ``spp``,
+``max_depth``, ``seed`` and an optional ``sensor``, with the experiment schema's own models
+(:mod:`simlunar.pipeline.schema`: a scene is an experiment's ``terrain`` and ``render``
+sections, flattened). Keys carry unit suffixes (``_deg``, ``_m``); unknown keys are errors.
 
 The same ``seed`` gives the same terrain as an experiment with that seed (the per-stage seed
 split of :func:`simlunar.pipeline.stages.stage_seeds`).
@@ -15,79 +12,34 @@ split of :func:`simlunar.pipeline.stages.stage_seeds`).
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
-import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, ValidationError
 
 from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
+from simlunar.pipeline import translate
 from simlunar.pipeline.config import (
     BsdfCfg,
-    CameraLightCfg,
-    Deg,
-    Metres,
+    CameraCfg,
+    LightCfg,
     OrenNayarCfg,
     OrthoNadirCfg,
+    PerspectiveCfg,
     SensorCfg,
     SunLightCfg,
     TerrainCfg,
     _Model,
     format_validation_error,
+    load_yaml,
 )
-from simlunar.pipeline.schema import _tagged_union
 
-Vec3 = tuple[float, float, float]
-
-
-class PerspectiveSceneCfg(_Model):
-    """Pinhole (or thin-lens) camera at ``position_m`` looking at ``look_at_m``.
-
-    Give either ``fov_deg`` (horizontal; square pixels, centred principal point) or all of
-    ``fx, fy, cx, cy`` (pixels; pixel centres at i + 0.5, so centred is ``width/2``).
-    """
-
-    kind: Literal["perspective"]
-    width: int = Field(gt=0, le=16384)
-    height: int = Field(gt=0, le=16384)
-    fov_deg: Deg | None = Field(None, gt=0, lt=180, description="horizontal field of view")
-    fx: float | None = Field(None, gt=0)
-    fy: float | None = Field(None, gt=0)
-    cx: float | None = None
-    cy: float | None = None
-    position_m: Vec3
-    look_at_m: Vec3
-    up: Vec3 = (0.0, 0.0, 1.0)
-    aperture_radius_m: Metres = Field(0.0, ge=0, description="thin lens; 0 = pinhole")
-    focus_distance_m: Metres | None = Field(None, gt=0)
-
-    @model_validator(mode="after")
-    def _intrinsics(self) -> PerspectiveSceneCfg:
-        k = [self.fx, self.fy, self.cx, self.cy]
-        if self.fov_deg is None and any(v is None for v in k):
-            raise ValueError("give fov_deg or all of fx, fy, cx, cy")
-        if self.fov_deg is not None and any(v is not None for v in k):
-            raise ValueError("give fov_deg or fx, fy, cx, cy, not both")
-        if self.aperture_radius_m > 0 and self.focus_distance_m is None:
-            raise ValueError("a thin lens (aperture_radius_m > 0) needs focus_distance_m")
-        return self
-
-
-class SunSceneCfg(SunLightCfg):
-    """Distant sun; ``angular_diameter_deg`` 0.53 gives the real solar disk (soft shadows)."""
-
-    angular_diameter_deg: Deg = Field(0.0, ge=0, lt=90)
-
-    @property
-    def angular_diameter(self) -> float:
-        return math.radians(self.angular_diameter_deg)
-
-
-SceneCameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveSceneCfg)
-SceneLightCfg = _tagged_union("sun", SunSceneCfg, CameraLightCfg)
+#: the experiment schema's models, under the names this module used to define
+PerspectiveSceneCfg = PerspectiveCfg
+SunSceneCfg = SunLightCfg
+SceneCameraCfg = CameraCfg
+SceneLightCfg = LightCfg
 
 
 class SceneCfg(_Model):
@@ -96,8 +48,8 @@ class SceneCfg(_Model):
     name: str = Field("scene", pattern=r"^[A-Za-z0-9_.-]+$")
     description: str = ""
     terrain: TerrainCfg
-    camera: SceneCameraCfg = Field(default_factory=OrthoNadirCfg)
-    light: SceneLightCfg = Field(default_factory=SunSceneCfg)
+    camera: CameraCfg = Field(default_factory=OrthoNadirCfg)
+    light: LightCfg = Field(default_factory=SunLightCfg)
     ambient_radiance: float = Field(0.0, ge=0, description="constant sky radiance (0 = off)")
     bsdf: BsdfCfg = Field(default_factory=lambda: OrenNayarCfg(kind="oren_nayar"))
     spp: int = Field(16, ge=1, le=65536)
@@ -119,12 +71,9 @@ def load_scene(path) -> SceneCfg:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"scene file not found: {path}")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML ({exc})") from None
+    data = load_yaml(path)
     if not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping of keys, got {type(data).__name__}")
+        raise ConfigError(f"{path}: <root>: expected a mapping of keys, got {type(data).__name__}")
     try:
         cfg = SceneCfg.model_validate(data)
     except ValidationError as exc:
@@ -143,54 +92,20 @@ def _seeds(seed: int) -> tuple[np.random.SeedSequence, int]:
 
 
 def build_camera(cfg, terrain):
-    """geometry camera of a camera config (orthographic nadir over ``terrain`` or perspective)."""
-    from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose
-
-    if isinstance(cfg, OrthoNadirCfg):
-        return OrthoCamera.nadir_for_grid(
-            terrain.shape, terrain.spacing, terrain.origin, altitude=cfg.altitude_m
-        )
-    if cfg.fov_deg is not None:
-        k = Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg)
-    else:
-        k = Intrinsics(cfg.fx, cfg.fy, cfg.cx, cfg.cy, cfg.width, cfg.height)
-    return Camera(
-        k,
-        Pose.look_at(cfg.position_m, cfg.look_at_m, cfg.up),
-        aperture_radius=cfg.aperture_radius_m,
-        focus_distance=cfg.focus_distance_m,
-    )
+    """Geometry camera of a camera config (:func:`simlunar.pipeline.translate.camera`)."""
+    return translate.camera(cfg, terrain)
 
 
 def build_lights(cfg: SceneCfg) -> list:
     """Light specs of a scene config (the light, plus the ambient term when > 0)."""
-    from simlunar.render.lights import make_light
-
-    light = cfg.light
-    if isinstance(light, SunSceneCfg):
-        out = [
-            make_light(
-                "sun",
-                elevation=light.elevation,
-                azimuth=light.azimuth,
-                irradiance=light.irradiance,
-                angular_diameter=light.angular_diameter,
-            )
-        ]
-    else:
-        out = [make_light("camera", intensity=light.intensity)]
-    if cfg.ambient_radiance > 0:
-        out.append(make_light("ambient", radiance=cfg.ambient_radiance))
-    return out
+    return translate.lights(cfg.light, cfg.ambient_radiance)
 
 
 def build_scene_inputs(cfg: SceneCfg):
     """``(terrain, camera, lights, bsdf)`` for :func:`simlunar.render.render`."""
-    from simlunar.pipeline.stages import build_bsdf, build_terrain
-
     terrain_ss, _ = _seeds(cfg.seed)
-    terrain = build_terrain(cfg.terrain, rng=np.random.default_rng(terrain_ss))
-    return terrain, build_camera(cfg.camera, terrain), build_lights(cfg), build_bsdf(cfg.bsdf)
+    terrain = translate.build_terrain(cfg.terrain, rng=np.random.default_rng(terrain_ss))
+    return terrain, build_camera(cfg.camera, terrain), build_lights(cfg), translate.bsdf(cfg.bsdf)
 
 
 def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:

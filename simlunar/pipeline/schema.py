@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Literal, Optional, Union
 
 from pydantic import (
     BaseModel,
@@ -19,21 +19,64 @@ from pydantic import (
     ConfigDict,
     Discriminator,
     Field,
+    JsonValue,
+    PositiveInt,
+    StringConstraints,
     Tag,
-    ValidationInfo,
+    create_model,
     field_validator,
+    model_serializer,
     model_validator,
 )
 
 from simlunar.pipeline.units import log_spaced, parse_fraction, parse_quantity
 
-Deg = Annotated[float, BeforeValidator(lambda v: parse_quantity(v, "deg"))]
-Metres = Annotated[float, BeforeValidator(lambda v: parse_quantity(v, "m"))]
-Density = Annotated[float, BeforeValidator(parse_fraction)]
+#: what a unit-bearing key accepts in the YAML (for the editor schema): a number in the key's
+#: unit or a string with an explicit unit ("0.5 rad", "20 cm")
+_QUANTITY_INPUT = float | Annotated[str, StringConstraints(pattern=r"^\s*[-+]?[0-9.]")]
+_FRACTION_INPUT = (
+    float | Annotated[str, StringConstraints(pattern=r"^\s*[0-9.]+(\s*/\s*[0-9.]+)?\s*$")]
+)
+
+Deg = Annotated[
+    float,
+    BeforeValidator(lambda v: parse_quantity(v, "deg"), json_schema_input_type=_QUANTITY_INPUT),
+]
+Metres = Annotated[
+    float,
+    BeforeValidator(lambda v: parse_quantity(v, "m"), json_schema_input_type=_QUANTITY_INPUT),
+]
+Density = Annotated[float, BeforeValidator(parse_fraction, json_schema_input_type=_FRACTION_INPUT)]
+Px = Annotated[float, Field(ge=0)]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # finite numbers only: .inf / .nan in a YAML is a one-line error with its key path
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class _SetKeysModel(_Model):
+    """Serialises the keys that are set (not None) only: an override names what it changes."""
+
+    @model_serializer(mode="wrap")
+    def _set_keys_only(self, handler):
+        return {k: v for k, v in handler(self).items() if v is not None}
+
+
+def _partial(model: type[BaseModel]) -> type[BaseModel]:
+    """``model`` with every field optional (default None = keep the value it overrides)."""
+    fields = {}
+    for name, f in model.model_fields.items():
+        info = f._copy()
+        info.default = None
+        info.default_factory = None
+        fields[name] = (Optional[f.annotation], info)  # noqa: UP045 - runtime type
+    return create_model(
+        f"{model.__name__}Override",
+        __base__=_SetKeysModel,
+        __doc__=f"Overrides of {model.__name__} (unset keys keep the preset's value).",
+        **fields,
+    )
 
 
 def _tagged_union(default: str | None, *members: type[BaseModel]):
@@ -57,6 +100,130 @@ def _tagged_union(default: str | None, *members: type[BaseModel]):
 
 
 # --------------------------------------------------------------------------- terrain
+# The terrain preset files (scenes/aerial_1.yaml, ...) and an experiment's terrain.overrides use
+# these models; :mod:`simlunar.pipeline.translate` turns them into
+# :class:`simlunar.terrain.params.TerrainParams`. Defaults are the terrain package's.
+def _check_law(kind: str, law: str, coefficient, exponent) -> None:
+    from simlunar.terrain.sfd import get_law
+
+    get_law(kind, law, coefficient=coefficient, exponent=exponent)
+
+
+class GridCfg(_Model):
+    """The height grid: rows x cols cells of ``spacing_m``; ``origin_m`` = top-left (x, y)."""
+
+    rows: int = Field(256, ge=16)
+    cols: int = Field(256, ge=16)
+    spacing_m: Metres = Field(0.2, gt=0, description="cell size (m)")
+    origin_m: tuple[float, float] = Field((0.0, 0.0), description="top-left corner (x, y) (m)")
+
+
+class FractalCfg(_Model):
+    """fBm base surface."""
+
+    hurst: float = Field(0.8, gt=0, lt=1, description="Hurst exponent")
+    rms_m: Metres = Field(0.2, ge=0, description="RMS height (m)")
+    periodic: bool = False
+    rolloff_m: Metres | None = Field(None, gt=0, description="roll-off wavelength (m); null = none")
+
+
+class BedCfg(_Model):
+    """Low-frequency undulating bed."""
+
+    amplitude_m: Metres = Field(0.0, ge=0, description="RMS amplitude (m); 0 = none")
+    wavelength_m: Metres = Field(1.0, gt=0)
+
+
+class CratersCfg(_Model):
+    """Crater population: cumulative size-frequency law, diameter range, degradation."""
+
+    enabled: bool = True
+    law: str = Field("trask", description="trask, viper or power (then coefficient, exponent)")
+    d_min_m: Metres = Field(1.0, gt=0)
+    d_max_m: Metres = Field(30.0, gt=0)
+    coefficient: float | None = Field(None, gt=0, description="power law: N(>D) = c D^-e per m^2")
+    exponent: float | None = Field(None, gt=0)
+    diffusivity_m2_per_myr: float = Field(5.5, ge=0, description="topographic diffusion")
+    max_age_myr: float = Field(20.0, ge=0)
+
+    @model_validator(mode="after")
+    def _range_and_law(self):
+        if self.d_max_m <= self.d_min_m:
+            raise ValueError(
+                f"d_max_m: the diameter range is empty ({self.d_max_m} <= d_min_m {self.d_min_m})"
+            )
+        _check_law("craters", self.law, self.coefficient, self.exponent)
+        return self
+
+
+class RocksCfg(_Model):
+    """Rock population: cumulative law, diameter range, clustering, albedo contrast."""
+
+    enabled: bool = True
+    law: str = Field("intercrater", description="a rock law name or power")
+    d_min_m: Metres = Field(0.3, gt=0)
+    d_max_m: Metres = Field(3.0, gt=0)
+    coefficient: float | None = Field(None, gt=0)
+    exponent: float | None = Field(None, gt=0)
+    cluster_fraction: float = Field(0.5, ge=0, le=1)
+    cluster_radius_m: Metres = Field(3.0, gt=0)
+    mean_per_cluster: float = Field(8.0, ge=1)
+    albedo_contrast: float = Field(0.1, ge=-0.9, le=5)
+
+    @model_validator(mode="after")
+    def _range_and_law(self):
+        if self.d_max_m <= self.d_min_m:
+            raise ValueError(
+                f"d_max_m: the diameter range is empty ({self.d_max_m} <= d_min_m {self.d_min_m})"
+            )
+        _check_law("rocks", self.law, self.coefficient, self.exponent)
+        return self
+
+
+class AlbedoCfg(_Model):
+    """Albedo: mean, relative low-frequency variation and per-cell noise, ejecta brightening."""
+
+    mean: float = Field(0.12, gt=0, le=1)
+    variation: float = Field(0.08, ge=0, le=1)
+    noise: float = Field(0.02, ge=0, le=1)
+    ejecta_brightening: float = Field(0.25, ge=0, le=5)
+    uniform: bool = False
+
+
+class TerrainPresetCfg(_Model):
+    """A terrain preset file (``scenes/<name>.yaml``): the generator's parameters."""
+
+    name: str = "custom"
+    description: str = ""
+    sources: list[str] = Field(default_factory=list, description="provenance of the numbers")
+    grid: GridCfg = Field(default_factory=GridCfg)
+    fractal: FractalCfg = Field(default_factory=FractalCfg)
+    bed: BedCfg = Field(default_factory=BedCfg)
+    craters: CratersCfg = Field(default_factory=CratersCfg)
+    rocks: RocksCfg = Field(default_factory=RocksCfg)
+    albedo: AlbedoCfg = Field(default_factory=AlbedoCfg)
+
+
+#: the preset sections an experiment may override
+PRESET_SECTIONS = ("grid", "fractal", "bed", "craters", "rocks", "albedo")
+
+
+class TerrainOverridesCfg(_SetKeysModel):
+    """Preset parameters to change: ``{section: {key: value}}``, deep-merged into the preset
+    before its validation (e.g. ``{fractal: {rms_m: 0.05}}``); unset keys keep the preset's."""
+
+    grid: _partial(GridCfg) | None = None  # type: ignore[valid-type]
+    fractal: _partial(FractalCfg) | None = None  # type: ignore[valid-type]
+    bed: _partial(BedCfg) | None = None  # type: ignore[valid-type]
+    craters: _partial(CratersCfg) | None = None  # type: ignore[valid-type]
+    rocks: _partial(RocksCfg) | None = None  # type: ignore[valid-type]
+    albedo: _partial(AlbedoCfg) | None = None  # type: ignore[valid-type]
+
+    def as_mapping(self) -> dict[str, dict]:
+        """The set keys only: ``{section: {key: value}}`` (empty sections dropped)."""
+        return {k: v for k, v in self.model_dump().items() if v}
+
+
 class TerrainCfg(_Model):
     """Terrain: a named preset (``scenes/<name>.yaml``) or a DEM file."""
 
@@ -64,41 +231,18 @@ class TerrainCfg(_Model):
     scale: float = Field(1.0, gt=0, le=1, description="preset resolution scale (1/8 = small)")
     file: Path | None = Field(None, description="DEM file (.npy, .tif, .exr); relative to the YAML")
     spacing_m: Metres | None = Field(None, gt=0, description="DEM cell size (m), for file")
-    albedo_file: Path | None = Field(None, description="optional albedo grid file")
+    albedo_file: Path | None = Field(
+        None, description="albedo grid file (.npy, same shape as the DEM), for file"
+    )
     albedo: float | None = Field(
         None, ge=0, le=1, description="replace the albedo by this uniform value (ablation)"
     )
-    overrides: dict[str, Any] = Field(
-        default_factory=dict,
+    overrides: TerrainOverridesCfg = Field(
+        default_factory=TerrainOverridesCfg,
         description="preset parameters to change, deep-merged into the preset before its "
         "validation: {section: {key: value}}, e.g. {fractal: {rms_m: 0.05}}; sections grid, "
         "fractal, bed, craters, rocks, albedo with the preset YAML's keys",
     )
-
-    @field_validator("overrides")
-    @classmethod
-    def _valid_overrides(cls, v: dict[str, Any], info: ValidationInfo) -> dict[str, Any]:
-        # The terrain package validates (merge_overrides + params_from_dict), so the rules are
-        # the presets' own. A ParamError names its key; it is reported as "<key>: <problem>",
-        # which format_validation_error appends to this field's path
-        # (terrain.overrides.fractal.rms_m: ...).
-        if not v:
-            return v
-        from simlunar.terrain.params import ParamError
-        from simlunar.terrain.presets import load_preset
-
-        preset = info.data.get("preset")
-        if preset is None:
-            raise ValueError("overrides apply to a preset only (give terrain.preset)")
-        try:
-            load_preset(preset)
-        except (ValueError, FileNotFoundError):
-            return v  # a bad preset name is reported at terrain.preset
-        try:
-            load_preset(preset, overrides=v)
-        except ParamError as exc:
-            raise ValueError(f"{exc.key}: {exc.problem}" if exc.key else exc.problem) from None
-        return v
 
     @model_validator(mode="after")
     def _one_source(self) -> TerrainCfg:
@@ -106,6 +250,19 @@ class TerrainCfg(_Model):
             raise ValueError("give exactly one of preset or file")
         if self.file is not None and self.spacing_m is None:
             raise ValueError("a DEM file needs spacing_m")
+        if self.albedo_file is not None and self.file is None:
+            raise ValueError("albedo_file goes with a DEM file (give terrain.file)")
+        if self.preset is None and self.overrides.model_dump():
+            raise ValueError("overrides: overrides apply to a preset only (give terrain.preset)")
+        if self.overrides.as_mapping():
+            # the merged preset must be valid; a bad preset name is reported at terrain.preset
+            from simlunar.pipeline.presets import PresetError, merged_preset
+
+            try:
+                merged_preset(self.preset, self.overrides)
+            except PresetError as exc:
+                if exc.key is not None:
+                    raise ValueError(f"overrides.{exc.key}: {exc.problem}") from None
         return self
 
 
@@ -117,15 +274,52 @@ class OrthoNadirCfg(_Model):
     altitude_m: Metres = Field(50.0, gt=0, description="camera height above z = 0 (m)")
 
 
+Vec3 = tuple[float, float, float]
+
+
 class PerspectiveCfg(_Model):
-    """Pinhole camera at ``position_m`` looking at ``look_at_m``."""
+    """Pinhole (or thin-lens) camera at ``position_m`` looking at ``look_at_m``.
+
+    Give either ``fov_deg`` (horizontal; square pixels, centred principal point) or all of
+    ``fx, fy, cx, cy`` (pixels; pixel centres at i + 0.5, so centred is ``width/2``).
+    """
 
     kind: Literal["perspective"]
-    width: int = Field(gt=0)
-    height: int = Field(gt=0)
-    fov_deg: Deg = Field(gt=0, lt=180, description="horizontal field of view")
-    position_m: tuple[float, float, float]
-    look_at_m: tuple[float, float, float]
+    width: int = Field(gt=0, le=16384)
+    height: int = Field(gt=0, le=16384)
+    fov_deg: Deg | None = Field(None, gt=0, lt=180, description="horizontal field of view")
+    fx: float | None = Field(None, gt=0, description="focal length (px)")
+    fy: float | None = Field(None, gt=0, description="focal length (px)")
+    cx: float | None = Field(None, description="principal point (px)")
+    cy: float | None = Field(None, description="principal point (px)")
+    position_m: Vec3
+    look_at_m: Vec3
+    up: Vec3 = Field((0.0, 0.0, 1.0), description="world up direction (unit-free)")
+    aperture_radius_m: Metres = Field(0.0, ge=0, description="thin lens; 0 = pinhole")
+    focus_distance_m: Metres | None = Field(None, gt=0)
+
+    @model_validator(mode="after")
+    def _intrinsics(self) -> PerspectiveCfg:
+        k = [self.fx, self.fy, self.cx, self.cy]
+        if self.fov_deg is None and any(v is None for v in k):
+            raise ValueError("give fov_deg or all of fx, fy, cx, cy")
+        if self.fov_deg is not None and any(v is not None for v in k):
+            raise ValueError("give fov_deg or fx, fy, cx, cy, not both")
+        if self.aperture_radius_m > 0 and self.focus_distance_m is None:
+            raise ValueError("a thin lens (aperture_radius_m > 0) needs focus_distance_m")
+        view = [b - a for a, b in zip(self.position_m, self.look_at_m)]
+        norm = math.sqrt(sum(v * v for v in view))
+        if norm == 0:
+            raise ValueError("look_at_m: the camera looks at its own position (position_m)")
+        up = math.sqrt(sum(v * v for v in self.up))
+        cross = (
+            view[1] * self.up[2] - view[2] * self.up[1],
+            view[2] * self.up[0] - view[0] * self.up[2],
+            view[0] * self.up[1] - view[1] * self.up[0],
+        )
+        if up == 0 or math.sqrt(sum(c * c for c in cross)) <= 1e-9 * norm * up:
+            raise ValueError("up: must not be zero or parallel to the viewing direction")
+        return self
 
 
 CameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveCfg)
@@ -135,7 +329,7 @@ class SunLightCfg(_Model):
     """A distant sun. Azimuth from +y (north) clockwise towards +x (east)."""
 
     kind: Literal["sun"] = "sun"
-    elevation_deg: Deg = Field(30.0, ge=0, le=90)
+    elevation_deg: Deg = Field(30.0, gt=0, le=90, description="above the horizon (0 < e <= 90)")
     azimuth_deg: Deg = Field(135.0, ge=-360, le=360)
     irradiance: float = Field(1.0, gt=0, description="W/m^2 at normal incidence (relative)")
     angular_diameter_deg: Deg = Field(
@@ -149,6 +343,10 @@ class SunLightCfg(_Model):
     @property
     def azimuth(self) -> float:
         return math.radians(self.azimuth_deg)
+
+    @property
+    def angular_diameter(self) -> float:
+        return math.radians(self.angular_diameter_deg)
 
 
 class CameraLightCfg(_Model):
@@ -169,7 +367,7 @@ class OrenNayarCfg(_Model):
     """Oren-Nayar (1994); ``sigma_deg`` is the slope standard deviation."""
 
     kind: Literal["oren_nayar"]
-    sigma_deg: Deg = Field(20.0, ge=0, le=90)
+    sigma_deg: Deg = Field(20.0, ge=0, lt=90, description="slope standard deviation (< 90)")
     model: Literal["full", "qualitative"] = "full"
 
     @property
@@ -201,8 +399,9 @@ class SensorCfg(_Model):
     exposure_e: float | None = Field(
         None,
         gt=0,
-        description="electrons per unit linear radiance; null = auto: the 99.5th "
-        "percentile radiance fills 80% of the well",
+        description="electrons per unit linear radiance; null = auto exposure: the 99.5th "
+        "percentile of the reference radiance fills 80% of the full well (the guide image; "
+        "the white calibration frame in scanner studies)",
     )
     response: Literal["linear", "gamma"] = "linear"
     gamma: float = Field(2.2, gt=0)
@@ -228,7 +427,9 @@ class DensityRange(_Model):
     stop: Density = Field(alias="to")
     count: int = Field(ge=1, le=64)
 
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=False)
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, populate_by_name=False, allow_inf_nan=False
+    )
 
     def values(self) -> list[float]:
         return log_spaced(self.start, self.stop, self.count)
@@ -240,6 +441,103 @@ def _densities(value):
     return value
 
 
+# Planner options. Defaults are the library's (a test compares them with the signatures of
+# simlunar.planner / simlunar.features); the translation passes them to the weighted strategies.
+#: the feature-map options each weighted strategy's map takes
+FEATURE_OPTION_KEYS = {
+    "gradient": (),
+    "saliency": (),
+    "entropy": ("size", "scale"),
+    "wavelet": ("wavelet", "levels", "boundary"),
+}
+
+
+class FeatureOptsCfg(_Model):
+    """Options of the strategy's importance map (:func:`simlunar.features.feature_map`).
+
+    ``wavelet``, ``levels``, ``boundary`` belong to the wavelet map; ``size``, ``scale`` to the
+    entropy map. A ``combination`` passes each map the options that belong to it.
+    """
+
+    wavelet: str = Field("db2", description="wavelet map: PyWavelets wavelet name")
+    levels: PositiveInt | None = Field(
+        None, description="wavelet map: decomposition levels summed, finest first; null = all"
+    )
+    boundary: Literal["symmetric", "periodic"] = Field("symmetric", description="wavelet map")
+    size: PositiveInt = Field(9, description="entropy map: window side (px)")
+    scale: Literal["minmax", "unit"] = Field("minmax", description="entropy map: 8-bit scaling")
+
+    @field_validator("wavelet")
+    @classmethod
+    def _known_wavelet(cls, v: str) -> str:
+        import pywt
+
+        if v not in pywt.wavelist(kind="discrete"):
+            raise ValueError(f"unknown discrete wavelet {v!r} (e.g. db2, haar, sym4)")
+        return v
+
+
+class CoefficientsCfg(_Model):
+    """``combination`` strategy: the weight of each feature map (maps normalised to mean 1)."""
+
+    gradient: float | None = Field(None, ge=0)
+    entropy: float | None = Field(None, ge=0)
+    wavelet: float | None = Field(None, ge=0)
+    saliency: float | None = Field(None, ge=0)
+
+    def as_mapping(self) -> dict[str, float]:
+        return {k: v for k, v in self.model_dump().items() if v is not None}
+
+
+class PlannerOptsCfg(_Model):
+    """Options of a feature-weighted strategy (:func:`simlunar.planner.plan`)."""
+
+    uniform_mix: float = Field(0.0, ge=0, le=1, description="mixture with uniform sampling")
+    density_cap: float | None = Field(
+        None, ge=1, description="max regional density, a multiple of the mean; null = none"
+    )
+    cap_block: PositiveInt = Field(16, description="block side (px) of density_cap")
+    blue_noise: bool = Field(False, description="Poisson-disk-like weighted sampling")
+    blue_noise_radius: float = Field(0.5, gt=0, description="radius factor of blue_noise")
+    feature_opts: FeatureOptsCfg = Field(default_factory=FeatureOptsCfg)
+    coefficients: CoefficientsCfg = Field(
+        default_factory=CoefficientsCfg, description="combination only: map weights"
+    )
+
+
+class StrategyOptionsCfg(PlannerOptsCfg):
+    """A strategy label's options: ``strategy`` names the registered strategy (default: the
+    label itself), the rest are its planner options."""
+
+    strategy: str | None = Field(None, description="registered strategy; null = the label")
+
+
+def check_planner_options(base: str, opts: PlannerOptsCfg) -> None:
+    """Raise ``ValueError("<key>: problem")`` for options the strategy ``base`` does not take."""
+    default = PlannerOptsCfg()
+    changed = [k for k in PlannerOptsCfg.model_fields if getattr(opts, k) != getattr(default, k)]
+    if base in ("grid", "random"):
+        if changed:
+            raise ValueError(f"{changed[0]}: strategy {base!r} takes no options")
+        return
+    if base == "combination":
+        if not opts.coefficients.as_mapping():
+            raise ValueError("coefficients: strategy 'combination' needs at least one weight")
+        features = list(opts.coefficients.as_mapping())
+    else:
+        if "coefficients" in changed:
+            raise ValueError(f"coefficients: only the combination strategy takes them ({base!r})")
+        features = [base]
+    allowed = {k for f in features for k in FEATURE_OPTION_KEYS.get(f, ())}
+    fdefault = FeatureOptsCfg()
+    for k in FeatureOptsCfg.model_fields:
+        if getattr(opts.feature_opts, k) != getattr(fdefault, k) and k not in allowed:
+            raise ValueError(
+                f"feature_opts.{k}: not an option of the {'/'.join(features)} map "
+                f"(valid: {', '.join(sorted(allowed)) or 'none'})"
+            )
+
+
 class SamplingStudyCfg(_Model):
     """The sampling study of the paper's section 4."""
 
@@ -247,11 +545,18 @@ class SamplingStudyCfg(_Model):
     strategies: list[str] = Field(
         default_factory=lambda: ["random", "grid", "gradient", "entropy", "wavelet"], min_length=1
     )
-    densities: Annotated[list[Density], BeforeValidator(_densities)] = Field(min_length=1)
+    densities: Annotated[
+        list[Density],
+        BeforeValidator(_densities, json_schema_input_type=list[Density] | DensityRange),
+    ] = Field(min_length=1)
     trials: int = Field(20, ge=1, le=1000)
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
     range_noise_std_m: Metres = Field(0.0, ge=0, description="range-sensor noise (m)")
-    strategy_options: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    strategy_options: dict[str, StrategyOptionsCfg] = Field(
+        default_factory=dict,
+        description="label -> options; a label not registered as a strategy names one in "
+        "'strategy' (e.g. wavelet_bn: {strategy: wavelet, blue_noise: true})",
+    )
 
     @field_validator("strategies", "metrics")
     @classmethod
@@ -259,6 +564,86 @@ class SamplingStudyCfg(_Model):
         if len(set(v)) != len(v):
             raise ValueError(f"names must be unique, got {v}")
         return v
+
+    @model_validator(mode="after")
+    def _options_fit(self) -> SamplingStudyCfg:
+        from simlunar.planner import STRATEGIES
+
+        for label, opts in self.strategy_options.items():
+            base = opts.strategy or label
+            if base not in STRATEGIES:
+                continue  # reported with the registries (unknown strategy, with its path)
+            try:
+                check_planner_options(base, opts)
+            except ValueError as exc:
+                raise ValueError(f"strategy_options.{label}.{exc}") from None
+        return self
+
+
+class RigCfg(_Model):
+    """Adjustments of the rig preset (:mod:`simlunar.scanner.rigs`); null = the preset's."""
+
+    fill: float = Field(0.9, gt=0, le=1, description="projection footprint / terrain side")
+    fov_x_deg: Deg | None = Field(
+        None,
+        gt=0,
+        lt=180,
+        description="projector horizontal field of view (50 moonyard, 30 aerial)",
+    )
+    cam_fov_x_deg: Deg | None = Field(
+        None, gt=0, lt=180, description="triangulation camera field of view; null = projector's"
+    )
+    distance_m: Metres | None = Field(
+        None, gt=0, description="moonyard: projector standoff; null = fit the terrain"
+    )
+    altitude_m: Metres | None = Field(
+        None, gt=0, description="aerial: projector altitude; null = fit the terrain"
+    )
+    elevation_deg: Deg | None = Field(
+        None, gt=0, le=90, description="moonyard: projector elevation (default 70)"
+    )
+    azimuth_deg: Deg | None = Field(None, ge=-360, le=360, description="projector azimuth")
+    baseline_m: Metres | None = Field(
+        None, gt=0, description="camera offset; null = 0.25 (moonyard) / 0.15 (aerial) x standoff"
+    )
+    verge: bool = Field(True, description="camera verged on the target")
+    aperture_radius_m: Metres = Field(0.0, ge=0, description="camera thin lens; 0 = pinhole")
+    focus_distance_m: Metres | None = Field(None, gt=0, description="null = the target")
+
+
+class GrayOptsCfg(_Model):
+    """Gray-code scan options (:func:`simlunar.scanner.modes.gray_code_scan`)."""
+
+    black_threshold: float = Field(0.05, ge=0, le=1, description="validity (frame units)")
+    white_threshold: float = Field(0.01, ge=0, le=1, description="bit reliability (frame units)")
+    inverses: Literal["linearity", "render"] = "linearity"
+    method: Literal["plane", "rays"] = "plane"
+    require_reliable: bool = True
+    subpixel: bool = Field(False, description="sub-pixel stripe-edge refinement")
+
+
+class DotOptsCfg(_Model):
+    """Dot scan options (:func:`simlunar.scanner.modes.dot_scan`)."""
+
+    exact: bool = Field(False, description="one dot per frame (reference mode)")
+    radius_px: Px = Field(0.0, description="dot radius (projector px); 0 = one pixel")
+    min_proj_spacing_px: Px = Field(8.0, description="scheduling spacing (projector px)")
+    min_cam_spacing_px: Px = Field(6.0, description="scheduling spacing (camera px)")
+    tol_px: Px = Field(2.0, description="matching tolerance (camera px)")
+    rel_threshold: float = Field(0.02, ge=0, le=1, description="relative blob threshold")
+    abs_threshold: float = Field(0.02, ge=0, le=1, description="absolute blob threshold")
+    batch: PositiveInt = Field(32, description="frames per render call (memory only)")
+
+
+class ScannerOptionsCfg(_Model):
+    """Scanner study options: rig adjustments, gray-code and dot scan options, planner options."""
+
+    rig: RigCfg = Field(default_factory=RigCfg)
+    gray_opts: GrayOptsCfg = Field(default_factory=GrayOptsCfg)
+    dot_opts: DotOptsCfg = Field(default_factory=DotOptsCfg)
+    planner_opts: dict[str, PlannerOptsCfg] = Field(
+        default_factory=dict, description="planner name -> options (study.planners only)"
+    )
 
 
 class ScannerStudyCfg(_Model):
@@ -280,8 +665,12 @@ class ScannerStudyCfg(_Model):
     trials: int = Field(1, ge=1, le=100)
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
     rig: Literal["moonyard", "aerial"] = Field("moonyard", description="rig preset")
-    projector_px: tuple[int, int] = Field((256, 192), description="projector (width, height)")
-    camera_px: tuple[int, int] = Field((256, 192), description="camera (width, height)")
+    projector_px: tuple[PositiveInt, PositiveInt] = Field(
+        (256, 192), description="projector (width, height)"
+    )
+    camera_px: tuple[PositiveInt, PositiveInt] = Field(
+        (256, 192), description="camera (width, height)"
+    )
     guide_light: Literal["projector", "sun"] = Field(
         "projector", description="guide image light: camera-centred projector or render.light"
     )
@@ -290,11 +679,33 @@ class ScannerStudyCfg(_Model):
     camera_blur_px: float = Field(
         0.0, ge=0, description="camera lens point-spread function, Gaussian sigma (camera px)"
     )
-    options: dict[str, Any] = Field(
-        default_factory=dict,
-        description="extra keyword options of run_scanner_study "
-        "(gray_opts, dot_opts, planner_opts, rig keywords under 'rig')",
+    options: ScannerOptionsCfg = Field(
+        default_factory=ScannerOptionsCfg,
+        description="rig adjustments (rig), gray_opts, dot_opts, planner_opts",
     )
+
+    @model_validator(mode="after")
+    def _options_fit(self) -> ScannerStudyCfg:
+        from simlunar.planner import STRATEGIES
+
+        o = self.options
+        stray = sorted(set(o.planner_opts) - set(self.planners))
+        if stray:
+            raise ValueError(
+                f"options.planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
+            )
+        for name, opts in o.planner_opts.items():
+            if name in STRATEGIES:
+                try:
+                    check_planner_options(name, opts)
+                except ValueError as exc:
+                    raise ValueError(f"options.planner_opts.{name}.{exc}") from None
+        moonyard_only = ("distance_m", "elevation_deg")
+        aerial_only = ("altitude_m",)
+        for key in aerial_only if self.rig == "moonyard" else moonyard_only:
+            if getattr(o.rig, key) is not None:
+                raise ValueError(f"options.rig.{key}: not an option of the {self.rig} rig")
+        return self
 
 
 StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg)
@@ -348,8 +759,23 @@ class ExperimentCfg(_Model):
     terrain: TerrainCfg
     render: RenderCfg = Field(default_factory=RenderCfg)
     study: StudyCfg
-    sweep: dict[str, list[Any]] = Field(
+    sweep: dict[str, list[JsonValue]] = Field(
         default_factory=dict,
-        description="dotted key path -> values; the cartesian product becomes work units",
+        description="dotted key path -> values; the cartesian product becomes work units "
+        "(each point is validated against this schema; unit strings become numbers)",
     )
     figures: FiguresCfg = Field(default_factory=FiguresCfg)
+
+    @model_validator(mode="after")
+    def _study_fits_render(self) -> ExperimentCfg:
+        sensor = self.render.sensor
+        if (
+            isinstance(self.study, ScannerStudyCfg)
+            and sensor is not None
+            and sensor.exposure_e is not None
+        ):
+            raise ValueError(
+                "render.sensor.exposure_e: a scanner study sets the exposure from its white "
+                "calibration frame (the auto exposure); leave exposure_e null"
+            )
+        return self

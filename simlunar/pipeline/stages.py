@@ -7,8 +7,9 @@ study. Random streams are split per stage from the experiment seed with
 every sweep point of an ablation sees the same terrain and the same sampling trials (common
 random numbers make the comparison sharper).
 
-This module converts YAML units (``_deg``, ``_m``) into the library's SI units and radians; the
-library functions it calls take arrays and keyword-only options, never config objects.
+Config models become library objects (SI units, radians, option dicts and dataclasses) in
+:mod:`simlunar.pipeline.translate`; the library functions called here take arrays and
+keyword-only options, never config objects.
 """
 
 from __future__ import annotations
@@ -19,11 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.pipeline import translate
 from simlunar.pipeline.config import (
     ExperimentCfg,
-    HapkeCfg,
-    LambertCfg,
-    OrenNayarCfg,
     OrthoNadirCfg,
     SamplingStudyCfg,
     SensorCfg,
@@ -55,63 +54,33 @@ def _int_seed(ss: np.random.SeedSequence) -> int:
 
 # --------------------------------------------------------------------------- terrain
 def build_terrain(cfg, *, rng):
-    """The :class:`~simlunar.terrain.Terrain` of a :class:`TerrainCfg`."""
-    if cfg.preset is not None:
-        from simlunar.terrain import generate
-        from simlunar.terrain.presets import load_preset
-
-        params = load_preset(cfg.preset, scale=cfg.scale, overrides=cfg.overrides or None)
-        terrain = generate(params, rng=rng).terrain
-    else:
-        from simlunar.terrain.io import load_dem
-
-        kw = {"spacing": cfg.spacing_m}
-        if cfg.albedo_file is not None:
-            kw["albedo_file"] = cfg.albedo_file
-        terrain = load_dem(cfg.file, **kw)
-    if cfg.albedo is not None:
-        from simlunar.terrain.types import Terrain
-
-        terrain = Terrain(
-            terrain.heights,
-            np.full(terrain.shape, cfg.albedo, np.float32),
-            terrain.spacing,
-            terrain.origin,
-        )
-    return terrain
+    """The :class:`~simlunar.terrain.Terrain` of a :class:`TerrainCfg`
+    (:func:`simlunar.pipeline.translate.build_terrain`)."""
+    return translate.build_terrain(cfg, rng=rng)
 
 
 # --------------------------------------------------------------------------- render
 def scene_inputs(cfg: ExperimentCfg):
-    """``(terrain, camera, lights, bsdf)`` of an experiment, through the scene builder.
+    """``(terrain, camera, lights, bsdf)`` of an experiment.
 
-    The experiment's ``terrain`` and ``render`` sections are a subset of the scene schema
-    (:class:`simlunar.pipeline.scene.SceneCfg`), so one builder serves ``simlunar render`` and
-    ``simlunar run`` and both give the same terrain for the same seed.
+    The experiment's ``terrain`` and ``render`` sections are the scene schema's models
+    (:class:`simlunar.pipeline.scene.SceneCfg`), translated by the same functions, so
+    ``simlunar render`` and ``simlunar run`` give the same terrain for the same seed.
     """
-    from simlunar.pipeline.scene import SceneCfg, build_scene_inputs
-
-    r = cfg.render.model_dump(mode="json", by_alias=True)
-    r.pop("sensor", None)
-    scene = SceneCfg.model_validate(
-        {"terrain": cfg.terrain.model_dump(mode="json"), "seed": cfg.seed, **r}
+    terrain_ss = stage_seeds(cfg.seed)["terrain"]
+    terrain = translate.build_terrain(cfg.terrain, rng=np.random.default_rng(terrain_ss))
+    r = cfg.render
+    return (
+        terrain,
+        translate.camera(r.camera, terrain),
+        translate.lights(r.light, r.ambient_radiance),
+        translate.bsdf(r.bsdf),
     )
-    return build_scene_inputs(scene)
 
 
 def build_bsdf(cfg):
-    from simlunar.render.materials import make_bsdf
-
-    if isinstance(cfg, LambertCfg):
-        return make_bsdf("lambert")
-    if isinstance(cfg, OrenNayarCfg):
-        return make_bsdf("oren_nayar", sigma=cfg.sigma, model=cfg.model)
-    if isinstance(cfg, HapkeCfg):
-        kw = {k: getattr(cfg, k) for k in ("w", "b", "c", "B0", "h") if getattr(cfg, k) is not None}
-        if cfg.theta_bar_deg is not None:
-            kw["theta_bar"] = float(np.radians(cfg.theta_bar_deg))
-        return make_bsdf("hapke", **kw)
-    raise ValueError(f"render.bsdf: unsupported BSDF {cfg!r}")
+    """BSDF spec of a BSDF config (:func:`simlunar.pipeline.translate.bsdf`)."""
+    return translate.bsdf(cfg)
 
 
 def luminance(image: np.ndarray) -> np.ndarray:
@@ -123,25 +92,20 @@ def luminance(image: np.ndarray) -> np.ndarray:
 
 
 def sensor_image(radiance: np.ndarray, cfg: SensorCfg | None, *, rng) -> np.ndarray:
-    """Radiance (rows, cols) -> sensor image in [0, 1] (float32); None = normalised radiance."""
+    """Radiance (rows, cols) -> sensor image in [0, 1] (float32).
+
+    ``exposure_e: null`` and ``sensor: null`` use the one auto-exposure rule
+    (:mod:`simlunar.imaging.exposure`): the 99.5th percentile of this radiance at 80 % of the
+    full well, or (no sensor) at 0.8 of the [0, 1] image, noiseless.
+    """
     finite = np.nan_to_num(radiance, nan=0.0)
     if cfg is None:
-        top = float(np.percentile(finite, 99.5)) or 1.0
-        return np.clip(finite / top, 0, 1).astype(np.float32)
-    from simlunar.imaging.sensor import SensorModel, apply_sensor
+        from simlunar.imaging.exposure import auto_gain
 
-    exposure = cfg.exposure_e
-    if exposure is None:
-        top = float(np.percentile(finite, 99.5))
-        exposure = 0.8 * cfg.full_well_e / top if top > 0 else 1.0
-    model = SensorModel(
-        exposure=exposure,
-        full_well_e=cfg.full_well_e,
-        read_noise_e=cfg.read_noise_e,
-        bits=cfg.bits,
-        response=cfg.response,
-        gamma=cfg.gamma,
-    )
+        return np.clip(finite * auto_gain(finite), 0, 1).astype(np.float32)
+    from simlunar.imaging.sensor import apply_sensor
+
+    model = translate.sensor_model(cfg, reference=finite)
     return apply_sensor(finite, model, rng=rng).astype(np.float32)
 
 
@@ -394,9 +358,7 @@ def compute_unit(
 
     s = cfg.study
     kw = {}
-    # strategy_options define labels; pass the ones in use, so `--set study.strategies=[...]`
-    # may run a subset of an experiment's strategies
-    used = {k: v for k, v in s.strategy_options.items() if k in s.strategies}
+    used = translate.strategy_options(s)
     if used:
         kw["strategy_options"] = used
     study = run_sampling_study(
@@ -451,49 +413,24 @@ def _compute_scanner_unit(
     s = cfg.study
     r = cfg.render
     t = time.perf_counter()
-    opts = dict(s.options)
     # the scanner package aims the preset rig at the terrain's centre at the standoff that
     # fits the projection inside it, so every guide pixel sees terrain at any terrain scale
-    rig = aim_rig_at_terrain(
-        terrain,
-        preset=s.rig,
-        proj_size=tuple(s.projector_px),
-        cam_size=tuple(s.camera_px),
-        **opts.pop("rig", {}),
-    )
-    sensor = None
-    if r.sensor is not None:
-        from simlunar.imaging.sensor import SensorModel
-
-        sensor = SensorModel(
-            exposure=r.sensor.exposure_e or 1000.0,
-            full_well_e=r.sensor.full_well_e,
-            read_noise_e=r.sensor.read_noise_e,
-            bits=r.sensor.bits,
-            response=r.sensor.response,
-            gamma=r.sensor.gamma,
-        )
+    rig = aim_rig_at_terrain(terrain, **translate.rig_kwargs(s))
+    # exposure: the auto-exposure rule on the white calibration frame (RenderCapture); the
+    # schema refuses a fixed exposure_e for scanner studies
+    sensor = None if r.sensor is None else translate.sensor_model(r.sensor)
     sun = lights[0] if isinstance(r.light, SunLightCfg) else None
     res = run_scanner_study(
         terrain,
         rig,
-        modes=tuple(s.modes),
-        planners=tuple(s.planners),
-        budget=s.budget,
-        trials=s.trials,
-        metrics=tuple(s.metrics),
         rng=seeds["study"],
         max_depth=r.max_depth,
         spp=r.spp,
         seed=_int_seed(seeds["render"]),
         sensor=sensor,
         bsdf=bsdf,
-        guide_light=s.guide_light,
         sun=sun,
-        projector_gamma=s.projector_gamma,
-        projector_blur=s.projector_blur_px,
-        camera_blur=s.camera_blur_px,
-        **opts,
+        **translate.scanner_options(s).kwargs(),
     )
     timings["study_s"] = time.perf_counter() - t
     guide = res.guide

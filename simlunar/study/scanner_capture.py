@@ -12,10 +12,12 @@ import numpy as np
 from scipy import ndimage
 
 from simlunar.geometry import Rig
+from simlunar.imaging.exposure import AUTO_EXPOSURE_LEVEL, AUTO_EXPOSURE_PERCENTILE
 from simlunar.scanner.triangulate import check_rig, projector_visibility, true_correspondences
 
-#: white-frame radiance percentile mapped to ``target_level`` by the auto exposure
-EXPOSURE_PERCENTILE = 99.0
+#: white-frame radiance percentile mapped to ``target_level`` by the auto exposure (the one
+#: rule of :mod:`simlunar.imaging.exposure`)
+EXPOSURE_PERCENTILE = AUTO_EXPOSURE_PERCENTILE
 
 
 class RenderCapture:
@@ -47,8 +49,10 @@ class RenderCapture:
         rendered frame before the sensor: the finite resolving power of the lens (diffraction
         and aberrations), independent of depth, unlike the thin-lens defocus of ``rig.camera``.
     target_level : float
-        The auto exposure maps the white frame's 99th-percentile radiance to this fraction of
-        the sensor range (or of 1 without a sensor), so thresholds are in [0, 1] frame units.
+        The auto exposure (:mod:`simlunar.imaging.exposure`) maps the white frame's
+        99.5th-percentile radiance to this fraction of the sensor range (or of 1 without a
+        sensor), so thresholds are in [0, 1] frame units. The sensor's own ``exposure`` is
+        replaced by it.
     """
 
     def __init__(
@@ -67,7 +71,7 @@ class RenderCapture:
         projector_gamma: float = 1.0,
         projector_blur: float = 0.0,
         camera_blur: float = 0.0,
-        target_level: float = 0.8,
+        target_level: float = AUTO_EXPOSURE_LEVEL,
     ) -> None:
         from simlunar.render.lights import ProjectorLight
         from simlunar.render.scene import TerrainScene

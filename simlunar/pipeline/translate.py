@@ -1,0 +1,378 @@
+"""Configuration -> library objects: the one place where YAML units meet the library's.
+
+The schema (:mod:`simlunar.pipeline.schema`) holds YAML keys with unit suffixes (``_deg``,
+``_m``, ``_px``); the library takes SI units and radians as arrays, keyword-only options and
+small frozen dataclasses (:class:`~simlunar.imaging.sensor.SensorModel`,
+:class:`~simlunar.terrain.params.TerrainParams`, geometry cameras, light and BSDF specs). Every
+function here takes typed config models and returns such objects or the keyword dicts of the
+library functions as they are today; nothing else in ``pipeline/`` converts units.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from simlunar.pipeline.schema import (
+    CameraLightCfg,
+    DotOptsCfg,
+    FeatureOptsCfg,
+    GrayOptsCfg,
+    HapkeCfg,
+    LambertCfg,
+    OrenNayarCfg,
+    OrthoNadirCfg,
+    PlannerOptsCfg,
+    RigCfg,
+    SamplingStudyCfg,
+    ScannerStudyCfg,
+    SensorCfg,
+    SunLightCfg,
+    TerrainPresetCfg,
+)
+
+# --------------------------------------------------------------------------- terrain
+
+
+def terrain_params(preset: TerrainPresetCfg, *, scale: float = 1.0):
+    """:class:`~simlunar.terrain.params.TerrainParams` of a validated preset (SI units)."""
+    from simlunar.terrain.params import (
+        AlbedoParams,
+        BedParams,
+        CraterParams,
+        FractalParams,
+        RockParams,
+        TerrainParams,
+    )
+
+    g, f, b, c, r, a = (
+        preset.grid,
+        preset.fractal,
+        preset.bed,
+        preset.craters,
+        preset.rocks,
+        preset.albedo,
+    )
+    params = TerrainParams(
+        rows=g.rows,
+        cols=g.cols,
+        spacing=g.spacing_m,
+        origin=tuple(g.origin_m),
+        fractal=FractalParams(hurst=f.hurst, rms=f.rms_m, periodic=f.periodic, rolloff=f.rolloff_m),
+        bed=BedParams(amplitude=b.amplitude_m, wavelength=b.wavelength_m),
+        craters=CraterParams(
+            enabled=c.enabled,
+            law=c.law,
+            d_min=c.d_min_m,
+            d_max=c.d_max_m,
+            coefficient=c.coefficient,
+            exponent=c.exponent,
+            diffusivity=c.diffusivity_m2_per_myr,
+            max_age_myr=c.max_age_myr,
+        ),
+        rocks=RockParams(
+            enabled=r.enabled,
+            law=r.law,
+            d_min=r.d_min_m,
+            d_max=r.d_max_m,
+            coefficient=r.coefficient,
+            exponent=r.exponent,
+            cluster_fraction=r.cluster_fraction,
+            cluster_radius=r.cluster_radius_m,
+            mean_per_cluster=r.mean_per_cluster,
+            albedo_contrast=r.albedo_contrast,
+        ),
+        albedo=AlbedoParams(
+            mean=a.mean,
+            variation=a.variation,
+            noise=a.noise,
+            ejecta_brightening=a.ejecta_brightening,
+            uniform=a.uniform,
+        ),
+        name=preset.name,
+        description=preset.description,
+    )
+    return params.scaled(scale)
+
+
+def build_terrain(cfg, *, rng):
+    """The :class:`~simlunar.terrain.Terrain` of a :class:`~simlunar.pipeline.schema.TerrainCfg`."""
+    from simlunar.terrain.types import Terrain
+
+    if cfg.preset is not None:
+        from simlunar.pipeline.presets import merged_preset
+        from simlunar.terrain import generate
+
+        params = terrain_params(merged_preset(cfg.preset, cfg.overrides), scale=cfg.scale)
+        terrain = generate(params, rng=rng).terrain
+    else:
+        from simlunar.terrain.io import load_dem
+
+        terrain = load_dem(cfg.file, spacing=cfg.spacing_m)
+        if cfg.albedo_file is not None:
+            albedo = load_albedo(cfg.albedo_file, terrain.shape)
+            terrain = Terrain(terrain.heights, albedo, terrain.spacing, terrain.origin)
+    if cfg.albedo is not None:
+        terrain = Terrain(
+            terrain.heights,
+            np.full(terrain.shape, cfg.albedo, np.float32),
+            terrain.spacing,
+            terrain.origin,
+        )
+    return terrain
+
+
+def load_albedo(path, shape: tuple[int, int]) -> np.ndarray:
+    """An albedo grid file (``.npy`` (rows, cols), or any single-band format that
+    :func:`simlunar.terrain.io.load_dem` reads) checked against the DEM's ``shape``.
+
+    Raises
+    ------
+    ValueError
+        Unreadable file, not a 2-D grid, a shape other than the DEM's, or values that are not
+        finite numbers in [0, 1] (the message names ``terrain.albedo_file`` and the file).
+    """
+    from pathlib import Path
+
+    from simlunar.terrain.io import load_dem
+
+    path = Path(path)
+    if path.suffix.lower() == ".npy":
+        try:
+            arr = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"terrain.albedo_file: cannot read {path}: {exc}") from None
+    else:
+        arr = load_dem(path, spacing=1.0).heights
+    arr = np.asarray(arr)
+    if arr.ndim != 2 or not np.issubdtype(arr.dtype, np.number):
+        raise ValueError(
+            f"terrain.albedo_file: {path} must hold a 2-D numeric grid, got {arr.dtype} {arr.shape}"
+        )
+    if arr.shape != tuple(shape):
+        raise ValueError(
+            f"terrain.albedo_file: {path} has shape {arr.shape}, the DEM {tuple(shape)}"
+        )
+    arr = arr.astype(np.float32)
+    if not np.all(np.isfinite(arr)) or arr.min() < 0 or arr.max() > 1:
+        raise ValueError(f"terrain.albedo_file: {path} values must be finite and lie in [0, 1]")
+    return arr
+
+
+# --------------------------------------------------------------------------- render
+
+
+def camera(cfg, terrain):
+    """Geometry camera of a camera config (orthographic nadir over ``terrain`` or perspective)."""
+    from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose
+
+    if isinstance(cfg, OrthoNadirCfg):
+        return OrthoCamera.nadir_for_grid(
+            terrain.shape, terrain.spacing, terrain.origin, altitude=cfg.altitude_m
+        )
+    if cfg.fov_deg is not None:
+        k = Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg)
+    else:
+        k = Intrinsics(cfg.fx, cfg.fy, cfg.cx, cfg.cy, cfg.width, cfg.height)
+    return Camera(
+        k,
+        Pose.look_at(cfg.position_m, cfg.look_at_m, cfg.up),
+        aperture_radius=cfg.aperture_radius_m,
+        focus_distance=cfg.focus_distance_m,
+    )
+
+
+def lights(light, ambient_radiance: float) -> list:
+    """Light specs: the configured light, plus the ambient term when > 0."""
+    from simlunar.render.lights import make_light
+
+    if isinstance(light, SunLightCfg):
+        out = [
+            make_light(
+                "sun",
+                elevation=light.elevation,
+                azimuth=light.azimuth,
+                irradiance=light.irradiance,
+                angular_diameter=light.angular_diameter,
+            )
+        ]
+    elif isinstance(light, CameraLightCfg):
+        out = [make_light("camera", intensity=light.intensity)]
+    else:  # pragma: no cover - the schema's union has no other member
+        raise TypeError(f"unsupported light {light!r}")
+    if ambient_radiance > 0:
+        out.append(make_light("ambient", radiance=ambient_radiance))
+    return out
+
+
+def bsdf(cfg):
+    """BSDF spec of a BSDF config (angles in radians)."""
+    from simlunar.render.materials import make_bsdf
+
+    if isinstance(cfg, LambertCfg):
+        return make_bsdf("lambert")
+    if isinstance(cfg, OrenNayarCfg):
+        return make_bsdf("oren_nayar", sigma=cfg.sigma, model=cfg.model)
+    if isinstance(cfg, HapkeCfg):
+        kw = {k: getattr(cfg, k) for k in ("w", "b", "c", "B0", "h") if getattr(cfg, k) is not None}
+        if cfg.theta_bar_deg is not None:
+            kw["theta_bar"] = float(np.radians(cfg.theta_bar_deg))
+        return make_bsdf("hapke", **kw)
+    raise TypeError(f"unsupported BSDF {cfg!r}")  # pragma: no cover - closed union
+
+
+def sensor_model(cfg: SensorCfg, reference: np.ndarray | None = None):
+    """:class:`~simlunar.imaging.sensor.SensorModel` of a sensor config.
+
+    ``exposure_e: null`` is the auto exposure (:mod:`simlunar.imaging.exposure`) on
+    ``reference``; without a reference (a scanner study, which exposes on its own white
+    calibration frame) the model's placeholder exposure is returned and replaced there.
+    """
+    from simlunar.imaging.exposure import auto_exposure_e
+    from simlunar.imaging.sensor import SensorModel
+
+    exposure = cfg.exposure_e
+    if exposure is None:
+        exposure = 1.0 if reference is None else auto_exposure_e(reference, cfg.full_well_e)
+    return SensorModel(
+        exposure=exposure,
+        full_well_e=cfg.full_well_e,
+        read_noise_e=cfg.read_noise_e,
+        bits=cfg.bits,
+        response=cfg.response,
+        gamma=cfg.gamma,
+    )
+
+
+# --------------------------------------------------------------------------- planners
+
+
+def feature_opts(base: str, opts: FeatureOptsCfg, features: list[str] | None = None) -> dict:
+    """The ``feature_opts`` of :func:`simlunar.planner.plan` for strategy ``base``."""
+    from simlunar.pipeline.schema import FEATURE_OPTION_KEYS
+
+    def of(feature: str) -> dict:
+        return {k: getattr(opts, k) for k in FEATURE_OPTION_KEYS.get(feature, ())}
+
+    if base == "combination":
+        return {f: of(f) for f in features or []}
+    return of(base)
+
+
+def planner_kwargs(base: str, opts: PlannerOptsCfg) -> dict[str, Any]:
+    """Keyword options of :func:`simlunar.planner.plan` for strategy ``base`` (none for grid
+    and random, which take none)."""
+    if base in ("grid", "random"):
+        return {}
+    kw: dict[str, Any] = {
+        "uniform_mix": opts.uniform_mix,
+        "density_cap": opts.density_cap,
+        "cap_block": opts.cap_block,
+        "blue_noise": opts.blue_noise,
+        "blue_noise_radius": opts.blue_noise_radius,
+    }
+    coeffs = opts.coefficients.as_mapping()
+    kw["feature_opts"] = feature_opts(base, opts.feature_opts, list(coeffs))
+    if base == "combination":
+        kw["coefficients"] = coeffs
+    return kw
+
+
+def strategy_options(study: SamplingStudyCfg) -> dict[str, dict]:
+    """``strategy_options`` of :func:`simlunar.study.sampling.run_sampling_study`: the labels
+    of the study's strategies that have options (so ``--set study.strategies=[...]`` may run a
+    subset of an experiment's labels)."""
+    out = {}
+    for label, opts in study.strategy_options.items():
+        if label not in study.strategies:
+            continue
+        base = opts.strategy or label
+        kw = planner_kwargs(base, opts)
+        if opts.strategy is not None:
+            kw["strategy"] = opts.strategy
+        out[label] = kw
+    return out
+
+
+# --------------------------------------------------------------------------- scanner
+
+
+def rig_kwargs(study: ScannerStudyCfg) -> dict[str, Any]:
+    """Keywords of :func:`simlunar.study.scanner.aim_rig_at_terrain` (radians, metres)."""
+    r: RigCfg = study.options.rig
+    kw: dict[str, Any] = {
+        "preset": study.rig,
+        "proj_size": tuple(study.projector_px),
+        "cam_size": tuple(study.camera_px),
+        "fill": r.fill,
+        "verge": r.verge,
+        "aperture_radius": r.aperture_radius_m,
+    }
+    angles = {
+        "fov_x": r.fov_x_deg,
+        "cam_fov_x": r.cam_fov_x_deg,
+        "elevation": r.elevation_deg,
+        "azimuth": r.azimuth_deg,
+    }
+    kw.update({k: math.radians(v) for k, v in angles.items() if v is not None})
+    lengths = {
+        "distance": r.distance_m,
+        "altitude": r.altitude_m,
+        "baseline": r.baseline_m,
+        "focus_distance": r.focus_distance_m,
+    }
+    kw.update({k: v for k, v in lengths.items() if v is not None})
+    return kw
+
+
+def gray_kwargs(opts: GrayOptsCfg) -> dict[str, Any]:
+    """Keywords of :func:`simlunar.scanner.modes.gray_code_scan`."""
+    return opts.model_dump()
+
+
+def dot_kwargs(opts: DotOptsCfg) -> dict[str, Any]:
+    """Keywords of :func:`simlunar.scanner.modes.dot_scan` (``_px`` suffixes dropped)."""
+    return {k.removesuffix("_px"): v for k, v in opts.model_dump().items()}
+
+
+@dataclass(frozen=True)
+class ScannerStudyOptions:
+    """The option keywords of :func:`simlunar.study.scanner.run_scanner_study` of a config."""
+
+    modes: tuple[str, ...]
+    planners: tuple[str, ...]
+    budget: float
+    trials: int
+    metrics: tuple[str, ...]
+    guide_light: str
+    projector_gamma: float
+    projector_blur: float
+    camera_blur: float
+    gray_opts: dict = field(default_factory=dict)
+    dot_opts: dict = field(default_factory=dict)
+    planner_opts: dict = field(default_factory=dict)
+
+    def kwargs(self) -> dict[str, Any]:
+        return {f: getattr(self, f) for f in self.__dataclass_fields__}
+
+
+def scanner_options(study: ScannerStudyCfg) -> ScannerStudyOptions:
+    """Study options of a scanner config (the rig is built by :func:`rig_kwargs`)."""
+    o = study.options
+    return ScannerStudyOptions(
+        modes=tuple(study.modes),
+        planners=tuple(study.planners),
+        budget=study.budget,
+        trials=study.trials,
+        metrics=tuple(study.metrics),
+        guide_light=study.guide_light,
+        projector_gamma=study.projector_gamma,
+        projector_blur=study.projector_blur_px,
+        camera_blur=study.camera_blur_px,
+        gray_opts=gray_kwargs(o.gray_opts),
+        dot_opts=dot_kwargs(o.dot_opts),
+        planner_opts={name: planner_kwargs(name, p) for name, p in o.planner_opts.items()},
+    )
