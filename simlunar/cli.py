@@ -137,13 +137,29 @@ def figures(
 @user_errors
 def schema(
     out: str = typer.Option(None, "--out", help="write to this file instead of stdout"),
+    kind: str = typer.Option(
+        "experiment", "--kind", help="document kind: experiment, scene or preset"
+    ),
+    markdown: bool = typer.Option(
+        False, "--markdown", help="the YAML reference as Markdown (docs/experiments.md)"
+    ),
 ) -> None:
-    """JSON Schema of experiment YAMLs (for editors: yaml-language-server)."""
+    """JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server)."""
     import json
 
-    from simlunar.pipeline.config import json_schema
+    from simlunar.errors import ConfigError
+    from simlunar.pipeline.config import SCHEMA_KINDS, json_schema
 
-    text = json.dumps(json_schema(), indent=2)
+    if kind not in SCHEMA_KINDS:
+        raise ConfigError(
+            f"--kind {kind}: unknown document kind (valid: {', '.join(SCHEMA_KINDS)})"
+        )
+    if markdown:
+        from simlunar.pipeline.reference import reference_markdown
+
+        text = reference_markdown()
+    else:
+        text = json.dumps(json_schema(kind), indent=2)
     if out:
         from simlunar.pipeline.store import atomic_write_text
 

@@ -429,9 +429,30 @@ def to_plain(cfg: ExperimentCfg) -> dict:
     return cfg.model_dump(mode="json", by_alias=True)
 
 
-def json_schema() -> dict:
-    """JSON Schema of the experiment YAML (for editors: yaml-language-server)."""
-    schema = ExperimentCfg.model_json_schema(by_alias=True)
+#: document kinds of :func:`json_schema`: experiment YAMLs, scene YAMLs, terrain presets
+SCHEMA_KINDS = ("experiment", "scene", "preset")
+
+
+def schema_model(kind: str = "experiment") -> type[BaseModel]:
+    """The root model of a document kind (:data:`SCHEMA_KINDS`)."""
+    if kind == "experiment":
+        return ExperimentCfg
+    if kind == "scene":
+        from simlunar.pipeline.scene import SceneCfg
+
+        return SceneCfg
+    if kind == "preset":
+        from simlunar.pipeline.schema import TerrainPresetCfg
+
+        return TerrainPresetCfg
+    raise ValueError(f"unknown schema kind {kind!r} (valid: {', '.join(SCHEMA_KINDS)})")
+
+
+def json_schema(kind: str = "experiment") -> dict:
+    """JSON Schema of an experiment, scene or terrain-preset YAML (for editors:
+    yaml-language-server). Unit-bearing keys accept a number or a string with a unit;
+    densities accept a number, a fraction string or (a list) a ``{from, to, count}`` range."""
+    schema = schema_model(kind).model_json_schema(by_alias=True)
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
-    schema["title"] = "simlunar experiment"
+    schema["title"] = f"simlunar {kind}"
     return schema

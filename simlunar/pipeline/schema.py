@@ -210,7 +210,9 @@ PRESET_SECTIONS = ("grid", "fractal", "bed", "craters", "rocks", "albedo")
 
 class TerrainOverridesCfg(_SetKeysModel):
     """Preset parameters to change: ``{section: {key: value}}``, deep-merged into the preset
-    before its validation (e.g. ``{fractal: {rms_m: 0.05}}``); unset keys keep the preset's."""
+    before its validation (e.g. ``{fractal: {rms_m: 0.05}}``). Each section takes the keys of
+    the terrain preset's section of the same name (below), all optional; unset keys keep the
+    preset's value."""
 
     grid: _partial(GridCfg) | None = None  # type: ignore[valid-type]
     fractal: _partial(FractalCfg) | None = None  # type: ignore[valid-type]
