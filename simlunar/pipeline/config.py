@@ -105,17 +105,26 @@ def _unknown_key_hint(path: str, data: dict) -> str:
 def _nested_key(loc: tuple, data: Any, msg: str) -> tuple[str, str] | None:
     """``(sub.path, problem)`` when a validator reported a key inside its own mapping value.
 
-    A validator of a free-form mapping (``terrain.overrides``) says ``"fractal.rms_m: ..."``;
-    when that key path exists in the data under the error's location, it belongs to the path.
+    A model validator says ``"options.rig.elevation_deg: ..."``; when that key path exists in
+    the data under the error's location, it belongs to the path (union tags in the location,
+    which are not keys of the data, are skipped).
     """
     m = re.match(r"^([A-Za-z_]\w*(?:\.\w+)*): (.+)$", msg)
     if m is None:
         return None
     cur: Any = data
-    for item in (*loc, *m.group(1).split(".")):
-        if not isinstance(cur, dict) or item not in cur:
+    items = (*loc, *m.group(1).split("."))
+    for i, item in enumerate(items):
+        if isinstance(cur, dict) and item in cur:
+            cur = cur[item]
+        elif isinstance(cur, list) and isinstance(item, int) and item < len(cur):
+            cur = cur[item]
+        elif isinstance(item, str) and item in _union_tags():
+            continue
+        elif i == len(items) - 1 and isinstance(cur, dict):
+            break  # a key the data lacks (a missing value the validator asks for)
+        else:
             return None
-        cur = cur[item]
     return m.group(1), m.group(2)
 
 

@@ -256,8 +256,8 @@ class TerrainCfg(_Model):
             raise ValueError("albedo_file goes with a DEM file (give terrain.file)")
         if self.preset is None and self.overrides.model_dump():
             raise ValueError("overrides: overrides apply to a preset only (give terrain.preset)")
-        if self.overrides.as_mapping():
-            # the merged preset must be valid; a bad preset name is reported at terrain.preset
+        if self.preset is not None:
+            # the preset file, with the overrides merged in, must be valid (same models)
             from simlunar.pipeline.presets import PresetError, merged_preset
 
             try:
@@ -265,6 +265,7 @@ class TerrainCfg(_Model):
             except PresetError as exc:
                 if exc.key is not None:
                     raise ValueError(f"overrides.{exc.key}: {exc.problem}") from None
+                raise ValueError(f"preset: {exc.problem}") from None
         return self
 
 

@@ -90,13 +90,16 @@ def test_build_camera_from_intrinsics_and_lights():
     lights = build_lights(cfg)
     assert isinstance(lights[0], CameraLight) and lights[0].intensity == 3.0
     assert lights[1].radiance == 0.1
-    ortho = build_camera(SceneCfg.model_validate({"terrain": {"preset": "x"}}).camera, t)
+    ortho = build_camera(SceneCfg.model_validate({"terrain": {"preset": "aerial_1"}}).camera, t)
     assert isinstance(ortho, OrthoCamera) and ortho.shape == (4, 6)
 
 
 def test_sun_with_disk():
     cfg = SceneCfg.model_validate(
-        {"terrain": {"preset": "x"}, "light": {"angular_diameter_deg": 0.53, "irradiance": 2}}
+        {
+            "terrain": {"preset": "aerial_1"},
+            "light": {"angular_diameter_deg": 0.53, "irradiance": 2},
+        }
     )
     (sun,) = build_lights(cfg)
     assert isinstance(sun, SunLight) and sun.irradiance == 2.0
