@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -39,6 +40,41 @@ CACHE_VERSION = 2  # 2: figure arrays use index coordinates (no half-cell offset
 #: Renders of units running concurrently in threads (``LocalPoolExecutor``) take turns: each
 #: render already uses every core, and Mitsuba scenes are built and rendered one at a time.
 RENDER_LOCK = threading.RLock()
+
+
+@dataclass(frozen=True, eq=False)
+class UnitRecord:
+    """What one work unit returns (its dict form, :meth:`to_dict`, is what executors carry
+    and the unit cache stores).
+
+    Attributes
+    ----------
+    rows : list of dict
+        Tidy result rows (sampling: strategy, density, k, trial, metric, value).
+    scores : dict
+        ``{metric: {strategy: score}}`` (eq. 4.3); empty for scanner units.
+    arrays : dict of str -> ndarray
+        Figure arrays (image, depth, wavelet energy, plan, reconstruction, ...).
+    timings : dict of str -> float
+        Stage -> seconds.
+    meta : dict
+        Image shape, spacing, Mitsuba variant, filled ground-truth pixels.
+    """
+
+    rows: list[dict[str, Any]]
+    scores: dict[str, dict[str, float]]
+    arrays: dict[str, np.ndarray]
+    timings: dict[str, float]
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "rows": self.rows,
+            "scores": self.scores,
+            "arrays": self.arrays,
+            "timings": self.timings,
+            "meta": self.meta,
+        }
 
 
 def stage_seeds(seed: int) -> dict[str, np.random.SeedSequence]:
@@ -270,9 +306,9 @@ def compute_unit(
     Returns
     -------
     dict
-        ``rows`` (tidy dicts: strategy, density, k, trial, metric, value), ``scores``
-        ({metric: {strategy: score}}), ``arrays`` (name -> ndarray, for figures) and
-        ``timings`` (stage -> seconds).
+        :meth:`UnitRecord.to_dict`: ``rows`` (tidy dicts: strategy, density, k, trial, metric,
+        value), ``scores`` ({metric: {strategy: score}}), ``arrays`` (name -> ndarray, for
+        figures), ``timings`` (stage -> seconds) and ``meta``.
     """
     cfg = ExperimentCfg.model_validate(payload["config"])
     seeds = stage_seeds(cfg.seed)
@@ -376,18 +412,18 @@ def compute_unit(
     )
     timings["study_s"] = time.perf_counter() - t
 
-    return {
-        "rows": [dict(r) for r in study.rows],
-        "scores": _plain_scores(study.scores),
-        "arrays": arrays,
-        "timings": timings,
-        "meta": {
+    return UnitRecord(
+        rows=[dict(r) for r in study.rows],
+        scores=_plain_scores(study.scores),
+        arrays=arrays,
+        timings=timings,
+        meta={
             "shape": list(image.shape),
             "spacing_m": terrain.spacing,
             "variant": _variant(),
             "invalid_pixels_filled": n_invalid,
         },
-    }
+    ).to_dict()
 
 
 def _plain_scores(scores) -> dict:
