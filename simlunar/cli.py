@@ -205,8 +205,15 @@ def terrain(
 
     if mesh.lower() not in ("ply", "obj", "none"):
         raise ValueError(f"--mesh must be ply, obj or none, got {mesh!r}")
+    from simlunar.pipeline.presets import merged_preset
+    from simlunar.pipeline.translate import terrain_params
+
+    if not 0 < scale <= 1:
+        raise ValueError(f"--scale must lie in (0, 1], got {scale}")
+    # the preset file through the schema's models (the same path as an experiment's terrain)
+    params = terrain_params(merged_preset(preset), scale=scale)
     t0 = time.perf_counter()
-    res = generate(preset, rng=seed, scale=scale)
+    res = generate(params, rng=seed)
     t_gen = time.perf_counter() - t0
     files = write_terrain_outputs(
         res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
