@@ -1,10 +1,15 @@
-"""The experiment schema: typed pydantic v2 models of an experiment YAML.
+"""The configuration schema: typed pydantic v2 models of experiment, scene and preset YAMLs.
 
-Unknown keys are rejected everywhere (``extra="forbid"``). Keys carry their unit as a suffix
-(``_deg``, ``_m``); values may be plain numbers in that unit or strings with an explicit unit
-(``"0.5 rad"``, ``"20 cm"``), converted once here. Properties without the suffix
-(``SunLightCfg.elevation``) give SI units / radians for the library. Loading, key-path error
-messages and sweeps live in :mod:`simlunar.pipeline.config`.
+One set of models: an experiment (:class:`ExperimentCfg`), a scene YAML
+(:class:`simlunar.pipeline.scene.SceneCfg`, built from the same sections) and a terrain preset
+file (:class:`TerrainPresetCfg`, whose sections an experiment's ``terrain.overrides`` changes).
+Every YAML key is a field, option blocks included (no free-form dicts); unknown keys are
+rejected everywhere (``extra="forbid"``) and numbers must be finite. Keys carry their unit as a
+suffix (``_deg``, ``_m``, ``_px``); values may be plain numbers in that unit or strings with an
+explicit unit (``"0.5 rad"``, ``"20 cm"``), converted once here. Properties without the suffix
+(``SunLightCfg.elevation``) give radians; :mod:`simlunar.pipeline.translate` turns the models
+into library objects. Loading, key-path error messages and sweeps live in
+:mod:`simlunar.pipeline.config`.
 """
 
 from __future__ import annotations
