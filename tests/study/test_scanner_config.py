@@ -18,9 +18,13 @@ def test_scanner_experiment_uses_the_documented_scanner_conditions():
     s = cfg.study
     assert s.kind == "scanner" and s.budget == 0.1 and s.planners == ["wavelet", "random"]
     assert s.camera_blur_px == 1.0
-    assert s.options["gray_opts"] == {"subpixel": True}
-    assert s.options["planner_opts"] == {"wavelet": {"feature_opts": {"levels": 1}}}
-    assert s.options["rig"] == {"cam_fov_x": pytest.approx(1.0472)}
+    # what the scanner study receives (pipeline.translate): radians, library option names
+    from simlunar.pipeline import translate
+
+    opts = translate.scanner_options(s)
+    assert opts.gray_opts["subpixel"] is True
+    assert opts.planner_opts["wavelet"]["feature_opts"]["levels"] == 1
+    assert translate.rig_kwargs(s)["cam_fov_x"] == pytest.approx(1.0472, abs=1e-4)
 
 
 def test_camera_blur_defaults_to_a_sharp_lens_and_rejects_negative_sigma():
