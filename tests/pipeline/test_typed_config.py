@@ -493,3 +493,20 @@ def test_a_density_below_three_samples_is_a_schema_error():
     assert msg.startswith(
         "study.densities[0]: density 0.0002 gives k = 1 < 3 samples on the 62 x 100"
     )
+
+
+def test_the_schema_command_prints_what_the_test_validates_against(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from simlunar.cli import app
+
+    for kind in ("experiment", "scene", "preset"):
+        r = CliRunner().invoke(app, ["schema", "--kind", kind])
+        assert r.exit_code == 0, r.output
+        assert json.loads(r.output) == json_schema(kind)
+    r = CliRunner().invoke(app, ["schema", "--kind", "recipe"])
+    assert r.exit_code == 2 and "--kind recipe: unknown document kind" in r.output
+    r = CliRunner().invoke(app, ["schema", "--markdown"])
+    assert r.exit_code == 0 and "#### `study.options.gray_opts`" in r.output
