@@ -1,5 +1,9 @@
 """Validated terrain parameters (SI units) and their construction from a plain dict.
 
+The library's own route from a preset mapping to :class:`TerrainParams`; the pipeline reads
+preset files through its typed models (:mod:`simlunar.pipeline.schema`'s
+``TerrainPresetCfg``) and gives the same parameters.
+
 YAML presets use unit suffixes (``spacing_m``, ``d_min_m``, ``diffusivity_m2_per_myr``);
 :func:`params_from_dict` converts them to these fields once. Every error names the field
 (``craters.d_max_m`` ...).
@@ -17,8 +21,9 @@ from simlunar.terrain import sfd
 class ParamError(ValueError):
     """An invalid terrain parameter: ``key`` is its YAML path (``fractal.rms_m``).
 
-    ``str()`` reads ``"<key> <problem>"``; callers that report key paths themselves (the
-    experiment schema's ``terrain.overrides``) use ``key`` and ``problem`` separately.
+    ``str()`` reads ``"<key> <problem>"``; callers that report key paths themselves use
+    ``key`` and ``problem`` separately. (Experiment YAMLs validate presets and overrides with the
+    pipeline's models, :mod:`simlunar.pipeline.presets`; a test keeps both routes equal.)
     """
 
     def __init__(self, key: str, problem: str):
