@@ -96,6 +96,9 @@ def run(
     set_: list[str] | None = _SET_OPTION,
     no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar"),
     no_figures: bool = typer.Option(False, "--no-figures", help="skip figures/"),
+    save_scans: bool = typer.Option(
+        False, "--save-scans", help="scanner studies: export each unit's scan to scans/unit<i>/"
+    ),
 ) -> None:
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
     from pathlib import Path
@@ -105,6 +108,10 @@ def run(
     from simlunar.pipeline.runner import run_experiment
 
     cfg = load_experiment(experiment, parse_set(set_ or []))
+    if save_scans:
+        from simlunar.pipeline.exports import with_save_scans
+
+        cfg = with_save_scans(cfg)
     executor = make_executor(workers=workers, scheduler=scheduler)
     out_dir = Path(out) if out else Path("results") / cfg.name
     summary = run_experiment(

@@ -255,6 +255,11 @@ def run_experiment(
         for i, result in executor.run(compute, payloads, **kw):
             u = todo[i]
             arrays = result.pop("arrays", {}) or {}
+            scans = result.pop("scans", None)
+            if scans is not None:  # before the cache entry: a cached unit has its scans
+                from simlunar.pipeline.exports import write_scan_export
+
+                write_scan_export(out / "scans" / f"unit{u.index}", scans)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
             cache.save(u.key, record, arrays)
             records[u.key] = json.loads(json.dumps(record, default=float))

@@ -295,6 +295,20 @@ class ScannerStudyCfg(_Model):
         description="extra keyword options of run_scanner_study "
         "(gray_opts, dot_opts, planner_opts, rig keywords under 'rig')",
     )
+    save_scans: bool = Field(
+        False,
+        description="write scans/unit<i>/ per unit: gray-code frames (8/16-bit PNG, OpenCV "
+        "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
+    )
+
+    @model_validator(mode="after")
+    def _scans_need_gray_code(self):
+        if self.save_scans and not {"gray_code", "ambiguity_enhancement"} & set(self.modes):
+            raise ValueError(
+                "save_scans exports the gray-code scan: modes must include gray_code or "
+                "ambiguity_enhancement"
+            )
+        return self
 
 
 StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg)
