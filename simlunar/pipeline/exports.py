@@ -42,6 +42,7 @@ __all__ = [
     "quantize",
     "read_cloud_ply",
     "scan_export_payload",
+    "with_save_scans",
     "write_calibration_yaml",
     "write_cloud_ply",
     "write_scan_export",
