@@ -178,7 +178,7 @@ def terrain(
     out: str = typer.Option(..., "--out", help="output folder"),
     seed: int = typer.Option(0, "--seed", help="random seed (same seed, same terrain)"),
     scale: float = typer.Option(1.0, "--scale", help="shrink the grid (same spacing), in (0, 1]"),
-    dem_format: str = typer.Option("exr", "--format", help="DEM file: exr, npz, npy or tif"),
+    dem_format: str = typer.Option("exr", "--format", help="DEM file: exr, npz, npy or tif (GeoTIFF)"),
     mesh: str = typer.Option("ply", "--mesh", help="mesh file: ply, obj or none"),
 ) -> None:
     """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""

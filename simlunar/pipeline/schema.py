@@ -63,7 +63,9 @@ class TerrainCfg(_Model):
     preset: str | None = Field(None, description="terrain preset name, e.g. aerial_1, moonyard")
     scale: float = Field(1.0, gt=0, le=1, description="preset resolution scale (1/8 = small)")
     file: Path | None = Field(None, description="DEM file (.npy, .tif, .exr); relative to the YAML")
-    spacing_m: Metres | None = Field(None, gt=0, description="DEM cell size (m), for file")
+    spacing_m: Metres | None = Field(
+        None, gt=0, description="DEM cell size (m), for a file without georeferencing"
+    )
     albedo_file: Path | None = Field(None, description="optional albedo grid file")
     albedo: float | None = Field(
         None, ge=0, le=1, description="replace the albedo by this uniform value (ablation)"
@@ -104,8 +106,6 @@ class TerrainCfg(_Model):
     def _one_source(self) -> TerrainCfg:
         if (self.preset is None) == (self.file is None):
             raise ValueError("give exactly one of preset or file")
-        if self.file is not None and self.spacing_m is None:
-            raise ValueError("a DEM file needs spacing_m")
         return self
 
 
