@@ -203,9 +203,21 @@ def terrain(
     if Path(preset).suffix.lower() in FORMATS + GDAL_FORMATS:
         if not stats or out is not None:
             raise ValueError(f"{preset}: a DEM file is only read with --stats (and no --out)")
+        import json
+        from types import SimpleNamespace
+
         dem = load_dem(preset)
         typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
-        for line in terrain_report(dem):
+        feats = {"craters": [], "rocks": []}
+        side = Path(preset).with_name("features.json")  # written beside it by simlunar terrain
+        if side.is_file():
+            feats = json.loads(side.read_text())
+            typer.echo(f"features: {side}")
+        kw = {
+            k: [SimpleNamespace(diameter=f["diameter"]) for f in feats.get(k, [])]
+            for k in ("craters", "rocks")
+        }
+        for line in terrain_report(dem, **kw):
             typer.echo(line)
         return
     t0 = time.perf_counter()

@@ -97,10 +97,14 @@ def roughness(heights, spacing: float, *, baselines_m=None) -> Roughness:
             raise ValueError(f"baseline {L} m ({k} cells) does not fit the {z.shape} grid")
         dx, dy = _diffs(z, k)
         ok = np.isfinite(dx) & np.isfinite(dy)
-        if not ok.any():
+        if ok.all():  # no nodata: skip the masked copies
+            dx, dy = dx.ravel(), dy.ravel()
+        elif ok.any():
+            dx, dy = dx[ok], dy[ok]
+        else:
             raise ValueError(f"baseline {L} m: no pair of valid heights")
-        nu = np.sqrt(0.5 * (np.mean(dx[ok] ** 2) + np.mean(dy[ok] ** 2)))
-        slope = np.hypot(dx[ok], dy[ok]) / (k * spacing)
+        nu = np.sqrt(0.5 * (np.dot(dx, dx) + np.dot(dy, dy)) / dx.size)
+        slope = np.hypot(dx, dy) / (k * spacing)
         nus.append(float(nu))
         rms.append(float(np.degrees(np.arctan(np.sqrt(2.0) * nu / (k * spacing)))))
         med.append(float(np.degrees(np.arctan(np.median(slope)))))

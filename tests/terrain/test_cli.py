@@ -76,6 +76,12 @@ def test_terrain_stats_prints_slopes_hurst_and_densities(tmp_path):
     assert r.exit_code == 0, r.output
     r = runner.invoke(app, ["terrain", str(out / "dem.tif"), "--stats"])
     assert r.exit_code == 0, r.output
-    assert "H = " in r.output and "unknown" in r.output
+    assert f"H = {h:.3f}" in r.output  # float32 on disk: same to 3 decimals
+    # the densities come from the features.json beside the DEM, as for the generated terrain
+    dens = [ln for ln in lines if ln.startswith(("craters", "rocks"))]
+    assert dens and all(d in r.output for d in dens)
+    (out / "features.json").unlink()
+    r = runner.invoke(app, ["terrain", str(out / "dem.tif"), "--stats"])
+    assert r.exit_code == 0 and "unknown" in r.output
     r = runner.invoke(app, ["terrain", "aerial_3"])
     assert r.exit_code == 2 and "--out" in r.output
