@@ -245,3 +245,18 @@ def test_albedo_file_is_read_as_the_albedo(tmp_path, terrain):
     tio.save_dem(tmp_path / "h.npz", terrain)
     t = tio.load_dem(tmp_path / "h.npz", albedo_file=tmp_path / "alb.npz")
     np.testing.assert_array_equal(t.albedo, terrain.albedo)
+
+
+def test_other_gdal_formats_load_with_their_transform(tmp_path):
+    import rasterio
+    from rasterio.transform import Affine
+
+    z = np.add.outer(np.arange(6.0), np.arange(7.0)).astype(np.float32)
+    with rasterio.open(
+        tmp_path / "dtm.img", "w", driver="HFA", width=7, height=6, count=1,
+        dtype="float32", transform=Affine(2.0, 0, -50.0, 0, -2.0, 30.0), nodata=-3.4e38,
+    ) as dst:  # fmt: skip
+        dst.write(z, 1)
+    t = tio.load_dem(tmp_path / "dtm.img")
+    assert t.spacing == 2.0 and t.origin == (-50.0, 30.0)
+    np.testing.assert_array_equal(t.heights, z)
