@@ -238,8 +238,17 @@ def _read_gdal(path: Path, *, resample: bool) -> tuple[np.ndarray, np.ndarray | 
             band = src.read(1, masked=True, **kw)
             h = np.ma.filled(band.astype(np.float64), np.nan)
             albedo = None
-            if src.count >= 2 and (src.descriptions[1] or "").lower() == "albedo":
+            ours = meta.get("format") == "simlunar-dem-1"
+            if src.count >= 2 and (ours or (src.descriptions[1] or "").lower() == "albedo"):
                 albedo = np.ma.filled(src.read(2, masked=True, **kw).astype(np.float32), np.nan)
+            elif ours and src.driver == "GTiff" and not georef:
+                # a pre-GeoTIFF simlunar .tif: albedo is the second page, which GDAL does not
+                # show as a band
+                import tifffile
+
+                stack = tifffile.imread(path)
+                if stack.ndim == 3 and stack.shape[0] == 2:
+                    albedo = stack[1].astype(np.float32)
             unit = (src.units[0] or "").strip().lower()
             if unit not in _VERTICAL_UNITS:
                 raise ValueError(

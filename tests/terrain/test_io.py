@@ -260,3 +260,22 @@ def test_other_gdal_formats_load_with_their_transform(tmp_path):
     t = tio.load_dem(tmp_path / "dtm.img")
     assert t.spacing == 2.0 and t.origin == (-50.0, 30.0)
     np.testing.assert_array_equal(t.heights, z)
+
+
+def test_pre_geotiff_simlunar_tif_still_loads(tmp_path):
+    # simlunar wrote .tif with tifffile before: a 2-page stack with JSON meta in the description
+    import tifffile
+
+    h = np.arange(12, dtype=np.float32).reshape(3, 4)
+    a = np.full((3, 4), 0.3, np.float32)
+    meta = {"spacing": 0.25, "origin": [1.0, 2.0], "format": "simlunar-dem-1"}
+    tifffile.imwrite(
+        tmp_path / "old.tif",
+        np.stack([h, a]),
+        photometric="minisblack",
+        metadata={"simlunar": json.dumps(meta)},
+    )
+    t = tio.load_dem(tmp_path / "old.tif")
+    assert t.spacing == 0.25 and t.origin == (1.0, 2.0)
+    np.testing.assert_array_equal(t.heights, h)
+    np.testing.assert_array_equal(t.albedo, a)
