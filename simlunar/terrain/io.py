@@ -99,11 +99,8 @@ def _write_geotiff(path: Path, h: np.ndarray, a: np.ndarray, terrain: Terrain) -
         "compress": "deflate",
         "predictor": 3,  # floating-point predictor: lossless, smaller
     }
-    if h.shape[0] >= 16 and h.shape[1] >= 16:
+    if min(h.shape) >= 256:  # 256 x 256 tiles (QGIS reads windows fast); else strips
         profile.update(tiled=True, blockxsize=256, blockysize=256)
-        if h.shape[0] < 256 or h.shape[1] < 256:
-            profile.update(tiled=False)
-            del profile["blockxsize"], profile["blockysize"]
 
     def write(tmp) -> None:
         with rasterio.open(tmp, "w", **profile) as dst:
