@@ -188,8 +188,11 @@ def unit_label(u: WorkUnit) -> str:
     parts = []
     for path, v in u.sweep.items():
         name = path.rsplit(".", 1)[-1]
-        if isinstance(v, dict):
-            v = v.get("kind", json.dumps(v, sort_keys=True))
+        if isinstance(v, dict) and "kind" in v:  # e.g. rover_mast(depression_deg=30)
+            rest = ", ".join(f"{k}={fmt_value(x)}" for k, x in v.items() if k != "kind")
+            v = f"{v['kind']}({rest})" if rest else v["kind"]
+        elif isinstance(v, dict):
+            v = json.dumps(v, sort_keys=True)
         elif v is None:
             v = "default"
         parts.append(f"{name}={fmt_value(v)}")
