@@ -90,6 +90,12 @@ def greedy_colour(
     n = order.shape[0]
     nb = band_start.shape[0] - 1
     colour = np.full(n, -1, np.int64)
+    # position of each dot in band order, and per band the end of the coloured prefix (every
+    # coloured dot of band b lies before band_start[b] + done[b]; later ones need no look)
+    pos = np.empty(n, np.int64)
+    for m in range(n):
+        pos[band_idx[m]] = m
+    done = np.zeros(nb, np.int64)
     stamp = np.full(n + 1, -1, np.int64)
     sep2 = sep * sep
     psp2 = psp * psp
@@ -108,7 +114,9 @@ def greedy_colour(
             elif bb < 0 or bb >= nb:
                 continue
             a = band_start[bb]
-            e = band_start[bb + 1]
+            e = a + done[bb]
+            if e == a:
+                continue
             lo = a + np.searchsorted(band_s0[a:e], lo_s)
             for m in range(lo, e):
                 if band_s0[m] > hi_s:
@@ -139,6 +147,8 @@ def greedy_colour(
         while stamp[c] == k:
             c += 1
         colour[i] = c
+        if pos[i] - band_start[b] + 1 > done[b]:
+            done[b] = pos[i] - band_start[b] + 1
     return colour
 
 

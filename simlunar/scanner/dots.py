@@ -254,8 +254,8 @@ def _epipolar_coordinates(rig: Rig, seg: np.ndarray, sep: float):
 
     Returns ``(w, s0, s1, reach, clique_width, cyclic, period)``: every two segments closer than
     ``sep`` have ``|w_i - w_j| < reach`` (cyclically with ``period`` when ``cyclic``) and
-    intervals ``[s0, s1]`` less than ``sep`` apart; points at a common ``s`` of segments whose
-    ``w`` differ by less than ``clique_width`` are less than ``sep`` apart.
+    intervals ``[s0, s1]`` less than ``sep`` apart; points at a common ``s <= s_top`` of
+    segments whose ``w`` differ by less than ``clique_width(s_top)`` are less than ``sep`` apart.
     """
     exy, ez = _epipole(rig)
     scale = float(np.abs(seg).max()) + 1.0
@@ -270,7 +270,10 @@ def _epipolar_coordinates(rig: Rig, seg: np.ndarray, sep: float):
         s = seg @ d
         s0, s1 = s.min(axis=1), s.max(axis=1)
         reach = sep + 2 * spread
-        clique_width = sep - 2 * spread
+
+        def clique_width(s_top):
+            return sep - 2 * spread
+
         return w, s0, s1, reach * (1 + 1e-9), clique_width, False, 0.0
     e = exy / ez
     rel = seg - e
@@ -283,9 +286,13 @@ def _epipolar_coordinates(rig: Rig, seg: np.ndarray, sep: float):
     w = np.arctan2(mid[:, 1], mid[:, 0])
     dth = np.abs(np.angle(np.exp(1j * (th - w[:, None]))))
     spread = float(dth.max())
-    s_min, s_max = float(s0.min()), float(s1.max())
+    s_min = float(s0.min())
     reach = (np.arcsin(sep / s_min) if sep < s_min else np.pi) + 2 * spread
-    clique_width = sep / s_max - 2 * spread
+
+    def clique_width(s_top):
+        # chord between points at distance s <= s_top on lines dw apart: <= s_top * dw
+        return sep / s_top - 2 * spread
+
     # cut the circle of angles in its widest empty gap
     ws = np.sort(w)
     gaps = np.diff(np.r_[ws, ws[0] + 2 * np.pi])
@@ -301,24 +308,36 @@ def _dist_to_segments(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
     return point_segment_distance(np.asarray(p, float)[None], seg)[0]
 
 
-def _largest_clique(w, s0, s1, puv, clique_width, sep, min_proj_spacing, q=4):
+def _largest_clique(w, s0, s1, puv, clique_width, sep, min_proj_spacing, q=4, slab=None):
     """Largest set of pairwise conflicting dots among two kinds of windows.
 
-    Camera: dots whose band coordinates lie in ``q`` consecutive bins of width
-    ``clique_width / q`` and whose intervals share a point (their segments all have a point at
-    that distance from the epipole, pairwise closer than ``sep``). Projector: dots in a square
-    of ``q`` x ``q`` bins of side ``min_proj_spacing / (q sqrt 2)`` (pairwise closer than the
-    spacing).
+    Camera: the line positions are cut into slabs (``slab`` long, default 8 ``sep``); in each,
+    dots whose band coordinates lie in ``q`` consecutive bins of width
+    ``clique_width(slab end) / q`` and whose intervals share a point in the slab (their segments
+    all have a point at that distance from the epipole, pairwise closer than ``sep``).
+    Projector: dots in a square of ``q`` x ``q`` bins of side ``min_proj_spacing / (q sqrt 2)``
+    (pairwise closer than the spacing).
     """
     best = np.empty(0, np.int64)
-    if clique_width > 0:
-        width = clique_width / q * (1 - 1e-9)
-        b = np.floor((w - w.min()) / width).astype(np.int64)
+    slab = 8.0 * sep if slab is None else slab
+    lo, hi = float(s0.min()), float(s1.max())
+    n_slab = max(int(np.ceil((hi - lo) / slab)), 1)
+    for k in range(n_slab):
+        a, e = lo + k * slab, lo + (k + 1) * slab
+        width = clique_width(max(e, 1e-300)) / q * (1 - 1e-9)
+        if width <= 0:
+            continue
+        sel = np.flatnonzero((s0 < e) & (s1 >= a))
+        if len(sel) <= len(best):
+            continue
+        c0 = np.maximum(s0[sel], a)
+        c1 = np.minimum(s1[sel], np.nextafter(e, -np.inf))
+        b = np.floor((w[sel] - w[sel].min()) / width).astype(np.int64)
         order = np.argsort(b, kind="stable")
-        depth, b0, s_star = _sched.max_overlap_windows(b[order], order, s0, s1, q)
-        if depth > 0:
-            inwin = (b >= b0) & (b < b0 + q) & (s0 <= s_star) & (s1 >= s_star)
-            best = np.flatnonzero(inwin)
+        depth, b0, s_star = _sched.max_overlap_windows(b[order], order, c0, c1, q)
+        if depth > len(best):
+            inwin = (b >= b0) & (b < b0 + q) & (c0 <= s_star) & (c1 >= s_star)
+            best = sel[inwin]
     if min_proj_spacing > 0:
         side = min_proj_spacing / (q * np.sqrt(2)) * (1 - 1e-9)
         ij = np.floor((puv - puv.min(axis=0)) / side).astype(np.int64)
@@ -345,7 +364,6 @@ def dot_schedule(
     depth_range: tuple[float, float],
     min_proj_spacing: float = 8.0,
     min_cam_spacing: float = 6.0,
-    order: str = "band",
 ) -> DotSchedule:
     """Group dots into frames along the epipolar structure, with a lower bound on frames.
 
@@ -355,17 +373,19 @@ def dot_schedule(
     :func:`segment_distance`). All segments lie on lines through the camera epipole (the image
     of the projector centre); each dot gets a band coordinate (the angle of its line about the
     epipole, or its offset when the epipole is at infinity) and an interval along the line
-    (distance from the epipole). Dots are sorted by band and then by the start of their interval
-    and coloured first-fit: each takes the lowest frame not used by an already scheduled dot it
-    conflicts with. Within one band this is the greedy colouring of an interval graph by left
-    end, which is optimal; conflicts with the neighbouring bands are checked exactly. The
-    candidates for a conflict are found from the band index and a binary search on interval
-    starts, so the work is linear in the number of dots times the number of dots that can lie
-    within reach of one segment; no conflict graph is built.
+    (distance from the epipole). Dots are swept by the start of their interval, all bands at
+    once, and coloured first-fit: each takes the lowest frame not used by an already scheduled
+    dot it conflicts with. Within one band this is the greedy colouring of an interval graph by
+    left end, which is optimal (frames = deepest overlap); conflicts with dots of the
+    neighbouring bands and in the projector are checked exactly. Candidates come from the band
+    index (conflicting dots are at most two bands apart) and a binary search on interval
+    starts, so the work is the number of dots times the number of scheduled dots within reach
+    of one segment; no conflict graph or pair list is built.
 
-    The lower bound is the largest set of mutually conflicting dots found: dots in a band
-    narrower than the camera spacing whose intervals share a point, or dots in a small
-    projector square.
+    The lower bound is the largest set of mutually conflicting dots found: in slabs of the line
+    position, dots whose lines are so close that points at a common distance from the epipole
+    are less than ``min_cam_spacing`` apart and whose intervals share such a distance; or dots
+    in a projector square of diagonal ``min_proj_spacing``. No schedule has fewer frames.
 
     Parameters
     ----------
@@ -374,7 +394,6 @@ def dot_schedule(
     depth_range : (near, far) projector z-depth bounds of the scene (m)
     min_proj_spacing, min_cam_spacing : float
         Projector pixels, camera pixels (> 0).
-    order : ``"band"`` (by band, then interval start) or ``"sweep"`` (by interval start only)
 
     Returns
     -------
@@ -387,8 +406,6 @@ def dot_schedule(
         raise ValueError(
             f"min_cam_spacing and min_proj_spacing must be > 0 px, got {sep} and {psp}"
         )
-    if order not in ("band", "sweep"):
-        raise ValueError(f"order must be 'band' or 'sweep', got {order!r}")
     seg = np.ascontiguousarray(epipolar_segments(rig, proj_uv, depth_range))
     w, s0, s1, reach, clique_width, cyclic, period = _epipolar_coordinates(rig, seg, sep)
     # bands half as wide as the reach: conflicting dots are at most 2 bands apart
@@ -415,12 +432,9 @@ def dot_schedule(
     pcell = pij[:, 1] * pnx + pij[:, 0]
     pidx = np.argsort(pcell, kind="stable")
     pstart = np.searchsorted(pcell[pidx], np.arange(pnx * pny + 1)).astype(np.int64)
-    if order == "band":
-        seq = by_band
-    else:
-        seq = np.lexsort((band, s0))
-    colour = _sched.greedy_colour(
-        seq.astype(np.int64),
+    # sweep: all bands at once by interval start
+    seq = np.lexsort((band, s0))
+    args = (
         band,
         band_start,
         band_s0,
@@ -440,6 +454,7 @@ def dot_schedule(
         pny,
         psp,
     )
+    colour = _sched.greedy_colour(seq.astype(np.int64), *args)
     frames = _frames_from_colour(colour)
     clique = _largest_clique(w, s0, s1, proj_uv, clique_width, sep, psp)
     return DotSchedule(frames=frames, colour=colour, clique=clique)
