@@ -8,9 +8,9 @@ from scipy import ndimage
 
 from simlunar.geometry import Camera, Intrinsics, Pose, Projector, Rig
 from simlunar.scanner import modes, rigs
+from simlunar.study import scanner as st
 from simlunar.terrain.types import Terrain
 
-st = pytest.importorskip("simlunar.study.scanner")
 pytestmark = pytest.mark.render
 
 N, SPACING, ORIGIN = 100, 0.02, (-1.0, 1.0)  # a 2 m x 2 m bench-top patch
