@@ -375,9 +375,9 @@ def dot_schedule(
     epipole, or its offset when the epipole is at infinity) and an interval along the line
     (distance from the epipole). Dots are swept by the start of their interval, all bands at
     once, and coloured first-fit: each takes the lowest frame not used by an already scheduled
-    dot it conflicts with. Within one band this is the greedy colouring of an interval graph by
-    left end, which is optimal (frames = deepest overlap); conflicts with dots of the
-    neighbouring bands and in the projector are checked exactly. Candidates come from the band
+    dot it conflicts with. For the dots of one epipolar line this is the greedy colouring of an
+    interval graph by left end, which is optimal (frames = deepest overlap); conflicts with
+    dots of the neighbouring lines and bands and in the projector are checked exactly. Candidates come from the band
     index (conflicting dots are at most two bands apart) and a binary search on interval
     starts, so the work is the number of dots times the number of scheduled dots within reach
     of one segment; no conflict graph or pair list is built.
