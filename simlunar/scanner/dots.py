@@ -255,7 +255,8 @@ def _epipolar_coordinates(rig: Rig, seg: np.ndarray, sep: float):
     Returns ``(w, s0, s1, reach, clique_width, cyclic, period)``: every two segments closer than
     ``sep`` have ``|w_i - w_j| < reach`` (cyclically with ``period`` when ``cyclic``) and
     intervals ``[s0, s1]`` less than ``sep`` apart; points at a common ``s <= s_top`` of
-    segments whose ``w`` differ by less than ``clique_width(s_top)`` are less than ``sep`` apart.
+    segments whose ``w`` differ by less than ``clique_width(s_top, d)`` are less than ``d``
+    apart.
     """
     exy, ez = _epipole(rig)
     scale = float(np.abs(seg).max()) + 1.0
@@ -271,8 +272,8 @@ def _epipolar_coordinates(rig: Rig, seg: np.ndarray, sep: float):
         s0, s1 = s.min(axis=1), s.max(axis=1)
         reach = sep + 2 * spread
 
-        def clique_width(s_top):
-            return sep - 2 * spread
+        def clique_width(s_top, sep_eff):
+            return sep_eff - 2 * spread
 
         return w, s0, s1, reach * (1 + 1e-9), clique_width, False, 0.0
     e = exy / ez
@@ -289,9 +290,9 @@ def _epipolar_coordinates(rig: Rig, seg: np.ndarray, sep: float):
     s_min = float(s0.min())
     reach = (np.arcsin(sep / s_min) if sep < s_min else np.pi) + 2 * spread
 
-    def clique_width(s_top):
+    def clique_width(s_top, sep_eff):
         # chord between points at distance s <= s_top on lines dw apart: <= s_top * dw
-        return sep / s_top - 2 * spread
+        return sep_eff / s_top - 2 * spread
 
     # cut the circle of angles in its widest empty gap
     ws = np.sort(w)
@@ -311,33 +312,37 @@ def _dist_to_segments(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
 def _largest_clique(w, s0, s1, puv, clique_width, sep, min_proj_spacing, q=4, slab=None):
     """Largest set of pairwise conflicting dots among two kinds of windows.
 
-    Camera: the line positions are cut into slabs (``slab`` long, default 8 ``sep``); in each,
-    dots whose band coordinates lie in ``q`` consecutive bins of width
-    ``clique_width(slab end) / q`` and whose intervals share a point in the slab (their segments
-    all have a point at that distance from the epipole, pairwise closer than ``sep``).
-    Projector: dots in a square of ``q`` x ``q`` bins of side ``min_proj_spacing / (q sqrt 2)``
-    (pairwise closer than the spacing).
+    Camera: the line positions are cut into slabs (``slab`` long, default 8 ``sep``). In each,
+    for a few margins m, dots whose intervals widened by m share a point s* of the slab, and
+    whose band coordinates lie in ``q`` consecutive bins of width
+    ``clique_width(slab end + m, sqrt(sep^2 - 4 m^2)) / q``: each has a point within m of
+    distance s* from the epipole, and two such points are less than
+    ``sqrt((2 m)^2 + sep^2 - 4 m^2) = sep`` apart. Projector: dots in a square of ``q`` x ``q``
+    bins of side ``min_proj_spacing / (q sqrt 2)`` (pairwise closer than the spacing).
     """
     best = np.empty(0, np.int64)
     slab = 8.0 * sep if slab is None else slab
     lo, hi = float(s0.min()), float(s1.max())
     n_slab = max(int(np.ceil((hi - lo) / slab)), 1)
-    for k in range(n_slab):
-        a, e = lo + k * slab, lo + (k + 1) * slab
-        width = clique_width(max(e, 1e-300)) / q * (1 - 1e-9)
-        if width <= 0:
-            continue
-        sel = np.flatnonzero((s0 < e) & (s1 >= a))
-        if len(sel) <= len(best):
-            continue
-        c0 = np.maximum(s0[sel], a)
-        c1 = np.minimum(s1[sel], np.nextafter(e, -np.inf))
-        b = np.floor((w[sel] - w[sel].min()) / width).astype(np.int64)
-        order = np.argsort(b, kind="stable")
-        depth, b0, s_star = _sched.max_overlap_windows(b[order], order, c0, c1, q)
-        if depth > len(best):
-            inwin = (b >= b0) & (b < b0 + q) & (c0 <= s_star) & (c1 >= s_star)
-            best = sel[inwin]
+    # m = 0: the widest band; m -> sep / 2: collinear segments whose intervals are < sep apart
+    for m in (0.0, 0.25 * sep, 0.5 * sep * (1 - 1e-6)):
+        sep_eff = np.sqrt(sep * sep - 4 * m * m)
+        for k in range(n_slab):
+            a, e = lo + k * slab, lo + (k + 1) * slab
+            width = clique_width(e + m, sep_eff) / q * (1 - 1e-9)
+            if width <= 0:
+                continue
+            sel = np.flatnonzero((s0 - m < e) & (s1 + m >= a))
+            if len(sel) <= len(best):
+                continue
+            c0 = np.maximum(s0[sel] - m, a)
+            c1 = np.minimum(s1[sel] + m, np.nextafter(e, -np.inf))
+            b = np.floor((w[sel] - w[sel].min()) / width).astype(np.int64)
+            order = np.argsort(b, kind="stable")
+            depth, b0, s_star = _sched.max_overlap_windows(b[order], order, c0, c1, q)
+            if depth > len(best):
+                inwin = (b >= b0) & (b < b0 + q) & (c0 <= s_star) & (c1 >= s_star)
+                best = sel[inwin]
     if min_proj_spacing > 0:
         side = min_proj_spacing / (q * np.sqrt(2)) * (1 - 1e-9)
         ij = np.floor((puv - puv.min(axis=0)) / side).astype(np.int64)

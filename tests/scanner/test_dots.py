@@ -211,6 +211,28 @@ def test_schedule_is_conflict_free_under_the_exact_test(name, rng):
     assert sch.lower_bound <= len(sch.frames) < n / 4  # dots are actually multiplexed
 
 
+def test_dots_on_one_epipolar_line_get_the_optimal_schedule(rng):
+    # camera parallel to the projector: one projector row maps to one camera row, so the
+    # segments are collinear and two dots conflict iff their intervals are < sep apart: an
+    # interval graph, whose optimal colouring needs exactly its largest clique
+    rig = RIGS["parallel"]()
+    cols = np.sort(rng.choice(256, size=120, replace=False)) + 0.5
+    uv = np.c_[cols, np.full(120, 77.5)]
+    sep = 6.0
+    sch = dots.dot_schedule(
+        rig, uv, depth_range=(1.3, 2.0), min_proj_spacing=1.0, min_cam_spacing=sep
+    )
+    seg = dots.epipolar_segments(rig, uv, (1.3, 2.0))
+    assert np.ptp(seg[..., 1]) < 1e-9  # one camera row
+    lo, hi = seg[..., 0].min(axis=1), seg[..., 0].max(axis=1)
+    # largest clique: most intervals widened by sep / 2 that contain one left end
+    x = lo - sep / 2
+    clique = ((lo[None] - sep / 2 <= x[:, None]) & (hi[None] + sep / 2 > x[:, None])).sum(1).max()
+    assert clique > 5
+    assert sch.lower_bound == clique
+    assert len(sch.frames) == clique
+
+
 def test_schedule_around_an_epipole_inside_the_image():
     # dots on a ring about the projector centre: their camera segments radiate all around the
     # epipole, so the bands close on themselves and the first band meets the last
