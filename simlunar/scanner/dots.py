@@ -10,6 +10,7 @@ on an already-claimed segment are interreflection ghosts and are rejected.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -459,10 +460,13 @@ def dot_schedule(
         pny,
         psp,
     )
-    colour = _sched.greedy_colour(seq.astype(np.int64), *args)
-    frames = _frames_from_colour(colour)
-    clique = _largest_clique(w, s0, s1, proj_uv, clique_width, sep, psp)
-    return DotSchedule(frames=frames, colour=colour, clique=clique)
+    # the lower bound is independent of the colouring: search it on a second core meanwhile
+    # (both kernels release the GIL)
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        bound = pool.submit(_largest_clique, w, s0, s1, proj_uv, clique_width, sep, psp)
+        colour = _sched.greedy_colour(seq.astype(np.int64), *args)
+        clique = bound.result()
+    return DotSchedule(frames=_frames_from_colour(colour), colour=colour, clique=clique)
 
 
 def _frames_from_colour(colour: np.ndarray) -> list[np.ndarray]:
