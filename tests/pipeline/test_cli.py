@@ -100,7 +100,6 @@ def test_bad_config_is_one_line_exit_2_nothing_written(case, data, expected, tmp
     ("case", "data", "expected"), BAD_REGISTRY, ids=[b[0] for b in BAD_REGISTRY]
 )
 def test_unknown_names_are_one_line_exit_2(case, data, expected, tmp_path):
-    pytest.importorskip("simlunar.planner.strategies")
     path = write(tmp_path, data)
     out = tmp_path / "results"
     _check_one_line_error(invoke("run", path, "--out", str(out)), expected, path, out)
@@ -118,7 +117,6 @@ def test_missing_yaml_and_bad_set_and_bad_scheduler(tmp_path):
 
 
 def test_unreachable_scheduler_writes_nothing(tmp_path, monkeypatch):
-    pytest.importorskip("simlunar.planner.strategies")
     import simlunar.pipeline.executors as ex
 
     monkeypatch.setattr(

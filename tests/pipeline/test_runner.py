@@ -180,7 +180,8 @@ def test_sigkill_then_resume_recomputes_nothing_finished(tmp_path, monkeypatch):
 
 @pytest.mark.slow
 def test_dask_local_cluster_through_the_scheduler_path_matches_the_pool(tmp_path):
-    distributed = pytest.importorskip("distributed")
+    import distributed
+
     _run(cfg(), tmp_path / "local", executor=LocalPoolExecutor(1))
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
