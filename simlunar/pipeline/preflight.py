@@ -24,6 +24,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -224,20 +225,36 @@ def _read_grid(path: Path, key: str, *, spacing: float | None):
     """``load_dem`` with every failure of the file turned into one line naming it."""
     from simlunar.terrain.io import load_dem
 
-    if path.suffix.lower() == ".npz":
-        _check_npz_spacing(path, key)
     try:
         if path.stat().st_size == 0:
             raise ConfigError(f"{key}: {path} is empty")
+        _check_magic(path, key)
+        if path.suffix.lower() == ".npz":
+            _check_npz_spacing(path, key)
         return load_dem(path, spacing=spacing)
     except ConfigError:
         raise
-    except (ValueError, TypeError, OSError, EOFError, KeyError) as exc:
+    except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
         # a file the reader cannot make sense of (truncated, garbage, wrong layout)
         msg = " ".join(str(exc).split()) or type(exc).__name__
         if str(path) in msg:
             raise ConfigError(f"{key}: {msg}") from None
         raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
+
+
+_MAGIC = {".npy": (b"\x93NUMPY", "a NumPy .npy file"), ".npz": (b"PK", "a NumPy .npz archive")}
+
+
+def _check_magic(path: Path, key: str) -> None:
+    """A ``.npy``/``.npz`` must start as one (``np.load`` guesses the format from the bytes
+    and leaves the file open when a guessed zip is not one)."""
+    magic, what = _MAGIC.get(path.suffix.lower(), (None, ""))
+    if magic is None:
+        return
+    with open(path, "rb") as f:
+        head = f.read(len(magic))
+    if head != magic or (path.suffix.lower() == ".npz" and not zipfile.is_zipfile(path)):
+        raise ConfigError(f"{key}: {path} is not {what}")
 
 
 def _check_npz_spacing(path: Path, key: str) -> None:
@@ -246,7 +263,7 @@ def _check_npz_spacing(path: Path, key: str) -> None:
             if "spacing" not in z.files:
                 return
             sp = np.asarray(z["spacing"])
-    except (ValueError, OSError, EOFError) as exc:
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
         raise ConfigError(f"{key}: cannot read {path}: {exc}") from None
     if sp.size != 1 or sp.dtype.kind not in "fiu":
         raise ConfigError(
