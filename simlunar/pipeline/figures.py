@@ -147,6 +147,10 @@ def write_figures(out_dir: str | Path) -> list[Path]:
     metrics = list(study.get("metrics") or [])
     units = res["units"]
     shown = units[:MAX_UNIT_PANELS]
+    cache = UnitCache(out)
+    # each .npz read once, before any figure is written; a corrupt one is an error naming it,
+    # not a silently missing panel
+    shown_arrays = [cache.load_arrays(rec["key"], strict=True) for rec in shown]
 
     for m in metrics:
         fig, axes = F.panel_row(len(shown), width=F.COLUMN_W * min(len(shown), 3))
@@ -161,9 +165,6 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             )
         emit(fig, f"error_vs_density_{m}")
 
-    cache = UnitCache(out)
-    # each .npz read once; a corrupt one is an error naming it, not a silently missing panel
-    shown_arrays = [cache.load_arrays(rec["key"], strict=True) for rec in shown]
     for rec, arr in zip(shown, shown_arrays):
         if not {"image", "wavelet_energy", "plan_rows", "reconstruction", "depth"} <= set(arr):
             continue

@@ -259,7 +259,7 @@ def _check_magic(path: Path, key: str) -> None:
 
 def _check_npz_spacing(path: Path, key: str) -> None:
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
             if "spacing" not in z.files:
                 return
             sp = np.asarray(z["spacing"])

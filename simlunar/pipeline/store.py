@@ -122,7 +122,8 @@ class UnitCache:
         :class:`~simlunar.errors.ResultFolderError` naming the file."""
         path = self.npz_path(key)
         try:
-            with np.load(path, allow_pickle=False) as z:
+            # our own handle: np.load leaves a file it opened itself open when it is no zip
+            with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
                 return {k: z[k] for k in z.files}
         except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
             if strict:
