@@ -407,3 +407,24 @@ def test_claim_folder_refuses_an_unrelated_folder(tmp_path):
     with pytest.raises(ResultFolderError, match=r"not a simlunar result folder .* thesis\.tex"):
         claim_folder(tmp_path, "name: x\nstudy: {}\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["thesis.tex"]
+
+
+def test_a_lost_cluster_is_one_line_exit_3_and_keeps_finished_units(tmp_path, monkeypatch):
+    from simlunar.errors import InfrastructureError
+    from simlunar.pipeline import runner
+
+    def lost_on_third(payload):
+        if payload["config"]["render"]["light"]["elevation_deg"] == 50:
+            raise InfrastructureError("--scheduler tcp://10.0.0.1:8786: lost the connection")
+        return fake_unit(payload)
+
+    monkeypatch.setitem(runner.run_experiment.__kwdefaults__, "compute", lost_on_third)
+    exp = write_exp(tmp_path / "exp.yaml", EXP)
+    out = tmp_path / "o"
+    r = CliRunner().invoke(app, ["run", str(exp), "--out", str(out), "--no-progress"])
+    assert r.exit_code == 3, r.output
+    assert r.stderr.splitlines() == [
+        "error: --scheduler tcp://10.0.0.1:8786: lost the connection; 2 of 4 units finished "
+        f"and kept in {out / 'units'}; rerun the same command to resume"
+    ]
+    assert len(finished_units(out)) == 2
