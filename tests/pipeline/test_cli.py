@@ -144,3 +144,39 @@ def test_figures_on_a_non_result_folder(tmp_path):
     r = invoke("figures", str(tmp_path))
     assert r.exit_code == 2
     assert "not a result folder (missing config.yaml)" in r.output
+
+
+# --------------------------------------------------------------------------- terrain, render
+def _one_error_line(r, expect: str) -> None:
+    assert r.exit_code == 2, r.output
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and expect in lines[0], r.stderr
+    assert "Traceback" not in r.output
+
+
+@pytest.mark.parametrize(
+    ("args", "expect"),
+    [
+        (("terrain", "aerial_9", "--out", "{d}/t"), "unknown terrain preset 'aerial_9'"),
+        (("terrain", "aerial_1", "--out", "{d}/t", "--scale", "0"), "scale"),
+        (("terrain", "aerial_1", "--out", "{d}/t", "--format", "bmp"), "--format must be"),
+        (("terrain", "aerial_1", "--out", "{d}/file"), "is a file, not a folder"),
+        (("terrain", "aerial_1", "--out", "{d}/file/t"), "is a file, so no folder can be made"),
+        (("render", "{d}/nope.yaml", "--out", "{d}/r"), "scene file not found"),
+        (("render", "{d}/scene.yaml", "--out", "{d}/file"), "is a file, not a folder"),
+        (("render", "{d}/bad_dem_scene.yaml", "--out", "{d}/r"), "every height is NaN"),
+        (("figures", "{d}/file"), "is a file, not a folder"),
+    ],
+    ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,
+)
+def test_terrain_render_figures_file_errors_are_one_line(args, expect, tmp_path):
+    import numpy as np
+
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "scene.yaml").write_text("terrain: {preset: aerial_1, scale: 0.125}\n")
+    np.save(tmp_path / "nan.npy", np.full((8, 8), np.nan))
+    (tmp_path / "bad_dem_scene.yaml").write_text("terrain: {file: nan.npy, spacing_m: 0.2}\n")
+    before = sorted((p.name, p.stat().st_size) for p in tmp_path.rglob("*"))
+    r = invoke(*[a.format(d=tmp_path) for a in args])
+    _one_error_line(r, expect)
+    assert sorted((p.name, p.stat().st_size) for p in tmp_path.rglob("*")) == before
