@@ -183,11 +183,17 @@ def figures(
     results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`"),
 ) -> None:
     """Redraw the figures of a result folder (PNG and PDF) without recomputing."""
+    from pathlib import Path
+
     from simlunar.pipeline.figures import write_figures_pruned
     from simlunar.pipeline.preflight import check_out_dir
+    from simlunar.pipeline.store import FolderLock
 
     check_out_dir(results_dir, option="figures")
-    paths = write_figures_pruned(results_dir)
+    if not Path(results_dir).is_dir():
+        raise SimlunarError(f"{results_dir}: no such folder")
+    with FolderLock(results_dir):  # not while a run writes into the folder
+        paths = write_figures_pruned(results_dir)
     for p in paths:
         typer.echo(str(p))
 
@@ -220,14 +226,14 @@ def render(
     """Render a scene: radiance.exr (linear), preview.png, ground_truth.exr/.npz, scene.json."""
     from pathlib import Path
 
-    from simlunar.pipeline.preflight import check_out_dir, terrain_facts
+    from simlunar.pipeline.preflight import check_camera, check_out_dir, terrain_facts
     from simlunar.pipeline.scene import load_scene, render_scene
 
     with user_input():
         cfg = load_scene(scene)
     out_dir = Path(out) if out else Path("results") / "render" / cfg.name
     check_out_dir(out_dir)
-    terrain_facts(cfg.terrain)  # DEM contents checked before the render
+    check_camera(cfg, terrain_facts(cfg.terrain))  # DEM contents and the view, before rendering
     paths = render_scene(cfg, out_dir)
     for name, path in paths.items():
         typer.echo(f"{name:<17} {path}")

@@ -184,8 +184,18 @@ class DaskExecutor(Executor):
         if self.scheme not in ("tcp", "tls", "ws", "wss"):
             return
         try:
-            with socket.create_connection((self.host, self.port), timeout=self.timeout_s):
-                pass
+            with socket.create_connection((self.host, self.port), timeout=self.timeout_s) as s:
+                if self.scheme == "tcp":
+                    # a Dask server sends its handshake as soon as it accepts; another
+                    # server (HTTP, ...) waits for the client, and Dask's Client would wait
+                    # for it forever
+                    try:
+                        s.recv(1)
+                    except TimeoutError:
+                        raise ConfigError(
+                            f"--scheduler {self.address}: something listens there but it "
+                            f"does not answer like a Dask scheduler within {self.timeout_s:g} s"
+                        ) from None
         except OSError as exc:
             why = (
                 f"no answer within {self.timeout_s:g} s"

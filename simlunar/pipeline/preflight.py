@@ -338,6 +338,8 @@ def image_shape(render: Any, facts: TerrainFacts) -> tuple[int, int]:
 def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera") -> None:
     """A perspective camera must have a view direction and see part of the terrain.
 
+    ``render`` is anything with a ``camera`` (an experiment's ``RenderCfg``, a ``SceneCfg``).
+
     Rays through a grid of pixels (the corners included) are intersected with the terrain's
     bounding box; if none meets it, no pixel can see the terrain.
     """

@@ -109,6 +109,23 @@ def test_a_closed_port_fails_at_once_with_one_line():
     assert time.perf_counter() - t0 < 2
 
 
+def test_a_listener_that_is_not_a_dask_scheduler_fails_within_the_timeout():
+    """Dask's own Client waits forever on a server that never answers its handshake."""
+    import socket
+
+    from simlunar.errors import ConfigError
+    from simlunar.pipeline.executors import DaskExecutor
+
+    with socket.create_server(("127.0.0.1", 0)) as server:
+        port = server.getsockname()[1]
+        t0 = time.perf_counter()
+        with pytest.raises(
+            ConfigError, match=r"does not answer like a Dask scheduler within 0\.5 s"
+        ):
+            DaskExecutor(f"tcp://127.0.0.1:{port}", timeout_s=0.5).open()
+        assert time.perf_counter() - t0 < 3
+
+
 def _cfg():
     from simlunar.pipeline.config import ExperimentCfg
 

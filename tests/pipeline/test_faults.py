@@ -320,6 +320,16 @@ def test_figures_on_a_damaged_folder_is_one_line_exit_2(case, damage, expect, fi
     assert tree(tmp_path, skip=()) == before
 
 
+def test_figures_waits_for_no_run_it_refuses_while_one_writes(finished, tmp_path):
+    out = tmp_path / "out"
+    shutil.copytree(finished, out)
+    before = tree(out, skip=())
+    with FolderLock(out):
+        r = CliRunner().invoke(app, ["figures", str(out)])
+        assert r.exit_code == 2 and f"(pid {os.getpid()}) is writing into this folder" in r.stderr
+    assert tree(out, skip=()) == before
+
+
 def test_figures_checks_rows_when_the_provenance_has_no_file_hashes(finished, tmp_path):
     """Folders of older versions carry no hashes: the table itself is still checked."""
     out = tmp_path / "out"
