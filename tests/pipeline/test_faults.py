@@ -438,3 +438,28 @@ def test_a_lost_cluster_is_one_line_exit_3_and_keeps_finished_units(tmp_path, mo
         f"and kept in {out / 'units'}; rerun the same command to resume"
     ]
     assert len(finished_units(out)) == 2
+
+
+@pytest.mark.slow
+def test_real_units_a_dem_multiplied_by_5_is_recomputed(tmp_path):
+    """Issue 12's case with real units: the same config, the DEM's heights times 5."""
+    rng = np.random.default_rng(4)
+    np.save(tmp_path / "dem.npy", rng.normal(0, 0.3, (24, 32)).cumsum(axis=1) * 0.2)
+    data = {
+        "name": "dem_change",
+        "terrain": {"file": "dem.npy", "spacing_m": 0.2},
+        "study": {"strategies": ["random", "grid"], "densities": [0.5, 0.25], "trials": 1},
+        "figures": {"enabled": False},
+    }
+    exp = write_exp(tmp_path / "exp.yaml", data)
+    out = tmp_path / "out"
+    args = ["run", str(exp), "--out", str(out), "--no-progress"]
+    r1 = CliRunner().invoke(app, args)
+    assert r1.exit_code == 0, r1.output
+    first = (out / "results.csv").read_bytes()
+    np.save(tmp_path / "dem.npy", 5 * np.load(tmp_path / "dem.npy"))
+    r2 = CliRunner().invoke(app, args)
+    assert r2.exit_code == 0, r2.output
+    assert "units: 1 (0 cached, 1 computed)" in r2.stdout
+    assert (out / "results.csv").read_bytes() != first
+    assert len(finished_units(out)) == 1
