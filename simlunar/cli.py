@@ -145,6 +145,9 @@ def run(
     set_: list[str] | None = _SET_OPTION,
     no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar"),
     no_figures: bool = typer.Option(False, "--no-figures", help="skip figures/"),
+    save_scans: bool = typer.Option(
+        False, "--save-scans", help="scanner studies: export each unit's scan to scans/unit<i>/"
+    ),
 ) -> None:
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
     from pathlib import Path
@@ -155,6 +158,10 @@ def run(
 
     with user_input():
         cfg = load_experiment(experiment, parse_set(set_ or []))
+        if save_scans:
+            from simlunar.pipeline.exports import with_save_scans
+
+            cfg = with_save_scans(cfg)
         executor = make_executor(workers=workers, scheduler=scheduler)
     if scheduler:
         import logging
@@ -243,38 +250,77 @@ def render(
 @app.command()
 @user_errors
 def terrain(
-    preset: str = typer.Argument(..., help="preset name (aerial_1..3, moonyard) or a terrain YAML"),
-    out: str = typer.Option(..., "--out", help="output folder"),
+    preset: str = typer.Argument(
+        ..., help="preset name (aerial_1..3, moonyard), a terrain YAML, or a DEM file with --stats"
+    ),
+    out: str = typer.Option(None, "--out", help="output folder (optional with --stats)"),
     seed: int = typer.Option(0, "--seed", help="random seed (same seed, same terrain)"),
     scale: float = typer.Option(1.0, "--scale", help="shrink the grid (same spacing), in (0, 1]"),
-    dem_format: str = typer.Option("exr", "--format", help="DEM file: exr, npz, npy or tif"),
+    dem_format: str = typer.Option(
+        "exr", "--format", help="DEM file: exr, npz, npy or tif (GeoTIFF)"
+    ),
     mesh: str = typer.Option("ply", "--mesh", help="mesh file: ply, obj or none"),
+    stats: bool = typer.Option(
+        False, "--stats", help="print RMS slopes at several baselines, Hurst exponent, densities"
+    ),
 ) -> None:
     """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""
     import time
+    from pathlib import Path
 
     from simlunar.pipeline.preflight import check_out_dir
     from simlunar.terrain import generate
-    from simlunar.terrain.io import write_terrain_outputs
+    from simlunar.terrain.io import FORMATS, GDAL_FORMATS, load_dem, write_terrain_outputs
     from simlunar.terrain.presets import load_preset
+    from simlunar.terrain.stats import terrain_report
 
     if mesh.lower() not in ("ply", "obj", "none"):
         raise SimlunarError(f"--mesh must be ply, obj or none, got {mesh!r}")
     if dem_format.lower() not in ("exr", "npz", "npy", "tif"):
         raise SimlunarError(f"--format must be exr, npz, npy or tif, got {dem_format!r}")
+    if out is None and not stats:
+        raise SimlunarError("--out is required (unless --stats)")
+    if Path(preset).suffix.lower() in FORMATS + GDAL_FORMATS:
+        if not stats or out is not None:
+            raise SimlunarError(f"{preset}: a DEM file is only read with --stats (and no --out)")
+        import json
+        from types import SimpleNamespace
+
+        with user_input():
+            dem = load_dem(preset)
+        typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
+        feats = {"craters": [], "rocks": []}
+        side = Path(preset).with_name("features.json")  # written beside it by simlunar terrain
+        if side.is_file():
+            with user_input():
+                feats = json.loads(side.read_text())
+            typer.echo(f"features: {side}")
+        kw = {
+            k: [SimpleNamespace(diameter=f["diameter"]) for f in feats.get(k, [])]
+            for k in ("craters", "rocks")
+        }
+        for line in terrain_report(dem, **kw):
+            typer.echo(line)
+        return
     with user_input():
         params = load_preset(preset, scale=scale)
-    check_out_dir(out)
+    if out is not None:
+        check_out_dir(out)
     t0 = time.perf_counter()
     res = generate(params, rng=seed)
     t_gen = time.perf_counter() - t0
-    files = write_terrain_outputs(
-        res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
-    )
     rows, cols = res.terrain.shape
     typer.echo(
         f"{res.params.name}: {rows} x {cols} cells at {res.terrain.spacing} m, "
         f"{len(res.craters)} craters, {len(res.rocks)} rocks, generated in {t_gen:.2f} s"
+    )
+    if stats:
+        for line in terrain_report(res.terrain, craters=res.craters, rocks=res.rocks):
+            typer.echo(line)
+    if out is None:
+        return
+    files = write_terrain_outputs(
+        res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
     )
     for name, path in files.items():
         typer.echo(f"{name:<10} {path}")

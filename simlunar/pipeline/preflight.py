@@ -330,7 +330,7 @@ def _dem_facts(path: Path, spacing: float | None, albedo_file) -> TerrainFacts:
 def image_shape(render: Any, facts: TerrainFacts) -> tuple[int, int]:
     """(rows, cols) of a unit's rendered image."""
     cam = render.camera
-    if getattr(cam, "kind", None) == "perspective":
+    if getattr(cam, "kind", None) != "orthographic_nadir" and hasattr(cam, "width"):
         return (int(cam.height), int(cam.width))
     return (facts.rows, facts.cols)
 
@@ -344,6 +344,9 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
     bounding box; if none meets it, no pixel can see the terrain.
     """
     cam = render.camera
+    if getattr(cam, "kind", None) == "rover_mast":
+        _check_site(cam, facts, key)
+        return
     if getattr(cam, "kind", None) != "perspective":
         return
     from simlunar.geometry import Camera, Intrinsics, Pose
@@ -384,6 +387,21 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
             f"{key}: the camera at {pos.tolist()} looking at {target.tolist()} sees no "
             f"terrain (the terrain spans x [{x0:g}, {x1:g}] m, y [{y0:g}, {y1:g}] m, "
             f"z [{facts.zmin:.3g}, {facts.zmax:.3g}] m)"
+        )
+
+
+def _check_site(cam: Any, facts: TerrainFacts, key: str) -> None:
+    """A rover mast stands on the terrain: its site must lie within the cell centres."""
+    site = getattr(cam, "site_m", None)
+    if site is None:
+        return  # the terrain's centre
+    x0, x1, y0, y1 = facts.extent
+    h = 0.5 * facts.spacing
+    x, y = float(site[0]), float(site[1])
+    if not (x0 + h <= x <= x1 - h and y0 + h <= y <= y1 - h):
+        raise ConfigError(
+            f"{key}.site_m: [{x:g}, {y:g}] m lies outside the terrain (cell centres span "
+            f"x [{x0 + h:g}, {x1 - h:g}] m, y [{y0 + h:g}, {y1 - h:g}] m)"
         )
 
 

@@ -217,8 +217,11 @@ def unit_label(u: WorkUnit) -> str:
     parts = []
     for path, v in u.sweep.items():
         name = path.rsplit(".", 1)[-1]
-        if isinstance(v, dict):
-            v = v.get("kind", json.dumps(v, sort_keys=True))
+        if isinstance(v, dict) and "kind" in v:  # e.g. rover_mast(depression_deg=30)
+            rest = ", ".join(f"{k}={fmt_value(x)}" for k, x in v.items() if k != "kind")
+            v = f"{v['kind']}({rest})" if rest else v["kind"]
+        elif isinstance(v, dict):
+            v = json.dumps(v, sort_keys=True)
         elif v is None:
             v = "default"
         parts.append(f"{name}={fmt_value(v)}")
@@ -421,6 +424,11 @@ def _run_locked(
         for i, result in executor.run(compute, payloads, **kw):
             u = todo[i]
             arrays = result.pop("arrays", {}) or {}
+            scans = result.pop("scans", None)
+            if scans is not None:  # before the cache entry: a cached unit has its scans
+                from simlunar.pipeline.exports import write_scan_export
+
+                write_scan_export(out / "scans" / f"unit{u.index}", scans)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
             cache.save(u.key, record, arrays)
             records[u.key] = json.loads(json.dumps(record, default=float))

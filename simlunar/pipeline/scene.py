@@ -38,7 +38,7 @@ from simlunar.pipeline.config import (
     _Model,
     format_validation_error,
 )
-from simlunar.pipeline.schema import _tagged_union
+from simlunar.pipeline.schema import RoverMastCfg, _tagged_union
 
 Vec3 = tuple[float, float, float]
 
@@ -86,7 +86,9 @@ class SunSceneCfg(SunLightCfg):
         return math.radians(self.angular_diameter_deg)
 
 
-SceneCameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveSceneCfg)
+SceneCameraCfg = _tagged_union(
+    "orthographic_nadir", OrthoNadirCfg, PerspectiveSceneCfg, RoverMastCfg
+)
 SceneLightCfg = _tagged_union("sun", SunSceneCfg, CameraLightCfg)
 
 
@@ -149,6 +151,21 @@ def build_camera(cfg, terrain):
     if isinstance(cfg, OrthoNadirCfg):
         return OrthoCamera.nadir_for_grid(
             terrain.shape, terrain.spacing, terrain.origin, altitude=cfg.altitude_m
+        )
+    if isinstance(cfg, RoverMastCfg):
+        from simlunar.geometry import rover_mast_camera
+
+        return rover_mast_camera(
+            terrain.heights,
+            terrain.spacing,
+            terrain.origin,
+            site=cfg.site_m,
+            height_above=cfg.height_m,
+            depression_deg=cfg.depression_deg,
+            azimuth_deg=cfg.azimuth_deg,
+            width=cfg.width,
+            height=cfg.height,
+            fov_x_deg=cfg.fov_deg,
         )
     if cfg.fov_deg is not None:
         k = Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg)

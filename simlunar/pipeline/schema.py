@@ -63,7 +63,9 @@ class TerrainCfg(_Model):
     preset: str | None = Field(None, description="terrain preset name, e.g. aerial_1, moonyard")
     scale: float = Field(1.0, gt=0, le=1, description="preset resolution scale (1/8 = small)")
     file: Path | None = Field(None, description="DEM file (.npy, .tif, .exr); relative to the YAML")
-    spacing_m: Metres | None = Field(None, gt=0, description="DEM cell size (m), for file")
+    spacing_m: Metres | None = Field(
+        None, gt=0, description="DEM cell size (m), for a file without georeferencing"
+    )
     albedo_file: Path | None = Field(None, description="optional albedo grid file")
     albedo: float | None = Field(
         None, ge=0, le=1, description="replace the albedo by this uniform value (ablation)"
@@ -104,8 +106,6 @@ class TerrainCfg(_Model):
     def _one_source(self) -> TerrainCfg:
         if (self.preset is None) == (self.file is None):
             raise ValueError("give exactly one of preset or file")
-        if self.file is not None and self.spacing_m is None:
-            raise ValueError("a DEM file needs spacing_m")
         return self
 
 
@@ -128,7 +128,25 @@ class PerspectiveCfg(_Model):
     look_at_m: tuple[float, float, float]
 
 
-CameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveCfg)
+class RoverMastCfg(_Model):
+    """Perspective camera on a rover mast: ``height_m`` above the ground at ``site_m``, its
+    optical axis ``depression_deg`` below the horizon, towards ``azimuth_deg``."""
+
+    kind: Literal["rover_mast"]
+    width: int = Field(320, gt=0, le=16384)
+    height: int = Field(240, gt=0, le=16384)
+    fov_deg: Deg = Field(60.0, gt=0, lt=180, description="horizontal field of view")
+    height_m: Metres = Field(1.5, gt=0, description="camera height above the terrain at the site")
+    depression_deg: Deg = Field(
+        30.0, gt=0, le=90, description="optical axis below the horizon (90 = straight down)"
+    )
+    azimuth_deg: Deg = Field(0.0, description="look direction from +y (north) clockwise to +x")
+    site_m: tuple[float, float] | None = Field(
+        None, description="world (x, y) of the mast foot; default the terrain's centre"
+    )
+
+
+CameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveCfg, RoverMastCfg)
 
 
 class SunLightCfg(_Model):
@@ -295,6 +313,20 @@ class ScannerStudyCfg(_Model):
         description="extra keyword options of run_scanner_study "
         "(gray_opts, dot_opts, planner_opts, rig keywords under 'rig')",
     )
+    save_scans: bool = Field(
+        False,
+        description="write scans/unit<i>/ per unit: gray-code frames (8/16-bit PNG, OpenCV "
+        "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
+    )
+
+    @model_validator(mode="after")
+    def _scans_need_gray_code(self):
+        if self.save_scans and not {"gray_code", "ambiguity_enhancement"} & set(self.modes):
+            raise ValueError(
+                "save_scans exports the gray-code scan: modes must include gray_code or "
+                "ambiguity_enhancement"
+            )
+        return self
 
 
 StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg)

@@ -206,6 +206,8 @@ CASES = [
     Case("camera at its target", with_("render.camera", {**PERSPECTIVE, "look_at_m": PERSPECTIVE["position_m"]}), "render.camera.look_at_m: equals position_m"),
     Case("camera looking away", with_("render.camera", {**PERSPECTIVE, "look_at_m": [20.0, -12.0, 60.0]}), "render.camera: the camera at [20.0, -12.0, 30.0] looking at [20.0, -12.0, 60.0] sees no terrain"),
     Case("camera beside the terrain", with_("render.camera", {**PERSPECTIVE, "position_m": [500.0, 0.0, 30.0], "look_at_m": [500.0, 0.0, 0.0]}), "sees no terrain"),
+    Case("rover mast off the terrain", with_("render.camera", {"kind": "rover_mast", "site_m": [500.0, 0.0]}), "render.camera.site_m: [500, 0] m lies outside the terrain"),
+    Case("rover mast density below one sample", {**with_("render.camera", {"kind": "rover_mast", "width": 32, "height": 24}), "study": {**GOOD["study"], "densities": [0.5, 0.003]}}, "density 0.003 gives 2 samples on the 24 x 32 image"),
     Case("camera far away", with_("render.camera", {**PERSPECTIVE, "position_m": [0.0, 0.0, 1e300]}), "render.camera.position_m: coordinates must be finite"),
     Case("scanner projector 0 x 0", with_("study", {**SCANNER, "projector_px": [0, 0]}), "study.projector_px"),
     Case("sweep point that sees nothing", {**with_("render.camera", PERSPECTIVE), "sweep": {"render.camera.look_at_m": [[20.0, -12.5, 0.0], [20.0, -12.0, 60.0]]}}, "sweep point 1 (look_at_m=[20.0, -12.0, 60.0]): render.camera"),
