@@ -182,10 +182,8 @@ def terrain_facts(t: Any) -> TerrainFacts:
     if t.preset is not None:
         memo = ("preset", str(t.preset), t.scale, repr(t.overrides))
         if memo not in _TERRAIN_MEMO:
-            from simlunar.terrain.presets import load_preset
-
             try:
-                p = load_preset(t.preset, scale=t.scale, overrides=t.overrides or None)
+                p = _preset_params(t)
             except (ValueError, OSError) as exc:
                 raise ConfigError(f"terrain.preset: {exc}") from None
             half = 0.5 * max(p.rows, p.cols) * p.spacing
@@ -201,6 +199,18 @@ def terrain_facts(t: Any) -> TerrainFacts:
     if memo not in _TERRAIN_MEMO:
         _TERRAIN_MEMO[memo] = _dem_facts(Path(t.file), t.spacing_m, t.albedo_file)
     return _TERRAIN_MEMO[memo]
+
+
+def _preset_params(t: Any):
+    """The preset's ``TerrainParams`` (grid size, spacing, origin) as the unit will build them."""
+    try:  # the typed configuration reads presets through its own models
+        from simlunar.pipeline.presets import merged_preset
+        from simlunar.pipeline.translate import terrain_params
+    except ImportError:
+        from simlunar.terrain.presets import load_preset
+
+        return load_preset(t.preset, scale=t.scale, overrides=t.overrides or None)
+    return terrain_params(merged_preset(t.preset, t.overrides), scale=t.scale)
 
 
 def _stamp(p: Path):
