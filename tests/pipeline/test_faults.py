@@ -463,3 +463,15 @@ def test_real_units_a_dem_multiplied_by_5_is_recomputed(tmp_path):
     assert "units: 1 (0 cached, 1 computed)" in r2.stdout
     assert (out / "results.csv").read_bytes() != first
     assert len(finished_units(out)) == 1
+
+
+def test_every_shipped_experiment_passes_the_checks():
+    """No false alarm: the preflight accepts every experiment in experiments/."""
+    from simlunar.pipeline.preflight import check_units
+    from simlunar.pipeline.runner import expand
+
+    paths = sorted((HERE.parents[1] / "experiments").glob("*.yaml"))
+    assert len(paths) >= 10
+    for path in paths:
+        units = expand(load_experiment(path))
+        assert len(check_units(units).terrain) == len(units)
