@@ -286,6 +286,12 @@ def run_experiment(
             return _run_locked(
                 cfg, out, units, checks, config_text, executor, compute, progress, figures, t_start
             )
+        except RunInterrupted:
+            raise
+        except KeyboardInterrupt:
+            # after the units, while the summary or the figures were written
+            done = len(UnitCache(out).keys() & {u.key for u in units})
+            raise RunInterrupted(_kept(out, done, len(units), "interrupted")) from None
         finally:
             lock.release()
     finally:

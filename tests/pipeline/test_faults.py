@@ -475,3 +475,20 @@ def test_every_shipped_experiment_passes_the_checks():
     for path in paths:
         units = expand(load_experiment(path))
         assert len(check_units(units).terrain) == len(units)
+
+
+def test_ctrl_c_while_the_summary_is_written_says_what_is_kept(tmp_path, monkeypatch):
+    from simlunar.errors import RunInterrupted
+    from simlunar.pipeline import runner
+
+    def interrupt(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner, "collect_rows", interrupt)
+    exp = write_exp(tmp_path / "exp.yaml", EXP)
+    out = tmp_path / "out"
+    with pytest.raises(RunInterrupted, match=r"^interrupted: 4 of 4 units finished and kept in"):
+        run_fake(exp, out)
+    assert not (out / ".lock").exists() and not (out / "provenance.json").exists()
+    monkeypatch.undo()
+    assert run_fake(exp, out).units_cached == 4
