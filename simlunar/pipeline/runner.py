@@ -245,6 +245,7 @@ def run_experiment(
         A validated experiment.
     out_dir : path
         Result folder (created). Finished units already cached there are not recomputed.
+        The run holds the folder's lock; a folder of another configuration is refused.
     executor : Executor, optional
         Where units run; default: serial in this process.
     compute : callable
@@ -254,6 +255,15 @@ def run_experiment(
         Show a progress bar with ETA on stderr.
     figures : bool
         Write ``figures/`` (when the experiment enables them).
+
+    Raises
+    ------
+    simlunar.errors.ConfigError, simlunar.errors.ResultFolderError
+        A user mistake (a file, the geometry, the folder), found before anything is written.
+    simlunar.errors.InfrastructureError
+        The executor's cluster failed; finished units are kept.
+    simlunar.errors.RunInterrupted
+        Ctrl-C; finished units are kept (a ``KeyboardInterrupt``).
     """
     t_start = time.perf_counter()
     out = Path(out_dir)
