@@ -101,7 +101,6 @@ def test_bad_config_is_one_line_exit_2_nothing_written(case, data, expected, tmp
     ("case", "data", "expected"), BAD_REGISTRY, ids=[b[0] for b in BAD_REGISTRY]
 )
 def test_unknown_names_are_one_line_exit_2(case, data, expected, tmp_path):
-    pytest.importorskip("simlunar.planner.strategies")
     path = write(tmp_path, data)
     out = tmp_path / "results"
     _check_one_line_error(invoke("run", path, "--out", str(out)), expected, path, out)
