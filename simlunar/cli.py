@@ -1,23 +1,34 @@
 """Command-line interface (Typer): a thin front over the library and the pipeline.
 
-Every user error (bad option, bad file, bad config) prints one line ``error: ...`` and exits
-with code 2, without a traceback.
+Exit codes: 0 done; 2 a user error (bad option, config, input file or result folder), found
+before anything is written, reported as one line ``error: ...`` without a traceback; 3 the
+environment failed during a run (Dask scheduler or workers lost, a write refused): one line,
+finished units kept; 130 interrupted (Ctrl-C): one line saying what was kept and how to
+resume; 1 an internal error (a bug): the traceback and a line asking to report it.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import platform
 import sys
+import traceback
 
 import typer
+
+from simlunar.errors import InfrastructureError, SimlunarError
 
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
+    pretty_exceptions_enable=False,
     help="simlunar: image-directed range scanning of lunar terrain, simulated.",
 )
+
+EXIT_USER, EXIT_INTERNAL, EXIT_INFRA, EXIT_INTERRUPTED = 2, 1, 3, 130
+REPORT_URL = "https://github.com/simlunar/simlunar/issues"
 
 
 @app.callback()
@@ -25,17 +36,31 @@ def _root() -> None:
     """simlunar: image-directed range scanning of lunar terrain, simulated."""
 
 
-USER_ERRORS: tuple[type[BaseException], ...] = (
-    ValueError,
-    FileNotFoundError,
-    KeyError,
-    IsADirectoryError,
-    PermissionError,
-)
+#: errors that mean "the user's input is wrong" when raised while the input is being read
+#: and checked (inside :func:`user_input`); raised later, they are bugs
+INPUT_ERRORS: tuple[type[BaseException], ...] = (ValueError, OSError)
+
+
+@contextlib.contextmanager
+def user_input():
+    """Treat ValueError / OSError raised inside (reading and checking input) as user errors."""
+    try:
+        yield
+    except SimlunarError:
+        raise
+    except INPUT_ERRORS as exc:
+        raise SimlunarError(_one_line(exc)) from None
+
+
+def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
+        return f"{exc.filename}: {exc.strerror}"
+    msg = " ".join(m.strip() for m in str(exc).strip().splitlines())
+    return msg or type(exc).__name__
 
 
 def user_errors(fn):
-    """Turn user errors into one line on stderr and exit code 2."""
+    """Map exceptions to the exit codes above (one line on stderr except for bugs)."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -43,12 +68,36 @@ def user_errors(fn):
             return fn(*args, **kwargs)
         except typer.Exit:
             raise
-        except USER_ERRORS as exc:
-            msg = str(exc).strip().splitlines()
-            typer.echo(f"error: {' '.join(m.strip() for m in msg) or type(exc).__name__}", err=True)
-            raise typer.Exit(2) from None
+        except SimlunarError as exc:
+            typer.echo(f"error: {_one_line(exc)}", err=True)
+            raise typer.Exit(EXIT_USER) from None
+        except InfrastructureError as exc:
+            typer.echo(f"error: {_one_line(exc)}", err=True)
+            raise typer.Exit(EXIT_INFRA) from None
+        except KeyboardInterrupt as exc:
+            msg = _one_line(exc) if str(exc) else "interrupted"
+            typer.echo(msg, err=True)
+            raise typer.Exit(EXIT_INTERRUPTED) from None
+        except OSError as exc:
+            if exc.filename is None:
+                raise _internal(exc) from None
+            # a write refused after the checks passed (disk full, permissions changed)
+            typer.echo(f"error: {_one_line(exc)}", err=True)
+            raise typer.Exit(EXIT_INFRA) from None
+        except Exception as exc:
+            raise _internal(exc) from None
 
     return wrapper
+
+
+def _internal(exc: BaseException) -> typer.Exit:
+    traceback.print_exception(exc, file=sys.stderr)
+    typer.echo(
+        f"simlunar: internal error ({type(exc).__name__}); this is a bug in simlunar, please "
+        f"report it with the traceback above at {REPORT_URL}",
+        err=True,
+    )
+    return typer.Exit(EXIT_INTERNAL)
 
 
 @app.command()
@@ -96,6 +145,9 @@ def run(
     set_: list[str] | None = _SET_OPTION,
     no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar"),
     no_figures: bool = typer.Option(False, "--no-figures", help="skip figures/"),
+    save_scans: bool = typer.Option(
+        False, "--save-scans", help="scanner studies: export each unit's scan to scans/unit<i>/"
+    ),
 ) -> None:
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
     from pathlib import Path
@@ -104,13 +156,25 @@ def run(
     from simlunar.pipeline.executors import make_executor
     from simlunar.pipeline.runner import run_experiment
 
-    cfg = load_experiment(experiment, parse_set(set_ or []))
-    executor = make_executor(workers=workers, scheduler=scheduler)
+    with user_input():
+        cfg = load_experiment(experiment, parse_set(set_ or []))
+        if save_scans:
+            from simlunar.pipeline.exports import with_save_scans
+
+            cfg = with_save_scans(cfg)
+        executor = make_executor(workers=workers, scheduler=scheduler)
+    if scheduler:
+        import logging
+
+        # a lost scheduler or worker is reported in one line; Dask's own log would add pages
+        logging.getLogger("distributed").setLevel(logging.CRITICAL)
     out_dir = Path(out) if out else Path("results") / cfg.name
     summary = run_experiment(
         cfg, out_dir, executor=executor, progress=not no_progress, figures=not no_figures
     )
     typer.echo(summary.scores_markdown)
+    for note in summary.notes:
+        typer.echo(note)
     typer.echo(
         f"units: {summary.units_total} ({summary.units_cached} cached, "
         f"{summary.units_computed} computed) in {summary.elapsed_s:.1f} s"
@@ -126,9 +190,17 @@ def figures(
     results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`"),
 ) -> None:
     """Redraw the figures of a result folder (PNG and PDF) without recomputing."""
-    from simlunar.pipeline.figures import write_figures
+    from pathlib import Path
 
-    paths = write_figures(results_dir)
+    from simlunar.pipeline.figures import write_figures_pruned
+    from simlunar.pipeline.preflight import check_out_dir
+    from simlunar.pipeline.store import FolderLock
+
+    check_out_dir(results_dir, option="figures")
+    if not Path(results_dir).is_dir():
+        raise SimlunarError(f"{results_dir}: no such folder")
+    with FolderLock(results_dir):  # not while a run writes into the folder
+        paths = write_figures_pruned(results_dir)
     for p in paths:
         typer.echo(str(p))
 
@@ -177,10 +249,14 @@ def render(
     """Render a scene: radiance.exr (linear), preview.png, ground_truth.exr/.npz, scene.json."""
     from pathlib import Path
 
+    from simlunar.pipeline.preflight import check_camera, check_out_dir, terrain_facts
     from simlunar.pipeline.scene import load_scene, render_scene
 
-    cfg = load_scene(scene)
+    with user_input():
+        cfg = load_scene(scene)
     out_dir = Path(out) if out else Path("results") / "render" / cfg.name
+    check_out_dir(out_dir)
+    check_camera(cfg, terrain_facts(cfg.terrain))  # DEM contents and the view, before rendering
     paths = render_scene(cfg, out_dir)
     for name, path in paths.items():
         typer.echo(f"{name:<17} {path}")
@@ -190,45 +266,93 @@ def render(
 @app.command()
 @user_errors
 def terrain(
-    preset: str = typer.Argument(..., help="preset name (aerial_1..3, moonyard) or a terrain YAML"),
-    out: str = typer.Option(..., "--out", help="output folder"),
+    preset: str = typer.Argument(
+        ..., help="preset name (aerial_1..3, moonyard), a terrain YAML, or a DEM file with --stats"
+    ),
+    out: str = typer.Option(None, "--out", help="output folder (optional with --stats)"),
     seed: int = typer.Option(0, "--seed", help="random seed (same seed, same terrain)"),
     scale: float = typer.Option(1.0, "--scale", help="shrink the grid (same spacing), in (0, 1]"),
-    dem_format: str = typer.Option("exr", "--format", help="DEM file: exr, npz, npy or tif"),
+    dem_format: str = typer.Option(
+        "exr", "--format", help="DEM file: exr, npz, npy or tif (GeoTIFF)"
+    ),
     mesh: str = typer.Option("ply", "--mesh", help="mesh file: ply, obj or none"),
+    stats: bool = typer.Option(
+        False, "--stats", help="print RMS slopes at several baselines, Hurst exponent, densities"
+    ),
 ) -> None:
     """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""
     import time
+    from pathlib import Path
 
+    from simlunar.pipeline.preflight import check_out_dir
     from simlunar.terrain import generate
-    from simlunar.terrain.io import write_terrain_outputs
+    from simlunar.terrain.io import FORMATS, GDAL_FORMATS, load_dem, write_terrain_outputs
+    from simlunar.terrain.presets import load_preset
+    from simlunar.terrain.stats import terrain_report
 
     if mesh.lower() not in ("ply", "obj", "none"):
-        raise ValueError(f"--mesh must be ply, obj or none, got {mesh!r}")
-    from simlunar.pipeline.presets import merged_preset
-    from simlunar.pipeline.translate import terrain_params
+        raise SimlunarError(f"--mesh must be ply, obj or none, got {mesh!r}")
+    if dem_format.lower() not in ("exr", "npz", "npy", "tif"):
+        raise SimlunarError(f"--format must be exr, npz, npy or tif, got {dem_format!r}")
+    if out is None and not stats:
+        raise SimlunarError("--out is required (unless --stats)")
+    if Path(preset).suffix.lower() in FORMATS + GDAL_FORMATS:
+        if not stats or out is not None:
+            raise SimlunarError(f"{preset}: a DEM file is only read with --stats (and no --out)")
+        import json
+        from types import SimpleNamespace
 
-    if not 0 < scale <= 1:
-        raise ValueError(f"--scale must lie in (0, 1], got {scale}")
-    # the preset file through the schema's models (the same path as an experiment's terrain)
-    params = terrain_params(merged_preset(preset), scale=scale)
+        with user_input():
+            dem = load_dem(preset)
+        typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
+        feats = {"craters": [], "rocks": []}
+        side = Path(preset).with_name("features.json")  # written beside it by simlunar terrain
+        if side.is_file():
+            with user_input():
+                feats = json.loads(side.read_text())
+            typer.echo(f"features: {side}")
+        kw = {
+            k: [SimpleNamespace(diameter=f["diameter"]) for f in feats.get(k, [])]
+            for k in ("craters", "rocks")
+        }
+        for line in terrain_report(dem, **kw):
+            typer.echo(line)
+        return
+    with user_input():
+        params = load_preset(preset, scale=scale)
+    if out is not None:
+        check_out_dir(out)
     t0 = time.perf_counter()
     res = generate(params, rng=seed)
     t_gen = time.perf_counter() - t0
-    files = write_terrain_outputs(
-        res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
-    )
     rows, cols = res.terrain.shape
     typer.echo(
         f"{res.params.name}: {rows} x {cols} cells at {res.terrain.spacing} m, "
         f"{len(res.craters)} craters, {len(res.rocks)} rocks, generated in {t_gen:.2f} s"
+    )
+    if stats:
+        for line in terrain_report(res.terrain, craters=res.craters, rocks=res.rocks):
+            typer.echo(line)
+    if out is None:
+        return
+    files = write_terrain_outputs(
+        res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
     )
     for name, path in files.items():
         typer.echo(f"{name:<10} {path}")
 
 
 def main() -> None:
-    app(prog_name="simlunar")
+    try:
+        app(prog_name="simlunar")
+    except SystemExit as exc:
+        if exc.code == EXIT_INTERRUPTED:
+            # threads of units still running (and their forked study processes) would be
+            # waited for at interpreter exit; the message is out and the lock released
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(EXIT_INTERRUPTED)
+        raise
 
 
 if __name__ == "__main__":

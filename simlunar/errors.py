@@ -9,3 +9,17 @@ class SimlunarError(Exception):
 
 class ConfigError(SimlunarError, ValueError):
     """An invalid configuration value; the message names the key path."""
+
+
+class ResultFolderError(SimlunarError):
+    """A result folder that cannot be used: not writable, owned by another run or config,
+    or holding files that disagree with each other; the message names the path."""
+
+
+class InfrastructureError(Exception):
+    """The environment failed during a run (Dask scheduler or workers lost, a write refused
+    by the filesystem): not the user's input, not a bug. Finished units are kept."""
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """SIGINT (Ctrl-C) stopped a run; the message says what was kept and how to resume."""

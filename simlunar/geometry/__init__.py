@@ -7,7 +7,19 @@ from simlunar.geometry.camera import (
     Pose,
     Projector,
     Rig,
+    grid_height_at,
     pixel_centers,
+    rover_mast_camera,
 )
 
-__all__ = ["Camera", "Intrinsics", "OrthoCamera", "Pose", "Projector", "Rig", "pixel_centers"]
+__all__ = [
+    "Camera",
+    "Intrinsics",
+    "OrthoCamera",
+    "Pose",
+    "Projector",
+    "Rig",
+    "grid_height_at",
+    "pixel_centers",
+    "rover_mast_camera",
+]

@@ -152,6 +152,19 @@ class Pose:
         y = np.cross(z, x)
         return cls(np.stack([x, y, z], axis=1), eye)
 
+    @classmethod
+    def from_heading(cls, eye, *, azimuth_deg: float, depression_deg: float) -> Pose:
+        """Device at ``eye`` looking towards ``azimuth_deg`` (from +y clockwise towards +x),
+        ``depression_deg`` below the horizon, with no roll (image x stays horizontal).
+
+        At 90 deg (straight down) image up is the azimuth direction.
+        """
+        az, dep = np.radians(azimuth_deg), np.radians(depression_deg)
+        z = np.array([np.cos(dep) * np.sin(az), np.cos(dep) * np.cos(az), -np.sin(dep)])
+        x = np.array([np.cos(az), -np.sin(az), 0.0])  # right of the heading, horizontal
+        y = np.cross(z, x)  # image down
+        return cls(np.stack([x, y, z], axis=1), np.asarray(eye, float))
+
     @property
     def forward(self) -> np.ndarray:
         return self.rotation[:, 2]
@@ -348,6 +361,78 @@ class Rig:
     @property
     def baseline(self) -> float:
         return float(np.linalg.norm(self.camera.position - self.projector.position))
+
+
+def grid_height_at(heights, spacing: float, origin, x: float, y: float) -> float:
+    """Bilinear height of a grid (cell centres, :class:`~simlunar.terrain.Terrain` frame) at
+    world (x, y); nodata neighbours are left out of the weights.
+
+    Raises
+    ------
+    ValueError
+        (x, y) outside the grid's cell centres, or all four neighbours nodata.
+    """
+    h = np.asarray(heights, float)
+    rows, cols = h.shape
+    fc = (x - origin[0]) / spacing - 0.5
+    fr = (origin[1] - y) / spacing - 0.5
+    if not (0 <= fc <= cols - 1 and 0 <= fr <= rows - 1):
+        raise ValueError(f"site ({x}, {y}) m lies outside the terrain's cell centres")
+    c0, r0 = min(int(fc), cols - 2), min(int(fr), rows - 2)
+    tc, tr = fc - c0, fr - r0
+    z = h[r0 : r0 + 2, c0 : c0 + 2]
+    w = np.array([[(1 - tr) * (1 - tc), (1 - tr) * tc], [tr * (1 - tc), tr * tc]])
+    ok = np.isfinite(z)
+    if not ok.any() or w[ok].sum() == 0:
+        raise ValueError(f"site ({x}, {y}) m lies over nodata")
+    return float((w[ok] * z[ok]).sum() / w[ok].sum())
+
+
+def rover_mast_camera(
+    heights,
+    spacing: float,
+    origin=(0.0, 0.0),
+    *,
+    site=None,
+    height_above: float = 1.5,
+    depression_deg: float = 30.0,
+    azimuth_deg: float = 0.0,
+    width: int = 320,
+    height: int = 240,
+    fov_x_deg: float = 60.0,
+) -> Camera:
+    """Pinhole camera on a rover mast over a height grid.
+
+    Parameters
+    ----------
+    heights, spacing, origin
+        The terrain grid (:class:`~simlunar.terrain.Terrain` frame).
+    site : (x, y), optional
+        World position of the mast foot; default the grid's centre.
+    height_above : float
+        Camera centre height above the (bilinear) ground at the site, metres.
+    depression_deg, azimuth_deg : float
+        Optical axis angle below the horizon, and heading from +y clockwise towards +x.
+    width, height : int
+        Image size (px); square pixels, centred principal point.
+    fov_x_deg : float
+        Horizontal field of view.
+
+    Returns
+    -------
+    Camera
+    """
+    rows, cols = np.shape(heights)
+    if site is None:
+        site = (origin[0] + cols * spacing / 2, origin[1] - rows * spacing / 2)
+    if not height_above > 0:
+        raise ValueError(f"height_above must be positive, got {height_above}")
+    if not 0 < depression_deg <= 90:
+        raise ValueError(f"depression_deg must be in (0, 90], got {depression_deg}")
+    ground = grid_height_at(heights, spacing, origin, float(site[0]), float(site[1]))
+    eye = (float(site[0]), float(site[1]), ground + height_above)
+    pose = Pose.from_heading(eye, azimuth_deg=azimuth_deg, depression_deg=depression_deg)
+    return Camera(Intrinsics.from_fov(width, height, fov_x_deg), pose)
 
 
 def pixel_centers(rows: int, cols: int) -> np.ndarray:

@@ -354,44 +354,11 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
                 registry.check_strategy(s, f"study.strategies[{i}]", p.study.strategy_options)
             for i, m in enumerate(p.study.metrics):
                 registry.check_metric(m, f"study.metrics[{i}]")
-            _check_sample_counts(p)
         if isinstance(p.study, ScannerStudyCfg):
             for i, s in enumerate(p.study.planners):
                 registry.check_strategy(s, f"study.planners[{i}]")
             for i, m in enumerate(p.study.modes):
                 registry.check_scan_mode(m, f"study.modes[{i}]")
-
-
-def image_shape(cfg: ExperimentCfg) -> tuple[int, int] | None:
-    """The guide image's (rows, cols) when the config alone tells it: a perspective camera,
-    or the nadir camera over a preset (None for a DEM file: its size is in the file)."""
-    cam = cfg.render.camera
-    if getattr(cam, "kind", None) == "perspective":
-        return cam.height, cam.width
-    if cfg.terrain.preset is None:
-        return None
-    from simlunar.pipeline.presets import merged_preset
-    from simlunar.pipeline.translate import terrain_params
-
-    params = terrain_params(
-        merged_preset(cfg.terrain.preset, cfg.terrain.overrides), scale=cfg.terrain.scale
-    )
-    return params.rows, params.cols
-
-
-def _check_sample_counts(cfg: ExperimentCfg) -> None:
-    """Every density must give k = round(density * N) >= 3 samples on the guide image."""
-    shape = image_shape(cfg)
-    if shape is None:
-        return
-    n = shape[0] * shape[1]
-    for i, d in enumerate(cfg.study.densities):
-        k = round(d * n)
-        if k < 3:
-            raise ConfigError(
-                f"study.densities[{i}]: density {d:g} gives k = {k} < 3 samples on the "
-                f"{shape[0]} x {shape[1]} image (smallest usable density: {3 / n:.3g})"
-            )
 
 
 def resolve_terrain_files(cfg, base_dir: Path | None):
@@ -426,15 +393,43 @@ def parse_set(items: list[str]) -> dict[str, Any]:
     return out
 
 
+class UniqueKeyLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses a key given twice in one mapping (PyYAML keeps the
+    last value silently)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            try:
+                hash(key)
+            except TypeError:
+                continue  # the base class reports unhashable keys
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None,
+                    None,
+                    f"duplicate key {key!r} (first at line {seen[key] + 1})",
+                    key_node.start_mark,
+                )
+            seen[key] = key_node.start_mark.line
+        return super().construct_mapping(node, deep=deep)
+
+
 def load_yaml(path: str | Path) -> dict:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"experiment file not found: {path}")
     try:
-        data = yaml.safe_load(path.read_text())
+        data = yaml.load(path.read_text(), Loader=UniqueKeyLoader)
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not a text file") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or ""
+        if problem.startswith("duplicate key"):
+            raise ConfigError(f"{path}: line {mark.line + 1}: {problem}") from None
         raise ConfigError(f"{path}: not valid YAML{where}") from None
     return data if data is not None else {}
 

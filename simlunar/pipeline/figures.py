@@ -6,12 +6,12 @@ redraws without recomputing anything).
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
-import yaml
-
-from simlunar.pipeline.store import UnitCache, atomic_write_bytes, read_csv
+from simlunar.errors import ResultFolderError
+from simlunar.pipeline.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
 
 MAX_UNIT_PANELS = 6
 
@@ -27,32 +27,83 @@ def load_results(out_dir: str | Path) -> dict:
 
     Raises
     ------
-    FileNotFoundError
-        ``out_dir`` is not a finished result folder.
+    ResultFolderError
+        ``out_dir`` is not a finished result folder, or its files disagree with each other
+        (``provenance.json`` records the SHA-256 of ``config.yaml``, ``results.csv`` and the
+        tables it was written with) or cannot be read; the message names the file.
     """
     out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ResultFolderError(f"{out}: is a file, not a result folder")
     for name in ("config.yaml", "results.csv", "provenance.json"):
         if not (out / name).is_file():
-            raise FileNotFoundError(
-                f"{out}: not a result folder (missing {name}); "
-                "run `simlunar run EXPERIMENT.yaml` first"
+            hint = (
+                "an unfinished run: rerun it with the same config to finish"
+                if (out / "config.yaml").is_file()
+                else "run `simlunar run EXPERIMENT.yaml` first"
             )
-    config = yaml.safe_load((out / "config.yaml").read_text())
-    prov = json.loads((out / "provenance.json").read_text())
+            raise ResultFolderError(f"{out}: not a result folder (missing {name}); {hint}")
+    from simlunar.pipeline.runner import read_folder_config
+
+    config = read_folder_config(out / "config.yaml")
+    prov = _read_provenance(out / "provenance.json")
+    for name, digest in (prov.get("files") or {}).items():
+        path = out / name
+        if not path.is_file() or file_sha256(path) != digest:
+            raise ResultFolderError(
+                f"{path}: does not belong to this folder's results (changed or missing since "
+                "provenance.json was written); rerun the experiment into this folder to repair"
+            )
+    rows = _read_rows(out / "results.csv")
     cache = UnitCache(out)
     units = []
     for key in prov["unit_keys"]:
         rec = cache.load(key)
         if rec is None:
-            raise FileNotFoundError(f"{out}: unit {key} is missing from units/")
+            raise ResultFolderError(
+                f"{cache.json_path(key)}: unit missing or unreadable; rerun the experiment "
+                "into this folder to recompute it"
+            )
         units.append(rec)
     return {
         "config": config,
-        "rows": read_csv(out / "results.csv"),
+        "rows": rows,
         "units": units,
         "dir": out,
         "provenance": prov,
     }
+
+
+def _read_provenance(path: Path) -> dict:
+    try:
+        prov = json.loads(path.read_text())
+    except (ValueError, OSError) as exc:
+        raise ResultFolderError(f"{path}: not valid JSON ({exc})") from None
+    keys = prov.get("unit_keys") if isinstance(prov, dict) else None
+    if not isinstance(keys, list) or not keys or not all(isinstance(k, str) for k in keys):
+        raise ResultFolderError(f"{path}: no 'unit_keys' list; not a simlunar provenance file")
+    return prov
+
+
+def _read_rows(path: Path) -> list[dict[str, str]]:
+    try:
+        rows = read_csv(path)
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise ResultFolderError(f"{path}: unreadable ({exc})") from None
+    if not rows:
+        raise ResultFolderError(f"{path}: no result rows")
+    missing = [c for c in ("unit", "metric", "value") if c not in rows[0]]
+    if missing:
+        raise ResultFolderError(f"{path}: no {missing[0]!r} column; not a simlunar results table")
+    for i, r in enumerate(rows, start=2):
+        try:
+            float(r["value"])
+            int(r["unit"])
+        except (TypeError, ValueError):
+            raise ResultFolderError(
+                f"{path}: line {i}: unit {r['unit']!r}, value {r['value']!r} are not numbers"
+            ) from None
+    return rows
 
 
 def load_unit_arrays(out_dir: str | Path, index: int = 0) -> dict:
@@ -96,6 +147,10 @@ def write_figures(out_dir: str | Path) -> list[Path]:
     metrics = list(study.get("metrics") or [])
     units = res["units"]
     shown = units[:MAX_UNIT_PANELS]
+    cache = UnitCache(out)
+    # each .npz read once, before any figure is written; a corrupt one is an error naming it,
+    # not a silently missing panel
+    shown_arrays = [cache.load_arrays(rec["key"], strict=True) for rec in shown]
 
     for m in metrics:
         fig, axes = F.panel_row(len(shown), width=F.COLUMN_W * min(len(shown), 3))
@@ -110,8 +165,6 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             )
         emit(fig, f"error_vs_density_{m}")
 
-    cache = UnitCache(out)
-    shown_arrays = [cache.load_arrays(rec["key"]) for rec in shown]  # each .npz read once
     for rec, arr in zip(shown, shown_arrays):
         if not {"image", "wavelet_energy", "plan_rows", "reconstruction", "depth"} <= set(arr):
             continue
@@ -179,3 +232,12 @@ def _scanner_figures(res: dict, emit) -> None:
         vals = {n: np.mean([float(r["value"]) for r in rows if r["metric"] == n]) for n in ber}
         fig, ax = F.bit_error_rates(vals)
         emit(fig, "gray_code_bit_errors")
+
+
+def write_figures_pruned(out_dir: str | Path) -> list[Path]:
+    """:func:`write_figures`, then remove the figures of ``figures/`` it did not write."""
+    from simlunar.pipeline.runner import prune_figures
+
+    written = write_figures(out_dir)
+    prune_figures(Path(out_dir), keep=written)
+    return written

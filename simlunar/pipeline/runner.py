@@ -2,8 +2,13 @@
 
 A work unit is one point of the sweep's cartesian product (one scene rendered once, shared by
 all strategies, densities and trials). Finished units are cached in ``<out>/units/`` under the
-SHA-256 of their resolved configuration, so an interrupted run resumes where it stopped and a
-finished one reruns instantly. ``results.csv`` is assembled in a fixed order (units in sweep
+SHA-256 of their resolved configuration, the contents of the files they read (DEM, albedo,
+preset YAML) and the simlunar version, so an interrupted run resumes where it stopped, a
+finished one reruns instantly and a changed input is recomputed.
+
+A run owns its folder (:class:`~simlunar.pipeline.store.FolderLock`), and a folder belongs to
+one configuration: a run whose config differs from the folder's ``config.yaml`` is refused.
+Every sweep point is checked (:mod:`simlunar.pipeline.preflight`) before anything is written. ``results.csv`` is assembled in a fixed order (units in sweep
 order; rows by strategy, density, trial and metric in config order) from the cache, so the
 same seed always gives a byte-identical file whatever the executor or completion order.
 """
@@ -23,14 +28,19 @@ from typing import Any
 
 import yaml
 
+import simlunar
+from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
+from simlunar.pipeline import preflight
 from simlunar.pipeline.config import ExperimentCfg, apply_sweep_value, to_plain
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.stages import CACHE_VERSION, compute_unit
 from simlunar.pipeline.store import (
+    FolderLock,
     UnitCache,
     atomic_write_json,
     atomic_write_text,
     csv_text,
+    file_sha256,
     fmt_value,
 )
 
@@ -53,16 +63,26 @@ class WorkUnit:
         Dotted key path -> value of this point (empty without a sweep).
     config : dict
         The full resolved configuration (plain, JSON-safe) without ``sweep``.
+    inputs : dict
+        Key path -> ``{"path", "sha256"}`` of every file the unit reads.
     """
 
     index: int
     key: str
     sweep: dict[str, Any]
     config: dict[str, Any]
+    inputs: dict[str, dict[str, str]] = field(default_factory=dict)
 
 
-def unit_key(config: dict[str, Any]) -> str:
-    """Cache key of a resolved unit config: what determines its numbers, and nothing else."""
+def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = None) -> str:
+    """Cache key of a resolved unit config: what determines its numbers, and nothing else.
+
+    It covers the config (less names and figure formats), the SHA-256 of every file the unit
+    reads (``inputs``, :func:`simlunar.pipeline.preflight.input_hashes`; computed when not
+    given) and the simlunar version.
+    """
+    if inputs is None:
+        inputs = preflight.input_hashes(config)
     relevant = {k: v for k, v in config.items() if k not in _NON_RESULT_KEYS}
     relevant.pop("figures", None)
     terrain = relevant.get("terrain")
@@ -82,7 +102,15 @@ def unit_key(config: dict[str, Any]) -> str:
             "sparse_mesh_roughness_threshold",
         )
     }
-    blob = json.dumps({"cache_version": CACHE_VERSION, "config": relevant}, sort_keys=True)
+    blob = json.dumps(
+        {
+            "cache_version": CACHE_VERSION,
+            "config": relevant,
+            "inputs": {k: v["sha256"] for k, v in inputs.items()},
+            "simlunar": simlunar.__version__,
+        },
+        sort_keys=True,
+    )
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 
@@ -99,9 +127,9 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
             point = apply_sweep_value(point, path, value)
         resolved = to_plain(ExperimentCfg.model_validate(point))
         resolved.pop("sweep", None)
-        units.append(
-            WorkUnit(i, unit_key(resolved), {p: v for (p, _), v in zip(axes, combo)}, resolved)
-        )
+        inputs = preflight.input_hashes(resolved)
+        sweep = {p: v for (p, _), v in zip(axes, combo)}
+        units.append(WorkUnit(i, unit_key(resolved, inputs), sweep, resolved, inputs))
     return units
 
 
@@ -114,6 +142,7 @@ class RunSummary:
     elapsed_s: float
     scores_markdown: str
     figures: list[Path] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def figures_dir(self) -> Path:
@@ -188,8 +217,11 @@ def unit_label(u: WorkUnit) -> str:
     parts = []
     for path, v in u.sweep.items():
         name = path.rsplit(".", 1)[-1]
-        if isinstance(v, dict):
-            v = v.get("kind", json.dumps(v, sort_keys=True))
+        if isinstance(v, dict) and "kind" in v:  # e.g. rover_mast(depression_deg=30)
+            rest = ", ".join(f"{k}={fmt_value(x)}" for k, x in v.items() if k != "kind")
+            v = f"{v['kind']}({rest})" if rest else v["kind"]
+        elif isinstance(v, dict):
+            v = json.dumps(v, sort_keys=True)
         elif v is None:
             v = "default"
         parts.append(f"{name}={fmt_value(v)}")
@@ -213,6 +245,7 @@ def run_experiment(
         A validated experiment.
     out_dir : path
         Result folder (created). Finished units already cached there are not recomputed.
+        The run holds the folder's lock; a folder of another configuration is refused.
     executor : Executor, optional
         Where units run; default: serial in this process.
     compute : callable
@@ -222,31 +255,183 @@ def run_experiment(
         Show a progress bar with ETA on stderr.
     figures : bool
         Write ``figures/`` (when the experiment enables them).
+
+    Raises
+    ------
+    simlunar.errors.ConfigError, simlunar.errors.ResultFolderError
+        A user mistake (a file, the geometry, the folder), found before anything is written.
+    simlunar.errors.InfrastructureError
+        The executor's cluster failed; finished units are kept.
+    simlunar.errors.RunInterrupted
+        Ctrl-C; finished units are kept (a ``KeyboardInterrupt``).
     """
     t_start = time.perf_counter()
+    out = Path(out_dir)
+    # every user mistake first, before connecting, locking or writing anything
+    preflight.check_out_dir(out)
+    units = expand(cfg)
+    checks = preflight.check_units(units)
+    config_text = yaml.safe_dump(to_plain(cfg), sort_keys=False, allow_unicode=True)
     executor = executor or LocalPoolExecutor(1)
     executor_open = getattr(executor, "open", None)
     if executor_open is not None:
         executor_open()  # connect before writing anything: a bad address leaves no folder
-    units = expand(cfg)
-    out = Path(out_dir)
-    cache = UnitCache(out)
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(
-        out / "config.yaml", yaml.safe_dump(to_plain(cfg), sort_keys=False, allow_unicode=True)
-    )
+    try:
+        created = not out.exists()
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            lock = FolderLock(out).acquire()
+        except OSError as exc:
+            raise ResultFolderError(
+                f"--out {out}: cannot create the folder ({exc.strerror or exc})"
+            ) from None
+        try:
+            try:
+                claim_folder(out, config_text)
+            except ResultFolderError:
+                lock.release()
+                if created:
+                    _remove_empty(out)
+                raise
+            return _run_locked(
+                cfg, out, units, checks, config_text, executor, compute, progress, figures, t_start
+            )
+        except RunInterrupted:
+            raise
+        except KeyboardInterrupt:
+            # after the units, while the summary or the figures were written
+            done = len(UnitCache(out).keys() & {u.key for u in units})
+            raise RunInterrupted(_kept(out, done, len(units), "interrupted")) from None
+        finally:
+            lock.release()
+    finally:
+        close = getattr(executor, "close", None)
+        if close is not None:
+            close()
 
+
+def _remove_empty(out: Path) -> None:
+    try:
+        out.rmdir()
+    except OSError:
+        pass
+
+
+def read_folder_config(path: Path) -> dict:
+    """A result folder's ``config.yaml`` as a dict (:class:`ResultFolderError` if unreadable)."""
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (yaml.YAMLError, UnicodeDecodeError, OSError) as exc:
+        what = "not valid YAML" if isinstance(exc, yaml.YAMLError) else "unreadable"
+        raise ResultFolderError(
+            f"{path}: {what}, so the folder's configuration is unknown; "
+            "choose another --out or delete the folder"
+        ) from None
+    if not isinstance(data, dict) or not isinstance(data.get("study"), dict):
+        raise ResultFolderError(
+            f"{path}: not an experiment configuration; choose another --out or delete the folder"
+        )
+    return data
+
+
+def _first_difference(old: Any, new: Any, path: str = "") -> str:
+    """``key.path: <old> here, <new> now`` for the first difference of two plain configs."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        for k in list(old) + [k for k in new if k not in old]:
+            if old.get(k, "<absent>") != new.get(k, "<absent>"):
+                return _first_difference(
+                    old.get(k, "<absent>"), new.get(k, "<absent>"), f"{path}.{k}" if path else k
+                )
+    return f"{path or '<root>'}: {json.dumps(old, default=str)} in the folder, {json.dumps(new, default=str)} now"
+
+
+def claim_folder(out: Path, config_text: str) -> None:
+    """Make ``out`` the folder of this configuration, or refuse (nothing is written then).
+
+    A folder with a ``config.yaml`` takes only that same configuration (a resume or a rerun);
+    a folder without one must be empty (hidden files aside). The new ``config.yaml`` is
+    written only into an empty folder.
+    """
+    path = out / "config.yaml"
+    new = yaml.safe_load(config_text)
+    if path.exists():
+        old = read_folder_config(path)
+        if old != new:
+            raise ResultFolderError(
+                f"{out} holds the results of another configuration "
+                f"({_first_difference(old, new)}); choose another --out or delete the folder"
+            )
+        if path.read_text() != config_text:
+            atomic_write_text(path, config_text)  # same config, written by an older version
+        return
+    others = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
+    if others:
+        raise ResultFolderError(
+            f"{out}: not empty and not a simlunar result folder (no config.yaml, found "
+            f"{others[0]}); choose an empty or new folder"
+        )
+    atomic_write_text(path, config_text)
+
+
+#: files that summarise the units; removed before the units change, written again at the end
+#: (provenance.json first: without it the folder reads as unfinished)
+RESULT_FILES = ("provenance.json", "results.csv", "scores.md", "scores.tex")
+
+
+def folder_complete(out: Path, keys: list[str]) -> bool:
+    """Whether the summary files are present and belong to these units and this config."""
+    try:
+        prov = json.loads((out / "provenance.json").read_text())
+        files = prov["files"]
+        if prov["unit_keys"] != keys:
+            return False
+        return all(file_sha256(out / name) == digest for name, digest in files.items())
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+
+
+def _invalidate(out: Path) -> None:
+    for name in RESULT_FILES:
+        (out / name).unlink(missing_ok=True)
+    prune_figures(out, keep=())
+
+
+def prune_figures(out: Path, keep) -> list[Path]:
+    """Remove ``figures/*.png|pdf`` not in ``keep`` (figures of another state of the folder)."""
+    keep = {Path(p).name for p in keep}
+    fig_dir = out / "figures"
+    removed = []
+    if fig_dir.is_dir():
+        for p in sorted(fig_dir.iterdir()):
+            if p.suffix.lower() in (".png", ".pdf") and p.name not in keep and p.is_file():
+                p.unlink()
+                removed.append(p)
+    return removed
+
+
+def _run_locked(
+    cfg, out, units, checks, config_text, executor, compute, progress, figures, t_start
+) -> RunSummary:
+    cache = UnitCache(out)
+    keys = [u.key for u in units]
     records: dict[str, dict] = {}
     todo: list[WorkUnit] = []
     for u in units:
         rec = cache.load(u.key)
-        if rec is not None:
+        if rec is not None and cache.arrays_readable(u.key):
             records[u.key] = rec
         elif u.key not in {t.key for t in todo}:
             todo.append(u)
     n_cached = len(units) - len(todo)
+    stale = cache.keys() - set(keys)
+    if todo or stale or not folder_complete(out, keys):
+        # the folder's summary and figures no longer describe its units: remove them before
+        # any unit changes, so an interrupted run never leaves them beside other units
+        _invalidate(out)
+        cache.remove_except(set(keys))
 
     bar = _progress(progress, len(units), n_cached, cfg.name)
+    n_new = 0
     try:
         payloads = [{"config": u.config} for u in todo]
         hook = bar.stage if bar is not None and accepts_keyword(compute, "progress") else None
@@ -255,11 +440,21 @@ def run_experiment(
         for i, result in executor.run(compute, payloads, **kw):
             u = todo[i]
             arrays = result.pop("arrays", {}) or {}
+            scans = result.pop("scans", None)
+            if scans is not None:  # before the cache entry: a cached unit has its scans
+                from simlunar.pipeline.exports import write_scan_export
+
+                write_scan_export(out / "scans" / f"unit{u.index}", scans)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
             cache.save(u.key, record, arrays)
             records[u.key] = json.loads(json.dumps(record, default=float))
+            n_new += 1
             if bar is not None:
                 bar.advance()
+    except KeyboardInterrupt:
+        raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted")) from None
+    except InfrastructureError as exc:
+        raise InfrastructureError(f"{exc}; {_kept(out, n_cached + n_new, len(units))}") from None
     finally:
         if bar is not None:
             bar.stop()
@@ -282,16 +477,43 @@ def run_experiment(
     atomic_write_text(out / "scores.tex", tex)
 
     elapsed = time.perf_counter() - t_start
-    _write_provenance(out, cfg, units, records, executor, n_cached, elapsed)
+    _write_provenance(out, cfg, units, records, executor, n_cached, elapsed, checks)
 
     written: list[Path] = []
     if figures and cfg.figures.enabled:
-        from simlunar.pipeline.figures import write_figures
+        from simlunar.pipeline.figures import write_figures_pruned
 
-        written = write_figures(out)
+        written = write_figures_pruned(out)
     return RunSummary(
-        out, len(units), n_cached, len(todo), time.perf_counter() - t_start, md, written
+        out,
+        len(units),
+        n_cached,
+        len(todo),
+        time.perf_counter() - t_start,
+        md,
+        written,
+        _notes(checks, units, records),
     )
+
+
+def _kept(out: Path, done: int, total: int, what: str = "") -> str:
+    head = f"{what}: " if what else ""
+    return (
+        f"{head}{done} of {total} units finished and kept in {out / 'units'}; "
+        "rerun the same command to resume"
+    )
+
+
+def _notes(checks, units, records) -> list[str]:
+    """Lines for the user about what the run did to its inputs (NaN holes filled)."""
+    notes = []
+    for h in checks.holes():
+        notes.append(
+            f"note: {h['file']}: {100 * h['nan_fraction']:.2f}% of the DEM heights are NaN "
+            "(holes); ground-truth pixels without a hit take the depth of the nearest valid "
+            "pixel (see provenance.json)"
+        )
+    return notes
 
 
 def _names(units: list[WorkUnit], key: str) -> list[str]:
@@ -303,7 +525,7 @@ def _names(units: list[WorkUnit], key: str) -> list[str]:
     return out
 
 
-def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapsed) -> None:
+def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapsed, checks) -> None:
     from simlunar.render.backend import versions
 
     variants = sorted(
@@ -327,8 +549,29 @@ def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapse
             "units": {u.key: records[u.key].get("timings", {}) for u in units},
         },
         "unit_keys": [u.key for u in units],
+        "simlunar": simlunar.__version__,
+        "inputs": _inputs(units),
+        "terrain_holes": checks.holes(),
+        "filled_pixels": {
+            u.key: records[u.key].get("meta", {}).get("invalid_pixels_filled") for u in units
+        },
+        # the folder's files this provenance belongs to (checked by `simlunar figures`)
+        "files": {
+            name: file_sha256(out / name)
+            for name in ("config.yaml", *RESULT_FILES[1:])
+            if (out / name).is_file()
+        },
     }
     atomic_write_json(out / "provenance.json", prov)
+
+
+def _inputs(units: list[WorkUnit]) -> list[dict[str, str]]:
+    """Distinct input files of the units: key path, path and SHA-256."""
+    seen: dict[tuple, dict[str, str]] = {}
+    for u in units:
+        for key, v in u.inputs.items():
+            seen.setdefault((key, v["path"], v["sha256"]), {"key": key, **v})
+    return list(seen.values())
 
 
 class _Bar:

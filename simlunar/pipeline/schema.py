@@ -237,7 +237,9 @@ class TerrainCfg(_Model):
     preset: str | None = Field(None, description="terrain preset name, e.g. aerial_1, moonyard")
     scale: float = Field(1.0, gt=0, le=1, description="preset resolution scale (1/8 = small)")
     file: Path | None = Field(None, description="DEM file (.npy, .tif, .exr); relative to the YAML")
-    spacing_m: Metres | None = Field(None, gt=0, description="DEM cell size (m), for file")
+    spacing_m: Metres | None = Field(
+        None, gt=0, description="DEM cell size (m), for a file without georeferencing"
+    )
     albedo_file: Path | None = Field(
         None, description="albedo grid file (.npy, same shape as the DEM), for file"
     )
@@ -255,8 +257,6 @@ class TerrainCfg(_Model):
     def _one_source(self) -> TerrainCfg:
         if (self.preset is None) == (self.file is None):
             raise ValueError("give exactly one of preset or file")
-        if self.file is not None and self.spacing_m is None:
-            raise ValueError("a DEM file needs spacing_m")
         if self.albedo_file is not None and self.file is None:
             raise ValueError("albedo_file goes with a DEM file (give terrain.file)")
         if self.preset is None and self.overrides.model_dump():
@@ -315,22 +315,30 @@ class PerspectiveCfg(_Model):
             raise ValueError("give fov_deg or fx, fy, cx, cy, not both")
         if self.aperture_radius_m > 0 and self.focus_distance_m is None:
             raise ValueError("a thin lens (aperture_radius_m > 0) needs focus_distance_m")
-        view = [b - a for a, b in zip(self.position_m, self.look_at_m)]
-        norm = math.sqrt(sum(v * v for v in view))
-        if norm == 0:
-            raise ValueError("look_at_m: the camera looks at its own position (position_m)")
-        up = math.sqrt(sum(v * v for v in self.up))
-        cross = (
-            view[1] * self.up[2] - view[2] * self.up[1],
-            view[2] * self.up[0] - view[0] * self.up[2],
-            view[0] * self.up[1] - view[1] * self.up[0],
-        )
-        if up == 0 or math.sqrt(sum(c * c for c in cross)) <= 1e-9 * norm * up:
-            raise ValueError("up: must not be zero or parallel to the viewing direction")
+        if tuple(self.position_m) == tuple(self.look_at_m):
+            raise ValueError("look_at_m: equals position_m (the camera looks at its own position)")
         return self
 
 
-CameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveCfg)
+class RoverMastCfg(_Model):
+    """Perspective camera on a rover mast: ``height_m`` above the ground at ``site_m``, its
+    optical axis ``depression_deg`` below the horizon, towards ``azimuth_deg``."""
+
+    kind: Literal["rover_mast"]
+    width: int = Field(320, gt=0, le=16384)
+    height: int = Field(240, gt=0, le=16384)
+    fov_deg: Deg = Field(60.0, gt=0, lt=180, description="horizontal field of view")
+    height_m: Metres = Field(1.5, gt=0, description="camera height above the terrain at the site")
+    depression_deg: Deg = Field(
+        30.0, gt=0, le=90, description="optical axis below the horizon (90 = straight down)"
+    )
+    azimuth_deg: Deg = Field(0.0, description="look direction from +y (north) clockwise to +x")
+    site_m: tuple[float, float] | None = Field(
+        None, description="world (x, y) of the mast foot; default the terrain's centre"
+    )
+
+
+CameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveCfg, RoverMastCfg)
 
 
 class SunLightCfg(_Model):
@@ -691,6 +699,20 @@ class ScannerStudyCfg(_Model):
         default_factory=ScannerOptionsCfg,
         description="rig adjustments (rig), gray_opts, dot_opts, planner_opts",
     )
+    save_scans: bool = Field(
+        False,
+        description="write scans/unit<i>/ per unit: gray-code frames (8/16-bit PNG, OpenCV "
+        "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
+    )
+
+    @model_validator(mode="after")
+    def _scans_need_gray_code(self):
+        if self.save_scans and not {"gray_code", "ambiguity_enhancement"} & set(self.modes):
+            raise ValueError(
+                "save_scans exports the gray-code scan: modes must include gray_code or "
+                "ambiguity_enhancement"
+            )
+        return self
 
     @model_validator(mode="after")
     def _options_fit(self) -> ScannerStudyCfg:

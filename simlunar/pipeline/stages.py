@@ -474,13 +474,21 @@ def _compute_scanner_unit(
         "image": np.asarray(guide.image, np.float32),
         "depth": np.where(guide.valid, guide.depth, np.nan).astype(np.float64),
     }
-    return {
+    out = {
         "rows": [dict(row) for row in res.rows],
         "scores": {},
         "arrays": arrays,
         "timings": timings,
         "meta": {"shape": list(terrain.shape), "variant": _variant()},
     }
+    if s.save_scans:
+        # written by the runner into scans/unit<i>/ (pipeline/exports.py)
+        from simlunar.pipeline.exports import scan_export_payload
+
+        out["scans"] = scan_export_payload(
+            res.gray, rig, gray_opts=translate.gray_kwargs(s.options.gray_opts)
+        )
+    return out
 
 
 def _variant() -> str:

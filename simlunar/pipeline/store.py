@@ -6,10 +6,13 @@ Layout of ``<out>/``::
     results.csv        tidy rows: unit, <sweep columns>, strategy, density, k, trial, metric, value
     scores.md          score tables (paper Tables 1 and 2 layout), Markdown
     scores.tex         the same tables, LaTeX (booktabs)
-    provenance.json    versions, variant, git commit, seed, timings, cache hits
+    provenance.json    versions, variant, git commit, seed, timings, cache hits, the
+                       SHA-256 of config.yaml / results.csv / the tables and of every
+                       input file (written last: its absence marks an unfinished run)
     units/<key>.json   one finished unit: rows, scores, timings (its existence marks completion)
     units/<key>.npz    the unit's arrays (image, depth, wavelet energy, plan, reconstruction)
     figures/           PNG and PDF
+    .lock              held (``flock``) by the run writing into the folder
 
 Every file is written to a temporary name in the same folder and moved into place with
 ``os.replace``, so a crash never leaves a half-written file under a final name. A unit's
@@ -19,8 +22,12 @@ Every file is written to a temporary name in the same folder and moved into plac
 from __future__ import annotations
 
 import csv
+import errno
+import fcntl
 import io
 import json
+import os
+import time
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -28,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from simlunar.atomic import atomic_write_bytes
+from simlunar.errors import ResultFolderError
 
 UNITS_DIR = "units"
 
@@ -109,13 +117,150 @@ class UnitCache:
             return None
         return rec
 
-    def load_arrays(self, key: str) -> dict[str, np.ndarray]:
+    def load_arrays(self, key: str, *, strict: bool = False) -> dict[str, np.ndarray]:
+        """The unit's arrays; ``{}`` when unreadable, or with ``strict`` a
+        :class:`~simlunar.errors.ResultFolderError` naming the file."""
+        path = self.npz_path(key)
         try:
-            with np.load(self.npz_path(key), allow_pickle=False) as z:
+            # our own handle: np.load leaves a file it opened itself open when it is no zip
+            with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
                 return {k: z[k] for k in z.files}
-        except (OSError, ValueError):
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            if strict:
+                raise ResultFolderError(
+                    f"{path}: unreadable unit arrays ({' '.join(str(exc).split())}); "
+                    "rerun the experiment into this folder to recompute the unit"
+                ) from None
             return {}
+
+    def arrays_readable(self, key: str) -> bool:
+        """Whether the unit's ``.npz`` opens (its central directory reads); a truncated or
+        garbage file fails here and the unit is recomputed."""
+        try:
+            with zipfile.ZipFile(self.npz_path(key)) as zf:
+                return all(n.endswith(".npy") for n in zf.namelist())
+        except (OSError, zipfile.BadZipFile, ValueError):
+            return False
+
+    def keys(self) -> set[str]:
+        """Keys of every unit file (``.json`` or ``.npz``) in the folder."""
+        if not self.dir.is_dir():
+            return set()
+        return {p.stem for p in self.dir.iterdir() if p.suffix in (".json", ".npz")}
+
+    def remove_except(self, keep: set[str]) -> list[Path]:
+        """Delete unit files whose key is not in ``keep`` and left-over temporary files."""
+        removed = []
+        if not self.dir.is_dir():
+            return removed
+        for p in sorted(self.dir.iterdir()):
+            stale = p.suffix in (".json", ".npz") and p.stem not in keep
+            temp = p.name.startswith(".") and ".tmp" in p.name
+            if (stale or temp) and p.is_file():
+                p.unlink()
+                removed.append(p)
+        return removed
 
     def save(self, key: str, record: dict, arrays: dict[str, np.ndarray]) -> None:
         atomic_write_bytes(self.npz_path(key), npz_bytes(arrays))
         atomic_write_json(self.json_path(key), {**record, "key": key})
+
+
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 (hex) of a file's bytes."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+LOCK_NAME = ".lock"
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+class FolderLock:
+    """An advisory lock that makes one run the owner of a result folder.
+
+    ``<out>/.lock`` is locked with ``flock`` (the kernel releases it when the process exits,
+    however it exits, so a lock of a killed run never blocks the next one) and holds the
+    owner's pid, which a refused run names. A ``.lock`` file left by a dead process is not a
+    lock: it is simply taken over. The file is removed when the lock is released.
+    """
+
+    def __init__(self, out_dir: str | Path):
+        self.out = Path(out_dir)
+        self.path = self.out / LOCK_NAME
+        self.fd: int | None = None
+
+    def acquire(self) -> FolderLock:
+        """Take the lock or raise :class:`ResultFolderError` naming the owner's pid."""
+        for _ in range(100):
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                os.close(fd)
+                if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                    raise
+                raise ResultFolderError(self._owner_message()) from None
+            # the owner removes the file before unlocking: a file we locked after that is
+            # no longer the folder's lock file, so lock the current one
+            try:
+                same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
+            except FileNotFoundError:
+                same = False
+            if not same:
+                os.close(fd)
+                continue
+            os.ftruncate(fd, 0)
+            os.write(fd, f"{os.getpid()}\n".encode())
+            self.fd = fd
+            return self
+        raise ResultFolderError(f"{self.path}: could not take the folder's lock")
+
+    def _owner_message(self) -> str:
+        pid = None
+        for _ in range(20):  # the owner writes its pid just after locking
+            try:
+                text = self.path.read_text().strip()
+            except OSError:
+                text = ""
+            if text.isdigit():
+                pid = int(text)
+                break
+            time.sleep(0.025)
+        who = f"pid {pid}" if pid is not None else "pid unknown"
+        if pid is not None and not _pid_alive(pid):
+            who += ", no longer running: a process it started still holds the lock"
+        return (
+            f"{self.out}: another simlunar run ({who}) is writing into this folder "
+            f"(lock {self.path}); wait for it to finish or choose another --out"
+        )
+
+    def release(self) -> None:
+        if self.fd is None:
+            return
+        try:
+            os.unlink(self.path)
+        except FileNotFoundError:
+            pass
+        os.close(self.fd)
+        self.fd = None
+
+    def __enter__(self) -> FolderLock:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()

@@ -27,6 +27,7 @@ from simlunar.pipeline.schema import (
     OrthoNadirCfg,
     PlannerOptsCfg,
     RigCfg,
+    RoverMastCfg,
     SamplingStudyCfg,
     ScannerStudyCfg,
     SensorCfg,
@@ -166,12 +167,28 @@ def load_albedo(path, shape: tuple[int, int]) -> np.ndarray:
 
 
 def camera(cfg, terrain):
-    """Geometry camera of a camera config (orthographic nadir over ``terrain`` or perspective)."""
+    """Geometry camera of a camera config (orthographic nadir over ``terrain``, rover mast on
+    ``terrain``, or perspective)."""
     from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose
 
     if isinstance(cfg, OrthoNadirCfg):
         return OrthoCamera.nadir_for_grid(
             terrain.shape, terrain.spacing, terrain.origin, altitude=cfg.altitude_m
+        )
+    if isinstance(cfg, RoverMastCfg):
+        from simlunar.geometry import rover_mast_camera
+
+        return rover_mast_camera(
+            terrain.heights,
+            terrain.spacing,
+            terrain.origin,
+            site=cfg.site_m,
+            height_above=cfg.height_m,
+            depression_deg=cfg.depression_deg,
+            azimuth_deg=cfg.azimuth_deg,
+            width=cfg.width,
+            height=cfg.height,
+            fov_x_deg=cfg.fov_deg,
         )
     if cfg.fov_deg is not None:
         k = Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg)

@@ -8,6 +8,7 @@ Delaunay-linear interpolation and score the reconstruction against the true dept
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import zlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -319,6 +320,9 @@ _STATE: dict = {}
 
 
 def _init_worker(state):
+    # Ctrl-C reaches the whole process group: the parent stops the pool, so a worker must not
+    # print its own KeyboardInterrupt traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _STATE.clear()
     _STATE.update(state)
 

@@ -59,6 +59,29 @@ def depth_range_from_terrain(terrain, rig: Rig, *, margin: float = 0.05) -> tupl
     return (float(z.min() * (1 - margin)), float(z.max() * (1 + margin)))
 
 
+def _gradient_weights_with_holes(truth: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    """GRAD weights |grad truth| with the holes of ``truth`` (``~valid``) left out.
+
+    As ``numpy.gradient``: central differences, one-sided at the border and, here, next to a
+    hole; 0 in the holes and where a cell has no valid neighbour along an axis.
+    """
+    t = np.where(valid, truth, 0.0)
+    grads = []
+    for axis in (0, 1):
+        d = np.diff(t, axis=axis)
+        ok = np.diff(valid.astype(np.int8), axis=axis) == 0
+        ok &= np.delete(valid, 0, axis=axis)  # both ends of each difference valid
+        d = np.where(ok, d, 0.0)
+        pad = [(0, 0), (0, 0)]
+        pad[axis] = (1, 0)
+        minus, ok_m = np.pad(d, pad), np.pad(ok, pad)  # difference to the previous cell
+        pad[axis] = (0, 1)
+        plus, ok_p = np.pad(d, pad), np.pad(ok, pad)  # difference to the next cell
+        n = ok_m.astype(float) + ok_p
+        grads.append(np.where(n > 0, (minus + plus) / np.maximum(n, 1), 0.0))
+    return np.where(valid, np.hypot(*grads), 0.0)
+
+
 def score_depth(
     depth: np.ndarray, truth: np.ndarray, *, metrics, image=None, mask=None
 ) -> dict[str, float]:
@@ -66,7 +89,8 @@ def score_depth(
 
     Parameters
     ----------
-    depth, truth : (H, W) float64 z-depth (m); NaN in ``truth`` is excluded
+    depth, truth : (H, W) float64 z-depth (m); NaN in ``truth`` is excluded (also from the
+        ``grad`` weights, which use differences between finite truth cells only)
     metrics : names from :data:`simlunar.metrics.METRICS` (``sal`` uses the saliency map of
         ``image`` as weights)
     image : (H, W) guide image (needed for ``sal``)
@@ -81,6 +105,10 @@ def score_depth(
     out = {}
     for name in metrics:
         weights = None
+        if name == "grad":
+            # |grad truth| from differences between valid cells only: the 0 put into the
+            # holes must not make the cells next to them the steepest of the image
+            weights = _gradient_weights_with_holes(truth, np.isfinite(truth))
         if name == "sal":
             if image is None:
                 raise ValueError("metric 'sal' needs the guide image for its saliency weights")

@@ -1,20 +1,31 @@
-"""DEM + albedo files (.npy, .npz, .exr, .tif), mesh export (PLY/OBJ) and hillshade previews.
+"""DEM + albedo files (.npy, .npz, .exr, GeoTIFF and other GDAL rasters), mesh export, hillshade.
 
 On disk heights and albedo are float32 (a float64 terrain is rounded once; a float32 terrain
 round-trips bit-identically). Nodata is NaN in every format. Spacing and origin travel with the
-data: inside the file for .npz (arrays), .exr (header) and .tif (JSON image description); in a
-sidecar ``<file>.json`` for .npy. A foreign single-band DEM (2-D .npy or TIFF without our
-metadata) loads as heights with a uniform albedo; pass ``spacing=`` (and ``origin=``, and
-``nodata=`` for a sentinel value such as -9999).
+data: inside the file for .npz (arrays), .exr (header) and .tif (GeoTIFF transform); in a
+sidecar ``<file>.json`` for .npy. A CRS (``Terrain.crs``, WKT) travels the same way when set.
+
+World frame (``Terrain``): the origin is the top-left (north-west) corner of cell (0, 0), columns
+run to +x, rows to -y, z up, metres. This is a north-up GeoTIFF's frame: the transform
+``(spacing, 0, x0, 0, -spacing, y0)`` maps pixel corner (col, row) to (x, y).
 
 Layouts: .npy holds a (2, rows, cols) float32 stack [heights, albedo]; .npz holds ``heights``,
-``albedo``, ``spacing``, ``origin``; .exr has channels ``Z`` (heights) and ``albedo``; .tif holds
-a (2, rows, cols) float32 stack.
+``albedo``, ``spacing``, ``origin`` (and ``crs``); .exr has channels ``Z`` (heights) and
+``albedo``; .tif/.tiff is a two-band float32 GeoTIFF (band 1 ``height`` in metres, band 2
+``albedo``, nodata NaN, the terrain's CRS or :data:`LUNAR_CRS`), written and read with rasterio.
+
+Foreign DEMs: any raster GDAL opens (GeoTIFF, PDS3/PDS4 labels, ISIS cubes, ERDAS .img, VRT, ...)
+loads with its transform (spacing, origin), nodata, CRS, band scale/offset and vertical unit (m,
+km, cm or ft -> metres). A second band is taken as albedo only when its description is
+``albedo``. Geographic CRSs (degrees), rotated transforms and non-square pixels are refused
+with one line (non-square pixels are resampled with ``resample=True``). A 2-D .npy or a TIFF
+without georeferencing needs ``spacing=`` (and ``origin=``; ``nodata=`` for a sentinel value).
 """
 
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -23,31 +34,94 @@ from simlunar.atomic import atomic_write
 from simlunar.terrain.mesh import grid_faces, grid_vertices
 from simlunar.terrain.types import Terrain
 
+#: formats :func:`save_dem` writes (and :func:`load_dem` reads)
 FORMATS = (".npy", ".npz", ".exr", ".tif", ".tiff")
+#: further raster formats :func:`load_dem` reads through GDAL (rasterio)
+GDAL_FORMATS = (".img", ".cub", ".lbl", ".xml", ".vrt", ".asc", ".dem", ".jp2", ".nc", ".hgt")
 #: albedo given to a foreign DEM that has none (lunar soil mean)
 DEFAULT_ALBEDO = 0.12
+#: CRS written for a terrain without one: the IAU 2015 Moon sphere (IAU_2015:30100), projected
+#: equirectangular in metres (IAU_2015:30110, whose base CRS is 30100), since the grid is in metres
+LUNAR_CRS = "IAU_2015:30110"
+#: vertical units understood in a raster band's ``units`` (factor to metres)
+_VERTICAL_UNITS = {
+    "": 1.0,
+    "m": 1.0,
+    "metre": 1.0,
+    "metres": 1.0,
+    "meter": 1.0,
+    "meters": 1.0,
+    "km": 1000.0,
+    "kilometre": 1000.0,
+    "kilometer": 1000.0,
+    "kilometers": 1000.0,
+    "cm": 0.01,
+    "ft": 0.3048,
+    "foot": 0.3048,
+    "feet": 0.3048,
+}
 
 
-def _suffix(path: Path) -> str:
+def _suffix(path: Path, *, read: bool = False) -> str:
     suf = path.suffix.lower()
-    if suf not in FORMATS:
+    valid = FORMATS + GDAL_FORMATS if read else FORMATS
+    if suf not in valid:
         raise ValueError(
-            f"unsupported DEM format {suf or '(none)'!r} for {path}; valid: {', '.join(FORMATS)}"
+            f"unsupported DEM format {suf or '(none)'!r} for {path}; valid: {', '.join(valid)}"
         )
     return suf
 
 
 def _meta(terrain: Terrain) -> dict:
-    return {"spacing": terrain.spacing, "origin": list(terrain.origin), "format": "simlunar-dem-1"}
+    meta = {"spacing": terrain.spacing, "origin": list(terrain.origin), "format": "simlunar-dem-1"}
+    if terrain.crs is not None:
+        meta["crs"] = terrain.crs
+    return meta
+
+
+def _write_geotiff(path: Path, h: np.ndarray, a: np.ndarray, terrain: Terrain) -> None:
+    import rasterio
+    from rasterio.crs import CRS
+    from rasterio.transform import Affine
+
+    x0, y0 = terrain.origin
+    sp = terrain.spacing
+    crs = CRS.from_wkt(terrain.crs) if terrain.crs else CRS.from_string(LUNAR_CRS)
+    profile = {
+        "driver": "GTiff",
+        "width": h.shape[1],
+        "height": h.shape[0],
+        "count": 2,
+        "dtype": "float32",
+        "crs": crs,
+        "transform": Affine(sp, 0.0, x0, 0.0, -sp, y0),
+        "nodata": float("nan"),
+        "compress": "deflate",
+        "predictor": 3,  # floating-point predictor: lossless, smaller
+    }
+    if min(h.shape) >= 256:  # 256 x 256 tiles (QGIS reads windows fast); else strips
+        profile.update(tiled=True, blockxsize=256, blockysize=256)
+
+    def write(tmp) -> None:
+        with rasterio.open(tmp, "w", **profile) as dst:
+            dst.write(h, 1)
+            dst.write(a, 2)
+            dst.set_band_description(1, "height")
+            dst.set_band_description(2, "albedo")
+            dst.units = ("m", "")
+            dst.update_tags(simlunar=json.dumps(_meta(terrain)))
+
+    atomic_write(path, write)
 
 
 def save_dem(path, terrain: Terrain) -> Path:
-    """Write heights and albedo (float32) with spacing and origin; format from the suffix.
+    """Write heights and albedo (float32) with spacing, origin and CRS; format from the suffix.
 
     Parameters
     ----------
     path : str or Path
-        ``.npy`` (+ sidecar ``.json``), ``.npz``, ``.exr``, ``.tif`` or ``.tiff``.
+        ``.npy`` (+ sidecar ``.json``), ``.npz``, ``.exr``, ``.tif`` or ``.tiff`` (GeoTIFF:
+        two float32 bands, height and albedo; CRS ``terrain.crs`` or :data:`LUNAR_CRS`).
     terrain : Terrain
 
     Returns
@@ -64,6 +138,7 @@ def save_dem(path, terrain: Terrain) -> Path:
         side = path.with_name(path.name + ".json")
         atomic_write(side, lambda t: Path(t).write_text(json.dumps(meta)))
     elif suf == ".npz":
+        extra = {} if terrain.crs is None else {"crs": np.array(terrain.crs)}
         atomic_write(
             path,
             lambda t: np.savez_compressed(
@@ -72,6 +147,7 @@ def save_dem(path, terrain: Terrain) -> Path:
                 albedo=a,
                 spacing=np.float64(terrain.spacing),
                 origin=np.array(terrain.origin, dtype=np.float64),
+                **extra,
             ),
         )
     elif suf == ".exr":
@@ -79,17 +155,7 @@ def save_dem(path, terrain: Terrain) -> Path:
 
         write_exr(path, {"Z": h, "albedo": a}, attrs=meta)
     else:
-        import tifffile
-
-        atomic_write(
-            path,
-            lambda t: tifffile.imwrite(
-                t,
-                np.stack([h, a]),
-                photometric="minisblack",
-                metadata={"simlunar": json.dumps(meta)},
-            ),
-        )
+        _write_geotiff(path, h, a, terrain)
     return path
 
 
@@ -111,10 +177,113 @@ def _split(arr: np.ndarray, path: Path) -> tuple[np.ndarray, np.ndarray | None]:
     )
 
 
+def _read_gdal(path: Path, *, resample: bool) -> tuple[np.ndarray, np.ndarray | None, dict]:
+    """Heights (float64 metres, NaN holes), albedo or None, and meta of a GDAL raster."""
+    import warnings
+
+    import rasterio
+    from rasterio.enums import Resampling
+    from rasterio.errors import NotGeoreferencedWarning, RasterioIOError
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        try:
+            src_cm = rasterio.open(path)
+        except RasterioIOError as exc:
+            raise ValueError(f"cannot read DEM {path}: {exc}") from None
+        with src_cm as src:
+            tags = src.tags()
+            # an old simlunar .tif (before GeoTIFF output) kept its meta in the description
+            meta: dict = {}
+            for key in ("simlunar", "TIFFTAG_IMAGEDESCRIPTION"):
+                try:
+                    d = json.loads(tags.get(key, ""))
+                except ValueError:
+                    continue
+                if key == "TIFFTAG_IMAGEDESCRIPTION" and isinstance(d, dict):
+                    d = json.loads(d["simlunar"]) if "simlunar" in d else {}
+                if isinstance(d, dict) and d:
+                    meta = d
+                    break
+            tr = src.transform
+            georef = src.crs is not None or not tr.is_identity
+            shape = (src.height, src.width)
+            if georef:
+                if abs(tr.b) > 0 or abs(tr.d) > 0:
+                    raise ValueError(
+                        f"{path}: rotated or sheared geotransform {tuple(tr)[:6]}; "
+                        "warp it north-up first (gdalwarp)"
+                    )
+                if src.crs is not None and src.crs.is_geographic:
+                    raise ValueError(
+                        f"{path}: CRS {src.crs.to_string()} is geographic (degrees); reproject "
+                        "to a projected CRS in metres first (gdalwarp -t_srs)"
+                    )
+                sx, sy = abs(tr.a), abs(tr.e)
+                if not math.isclose(sx, sy, rel_tol=1e-9):
+                    if not resample:
+                        raise ValueError(
+                            f"{path}: non-square pixels {sx} x {sy}; pass resample=True to "
+                            "resample to square cells, or resample with gdalwarp -tr"
+                        )
+                    sp = min(sx, sy)
+                    shape = (round(src.height * sy / sp), round(src.width * sx / sp))
+                    sx = sy = sp
+            kw = {}
+            if shape != (src.height, src.width):
+                kw = {"out_shape": shape, "resampling": Resampling.bilinear}
+            band = src.read(1, masked=True, **kw)
+            h = np.ma.filled(band.astype(np.float64), np.nan)
+            albedo = None
+            ours = meta.get("format") == "simlunar-dem-1"
+            if src.count >= 2 and (ours or (src.descriptions[1] or "").lower() == "albedo"):
+                albedo = np.ma.filled(src.read(2, masked=True, **kw).astype(np.float32), np.nan)
+            elif ours and src.driver == "GTiff" and not georef:
+                # a pre-GeoTIFF simlunar .tif: albedo is the second page, which GDAL does not
+                # show as a band
+                import tifffile
+
+                stack = tifffile.imread(path)
+                if stack.ndim == 3 and stack.shape[0] == 2:
+                    albedo = stack[1].astype(np.float32)
+            unit = (src.units[0] or "").strip().lower()
+            if unit not in _VERTICAL_UNITS:
+                raise ValueError(
+                    f"{path}: unknown vertical unit {src.units[0]!r}; "
+                    f"valid: {', '.join(u for u in _VERTICAL_UNITS if u)}"
+                )
+            scale, offset = src.scales[0], src.offsets[0]
+            if scale != 1.0 or offset != 0.0:
+                h = h * scale + offset
+            if _VERTICAL_UNITS[unit] != 1.0:
+                h = h * _VERTICAL_UNITS[unit]
+            if georef:
+                lin = 1.0
+                if src.crs is not None and src.crs.is_projected:
+                    lin = float(src.crs.linear_units_factor[1])
+                x0, y0 = tr.c, tr.f
+                if tr.e > 0:  # south-up: flip the rows into the north-up frame
+                    h, y0 = h[::-1], tr.f + shape[0] * sx
+                    albedo = None if albedo is None else albedo[::-1]
+                if tr.a < 0:  # east-to-west columns
+                    h, x0 = h[:, ::-1], tr.c - shape[1] * sx
+                    albedo = None if albedo is None else albedo[:, ::-1]
+                meta = {"spacing": sx * lin, "origin": [x0 * lin, y0 * lin]}
+                if src.crs is not None:
+                    meta["crs"] = src.crs.to_wkt()
+    return np.ascontiguousarray(h), albedo, meta
+
+
 def load_dem(
-    path, *, spacing: float | None = None, origin=None, nodata: float | None = None
+    path,
+    *,
+    spacing: float | None = None,
+    origin=None,
+    nodata: float | None = None,
+    albedo_file=None,
+    resample: bool = False,
 ) -> Terrain:
-    """Read a DEM written by :func:`save_dem`, or a foreign single-band DEM.
+    """Read a DEM written by :func:`save_dem`, or a foreign DEM (any raster GDAL opens).
 
     Parameters
     ----------
@@ -124,21 +293,28 @@ def load_dem(
     origin : (x, y), optional
         World position of the top-left corner; default the file's or (0, 0).
     nodata : float, optional
-        Sentinel height value to turn into NaN (foreign DEMs).
+        Sentinel height value to turn into NaN (the raster's own nodata is always honoured).
+    albedo_file : str or Path, optional
+        A second file (any format here) whose first band / heights array is the albedo grid.
+    resample : bool
+        Resample a raster with non-square pixels (bilinear) to square cells of the smaller
+        size instead of refusing it.
 
     Returns
     -------
     Terrain
+        ``crs`` is the raster's CRS as WKT (or the one saved with the file), else None.
 
     Raises
     ------
     FileNotFoundError
         Missing file (named).
     ValueError
-        Unreadable file, wrong shape or dtype, missing spacing (message names the file).
+        Unreadable file, wrong shape or dtype, missing spacing, geographic CRS, rotated
+        transform, non-square pixels (message names the file).
     """
     path = Path(path)
-    suf = _suffix(path)
+    suf = _suffix(path, read=True)
     if not path.is_file():
         raise FileNotFoundError(f"DEM file not found: {path}")
     meta: dict = {}
@@ -161,6 +337,8 @@ def load_dem(
                     meta["spacing"] = float(z["spacing"])
                 if "origin" in z:
                     meta["origin"] = [float(v) for v in z["origin"]]
+                if "crs" in z:
+                    meta["crs"] = str(z["crs"])
         elif suf == ".exr":
             from simlunar.imaging.exr import read_exr
 
@@ -173,22 +351,18 @@ def load_dem(
                 raise ValueError(f"{path}: no 'Z' (or 'Y') height channel (found {sorted(chans)})")
             albedo = chans.get("albedo")
         else:
-            import tifffile
-
-            with tifffile.TiffFile(path) as tf:
-                arr = _check_array(tf.asarray(), path, "the image")
-                desc = tf.pages[0].description if len(tf.pages) else ""
-            heights, albedo = _split(np.squeeze(arr) if arr.ndim > 3 else arr, path)
-            try:
-                d = json.loads(desc) if desc else {}
-                meta = json.loads(d["simlunar"]) if isinstance(d, dict) and "simlunar" in d else {}
-            except (ValueError, TypeError):
-                meta = {}
+            heights, albedo, meta = _read_gdal(path, resample=resample)
     except (ValueError, OSError, KeyError, EOFError) as exc:
         msg = str(exc)
         raise ValueError(msg if str(path) in msg else f"cannot read DEM {path}: {msg}") from None
     if heights.ndim != 2:
         raise ValueError(f"{path}: heights must be 2-D, got shape {heights.shape}")
+    if albedo_file is not None:
+        albedo = load_dem(albedo_file, spacing=1.0).heights.astype(np.float32)
+        if albedo.shape != heights.shape:
+            raise ValueError(
+                f"{albedo_file}: albedo shape {albedo.shape} differs from heights {heights.shape}"
+            )
     if albedo is not None and albedo.shape != heights.shape:
         raise ValueError(
             f"{path}: albedo shape {albedo.shape} differs from heights {heights.shape}"
@@ -202,8 +376,11 @@ def load_dem(
         h[heights == nodata] = np.nan
     if albedo is None:
         albedo = np.full(h.shape, DEFAULT_ALBEDO, dtype=np.float32)
+    crs = meta.get("crs")
     try:
-        return Terrain(h, albedo.astype(np.float32), float(sp), tuple(org))
+        return Terrain(
+            h, albedo.astype(np.float32), float(sp), tuple(org), crs=crs if crs else None
+        )
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
 
@@ -211,8 +388,10 @@ def load_dem(
 def export_mesh(terrain: Terrain, path) -> Path:
     """Export the grid mesh (one vertex per cell, as ``terrain.mesh``) as PLY or OBJ.
 
-    Vertex colour is the albedo as 8-bit grey (``round(255 * albedo)``). Triangles touching
-    nodata cells are dropped; their vertices stay (NaN) so vertex ``r * cols + c`` is cell (r, c).
+    PLY carries the albedo as 8-bit grey vertex colour (``round(255 * albedo)``); OBJ is plain
+    (``v x y z`` and ``f`` lines, no colour extension), so every reader sees (n, 3) points.
+    Triangles touching nodata cells are dropped; their vertices stay (NaN) so vertex
+    ``r * cols + c`` is cell (r, c).
     """
     import trimesh
 
@@ -225,7 +404,7 @@ def export_mesh(terrain: Terrain, path) -> Path:
     v = grid_vertices(terrain.heights, terrain.spacing, terrain.origin)
     f = grid_faces(terrain.shape, terrain.nodata)
     g = np.round(np.clip(terrain.albedo.ravel(), 0, 1) * 255).astype(np.uint8)
-    colors = np.stack([g, g, g, np.full_like(g, 255)], axis=1)
+    colors = np.stack([g, g, g, np.full_like(g, 255)], axis=1) if suf == ".ply" else None
     mesh = trimesh.Trimesh(vertices=v, faces=f, vertex_colors=colors, process=False, validate=False)
     data = mesh.export(file_type=suf[1:])
     blob = data if isinstance(data, bytes) else data.encode()

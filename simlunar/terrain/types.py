@@ -23,12 +23,16 @@ class Terrain:
         World (x, y) of the top-left (north-west) corner of cell (0, 0). Columns run to +x,
         rows to -y, so the centre of cell (r, c) is
         ``(x0 + (c + 0.5) * spacing, y0 - (r + 0.5) * spacing)``.
+    crs : str, optional
+        Coordinate reference system of (x, y) as WKT (e.g. read from a GeoTIFF); None for a
+        local frame (written to GeoTIFF as the Moon 2015 sphere, see :mod:`simlunar.terrain.io`).
     """
 
     heights: np.ndarray
     albedo: np.ndarray
     spacing: float
     origin: tuple[float, float] = (0.0, 0.0)
+    crs: str | None = None
 
     def __post_init__(self) -> None:
         h = np.array(self.heights, dtype=np.float64, copy=True)
@@ -47,6 +51,8 @@ class Terrain:
         object.__setattr__(self, "albedo", a)
         object.__setattr__(self, "spacing", float(self.spacing))
         object.__setattr__(self, "origin", (float(self.origin[0]), float(self.origin[1])))
+        if self.crs is not None and not isinstance(self.crs, str):
+            raise ValueError(f"crs must be a WKT string or None, got {type(self.crs).__name__}")
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 
 import pytest
 import yaml
@@ -100,7 +101,6 @@ def test_bad_config_is_one_line_exit_2_nothing_written(case, data, expected, tmp
     ("case", "data", "expected"), BAD_REGISTRY, ids=[b[0] for b in BAD_REGISTRY]
 )
 def test_unknown_names_are_one_line_exit_2(case, data, expected, tmp_path):
-    pytest.importorskip("simlunar.planner.strategies")
     path = write(tmp_path, data)
     out = tmp_path / "results"
     _check_one_line_error(invoke("run", path, "--out", str(out)), expected, path, out)
@@ -117,24 +117,16 @@ def test_missing_yaml_and_bad_set_and_bad_scheduler(tmp_path):
     _check_one_line_error(r, "render.spp: Input should be greater than or equal to 1", path, out)
 
 
-def test_unreachable_scheduler_writes_nothing(tmp_path, monkeypatch):
-    pytest.importorskip("simlunar.planner.strategies")
-    import simlunar.pipeline.executors as ex
-
-    monkeypatch.setattr(
-        ex.DaskExecutor,
-        "__init__",
-        lambda self, address, timeout_s=1.0: (
-            setattr(self, "address", address),
-            setattr(self, "timeout_s", 1.0),
-        )[0],
-    )
+def test_unreachable_scheduler_writes_nothing(tmp_path):
     path = write(tmp_path, GOOD)
     out = tmp_path / "results"
+    t0 = time.perf_counter()
     r = invoke("run", path, "--out", str(out), "--scheduler", "tcp://127.0.0.1:9")
     assert r.exit_code == 2, r.output
     assert r.output.startswith("error: --scheduler tcp://127.0.0.1:9: cannot connect")
+    assert len(r.output.strip().splitlines()) == 1
     assert not out.exists()
+    assert time.perf_counter() - t0 < 5  # a closed port fails at once, no 20 s of retries
 
 
 def test_schema_command(tmp_path):
@@ -151,3 +143,45 @@ def test_figures_on_a_non_result_folder(tmp_path):
     r = invoke("figures", str(tmp_path))
     assert r.exit_code == 2
     assert "not a result folder (missing config.yaml)" in r.output
+
+
+# --------------------------------------------------------------------------- terrain, render
+def _one_error_line(r, expect: str) -> None:
+    assert r.exit_code == 2, r.output
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and expect in lines[0], r.stderr
+    assert "Traceback" not in r.output
+
+
+@pytest.mark.parametrize(
+    ("args", "expect"),
+    [
+        (("terrain", "aerial_9", "--out", "{d}/t"), "unknown terrain preset 'aerial_9'"),
+        (("terrain", "aerial_1", "--out", "{d}/t", "--scale", "0"), "scale"),
+        (("terrain", "aerial_1", "--out", "{d}/t", "--format", "bmp"), "--format must be"),
+        (("terrain", "aerial_1", "--out", "{d}/file"), "is a file, not a folder"),
+        (("terrain", "aerial_1", "--out", "{d}/file/t"), "is a file, so no folder can be made"),
+        (("render", "{d}/nope.yaml", "--out", "{d}/r"), "scene file not found"),
+        (("render", "{d}/scene.yaml", "--out", "{d}/file"), "is a file, not a folder"),
+        (("render", "{d}/bad_dem_scene.yaml", "--out", "{d}/r"), "every height is NaN"),
+        (("render", "{d}/away_scene.yaml", "--out", "{d}/r"), "camera: the camera at"),
+        (("figures", "{d}/file"), "is a file, not a folder"),
+        (("figures", "{d}/nothing"), "no such folder"),
+    ],
+    ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,
+)
+def test_terrain_render_figures_file_errors_are_one_line(args, expect, tmp_path):
+    import numpy as np
+
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "scene.yaml").write_text("terrain: {preset: aerial_1, scale: 0.125}\n")
+    np.save(tmp_path / "nan.npy", np.full((8, 8), np.nan))
+    (tmp_path / "bad_dem_scene.yaml").write_text("terrain: {file: nan.npy, spacing_m: 0.2}\n")
+    (tmp_path / "away_scene.yaml").write_text(
+        "terrain: {preset: aerial_1, scale: 0.125}\ncamera: {kind: perspective, width: 32, "
+        "height: 24, fov_deg: 30, position_m: [0, 0, 60], look_at_m: [0, 0, 90]}\n"
+    )
+    before = sorted((p.name, p.stat().st_size) for p in tmp_path.rglob("*"))
+    r = invoke(*[a.format(d=tmp_path) for a in args])
+    _one_error_line(r, expect)
+    assert sorted((p.name, p.stat().st_size) for p in tmp_path.rglob("*")) == before

@@ -142,7 +142,6 @@ def test_errors_name_the_key_path(mutate, message, tmp_path):
 
 
 def test_registry_names_are_checked():
-    pytest.importorskip("simlunar.planner")
     with pytest.raises(
         ConfigError, match=r"^terrain.preset: unknown terrain preset 'mars_1' \(valid: .*aerial_1"
     ):

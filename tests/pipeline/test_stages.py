@@ -89,9 +89,14 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
     same = np.isclose(out["sparse_mesh_sigma"], on.sigma, rtol=0, atol=1e-7)
     assert same.any() and (~same).any()
     assert not np.allclose(rough[~same], const[~same], rtol=1e-3)
-    # a degenerate range equal to the scene's sigma reproduces the constant render exactly
+    # a degenerate range equal to the scene's sigma reproduces the constant render: exactly on
+    # LLVM; a CUDA kernel rounds the texture path's sigma factors a few ulp differently from
+    # the scalar path's (tests/render/test_bsdfs.py), and a pixel sums 2 spp of 1 BSDF value
+    # each, so 16 float32 ulp relative bound it (a 1e-5 relative change of sigma moves BSDF
+    # values by 42-250 ulp on the eval grid of test_bsdfs.py; the check above covers the map)
     flat = sparse_mesh_render(t, cam, sun, on, image, rng=3, sigma_range=(on.sigma, on.sigma), **kw)
-    np.testing.assert_array_equal(flat["sparse_mesh_render_rough"], const)
+    diff = np.abs(flat["sparse_mesh_render_rough"].astype(np.float64) - const)
+    assert np.all(diff <= 16 * np.finfo(np.float32).eps * np.abs(const))
     # the same plan (same rng) gives the same constant render; no modulation without a range
     # or for a BSDF without roughness
     plain = sparse_mesh_render(t, cam, sun, on, image, rng=3, **kw)

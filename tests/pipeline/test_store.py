@@ -58,3 +58,32 @@ def test_unit_cache_round_trip_and_corrupt_entries(tmp_path):
     assert c.load("k2") is None  # unreadable -> recomputed, never trusted
     c.json_path("k3").write_text('{"key": "other"}')
     assert c.load("k3") is None
+
+
+def test_folder_lock_excludes_a_second_owner_and_leaves_no_file(tmp_path):
+    from simlunar.errors import ResultFolderError
+    from simlunar.pipeline.store import FolderLock
+
+    a = FolderLock(tmp_path).acquire()
+    assert (tmp_path / ".lock").read_text().strip() == str(os.getpid())
+    with pytest.raises(ResultFolderError, match=rf"another simlunar run \(pid {os.getpid()}\)"):
+        FolderLock(tmp_path).acquire()
+    a.release()
+    assert not (tmp_path / ".lock").exists()
+    with FolderLock(tmp_path):  # free again
+        pass
+
+
+def test_unit_cache_prunes_other_keys_and_temporaries_and_checks_arrays(tmp_path):
+    c = UnitCache(tmp_path)
+    for k in ("keep", "old"):
+        c.save(k, {"rows": []}, {"a": np.zeros(2)})
+    (c.dir / ".keep.json.x1.tmp.json").write_text("{")
+    removed = c.remove_except({"keep"})
+    assert sorted(p.name for p in removed) == [".keep.json.x1.tmp.json", "old.json", "old.npz"]
+    assert c.keys() == {"keep"} and c.arrays_readable("keep")
+    c.npz_path("keep").write_bytes(b"PK\x03\x04 truncated")
+    assert not c.arrays_readable("keep")
+    with pytest.raises(Exception, match=r"keep\.npz: unreadable unit arrays"):
+        c.load_arrays("keep", strict=True)
+    assert c.load_arrays("keep") == {}

@@ -335,7 +335,7 @@ def test_translated_options_run_through_the_planner():
                     }
                 }
             ),
-            "render.camera.look_at_m: the camera looks at its own position (position_m)",
+            "render.camera.look_at_m: equals position_m (the camera looks at its own position)",
         ),
         (scanner(projector_px=[0, 0]), "study.projector_px[0]: Input should be greater than 0"),
         (
@@ -479,20 +479,6 @@ def test_albedo_file_of_another_shape_is_one_line(tmp_path):
         build_terrain(cfg.terrain, rng=np.random.default_rng(0))
     msg = error_of(base(terrain={"preset": "aerial_1", "albedo_file": "alb.npy"}))
     assert msg == "terrain: albedo_file goes with a DEM file (give terrain.file)"
-
-
-def test_a_density_below_three_samples_is_a_schema_error():
-    # aerial_1 at scale 1/8: 125 x 200 = 25000 pixels; 1e-4 gives k = round(2.5) = 2
-    msg = error_of(base(study={"densities": [0.5, 1e-4], "trials": 1}))
-    assert msg.startswith(
-        "study.densities[1]: density 0.0001 gives k = 2 < 3 samples on the 125 x 200"
-    )
-    validate_data(base(study={"densities": [0.5, 1.2e-4], "trials": 1}))  # k = 3
-    # a sweep over the scale is checked point by point
-    msg = error_of(base(study={"densities": [2e-4]}, sweep={"terrain.scale": [0.125, 0.0625]}))
-    assert msg.startswith(
-        "study.densities[0]: density 0.0002 gives k = 1 < 3 samples on the 62 x 100"
-    )
 
 
 def test_the_schema_command_prints_what_the_test_validates_against(tmp_path):

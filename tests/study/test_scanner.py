@@ -8,9 +8,9 @@ from scipy import ndimage
 
 from simlunar.geometry import Camera, Intrinsics, Pose, Projector, Rig
 from simlunar.scanner import modes, rigs
+from simlunar.study import scanner as st
 from simlunar.terrain.types import Terrain
 
-st = pytest.importorskip("simlunar.study.scanner")
 pytestmark = pytest.mark.render
 
 N, SPACING, ORIGIN = 100, 0.02, (-1.0, 1.0)  # a 2 m x 2 m bench-top patch
@@ -235,3 +235,22 @@ def test_scanner_ambiguity_experiment_plain_arguments():
         metrics=("mse",),
     )
     assert st.summarize(again, "mse") == mse
+
+
+def test_grad_score_ignores_the_holes_of_the_truth(rng):
+    from simlunar.study.scanner import score_depth
+
+    # a tilted plane (m): every GRAD weight is the same |slope|, so GRAD is the plain MSE of
+    # the evaluated cells, whatever the errors
+    r, c = np.mgrid[0:40, 0:50]
+    truth = 1.5 + 0.01 * c + 0.004 * r
+    hole = np.zeros(truth.shape, bool)
+    hole[12:20, 15:30] = True
+    err = rng.normal(0.0, 1e-3, truth.shape)
+    err[ndimage.binary_dilation(hole, iterations=2) & ~hole] *= 20  # errors around the hole
+    depth = truth + err
+    with_hole = score_depth(depth, np.where(hole, np.nan, truth), metrics=("grad", "mse"))
+    reference = score_depth(depth, truth, metrics=("grad", "mse"), mask=~hole)
+    assert reference["grad"] == pytest.approx(reference["mse"], rel=1e-12)
+    assert with_hole["grad"] == pytest.approx(reference["grad"], rel=1e-9)
+    assert with_hole["mse"] == pytest.approx(reference["mse"], rel=1e-12)

@@ -51,3 +51,37 @@ def test_terrain_command_errors_are_one_line(tmp_path):
     assert r.exit_code == 2 and "grid.spacing_m" in r.output and "Traceback" not in r.output
     r = runner.invoke(app, ["terrain", "moonyard", "--out", str(tmp_path / "z"), "--mesh", "stl"])
     assert r.exit_code == 2 and "--mesh" in r.output
+
+
+def test_terrain_stats_prints_slopes_hurst_and_densities(tmp_path):
+    r = runner.invoke(app, ["terrain", "aerial_3", "--stats", "--scale", "0.05", "--seed", "5"])
+    assert r.exit_code == 0, r.output
+    lines = r.output.splitlines()
+    slope_rows = [ln for ln in lines if ln.count("°") == 2]
+    assert len(slope_rows) >= 3
+    assert any(ln.startswith("Hurst exponent H = ") for ln in lines)
+    assert any(ln.startswith("rocks per 100 m^2") for ln in lines)
+    # the numbers are those of the library on the same terrain
+    from simlunar.terrain.stats import roughness
+
+    ref = generate("aerial_3", rng=5, scale=0.05).terrain
+    h = roughness(ref.heights, ref.spacing).hurst
+    assert f"H = {h:.3f}" in r.output
+    # and a DEM file (a GeoTIFF written by the command) gives the same roughness
+    out = tmp_path / "t"
+    r = runner.invoke(
+        app, ["terrain", "aerial_3", "--scale", "0.05", "--seed", "5", "--out", str(out),
+              "--format", "tif", "--mesh", "none"],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["terrain", str(out / "dem.tif"), "--stats"])
+    assert r.exit_code == 0, r.output
+    assert f"H = {h:.3f}" in r.output  # float32 on disk: same to 3 decimals
+    # the densities come from the features.json beside the DEM, as for the generated terrain
+    dens = [ln for ln in lines if ln.startswith(("craters", "rocks"))]
+    assert dens and all(d in r.output for d in dens)
+    (out / "features.json").unlink()
+    r = runner.invoke(app, ["terrain", str(out / "dem.tif"), "--stats"])
+    assert r.exit_code == 0 and "unknown" in r.output
+    r = runner.invoke(app, ["terrain", "aerial_3"])
+    assert r.exit_code == 2 and "--out" in r.output

@@ -1,0 +1,184 @@
+"""Mitsuba BSDF plugin ``hapke``: Hapke's regolith BRDF.
+
+Evaluates exactly the formulas of :func:`simlunar.render.reference.hapke` (the tests compare
+them on an angle grid) in Mitsuba's local shading frame; ``eval`` returns ``f * cos(theta_o)``.
+Double Henyey-Greenstein phase function, shadow-hiding opposition surge
+``B0 / (1 + tan(g/2) / h)``, Hapke (2002) H functions for multiple scattering, Hapke (1984)
+macroscopic roughness. Sampling is cosine-weighted over the upper hemisphere. Lobe: glossy
+reflection, front side only.
+
+Parameters
+----------
+
+=============== ================= ============= ======== ===========================================
+name            type              default       unit     meaning
+=============== ================= ============= ======== ===========================================
+``reflectance`` float or texture  0.12          1        normal albedo in [0, 1] (``albedo_mode``
+                                                         ``normal``) or the single-scattering
+                                                         albedo w (``albedo_mode`` ``w``)
+``albedo_mode`` string            ``normal``    --       ``normal``: w is derived per point from
+                                                         a table (:data:`HAPKE_TABLE_SIZE`
+                                                         entries, linear interpolation) so that
+                                                         the Hapke normal albedo equals the
+                                                         reflectance; ``w``: the reflectance is w
+``b``           float             0.26          1        Henyey-Greenstein lobe width, [0, 1)
+``c``           float             0.08          1        backscatter lobe weight (1 + c) / 2,
+                                                         [-1, 1]
+``B0``          float             1.0           1        opposition surge amplitude, >= 0
+``h``           float             0.07          1        opposition surge angular width, > 0
+``theta_bar``   float             0.41289       radian   mean macroscopic slope (23.657 deg),
+                                                         [0, pi/2)
+=============== ================= ============= ======== ===========================================
+
+Defaults are :data:`simlunar.render.reference.LUNAR_HAPKE`. The scalar parameters are opaque
+constants: changing them through ``mi.traverse`` reuses the compiled kernels (the albedo table
+is rebuilt on ``parameters_changed``). ``mi.traverse`` exposes ``reflectance``
+(differentiable) and ``b``, ``c``, ``B0``, ``h``, ``theta_bar`` (not differentiable).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from simlunar.render import reference as ref
+from simlunar.render.plugins._common import (
+    INV_PI,
+    cosine_bsdf_base,
+    local_angles,
+    opaque,
+    scalar,
+)
+
+NAME = "hapke"
+
+#: entries of the normal albedo -> w lookup table (albedo in [0, 1])
+HAPKE_TABLE_SIZE = 1024
+
+_REGISTERED: set[str] = set()
+
+
+def register(mi) -> None:
+    """Define and register the plugin for the current variant (idempotent)."""
+    variant = mi.variant()
+    if variant in _REGISTERED:
+        return
+    import drjit as dr
+
+    from simlunar.render.materials import HapkeBSDF
+
+    inv_pi = INV_PI
+
+    class HapkePlugin(cosine_bsdf_base(mi)):
+        """Hapke BRDF; see :func:`simlunar.render.reference.hapke`."""
+
+        flags = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
+        lobe = mi.BSDFFlags.GlossyReflection
+        _keys = ("b", "c", "B0", "h", "theta_bar")
+
+        def __init__(self, props):
+            super().__init__(props)
+            self.reflectance = props.get_texture("reflectance", 0.12)
+            mode = str(props.get("albedo_mode", "normal"))
+            if mode not in ("normal", "w"):
+                raise ValueError(f"hapke: albedo_mode must be normal or w, got {mode!r}")
+            self.albedo_mode = mode
+            d = ref.LUNAR_HAPKE
+            vals = {k: scalar(props, k, getattr(d, k)) for k in self._keys}
+            HapkeBSDF(**vals)  # validates and names the offending field
+            for k, v in vals.items():
+                setattr(self, k, opaque(mi, v))
+            self._update_table()
+
+        def _params(self) -> dict:
+            return {k: float(getattr(self, k)[0]) for k in self._keys}
+
+        def _update_table(self):
+            p = self._params()
+            HapkeBSDF(**p)
+            albedo = np.linspace(0.0, 1.0, HAPKE_TABLE_SIZE)
+            self.w_table = mi.Float(ref.hapke_w_from_normal_albedo(albedo, **p).astype(np.float32))
+
+        def _w(self, si, active):
+            a = self.reflectance.eval(si, active)
+            if self.albedo_mode == "w":
+                return dr.clip(a, 0.0, 1.0)
+            n = HAPKE_TABLE_SIZE
+            out = []
+            for ch in range(3):
+                t = dr.clip(a[ch], 0.0, 1.0) * (n - 1)
+                i0 = mi.UInt32(dr.minimum(dr.floor(t), n - 2))
+                fr = t - mi.Float(i0)
+                w0 = dr.gather(mi.Float, self.w_table, i0, active)
+                w1 = dr.gather(mi.Float, self.w_table, i0 + 1, active)
+                out.append(dr.fma(fr, w1 - w0, w0))
+            return mi.Color3f(out[0], out[1], out[2])
+
+        @staticmethod
+        def _h(x, w):
+            x = dr.maximum(x, 1e-6)
+            gamma = dr.sqrt(dr.maximum(1.0 - w, 0.0))
+            r0 = (1.0 - gamma) / (1.0 + gamma)
+            return dr.rcp(1.0 - w * x * (r0 + (1.0 - 2.0 * r0 * x) * 0.5 * dr.log((1.0 + x) / x)))
+
+        def _f(self, si, wo, active):
+            w = self._w(si, active)
+            mu0, mu, si_, se, cpsi = local_angles(si, wo)
+            mu0 = dr.clip(mu0, 1e-6, 1.0)
+            mu = dr.clip(mu, 1e-6, 1.0)
+            si_ = dr.maximum(si_, 1e-6)
+            se = dr.maximum(se, 1e-6)
+            # macroscopic roughness (Hapke 1984); theta_bar = 0 is approached, not special-cased
+            tb = dr.maximum(dr.tan(self.theta_bar), 1e-4)
+            cot_tb = dr.rcp(tb)
+            chi = dr.rsqrt(1.0 + math.pi * tb * tb)
+            cot_i = mu0 / si_
+            cot_e = mu / se
+            e1i = dr.exp(-2.0 * inv_pi * cot_tb * cot_i)
+            e1e = dr.exp(-2.0 * inv_pi * cot_tb * cot_e)
+            e2i = dr.exp(-inv_pi * cot_tb * cot_tb * cot_i * cot_i)
+            e2e = dr.exp(-inv_pi * cot_tb * cot_tb * cot_e * cot_e)
+            eta_i = chi * (mu0 + si_ * tb * e2i / (2.0 - e1i))
+            eta_e = chi * (mu + se * tb * e2e / (2.0 - e1e))
+            psi = dr.safe_acos(cpsi)
+            s2 = dr.square(dr.sin(0.5 * psi))
+            fpsi = dr.exp(-2.0 * dr.tan(0.5 * dr.minimum(psi, math.pi - 1e-3)))
+            first = mu0 >= mu  # i <= e
+            d = dr.select(first, 2.0 - e1e - psi * inv_pi * e1i, 2.0 - e1i - psi * inv_pi * e1e)
+            mu0e = chi * (
+                mu0 + si_ * tb * dr.select(first, cpsi * e2e + s2 * e2i, e2i - s2 * e2e) / d
+            )
+            mue = chi * (mu + se * tb * dr.select(first, e2e - s2 * e2i, cpsi * e2i + s2 * e2e) / d)
+            ratio = dr.select(first, mu0 / eta_i, mu / eta_e)
+            shadow = mue / eta_e * mu0 / eta_i * chi / (1.0 - fpsi + fpsi * chi * ratio)
+            # phase function and opposition surge (phase angle g between wi and wo)
+            cos_g = dr.clip(dr.dot(si.wi, wo), -1.0, 1.0)
+            b, c = self.b, self.c
+            b2 = b * b
+            back = (1.0 - b2) / dr.power(1.0 - 2.0 * b * cos_g + b2, 1.5)
+            fwd = (1.0 - b2) / dr.power(1.0 + 2.0 * b * cos_g + b2, 1.5)
+            p = 0.5 * (1.0 + c) * back + 0.5 * (1.0 - c) * fwd
+            # |wi - wo| / |wi + wo| = tan(g/2), accurate near g = 0 where the surge peaks
+            tan_half_g = dr.norm(si.wi - wo) / dr.maximum(dr.norm(si.wi + wo), 1e-7)
+            surge = 1.0 + self.B0 / (1.0 + tan_half_g / self.h)
+            multiple = self._h(mu0e, w) * self._h(mue, w) - 1.0
+            scale = 0.25 * inv_pi * mu0e / (mu0e + mue) * shadow / mu0
+            return w * scale * (p * surge + multiple)
+
+        def traverse(self, callback):
+            callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
+            for k in self._keys:
+                callback.put(k, getattr(self, k), mi.ParamFlags.NonDifferentiable)
+
+        def parameters_changed(self, keys):
+            self._update_table()
+            for k in self._keys:
+                dr.make_opaque(getattr(self, k))
+
+        def to_string(self):
+            p = ", ".join(f"{k}={v:.6g}" for k, v in self._params().items())
+            return f"Hapke[{p}, albedo_mode={self.albedo_mode}, reflectance={self.reflectance}]"
+
+    mi.register_bsdf(NAME, lambda props: HapkePlugin(props))
+    _REGISTERED.add(variant)

@@ -1,0 +1,231 @@
+"""Scan export: a small real gray-code scan written out and read back with OpenCV.
+
+One module-scoped scan (64 x 48 projector, 96 x 72 camera, 12-bit sensor with shot and read
+noise, 4 spp) on a bumpy patch with an albedo pattern; the checks decode the exported PNGs
+with OpenCV's own decoder and reproject the exported cloud with OpenCV's own projection.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from simlunar.cli import app
+from simlunar.imaging.exr import read_exr
+from simlunar.imaging.sensor import SensorModel
+from simlunar.pipeline import exports
+from simlunar.scanner import modes, rigs
+from simlunar.study.scanner import RenderCapture
+from simlunar.terrain.types import Terrain
+
+pytestmark = pytest.mark.render
+
+N, SPACING, ORIGIN = 100, 0.02, (-1.0, 1.0)  # a 2 m x 2 m bench-top patch
+PROJ, CAM = (64, 48), (96, 72)
+ROOT = Path(__file__).resolve().parents[2]
+QUICKSTART = str(ROOT / "experiments" / "quickstart.yaml")
+
+
+@pytest.fixture(scope="module")
+def scan(tmp_path_factory):
+    x = ORIGIN[0] + SPACING * (np.arange(N) + 0.5)
+    xx, yy = np.meshgrid(x, ORIGIN[1] - SPACING * (np.arange(N) + 0.5))
+    heights = 0.1 * np.exp(-(xx**2 + yy**2) / 0.1) + 0.05 * np.sin(3 * xx)
+    albedo = (0.3 + 0.2 * (np.sin(7 * xx) * np.sin(5 * yy) > 0)).astype(np.float32)
+    terr = Terrain(heights, albedo, SPACING, ORIGIN)
+    rig = rigs.moonyard_rig(proj_size=PROJ, cam_size=CAM)
+    sensor = SensorModel(full_well_e=20000.0, read_noise_e=5.0, bits=12)
+    cap = RenderCapture(terr, rig, spp=4, seed=1, sensor=sensor, rng=3, camera_blur=0.7)
+    gray = modes.gray_code_scan(cap, rig)
+    folder = tmp_path_factory.mktemp("export") / "unit0"
+    exports.write_scan_export(folder, exports.scan_export_payload(gray, rig))
+    return rig, gray, folder
+
+
+def _frames(folder, sub):
+    paths = sorted((folder / sub).glob("*.png"))
+    return paths, [cv2.imread(str(p), cv2.IMREAD_UNCHANGED) for p in paths]
+
+
+def test_layout_and_frame_order_names(scan):
+    _, gray, folder = scan
+    paths, f8 = _frames(folder, "frames8")
+    _, f16 = _frames(folder, "frames16")
+    # 6 column + 6 row bits, pattern and inverse each, then white and black
+    assert [p.name for p in paths[:3]] == ["00_col0.png", "01_col0_inv.png", "02_col1.png"]
+    assert [p.name for p in paths[-3:]] == ["23_row5_inv.png", "24_white.png", "25_black.png"]
+    assert {f.dtype for f in f8} == {np.dtype(np.uint8)}
+    assert {f.dtype for f in f16} == {np.dtype(np.uint16)}
+    assert f8[0].shape == (CAM[1], CAM[0])
+    # the exported frames are the sensor frames the decoder used, quantised
+    used = np.concatenate(
+        [gray.frames["images"], gray.frames["white"][None], gray.frames["black"][None]]
+    )
+    assert np.array_equal(np.stack(f8), np.rint(np.clip(used, 0, 1) * 255).astype(np.uint8))
+    assert np.array_equal(np.stack(f16), np.rint(np.clip(used, 0, 1) * 65535).astype(np.uint16))
+    # sensor frames, not ideal patterns: the black frame has read noise, the white frame is
+    # not a constant 255
+    assert np.stack(f16)[-1].std() > 0 and len(np.unique(f8[-2])) > 20
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["opencv_black_threshold_8bit"] == 13  # 0.05 * 255 = 12.75
+    assert manifest["opencv_white_threshold_8bit"] == 3  # 0.01 * 255 = 2.55
+    assert manifest["frames"] == [p.name for p in paths]
+
+
+def test_opencv_getprojpixel_on_the_exported_8bit_stack_agrees_with_simlunar(scan):
+    _, gray, folder = scan
+    _, f8 = _frames(folder, "frames8")
+    pattern, white, black = f8[:-2], f8[-2], f8[-1]
+    g = cv2.structured_light.GrayCodePattern.create(*PROJ)
+    assert g.getNumberOfPatternImages() == len(pattern)
+    g.setBlackThreshold(13)
+    g.setWhiteThreshold(3)
+    # OpenCV's shadow mask (decode()): white - black > blackThreshold
+    lit = white.astype(int) - black.astype(int) > 13
+    cv_col = np.full(lit.shape, -1)
+    cv_row = np.full(lit.shape, -1)
+    for y, x in zip(*np.nonzero(lit)):
+        err, (px, py) = g.getProjPixel(pattern, int(x), int(y))
+        if not err:
+            cv_col[y, x], cv_row[y, x] = px, py
+    dec = gray.decode
+    both = dec.valid & (cv_col >= 0)
+    assert both.mean() > 0.5  # most of the camera sees a decoded projector pixel
+    agree = (cv_col[both] == dec.col[both]) & (cv_row[both] == dec.row[both])
+    assert agree.mean() >= 0.995, f"{agree.mean():.4f}"
+    # the exported maps are simlunar's decode (integer pixels, -1 where invalid)
+    maps = read_exr(folder / "decode.exr")
+    assert np.array_equal(maps["valid"] > 0, dec.valid)
+    assert np.array_equal(maps["col"][dec.valid], dec.col[dec.valid])
+    assert np.array_equal(maps["row"][dec.valid], dec.row[dec.valid])
+    assert np.all(maps["col"][~dec.valid] == -1)
+    # u, v: simlunar's projector coordinates shifted to OpenCV's convention (centre at col)
+    assert np.allclose(maps["u"][dec.valid], dec.col[dec.valid])
+
+
+def test_16bit_frames_are_the_8bit_frames_at_finer_steps(scan):
+    _, _, folder = scan
+    _, f8 = _frames(folder, "frames8")
+    _, f16 = _frames(folder, "frames16")
+    # 65535 = 257 * 255: one 8-bit step is 257 16-bit steps
+    assert np.abs(np.stack(f16).astype(int) - 257 * np.stack(f8).astype(int)).max() <= 128
+
+
+def test_exported_calibration_reprojects_the_cloud_with_cv2_projectpoints(scan):
+    rig, gray, folder = scan
+    fs = cv2.FileStorage(str(folder / "calibration.yml"), cv2.FILE_STORAGE_READ)
+    assert fs.isOpened()
+    K = fs.getNode("camera_matrix").mat()
+    dist = fs.getNode("camera_distortion").mat()
+    Kp = fs.getNode("projector_matrix").mat()
+    distp = fs.getNode("projector_distortion").mat()
+    Rc, tc = fs.getNode("camera_R_world").mat(), fs.getNode("camera_t_world").mat()
+    R, T = fs.getNode("R").mat(), fs.getNode("T").mat()
+    size = fs.getNode("camera_image_size")
+    assert [int(size.at(i).real()) for i in range(2)] == list(CAM)
+    assert fs.getNode("baseline_m").real() == pytest.approx(rig.baseline, rel=1e-15)
+    assert np.linalg.norm(T) == pytest.approx(rig.baseline, rel=1e-12)
+    fs.release()
+
+    cloud = exports.read_cloud_ply(folder / "cloud.ply")
+    pts = np.stack([cloud["x"], cloud["y"], cloud["z"]], axis=-1)
+    # the exported cloud is the scan's cloud, point for point
+    assert np.array_equal(pts, gray.cloud.points)
+    assert len(pts) > 0.5 * CAM[0] * CAM[1]
+    # each point came from camera pixel (cam_col, cam_row) (ray-plane triangulation: on its ray)
+    uv, _ = cv2.projectPoints(pts, cv2.Rodrigues(Rc)[0], tc, K, dist)
+    cam = np.stack([cloud["cam_col"], cloud["cam_row"]], axis=-1)
+    assert np.abs(uv[:, 0] - cam).max() < 0.01
+    # and on its decoded projector column plane; R, T chain camera -> projector
+    x_cam = pts @ Rc.T + tc.ravel()
+    uvp, _ = cv2.projectPoints(x_cam, cv2.Rodrigues(R)[0], T, Kp, distp)
+    assert np.abs(uvp[:, 0, 0] - cloud["proj_u"]).max() < 0.01
+    assert np.array_equal(cloud["proj_u"], gray.cloud.proj_uv[:, 0] - 0.5)
+
+
+def test_a_wrong_calibration_would_fail_the_reprojection_check(scan):
+    # the 0.01 px check has teeth: a half-pixel principal point (simlunar's convention
+    # instead of OpenCV's) moves every point by 0.5 px
+    rig, _, folder = scan
+    cloud = exports.read_cloud_ply(folder / "cloud.ply")
+    pts = np.stack([cloud["x"], cloud["y"], cloud["z"]], axis=-1)
+    Rc, tc = rig.camera.pose.extrinsics_opencv()
+    uv, _ = cv2.projectPoints(pts, cv2.Rodrigues(Rc)[0], tc, rig.camera.intrinsics.K, None)
+    cam = np.stack([cloud["cam_col"], cloud["cam_row"]], axis=-1)
+    assert np.abs(uv[:, 0] - cam).min() > 0.49
+
+
+def test_calibration_yaml_keeps_full_precision(tmp_path):
+    calib = {"M": np.array([[1 / 3, -2e-17], [np.pi, 1e300]]), "size": [640, 480], "b": 0.1}
+    exports.write_calibration_yaml(tmp_path / "c.yml", calib)
+    assert (tmp_path / "c.yml").read_text().startswith("%YAML:1.0\n")
+    fs = cv2.FileStorage(str(tmp_path / "c.yml"), cv2.FILE_STORAGE_READ)
+    assert np.array_equal(fs.getNode("M").mat(), calib["M"])
+    assert fs.getNode("b").real() == 0.1
+    with pytest.raises(ValueError, match="not finite"):
+        exports.write_calibration_yaml(tmp_path / "d.yml", {"M": np.full((1, 1), np.nan)})
+
+
+def test_quantize_rounds_and_clips():
+    x = np.array([-0.1, 0.0, 0.5 / 255, 0.49 / 255, 1.0, 1.7])
+    assert exports.quantize(x, 8).tolist() == [0, 0, 0, 0, 255, 255]  # 0.5 ties to even
+    assert exports.quantize(np.array([1.5 / 255]), 8).tolist() == [2]
+    assert exports.quantize(np.array([1 / 65535, 0.5]), 16).tolist() == [1, 32768]
+    with pytest.raises(ValueError):
+        exports.quantize(x, 12)
+
+
+def test_run_with_save_scans_writes_one_folder_per_unit(tmp_path):
+    out = tmp_path / "scan"
+    args = [
+        "run",
+        str(ROOT / "experiments" / "scanner_ambiguity.yaml"),
+        "--out",
+        str(out),
+        "--save-scans",
+        "--no-progress",
+        "--no-figures",
+        *("--set", "terrain.scale=0.125"),
+        *("--set", "study.projector_px=[32, 24]"),
+        *("--set", "study.camera_px=[48, 36]"),
+        *("--set", "render.spp=1"),
+        *("--set", "study.modes=[gray_code]"),
+        *("--set", "study.metrics=[mse]"),
+        *("--set", "sweep={}"),
+    ]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0, r.output
+    unit = out / "scans" / "unit0"
+    assert len(list((unit / "frames8").glob("*.png"))) == 2 * (5 + 5) + 2
+    assert {"decode.exr", "cloud.ply", "calibration.yml", "manifest.json"} <= {
+        p.name for p in unit.iterdir()
+    }
+    assert "save_scans: true" in (out / "config.yaml").read_text()
+
+
+def test_save_scans_on_a_sampling_study_is_a_user_error(tmp_path):
+    out = tmp_path / "q"
+    r = CliRunner().invoke(app, ["run", QUICKSTART, "--out", str(out), "--save-scans"])
+    assert r.exit_code == 2
+    assert "--save-scans" in r.output and "scanner" in r.output
+    assert not out.exists()
+
+
+def test_save_scans_without_a_gray_code_scan_is_a_user_error(tmp_path):
+    out = tmp_path / "d"
+    args = ["run", str(ROOT / "experiments" / "scanner_ambiguity.yaml"), "--out", str(out)]
+    args += ["--set", "study.save_scans=true", "--set", "study.modes=[data_reduction]"]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 2
+    assert "save_scans" in r.output and "gray_code" in r.output
+    assert not out.exists()
+    r = CliRunner().invoke(
+        app, [*args[:4], "--set", "study.modes=[data_reduction]", "--save-scans"]
+    )
+    assert r.exit_code == 2 and "--save-scans" in r.output
+    assert not out.exists()

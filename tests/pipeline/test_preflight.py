@@ -1,0 +1,71 @@
+"""The preflight checks' own mathematics and file handling (hand-computed cases)."""
+
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+import pytest
+
+from simlunar.errors import ConfigError
+from simlunar.pipeline.preflight import (
+    TerrainFacts,
+    _ray_box,
+    check_study_sizes,
+    file_sha256,
+    input_files,
+    input_hashes,
+)
+
+LO, HI = np.array([0.0, -10.0, -1.0]), np.array([20.0, 0.0, 1.0])
+
+
+@pytest.mark.parametrize(
+    ("origin", "direction", "hits"),
+    [
+        ((10, -5, 30), (0, 0, -1), True),  # straight down into the box
+        ((10, -5, 30), (0, 0, 1), False),  # straight up, away from it
+        ((10, -5, 0), (0, 0, 1), True),  # starts inside the box
+        ((-10, -5, 0), (1, 0, 0), True),  # parallel to z and y slabs, inside them, towards it
+        ((-10, -5, 5), (1, 0, 0), False),  # parallel to the z slab but above it
+        ((30, -5, 30), (0, 0, -1), False),  # beside the footprint
+        ((-10, -5, 10), (1, 0, -0.5), True),  # oblique: reaches z = 1 at x = 8
+        ((-10, -5, 10), (1, 0, -0.1), False),  # oblique: still at z = 7 at x = 20
+    ],
+)
+def test_ray_box_by_hand(origin, direction, hits):
+    o = np.array([origin], float)
+    d = np.array([direction], float)
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    assert bool(_ray_box(o, d, LO, HI)[0]) is hits
+
+
+def test_terrain_facts_extent_follows_the_terrain_convention():
+    f = TerrainFacts(rows=10, cols=20, spacing=0.5, origin=(1.0, 2.0), zmin=0, zmax=1)
+    # columns run to +x, rows to -y from the top-left corner
+    assert f.extent == (1.0, 11.0, -3.0, 2.0)
+
+
+def test_density_sample_counts_are_checked_on_the_units_image():
+    from types import SimpleNamespace
+
+    study = SimpleNamespace(kind="sampling", densities=[0.5, 3 / 1000])
+    cfg = SimpleNamespace(study=study)
+    check_study_sizes(cfg, (40, 25))  # 1000 pixels: 3 samples, just enough
+    study.densities = [0.5, 2.4 / 1000]  # rounds to 2
+    with pytest.raises(ConfigError, match=r"study.densities\[1\]: density 0.0024 gives 2 samples"):
+        check_study_sizes(cfg, (40, 25))
+
+
+def test_input_hashes_are_the_sha256_of_the_files_and_follow_their_contents(tmp_path):
+    dem = tmp_path / "dem.npy"
+    np.save(dem, np.zeros((3, 4)))
+    (tmp_path / "dem.npy.json").write_text('{"spacing": 0.2}')
+    cfg = {"terrain": {"file": str(dem), "albedo_file": None}}
+    assert set(input_files(cfg)) == {"terrain.file", "terrain.file.json"}
+    h1 = input_hashes(cfg)["terrain.file"]["sha256"]
+    assert h1 == hashlib.sha256(dem.read_bytes()).hexdigest() == file_sha256(dem)
+    np.save(dem, np.ones((3, 4)))
+    assert input_hashes(cfg)["terrain.file"]["sha256"] != h1
+    preset = input_files({"terrain": {"preset": "aerial_1"}})["terrain.preset"]
+    assert preset.name == "aerial_1.yaml" and preset.is_file()
