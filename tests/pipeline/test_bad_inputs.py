@@ -6,9 +6,6 @@ traceback, and the SHA-256 of the whole test folder (the YAML, the input files, 
 folder when it exists beforehand) unchanged, so nothing was written anywhere. Almost every
 case must fail in validation or in the preflight checks, before any render: the test module
 runs in seconds.
-
-Cases that fail on this branch only because the typed configuration (branch ``config``) is
-not merged yet are in ``NEEDS_TYPED_CONFIG`` and skipped.
 """
 
 from __future__ import annotations
@@ -228,10 +225,7 @@ CASES = [
     Case("malformed --scheduler", GOOD, "--scheduler 'not a url': not a scheduler address", args=("--scheduler", "not a url")),
     Case("--scheduler port out of range", GOOD, "not a scheduler address", args=("--scheduler", "tcp://127.0.0.1:99999")),
     Case("unreachable --scheduler", GOOD, "--scheduler tcp://127.0.0.1:9: cannot connect", args=("--scheduler", "tcp://127.0.0.1:9")),
-]  # fmt: skip
-
-#: fail on this branch only because the typed configuration of branch `config` is missing
-NEEDS_TYPED_CONFIG = [
+    # value checks and option models of the typed configuration
     Case("sun on the horizon", {**GOOD, "sweep": {"render.light.elevation_deg": [30, 60, 0]}}, "elevation_deg"),
     Case("sigma 90", with_("render.bsdf", {"kind": "oren_nayar", "sigma_deg": 90}), "sigma_deg"),
     Case("inf irradiance", with_("render.light.irradiance", float("inf")), "irradiance"),
@@ -301,12 +295,6 @@ def _make_read_only(folder: Path, monkeypatch) -> None:
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(case, tmp_path, monkeypatch):
-    _run_case(case, tmp_path, monkeypatch)
-
-
-@pytest.mark.skip(reason="needs typed config from branch config")
-@pytest.mark.parametrize("case", NEEDS_TYPED_CONFIG, ids=[c.name for c in NEEDS_TYPED_CONFIG])
-def test_bad_input_needing_the_typed_config(case, tmp_path, monkeypatch):
     _run_case(case, tmp_path, monkeypatch)
 
 
