@@ -155,7 +155,7 @@ def test_scanner_experiment_end_to_end(tmp_path):
         "--set",
         "sweep={}",
     )
-    assert "| gray_code |" in r.output and "| ambiguity_enhancement / wavelet |" in r.output
+    assert "| Gray code |" in r.output and "| Ambiguity enhancement / Wavelet |" in r.output
     with (out / "results.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert {row["mode"] for row in rows} == {"gray_code", "ambiguity_enhancement"}
