@@ -233,8 +233,8 @@ def _scanner_figures(res: dict, emit, captions: dict) -> None:
     )
     if ber:
         vals = {n: np.mean([float(r["value"]) for r in rows if r["metric"] == n]) for n in ber}
-        fig, ax = F.bit_error_rates(vals)
-        emit(fig, "gray_code_bit_errors")
         captions["gray_code_bit_errors"] = captions_text.bit_errors(
             n_units, all(v == 0 for v in vals.values())
         )
+        fig, ax = F.bit_error_rates(vals)
+        emit(fig, "gray_code_bit_errors")

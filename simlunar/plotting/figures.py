@@ -413,7 +413,7 @@ def bit_error_rates(rates: dict[str, float], *, ax=None):
             )
             drawn = True
     ax.set_xlabel("bit (0 = most significant)")
-    ax.set_ylabel("bit error rate (fraction of decoded pixels)")
+    ax.set_ylabel("bit error rate (fraction)")
     vals = [float(v) for v in rates.values()]
     if drawn and vals and max(vals) == 0:
         ax.set_ylim(-0.05, 1.0)
