@@ -146,6 +146,8 @@ def _check_long(args: list[str], line: str, cwd: Path) -> None:
     if args[0] in ("simlunar", ".venv/bin/simlunar"):
         sub = [a for a in args[1:2] if not a.startswith("-")]
         _run([sys.executable, "-m", "simlunar.cli", *sub, "--help"], cwd, line)
+    elif args[0] in ("python", "python3", ".venv/bin/python") and args[1:2] == ["-m"]:
+        _run([sys.executable, "-m", args[2], "--help"], cwd, line)
 
 
 @pytest.mark.parametrize(("doc", "lang", "text"), BLOCKS)
