@@ -196,7 +196,8 @@ def test_the_quickstart_itself_runs(tmp_path):
     out = tmp_path / "quickstart"
     r = run_cli(QUICKSTART, "--out", str(out), "--no-figures")
     header = (
-        "| Metric | Random | Grid | Gradient | Entropy | Wavelet | Wavelet bn | Wavelet bn mix |"
+        "| Metric | Random | Grid | Gradient | Entropy | Wavelet | Wavelet, blue noise |"
+        " Wavelet, blue noise + uniform |"
     )
     assert header in r.output
     assert "| MSE | 1.00 |" in r.output
