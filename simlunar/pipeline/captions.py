@@ -20,7 +20,7 @@ _METRIC_TEXT = {
 
 def _metric(m: str) -> str:
     unit = METRIC_UNITS.get(m, "")
-    return f"{_METRIC_TEXT.get(m, METRIC_NAMES.get(m, m))}{f' ({unit})' if unit else ''}"
+    return f"{_METRIC_TEXT.get(m, METRIC_NAMES.get(m, m))}{f', in {unit}' if unit else ''}"
 
 
 def error_vs_density(metric: str, study: dict, n_panels: int) -> str:
