@@ -53,15 +53,25 @@ from scipy.ndimage import gaussian_filter
 depth = gaussian_filter(np.random.default_rng(0).normal(size=(128, 128)), 4.0)
 image = 0.5 + 10.0 * np.gradient(depth)[1]
 """,
-    "terrain.md": """
-import numpy as np
-import rasterio
-from rasterio.transform import from_origin
-with rasterio.open("lola.tif", "w", driver="GTiff", width=8, height=6, count=1,
-                   dtype="float32", nodata=-9999, transform=from_origin(0, 30, 5, 5)) as f:
-    f.write(np.arange(48, dtype=np.float32).reshape(6, 8), 1)
-""",
 }
+
+
+def _geotiff_prelude(text: str) -> str:
+    """Small GeoTIFFs for every ``load_dem("X.tif", ...)`` of a block: georeferenced (transform
+    and a projected CRS in metres) unless the call gives ``spacing=``, which is for plain files."""
+    lines = [
+        "import numpy as np",
+        "import rasterio",
+        "from rasterio.transform import from_origin",
+    ]
+    for name, args in re.findall(r'load_dem\("([^"]+\.tiff?)"([^)]*)\)', text):
+        geo = "" if "spacing" in args else ", transform=from_origin(0, 30, 5, 5), crs='EPSG:32633'"
+        lines += [
+            f"with rasterio.open({name!r}, 'w', driver='GTiff', width=8, height=6, count=1,",
+            f"                   dtype='float32', nodata=-9999{geo}) as f:",
+            "    f.write(np.arange(48, dtype=np.float32).reshape(6, 8), 1)",
+        ]
+    return "\n".join(lines) + "\n"
 
 
 def _blocks():
@@ -172,7 +182,7 @@ def test_doc_block_runs(doc, lang, text, tmp_path):
         if first.startswith("#") and LONG[2:] in first:
             compile(text, str(doc), "exec")
             return
-        script = PRELUDES.get(doc.name, "") + "\n" + text
+        script = PRELUDES.get(doc.name, "") + _geotiff_prelude(text) + "\n" + text
         (cwd / "block.py").write_text(script)
         _run([sys.executable, "block.py"], cwd, f"{doc.name} python block:\n{text}")
     elif lang in ("yaml", "yml"):

@@ -17,6 +17,7 @@ import sys
 import time
 from pathlib import Path
 
+from simlunar.errors import SimlunarError
 from simlunar.pipeline.figures import load_results
 from simlunar.pipeline.store import UnitCache, atomic_write_bytes
 
@@ -134,7 +135,7 @@ def main(argv: list[str] | None = None) -> int:
             restarts=a.restarts,
             trials=a.trials,
         )
-    except (FileNotFoundError, ValueError) as e:
+    except (FileNotFoundError, ValueError, SimlunarError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     print(_markdown(report))
