@@ -123,7 +123,9 @@ def _label(rec: dict) -> str:
 
 def write_figures(out_dir: str | Path) -> list[Path]:
     """Draw every figure the results support; returns the written paths (PNG and PDF)."""
+    from simlunar.pipeline import captions as captions_text
     from simlunar.plotting import figures as F
+    from simlunar.plotting.style import axis_name
 
     res = load_results(out_dir)
     out = res["dir"]
@@ -140,8 +142,10 @@ def write_figures(out_dir: str | Path) -> list[Path]:
         F.close(fig)
 
     study = cfg.get("study", {})
+    captions: dict[str, str] = {}
     if study.get("kind", "sampling") != "sampling":
-        _scanner_figures(res, emit)
+        _scanner_figures(res, emit, captions)
+        write_captions(fig_dir, captions, written)
         return written
     strategies = list(study.get("strategies") or [])
     metrics = list(study.get("metrics") or [])
@@ -163,13 +167,17 @@ def write_figures(out_dir: str | Path) -> list[Path]:
                 where={"unit": rec.get("index", 0)},
                 title=_label(rec) if len(units) > 1 else None,
             )
+        for ax in axes[1:]:  # one legend per figure: the panels share strategies and styles
+            if ax.get_legend() is not None:
+                ax.get_legend().remove()
         emit(fig, f"error_vs_density_{m}")
+        captions[f"error_vs_density_{m}"] = captions_text.error_vs_density(m, study, len(shown))
 
     for rec, arr in zip(shown, shown_arrays):
         if not {"image", "wavelet_energy", "plan_rows", "reconstruction", "depth"} <= set(arr):
             continue
         density = (rec.get("config", {}).get("figures") or {}).get("panel_density")
-        label = f"(k/N = 1/{round(1 / density)})" if density else ""
+        label = f"k/N = 1/{round(1 / density)}" if density else ""
         fig, _ = F.image_panels(
             arr["image"],
             arr["wavelet_energy"],
@@ -178,8 +186,11 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             arr["reconstruction"],
             arr["depth"],
             density_label=label,
+            planner="wavelet",
+            point=_label(rec) if len(units) > 1 else "",
         )
         emit(fig, f"panels_unit{rec.get('index', 0)}")
+        captions[f"panels_unit{rec.get('index', 0)}"] = captions_text.panels(label, _label(rec))
 
     for rec, arr in zip(shown, shown_arrays):
         if "sparse_mesh_render" not in arr or "radiance" not in arr:
@@ -192,8 +203,12 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             arr.get("wavelet_energy"),
             rough=arr.get("sparse_mesh_render_rough"),
             n_samples=n,
+            point=_label(rec) if len(units) > 1 else "",
         )
         emit(fig, f"sparse_mesh_unit{rec.get('index', 0)}")
+        captions[f"sparse_mesh_unit{rec.get('index', 0)}"] = captions_text.sparse_mesh(
+            n, "sparse_mesh_render_rough" in arr
+        )
 
     sweep = cfg.get("sweep") or {}
     if len(sweep) == 1 and len(units) > 1:
@@ -203,33 +218,77 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             v = rec["sweep"][path]
             if isinstance(v, dict):
                 v = v.get("kind", json.dumps(v, sort_keys=True))
+            elif v is None:
+                v = "preset default"
             points.append((v, rec.get("scores", {})))
         axis = path.rsplit(".", 1)[-1]
         for m in metrics:
-            fig, _ = F.score_vs_sweep(points, metric=m, strategies=strategies, axis_label=path)
+            fig, _ = F.score_vs_sweep(
+                points, metric=m, strategies=strategies, axis_label=axis_name(path)
+            )
             emit(fig, f"score_vs_{axis}_{m}")
+            captions[f"score_vs_{axis}_{m}"] = captions_text.score_vs_sweep(m, path, study)
+    write_captions(fig_dir, captions, written)
     return written
 
 
-def _scanner_figures(res: dict, emit) -> None:
+def write_captions(fig_dir: Path, captions: dict[str, str], written: list[Path]) -> None:
+    """Write ``figures/captions.md``: one section per figure (stem), its caption beside it."""
+    if not captions:
+        return
+    lines = ["# Figure captions", ""]
+    for stem, text in captions.items():
+        lines += [f"## {stem}", "", text, ""]
+    path = fig_dir / "captions.md"
+    atomic_write_bytes(path, "\n".join(lines).encode())
+    written.append(path)
+
+
+def _scanner_pooled(rows: list[dict], metrics: list[str]) -> list[dict]:
+    """Mean, s.d. and count of each metric per (mode, planner) over all units and trials."""
     import numpy as np
 
+    groups: dict[tuple, dict[str, list[float]]] = {}
+    for r in rows:
+        key = (r["mode"], r.get("planner") or "")
+        groups.setdefault(key, {}).setdefault(r["metric"], []).append(float(r["value"]))
+    out = []
+    for (mode, planner), vals in groups.items():
+        e = {"mode": mode, "planner": planner}
+        for m in metrics:
+            v = np.asarray(vals.get(m, []), float)
+            v = v[np.isfinite(v)]
+            e[m] = float(v.mean()) if v.size else None
+            e[f"{m}_sd"] = float(v.std(ddof=1)) if v.size > 1 else None
+            e["n"] = int(v.size)
+        out.append(e)
+    return out
+
+
+def _scanner_figures(res: dict, emit, captions: dict) -> None:
+    import numpy as np
+
+    from simlunar.pipeline import captions as captions_text
     from simlunar.plotting import figures as F
-    from simlunar.plotting.tables import scanner_summary
 
     rows = res["rows"]
     metrics = list(res["config"]["study"].get("metrics") or [])
-    summary = scanner_summary(rows, metrics=metrics)
+    summary = _scanner_pooled(rows, metrics)
     fig, axes = F.panel_row(len(metrics))
     for ax, m in zip(axes, metrics):
         F.scanner_bars(summary, metric=m, ax=ax)
     emit(fig, "scanner_errors")
+    n_units = len({str(r.get("unit", "0")) for r in rows})
+    captions["scanner_errors"] = captions_text.scanner_errors(metrics, n_units)
     ber = sorted(
         {r["metric"] for r in rows if r["metric"].startswith("ber_")},
         key=lambda n: (n[4], int(n[5:])),
     )
     if ber:
         vals = {n: np.mean([float(r["value"]) for r in rows if r["metric"] == n]) for n in ber}
+        captions["gray_code_bit_errors"] = captions_text.bit_errors(
+            n_units, all(v == 0 for v in vals.values())
+        )
         fig, ax = F.bit_error_rates(vals)
         emit(fig, "gray_code_bit_errors")
 

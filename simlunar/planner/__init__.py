@@ -1,6 +1,6 @@
 """Sample planners: which k pixels of the native grid a range sensor should measure."""
 
-from simlunar.planner.combination import CombinationFit, fit_combination
+from simlunar.planner.combination import CombinationFit, fit_combination, score_combination
 from simlunar.planner.strategies import (
     STRATEGIES,
     STRATEGY_NAMES,
@@ -22,5 +22,6 @@ __all__ = [
     "combine_maps",
     "fit_combination",
     "plan",
+    "score_combination",
     "strategy_weights",
 ]

@@ -2,9 +2,11 @@
 
 "Optimal linear coefficients were found using fminsearch": MATLAB's ``fminsearch`` is the
 Nelder-Mead simplex method, here ``scipy.optimize.minimize(method="Nelder-Mead")``. What the
-paper combined is not stated; this fits weights a_i of the normalised feature maps,
-w = sum_i |a_i| m_i / mean(m_i), maximising the mean eq. 4.3 score against uniform random
-sampling over training scenes.
+paper combined is not stated; this fits weights a_i of the normalised maps
+w = sum_i |a_i| m_i / mean(m_i) of ``uniform`` (a constant map: a share of uniform sampling),
+``gradient``, ``entropy``, ``wavelet`` and ``saliency``, maximising the mean eq. 4.3 score
+against uniform random sampling over training scenes. Score the result on held-out scenes
+with :func:`score_combination`.
 """
 
 from __future__ import annotations
@@ -15,8 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from simlunar.features import FEATURES, check_image, feature_map
-from simlunar.planner.strategies import check_k, combine_maps, plan
+from simlunar.features import check_image, feature_map
+from simlunar.planner.strategies import COMBINABLE, check_k, combination_map, combine_maps, plan
+
+#: the maps :func:`fit_combination` weights by default
+DEFAULT_FEATURES = ("uniform", "gradient", "entropy", "wavelet", "saliency")
 
 
 @dataclass(frozen=True)
@@ -42,64 +47,28 @@ class CombinationFit:
     nfev: int
 
 
-def fit_combination(
-    scenes: Sequence[tuple[np.ndarray, np.ndarray]],
-    *,
-    features: Sequence[str] = ("gradient", "entropy", "wavelet"),
-    densities: Sequence[float] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024),
-    trials: int = 2,
-    metric: str = "mse",
-    rng,
-    maxiter: int = 60,
-    x0: Sequence[float] | None = None,
-) -> CombinationFit:
-    """Fit combination coefficients by Nelder-Mead on training scenes.
-
-    Parameters
-    ----------
-    scenes : sequence of (depth, image)
-        Training scenes: depth (rows, cols) and guide image (rows, cols) or (rows, cols, 3).
-    features : sequence of str
-        Feature maps to combine (names of ``simlunar.features.FEATURES``).
-    densities : sequence of float
-        Densities k / N in (0, 1] of the training protocol.
-    trials : int
-        Trials per density; the seeds are fixed across objective evaluations (common random
-        numbers), so the objective is deterministic and Nelder-Mead can compare points.
-    metric : str
-        Error metric the score uses (``mse``, ``rmse``, ``mae``, ``grad``; ``sal`` uses the
-        image's saliency map).
-    rng : None, int, SeedSequence or Generator
-    maxiter : int
-        Nelder-Mead iterations.
-    x0 : sequence of float, optional
-        Starting coefficients (default all ones).
-
-    Returns
-    -------
-    CombinationFit
-    """
-    from simlunar.metrics import check_densities, depth_gradient_weights
+def _prepare(scenes, maps, features, dens, trials, metric, base, feature_opts):
+    from simlunar.metrics import depth_gradient_weights
     from simlunar.metrics import metric as error_metric
-    from simlunar.metrics import score as eq43
     from simlunar.reconstruction import reconstruct
 
-    features = list(features)
-    bad = [f for f in features if f not in FEATURES]
-    if bad or not features:
-        raise ValueError(f"unknown feature(s) {bad}; valid: {', '.join(FEATURES)}")
-    dens = check_densities(densities)
-    if not scenes:
-        raise ValueError("fit_combination needs at least one training scene")
-    base = int(np.random.default_rng(rng).integers(0, 2**63))
-
+    if maps is not None and len(maps) != len(scenes):
+        raise ValueError(f"maps: one dict per scene, got {len(maps)} for {len(scenes)} scenes")
     prepared = []
     for si, (depth, image) in enumerate(scenes):
         depth = np.asarray(depth, dtype=np.float64)
         image = check_image(image)
         if depth.shape != image.shape[:2] or not np.all(np.isfinite(depth)):
             raise ValueError(f"scene {si}: depth must be finite and match the image grid")
-        maps = {f: feature_map(f, image) for f in features}
+        given = {} if maps is None else dict(maps[si])
+        m = {}
+        for f in features:
+            if f in given:
+                m[f] = np.asarray(given[f], dtype=np.float64)
+                if m[f].shape != depth.shape:
+                    raise ValueError(f"scene {si}: map {f!r} shape {m[f].shape} != {depth.shape}")
+            else:
+                m[f] = combination_map(f, image, **(feature_opts or {}).get(f, {}))
         mw = None
         if metric == "grad":
             mw = depth_gradient_weights(depth)
@@ -120,36 +89,155 @@ def fit_combination(
                     e[di, t] = error_metric(metric, rec, depth, weights=mw)
             return e
 
-        prepared.append((maps, errors, errors("random", None)))
+        prepared.append((m, errors, errors("random", None)))
+    return prepared
 
-    nfev = 0
 
-    def mean_score(x):
-        nonlocal nfev
-        nfev += 1
-        coefs = dict(zip(features, np.abs(x)))
-        if sum(coefs.values()) <= 0:
-            return 0.0
-        total = 0.0
-        for maps, errors, e_random in prepared:
-            w = combine_maps(maps, coefs)
-            e = errors("combination", w)
-            total += eq43({"random": e_random, "combination": e}, dens)["combination"]
-        return total / len(prepared)
+def _check(features, densities, scenes):
+    from simlunar.metrics import check_densities
 
+    features = list(features)
+    bad = [f for f in features if f not in COMBINABLE]
+    if bad or not features:
+        raise ValueError(f"unknown feature(s) {bad}; valid: {', '.join(COMBINABLE)}")
+    dens = check_densities(densities)
+    if not scenes:
+        raise ValueError("fit_combination needs at least one training scene")
+    return features, dens
+
+
+def _mean_score(prepared, coefs, dens):
+    from simlunar.metrics import score as eq43
+
+    total = 0.0
+    for m, errors, e_random in prepared:
+        w = combine_maps(m, coefs)
+        e = errors("combination", w)
+        total += eq43({"random": e_random, "combination": e}, dens)["combination"]
+    return total / len(prepared)
+
+
+def fit_combination(
+    scenes: Sequence[tuple[np.ndarray, np.ndarray]],
+    *,
+    features: Sequence[str] = DEFAULT_FEATURES,
+    densities: Sequence[float] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024),
+    trials: int = 2,
+    metric: str = "mse",
+    rng,
+    maxiter: int = 60,
+    x0: Sequence[float] | None = None,
+    step: float = 1.0,
+    restarts: int = 2,
+    maps: Sequence[dict[str, np.ndarray]] | None = None,
+    feature_opts: dict[str, dict] | None = None,
+) -> CombinationFit:
+    """Fit combination coefficients by Nelder-Mead on training scenes.
+
+    Parameters
+    ----------
+    scenes : sequence of (depth, image)
+        Training scenes: depth (rows, cols) and guide image (rows, cols) or (rows, cols, 3).
+    features : sequence of str
+        Maps to combine (names of :data:`simlunar.planner.strategies.COMBINABLE`: ``uniform``
+        and the feature maps).
+    densities : sequence of float
+        Densities k / N in (0, 1] of the training protocol.
+    trials : int
+        Trials per density; the seeds are fixed across objective evaluations (common random
+        numbers), so the objective is deterministic and Nelder-Mead can compare points.
+    metric : str
+        Error metric the score uses (``mse``, ``rmse``, ``mae``, ``grad``; ``sal`` uses the
+        image's saliency map).
+    rng : None, int, SeedSequence or Generator
+    maxiter : int
+        Nelder-Mead iterations.
+    x0 : sequence of float, optional
+        Starting coefficients (default all ones).
+    step : float
+        Initial simplex size in log-ratio space: each simplex vertex multiplies one
+        coefficient by e^step (scipy's default 5 % steps are too small for the nearly
+        piecewise-constant objective of a sampled plan). Coefficients that are 0 in ``x0``
+        start at 1e-6 of the largest.
+    restarts : int
+        Nelder-Mead runs after the first, each from the best point so far with a fresh
+        simplex (``maxiter`` iterations each).
+    maps : sequence of dict, optional
+        Per scene, precomputed maps by name (used instead of computing them from the image).
+    feature_opts : dict of str -> dict, optional
+        Options of each computed map (e.g. ``{"entropy": {"scale": "unit"}}``).
+
+    Returns
+    -------
+    CombinationFit
+        The best vertex Nelder-Mead found (never worse than the start, which is a vertex).
+    """
+    features, dens = _check(features, densities, scenes)
+    base = int(np.random.default_rng(rng).integers(0, 2**63))
+    prepared = _prepare(scenes, maps, features, dens, trials, metric, base, feature_opts)
     start = np.ones(len(features)) if x0 is None else np.asarray(x0, dtype=np.float64)
     if start.shape != (len(features),):
         raise ValueError(f"x0 must have {len(features)} entries, got {start.shape}")
-    initial = mean_score(start)
-    res = minimize(
-        lambda x: -mean_score(x), start, method="Nelder-Mead", options={"maxiter": maxiter}
-    )
-    best_x, best = (res.x, -float(res.fun)) if -res.fun >= initial else (start, initial)
-    a = np.abs(best_x)
-    a = a / a.sum()
+    start = np.abs(start)
+    if not start.sum() > 0:
+        raise ValueError("x0 must have a non-zero entry")
+    # Search in log-ratios z_i = log(a_i / a_ref) against the largest start coefficient: the
+    # score does not depend on the scale of a, so this drops the flat direction, keeps every
+    # weight positive, and makes a simplex step a factor (e^step) rather than an increment.
+    ref = int(np.argmax(start))
+    free = [i for i in range(len(features)) if i != ref]
+    floor = 1e-6 * start[ref]
+
+    def coefs_of(z):
+        logs = np.zeros(len(features))
+        logs[free] = z
+        a = np.exp(logs - logs.max())
+        return a / a.sum()
+
+    nfev = 0
+
+    def objective(z):
+        nonlocal nfev
+        nfev += 1
+        return -_mean_score(prepared, dict(zip(features, coefs_of(z))), dens)
+
+    z = np.log(np.maximum(start[free], floor) / start[ref])
+    fz = objective(z)
+    initial = -fz
+    for _ in range(restarts + 1 if free else 0):
+        # restarting from the best vertex with a fresh simplex (as is usual with fminsearch)
+        # escapes a simplex that collapsed on a plateau of the sampled objective
+        simplex = np.vstack([z, z + step * np.eye(len(free))])
+        res = minimize(
+            objective,
+            z,
+            method="Nelder-Mead",
+            options={"maxiter": maxiter, "initial_simplex": simplex},
+        )
+        if res.fun < fz:
+            z, fz = res.x, float(res.fun)
+    a = coefs_of(z)
     return CombinationFit(
         coefficients={f: float(v) for f, v in zip(features, a)},
-        score=float(best),
+        score=float(-fz),
         initial_score=float(initial),
         nfev=nfev,
     )
+
+
+def score_combination(
+    scenes: Sequence[tuple[np.ndarray, np.ndarray]],
+    coefficients: dict[str, float],
+    *,
+    densities: Sequence[float] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024),
+    trials: int = 2,
+    metric: str = "mse",
+    rng,
+    maps: Sequence[dict[str, np.ndarray]] | None = None,
+    feature_opts: dict[str, dict] | None = None,
+) -> float:
+    """Mean eq. 4.3 score of fixed coefficients over (held-out) scenes, as in the fit."""
+    features, dens = _check(list(coefficients), densities, scenes)
+    base = int(np.random.default_rng(rng).integers(0, 2**63))
+    prepared = _prepare(scenes, maps, features, dens, trials, metric, base, feature_opts)
+    return _mean_score(prepared, dict(coefficients), dens)

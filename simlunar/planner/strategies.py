@@ -76,15 +76,27 @@ def normalised_map(m: np.ndarray) -> np.ndarray:
     return m / mean if mean > 0 else np.zeros_like(m)
 
 
+#: maps a combination may weight: ``uniform`` (a constant map) and the feature maps
+COMBINABLE = ("uniform", *FEATURES)
+
+
+def combination_map(name: str, image, **opts) -> np.ndarray:
+    """A map of :data:`COMBINABLE`: ones for ``uniform``, else ``feature_map(name, image)``."""
+    if name == "uniform":
+        return np.ones(check_image(image).shape[:2])
+    return feature_map(name, image, **opts)
+
+
 def combine_maps(maps: dict[str, np.ndarray], coefficients: dict[str, float]) -> np.ndarray:
     """Linear combination sum_i |a_i| m_i / mean(m_i) of feature maps.
 
-    Absolute values keep the weights non-negative whatever the optimiser proposes.
+    Absolute values keep the weights non-negative whatever the optimiser proposes. Names are
+    those of :data:`COMBINABLE` (``uniform`` is a constant map, i.e. a uniform-sampling share).
     """
-    unknown = sorted(set(coefficients) - set(FEATURES))
+    unknown = sorted(set(coefficients) - set(COMBINABLE))
     if unknown:
         raise ValueError(
-            f"unknown feature(s) {unknown} in coefficients; valid: {', '.join(FEATURES)}"
+            f"unknown feature(s) {unknown} in coefficients; valid: {', '.join(COMBINABLE)}"
         )
     if not coefficients:
         raise ValueError("coefficients must name at least one feature map")
@@ -110,7 +122,7 @@ def strategy_weights(
     if base == "combination":
         if not coefficients:
             raise ValueError("strategy 'combination' needs coefficients={feature: weight}")
-        maps = {n: feature_map(n, image, **feature_opts.get(n, {})) for n in coefficients}
+        maps = {n: combination_map(n, image, **feature_opts.get(n, {})) for n in coefficients}
         return combine_maps(maps, coefficients)
     return feature_map(base, image, **feature_opts)
 

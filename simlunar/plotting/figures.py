@@ -16,19 +16,16 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from simlunar.metrics import METRIC_NAMES
-from simlunar.planner import STRATEGY_NAMES
+from simlunar.plotting.style import label, metric_axis, pair_label, style, styles
 
 COLUMN_W = 3.4  # in, one column of a two-column paper
 PAGE_W = 7.0  # in, full page width
-#: fixed colours so a strategy looks the same in every figure
+#: fixed colours so a strategy looks the same in every figure (see simlunar.plotting.style)
 STRATEGY_COLORS = {
-    "random": "#7f7f7f",
-    "grid": "#1f77b4",
-    "gradient": "#ff7f0e",
-    "entropy": "#2ca02c",
-    "wavelet": "#d62728",
-    "saliency": "#9467bd",
+    n: style(n).colour for n in ("random", "grid", "gradient", "entropy", "wavelet", "saliency")
 }
+#: what the shaded band of :func:`error_vs_density` shows (legend entry and caption text)
+BAND_LABEL = "band: ±1 s.d. over trials"
 
 
 def _axes(ax, figsize):
@@ -85,32 +82,46 @@ def error_vs_density(
 ):
     """Reconstruction error against sampling density per strategy (paper Fig. 3).
 
-    Log-log axes; the band is +- one standard deviation over trials. Density falls to the
-    right, as in the paper.
+    Log-log axes; the line is the mean over trials, the band +- one standard deviation over
+    trials (:data:`BAND_LABEL`, also a legend entry). Density falls to the right, as in the
+    paper. Colours, markers and labels come from :mod:`simlunar.plotting.style`.
     """
+    from matplotlib.patches import Patch
+
     fig, ax = _axes(ax, (COLUMN_W, 2.6))
     if strategies is None:
         strategies = list(dict.fromkeys(r["strategy"] for r in rows))
+    st = styles(strategies)
+    band = False
     for s in strategies:
         d, m, sd = mean_error_by_density(rows, metric=metric, strategy=s, where=where)
         if d.size == 0:
             continue
-        c = STRATEGY_COLORS.get(s)
-        ax.plot(d, m, marker="o", ms=3, lw=1.2, color=c, label=STRATEGY_NAMES.get(s, s))
-        lo = np.clip(m - sd, np.nanmin(m[m > 0]) * 0.5 if np.any(m > 0) else 1e-12, None)
-        ax.fill_between(d, lo, m + sd, color=c, alpha=0.15, lw=0)
+        c = st[s].colour
+        ax.plot(d, m, marker=st[s].marker, ms=3, lw=1.2, color=c, label=st[s].label)
+        if np.any(sd > 0):
+            lo = np.clip(m - sd, np.nanmin(m[m > 0]) * 0.5 if np.any(m > 0) else 1e-12, None)
+            ax.fill_between(d, lo, m + sd, color=c, alpha=0.15, lw=0)
+            band = True
     ax.set_xscale("log", base=2)
     if any(
         line.get_ydata().size and np.all(np.asarray(line.get_ydata()) > 0)
         for line in ax.get_lines()
     ):
         ax.set_yscale("log")
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo, hi * (hi / lo) ** 0.25)  # headroom for the legend
     ax.invert_xaxis()
     ax.set_xlabel("sampling density k/N")
-    ax.set_ylabel(f"{METRIC_NAMES.get(metric, metric)} error")
+    ax.set_ylabel(metric_axis(metric))
     if title:
         ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, frameon=False)
+    handles, labels = ax.get_legend_handles_labels()
+    if band:
+        handles.append(Patch(color="0.5", alpha=0.3, lw=0))
+        labels.append(BAND_LABEL)
+    # errors rise to the right (density falls), so the upper left is empty
+    ax.legend(handles, labels, fontsize=5.5, frameon=False, loc="upper left", handlelength=1.6)
     ax.grid(True, which="major", alpha=0.3)
     return fig, ax
 
@@ -124,12 +135,18 @@ def score_vs_sweep(
     ax=None,
     title: str | None = None,
 ):
-    """Score (eq. 4.3) against a sweep axis, one line per strategy (ablations).
+    """Score (eq. 4.3) against a sweep axis, one series per strategy (ablations).
+
+    A numeric axis draws lines; a categorical one (labels such as ``"sun"``, ``"camera"``)
+    draws unconnected markers per category, side by side, since nothing lies between two
+    categories.
 
     Parameters
     ----------
     points : sequence of (x, scores)
         ``x`` a number or a label; ``scores`` maps metric -> strategy -> score.
+    axis_label : str
+        Readable axis name (see :func:`simlunar.plotting.style.axis_name`).
     """
     fig, ax = _axes(ax, (COLUMN_W, 2.6))
     xs = [p[0] for p in points]
@@ -137,35 +154,56 @@ def score_vs_sweep(
     pos = np.asarray(xs, float) if numeric else np.arange(len(xs), dtype=float)
     if strategies is None:
         strategies = list(dict.fromkeys(s for _, sc in points for s in sc.get(metric, {})))
-    for s in strategies:
+    st = styles(strategies)
+    n = max(len(strategies), 1)
+    for i, s in enumerate(strategies):
         y = np.array([sc.get(metric, {}).get(s, math.nan) for _, sc in points], float)
-        ax.plot(
-            pos,
-            y,
-            marker="o",
-            ms=3,
-            lw=1.2,
-            color=STRATEGY_COLORS.get(s),
-            label=STRATEGY_NAMES.get(s, s),
-        )
+        if numeric:
+            ax.plot(
+                pos, y, marker=st[s].marker, ms=3, lw=1.2, color=st[s].colour, label=st[s].label
+            )
+        else:
+            dodge = (i - (n - 1) / 2) * min(0.6 / n, 0.12)
+            ax.plot(
+                pos + dodge,
+                y,
+                marker=st[s].marker,
+                ms=4,
+                ls="none",
+                color=st[s].colour,
+                label=st[s].label,
+            )
     ax.axhline(1.0, color="k", lw=0.6, ls=":")
     if not numeric:
-        ax.set_xticks(pos, [str(x) for x in xs], rotation=20, fontsize=7)
+        ax.set_xticks(pos, [label(str(x)) for x in xs], fontsize=7)
+        ax.set_xlim(pos[0] - 0.5, pos[-1] + 0.5)
     ax.set_xlabel(axis_label)
-    ax.set_ylabel(f"{METRIC_NAMES.get(metric, metric)} score (random = 1)")
+    ax.set_ylabel(f"{_metric_name(metric)} score (random = 1)")
     if title:
         ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, frameon=False)
+    ax.legend(fontsize=6, frameon=False)
     ax.grid(True, alpha=0.3)
     return fig, ax
 
 
+def _metric_name(metric: str) -> str:
+    """Display name of a metric (``"mse"`` -> ``"MSE"``)."""
+    return METRIC_NAMES.get(metric, metric)
+
+
 def _show(ax, img, title, cmap="gray", **kw):
     im = ax.imshow(img, cmap=cmap, interpolation="nearest", **kw)
-    ax.set_title(title, fontsize=8)
+    ax.set_title(title, fontsize=7)
     ax.set_xticks([])
     ax.set_yticks([])
     return im
+
+
+def _cbar(fig, im, ax, text):
+    cb = fig.colorbar(im, ax=ax, shrink=0.7, pad=0.02)
+    cb.set_label(text, fontsize=6)
+    cb.ax.tick_params(labelsize=6)
+    return cb
 
 
 def image_panels(
@@ -178,8 +216,14 @@ def image_panels(
     *,
     axes=None,
     density_label: str = "",
+    planner: str = "wavelet",
+    point: str = "",
 ):
-    """Guide image, wavelet energy map, sample locations, reconstruction and error map.
+    """Guide image, wavelet energy map, sample locations, truth, reconstruction and error map.
+
+    Panels (2 x 3): guide image | wavelet energy (log10, colour bar) | the planner's samples on
+    the guide image; true depth | reconstruction (same colour scale, colour bar in m) | error
+    reconstruction - truth (m, symmetric scale at the 99th percentile of |error|).
 
     Parameters
     ----------
@@ -191,36 +235,53 @@ def image_panels(
         Sampled pixels.
     reconstruction, truth : (rows, cols) float
         Reconstructed and true depth (m); the error map is their difference.
-    axes : sequence of 5 Axes, optional
+    axes : sequence of 6 Axes, optional
+    density_label : str
+        Sweep-independent density text for the samples panel, e.g. ``"k/N = 1/32"``.
+    planner : str
+        Strategy that placed the samples (its display label titles the samples panel).
+    point : str
+        Sweep point or scene the panels show (figure title), e.g. ``"elevation_deg=30"``.
 
     Returns
     -------
     (Figure, ndarray of Axes)
     """
     if axes is None:
-        fig, axes = plt.subplots(1, 5, figsize=(PAGE_W, 1.9), constrained_layout=True)
+        fig, axes = plt.subplots(2, 3, figsize=(PAGE_W, 3.9), constrained_layout=True)
     else:
-        fig = axes[0].figure
+        fig = axes[0].figure if isinstance(axes, (list, tuple)) else np.ravel(axes)[0].figure
     axes = np.asarray(axes).ravel()
-    _show(axes[0], image, "guide image", vmin=0, vmax=max(float(np.nanmax(image)), 1e-12))
+    if len(axes) < 6:
+        raise ValueError(f"axes: 6 panels need 6 axes, got {len(axes)}")
+    top = max(float(np.nanmax(image)), 1e-12)
+    im = _show(axes[0], image, "guide image", vmin=0, vmax=top)
+    _cbar(fig, im, axes[0], "sensor value (0-1)")
     e = np.asarray(energy, float)
     pos = e[e > 0]
     floor = float(np.percentile(pos, 1)) if pos.size else 1e-12
-    _show(axes[1], np.log10(np.maximum(e, floor)), "wavelet energy (log)", cmap="magma")
-    _show(
-        axes[2],
-        image,
-        f"samples {density_label}".strip(),
-        vmin=0,
-        vmax=max(float(np.nanmax(image)), 1e-12),
-    )
+    im = _show(axes[1], np.log10(np.maximum(e, floor)), "wavelet energy", cmap="magma")
+    _cbar(fig, im, axes[1], "log10 energy")
+    dens = f", {density_label.strip('() ')}" if density_label else ""
+    _show(axes[2], image, f"{label(planner)} samples{dens}", vmin=0, vmax=top)
     axes[2].scatter(np.asarray(plan_cols), np.asarray(plan_rows), s=0.8, c="#d62728", linewidths=0)
     vmin, vmax = float(np.nanmin(truth)), float(np.nanmax(truth))
-    _show(axes[3], reconstruction, "reconstruction", cmap="terrain_r", vmin=vmin, vmax=vmax)
+    _show(axes[3], truth, "true depth", cmap="terrain_r", vmin=vmin, vmax=vmax)
+    im = _show(
+        axes[4],
+        reconstruction,
+        f"reconstruction ({len(np.asarray(plan_rows))} samples)",
+        cmap="terrain_r",
+        vmin=vmin,
+        vmax=vmax,
+    )
+    _cbar(fig, im, axes[3:5].tolist(), "depth (m)")
     err = np.asarray(reconstruction, float) - np.asarray(truth, float)
     lim = float(np.nanpercentile(np.abs(err), 99)) or 1e-12
-    im = _show(axes[4], err, "error (m)", cmap="coolwarm", vmin=-lim, vmax=lim)
-    fig.colorbar(im, ax=axes[4], shrink=0.8)
+    im = _show(axes[5], err, "error: reconstruction - truth", cmap="coolwarm", vmin=-lim, vmax=lim)
+    _cbar(fig, im, axes[5], "error (m)")
+    if point:
+        fig.suptitle(point, fontsize=8)
     return fig, axes
 
 
@@ -232,13 +293,16 @@ def sparse_mesh_panels(
     rough: np.ndarray | None = None,
     axes=None,
     n_samples: int | None = None,
+    point: str = "",
 ):
     """Paper Fig. 4: sparse-mesh renderings next to the full-resolution ground truth.
 
-    Panels, left to right: the sparse mesh with roughness modulated by wavelet energy (when
-    ``rough`` is given), the sparse mesh with constant roughness, the full-resolution render,
-    and the frequency map (when ``energy`` is given). All renders share one exposure (the
-    99.5th percentile of ``full``), so brightness differences are real.
+    Panels, left to right: the sparse mesh with roughness modulated by wavelet energy and
+    the difference of that render from the constant-roughness one (when ``rough`` is given),
+    the sparse mesh with constant roughness, the full-resolution render, and the frequency
+    map (when ``energy`` is given). All renders share one exposure (the 99.5th percentile of
+    ``full``), so brightness differences are real; the difference panel is in units of that
+    exposure, on a symmetric scale.
 
     Parameters
     ----------
@@ -253,48 +317,87 @@ def sparse_mesh_panels(
         One per panel.
     n_samples : int, optional
         Number of samples of the sparse mesh (shown in the titles).
+    point : str
+        Sweep point or scene (figure title).
     """
-    n = 2 + (rough is not None) + (energy is not None)
+    n = 2 + 2 * (rough is not None) + (energy is not None)
     if axes is None:
-        fig, axes = plt.subplots(1, n, figsize=(PAGE_W, PAGE_W / n), constrained_layout=True)
+        nr = 1 if n <= 3 else 2
+        nc = -(-n // nr)
+        fig, grid = plt.subplots(
+            nr, nc, figsize=(PAGE_W, nr * PAGE_W / nc * 0.78), constrained_layout=True
+        )
+        for extra in np.ravel(grid)[n:]:
+            extra.axis("off")
+        axes = np.ravel(grid)[:n]
     else:
-        fig = axes[0].figure
+        fig = np.ravel(axes)[0].figure
     axes = list(np.asarray(axes).ravel())
     if len(axes) < n:
         raise ValueError(f"axes: {n} panels need {n} axes, got {len(axes)}")
     top = max(float(np.nanpercentile(full, 99.5)), 1e-12)
-    label = f"sparse mesh ({n_samples} samples)" if n_samples else "sparse mesh"
+    label_ = f"sparse mesh ({n_samples} samples)" if n_samples else "sparse mesh"
     i = 0
     if rough is not None:
-        _show(axes[i], np.clip(rough / top, 0, 1), f"{label},\nroughness from energy")
-        i += 1
-    _show(axes[i], np.clip(sparse / top, 0, 1), f"{label},\nconstant roughness")
+        _show(axes[i], np.clip(rough / top, 0, 1), f"{label_},\nroughness from energy")
+        diff = np.asarray(rough, float) / top - np.asarray(sparse, float) / top
+        if diff.ndim == 3:
+            diff = diff.mean(axis=2)
+        lim = float(np.nanmax(np.abs(diff))) or 1e-12
+        im = _show(
+            axes[i + 1],
+            diff,
+            f"energy - constant roughness\n(max {100 * lim:.2g} % of exposure)",
+            cmap="coolwarm",
+            vmin=-lim,
+            vmax=lim,
+        )
+        _cbar(fig, im, axes[i + 1], "Δ radiance / exposure")
+        i += 2
+    _show(axes[i], np.clip(sparse / top, 0, 1), f"{label_},\nconstant roughness")
     _show(axes[i + 1], np.clip(full / top, 0, 1), "full resolution")
     if energy is not None:
         e = np.asarray(energy, float)
         pos = e[e > 0]
         floor = float(np.percentile(pos, 1)) if pos.size else 1e-12
-        _show(axes[i + 2], np.log10(np.maximum(e, floor)), "frequency map", cmap="magma")
+        im = _show(axes[i + 2], np.log10(np.maximum(e, floor)), "frequency map", cmap="magma")
+        _cbar(fig, im, axes[i + 2], "log10 wavelet energy")
+    if point:
+        fig.suptitle(point, fontsize=8)
     return fig, np.asarray(axes[:n])
 
 
 def scanner_bars(summary: Sequence[dict], *, metric: str = "mse", ax=None):
-    """Bar chart of a scanner-study metric per (mode, planner) (means over trials)."""
+    """Bar chart of a scanner-study metric per (mode, planner).
+
+    Each entry of ``summary`` has ``mode``, ``planner`` (or empty) and the mean of ``metric``;
+    an optional ``f"{metric}_sd"`` (standard deviation over trials and seeds) draws an error
+    bar of +- one s.d., and ``n`` (the number of values) goes into the tick label.
+    """
     fig, ax = _axes(ax, (COLUMN_W, 2.6))
-    labels = [e["label"] for e in summary]
+    labels = [
+        pair_label(e["mode"], e.get("planner")) if "mode" in e else e["label"] for e in summary
+    ]
     vals = [e.get(metric) if e.get(metric) is not None else math.nan for e in summary]
-    colors = [STRATEGY_COLORS.get(e.get("planner") or "", "#1f77b4") for e in summary]
-    ax.bar(range(len(vals)), vals, color=colors)
-    ax.set_xticks(range(len(vals)), labels, rotation=25, ha="right", fontsize=6)
-    ax.set_ylabel(f"{METRIC_NAMES.get(metric, metric)} error")
+    sds = [e.get(f"{metric}_sd") for e in summary]
+    yerr = None if all(s is None for s in sds) else [math.nan if s is None else s for s in sds]
+    colors = [style(e.get("planner") or e.get("mode") or "").colour for e in summary]
+    ax.bar(range(len(vals)), vals, color=colors, yerr=yerr, capsize=2, error_kw={"lw": 0.8})
+    ticks = [f"{t}\n(n = {e['n']})" if e.get("n") else t for t, e in zip(labels, summary)]
+    ax.set_xticks(range(len(vals)), ticks, rotation=25, ha="right", fontsize=6)
+    ax.set_ylabel(metric_axis(metric))
     ax.grid(True, axis="y", alpha=0.3)
     return fig, ax
 
 
 def bit_error_rates(rates: dict[str, float], *, ax=None):
-    """Gray-code bit error rate per bit (``ber_c<i>`` columns, ``ber_r<i>`` rows; MSB = 0)."""
+    """Gray-code bit error rate per bit (``ber_c<i>`` columns, ``ber_r<i>`` rows; MSB = 0).
+
+    When every rate is zero the figure says so in its axes (no curve on a meaningless axis).
+    """
     fig, ax = _axes(ax, (COLUMN_W, 2.4))
-    for prefix, label, color in (
+    drawn = False
+    for prefix, name, color in (
         ("ber_c", "column bits", "#1f77b4"),
         ("ber_r", "row bits", "#ff7f0e"),
     ):
@@ -306,11 +409,27 @@ def bit_error_rates(rates: dict[str, float], *, ax=None):
                 marker="o",
                 ms=3,
                 color=color,
-                label=label,
+                label=name,
             )
+            drawn = True
     ax.set_xlabel("bit (0 = most significant)")
-    ax.set_ylabel("bit error rate")
-    ax.legend(fontsize=7, frameon=False)
+    ax.set_ylabel("bit error rate (fraction)")
+    vals = [float(v) for v in rates.values()]
+    if drawn and vals and max(vals) == 0:
+        ax.set_ylim(-0.05, 1.0)
+        ax.text(
+            0.5,
+            0.5,
+            f"no bit errors: all {len(vals)} per-bit rates are 0",
+            transform=ax.transAxes,
+            ha="center",
+            va="center",
+            fontsize=8,
+        )
+    elif drawn:
+        ax.set_ylim(0, max(vals) * 1.15)
+    if drawn:
+        ax.legend(fontsize=7, frameon=False)
     ax.grid(True, alpha=0.3)
     return fig, ax
 

@@ -14,7 +14,8 @@ from __future__ import annotations
 import math
 
 from simlunar.metrics import METRIC_NAMES
-from simlunar.planner import STRATEGY_NAMES
+from simlunar.plotting.style import label as display_label
+from simlunar.plotting.style import pair_label
 
 
 def _name(table: dict, key: str) -> str:
@@ -122,7 +123,7 @@ def score_tables(
     (markdown, latex) : tuple of str
         The best score of each row is bold.
     """
-    header = ["", *[_name(STRATEGY_NAMES, s) for s in strategies]]
+    header = ["", *[display_label(s) for s in strategies]]
     md, tex = [], []
     if len(units) == 1:
         _, scores = units[0]
@@ -182,7 +183,7 @@ def scanner_summary(rows: list[dict], *, metrics: list[str]) -> list[dict]:
             g["renders"].append(float(r["renders"]))
     out = []
     for (unit, mode, planner), g in groups.items():
-        label = f"{mode} / {planner}" if planner else mode
+        label = pair_label(mode, planner)
         entry = {
             "label": label,
             "unit": unit,

@@ -147,3 +147,28 @@ def test_bad_images(image, match):
 def test_entropy_bad_size():
     with pytest.raises(ValueError, match="odd"):
         entropy(np.zeros((5, 5)), size=4)
+
+
+def _h(counts):
+    p = np.asarray(counts, float) / 81.0
+    return float(-(p * np.log2(p)).sum())
+
+
+def test_entropy_matlab_parity_hand_computed():
+    # entropyfilt(I) on a 2 x 2 double image, true(9), symmetric padding: every 9 x 9 window
+    # holds the pixel's own row and column 5 times and the other row / column 4 times, so the
+    # four pixels have weights 25, 20, 20, 16 (of 81).
+    img = np.array([[0.3, 1.7], [-0.2, 76.6 / 255]])
+    # im2uint8: 0.3 * 255 = 76.5 rounds half away from zero to 77 (numpy.rint gives 76);
+    # 1.7 clips to 255, -0.2 to 0; 76.6 rounds to 77. No min-max rescaling.
+    np.testing.assert_array_equal(to_uint8(img, scale="unit"), [[77, 255], [0, 77]])
+    got = entropy(img, scale="unit")
+    expected = [
+        [_h([25 + 16, 20, 20]), _h([25, 20 + 20, 16])],
+        [_h([25, 20 + 20, 16]), _h([25 + 16, 20, 20])],
+    ]
+    np.testing.assert_allclose(got, expected, rtol=1e-12)
+    # without rescaling, close values share one bin: zero entropy (min-max would split them)
+    flat = np.array([[0.100, 0.101], [0.102, 0.102]])
+    np.testing.assert_array_equal(entropy(flat, scale="unit"), 0.0)
+    assert entropy(flat, scale="minmax").min() > 1.0

@@ -177,7 +177,7 @@ def test_scanner_experiment_end_to_end(tmp_path):
         "--set",
         "sweep={}",
     )
-    assert "| gray_code |" in r.output and "| ambiguity_enhancement / wavelet |" in r.output
+    assert "| Gray code |" in r.output and "| Ambiguity enhancement / Wavelet |" in r.output
     with (out / "results.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert {row["mode"] for row in rows} == {"gray_code", "ambiguity_enhancement"}
@@ -219,7 +219,8 @@ def test_the_quickstart_itself_runs(tmp_path):
     out = tmp_path / "quickstart"
     r = run_cli(QUICKSTART, "--out", str(out), "--no-figures")
     header = (
-        "| Metric | Random | Grid | Gradient | Entropy | Wavelet | Wavelet bn | Wavelet bn mix |"
+        "| Metric | Random | Grid | Gradient | Entropy | Wavelet | Wavelet, blue noise |"
+        " Wavelet, blue noise + uniform |"
     )
     assert header in r.output
     assert "| MSE | 1.00 |" in r.output

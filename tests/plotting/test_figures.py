@@ -70,49 +70,120 @@ def test_ax_argument_draws_into_the_given_axes():
     assert line.get_ydata().tolist() == [1.2, 1.4]
 
 
-def test_score_vs_sweep_with_labels():
+def test_score_vs_sweep_with_labels_draws_categories_unconnected():
     _fig, ax = F.score_vs_sweep(
-        [("lambert", {"mse": {"grid": 0.9}}), ("hapke", {"mse": {"grid": 1.1}})]
+        [
+            ("lambert", {"mse": {"grid": 0.9, "wavelet": 1.0}}),
+            ("oren_nayar", {"mse": {"grid": 1.1}}),
+        ]
     )
-    assert [t.get_text() for t in ax.get_xticklabels()] == ["lambert", "hapke"]
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["Lambert", "Oren-Nayar"]
+    grid = next(ln for ln in ax.get_lines() if ln.get_label() == "Grid")
+    assert grid.get_linestyle() == "None"  # no line between two categories
+    assert grid.get_ydata().tolist() == [0.9, 1.1]
+    # side by side: each strategy's markers sit off the category centre, in opposite ways
+    wav = next(ln for ln in ax.get_lines() if ln.get_label() == "Wavelet")
+    assert grid.get_xdata()[0] < 0 < wav.get_xdata()[0]
+    assert ax.get_ylabel() == "MSE score (random = 1)"
 
 
-def test_image_panels_and_sparse_mesh(rng):
+def test_numeric_sweep_draws_lines():
+    _fig, ax = F.score_vs_sweep([(5, {"mse": {"grid": 1}}), (30, {"mse": {"grid": 2}})])
+    (line,) = [ln for ln in ax.get_lines() if ln.get_label() == "Grid"]
+    assert line.get_linestyle() == "-"
+
+
+def test_error_axes_have_units_and_the_band_is_explained():
+    _fig, ax = F.error_vs_density(rows(), metric="mse")
+    assert ax.get_ylabel() == "MSE error (m²)"
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == ["Random", "Wavelet", F.BAND_LABEL]
+    # no spread (one trial): no band, so no band entry
+    one = [r for r in rows() if r["trial"] == "0"]
+    _fig, ax = F.error_vs_density(one, metric="mse")
+    assert F.BAND_LABEL not in [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def _colorbar_labels(fig):
+    return [a.get_ylabel() for a in fig.axes if a.get_label() == "<colorbar>"]
+
+
+def test_image_panels_name_planner_and_point_and_have_colour_bars(rng):
     img = rng.random((20, 30))
-    _fig, axes = F.image_panels(img, img**2, np.array([1, 2]), np.array([3, 4]), img * 2, img * 2.1)
-    assert len(axes) == 5
+    fig, axes = F.image_panels(
+        img, img**2, np.array([1, 2]), np.array([3, 4]), img * 2, img * 2.1,
+        density_label="k/N = 1/32", planner="wavelet_bn", point="elevation_deg=30",
+    )  # fmt: skip
+    assert len(axes) == 6
+    assert axes[2].get_title() == "Wavelet, blue noise samples, k/N = 1/32"
+    assert fig._suptitle.get_text() == "elevation_deg=30"
     offsets = axes[2].collections[0].get_offsets()
     np.testing.assert_array_equal(np.asarray(offsets), [[3, 1], [4, 2]])  # (x=col, y=row)
-    err = axes[4].images[0].get_array()
+    err = axes[5].images[0].get_array()
     np.testing.assert_allclose(err, img * 2 - img * 2.1)
+    # truth and reconstruction share one colour scale
+    assert axes[3].images[0].get_clim() == axes[4].images[0].get_clim()
+    assert _colorbar_labels(fig) == ["sensor value (0-1)", "log10 energy", "depth (m)", "error (m)"]
+
+
+def test_sparse_mesh_panels(rng):
+    img = rng.random((20, 30))
     _fig, axes = F.sparse_mesh_panels(img, img, img, n_samples=7)
     assert len(axes) == 3
     assert axes[0].get_title() == "sparse mesh (7 samples),\nconstant roughness"
 
 
-def test_sparse_mesh_panels_with_roughness_modulated_render(rng):
+def test_sparse_mesh_panels_with_roughness_modulated_render_and_difference(rng):
     full = rng.random((20, 30)) + 0.5
     sparse, rough, energy = 0.9 * full, 0.7 * full, rng.random((20, 30))
-    _fig, axes = F.sparse_mesh_panels(sparse, full, energy, rough=rough, n_samples=9)
+    fig, axes = F.sparse_mesh_panels(sparse, full, energy, rough=rough, n_samples=9)
+    top = np.percentile(full, 99.5)
+    lim = np.max(np.abs(rough - sparse)) / top
     titles = [a.get_title() for a in axes]
     assert titles == [
         "sparse mesh (9 samples),\nroughness from energy",
+        f"energy - constant roughness\n(max {100 * lim:.2g} % of exposure)",
         "sparse mesh (9 samples),\nconstant roughness",
         "full resolution",
         "frequency map",
     ]
     # one exposure for the three renders: the 99.5th percentile of the full render
-    top = np.percentile(full, 99.5)
     np.testing.assert_allclose(axes[0].images[0].get_array(), np.clip(rough / top, 0, 1))
-    np.testing.assert_allclose(axes[1].images[0].get_array(), np.clip(sparse / top, 0, 1))
+    np.testing.assert_allclose(axes[2].images[0].get_array(), np.clip(sparse / top, 0, 1))
+    # the difference panel: (rough - sparse) / exposure on a symmetric scale
+    np.testing.assert_allclose(axes[1].images[0].get_array(), (rough - sparse) / top)
+    assert axes[1].images[0].get_clim() == pytest.approx((-lim, lim))
     # log scale floored at the 1st percentile of the positive energies
     logged = np.log10(np.maximum(energy, np.percentile(energy, 1)))
-    np.testing.assert_allclose(axes[3].images[0].get_array(), logged, rtol=1e-12)
-    # without the frequency map: three panels
+    np.testing.assert_allclose(axes[4].images[0].get_array(), logged, rtol=1e-12)
+    assert "log10 wavelet energy" in _colorbar_labels(fig)
+    # without the frequency map: four panels
     _fig, axes = F.sparse_mesh_panels(sparse, full, rough=rough)
-    assert len(axes) == 3 and axes[2].get_title() == "full resolution"
-    with pytest.raises(ValueError, match="4 panels need 4 axes"):
+    assert len(axes) == 4 and axes[3].get_title() == "full resolution"
+    with pytest.raises(ValueError, match="5 panels need 5 axes"):
         F.sparse_mesh_panels(sparse, full, energy, rough=rough, axes=axes)
+
+
+def test_scanner_bars_draw_error_bars():
+    summary = [
+        {"mode": "gray_code", "planner": "", "mse": 2.0, "mse_sd": 0.5, "n": 6},
+        {"mode": "ambiguity_enhancement", "planner": "wavelet", "mse": 1.5, "mse_sd": 0.25},
+    ]
+    _fig, ax = F.scanner_bars(summary, metric="mse")
+    bars = next(c for c in ax.containers if hasattr(c, "errorbar"))
+    assert bars.errorbar is not None
+    segs = bars.errorbar.lines[2][0].get_segments()
+    np.testing.assert_allclose([s[:, 1] for s in segs], [[1.5, 2.5], [1.25, 1.75]])
+    assert ax.get_xticklabels()[0].get_text() == "Gray code\n(n = 6)"
+    assert ax.get_ylabel() == "MSE error (m²)"
+
+
+def test_bit_error_plot_with_no_errors_says_so():
+    _fig, ax = F.bit_error_rates({"ber_c0": 0.0, "ber_c1": 0.0, "ber_r0": 0.0})
+    texts = [t.get_text() for t in ax.texts]
+    assert texts == ["no bit errors: all 3 per-bit rates are 0"]
+    _fig, ax = F.bit_error_rates({"ber_c0": 0.02, "ber_c1": 0.0})
+    assert len(ax.texts) == 0 and ax.get_ylim()[0] == 0.0
 
 
 def test_save_is_deterministic():

@@ -89,10 +89,10 @@ def test_scanner_table_means_and_ratio_to_gray_code():
         },
     ]
     md, tex = scanner_tables(rows, metrics=["mse"], title="s")
-    assert "| gray_code | 4 | – | 18 | 1.000 |" in md
+    assert "| Gray code | 4 | – | 18 | 1.000 |" in md
     # mean MSE 3.0 over two trials -> 3/4 of the gray-code MSE; mean frames 110
-    assert "| ambiguity_enhancement / wavelet | 3 | – | 110 | 0.750 |" in md
-    assert "ambiguity\\_enhancement / wavelet & 3 & -- & 110 & 0.750 \\\\" in tex
+    assert "| Ambiguity enhancement / Wavelet | 3 | – | 110 | 0.750 |" in md
+    assert "Ambiguity enhancement / Wavelet & 3 & -- & 110 & 0.750 \\\\" in tex
     assert "mean of" not in md  # one unit: no pooled rows
 
 
@@ -118,8 +118,8 @@ def test_scanner_table_labels_sweep_points_and_pools_units():
         row("1", "6", "ambiguity_enhancement", "wavelet", "1.0"),
     ]
     md, _ = scanner_tables(rows, metrics=["mse"], title="s")
-    assert "| seed=5: ambiguity_enhancement / wavelet | 3 | – | 10 | 0.750 |" in md
-    assert "| seed=6: ambiguity_enhancement / wavelet | 1 | – | 10 | 0.500 |" in md
+    assert "| seed=5: Ambiguity enhancement / Wavelet | 3 | – | 10 | 0.750 |" in md
+    assert "| seed=6: Ambiguity enhancement / Wavelet | 1 | – | 10 | 0.500 |" in md
     # pooled: mean MSE (3 + 1) / 2 = 2 and mean of the per-unit ratios (0.75 + 0.5) / 2
-    assert "| mean of 2 units: ambiguity_enhancement / wavelet | 2 | – | 10 | 0.625 |" in md
-    assert "| mean of 2 units: gray_code | 3 | – | 10 | 1.000 |" in md
+    assert "| mean of 2 units: Ambiguity enhancement / Wavelet | 2 | – | 10 | 0.625 |" in md
+    assert "| mean of 2 units: Gray code | 3 | – | 10 | 1.000 |" in md

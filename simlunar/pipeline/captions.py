@@ -1,0 +1,113 @@
+"""Caption text for the figures a result folder holds (written to ``figures/captions.md``).
+
+Each function returns one paragraph: what is plotted, the units, and what bands, bars and
+colour scales mean, with the experiment's own numbers (trials, densities, units) filled in.
+"""
+
+from __future__ import annotations
+
+from simlunar.metrics import METRIC_NAMES
+from simlunar.plotting.style import METRIC_UNITS, axis_name, label
+
+_METRIC_TEXT = {
+    "mse": "mean squared depth error over all cells",
+    "grad": "mean squared depth error weighted by the true depth-gradient magnitude (GRAD)",
+    "sal": "mean squared depth error weighted by the guide image's Itti-Koch saliency (SAL)",
+    "rmse": "root-mean-square depth error",
+    "mae": "mean absolute depth error",
+}
+
+
+def _metric(m: str) -> str:
+    unit = METRIC_UNITS.get(m, "")
+    return f"{_METRIC_TEXT.get(m, METRIC_NAMES.get(m, m))}{f', in {unit}' if unit else ''}"
+
+
+def error_vs_density(metric: str, study: dict, n_panels: int) -> str:
+    """Caption of ``error_vs_density_<metric>``."""
+    trials = study.get("trials", 20)
+    strategies = ", ".join(label(s) for s in study.get("strategies") or [])
+    per = " One panel per work unit (scene or sweep point)." if n_panels > 1 else ""
+    return (
+        f"Reconstruction error against sampling density k/N (log-log; density falls to the "
+        f"right, as in the paper's Fig. 3). y: {_metric(metric)} of the Delaunay "
+        f"reconstruction from k range samples against the full-resolution ground truth. "
+        f"Lines: mean over {trials} trials per density; shaded band: ±1 standard deviation "
+        f"over those trials (a fresh grid shift, random draw and noise per trial), clipped "
+        f"below at half the smallest mean on the log axis. Strategies: {strategies}.{per}"
+    )
+
+
+def panels(density_label: str, point: str) -> str:
+    """Caption of ``panels_unit<i>``."""
+    at = f" at {density_label}" if density_label else ""
+    return (
+        f"Image-directed sampling of one scene ({point}). Top: the guide image (sensor "
+        f"output, 0-1); its db2 wavelet detail-energy map (log10, dimensionless), the map the "
+        f"Wavelet planner samples from; the Wavelet planner's samples{at} (red dots) on the "
+        f"guide image. Bottom: the true depth and the Delaunay reconstruction from those "
+        f"samples on one colour scale (m); the error reconstruction - truth (m) on a "
+        f"symmetric scale clipped at the 99th percentile of |error|."
+    )
+
+
+def sparse_mesh(n_samples: int | None, rough: bool) -> str:
+    """Caption of ``sparse_mesh_unit<i>`` (paper Fig. 4)."""
+    n = f"{n_samples} " if n_samples else ""
+    diff = (
+        "The sparse mesh rendered with Oren-Nayar roughness modulated by the wavelet energy, "
+        "and the difference of that render from the constant-roughness one (energy - "
+        "constant, in units of the shared exposure, symmetric scale; its title gives the "
+        "largest |difference|); "
+        if rough
+        else ""
+    )
+    return (
+        f"Rendering a terrain rebuilt from {n}wavelet-planned samples (paper Fig. 4). "
+        f"{diff}the sparse mesh with constant roughness; the full-resolution terrain; the "
+        f"frequency (wavelet energy) map, log10. All renders share one exposure (the 99.5th "
+        f"percentile of the full-resolution render), so brightness differences are real."
+    )
+
+
+def score_vs_sweep(metric: str, path: str, study: dict) -> str:
+    """Caption of ``score_vs_<axis>_<metric>`` (ablations)."""
+    trials = study.get("trials", 20)
+    return (
+        f"{METRIC_NAMES.get(metric, metric)} score (paper eq. 4.3: the inverse-density-"
+        f"weighted mean over densities of e_random / e_strategy, {trials} trials per density; "
+        f"random = 1 by construction, dotted line; higher is better) against "
+        f"{axis_name(path)} (sweep key `{path}`). Each point is one sweep point's score; a "
+        f"categorical axis shows unconnected markers, offset side by side per strategy. "
+        f"The score has no interval here: differences of a few hundredths are within the "
+        f"trial-to-trial spread."
+    )
+
+
+def scanner_errors(metrics: list[str], n_units: int) -> str:
+    """Caption of ``scanner_errors`` (section 5)."""
+    ms = "; ".join(f"{METRIC_NAMES.get(m, m)}: {_metric(m)}" for m in metrics)
+    seeds = f" and {n_units} sweep points (seeds)" if n_units > 1 else ""
+    return (
+        f"Structured-light scanner study: depth error of each scan mode / dot planner against "
+        f"the ground truth on the guide grid ({ms}). Bars: mean over all trials{seeds}; "
+        f"error bars: ±1 standard deviation over the same values (n in each tick label). "
+        f"Lower is better."
+    )
+
+
+def bit_errors(n_units: int, all_zero: bool) -> str:
+    """Caption of ``gray_code_bit_errors``."""
+    zero = (
+        " Every rate is zero here: no bit of any stably lit pixel was decoded wrongly, and "
+        "the figure says so instead of drawing a flat line."
+        if all_zero
+        else ""
+    )
+    over = f", mean over trials and {n_units} units" if n_units > 1 else ", mean over trials"
+    return (
+        f"Gray-code bit error rate per bit (0 = most significant; column bits and row bits): "
+        f"the fraction of camera pixels lit by the projector, and at least one pixel from "
+        f"that bit's true stripe edges, whose decoded bit differs from the truth{over}."
+        f"{zero}"
+    )

@@ -1,0 +1,193 @@
+"""One style (colour, marker, display label) per strategy, variant, scan mode and planner.
+
+Figures and tables look names up here, so a strategy has the same colour in every figure and
+the same label in a figure legend as in a table. The registry holds the five strategies of the
+paper, simlunar's other strategies, the labelled variants the shipped experiments define
+(``wavelet_bn``, ``wavelet_bn_mix``, ``fitted_combination``) and the scanner's modes.
+
+A name the registry does not know (a new ``strategy_options`` label) gets the label
+``name.replace("_", " ").capitalize()`` and a colour from :data:`SPARE_COLOURS` chosen by a
+hash of the name: the same in every figure and every run, and never a registered colour.
+:func:`styles` resolves hash collisions within one figure so every curve stays distinguishable.
+
+This module does not import matplotlib: tables (plain text) use it too.
+"""
+
+from __future__ import annotations
+
+import zlib
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Style:
+    """How one strategy / variant / mode is drawn and named.
+
+    Attributes
+    ----------
+    colour : str
+        Matplotlib colour (hex).
+    marker : str
+        Matplotlib marker.
+    label : str
+        Display label for legends, axis ticks and table headers.
+    """
+
+    colour: str
+    marker: str
+    label: str
+
+
+#: registered styles (strategies of the paper first, then simlunar's, variants, scan modes)
+REGISTRY: dict[str, Style] = {
+    # the paper's five strategies (Tables 1 and 2)
+    "random": Style("#7f7f7f", "o", "Random"),
+    "grid": Style("#1f77b4", "s", "Grid"),
+    "gradient": Style("#ff7f0e", "^", "Gradient"),
+    "entropy": Style("#2ca02c", "v", "Entropy"),
+    "wavelet": Style("#d62728", "D", "Wavelet"),
+    # simlunar's other strategies
+    "saliency": Style("#9467bd", "P", "Saliency"),
+    "combination": Style("#8c564b", "X", "Combination"),
+    # labelled variants of the shipped experiments
+    "wavelet_bn": Style("#e377c2", "d", "Wavelet, blue noise"),
+    "wavelet_bn_mix": Style("#17becf", "h", "Wavelet, blue noise + uniform"),
+    "fitted_combination": Style("#bcbd22", "*", "Fitted combination"),
+    # scanner modes (section 5)
+    "gray_code": Style("#393b79", "o", "Gray code"),
+    "ambiguity_enhancement": Style("#637939", "s", "Ambiguity enhancement"),
+    "data_reduction": Style("#843c39", "^", "Data reduction"),
+}
+
+#: colours for names the registry does not know (none of them is registered)
+SPARE_COLOURS = (
+    "#aec7e8",
+    "#ffbb78",
+    "#98df8a",
+    "#ff9896",
+    "#c5b0d5",
+    "#c49c94",
+    "#f7b6d2",
+    "#dbdb8d",
+    "#9edae5",
+    "#5254a3",
+    "#8ca252",
+    "#bd9e39",
+    "#ad494a",
+    "#a55194",
+    "#6b6ecf",
+    "#e7ba52",
+)
+SPARE_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "h")
+
+
+#: display labels of other names shown on axes (sweep categories: BSDFs, lights)
+PLAIN_LABELS = {
+    "lambert": "Lambert",
+    "oren_nayar": "Oren-Nayar",
+    "hapke": "Hapke",
+    "sun": "Sun",
+    "camera": "Camera-centred light",
+}
+
+
+def label(name: str) -> str:
+    """Display label of a strategy / variant / mode / planner name (tables and figures).
+
+    Unknown names: underscores become spaces, first letter capitalised (``my_var`` ->
+    ``"My var"``).
+    """
+    s = REGISTRY.get(name)
+    if s is not None:
+        return s.label
+    if name in PLAIN_LABELS:
+        return PLAIN_LABELS[name]
+    return str(name).replace("_", " ").capitalize()
+
+
+def style(name: str) -> Style:
+    """The style of ``name``; unknown names get a spare colour chosen by a hash of the name."""
+    s = REGISTRY.get(name)
+    if s is not None:
+        return s
+    h = zlib.crc32(str(name).encode())
+    return Style(
+        SPARE_COLOURS[h % len(SPARE_COLOURS)], SPARE_MARKERS[h % len(SPARE_MARKERS)], label(name)
+    )
+
+
+def styles(names: Iterable[str]) -> dict[str, Style]:
+    """Styles of several names drawn together, with pairwise distinct colours.
+
+    Registered names keep their colour; an unknown name whose hashed spare colour is taken by
+    an earlier name moves to the next free spare colour (deterministic for a given list).
+    """
+    out: dict[str, Style] = {}
+    used: set[str] = set()
+    names = list(dict.fromkeys(names))
+    for n in names:  # registered first, so they never move
+        if n in REGISTRY:
+            out[n] = REGISTRY[n]
+            used.add(REGISTRY[n].colour)
+    for n in names:
+        if n in out:
+            continue
+        s = style(n)
+        i = SPARE_COLOURS.index(s.colour)
+        for step in range(len(SPARE_COLOURS)):
+            c = SPARE_COLOURS[(i + step) % len(SPARE_COLOURS)]
+            if c not in used:
+                s = Style(c, s.marker, s.label)
+                break
+        used.add(s.colour)
+        out[n] = s
+    return {n: out[n] for n in names}
+
+
+def pair_label(mode: str, planner: str | None) -> str:
+    """Label of a scanner row: ``"Ambiguity enhancement / Wavelet"`` (mode alone without planner)."""
+    return f"{label(mode)} / {label(planner)}" if planner else label(mode)
+
+
+#: units of the error metrics (GRAD and SAL are weighted mean squared errors)
+METRIC_UNITS = {"mse": "m²", "grad": "m²", "sal": "m²", "rmse": "m", "mae": "m"}
+
+#: readable names of sweep axes (config paths), for axis labels
+AXIS_NAMES = {
+    "render.light": "light source",
+    "render.light.elevation_deg": "sun elevation (deg)",
+    "render.light.azimuth_deg": "sun azimuth (deg)",
+    "render.bsdf": "reflectance model (BSDF)",
+    "render.bsdf.albedo": "albedo",
+    "render.sensor.read_noise_e": "sensor read noise (e⁻)",
+    "render.sensor.full_well_e": "sensor full well (e⁻)",
+    "terrain.preset": "terrain preset",
+    "terrain.albedo": "terrain albedo (null = preset's)",
+    "terrain.overrides.fractal.rms_m": "fractal roughness RMS (m)",
+    "terrain.seed": "terrain seed",
+    "seed": "seed",
+}
+
+_UNIT_SUFFIXES = {"_deg": "deg", "_m": "m", "_e": "e⁻", "_px": "px", "_s": "s"}
+
+
+def metric_axis(metric: str, *, what: str = "error") -> str:
+    """Axis label of an error metric with its unit, e.g. ``"MSE error (m²)"``."""
+    from simlunar.metrics import METRIC_NAMES
+
+    name = METRIC_NAMES.get(metric, metric)
+    unit = METRIC_UNITS.get(metric)
+    return f"{name} {what} ({unit})" if unit else f"{name} {what}"
+
+
+def axis_name(path: str) -> str:
+    """Readable axis label of a sweep path (``render.light.elevation_deg`` -> ``"sun elevation
+    (deg)"``); unknown paths: the last key, its unit suffix as ``(unit)``."""
+    if path in AXIS_NAMES:
+        return AXIS_NAMES[path]
+    key = str(path).rsplit(".", 1)[-1]
+    for suffix, unit in _UNIT_SUFFIXES.items():
+        if key.endswith(suffix):
+            return f"{key[: -len(suffix)].replace('_', ' ')} ({unit})"
+    return key.replace("_", " ")

@@ -1,0 +1,28 @@
+"""figures/captions.md: a caption per figure, with units and what bands and bars mean."""
+
+from __future__ import annotations
+
+from simlunar.pipeline import captions as C
+from simlunar.pipeline.figures import write_captions
+
+
+def test_captions_state_units_trials_and_bands():
+    text = C.error_vs_density("grad", {"trials": 7, "strategies": ["grid", "wavelet_bn"]}, 1)
+    assert "in m²" in text and "mean over 7 trials" in text
+    assert "±1 standard deviation over those trials" in text
+    assert "Grid, Wavelet, blue noise" in text  # registry labels, as in the legend
+    assert "error bars: ±1 standard deviation" in C.scanner_errors(["mse"], 4)
+    assert "4 sweep points" in C.scanner_errors(["mse"], 4)
+    assert "Every rate is zero" in C.bit_errors(1, True)
+    assert "Every rate is zero" not in C.bit_errors(1, False)
+    assert "sun elevation (deg)" in C.score_vs_sweep("mse", "render.light.elevation_deg", {})
+
+
+def test_write_captions_one_section_per_figure(tmp_path):
+    written = []
+    write_captions(tmp_path, {"a": "first.", "b": "second."}, written)
+    text = (tmp_path / "captions.md").read_text()
+    assert text == "# Figure captions\n\n## a\n\nfirst.\n\n## b\n\nsecond.\n"
+    assert written == [tmp_path / "captions.md"]
+    write_captions(tmp_path / "none", {}, written)  # no figures: no file
+    assert not (tmp_path / "none").exists()
