@@ -461,6 +461,7 @@ def _densities(value):
 # simlunar.planner / simlunar.features); the translation passes them to the weighted strategies.
 #: the feature-map options each weighted strategy's map takes
 FEATURE_OPTION_KEYS = {
+    "uniform": (),
     "gradient": (),
     "saliency": (),
     "entropy": ("size", "scale"),
@@ -494,8 +495,10 @@ class FeatureOptsCfg(_Model):
 
 
 class CoefficientsCfg(_Model):
-    """``combination`` strategy: the weight of each feature map (maps normalised to mean 1)."""
+    """``combination`` strategy: the weight of each feature map (maps normalised to mean 1;
+    ``uniform`` is the constant map)."""
 
+    uniform: float | None = Field(None, ge=0)
     gradient: float | None = Field(None, ge=0)
     entropy: float | None = Field(None, ge=0)
     wavelet: float | None = Field(None, ge=0)

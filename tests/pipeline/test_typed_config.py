@@ -292,6 +292,7 @@ def test_translated_options_run_through_the_planner():
         ("wavelet", schema.PlannerOptsCfg(blue_noise=True, feature_opts={"levels": 1})),
         ("entropy", schema.PlannerOptsCfg(uniform_mix=0.3, feature_opts={"size": 5})),
         ("combination", schema.PlannerOptsCfg(coefficients={"gradient": 1, "wavelet": 2})),
+        ("combination", schema.PlannerOptsCfg(coefficients={"uniform": 1, "entropy": 0.5})),
         ("random", schema.PlannerOptsCfg()),
     ):
         p = plan(base_name, 20, image=image, rng=1, **translate.planner_kwargs(base_name, opts))
