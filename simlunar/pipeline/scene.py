@@ -186,9 +186,9 @@ def build_lights(cfg: SceneCfg) -> list:
 
 def build_scene_inputs(cfg: SceneCfg):
     """``(terrain, camera, lights, bsdf)`` for :func:`simlunar.render.render`."""
-    from simlunar.pipeline.stages import build_bsdf, build_terrain
+    from simlunar.pipeline.stages import build_bsdf, build_terrain, terrain_seed_sequence
 
-    terrain_ss, _ = _seeds(cfg.seed)
+    terrain_ss = terrain_seed_sequence(cfg.seed, cfg.terrain.seed_index)
     terrain = build_terrain(cfg.terrain, rng=np.random.default_rng(terrain_ss))
     return terrain, build_camera(cfg.camera, terrain), build_lights(cfg), build_bsdf(cfg.bsdf)
 

@@ -75,6 +75,14 @@ class TerrainCfg(_Model):
         "fractal, bed, craters, rocks, albedo with the preset YAML's keys",
     )
 
+    seed_index: int = Field(
+        0,
+        ge=0,
+        lt=10000,
+        description="terrain realisation of a preset: 0 = the experiment seed's terrain, "
+        "i > 0 = its i-th independent child stream (set per unit by study.terrain_seeds)",
+    )
+
     @field_validator("overrides")
     @classmethod
     def _valid_overrides(cls, v: dict[str, Any], info: ValidationInfo) -> dict[str, Any]:
@@ -106,6 +114,8 @@ class TerrainCfg(_Model):
             raise ValueError("give exactly one of preset or file")
         if self.file is not None and self.spacing_m is None:
             raise ValueError("a DEM file needs spacing_m")
+        if self.file is not None and self.seed_index != 0:
+            raise ValueError("seed_index applies to a preset only (a DEM file has one terrain)")
         return self
 
 
@@ -252,6 +262,14 @@ class SamplingStudyCfg(_Model):
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
     range_noise_std_m: Metres = Field(0.0, ge=0, description="range-sensor noise (m)")
     strategy_options: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    terrain_seeds: int = Field(
+        1,
+        ge=1,
+        le=100,
+        description="repeat every sweep point on this many terrain realisations "
+        "(terrain.seed_index 0..N-1, one unit each, all else shared); tables pool them "
+        "and give 95 % bootstrap intervals",
+    )
 
     @field_validator("strategies", "metrics")
     @classmethod
