@@ -142,6 +142,8 @@ def write_figures(out_dir: str | Path) -> list[Path]:
         )
         emit(fig, f"sparse_mesh_unit{rec.get('index', 0)}")
 
+    _samples_saved_figures(res, emit)
+
     sweep = cfg.get("sweep") or {}
     if len(sweep) == 1 and len(units) > 1:
         (path,) = sweep
@@ -179,3 +181,27 @@ def _scanner_figures(res: dict, emit) -> None:
         vals = {n: np.mean([float(r["value"]) for r in rows if r["metric"] == n]) for n in ber}
         fig, ax = F.bit_error_rates(vals)
         emit(fig, "gray_code_bit_errors")
+
+
+def _samples_saved_figures(res: dict, emit) -> None:
+    """``samples_saved``: per sweep point (pooled over terrain seeds), one panel per reference
+    (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
+    from simlunar.pipeline import aggregate
+    from simlunar.plotting import figures as F
+
+    points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
+    points = [p for p in points if p.saved][:MAX_UNIT_PANELS]
+    for i, p in enumerate(points):
+        fig, axes = F.panel_row(len(p.saved))
+        for ax, (ref, sv) in zip(axes, p.saved.items()):
+            F.samples_saved_plot(
+                p.densities,
+                sv.factor,
+                sv.flag,
+                reference=ref,
+                metric=p.saved_metric,
+                strategies=p.strategies,
+                ax=ax,
+                title=f"{p.label}: vs {ref}" if len(points) > 1 else None,
+            )
+        emit(fig, "samples_saved" if len(points) == 1 else f"samples_saved_point{i}")

@@ -66,7 +66,10 @@ def test_quickstart_variant_end_to_end(tmp_path):
     }
     assert all(float(row["value"]) > 0 for row in rows)
     scores = (out / "scores.md").read_text()
-    assert "| MSE | 1.00 |" in scores  # random is the reference: exactly 1 (eq. 4.3)
+    # random is the reference: exactly 1 (eq. 4.3), and so is every bootstrap replicate
+    assert "| MSE | 1.00 [1.00, 1.00] |" in scores
+    assert "samples saved vs Random at equal MSE" in scores
+    assert "| Grid |" in scores.split("samples saved vs Random")[1]
     assert "\\begin{tabular}{lrrr}" in (out / "scores.tex").read_text()
     prov = json.loads((out / "provenance.json").read_text())
     assert prov["variant"] in ("llvm_ad_rgb", "scalar_rgb", "cuda_ad_rgb")
@@ -74,6 +77,7 @@ def test_quickstart_variant_end_to_end(tmp_path):
     figs = {p.name for p in (out / "figures").iterdir()}
     assert {"error_vs_density_mse.png", "error_vs_density_mse.pdf", "panels_unit0.png"} <= figs
     assert "sparse_mesh_unit0.png" in figs  # Fig. 4
+    assert {"samples_saved.png", "samples_saved.pdf"} <= figs
     from simlunar.pipeline.store import UnitCache
 
     arr = UnitCache(out).load_arrays(prov["unit_keys"][0])
@@ -199,6 +203,8 @@ def test_the_quickstart_itself_runs(tmp_path):
         "| Metric | Random | Grid | Gradient | Entropy | Wavelet | Wavelet bn | Wavelet bn mix |"
     )
     assert header in r.output
-    assert "| MSE | 1.00 |" in r.output
+    assert "| MSE | 1.00 [1.00, 1.00] |" in r.output
+    assert "samples saved vs Random at equal MSE" in r.output
+    assert "samples saved vs Grid at equal MSE" in r.output
     with (out / "results.csv").open() as f:
         assert sum(1 for _ in f) == 1 + 7 * 7 * 3 * 3
