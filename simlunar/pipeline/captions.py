@@ -111,3 +111,18 @@ def bit_errors(n_units: int, all_zero: bool) -> str:
         f"that bit's true stripe edges, whose decoded bit differs from the truth{over}."
         f"{zero}"
     )
+
+
+def samples_saved(metric: str, references: list[str], point: str) -> str:
+    """Caption of ``samples_saved`` (``samples_saved_point<i>``)."""
+    refs = " and ".join(references)
+    where = f" Sweep point: {point}." if point else ""
+    return (
+        f"Samples saved at equal error, one panel per reference ({refs}): for each strategy "
+        f"and density, the number of reference samples that reach the strategy's "
+        f"{_metric(metric)} (interpolated on the reference's log-log error-vs-samples curve), "
+        f"divided by the strategy's own sample count; above 1 the strategy needs fewer "
+        f"samples than the reference for the same error. Errors pool the terrain seeds and "
+        f"trials. Hollow markers: outside the reference's measured range (extrapolated, "
+        f"clipped to [1, N]); they are left out of the tables' geometric-mean summary.{where}"
+    )

@@ -210,6 +210,8 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             n, "sparse_mesh_render_rough" in arr
         )
 
+    _samples_saved_figures(res, emit, captions)
+
     sweep = cfg.get("sweep") or {}
     if len(sweep) == 1 and len(units) > 1:
         (path,) = sweep
@@ -300,3 +302,30 @@ def write_figures_pruned(out_dir: str | Path) -> list[Path]:
     written = write_figures(out_dir)
     prune_figures(Path(out_dir), keep=written)
     return written
+
+
+def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
+    """``samples_saved``: per sweep point (pooled over terrain seeds), one panel per reference
+    (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
+    from simlunar.pipeline import aggregate
+    from simlunar.pipeline import captions as captions_text
+    from simlunar.plotting import figures as F
+
+    points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
+    points = [p for p in points if p.saved][:MAX_UNIT_PANELS]
+    for i, p in enumerate(points):
+        fig, axes = F.panel_row(len(p.saved))
+        for ax, (ref, sv) in zip(axes, p.saved.items()):
+            F.samples_saved_plot(
+                p.densities,
+                sv.factor,
+                sv.flag,
+                reference=ref,
+                metric=p.saved_metric,
+                strategies=p.strategies,
+                ax=ax,
+                title=f"{p.label}: vs {ref}" if len(points) > 1 else None,
+            )
+        stem = "samples_saved" if len(points) == 1 else f"samples_saved_point{i}"
+        emit(fig, stem)
+        captions[stem] = captions_text.samples_saved(p.saved_metric, list(p.saved), p.label)

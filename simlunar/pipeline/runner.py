@@ -65,6 +65,9 @@ class WorkUnit:
         The full resolved configuration (plain, JSON-safe) without ``sweep``.
     inputs : dict
         Key path -> ``{"path", "sha256"}`` of every file the unit reads.
+    terrain_seed : int or None
+        The unit's terrain realisation (``terrain.seed_index``) when the experiment repeats
+        over ``study.terrain_seeds`` > 1; None otherwise.
     """
 
     index: int
@@ -72,6 +75,7 @@ class WorkUnit:
     sweep: dict[str, Any]
     config: dict[str, Any]
     inputs: dict[str, dict[str, str]] = field(default_factory=dict)
+    terrain_seed: int | None = None
 
 
 def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = None) -> str:
@@ -90,6 +94,14 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
         # no overrides = the preset as shipped: keep the keys of caches made before the
         # overrides key existed
         relevant["terrain"] = {k: v for k, v in terrain.items() if k != "overrides"}
+    terrain = relevant.get("terrain")
+    if isinstance(terrain, dict) and not terrain.get("seed_index"):
+        # realisation 0 is the terrain of runs before seed_index existed: same keys
+        relevant["terrain"] = {k: v for k, v in terrain.items() if k != "seed_index"}
+    study = relevant.get("study")
+    if isinstance(study, dict) and "terrain_seeds" in study:
+        # how many realisations run does not change any one unit's numbers
+        relevant["study"] = {k: v for k, v in study.items() if k != "terrain_seeds"}
     figures = config.get("figures") or {}
     # the panel arrays depend on these, the file formats do not
     relevant["_figures"] = {
@@ -119,7 +131,7 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
     base = {k: v for k, v in to_plain(cfg).items() if k != "sweep"}
     axes = list(cfg.sweep.items())
     units = []
-    for i, combo in enumerate(itertools.product(*[vals for _, vals in axes])):
+    for combo in itertools.product(*[vals for _, vals in axes]):
         point = base
         # a kind resets its section, so kinds go first and the other axes refine them
         ordered = sorted(zip(axes, combo), key=lambda av: av[0][0].split(".")[-1] != "kind")
@@ -127,9 +139,28 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
             point = apply_sweep_value(point, path, value)
         resolved = to_plain(ExperimentCfg.model_validate(point))
         resolved.pop("sweep", None)
-        inputs = preflight.input_hashes(resolved)
         sweep = {p: v for (p, _), v in zip(axes, combo)}
-        units.append(WorkUnit(i, unit_key(resolved, inputs), sweep, resolved, inputs))
+        n_seeds = int(resolved.get("study", {}).get("terrain_seeds", 1) or 1)
+        if n_seeds == 1:
+            inputs = preflight.input_hashes(resolved)
+            key = unit_key(resolved, inputs)
+            units.append(WorkUnit(len(units), key, sweep, resolved, inputs=inputs))
+            continue
+        for seed_index in range(n_seeds):
+            one = apply_sweep_value(resolved, "terrain.seed_index", seed_index)
+            one = to_plain(ExperimentCfg.model_validate(one))
+            one.pop("sweep", None)
+            inputs = preflight.input_hashes(one)
+            units.append(
+                WorkUnit(
+                    len(units),
+                    unit_key(one, inputs),
+                    sweep,
+                    one,
+                    inputs=inputs,
+                    terrain_seed=seed_index,
+                )
+            )
     return units
 
 
@@ -197,14 +228,17 @@ def _sort_rows(rows: list[dict], config: dict) -> list[dict]:
 def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[dict], list[str]]:
     """All tidy rows in the fixed results order, and the CSV columns."""
     sweep_cols = list(units[0].sweep) if units else []
+    if any(u.terrain_seed is not None for u in units):
+        sweep_cols.append("terrain_seed")
     extra: list[str] = []
     rows: list[dict] = []
     for u in units:
+        point = {**u.sweep, "terrain_seed": u.terrain_seed}
         for r in _sort_rows(records[u.key]["rows"], u.config):
             for c in r:
                 if c not in ROW_COLUMNS and c not in extra:
                     extra.append(c)
-            rows.append({"unit": u.index, **{c: u.sweep[c] for c in sweep_cols}, **r})
+            rows.append({"unit": u.index, **{c: point[c] for c in sweep_cols}, **r})
     present = {c for r in rows for c in r}
     known = [c for c in ROW_COLUMNS if c != "value" and c in present]
     return rows, ["unit", *sweep_cols, *known, *extra, "value"]
@@ -212,8 +246,9 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
 
 def unit_label(u: WorkUnit) -> str:
     """Short human label of a sweep point (``elevation_deg=30``)."""
+    seed = [] if u.terrain_seed is None else [f"terrain_seed={u.terrain_seed}"]
     if not u.sweep:
-        return u.config.get("name", f"unit {u.index}")
+        return ", ".join(seed) or u.config.get("name", f"unit {u.index}")
     parts = []
     for path, v in u.sweep.items():
         name = path.rsplit(".", 1)[-1]
@@ -225,7 +260,7 @@ def unit_label(u: WorkUnit) -> str:
         elif v is None:
             v = "default"
         parts.append(f"{name}={fmt_value(v)}")
-    return ", ".join(parts)
+    return ", ".join(parts + seed)
 
 
 def run_experiment(
@@ -375,7 +410,7 @@ def claim_folder(out: Path, config_text: str) -> None:
 
 #: files that summarise the units; removed before the units change, written again at the end
 #: (provenance.json first: without it the folder reads as unfinished)
-RESULT_FILES = ("provenance.json", "results.csv", "scores.md", "scores.tex")
+RESULT_FILES = ("provenance.json", "results.csv", "scores.md", "scores.tex", "scores.csv")
 
 
 def folder_complete(out: Path, keys: list[str]) -> bool:
@@ -462,17 +497,12 @@ def _run_locked(
     rows, columns = collect_rows(units, records)
     atomic_write_text(out / "results.csv", csv_text(rows, columns))
 
-    from simlunar.plotting.tables import score_tables
-
     if cfg.study.kind == "scanner":
         from simlunar.plotting.tables import scanner_tables
 
         md, tex = scanner_tables(rows, metrics=_names(units, "metrics"), title=cfg.name)
     else:
-        labelled = [(unit_label(u), records[u.key].get("scores", {})) for u in units]
-        strategies = _names(units, "strategies")
-        metrics = _names(units, "metrics")
-        md, tex = score_tables(labelled, strategies=strategies, metrics=metrics, title=cfg.name)
+        md, tex = _sampling_tables(cfg, units, records, rows, out)
     atomic_write_text(out / "scores.md", md)
     atomic_write_text(out / "scores.tex", tex)
 
@@ -514,6 +544,59 @@ def _notes(checks, units, records) -> list[str]:
             "pixel (see provenance.json)"
         )
     return notes
+
+
+def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
+    """Score tables (pooled over terrain seeds, with intervals), samples-saved tables and
+    ``scores.csv`` (per-seed and pooled scores) of a sampling experiment."""
+    from simlunar.pipeline import aggregate
+    from simlunar.plotting.tables import Cell, samples_saved_tables, score_tables
+
+    recs = [{**records[u.key], "sweep": u.sweep, "config": u.config} for u in units]
+    points = aggregate.summarise(recs, rows, seed=cfg.seed)
+    labelled = []
+    for p in points:
+        scores = {}
+        for m in p.metrics:
+            res, sep = p.intervals.get(m), p.separation.get(m)
+            if res is None:
+                continue
+            scores[m] = {
+                s: Cell(
+                    *res.interval(s), bold=sep is not None and sep.significant and s == sep.best
+                )
+                for s in res.strategies
+            }
+        labelled.append((p.label, scores))
+    strategies = _names(units, "strategies")
+    metrics = _names(units, "metrics")
+    seeds = sorted({len(p.seeds) for p in points})
+    trials = sorted({r.n_trials for p in points for r in p.intervals.values()})
+    n_seeds = "/".join(map(str, seeds))
+    note = (
+        f"Scores pool {n_seeds} terrain seed(s) x {'/'.join(map(str, trials))} trials; "
+        "[95 % interval]: paired bootstrap over terrain seeds (one seed: over trials), "
+        "percentile, small-sample widened. Bold: the best score of a row where the paired "
+        "bootstrap 95 % interval of its difference to the runner-up excludes 0."
+    )
+    md, tex = score_tables(
+        labelled, strategies=strategies, metrics=metrics, title=cfg.name, note=note
+    )
+    entries = [
+        {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": p.saved_metric,
+         "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
+         "factor": sv.factor, "flag": sv.flag, "summary": sv.summary, "n_summary": sv.n_summary}
+        for p in points
+        for ref, sv in p.saved.items()
+    ]  # fmt: skip
+    md2, tex2 = samples_saved_tables(entries, title=cfg.name)
+    if md2:
+        md, tex = md + "\n" + md2, tex + "\n" + tex2
+    atomic_write_text(
+        out / "scores.csv",
+        csv_text(aggregate.scores_csv_rows(points, recs), aggregate.SCORES_CSV_COLUMNS),
+    )
+    return md, tex
 
 
 def _names(units: list[WorkUnit], key: str) -> list[str]:

@@ -103,7 +103,9 @@ def build_lights(cfg: SceneCfg) -> list:
 
 def build_scene_inputs(cfg: SceneCfg):
     """``(terrain, camera, lights, bsdf)`` for :func:`simlunar.render.render`."""
-    terrain_ss, _ = _seeds(cfg.seed)
+    from simlunar.pipeline.stages import terrain_seed_sequence
+
+    terrain_ss = terrain_seed_sequence(cfg.seed, cfg.terrain.seed_index)
     terrain = translate.build_terrain(cfg.terrain, rng=np.random.default_rng(terrain_ss))
     return terrain, build_camera(cfg.camera, terrain), build_lights(cfg), translate.bsdf(cfg.bsdf)
 

@@ -253,6 +253,14 @@ class TerrainCfg(_Model):
         "fractal, bed, craters, rocks, albedo with the preset YAML's keys",
     )
 
+    seed_index: int = Field(
+        0,
+        ge=0,
+        lt=10000,
+        description="terrain realisation of a preset: 0 = the experiment seed's terrain, "
+        "i > 0 = its i-th independent child stream (set per unit by study.terrain_seeds)",
+    )
+
     @model_validator(mode="after")
     def _one_source(self) -> TerrainCfg:
         if (self.preset is None) == (self.file is None):
@@ -271,6 +279,8 @@ class TerrainCfg(_Model):
                 if exc.key is not None:
                     raise ValueError(f"overrides.{exc.key}: {exc.problem}") from None
                 raise ValueError(f"preset: {exc.problem}") from None
+        if self.file is not None and self.seed_index != 0:
+            raise ValueError("seed_index applies to a preset only (a DEM file has one terrain)")
         return self
 
 
@@ -575,6 +585,14 @@ class SamplingStudyCfg(_Model):
         default_factory=dict,
         description="label -> options; a label not registered as a strategy names one in "
         "'strategy' (e.g. wavelet_bn: {strategy: wavelet, blue_noise: true})",
+    )
+    terrain_seeds: int = Field(
+        1,
+        ge=1,
+        le=100,
+        description="repeat every sweep point on this many terrain realisations "
+        "(terrain.seed_index 0..N-1, one unit each, all else shared); tables pool them "
+        "and give 95 % bootstrap intervals",
     )
 
     @field_validator("strategies", "metrics")

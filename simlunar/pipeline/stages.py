@@ -83,6 +83,21 @@ def stage_seeds(seed: int) -> dict[str, np.random.SeedSequence]:
     return dict(zip(STAGES, children))
 
 
+def terrain_seed_sequence(seed: int, index: int = 0) -> np.random.SeedSequence:
+    """Seed sequence of terrain realisation ``index`` of an experiment seed.
+
+    Index 0 is the terrain stage's own sequence (``stage_seeds(seed)["terrain"]``, the terrain
+    of every run without ``study.terrain_seeds``); index i > 0 is that sequence's child i - 1
+    (``stage_seeds(seed)["terrain"].spawn(i)[i - 1]``), independent of it and of each other.
+    """
+    if index < 0:
+        raise ValueError(f"terrain seed index must be >= 0, got {index}")
+    parent = stage_seeds(seed)["terrain"]
+    if index == 0:
+        return parent
+    return np.random.SeedSequence(parent.entropy, spawn_key=(*parent.spawn_key, index - 1))
+
+
 def _int_seed(ss: np.random.SeedSequence) -> int:
     """A 31-bit integer seed for code that wants an int (Mitsuba's sampler)."""
     return int(ss.generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF)

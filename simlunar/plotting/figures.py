@@ -466,3 +466,60 @@ def save(fig: Figure, path_stem, formats: Sequence[str] = ("png", "pdf"), dpi: i
         fig.savefig(buf, format=fmt, dpi=dpi, metadata=meta)
         out.append((fmt, buf.getvalue()))
     return out
+
+
+def samples_saved_plot(
+    densities: Sequence[float],
+    factor: dict,
+    flag: dict,
+    *,
+    reference: str = "random",
+    metric: str = "mse",
+    strategies: Sequence[str] | None = None,
+    ax=None,
+    title: str | None = None,
+):
+    """Samples saved at equal error against ``reference``, per density and strategy.
+
+    Parameters
+    ----------
+    densities : sequence of float (n,)
+        k / N of each point.
+    factor : dict of str -> array (n,)
+        Samples the reference needs for the strategy's error / the strategy's samples
+        (:func:`simlunar.study.stats.samples_saved`); > 1 = the strategy saves samples.
+    flag : dict of str -> array (n,)
+        0 where interpolated on the reference's measured curve, else extrapolated (drawn as
+        hollow markers).
+    reference, metric : str
+        Names for the labels; the reference itself is not drawn (its factor is 1, the
+        dotted line).
+    strategies : sequence of str, optional
+        Order (default: ``factor``'s).
+    """
+    fig, ax = _axes(ax, (COLUMN_W, 2.6))
+    d = np.asarray(densities, float)
+    names = [s for s in (strategies or list(factor)) if s in factor and s != reference]
+    look = styles(names)
+    for s in names:
+        y = np.asarray(factor[s], float)
+        extra = np.asarray(flag[s]) != 0
+        c, mk = look[s].colour, look[s].marker
+        ax.plot(d, y, lw=1.2, color=c, label=look[s].label)
+        ax.plot(d[~extra], y[~extra], mk, ms=3, color=c)
+        ax.plot(d[extra], y[extra], mk, ms=3.5, mfc="none", mec=c, mew=0.8)
+    ax.axhline(1.0, color="k", lw=0.6, ls=":")
+    ax.set_xscale("log", base=2)
+    if names and all(np.all(np.asarray(factor[s]) > 0) for s in names):
+        ax.set_yscale("log", base=2)
+    ax.invert_xaxis()
+    ref = label(reference)
+    from matplotlib.ticker import FuncFormatter
+
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.set_xlabel("sampling density k/N")
+    ax.set_ylabel(f"{ref} samples / own, equal {METRIC_NAMES.get(metric, metric)}", fontsize=8)
+    ax.set_title(title or f"samples saved vs {ref} (hollow: extrapolated)", fontsize=8)
+    ax.legend(fontsize=6, frameon=False)
+    ax.grid(True, which="major", alpha=0.3)
+    return fig, ax

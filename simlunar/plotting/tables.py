@@ -33,14 +33,42 @@ def _best(values: list) -> int | None:
     return max(finite)[1] if finite else None
 
 
+class Cell(float):
+    """A score with its interval and whether to bold it (rows of :func:`score_tables`)."""
+
+    low: float | None = None
+    high: float | None = None
+    bold: bool = False
+
+    def __new__(cls, value, low=None, high=None, bold=False):
+        obj = super().__new__(cls, value)
+        obj.low, obj.high, obj.bold = low, high, bold
+        return obj
+
+
+def _fmt_cell(v) -> str:
+    text = _fmt(v)
+    if isinstance(v, Cell) and v.low is not None and v.high is not None:
+        text += f" [{_fmt(v.low)}, {_fmt(v.high)}]"
+    return text
+
+
+def _bold_index(vals: list) -> int | None:
+    """Cells say themselves whether they are bold; plain values: the row's maximum."""
+    if any(isinstance(v, Cell) for v in vals):
+        marked = [i for i, v in enumerate(vals) if isinstance(v, Cell) and v.bold]
+        return marked[0] if marked else None
+    return _best(vals)
+
+
 def _md_table(header: list[str], rows: list[tuple[str, list]]) -> str:
     lines = [
         "| " + " | ".join(header) + " |",
         "|" + "|".join(["---"] + ["---:"] * (len(header) - 1)) + "|",
     ]
     for label, vals in rows:
-        b = _best(vals)
-        cells = [f"**{_fmt(v)}**" if i == b else _fmt(v) for i, v in enumerate(vals)]
+        b = _bold_index(vals)
+        cells = [f"**{_fmt_cell(v)}**" if i == b else _fmt_cell(v) for i, v in enumerate(vals)]
         lines.append("| " + " | ".join([label, *cells]) + " |")
     return "\n".join(lines) + "\n"
 
@@ -82,8 +110,10 @@ def _tex_rows(rows: list[tuple[str, list]]) -> list[str]:
     """Body lines of a LaTeX table, the best value of each row in bold."""
     out = []
     for label, vals in rows:
-        b = _best(vals)
-        cells = [f"\\textbf{{{_fmt(v)}}}" if i == b else _fmt(v) for i, v in enumerate(vals)]
+        b = _bold_index(vals)
+        cells = [
+            f"\\textbf{{{_fmt_cell(v)}}}" if i == b else _fmt_cell(v) for i, v in enumerate(vals)
+        ]
         out.append(" & ".join([_tex_escape(label), *cells]) + " \\\\")
     return out
 
@@ -105,7 +135,12 @@ def _tex_blocks(blocks: list[tuple[list[str], list[tuple[str, list]]]], caption:
 
 
 def score_tables(
-    units: list[tuple[str, dict]], *, strategies: list[str], metrics: list[str], title: str = ""
+    units: list[tuple[str, dict]],
+    *,
+    strategies: list[str],
+    metrics: list[str],
+    title: str = "",
+    note: str = "",
 ) -> tuple[str, str]:
     """Markdown and LaTeX score tables.
 
@@ -113,18 +148,25 @@ def score_tables(
     ----------
     units : list of (label, scores)
         ``scores`` maps metric -> strategy -> score (eq. 4.3); one entry per scene / sweep point.
+        A score given as a :class:`Cell` prints its interval (``1.29 [1.21, 1.37]``) and is
+        bold only where the cell says so; plain floats: the best of each row is bold.
     strategies, metrics : list of str
         Column and row order.
     title : str
         Caption prefix (the experiment name).
+    note : str
+        A sentence printed under the first heading (Markdown) and as a LaTeX comment, e.g.
+        how the intervals and the bold face were computed.
 
     Returns
     -------
     (markdown, latex) : tuple of str
-        The best score of each row is bold.
     """
     header = ["", *[display_label(s) for s in strategies]]
     md, tex = [], []
+    if note:
+        md.append(note + "\n")
+        tex.append("% " + note.replace("%", "\\%").replace("\n", "\n% ") + "\n")
     if len(units) == 1:
         _, scores = units[0]
         rows = [
@@ -158,6 +200,70 @@ def score_tables(
             )
             md.append(f"### {cap}\n\n" + _md_table(["Scene", *header[1:]], rows))
             tex.append(_tex_table(["Scene", *header[1:]], rows, cap))
+    return "\n".join(md), "\n".join(tex)
+
+
+def _fmt_factor(v: float, flag: int) -> str:
+    if v is None or not math.isfinite(v):
+        return "–"
+    text = f"{v:.2f}" if v < 10 else f"{v:.1f}"
+    return text + ("*" if flag else "")
+
+
+def samples_saved_tables(entries: list[dict], *, title: str = "") -> tuple[str, str]:
+    """Markdown and LaTeX tables of samples saved at equal error.
+
+    Parameters
+    ----------
+    entries : list of dict
+        One per (sweep point, reference): ``label`` (point), ``reference`` (strategy name),
+        ``metric``, ``strategies`` (row order), ``ks`` (sample counts per density column),
+        ``densities``, ``factor`` / ``flag`` (strategy -> per-density arrays), ``summary`` /
+        ``n_summary`` (strategy -> geometric mean and how many densities it averages).
+    title : str
+        Caption prefix.
+
+    Returns
+    -------
+    (markdown, latex) : tuple of str
+        Factor = samples the reference needs for the strategy's error / the strategy's samples
+        (> 1: the strategy saves samples); ``*`` marks factors extrapolated beyond the
+        reference's measured error range.
+    """
+    md, tex = [], []
+    if not entries:
+        return "", ""
+    expl = (
+        "Samples saved at equal error: at each density, the samples the reference needs to "
+        "reach the strategy's mean error (its mean-error curve interpolated in log-log) over "
+        "the strategy's samples; > 1 = the strategy needs fewer. * = beyond the reference's "
+        "measured range (its end segment's power law extended, clipped to N samples); the "
+        "geometric mean (n densities) leaves those out."
+    )
+    md.append(expl + "\n")
+    tex.append("% " + expl + "\n")
+    for e in entries:
+        ref = display_label(e["reference"])
+        metric = _name(METRIC_NAMES, e["metric"])
+        cols = [f"1/{round(1 / d)}" if d < 1 else "1" for d in e["densities"]]
+        header = ["Strategy", *cols, "geo. mean (n)"]
+        rows = []
+        for s in e["strategies"]:
+            if s == e["reference"] or s not in e["factor"]:
+                continue
+            cells = [_fmt_factor(v, f) for v, f in zip(e["factor"][s], e["flag"][s])]
+            g = e["summary"][s]
+            cells.append("–" if not math.isfinite(g) else f"{g:.2f} ({e['n_summary'][s]})")
+            rows.append((display_label(s), cells))
+        where = f"{e['label']}: " if e.get("label") else ""
+        cap = f"{title}: {where}samples saved vs {ref} at equal {metric}"
+        lines = ["| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]
+        lines += ["| " + " | ".join([lab, *c]) + " |" for lab, c in rows]
+        md.append(f"### {cap}\n\n" + "\n".join(lines) + "\n")
+        out = _tex_begin(cap, len(header))
+        out += [" & ".join(_tex_escape(h) for h in header) + " \\\\", "\\midrule"]
+        out += [" & ".join([_tex_escape(lab), *c]) + " \\\\" for lab, c in rows]
+        tex.append(_tex_end(out))
     return "\n".join(md), "\n".join(tex)
 
 

@@ -87,6 +87,30 @@ class SamplingStudyResult:
         """Relative samples each strategy needs for the reference's error (see metrics)."""
         return _samples_for_equal_error(self.errors(metric), self.ks, reference=self.reference)
 
+    def score_intervals(self, metric: str = "mse", *, n_boot: int = 2000, rng=0):
+        """Scores of ``metric`` with paired bootstrap 95 % intervals over the trials.
+
+        One scene: the interval says how well the trials pin each score down on this terrain
+        (see :func:`simlunar.study.stats.bootstrap_scores`).
+        """
+        from simlunar.study.stats import bootstrap_scores
+
+        errs = self.errors(metric)
+        return bootstrap_scores(
+            errs, self.densities, reference=self.reference, n_boot=n_boot, rng=rng
+        )
+
+    def samples_saved(self, metric: str = "mse", reference: str | None = None):
+        """Samples ``reference`` (default: the study's) needs for each strategy's mean error,
+        over the strategy's, per density (:func:`simlunar.study.stats.samples_saved`)."""
+        from simlunar.study.stats import samples_saved
+
+        means = {s: e.mean(axis=1) for s, e in self.errors(metric).items()}
+        n = round(self.ks[0] / self.densities[0])
+        return samples_saved(
+            means, self.ks, reference=reference or self.reference, n_pixels=float(n)
+        )
+
     def _table(self):
         cols = [s for s in self.strategies]
         header = [STRATEGY_NAMES.get(s, s) for s in cols]

@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -80,10 +81,14 @@ def test_quickstart_variant_end_to_end(tmp_path):
             for s in ("random", "grid", "wavelet")
         ]
         line = next(x for x in scores.splitlines() if x.startswith(f"| {name} |"))
-        got = [float(v.strip(" *")) for v in line.strip("|").split("|")[1:]]  # best in bold
+        cells = [v.strip(" *") for v in line.strip("|").split("|")[1:]]  # best in bold
+        assert all(re.fullmatch(r"\d+\.\d\d \[\d+\.\d\d, \d+\.\d\d\]", c) for c in cells), cells
+        got = [float(c.split()[0]) for c in cells]  # the point score before its interval
         np.testing.assert_allclose(got, want, atol=0.0051)
         assert got[0] == 1.0
         assert abs(got[2] - got[0]) > 0.01  # wavelet is not random in disguise
+    assert "samples saved vs Random at equal MSE" in scores
+    assert "| Grid |" in scores.split("samples saved vs Random")[1]
     assert "\\begin{tabular}{lrrr}" in (out / "scores.tex").read_text()
     prov = json.loads((out / "provenance.json").read_text())
     assert prov["variant"] in ("llvm_ad_rgb", "scalar_rgb", "cuda_ad_rgb")
@@ -91,6 +96,7 @@ def test_quickstart_variant_end_to_end(tmp_path):
     figs = {p.name for p in (out / "figures").iterdir()}
     assert {"error_vs_density_mse.png", "error_vs_density_mse.pdf", "panels_unit0.png"} <= figs
     assert "sparse_mesh_unit0.png" in figs  # Fig. 4
+    assert {"samples_saved.png", "samples_saved.pdf"} <= figs
     from simlunar.pipeline.store import UnitCache
 
     arr = UnitCache(out).load_arrays(prov["unit_keys"][0])
@@ -223,6 +229,8 @@ def test_the_quickstart_itself_runs(tmp_path):
         " Wavelet, blue noise + uniform |"
     )
     assert header in r.output
-    assert "| MSE | 1.00 |" in r.output
+    assert "| MSE | 1.00 [1.00, 1.00] |" in r.output
+    assert "samples saved vs Random at equal MSE" in r.output
+    assert "samples saved vs Grid at equal MSE" in r.output
     with (out / "results.csv").open() as f:
         assert sum(1 for _ in f) == 1 + 7 * 7 * 3 * 3

@@ -33,7 +33,9 @@ def test_experiment_validates(path):
     cfg = load_experiment(path)
     assert cfg.name == path.stem
     units = expand(cfg)
-    assert len(units) == max(1, __import__("math").prod(len(v) for v in cfg.sweep.values()))
+    repeats = getattr(cfg.study, "terrain_seeds", 1)
+    points = max(1, __import__("math").prod(len(v) for v in cfg.sweep.values()))
+    assert len(units) == points * repeats
     assert len({u.key for u in units}) == len(units)
 
 
@@ -45,3 +47,4 @@ def test_paper_protocol_in_the_tables():
         assert cfg.study.densities == [2.0**-i for i in range(1, 12)]
         assert cfg.study.trials == 20
         assert set(cfg.study.strategies) == {"random", "grid", "gradient", "entropy", "wavelet"}
+        assert cfg.study.terrain_seeds >= 5  # intervals over terrain realisations

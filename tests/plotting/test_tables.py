@@ -123,3 +123,52 @@ def test_scanner_table_labels_sweep_points_and_pools_units():
     # pooled: mean MSE (3 + 1) / 2 = 2 and mean of the per-unit ratios (0.75 + 0.5) / 2
     assert "| mean of 2 units: Ambiguity enhancement / Wavelet | 2 | – | 10 | 0.625 |" in md
     assert "| mean of 2 units: Gray code | 3 | – | 10 | 1.000 |" in md
+
+
+def test_intervals_print_and_bold_only_where_marked():
+    from simlunar.plotting.tables import Cell
+
+    scores = {
+        "mse": {
+            "random": Cell(1.0, 1.0, 1.0),
+            "grid": Cell(1.291, 1.2149, 1.37),
+            "wavelet": Cell(1.25, 1.1, 1.4),
+        },
+        "grad": {
+            "random": Cell(1.0, 1.0, 1.0),
+            "grid": Cell(0.9, 0.8, 1.0),
+            "wavelet": Cell(1.42, 1.3, 1.5, bold=True),
+        },
+    }
+    md, tex = score_tables(
+        [("x", scores)], strategies=["random", "grid", "wavelet"], metrics=["mse", "grad"],
+        note="how",
+    )  # fmt: skip
+    # the best MSE is not bold: nothing marked it (its lead is not significant)
+    assert "| MSE | 1.00 [1.00, 1.00] | 1.29 [1.21, 1.37] | 1.25 [1.10, 1.40] |" in md
+    assert "| GRAD | 1.00 [1.00, 1.00] | 0.90 [0.80, 1.00] | **1.42 [1.30, 1.50]** |" in md
+    assert "\\textbf{1.42 [1.30, 1.50]}" in tex and "\\textbf{1.29" not in tex
+    assert md.startswith("how\n") and tex.startswith("% how")
+
+
+def test_samples_saved_table():
+    from simlunar.plotting.tables import samples_saved_tables
+
+    entry = {
+        "label": "",
+        "reference": "random",
+        "metric": "mse",
+        "strategies": ["random", "grid"],
+        "ks": [100, 25],
+        "densities": [0.5, 0.125],
+        "factor": {"random": [1.0, 1.0], "grid": [1.234, 12.34]},
+        "flag": {"random": [0, 0], "grid": [1, 0]},
+        "summary": {"random": 1.0, "grid": 12.34},
+        "n_summary": {"random": 2, "grid": 1},
+    }
+    md, tex = samples_saved_tables([entry], title="t")
+    assert "| Strategy | 1/2 | 1/8 | geo. mean (n) |" in md
+    assert "| Grid | 1.23* | 12.3 | 12.34 (1) |" in md  # * = extrapolated
+    assert "| Random |" not in md  # the reference is not its own row
+    assert "Grid & 1.23* & 12.3 & 12.34 (1) \\\\" in tex
+    assert samples_saved_tables([], title="t") == ("", "")

@@ -175,6 +175,21 @@ def test_samples_for_equal_error_summary(scene):
     np.testing.assert_allclose(out["random"], 1.0)
 
 
+def test_score_intervals_and_samples_saved(scene):
+    depth, image = scene
+    res = run_sampling_study(depth, image, densities=DENS, trials=4, rng=0, metrics=["mse"])
+    iv = res.score_intervals("mse", n_boot=200, rng=1)
+    for s in res.strategies:
+        score, lo, hi = iv.interval(s)
+        assert score == pytest.approx(res.scores["mse"][s])  # the point is eq. 4.3
+        assert lo <= score <= hi
+    assert iv.interval("random") == (1.0, 1.0, 1.0)
+    saved = res.samples_saved("mse")
+    np.testing.assert_allclose(saved.factor["random"], 1.0)
+    assert saved.reference == "random" and saved.ks.tolist() == res.ks
+    assert res.samples_saved("mse", reference="grid").factor["grid"] == pytest.approx(1.0)
+
+
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [

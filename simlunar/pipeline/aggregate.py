@@ -1,0 +1,186 @@
+"""Pool a sampling experiment's units over terrain seeds: score intervals and samples saved.
+
+Units that differ only in their terrain realisation (``study.terrain_seeds``, or a sweep over
+``terrain.seed_index``) form one *point*; every point gets its eq. 4.3 scores with bootstrap
+intervals (:func:`simlunar.study.stats.bootstrap_scores`), the test of its best strategy
+against the runner-up, and the samples saved at equal error against random and the grid.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from simlunar.study.stats import (
+    SamplesSaved,
+    ScoreIntervals,
+    Separation,
+    best_separation,
+    bootstrap_scores,
+    samples_saved,
+)
+
+SEED_AXIS = "terrain.seed_index"
+#: bootstrap replicates per point and metric
+N_BOOT = 2000
+#: references of the samples-saved tables and figure
+SAVED_REFERENCES = ("random", "grid")
+
+
+@dataclass
+class Point:
+    """One sweep point pooled over its terrain seeds."""
+
+    label: str
+    sweep: dict[str, Any]
+    unit_indices: list[int]
+    seeds: list[int]
+    strategies: list[str]
+    metrics: list[str]
+    densities: list[float] = field(default_factory=list)
+    ks: list[int] = field(default_factory=list)
+    n_pixels: int = 0
+    intervals: dict[str, ScoreIntervals] = field(default_factory=dict)
+    separation: dict[str, Separation | None] = field(default_factory=dict)
+    saved_metric: str | None = None
+    saved: dict[str, SamplesSaved] = field(default_factory=dict)
+    mean_errors: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+
+
+def _label(sweep: dict, config: dict) -> str:
+    from simlunar.pipeline.runner import WorkUnit, unit_label
+
+    return unit_label(WorkUnit(0, "", sweep, config))
+
+
+def group_points(records: list[dict]) -> list[Point]:
+    """Units (records in results order: ``sweep``, ``config``) grouped into points.
+
+    Two units belong to one point when their sweep values agree on every axis but
+    ``terrain.seed_index``; points keep the order of their first unit.
+    """
+    points: dict[str, Point] = {}
+    for i, rec in enumerate(records):
+        sweep = {k: v for k, v in (rec.get("sweep") or {}).items() if k != SEED_AXIS}
+        key = json.dumps(sweep, sort_keys=True, default=str)
+        cfg = rec.get("config") or {}
+        study = cfg.get("study") or {}
+        if key not in points:
+            points[key] = Point(
+                label=_label(sweep, cfg),
+                sweep=sweep,
+                unit_indices=[],
+                seeds=[],
+                strategies=list(study.get("strategies") or []),
+                metrics=list(study.get("metrics") or []),
+            )
+        p = points[key]
+        p.unit_indices.append(i)
+        p.seeds.append(int((cfg.get("terrain") or {}).get("seed_index", 0) or 0))
+        shape = (rec.get("meta") or {}).get("shape")
+        if shape:
+            p.n_pixels = int(np.prod(shape[:2]))
+    return list(points.values())
+
+
+def error_arrays(rows: list[dict], point: Point, metric: str):
+    """``(densities, ks, {strategy: errors (seeds, densities, trials)})`` of one point.
+
+    Densities descending (the results order). Rows may hold strings (read from CSV).
+    """
+    units = {str(i): j for j, i in enumerate(point.unit_indices)}
+    cells: dict[str, dict[tuple[int, float, int], float]] = {s: {} for s in point.strategies}
+    ks: dict[float, int] = {}
+    trials: set[int] = set()
+    for r in rows:
+        j = units.get(str(r.get("unit")))
+        if j is None or r.get("metric") != metric or r.get("strategy") not in cells:
+            continue
+        d = float(r["density"])
+        t = int(float(r["trial"]))
+        cells[r["strategy"]][(j, d, t)] = float(r["value"])
+        ks[d] = int(float(r["k"]))
+        trials.add(t)
+    dens = sorted(ks, reverse=True)
+    n_t = len(trials)
+    out = {}
+    for s, c in cells.items():
+        e = np.full((len(point.unit_indices), len(dens), n_t), np.nan)
+        for (j, d, t), v in c.items():
+            e[j, dens.index(d), t] = v
+        if np.isnan(e).any():
+            raise ValueError(f"results of {point.label!r}: missing errors of {s!r} ({metric})")
+        out[s] = e
+    return dens, [ks[d] for d in dens], out
+
+
+def summarise(
+    records: list[dict], rows: list[dict], *, seed: int, n_boot: int = N_BOOT
+) -> list[Point]:
+    """Every point of a sampling experiment with intervals and samples saved.
+
+    Parameters
+    ----------
+    records : list of dict
+        Unit records in results order (``sweep``, ``config``, ``meta``).
+    rows : list of dict
+        The tidy results (``unit`` = position in ``records``).
+    seed : int
+        The experiment seed; point i's bootstrap uses ``SeedSequence([seed, i])``.
+    n_boot : int
+        Bootstrap replicates.
+    """
+    points = group_points(records)
+    for i, p in enumerate(points):
+        if "random" not in p.strategies:
+            continue
+        for m in p.metrics:
+            dens, ks, errs = error_arrays(rows, p, m)
+            if not p.densities:
+                p.densities, p.ks = dens, ks
+            rng = np.random.default_rng(np.random.SeedSequence([seed, i, p.metrics.index(m)]))
+            res = bootstrap_scores(errs, dens, n_boot=n_boot, rng=rng)
+            p.intervals[m] = res
+            p.separation[m] = best_separation(res)
+            p.mean_errors[m] = {s: e.mean(axis=(0, 2)) for s, e in errs.items()}
+        if len(p.ks) >= 2 and p.metrics:
+            m = p.metrics[0]
+            p.saved_metric = m
+            n_pix = p.n_pixels or np.inf
+            for ref in SAVED_REFERENCES:
+                if ref in p.strategies:
+                    p.saved[ref] = samples_saved(
+                        p.mean_errors[m], p.ks, reference=ref, n_pixels=n_pix
+                    )
+    return points
+
+
+def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:
+    """Per-seed scores (from each unit) and pooled scores with intervals, one row each."""
+    out = []
+    for p in points:
+        for m in p.metrics:
+            for j, seed in zip(p.unit_indices, p.seeds):
+                sc = (records[j].get("scores") or {}).get(m, {})
+                for s in p.strategies:
+                    if s in sc:
+                        out.append(
+                            {"point": p.label, "terrain_seed": seed, "metric": m, "strategy": s,
+                             "score": sc[s], "ci_low": "", "ci_high": ""}
+                        )  # fmt: skip
+            res = p.intervals.get(m)
+            if res is None:
+                continue
+            for s in p.strategies:
+                sc, lo, hi = res.interval(s)
+                out.append(
+                    {"point": p.label, "terrain_seed": "all", "metric": m, "strategy": s,
+                     "score": sc, "ci_low": lo, "ci_high": hi}
+                )  # fmt: skip
+    return out
+
+
+SCORES_CSV_COLUMNS = ["point", "terrain_seed", "metric", "strategy", "score", "ci_low", "ci_high"]

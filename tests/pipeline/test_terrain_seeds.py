@@ -1,0 +1,142 @@
+"""Repeats over terrain seeds: units, seeds, cache keys, results columns, pooled tables."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import numpy as np
+import pytest
+from fake_unit import fake_unit
+
+from simlunar.pipeline import aggregate
+from simlunar.pipeline.config import ExperimentCfg
+from simlunar.pipeline.runner import expand, run_experiment
+from simlunar.pipeline.stages import stage_seeds, terrain_seed_sequence
+
+
+def cfg(n_seeds=1, **over) -> ExperimentCfg:
+    d = {
+        "name": "seeds_test",
+        "seed": 7,
+        "terrain": {"preset": "aerial_1", "scale": 0.125},
+        "study": {
+            "strategies": ["random", "grid", "wavelet"],
+            "densities": {"from": "1/2", "to": "1/32", "count": 5},
+            "trials": 3,
+            "metrics": ["mse", "grad"],
+            "terrain_seeds": n_seeds,
+        },
+        "sweep": {"render.light.elevation_deg": [10, 60]},
+    }
+    d.update(over)
+    return ExperimentCfg.model_validate(d)
+
+
+def test_terrain_seed_sequences():
+    # index 0 is the terrain stage's own stream (runs without terrain_seeds keep their
+    # terrain); index i is the stage's child i - 1, distinct for every i
+    s0 = terrain_seed_sequence(5, 0).generate_state(4)
+    assert np.array_equal(s0, stage_seeds(5)["terrain"].generate_state(4))
+    child = stage_seeds(5)["terrain"].spawn(3)[2].generate_state(4)
+    assert np.array_equal(terrain_seed_sequence(5, 3).generate_state(4), child)
+    states = {tuple(terrain_seed_sequence(5, i).generate_state(4)) for i in range(6)}
+    assert len(states) == 6
+    with pytest.raises(ValueError):
+        terrain_seed_sequence(5, -1)
+
+
+def test_seed_index_gives_another_terrain_and_zero_the_old_one():
+    from simlunar.pipeline.scene import SceneCfg, build_scene_inputs
+
+    base = {"terrain": {"preset": "aerial_1", "scale": 0.0625}, "seed": 3}
+    t0 = build_scene_inputs(SceneCfg.model_validate(base))[0]
+    base["terrain"]["seed_index"] = 0
+    t0b = build_scene_inputs(SceneCfg.model_validate(base))[0]
+    base["terrain"]["seed_index"] = 1
+    t1 = build_scene_inputs(SceneCfg.model_validate(base))[0]
+    assert np.array_equal(t0.heights, t0b.heights)
+    assert t1.heights.shape == t0.heights.shape
+    assert not np.allclose(t1.heights, t0.heights)
+
+
+def test_expand_repeats_every_point_over_the_seeds():
+    units = expand(cfg(3))
+    assert len(units) == 6
+    assert [u.terrain_seed for u in units] == [0, 1, 2, 0, 1, 2]
+    assert [u.config["terrain"]["seed_index"] for u in units] == [0, 1, 2, 0, 1, 2]
+    assert [u.index for u in units] == list(range(6))
+    assert len({u.key for u in units}) == 6
+    # seed 0 of a repeated run is the unit of the run without repeats (cache shared)
+    plain = expand(cfg(1))
+    assert [u.terrain_seed for u in plain] == [None, None]
+    assert units[0].key == plain[0].key and units[3].key == plain[1].key
+    # the other config fields are shared
+    assert units[1].config["render"] == units[0].config["render"]
+
+
+def test_seed_index_is_for_presets_only(tmp_path):
+    from pydantic import ValidationError
+
+    with pytest.raises(ValidationError, match="seed_index"):
+        ExperimentCfg.model_validate(
+            {
+                "name": "x",
+                "terrain": {"file": str(tmp_path / "a.npy"), "spacing_m": 1, "seed_index": 1},
+                "study": {"densities": [0.5]},
+            }
+        )
+
+
+def _run(c, out):
+    return run_experiment(c, out, compute=fake_unit, progress=False, figures=False)
+
+
+def test_results_keep_per_seed_rows_and_tables_pool_them(tmp_path):
+    _run(cfg(1), tmp_path / "one")
+    one = (tmp_path / "one" / "results.csv").read_text()
+    assert one.splitlines()[0] == (
+        "unit,render.light.elevation_deg,strategy,density,k,trial,metric,value"
+    )
+    _run(cfg(3), tmp_path / "three")
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "three" / "results.csv").read_text())))
+    assert list(rows[0])[:3] == ["unit", "render.light.elevation_deg", "terrain_seed"]
+    assert {(r["unit"], r["terrain_seed"]) for r in rows} == {
+        (str(i), str(i % 3)) for i in range(6)
+    }
+    assert len(rows) == 6 * 3 * 5 * 3 * 2
+    md = (tmp_path / "three" / "scores.md").read_text()
+    assert "Scores pool 3 terrain seed(s) x 3 trials" in md
+    assert "| MSE | 1.00 [1.00, 1.00] |" in md
+    assert "samples saved vs Random at equal MSE" in md
+    assert "samples saved vs Grid at equal MSE" in md
+    scores = list(csv.DictReader(io.StringIO((tmp_path / "three" / "scores.csv").read_text())))
+    seeds = {r["terrain_seed"] for r in scores}
+    assert seeds == {"0", "1", "2", "all"}
+    pooled = [r for r in scores if r["terrain_seed"] == "all"]
+    assert len(pooled) == 2 * 2 * 3  # points x metrics x strategies
+    assert all(float(r["ci_low"]) <= float(r["score"]) <= float(r["ci_high"]) for r in pooled)
+
+
+def test_pooled_score_is_eq_4_3_of_all_pairs(tmp_path):
+    from simlunar.metrics import score
+
+    _run(cfg(2, sweep={}), tmp_path / "r")
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "r" / "results.csv").read_text())))
+    recs = [{"sweep": u.sweep, "config": u.config} for u in expand(cfg(2, sweep={}))]
+    (point,) = aggregate.group_points(recs)
+    assert point.seeds == [0, 1] and point.unit_indices == [0, 1]
+    dens, _ks, errs = aggregate.error_arrays(rows, point, "mse")
+    assert errs["random"].shape == (2, 5, 3)
+    # pooled over seeds = eq. 4.3 of the errors with seeds and trials side by side
+    flat = {s: e.transpose(1, 0, 2).reshape(5, 6) for s, e in errs.items()}
+    want = score(flat, dens)
+    (p,) = aggregate.summarise(recs, rows, seed=7, n_boot=50)
+    assert p.intervals["mse"].score == pytest.approx([want[s] for s in p.strategies])
+
+
+def test_a_sweep_over_seed_index_is_pooled_too():
+    units = expand(cfg(1, sweep={"terrain.seed_index": [0, 1, 2]}))
+    recs = [{"sweep": u.sweep, "config": u.config} for u in units]
+    (point,) = aggregate.group_points(recs)
+    assert point.seeds == [0, 1, 2]
