@@ -126,7 +126,7 @@ class RenderCapture:
         return p
 
     def render(self, patterns) -> np.ndarray:
-        """Noise-free luminance (n, rows, cols) under ``patterns`` (n, H, W)."""
+        """Noise-free luminance (n, rows, cols) float32 under ``patterns`` (n, H, W)."""
         pats = np.asarray(patterns, np.float32)
         if pats.ndim != 3 or pats.shape[1:] != tuple(self.proj_shape):
             raise ValueError(
@@ -134,29 +134,39 @@ class RenderCapture:
                 f"{self.proj_shape[1]}) for this projector, got {pats.shape}"
             )
         self.renders += len(pats)
-        return self._lens(self.scene.render_patterns(self.emitted(pats)).astype(np.float64))
+        return self._lens(self.scene.render_patterns(self.emitted(pats)))
 
     def _lens(self, frames) -> np.ndarray:
-        """Camera lens point-spread function (Gaussian, ``camera_blur`` px) on (n, rows, cols)."""
-        frames = np.asarray(frames, np.float64)
+        """Camera lens point-spread function (Gaussian, ``camera_blur`` px) on (n, rows, cols).
+
+        Each frame on its own, float32 (:func:`simlunar.imaging.blur.gaussian_blur`, the same
+        filter as ``ndimage.gaussian_filter(mode="nearest")``), in place.
+        """
+        frames = np.asarray(frames, np.float32)
         if self.camera_blur <= 0:
             return frames
-        # sigma 0 along the frame axis: each frame is blurred on its own
-        return ndimage.gaussian_filter(
-            frames, (0, self.camera_blur, self.camera_blur), mode="nearest"
-        )
+        from simlunar.imaging.blur import gaussian_blur
+
+        if not frames.flags.writeable:
+            frames = frames.copy()
+        for i, f in enumerate(frames):
+            frames[i] = gaussian_blur(f, self.camera_blur)
+        return frames
 
     def sense(self, images) -> np.ndarray:
-        """Captured frames in [0, 1]-ish units: exposure, then sensor noise per frame."""
-        imgs = np.asarray(images, np.float64)
+        """Captured frames (n, rows, cols) float32 in [0, 1]-ish units: exposure, sensor noise.
+
+        One noise draw per frame, in order, from the capture's noise stream.
+        """
+        imgs = np.asarray(images)
         if self.sensor is None:
-            return imgs * self.gain
+            return (imgs * np.float32(self.gain)).astype(np.float32, copy=False)
         from simlunar.imaging.sensor import apply_sensor
 
-        # one noise draw per captured frame (inverses by linearity included)
-        return np.stack([apply_sensor(im, self.sensor, rng=self.rng) for im in imgs]).astype(
-            np.float64
-        )
+        out = np.empty(imgs.shape, np.float32)
+        for i, im in enumerate(imgs):
+            out[i] = apply_sensor(im, self.sensor, rng=self.rng)
+        return out
 
 
 @dataclass(frozen=True, eq=False)
