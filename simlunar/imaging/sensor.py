@@ -116,8 +116,9 @@ def apply_sensor(radiance: np.ndarray, model: SensorModel, *, rng=None) -> np.nd
     inside. Shot noise: a pixel with mean ``mu`` electrons gets an exact Poisson draw
     (inverse CDF) for ``mu < POISSON_EXACT_BELOW`` and ``mu + sqrt(mu) z + (z**2 - 1) / 6``
     (normal ``z``; the Cornish-Fisher expansion of the Poisson law: exact mean and third
-    cumulant, variance ``mu + 1/18``) above; the random numbers come from ``rng`` (one normal
-    per pixel for the shot noise, one for the read noise), so equal seeds give equal images.
+    cumulant, variance ``mu + 1/18``) above; the random numbers come from ``rng`` (one float32
+    normal per pixel for the shot noise, one for the read noise), so equal seeds give equal
+    images.
 
     Parameters
     ----------
@@ -139,7 +140,7 @@ def apply_sensor(radiance: np.ndarray, model: SensorModel, *, rng=None) -> np.nd
     if rad.dtype not in (np.float32, np.float64):
         rad = rad.astype(np.float64)
     flat = np.ascontiguousarray(rad).reshape(-1)
-    shot_z = gen.standard_normal(flat.size)
+    shot_z = gen.standard_normal(flat.size, dtype=np.float32)
     read_z = (
         gen.standard_normal(flat.size, dtype=np.float32)
         if model.read_noise_e > 0

@@ -10,7 +10,7 @@ import numpy as np
 from scipy import ndimage
 
 from simlunar.scanner.dots import Detections
-from simlunar.scanner.gray_code import gray
+from simlunar.scanner.gray_code import GrayDecode, gray, gray_to_binary, num_bits
 
 
 def apply_sensor_reference(radiance, model, *, rng=None) -> np.ndarray:
@@ -183,3 +183,93 @@ def detect_dots_reference(
         edge = np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))
         ok &= ~np.isin(idx, edge)
     return Detections(np.stack([u, v], axis=-1)[ok], np.asarray(flux)[ok], np.asarray(pk)[ok])
+
+
+def decode_reference(
+    images: np.ndarray,
+    white: np.ndarray,
+    black: np.ndarray,
+    *,
+    proj_shape: tuple[int, int],
+    black_threshold: float = 40.0,
+    white_threshold: float = 5.0,
+    require_reliable: bool = True,
+) -> GrayDecode:
+    """Decode a gray-code image stack into per-pixel projector correspondences.
+
+    Parameters
+    ----------
+    images : (2 * (num_bits(W) + num_bits(H)), rows, cols) array
+        Captured (pattern, inverse) pairs in :func:`encode` order.
+    white, black : (rows, cols) array
+        Captured all-white and all-black frames.
+    proj_shape : (H, W)
+        Projector pattern shape (height, width).
+    black_threshold, white_threshold : float
+        OpenCV's thresholds, in the units of the images.
+    require_reliable : bool
+        If True (OpenCV's behaviour) a pixel with any unreliable bit is invalid.
+
+    Returns
+    -------
+    GrayDecode
+    """
+    H, W = (int(proj_shape[0]), int(proj_shape[1]))
+    ncb, nrb = num_bits(W), num_bits(H)
+    images = np.asarray(images, dtype=np.float64)
+    white = np.asarray(white, dtype=np.float64)
+    black = np.asarray(black, dtype=np.float64)
+    n_expected = 2 * (ncb + nrb)
+    if images.ndim != 3 or images.shape[0] != n_expected:
+        raise ValueError(
+            f"images must be a ({n_expected}, rows, cols) gray-code stack for a {W}x{H} projector "
+            f"({ncb} column + {nrb} row bits, pattern and inverse each), got shape {images.shape}"
+        )
+    if white.shape != images.shape[1:] or black.shape != images.shape[1:]:
+        raise ValueError(
+            f"white {white.shape} and black {black.shape} frames must match the "
+            f"camera shape {images.shape[1:]}"
+        )
+    pat, inv = images[0::2], images[1::2]
+    bits = (pat > inv).astype(np.uint8)
+    reliable = np.abs(pat - inv) >= white_threshold
+    lit = (white - black) > black_threshold
+    col = gray_to_binary(bits[:ncb])
+    row = gray_to_binary(bits[ncb:])
+    valid = lit & (col < W) & (row < H)
+    if require_reliable:
+        valid &= np.all(reliable, axis=0)
+    col = np.where(valid, col, -1)
+    row = np.where(valid, row, -1)
+    return GrayDecode(
+        col=col,
+        row=row,
+        valid=valid,
+        lit=lit,
+        bits=bits,
+        reliable=reliable,
+        n_col_bits=ncb,
+        n_row_bits=nrb,
+        proj_shape=(H, W),
+    )
+
+
+def refine_subpixel_reference(result: GrayDecode, images, *, max_gap: int = 2) -> GrayDecode:
+    """Sub-pixel refinement on a float64 stack with the NumPy edge search."""
+    import dataclasses
+
+    images = np.asarray(images, dtype=np.float64)
+    diff = images[0::2] - images[1::2]
+    ncb = result.n_col_bits
+    u = refine_along_rows_reference(
+        result.col, result.valid, result.lit, diff[:ncb], ncb, int(max_gap)
+    )
+    v = refine_along_rows_reference(
+        result.row.T,
+        result.valid.T,
+        result.lit.T,
+        diff[ncb:].transpose(0, 2, 1),
+        result.n_row_bits,
+        int(max_gap),
+    ).T
+    return dataclasses.replace(result, subpixel=np.stack([u, v], axis=-1))

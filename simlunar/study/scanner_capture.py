@@ -49,6 +49,16 @@ class RenderCapture:
     target_level : float
         The auto exposure maps the white frame's 99th-percentile radiance to this fraction of
         the sensor range (or of 1 without a sensor), so thresholds are in [0, 1] frame units.
+    sparse_integrator : "path" or "ptracer"
+        Integrator for sparse patterns (projector dots): patterns with a lit fraction of at
+        most ``sparse_below`` (and some light) are rendered with it
+        (:meth:`simlunar.render.scene.TerrainScene.render`); ``"ptracer"`` traces light from
+        the projector, which samples its lit pixels, so the dots get every light path.
+    sparse_spp : int or None
+        Samples per pixel for sparse patterns (None: ``spp``); for ``"ptracer"`` light paths
+        per film pixel.
+    sparse_below : float
+        Largest lit fraction of the projector's pixels that counts as sparse.
     """
 
     def __init__(
@@ -68,6 +78,9 @@ class RenderCapture:
         projector_blur: float = 0.0,
         camera_blur: float = 0.0,
         target_level: float = 0.8,
+        sparse_integrator: str = "path",
+        sparse_spp: int | None = None,
+        sparse_below: float = 0.01,
     ) -> None:
         from simlunar.render.lights import ProjectorLight
         from simlunar.render.scene import TerrainScene
@@ -80,6 +93,15 @@ class RenderCapture:
         if camera_blur < 0:
             raise ValueError(f"camera_blur must be >= 0 px, got {camera_blur}")
         self.camera_blur = float(camera_blur)
+        if sparse_integrator not in ("path", "ptracer"):
+            raise ValueError(
+                f"unknown sparse_integrator {sparse_integrator!r}; valid: 'path', 'ptracer'"
+            )
+        if sparse_spp is not None and int(sparse_spp) < 1:
+            raise ValueError(f"sparse_spp must be >= 1, got {sparse_spp}")
+        self.sparse_integrator = sparse_integrator
+        self.sparse_spp = None if sparse_spp is None else int(sparse_spp)
+        self.sparse_below = float(sparse_below)
         self.rig = rig
         self.proj_shape = rig.projector.intrinsics.shape
         self.gamma = float(projector_gamma)
@@ -134,7 +156,18 @@ class RenderCapture:
                 f"{self.proj_shape[1]}) for this projector, got {pats.shape}"
             )
         self.renders += len(pats)
-        return self._lens(self.scene.render_patterns(self.emitted(pats)))
+        em = self.emitted(pats)
+        lit = (em > 0).mean(axis=(1, 2))
+        sparse = (lit > 0) & (lit <= self.sparse_below)
+        if (self.sparse_integrator == "path" and self.sparse_spp is None) or not sparse.any():
+            return self._lens(self.scene.render_patterns(em))
+        out = np.empty((len(em), *self.scene.shape), np.float32)
+        if (~sparse).any():
+            out[~sparse] = self.scene.render_patterns(em[~sparse])
+        out[sparse] = self.scene.render_patterns(
+            em[sparse], spp=self.sparse_spp, integrator=self.sparse_integrator
+        )
+        return self._lens(out)
 
     def _lens(self, frames) -> np.ndarray:
         """Camera lens point-spread function (Gaussian, ``camera_blur`` px) on (n, rows, cols).

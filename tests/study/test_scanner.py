@@ -238,3 +238,35 @@ def test_scanner_ambiguity_experiment_plain_arguments():
         metrics=("mse",),
     )
     assert st.summarize(again, "mse") == mse
+
+
+def test_light_traced_dot_frames_equal_path_traced_ones():
+    # a bumpy bed, 12 dots: the light tracer (sparse_integrator="ptracer") and the path tracer
+    # estimate the same image, so the dots' flux and centroids agree
+    x, y = grid()
+    bumpy = terrain(0.04 * np.sin(3 * x) * np.cos(2 * y), albedo=0.6)
+    rig = rigs.moonyard_rig(proj_size=(64, 48), cam_size=(128, 96))
+    path = st.RenderCapture(bumpy, rig, max_depth=3, spp=64, seed=2)
+    light = st.RenderCapture(
+        bumpy, rig, max_depth=3, spp=64, seed=2, sparse_integrator="ptracer", sparse_spp=16
+    )
+    rng = np.random.default_rng(0)
+    uv = np.c_[rng.choice(np.arange(6, 58, 8), 12) + 0.5, rng.choice(np.arange(6, 42, 6), 12) + 0.5]
+    uv = np.unique(uv, axis=0)
+    from simlunar.scanner import dots
+
+    pat = dots.dot_pattern((48, 64), uv)[None]
+    a, b = path.render(pat)[0], light.render(pat)[0]
+    assert light.renders == 1
+    assert b.sum() == pytest.approx(a.sum(), rel=0.03)
+    da = dots.detect_dots(a, background=0.0, rel_threshold=0.1)
+    db = dots.detect_dots(b, background=0.0, rel_threshold=0.1)
+    assert len(da) == len(db) >= 6
+    d, _ = __import__("scipy.spatial", fromlist=["cKDTree"]).cKDTree(da.uv).query(db.uv)
+    assert np.median(d) < 0.1
+    # dense patterns still go to the path tracer: identical images
+    stripes = np.zeros((1, 48, 64), np.float32)
+    stripes[0, :, ::2] = 1.0
+    np.testing.assert_array_equal(light.render(stripes), path.render(stripes))
+    with pytest.raises(ValueError, match="sparse_integrator"):
+        st.RenderCapture(bumpy, rig, sparse_integrator="bdpt")
