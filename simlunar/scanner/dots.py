@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 from scipy import ndimage
-from scipy.spatial import cKDTree
 
 from simlunar.geometry import Rig
+from simlunar.scanner import _schedule as _sched
 from simlunar.scanner.triangulate import check_rig
 
 
@@ -229,18 +229,267 @@ def point_segment_distance(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
     return np.linalg.norm(ap - t[..., None] * ab, axis=-1)
 
 
-def _segment_conflicts(seg: np.ndarray, sep: float) -> set[tuple[int, int]]:
-    """Pairs of segments closer than ``sep`` (conservative by at most half the sampling step)."""
-    h = sep / 2.0
-    lengths = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=-1)
-    counts = np.ceil(lengths / h).astype(int) + 1
-    owner = np.repeat(np.arange(len(seg)), counts)
-    t = np.concatenate([np.linspace(0.0, 1.0, c) for c in counts])
-    pts = seg[owner, 0] + t[:, None] * (seg[owner, 1] - seg[owner, 0])
-    pairs = cKDTree(pts).query_pairs(sep + h, output_type="ndarray")
-    a, b = owner[pairs[:, 0]], owner[pairs[:, 1]]
-    keep = a != b
-    return {(int(min(x, y)), int(max(x, y))) for x, y in zip(a[keep], b[keep])}
+def segment_distance(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Exact distances between 2-D segments ``a`` (..., 2, 2) and ``b`` (..., 2, 2) (broadcast).
+
+    Zero where the segments cross or touch, else the least of the four endpoint-to-segment
+    distances. This is the camera test of :func:`dot_schedule`.
+    """
+    a = np.asarray(a, float)
+    b = np.asarray(b, float)
+
+    def pseg(p, s):
+        ab = s[..., 1, :] - s[..., 0, :]
+        ap = p - s[..., 0, :]
+        L2 = np.sum(ab * ab, axis=-1)
+        t = np.clip(np.sum(ap * ab, axis=-1) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+        return np.linalg.norm(ap - t[..., None] * ab, axis=-1)
+
+    def orient(p, q, r):
+        return (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1]) - (q[..., 1] - p[..., 1]) * (
+            r[..., 0] - p[..., 0]
+        )
+
+    a0, a1, b0, b1 = a[..., 0, :], a[..., 1, :], b[..., 0, :], b[..., 1, :]
+    cross = (orient(a0, a1, b0) * orient(a0, a1, b1) < 0) & (
+        orient(b0, b1, a0) * orient(b0, b1, a1) < 0
+    )
+    d = np.minimum(np.minimum(pseg(a0, b), pseg(a1, b)), np.minimum(pseg(b0, a), pseg(b1, a)))
+    return np.where(cross, 0.0, d)
+
+
+@dataclass(frozen=True, eq=False)
+class DotSchedule:
+    """Dots grouped into frames, with a lower bound on the number of frames.
+
+    Attributes
+    ----------
+    frames : list of int arrays, indices into the dots; every dot appears exactly once
+    colour : (n,) int, the frame of each dot
+    clique : (k,) int, dots that conflict pairwise (so no schedule has fewer than k frames)
+    """
+
+    frames: list
+    colour: np.ndarray
+    clique: np.ndarray
+
+    @property
+    def lower_bound(self) -> int:
+        """Size of the largest set of mutually conflicting dots found (<= optimal frames)."""
+        return len(self.clique)
+
+    @property
+    def frames_over_bound(self) -> float:
+        return len(self.frames) / max(self.lower_bound, 1)
+
+
+def _epipole(rig: Rig) -> tuple[np.ndarray, float]:
+    """Homogeneous camera image (x, y, w) of the projector centre (the camera epipole)."""
+    X, Y, Z = rig.camera.pose.world_to_device(rig.projector.position)
+    K = rig.camera.intrinsics
+    return np.array([K.fx * X + K.cx * Z, K.fy * Y + K.cy * Z]), float(Z)
+
+
+def _epipolar_coordinates(rig: Rig, seg: np.ndarray, sep: float):
+    """Band coordinate, intervals along the epipolar lines and the band geometry.
+
+    Returns ``(w, s0, s1, reach, clique_width, cyclic, period)``: every two segments closer than
+    ``sep`` have ``|w_i - w_j| < reach`` (cyclically with ``period`` when ``cyclic``) and
+    intervals ``[s0, s1]`` less than ``sep`` apart; points at a common ``s`` of segments whose
+    ``w`` differ by less than ``clique_width`` are less than ``sep`` apart.
+    """
+    exy, ez = _epipole(rig)
+    scale = float(np.abs(seg).max()) + 1.0
+    far = abs(ez) * 1e7 * scale < float(np.hypot(*exy)) or abs(ez) < 1e-300
+    if far:
+        # epipole at infinity (or as good as): parallel lines, offset and position along them
+        d = exy / np.hypot(*exy)
+        nrm = np.array([-d[1], d[0]])
+        wend = seg @ nrm
+        w = wend.mean(axis=1)
+        spread = float(np.abs(wend - w[:, None]).max())
+        s = seg @ d
+        s0, s1 = s.min(axis=1), s.max(axis=1)
+        reach = sep + 2 * spread
+        clique_width = sep - 2 * spread
+        return w, s0, s1, reach * (1 + 1e-9), clique_width, False, 0.0
+    e = exy / ez
+    rel = seg - e
+    r = np.hypot(rel[..., 0], rel[..., 1])
+    # distance from the epipole to each segment (its nearest point) and to its far end
+    s0 = _dist_to_segments(e, seg)
+    s1 = r.max(axis=1)
+    th = np.arctan2(rel[..., 1], rel[..., 0])
+    mid = rel.mean(axis=1)
+    w = np.arctan2(mid[:, 1], mid[:, 0])
+    dth = np.abs(np.angle(np.exp(1j * (th - w[:, None]))))
+    spread = float(dth.max())
+    s_min, s_max = float(s0.min()), float(s1.max())
+    reach = (np.arcsin(sep / s_min) if sep < s_min else np.pi) + 2 * spread
+    clique_width = sep / s_max - 2 * spread
+    # cut the circle of angles in its widest empty gap
+    ws = np.sort(w)
+    gaps = np.diff(np.r_[ws, ws[0] + 2 * np.pi])
+    g = int(np.argmax(gaps))
+    cut = ws[(g + 1) % len(ws)]
+    w = np.mod(w - cut, 2 * np.pi)
+    cyclic = bool(gaps[g] <= reach)
+    return w, s0, s1, reach * (1 + 1e-9), clique_width, cyclic, 2 * np.pi
+
+
+def _dist_to_segments(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """Distances from one point (2,) to segments (n, 2, 2)."""
+    return point_segment_distance(np.asarray(p, float)[None], seg)[0]
+
+
+def _largest_clique(w, s0, s1, puv, clique_width, sep, min_proj_spacing, q=4):
+    """Largest set of pairwise conflicting dots among two kinds of windows.
+
+    Camera: dots whose band coordinates lie in ``q`` consecutive bins of width
+    ``clique_width / q`` and whose intervals share a point (their segments all have a point at
+    that distance from the epipole, pairwise closer than ``sep``). Projector: dots in a square
+    of ``q`` x ``q`` bins of side ``min_proj_spacing / (q sqrt 2)`` (pairwise closer than the
+    spacing).
+    """
+    best = np.empty(0, np.int64)
+    if clique_width > 0:
+        width = clique_width / q * (1 - 1e-9)
+        b = np.floor((w - w.min()) / width).astype(np.int64)
+        order = np.argsort(b, kind="stable")
+        depth, b0, s_star = _sched.max_overlap_windows(b[order], order, s0, s1, q)
+        if depth > 0:
+            inwin = (b >= b0) & (b < b0 + q) & (s0 <= s_star) & (s1 >= s_star)
+            best = np.flatnonzero(inwin)
+    if min_proj_spacing > 0:
+        side = min_proj_spacing / (q * np.sqrt(2)) * (1 - 1e-9)
+        ij = np.floor((puv - puv.min(axis=0)) / side).astype(np.int64)
+        nx = int(ij[:, 0].max()) + q + 1
+        if nx * (int(ij[:, 1].max()) + q + 1) < 2**62:
+            # every q x q window of bins that holds a dot, keyed by its lower corner
+            dy, dx = np.divmod(np.arange(q * q), q)
+            key = (ij[:, 1, None] - dy + q) * nx + (ij[:, 0, None] - dx + q)
+            keys, counts = np.unique(key.ravel(), return_counts=True)
+            k = int(np.argmax(counts))
+            if counts[k] > len(best):
+                y0, x0 = divmod(int(keys[k]), nx)
+                x0, y0 = x0 - q, y0 - q
+                inwin = (ij[:, 0] >= x0) & (ij[:, 0] < x0 + q)
+                inwin &= (ij[:, 1] >= y0) & (ij[:, 1] < y0 + q)
+                best = np.flatnonzero(inwin)
+    return best
+
+
+def dot_schedule(
+    rig: Rig,
+    proj_uv,
+    *,
+    depth_range: tuple[float, float],
+    min_proj_spacing: float = 8.0,
+    min_cam_spacing: float = 6.0,
+    order: str = "band",
+) -> DotSchedule:
+    """Group dots into frames along the epipolar structure, with a lower bound on frames.
+
+    Two dots conflict (must not share a frame) if they are closer than ``min_proj_spacing``
+    projector pixels or their camera epipolar segments (:func:`epipolar_segments` for
+    ``depth_range``) come closer than ``min_cam_spacing`` camera pixels (exact segment distance,
+    :func:`segment_distance`). All segments lie on lines through the camera epipole (the image
+    of the projector centre); each dot gets a band coordinate (the angle of its line about the
+    epipole, or its offset when the epipole is at infinity) and an interval along the line
+    (distance from the epipole). Dots are sorted by band and then by the start of their interval
+    and coloured first-fit: each takes the lowest frame not used by an already scheduled dot it
+    conflicts with. Within one band this is the greedy colouring of an interval graph by left
+    end, which is optimal; conflicts with the neighbouring bands are checked exactly. The
+    candidates for a conflict are found from the band index and a binary search on interval
+    starts, so the work is linear in the number of dots times the number of dots that can lie
+    within reach of one segment; no conflict graph is built.
+
+    The lower bound is the largest set of mutually conflicting dots found: dots in a band
+    narrower than the camera spacing whose intervals share a point, or dots in a small
+    projector square.
+
+    Parameters
+    ----------
+    rig : Rig
+    proj_uv : (n, 2) projector pixel coordinates of the dots
+    depth_range : (near, far) projector z-depth bounds of the scene (m)
+    min_proj_spacing, min_cam_spacing : float
+        Projector pixels, camera pixels (> 0).
+    order : ``"band"`` (by band, then interval start) or ``"sweep"`` (by interval start only)
+
+    Returns
+    -------
+    DotSchedule
+    """
+    proj_uv = _as_uv(proj_uv, "dot positions")
+    sep = float(min_cam_spacing)
+    psp = float(min_proj_spacing)
+    if not (sep > 0 and psp > 0):
+        raise ValueError(
+            f"min_cam_spacing and min_proj_spacing must be > 0 px, got {sep} and {psp}"
+        )
+    if order not in ("band", "sweep"):
+        raise ValueError(f"order must be 'band' or 'sweep', got {order!r}")
+    seg = np.ascontiguousarray(epipolar_segments(rig, proj_uv, depth_range))
+    w, s0, s1, reach, clique_width, cyclic, period = _epipolar_coordinates(rig, seg, sep)
+    # bands half as wide as the reach: conflicting dots are at most 2 bands apart
+    reach_bands = 2
+    bw = max(reach / reach_bands, float(np.ptp(w)) / 65536)  # at most ~65k bands
+    reach_bands = int(np.ceil(reach / bw))
+    if cyclic:
+        nb = max(int(np.floor(period / bw)), 1)
+        bw = period / nb
+        reach_bands = int(np.ceil(reach / bw))
+        band = np.minimum(np.floor(w / bw).astype(np.int64), nb - 1)
+    else:
+        band = np.floor((w - w.min()) / bw).astype(np.int64)
+        nb = int(band.max()) + 1
+    by_band = np.lexsort((s0, band))
+    band_start = np.searchsorted(band[by_band], np.arange(nb + 1)).astype(np.int64)
+    band_s0 = np.ascontiguousarray(s0[by_band])
+    max_len = float(np.max(s1 - s0))
+    # projector grid, cells one spacing wide
+    pmin = proj_uv.min(axis=0)
+    pcs = max(psp, float(np.ptp(proj_uv, axis=0).max()) / 4096)  # at most 4096^2 cells
+    pij = np.floor((proj_uv - pmin) / pcs).astype(np.int64)
+    pnx, pny = int(pij[:, 0].max()) + 1, int(pij[:, 1].max()) + 1
+    pcell = pij[:, 1] * pnx + pij[:, 0]
+    pidx = np.argsort(pcell, kind="stable")
+    pstart = np.searchsorted(pcell[pidx], np.arange(pnx * pny + 1)).astype(np.int64)
+    if order == "band":
+        seq = by_band
+    else:
+        seq = np.lexsort((band, s0))
+    colour = _sched.greedy_colour(
+        seq.astype(np.int64),
+        band,
+        band_start,
+        band_s0,
+        by_band.astype(np.int64),
+        s0,
+        s1,
+        seg,
+        sep,
+        reach_bands,
+        cyclic,
+        max_len,
+        np.ascontiguousarray(proj_uv),
+        pstart,
+        pidx.astype(np.int64),
+        pcell,
+        pnx,
+        pny,
+        psp,
+    )
+    frames = _frames_from_colour(colour)
+    clique = _largest_clique(w, s0, s1, proj_uv, clique_width, sep, psp)
+    return DotSchedule(frames=frames, colour=colour, clique=clique)
+
+
+def _frames_from_colour(colour: np.ndarray) -> list[np.ndarray]:
+    idx = np.argsort(colour, kind="stable")
+    bounds = np.searchsorted(colour[idx], np.arange(int(colour.max()) + 2))
+    return [idx[bounds[c] : bounds[c + 1]] for c in range(len(bounds) - 1)]
 
 
 def schedule_dots(
@@ -254,9 +503,9 @@ def schedule_dots(
 ) -> list[np.ndarray]:
     """Group dots into frames that the camera can decode without confusion.
 
-    Greedy graph colouring of the conflict graph: two dots conflict if they are closer than
-    ``min_proj_spacing`` projector pixels or their camera epipolar segments (for
-    ``depth_range``) come within ``min_cam_spacing`` camera pixels.
+    The frames of :func:`dot_schedule` (two dots share a frame only if they are at least
+    ``min_proj_spacing`` projector pixels apart and their camera epipolar segments for
+    ``depth_range`` stay at least ``min_cam_spacing`` camera pixels apart).
 
     Parameters
     ----------
@@ -272,25 +521,15 @@ def schedule_dots(
     list of int arrays, indices into ``proj_uv``; every dot appears exactly once
     """
     proj_uv = _as_uv(proj_uv, "dot positions")
-    n = len(proj_uv)
     if exact:
-        return [np.array([i]) for i in range(n)]
-    seg = epipolar_segments(rig, proj_uv, depth_range)
-    conflicts = _segment_conflicts(seg, float(min_cam_spacing))
-    for a, b in cKDTree(proj_uv).query_pairs(float(min_proj_spacing), output_type="ndarray"):
-        conflicts.add((int(min(a, b)), int(max(a, b))))
-    neighbours: list[list[int]] = [[] for _ in range(n)]
-    for a, b in conflicts:
-        neighbours[a].append(b)
-        neighbours[b].append(a)
-    colour = np.full(n, -1, dtype=np.int64)
-    for i in range(n):
-        used = {int(colour[j]) for j in neighbours[i] if colour[j] >= 0}
-        c = 0
-        while c in used:
-            c += 1
-        colour[i] = c
-    return [np.flatnonzero(colour == c) for c in range(int(colour.max()) + 1)]
+        return [np.array([i]) for i in range(len(proj_uv))]
+    return dot_schedule(
+        rig,
+        proj_uv,
+        depth_range=depth_range,
+        min_proj_spacing=min_proj_spacing,
+        min_cam_spacing=min_cam_spacing,
+    ).frames
 
 
 @dataclass(frozen=True, eq=False)

@@ -110,6 +110,121 @@ def test_schedule_respects_spacing_and_covers_every_dot(rig, rng):
     assert len(exact) == 600 and all(len(f) == 1 for f in exact)
 
 
+def _dense_segment_distance(a, b, k=4001):
+    """Brute force: distance between k samples of ``a`` and the exact segment ``b``."""
+    t = np.linspace(0.0, 1.0, k)
+    pts = a[0] + t[:, None] * (a[1] - a[0])
+    return dots.point_segment_distance(pts, b[None]).min()
+
+
+def test_segment_distance_hand_cases_and_brute_force(rng):
+    h = np.array([[0.0, 0.0], [10.0, 0.0]])
+    cases = [
+        (np.array([[2.0, 3.0], [8.0, 3.0]]), 3.0),  # parallel, overlapping: the offset
+        (np.array([[13.0, 4.0], [20.0, 4.0]]), 5.0),  # parallel, disjoint: end to end (3-4-5)
+        (np.array([[5.0, -1.0], [5.0, 1.0]]), 0.0),  # crossing
+        (np.array([[12.0, 0.0], [15.0, 0.0]]), 2.0),  # collinear gap
+        (np.array([[5.0, 2.0], [5.0, 7.0]]), 2.0),  # T: endpoint over the interior
+        (np.array([[10.0, 0.0], [11.0, 5.0]]), 0.0),  # touching at an end
+    ]
+    for seg, want in cases:
+        assert dots.segment_distance(h, seg) == pytest.approx(want, abs=1e-12)
+        assert dots.segment_distance(seg, h) == pytest.approx(want, abs=1e-12)
+    a = rng.uniform(0, 10, size=(200, 2, 2))
+    b = rng.uniform(0, 10, size=(200, 2, 2))
+    d = dots.segment_distance(a, b)
+    brute = np.array(
+        [min(_dense_segment_distance(x, y), _dense_segment_distance(y, x)) for x, y in zip(a, b)]
+    )
+    # sampling only overestimates, by at most half a sample step of the longer segment
+    assert np.all(d <= brute + 1e-12)
+    assert np.all(brute - d <= 10 * np.sqrt(2) / 4000 / 2 + 1e-9)
+
+
+def _rolled(rig, angle):
+    """The rig with its camera rolled about its optical axis (epipolar lines turn by angle)."""
+    from simlunar.geometry import Camera, Pose, Rig
+
+    c, s = np.cos(angle), np.sin(angle)
+    roll = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    cam = rig.camera
+    return Rig(rig.projector, Camera(cam.intrinsics, Pose(cam.pose.rotation @ roll, cam.position)))
+
+
+def _behind(rig):
+    """Camera 0.4 m straight behind the projector: the epipole is inside the image."""
+    from simlunar.geometry import Camera, Pose, Rig
+
+    p = rig.projector.pose
+    return Rig(
+        rig.projector, Camera(rig.camera.intrinsics, Pose(p.rotation, p.position - 0.4 * p.forward))
+    )
+
+
+RIGS = {
+    # verged moonyard rig, epipole far off the image side
+    "moonyard": lambda: rigs.moonyard_rig(proj_size=(256, 192), cam_size=(512, 384)),
+    # camera parallel to the projector: epipole at infinity, rectified rows
+    "parallel": lambda: rigs.moonyard_rig(proj_size=(256, 192), cam_size=(512, 384), verge=False),
+    # converged with a long baseline and a rolled camera: slanted, fanning epipolar lines
+    "rolled": lambda: _rolled(
+        rigs.moonyard_rig(proj_size=(256, 192), cam_size=(512, 384), baseline=0.9), 0.6
+    ),
+    # nadir aerial rig seen from the side at a steep azimuth
+    "aerial": lambda: rigs.aerial_rig(proj_size=(256, 192), cam_size=(400, 300), azimuth=2.0),
+    # epipole inside the image: lines radiate all around it
+    "behind": lambda: _behind(rigs.moonyard_rig(proj_size=(256, 192), cam_size=(512, 384))),
+}
+
+
+def _conflicts(seg, uv, i, j, psp, sep):
+    """Exact test for the pairs (i, j): projector distance < psp or segment distance < sep."""
+    dp = np.linalg.norm(uv[i] - uv[j], axis=-1)
+    return (dp < psp) | (dots.segment_distance(seg[i], seg[j]) < sep)
+
+
+@pytest.mark.parametrize("name", sorted(RIGS))
+def test_schedule_is_conflict_free_under_the_exact_test(name, rng):
+    rig = RIGS[name]()
+    dist = 1.6 if name != "aerial" else 100.0
+    depth_range = (0.8 * dist, 1.25 * dist)
+    uv = np.unique(np.floor(rng.uniform([0, 0], [256, 192], size=(2500, 2))) + 0.5, axis=0)
+    n = len(uv)
+    psp, sep = 8.0, 6.0
+    sch = dots.dot_schedule(
+        rig, uv, depth_range=depth_range, min_proj_spacing=psp, min_cam_spacing=sep
+    )
+    np.testing.assert_array_equal(np.sort(np.concatenate(sch.frames)), np.arange(n))
+    for k, f in enumerate(sch.frames):
+        assert np.all(sch.colour[f] == k)
+    seg = dots.epipolar_segments(rig, uv, depth_range)
+    # every pair of dots that share a frame, against the exact test
+    i, j = np.concatenate(
+        [np.stack([f[a], f[b]]) for f in sch.frames for a, b in [np.triu_indices(len(f), 1)]],
+        axis=1,
+    )
+    assert not np.any(_conflicts(seg, uv, i, j, psp, sep)), "conflicting dots share a frame"
+    # the lower bound is a real clique: every pair in it conflicts
+    cl = sch.clique
+    a, b = np.triu_indices(len(cl), 1)
+    assert len(cl) >= 2 and np.all(_conflicts(seg, uv, cl[a], cl[b], psp, sep))
+    assert sch.lower_bound <= len(sch.frames) < n / 4  # dots are actually multiplexed
+
+
+def test_schedule_around_an_epipole_inside_the_image():
+    # dots on a ring about the projector centre: their camera segments radiate all around the
+    # epipole, so the bands close on themselves and the first band meets the last
+    rig = _behind(rigs.moonyard_rig(proj_size=(256, 192), cam_size=(512, 384)))
+    ang = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    uv = np.c_[128 + 60 * np.cos(ang), 96 + 60 * np.sin(ang)]
+    sch = dots.dot_schedule(rig, uv, depth_range=(1.3, 2.0), min_proj_spacing=2.0)
+    seg = dots.epipolar_segments(rig, uv, (1.3, 2.0))
+    i, j = np.triu_indices(len(uv), 1)
+    bad = _conflicts(seg, uv, i, j, 2.0, 6.0) & (sch.colour[i] == sch.colour[j])
+    assert not bad.any()
+    assert 3 <= sch.lower_bound <= len(sch.frames) < 40
+
+
 def test_multiplexed_frames_decode_like_one_dot_frames(rig, rng):
     # plane z = 0 seen by the moonyard rig; render each frame as Gaussian camera spots
     k = 300
