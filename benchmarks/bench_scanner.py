@@ -11,6 +11,13 @@ one-dot-per-frame scan; to keep the benchmark short it is run on a random subset
 and its time extrapolated per dot (``reference_s`` = measured time per exact frame x dots;
 ``exact_subset`` says how many were rendered). The depth difference between the two modes on
 the subset is compared with the guide pixel's footprint.
+
+``scanner_dlp``: one gray-code scan at DLP size (the full moonyard, 1024 x 768 projector,
+2048 x 1536 camera, spp 8, the DLP experiment's sensor, lens PSF and sub-pixel refinement) in
+a fresh process, so its peak memory is its own: ``render_s`` (Mitsuba), ``rest_s`` (all other
+work of the scan) and ``peak_rss_gb``. Reference: the former float64 path (blur of the whole
+stack, NumPy Poisson per frame, decode and refinement of the stack) on the same rendered
+frames, in a second process; ``ratio`` compares the two rests.
 """
 
 from __future__ import annotations
