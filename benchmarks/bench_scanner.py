@@ -18,12 +18,23 @@ pixels at random (seeded) scheduled by :func:`simlunar.scanner.dots.dot_schedule
 frame count, lower bound and time. Reference: the previous scheduler (conflict pairs from a
 k-d tree of segment samples gathered in a Python set, greedy colouring in index order), kept
 here, timed against the new one on the same ``REFERENCE_SUBSET`` dots.
+
+``scanner_dlp``: one gray-code scan at DLP size (the full moonyard, 1024 x 768 projector,
+2048 x 1536 camera, spp 8, the DLP experiment's sensor, lens PSF and sub-pixel refinement) in
+a fresh process, so its peak memory is its own: ``render_s`` (Mitsuba), ``rest_s`` (all other
+work of the scan) and ``peak_rss_gb``. Reference: the former float64 path (blur of the whole
+stack, NumPy Poisson per frame, decode and refinement of the stack) on the same rendered
+frames, in a second process; ``ratio`` compares the two rests.
 """
 
 from __future__ import annotations
 
+import json
 import os
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -203,8 +214,168 @@ def bench_dot_schedule(fraction: float = 0.1) -> dict:
     }
 
 
+#: the DLP rig of experiments/scanner_ambiguity_dlp.yaml: projector and camera (width, height)
+DLP_PROJ, DLP_CAM = (1024, 768), (2048, 1536)
+DLP_SPP = 8
+
+
+def _dlp_setup():
+    from simlunar.imaging.sensor import SensorModel
+    from simlunar.study import scanner as st
+    from simlunar.terrain import generate
+
+    terr = generate("moonyard", rng=0, scale=1.0).terrain  # the full 971 x 1674 moonyard
+    rig = st.aim_rig_at_terrain(
+        terr, proj_size=DLP_PROJ, cam_size=DLP_CAM, cam_fov_x=np.radians(60.0)
+    )
+    sensor = SensorModel(full_well_e=20000.0, read_noise_e=5.0, bits=10)
+    cap = st.RenderCapture(
+        terr, rig, max_depth=3, spp=DLP_SPP, seed=0, sensor=sensor, rng=0, camera_blur=1.0
+    )
+    return terr, rig, cap
+
+
+def _warm_up_compiled():
+    """Load (or compile) the numba kernels before timing: a tiny gray-code scan of each step."""
+    from simlunar.imaging.blur import gaussian_blur
+    from simlunar.imaging.sensor import SensorModel, apply_sensor
+    from simlunar.scanner import gray_code as gc
+
+    apply_sensor(np.ones((4, 4), np.float32), SensorModel(), rng=0)
+    gaussian_blur(np.ones((12, 12), np.float32), 1.0)
+    st = gc.encode(8, 4).astype(np.float32) / 255
+    d = gc.decode(st, np.ones((4, 8)), np.zeros((4, 8)), proj_shape=(4, 8), black_threshold=0.1)
+    gc.refine_subpixel(d, st)
+
+
+def _dlp_worker(mode: str, frames_path: str) -> dict:
+    """One DLP gray-code scan in this process; ``mode`` "ours" or "reference".
+
+    ``ours`` renders and times the scan (render vs the rest) and saves the noise-free
+    radiance frames; ``reference`` loads them and runs the pre-streaming float64 path on them
+    (lens blur of the stack, NumPy Poisson per frame, decode and refinement of the stack).
+    """
+    import resource
+
+    from simlunar.scanner import modes
+    from simlunar.scanner.triangulate import Correspondences, depth_at_proj_pixels, triangulate
+
+    _warm_up_compiled()
+    _terrain, rig, cap = _dlp_setup()
+    if mode == "ours":
+        render_s = save_s = 0.0
+        saved = []
+        orig = cap.scene.render_patterns
+
+        def timed(pats, **kw):
+            nonlocal render_s, save_s
+            t = time.perf_counter()
+            out = orig(pats, **kw)
+            t1 = time.perf_counter()
+            # the raw frames for the reference path (not timed: written to disk at once)
+            saved.append(f"{frames_path}.{len(saved)}.npy")
+            np.save(saved[-1], out)
+            render_s += t1 - t
+            save_s += time.perf_counter() - t1
+            return out
+
+        cap.scene.render_patterns = timed
+        t0 = time.perf_counter()
+        g = modes.gray_code_scan(cap, rig, subpixel=True)
+        total = time.perf_counter() - t0 - save_s
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
+        # raw frames in render order (white, black, then the bit patterns) for the reference
+        np.save(frames_path, np.concatenate([np.load(f) for f in saved]))
+        for f in saved:
+            os.remove(f)
+        dec = g.decode
+        out = {"render_s": render_s, "rest_s": total - render_s, "renders": g.renders}
+    else:
+        from simlunar.scanner import _reference as ref
+        from simlunar.scanner import gray_code as gc
+
+        raw = np.load(frames_path)  # white, black, patterns: the radiance the scan rendered
+        t0 = time.perf_counter()
+        H, W = DLP_PROJ[1], DLP_PROJ[0]
+        rad = ref.lens_reference(raw, cap.camera_blur)
+        white_r, black_r, pats = rad[0], rad[1], rad[2:]
+        inv = gc.inverses_by_linearity(pats, white_r, black_r)
+        radiance = np.concatenate([gc.interleave(pats, inv), rad[:2]])
+        frames = np.stack(
+            [ref.apply_sensor_reference(im, cap.sensor, rng=cap.rng) for im in radiance]
+        ).astype(np.float64)
+        images, white, black = frames[:-2], frames[-2], frames[-1]
+        dec = ref.decode_reference(
+            images, white, black, proj_shape=(H, W), black_threshold=0.05, white_threshold=0.01
+        )
+        dec = ref.refine_subpixel_reference(dec, images)
+        cloud = triangulate(rig, Correspondences.from_gray(dec), method="plane")
+        depth_at_proj_pixels(cloud, rig.guide)
+        out = {"rest_s": time.perf_counter() - t0}
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
+    out["peak_rss_gb"] = peak
+    out["valid_fraction"] = float(dec.valid.mean())
+    np.savez(frames_path + f".{mode}.npz", col=dec.col, valid=dec.valid, sub=dec.subpixel)
+    return out
+
+
+def bench_scanner_dlp() -> dict:
+    """One gray-code scan at DLP size (spp 8) in a fresh process; the float64 path on its frames.
+
+    ``render_s``: Mitsuba (scene.render_patterns, 22 frames); ``rest_s``: everything else of
+    the scan (lens blur, sensor, decode, refinement, triangulation); ``peak_rss_gb``: the
+    scan process's peak resident memory (scene included). ``reference_s`` is the rest of the
+    pre-streaming float64 path on the same rendered frames, in a second process.
+    """
+    root = Path(__file__).resolve().parent.parent
+    tmp = root / "build" / "bench_scanner_dlp"
+    tmp.mkdir(parents=True, exist_ok=True)
+    frames = str(tmp / "radiance.npy")
+    env = {**os.environ, "PYTHONPATH": str(root)}
+    res = {}
+    for mode in ("ours", "reference"):
+        p = subprocess.run(
+            [sys.executable, str(Path(__file__).resolve()), "dlp", mode, frames],
+            capture_output=True,
+            text=True,
+            env=env,
+            check=False,
+        )
+        if p.returncode != 0:
+            raise RuntimeError(f"scanner_dlp {mode} worker failed:\n{p.stderr[-2000:]}")
+        res[mode] = json.loads(p.stdout.strip().splitlines()[-1])
+    ours, ref = res["ours"], res["reference"]
+    a = np.load(frames + ".ours.npz")
+    b = np.load(frames + ".reference.npz")
+    both = a["valid"] & b["valid"]
+    du = a["sub"][..., 0][both] - b["sub"][..., 0][both]
+    du = du[np.isfinite(du)]
+    os.remove(frames)
+    return {
+        "reference_s": round(ref["rest_s"], 3),
+        "ours_s": round(ours["rest_s"], 3),
+        "render_s": round(ours["render_s"], 3),
+        "rest_s": round(ours["rest_s"], 3),
+        "rest_over_render": round(ours["rest_s"] / ours["render_s"], 3),
+        "peak_rss_gb": round(ours["peak_rss_gb"], 3),
+        "reference_peak_rss_gb": round(ref["peak_rss_gb"], 3),
+        "renders": ours["renders"],
+        "spp": DLP_SPP,
+        "valid_fraction": round(ours["valid_fraction"], 4),
+        "reference_valid_fraction": round(ref["valid_fraction"], 4),
+        "same_column": round(float(np.mean(a["col"][both] == b["col"][both])), 4),
+        "subpixel_rms_diff_px": round(float(np.sqrt(np.mean(du**2))), 4),
+        "load_1min": round(os.getloadavg()[0], 2),
+    }
+
+
 BENCHMARKS = {
     "gray_code_scan": bench_gray_code_scan,
     "multiplexed_dots": bench_multiplexed_dots,
     "dot_schedule": bench_dot_schedule,
+    "scanner_dlp": bench_scanner_dlp,
 }
+
+
+if __name__ == "__main__" and len(sys.argv) == 4 and sys.argv[1] == "dlp":
+    print(json.dumps(_dlp_worker(sys.argv[2], sys.argv[3])))

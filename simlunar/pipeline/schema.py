@@ -669,15 +669,33 @@ class DotOptsCfg(_Model):
     tol_px: Px = Field(2.0, description="matching tolerance (camera px)")
     rel_threshold: float = Field(0.02, ge=0, le=1, description="relative blob threshold")
     abs_threshold: float = Field(0.02, ge=0, le=1, description="absolute blob threshold")
-    batch: PositiveInt = Field(32, description="frames per render call (memory only)")
+    batch: PositiveInt = Field(8, description="frames per render call (memory only)")
+
+
+class CaptureOptsCfg(_Model):
+    """Render-capture options (:class:`simlunar.study.scanner_capture.RenderCapture`)."""
+
+    sparse_integrator: Literal["path", "ptracer"] = Field(
+        "path",
+        description="integrator for sparse patterns (dot frames): path tracer, or ptracer "
+        "(light traced from the projector; docs/scanner.md)",
+    )
+    sparse_spp: PositiveInt | None = Field(
+        None, description="samples per pixel for sparse patterns (null: render.spp)"
+    )
+    sparse_below: float = Field(
+        0.01, gt=0, le=1, description="largest lit fraction of projector pixels counted sparse"
+    )
 
 
 class ScannerOptionsCfg(_Model):
-    """Scanner study options: rig adjustments, gray-code and dot scan options, planner options."""
+    """Scanner study options: rig adjustments, gray-code, dot scan and capture options,
+    planner options."""
 
     rig: RigCfg = Field(default_factory=RigCfg)
     gray_opts: GrayOptsCfg = Field(default_factory=GrayOptsCfg)
     dot_opts: DotOptsCfg = Field(default_factory=DotOptsCfg)
+    capture_opts: CaptureOptsCfg = Field(default_factory=CaptureOptsCfg)
     planner_opts: dict[str, PlannerOptsCfg] = Field(
         default_factory=dict, description="planner name -> options (study.planners only)"
     )

@@ -471,6 +471,10 @@ def _compute_scanner_unit(
     # schema refuses a fixed exposure_e for scanner studies
     sensor = None if r.sensor is None else translate.sensor_model(r.sensor)
     sun = lights[0] if isinstance(r.light, SunLightCfg) else None
+    opts = translate.scanner_options(s).kwargs()
+    if s.save_scans:
+        # the gray-code scan streams its frames into the decoder; the export needs the stack
+        opts["gray_opts"] = {**opts["gray_opts"], "keep_frames": True}
     res = run_scanner_study(
         terrain,
         rig,
@@ -481,7 +485,7 @@ def _compute_scanner_unit(
         sensor=sensor,
         bsdf=bsdf,
         sun=sun,
-        **translate.scanner_options(s).kwargs(),
+        **opts,
     )
     timings["study_s"] = time.perf_counter() - t
     guide = res.guide

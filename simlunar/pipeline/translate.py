@@ -371,6 +371,7 @@ class ScannerStudyOptions:
     gray_opts: dict = field(default_factory=dict)
     dot_opts: dict = field(default_factory=dict)
     planner_opts: dict = field(default_factory=dict)
+    capture_opts: dict = field(default_factory=dict)
 
     def kwargs(self) -> dict[str, Any]:
         return {f: getattr(self, f) for f in self.__dataclass_fields__}
@@ -392,4 +393,5 @@ def scanner_options(study: ScannerStudyCfg) -> ScannerStudyOptions:
         gray_opts=gray_kwargs(o.gray_opts),
         dot_opts=dot_kwargs(o.dot_opts),
         planner_opts={name: planner_kwargs(name, p) for name, p in o.planner_opts.items()},
+        capture_opts=o.capture_opts.model_dump(),
     )

@@ -176,6 +176,7 @@ class TerrainScene:
         self._params = mi.traverse(self._scene)
         self._pattern_key = f"{PROJECTOR_ID}.irradiance.data"
         self._pattern = self.projector.pattern if self.projector is not None else None
+        self._ptracer = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -186,11 +187,27 @@ class TerrainScene:
         """The projector pattern now in the scene (read-only), or None without projector."""
         return self._pattern
 
-    def render(self, spp: int | None = None, seed: int | None = None) -> np.ndarray:
-        """Linear radiance image, float32 (rows, cols, 3) (W m^-2 sr^-1 per unit irradiance)."""
+    def render(
+        self, spp: int | None = None, seed: int | None = None, *, integrator: str = "path"
+    ) -> np.ndarray:
+        """Linear radiance image, float32 (rows, cols, 3) (W m^-2 sr^-1 per unit irradiance).
+
+        ``integrator``: ``"path"`` (the scene's path tracer) or ``"ptracer"`` (Mitsuba's light
+        tracer with the same ``max_depth``: paths start at the emitters, which sample their
+        lit area, and are splatted onto the film; ``spp`` then counts light paths per film
+        pixel). Both estimate the same image; light tracing pays for sparse emission
+        (projector dots).
+        """
         spp = self.spp if spp is None else _check_int("spp", spp, 1)
         seed = self.seed if seed is None else _check_int("seed", seed, 0)
-        img = self._mi.render(self._scene, spp=spp, seed=seed)
+        if integrator == "path":
+            img = self._mi.render(self._scene, spp=spp, seed=seed)
+        elif integrator == "ptracer":
+            if self._ptracer is None:
+                self._ptracer = self._mi.load_dict({"type": "ptracer", "max_depth": self.max_depth})
+            img = self._mi.render(self._scene, integrator=self._ptracer, spp=spp, seed=seed)
+        else:
+            raise ValueError(f"unknown integrator {integrator!r}; valid: 'path', 'ptracer'")
         return np.array(img, dtype=np.float32, copy=True)[..., :3]
 
     def set_pattern(self, pattern) -> None:
@@ -203,7 +220,13 @@ class TerrainScene:
         self._pattern = p
 
     def render_patterns(
-        self, patterns, *, spp: int | None = None, seed: int | None = None, inverses: bool = False
+        self,
+        patterns,
+        *,
+        spp: int | None = None,
+        seed: int | None = None,
+        inverses: bool = False,
+        integrator: str = "path",
     ):
         """Luminance images under a stack of projector patterns, rendered in this scene.
 
@@ -217,6 +240,8 @@ class TerrainScene:
             Also return the images under ``1 - pattern``, obtained by linearity
             (:func:`inverse_by_linearity`) from two extra renders (all-ones and all-zeros
             pattern) instead of n more. Noise-free: add sensor noise per frame afterwards.
+        integrator : "path" or "ptracer"
+            See :meth:`render`.
 
         Returns
         -------
@@ -238,13 +263,13 @@ class TerrainScene:
         try:
             for i, p in enumerate(pats):
                 self.set_pattern(p)
-                out[i] = luminance(self.render(spp, seed))
+                out[i] = luminance(self.render(spp, seed, integrator=integrator))
             if not inverses:
                 return out
             self.set_pattern(np.ones(shape, np.float32))
-            white = luminance(self.render(spp, seed))
+            white = luminance(self.render(spp, seed, integrator=integrator))
             self.set_pattern(np.zeros(shape, np.float32))
-            black = luminance(self.render(spp, seed))
+            black = luminance(self.render(spp, seed, integrator=integrator))
         finally:
             self.set_pattern(original)
         return out, inverse_by_linearity(white, out, black)

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 
 def num_bits(n: int) -> int:
@@ -64,8 +65,10 @@ def gray_to_binary(bits: np.ndarray) -> np.ndarray:
 def bit_planes(values, n: int) -> np.ndarray:
     """Gray-code bits of ``values`` as (n, ...) uint8 planes, most significant first."""
     g = gray(values)
-    shifts = np.arange(n - 1, -1, -1, dtype=np.int64).reshape((n,) + (1,) * g.ndim)
-    return ((g[None] >> shifts) & 1).astype(np.uint8)
+    out = np.empty((n, *g.shape), np.uint8)
+    for i in range(n):
+        np.bitwise_and(g >> (n - 1 - i), 1, out=out[i], casting="unsafe")
+    return out
 
 
 def encode(width: int, height: int) -> np.ndarray:
@@ -201,6 +204,125 @@ class GrayDecode:
         return uv
 
 
+class GrayDecoder:
+    """Streaming gray-code decoder: frames are added as they are captured.
+
+    Holds per camera pixel only the decoded bits, their reliability and (for sub-pixel
+    refinement) the pattern-minus-inverse signal of each bit, never the frame stack, so a
+    scan's memory does not grow with its number of frames. :func:`decode` is this class fed
+    with a whole stack; both give identical results.
+
+    Parameters
+    ----------
+    proj_shape : (H, W)
+        Projector pattern shape (height, width).
+    cam_shape : (rows, cols)
+        Camera frame shape.
+    black_threshold, white_threshold : float
+        OpenCV's thresholds, in the units of the frames (see :func:`decode`).
+    keep_diff : bool
+        Keep each bit's ``pattern - inverse`` signal (float32 for float32 frames, else
+        float64) for :func:`refine_subpixel_from_diff`.
+    """
+
+    def __init__(
+        self,
+        proj_shape: tuple[int, int],
+        cam_shape: tuple[int, int],
+        *,
+        black_threshold: float = 40.0,
+        white_threshold: float = 5.0,
+        keep_diff: bool = False,
+    ) -> None:
+        self.proj_shape = (int(proj_shape[0]), int(proj_shape[1]))
+        self.cam_shape = (int(cam_shape[0]), int(cam_shape[1]))
+        H, W = self.proj_shape
+        self.n_col_bits, self.n_row_bits = num_bits(W), num_bits(H)
+        self.n_bits = self.n_col_bits + self.n_row_bits
+        self.black_threshold = float(black_threshold)
+        self.white_threshold = float(white_threshold)
+        self.bits = np.zeros((self.n_bits, *self.cam_shape), np.uint8)
+        self.reliable = np.zeros((self.n_bits, *self.cam_shape), bool)
+        self.keep_diff = bool(keep_diff)
+        self.diff: np.ndarray | None = None
+        self._seen = np.zeros(self.n_bits, bool)
+        self.lit: np.ndarray | None = None
+
+    def _frame(self, name: str, a) -> np.ndarray:
+        a = np.asarray(a)
+        if a.shape != self.cam_shape:
+            raise ValueError(f"{name} frame {a.shape} must match the camera shape {self.cam_shape}")
+        return a
+
+    def add_pair(self, bit: int, pattern, inverse) -> None:
+        """Add the captured (pattern, inverse) frames of gray bit ``bit``.
+
+        ``bit`` counts column bits MSB first, then row bits MSB first (the pair index of the
+        :func:`encode` stack).
+        """
+        bit = int(bit)
+        if not 0 <= bit < self.n_bits:
+            raise ValueError(f"bit must be in 0..{self.n_bits - 1}, got {bit}")
+        p = self._frame("pattern", pattern)
+        i = self._frame("inverse", inverse)
+        # the decision is made in float64 whatever the frames' type
+        d = np.subtract(p, i, dtype=np.float64)
+        np.greater(d, 0.0, out=self.bits[bit], casting="unsafe")
+        np.greater_equal(np.abs(d), self.white_threshold, out=self.reliable[bit])
+        if self.keep_diff:
+            if self.diff is None:
+                dt = np.float64 if np.result_type(p, i) == np.float64 else np.float32
+                self.diff = np.zeros((self.n_bits, *self.cam_shape), dt)
+            self.diff[bit] = d
+        self._seen[bit] = True
+
+    def add_white_black(self, white, black) -> None:
+        """Add the captured all-white and all-black frames."""
+        w = self._frame("white", white)
+        b = self._frame("black", black)
+        self.lit = np.subtract(w, b, dtype=np.float64) > self.black_threshold
+
+    def result(self, *, require_reliable: bool = True) -> GrayDecode:
+        """The decode of the frames added so far (every pair and white/black are needed)."""
+        missing = np.flatnonzero(~self._seen)
+        if missing.size or self.lit is None:
+            what = [f"bit {int(k)}" for k in missing] + (
+                ["white/black"] if self.lit is None else []
+            )
+            raise ValueError(f"gray-code decode is missing frames: {', '.join(what)}")
+        H, W = self.proj_shape
+        ncb = self.n_col_bits
+        col = _gray_planes_to_index(self.bits[:ncb])
+        row = _gray_planes_to_index(self.bits[ncb:])
+        valid = self.lit & (col < W) & (row < H)
+        if require_reliable:
+            valid &= np.all(self.reliable, axis=0)
+        col[~valid] = -1
+        row[~valid] = -1
+        return GrayDecode(
+            col=col,
+            row=row,
+            valid=valid,
+            lit=self.lit,
+            bits=self.bits,
+            reliable=self.reliable,
+            n_col_bits=ncb,
+            n_row_bits=self.n_row_bits,
+            proj_shape=(H, W),
+        )
+
+
+def _gray_planes_to_index(planes: np.ndarray) -> np.ndarray:
+    """:func:`gray_to_binary` plane by plane (no (n_bits, ...) int64 temporary)."""
+    binary = np.zeros(planes.shape[1:], np.uint8)
+    out = np.zeros(planes.shape[1:], np.int64)
+    for g in planes:
+        binary ^= g
+        out <<= 1
+        out |= binary
+    return out
+
+
 def decode(
     images: np.ndarray,
     white: np.ndarray,
@@ -232,9 +354,9 @@ def decode(
     """
     H, W = (int(proj_shape[0]), int(proj_shape[1]))
     ncb, nrb = num_bits(W), num_bits(H)
-    images = np.asarray(images, dtype=np.float64)
-    white = np.asarray(white, dtype=np.float64)
-    black = np.asarray(black, dtype=np.float64)
+    images = np.asarray(images)
+    white = np.asarray(white)
+    black = np.asarray(black)
     n_expected = 2 * (ncb + nrb)
     if images.ndim != 3 or images.shape[0] != n_expected:
         raise ValueError(
@@ -246,28 +368,16 @@ def decode(
             f"white {white.shape} and black {black.shape} frames must match the "
             f"camera shape {images.shape[1:]}"
         )
-    pat, inv = images[0::2], images[1::2]
-    bits = (pat > inv).astype(np.uint8)
-    reliable = np.abs(pat - inv) >= white_threshold
-    lit = (white - black) > black_threshold
-    col = gray_to_binary(bits[:ncb])
-    row = gray_to_binary(bits[ncb:])
-    valid = lit & (col < W) & (row < H)
-    if require_reliable:
-        valid &= np.all(reliable, axis=0)
-    col = np.where(valid, col, -1)
-    row = np.where(valid, row, -1)
-    return GrayDecode(
-        col=col,
-        row=row,
-        valid=valid,
-        lit=lit,
-        bits=bits,
-        reliable=reliable,
-        n_col_bits=ncb,
-        n_row_bits=nrb,
-        proj_shape=(H, W),
+    dec = GrayDecoder(
+        (H, W),
+        images.shape[1:],
+        black_threshold=black_threshold,
+        white_threshold=white_threshold,
     )
+    for k in range(ncb + nrb):
+        dec.add_pair(k, images[2 * k], images[2 * k + 1])
+    dec.add_white_black(white, black)
+    return dec.result(require_reliable=require_reliable)
 
 
 def bit_errors(
@@ -323,20 +433,38 @@ def stable_bits(
     from scipy import ndimage
 
     true_col = np.asarray(true_col)
-    has = (true_col >= 0) & (np.asarray(true_row) >= 0)
-    tb = np.concatenate(
-        [
-            bit_planes(np.clip(true_col, 0, None), n_col_bits),
-            bit_planes(np.clip(true_row, 0, None), n_row_bits),
-        ]
-    ).astype(np.int8)
+    true_row = np.asarray(true_row)
+    has = (true_col >= 0) & (true_row >= 0)
     size = 2 * int(margin) + 1
-    out = np.empty(tb.shape, bool)
     all_has = ndimage.minimum_filter(has.astype(np.int8), size=size, mode="constant", cval=0) > 0
-    for i, b in enumerate(tb):
-        lo = ndimage.minimum_filter(b, size=size, mode="nearest")
-        hi = ndimage.maximum_filter(b, size=size, mode="nearest")
-        out[i] = (lo == hi) & all_has
+    out = np.empty((n_col_bits + n_row_bits, *true_col.shape), bool)
+    k = 0
+    for idx, n in ((true_col, n_col_bits), (true_row, n_row_bits)):
+        g = gray(np.clip(idx, 0, None))
+        # a bit is constant over the window iff its OR and its AND over the window agree;
+        # both are separable box filters (borders: the edge pixel repeated)
+        changes = _box_bitwise(g, margin, np.bitwise_or) ^ _box_bitwise(g, margin, np.bitwise_and)
+        for i in range(n):
+            out[k] = (((changes >> (n - 1 - i)) & 1) == 0) & all_has
+            k += 1
+    return out
+
+
+def _box_bitwise(a: np.ndarray, margin: int, op) -> np.ndarray:
+    """Bitwise ``op`` over the (2 margin + 1)^2 window of each pixel, edge pixels repeated."""
+    m = int(margin)
+    out = a
+    for axis in (0, 1):
+        p = np.pad(out, [(m, m) if ax == axis else (0, 0) for ax in (0, 1)], mode="edge")
+        n = out.shape[axis]
+
+        def window(s, p=p, n=n, axis=axis):
+            return p[s : s + n] if axis == 0 else p[:, s : s + n]
+
+        acc = window(0).copy()
+        for s in range(1, 2 * m + 1):
+            op(acc, window(s), out=acc)
+        out = acc
     return out
 
 
@@ -351,90 +479,103 @@ def bit_error_rates(errors: np.ndarray, mask: np.ndarray) -> np.ndarray:
         return np.where(n > 0, (errors & mask).sum(axis=(1, 2)) / np.maximum(n, 1), np.nan)
 
 
-def _edges_along_rows(
-    index: np.ndarray,
-    valid: np.ndarray,
-    lit: np.ndarray,
-    diff: np.ndarray,
-    n_bits: int,
-    max_gap: int,
-):
-    """Stripe edges between horizontally consecutive valid camera pixels (refine_subpixel helper).
+@njit(cache=True, nogil=True, error_model="numpy")
+def _refine_lines(index, valid, lit, diff, n_bits, max_gap, out):  # pragma: no cover - compiled
+    """Sub-pixel projector index along each line (row) of 2-D views; writes ``out``.
 
-    ``index`` (rows, cols) decoded projector index, ``diff`` (n_bits, rows, cols) the
-    pattern-minus-inverse signal of each gray bit. An edge follows valid pixel x when the next
-    valid pixel x' in its row is at most ``max_gap + 1`` pixels on, every pixel between them is
-    lit (they only failed the reliability test, as a pixel straddling a stripe edge does) and
-    the two indices differ by exactly one: consecutive gray codes differ in one bit, whose
-    signal changes sign across the edge. The first zero crossing of that signal from x to x',
-    linear between pixel centres, is the edge's camera position.
+    Stripe edges: an edge follows valid pixel x when the next valid pixel x' on its line is at
+    most ``max_gap + 1`` pixels on, every pixel between them is lit (they only failed the
+    reliability test, as a pixel straddling a stripe edge does) and the two indices differ by
+    exactly one: consecutive gray codes differ in one bit, whose pattern-minus-inverse signal
+    changes sign across the edge. The first zero crossing of that signal from x to x', linear
+    between pixel centres, is the edge's camera position; its projector coordinate is the
+    boundary ``max(i, i')``. Edges are keyed by their left pixel x.
 
-    Returns
-    -------
-    ok : (rows, cols) bool, keyed by the left pixel x
-    pos : (rows, cols) float64 camera coordinate of the edge (pixel centres at x + 0.5)
-    u : (rows, cols) float64 projector coordinate of the edge (the boundary ``max(i, i')``)
+    A valid pixel then takes the projector index interpolated linearly between the nearest
+    edge keyed left of it and the nearest keyed at or right of it, if those two edges bound
+    the one projector stripe of its decoded index; else NaN.
     """
-    rows, cols = index.shape
-    r, c = np.indices((rows, cols))
-    ok = np.zeros((rows, cols), bool)
-    pos = np.full((rows, cols), np.nan)
-    u = np.full((rows, cols), np.nan)
-    between = np.ones((rows, cols), bool)  # every pixel from x + 1 to x + g - 1 is lit, invalid
-    for g in range(1, max_gap + 2):
-        if g >= cols:
-            break
-        a, b = index[:, :-g], index[:, g:]
-        pair = valid[:, :-g] & valid[:, g:] & between[:, :-g] & ~ok[:, :-g]
-        step = pair & (np.abs(a - b) == 1)
-        lo = np.minimum(a, b)
-        flip = gray(np.where(step, lo, 0)) ^ gray(np.where(step, lo + 1, 1))
-        # bit position (MSB first) of the one gray bit that changes between lo and lo + 1
-        k = np.clip(n_bits - 1 - np.log2(np.maximum(flip, 1)).astype(np.int64), 0, n_bits - 1)
-        rr, cc = r[:, :-g], c[:, :-g]
-        s_start = diff[k, rr, cc]
-        found = np.zeros(step.shape, bool)
-        where = np.full(step.shape, np.nan)
-        for j in range(g):
-            s0, s1 = diff[k, rr, cc + j], diff[k, rr, cc + j + 1]
-            cross = step & ~found & (s0 * s_start > 0) & (s1 * s_start <= 0) & (s0 != s1)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t = np.clip(s0 / (s0 - s1), 0.0, 1.0)
-            where = np.where(cross, cc + j + 0.5 + t, where)
-            found |= cross
-        ok[:, :-g] |= found
-        pos[:, :-g] = np.where(found, where, pos[:, :-g])
-        u[:, :-g] = np.where(found, lo + 1.0, u[:, :-g])
-        # the next gap size needs pixel x + g to be lit and invalid, and x' = x + g + 1 valid
-        between[:, :-g] &= lit[:, g:] & ~valid[:, g:]
-    return ok, pos, u
+    lines, n = index.shape
+    ok = np.zeros(n, np.bool_)
+    pos = np.empty(n, np.float64)
+    uu = np.empty(n, np.float64)
+    left = np.empty(n, np.int64)
+    for r in range(lines):
+        for x in range(n):
+            ok[x] = False
+            out[r, x] = np.nan
+        for x in range(n):
+            if not valid[r, x]:
+                continue
+            x2 = -1
+            g = 1
+            while g <= max_gap + 1 and x + g < n:
+                if valid[r, x + g]:
+                    x2 = x + g
+                    break
+                if not lit[r, x + g]:
+                    break
+                g += 1
+            if x2 < 0:
+                continue
+            a = index[r, x]
+            b = index[r, x2]
+            if abs(a - b) != 1:
+                continue
+            lo = min(a, b)
+            flip = (lo ^ (lo >> 1)) ^ ((lo + 1) ^ ((lo + 1) >> 1))
+            p = 0
+            while flip > 1:
+                flip >>= 1
+                p += 1
+            k = min(max(n_bits - 1 - p, 0), n_bits - 1)
+            s_start = np.float64(diff[k, r, x])
+            for j in range(g):
+                s0 = np.float64(diff[k, r, x + j])
+                s1 = np.float64(diff[k, r, x + j + 1])
+                if s0 * s_start > 0 and s1 * s_start <= 0 and s0 != s1:
+                    t = min(max(s0 / (s0 - s1), 0.0), 1.0)
+                    ok[x] = True
+                    pos[x] = x + j + 0.5 + t
+                    uu[x] = lo + 1.0
+                    break
+        # nearest edge keyed strictly left of each pixel, then at or right of it
+        last = -1
+        for x in range(n):
+            left[x] = last
+            if ok[x]:
+                last = x
+        nxt = n
+        for x in range(n - 1, -1, -1):
+            if ok[x]:
+                nxt = x
+            if not valid[r, x] or left[x] < 0 or nxt >= n:
+                continue
+            li = left[x]
+            lu, ru = uu[li], uu[nxt]
+            if abs(ru - lu) != 1 or min(lu, ru) != index[r, x]:
+                continue
+            lp, rp = pos[li], pos[nxt]
+            v = lu + (ru - lu) * (x + 0.5 - lp) / (rp - lp)
+            if v != v:
+                continue
+            lo_v = np.float64(index[r, x])
+            out[r, x] = min(max(v, lo_v), lo_v + 1 - 1e-9)
 
 
 def _refine_along_rows(index, valid, lit, diff, n_bits, max_gap) -> np.ndarray:
-    """Sub-pixel projector index per camera pixel from the edges left and right of it."""
-    ok, pos, u = _edges_along_rows(index, valid, lit, diff, n_bits, max_gap)
-    rows, cols = index.shape
-    e = np.arange(cols)
-    # edges keyed by their left pixel: those keyed < x lie left of valid pixel x's centre,
-    # those keyed >= x right of it
-    left = np.maximum.accumulate(np.where(ok, e, -1), axis=1)
-    right = np.minimum.accumulate(np.where(ok, e, cols)[:, ::-1], axis=1)[:, ::-1]
-    li = np.full((rows, cols), -1)
-    li[:, 1:] = left[:, :-1]
-    ri = right
-    has = (li >= 0) & (ri < cols) & valid
-    r = np.indices((rows, cols))[0]
-    lp = np.where(has, pos[r, np.clip(li, 0, cols - 1)], np.nan)
-    rp = np.where(has, pos[r, np.clip(ri, 0, cols - 1)], np.nan)
-    lu = np.where(has, u[r, np.clip(li, 0, cols - 1)], np.nan)
-    ru = np.where(has, u[r, np.clip(ri, 0, cols - 1)], np.nan)
-    # the pixel must lie in the one projector stripe bounded by the two edges
-    has &= (np.abs(ru - lu) == 1) & (np.minimum(lu, ru) == index)
-    xc = np.arange(cols) + 0.5
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out = lu + (ru - lu) * (xc[None] - lp) / (rp - lp)
-    out = np.clip(out, index, index + 1 - 1e-9)
-    return np.where(has, out, np.nan)
+    """Sub-pixel projector index per camera pixel along rows of (possibly transposed) views."""
+    out = np.empty(index.shape, np.float64)
+    _refine_lines(
+        np.asarray(index, np.int64),
+        np.asarray(valid, np.bool_),
+        np.asarray(lit, np.bool_),
+        diff,
+        int(n_bits),
+        int(max_gap),
+        out,
+    )
+    return out
 
 
 def refine_subpixel(result: GrayDecode, images: np.ndarray, *, max_gap: int = 2) -> GrayDecode:
@@ -464,19 +605,51 @@ def refine_subpixel(result: GrayDecode, images: np.ndarray, *, max_gap: int = 2)
         ``result`` with ``subpixel`` set: (rows, cols, 2) projector (u, v) inside each decoded
         pixel, NaN where no edge pair brackets the pixel (the pixel centre is used there).
     """
-    images = np.asarray(images, dtype=np.float64)
+    images = np.asarray(images)
     nb = result.n_col_bits + result.n_row_bits
     if images.ndim != 3 or images.shape[0] != 2 * nb or images.shape[1:] != result.shape:
         raise ValueError(
             f"images must be the decoded ({2 * nb}, {result.shape[0]}, {result.shape[1]}) "
             f"gray-code stack, got shape {images.shape}"
         )
-    diff = images[0::2] - images[1::2]
-    ncb = result.n_col_bits
+    diff = np.subtract(images[0::2], images[1::2], dtype=np.float64)
+    return refine_subpixel_from_diff(result, diff, max_gap=max_gap)
+
+
+def refine_subpixel_from_diff(
+    result: GrayDecode, diff: np.ndarray, *, max_gap: int = 2
+) -> GrayDecode:
+    """:func:`refine_subpixel` from each bit's ``pattern - inverse`` signal.
+
+    Parameters
+    ----------
+    result : GrayDecode
+    diff : (n_col_bits + n_row_bits, rows, cols) float32 or float64
+        Pattern minus inverse per gray bit (e.g. :attr:`GrayDecoder.diff`).
+    max_gap : int
+        As in :func:`refine_subpixel`.
+
+    Returns
+    -------
+    GrayDecode with ``subpixel`` set
+    """
+    nb = result.n_col_bits + result.n_row_bits
+    diff = np.asarray(diff)
+    if diff.dtype not in (np.float32, np.float64):
+        diff = diff.astype(np.float64)
+    if diff.shape != (nb, *result.shape):
+        raise ValueError(
+            f"diff must be ({nb}, {result.shape[0]}, {result.shape[1]}), got {diff.shape}"
+        )
     if int(max_gap) < 0:
         raise ValueError(f"max_gap must be >= 0 pixels, got {max_gap}")
-    u = _refine_along_rows(result.col, result.valid, result.lit, diff[:ncb], ncb, int(max_gap))
-    v = _refine_along_rows(
+    ncb = result.n_col_bits
+    sub = np.empty((*result.shape, 2), np.float64)
+    sub[..., 0] = _refine_along_rows(
+        result.col, result.valid, result.lit, diff[:ncb], ncb, int(max_gap)
+    )
+    # rows are refined along camera columns: transposed views, no copies
+    sub[..., 1] = _refine_along_rows(
         result.row.T,
         result.valid.T,
         result.lit.T,
@@ -486,4 +659,4 @@ def refine_subpixel(result: GrayDecode, images: np.ndarray, *, max_gap: int = 2)
     ).T
     import dataclasses
 
-    return dataclasses.replace(result, subpixel=np.stack([u, v], axis=-1))
+    return dataclasses.replace(result, subpixel=sub)

@@ -41,7 +41,8 @@ class GrayScan:
     cloud : PointCloud of every valid camera pixel
     depth : (H, W) float64 z-depth in the guide (projector) view, NaN holes
     renders : int number of rendered frames
-    frames : dict of the captured 'images' (OpenCV-ordered stack), 'white', 'black'
+    frames : dict of the captured 'white' and 'black' frames and, with ``keep_frames``, the
+        'images' (OpenCV-ordered stack)
     """
 
     decode: gc.GrayDecode
@@ -78,9 +79,11 @@ class DotScan:
 
 
 def _check_patterns(capture, patterns: np.ndarray) -> np.ndarray:
-    imgs = np.asarray(capture.render(patterns), dtype=np.float64)
+    imgs = np.asarray(capture.render(patterns))
     if imgs.ndim != 3 or imgs.shape[0] != len(patterns):
         raise ValueError(f"capture.render returned shape {imgs.shape} for {len(patterns)} patterns")
+    if imgs.dtype not in (np.float32, np.float64):
+        imgs = imgs.astype(np.float64)
     return imgs
 
 
@@ -94,8 +97,15 @@ def gray_code_scan(
     method: str = "plane",
     require_reliable: bool = True,
     subpixel: bool = False,
+    keep_frames: bool = False,
 ) -> GrayScan:
     """Full gray-code scan (columns and rows) decoded and triangulated.
+
+    Frames are streamed into a :class:`~simlunar.scanner.gray_code.GrayDecoder` as they are
+    captured: white and black are rendered first, then each bit's pattern (and its inverse,
+    by linearity or rendered) is rendered, sensed and decoded before the next, so memory
+    holds a few frames plus the per-pixel bits, never the whole stack. Frames are sensed in
+    OpenCV stack order (pattern, inverse pairs, then white and black).
 
     Parameters
     ----------
@@ -111,49 +121,60 @@ def gray_code_scan(
     subpixel : bool
         Sub-pixel stripe-edge refinement of the decoded columns and rows
         (:func:`simlunar.scanner.gray_code.refine_subpixel`) instead of projector pixel centres.
+    keep_frames : bool
+        Keep the captured stack in ``GrayScan.frames["images"]`` (as captured, float32 for
+        :class:`~simlunar.study.scanner.RenderCapture`); white and black are always kept.
 
     Returns
     -------
     GrayScan
     """
     check_rig(rig)
-    H, W = rig.projector.intrinsics.shape
-    stack = gc.encode(W, H).astype(np.float32) / 255.0
-    ones = np.ones((1, H, W), np.float32)
-    zeros = np.zeros((1, H, W), np.float32)
-    if inverses == "linearity":
-        pos = stack[0::2]
-        radiance = _check_patterns(capture, np.concatenate([pos, ones, zeros]))
-        white_r, black_r = radiance[-2], radiance[-1]
-        inv = gc.inverses_by_linearity(radiance[:-2], white_r, black_r)
-        radiance = np.concatenate([gc.interleave(radiance[:-2], inv), radiance[-2:]])
-        renders = len(pos) + 2
-    elif inverses == "render":
-        radiance = _check_patterns(capture, np.concatenate([stack, ones, zeros]))
-        renders = len(stack) + 2
-    else:
+    if inverses not in ("linearity", "render"):
         raise ValueError(f"unknown inverses option {inverses!r}; valid: 'linearity', 'render'")
-    frames = np.asarray(capture.sense(radiance), dtype=np.float64)
-    images, white, black = frames[:-2], frames[-2], frames[-1]
-    dec = gc.decode(
-        images,
-        white,
-        black,
-        proj_shape=(H, W),
+    H, W = rig.projector.intrinsics.shape
+    stack = gc.encode(W, H)
+    n_bits = len(stack) // 2
+    wb_r = _check_patterns(
+        capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
+    )
+    renders = 2
+    dec = gc.GrayDecoder(
+        (H, W),
+        wb_r.shape[1:],
         black_threshold=black_threshold,
         white_threshold=white_threshold,
-        require_reliable=require_reliable,
+        keep_diff=subpixel,
     )
+    kept = [] if keep_frames else None
+    for k in range(n_bits):
+        if inverses == "linearity":
+            pat_r = _check_patterns(capture, stack[2 * k : 2 * k + 1].astype(np.float32) / 255.0)
+            pair_r = np.concatenate([pat_r, gc.inverses_by_linearity(pat_r, wb_r[0], wb_r[1])])
+            renders += 1
+        else:
+            pair_r = _check_patterns(capture, stack[2 * k : 2 * k + 2].astype(np.float32) / 255.0)
+            renders += 2
+        pair = np.asarray(capture.sense(pair_r))
+        dec.add_pair(k, pair[0], pair[1])
+        if kept is not None:
+            kept.append(pair)
+    white, black = np.asarray(capture.sense(wb_r))
+    dec.add_white_black(white, black)
+    result = dec.result(require_reliable=require_reliable)
     if subpixel:
-        dec = gc.refine_subpixel(dec, images)
-    cloud = triangulate(rig, Correspondences.from_gray(dec), method=method)
+        result = gc.refine_subpixel_from_diff(result, dec.diff)
+    cloud = triangulate(rig, Correspondences.from_gray(result), method=method)
     depth = depth_at_proj_pixels(cloud, rig.guide)
+    frames = {"white": white, "black": black}
+    if kept is not None:
+        frames["images"] = np.concatenate(kept)
     return GrayScan(
-        decode=dec,
+        decode=result,
         cloud=cloud,
         depth=depth,
         renders=renders,
-        frames={"images": images, "white": white, "black": black},
+        frames=frames,
     )
 
 
@@ -170,7 +191,7 @@ def dot_scan(
     tol: float = 2.0,
     rel_threshold: float = 0.02,
     abs_threshold: float = 0.02,
-    batch: int = 32,
+    batch: int = 8,
 ) -> DotScan:
     """Scan dots (one projector pixel or a small disk each), multiplexed or one per frame.
 
@@ -221,7 +242,7 @@ def dot_scan(
     for start in range(0, len(schedule), batch):
         group = schedule[start : start + batch]
         pats = np.stack([_dots.dot_pattern((H, W), proj_uv[f], radius=radius) for f in group])
-        frames = np.asarray(capture.sense(_check_patterns(capture, pats)), dtype=np.float64)
+        frames = np.asarray(capture.sense(_check_patterns(capture, pats)))
         for f, frame in zip(group, frames):
             det = _dots.detect_dots(
                 frame, background=black, rel_threshold=rel_threshold, abs_threshold=abs_threshold

@@ -191,6 +191,7 @@ def run_scanner_study(
     gray_opts: dict | None = None,
     dot_opts: dict | None = None,
     planner_opts: dict | None = None,
+    capture_opts: dict | None = None,
     progress=None,
 ) -> ScannerStudyResult:
     """Scan a terrain with a rig in several modes and score the guide-view depth.
@@ -217,6 +218,9 @@ def run_scanner_study(
         Planner options (:func:`simlunar.planner.plan`) by planner name, e.g.
         ``{"wavelet": {"feature_opts": {"levels": 1}}}``; planners not named get none (the
         ``random`` planner takes no options).
+    capture_opts : dict, optional
+        Further :class:`RenderCapture` options, e.g. ``{"sparse_integrator": "ptracer",
+        "sparse_spp": 1}`` (light tracing for dot frames).
     progress : callable(str) or None
 
     Returns
@@ -250,6 +254,7 @@ def run_scanner_study(
         projector_gamma=projector_gamma,
         projector_blur=projector_blur,
         camera_blur=camera_blur,
+        **(capture_opts or {}),
     )
     guide = render_guide(
         terrain, rig, light=guide_light, sun=sun, bsdf=bsdf, max_depth=max_depth, spp=spp, seed=seed

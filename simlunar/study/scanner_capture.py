@@ -53,6 +53,16 @@ class RenderCapture:
         99.5th-percentile radiance to this fraction of the sensor range (or of 1 without a
         sensor), so thresholds are in [0, 1] frame units. The sensor's own ``exposure`` is
         replaced by it.
+    sparse_integrator : "path" or "ptracer"
+        Integrator for sparse patterns (projector dots): patterns with a lit fraction of at
+        most ``sparse_below`` (and some light) are rendered with it
+        (:meth:`simlunar.render.scene.TerrainScene.render`); ``"ptracer"`` traces light from
+        the projector, which samples its lit pixels, so the dots get every light path.
+    sparse_spp : int or None
+        Samples per pixel for sparse patterns (None: ``spp``); for ``"ptracer"`` light paths
+        per film pixel.
+    sparse_below : float
+        Largest lit fraction of the projector's pixels that counts as sparse.
     """
 
     def __init__(
@@ -72,6 +82,9 @@ class RenderCapture:
         projector_blur: float = 0.0,
         camera_blur: float = 0.0,
         target_level: float = AUTO_EXPOSURE_LEVEL,
+        sparse_integrator: str = "path",
+        sparse_spp: int | None = None,
+        sparse_below: float = 0.01,
     ) -> None:
         from simlunar.render.lights import ProjectorLight
         from simlunar.render.scene import TerrainScene
@@ -84,6 +97,15 @@ class RenderCapture:
         if camera_blur < 0:
             raise ValueError(f"camera_blur must be >= 0 px, got {camera_blur}")
         self.camera_blur = float(camera_blur)
+        if sparse_integrator not in ("path", "ptracer"):
+            raise ValueError(
+                f"unknown sparse_integrator {sparse_integrator!r}; valid: 'path', 'ptracer'"
+            )
+        if sparse_spp is not None and int(sparse_spp) < 1:
+            raise ValueError(f"sparse_spp must be >= 1, got {sparse_spp}")
+        self.sparse_integrator = sparse_integrator
+        self.sparse_spp = None if sparse_spp is None else int(sparse_spp)
+        self.sparse_below = float(sparse_below)
         self.rig = rig
         self.proj_shape = rig.projector.intrinsics.shape
         self.gamma = float(projector_gamma)
@@ -130,7 +152,7 @@ class RenderCapture:
         return p
 
     def render(self, patterns) -> np.ndarray:
-        """Noise-free luminance (n, rows, cols) under ``patterns`` (n, H, W)."""
+        """Noise-free luminance (n, rows, cols) float32 under ``patterns`` (n, H, W)."""
         pats = np.asarray(patterns, np.float32)
         if pats.ndim != 3 or pats.shape[1:] != tuple(self.proj_shape):
             raise ValueError(
@@ -138,29 +160,50 @@ class RenderCapture:
                 f"{self.proj_shape[1]}) for this projector, got {pats.shape}"
             )
         self.renders += len(pats)
-        return self._lens(self.scene.render_patterns(self.emitted(pats)).astype(np.float64))
+        em = self.emitted(pats)
+        lit = (em > 0).mean(axis=(1, 2))
+        sparse = (lit > 0) & (lit <= self.sparse_below)
+        if (self.sparse_integrator == "path" and self.sparse_spp is None) or not sparse.any():
+            return self._lens(self.scene.render_patterns(em))
+        out = np.empty((len(em), *self.scene.shape), np.float32)
+        if (~sparse).any():
+            out[~sparse] = self.scene.render_patterns(em[~sparse])
+        out[sparse] = self.scene.render_patterns(
+            em[sparse], spp=self.sparse_spp, integrator=self.sparse_integrator
+        )
+        return self._lens(out)
 
     def _lens(self, frames) -> np.ndarray:
-        """Camera lens point-spread function (Gaussian, ``camera_blur`` px) on (n, rows, cols)."""
-        frames = np.asarray(frames, np.float64)
+        """Camera lens point-spread function (Gaussian, ``camera_blur`` px) on (n, rows, cols).
+
+        Each frame on its own, float32 (:func:`simlunar.imaging.blur.gaussian_blur`, the same
+        filter as ``ndimage.gaussian_filter(mode="nearest")``), in place.
+        """
+        frames = np.asarray(frames, np.float32)
         if self.camera_blur <= 0:
             return frames
-        # sigma 0 along the frame axis: each frame is blurred on its own
-        return ndimage.gaussian_filter(
-            frames, (0, self.camera_blur, self.camera_blur), mode="nearest"
-        )
+        from simlunar.imaging.blur import gaussian_blur
+
+        if not frames.flags.writeable:
+            frames = frames.copy()
+        for i, f in enumerate(frames):
+            frames[i] = gaussian_blur(f, self.camera_blur)
+        return frames
 
     def sense(self, images) -> np.ndarray:
-        """Captured frames in [0, 1]-ish units: exposure, then sensor noise per frame."""
-        imgs = np.asarray(images, np.float64)
+        """Captured frames (n, rows, cols) float32 in [0, 1]-ish units: exposure, sensor noise.
+
+        One noise draw per frame, in order, from the capture's noise stream.
+        """
+        imgs = np.asarray(images)
         if self.sensor is None:
-            return imgs * self.gain
+            return (imgs * np.float32(self.gain)).astype(np.float32, copy=False)
         from simlunar.imaging.sensor import apply_sensor
 
-        # one noise draw per captured frame (inverses by linearity included)
-        return np.stack([apply_sensor(im, self.sensor, rng=self.rng) for im in imgs]).astype(
-            np.float64
-        )
+        out = np.empty(imgs.shape, np.float32)
+        for i, im in enumerate(imgs):
+            out[i] = apply_sensor(im, self.sensor, rng=self.rng)
+        return out
 
 
 @dataclass(frozen=True, eq=False)

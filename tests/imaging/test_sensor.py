@@ -100,3 +100,69 @@ def test_gamma_and_callable_responses():
 def test_bad_parameters_name_the_field(kw, field):
     with pytest.raises(ValueError, match=field):
         SensorModel(**kw)
+
+
+# --- the compiled shot-noise sampler (exact Poisson below POISSON_EXACT_BELOW, normal above) ---
+
+
+def _electrons(mean, n=200_000, seed=11):
+    # gain 1 e-/DN, no read noise, 24-bit ADC: the DN is the electron count (rounded)
+    m = SensorModel(exposure=1.0, full_well_e=1e7, read_noise_e=0.0, bits=24, gain=1.0)
+    return _dn(apply_sensor(np.full(n, mean, np.float32), m, rng=seed), m)
+
+
+@pytest.mark.parametrize("mean", [0.3, 3.7, 20.0, 49.0])
+def test_shot_noise_is_exactly_poisson_below_the_threshold(mean):
+    from scipy import stats
+
+    from simlunar.imaging.sensor import POISSON_EXACT_BELOW
+
+    assert mean < POISSON_EXACT_BELOW
+    k = _electrons(mean).astype(int)
+    assert np.all(k == _electrons(mean))  # integer counts
+    # chi-square goodness of fit against the Poisson pmf over bins with >= 20 expected counts
+    ks = np.arange(0, int(mean + 8 * np.sqrt(mean) + 10))
+    expected = stats.poisson.pmf(ks, mean) * k.size
+    observed = np.bincount(k, minlength=ks.size)[: ks.size]
+    keep = expected >= 20
+    chi2 = np.sum((observed[keep] - expected[keep]) ** 2 / expected[keep])
+    # p > 1e-4 for the right law; a Poisson of mean * 1.01 already fails at 20 and 49
+    assert stats.chi2.sf(chi2, keep.sum() - 1) > 1e-4
+
+
+@pytest.mark.parametrize("mean", [50.0, 64.0, 400.0, 12_000.0])
+def test_shot_noise_above_the_threshold_has_poisson_mean_variance_and_skew(mean):
+    from scipy import stats
+
+    k = _electrons(mean)
+    n = k.size
+    # mean exact; variance mu + 1/18 (Cornish-Fisher term) + 1/12 (DN rounding)
+    assert abs(k.mean() - mean) < 4 * np.sqrt(mean / n)
+    var = mean + 1 / 18 + 1 / 12
+    assert abs(k.var() - var) < 4 * var * np.sqrt(2 / n)
+    # third cumulant of the Poisson law: skewness 1 / sqrt(mu) (a plain normal gives 0)
+    if mean < 1000:
+        assert abs(stats.skew(k) - 1 / np.sqrt(mean)) < 4 * np.sqrt(6 / n)
+
+
+def test_sampler_matches_numpys_poisson_in_distribution():
+    from simlunar.scanner._reference import apply_sensor_reference
+
+    m = SensorModel(exposure=30.0, full_well_e=2000.0, read_noise_e=2.0, bits=12)
+    rad = np.repeat(np.array([0.0, 0.05, 0.6, 1.9, 20.0, 80.0]), 40_000).reshape(6, -1)
+    ours = _dn(apply_sensor(rad, m, rng=5), m)
+    ref = _dn(apply_sensor_reference(rad, m, rng=5), m)
+    for a, b in zip(ours, ref):
+        se = np.sqrt((a.var() + b.var()) / a.size) + 1e-9
+        assert abs(a.mean() - b.mean()) < 5 * se
+        assert a.var() == pytest.approx(b.var(), rel=0.05, abs=0.02)
+
+
+def test_nan_inf_and_negative_radiance_count_as_dark_and_float32_equals_float64():
+    m = SensorModel(exposure=1e3, read_noise_e=0.0, bits=12)
+    x = np.array([[np.nan, np.inf, -np.inf, -3.0, 0.0]])
+    assert np.all(apply_sensor(x, m, rng=0) == 0.0)
+    y = np.random.default_rng(1).random((40, 50)).astype(np.float32)
+    np.testing.assert_array_equal(
+        apply_sensor(y, m, rng=4), apply_sensor(y.astype(np.float64), m, rng=4)
+    )

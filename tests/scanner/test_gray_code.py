@@ -223,3 +223,116 @@ def test_refine_subpixel_finds_edges_across_unreliable_edge_pixels():
     np.testing.assert_allclose(across[ok], np.stack([u, v], -1)[ok], atol=1e-9)
     with pytest.raises(ValueError, match="max_gap must be >= 0"):
         gc.refine_subpixel(dec, images, max_gap=-1)
+
+
+# --- streaming decoder and compiled refinement against the NumPy reference implementations ---
+
+
+def _noisy_ramp_case(seed, slope=0.5, noise=0.03, white_threshold=0.1):
+    W, H = 20, 13
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:26, 0:41] + 0.5
+    # a wavy mapping with occlusion-like gaps: some pixels unlit, some decode wrong
+    u = 0.31 + 0.47 * x + 0.03 * y + 0.4 * np.sin(x / 3.0)
+    v = 0.17 + 0.49 * y - 0.01 * x + 0.3 * np.cos(y / 2.5)
+    images, white, black = _ramp_stack(
+        np.clip(u, 0, W - 1e-3), np.clip(v, 0, H - 1e-3), W, H, slope
+    )
+    images = images + noise * rng.standard_normal(images.shape)
+    white = white.copy()
+    white[rng.random(white.shape) < 0.05] = 0.0  # shadowed pixels
+    dec = gc.decode(
+        images,
+        white,
+        black,
+        proj_shape=(H, W),
+        black_threshold=0.5,
+        white_threshold=white_threshold,
+    )
+    return dec, images
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("max_gap", [0, 1, 2, 4])
+def test_compiled_refinement_equals_the_numpy_reference(seed, max_gap):
+    from simlunar.scanner._reference import refine_along_rows_reference
+
+    dec, images = _noisy_ramp_case(seed)
+    assert (dec.lit & ~dec.valid).sum() > 20 and dec.valid.sum() > 200
+    diff = images[0::2] - images[1::2]
+    ncb = dec.n_col_bits
+    ref_u = refine_along_rows_reference(dec.col, dec.valid, dec.lit, diff[:ncb], ncb, max_gap)
+    ref_v = refine_along_rows_reference(
+        dec.row.T,
+        dec.valid.T,
+        dec.lit.T,
+        diff[ncb:].transpose(0, 2, 1),
+        dec.n_row_bits,
+        max_gap,
+    ).T
+    sub = gc.refine_subpixel(dec, images, max_gap=max_gap).subpixel
+    np.testing.assert_array_equal(np.isfinite(sub[..., 0]), np.isfinite(ref_u))
+    np.testing.assert_array_equal(np.isfinite(sub[..., 1]), np.isfinite(ref_v))
+    np.testing.assert_allclose(sub[..., 0], ref_u, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sub[..., 1], ref_v, rtol=0, atol=1e-12)
+    # float32 signals (what a streamed scan keeps) move the result by float32 rounding only
+    sub32 = gc.refine_subpixel_from_diff(dec, diff.astype(np.float32), max_gap=max_gap).subpixel
+    both = np.isfinite(sub32) & np.isfinite(sub)
+    assert both.sum() >= 0.99 * np.isfinite(sub).sum()
+    np.testing.assert_allclose(sub32[both], sub[both], atol=1e-5)
+
+
+def test_streaming_decoder_equals_decode_in_any_order_and_reports_missing_frames():
+    dec, images = _noisy_ramp_case(1)
+    white = np.where(dec.lit, 1.0, 0.0)
+    black = np.zeros_like(white)
+    ref = gc.decode(
+        images, white, black, proj_shape=(13, 20), black_threshold=0.5, white_threshold=0.1
+    )
+    s = gc.GrayDecoder(
+        (13, 20), white.shape, black_threshold=0.5, white_threshold=0.1, keep_diff=True
+    )
+    nb = s.n_bits
+    with pytest.raises(ValueError, match="missing frames: bit 0"):
+        s.result()
+    for k in np.random.default_rng(0).permutation(nb):
+        s.add_pair(k, images[2 * k], images[2 * k + 1])
+    with pytest.raises(ValueError, match="white/black"):
+        s.result()
+    s.add_white_black(white, black)
+    out = s.result()
+    for name in ("col", "row", "valid", "lit", "bits", "reliable"):
+        np.testing.assert_array_equal(getattr(out, name), getattr(ref, name))
+    np.testing.assert_array_equal(s.diff, images[0::2] - images[1::2])
+    with pytest.raises(ValueError, match="bit must be"):
+        s.add_pair(nb, images[0], images[1])
+    with pytest.raises(ValueError, match="camera shape"):
+        s.add_pair(0, images[0][:-1], images[1][:-1])
+
+
+def test_stable_bits_equals_min_max_filter_definition():
+    from scipy import ndimage
+
+    rng = np.random.default_rng(2)
+    col = np.cumsum(rng.random((30, 45)) * 0.8, axis=1).astype(int)
+    row = np.cumsum(rng.random((30, 45)) * 0.6, axis=0).astype(int)
+    col[rng.random(col.shape) < 0.05] = -1
+    for margin in (0, 1, 2):
+        size = 2 * margin + 1
+        tb = np.concatenate(
+            [gc.bit_planes(np.clip(col, 0, None), 6), gc.bit_planes(np.clip(row, 0, None), 5)]
+        )
+        has = ndimage.minimum_filter(
+            ((col >= 0) & (row >= 0)).astype(np.int8), size=size, mode="constant"
+        )
+        want = np.stack(
+            [
+                (
+                    ndimage.minimum_filter(b, size=size, mode="nearest")
+                    == ndimage.maximum_filter(b, size=size, mode="nearest")
+                )
+                & (has > 0)
+                for b in tb
+            ]
+        )
+        np.testing.assert_array_equal(gc.stable_bits(col, row, 6, 5, margin=margin), want)
