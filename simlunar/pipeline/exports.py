@@ -230,7 +230,8 @@ def scan_export_payload(gray, rig, *, gray_opts: dict | None = None) -> dict[str
     Parameters
     ----------
     gray : :class:`simlunar.scanner.modes.GrayScan`
-        The scan (its captured frames, decode and cloud).
+        The scan (its captured frames, decode and cloud); scanned with ``keep_frames=True``
+        (the streaming decoder keeps no frame stack otherwise).
     rig : Rig
         The rig that scanned.
     gray_opts : dict, optional
@@ -250,6 +251,8 @@ def scan_export_payload(gray, rig, *, gray_opts: dict | None = None) -> dict[str
     opts = {**_gray_defaults(), **(gray_opts or {})}
     dec = gray.decode
     fr = gray.frames
+    if "images" not in fr:
+        raise ValueError("the gray-code scan kept no frame stack: scan with keep_frames=True")
     frames = np.concatenate(
         [np.asarray(fr["images"]), np.asarray(fr["white"])[None], np.asarray(fr["black"])[None]]
     )

@@ -41,7 +41,7 @@ def scan(tmp_path_factory):
     rig = rigs.moonyard_rig(proj_size=PROJ, cam_size=CAM)
     sensor = SensorModel(full_well_e=20000.0, read_noise_e=5.0, bits=12)
     cap = RenderCapture(terr, rig, spp=4, seed=1, sensor=sensor, rng=3, camera_blur=0.7)
-    gray = modes.gray_code_scan(cap, rig)
+    gray = modes.gray_code_scan(cap, rig, keep_frames=True)
     folder = tmp_path_factory.mktemp("export") / "unit0"
     exports.write_scan_export(folder, exports.scan_export_payload(gray, rig))
     return rig, gray, folder
@@ -65,7 +65,7 @@ def test_layout_and_frame_order_names(scan):
     # the exported frames are the sensor frames the decoder used, quantised
     used = np.concatenate(
         [gray.frames["images"], gray.frames["white"][None], gray.frames["black"][None]]
-    )
+    ).astype(np.float64)  # float32 frames; the export quantises in float64
     assert np.array_equal(np.stack(f8), np.rint(np.clip(used, 0, 1) * 255).astype(np.uint8))
     assert np.array_equal(np.stack(f16), np.rint(np.clip(used, 0, 1) * 65535).astype(np.uint16))
     # sensor frames, not ideal patterns: the black frame has read noise, the white frame is

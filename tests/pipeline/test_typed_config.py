@@ -153,7 +153,12 @@ def test_option_defaults_are_the_library_defaults():
     from simlunar.study.scanner import aim_rig_at_terrain
 
     gray = _defaults(modes.gray_code_scan)
+    assert gray.pop("keep_frames") is False  # set by the pipeline for study.save_scans only
     assert translate.gray_kwargs(schema.GrayOptsCfg()) == gray
+    from simlunar.study.scanner_capture import RenderCapture
+
+    capture = {k: v for k, v in _defaults(RenderCapture).items() if k.startswith("sparse_")}
+    assert schema.CaptureOptsCfg().model_dump() == capture
     dots = _defaults(modes.dot_scan)
     dots.pop("depth_range", None)
     assert translate.dot_kwargs(schema.DotOptsCfg()) == dots
