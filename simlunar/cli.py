@@ -157,11 +157,14 @@ def run(
     from simlunar.pipeline.runner import run_experiment
 
     with user_input():
-        cfg = load_experiment(experiment, parse_set(set_ or []))
+        overrides = parse_set(set_ or [])
+        cfg = load_experiment(experiment, overrides)
         if save_scans:
-            from simlunar.pipeline.exports import with_save_scans
+            from simlunar.pipeline.exports import check_save_scans
 
-            cfg = with_save_scans(cfg)
+            check_save_scans(cfg)
+            # an override before validation, so every sweep point is checked with it
+            cfg = load_experiment(experiment, {**overrides, "study.save_scans": True})
         executor = make_executor(workers=workers, scheduler=scheduler)
     if scheduler:
         import logging

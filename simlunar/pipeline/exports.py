@@ -38,11 +38,11 @@ from simlunar.atomic import atomic_write
 
 __all__ = [
     "calibration_opencv",
+    "check_save_scans",
     "frame_names",
     "quantize",
     "read_cloud_ply",
     "scan_export_payload",
-    "with_save_scans",
     "write_calibration_yaml",
     "write_cloud_ply",
     "write_scan_export",
@@ -348,8 +348,12 @@ def write_scan_export(folder, payload: dict[str, Any]) -> Path:
     return folder
 
 
-def with_save_scans(cfg):
-    """``cfg`` with ``study.save_scans`` on (``simlunar run --save-scans``).
+def check_save_scans(cfg) -> None:
+    """Refuse ``simlunar run --save-scans`` for an experiment whose scan cannot be exported.
+
+    Checks the experiment as written; the CLI then validates it again with
+    ``study.save_scans: true`` applied like a ``--set`` override, so every sweep point is
+    checked too.
 
     Raises
     ------
@@ -369,5 +373,3 @@ def with_save_scans(cfg):
             f"--save-scans: study.modes {list(study.modes)} has no gray-code scan to export "
             "(add gray_code or ambiguity_enhancement)"
         )
-    new_study = type(study).model_validate({**study.model_dump(), "save_scans": True})
-    return cfg.model_copy(update={"study": new_study})

@@ -229,3 +229,19 @@ def test_save_scans_without_a_gray_code_scan_is_a_user_error(tmp_path):
     )
     assert r.exit_code == 2 and "--save-scans" in r.output
     assert not out.exists()
+
+
+def test_save_scans_checks_every_sweep_point(tmp_path):
+    # --save-scans is applied before validation: a sweep point without a gray-code scan is
+    # refused in one line (it used to reach runner.expand and crash with a traceback)
+    out = tmp_path / "s"
+    args = ["run", str(ROOT / "experiments" / "scanner_ambiguity.yaml"), "--out", str(out)]
+    args += ["--set", "study.modes=[gray_code]"]
+    args += ["--set", "sweep={study.modes: [[gray_code], [data_reduction]]}", "--save-scans"]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 2, r.output
+    assert "Traceback" not in r.output
+    lines = r.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ")
+    assert "sweep.study.modes[1]" in lines[0] and "gray_code" in lines[0]
+    assert not out.exists()
