@@ -34,7 +34,10 @@ from simlunar.pipeline.config import (
 STAGES = ("terrain", "render", "sensor", "study", "panels")
 
 #: bump when a change makes cached unit results invalid
-CACHE_VERSION = 2  # 2: figure arrays use index coordinates (no half-cell offset)
+#: 2: figure arrays use index coordinates (no half-cell offset)
+#: 3: scanner auto-exposure from the white frame's 99.5th percentile (was 99th), exposure
+#:    without a sensor model, GRAD weights around holes
+CACHE_VERSION = 3
 
 
 #: Renders of units running concurrently in threads (``LocalPoolExecutor``) take turns: each
