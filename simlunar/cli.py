@@ -10,6 +10,7 @@ resume; 1 an internal error (a bug): the traceback and a line asking to report i
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 import os
 import platform
@@ -55,8 +56,16 @@ def user_input():
 def _one_line(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
         return f"{exc.filename}: {exc.strerror}"
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
     msg = " ".join(m.strip() for m in str(exc).strip().splitlines())
     return msg or type(exc).__name__
+
+
+#: errno values that mean the environment failed (exit 3), even when no file is named
+ENVIRONMENT_ERRNOS = frozenset(
+    getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EROFS", "EIO") if hasattr(errno, name)
+)
 
 
 def user_errors(fn):
@@ -79,9 +88,10 @@ def user_errors(fn):
             typer.echo(msg, err=True)
             raise typer.Exit(EXIT_INTERRUPTED) from None
         except OSError as exc:
-            if exc.filename is None:
+            if exc.filename is None and exc.errno not in ENVIRONMENT_ERRNOS:
                 raise _internal(exc) from None
-            # a write refused after the checks passed (disk full, permissions changed)
+            # a write refused after the checks passed (disk full, quota, read-only file
+            # system, I/O error, permissions changed); the OS names no file for a full disk
             typer.echo(f"error: {_one_line(exc)}", err=True)
             raise typer.Exit(EXIT_INFRA) from None
         except Exception as exc:

@@ -7,6 +7,7 @@ CLI with that unit (:mod:`fake_cli`), so exit codes and stderr are the user's.
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
@@ -395,9 +396,14 @@ def test_a_write_refused_during_the_run_is_one_line_exit_3(tmp_path, monkeypatch
 
     real = runner.atomic_write_text
 
+    def full(fd):  # as the OS reports a full disk: an errno, no file name
+        raise OSError(errno.ENOSPC, "No space left on device")
+
     def refuse(path, text):
         if Path(path).name == "results.csv":
-            raise OSError(28, "No space left on device", str(path))
+            with monkeypatch.context() as m:
+                m.setattr(os, "fsync", full)
+                return real(path, text)
         return real(path, text)
 
     monkeypatch.setitem(runner.run_experiment.__kwdefaults__, "compute", fake_unit)
@@ -408,6 +414,21 @@ def test_a_write_refused_during_the_run_is_one_line_exit_3(tmp_path, monkeypatch
     assert r.exit_code == 3
     assert r.stderr.splitlines() == [f"error: {out / 'results.csv'}: No space left on device"]
     assert len(finished_units(out)) == 1  # the finished unit is kept
+    assert not list(out.glob(".results.csv.*"))  # no temporary file left
+
+
+@pytest.mark.parametrize("code", [errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EIO])
+def test_an_environment_errno_without_a_file_name_is_exit_3(tmp_path, monkeypatch, code):
+    from simlunar.pipeline import runner
+
+    def unit(payload):
+        raise OSError(code, os.strerror(code))  # e.g. from a writer that names no file
+
+    monkeypatch.setitem(runner.run_experiment.__kwdefaults__, "compute", unit)
+    exp = write_exp(tmp_path / "exp.yaml", {**EXP, "sweep": {}})
+    r = CliRunner().invoke(app, ["run", str(exp), "--out", str(tmp_path / "o"), "--no-progress"])
+    assert r.exit_code == 3, r.output
+    assert r.stderr.splitlines() == [f"error: {os.strerror(code)}"]
 
 
 def test_claim_folder_refuses_an_unrelated_folder(tmp_path):
