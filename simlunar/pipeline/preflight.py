@@ -252,6 +252,25 @@ def _read_grid(path: Path, key: str, *, spacing: float | None):
         raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
 
 
+def _read_albedo(path: Path, key: str, shape, valid) -> np.ndarray:
+    """:func:`simlunar.terrain.io.load_albedo` (the unit's reader) with every failure turned
+    into one line naming ``key`` and the file."""
+    from simlunar.terrain.io import load_albedo
+
+    try:
+        if path.stat().st_size == 0:
+            raise ConfigError(f"{key}: {path} is empty")
+        _check_magic(path, key)
+        return load_albedo(path, shape, valid=valid)
+    except ConfigError:
+        raise
+    except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        if str(path) in msg:
+            raise ConfigError(f"{key}: {msg}") from None
+        raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
+
+
 _MAGIC = {".npy": (b"\x93NUMPY", "a NumPy .npy file"), ".npz": (b"PK", "a NumPy .npz archive")}
 
 
@@ -314,23 +333,17 @@ def _dem_facts(path: Path, spacing: float | None, albedo_file) -> TerrainFacts:
         rows, cols, terrain.spacing, tuple(terrain.origin), zmin, zmax, frac, str(path)
     )
     _check_extent(facts, key)
-    albedo = np.asarray(terrain.albedo)
-    akey, apath = key, path
     if albedo_file is not None:
         akey, apath = "terrain.albedo_file", Path(albedo_file)
         if not apath.is_file():
             raise ConfigError(f"{akey}: file not found: {apath}")
-        albedo = np.asarray(_read_grid(apath, akey, spacing=1.0).heights)
-        if albedo.shape != h.shape:
-            raise ConfigError(
-                f"{akey}: {apath}: albedo shape {albedo.shape[0]} x {albedo.shape[1]} differs "
-                f"from the DEM's {rows} x {cols} ({path})"
-            )
-    a = albedo[finite]
+        _read_albedo(apath, akey, h.shape, finite)  # the reader the unit uses
+        return facts
+    a = np.asarray(terrain.albedo)[finite]
     if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
         bad = a[~(np.isfinite(a) & (a >= 0) & (a <= 1))][0]
         raise ConfigError(
-            f"{akey}: {apath}: albedo must be finite and within [0, 1] where the DEM has "
+            f"{key}: {path}: albedo must be finite and within [0, 1] where the DEM has "
             f"heights, found {bad}"
         )
     return facts
