@@ -108,7 +108,8 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
     """The files a unit (resolved plain config) reads, by the key path that names them.
 
     ``terrain.preset`` -> the preset YAML (``scenes/<name>.yaml``), ``terrain.file`` (and the
-    ``.json`` side file of a ``.npy`` DEM when present), ``terrain.albedo_file``.
+    ``.json`` side file of a ``.npy`` DEM when present), ``terrain.albedo_file``; for a raster
+    GDAL reads, every other file it reads (:func:`gdal_files`) as ``terrain.file+<name>``.
     """
     t = config.get("terrain") or {}
     out: dict[str, Path] = {}
@@ -129,7 +130,38 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
         side = dem.with_name(dem.name + ".json")
         if side.is_file():
             out["terrain.file.json"] = side
+    for key in ("terrain.file", "terrain.albedo_file"):
+        main = out.get(key)
+        if main is not None:
+            for extra in gdal_files(main):
+                # named relative to the main file, so a moved data folder keeps its keys
+                out[f"{key}+{os.path.relpath(extra, main.parent)}"] = extra
     return out
+
+
+def gdal_files(path: Path) -> list[Path]:
+    """The files other than ``path`` that GDAL reads for a raster (rasterio's ``src.files``):
+    the sources of a ``.vrt``, the image of a PDS ``.lbl``, ``.tfw`` / ``.aux.xml`` sidecars.
+
+    Empty for the formats simlunar reads itself (.npy, .npz, .exr) and for a file GDAL cannot
+    open (the checks report that one).
+    """
+    if path.suffix.lower() in (".npy", ".npz", ".exr") or not path.is_file():
+        return []
+    try:
+        import rasterio
+
+        with rasterio.open(path) as src:
+            files = list(src.files)
+    except Exception:  # an unreadable raster is reported by the checks
+        return []
+    me = path.resolve()
+    out = []
+    for f in files:
+        q = Path(f)
+        if q.resolve() != me and q.is_file() and q not in out:
+            out.append(q)
+    return sorted(out)
 
 
 def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
