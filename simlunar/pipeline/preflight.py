@@ -21,6 +21,7 @@ of the unit's cache key, so a changed DEM is recomputed.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import os
@@ -115,13 +116,10 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
     out: dict[str, Path] = {}
     preset = t.get("preset")
     if preset:
-        from simlunar.terrain.presets import SCENES
+        from simlunar.pipeline.presets import PresetError, preset_path
 
-        s = str(preset)
-        looks_like_path = s.endswith((".yaml", ".yml")) or "/" in s or "\\" in s
-        p = Path(s) if looks_like_path else SCENES / f"{s}.yaml"
-        if p.is_file():
-            out["terrain.preset"] = p
+        with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
+            out["terrain.preset"] = preset_path(str(preset))
     for key in ("file", "albedo_file"):
         if t.get(key):
             out[f"terrain.{key}"] = Path(t[key])
