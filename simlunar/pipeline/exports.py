@@ -39,6 +39,7 @@ from simlunar.atomic import atomic_write
 __all__ = [
     "calibration_opencv",
     "check_save_scans",
+    "export_unit_key",
     "frame_names",
     "quantize",
     "read_cloud_ply",
@@ -300,7 +301,7 @@ def scan_export_payload(gray, rig, *, gray_opts: dict | None = None) -> dict[str
     }
 
 
-def write_scan_export(folder, payload: dict[str, Any]) -> Path:
+def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None = None) -> Path:
     """Write a scan export (module docstring) into ``folder`` (created).
 
     Parameters
@@ -309,6 +310,9 @@ def write_scan_export(folder, payload: dict[str, Any]) -> Path:
         E.g. ``<result folder>/scans/unit0``.
     payload : dict
         From :func:`scan_export_payload`.
+    unit_key : str, optional
+        The cache key of the unit that made the scan, recorded in ``manifest.json`` (written
+        last): the runner keeps a folder only while its unit is part of the result folder.
     """
     from PIL import Image
 
@@ -343,9 +347,21 @@ def write_scan_export(folder, payload: dict[str, Any]) -> Path:
         "pixel_convention": "OpenCV: pixel (col, row) has its centre at integer (col, row)",
         "cloud_points": len(cl["points"]),
     }
+    if unit_key is not None:
+        manifest["unit_key"] = unit_key
     text = json.dumps(manifest, indent=2) + "\n"
     atomic_write(folder / "manifest.json", lambda tmp: Path(tmp).write_text(text))
     return folder
+
+
+def export_unit_key(folder) -> str | None:
+    """The unit key recorded in a scan export's ``manifest.json`` (None: no complete export,
+    or one written before the key was recorded)."""
+    try:
+        key = json.loads((Path(folder) / "manifest.json").read_text()).get("unit_key")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return key if isinstance(key, str) else None
 
 
 def check_save_scans(cfg) -> None:
