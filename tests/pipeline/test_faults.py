@@ -91,18 +91,24 @@ def finished_units(out: Path) -> list[Path]:
 
 
 # --------------------------------------------------------------------------- one run per folder
-def test_two_runs_started_at_once_one_proceeds_the_other_exits_2_naming_the_lock(tmp_path):
+def test_a_second_run_while_one_runs_exits_2_naming_the_lock(tmp_path):
     exp = write_exp(tmp_path / "exp.yaml", EXP)
     ref = tmp_path / "ref"
     run_fake(exp, ref)
     out = tmp_path / "out"
-    env = {"SIMLUNAR_TEST_DELAY": "0.3"}
-    procs = [cli("run", str(exp), "--out", str(out), "--no-progress", env=env) for _ in range(2)]
-    results = [(p.wait(timeout=120), *p.communicate()) for p in procs]
-    codes = sorted(r[0] for r in results)
-    assert codes == [0, 2], results
-    (loser,) = [r for r in results if r[0] == 2]
-    (winner,) = [p for p, r in zip(procs, results) if r[0] == 0]
+    # the first run is held inside its first unit (it holds the lock) until the second ends:
+    # the two overlap whatever the machine's load
+    gate, calls = tmp_path / "gate", tmp_path / "calls"
+    env = {"SIMLUNAR_TEST_GATE": str(gate), "SIMLUNAR_TEST_CALLS": str(calls)}
+    winner = cli("run", str(exp), "--out", str(out), "--no-progress", env=env)
+    try:
+        wait_for(lambda: calls.is_dir() and any(calls.iterdir()), timeout=120)
+        second = cli("run", str(exp), "--out", str(out), "--no-progress")
+        loser = (second.wait(timeout=120), *second.communicate())
+    finally:
+        gate.touch()
+    won = (winner.wait(timeout=120), *winner.communicate())
+    assert (won[0], loser[0]) == (0, 2), (won, loser)
     lines = loser[2].splitlines()
     assert len(lines) == 1, loser[2]
     assert f"another simlunar run (pid {winner.pid}) is writing into this folder" in lines[0]
@@ -190,9 +196,11 @@ def test_kill_after_config_write_then_figures_and_another_config_refuse(tmp_path
     ref = tmp_path / "ref"
     run_fake(exp, ref)
     out = tmp_path / "out"
-    p = cli("run", str(exp), "--out", str(out), "--no-progress", env={"SIMLUNAR_TEST_DELAY": "0.5"})
-    wait_for(lambda: (out / "config.yaml").is_file())
-    time.sleep(0.2)
+    # every unit waits at a gate that never opens: killed inside the first one
+    calls = tmp_path / "calls"
+    env = {"SIMLUNAR_TEST_CALLS": str(calls), "SIMLUNAR_TEST_GATE": str(tmp_path / "never")}
+    p = cli("run", str(exp), "--out", str(out), "--no-progress", env=env)
+    wait_for(lambda: (out / "config.yaml").is_file() and calls.is_dir() and any(calls.iterdir()))
     os.killpg(p.pid, signal.SIGKILL)
     p.communicate()
     assert not (out / "results.csv").exists() and not (out / "provenance.json").exists()
@@ -353,10 +361,24 @@ def test_sigint_keeps_finished_units_says_so_in_one_line_and_resumes(tmp_path):
     ref = tmp_path / "ref"
     run_fake(exp, ref)
     out = tmp_path / "out"
-    p = cli("run", str(exp), "--out", str(out), "--no-progress", env={"SIMLUNAR_TEST_DELAY": "0.5"})
-    wait_for(lambda: (out / "units").is_dir() and len(finished_units(out)) >= 2)
+    # two units finish, the third waits at a gate that never opens: interrupted there
+    calls = tmp_path / "calls"
+    env = {
+        "SIMLUNAR_TEST_CALLS": str(calls),
+        "SIMLUNAR_TEST_GATE": str(tmp_path / "never"),
+        "SIMLUNAR_TEST_GATE_AFTER": "2",
+    }
+    p = cli("run", str(exp), "--out", str(out), "--no-progress", env=env)
+    wait_for(
+        lambda: (
+            (out / "units").is_dir()
+            and len(finished_units(out)) >= 2
+            and len(list(calls.glob("*.call"))) >= 3
+        ),
+        timeout=120,
+    )
     os.killpg(p.pid, signal.SIGINT)
-    code = p.wait(timeout=30)
+    code = p.wait(timeout=60)
     _, stderr = p.communicate()
     assert code == 130, stderr
     kept = finished_units(out)
@@ -364,7 +386,7 @@ def test_sigint_keeps_finished_units_says_so_in_one_line_and_resumes(tmp_path):
         f"interrupted: {len(kept)} of 4 units finished and kept in {out / 'units'}; "
         "rerun the same command to resume"
     ]
-    assert 2 <= len(kept) < 4
+    assert len(kept) == 2
     assert not (out / ".lock").exists()
     s = run_fake(exp, out)
     assert (s.units_cached, s.units_computed) == (len(kept), 4 - len(kept))
