@@ -22,7 +22,6 @@ of the unit's cache key, so a changed DEM is recomputed.
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import math
 import os
 import zipfile
@@ -33,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from simlunar.errors import ConfigError, ResultFolderError
+from simlunar.pipeline.store import file_sha256
 
 #: NaN heights (holes) a DEM may have. Holes leave the terrain mesh open; the rays that miss
 #: it take the depth of their nearest valid pixel (``stages.fill_invalid``) and are scored as
@@ -88,21 +88,6 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
 
 
 # --------------------------------------------------------------------------- input hashes
-_HASHES: dict[tuple, str] = {}
-
-
-def file_sha256(path: str | Path) -> str:
-    """SHA-256 (hex) of a file's contents, remembered per (path, size, mtime) in this process."""
-    p = Path(path).resolve()
-    st = p.stat()
-    memo = (str(p), st.st_size, st.st_mtime_ns, st.st_ino)
-    if memo not in _HASHES:
-        h = hashlib.sha256()
-        with open(p, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                h.update(block)
-        _HASHES[memo] = h.hexdigest()
-    return _HASHES[memo]
 
 
 def input_files(config: dict[str, Any]) -> dict[str, Path]:
@@ -233,13 +218,9 @@ def terrain_facts(t: Any) -> TerrainFacts:
 
 def _preset_params(t: Any):
     """The preset's ``TerrainParams`` (grid size, spacing, origin) as the unit will build them."""
-    try:  # the typed configuration reads presets through its own models
-        from simlunar.pipeline.presets import merged_preset
-        from simlunar.pipeline.translate import terrain_params
-    except ImportError:
-        from simlunar.terrain.presets import load_preset
+    from simlunar.pipeline.presets import merged_preset
+    from simlunar.pipeline.translate import terrain_params
 
-        return load_preset(t.preset, scale=t.scale, overrides=t.overrides or None)
     return terrain_params(merged_preset(t.preset, t.overrides), scale=t.scale)
 
 
