@@ -26,6 +26,11 @@ else:
     runner.run_experiment.__kwdefaults__["compute"] = fake_unit
 
 if __name__ == "__main__":
+    import signal
+
+    # Ctrl-C as in a terminal, whatever the disposition the test process passed down (a
+    # child started with SIGINT ignored would never see the tests' SIGINT)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     from simlunar.cli import main
 
     main()

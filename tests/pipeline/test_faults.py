@@ -104,10 +104,12 @@ def test_a_second_run_while_one_runs_exits_2_naming_the_lock(tmp_path):
     try:
         wait_for(lambda: calls.is_dir() and any(calls.iterdir()), timeout=120)
         second = cli("run", str(exp), "--out", str(out), "--no-progress")
-        loser = (second.wait(timeout=120), *second.communicate())
+        out_err = second.communicate(timeout=120)  # reads the pipes while waiting
+        loser = (second.returncode, *out_err)
     finally:
         gate.touch()
-    won = (winner.wait(timeout=120), *winner.communicate())
+    out_err = winner.communicate(timeout=120)
+    won = (winner.returncode, *out_err)
     assert (won[0], loser[0]) == (0, 2), (won, loser)
     lines = loser[2].splitlines()
     assert len(lines) == 1, loser[2]
@@ -378,8 +380,8 @@ def test_sigint_keeps_finished_units_says_so_in_one_line_and_resumes(tmp_path):
         timeout=120,
     )
     os.killpg(p.pid, signal.SIGINT)
-    code = p.wait(timeout=60)
-    _, stderr = p.communicate()
+    _, stderr = p.communicate(timeout=60)  # reads the pipes while waiting
+    code = p.returncode
     assert code == 130, stderr
     kept = finished_units(out)
     assert stderr.splitlines() == [
