@@ -41,9 +41,13 @@ def atomic_write(
         write(tmp)
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and exc.filename in (None, tmp) and exc.errno is not None:
+            # the OS reports a full disk from write()/fsync() without a file name: name
+            # the file the user asked for (not the temporary one)
+            raise OSError(exc.errno, exc.strerror or os.strerror(exc.errno), str(path)) from exc
         raise
     return path
 

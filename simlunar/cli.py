@@ -10,6 +10,7 @@ resume; 1 an internal error (a bug): the traceback and a line asking to report i
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 import os
 import platform
@@ -55,8 +56,16 @@ def user_input():
 def _one_line(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
         return f"{exc.filename}: {exc.strerror}"
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
     msg = " ".join(m.strip() for m in str(exc).strip().splitlines())
     return msg or type(exc).__name__
+
+
+#: errno values that mean the environment failed (exit 3), even when no file is named
+ENVIRONMENT_ERRNOS = frozenset(
+    getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EROFS", "EIO") if hasattr(errno, name)
+)
 
 
 def user_errors(fn):
@@ -79,9 +88,10 @@ def user_errors(fn):
             typer.echo(msg, err=True)
             raise typer.Exit(EXIT_INTERRUPTED) from None
         except OSError as exc:
-            if exc.filename is None:
+            if exc.filename is None and exc.errno not in ENVIRONMENT_ERRNOS:
                 raise _internal(exc) from None
-            # a write refused after the checks passed (disk full, permissions changed)
+            # a write refused after the checks passed (disk full, quota, read-only file
+            # system, I/O error, permissions changed); the OS names no file for a full disk
             typer.echo(f"error: {_one_line(exc)}", err=True)
             raise typer.Exit(EXIT_INFRA) from None
         except Exception as exc:
@@ -157,11 +167,14 @@ def run(
     from simlunar.pipeline.runner import run_experiment
 
     with user_input():
-        cfg = load_experiment(experiment, parse_set(set_ or []))
+        overrides = parse_set(set_ or [])
+        cfg = load_experiment(experiment, overrides)
         if save_scans:
-            from simlunar.pipeline.exports import with_save_scans
+            from simlunar.pipeline.exports import check_save_scans
 
-            cfg = with_save_scans(cfg)
+            check_save_scans(cfg)
+            # an override before validation, so every sweep point is checked with it
+            cfg = load_experiment(experiment, {**overrides, "study.save_scans": True})
         executor = make_executor(workers=workers, scheduler=scheduler)
     if scheduler:
         import logging
@@ -285,9 +298,10 @@ def terrain(
     from pathlib import Path
 
     from simlunar.pipeline.preflight import check_out_dir
+    from simlunar.pipeline.presets import merged_preset
+    from simlunar.pipeline.translate import terrain_params
     from simlunar.terrain import generate
     from simlunar.terrain.io import FORMATS, GDAL_FORMATS, load_dem, write_terrain_outputs
-    from simlunar.terrain.presets import load_preset
     from simlunar.terrain.stats import terrain_report
 
     if mesh.lower() not in ("ply", "obj", "none"):
@@ -305,21 +319,25 @@ def terrain(
         with user_input():
             dem = load_dem(preset)
         typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
-        feats = {"craters": [], "rocks": []}
+        kw = {"craters": [], "rocks": []}
         side = Path(preset).with_name("features.json")  # written beside it by simlunar terrain
         if side.is_file():
             with user_input():
-                feats = json.loads(side.read_text())
+                try:
+                    feats = json.loads(side.read_text())
+                except json.JSONDecodeError as exc:
+                    raise ValueError(f"{side}: not valid JSON ({exc})") from None
+                kw = _feature_diameters(side, feats)
             typer.echo(f"features: {side}")
-        kw = {
-            k: [SimpleNamespace(diameter=f["diameter"]) for f in feats.get(k, [])]
-            for k in ("craters", "rocks")
-        }
+        kw = {k: [SimpleNamespace(diameter=d) for d in v] for k, v in kw.items()}
         for line in terrain_report(dem, **kw):
             typer.echo(line)
         return
+    if not 0 < scale <= 1:
+        raise SimlunarError(f"--scale must lie in (0, 1], got {scale}")
     with user_input():
-        params = load_preset(preset, scale=scale)
+        # the preset file through the schema's models (the same path as an experiment's terrain)
+        params = terrain_params(merged_preset(preset), scale=scale)
     if out is not None:
         check_out_dir(out)
     t0 = time.perf_counter()
@@ -340,6 +358,27 @@ def terrain(
     )
     for name, path in files.items():
         typer.echo(f"{name:<10} {path}")
+
+
+def _feature_diameters(path, feats) -> dict[str, list[float]]:
+    """``{"craters": [diameter, ...], "rocks": [...]}`` of a features.json (as written by
+    ``simlunar terrain``); a file of another layout raises ValueError naming it."""
+    import math
+
+    if not isinstance(feats, dict):
+        raise ValueError(f"{path}: expected a mapping with 'craters' and 'rocks' lists")
+    out = {}
+    for key in ("craters", "rocks"):
+        items = feats.get(key, [])
+        if not isinstance(items, list):
+            raise ValueError(f"{path}: {key}: expected a list, got {type(items).__name__}")
+        out[key] = []
+        for i, f in enumerate(items):
+            d = f.get("diameter") if isinstance(f, dict) else None
+            if isinstance(d, bool) or not isinstance(d, (int, float)) or not math.isfinite(d):
+                raise ValueError(f"{path}: {key}[{i}].diameter: expected a number (metres)")
+            out[key].append(float(d))
+    return out
 
 
 def main() -> None:

@@ -38,11 +38,12 @@ from simlunar.atomic import atomic_write
 
 __all__ = [
     "calibration_opencv",
+    "check_save_scans",
+    "export_unit_key",
     "frame_names",
     "quantize",
     "read_cloud_ply",
     "scan_export_payload",
-    "with_save_scans",
     "write_calibration_yaml",
     "write_cloud_ply",
     "write_scan_export",
@@ -303,7 +304,7 @@ def scan_export_payload(gray, rig, *, gray_opts: dict | None = None) -> dict[str
     }
 
 
-def write_scan_export(folder, payload: dict[str, Any]) -> Path:
+def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None = None) -> Path:
     """Write a scan export (module docstring) into ``folder`` (created).
 
     Parameters
@@ -312,6 +313,9 @@ def write_scan_export(folder, payload: dict[str, Any]) -> Path:
         E.g. ``<result folder>/scans/unit0``.
     payload : dict
         From :func:`scan_export_payload`.
+    unit_key : str, optional
+        The cache key of the unit that made the scan, recorded in ``manifest.json`` (written
+        last): the runner keeps a folder only while its unit is part of the result folder.
     """
     from PIL import Image
 
@@ -346,13 +350,29 @@ def write_scan_export(folder, payload: dict[str, Any]) -> Path:
         "pixel_convention": "OpenCV: pixel (col, row) has its centre at integer (col, row)",
         "cloud_points": len(cl["points"]),
     }
+    if unit_key is not None:
+        manifest["unit_key"] = unit_key
     text = json.dumps(manifest, indent=2) + "\n"
     atomic_write(folder / "manifest.json", lambda tmp: Path(tmp).write_text(text))
     return folder
 
 
-def with_save_scans(cfg):
-    """``cfg`` with ``study.save_scans`` on (``simlunar run --save-scans``).
+def export_unit_key(folder) -> str | None:
+    """The unit key recorded in a scan export's ``manifest.json`` (None: no complete export,
+    or one written before the key was recorded)."""
+    try:
+        key = json.loads((Path(folder) / "manifest.json").read_text()).get("unit_key")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return key if isinstance(key, str) else None
+
+
+def check_save_scans(cfg) -> None:
+    """Refuse ``simlunar run --save-scans`` for an experiment whose scan cannot be exported.
+
+    Checks the experiment as written; the CLI then validates it again with
+    ``study.save_scans: true`` applied like a ``--set`` override, so every sweep point is
+    checked too.
 
     Raises
     ------
@@ -372,5 +392,3 @@ def with_save_scans(cfg):
             f"--save-scans: study.modes {list(study.modes)} has no gray-code scan to export "
             "(add gray_code or ambiguity_enhancement)"
         )
-    new_study = type(study).model_validate({**study.model_dump(), "save_scans": True})
-    return cfg.model_copy(update={"study": new_study})

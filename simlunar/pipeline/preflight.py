@@ -21,7 +21,7 @@ of the unit's cache key, so a changed DEM is recomputed.
 
 from __future__ import annotations
 
-import hashlib
+import contextlib
 import math
 import os
 import zipfile
@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from simlunar.errors import ConfigError, ResultFolderError
+from simlunar.pipeline.store import file_sha256
 
 #: NaN heights (holes) a DEM may have. Holes leave the terrain mesh open; the rays that miss
 #: it take the depth of their nearest valid pixel (``stages.fill_invalid``) and are scored as
@@ -87,40 +88,23 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
 
 
 # --------------------------------------------------------------------------- input hashes
-_HASHES: dict[tuple, str] = {}
-
-
-def file_sha256(path: str | Path) -> str:
-    """SHA-256 (hex) of a file's contents, remembered per (path, size, mtime) in this process."""
-    p = Path(path).resolve()
-    st = p.stat()
-    memo = (str(p), st.st_size, st.st_mtime_ns, st.st_ino)
-    if memo not in _HASHES:
-        h = hashlib.sha256()
-        with open(p, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                h.update(block)
-        _HASHES[memo] = h.hexdigest()
-    return _HASHES[memo]
 
 
 def input_files(config: dict[str, Any]) -> dict[str, Path]:
     """The files a unit (resolved plain config) reads, by the key path that names them.
 
     ``terrain.preset`` -> the preset YAML (``scenes/<name>.yaml``), ``terrain.file`` (and the
-    ``.json`` side file of a ``.npy`` DEM when present), ``terrain.albedo_file``.
+    ``.json`` side file of a ``.npy`` DEM when present), ``terrain.albedo_file``; for a raster
+    GDAL reads, every other file it reads (:func:`gdal_files`) as ``terrain.file+<name>``.
     """
     t = config.get("terrain") or {}
     out: dict[str, Path] = {}
     preset = t.get("preset")
     if preset:
-        from simlunar.terrain.presets import SCENES
+        from simlunar.pipeline.presets import PresetError, preset_path
 
-        s = str(preset)
-        looks_like_path = s.endswith((".yaml", ".yml")) or "/" in s or "\\" in s
-        p = Path(s) if looks_like_path else SCENES / f"{s}.yaml"
-        if p.is_file():
-            out["terrain.preset"] = p
+        with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
+            out["terrain.preset"] = preset_path(str(preset))
     for key in ("file", "albedo_file"):
         if t.get(key):
             out[f"terrain.{key}"] = Path(t[key])
@@ -129,7 +113,38 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
         side = dem.with_name(dem.name + ".json")
         if side.is_file():
             out["terrain.file.json"] = side
+    for key in ("terrain.file", "terrain.albedo_file"):
+        main = out.get(key)
+        if main is not None:
+            for extra in gdal_files(main):
+                # named relative to the main file, so a moved data folder keeps its keys
+                out[f"{key}+{os.path.relpath(extra, main.parent)}"] = extra
     return out
+
+
+def gdal_files(path: Path) -> list[Path]:
+    """The files other than ``path`` that GDAL reads for a raster (rasterio's ``src.files``):
+    the sources of a ``.vrt``, the image of a PDS ``.lbl``, ``.tfw`` / ``.aux.xml`` sidecars.
+
+    Empty for the formats simlunar reads itself (.npy, .npz, .exr) and for a file GDAL cannot
+    open (the checks report that one).
+    """
+    if path.suffix.lower() in (".npy", ".npz", ".exr") or not path.is_file():
+        return []
+    try:
+        import rasterio
+
+        with rasterio.open(path) as src:
+            files = list(src.files)
+    except Exception:  # an unreadable raster is reported by the checks
+        return []
+    me = path.resolve()
+    out = []
+    for f in files:
+        q = Path(f)
+        if q.resolve() != me and q.is_file() and q not in out:
+            out.append(q)
+    return sorted(out)
 
 
 def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
@@ -203,13 +218,9 @@ def terrain_facts(t: Any) -> TerrainFacts:
 
 def _preset_params(t: Any):
     """The preset's ``TerrainParams`` (grid size, spacing, origin) as the unit will build them."""
-    try:  # the typed configuration reads presets through its own models
-        from simlunar.pipeline.presets import merged_preset
-        from simlunar.pipeline.translate import terrain_params
-    except ImportError:
-        from simlunar.terrain.presets import load_preset
+    from simlunar.pipeline.presets import merged_preset
+    from simlunar.pipeline.translate import terrain_params
 
-        return load_preset(t.preset, scale=t.scale, overrides=t.overrides or None)
     return terrain_params(merged_preset(t.preset, t.overrides), scale=t.scale)
 
 
@@ -246,6 +257,25 @@ def _read_grid(path: Path, key: str, *, spacing: float | None):
         raise
     except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
         # a file the reader cannot make sense of (truncated, garbage, wrong layout)
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        if str(path) in msg:
+            raise ConfigError(f"{key}: {msg}") from None
+        raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
+
+
+def _read_albedo(path: Path, key: str, shape, valid) -> np.ndarray:
+    """:func:`simlunar.terrain.io.load_albedo` (the unit's reader) with every failure turned
+    into one line naming ``key`` and the file."""
+    from simlunar.terrain.io import load_albedo
+
+    try:
+        if path.stat().st_size == 0:
+            raise ConfigError(f"{key}: {path} is empty")
+        _check_magic(path, key)
+        return load_albedo(path, shape, valid=valid)
+    except ConfigError:
+        raise
+    except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
         msg = " ".join(str(exc).split()) or type(exc).__name__
         if str(path) in msg:
             raise ConfigError(f"{key}: {msg}") from None
@@ -314,23 +344,17 @@ def _dem_facts(path: Path, spacing: float | None, albedo_file) -> TerrainFacts:
         rows, cols, terrain.spacing, tuple(terrain.origin), zmin, zmax, frac, str(path)
     )
     _check_extent(facts, key)
-    albedo = np.asarray(terrain.albedo)
-    akey, apath = key, path
     if albedo_file is not None:
         akey, apath = "terrain.albedo_file", Path(albedo_file)
         if not apath.is_file():
             raise ConfigError(f"{akey}: file not found: {apath}")
-        albedo = np.asarray(_read_grid(apath, akey, spacing=1.0).heights)
-        if albedo.shape != h.shape:
-            raise ConfigError(
-                f"{akey}: {apath}: albedo shape {albedo.shape[0]} x {albedo.shape[1]} differs "
-                f"from the DEM's {rows} x {cols} ({path})"
-            )
-    a = albedo[finite]
+        _read_albedo(apath, akey, h.shape, finite)  # the reader the unit uses
+        return facts
+    a = np.asarray(terrain.albedo)[finite]
     if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
         bad = a[~(np.isfinite(a) & (a >= 0) & (a <= 1))][0]
         raise ConfigError(
-            f"{akey}: {apath}: albedo must be finite and within [0, 1] where the DEM has "
+            f"{key}: {path}: albedo must be finite and within [0, 1] where the DEM has "
             f"heights, found {bad}"
         )
     return facts

@@ -431,6 +431,51 @@ def _invalidate(out: Path) -> None:
     prune_figures(out, keep=())
 
 
+def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
+    """``{"unit<i>": unit key}``: the ``scans/`` folders these units export (units with
+    ``study.save_scans``; of units sharing a key, the first, which is the one computed)."""
+    out: dict[str, str] = {}
+    seen: set[str] = set()
+    for u in units:
+        if (u.config.get("study") or {}).get("save_scans") and u.key not in seen:
+            seen.add(u.key)
+            out[f"unit{u.index}"] = u.key
+    return out
+
+
+def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
+    from simlunar.pipeline.exports import export_unit_key
+
+    name = f"unit{u.index}"
+    if scan_dirs.get(name) != u.key:
+        return True  # exports nothing (or a unit of the same key does)
+    return export_unit_key(out / "scans" / name) == u.key
+
+
+def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
+    """Remove ``scans/unit<i>/`` folders that do not hold the export of the unit that now
+    has index i (another configuration's, an interrupted one, or save_scans turned off)."""
+    import re
+    import shutil
+
+    from simlunar.pipeline.exports import export_unit_key
+
+    folder = out / "scans"
+    removed: list[Path] = []
+    if not folder.is_dir():
+        return removed
+    for p in sorted(folder.iterdir()):
+        if not (p.is_dir() and re.fullmatch(r"unit\d+", p.name)):
+            continue  # only what the runner writes
+        key = scan_dirs.get(p.name)
+        if key is None or export_unit_key(p) != key:
+            shutil.rmtree(p)
+            removed.append(p)
+    if not any(folder.iterdir()):
+        folder.rmdir()
+    return removed
+
+
 def prune_figures(out: Path, keep) -> list[Path]:
     """Remove ``figures/*.png|pdf`` not in ``keep`` (figures of another state of the folder)."""
     keep = {Path(p).name for p in keep}
@@ -449,11 +494,15 @@ def _run_locked(
 ) -> RunSummary:
     cache = UnitCache(out)
     keys = [u.key for u in units]
+    scan_dirs = scan_folders(units)
     records: dict[str, dict] = {}
     todo: list[WorkUnit] = []
     for u in units:
         rec = cache.load(u.key)
-        if rec is not None and cache.arrays_readable(u.key):
+        # a cached unit whose scan export is missing (deleted, interrupted) is computed again:
+        # the numbers are the same (seeded), the export comes back
+        scans_ok = _scans_present(out, scan_dirs, u)
+        if rec is not None and cache.arrays_readable(u.key) and scans_ok:
             records[u.key] = rec
         elif u.key not in {t.key for t in todo}:
             todo.append(u)
@@ -464,6 +513,7 @@ def _run_locked(
         # any unit changes, so an interrupted run never leaves them beside other units
         _invalidate(out)
         cache.remove_except(set(keys))
+    prune_scans(out, scan_dirs)  # the exports of units no longer produced go with them
 
     bar = _progress(progress, len(units), n_cached, cfg.name)
     n_new = 0
@@ -479,7 +529,7 @@ def _run_locked(
             if scans is not None:  # before the cache entry: a cached unit has its scans
                 from simlunar.pipeline.exports import write_scan_export
 
-                write_scan_export(out / "scans" / f"unit{u.index}", scans)
+                write_scan_export(out / "scans" / f"unit{u.index}", scans, unit_key=u.key)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
             cache.save(u.key, record, arrays)
             records[u.key] = json.loads(json.dumps(record, default=float))

@@ -26,7 +26,6 @@ from simlunar.pipeline.config import (
     LightCfg,
     OrenNayarCfg,
     OrthoNadirCfg,
-    PerspectiveCfg,
     SensorCfg,
     SunLightCfg,
     TerrainCfg,
@@ -34,12 +33,6 @@ from simlunar.pipeline.config import (
     format_validation_error,
     load_yaml,
 )
-
-#: the experiment schema's models, under the names this module used to define
-PerspectiveSceneCfg = PerspectiveCfg
-SunSceneCfg = SunLightCfg
-SceneCameraCfg = CameraCfg
-SceneLightCfg = LightCfg
 
 
 class SceneCfg(_Model):
@@ -83,14 +76,6 @@ def load_scene(path) -> SceneCfg:
     return resolve_terrain_files(cfg, path.parent)
 
 
-def _seeds(seed: int) -> tuple[np.random.SeedSequence, int]:
-    from simlunar.pipeline.stages import stage_seeds
-
-    s = stage_seeds(seed)
-    render_seed = int(s["render"].generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF)
-    return s["terrain"], render_seed
-
-
 def build_camera(cfg, terrain):
     """Geometry camera of a camera config (:func:`simlunar.pipeline.translate.camera`)."""
     return translate.camera(cfg, terrain)
@@ -99,15 +84,6 @@ def build_camera(cfg, terrain):
 def build_lights(cfg: SceneCfg) -> list:
     """Light specs of a scene config (the light, plus the ambient term when > 0)."""
     return translate.lights(cfg.light, cfg.ambient_radiance)
-
-
-def build_scene_inputs(cfg: SceneCfg):
-    """``(terrain, camera, lights, bsdf)`` for :func:`simlunar.render.render`."""
-    from simlunar.pipeline.stages import terrain_seed_sequence
-
-    terrain_ss = terrain_seed_sequence(cfg.seed, cfg.terrain.seed_index)
-    terrain = translate.build_terrain(cfg.terrain, rng=np.random.default_rng(terrain_ss))
-    return terrain, build_camera(cfg.camera, terrain), build_lights(cfg), translate.bsdf(cfg.bsdf)
 
 
 def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
@@ -133,9 +109,11 @@ def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    terrain, camera, lights, bsdf = build_scene_inputs(cfg)
+    from simlunar.pipeline.stages import int_seed, scene_inputs, stage_seeds
+
+    terrain, camera, lights, bsdf = scene_inputs(cfg)  # as an experiment's unit builds them
     t1 = time.perf_counter()
-    _, render_seed = _seeds(cfg.seed)
+    render_seed = int_seed(stage_seeds(cfg.seed)["render"])
     res = render(
         terrain,
         camera,

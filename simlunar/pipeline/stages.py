@@ -34,7 +34,10 @@ from simlunar.pipeline.config import (
 STAGES = ("terrain", "render", "sensor", "study", "panels")
 
 #: bump when a change makes cached unit results invalid
-CACHE_VERSION = 2  # 2: figure arrays use index coordinates (no half-cell offset)
+#: 2: figure arrays use index coordinates (no half-cell offset)
+#: 3: scanner auto-exposure from the white frame's 99.5th percentile (was 99th), exposure
+#:    without a sensor model, GRAD weights around holes
+CACHE_VERSION = 3
 
 
 #: Renders of units running concurrently in threads (``LocalPoolExecutor``) take turns: each
@@ -98,7 +101,7 @@ def terrain_seed_sequence(seed: int, index: int = 0) -> np.random.SeedSequence:
     return np.random.SeedSequence(parent.entropy, spawn_key=(*parent.spawn_key, index - 1))
 
 
-def _int_seed(ss: np.random.SeedSequence) -> int:
+def int_seed(ss: np.random.SeedSequence) -> int:
     """A 31-bit integer seed for code that wants an int (Mitsuba's sampler)."""
     return int(ss.generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF)
 
@@ -111,27 +114,23 @@ def build_terrain(cfg, *, rng):
 
 
 # --------------------------------------------------------------------------- render
-def scene_inputs(cfg: ExperimentCfg):
-    """``(terrain, camera, lights, bsdf)`` of an experiment.
+def scene_inputs(cfg):
+    """``(terrain, camera, lights, bsdf)`` of an experiment (``ExperimentCfg``: camera, light,
+    BSDF under ``render``) or of a scene (:class:`simlunar.pipeline.scene.SceneCfg`: the same
+    models at the top level).
 
-    The experiment's ``terrain`` and ``render`` sections are the scene schema's models
-    (:class:`simlunar.pipeline.scene.SceneCfg`), translated by the same functions, so
-    ``simlunar render`` and ``simlunar run`` give the same terrain for the same seed.
+    One function for both, so ``simlunar render`` and ``simlunar run`` give the same terrain
+    for the same seed.
     """
-    terrain_ss = stage_seeds(cfg.seed)["terrain"]
+    terrain_ss = terrain_seed_sequence(cfg.seed, cfg.terrain.seed_index)
     terrain = translate.build_terrain(cfg.terrain, rng=np.random.default_rng(terrain_ss))
-    r = cfg.render
+    r = getattr(cfg, "render", cfg)
     return (
         terrain,
         translate.camera(r.camera, terrain),
         translate.lights(r.light, r.ambient_radiance),
         translate.bsdf(r.bsdf),
     )
-
-
-def build_bsdf(cfg):
-    """BSDF spec of a BSDF config (:func:`simlunar.pipeline.translate.bsdf`)."""
-    return translate.bsdf(cfg)
 
 
 def luminance(image: np.ndarray) -> np.ndarray:
@@ -349,7 +348,7 @@ def compute_unit(
             lights=lights,
             bsdf=bsdf,
             spp=r.spp,
-            seed=_int_seed(seeds["render"]),
+            seed=int_seed(seeds["render"]),
             max_depth=r.max_depth,
         )
     timings["render_s"] = time.perf_counter() - t
@@ -395,7 +394,7 @@ def compute_unit(
                 image,
                 density=density,
                 spp=r.spp,
-                seed=_int_seed(seeds["render"]),
+                seed=int_seed(seeds["render"]),
                 max_depth=r.max_depth,
                 rng=np.random.default_rng(mesh_ss),
                 sigma_range=cfg.figures.sparse_mesh_sigma,
@@ -481,7 +480,7 @@ def _compute_scanner_unit(
         rng=seeds["study"],
         max_depth=r.max_depth,
         spp=r.spp,
-        seed=_int_seed(seeds["render"]),
+        seed=int_seed(seeds["render"]),
         sensor=sensor,
         bsdf=bsdf,
         sun=sun,

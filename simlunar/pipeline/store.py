@@ -166,15 +166,24 @@ class UnitCache:
         atomic_write_json(self.json_path(key), {**record, "key": key})
 
 
+_HASHES: dict[tuple, str] = {}
+
+
 def file_sha256(path: str | Path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
+    """SHA-256 (hex) of a file's bytes, remembered per (path, size, mtime, inode) in this
+    process (a sweep hashes the same DEM once; an atomic rewrite is a new inode)."""
     import hashlib
 
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
+    p = Path(path).resolve()
+    st = p.stat()
+    memo = (str(p), st.st_size, st.st_mtime_ns, st.st_ino)
+    if memo not in _HASHES:
+        h = hashlib.sha256()
+        with open(p, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+        _HASHES[memo] = h.hexdigest()
+    return _HASHES[memo]
 
 
 LOCK_NAME = ".lock"

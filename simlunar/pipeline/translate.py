@@ -110,12 +110,20 @@ def build_terrain(cfg, *, rng):
         params = terrain_params(merged_preset(cfg.preset, cfg.overrides), scale=cfg.scale)
         terrain = generate(params, rng=rng).terrain
     else:
-        from simlunar.terrain.io import load_dem
+        from simlunar.terrain.io import load_albedo, load_dem
 
         terrain = load_dem(cfg.file, spacing=cfg.spacing_m)
         if cfg.albedo_file is not None:
-            albedo = load_albedo(cfg.albedo_file, terrain.shape)
-            terrain = Terrain(terrain.heights, albedo, terrain.spacing, terrain.origin)
+            # the reader the preflight checked the file with (one reader, one verdict)
+            try:
+                albedo = load_albedo(
+                    cfg.albedo_file, terrain.shape, valid=np.isfinite(terrain.heights)
+                )
+            except ValueError as exc:
+                raise ValueError(f"terrain.albedo_file: {exc}") from None
+            terrain = Terrain(
+                terrain.heights, albedo, terrain.spacing, terrain.origin, crs=terrain.crs
+            )
     if cfg.albedo is not None:
         terrain = Terrain(
             terrain.heights,
@@ -124,43 +132,6 @@ def build_terrain(cfg, *, rng):
             terrain.origin,
         )
     return terrain
-
-
-def load_albedo(path, shape: tuple[int, int]) -> np.ndarray:
-    """An albedo grid file (``.npy`` (rows, cols), or any single-band format that
-    :func:`simlunar.terrain.io.load_dem` reads) checked against the DEM's ``shape``.
-
-    Raises
-    ------
-    ValueError
-        Unreadable file, not a 2-D grid, a shape other than the DEM's, or values that are not
-        finite numbers in [0, 1] (the message names ``terrain.albedo_file`` and the file).
-    """
-    from pathlib import Path
-
-    from simlunar.terrain.io import load_dem
-
-    path = Path(path)
-    if path.suffix.lower() == ".npy":
-        try:
-            arr = np.load(path, allow_pickle=False)
-        except (OSError, ValueError) as exc:
-            raise ValueError(f"terrain.albedo_file: cannot read {path}: {exc}") from None
-    else:
-        arr = load_dem(path, spacing=1.0).heights
-    arr = np.asarray(arr)
-    if arr.ndim != 2 or not np.issubdtype(arr.dtype, np.number):
-        raise ValueError(
-            f"terrain.albedo_file: {path} must hold a 2-D numeric grid, got {arr.dtype} {arr.shape}"
-        )
-    if arr.shape != tuple(shape):
-        raise ValueError(
-            f"terrain.albedo_file: {path} has shape {arr.shape}, the DEM {tuple(shape)}"
-        )
-    arr = arr.astype(np.float32)
-    if not np.all(np.isfinite(arr)) or arr.min() < 0 or arr.max() > 1:
-        raise ValueError(f"terrain.albedo_file: {path} values must be finite and lie in [0, 1]")
-    return arr
 
 
 # --------------------------------------------------------------------------- render

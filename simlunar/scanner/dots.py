@@ -411,6 +411,7 @@ def dot_schedule(
     depth_range: tuple[float, float],
     min_proj_spacing: float = 8.0,
     min_cam_spacing: float = 6.0,
+    bound: bool = True,
 ) -> DotSchedule:
     """Group dots into frames along the epipolar structure, with a lower bound on frames.
 
@@ -441,6 +442,9 @@ def dot_schedule(
     depth_range : (near, far) projector z-depth bounds of the scene (m)
     min_proj_spacing, min_cam_spacing : float
         Projector pixels, camera pixels (> 0).
+    bound : bool
+        Search the lower bound (on a second thread while colouring). False skips it (the
+        frames are the same): ``clique`` is then empty and ``lower_bound`` 0.
 
     Returns
     -------
@@ -501,6 +505,10 @@ def dot_schedule(
         pny,
         psp,
     )
+    if not bound:
+        colour = _sched.greedy_colour(seq.astype(np.int64), *args)
+        clique = np.empty(0, np.int64)
+        return DotSchedule(frames=_frames_from_colour(colour), colour=colour, clique=clique)
     # the lower bound is independent of the colouring: search it on a second core meanwhile
     # (both kernels release the GIL)
     with ThreadPoolExecutor(max_workers=1) as pool:
@@ -553,6 +561,7 @@ def schedule_dots(
         depth_range=depth_range,
         min_proj_spacing=min_proj_spacing,
         min_cam_spacing=min_cam_spacing,
+        bound=False,  # the scan needs the frames only
     ).frames
 
 

@@ -358,11 +358,10 @@ def load_dem(
     if heights.ndim != 2:
         raise ValueError(f"{path}: heights must be 2-D, got shape {heights.shape}")
     if albedo_file is not None:
-        albedo = load_dem(albedo_file, spacing=1.0).heights.astype(np.float32)
-        if albedo.shape != heights.shape:
-            raise ValueError(
-                f"{albedo_file}: albedo shape {albedo.shape} differs from heights {heights.shape}"
-            )
+        valid = (
+            np.isfinite(heights) if nodata is None else np.isfinite(heights) & (heights != nodata)
+        )
+        albedo = load_albedo(albedo_file, heights.shape, valid=valid)
     if albedo is not None and albedo.shape != heights.shape:
         raise ValueError(
             f"{path}: albedo shape {albedo.shape} differs from heights {heights.shape}"
@@ -383,6 +382,66 @@ def load_dem(
         )
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
+
+
+def load_albedo(path, shape: tuple[int, int], *, valid: np.ndarray | None = None) -> np.ndarray:
+    """Read an albedo grid file for a DEM of ``shape``: the one reader of ``albedo_file``.
+
+    A ``.npy`` must hold one (rows, cols) grid (a (2, rows, cols) [heights, albedo] stack is
+    a DEM, not an albedo file); any other format :func:`load_dem` reads gives its first band
+    (heights array).
+
+    Parameters
+    ----------
+    path : str or Path
+    shape : (rows, cols)
+        The DEM's grid; the albedo grid must match it.
+    valid : bool array of ``shape``, optional
+        Cells where the DEM has heights; values must be finite and in [0, 1] there (default
+        everywhere). Other cells (holes) are not checked.
+
+    Returns
+    -------
+    (rows, cols) float32 array
+
+    Raises
+    ------
+    FileNotFoundError
+        Missing file.
+    ValueError
+        Unreadable file, not one 2-D numeric grid, a shape other than ``shape``, or values
+        that are not finite numbers in [0, 1] (the message names the file).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"albedo file not found: {path}")
+    if _suffix(path, read=True) == ".npy":
+        try:
+            arr = np.load(path, allow_pickle=False)
+        except (OSError, ValueError, EOFError) as exc:
+            raise ValueError(f"cannot read {path}: {' '.join(str(exc).split())}") from None
+        arr = np.asarray(arr)
+        if arr.ndim != 2 or arr.dtype.kind not in "fiu":
+            raise ValueError(
+                f"{path}: an albedo .npy must hold one (rows, cols) numeric grid, got "
+                f"{arr.dtype} {arr.shape}"
+            )
+    else:
+        arr = load_dem(path, spacing=1.0).heights
+    if arr.shape != tuple(shape):
+        raise ValueError(
+            f"{path}: albedo shape {arr.shape[0]} x {arr.shape[1]} differs from the DEM's "
+            f"{shape[0]} x {shape[1]}"
+        )
+    arr = arr.astype(np.float32)
+    a = arr if valid is None else arr[np.asarray(valid, bool)]
+    ok = np.isfinite(a) & (a >= 0) & (a <= 1)
+    if not np.all(ok):
+        raise ValueError(
+            f"{path}: albedo must be finite and within [0, 1] where the DEM has heights, "
+            f"found {a[~ok][0]}"
+        )
+    return arr
 
 
 def export_mesh(terrain: Terrain, path) -> Path:

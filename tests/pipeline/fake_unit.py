@@ -3,6 +3,7 @@
 It depends on the unit's config and seed exactly as a real unit does (rows per strategy,
 density, trial and metric; the light elevation shifts the numbers), and counts its calls in a
 folder given by ``SIMLUNAR_TEST_CALLS`` so tests can prove which units were recomputed.
+``SIMLUNAR_TEST_GATE`` holds units until a file exists (:func:`enter_unit`).
 """
 
 from __future__ import annotations
@@ -18,12 +19,42 @@ from simlunar.pipeline.config import ExperimentCfg
 from simlunar.pipeline.stages import stage_seeds
 
 
-def fake_unit(payload: dict) -> dict:
-    cfg = ExperimentCfg.model_validate(payload["config"])
+def enter_unit(payload: dict) -> None:
+    """Count the call (``SIMLUNAR_TEST_CALLS``) and wait at the gate.
+
+    ``SIMLUNAR_TEST_GATE`` (a path): a call waits until that file exists, except the first
+    ``SIMLUNAR_TEST_GATE_AFTER`` calls (default 0; counted in ``SIMLUNAR_TEST_CALLS``). A test
+    can so stop a run after exactly N units, whatever the machine's load, then kill it.
+    """
     calls = os.environ.get("SIMLUNAR_TEST_CALLS")
+    n_calls = 0
     if calls:
         Path(calls).mkdir(parents=True, exist_ok=True)
         (Path(calls) / f"{uuid.uuid4().hex}.call").write_text(payload["config"]["name"])
+        n_calls = len(list(Path(calls).glob("*.call")))
+    gate = os.environ.get("SIMLUNAR_TEST_GATE")
+    after = int(os.environ.get("SIMLUNAR_TEST_GATE_AFTER", "0"))
+    if gate and (not calls or n_calls > after):
+        deadline = time.monotonic() + 120
+        while not Path(gate).exists():
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"SIMLUNAR_TEST_GATE {gate} never appeared")
+            time.sleep(0.02)
+
+
+def gated(compute):
+    """``compute`` (e.g. the real ``stages.compute_unit``) behind :func:`enter_unit`."""
+
+    def unit(payload: dict) -> dict:
+        enter_unit(payload)
+        return compute(payload)
+
+    return unit
+
+
+def fake_unit(payload: dict) -> dict:
+    cfg = ExperimentCfg.model_validate(payload["config"])
+    enter_unit(payload)
     delay = float(os.environ.get("SIMLUNAR_TEST_DELAY", "0"))
     if delay:
         time.sleep(delay)

@@ -198,6 +198,7 @@ CASES = [
     Case("corrupt albedo", dem_cfg(albedo_file="alb.npy"), "terrain.albedo_file", setup=files(dem__npy=good_dem, alb__npy=raw(b"PK\x03\x04 not a zip"))),
     Case("all-NaN albedo", dem_cfg(albedo_file="alb.npy"), "albedo must be finite and within [0, 1]", setup=files(dem__npy=good_dem, alb__npy=lambda p: _npy(p, np.full((24, 32), np.nan)))),
     Case("1x1 albedo", dem_cfg(albedo_file="alb.npy"), "albedo shape 1 x 1 differs from the DEM's 24 x 32", setup=files(dem__npy=good_dem, alb__npy=lambda p: _npy(p, [[0.1]]))),
+    Case("albedo .npy stack", dem_cfg(albedo_file="alb.npy"), "an albedo .npy must hold one (rows, cols) numeric grid", setup=files(dem__npy=good_dem, alb__npy=lambda p: _npy(p, np.full((2, 24, 32), 0.1)))),
     Case("albedo shape mismatch", dem_cfg(albedo_file="alb.npy"), "albedo shape 32 x 24 differs", setup=files(dem__npy=good_dem, alb__npy=lambda p: _npy(p, np.full((32, 24), 0.1)))),
     # geometry that sees nothing
     Case("camera at its target", with_("render.camera", {**PERSPECTIVE, "look_at_m": PERSPECTIVE["position_m"]}), "render.camera.look_at_m: equals position_m"),

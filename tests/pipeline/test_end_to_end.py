@@ -127,34 +127,38 @@ def test_real_sweep_sigkill_then_resume(tmp_path):
     ref = tmp_path / "ref"
     run_cli(QUICKSTART, "--out", str(ref), *args)
     out = tmp_path / "killed"
+    # the real CLI and units; the second unit waits at a gate that never opens (tests/pipeline/
+    # fake_cli.py), so the kill comes after exactly one unit whatever the machine's load
+    calls = tmp_path / "calls"
+    env = {
+        **os.environ,
+        "SIMLUNAR_TEST_REAL_UNITS": "1",
+        "SIMLUNAR_TEST_CALLS": str(calls),
+        "SIMLUNAR_TEST_GATE": str(tmp_path / "never"),
+        "SIMLUNAR_TEST_GATE_AFTER": "1",
+    }
+    fake_cli = Path(__file__).resolve().parent / "fake_cli.py"
     proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "simlunar.cli",
-            "run",
-            QUICKSTART,
-            "--out",
-            str(out),
-            "--no-progress",
-            *args,
-        ],
+        [sys.executable, str(fake_cli), "run", QUICKSTART, "--out", str(out), "--no-progress",
+         *args],
         cwd=ROOT,
+        env=env,
         start_new_session=True,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
-    )
+    )  # fmt: skip
     deadline = time.monotonic() + 240
     units = out / "units"
     while time.monotonic() < deadline and proc.poll() is None:
-        if units.is_dir() and _finished(units):
+        n_calls = len(list(calls.glob("*.call"))) if calls.is_dir() else 0
+        if units.is_dir() and _finished(units) and n_calls >= 2:
             break
         time.sleep(0.05)
-    assert proc.poll() is None, "the run finished before it could be killed"
+    assert proc.poll() is None, "the run ended before it could be killed"
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     done = {p.name: p.stat().st_mtime_ns for p in _finished(units)}
-    assert 1 <= len(done) < 3
+    assert len(done) == 1
     r = run_cli(QUICKSTART, "--out", str(out), *args)
     assert f"units: 3 ({len(done)} cached, {3 - len(done)} computed)" in r.output
     assert {p.name: p.stat().st_mtime_ns for p in units.glob("*.json") if p.name in done} == done

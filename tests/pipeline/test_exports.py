@@ -229,3 +229,76 @@ def test_save_scans_without_a_gray_code_scan_is_a_user_error(tmp_path):
     )
     assert r.exit_code == 2 and "--save-scans" in r.output
     assert not out.exists()
+
+
+def test_save_scans_checks_every_sweep_point(tmp_path):
+    # --save-scans is applied before validation: a sweep point without a gray-code scan is
+    # refused in one line (it used to reach runner.expand and crash with a traceback)
+    out = tmp_path / "s"
+    args = ["run", str(ROOT / "experiments" / "scanner_ambiguity.yaml"), "--out", str(out)]
+    args += ["--set", "study.modes=[gray_code]"]
+    args += ["--set", "sweep={study.modes: [[gray_code], [data_reduction]]}", "--save-scans"]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 2, r.output
+    assert "Traceback" not in r.output
+    lines = r.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ")
+    assert "sweep.study.modes[1]" in lines[0] and "gray_code" in lines[0]
+    assert not out.exists()
+
+
+def test_scan_folders_follow_their_units(tmp_path, monkeypatch):
+    """manifest.json names the unit's key; folders of units no longer produced are removed
+    with the units, and a cached unit whose export is missing is computed again."""
+    import shutil
+
+    from simlunar.pipeline import runner
+    from simlunar.pipeline.exports import export_unit_key
+
+    out = tmp_path / "scan"
+    args = [
+        "run",
+        str(ROOT / "experiments" / "scanner_ambiguity.yaml"),
+        "--out",
+        str(out),
+        "--no-progress",
+        "--no-figures",
+        "--save-scans",
+        *("--set", "terrain.scale=0.125"),
+        *("--set", "study.projector_px=[16, 12]"),
+        *("--set", "study.camera_px=[24, 18]"),
+        *("--set", "render.spp=1"),
+        *("--set", "study.modes=[gray_code]"),
+        *("--set", "study.metrics=[mse]"),
+        *("--set", "sweep={seed: [1, 2]}"),
+    ]
+
+    def run():
+        r = CliRunner().invoke(app, args)
+        assert r.exit_code == 0, r.output
+        keys = json.loads((out / "provenance.json").read_text())["unit_keys"]
+        return r.output, keys
+
+    def exported():
+        return {p.name: export_unit_key(p) for p in (out / "scans").iterdir()}
+
+    _, keys = run()
+    assert exported() == {"unit0": keys[0], "unit1": keys[1]}
+    # a leftover folder and the export of another state of unit1: removed / made again
+    shutil.copytree(out / "scans" / "unit0", out / "scans" / "unit7")
+    manifest = out / "scans" / "unit1" / "manifest.json"
+    manifest.write_text(json.dumps({**json.loads(manifest.read_text()), "unit_key": "0" * 16}))
+    text, _ = run()
+    assert "(1 cached, 1 computed)" in text
+    assert exported() == {"unit0": keys[0], "unit1": keys[1]}
+    # a missing export of a cached unit is written again (the unit is computed again)
+    shutil.rmtree(out / "scans" / "unit0")
+    text, _ = run()
+    assert "(1 cached, 1 computed)" in text and exported()["unit0"] == keys[0]
+    text, _ = run()
+    assert "(2 cached, 0 computed)" in text
+    # new unit keys (another simlunar): the old units and their exports are replaced
+    monkeypatch.setattr(runner, "CACHE_VERSION", runner.CACHE_VERSION + 1000)
+    text, new_keys = run()
+    assert "(0 cached, 2 computed)" in text and set(new_keys).isdisjoint(keys)
+    assert exported() == {"unit0": new_keys[0], "unit1": new_keys[1]}

@@ -7,6 +7,7 @@ CLI with that unit (:mod:`fake_cli`), so exit codes and stderr are the user's.
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
@@ -90,18 +91,26 @@ def finished_units(out: Path) -> list[Path]:
 
 
 # --------------------------------------------------------------------------- one run per folder
-def test_two_runs_started_at_once_one_proceeds_the_other_exits_2_naming_the_lock(tmp_path):
+def test_a_second_run_while_one_runs_exits_2_naming_the_lock(tmp_path):
     exp = write_exp(tmp_path / "exp.yaml", EXP)
     ref = tmp_path / "ref"
     run_fake(exp, ref)
     out = tmp_path / "out"
-    env = {"SIMLUNAR_TEST_DELAY": "0.3"}
-    procs = [cli("run", str(exp), "--out", str(out), "--no-progress", env=env) for _ in range(2)]
-    results = [(p.wait(timeout=120), *p.communicate()) for p in procs]
-    codes = sorted(r[0] for r in results)
-    assert codes == [0, 2], results
-    (loser,) = [r for r in results if r[0] == 2]
-    (winner,) = [p for p, r in zip(procs, results) if r[0] == 0]
+    # the first run is held inside its first unit (it holds the lock) until the second ends:
+    # the two overlap whatever the machine's load
+    gate, calls = tmp_path / "gate", tmp_path / "calls"
+    env = {"SIMLUNAR_TEST_GATE": str(gate), "SIMLUNAR_TEST_CALLS": str(calls)}
+    winner = cli("run", str(exp), "--out", str(out), "--no-progress", env=env)
+    try:
+        wait_for(lambda: calls.is_dir() and any(calls.iterdir()), timeout=120)
+        second = cli("run", str(exp), "--out", str(out), "--no-progress")
+        out_err = second.communicate(timeout=120)  # reads the pipes while waiting
+        loser = (second.returncode, *out_err)
+    finally:
+        gate.touch()
+    out_err = winner.communicate(timeout=120)
+    won = (winner.returncode, *out_err)
+    assert (won[0], loser[0]) == (0, 2), (won, loser)
     lines = loser[2].splitlines()
     assert len(lines) == 1, loser[2]
     assert f"another simlunar run (pid {winner.pid}) is writing into this folder" in lines[0]
@@ -189,9 +198,11 @@ def test_kill_after_config_write_then_figures_and_another_config_refuse(tmp_path
     ref = tmp_path / "ref"
     run_fake(exp, ref)
     out = tmp_path / "out"
-    p = cli("run", str(exp), "--out", str(out), "--no-progress", env={"SIMLUNAR_TEST_DELAY": "0.5"})
-    wait_for(lambda: (out / "config.yaml").is_file())
-    time.sleep(0.2)
+    # every unit waits at a gate that never opens: killed inside the first one
+    calls = tmp_path / "calls"
+    env = {"SIMLUNAR_TEST_CALLS": str(calls), "SIMLUNAR_TEST_GATE": str(tmp_path / "never")}
+    p = cli("run", str(exp), "--out", str(out), "--no-progress", env=env)
+    wait_for(lambda: (out / "config.yaml").is_file() and calls.is_dir() and any(calls.iterdir()))
     os.killpg(p.pid, signal.SIGKILL)
     p.communicate()
     assert not (out / "results.csv").exists() and not (out / "provenance.json").exists()
@@ -352,18 +363,32 @@ def test_sigint_keeps_finished_units_says_so_in_one_line_and_resumes(tmp_path):
     ref = tmp_path / "ref"
     run_fake(exp, ref)
     out = tmp_path / "out"
-    p = cli("run", str(exp), "--out", str(out), "--no-progress", env={"SIMLUNAR_TEST_DELAY": "0.5"})
-    wait_for(lambda: (out / "units").is_dir() and len(finished_units(out)) >= 2)
+    # two units finish, the third waits at a gate that never opens: interrupted there
+    calls = tmp_path / "calls"
+    env = {
+        "SIMLUNAR_TEST_CALLS": str(calls),
+        "SIMLUNAR_TEST_GATE": str(tmp_path / "never"),
+        "SIMLUNAR_TEST_GATE_AFTER": "2",
+    }
+    p = cli("run", str(exp), "--out", str(out), "--no-progress", env=env)
+    wait_for(
+        lambda: (
+            (out / "units").is_dir()
+            and len(finished_units(out)) >= 2
+            and len(list(calls.glob("*.call"))) >= 3
+        ),
+        timeout=120,
+    )
     os.killpg(p.pid, signal.SIGINT)
-    code = p.wait(timeout=30)
-    _, stderr = p.communicate()
+    _, stderr = p.communicate(timeout=60)  # reads the pipes while waiting
+    code = p.returncode
     assert code == 130, stderr
     kept = finished_units(out)
     assert stderr.splitlines() == [
         f"interrupted: {len(kept)} of 4 units finished and kept in {out / 'units'}; "
         "rerun the same command to resume"
     ]
-    assert 2 <= len(kept) < 4
+    assert len(kept) == 2
     assert not (out / ".lock").exists()
     s = run_fake(exp, out)
     assert (s.units_cached, s.units_computed) == (len(kept), 4 - len(kept))
@@ -395,9 +420,14 @@ def test_a_write_refused_during_the_run_is_one_line_exit_3(tmp_path, monkeypatch
 
     real = runner.atomic_write_text
 
+    def full(fd):  # as the OS reports a full disk: an errno, no file name
+        raise OSError(errno.ENOSPC, "No space left on device")
+
     def refuse(path, text):
         if Path(path).name == "results.csv":
-            raise OSError(28, "No space left on device", str(path))
+            with monkeypatch.context() as m:
+                m.setattr(os, "fsync", full)
+                return real(path, text)
         return real(path, text)
 
     monkeypatch.setitem(runner.run_experiment.__kwdefaults__, "compute", fake_unit)
@@ -408,6 +438,21 @@ def test_a_write_refused_during_the_run_is_one_line_exit_3(tmp_path, monkeypatch
     assert r.exit_code == 3
     assert r.stderr.splitlines() == [f"error: {out / 'results.csv'}: No space left on device"]
     assert len(finished_units(out)) == 1  # the finished unit is kept
+    assert not list(out.glob(".results.csv.*"))  # no temporary file left
+
+
+@pytest.mark.parametrize("code", [errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EIO])
+def test_an_environment_errno_without_a_file_name_is_exit_3(tmp_path, monkeypatch, code):
+    from simlunar.pipeline import runner
+
+    def unit(payload):
+        raise OSError(code, os.strerror(code))  # e.g. from a writer that names no file
+
+    monkeypatch.setitem(runner.run_experiment.__kwdefaults__, "compute", unit)
+    exp = write_exp(tmp_path / "exp.yaml", {**EXP, "sweep": {}})
+    r = CliRunner().invoke(app, ["run", str(exp), "--out", str(tmp_path / "o"), "--no-progress"])
+    assert r.exit_code == 3, r.output
+    assert r.stderr.splitlines() == [f"error: {os.strerror(code)}"]
 
 
 def test_claim_folder_refuses_an_unrelated_folder(tmp_path):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import warnings
 
 import numpy as np
 import pytest
@@ -69,3 +70,57 @@ def test_input_hashes_are_the_sha256_of_the_files_and_follow_their_contents(tmp_
     assert input_hashes(cfg)["terrain.file"]["sha256"] != h1
     preset = input_files({"terrain": {"preset": "aerial_1"}})["terrain.preset"]
     assert preset.name == "aerial_1.yaml" and preset.is_file()
+
+
+def _tif(path, heights, *, georef=True):
+    import rasterio
+    from rasterio.transform import Affine
+
+    kw = {"transform": Affine(0.5, 0, 0, 0, -0.5, 0)} if georef else {}
+    rows, cols = heights.shape
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", rasterio.errors.NotGeoreferencedWarning)
+        with rasterio.open(
+            path, "w", driver="GTiff", width=cols, height=rows, count=1, dtype="float32", **kw
+        ) as dst:
+            dst.write(heights.astype(np.float32), 1)
+
+
+_VRT = """<VRTDataset rasterXSize="5" rasterYSize="4">
+  <GeoTransform>0, 0.5, 0, 0, 0, -0.5</GeoTransform>
+  <VRTRasterBand dataType="Float32" band="1">
+    <SimpleSource>
+      <SourceFilename relativeToVRT="1">src.tif</SourceFilename>
+      <SourceBand>1</SourceBand>
+    </SimpleSource>
+  </VRTRasterBand>
+</VRTDataset>
+"""
+
+
+def test_the_cache_key_follows_the_tif_a_vrt_points_to(tmp_path):
+    from simlunar.pipeline.runner import unit_key
+
+    _tif(tmp_path / "src.tif", np.zeros((4, 5)))
+    (tmp_path / "dem.vrt").write_text(_VRT)
+    cfg = {"terrain": {"file": str(tmp_path / "dem.vrt")}}
+    files = input_files(cfg)
+    assert files["terrain.file+src.tif"] == tmp_path / "src.tif"
+    k1 = unit_key(cfg)
+    _tif(tmp_path / "src.tif", np.ones((4, 5)))  # the .vrt itself is unchanged
+    assert unit_key(cfg) != k1
+
+
+def test_the_cache_key_follows_a_world_file(tmp_path):
+    from simlunar.pipeline.runner import unit_key
+
+    _tif(tmp_path / "dem.tif", np.zeros((4, 5)), georef=False)
+    (tmp_path / "dem.tfw").write_text("0.5\n0\n0\n-0.5\n0.25\n-0.25\n")
+    cfg = {"terrain": {"file": str(tmp_path / "dem.tif")}}
+    assert "terrain.file+dem.tfw" in input_files(cfg)
+    k1 = unit_key(cfg)
+    (tmp_path / "dem.tfw").write_text("0.2\n0\n0\n-0.2\n0.1\n-0.1\n")  # another spacing
+    assert unit_key(cfg) != k1
+    # a plain GeoTIFF reads one file
+    _tif(tmp_path / "plain.tif", np.zeros((4, 5)))
+    assert set(input_files({"terrain": {"file": str(tmp_path / "plain.tif")}})) == {"terrain.file"}

@@ -92,11 +92,16 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
     # a degenerate range equal to the scene's sigma reproduces the constant render: exactly on
     # LLVM; a CUDA kernel rounds the texture path's sigma factors a few ulp differently from
     # the scalar path's (tests/render/test_bsdfs.py), and a pixel sums 2 spp of 1 BSDF value
-    # each, so 16 float32 ulp relative bound it (a 1e-5 relative change of sigma moves BSDF
-    # values by 42-250 ulp on the eval grid of test_bsdfs.py; the check above covers the map)
+    # each, so 16 float32 ulp relative bound it there (a 1e-5 relative change of sigma moves
+    # BSDF values by 42-250 ulp on the eval grid of test_bsdfs.py; the check above covers the map)
     flat = sparse_mesh_render(t, cam, sun, on, image, rng=3, sigma_range=(on.sigma, on.sigma), **kw)
-    diff = np.abs(flat["sparse_mesh_render_rough"].astype(np.float64) - const)
-    assert np.all(diff <= 16 * np.finfo(np.float32).eps * np.abs(const))
+    import mitsuba as mi  # the variant the renders above ran on
+
+    if mi.variant().startswith("cuda"):
+        diff = np.abs(flat["sparse_mesh_render_rough"].astype(np.float64) - const)
+        assert np.all(diff <= 16 * np.finfo(np.float32).eps * np.abs(const))
+    else:
+        np.testing.assert_array_equal(flat["sparse_mesh_render_rough"], const)
     # the same plan (same rng) gives the same constant render; no modulation without a range
     # or for a BSDF without roughness
     plain = sparse_mesh_render(t, cam, sun, on, image, rng=3, **kw)

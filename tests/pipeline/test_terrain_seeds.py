@@ -46,16 +46,24 @@ def test_terrain_seed_sequences():
         terrain_seed_sequence(5, -1)
 
 
-def test_seed_index_gives_another_terrain_and_zero_the_old_one():
-    from simlunar.pipeline.scene import SceneCfg, build_scene_inputs
+@pytest.mark.parametrize("kind", ["scene", "experiment"])
+def test_seed_index_gives_another_terrain_and_zero_the_old_one(kind):
+    # both the scene path (simlunar render) and the experiment path (the units of simlunar
+    # run) must build realisation i from terrain_seed_sequence(seed, i)
+    from simlunar.pipeline.scene import SceneCfg
+    from simlunar.pipeline.stages import scene_inputs
 
-    base = {"terrain": {"preset": "aerial_1", "scale": 0.0625}, "seed": 3}
-    t0 = build_scene_inputs(SceneCfg.model_validate(base))[0]
-    base["terrain"]["seed_index"] = 0
-    t0b = build_scene_inputs(SceneCfg.model_validate(base))[0]
-    base["terrain"]["seed_index"] = 1
-    t1 = build_scene_inputs(SceneCfg.model_validate(base))[0]
+    def terrain(seed_index=None):
+        t = {"preset": "aerial_1", "scale": 0.0625}
+        if seed_index is not None:
+            t["seed_index"] = seed_index
+        if kind == "scene":
+            return scene_inputs(SceneCfg.model_validate({"terrain": t, "seed": 3}))[0]
+        return scene_inputs(cfg(terrain=t, seed=3))[0]
+
+    t0, t0b, t1, t1b = terrain(), terrain(0), terrain(1), terrain(1)
     assert np.array_equal(t0.heights, t0b.heights)
+    assert np.array_equal(t1.heights, t1b.heights)
     assert t1.heights.shape == t0.heights.shape
     assert not np.allclose(t1.heights, t0.heights)
 

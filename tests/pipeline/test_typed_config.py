@@ -481,10 +481,40 @@ def test_albedo_file_of_another_shape_is_one_line(tmp_path):
         base(terrain={"file": "dem.npy", "albedo_file": "alb.npy", "spacing_m": 0.2}),
         base_dir=tmp_path,
     )
-    with pytest.raises(ValueError, match=r"^terrain.albedo_file: .*alb.npy has shape \(32, 40\)"):
+    with pytest.raises(
+        ValueError, match=r"^terrain.albedo_file: .*alb.npy: albedo shape 32 x 40 differs"
+    ):
         build_terrain(cfg.terrain, rng=np.random.default_rng(0))
     msg = error_of(base(terrain={"preset": "aerial_1", "albedo_file": "alb.npy"}))
     assert msg == "terrain: albedo_file goes with a DEM file (give terrain.file)"
+
+
+@pytest.mark.parametrize(
+    "albedo",
+    [
+        np.full((2, 32, 48), 0.2),  # a [heights, albedo] stack: a DEM, not an albedo grid
+        np.full((32, 48), 1.5),  # outside [0, 1]
+        np.full((48, 32), 0.2),  # transposed
+    ],
+    ids=["stack", "range", "shape"],
+)
+def test_the_preflight_rejects_what_the_unit_would_reject(tmp_path, albedo):
+    """One albedo reader: a file the unit refuses is refused before anything is written."""
+    from simlunar.errors import ConfigError
+    from simlunar.pipeline.preflight import terrain_facts
+    from simlunar.pipeline.stages import build_terrain
+
+    _dem_files(tmp_path)
+    np.save(tmp_path / "alb.npy", albedo)
+    cfg = validate_data(
+        base(terrain={"file": "dem.npy", "albedo_file": "alb.npy", "spacing_m": 0.2}),
+        base_dir=tmp_path,
+    )
+    with pytest.raises(ValueError, match=r"^terrain.albedo_file: ") as unit_err:
+        build_terrain(cfg.terrain, rng=np.random.default_rng(0))
+    with pytest.raises(ConfigError, match=r"^terrain.albedo_file: ") as pre_err:
+        terrain_facts(cfg.terrain)
+    assert str(pre_err.value) == str(unit_err.value)
 
 
 def test_the_schema_command_prints_what_the_test_validates_against(tmp_path):

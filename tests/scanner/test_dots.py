@@ -110,6 +110,23 @@ def test_schedule_respects_spacing_and_covers_every_dot(rig, rng):
     assert len(exact) == 600 and all(len(f) == 1 for f in exact)
 
 
+def test_the_scan_path_skips_the_lower_bound(rig, rng, monkeypatch):
+    proj_uv = rng.uniform([0, 0], [128, 96], size=(300, 2))
+    kw = {"depth_range": (1.4, 1.8), "min_proj_spacing": 6.0, "min_cam_spacing": 5.0}
+    full = dots.dot_schedule(rig, proj_uv, **kw)
+    assert full.lower_bound > 1
+
+    def no_search(*a, **k):
+        raise AssertionError("the lower bound was searched")
+
+    monkeypatch.setattr(dots, "_largest_clique", no_search)
+    fast = dots.dot_schedule(rig, proj_uv, bound=False, **kw)
+    assert fast.lower_bound == 0 and fast.clique.size == 0
+    np.testing.assert_array_equal(fast.colour, full.colour)  # the same frames
+    frames = dots.schedule_dots(rig, proj_uv, **kw)
+    assert [f.tolist() for f in frames] == [f.tolist() for f in full.frames]
+
+
 def _dense_segment_distance(a, b, k=4001):
     """Brute force: distance between k samples of ``a`` and the exact segment ``b``."""
     t = np.linspace(0.0, 1.0, k)

@@ -85,3 +85,40 @@ def test_terrain_stats_prints_slopes_hurst_and_densities(tmp_path):
     assert r.exit_code == 0 and "unknown" in r.output
     r = runner.invoke(app, ["terrain", "aerial_3"])
     assert r.exit_code == 2 and "--out" in r.output
+
+
+def test_terrain_reads_a_preset_as_experiments_do(tmp_path):
+    """Unit strings (``spacing_m: "20 cm"``) go through the schema's models, as in an
+    experiment's terrain; the old preset reader refused them."""
+    import yaml
+
+    from simlunar.terrain.presets import SCENES
+
+    data = yaml.safe_load((SCENES / "aerial_3.yaml").read_text())
+    data["grid"]["spacing_m"] = "20 cm"
+    path = tmp_path / "p.yaml"
+    path.write_text(yaml.safe_dump(data))
+    r = runner.invoke(app, ["terrain", str(path), "--stats", "--scale", "0.05", "--seed", "5"])
+    assert r.exit_code == 0, r.output
+    assert r.output.splitlines()[0].startswith("aerial_3: 50 x 80 cells at 0.2 m")
+    ref = runner.invoke(app, ["terrain", "aerial_3", "--stats", "--scale", "0.05", "--seed", "5"])
+    assert r.output.splitlines()[1:] == ref.output.splitlines()[1:]  # the same terrain
+    r = runner.invoke(app, ["terrain", "aerial_3", "--stats", "--scale", "1.5"])
+    assert r.exit_code == 2 and "--scale" in r.output
+
+
+def test_terrain_stats_with_a_malformed_features_json_is_one_line(tmp_path):
+    out = tmp_path / "t"
+    r = runner.invoke(
+        app, ["terrain", "aerial_3", "--scale", "0.05", "--out", str(out), "--format", "npz",
+              "--mesh", "none"],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    side = out / "features.json"
+    for bad in ('["not", "a", "mapping"]', '{"craters": [{"x": 1}]}', '{"rocks": 3}', "{"):
+        side.write_text(bad)
+        r = runner.invoke(app, ["terrain", str(out / "dem.npz"), "--stats"])
+        assert r.exit_code == 2, (bad, r.output)
+        assert "Traceback" not in r.output
+        err = [ln for ln in r.output.splitlines() if ln.startswith("error: ")]
+        assert len(err) == 1 and str(side) in err[0], r.output
