@@ -116,8 +116,11 @@ def load_unit_arrays(out_dir: str | Path, index: int = 0) -> dict:
 def _label(rec: dict) -> str:
     from simlunar.pipeline.runner import WorkUnit, unit_label
 
+    config = rec.get("config", {}) or {}
+    repeats = int((config.get("study") or {}).get("terrain_seeds", 1) or 1)
+    seed = int((config.get("terrain") or {}).get("seed_index", 0) or 0) if repeats > 1 else None
     return unit_label(
-        WorkUnit(rec.get("index", 0), rec["key"], rec.get("sweep", {}), rec.get("config", {}))
+        WorkUnit(rec.get("index", 0), rec["key"], rec.get("sweep", {}), config, terrain_seed=seed)
     )
 
 

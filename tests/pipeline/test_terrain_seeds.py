@@ -148,3 +148,14 @@ def test_a_sweep_over_seed_index_is_pooled_too():
     recs = [{"sweep": u.sweep, "config": u.config} for u in units]
     (point,) = aggregate.group_points(recs)
     assert point.seeds == [0, 1, 2]
+
+
+def test_figure_titles_name_the_terrain_seed():
+    # panels of a repeated experiment say which terrain realisation they show
+    from simlunar.pipeline.figures import _label
+
+    rec = {"index": 3, "key": "k", "sweep": {}, "config": cfg(3).model_dump(mode="json")}
+    rec["config"]["terrain"]["seed_index"] = 2
+    assert "terrain_seed=2" in _label(rec)
+    single = {"index": 0, "key": "k", "sweep": {}, "config": cfg(1).model_dump(mode="json")}
+    assert "terrain_seed" not in _label(single)
