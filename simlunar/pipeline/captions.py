@@ -23,18 +23,29 @@ def _metric(m: str) -> str:
     return f"{_METRIC_TEXT.get(m, METRIC_NAMES.get(m, m))}{f', in {unit}' if unit else ''}"
 
 
-def error_vs_density(metric: str, study: dict, n_panels: int) -> str:
-    """Caption of ``error_vs_density_<metric>``."""
+def error_vs_density(metric: str, study: dict, n_panels: int, *, seeds: int = 1) -> str:
+    """Caption of ``error_vs_density_<metric>`` (``seeds``: terrain seeds pooled per panel)."""
     trials = study.get("trials", 20)
     strategies = ", ".join(label(s) for s in study.get("strategies") or [])
-    per = " One panel per work unit (scene or sweep point)." if n_panels > 1 else ""
+    per = " One panel per scene or sweep point." if n_panels > 1 else ""
+    if seeds > 1:
+        over = (
+            f"mean over {seeds} terrain seeds × {trials} trials per density (every trial of "
+            f"every terrain realisation of the panel's sweep point); shaded band: ±1 standard "
+            f"deviation over those {seeds * trials} runs, so it holds the spread between "
+            f"terrains as well as between trials"
+        )
+    else:
+        over = (
+            f"mean over {trials} trials per density; shaded band: ±1 standard deviation "
+            f"over those trials (a fresh grid shift, random draw and noise per trial)"
+        )
     return (
         f"Reconstruction error against sampling density k/N (log-log; density falls to the "
         f"right, as in the paper's Fig. 3). y: {_metric(metric)} of the Delaunay "
         f"reconstruction from k range samples against the full-resolution ground truth. "
-        f"Lines: mean over {trials} trials per density; shaded band: ±1 standard deviation "
-        f"over those trials (a fresh grid shift, random draw and noise per trial), clipped "
-        f"below at half the smallest mean on the log axis. Strategies: {strategies}.{per}"
+        f"Lines: {over}, clipped below at half the smallest mean on the log axis. "
+        f"Strategies: {strategies}.{per}"
     )
 
 

@@ -124,6 +124,19 @@ def _label(rec: dict) -> str:
     )
 
 
+def _density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
+    """The panels of ``error_vs_density``: ``[(title, unit records)]`` in results order.
+
+    One panel per sweep point (:func:`simlunar.pipeline.aggregate.group_points`): the units of
+    a point that differ only by terrain seed share a panel, whose curves pool their rows (mean
+    and spread over terrain seeds and trials), so a repeated experiment draws as many panels
+    as it has sweep points, not seeds times points.
+    """
+    from simlunar.pipeline.aggregate import group_points
+
+    return [(p.label, [units[i] for i in p.unit_indices]) for p in group_points(units)]
+
+
 def write_figures(out_dir: str | Path) -> list[Path]:
     """Draw every figure the results support; returns the written paths (PNG and PDF)."""
     from simlunar.pipeline import captions as captions_text
@@ -159,22 +172,26 @@ def write_figures(out_dir: str | Path) -> list[Path]:
     # not a silently missing panel
     shown_arrays = [cache.load_arrays(rec["key"], strict=True) for rec in shown]
 
+    groups = _density_panels(units)[:MAX_UNIT_PANELS]
+    pooled = any(len(members) > 1 for _, members in groups)
     for m in metrics:
-        fig, axes = F.panel_row(len(shown), width=F.COLUMN_W * min(len(shown), 3))
-        for ax, rec in zip(axes, shown):
+        fig, axes = F.panel_grid(len(groups))
+        for ax, (title, members) in zip(axes, groups):
             F.error_vs_density(
                 res["rows"],
                 metric=m,
                 strategies=strategies,
                 ax=ax,
-                where={"unit": rec.get("index", 0)},
-                title=_label(rec) if len(units) > 1 else None,
+                where={"unit": [rec.get("index", 0) for rec in members]},
+                title=title if len(units) > 1 else None,
+                band_label=F.BAND_LABEL_SEEDS if pooled else F.BAND_LABEL,
             )
-        for ax in axes[1:]:  # one legend per figure: the panels share strategies and styles
-            if ax.get_legend() is not None:
-                ax.get_legend().remove()
+        if len(axes) > 1:
+            F.shared_legend(fig, axes)
         emit(fig, f"error_vs_density_{m}")
-        captions[f"error_vs_density_{m}"] = captions_text.error_vs_density(m, study, len(shown))
+        captions[f"error_vs_density_{m}"] = captions_text.error_vs_density(
+            m, study, len(groups), seeds=max(len(members) for _, members in groups)
+        )
 
     for rec, arr in zip(shown, shown_arrays):
         if not {"image", "wavelet_energy", "plan_rows", "reconstruction", "depth"} <= set(arr):

@@ -62,6 +62,11 @@ class UnitRecord:
         Stage -> seconds.
     meta : dict
         Image shape, spacing, Mitsuba variant, filled ground-truth pixels.
+    scans : dict or None
+        Scanner units with ``study.save_scans``: the scan export payload
+        (:func:`simlunar.pipeline.exports.scan_export_payload`), which the runner writes to
+        ``scans/unit<i>/`` and drops before caching; None otherwise (then absent from the dict
+        form, so cached results are unchanged).
     """
 
     rows: list[dict[str, Any]]
@@ -69,15 +74,19 @@ class UnitRecord:
     arrays: dict[str, np.ndarray]
     timings: dict[str, float]
     meta: dict[str, Any] = field(default_factory=dict)
+    scans: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out = {
             "rows": self.rows,
             "scores": self.scores,
             "arrays": self.arrays,
             "timings": self.timings,
             "meta": self.meta,
         }
+        if self.scans is not None:
+            out["scans"] = self.scans
+        return out
 
 
 def stage_seeds(seed: int) -> dict[str, np.random.SeedSequence]:
@@ -492,21 +501,22 @@ def _compute_scanner_unit(
         "image": np.asarray(guide.image, np.float32),
         "depth": np.where(guide.valid, guide.depth, np.nan).astype(np.float64),
     }
-    out = {
-        "rows": [dict(row) for row in res.rows],
-        "scores": {},
-        "arrays": arrays,
-        "timings": timings,
-        "meta": {"shape": list(terrain.shape), "variant": _variant()},
-    }
+    scans = None
     if s.save_scans:
         # written by the runner into scans/unit<i>/ (pipeline/exports.py)
         from simlunar.pipeline.exports import scan_export_payload
 
-        out["scans"] = scan_export_payload(
+        scans = scan_export_payload(
             res.gray, rig, gray_opts=translate.gray_kwargs(s.options.gray_opts)
         )
-    return out
+    return UnitRecord(
+        rows=[dict(row) for row in res.rows],
+        scores={},
+        arrays=arrays,
+        timings=timings,
+        meta={"shape": list(terrain.shape), "variant": _variant()},
+        scans=scans,
+    ).to_dict()
 
 
 def _variant() -> str:

@@ -26,6 +26,10 @@ STRATEGY_COLORS = {
 }
 #: what the shaded band of :func:`error_vs_density` shows (legend entry and caption text)
 BAND_LABEL = "band: ±1 s.d. over trials"
+#: the band when each panel pools the realisations of several terrain seeds
+BAND_LABEL_SEEDS = "band: ±1 s.d. over terrain seeds × trials"
+#: panels per row of a multi-panel figure (three single-column panels fill a page width)
+MAX_COLS = 3
 
 
 def _axes(ax, figsize):
@@ -51,17 +55,23 @@ def mean_error_by_density(
     metric, strategy : str
         Which curve.
     where : dict, optional
-        Extra column filters (e.g. ``{"unit": "0"}``), compared as strings.
+        Extra column filters (e.g. ``{"unit": "0"}``), compared as strings; a list, tuple or
+        set value keeps rows whose column is any of its items (``{"unit": [0, 3]}`` pools two
+        units).
 
     Returns
     -------
     densities (n,), mean (n,), std (n,) : float64 arrays, densities descending.
     """
     groups: dict[float, list[float]] = defaultdict(list)
+    allowed = {
+        k: {str(x) for x in v} if isinstance(v, list | tuple | set | frozenset) else {str(v)}
+        for k, v in (where or {}).items()
+    }
     for r in rows:
         if r["metric"] != metric or r["strategy"] != strategy:
             continue
-        if where and any(str(r.get(k)) != str(v) for k, v in where.items()):
+        if any(str(r.get(k)) not in ok for k, ok in allowed.items()):
             continue
         groups[_f(r["density"])].append(_f(r["value"]))
     d = np.array(sorted(groups, reverse=True), float)
@@ -79,12 +89,14 @@ def error_vs_density(
     where: dict | None = None,
     ax=None,
     title: str | None = None,
+    band_label: str = BAND_LABEL,
 ):
     """Reconstruction error against sampling density per strategy (paper Fig. 3).
 
-    Log-log axes; the line is the mean over trials, the band +- one standard deviation over
-    trials (:data:`BAND_LABEL`, also a legend entry). Density falls to the right, as in the
-    paper. Colours, markers and labels come from :mod:`simlunar.plotting.style`.
+    Log-log axes; the line is the mean over the rows ``where`` selects (the trials of one unit,
+    or of several pooled units), the band +- one standard deviation over them (``band_label``,
+    also a legend entry). Density falls to the right, as in the paper. Colours, markers and
+    labels come from :mod:`simlunar.plotting.style`.
     """
     from matplotlib.patches import Patch
 
@@ -119,7 +131,7 @@ def error_vs_density(
     handles, labels = ax.get_legend_handles_labels()
     if band:
         handles.append(Patch(color="0.5", alpha=0.3, lw=0))
-        labels.append(BAND_LABEL)
+        labels.append(band_label)
     # errors rise to the right (density falls), so the upper left is empty
     ax.legend(handles, labels, fontsize=5.5, frameon=False, loc="upper left", handlelength=1.6)
     ax.grid(True, which="major", alpha=0.3)
@@ -206,6 +218,19 @@ def _cbar(fig, im, ax, text):
     return cb
 
 
+#: at most this share of a samples panel is covered by sample markers (the rest shows the
+#: image under them, so where samples concentrate stays visible at any density)
+SAMPLE_INK = 0.15
+
+
+def sample_marker_area(ax, k: int, *, ink: float = SAMPLE_INK) -> float:
+    """Scatter marker area (pt²) for ``k`` samples on ``ax``: ``ink`` of the axes' area over
+    ``k``, between 0.05 pt² (a dot still visible at 300 dpi) and 4 pt² (few samples)."""
+    w, h = ax.bbox.width, ax.bbox.height  # display pixels at the figure's dpi
+    area_pt2 = w * h * (72.0 / ax.figure.dpi) ** 2
+    return float(np.clip(ink * area_pt2 / max(int(k), 1), 0.05, 4.0))
+
+
 def image_panels(
     image: np.ndarray,
     energy: np.ndarray,
@@ -264,7 +289,15 @@ def image_panels(
     _cbar(fig, im, axes[1], "log10 energy")
     dens = f", {density_label.strip('() ')}" if density_label else ""
     _show(axes[2], image, f"{label(planner)} samples{dens}", vmin=0, vmax=top)
-    axes[2].scatter(np.asarray(plan_cols), np.asarray(plan_rows), s=0.8, c="#d62728", linewidths=0)
+    k = len(np.asarray(plan_rows))
+    axes[2].scatter(
+        np.asarray(plan_cols),
+        np.asarray(plan_rows),
+        s=sample_marker_area(axes[2], k),
+        c="#d62728",
+        linewidths=0,
+        rasterized=k > 2000,  # a PDF of tens of thousands of vector dots is slow to open
+    )
     vmin, vmax = float(np.nanmin(truth)), float(np.nanmax(truth))
     _show(axes[3], truth, "true depth", cmap="terrain_r", vmin=vmin, vmax=vmax)
     im = _show(
@@ -447,6 +480,63 @@ def panel_row(n: int, *, width: float | None = None, height: float = 2.6):
         squeeze=False,
     )
     return fig, list(axes[0])
+
+
+def panel_grid(n: int, *, ncols: int = MAX_COLS, panel_w: float = COLUMN_W, height: float = 2.6):
+    """A figure of ``n`` panels in rows of at most ``ncols``: (Figure, list of n Axes).
+
+    Every panel keeps one column's width (``panel_w``), however many there are; grid cells
+    past ``n`` in the last row are removed.
+    """
+    if n < 1:
+        raise ValueError(f"panel_grid needs at least one panel, got {n}")
+    cols = min(n, ncols)
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(panel_w * cols, height * rows), constrained_layout=True, squeeze=False
+    )
+    flat = list(axes.ravel())
+    for ax in flat[n:]:
+        ax.remove()
+    return fig, flat[:n]
+
+
+def shared_legend(fig: Figure, axes: Sequence) -> None:
+    """Replace the panels' legends by one figure legend below them (multi-panel figures).
+
+    The entries are the first panel's (panels of one figure share strategies and styles), in
+    one row when they fit, so no legend covers a curve in a small panel. Axis labels stay on
+    the left column (y) and the bottom panel of each column (x) only.
+    """
+    handles, labels = [], []
+    for ax in axes:
+        leg = ax.get_legend()
+        if leg is not None:
+            if not handles:
+                handles = list(leg.legend_handles)
+                labels = [t.get_text() for t in leg.get_texts()]
+            leg.remove()
+    if handles:
+        fig.legend(
+            handles,
+            labels,
+            loc="outside lower center",
+            ncols=min(len(labels), 4),
+            fontsize=7,
+            frameon=False,
+            handlelength=1.6,
+        )
+    if len(axes) > 1:
+        grid = [ax.get_subplotspec() for ax in axes]
+        last_row = {}
+        for spec in grid:
+            col = spec.colspan.start
+            last_row[col] = max(last_row.get(col, 0), spec.rowspan.start)
+        for ax, spec in zip(axes, grid):
+            if spec.colspan.start != 0:
+                ax.set_ylabel("")
+            if spec.rowspan.start != last_row[spec.colspan.start]:
+                ax.set_xlabel("")
 
 
 def close(fig: Figure) -> None:

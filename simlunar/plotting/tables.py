@@ -73,7 +73,7 @@ def _md_table(header: list[str], rows: list[tuple[str, list]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _tex_escape(s: str) -> str:
+def tex_escape(s: str) -> str:
     for a, b in (
         ("\\", r"\textbackslash{}"),
         ("_", r"\_"),
@@ -90,7 +90,7 @@ def _tex_escape(s: str) -> str:
 
 def _tex_table(header: list[str], rows: list[tuple[str, list]], caption: str) -> str:
     out = _tex_begin(caption, len(header))
-    out += [" & ".join(_tex_escape(h) for h in header) + " \\\\", "\\midrule"]
+    out += [" & ".join(tex_escape(h) for h in header) + " \\\\", "\\midrule"]
     out += _tex_rows(rows)
     return _tex_end(out)
 
@@ -100,7 +100,7 @@ def _tex_begin(caption: str, ncols: int) -> list[str]:
     return [
         "\\begin{table}[t]",
         "\\centering",
-        f"\\caption{{{_tex_escape(caption)}}}",
+        f"\\caption{{{tex_escape(caption)}}}",
         f"\\begin{{tabular}}{{l{'r' * (ncols - 1)}}}",
         "\\toprule",
     ]
@@ -114,7 +114,7 @@ def _tex_rows(rows: list[tuple[str, list]]) -> list[str]:
         cells = [
             f"\\textbf{{{_fmt_cell(v)}}}" if i == b else _fmt_cell(v) for i, v in enumerate(vals)
         ]
-        out.append(" & ".join([_tex_escape(label), *cells]) + " \\\\")
+        out.append(" & ".join([tex_escape(label), *cells]) + " \\\\")
     return out
 
 
@@ -129,7 +129,7 @@ def _tex_blocks(blocks: list[tuple[list[str], list[tuple[str, list]]]], caption:
     for k, (header, rows) in enumerate(blocks):
         if k:
             out.append("\\midrule")
-        out += [" & ".join(_tex_escape(h) for h in header) + " \\\\", "\\midrule"]
+        out += [" & ".join(tex_escape(h) for h in header) + " \\\\", "\\midrule"]
         out += _tex_rows(rows)
     return _tex_end(out)
 
@@ -261,8 +261,8 @@ def samples_saved_tables(entries: list[dict], *, title: str = "") -> tuple[str, 
         lines += ["| " + " | ".join([lab, *c]) + " |" for lab, c in rows]
         md.append(f"### {cap}\n\n" + "\n".join(lines) + "\n")
         out = _tex_begin(cap, len(header))
-        out += [" & ".join(_tex_escape(h) for h in header) + " \\\\", "\\midrule"]
-        out += [" & ".join([_tex_escape(lab), *c]) + " \\\\" for lab, c in rows]
+        out += [" & ".join(tex_escape(h) for h in header) + " \\\\", "\\midrule"]
+        out += [" & ".join([tex_escape(lab), *c]) + " \\\\" for lab, c in rows]
         tex.append(_tex_end(out))
     return "\n".join(md), "\n".join(tex)
 
@@ -360,17 +360,17 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
             cell(e["ratio"], "{:.3f}"),
         ]
         md_lines.append("| " + " | ".join([e["label"], *cells]) + " |")
-        tex_rows.append(" & ".join([_tex_escape(e["label"]), *cells]) + " \\\\")
+        tex_rows.append(" & ".join([tex_escape(e["label"]), *cells]) + " \\\\")
     cap = f"{title}: scanner study (means over trials; lower error is better)"
     md = f"### {cap}\n\n" + "\n".join(md_lines) + "\n"
     tex = "\n".join(
         [
             "\\begin{table}[t]",
             "\\centering",
-            f"\\caption{{{_tex_escape(cap)}}}",
+            f"\\caption{{{tex_escape(cap)}}}",
             f"\\begin{{tabular}}{{l{'r' * (len(header) - 1)}}}",
             "\\toprule",
-            " & ".join(_tex_escape(h) for h in header) + " \\\\",
+            " & ".join(tex_escape(h) for h in header) + " \\\\",
             "\\midrule",
             *tex_rows,
             "\\bottomrule",

@@ -20,7 +20,7 @@ from simlunar.metrics import METRIC_NAMES, METRICS, check_densities, depth_gradi
 from simlunar.metrics import samples_for_equal_error as _samples_for_equal_error
 from simlunar.metrics import score as _score
 from simlunar.metrics._fast import error_sums
-from simlunar.planner import STRATEGIES, STRATEGY_NAMES, check_k, plan, strategy_weights
+from simlunar.planner import STRATEGIES, check_k, plan, strategy_weights
 from simlunar.reconstruction import OUTSIDE_POLICIES, reconstruct
 
 PAPER_STRATEGIES = ("grid", "random", "gradient", "entropy", "wavelet")
@@ -112,8 +112,12 @@ class SamplingStudyResult:
         )
 
     def _table(self):
+        # display labels from the one style registry, as in figure legends and the result
+        # folders' scores.md (a strategy_options variant such as wavelet_bn gets its label)
+        from simlunar.plotting.style import label
+
         cols = [s for s in self.strategies]
-        header = [STRATEGY_NAMES.get(s, s) for s in cols]
+        header = [label(s) for s in cols]
         body = []
         for m in self.metrics:
             if m in self.scores:
@@ -130,7 +134,10 @@ class SamplingStudyResult:
 
     def score_table_latex(self, digits: int = 2) -> str:
         """Scores as a LaTeX tabular (booktabs), same layout as :meth:`score_table_markdown`."""
+        from simlunar.plotting.tables import tex_escape
+
         header, body = self._table()
+        header = [tex_escape(h) for h in header]
         lines = [
             "\\begin{tabular}{l" + "r" * len(header) + "}",
             "\\toprule",

@@ -159,3 +159,36 @@ def test_figure_titles_name_the_terrain_seed():
     assert "terrain_seed=2" in _label(rec)
     single = {"index": 0, "key": "k", "sweep": {}, "config": cfg(1).model_dump(mode="json")}
     assert "terrain_seed" not in _label(single)
+
+
+def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monkeypatch):
+    # 2 sweep points x 3 terrain seeds: two panels (not six), each pooling its three units,
+    # with the band and caption saying so
+    from simlunar.pipeline import figures as PF
+    from simlunar.plotting import figures as F
+
+    units = [
+        {"index": u.index, "key": u.key, "sweep": u.sweep, "config": u.config}
+        for u in expand(cfg(3))
+    ]
+    panels = PF._density_panels(units)
+    assert [t for t, _ in panels] == ["elevation_deg=10", "elevation_deg=60"]
+    assert [[r["index"] for r in members] for _, members in panels] == [[0, 1, 2], [3, 4, 5]]
+
+    _run(cfg(3), tmp_path / "r")
+    drawn = []
+    real = F.error_vs_density
+
+    def spy(rows, **kw):
+        drawn.append((kw["where"], kw["band_label"]))
+        return real(rows, **kw)
+
+    monkeypatch.setattr(F, "error_vs_density", spy)
+    PF.write_figures(tmp_path / "r")
+    assert drawn[:2] == [
+        ({"unit": [0, 1, 2]}, F.BAND_LABEL_SEEDS),
+        ({"unit": [3, 4, 5]}, F.BAND_LABEL_SEEDS),
+    ]
+    assert len(drawn) == 2 * 2  # two panels per metric, two metrics
+    text = (tmp_path / "r" / "figures" / "captions.md").read_text()
+    assert "mean over 3 terrain seeds × 3 trials" in text

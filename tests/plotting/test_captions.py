@@ -26,3 +26,10 @@ def test_write_captions_one_section_per_figure(tmp_path):
     assert written == [tmp_path / "captions.md"]
     write_captions(tmp_path / "none", {}, written)  # no figures: no file
     assert not (tmp_path / "none").exists()
+
+
+def test_error_vs_density_caption_of_pooled_terrain_seeds():
+    text = C.error_vs_density("mse", {"trials": 4, "strategies": ["grid"]}, 2, seeds=5)
+    assert "mean over 5 terrain seeds × 4 trials" in text
+    assert "over those 20 runs" in text and "One panel per scene or sweep point" in text
+    assert "terrain seeds" not in C.error_vs_density("mse", {"trials": 4}, 1)

@@ -191,3 +191,64 @@ def test_save_is_deterministic():
     b = dict(F.save(F.error_vs_density(rows(), metric="mse")[0], "x", ("png", "pdf")))
     assert a["png"][:8] == b"\x89PNG\r\n\x1a\n" and a["pdf"][:5] == b"%PDF-"
     assert a == b
+
+
+def test_where_with_a_list_pools_units():
+    # unit 1: the same design at 3x the error; pooling both units averages four values
+    both = rows() + [dict(r, unit="1", value=str(3 * float(r["value"]))) for r in rows()]
+    d, m, sd = F.mean_error_by_density(
+        both, metric="mse", strategy="wavelet", where={"unit": [0, 1]}
+    )
+    assert d.tolist() == [0.5, 0.25, 0.125]
+    vals = np.array([0.9, 1.1, 2.7, 3.3])  # x (1/d) for trials 0, 1 of units 0 and 1
+    np.testing.assert_allclose(m, np.array([2.0, 4.0, 8.0]) * vals.mean())
+    np.testing.assert_allclose(sd, np.array([2.0, 4.0, 8.0]) * vals.std(ddof=1))
+    _d, m1, _ = F.mean_error_by_density(
+        both, metric="mse", strategy="wavelet", where={"unit": (1,)}
+    )
+    np.testing.assert_allclose(m1, [6.0, 12.0, 24.0])
+
+
+def test_panel_grid_wraps_rows_and_keeps_column_width():
+    fig, axes = F.panel_grid(5)
+    assert len(axes) == 5 and len(fig.axes) == 5  # the sixth grid cell is removed
+    w, h = fig.get_size_inches()
+    assert w == pytest.approx(3 * F.COLUMN_W) and h == pytest.approx(2 * 2.6)
+    specs = [(a.get_subplotspec().rowspan.start, a.get_subplotspec().colspan.start) for a in axes]
+    assert specs == [(0, 0), (0, 1), (0, 2), (1, 0), (1, 1)]
+    fig, axes = F.panel_grid(2)
+    assert fig.get_size_inches()[0] == pytest.approx(2 * F.COLUMN_W)
+    with pytest.raises(ValueError, match="at least one panel"):
+        F.panel_grid(0)
+
+
+def test_shared_legend_replaces_panel_legends_and_inner_labels():
+    fig, axes = F.panel_grid(5)
+    for ax in axes:
+        F.error_vs_density(rows(), metric="mse", ax=ax, band_label=F.BAND_LABEL_SEEDS)
+    F.shared_legend(fig, axes)
+    assert all(ax.get_legend() is None for ax in axes)
+    (leg,) = fig.legends
+    assert [t.get_text() for t in leg.get_texts()] == ["Random", "Wavelet", F.BAND_LABEL_SEEDS]
+    ylabels = [ax.get_ylabel() for ax in axes]
+    assert ylabels == ["MSE error (m²)", "", "", "MSE error (m²)", ""]
+    # x labels on the bottom panel of each column: (1, 0), (1, 1) and (0, 2)
+    xlabels = [bool(ax.get_xlabel()) for ax in axes]
+    assert xlabels == [False, False, True, True, True]
+    F.save(fig, "x", ("png",))  # the outside legend lays out
+
+
+def test_sample_markers_cover_a_bounded_share_of_the_panel(rng):
+    # 25 000 samples (Table 1 at 1/64) must not paint the samples panel solid red
+    img = rng.random((120, 200))
+    r, c = rng.integers(0, 120, 25_000), rng.integers(0, 200, 25_000)
+    _fig, axes = F.image_panels(img, img, r, c, img, img)
+    ax = axes[2]
+    (sizes,) = {float(s) for s in ax.collections[0].get_sizes()}
+    area_pt2 = ax.bbox.width * ax.bbox.height * (72 / ax.figure.dpi) ** 2
+    assert sizes * 25_000 <= F.SAMPLE_INK * area_pt2 * 1.0001 or sizes == 0.05
+    assert ax.collections[0].get_rasterized()
+    # a handful of samples get big markers, capped at 4 pt²
+    _fig, axes = F.image_panels(img, img, r[:10], c[:10], img, img)
+    assert float(axes[2].collections[0].get_sizes()[0]) == 4.0
+    assert not axes[2].collections[0].get_rasterized()

@@ -273,3 +273,19 @@ def test_progress_and_nan_policy(scene):
     np.testing.assert_allclose(a, b, rtol=0.5)
     # at the sparsest level the hull leaves cells out, so the policies do differ
     assert not np.array_equal(res.errors("mse")["random"][2], near.errors("mse")["random"][2])
+
+
+def test_tables_use_registry_labels_for_variants(scene):
+    # a strategy_options variant is named as in figure legends, and LaTeX gets no raw "_"
+    depth, image = scene
+    res = run_sampling_study(
+        depth, image, densities=DENS, trials=1, rng=0, metrics=["mse"],
+        strategies=["random", "wavelet_bn", "my_variant"],
+        strategy_options={
+            "wavelet_bn": {"strategy": "wavelet", "blue_noise": True},
+            "my_variant": {"strategy": "wavelet"},
+        },
+    )  # fmt: skip
+    md = res.score_table_markdown().splitlines()
+    assert md[0] == "| Metric | Random | Wavelet, blue noise | My variant |"
+    assert "_" not in res.score_table_latex().split("\\midrule")[0].replace("\\_", "")
