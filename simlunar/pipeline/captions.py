@@ -107,6 +107,23 @@ def scanner_errors(metrics: list[str], n_units: int) -> str:
     )
 
 
+def scanner_vs_sweep(metrics: list[str], path: str, trials: int) -> str:
+    """Caption of ``scanner_vs_<axis>`` (scanner ablations)."""
+    ms = "; ".join(f"{METRIC_NAMES.get(m, m)}: {_metric(m)}" for m in metrics)
+    spread = (
+        f"mean over {trials} planner trials, error bars ±1 standard deviation over them"
+        if trials > 1
+        else "one planner trial per point"
+    )
+    return (
+        f"Structured-light scanner study against {axis_name(path)} (sweep key `{path}`): depth "
+        f"error of each scan mode / dot planner against the ground truth on the guide grid "
+        f"({ms}; {spread}; log axes where the values span more than a factor of 20), and the "
+        f"fraction of guide pixels the scan measured (last panel; the rest are filled from "
+        f"their neighbours before scoring). Lower error is better."
+    )
+
+
 def bit_errors(n_units: int, all_zero: bool) -> str:
     """Caption of ``gray_code_bit_errors``."""
     zero = (

@@ -14,6 +14,8 @@ from simlunar.errors import ResultFolderError
 from simlunar.pipeline.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
 
 MAX_UNIT_PANELS = 6
+#: sweep axes that repeat an experiment over realisations (pooled, not plotted against)
+SEED_AXES = ("seed", "terrain.seed", "terrain.seed_index")
 
 
 def load_results(out_dir: str | Path) -> dict:
@@ -287,21 +289,68 @@ def _scanner_pooled(rows: list[dict], metrics: list[str]) -> list[dict]:
     return out
 
 
+def _ambient_axis(rows: list[dict], units: list[dict], path: str):
+    """``(factor, label)`` of a sun-to-projector axis when every unit of a one-axis sweep is a
+    daylight scan whose ``ambient_ratio`` is proportional to the swept value (the sun's
+    irradiance), else None."""
+    ratio = {str(r.get("unit")): float(r["value"]) for r in rows if r["metric"] == "ambient_ratio"}
+    k = []
+    for rec in units:
+        x, v = rec["sweep"].get(path), ratio.get(str(rec.get("index", 0)))
+        if v is None or not isinstance(x, (int, float)) or isinstance(x, bool) or x <= 0:
+            return None
+        k.append(v / x)
+    if not k or max(k) - min(k) > 1e-3 * max(k) or not max(k) > 0:
+        return None
+    return float(sum(k) / len(k)), "sun / projector white, as the camera sees it"
+
+
 def _scanner_figures(res: dict, emit, captions: dict) -> None:
     import numpy as np
 
     from simlunar.pipeline import captions as captions_text
     from simlunar.plotting import figures as F
+    from simlunar.plotting.style import axis_name
 
     rows = res["rows"]
-    metrics = list(res["config"]["study"].get("metrics") or [])
-    summary = _scanner_pooled(rows, metrics)
-    fig, axes = F.panel_row(len(metrics))
-    for ax, m in zip(axes, metrics):
-        F.scanner_bars(summary, metric=m, ax=ax)
-    emit(fig, "scanner_errors")
+    cfg = res["config"]
+    metrics = list(cfg["study"].get("metrics") or [])
+    sweep = cfg.get("sweep") or {}
+    units = res["units"]
     n_units = len({str(r.get("unit", "0")) for r in rows})
-    captions["scanner_errors"] = captions_text.scanner_errors(metrics, n_units)
+    if len(sweep) == 1 and next(iter(sweep)) not in SEED_AXES and len(units) > 1:
+        # an ablation: the errors against the swept value (pooling across it would mix
+        # errors of different conditions into one bar)
+        (path,) = sweep
+        shown = [*metrics, "valid_fraction"]
+        points = []
+        for rec in units:
+            v = rec["sweep"][path]
+            if isinstance(v, dict):
+                v = v.get("kind", json.dumps(v, sort_keys=True))
+            elif v is None:
+                v = "preset default"
+            own = [r for r in rows if str(r.get("unit")) == str(rec.get("index", 0))]
+            points.append((v, _scanner_pooled(own, shown)))
+        fig, axes = F.panel_grid(len(shown), height=2.8)
+        secondary = _ambient_axis(rows, units, path)
+        for ax, m in zip(axes, shown):
+            F.scanner_vs_sweep(
+                points, metric=m, axis_label=axis_name(path), ax=ax, secondary=secondary
+            )
+        F.shared_legend(fig, axes, prune_labels=False)
+        axis = path.rsplit(".", 1)[-1]
+        emit(fig, f"scanner_vs_{axis}")
+        captions[f"scanner_vs_{axis}"] = captions_text.scanner_vs_sweep(
+            metrics, path, int(cfg["study"].get("trials", 1))
+        )
+    else:
+        summary = _scanner_pooled(rows, metrics)
+        fig, axes = F.panel_row(len(metrics))
+        for ax, m in zip(axes, metrics):
+            F.scanner_bars(summary, metric=m, ax=ax)
+        emit(fig, "scanner_errors")
+        captions["scanner_errors"] = captions_text.scanner_errors(metrics, n_units)
     ber = sorted(
         {r["metric"] for r in rows if r["metric"].startswith("ber_")},
         key=lambda n: (n[4], int(n[5:])),

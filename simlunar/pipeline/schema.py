@@ -729,6 +729,12 @@ class ScannerStudyCfg(_Model):
     guide_light: Literal["projector", "sun"] = Field(
         "projector", description="guide image light: camera-centred projector or render.light"
     )
+    scan_light: Literal["none", "sun"] = Field(
+        "none",
+        description="light on during the scan besides the projector: none (a dark scan, as in "
+        "the paper's lab) or sun (render.light, which must be a sun, and "
+        "render.ambient_radiance stay on: a daylight scan; docs/scanner.md)",
+    )
     projector_gamma: float = Field(1.0, gt=0)
     projector_blur_px: float = Field(0.0, ge=0, description="projector defocus sigma (px)")
     camera_blur_px: float = Field(
@@ -847,4 +853,13 @@ class ExperimentCfg(_Model):
                 "render.sensor.exposure_e: a scanner study sets the exposure from its white "
                 "calibration frame (the auto exposure); leave exposure_e null"
             )
+        if isinstance(self.study, ScannerStudyCfg) and not isinstance(
+            self.render.light, SunLightCfg
+        ):
+            for key in ("guide_light", "scan_light"):
+                if getattr(self.study, key) == "sun":
+                    raise ValueError(
+                        f"study.{key}: sun needs render.light.kind sun (got "
+                        f"{self.render.light.kind})"
+                    )
         return self

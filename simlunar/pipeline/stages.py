@@ -493,6 +493,8 @@ def _compute_scanner_unit(
         sensor=sensor,
         bsdf=bsdf,
         sun=sun,
+        # a daylight scan: the sun (and sky) stay on while the projector scans
+        extra_lights=tuple(lights) if s.scan_light == "sun" else (),
         **opts,
     )
     timings["study_s"] = time.perf_counter() - t

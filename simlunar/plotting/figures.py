@@ -423,6 +423,91 @@ def scanner_bars(summary: Sequence[dict], *, metric: str = "mse", ax=None):
     return fig, ax
 
 
+def scanner_vs_sweep(
+    points: Sequence[tuple[object, Sequence[dict]]],
+    *,
+    metric: str = "mse",
+    axis_label: str = "",
+    ax=None,
+    title: str | None = None,
+    secondary: tuple[float, str] | None = None,
+):
+    """A scanner-study metric against a sweep axis, one series per (mode, planner).
+
+    Parameters
+    ----------
+    points : sequence of (x, summary)
+        ``x`` a number or a label (one sweep point); ``summary`` entries as for
+        :func:`scanner_bars` (``mode``, ``planner``, the mean of ``metric`` and optionally
+        ``f"{metric}_sd"``, drawn as ±1 s.d. error bars).
+    metric : str
+        An error metric (log y axis when every value is positive and they span more than a
+        factor of 20) or ``"valid_fraction"`` (linear, 0 to 1).
+    secondary : (factor, label), optional
+        A second x axis on top, ``factor`` times the swept value (numeric axes), e.g. the
+        sun-to-projector ratio the camera saw against the sun's irradiance.
+
+    A numeric axis spanning more than a factor of 20 (all positive) is drawn on a log scale;
+    a categorical one gets one tick per label, markers unconnected.
+    """
+    fig, ax = _axes(ax, (COLUMN_W, 2.6))
+    xs = [p[0] for p in points]
+    numeric = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in xs)
+    pos = np.asarray(xs, float) if numeric else np.arange(len(xs), dtype=float)
+    keys = list(dict.fromkeys((e["mode"], e.get("planner") or "") for _, s in points for e in s))
+    allv = []
+    for mode, planner in keys:
+        name = planner or mode
+        st = style(name)
+        y, sd = [], []
+        for _, summary in points:
+            e = next(
+                (e for e in summary if (e["mode"], e.get("planner") or "") == (mode, planner)), {}
+            )
+            v = e.get(metric)
+            y.append(math.nan if v is None else float(v))
+            s_ = e.get(f"{metric}_sd")
+            sd.append(0.0 if s_ is None else float(s_))
+        y = np.asarray(y)
+        allv += [v for v in y if np.isfinite(v)]
+        ax.errorbar(
+            pos,
+            y,
+            yerr=np.asarray(sd) if any(sd) else None,
+            marker=st.marker,
+            ms=3.5,
+            lw=1.2 if numeric else 0,
+            ls="-" if numeric else "none",
+            color=st.colour,
+            capsize=2,
+            elinewidth=0.8,
+            label=pair_label(mode, planner or None),
+        )
+    if numeric and pos.size and np.all(pos > 0) and pos.max() / pos.min() > 20:
+        ax.set_xscale("log")
+    if not numeric:
+        ax.set_xticks(pos, [label(str(x)) for x in xs], fontsize=7)
+        ax.set_xlim(pos[0] - 0.5, pos[-1] + 0.5)
+    if secondary is not None and numeric:
+        k, text = secondary
+        top = ax.secondary_xaxis("top", functions=(lambda x: x * k, lambda x: x / k))
+        top.set_xlabel(text, fontsize=7)
+        top.tick_params(labelsize=6)
+    if metric == "valid_fraction":
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_ylabel("valid fraction of guide pixels")
+    else:
+        if allv and min(allv) > 0 and max(allv) / min(allv) > 20:
+            ax.set_yscale("log")
+        ax.set_ylabel(metric_axis(metric))
+    ax.set_xlabel(axis_label)
+    if title:
+        ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=6, frameon=False)
+    ax.grid(True, alpha=0.3)
+    return fig, ax
+
+
 def bit_error_rates(rates: dict[str, float], *, ax=None):
     """Gray-code bit error rate per bit (``ber_c<i>`` columns, ``ber_r<i>`` rows; MSB = 0).
 
@@ -501,12 +586,13 @@ def panel_grid(n: int, *, ncols: int = MAX_COLS, panel_w: float = COLUMN_W, heig
     return fig, flat[:n]
 
 
-def shared_legend(fig: Figure, axes: Sequence) -> None:
+def shared_legend(fig: Figure, axes: Sequence, *, prune_labels: bool = True) -> None:
     """Replace the panels' legends by one figure legend below them (multi-panel figures).
 
     The entries are the first panel's (panels of one figure share strategies and styles), in
-    one row when they fit, so no legend covers a curve in a small panel. Axis labels stay on
-    the left column (y) and the bottom panel of each column (x) only.
+    one row when they fit, so no legend covers a curve in a small panel. With
+    ``prune_labels`` (panels that share their axes' quantities) axis labels stay on the left
+    column (y) and the bottom panel of each column (x) only.
     """
     handles, labels = [], []
     for ax in axes:
@@ -526,7 +612,7 @@ def shared_legend(fig: Figure, axes: Sequence) -> None:
             frameon=False,
             handlelength=1.6,
         )
-    if len(axes) > 1:
+    if prune_labels and len(axes) > 1:
         grid = [ax.get_subplotspec() for ax in axes]
         last_row = {}
         for spec in grid:

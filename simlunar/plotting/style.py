@@ -158,6 +158,7 @@ AXIS_NAMES = {
     "render.light": "light source",
     "render.light.elevation_deg": "sun elevation (deg)",
     "render.light.azimuth_deg": "sun azimuth (deg)",
+    "render.light.irradiance": "sun irradiance (W/m²)",
     "render.bsdf": "reflectance model (BSDF)",
     "render.bsdf.albedo": "albedo",
     "render.sensor.read_noise_e": "sensor read noise (e⁻)",

@@ -291,7 +291,10 @@ def run_scanner_study(
             res = scan_modes.ScanResult(
                 "gray_code", scan_modes.fill_holes(gray.depth), gray.depth, gray.renders, gray=gray
             )
-            record("gray_code", "", 0, res, bit_error_table(gray, camera_truth(capture, guide)))
+            extra = bit_error_table(gray, camera_truth(capture, guide))
+            if capture.ambient is not None:  # a daylight scan: how bright the sun was
+                extra["ambient_ratio"] = capture.ambient_ratio
+            record("gray_code", "", 0, res, extra)
     plan_rngs = iter(plan_rng.spawn(len(planners) * int(trials) * len(modes)))
     for mode in modes:
         if mode == "gray_code":

@@ -37,7 +37,13 @@ class RenderCapture:
     rng : seed or Generator
         Noise stream (separate from the renderer's seed).
     extra_lights : sequence of light specs
-        Sun or ambient light that stays on during the scan (appears in the black frame).
+        Sun or ambient light that stays on during the scan (a daylight scan). Light transport
+        is linear in the emitters, so their image is rendered once (:attr:`ambient`, at
+        ``spp``) and added to every pattern's render: the same frame in expectation as
+        rendering them with each pattern, at no cost per frame, and the dot frames keep
+        their light tracing from the projector. It appears in the black frame, which the
+        decoders subtract; the sensor noise of every frame is drawn on the sum, so the sun's
+        shot noise is in every frame.
     projector_scale : float
         Projector irradiance scale (Mitsuba ``scale``).
     projector_gamma : float
@@ -110,14 +116,30 @@ class RenderCapture:
         self.proj_shape = rig.projector.intrinsics.shape
         self.gamma = float(projector_gamma)
         self.blur = float(projector_blur)
+        #: (rows, cols) float32 luminance of ``extra_lights`` alone (None without them),
+        #: added to every rendered frame
+        self.ambient = None
+        if extra_lights:
+            from simlunar.render.scene import luminance
+
+            sky = TerrainScene(
+                terrain,
+                rig.camera,
+                lights=list(extra_lights),
+                bsdf=bsdf,
+                max_depth=max_depth,
+                spp=spp,
+                seed=seed,
+            )
+            self.ambient = luminance(sky.render()).astype(np.float32)
+            del sky  # one scene in memory at a time (a DLP-size terrain mesh is large)
         self.scene = TerrainScene(
             terrain,
             rig.camera,
             lights=[
                 ProjectorLight(
                     rig.projector, np.ones(self.proj_shape, np.float32), scale=projector_scale
-                ),
-                *extra_lights,
+                )
             ],
             bsdf=bsdf,
             max_depth=max_depth,
@@ -126,16 +148,24 @@ class RenderCapture:
         )
         self.rng = np.random.default_rng(rng)
         self.renders = 0
-        # calibration frame (not counted as a scan render): sets the exposure
-        white = self._lens(self.scene.render_patterns(np.ones((1, *self.proj_shape), np.float32)))[
-            0
-        ]
-        ref = float(np.percentile(white, EXPOSURE_PERCENTILE))
-        if not ref > 0:
+        # calibration frame (not counted as a scan render): sets the exposure, on what the
+        # camera sees under the white pattern (with the extra lights: a daylight scan is
+        # exposed for projector plus sun)
+        lit = self.scene.render_patterns(np.ones((1, *self.proj_shape), np.float32))
+        if not float(np.percentile(lit, EXPOSURE_PERCENTILE)) > 0:
             raise ValueError(
                 "the camera does not see the projected area: the white frame is "
                 "black in the triangulation camera"
             )
+        #: the extra lights' mean image over the pixels the projector lights, relative to
+        #: the white pattern's there (0 without extra lights): the sun-to-projector ratio
+        #: the camera sees
+        self.ambient_ratio = 0.0
+        if self.ambient is not None:
+            on = lit[0] > 0
+            self.ambient_ratio = float(self.ambient[on].mean() / lit[0][on].mean())
+        white = self._lens(self._with_ambient(lit))[0]
+        ref = float(np.percentile(white, EXPOSURE_PERCENTILE))
         self.gain = target_level / ref
         self.sensor = None
         if sensor is not None:
@@ -164,14 +194,24 @@ class RenderCapture:
         lit = (em > 0).mean(axis=(1, 2))
         sparse = (lit > 0) & (lit <= self.sparse_below)
         if (self.sparse_integrator == "path" and self.sparse_spp is None) or not sparse.any():
-            return self._lens(self.scene.render_patterns(em))
+            return self._lens(self._with_ambient(self.scene.render_patterns(em)))
         out = np.empty((len(em), *self.scene.shape), np.float32)
         if (~sparse).any():
             out[~sparse] = self.scene.render_patterns(em[~sparse])
         out[sparse] = self.scene.render_patterns(
             em[sparse], spp=self.sparse_spp, integrator=self.sparse_integrator
         )
-        return self._lens(out)
+        return self._lens(self._with_ambient(out))
+
+    def _with_ambient(self, frames: np.ndarray) -> np.ndarray:
+        """``frames`` plus the image of the extra lights (linearity of light transport)."""
+        if self.ambient is None:
+            return frames
+        frames = np.asarray(frames, np.float32)
+        if not frames.flags.writeable:
+            frames = frames.copy()
+        frames += self.ambient
+        return frames
 
     def _lens(self, frames) -> np.ndarray:
         """Camera lens point-spread function (Gaussian, ``camera_blur`` px) on (n, rows, cols).

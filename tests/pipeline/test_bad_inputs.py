@@ -233,6 +233,9 @@ CASES = [
     Case("inf full well", with_("render.sensor.full_well_e", float("inf")), "full_well_e"),
     Case("inf gamma", with_("render.sensor.gamma", float("inf")), "gamma"),
     Case("unknown scanner option", with_("study", {**SCANNER, "options": {"gray_opts": {"subpixle": True}}}), "subpixle"),
+    Case("daylight scan without a sun", {**with_("study", {**SCANNER, "scan_light": "sun"}), "render": {**GOOD.get("render", {}), "light": {"kind": "camera"}}}, "study.scan_light: sun needs render.light.kind sun"),
+    Case("sun guide light without a sun", {**with_("study", {**SCANNER, "guide_light": "sun"}), "render": {**GOOD.get("render", {}), "light": {"kind": "camera"}}}, "study.guide_light: sun needs render.light.kind sun"),
+    Case("unknown scan light", with_("study", {**SCANNER, "scan_light": "moon"}), "scan_light"),
     Case("unknown rig option", with_("study", {**SCANNER, "options": {"rig": {"tilt_deg": 3}}}), "tilt"),
     Case("unknown strategy option", with_("study.strategy_options", {"wavelet": {"blue_nose": True}}), "blue_nose"),
 ]  # fmt: skip

@@ -198,6 +198,42 @@ def test_scanner_experiment_end_to_end(tmp_path):
 
 
 @pytest.mark.slow
+def test_daylight_scan_ablation_reports_the_sun_to_projector_ratio(tmp_path):
+    # study.scan_light: sun through the CLI: the gray-code rows carry ambient_ratio, linear in
+    # the sun's irradiance (the sun's image is rendered with the same samples at every point)
+    out = tmp_path / "day"
+    run_cli(
+        str(ROOT / "experiments" / "ablation_scanner_daylight.yaml"),
+        "--out",
+        str(out),
+        "--set",
+        "terrain.scale=0.125",
+        "--set",
+        "study.projector_px=[64, 48]",
+        "--set",
+        "study.camera_px=[96, 72]",
+        "--set",
+        "render.spp=4",
+        "--set",
+        "study.modes=[gray_code]",
+        "--set",
+        "study.metrics=[mse]",
+        "--set",
+        "sweep={render.light.irradiance: [0.01, 100]}",
+    )
+    with (out / "results.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    ratio = {r["unit"]: float(r["value"]) for r in rows if r["metric"] == "ambient_ratio"}
+    assert set(ratio) == {"0", "1"} and ratio["0"] > 0
+    assert ratio["1"] / ratio["0"] == pytest.approx(1e4, rel=1e-4)
+    valid = {r["unit"]: float(r["value"]) for r in rows if r["metric"] == "valid_fraction"}
+    assert valid["1"] < valid["0"]  # a sun 1e4x brighter drowns stripes
+    # an ablation's figure plots the errors against the swept value; no bars pooled across it
+    figs = {p.name for p in (out / "figures").iterdir()}
+    assert "scanner_vs_irradiance.png" in figs and "scanner_errors.png" not in figs
+
+
+@pytest.mark.slow
 def test_real_sweep_on_dask_through_the_cli_matches_the_local_pool(tmp_path):
     import distributed
 

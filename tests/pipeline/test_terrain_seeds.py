@@ -192,3 +192,19 @@ def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monke
     assert len(drawn) == 2 * 2  # two panels per metric, two metrics
     text = (tmp_path / "r" / "figures" / "captions.md").read_text()
     assert "mean over 3 terrain seeds × 3 trials" in text
+
+
+def test_scanner_ablation_axis_of_the_sun_to_projector_ratio():
+    # the top axis appears only when ambient_ratio is proportional to the swept irradiance
+    from simlunar.pipeline.figures import _ambient_axis
+
+    units = [{"index": i, "sweep": {"render.light.irradiance": x}} for i, x in enumerate([1, 10])]
+    rows = [
+        {"unit": "0", "metric": "ambient_ratio", "value": "0.24"},
+        {"unit": "1", "metric": "ambient_ratio", "value": "2.4"},
+    ]
+    k, text = _ambient_axis(rows, units, "render.light.irradiance")
+    assert k == pytest.approx(0.24) and "sun / projector" in text
+    rows[1]["value"] = "3.0"  # not proportional: no axis
+    assert _ambient_axis(rows, units, "render.light.irradiance") is None
+    assert _ambient_axis(rows[:1], units, "render.light.irradiance") is None  # a dark unit

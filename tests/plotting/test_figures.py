@@ -252,3 +252,39 @@ def test_sample_markers_cover_a_bounded_share_of_the_panel(rng):
     _fig, axes = F.image_panels(img, img, r[:10], c[:10], img, img)
     assert float(axes[2].collections[0].get_sizes()[0]) == 4.0
     assert not axes[2].collections[0].get_rasterized()
+
+
+def _scan_summary(mse_gray, mse_dots, valid):
+    return [
+        {"mode": "gray_code", "planner": "", "mse": mse_gray, "valid_fraction": valid},
+        {"mode": "ambiguity_enhancement", "planner": "wavelet", "mse": mse_dots,
+         "mse_sd": mse_dots / 10, "valid_fraction": valid},
+    ]  # fmt: skip
+
+
+def test_scanner_vs_sweep_draws_each_pair_against_the_axis():
+    pts = [(0.3, _scan_summary(1e-6, 9e-7, 1.0)), (30, _scan_summary(3e-6, 2e-5, 0.9)),
+           (100, _scan_summary(2e-3, 3e-3, 0.01))]  # fmt: skip
+    _fig, ax = F.scanner_vs_sweep(pts, metric="mse", axis_label="sun", secondary=(0.24, "ratio"))
+    lines = {c.get_label(): c.lines[0] for c in ax.containers}  # errorbar containers
+    assert set(lines) == {"Gray code", "Ambiguity enhancement / Wavelet"}
+    np.testing.assert_allclose(lines["Gray code"].get_ydata(), [1e-6, 3e-6, 2e-3])
+    np.testing.assert_allclose(lines["Gray code"].get_xdata(), [0.3, 30, 100])
+    assert ax.get_xscale() == "log" and ax.get_yscale() == "log"  # both span > 20x
+    (top,) = [c for c in ax.child_axes]
+    assert top.get_xlabel() == "ratio"
+    _fig, ax = F.scanner_vs_sweep(pts, metric="valid_fraction")
+    assert ax.get_yscale() == "linear" and ax.get_ylabel() == "valid fraction of guide pixels"
+    # categories: unconnected markers at 0, 1, 2
+    _fig, ax = F.scanner_vs_sweep([("a", p[1]) for p in pts], metric="mse")
+    (gray,) = [c.lines[0] for c in ax.containers if c.get_label() == "Gray code"]
+    assert gray.get_linestyle() == "None" and gray.get_xdata().tolist() == [0, 1, 2]
+
+
+def test_shared_legend_keeps_labels_of_panels_with_different_quantities():
+    fig, axes = F.panel_grid(2)
+    F.error_vs_density(rows(), metric="mse", ax=axes[0])
+    F.error_vs_density(rows(), metric="mse", ax=axes[1])
+    axes[1].set_ylabel("GRAD error (m²)")
+    F.shared_legend(fig, axes, prune_labels=False)
+    assert [a.get_ylabel() for a in axes] == ["MSE error (m²)", "GRAD error (m²)"]

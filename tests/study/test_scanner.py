@@ -289,3 +289,49 @@ def test_light_traced_dot_frames_equal_path_traced_ones():
     np.testing.assert_array_equal(light.render(stripes), path.render(stripes))
     with pytest.raises(ValueError, match="sparse_integrator"):
         st.RenderCapture(bumpy, rig, sparse_integrator="bdpt")
+
+
+def test_daylight_scan_adds_the_sun_by_linearity_and_still_decodes(rig):
+    # the sun stays on while the projector scans (study.scan_light: sun): its image is
+    # rendered once and added to every frame, which must equal (in expectation) rendering
+    # projector and sun together; the black frame holds the sun and the gray code still decodes
+    from simlunar.render.lights import ProjectorLight, SunLight
+    from simlunar.render.scene import TerrainScene, luminance
+
+    x, _ = grid()
+    tilted = terrain(0.3 * x)
+    sun = SunLight(elevation=np.radians(50.0), azimuth=np.radians(120.0), irradiance=0.5)
+    day = st.RenderCapture(tilted, rig, max_depth=2, spp=64, seed=3, extra_lights=(sun,))
+    assert day.ambient is not None and day.ambient.mean() > 0 and day.ambient_ratio > 0
+    stripes = np.zeros((1, 48, 64), np.float32)
+    stripes[0, :, ::4] = 1.0
+    np.testing.assert_array_equal(day.render(np.zeros_like(stripes))[0], day.ambient)
+    joint = TerrainScene(
+        tilted,
+        rig.camera,
+        lights=[ProjectorLight(rig.projector, stripes[0]), sun],
+        max_depth=2,
+        spp=64,
+        seed=3,
+    )
+    together = luminance(joint.render())
+    added = day.render(stripes)[0]
+    assert added.mean() == pytest.approx(together.mean(), rel=0.02)
+    # per 5 x 5 block (Monte Carlo noise averages out; the stripes are resolved at this size)
+    blocks = [ndimage.uniform_filter(a, 5)[2::5, 2::5] for a in (added, together)]
+    np.testing.assert_allclose(blocks[0], blocks[1], rtol=0.1, atol=0.02 * together.max())
+    # the sun-to-projector ratio the camera sees, over the pixels the projector lights
+    lit = day.scene.render_patterns(np.ones_like(stripes))[0]
+    on = lit > 0
+    assert day.ambient_ratio == pytest.approx(day.ambient[on].mean() / lit[on].mean(), rel=1e-6)
+    # the exposure is set on projector plus sun: the white frame's 99.5th percentile at 0.8
+    white = day.sense(day.render(np.ones_like(stripes)))[0]
+    assert np.percentile(white, st.EXPOSURE_PERCENTILE) == pytest.approx(0.8, rel=1e-5)
+    dark = st.RenderCapture(tilted, rig, max_depth=2, spp=16, seed=3)
+    day16 = st.RenderCapture(tilted, rig, max_depth=2, spp=16, seed=3, extra_lights=(sun,))
+    g_dark, g_day = modes.gray_code_scan(dark, rig), modes.gray_code_scan(day16, rig)
+    v_dark, v_day = g_dark.decode.valid.mean(), g_day.decode.valid.mean()
+    assert v_day >= 0.9 * v_dark > 0.3
+    both = g_dark.decode.valid & g_day.decode.valid
+    same = g_dark.decode.col[both] == g_day.decode.col[both]
+    assert same.mean() > 0.97
