@@ -237,14 +237,7 @@ def write_figures(out_dir: str | Path) -> list[Path]:
     sweep = cfg.get("sweep") or {}
     if len(sweep) == 1 and len(units) > 1:
         (path,) = sweep
-        points = []
-        for rec in units:
-            v = rec["sweep"][path]
-            if isinstance(v, dict):
-                v = v.get("kind", json.dumps(v, sort_keys=True))
-            elif v is None:
-                v = "preset default"
-            points.append((v, rec.get("scores", {})))
+        points = [(_sweep_value(rec, path), rec.get("scores", {})) for rec in units]
         axis = path.rsplit(".", 1)[-1]
         for m in metrics:
             fig, _ = F.score_vs_sweep(
@@ -289,6 +282,15 @@ def _scanner_pooled(rows: list[dict], metrics: list[str]) -> list[dict]:
     return out
 
 
+def _sweep_value(rec: dict, path: str):
+    """A unit's value on sweep axis ``path`` as a plot position or label: numbers as they
+    are, a model (dict) by its ``kind``, null as ``"preset default"``."""
+    v = rec["sweep"][path]
+    if isinstance(v, dict):
+        return v.get("kind", json.dumps(v, sort_keys=True))
+    return "preset default" if v is None else v
+
+
 def _ambient_axis(rows: list[dict], units: list[dict], path: str):
     """``(factor, label)`` of a sun-to-projector axis when every unit of a one-axis sweep is a
     daylight scan whose ``ambient_ratio`` is proportional to the swept value (the sun's
@@ -325,13 +327,8 @@ def _scanner_figures(res: dict, emit, captions: dict) -> None:
         shown = [*metrics, "valid_fraction"]
         points = []
         for rec in units:
-            v = rec["sweep"][path]
-            if isinstance(v, dict):
-                v = v.get("kind", json.dumps(v, sort_keys=True))
-            elif v is None:
-                v = "preset default"
             own = [r for r in rows if str(r.get("unit")) == str(rec.get("index", 0))]
-            points.append((v, _scanner_pooled(own, shown)))
+            points.append((_sweep_value(rec, path), _scanner_pooled(own, shown)))
         fig, axes = F.panel_grid(len(shown), height=2.8)
         secondary = _ambient_axis(rows, units, path)
         for ax, m in zip(axes, shown):
