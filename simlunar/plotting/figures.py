@@ -599,8 +599,13 @@ def shared_legend(fig: Figure, axes: Sequence, *, prune_labels: bool = True) -> 
         leg = ax.get_legend()
         if leg is not None:
             if not handles:
-                handles = list(leg.legend_handles)
-                labels = [t.get_text() for t in leg.get_texts()]
+                # the artists themselves (an errorbar keeps its marker and bars), then
+                # entries only the legend has (the band's patch)
+                handles, labels = (list(x) for x in ax.get_legend_handles_labels())
+                for h, t in zip(leg.legend_handles, leg.get_texts()):
+                    if t.get_text() not in labels:
+                        handles.append(h)
+                        labels.append(t.get_text())
             leg.remove()
     if handles:
         fig.legend(
