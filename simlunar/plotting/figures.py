@@ -442,7 +442,8 @@ def scanner_vs_sweep(
         ``f"{metric}_sd"``, drawn as ±1 s.d. error bars).
     metric : str
         An error metric (log y axis when every value is positive and they span more than a
-        factor of 20) or ``"valid_fraction"`` (linear, 0 to 1).
+        factor of 20) or ``"valid_fraction"`` (linear: 0 to 1, or zoomed in on the values
+        when all are above 0.5).
     secondary : (factor, label), optional
         A second x axis on top, ``factor`` times the swept value (numeric axes), e.g. the
         sun-to-projector ratio the camera saw against the sun's irradiance.
@@ -494,7 +495,12 @@ def scanner_vs_sweep(
         top.set_xlabel(text, fontsize=7)
         top.tick_params(labelsize=6)
     if metric == "valid_fraction":
-        ax.set_ylim(-0.02, 1.02)
+        lo = min(allv) if allv else 0.0
+        if lo > 0.5:  # all close to 1: zoom in so a change of a few tenths of a percent shows
+            pad = max(0.15 * (1.0 - lo), 5e-4)
+            ax.set_ylim(lo - pad, 1.0 + pad)
+        else:
+            ax.set_ylim(-0.02, 1.02)
         ax.set_ylabel("valid fraction of guide pixels")
     else:
         if allv and min(allv) > 0 and max(allv) / min(allv) > 20:

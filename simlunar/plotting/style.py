@@ -159,6 +159,7 @@ AXIS_NAMES = {
     "render.light.elevation_deg": "sun elevation (deg)",
     "render.light.azimuth_deg": "sun azimuth (deg)",
     "render.light.irradiance": "sun irradiance (W/m²)",
+    "study.options.gray_opts.black_threshold": "gray-code validity threshold",
     "render.bsdf": "reflectance model (BSDF)",
     "render.bsdf.albedo": "albedo",
     "render.sensor.read_noise_e": "sensor read noise (e⁻)",

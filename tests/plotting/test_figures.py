@@ -275,6 +275,12 @@ def test_scanner_vs_sweep_draws_each_pair_against_the_axis():
     assert top.get_xlabel() == "ratio"
     _fig, ax = F.scanner_vs_sweep(pts, metric="valid_fraction")
     assert ax.get_yscale() == "linear" and ax.get_ylabel() == "valid fraction of guide pixels"
+    assert ax.get_ylim() == pytest.approx((-0.02, 1.02))
+    # all close to 1: the axis zooms in so 0.994 vs 1.0 is visible
+    near = [(x, _scan_summary(1e-6, 1e-6, v)) for x, v in ((1, 1.0), (2, 0.994))]
+    _fig, ax = F.scanner_vs_sweep(near, metric="valid_fraction")
+    lo, hi = ax.get_ylim()
+    assert 0.99 < lo < 0.994 and 1.0 < hi < 1.002
     # categories: unconnected markers at 0, 1, 2
     _fig, ax = F.scanner_vs_sweep([("a", p[1]) for p in pts], metric="mse")
     (gray,) = [c.lines[0] for c in ax.containers if c.get_label() == "Gray code"]
