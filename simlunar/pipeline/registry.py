@@ -55,6 +55,14 @@ def check_strategy(name: str, path: str, options: Mapping | None = None) -> None
     _check(name, strategy_names(), path, "strategy")
 
 
+def check_scan_planner(name: str, path: str) -> None:
+    """A planner of the scanner study: a registered strategy (it plans from the guide image)
+    or one of :data:`simlunar.scanner.modes.SCAN_PLANNERS` (it ranks the gray-code scan)."""
+    from simlunar.scanner.modes import SCAN_PLANNERS
+
+    _check(name, [*strategy_names(), *SCAN_PLANNERS], path, "planner")
+
+
 def metric_names() -> list[str]:
     from simlunar.metrics import METRICS
 

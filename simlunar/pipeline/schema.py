@@ -714,7 +714,9 @@ class ScannerStudyCfg(_Model):
     planners: list[str] = Field(
         default_factory=lambda: ["wavelet", "random"],
         min_length=1,
-        description="strategies that pick the dots (dot modes)",
+        description="what picks the dots (dot modes): a planner strategy (from the guide "
+        "image) or low_contrast (the gray-code pixels the projector lit least; "
+        "ambiguity_enhancement only)",
     )
     budget: Density = Field(0.1, description="fraction of guide pixels rescanned / sampled")
     trials: int = Field(1, ge=1, le=100)
@@ -769,6 +771,17 @@ class ScannerStudyCfg(_Model):
             raise ValueError(
                 f"options.planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
             )
+        from simlunar.scanner.modes import SCAN_PLANNERS
+
+        scan_planners = [p for p in self.planners if p in SCAN_PLANNERS]
+        if scan_planners and "data_reduction" in self.modes:
+            raise ValueError(
+                f"planners: {scan_planners[0]} ranks the pixels of the gray-code scan, which "
+                "the data_reduction mode does not make (use it with ambiguity_enhancement)"
+            )
+        for name in scan_planners:
+            if name in o.planner_opts:
+                raise ValueError(f"options.planner_opts.{name}: {name} takes no options")
         for name, opts in o.planner_opts.items():
             if name in STRATEGIES:
                 try:

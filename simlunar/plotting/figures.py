@@ -8,6 +8,7 @@ single column (3.4 in) or a full page width (7.0 in) at 300 dpi.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections import defaultdict
 from collections.abc import Iterable, Sequence
 
@@ -416,8 +417,11 @@ def scanner_bars(summary: Sequence[dict], *, metric: str = "mse", ax=None):
     yerr = None if all(s is None for s in sds) else [math.nan if s is None else s for s in sds]
     colors = [style(e.get("planner") or e.get("mode") or "").colour for e in summary]
     ax.bar(range(len(vals)), vals, color=colors, yerr=yerr, capsize=2, error_kw={"lw": 0.8})
-    ticks = [f"{t}\n(n = {e['n']})" if e.get("n") else t for t, e in zip(labels, summary)]
-    ax.set_xticks(range(len(vals)), ticks, rotation=25, ha="right", fontsize=6)
+    # horizontal, wrapped at word boundaries so a long pair label stays within its bar's width
+    width = max(8, int(56 / max(len(vals), 1)))  # characters of 6 pt text per bar
+    wrapped = [textwrap.fill(t, width, break_long_words=False) for t in labels]
+    ticks = [f"{t}\n(n = {e['n']})" if e.get("n") else t for t, e in zip(wrapped, summary)]
+    ax.set_xticks(range(len(vals)), ticks, fontsize=6)
     ax.set_ylabel(metric_axis(metric))
     ax.grid(True, axis="y", alpha=0.3)
     return fig, ax

@@ -54,6 +54,8 @@ REGISTRY: dict[str, Style] = {
     "wavelet_bn": Style("#e377c2", "d", "Wavelet, blue noise"),
     "wavelet_bn_mix": Style("#17becf", "h", "Wavelet, blue noise + uniform"),
     "fitted_combination": Style("#bcbd22", "*", "Fitted combination"),
+    # the scanner's scan-ranking rescan planner
+    "low_contrast": Style("#252525", "*", "Low contrast"),
     # scanner modes (section 5)
     "gray_code": Style("#393b79", "o", "Gray code"),
     "ambiguity_enhancement": Style("#637939", "s", "Ambiguity enhancement"),

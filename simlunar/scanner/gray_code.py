@@ -174,6 +174,9 @@ class GrayDecode:
         Sub-pixel projector coordinates (u, v) from stripe-edge refinement
         (:func:`refine_subpixel`), each inside its decoded pixel; NaN where a pixel could not be
         refined (its pixel centre is used). None: not refined.
+    contrast : (rows, cols) float32 or None
+        ``white - black`` per camera pixel (frame units): how brightly the projector lights
+        what the pixel sees (the ``low_contrast`` rescan planner ranks by it).
     """
 
     col: np.ndarray
@@ -186,6 +189,7 @@ class GrayDecode:
     n_row_bits: int
     proj_shape: tuple[int, int]
     subpixel: np.ndarray | None = None
+    contrast: np.ndarray | None = None
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -247,6 +251,7 @@ class GrayDecoder:
         self.diff: np.ndarray | None = None
         self._seen = np.zeros(self.n_bits, bool)
         self.lit: np.ndarray | None = None
+        self.contrast: np.ndarray | None = None
 
     def _frame(self, name: str, a) -> np.ndarray:
         a = np.asarray(a)
@@ -280,7 +285,9 @@ class GrayDecoder:
         """Add the captured all-white and all-black frames."""
         w = self._frame("white", white)
         b = self._frame("black", black)
-        self.lit = np.subtract(w, b, dtype=np.float64) > self.black_threshold
+        contrast = np.subtract(w, b, dtype=np.float64)
+        self.lit = contrast > self.black_threshold
+        self.contrast = contrast.astype(np.float32)
 
     def result(self, *, require_reliable: bool = True) -> GrayDecode:
         """The decode of the frames added so far (every pair and white/black are needed)."""
@@ -309,6 +316,7 @@ class GrayDecoder:
             n_col_bits=ncb,
             n_row_bits=self.n_row_bits,
             proj_shape=(H, W),
+            contrast=self.contrast,
         )
 
 

@@ -283,6 +283,39 @@ def plan_pixels(
     return rc
 
 
+#: rescan planners that rank pixels by the gray-code scan itself rather than by the guide
+#: image (``ambiguity_enhancement`` only: they need the scan)
+SCAN_PLANNERS = ("low_contrast",)
+
+
+def low_contrast_pixels(gray: GrayScan, k: int, *, rng) -> np.ndarray:
+    """The ``k`` guide pixels the gray-code scan saw with the least contrast: (k, 2) (row, col).
+
+    Each projector pixel (= guide pixel) gets the lowest ``white - black`` contrast of the lit
+    camera pixels whose gray code decodes to it (whether or not every bit was reliable: a
+    dim pixel's code is what it is, and a wrong code puts a wrong depth at the pixel it names);
+    the ``k`` lowest are rescanned, ties in random order. Projector pixels no lit camera pixel
+    decodes to come last: the camera cannot see a dot there either. The threshold ablation
+    (docs/scanner.md) finds most of the gray code's squared error in its lowest-contrast
+    pixels.
+    """
+    dec = gray.decode
+    if dec.contrast is None:
+        raise ValueError("low_contrast needs a decode with its contrast (GrayDecoder.result)")
+    H, W = dec.proj_shape
+    if not 1 <= int(k) <= H * W:
+        raise ValueError(f"k must be in 1..{H * W}, got {k}")
+    ncb = dec.n_col_bits
+    col = gc._gray_planes_to_index(dec.bits[:ncb])
+    row = gc._gray_planes_to_index(dec.bits[ncb:])
+    ok = dec.lit & (col < W) & (row < H)
+    lowest = np.full(H * W, np.inf)
+    np.minimum.at(lowest, (row[ok] * W + col[ok]).ravel(), dec.contrast[ok].ravel())
+    tie = np.random.default_rng(rng).random(H * W)
+    order = np.lexsort((tie, lowest))[: int(k)]
+    return np.stack([order // W, order % W], axis=-1).astype(np.int64)
+
+
 def fill_holes(depth: np.ndarray, *, outside: str = "nearest") -> np.ndarray:
     """Delaunay-linear reconstruction of a depth map with NaN holes to the full grid."""
     from simlunar.reconstruction import reconstruct
@@ -349,7 +382,7 @@ def scan_ambiguity_enhancement(
     """
     g = gray if gray is not None else gray_code_scan(capture, rig, **(gray_opts or {}))
     rc, d = _planned_dot_scan(
-        capture, rig, guide_image, planner, rng, depth_range, budget, dot_opts, planner_opts
+        capture, rig, guide_image, planner, rng, depth_range, budget, dot_opts, planner_opts, g
     )
     fused = g.depth.copy()
     hit = np.isfinite(d.depth)
@@ -394,15 +427,26 @@ def scan_data_reduction(
 
 
 def _planned_dot_scan(
-    capture, rig, guide_image, planner, rng, depth_range, budget, dot_opts, planner_opts
+    capture, rig, guide_image, planner, rng, depth_range, budget, dot_opts, planner_opts, gray=None
 ):
-    """Plan ``budget`` of the guide pixels from the guide image and scan them with dots.
+    """Plan ``budget`` of the guide pixels (from the guide image, or from the gray-code scan
+    ``gray`` for a :data:`SCAN_PLANNERS` planner) and scan them with dots.
 
     Returns the planned pixels (k, 2) as (row, col) and the :class:`DotScan`.
     """
     H, W = rig.projector.intrinsics.shape
     k = _budget_k(budget, H * W)
-    rc = plan_pixels(guide_image, k, planner=planner, rng=rng, **(planner_opts or {}))
+    if planner in SCAN_PLANNERS:
+        if gray is None:
+            raise ValueError(
+                f"planner {planner!r} ranks the pixels of a gray-code scan: use it with the "
+                "ambiguity_enhancement mode"
+            )
+        if planner_opts:
+            raise ValueError(f"planner {planner!r} takes no options, got {sorted(planner_opts)}")
+        rc = low_contrast_pixels(gray, k, rng=rng)
+    else:
+        rc = plan_pixels(guide_image, k, planner=planner, rng=rng, **(planner_opts or {}))
     # guide pixel (r, c) is projector pixel (r, c): its centre is (u, v) = (c + .5, r + .5)
     d = dot_scan(
         capture,

@@ -201,7 +201,9 @@ def run_scanner_study(
     terrain : Terrain
     rig : Rig (e.g. :func:`simlunar.scanner.rigs.moonyard_rig` aimed at the terrain)
     modes : names from :data:`simlunar.scanner.modes.MODES`
-    planners : planner strategy names (:func:`simlunar.planner.plan`) for the dot modes
+    planners : planner strategy names (:func:`simlunar.planner.plan`) for the dot modes, or
+        ``"low_contrast"`` (:func:`simlunar.scanner.modes.low_contrast_pixels`: the pixels
+        the gray-code scan saw least lit; ambiguity_enhancement only)
     budget : fraction of guide pixels rescanned / sampled by dots (paper: 0.1)
     trials : planner draws per (mode, planner); the gray-code scan is shared
     metrics : sampling-study metric names

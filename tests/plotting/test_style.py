@@ -94,7 +94,8 @@ def test_scanner_bar_labels_equal_scanner_table_labels():
         {"mode": "ambiguity_enhancement", "planner": "wavelet", "mse": 1.5},
     ]
     _fig, ax = F.scanner_bars(summary, metric="mse")
-    ticks = [t.get_text().split("\n")[0] for t in ax.get_xticklabels()]
+    # the tick wraps the pair label at word boundaries and adds the count on its own line
+    ticks = [" ".join(t.get_text().split("\n(n =")[0].split("\n")) for t in ax.get_xticklabels()]
     assert ticks == table == ["Gray code", "Ambiguity enhancement / Wavelet"]
 
 

@@ -76,3 +76,61 @@ def test_gray_code_mode_fills_holes(rig):
     cap = PlaneCapture(rig, (0, 0, 1.0), 0.0)
     res = modes.scan("gray_code", cap, rig, gray_opts={"black_threshold": 0.2})
     assert np.isfinite(res.depth).all() and np.isnan(res.measured).any()
+
+
+def _decode_of(contrast: np.ndarray, proj_shape=(2, 4)):
+    """A gray-code decode of a camera that sees the projector pixel for pixel (camera shape =
+    projector shape), each pixel lit with ``contrast`` (white - black), black 0.1."""
+    from simlunar.scanner import gray_code as gc
+
+    H, W = proj_shape
+    pats = gc.encode(W, H).astype(float)  # (pattern, inverse) pairs
+    black = np.full((H, W), 0.1)
+    frames = black + pats * contrast
+    return gc.decode(frames, black + contrast, black, proj_shape=(H, W),
+                     black_threshold=0.01, white_threshold=0.001)  # fmt: skip
+
+
+def test_decode_keeps_the_contrast():
+    c = np.array([[0.5, 0.2, 0.9, 0.05], [0.3, 0.7, 0.6, 0.4]])
+    dec = _decode_of(c)
+    assert dec.contrast.dtype == np.float32
+    np.testing.assert_allclose(dec.contrast, c, rtol=1e-6)
+    assert np.all(dec.col == np.arange(4)) and np.all(dec.row.T == np.arange(2))
+
+
+def test_low_contrast_planner_picks_the_least_lit_projector_pixels():
+    c = np.array([[0.5, 0.2, 0.9, 0.05], [0.3, 0.7, 0.6, 0.004]])
+    dec = _decode_of(c)  # (1, 3) is below black_threshold 0.01: unlit, ranked last
+    g = modes.GrayScan(decode=dec, cloud=None, depth=np.zeros(dec.proj_shape), renders=0, frames={})
+    rc = modes.low_contrast_pixels(g, 3, rng=0)
+    assert rc.tolist() == [[0, 3], [0, 1], [1, 0]]  # contrasts 0.05, 0.2, 0.3
+    everything = modes.low_contrast_pixels(g, 8, rng=0)
+    assert everything[-1].tolist() == [1, 3]
+    with pytest.raises(ValueError, match=r"k must be in 1\.\.8"):
+        modes.low_contrast_pixels(g, 9, rng=0)
+
+
+def test_low_contrast_planner_takes_the_dimmest_camera_pixel_of_a_projector_pixel():
+    # two camera pixels decode to each projector column: the projector pixel's rank is the
+    # lower contrast of the two (a wrongly decoded dim pixel corrupts the depth there)
+    from simlunar.scanner import gray_code as gc
+
+    H, W = 2, 4
+    pats = gc.encode(W, H).astype(float)
+    cam = np.repeat(pats, 2, axis=2)  # camera (2, 8): pixels 2j, 2j+1 see column j
+    c = np.array([[0.9, 0.8, 0.15, 0.9, 0.5, 0.6, 0.3, 0.35], [0.95] * 8])
+    dec = gc.decode(cam * c, c, np.zeros_like(c), proj_shape=(H, W),
+                    black_threshold=0.01, white_threshold=0.001)  # fmt: skip
+    g = modes.GrayScan(decode=dec, cloud=None, depth=np.zeros((H, W)), renders=0, frames={})
+    # row 0 by the lower contrast of its two camera pixels: 0.15, 0.3, 0.5, 0.8
+    assert modes.low_contrast_pixels(g, 4, rng=0).tolist() == [[0, 1], [0, 3], [0, 2], [0, 0]]
+
+
+def test_low_contrast_planner_needs_the_gray_code_scan(rig):
+    cap = PlaneCapture(rig, (0, 0, 1.0), 0.0, noise=0.0)
+    with pytest.raises(ValueError, match="use it with the ambiguity_enhancement mode"):
+        modes.scan_data_reduction(
+            cap, rig, guide_image=np.ones((48, 64)), planner="low_contrast", rng=0,
+            depth_range=(1.0, 3.0), budget=0.01,
+        )  # fmt: skip

@@ -335,3 +335,29 @@ def test_daylight_scan_adds_the_sun_by_linearity_and_still_decodes(rig):
     both = g_dark.decode.valid & g_day.decode.valid
     same = g_dark.decode.col[both] == g_day.decode.col[both]
     assert same.mean() > 0.97
+
+
+def test_low_contrast_rescans_the_least_lit_pixels_of_the_gray_code_scan(rig):
+    # the planner ranks the study's own gray-code scan (no ground truth): the planned pixels
+    # are low_contrast_pixels of that scan, and the fused depth is no worse than gray code
+    xx, yy = grid()
+    h = 0.05 * np.exp(-((xx - 0.1) ** 2 + yy**2) / 0.02)
+    res = st.run_scanner_study(
+        terrain(h),
+        rig,
+        modes=("gray_code", "ambiguity_enhancement"),
+        planners=("low_contrast",),
+        budget=0.1,
+        trials=1,
+        metrics=("mse",),
+        rng=3,
+        spp=2,
+        max_depth=2,
+    )
+    ae = res.scans[("ambiguity_enhancement", "low_contrast", 0)]
+    k = round(0.1 * 64 * 48)
+    want = modes.low_contrast_pixels(ae.gray, k, rng=0)
+    # contrast values are distinct floats, so the random tie-break does not matter
+    assert {tuple(p) for p in ae.planned_rc} == {tuple(p) for p in want}
+    mse = {(r["mode"], r["metric"]): r["value"] for r in res.rows}
+    assert mse[("ambiguity_enhancement", "mse")] <= mse[("gray_code", "mse")] * 1.05
