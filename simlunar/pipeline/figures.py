@@ -11,11 +11,13 @@ import json
 from pathlib import Path
 
 from simlunar.errors import ResultFolderError
+from simlunar.pipeline.aggregate import SEED_AXIS
 from simlunar.pipeline.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
 
 MAX_UNIT_PANELS = 6
-#: sweep axes that repeat an experiment over realisations (pooled, not plotted against)
-SEED_AXES = ("seed", "terrain.seed", "terrain.seed_index")
+#: sweep axes that repeat an experiment over realisations (pooled, not plotted against): the
+#: experiment seed and the terrain realisation
+SEED_AXES = ("seed", SEED_AXIS)
 
 
 def load_results(out_dir: str | Path) -> dict:
@@ -325,10 +327,16 @@ def _scanner_figures(res: dict, emit, captions: dict) -> None:
         # errors of different conditions into one bar)
         (path,) = sweep
         shown = [*metrics, "valid_fraction"]
-        points = []
-        for rec in units:
-            own = [r for r in rows if str(r.get("unit")) == str(rec.get("index", 0))]
-            points.append((_sweep_value(rec, path), _scanner_pooled(own, shown)))
+        by_unit: dict[str, list[dict]] = {}
+        for r in rows:
+            by_unit.setdefault(str(r.get("unit")), []).append(r)
+        points = [
+            (
+                _sweep_value(rec, path),
+                _scanner_pooled(by_unit.get(str(rec.get("index", 0)), []), shown),
+            )
+            for rec in units
+        ]
         fig, axes = F.panel_grid(len(shown), height=2.8)
         secondary = _ambient_axis(rows, units, path)
         for ax, m in zip(axes, shown):

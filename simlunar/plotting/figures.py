@@ -139,6 +139,18 @@ def error_vs_density(
     return fig, ax
 
 
+def _sweep_positions(xs: Sequence) -> tuple[bool, np.ndarray]:
+    """``(numeric, positions)`` of sweep values: numbers where they all are, else 0, 1, ..."""
+    numeric = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in xs)
+    return numeric, np.asarray(xs, float) if numeric else np.arange(len(xs), dtype=float)
+
+
+def _category_ticks(ax, pos: np.ndarray, xs: Sequence) -> None:
+    """One tick per category (display labels), half a slot of margin either side."""
+    ax.set_xticks(pos, [label(str(x)) for x in xs], fontsize=7)
+    ax.set_xlim(pos[0] - 0.5, pos[-1] + 0.5)
+
+
 def score_vs_sweep(
     points: Sequence[tuple[object, dict]],
     *,
@@ -163,8 +175,7 @@ def score_vs_sweep(
     """
     fig, ax = _axes(ax, (COLUMN_W, 2.6))
     xs = [p[0] for p in points]
-    numeric = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in xs)
-    pos = np.asarray(xs, float) if numeric else np.arange(len(xs), dtype=float)
+    numeric, pos = _sweep_positions(xs)
     if strategies is None:
         strategies = list(dict.fromkeys(s for _, sc in points for s in sc.get(metric, {})))
     st = styles(strategies)
@@ -188,8 +199,7 @@ def score_vs_sweep(
             )
     ax.axhline(1.0, color="k", lw=0.6, ls=":")
     if not numeric:
-        ax.set_xticks(pos, [label(str(x)) for x in xs], fontsize=7)
-        ax.set_xlim(pos[0] - 0.5, pos[-1] + 0.5)
+        _category_ticks(ax, pos, xs)
     ax.set_xlabel(axis_label)
     ax.set_ylabel(f"{_metric_name(metric)} score (random = 1)")
     if title:
@@ -457,8 +467,7 @@ def scanner_vs_sweep(
     """
     fig, ax = _axes(ax, (COLUMN_W, 2.6))
     xs = [p[0] for p in points]
-    numeric = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in xs)
-    pos = np.asarray(xs, float) if numeric else np.arange(len(xs), dtype=float)
+    numeric, pos = _sweep_positions(xs)
     keys = list(dict.fromkeys((e["mode"], e.get("planner") or "") for _, s in points for e in s))
     allv = []
     for mode, planner in keys:
@@ -491,8 +500,7 @@ def scanner_vs_sweep(
     if numeric and pos.size and np.all(pos > 0) and pos.max() / pos.min() > 20:
         ax.set_xscale("log")
     if not numeric:
-        ax.set_xticks(pos, [label(str(x)) for x in xs], fontsize=7)
-        ax.set_xlim(pos[0] - 0.5, pos[-1] + 0.5)
+        _category_ticks(ax, pos, xs)
     if secondary is not None and numeric:
         k, text = secondary
         top = ax.secondary_xaxis("top", functions=(lambda x: x * k, lambda x: x / k))

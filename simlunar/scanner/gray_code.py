@@ -195,6 +195,12 @@ class GrayDecode:
     def shape(self) -> tuple[int, int]:
         return self.valid.shape  # type: ignore[return-value]
 
+    def decoded_index(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(col, row)`` int64 that every camera pixel's bits name, valid or not (``col``
+        and ``row`` hold -1 where the pixel is invalid)."""
+        ncb = self.n_col_bits
+        return _gray_planes_to_index(self.bits[:ncb]), _gray_planes_to_index(self.bits[ncb:])
+
     def proj_uv(self) -> np.ndarray:
         """(rows, cols, 2) projector coordinates (u, v); NaN where invalid.
 

@@ -305,9 +305,7 @@ def low_contrast_pixels(gray: GrayScan, k: int, *, rng) -> np.ndarray:
     H, W = dec.proj_shape
     if not 1 <= int(k) <= H * W:
         raise ValueError(f"k must be in 1..{H * W}, got {k}")
-    ncb = dec.n_col_bits
-    col = gc._gray_planes_to_index(dec.bits[:ncb])
-    row = gc._gray_planes_to_index(dec.bits[ncb:])
+    col, row = dec.decoded_index()
     ok = dec.lit & (col < W) & (row < H)
     lowest = np.full(H * W, np.inf)
     np.minimum.at(lowest, (row[ok] * W + col[ok]).ravel(), dec.contrast[ok].ravel())

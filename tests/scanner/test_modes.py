@@ -102,6 +102,7 @@ def test_decode_keeps_the_contrast():
 def test_low_contrast_planner_picks_the_least_lit_projector_pixels():
     c = np.array([[0.5, 0.2, 0.9, 0.05], [0.3, 0.7, 0.6, 0.004]])
     dec = _decode_of(c)  # (1, 3) is below black_threshold 0.01: unlit, ranked last
+    assert dec.col[1, 3] == -1 and [a[1, 3] for a in dec.decoded_index()] == [3, 1]
     g = modes.GrayScan(decode=dec, cloud=None, depth=np.zeros(dec.proj_shape), renders=0, frames={})
     rc = modes.low_contrast_pixels(g, 3, rng=0)
     assert rc.tolist() == [[0, 3], [0, 1], [1, 0]]  # contrasts 0.05, 0.2, 0.3
