@@ -25,7 +25,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from simlunar.pipeline.config import load_experiment
+from simlunar.config.loading import load_experiment
 from simlunar.pipeline.executors import LocalPoolExecutor
 from simlunar.pipeline.runner import run_experiment
 

@@ -20,9 +20,9 @@ import numpy as np
 
 
 def results_report(out_dir: str) -> None:
-    from simlunar.pipeline import aggregate
-    from simlunar.pipeline.figures import load_results
-    from simlunar.pipeline.store import UnitCache
+    from simlunar.results import aggregate
+    from simlunar.results.figures import load_results
+    from simlunar.results.store import UnitCache
     from simlunar.study.spectrum import sample_pitch, variance_share_above
 
     res = load_results(out_dir)

@@ -162,7 +162,7 @@ def run(
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
     from pathlib import Path
 
-    from simlunar.pipeline.config import load_experiment, parse_set
+    from simlunar.config.loading import load_experiment, parse_set
     from simlunar.pipeline.executors import make_executor
     from simlunar.pipeline.runner import run_experiment
 
@@ -170,7 +170,7 @@ def run(
         overrides = parse_set(set_ or [])
         cfg = load_experiment(experiment, overrides)
         if save_scans:
-            from simlunar.pipeline.exports import check_save_scans
+            from simlunar.results.exports import check_save_scans
 
             check_save_scans(cfg)
             # an override before validation, so every sweep point is checked with it
@@ -205,9 +205,9 @@ def figures(
     """Redraw the figures of a result folder (PNG and PDF) without recomputing."""
     from pathlib import Path
 
-    from simlunar.pipeline.figures import write_figures_pruned
     from simlunar.pipeline.preflight import check_out_dir
-    from simlunar.pipeline.store import FolderLock
+    from simlunar.results.figures import write_figures_pruned
+    from simlunar.results.store import FolderLock
 
     check_out_dir(results_dir, option="figures")
     if not Path(results_dir).is_dir():
@@ -232,21 +232,21 @@ def schema(
     """JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server)."""
     import json
 
+    from simlunar.config.loading import SCHEMA_KINDS, json_schema
     from simlunar.errors import ConfigError
-    from simlunar.pipeline.config import SCHEMA_KINDS, json_schema
 
     if kind not in SCHEMA_KINDS:
         raise ConfigError(
             f"--kind {kind}: unknown document kind (valid: {', '.join(SCHEMA_KINDS)})"
         )
     if markdown:
-        from simlunar.pipeline.reference import reference_markdown
+        from simlunar.config.docs import reference_markdown
 
         text = reference_markdown()
     else:
         text = json.dumps(json_schema(kind), indent=2)
     if out:
-        from simlunar.pipeline.store import atomic_write_text
+        from simlunar.results.store import atomic_write_text
 
         atomic_write_text(out, text + "\n")
     else:
@@ -262,8 +262,8 @@ def render(
     """Render a scene: radiance.exr (linear), preview.png, ground_truth.exr/.npz, scene.json."""
     from pathlib import Path
 
+    from simlunar.config.scene import load_scene, render_scene
     from simlunar.pipeline.preflight import check_camera, check_out_dir, terrain_facts
-    from simlunar.pipeline.scene import load_scene, render_scene
 
     with user_input():
         cfg = load_scene(scene)
@@ -297,9 +297,9 @@ def terrain(
     import time
     from pathlib import Path
 
+    from simlunar.config.presets import merged_preset
+    from simlunar.config.translate import terrain_params
     from simlunar.pipeline.preflight import check_out_dir
-    from simlunar.pipeline.presets import merged_preset
-    from simlunar.pipeline.translate import terrain_params
     from simlunar.terrain import generate
     from simlunar.terrain.io import FORMATS, GDAL_FORMATS, load_dem, write_terrain_outputs
     from simlunar.terrain.stats import terrain_report

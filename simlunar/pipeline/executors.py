@@ -71,7 +71,7 @@ class LocalPoolExecutor(Executor):
 
     Each unit runs in a thread of this process, so nothing is imported, initialised or
     compiled twice, and each render still uses every core: renders of concurrent units take
-    turns (a lock in :mod:`simlunar.pipeline.stages`), which costs nothing because a render
+    turns (a lock in :mod:`simlunar.pipeline.unit`), which costs nothing because a render
     already keeps every core busy. The single-threaded part of a unit, the sampling study,
     runs its (strategy, trial) tasks on ``workers`` forked processes
     (:func:`simlunar.study.sampling.run_sampling_study`), which is where the cores are gained;
@@ -80,7 +80,7 @@ class LocalPoolExecutor(Executor):
     with a single unit is parallel too (its study is). Results do not depend on ``workers``.
 
     ``fn`` gets ``study_workers=workers`` when its signature has that parameter (as
-    :func:`simlunar.pipeline.stages.compute_unit` does); other functions simply run
+    :func:`simlunar.pipeline.unit.compute_unit` does); other functions simply run
     ``workers`` at a time in threads.
     """
 

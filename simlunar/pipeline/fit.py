@@ -18,8 +18,8 @@ import time
 from pathlib import Path
 
 from simlunar.errors import SimlunarError
-from simlunar.pipeline.figures import load_results
-from simlunar.pipeline.store import UnitCache, atomic_write_bytes
+from simlunar.results.figures import load_results
+from simlunar.results.store import UnitCache, atomic_write_bytes
 
 
 def _scenes(res: dict, seeds: list[int]) -> list[tuple]:

@@ -1,6 +1,6 @@
 """Checks that run before any render or write: input files, geometry, sizes, the result folder.
 
-The schema (:mod:`simlunar.pipeline.schema`) checks each value on its own; what needs a file
+The schema (:mod:`simlunar.config.schema`) checks each value on its own; what needs a file
 or the geometry of a sweep point is checked here, for every sweep point, before the first
 unit starts, so a mistake costs a second instead of the units computed before it:
 
@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from simlunar.errors import ConfigError, ResultFolderError
-from simlunar.pipeline.store import file_sha256
+from simlunar.results.store import file_sha256
 
 #: NaN heights (holes) a DEM may have. Holes leave the terrain mesh open; the rays that miss
 #: it take the depth of their nearest valid pixel (``stages.fill_invalid``) and are scored as
@@ -101,7 +101,7 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
     out: dict[str, Path] = {}
     preset = t.get("preset")
     if preset:
-        from simlunar.pipeline.presets import PresetError, preset_path
+        from simlunar.config.presets import PresetError, preset_path
 
         with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
             out["terrain.preset"] = preset_path(str(preset))
@@ -218,8 +218,8 @@ def terrain_facts(t: Any) -> TerrainFacts:
 
 def _preset_params(t: Any):
     """The preset's ``TerrainParams`` (grid size, spacing, origin) as the unit will build them."""
-    from simlunar.pipeline.presets import merged_preset
-    from simlunar.pipeline.translate import terrain_params
+    from simlunar.config.presets import merged_preset
+    from simlunar.config.translate import terrain_params
 
     return terrain_params(merged_preset(t.preset, t.overrides), scale=t.scale)
 
@@ -518,7 +518,7 @@ def check_units(units: list[Any]) -> Preflight:
     ``units`` are :class:`~simlunar.pipeline.runner.WorkUnit` (their plain ``config``).
     Errors of a sweep point name the point: ``sweep point 3 (elevation_deg=0): ...``.
     """
-    from simlunar.pipeline.config import ExperimentCfg
+    from simlunar.config.loading import ExperimentCfg
 
     facts = []
     for u in units:

@@ -6,7 +6,7 @@ SHA-256 of their resolved configuration, the contents of the files they read (DE
 preset YAML) and the simlunar version, so an interrupted run resumes where it stopped, a
 finished one reruns instantly and a changed input is recomputed.
 
-A run owns its folder (:class:`~simlunar.pipeline.store.FolderLock`), and a folder belongs to
+A run owns its folder (:class:`~simlunar.results.store.FolderLock`), and a folder belongs to
 one configuration: a run whose config differs from the folder's ``config.yaml`` is refused.
 Every sweep point is checked (:mod:`simlunar.pipeline.preflight`) before anything is written. ``results.csv`` is assembled in a fixed order (units in sweep
 order; rows by strategy, density, trial and metric in config order) from the cache, so the
@@ -29,12 +29,12 @@ from typing import Any
 import yaml
 
 import simlunar
+from simlunar.config.loading import ExperimentCfg, apply_sweep_value, to_plain
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
 from simlunar.pipeline import preflight
-from simlunar.pipeline.config import ExperimentCfg, apply_sweep_value, to_plain
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
-from simlunar.pipeline.stages import CACHE_VERSION, compute_unit
-from simlunar.pipeline.store import (
+from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
+from simlunar.results.store import (
     FolderLock,
     UnitCache,
     atomic_write_json,
@@ -444,7 +444,7 @@ def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
 
 
 def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
-    from simlunar.pipeline.exports import export_unit_key
+    from simlunar.results.exports import export_unit_key
 
     name = f"unit{u.index}"
     if scan_dirs.get(name) != u.key:
@@ -458,7 +458,7 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
     import re
     import shutil
 
-    from simlunar.pipeline.exports import export_unit_key
+    from simlunar.results.exports import export_unit_key
 
     folder = out / "scans"
     removed: list[Path] = []
@@ -527,7 +527,7 @@ def _run_locked(
             arrays = result.pop("arrays", {}) or {}
             scans = result.pop("scans", None)
             if scans is not None:  # before the cache entry: a cached unit has its scans
-                from simlunar.pipeline.exports import write_scan_export
+                from simlunar.results.exports import write_scan_export
 
                 write_scan_export(out / "scans" / f"unit{u.index}", scans, unit_key=u.key)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
@@ -561,7 +561,7 @@ def _run_locked(
 
     written: list[Path] = []
     if figures and cfg.figures.enabled:
-        from simlunar.pipeline.figures import write_figures_pruned
+        from simlunar.results.figures import write_figures_pruned
 
         written = write_figures_pruned(out)
     return RunSummary(
@@ -599,8 +599,8 @@ def _notes(checks, units, records) -> list[str]:
 def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     """Score tables (pooled over terrain seeds, with intervals), samples-saved tables and
     ``scores.csv`` (per-seed and pooled scores) of a sampling experiment."""
-    from simlunar.pipeline import aggregate
     from simlunar.plotting.tables import Cell, samples_saved_tables, score_tables
+    from simlunar.results import aggregate
 
     recs = [{**records[u.key], "sweep": u.sweep, "config": u.config} for u in units]
     points = aggregate.summarise(recs, rows, seed=cfg.seed)

@@ -16,16 +16,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.geometry import Rig
-from simlunar.scanner import gray_code as gc
-from simlunar.scanner import modes as scan_modes
-from simlunar.scanner.triangulate import true_correspondences
-from simlunar.study.scanner_capture import (
+from simlunar.render.capture import (
     EXPOSURE_PERCENTILE,
     GuideView,
     RenderCapture,
     camera_truth,
     render_guide,
 )
+from simlunar.scanner import gray_code as gc
+from simlunar.scanner import modes as scan_modes
+from simlunar.scanner.triangulate import true_correspondences
 
 __all__ = [
     "EXPOSURE_PERCENTILE",

@@ -1,7 +1,7 @@
 """Validated terrain parameters (SI units) and their construction from a plain dict.
 
 The library's own route from a preset mapping to :class:`TerrainParams`; the pipeline reads
-preset files through its typed models (:mod:`simlunar.pipeline.schema`'s
+preset files through its typed models (:mod:`simlunar.config.schema`'s
 ``TerrainPresetCfg``) and gives the same parameters.
 
 YAML presets use unit suffixes (``spacing_m``, ``d_min_m``, ``diffusivity_m2_per_myr``);
@@ -23,7 +23,7 @@ class ParamError(ValueError):
 
     ``str()`` reads ``"<key> <problem>"``; callers that report key paths themselves use
     ``key`` and ``problem`` separately. (Experiment YAMLs validate presets and overrides with the
-    pipeline's models, :mod:`simlunar.pipeline.presets`; a test keeps both routes equal.)
+    pipeline's models, :mod:`simlunar.config.presets`; a test keeps both routes equal.)
     """
 
     def __init__(self, key: str, problem: str):

@@ -21,8 +21,8 @@ def test_auto_gain_hand_computed():
 
 def test_sampling_sensor_fills_80_percent_of_the_well():
     """sensor: {exposure_e: null} in a sampling study: the 99.5th pct reads 0.8 of the ADC."""
-    from simlunar.pipeline.schema import SensorCfg
-    from simlunar.pipeline.stages import sensor_image
+    from simlunar.config.schema import SensorCfg
+    from simlunar.pipeline.unit import sensor_image
 
     rad = np.random.default_rng(3).random((64, 64)).astype(np.float32) * 7.0
     # a huge well makes shot noise negligible; no read noise, 16 bits
@@ -38,8 +38,8 @@ def test_sampling_sensor_fills_80_percent_of_the_well():
 def test_scanner_capture_uses_the_rule_on_its_white_frame():
     """RenderCapture exposes the sensor by the same rule, on its white calibration frame."""
     from simlunar.imaging.sensor import SensorModel
+    from simlunar.render.capture import RenderCapture
     from simlunar.scanner import rigs
-    from simlunar.study.scanner_capture import RenderCapture
     from simlunar.terrain.types import Terrain
 
     n = 60

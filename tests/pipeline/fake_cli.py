@@ -19,7 +19,7 @@ from simlunar.pipeline import runner
 if os.environ.get("SIMLUNAR_TEST_REAL_UNITS"):  # the real units, behind the test gate
     from fake_unit import gated
 
-    from simlunar.pipeline.stages import compute_unit
+    from simlunar.pipeline.unit import compute_unit
 
     runner.run_experiment.__kwdefaults__["compute"] = gated(compute_unit)
 else:

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from simlunar.pipeline.config import ExperimentCfg
-from simlunar.pipeline.stages import stage_seeds
+from simlunar.config.loading import ExperimentCfg
+from simlunar.pipeline.unit import stage_seeds
 
 
 def enter_unit(payload: dict) -> None:

@@ -22,7 +22,7 @@ import yaml
 from typer.testing import CliRunner
 
 from simlunar.cli import app
-from simlunar.pipeline.config import set_path
+from simlunar.config.loading import set_path
 from simlunar.pipeline.preflight import MAX_NAN_FRACTION
 
 GOOD = {
@@ -312,7 +312,7 @@ def test_there_are_at_least_40_distinct_cases():
 
 def test_the_good_config_passes_the_checks(tmp_path):
     """The cases above differ from a config that is valid (so each fails for its own reason)."""
-    from simlunar.pipeline.config import validate_data
+    from simlunar.config.loading import validate_data
     from simlunar.pipeline.preflight import check_units
     from simlunar.pipeline.runner import expand
 

@@ -35,7 +35,7 @@ def write(tmp_path, data) -> str:
 
 
 def _with(path: str, value):
-    from simlunar.pipeline.config import set_path
+    from simlunar.config.loading import set_path
 
     return set_path(GOOD, path, value)
 

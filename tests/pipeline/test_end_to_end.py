@@ -97,7 +97,7 @@ def test_quickstart_variant_end_to_end(tmp_path):
     assert {"error_vs_density_mse.png", "error_vs_density_mse.pdf", "panels_unit0.png"} <= figs
     assert "sparse_mesh_unit0.png" in figs  # Fig. 4
     assert {"samples_saved.png", "samples_saved.pdf"} <= figs
-    from simlunar.pipeline.store import UnitCache
+    from simlunar.results.store import UnitCache
 
     arr = UnitCache(out).load_arrays(prov["unit_keys"][0])
     # quickstart is Oren-Nayar: constant and energy-modulated renders of the sparse mesh

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from simlunar.pipeline.config import SamplingStudyCfg, load_experiment
+from simlunar.config.loading import SamplingStudyCfg, load_experiment
 from simlunar.pipeline.runner import expand
 
 EXPERIMENTS = sorted((Path(__file__).resolve().parents[2] / "experiments").glob("*.yaml"))

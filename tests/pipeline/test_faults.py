@@ -25,10 +25,10 @@ from fake_unit import fake_unit
 from typer.testing import CliRunner
 
 from simlunar.cli import app
+from simlunar.config.loading import load_experiment
 from simlunar.errors import ResultFolderError
-from simlunar.pipeline.config import load_experiment
 from simlunar.pipeline.runner import run_experiment
-from simlunar.pipeline.store import FolderLock
+from simlunar.results.store import FolderLock
 
 HERE = Path(__file__).resolve().parent
 EXP = {

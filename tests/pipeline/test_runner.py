@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from fake_unit import fake_unit
 
-from simlunar.pipeline.config import ExperimentCfg
+from simlunar.config.loading import ExperimentCfg
 from simlunar.pipeline.executors import LocalPoolExecutor, make_executor
 from simlunar.pipeline.runner import expand, run_experiment, unit_key
 
@@ -149,7 +149,7 @@ def test_sigkill_then_resume_recomputes_nothing_finished(tmp_path, monkeypatch):
         import sys
         sys.path.insert(0, {str(HERE)!r})
         from fake_unit import fake_unit
-        from simlunar.pipeline.config import ExperimentCfg
+        from simlunar.config.loading import ExperimentCfg
         from simlunar.pipeline.runner import run_experiment
         cfg = ExperimentCfg.model_validate_json({c.model_dump_json(by_alias=True)!r})
         run_experiment(cfg, {str(out)!r}, compute=fake_unit, progress=False, figures=False)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from fake_unit import fake_unit
 
-from simlunar.pipeline import aggregate
-from simlunar.pipeline.config import ExperimentCfg
+from simlunar.config.loading import ExperimentCfg
 from simlunar.pipeline.runner import expand, run_experiment
-from simlunar.pipeline.stages import stage_seeds, terrain_seed_sequence
+from simlunar.pipeline.unit import stage_seeds, terrain_seed_sequence
+from simlunar.results import aggregate
 
 
 def cfg(n_seeds=1, **over) -> ExperimentCfg:
@@ -50,8 +50,8 @@ def test_terrain_seed_sequences():
 def test_seed_index_gives_another_terrain_and_zero_the_old_one(kind):
     # both the scene path (simlunar render) and the experiment path (the units of simlunar
     # run) must build realisation i from terrain_seed_sequence(seed, i)
-    from simlunar.pipeline.scene import SceneCfg
-    from simlunar.pipeline.stages import scene_inputs
+    from simlunar.config.scene import SceneCfg
+    from simlunar.pipeline.unit import scene_inputs
 
     def terrain(seed_index=None):
         t = {"preset": "aerial_1", "scale": 0.0625}
@@ -152,7 +152,7 @@ def test_a_sweep_over_seed_index_is_pooled_too():
 
 def test_figure_titles_name_the_terrain_seed():
     # panels of a repeated experiment say which terrain realisation they show
-    from simlunar.pipeline.figures import _label
+    from simlunar.results.figures import _label
 
     rec = {"index": 3, "key": "k", "sweep": {}, "config": cfg(3).model_dump(mode="json")}
     rec["config"]["terrain"]["seed_index"] = 2
@@ -164,8 +164,8 @@ def test_figure_titles_name_the_terrain_seed():
 def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monkeypatch):
     # 2 sweep points x 3 terrain seeds: two panels (not six), each pooling its three units,
     # with the band and caption saying so
-    from simlunar.pipeline import figures as PF
     from simlunar.plotting import figures as F
+    from simlunar.results import figures as PF
 
     units = [
         {"index": u.index, "key": u.key, "sweep": u.sweep, "config": u.config}
@@ -196,7 +196,7 @@ def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monke
 
 def test_scanner_ablation_axis_of_the_sun_to_projector_ratio():
     # the top axis appears only when ambient_ratio is proportional to the swept irradiance
-    from simlunar.pipeline.figures import _ambient_axis
+    from simlunar.results.figures import _ambient_axis
 
     units = [{"index": i, "sweep": {"render.light.irradiance": x}} for i, x in enumerate([1, 10])]
     rows = [

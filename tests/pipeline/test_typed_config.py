@@ -15,10 +15,10 @@ import pytest
 import yaml
 from pydantic import BaseModel
 
+from simlunar.config import schema, translate
+from simlunar.config.loading import json_schema, schema_model, validate_data
+from simlunar.config.scene import SceneCfg
 from simlunar.errors import ConfigError
-from simlunar.pipeline import schema, translate
-from simlunar.pipeline.config import json_schema, schema_model, validate_data
-from simlunar.pipeline.scene import SceneCfg
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -155,7 +155,7 @@ def test_option_defaults_are_the_library_defaults():
     gray = _defaults(modes.gray_code_scan)
     assert gray.pop("keep_frames") is False  # set by the pipeline for study.save_scans only
     assert translate.gray_kwargs(schema.GrayOptsCfg()) == gray
-    from simlunar.study.scanner_capture import RenderCapture
+    from simlunar.render.capture import RenderCapture
 
     capture = {k: v for k, v in _defaults(RenderCapture).items() if k.startswith("sparse_")}
     assert schema.CaptureOptsCfg().model_dump() == capture
@@ -391,7 +391,7 @@ def test_sweep_keeps_plain_values_as_written():
 
 # --------------------------------------------------------------------------- presets
 def test_presets_through_the_models_equal_the_terrain_package():
-    from simlunar.pipeline.presets import merged_preset
+    from simlunar.config.presets import merged_preset
     from simlunar.terrain import load_preset, preset_names
 
     names = preset_names()
@@ -415,7 +415,7 @@ def test_a_bad_preset_file_is_one_line_naming_file_and_key(tmp_path):
 
 # --------------------------------------------------------------------------- docs
 def test_the_yaml_reference_in_the_docs_is_the_generated_one():
-    from simlunar.pipeline.reference import docs_block, reference_markdown
+    from simlunar.config.docs import docs_block, reference_markdown
 
     text = (ROOT / "docs" / "experiments.md").read_text()
     block = docs_block(text)
@@ -443,7 +443,7 @@ def test_the_documented_albedo_file_example_runs_end_to_end(tmp_path):
     from typer.testing import CliRunner
 
     from simlunar.cli import app
-    from simlunar.pipeline.store import UnitCache
+    from simlunar.results.store import UnitCache
 
     docs = (ROOT / "docs" / "experiments.md").read_text()
     example = "{file: dem.npy, albedo_file: alb.npy, spacing_m: 0.2}"
@@ -474,7 +474,7 @@ figures: {{enabled: false}}
 
 
 def test_albedo_file_of_another_shape_is_one_line(tmp_path):
-    from simlunar.pipeline.stages import build_terrain
+    from simlunar.pipeline.unit import build_terrain
 
     _dem_files(tmp_path, albedo_shape=(32, 40))
     cfg = validate_data(
@@ -502,7 +502,7 @@ def test_the_preflight_rejects_what_the_unit_would_reject(tmp_path, albedo):
     """One albedo reader: a file the unit refuses is refused before anything is written."""
     from simlunar.errors import ConfigError
     from simlunar.pipeline.preflight import terrain_facts
-    from simlunar.pipeline.stages import build_terrain
+    from simlunar.pipeline.unit import build_terrain
 
     _dem_files(tmp_path)
     np.save(tmp_path / "alb.npy", albedo)

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from simlunar.config.loading import load_experiment, validate_data
 from simlunar.errors import ConfigError
-from simlunar.pipeline.config import load_experiment, validate_data
 from simlunar.pipeline.runner import expand, unit_label
-from simlunar.pipeline.stages import scene_inputs
+from simlunar.pipeline.unit import scene_inputs
 
 ROOT = Path(__file__).resolve().parents[2]
 

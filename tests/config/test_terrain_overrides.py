@@ -10,10 +10,10 @@ import yaml
 from typer.testing import CliRunner
 
 from simlunar.cli import app
+from simlunar.config.loading import check_key_path, load_experiment, validate_data
 from simlunar.errors import ConfigError
-from simlunar.pipeline.config import check_key_path, load_experiment, validate_data
 from simlunar.pipeline.runner import expand, unit_key
-from simlunar.pipeline.stages import build_terrain
+from simlunar.pipeline.unit import build_terrain
 
 BASE = {
     "name": "ovr",

@@ -122,7 +122,7 @@ def _section(
 
 def reference_markdown() -> str:
     """Markdown tables of every key of experiment YAMLs, then scene YAMLs and preset files."""
-    from simlunar.pipeline.config import schema_model
+    from simlunar.config.loading import schema_model
 
     out: list[str] = []
     for kind, title in (

@@ -1,6 +1,6 @@
 """Loading and validating experiment YAMLs: one-line errors with key paths, sweeps, overrides.
 
-The models are in :mod:`simlunar.pipeline.schema` (re-exported here). Every problem is
+The models are in :mod:`simlunar.config.schema` (re-exported here). Every problem is
 reported as a :class:`simlunar.errors.ConfigError` whose one-line message names the key path
 (``render.light.elevation_deg: ...``); see :func:`load_experiment`.
 """
@@ -15,8 +15,7 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from simlunar.errors import ConfigError
-from simlunar.pipeline.schema import (  # noqa: F401 - re-exported: the schema's public names
+from simlunar.config.schema import (  # noqa: F401 - re-exported: the schema's public names
     BsdfCfg,
     CameraCfg,
     CameraLightCfg,
@@ -41,6 +40,7 @@ from simlunar.pipeline.schema import (  # noqa: F401 - re-exported: the schema's
     TerrainCfg,
     _Model,
 )
+from simlunar.errors import ConfigError
 
 
 # --------------------------------------------------------------------------- loading
@@ -336,7 +336,7 @@ def _normalised_value(raw: Any, point: ExperimentCfg, path: str) -> Any:
 
 def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
     """Names that select code (preset, strategy, metric) must exist."""
-    from simlunar.pipeline import registry
+    from simlunar.config import registry
 
     points = [cfg]
     for path, values in cfg.sweep.items():
@@ -475,11 +475,11 @@ def schema_model(kind: str = "experiment") -> type[BaseModel]:
     if kind == "experiment":
         return ExperimentCfg
     if kind == "scene":
-        from simlunar.pipeline.scene import SceneCfg
+        from simlunar.config.scene import SceneCfg
 
         return SceneCfg
     if kind == "preset":
-        from simlunar.pipeline.schema import TerrainPresetCfg
+        from simlunar.config.schema import TerrainPresetCfg
 
         return TerrainPresetCfg
     raise ValueError(f"unknown schema kind {kind!r} (valid: {', '.join(SCHEMA_KINDS)})")

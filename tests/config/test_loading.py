@@ -7,8 +7,7 @@ import math
 import pytest
 import yaml
 
-from simlunar.errors import ConfigError
-from simlunar.pipeline.config import (
+from simlunar.config.loading import (
     ExperimentCfg,
     apply_sweep_value,
     json_schema,
@@ -16,6 +15,7 @@ from simlunar.pipeline.config import (
     parse_set,
     validate_data,
 )
+from simlunar.errors import ConfigError
 
 
 def base(**over) -> dict:
@@ -212,7 +212,7 @@ def test_json_schema_forbids_unknown_keys():
 def test_fig4_roughness_options_defaults_units_and_errors():
     import math as m
 
-    from simlunar.pipeline.schema import FiguresCfg
+    from simlunar.config.schema import FiguresCfg
 
     f = FiguresCfg()
     assert f.sparse_mesh_sigma_deg == (20.0, 45.0) and f.sparse_mesh_roughness_threshold == 0.8

@@ -11,8 +11,8 @@ import json
 from pathlib import Path
 
 from simlunar.errors import ResultFolderError
-from simlunar.pipeline.aggregate import SEED_AXIS
-from simlunar.pipeline.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
+from simlunar.results.aggregate import SEED_AXIS
+from simlunar.results.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
 
 MAX_UNIT_PANELS = 6
 #: sweep axes that repeat an experiment over realisations (pooled, not plotted against): the
@@ -131,19 +131,19 @@ def _label(rec: dict) -> str:
 def _density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
     """The panels of ``error_vs_density``: ``[(title, unit records)]`` in results order.
 
-    One panel per sweep point (:func:`simlunar.pipeline.aggregate.group_points`): the units of
+    One panel per sweep point (:func:`simlunar.results.aggregate.group_points`): the units of
     a point that differ only by terrain seed share a panel, whose curves pool their rows (mean
     and spread over terrain seeds and trials), so a repeated experiment draws as many panels
     as it has sweep points, not seeds times points.
     """
-    from simlunar.pipeline.aggregate import group_points
+    from simlunar.results.aggregate import group_points
 
     return [(p.label, [units[i] for i in p.unit_indices]) for p in group_points(units)]
 
 
 def write_figures(out_dir: str | Path) -> list[Path]:
     """Draw every figure the results support; returns the written paths (PNG and PDF)."""
-    from simlunar.pipeline import captions as captions_text
+    from simlunar.results import captions as captions_text
     from simlunar.plotting import figures as F
     from simlunar.plotting.style import axis_name
 
@@ -312,7 +312,7 @@ def _ambient_axis(rows: list[dict], units: list[dict], path: str):
 def _scanner_figures(res: dict, emit, captions: dict) -> None:
     import numpy as np
 
-    from simlunar.pipeline import captions as captions_text
+    from simlunar.results import captions as captions_text
     from simlunar.plotting import figures as F
     from simlunar.plotting.style import axis_name
 
@@ -381,8 +381,8 @@ def write_figures_pruned(out_dir: str | Path) -> list[Path]:
 def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
     """``samples_saved``: per sweep point (pooled over terrain seeds), one panel per reference
     (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
-    from simlunar.pipeline import aggregate
-    from simlunar.pipeline import captions as captions_text
+    from simlunar.results import aggregate
+    from simlunar.results import captions as captions_text
     from simlunar.plotting import figures as F
 
     points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)

@@ -10,9 +10,9 @@ import yaml
 from typer.testing import CliRunner
 
 from simlunar.cli import app
+from simlunar.config.scene import SceneCfg, build_camera, build_lights, load_scene
 from simlunar.errors import ConfigError
 from simlunar.geometry import Camera, OrthoCamera
-from simlunar.pipeline.scene import SceneCfg, build_camera, build_lights, load_scene
 from simlunar.render.lights import CameraLight, SunLight
 from simlunar.terrain.types import Terrain
 

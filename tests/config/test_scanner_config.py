@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
+from simlunar.config.loading import load_experiment, parse_set
+from simlunar.config.schema import ScannerStudyCfg
 from simlunar.errors import ConfigError
-from simlunar.pipeline.config import load_experiment, parse_set
-from simlunar.pipeline.schema import ScannerStudyCfg
 
 EXPERIMENT = Path(__file__).resolve().parents[2] / "experiments" / "scanner_ambiguity.yaml"
 
@@ -19,7 +19,7 @@ def test_scanner_experiment_uses_the_documented_scanner_conditions():
     assert s.kind == "scanner" and s.budget == 0.1 and s.planners == ["wavelet", "random"]
     assert s.camera_blur_px == 1.0
     # what the scanner study receives (pipeline.translate): radians, library option names
-    from simlunar.pipeline import translate
+    from simlunar.config import translate
 
     opts = translate.scanner_options(s)
     assert opts.gray_opts["subpixel"] is True

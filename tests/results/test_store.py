@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from simlunar import atomic
-from simlunar.pipeline.store import UnitCache, atomic_write_text, csv_text, fmt_value
+from simlunar.results.store import UnitCache, atomic_write_text, csv_text, fmt_value
 
 
 def test_atomic_write_replaces_and_leaves_no_temporary(tmp_path):
@@ -62,7 +62,7 @@ def test_unit_cache_round_trip_and_corrupt_entries(tmp_path):
 
 def test_folder_lock_excludes_a_second_owner_and_leaves_no_file(tmp_path):
     from simlunar.errors import ResultFolderError
-    from simlunar.pipeline.store import FolderLock
+    from simlunar.results.store import FolderLock
 
     a = FolderLock(tmp_path).acquire()
     assert (tmp_path / ".lock").read_text().strip() == str(os.getpid())

@@ -1,6 +1,6 @@
 """Configuration -> library objects: the one place where YAML units meet the library's.
 
-The schema (:mod:`simlunar.pipeline.schema`) holds YAML keys with unit suffixes (``_deg``,
+The schema (:mod:`simlunar.config.schema`) holds YAML keys with unit suffixes (``_deg``,
 ``_m``, ``_px``); the library takes SI units and radians as arrays, keyword-only options and
 small frozen dataclasses (:class:`~simlunar.imaging.sensor.SensorModel`,
 :class:`~simlunar.terrain.params.TerrainParams`, geometry cameras, light and BSDF specs). Every
@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from simlunar.pipeline.schema import (
+from simlunar.config.schema import (
     CameraLightCfg,
     DotOptsCfg,
     FeatureOptsCfg,
@@ -100,11 +100,11 @@ def terrain_params(preset: TerrainPresetCfg, *, scale: float = 1.0):
 
 
 def build_terrain(cfg, *, rng):
-    """The :class:`~simlunar.terrain.Terrain` of a :class:`~simlunar.pipeline.schema.TerrainCfg`."""
+    """The :class:`~simlunar.terrain.Terrain` of a :class:`~simlunar.config.schema.TerrainCfg`."""
     from simlunar.terrain.types import Terrain
 
     if cfg.preset is not None:
-        from simlunar.pipeline.presets import merged_preset
+        from simlunar.config.presets import merged_preset
         from simlunar.terrain import generate
 
         params = terrain_params(merged_preset(cfg.preset, cfg.overrides), scale=cfg.scale)
@@ -240,7 +240,7 @@ def sensor_model(cfg: SensorCfg, reference: np.ndarray | None = None):
 
 def feature_opts(base: str, opts: FeatureOptsCfg, features: list[str] | None = None) -> dict:
     """The ``feature_opts`` of :func:`simlunar.planner.plan` for strategy ``base``."""
-    from simlunar.pipeline.schema import FEATURE_OPTION_KEYS
+    from simlunar.config.schema import FEATURE_OPTION_KEYS
 
     def of(feature: str) -> dict:
         return {k: getattr(opts, k) for k in FEATURE_OPTION_KEYS.get(feature, ())}

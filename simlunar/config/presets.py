@@ -1,9 +1,9 @@
 """Terrain preset files (``scenes/<name>.yaml``) read through the schema's models.
 
-A preset file is a :class:`~simlunar.pipeline.schema.TerrainPresetCfg`; an experiment's
-``terrain.overrides`` (a :class:`~simlunar.pipeline.schema.TerrainOverridesCfg`) is deep-merged
+A preset file is a :class:`~simlunar.config.schema.TerrainPresetCfg`; an experiment's
+``terrain.overrides`` (a :class:`~simlunar.config.schema.TerrainOverridesCfg`) is deep-merged
 into it before validation, so the rules are the same models' either way.
-:func:`simlunar.pipeline.translate.terrain_params` turns the result into the terrain package's
+:func:`simlunar.config.translate.terrain_params` turns the result into the terrain package's
 :class:`~simlunar.terrain.params.TerrainParams`.
 """
 
@@ -14,8 +14,8 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
+from simlunar.config.schema import TerrainOverridesCfg, TerrainPresetCfg
 from simlunar.errors import ConfigError
-from simlunar.pipeline.schema import TerrainOverridesCfg, TerrainPresetCfg
 
 
 class PresetError(ValueError):
@@ -45,7 +45,7 @@ def preset_path(name: str) -> Path:
 
 @functools.lru_cache(maxsize=64)
 def _read(path: Path, mtime_ns: int, size: int) -> dict:
-    from simlunar.pipeline.config import load_yaml
+    from simlunar.config.loading import load_yaml
 
     try:
         data = load_yaml(path)
@@ -81,7 +81,7 @@ def merged_preset(name: str, overrides: TerrainOverridesCfg | None = None) -> Te
         ``key`` = the override's key path (``fractal.rms_m``) when an override makes the preset
         invalid; ``key`` None with a message naming the file when the preset itself is invalid.
     """
-    from simlunar.pipeline.config import format_validation_error
+    from simlunar.config.loading import format_validation_error
 
     data = preset_data(name)
     try:

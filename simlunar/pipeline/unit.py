@@ -8,7 +8,7 @@ every sweep point of an ablation sees the same terrain and the same sampling tri
 random numbers make the comparison sharper).
 
 Config models become library objects (SI units, radians, option dicts and dataclasses) in
-:mod:`simlunar.pipeline.translate`; the library functions called here take arrays and
+:mod:`simlunar.config.translate`; the library functions called here take arrays and
 keyword-only options, never config objects.
 """
 
@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from simlunar.pipeline import translate
-from simlunar.pipeline.config import (
+from simlunar.config import translate
+from simlunar.config.loading import (
     ExperimentCfg,
     OrthoNadirCfg,
     SamplingStudyCfg,
@@ -64,7 +64,7 @@ class UnitRecord:
         Image shape, spacing, Mitsuba variant, filled ground-truth pixels.
     scans : dict or None
         Scanner units with ``study.save_scans``: the scan export payload
-        (:func:`simlunar.pipeline.exports.scan_export_payload`), which the runner writes to
+        (:func:`simlunar.results.exports.scan_export_payload`), which the runner writes to
         ``scans/unit<i>/`` and drops before caching; None otherwise (then absent from the dict
         form, so cached results are unchanged).
     """
@@ -118,14 +118,14 @@ def int_seed(ss: np.random.SeedSequence) -> int:
 # --------------------------------------------------------------------------- terrain
 def build_terrain(cfg, *, rng):
     """The :class:`~simlunar.terrain.Terrain` of a :class:`TerrainCfg`
-    (:func:`simlunar.pipeline.translate.build_terrain`)."""
+    (:func:`simlunar.config.translate.build_terrain`)."""
     return translate.build_terrain(cfg, rng=rng)
 
 
 # --------------------------------------------------------------------------- render
 def scene_inputs(cfg):
     """``(terrain, camera, lights, bsdf)`` of an experiment (``ExperimentCfg``: camera, light,
-    BSDF under ``render``) or of a scene (:class:`simlunar.pipeline.scene.SceneCfg`: the same
+    BSDF under ``render``) or of a scene (:class:`simlunar.config.scene.SceneCfg`: the same
     models at the top level).
 
     One function for both, so ``simlunar render`` and ``simlunar run`` give the same terrain
@@ -506,7 +506,7 @@ def _compute_scanner_unit(
     scans = None
     if s.save_scans:
         # written by the runner into scans/unit<i>/ (pipeline/exports.py)
-        from simlunar.pipeline.exports import scan_export_payload
+        from simlunar.results.exports import scan_export_payload
 
         scans = scan_export_payload(
             res.gray, rig, gray_opts=translate.gray_kwargs(s.options.gray_opts)

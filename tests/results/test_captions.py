@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from simlunar.pipeline import captions as C
-from simlunar.pipeline.figures import write_captions
+from simlunar.results import captions as C
+from simlunar.results.figures import write_captions
 
 
 def test_captions_state_units_trials_and_bands():

@@ -45,7 +45,7 @@ def check_strategy(name: str, path: str, options: Mapping | None = None) -> None
 
     Labels let one study compare variants of a strategy, e.g.
     ``strategy_options: {wavelet_bn: {strategy: wavelet, blue_noise: true}}``.
-    ``options`` maps labels to :class:`~simlunar.pipeline.schema.StrategyOptionsCfg`.
+    ``options`` maps labels to :class:`~simlunar.config.schema.StrategyOptionsCfg`.
     """
     label_opts = (options or {}).get(name)
     base = getattr(label_opts, "strategy", None)

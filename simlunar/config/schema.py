@@ -1,15 +1,15 @@
 """The configuration schema: typed pydantic v2 models of experiment, scene and preset YAMLs.
 
 One set of models: an experiment (:class:`ExperimentCfg`), a scene YAML
-(:class:`simlunar.pipeline.scene.SceneCfg`, built from the same sections) and a terrain preset
+(:class:`simlunar.config.scene.SceneCfg`, built from the same sections) and a terrain preset
 file (:class:`TerrainPresetCfg`, whose sections an experiment's ``terrain.overrides`` changes).
 Every YAML key is a field, option blocks included (no free-form dicts); unknown keys are
 rejected everywhere (``extra="forbid"``) and numbers must be finite. Keys carry their unit as a
 suffix (``_deg``, ``_m``, ``_px``); values may be plain numbers in that unit or strings with an
 explicit unit (``"0.5 rad"``, ``"20 cm"``), converted once here. Properties without the suffix
-(``SunLightCfg.elevation``) give radians; :mod:`simlunar.pipeline.translate` turns the models
+(``SunLightCfg.elevation``) give radians; :mod:`simlunar.config.translate` turns the models
 into library objects. Loading, key-path error messages and sweeps live in
-:mod:`simlunar.pipeline.config`.
+:mod:`simlunar.config.loading`.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from pydantic import (
     model_validator,
 )
 
-from simlunar.pipeline.units import log_spaced, parse_fraction, parse_quantity
+from simlunar.config.quantities import log_spaced, parse_fraction, parse_quantity
 
 #: what a unit-bearing key accepts in the YAML (for the editor schema): a number in the key's
 #: unit or a string with an explicit unit ("0.5 rad", "20 cm")
@@ -106,7 +106,7 @@ def _tagged_union(default: str | None, *members: type[BaseModel]):
 
 # --------------------------------------------------------------------------- terrain
 # The terrain preset files (scenes/aerial_1.yaml, ...) and an experiment's terrain.overrides use
-# these models; :mod:`simlunar.pipeline.translate` turns them into
+# these models; :mod:`simlunar.config.translate` turns them into
 # :class:`simlunar.terrain.params.TerrainParams`. Defaults are the terrain package's.
 def _check_law(kind: str, law: str, coefficient, exponent) -> None:
     from simlunar.terrain.sfd import get_law
@@ -271,7 +271,7 @@ class TerrainCfg(_Model):
             raise ValueError("overrides: overrides apply to a preset only (give terrain.preset)")
         if self.preset is not None:
             # the preset file, with the overrides merged in, must be valid (same models)
-            from simlunar.pipeline.presets import PresetError, merged_preset
+            from simlunar.config.presets import PresetError, merged_preset
 
             try:
                 merged_preset(self.preset, self.overrides)
@@ -673,7 +673,7 @@ class DotOptsCfg(_Model):
 
 
 class CaptureOptsCfg(_Model):
-    """Render-capture options (:class:`simlunar.study.scanner_capture.RenderCapture`)."""
+    """Render-capture options (:class:`simlunar.render.capture.RenderCapture`)."""
 
     sparse_integrator: Literal["path", "ptracer"] = Field(
         "path",

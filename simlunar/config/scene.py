@@ -2,11 +2,11 @@
 
 A scene YAML says what to render: ``terrain``, ``camera``, ``light``, ``bsdf``, ``spp``,
 ``max_depth``, ``seed`` and an optional ``sensor``, with the experiment schema's own models
-(:mod:`simlunar.pipeline.schema`: a scene is an experiment's ``terrain`` and ``render``
+(:mod:`simlunar.config.schema`: a scene is an experiment's ``terrain`` and ``render``
 sections, flattened). Keys carry unit suffixes (``_deg``, ``_m``); unknown keys are errors.
 
 The same ``seed`` gives the same terrain as an experiment with that seed (the per-stage seed
-split of :func:`simlunar.pipeline.stages.stage_seeds`).
+split of :func:`simlunar.pipeline.unit.stage_seeds`).
 """
 
 from __future__ import annotations
@@ -18,9 +18,8 @@ import numpy as np
 from pydantic import Field, ValidationError
 
 from simlunar.atomic import atomic_write
-from simlunar.errors import ConfigError
-from simlunar.pipeline import translate
-from simlunar.pipeline.config import (
+from simlunar.config import translate
+from simlunar.config.loading import (
     BsdfCfg,
     CameraCfg,
     LightCfg,
@@ -33,6 +32,7 @@ from simlunar.pipeline.config import (
     format_validation_error,
     load_yaml,
 )
+from simlunar.errors import ConfigError
 
 
 class SceneCfg(_Model):
@@ -71,13 +71,13 @@ def load_scene(path) -> SceneCfg:
         cfg = SceneCfg.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(f"{path}: {format_validation_error(exc, data)}") from None
-    from simlunar.pipeline.config import resolve_terrain_files
+    from simlunar.config.loading import resolve_terrain_files
 
     return resolve_terrain_files(cfg, path.parent)
 
 
 def build_camera(cfg, terrain):
-    """Geometry camera of a camera config (:func:`simlunar.pipeline.translate.camera`)."""
+    """Geometry camera of a camera config (:func:`simlunar.config.translate.camera`)."""
     return translate.camera(cfg, terrain)
 
 
@@ -109,7 +109,7 @@ def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    from simlunar.pipeline.stages import int_seed, scene_inputs, stage_seeds
+    from simlunar.pipeline.unit import int_seed, scene_inputs, stage_seeds
 
     terrain, camera, lights, bsdf = scene_inputs(cfg)  # as an experiment's unit builds them
     t1 = time.perf_counter()
@@ -143,7 +143,7 @@ def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
         valid=gt.valid,
     )
     if cfg.sensor is not None:
-        from simlunar.pipeline.stages import luminance, sensor_image, stage_seeds
+        from simlunar.pipeline.unit import luminance, sensor_image, stage_seeds
 
         rng = np.random.default_rng(stage_seeds(cfg.seed)["sensor"])
         img = sensor_image(luminance(res.image), cfg.sensor, rng=rng)

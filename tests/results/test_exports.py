@@ -18,7 +18,7 @@ from typer.testing import CliRunner
 from simlunar.cli import app
 from simlunar.imaging.exr import read_exr
 from simlunar.imaging.sensor import SensorModel
-from simlunar.pipeline import exports
+from simlunar.results import exports
 from simlunar.scanner import modes, rigs
 from simlunar.study.scanner import RenderCapture
 from simlunar.terrain.types import Terrain
@@ -253,7 +253,7 @@ def test_scan_folders_follow_their_units(tmp_path, monkeypatch):
     import shutil
 
     from simlunar.pipeline import runner
-    from simlunar.pipeline.exports import export_unit_key
+    from simlunar.results.exports import export_unit_key
 
     out = tmp_path / "scan"
     args = [

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simlunar.pipeline.config import SensorCfg
-from simlunar.pipeline.stages import STAGES, fill_invalid, luminance, sensor_image, stage_seeds
+from simlunar.config.loading import SensorCfg
+from simlunar.pipeline.unit import STAGES, fill_invalid, luminance, sensor_image, stage_seeds
 
 
 def test_stage_seeds_are_independent_and_depend_only_on_the_seed():
@@ -59,7 +59,7 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
 
     from simlunar.features import feature_map
     from simlunar.geometry import OrthoCamera
-    from simlunar.pipeline.stages import sparse_mesh_render
+    from simlunar.pipeline.unit import sparse_mesh_render
     from simlunar.render.lights import SunLight
     from simlunar.render.materials import LambertBSDF, OrenNayarBSDF, sigma_map_from_energy
     from simlunar.terrain.types import Terrain

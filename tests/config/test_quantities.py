@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from simlunar.pipeline.units import log_spaced, parse_fraction, parse_quantity
+from simlunar.config.quantities import log_spaced, parse_fraction, parse_quantity
 
 
 @pytest.mark.parametrize(
