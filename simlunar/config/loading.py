@@ -15,31 +15,9 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from simlunar.config.schema import (  # noqa: F401 - re-exported: the schema's public names
-    BsdfCfg,
-    CameraCfg,
-    CameraLightCfg,
-    Deg,
-    Density,
-    DensityRange,
-    ExperimentCfg,
-    FiguresCfg,
-    HapkeCfg,
-    LambertCfg,
-    LightCfg,
-    Metres,
-    OrenNayarCfg,
-    OrthoNadirCfg,
-    PerspectiveCfg,
-    RenderCfg,
-    SamplingStudyCfg,
-    ScannerStudyCfg,
-    SensorCfg,
-    StudyCfg,
-    SunLightCfg,
-    TerrainCfg,
-    _Model,
-)
+from simlunar.config.fields import _Model
+from simlunar.config.schema import ExperimentCfg
+from simlunar.config.studies import SamplingStudyCfg, ScannerStudyCfg
 from simlunar.errors import ConfigError
 
 
@@ -479,7 +457,7 @@ def schema_model(kind: str = "experiment") -> type[BaseModel]:
 
         return SceneCfg
     if kind == "preset":
-        from simlunar.config.schema import TerrainPresetCfg
+        from simlunar.config.terrain import TerrainPresetCfg
 
         return TerrainPresetCfg
     raise ValueError(f"unknown schema kind {kind!r} (valid: {', '.join(SCHEMA_KINDS)})")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from simlunar.config.schema import TerrainOverridesCfg, TerrainPresetCfg
+from simlunar.config.terrain import TerrainOverridesCfg, TerrainPresetCfg
 from simlunar.errors import ConfigError
 
 

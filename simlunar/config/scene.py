@@ -19,7 +19,9 @@ from pydantic import Field, ValidationError
 
 from simlunar.atomic import atomic_write
 from simlunar.config import translate
-from simlunar.config.loading import (
+from simlunar.config.fields import _Model
+from simlunar.config.loading import format_validation_error, load_yaml
+from simlunar.config.render import (
     BsdfCfg,
     CameraCfg,
     LightCfg,
@@ -27,11 +29,8 @@ from simlunar.config.loading import (
     OrthoNadirCfg,
     SensorCfg,
     SunLightCfg,
-    TerrainCfg,
-    _Model,
-    format_validation_error,
-    load_yaml,
 )
+from simlunar.config.terrain import TerrainCfg
 from simlunar.errors import ConfigError
 
 

@@ -5,7 +5,7 @@ The schema (:mod:`simlunar.config.schema`) holds YAML keys with unit suffixes (`
 small frozen dataclasses (:class:`~simlunar.imaging.sensor.SensorModel`,
 :class:`~simlunar.terrain.params.TerrainParams`, geometry cameras, light and BSDF specs). Every
 function here takes typed config models and returns such objects or the keyword dicts of the
-library functions as they are today; nothing else in ``pipeline/`` converts units.
+library functions as they are today; nothing else converts units.
 """
 
 from __future__ import annotations
@@ -16,24 +16,26 @@ from typing import Any
 
 import numpy as np
 
-from simlunar.config.schema import (
+from simlunar.config.render import (
     CameraLightCfg,
-    DotOptsCfg,
-    FeatureOptsCfg,
-    GrayOptsCfg,
     HapkeCfg,
     LambertCfg,
     OrenNayarCfg,
     OrthoNadirCfg,
-    PlannerOptsCfg,
-    RigCfg,
     RoverMastCfg,
-    SamplingStudyCfg,
-    ScannerStudyCfg,
     SensorCfg,
     SunLightCfg,
-    TerrainPresetCfg,
 )
+from simlunar.config.studies import (
+    DotOptsCfg,
+    FeatureOptsCfg,
+    GrayOptsCfg,
+    PlannerOptsCfg,
+    RigCfg,
+    SamplingStudyCfg,
+    ScannerStudyCfg,
+)
+from simlunar.config.terrain import TerrainPresetCfg
 
 # --------------------------------------------------------------------------- terrain
 
@@ -240,7 +242,7 @@ def sensor_model(cfg: SensorCfg, reference: np.ndarray | None = None):
 
 def feature_opts(base: str, opts: FeatureOptsCfg, features: list[str] | None = None) -> dict:
     """The ``feature_opts`` of :func:`simlunar.planner.plan` for strategy ``base``."""
-    from simlunar.config.schema import FEATURE_OPTION_KEYS
+    from simlunar.config.studies import FEATURE_OPTION_KEYS
 
     def of(feature: str) -> dict:
         return {k: getattr(opts, k) for k in FEATURE_OPTION_KEYS.get(feature, ())}

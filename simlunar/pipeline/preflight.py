@@ -518,7 +518,7 @@ def check_units(units: list[Any]) -> Preflight:
     ``units`` are :class:`~simlunar.pipeline.runner.WorkUnit` (their plain ``config``).
     Errors of a sweep point name the point: ``sweep point 3 (elevation_deg=0): ...``.
     """
-    from simlunar.config.loading import ExperimentCfg
+    from simlunar.config.schema import ExperimentCfg
 
     facts = []
     for u in units:

@@ -29,7 +29,8 @@ from typing import Any
 import yaml
 
 import simlunar
-from simlunar.config.loading import ExperimentCfg, apply_sweep_value, to_plain
+from simlunar.config.loading import apply_sweep_value, to_plain
+from simlunar.config.schema import ExperimentCfg
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword

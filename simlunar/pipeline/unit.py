@@ -22,13 +22,9 @@ from typing import Any
 import numpy as np
 
 from simlunar.config import translate
-from simlunar.config.loading import (
-    ExperimentCfg,
-    OrthoNadirCfg,
-    SamplingStudyCfg,
-    SensorCfg,
-    SunLightCfg,
-)
+from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
+from simlunar.config.schema import ExperimentCfg
+from simlunar.config.studies import SamplingStudyCfg
 
 #: stage name -> spawn index; append only (reordering would change every result)
 STAGES = ("terrain", "render", "sensor", "study", "panels")
@@ -505,7 +501,7 @@ def _compute_scanner_unit(
     }
     scans = None
     if s.save_scans:
-        # written by the runner into scans/unit<i>/ (pipeline/exports.py)
+        # written by the runner into scans/unit<i>/ (results/exports.py)
         from simlunar.results.exports import scan_export_payload
 
         scans = scan_export_payload(

@@ -8,13 +8,13 @@ import pytest
 import yaml
 
 from simlunar.config.loading import (
-    ExperimentCfg,
     apply_sweep_value,
     json_schema,
     load_experiment,
     parse_set,
     validate_data,
 )
+from simlunar.config.schema import ExperimentCfg
 from simlunar.errors import ConfigError
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from simlunar.config.loading import load_experiment, parse_set
-from simlunar.config.schema import ScannerStudyCfg
+from simlunar.config.studies import ScannerStudyCfg
 from simlunar.errors import ConfigError
 
 EXPERIMENT = Path(__file__).resolve().parents[2] / "experiments" / "scanner_ambiguity.yaml"

@@ -21,7 +21,7 @@ def test_auto_gain_hand_computed():
 
 def test_sampling_sensor_fills_80_percent_of_the_well():
     """sensor: {exposure_e: null} in a sampling study: the 99.5th pct reads 0.8 of the ADC."""
-    from simlunar.config.schema import SensorCfg
+    from simlunar.config.render import SensorCfg
     from simlunar.pipeline.unit import sensor_image
 
     rad = np.random.default_rng(3).random((64, 64)).astype(np.float32) * 7.0

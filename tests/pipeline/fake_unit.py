@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from simlunar.config.loading import ExperimentCfg
+from simlunar.config.schema import ExperimentCfg
 from simlunar.pipeline.unit import stage_seeds
 
 
