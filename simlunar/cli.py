@@ -162,7 +162,8 @@ def run(
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
     from pathlib import Path
 
-    from simlunar.config.loading import load_experiment, parse_set
+    from simlunar.config.loading import load_experiment
+    from simlunar.config.yamlio import parse_set
     from simlunar.pipeline.executors import make_executor
     from simlunar.pipeline.runner import run_experiment
 
@@ -232,7 +233,7 @@ def schema(
     """JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server)."""
     import json
 
-    from simlunar.config.loading import SCHEMA_KINDS, json_schema
+    from simlunar.config.docs import SCHEMA_KINDS, json_schema
     from simlunar.errors import ConfigError
 
     if kind not in SCHEMA_KINDS:
@@ -262,14 +263,17 @@ def render(
     """Render a scene: radiance.exr (linear), preview.png, ground_truth.exr/.npz, scene.json."""
     from pathlib import Path
 
-    from simlunar.config.scene import load_scene, render_scene
+    from simlunar.config.scene import load_scene
     from simlunar.pipeline.preflight import check_camera, check_out_dir, terrain_facts
+    from simlunar.pipeline.scene import render_scene
 
     with user_input():
         cfg = load_scene(scene)
     out_dir = Path(out) if out else Path("results") / "render" / cfg.name
     check_out_dir(out_dir)
-    check_camera(cfg, terrain_facts(cfg.terrain))  # DEM contents and the view, before rendering
+    check_camera(
+        cfg.render, terrain_facts(cfg.terrain)
+    )  # DEM contents and the view, before rendering
     paths = render_scene(cfg, out_dir)
     for name, path in paths.items():
         typer.echo(f"{name:<17} {path}")
@@ -297,7 +301,7 @@ def terrain(
     import time
     from pathlib import Path
 
-    from simlunar.config.presets import merged_preset
+    from simlunar.config.terrain import merged_preset
     from simlunar.config.translate import terrain_params
     from simlunar.pipeline.preflight import check_out_dir
     from simlunar.terrain import generate

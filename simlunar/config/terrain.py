@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
-from pydantic import (
-    Field,
-    model_validator,
-)
+import yaml
+from pydantic import Field, ValidationError, model_validator
 
-from simlunar.config.fields import (
-    Metres,
-    _Model,
-    _partial,
-    _SetKeysModel,
-)
+from simlunar.config.fields import Metres, _Model, _partial, _SetKeysModel
+from simlunar.config.messages import format_validation_error
+from simlunar.config.yamlio import load_yaml
+from simlunar.errors import ConfigError
+from simlunar.terrain.sfd import get_law
 
 
 # --------------------------------------------------------------------------- terrain
@@ -22,8 +20,6 @@ from simlunar.config.fields import (
 # these models; :mod:`simlunar.config.translate` turns them into
 # :class:`simlunar.terrain.params.TerrainParams`. Defaults are the terrain package's.
 def _check_law(kind: str, law: str, coefficient, exponent) -> None:
-    from simlunar.terrain.sfd import get_law
-
     get_law(kind, law, coefficient=coefficient, exponent=exponent)
 
 
@@ -184,8 +180,6 @@ class TerrainCfg(_Model):
             raise ValueError("overrides: overrides apply to a preset only (give terrain.preset)")
         if self.preset is not None:
             # the preset file, with the overrides merged in, must be valid (same models)
-            from simlunar.config.presets import PresetError, merged_preset
-
             try:
                 merged_preset(self.preset, self.overrides)
             except PresetError as exc:
@@ -195,3 +189,103 @@ class TerrainCfg(_Model):
         if self.file is not None and self.seed_index != 0:
             raise ValueError("seed_index applies to a preset only (a DEM file has one terrain)")
         return self
+
+
+# --------------------------------------------------------------------------- preset files
+# ``scenes/<name>.yaml`` read through the models above; an experiment's ``terrain.overrides``
+# is deep-merged in before validation, so the rules are the same models' either way.
+#: the folder of the shipped terrain presets (and the quickstart scene)
+SCENES = Path(__file__).resolve().parents[2] / "scenes"
+
+
+def preset_names() -> list[str]:
+    """Names of the terrain presets shipped in ``scenes/`` (files with a ``grid`` section)."""
+    out = []
+    for p in sorted(SCENES.glob("*.yaml")):
+        try:
+            d = yaml.safe_load(p.read_text())
+        except (OSError, yaml.YAMLError):
+            continue
+        if isinstance(d, dict) and "grid" in d and "craters" in d:
+            out.append(p.stem)
+    return out
+
+
+class PresetError(ValueError):
+    """An invalid preset or override: ``key`` is the key path inside the preset (or None when
+    the preset itself, not an override, is at fault: unknown name, unreadable file)."""
+
+    def __init__(self, key: str | None, problem: str):
+        super().__init__(f"{key}: {problem}" if key else problem)
+        self.key = key
+        self.problem = problem
+
+
+def preset_path(name: str) -> Path:
+    """The YAML file of a preset name (``aerial_1``) or path (``my/preset.yaml``)."""
+    looks_like_path = name.endswith((".yaml", ".yml")) or "/" in name or "\\" in name
+    path = Path(name) if looks_like_path else SCENES / f"{name}.yaml"
+    if not path.is_file():
+        if looks_like_path:
+            raise PresetError(None, f"terrain preset file not found: {path}")
+        raise PresetError(
+            None, f"unknown terrain preset {name!r} (valid: {', '.join(preset_names())})"
+        )
+    return path
+
+
+@functools.lru_cache(maxsize=64)
+def _read(path: Path, mtime_ns: int, size: int) -> dict:
+    try:
+        data = load_yaml(path)
+    except ConfigError as exc:
+        raise PresetError(None, str(exc)) from None
+    if not isinstance(data, dict):
+        raise PresetError(None, f"{path}: <root>: expected a mapping of keys")
+    return data
+
+
+def preset_data(name: str) -> dict:
+    """The parsed YAML mapping of a preset (cached by path, modification time and size)."""
+    path = preset_path(name)
+    st = path.stat()
+    return _read(path.resolve(), st.st_mtime_ns, st.st_size)
+
+
+def _merge(data: dict, overrides: dict) -> dict:
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
+    for sec, sub in overrides.items():
+        merged = dict(out.get(sec) or {})
+        merged.update(sub)
+        out[sec] = merged
+    return out
+
+
+def merged_preset(name: str, overrides: TerrainOverridesCfg | None = None) -> TerrainPresetCfg:
+    """A preset with ``overrides`` deep-merged in, validated.
+
+    Raises
+    ------
+    PresetError
+        ``key`` = the override's key path (``fractal.rms_m``) when an override makes the preset
+        invalid; ``key`` None with a message naming the file when the preset itself is invalid.
+    """
+    data = preset_data(name)
+    try:
+        base = TerrainPresetCfg.model_validate(data)
+    except ValidationError as exc:
+        raise PresetError(
+            None,
+            f"{preset_path(name)}: {format_validation_error(exc, data, root=TerrainPresetCfg)}",
+        ) from None
+    ov = overrides.as_mapping() if overrides is not None else {}
+    if not ov:
+        return base
+    merged = _merge(data, ov)
+    try:
+        return TerrainPresetCfg.model_validate(merged)
+    except ValidationError as exc:
+        line = format_validation_error(exc, merged, root=TerrainPresetCfg)
+        key, _, problem = line.partition(": ")
+        return_key = key if key.split(".")[0] in ov else None
+        raise PresetError(return_key, problem if return_key else line) from None

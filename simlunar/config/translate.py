@@ -106,7 +106,7 @@ def build_terrain(cfg, *, rng):
     from simlunar.terrain.types import Terrain
 
     if cfg.preset is not None:
-        from simlunar.config.presets import merged_preset
+        from simlunar.config.terrain import merged_preset
         from simlunar.terrain import generate
 
         params = terrain_params(merged_preset(cfg.preset, cfg.overrides), scale=cfg.scale)

@@ -101,7 +101,7 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
     out: dict[str, Path] = {}
     preset = t.get("preset")
     if preset:
-        from simlunar.config.presets import PresetError, preset_path
+        from simlunar.config.terrain import PresetError, preset_path
 
         with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
             out["terrain.preset"] = preset_path(str(preset))
@@ -218,7 +218,7 @@ def terrain_facts(t: Any) -> TerrainFacts:
 
 def _preset_params(t: Any):
     """The preset's ``TerrainParams`` (grid size, spacing, origin) as the unit will build them."""
-    from simlunar.config.presets import merged_preset
+    from simlunar.config.terrain import merged_preset
     from simlunar.config.translate import terrain_params
 
     return terrain_params(merged_preset(t.preset, t.overrides), scale=t.scale)
@@ -372,7 +372,7 @@ def image_shape(render: Any, facts: TerrainFacts) -> tuple[int, int]:
 def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera") -> None:
     """A perspective camera must have a view direction and see part of the terrain.
 
-    ``render`` is anything with a ``camera`` (an experiment's ``RenderCfg``, a ``SceneCfg``).
+    ``render`` is a ``RenderCfg`` (an experiment's or a scene's).
 
     Rays through a grid of pixels (the corners included) are intersected with the terrain's
     bounding box; if none meets it, no pixel can see the terrain.

@@ -23,7 +23,7 @@ class ParamError(ValueError):
 
     ``str()`` reads ``"<key> <problem>"``; callers that report key paths themselves use
     ``key`` and ``problem`` separately. (Experiment YAMLs validate presets and overrides with the
-    pipeline's models, :mod:`simlunar.config.presets`; a test keeps both routes equal.)
+    pipeline's models, :mod:`simlunar.config.terrain`; a test keeps both routes equal.)
     """
 
     def __init__(self, key: str, problem: str):

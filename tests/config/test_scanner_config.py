@@ -6,8 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from simlunar.config.loading import load_experiment, parse_set
+from simlunar.config.loading import load_experiment
 from simlunar.config.studies import ScannerStudyCfg
+from simlunar.config.yamlio import parse_set
 from simlunar.errors import ConfigError
 
 EXPERIMENT = Path(__file__).resolve().parents[2] / "experiments" / "scanner_ambiguity.yaml"

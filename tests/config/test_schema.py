@@ -16,7 +16,8 @@ import yaml
 from pydantic import BaseModel
 
 from simlunar.config import render, schema, studies, terrain, translate
-from simlunar.config.loading import json_schema, schema_model, validate_data
+from simlunar.config.docs import json_schema, schema_model
+from simlunar.config.loading import validate_data
 from simlunar.config.scene import SceneCfg
 from simlunar.errors import ConfigError
 
@@ -391,7 +392,7 @@ def test_sweep_keeps_plain_values_as_written():
 
 # --------------------------------------------------------------------------- presets
 def test_presets_through_the_models_equal_the_terrain_package():
-    from simlunar.config.presets import merged_preset
+    from simlunar.config.terrain import merged_preset
     from simlunar.terrain import load_preset, preset_names
 
     names = preset_names()
