@@ -46,11 +46,12 @@ DOT_SPP = int(os.environ.get("SIMLUNAR_BENCH_SCANNER_DOT_SPP", "16"))
 
 
 def _setup(cam_size, *, max_depth=3, seed=0, spp=SPP):
+    from simlunar.config.translate import preset_params
     from simlunar.imaging.sensor import SensorModel
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
-    terr = generate("moonyard", rng=seed, scale=0.35).terrain
+    terr = generate(preset_params("moonyard"), rng=seed, scale=0.35).terrain
     rig = st.aim_rig_at_terrain(terr, proj_size=(1024, 768), cam_size=cam_size)
     cap = st.RenderCapture(
         terr, rig, max_depth=max_depth, spp=spp, seed=seed, sensor=SensorModel(), rng=seed
@@ -174,12 +175,13 @@ def _reference_schedule(rig, proj_uv, *, depth_range, min_proj_spacing=8.0, min_
 
 
 def bench_dot_schedule(fraction: float = 0.1) -> dict:
+    from simlunar.config.translate import preset_params
     from simlunar.scanner import dots
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
     proj, cam = (1024, 768), (2048, 1536)
-    terr = generate("moonyard", rng=0).terrain
+    terr = generate(preset_params("moonyard"), rng=0).terrain
     rig = st.aim_rig_at_terrain(terr, proj_size=proj, cam_size=cam)
     depth_range = st.depth_range_from_terrain(terr, rig)
     rng = np.random.default_rng(0)
@@ -220,11 +222,14 @@ DLP_SPP = 8
 
 
 def _dlp_setup():
+    from simlunar.config.translate import preset_params
     from simlunar.imaging.sensor import SensorModel
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
-    terr = generate("moonyard", rng=0, scale=1.0).terrain  # the full 971 x 1674 moonyard
+    terr = generate(
+        preset_params("moonyard"), rng=0, scale=1.0
+    ).terrain  # the full 971 x 1674 moonyard
     rig = st.aim_rig_at_terrain(
         terr, proj_size=DLP_PROJ, cam_size=DLP_CAM, cam_fov_x=np.radians(60.0)
     )

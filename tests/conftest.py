@@ -2,8 +2,17 @@
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
+
+# the fake work unit and CLI of tests/pipeline importable by name from any test folder (spawned
+# pool workers unpickle the fake unit by reference)
+_FAKES = str(Path(__file__).resolve().parent / "pipeline")
+if _FAKES not in sys.path:
+    sys.path.insert(0, _FAKES)
 
 
 @pytest.fixture

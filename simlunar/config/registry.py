@@ -21,7 +21,7 @@ def _check(name: str, valid: Iterable[str], path: str, what: str) -> None:
 
 def preset_names() -> list[str]:
     """Terrain preset names (``scenes/*.yaml`` via :mod:`simlunar.terrain.presets`)."""
-    from simlunar.terrain.presets import preset_names as names
+    from simlunar.config.terrain import preset_names as names
 
     return list(names())
 

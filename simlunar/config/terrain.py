@@ -221,8 +221,9 @@ class PresetError(ValueError):
         self.problem = problem
 
 
-def preset_path(name: str) -> Path:
+def preset_path(name: str | Path) -> Path:
     """The YAML file of a preset name (``aerial_1``) or path (``my/preset.yaml``)."""
+    name = str(name)
     looks_like_path = name.endswith((".yaml", ".yml")) or "/" in name or "\\" in name
     path = Path(name) if looks_like_path else SCENES / f"{name}.yaml"
     if not path.is_file():

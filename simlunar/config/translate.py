@@ -15,7 +15,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
+from simlunar.config.messages import format_validation_error
 from simlunar.config.render import (
     CameraLightCfg,
     HapkeCfg,
@@ -35,7 +37,12 @@ from simlunar.config.studies import (
     SamplingStudyCfg,
     ScannerStudyCfg,
 )
-from simlunar.config.terrain import TerrainPresetCfg
+from simlunar.config.terrain import (
+    PresetError,
+    TerrainOverridesCfg,
+    TerrainPresetCfg,
+    merged_preset,
+)
 
 # --------------------------------------------------------------------------- terrain
 
@@ -99,6 +106,27 @@ def terrain_params(preset: TerrainPresetCfg, *, scale: float = 1.0):
         description=preset.description,
     )
     return params.scaled(scale)
+
+
+def preset_params(name: str, *, scale: float = 1.0, overrides: dict | None = None):
+    """:class:`~simlunar.terrain.params.TerrainParams` of a preset name (``aerial_1``) or preset
+    YAML path, with optional ``overrides`` (``{"fractal": {"rms_m": 0.05}}``, the keys of an
+    experiment's ``terrain.overrides``), through the schema's models.
+
+    Raises
+    ------
+    simlunar.config.terrain.PresetError
+        An unknown preset, an invalid file or override (``key`` names the override's path).
+    """
+    ov = None
+    if overrides:
+        try:
+            ov = TerrainOverridesCfg.model_validate(overrides)
+        except ValidationError as exc:
+            line = format_validation_error(exc, overrides, root=TerrainOverridesCfg)
+            key, _, problem = line.partition(": ")
+            raise PresetError(key, problem) from None
+    return terrain_params(merged_preset(name, ov), scale=scale)
 
 
 def build_terrain(cfg, *, rng):

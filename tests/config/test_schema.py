@@ -391,22 +391,6 @@ def test_sweep_keeps_plain_values_as_written():
 
 
 # --------------------------------------------------------------------------- presets
-def test_presets_through_the_models_equal_the_terrain_package():
-    from simlunar.config.terrain import merged_preset
-    from simlunar.terrain import load_preset, preset_names
-
-    names = preset_names()
-    assert {"aerial_1", "moonyard"} <= set(names)
-    for name in names:
-        assert translate.terrain_params(merged_preset(name), scale=0.25) == load_preset(
-            name, scale=0.25
-        )
-    ov = terrain.TerrainOverridesCfg(fractal={"rms_m": "5 cm"}, rocks={"enabled": False})
-    assert translate.terrain_params(merged_preset("aerial_1", ov)) == load_preset(
-        "aerial_1", overrides={"fractal": {"rms_m": 0.05}, "rocks": {"enabled": False}}
-    )
-
-
 def test_a_bad_preset_file_is_one_line_naming_file_and_key(tmp_path):
     p = tmp_path / "mine.yaml"
     p.write_text(yaml.safe_dump({"grid": {"rows": 32, "cols": 32}, "fractal": {"hurst": 1.5}}))

@@ -217,9 +217,10 @@ def test_generated_terrain_geotiff_reads_back_in_rasterio(tmp_path):
     from rasterio.crs import CRS
     from rasterio.transform import Affine
 
+    from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    res = generate("aerial_3", rng=1, scale=0.05)
+    res = generate(preset_params("aerial_3"), rng=1, scale=0.05)
     t = res.terrain
     p = tio.save_dem(tmp_path / "dem.tif", t)
     with rasterio.open(p) as src:
