@@ -57,8 +57,8 @@ def check_strategy(name: str, path: str, options: Mapping | None = None) -> None
 
 def check_scan_planner(name: str, path: str) -> None:
     """A planner of the scanner study: a registered strategy (it plans from the guide image)
-    or one of :data:`simlunar.scanner.modes.SCAN_PLANNERS` (it ranks the gray-code scan)."""
-    from simlunar.scanner.modes import SCAN_PLANNERS
+    or one of :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
+    from simlunar.scanner.scans import SCAN_PLANNERS
 
     _check(name, [*strategy_names(), *SCAN_PLANNERS], path, "planner")
 
@@ -74,6 +74,6 @@ def check_metric(name: str, path: str) -> None:
 
 
 def check_scan_mode(name: str, path: str) -> None:
-    from simlunar.scanner import modes
+    from simlunar.sensors.structured_light import MODES
 
-    _check(name, list(modes.MODES), path, "scan mode")
+    _check(name, list(MODES), path, "scan mode")

@@ -228,7 +228,7 @@ class RigCfg(_Model):
 
 
 class GrayOptsCfg(_Model):
-    """Gray-code scan options (:func:`simlunar.scanner.modes.gray_code_scan`)."""
+    """Gray-code scan options (:func:`simlunar.scanner.scans.gray_code_scan`)."""
 
     black_threshold: float = Field(0.05, ge=0, le=1, description="validity (frame units)")
     white_threshold: float = Field(0.01, ge=0, le=1, description="bit reliability (frame units)")
@@ -239,7 +239,7 @@ class GrayOptsCfg(_Model):
 
 
 class DotOptsCfg(_Model):
-    """Dot scan options (:func:`simlunar.scanner.modes.dot_scan`)."""
+    """Dot scan options (:func:`simlunar.scanner.scans.dot_scan`)."""
 
     exact: bool = Field(False, description="one dot per frame (reference mode)")
     radius_px: Px = Field(0.0, description="dot radius (projector px); 0 = one pixel")
@@ -350,7 +350,7 @@ class ScannerStudyCfg(_Model):
             raise ValueError(
                 f"options.planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
             )
-        from simlunar.scanner.modes import SCAN_PLANNERS
+        from simlunar.scanner.scans import SCAN_PLANNERS
 
         scan_planners = [p for p in self.planners if p in SCAN_PLANNERS]
         if scan_planners and "data_reduction" in self.modes:

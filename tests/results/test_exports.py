@@ -19,8 +19,9 @@ from simlunar.cli import app
 from simlunar.imaging.exr import read_exr
 from simlunar.imaging.sensor import SensorModel
 from simlunar.results import exports
-from simlunar.scanner import modes, rigs
-from simlunar.study.scanner import RenderCapture
+from simlunar.render.capture import CaptureOptions, RenderCapture
+from simlunar.scanner import rigs, scans
+from simlunar.scanner.scans import GrayCodeOptions
 from simlunar.terrain.types import Terrain
 
 pytestmark = pytest.mark.render
@@ -40,8 +41,10 @@ def scan(tmp_path_factory):
     terr = Terrain(heights, albedo, SPACING, ORIGIN)
     rig = rigs.moonyard_rig(proj_size=PROJ, cam_size=CAM)
     sensor = SensorModel(full_well_e=20000.0, read_noise_e=5.0, bits=12)
-    cap = RenderCapture(terr, rig, spp=4, seed=1, sensor=sensor, rng=3, camera_blur=0.7)
-    gray = modes.gray_code_scan(cap, rig, keep_frames=True)
+    cap = RenderCapture(
+        terr, rig, CaptureOptions(spp=4, seed=1, camera_blur=0.7), sensor=sensor, rng=3
+    )
+    gray = scans.gray_code_scan(cap, rig, GrayCodeOptions(keep_frames=True))
     folder = tmp_path_factory.mktemp("export") / "unit0"
     exports.write_scan_export(folder, exports.scan_export_payload(gray, rig))
     return rig, gray, folder
