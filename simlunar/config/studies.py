@@ -22,6 +22,8 @@ from simlunar.config.fields import (
     _tagged_union,
 )
 from simlunar.config.quantities import log_spaced
+from simlunar.planner import STRATEGIES
+from simlunar.scanner.scans import SCAN_PLANNERS
 
 
 # --------------------------------------------------------------------------- studies
@@ -183,7 +185,6 @@ class SamplingStudyCfg(_Model):
 
     @model_validator(mode="after")
     def _options_fit(self) -> SamplingStudyCfg:
-        from simlunar.planner import STRATEGIES
 
         for label, opts in self.strategy_options.items():
             base = opts.strategy or label
@@ -342,7 +343,6 @@ class ScannerStudyCfg(_Model):
 
     @model_validator(mode="after")
     def _options_fit(self) -> ScannerStudyCfg:
-        from simlunar.planner import STRATEGIES
 
         o = self.options
         stray = sorted(set(o.planner_opts) - set(self.planners))
@@ -350,7 +350,6 @@ class ScannerStudyCfg(_Model):
             raise ValueError(
                 f"options.planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
             )
-        from simlunar.scanner.scans import SCAN_PLANNERS
 
         scan_planners = [p for p in self.planners if p in SCAN_PLANNERS]
         if scan_planners and "data_reduction" in self.modes:

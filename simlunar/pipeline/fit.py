@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 from simlunar.errors import SimlunarError
+from simlunar.planner import fit_combination, score_combination
 from simlunar.results.figures import load_results
 from simlunar.results.store import UnitCache, atomic_write_bytes
 
@@ -53,7 +54,6 @@ def run_fit(
     rng: int = 0,
 ) -> dict:
     """Fit on the training seeds' units, score on the test seeds'; returns the report dict."""
-    from simlunar.planner import fit_combination, score_combination
 
     res = load_results(out_dir)
     if set(train_seeds) & set(test_seeds):

@@ -529,7 +529,7 @@ def check_units(units: list[Any]) -> Preflight:
             check_study_sizes(cfg, image_shape(cfg.render, f))
         except ConfigError as exc:
             if len(units) > 1 and u.sweep:
-                from simlunar.pipeline.runner import unit_label
+                from simlunar.results.records import unit_label
 
                 raise ConfigError(f"sweep point {u.index} ({unit_label(u)}): {exc}") from None
             raise

@@ -35,6 +35,7 @@ from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupt
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
+from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
     FolderLock,
     UnitCache,
@@ -42,41 +43,11 @@ from simlunar.results.store import (
     atomic_write_text,
     csv_text,
     file_sha256,
-    fmt_value,
 )
 
 #: keys that do not change a unit's numbers (excluded from its cache key)
 _NON_RESULT_KEYS = ("name", "description", "sweep")
 ROW_COLUMNS = ("mode", "planner", "budget", "strategy", "density", "k", "trial", "metric", "value")
-
-
-@dataclass(frozen=True)
-class WorkUnit:
-    """One sweep point.
-
-    Attributes
-    ----------
-    index : int
-        Position in the sweep's cartesian product (results order).
-    key : str
-        SHA-256 (hex, 16 chars) of the resolved configuration: the cache key.
-    sweep : dict
-        Dotted key path -> value of this point (empty without a sweep).
-    config : dict
-        The full resolved configuration (plain, JSON-safe) without ``sweep``.
-    inputs : dict
-        Key path -> ``{"path", "sha256"}`` of every file the unit reads.
-    terrain_seed : int or None
-        The unit's terrain realisation (``terrain.seed_index``) when the experiment repeats
-        over ``study.terrain_seeds`` > 1; None otherwise.
-    """
-
-    index: int
-    key: str
-    sweep: dict[str, Any]
-    config: dict[str, Any]
-    inputs: dict[str, dict[str, str]] = field(default_factory=dict)
-    terrain_seed: int | None = None
 
 
 def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = None) -> str:
@@ -243,25 +214,6 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
     present = {c for r in rows for c in r}
     known = [c for c in ROW_COLUMNS if c != "value" and c in present]
     return rows, ["unit", *sweep_cols, *known, *extra, "value"]
-
-
-def unit_label(u: WorkUnit) -> str:
-    """Short human label of a sweep point (``elevation_deg=30``)."""
-    seed = [] if u.terrain_seed is None else [f"terrain_seed={u.terrain_seed}"]
-    if not u.sweep:
-        return ", ".join(seed) or u.config.get("name", f"unit {u.index}")
-    parts = []
-    for path, v in u.sweep.items():
-        name = path.rsplit(".", 1)[-1]
-        if isinstance(v, dict) and "kind" in v:  # e.g. rover_mast(depression_deg=30)
-            rest = ", ".join(f"{k}={fmt_value(x)}" for k, x in v.items() if k != "kind")
-            v = f"{v['kind']}({rest})" if rest else v["kind"]
-        elif isinstance(v, dict):
-            v = json.dumps(v, sort_keys=True)
-        elif v is None:
-            v = "default"
-        parts.append(f"{name}={fmt_value(v)}")
-    return ", ".join(parts + seed)
 
 
 def run_experiment(

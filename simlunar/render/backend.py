@@ -251,7 +251,6 @@ def init(prefer: str | None = None) -> BackendInfo:
         )
     _INFO, _MI = info, mi
     # the variant is set: now plugins that subclass mi.BSDF may be defined and registered
-    import simlunar.render.plugins  # noqa: F401  (registers its hooks on import)
 
     for hook in _PLUGIN_HOOKS:
         hook(mi)

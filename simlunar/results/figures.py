@@ -118,7 +118,7 @@ def load_unit_arrays(out_dir: str | Path, index: int = 0) -> dict:
 
 
 def _label(rec: dict) -> str:
-    from simlunar.pipeline.runner import WorkUnit, unit_label
+    from simlunar.results.records import WorkUnit, unit_label
 
     config = rec.get("config", {}) or {}
     repeats = int((config.get("study") or {}).get("terrain_seeds", 1) or 1)

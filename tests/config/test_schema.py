@@ -456,7 +456,7 @@ figures: {{enabled: false}}
 
 
 def test_albedo_file_of_another_shape_is_one_line(tmp_path):
-    from simlunar.pipeline.unit import build_terrain
+    from simlunar.config.translate import build_terrain
 
     _dem_files(tmp_path, albedo_shape=(32, 40))
     cfg = validate_data(
@@ -482,9 +482,9 @@ def test_albedo_file_of_another_shape_is_one_line(tmp_path):
 )
 def test_the_preflight_rejects_what_the_unit_would_reject(tmp_path, albedo):
     """One albedo reader: a file the unit refuses is refused before anything is written."""
+    from simlunar.config.translate import build_terrain
     from simlunar.errors import ConfigError
     from simlunar.pipeline.preflight import terrain_facts
-    from simlunar.pipeline.unit import build_terrain
 
     _dem_files(tmp_path)
     np.save(tmp_path / "alb.npy", albedo)
