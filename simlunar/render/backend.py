@@ -251,6 +251,8 @@ def init(prefer: str | None = None) -> BackendInfo:
         )
     _INFO, _MI = info, mi
     # the variant is set: now plugins that subclass mi.BSDF may be defined and registered
+    # (lazy: the plugin package registers its hooks here, and imports this module)
+    import simlunar.render.plugins  # noqa: F401
 
     for hook in _PLUGIN_HOOKS:
         hook(mi)
