@@ -35,6 +35,7 @@ from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupt
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
+from simlunar.results.folder import prune_figures, read_folder_config
 from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
     FolderLock,
@@ -305,23 +306,6 @@ def _remove_empty(out: Path) -> None:
         pass
 
 
-def read_folder_config(path: Path) -> dict:
-    """A result folder's ``config.yaml`` as a dict (:class:`ResultFolderError` if unreadable)."""
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (yaml.YAMLError, UnicodeDecodeError, OSError) as exc:
-        what = "not valid YAML" if isinstance(exc, yaml.YAMLError) else "unreadable"
-        raise ResultFolderError(
-            f"{path}: {what}, so the folder's configuration is unknown; "
-            "choose another --out or delete the folder"
-        ) from None
-    if not isinstance(data, dict) or not isinstance(data.get("study"), dict):
-        raise ResultFolderError(
-            f"{path}: not an experiment configuration; choose another --out or delete the folder"
-        )
-    return data
-
-
 def _first_difference(old: Any, new: Any, path: str = "") -> str:
     """``key.path: <old> here, <new> now`` for the first difference of two plain configs."""
     if isinstance(old, dict) and isinstance(new, dict):
@@ -426,19 +410,6 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
             removed.append(p)
     if not any(folder.iterdir()):
         folder.rmdir()
-    return removed
-
-
-def prune_figures(out: Path, keep) -> list[Path]:
-    """Remove ``figures/*.png|pdf`` not in ``keep`` (figures of another state of the folder)."""
-    keep = {Path(p).name for p in keep}
-    fig_dir = out / "figures"
-    removed = []
-    if fig_dir.is_dir():
-        for p in sorted(fig_dir.iterdir()):
-            if p.suffix.lower() in (".png", ".pdf") and p.name not in keep and p.is_file():
-                p.unlink()
-                removed.append(p)
     return removed
 
 

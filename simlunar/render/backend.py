@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from simlunar.render import llvm as _llvm
+from simlunar.render.plugins import PLUGINS
 
 JIT_VARIANTS = ("cuda_ad_rgb", "llvm_ad_rgb")
 SCALAR_VARIANT = "scalar_rgb"
@@ -251,9 +252,8 @@ def init(prefer: str | None = None) -> BackendInfo:
         )
     _INFO, _MI = info, mi
     # the variant is set: now plugins that subclass mi.BSDF may be defined and registered
-    # (lazy: the plugin package registers its hooks here, and imports this module)
-    import simlunar.render.plugins  # noqa: F401
-
+    for module in PLUGINS.values():
+        module.register(mi)
     for hook in _PLUGIN_HOOKS:
         hook(mi)
     return info
