@@ -15,6 +15,7 @@ The rendering of the histograms lives in :mod:`simlunar.render.transient`.
 
 from simlunar.lidar.detector import (
     DetectorOptions,
+    LinkBudget,
     coates_correction,
     expected_counts,
     photon_counts,
@@ -55,6 +56,7 @@ __all__ = [
     "SPEED_OF_LIGHT",
     "DetectorOptions",
     "FootprintOptions",
+    "LinkBudget",
     "OrderOptions",
     "PulseOptions",
     "RangeOptions",

@@ -132,6 +132,7 @@ def flash_frame(
     options: TransientOptions = TransientOptions(),
     bsdf=None,
     sun=None,
+    projector=None,
 ) -> FlashFrame:
     """Render a flash-lidar frame: a receiver array lit by one pulse from its centre.
 
@@ -146,6 +147,9 @@ def flash_frame(
     bsdf : BSDF spec or None (Lambert)
     sun : SunLight or None
         Rendered separately as a steady image (:attr:`FlashFrame.sun`).
+    projector : ProjectorLight or None
+        The laser as a pattern projector (a micromirror array lighting chosen directions,
+        ``scale`` its irradiance) instead of the isotropic point laser.
 
     Returns
     -------
@@ -164,8 +168,13 @@ def flash_frame(
         "sensor": sensor,
         "integrator": {"type": "transient_path", "max_depth": int(options.max_depth)},
         **_terrain_entries(mi, terrain, bsdf),
-        **_laser(camera.pose.position, options),
     }
+    if projector is None:
+        scene.update(_laser(camera.pose.position, options))
+    else:
+        from simlunar.render.lights import emitter_dicts
+
+        scene.update(emitter_dicts(projector, camera))
     steady, hist = mi.render(mi.load_dict(scene), spp=options.spp, seed=options.seed)
     hist = np.asarray(hist, np.float32)  # (rows, cols, bins, channels)
     hist = (hist[..., :3] @ LUMINANCE).astype(np.float32)
