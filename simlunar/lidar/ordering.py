@@ -5,7 +5,9 @@ which grows monotonically with the Chebyshev (L-infinity) distance between point
 axes move at once, alike); so a k-d tree in that metric finds the nearest points in time.
 Tours are open paths from a fixed start. The nearest-neighbour tour and the planner's own
 order are both improved by 2-opt over k-nearest-neighbour candidate lists (compiled with
-numba) and the shorter is kept, so the result is never longer than the planner's order.
+numba) and the shorter is kept (above 5000 points only the nearest-neighbour tour is
+improved, and kept if shorter than the planner's order), so the result is never longer
+than the planner's order.
 """
 
 from __future__ import annotations
@@ -79,35 +81,82 @@ def raster_order(angles: np.ndarray, line_pitch_rad: float | None = None) -> np.
 def nearest_neighbour_order(angles: np.ndarray, start: int = 0) -> np.ndarray:
     """Greedy tour from point ``start`` to the nearest unvisited point (Chebyshev metric).
 
-    The k-d tree is rebuilt on the unvisited points whenever half of its points are visited,
-    so the nearest unvisited point is found among few candidates.
+    Compiled (numba): the unvisited points sit in a uniform grid of about two points per cell,
+    searched in rings of cells around the current point; the grid is rebuilt on the points
+    left whenever half of its points are visited, so queries stay local (O(n log n) overall
+    on spread-out plans).
+
+    Parameters
+    ----------
+    angles : (n, 2) float
+        Pointings (rad).
+    start : int
+        First point.
+
+    Returns
+    -------
+    (n,) int64 permutation starting with ``start``.
     """
-    p = np.asarray(angles, float)
-    n = len(p)
-    visited = np.zeros(n, bool)
+    p = np.ascontiguousarray(angles, dtype=float)
+    if len(p) == 0:
+        return np.zeros(0, np.int64)
+    return _nn_grid(p, int(start))
+
+
+@numba.njit(cache=True, nogil=True)
+def _scan_cell(p, cur, items, cstart, clen, c, best, bi):
+    for t in range(cstart[c], cstart[c] + clen[c]):
+        q = items[t]
+        d = max(abs(p[q, 0] - p[cur, 0]), abs(p[q, 1] - p[cur, 1]))
+        if d < best:
+            best, bi = d, t
+    return best, bi
+
+
+@numba.njit(cache=True, nogil=True)
+def _nn_grid(p, start):
+    n = p.shape[0]
     order = np.empty(n, np.int64)
-    ids = np.arange(n)
-    tree = cKDTree(p)
-    cur = int(start)
-    for step in range(n):
-        order[step] = cur
-        visited[cur] = True
-        if step == n - 1:
-            break
-        left = n - step - 1
-        if len(ids) > 64 and left < len(ids) // 2:
-            ids = ids[~visited[ids]]
-            tree = cKDTree(p[ids])
-        k = 8
-        while True:
-            kk = min(k, len(ids))
-            _, j = tree.query(p[cur], k=kk, p=np.inf)
-            cand = ids[np.atleast_1d(j)]
-            free = cand[~visited[cand]]
-            if free.size:
-                cur = int(free[0])
-                break
-            k *= 4
+    visited = np.zeros(n, np.bool_)
+    order[0], visited[start], k, cur = start, True, 1, start
+    while k < n:
+        ids = np.flatnonzero(~visited)
+        m = ids.size
+        g = max(1, int(np.sqrt(m / 2.0)))
+        lo0, lo1 = p[ids, 0].min(), p[ids, 1].min()
+        cs = max(p[ids, 0].max() - lo0, p[ids, 1].max() - lo1) / g + 1e-12
+        cell = np.empty(m, np.int64)
+        for t in range(m):
+            i = min(int((p[ids[t], 0] - lo0) / cs), g - 1)
+            j = min(int((p[ids[t], 1] - lo1) / cs), g - 1)
+            cell[t] = i * g + j
+        srt = np.argsort(cell, kind="mergesort")
+        items, clen = ids[srt], np.zeros(g * g, np.int64)
+        for t in range(m):
+            clen[cell[t]] += 1
+        cstart = np.zeros(g * g, np.int64)
+        for c in range(1, g * g):
+            cstart[c] = cstart[c - 1] + clen[c - 1]
+        target = n if m < 64 else k + m // 2
+        while k < min(target, n):
+            ci = min(max(int((p[cur, 0] - lo0) / cs), 0), g - 1)
+            cj = min(max(int((p[cur, 1] - lo1) / cs), 0), g - 1)
+            best, bi, r = np.inf, -1, 0
+            while r <= g:
+                for i in range(max(ci - r, 0), min(ci + r, g - 1) + 1):
+                    for j in range(max(cj - r, 0), min(cj + r, g - 1) + 1):
+                        if max(abs(i - ci), abs(j - cj)) == r:
+                            best, bi = _scan_cell(p, cur, items, cstart, clen, i * g + j, best, bi)
+                if bi >= 0 and r * cs >= best:
+                    break
+                r += 1
+            q = items[bi]
+            c = (min(int((p[q, 0] - lo0) / cs), g - 1)) * g + min(int((p[q, 1] - lo1) / cs), g - 1)
+            last = cstart[c] + clen[c] - 1
+            items[bi], items[last] = items[last], items[bi]
+            clen[c] -= 1
+            visited[q] = True
+            order[k], cur, k = q, q, k + 1
     return order
 
 
@@ -220,8 +269,10 @@ def order_scan(
         return given
     if options.method == "raster":
         return raster_order(p, options.line_pitch_rad)
-    best, best_t = given, np.inf
-    for seed in (nearest_neighbour_order(p, 0), given):
+    best, best_t = given, scan_timing(p, given, options=steering).total_s
+    # 2-opt from a random-looking planner order is slow (long reversals): small plans only
+    seeds = [nearest_neighbour_order(p, 0)] + ([given] if n <= 5000 else [])
+    for seed in seeds:
         tour = two_opt(p, seed, steering=steering, options=options)
         t = scan_timing(p, tour, options=steering).total_s
         if t < best_t:
