@@ -170,3 +170,61 @@ def test_sun_adds_no_spurious_return(mi):
     r_dark = _read(dark, bins)
     assert r_sun.valid.all() and r_dark.valid.all()
     assert np.abs(r_sun.range - r_dark.range).max() < bins.bin_range
+
+
+@pytest.mark.parametrize("bsdf_name", ["lambert", "oren_nayar", "hapke"])
+def test_flash_steady_matches_the_ordinary_render_for_every_bsdf(mi, bsdf_name):
+    # the flash's laser is the camera-centred point light of the ordinary renderer, so its
+    # steady image must equal TerrainScene's with CameraLight: simlunar's Python BSDF plugins
+    # work inside mitransient's transient_path
+    from simlunar.render.lights import CameraLight
+    from simlunar.render.materials import HapkeBSDF, LambertBSDF, OrenNayarBSDF
+    from simlunar.render.scene import TerrainScene, luminance
+    from simlunar.render.transient import TransientOptions, flash_frame
+
+    bsdf = {"lambert": LambertBSDF(), "oren_nayar": OrenNayarBSDF(sigma=0.4), "hapke": HapkeBSDF()}[
+        bsdf_name
+    ]
+    terrain, cam = _plane(slope=0.3), _nadir_camera(8, 20.0)
+    bins = TimeBins.for_ranges(30.0, 70.0, 0.1)
+    fr = flash_frame(terrain, cam, bins=bins, options=TransientOptions(spp=64), bsdf=bsdf)
+    ref = luminance(
+        TerrainScene(
+            terrain, cam, lights=[CameraLight(1.0)], bsdf=bsdf, max_depth=2, spp=64
+        ).render()
+    )
+    assert fr.steady.mean() == pytest.approx(ref.mean(), rel=0.01)
+    assert fr.steady == pytest.approx(ref, rel=0.05)
+    assert fr.histograms.sum(-1) == pytest.approx(fr.steady, rel=1e-3)
+
+
+def test_batches_reuse_one_kernel(mi):
+    import drjit as dr
+
+    from simlunar.render.transient import BeamCapture
+
+    cap = BeamCapture(
+        _plane(),
+        [0.0, 0.0, H],
+        footprint=FootprintOptions(1e-3, samples=4),
+        window=TimeBins(0.0, 0.1, 40),
+        batch=8,
+    )
+    d = np.tile([[0.0, 0.0, -1.0]], (8, 1))
+    cap.render_batch(d, 96.0)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history()
+        d2 = d + np.array([0.05, 0.0, 0.0])
+        h, _ = cap.render_batch(d2[:5], 97.0, seed=1)
+        compiled = [
+            e
+            for e in dr.kernel_history()
+            if e.get("type") == dr.KernelType.JIT and not e.get("cache_hit", 0)
+        ]
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert compiled == []
+    assert h.shape == (5, 40)
+    # the window moved by 1 m of OPL: the return (OPL 2 * 50.06 m) sits at bin (100.12 - 97) / 0.1
+    assert int(np.argmax(h[0])) == 31
