@@ -12,7 +12,8 @@ Importing this package does not import Mitsuba; :func:`simlunar.render.backend.i
 - time of flight (mitransient): ``TransientOptions``, ``FlashFrame``, ``flash_frame``,
   ``BeamCapture``, ``BeamReturns``, ``capture_beams``; LIDAR acquisitions:
   ``SteeredBeamOptions``, ``FlashOptions``, ``LidarScan``, ``beam_capture``,
-  ``steered_beam_scan``, ``flash_scan``, ``micromirror_flash``, ``micromirror_frames``
+  ``steered_beam_scan``, ``flash_scan``, ``micromirror_flash``, ``micromirror_frames``,
+  ``guide_directions``, ``receiver_rc``
 - :mod:`simlunar.render.specs` gathers every light and BSDF spec (NumPy only)
 """
 
@@ -53,6 +54,8 @@ _EXPORTS = {
     "flash_scan": "lidar_scan",
     "micromirror_flash": "lidar_scan",
     "micromirror_frames": "lidar_scan",
+    "guide_directions": "lidar_scan",
+    "receiver_rc": "lidar_scan",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -133,6 +133,30 @@ class LidarScan:
     frames: int
     timing: ScanTiming | None = None
 
+    def depth(self, camera: Camera) -> np.ndarray:
+        """z-depth (m) of :attr:`points` along ``camera``'s optical axis (the guide view's
+        depth convention of :class:`~simlunar.geometry.types.GroundTruth`); NaN where invalid."""
+        return (self.points - camera.pose.position) @ camera.pose.forward
+
+
+def guide_directions(camera: Camera, rc: np.ndarray) -> np.ndarray:
+    """Unit world directions (k, 3) through the centres of guide pixels ``rc`` (k, 2) (row, col)."""
+    rc = np.asarray(rc, float).reshape(-1, 2)
+    return camera.rays(rc[:, ::-1] + 0.5)[1]
+
+
+def receiver_rc(receiver_shape, guide_shape) -> np.ndarray:
+    """Receiver pixel centres as guide (row, col) index coordinates, (rows * cols, 2) float.
+
+    A co-boresighted receiver of the same field of view: receiver pixel (i, j) has its centre at
+    guide (u, v) = ((j + 1/2) W / w, (i + 1/2) H / h), i.e. index coordinates (v - 1/2, u - 1/2),
+    row-major (the order of a flash scan's flattened arrays).
+    """
+    (h, w), (gh, gw) = receiver_shape, guide_shape
+    i, j = np.mgrid[0:h, 0:w]
+    v, u = (i.ravel() + 0.5) * gh / h, (j.ravel() + 0.5) * gw / w
+    return np.stack([v - 0.5, u - 0.5], axis=1)
+
 
 def beam_capture(terrain, origin, *, options: SteeredBeamOptions, sun=None, bsdf=None):
     """The reusable render of a steered beam at ``origin`` (3,) m over ``terrain``."""

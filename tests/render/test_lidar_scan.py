@@ -59,7 +59,10 @@ def test_steered_beam_scan_on_a_plane(mi):
     )
     cam = _camera(64, 40.0)
     uv = np.random.default_rng(0).uniform(0, 64, (50, 2))
-    _, d = cam.rays(uv)
+    from simlunar.render.lidar_scan import guide_directions
+
+    d = guide_directions(cam, uv[:, ::-1] - 0.5)  # the same rays, from (row, col)
+    assert d == pytest.approx(cam.rays(uv)[1])
     scan = steered_beam_scan(
         beam_capture(_plane(), cam.position, options=opts),
         d,
@@ -71,6 +74,7 @@ def test_steered_beam_scan_on_a_plane(mi):
     assert scan.valid.all()
     assert np.abs(scan.ranges - truth).max() < opts.bin_range_m
     assert scan.points[:, 2] == pytest.approx(0.0, abs=opts.bin_range_m)
+    assert scan.depth(cam) == pytest.approx(H, abs=opts.bin_range_m)  # nadir view of z = 0
     from simlunar.lidar import pointing_angles
 
     ang = pointing_angles(d, cam.pose)
@@ -105,6 +109,11 @@ def test_flash_scan_on_a_plane(mi):
     assert scan.valid.all()
     assert np.abs(scan.ranges - H / -d[..., 2]).max() < opts.bin_range_m
     assert scan.seconds == pytest.approx(4 / 20.0)
+    from simlunar.render.lidar_scan import receiver_rc
+
+    # a 16 x 16 receiver on a 64 x 64 guide: receiver pixel (0, 0) centre = guide (2, 2) - 1/2
+    rc = receiver_rc((16, 16), (64, 64))
+    assert rc[0] == pytest.approx([1.5, 1.5]) and rc[17] == pytest.approx([5.5, 5.5])
 
 
 def test_micromirror_flash_lights_only_the_planned_pixels(mi):
