@@ -61,3 +61,22 @@ def test_exact_order_refuses_large_cases():
         exact_order(np.zeros((11, 2)), steering=STEER)
     with pytest.raises(ValueError, match="nn2opt"):
         OrderOptions(method="tsp")
+
+
+def test_ordered_scan_time_by_hand():
+    # four points on one azimuth line given out of order; the ordered scan sweeps them:
+    # moves of 0.1, 0.1, 0.2 rad = 0.2 + 0.2 + 0.3 s (v = 1 rad/s, a = 10 rad/s^2), 3 settles
+    steer = SteeringOptions(
+        max_rate_rad_s=1.0,
+        max_accel_rad_s2=10.0,
+        settle_s=0.01,
+        pulse_rate_hz=1000.0,
+        pulses_per_point=10,
+    )
+    p = np.array([[0.0, 0.0], [0.2, 0.0], [0.4, 0.0], [0.1, 0.0]])
+    order = order_scan(p, steering=steer)
+    assert list(order) == [0, 3, 1, 2]
+    t = scan_timing(p, order, options=steer)
+    assert t.total_s == pytest.approx(0.7 + 3 * 0.01 + 4 * 0.01)
+    # the planner's order: 0.2 + 0.2 (trapezoid 0.2 / 1 + 0.1 = 0.3 each) + 0.3 rad
+    assert scan_timing(p, options=steer).total_s == pytest.approx(0.3 + 0.3 + 0.4 + 0.07)

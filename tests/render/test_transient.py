@@ -228,3 +228,18 @@ def test_batches_reuse_one_kernel(mi):
     assert h.shape == (5, 40)
     # the window moved by 1 m of OPL: the return (OPL 2 * 50.06 m) sits at bin (100.12 - 97) / 0.1
     assert int(np.argmax(h[0])) == 31
+
+
+def test_photon_counts_are_poisson_with_the_rendered_mean(mi):
+    # dispersion test on a rendered flash frame: every bin's draws have the rendered mean as
+    # mean and variance; sum (x - m)^2 / m over draws and bins is chi^2 with that many dof
+    from scipy import stats
+
+    _, bins, fr = _sunny(mi)
+    det = DetectorOptions(signal_photons=2e6, background_photons_per_s=5e10, pulses=1)
+    lam = expected_counts(fr.histograms, fr.sun, bins, det)
+    assert lam.max() > 5 * lam.min() > 0  # returns above a sun floor
+    draws = photon_counts(np.broadcast_to(lam, (40, *lam.shape)), options=det, rng=7)
+    d = np.sum((draws - lam) ** 2 / lam)
+    assert 0.001 < stats.chi2.sf(d, df=draws.size) < 0.999
+    assert draws.mean(axis=0).sum() == pytest.approx(lam.sum(), rel=0.01)
