@@ -10,7 +10,12 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "simlunar"
 
 # module prefix -> the only subpackage allowed to import it
-RULES = {"mitsuba": "render", "drjit": "render", "matplotlib": "plotting"}
+RULES = {
+    "mitsuba": "render",
+    "drjit": "render",
+    "mitransient": "render",
+    "matplotlib": "plotting",
+}
 
 
 def _imports(path: Path) -> set[str]:
