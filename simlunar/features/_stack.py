@@ -9,6 +9,7 @@ trained on one :data:`FEATURE_SET_VERSION` refuses images featurised by another.
 from __future__ import annotations
 
 import numpy as np
+import pywt
 from scipy import ndimage
 
 from simlunar.features.maps import to_gray, wavelet_levels
@@ -56,7 +57,9 @@ def _log(x: np.ndarray) -> np.ndarray:
 def _energies(g: np.ndarray) -> dict[str, np.ndarray]:
     """Linear (not yet logged) energies of the normalised gray image, by feature name."""
     out = {}
-    levels = wavelet_levels(g, levels=max(WAVELET_LEVELS))
+    # deepest level pywt decomposes without boundary warnings (the image is mirrored to 2x)
+    usable = pywt.dwt_max_level(2 * min(g.shape), pywt.Wavelet("db2").dec_len)
+    levels = wavelet_levels(g, levels=max(1, min(max(WAVELET_LEVELS), usable)))
     for j in WAVELET_LEVELS:
         out[f"wavelet_l{j}"] = levels[j - 1] if j <= len(levels) else np.zeros_like(g)
     total = np.sum(levels, axis=0)

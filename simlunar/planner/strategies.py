@@ -47,6 +47,11 @@ STRATEGY_NAMES = {
     "saliency": "Saliency",
     "combination": "Combination",
 }
+# ---- learned importance map (issue 20, simlunar.features.learned): a weighted strategy whose
+# map comes from a trained model: feature_opts={"model": "<name>.joblib", "density": k / N}
+WEIGHTED += ("learned",)
+STRATEGY_NAMES["learned"] = "Learned"
+# ----
 _WEIGHTED_OPTS = (
     "uniform_mix",
     "density_cap",
