@@ -241,6 +241,8 @@ def error_estimate(points_rc, values, shape, *, prior=None, options=None) -> np.
     opt = options or SequentialOptions()
     pts = np.asarray(points_rc, dtype=np.float64)
     res = loo_residuals(pts, values)
+    # rounding residuals of an exact plane must not become a (normalised) signal
+    res[np.abs(res) <= 1e-9 * float(np.ptp(values))] = 0.0
     pitch = float(np.sqrt(shape[0] * shape[1] / len(pts)))
     sq = reconstruct(pts, res * res, shape)
     s = ndimage.gaussian_filter(sq, pitch, mode="nearest")
