@@ -7,19 +7,22 @@ import numpy as np
 
 
 @numba.njit(cache=True, nogil=True)
-def diffuse(target, thresh):  # pragma: no cover - compiled
-    """Serpentine Floyd-Steinberg error diffusion of ``target`` (samples per cell).
+def diffuse(target, thresh, cap):  # pragma: no cover - compiled
+    """Serpentine Floyd-Steinberg error diffusion of ``target`` to integer counts.
 
     Parameters
     ----------
     target : ndarray of float64, shape (rows, cols)
-        Expected samples per cell, each in [0, 1].
+        Expected samples per cell (or per block of cells), >= 0.
     thresh : ndarray of float64, shape (rows, cols)
-        Per-cell threshold (about 0.5, jittered).
+        Per-cell rounding threshold (about 0.5, jittered): a cell gets floor(v) + 1 samples
+        when the fractional part of its value v reaches the threshold.
+    cap : ndarray of int64, shape (rows, cols)
+        Most samples a cell can take.
 
     Returns
     -------
-    chosen : ndarray of bool, shape (rows, cols)
+    count : ndarray of int64, shape (rows, cols)
     value : ndarray of float64, shape (rows, cols)
         Target plus diffused error at each cell when it was visited (the fix-up's priority).
 
@@ -32,7 +35,7 @@ def diffuse(target, thresh):  # pragma: no cover - compiled
     nr, nc = target.shape
     acc = target.copy()
     value = np.empty((nr, nc))
-    chosen = np.zeros((nr, nc), dtype=np.bool_)
+    count = np.zeros((nr, nc), dtype=np.int64)
     for r in range(nr):
         step = 1 if r % 2 == 0 else -1
         start = 0 if step == 1 else nc - 1
@@ -40,11 +43,12 @@ def diffuse(target, thresh):  # pragma: no cover - compiled
             c = start + step * i
             v = acc[r, c]
             value[r, c] = v
-            if v >= thresh[r, c]:
-                chosen[r, c] = True
-                e = v - 1.0
-            else:
-                e = v
+            n = int(np.floor(v)) if v > 0 else 0
+            if v - n >= thresh[r, c]:
+                n += 1
+            n = min(max(n, 0), cap[r, c])
+            count[r, c] = n
+            e = v - n
             cn = c + step
             cb = c - step
             ahead = 0 <= cn < nc
@@ -64,7 +68,43 @@ def diffuse(target, thresh):  # pragma: no cover - compiled
                     acc[r + 1, cb] += 3.0 * e
                 if ahead:
                     acc[r + 1, cn] += 1.0 * e
-    return chosen, value
+    return count, value
+
+
+@numba.njit(cache=True, nogil=True)
+def pick_in_blocks(keys, count, b):  # pragma: no cover - compiled
+    """The ``count`` cells of smallest key in each b x b block (flat indices, block order).
+
+    Parameters
+    ----------
+    keys : ndarray of float64, shape (rows, cols)
+        Priority of each cell (smallest first; inf = never unless needed).
+    count : ndarray of int64, shape (ceil(rows / b), ceil(cols / b))
+        Samples per block (at most the block's cells).
+    b : int
+        Block side (pixels).
+    """
+    nr, nc = keys.shape
+    out = np.empty(count.sum(), dtype=np.int64)
+    buf_k = np.empty(b * b)
+    buf_i = np.empty(b * b, dtype=np.int64)
+    j = 0
+    for br in range(count.shape[0]):
+        for bc in range(count.shape[1]):
+            n = count[br, bc]
+            if n == 0:
+                continue
+            m = 0
+            for r in range(br * b, min(br * b + b, nr)):
+                for c in range(bc * b, min(bc * b + b, nc)):
+                    buf_k[m] = keys[r, c]
+                    buf_i[m] = r * nc + c
+                    m += 1
+            order = np.argsort(buf_k[:m])
+            for q in range(n):
+                out[j] = buf_i[order[q]]
+                j += 1
+    return out
 
 
 @numba.njit(cache=True, nogil=True)

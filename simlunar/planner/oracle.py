@@ -18,7 +18,6 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from simlunar.planner._bluenoise import poisson_accept
 from simlunar.planner.placement import density_from_map, place
 from simlunar.reconstruction import reconstruct
 
@@ -65,15 +64,17 @@ def framed_grid(shape, k: int) -> np.ndarray:
     return np.sort((rows[:, None] * nc + cols[None, :]).ravel())
 
 
-def _batch(score, hole, sampled, m, spacing) -> np.ndarray:
-    """m unsampled cells in decreasing score, each at least ``spacing`` x its hole radius
-    (distance to the nearest earlier sample) from the others of the batch (then the best rest)."""
-    free = np.flatnonzero(~sampled)
-    top = min(free.size, 16 * m)
-    cand = free[np.argpartition(-score[free], top - 1)[:top]] if top < free.size else free
-    cand = cand[np.argsort(-score[cand], kind="stable")]
-    radius = np.maximum(spacing * hole, 1.0).ravel()
-    return poisson_accept(cand, radius, np.asarray(hole.shape, dtype=np.int64), m)
+def _batch(score, sampled, m, window) -> np.ndarray:
+    """The m unsampled cells of highest score, peaks of a ``window``-wide maximum filter first."""
+    peaks = (score == ndimage.maximum_filter(score, size=window, mode="nearest")).ravel()
+    peaks &= ~sampled
+    cand = np.flatnonzero(peaks)
+    flat = score.ravel()
+    if cand.size < m:  # too few peaks: the best of the remaining cells
+        rest = np.flatnonzero(~sampled & ~peaks)
+        top = rest[np.argpartition(-flat[rest], m - cand.size - 1)[: m - cand.size]]
+        return np.concatenate((cand, top))
+    return cand[np.argpartition(-flat[cand], m - 1)[:m]]
 
 
 def oracle_greedy(
@@ -83,8 +84,8 @@ def oracle_greedy(
     rng=None,
     start: float = 0.25,
     batch: float = 0.15,
-    smooth: float = 1.0,
-    spacing: float = 0.5,
+    smooth: float = 0.25,
+    window: float = 1.0,
 ) -> np.ndarray:
     """Greedy error-feedback refiner on the true depth (an oracle bound, never realisable).
 
@@ -101,11 +102,10 @@ def oracle_greedy(
     batch : float, > 0
         Batch size as a share of the current sample count.
     smooth : float, >= 0
-        Gaussian sigma (pixels) of the squared-error smoothing.
-    spacing : float, >= 0
-        Non-maximum suppression: a batch's samples keep ``spacing`` x (distance to the nearest
-        earlier sample) from each other, so a batch spreads over the error peaks and still
-        concentrates where samples are already dense.
+        Gaussian sigma of the squared-error smoothing, in current pitches sqrt(N / n).
+    window : float, > 0
+        Non-maximum suppression window, in current pitches (odd, >= 3 cells): a batch takes
+        the highest local maxima of the smoothed error within that window.
 
     Returns
     -------
@@ -119,10 +119,10 @@ def oracle_greedy(
     """
     del rng
     truth = _check_truth(truth, k)
-    if not 0 < start <= 1 or not batch > 0 or not smooth >= 0 or not spacing >= 0:
+    if not 0 < start <= 1 or not batch > 0 or not smooth >= 0 or not window > 0:
         raise ValueError(
-            "need 0 < start <= 1, batch > 0, smooth >= 0, spacing >= 0; "
-            f"got {start}, {batch}, {smooth}, {spacing}"
+            "need 0 < start <= 1, batch > 0, smooth >= 0, window > 0; "
+            f"got {start}, {batch}, {smooth}, {window}"
         )
     shape, n = truth.shape, truth.size
     flat = framed_grid(shape, max(4, int(start * k)))
@@ -130,13 +130,14 @@ def oracle_greedy(
     sampled[flat] = True
     while flat.size < k:
         rec = reconstruct(np.column_stack(np.divmod(flat, shape[1])), truth.ravel()[flat], shape)
-        e2 = ndimage.gaussian_filter((rec - truth) ** 2, sigma=smooth, mode="nearest")
+        pitch = np.sqrt(n / flat.size)
+        e2 = ndimage.gaussian_filter((rec - truth) ** 2, sigma=smooth * pitch, mode="nearest")
         hole = ndimage.distance_transform_edt(~sampled.reshape(shape))
         top = float(e2.max())
         # the hole term only orders cells whose error is negligible against the largest
         score = e2 + (1e-9 * top if top > 0 else 1.0) * hole / max(float(hole.max()), 1.0)
         m = min(int(np.ceil(batch * flat.size)), k - flat.size)
-        new = _batch(score.ravel(), hole, sampled, m, spacing)
+        new = _batch(score, sampled, m, max(3, 2 * int(window * pitch / 2) + 1))
         sampled[new] = True
         flat = np.concatenate((flat, new))
     return np.sort(flat)

@@ -30,6 +30,8 @@ __all__ = ["cvt_energy", "density_from_map", "halftone", "lloyd", "place", "samp
 THRESHOLD_JITTER = 0.1
 #: Voronoi search radius of a site, in local pitches (a CVT cell's circumradius is ~0.62)
 SEARCH_PITCHES = 1.25
+#: samples per halftone block at the mean density (error diffusion is poor far below ~0.3)
+BLOCK_SAMPLES = 0.5
 
 
 def density_from_map(importance, *, power: float = 0.5, mix: float = 0.25) -> np.ndarray:
@@ -100,13 +102,44 @@ def samples_per_cell(density, k: int) -> np.ndarray:
     return np.minimum(t, 1.0)
 
 
+def _block_side(k: int, n: int) -> int:
+    """Halftone block side: about BLOCK_SAMPLES samples per block at the mean density."""
+    return max(1, round(float(np.sqrt(BLOCK_SAMPLES * n / k))))
+
+
+def _fix_count(count, value, cap, k):
+    """Adjust per-block counts (in place) to sum exactly k, by the diffused residuals."""
+    for _ in range(64):
+        total = int(count.sum())
+        if total == k:
+            return
+        resid = (value - count).ravel()
+        flat = count.ravel()
+        if total > k:
+            cand = np.flatnonzero(flat > 0)
+            m = min(total - k, cand.size)
+            pick = cand[np.argpartition(resid[cand], m - 1)[:m]]
+            flat[pick] -= 1
+        else:
+            cand = np.flatnonzero(flat < cap.ravel())
+            m = min(k - total, cand.size)
+            pick = cand[np.argpartition(-resid[cand], m - 1)[:m]]
+            flat[pick] += 1
+        count[...] = flat.reshape(count.shape)
+    raise RuntimeError("halftone count fix-up did not converge")  # pragma: no cover
+
+
 def halftone(density, k: int, *, rng=None) -> np.ndarray:
     """Exactly k distinct cells whose local density follows ``density`` (error diffusion).
 
-    Serpentine Floyd-Steinberg over :func:`samples_per_cell`, thresholds 0.5 +-
-    :data:`THRESHOLD_JITTER` (uniform), the scan starting from a random corner (a random flip of
-    rows and of columns per call); then the count is fixed up to exactly k: surplus cells with
-    the lowest diffused value are dropped, missing ones added at the highest.
+    Serpentine Floyd-Steinberg of :func:`samples_per_cell` summed over b x b blocks (b chosen so
+    a block holds about :data:`BLOCK_SAMPLES` samples at the mean density; b = 1 at high
+    densities), quantised to integer counts per block with thresholds 0.5 +-
+    :data:`THRESHOLD_JITTER` (uniform). Error diffusion at a few percent per cell lays samples
+    in lines and clumps; on blocks it stays in its good range. The scan starts from a random
+    corner (a random flip of rows and of columns per call); the counts are fixed up to exactly
+    k by the diffused residuals; each block's samples go to distinct cells drawn without
+    replacement in proportion to the density (Efraimidis-Spirakis keys).
 
     Parameters
     ----------
@@ -115,7 +148,7 @@ def halftone(density, k: int, *, rng=None) -> np.ndarray:
     k : int
         Number of samples.
     rng : None, int, SeedSequence or Generator
-        Randomness of the jitter and the flips.
+        Randomness of the jitter, the flips and the cells inside blocks.
 
     Returns
     -------
@@ -125,28 +158,42 @@ def halftone(density, k: int, *, rng=None) -> np.ndarray:
     rng = np.random.default_rng(rng)
     t = samples_per_cell(density, k)
     flip_r, flip_c = bool(rng.integers(2)), bool(rng.integers(2))
-    thresh = 0.5 + rng.uniform(-THRESHOLD_JITTER, THRESHOLD_JITTER, t.shape)
     sl = (slice(None, None, -1 if flip_r else 1), slice(None, None, -1 if flip_c else 1))
-    chosen, value = _k.diffuse(np.ascontiguousarray(t[sl]), thresh)
-    chosen, value = chosen[sl].ravel(), value[sl].ravel()
-    flat = np.flatnonzero(chosen)
-    if flat.size > k:
-        drop = np.argpartition(value[flat], flat.size - k - 1)[: flat.size - k]
-        flat = np.delete(flat, drop)
-    elif flat.size < k:
-        free = np.flatnonzero(~chosen)
-        add = free[np.argpartition(-value[free], k - flat.size - 1)[: k - flat.size]]
-        flat = np.concatenate((flat, add))
-    return np.sort(flat)
+    tf = np.ascontiguousarray(t[sl])
+    b = _block_side(k, t.size)
+    nbr, nbc = -(-t.shape[0] // b), -(-t.shape[1] // b)
+    pad = ((0, nbr * b - t.shape[0]), (0, nbc * b - t.shape[1]))
+    blocks = np.pad(tf, pad).reshape(nbr, b, nbc, b)
+    target = blocks.sum(axis=(1, 3))
+    cap = (blocks > 0).sum(axis=(1, 3)).astype(np.int64)
+    thresh = 0.5 + rng.uniform(-THRESHOLD_JITTER, THRESHOLD_JITTER, target.shape)
+    count, value = _k.diffuse(target, thresh, cap)
+    _fix_count(count, value, cap, k)
+    with np.errstate(divide="ignore"):
+        keys = rng.standard_exponential(tf.shape) / tf
+    flat = _k.pick_in_blocks(keys, count, b)
+    r, c = np.divmod(flat, t.shape[1])
+    if flip_r:
+        r = t.shape[0] - 1 - r
+    if flip_c:
+        c = t.shape[1] - 1 - c
+    return np.sort(r * t.shape[1] + c)
 
 
 def _snap(sr, sc, pitch, shape, border):
-    """Sites within ``border`` local pitches of an image edge moved onto it (in place)."""
-    lim = border * pitch
-    sr[sr < lim] = 0.0
-    sc[sc < lim] = 0.0
-    sr[sr > shape[0] - 1 - lim] = shape[0] - 1
-    sc[sc > shape[1] - 1 - lim] = shape[1] - 1
+    """Sites within ``border`` local pitches of an image edge moved onto the nearest edge.
+
+    One edge only: snapping a site near a corner onto both edges would stack sites on the
+    corner (the designated corner sites are forced separately).
+    """
+    far_r, far_c = shape[0] - 1 - sr, shape[1] - 1 - sc
+    dist = np.stack((sr, far_r, sc, far_c))
+    edge = np.argmin(dist, axis=0)
+    near = dist[edge, np.arange(sr.size)] < border * pitch
+    sr[near & (edge == 0)] = 0.0
+    sr[near & (edge == 1)] = shape[0] - 1
+    sc[near & (edge == 2)] = 0.0
+    sc[near & (edge == 3)] = shape[1] - 1
 
 
 def _corner_sites(sr, sc, shape) -> np.ndarray:

@@ -44,8 +44,8 @@ image-directed ``"lloyd"`` layouts.
 
 Oracles (:data:`ORACLES`, labels "Oracle ..."): they READ THE TRUE DEPTH, passed as
 ``plan(..., truth=depth)``, and can never be realised; they bound the headroom.
-``oracle_greedy`` (options ``start_share`` 0.25, ``batch_share`` 0.15, ``smooth_px`` 1,
-``nms_spacing`` 0.5, see
+``oracle_greedy`` (options ``start_share`` 0.25, ``batch_share`` 0.15, ``smooth_pitch`` 0.25,
+``nms_pitch`` 1, see
 :func:`simlunar.planner.oracle.oracle_greedy`) and ``oracle_hessian`` (``density_power`` 0.5,
 ``uniform_mix`` 0.25, ``lloyd_iterations``, ``border_pitch``). No other strategy reads ``truth``.
 """
@@ -101,7 +101,7 @@ _RANDOM_ONLY = ("density_cap", "cap_block", "blue_noise", "blue_noise_radius")
 #: options of the strategies that are not weighted (grid and random take none)
 _OTHER_OPTS = {
     "lloyd_uniform": _LLOYD_OPTS,
-    "oracle_greedy": ("start_share", "batch_share", "smooth_px", "nms_spacing"),
+    "oracle_greedy": ("start_share", "batch_share", "smooth_pitch", "nms_pitch"),
     "oracle_hessian": ("density_power", "uniform_mix", *_LLOYD_OPTS),
 }
 
@@ -342,8 +342,8 @@ def _oracle_greedy_strategy(
     truth,
     start_share=0.25,
     batch_share=0.15,
-    smooth_px=1.0,
-    nms_spacing=0.5,
+    smooth_pitch=0.25,
+    nms_pitch=1.0,
 ):
     return oracle_greedy(
         truth,
@@ -351,8 +351,8 @@ def _oracle_greedy_strategy(
         rng=rng,
         start=start_share,
         batch=batch_share,
-        smooth=smooth_px,
-        spacing=nms_spacing,
+        smooth=smooth_pitch,
+        window=nms_pitch,
     )
 
 
