@@ -26,14 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from simlunar.planner.placement import place
 from simlunar.planner.strategies import check_k
 from simlunar.planner.types import SamplePlan
 from simlunar.reconstruction import reconstruct, triangulate
-
-try:  # Lloyd placement of issue 20 part A (branch placement); the framed grid until merged
-    from simlunar.planner.placement import place as _place
-except ImportError:  # pragma: no cover - depends on the merge order
-    _place = None
 
 __all__ = [
     "SequentialOptions",
@@ -119,27 +115,11 @@ class SequentialPlan:
         return tuple(int(n) for n in np.bincount(self.round_of, minlength=self.rounds))
 
 
-def _framed_grid(shape, k: int, rng: np.random.Generator) -> np.ndarray:
-    """k cells of a lattice whose outer rows and columns lie on the image border."""
-    rows, cols = shape
-    n_r = int(np.clip(round(np.sqrt(k * rows / cols)), 2, rows))
-    n_c = int(np.clip(-(-k // n_r), 2, cols))
-    while n_r * n_c < k:
-        n_r, n_c = min(n_r + 1, rows), min(n_c + 1, cols)
-    r = np.unique(np.round(np.linspace(0, rows - 1, n_r)).astype(np.int64))
-    c = np.unique(np.round(np.linspace(0, cols - 1, n_c)).astype(np.int64))
-    flat = (r[:, None] * cols + c[None, :]).ravel()
-    corners = np.array([0, cols - 1, (rows - 1) * cols, rows * cols - 1])
-    others = np.setdiff1d(flat, corners)
-    keep = rng.choice(others.size, k - 4, replace=False) if k > 4 else []
-    return np.sort(np.concatenate((corners[:k], others[keep])))
-
-
 def uniform_layout(shape, k: int, *, rng=None) -> np.ndarray:
     """An image-free, evenly spread layout of k cells with the border covered.
 
-    Lloyd placement of a uniform density (:func:`simlunar.planner.placement.place`) when that
-    module is present, else a framed lattice (outer rows and columns on the border).
+    Lloyd placement of a uniform density (:func:`simlunar.planner.placement.place`: halftone,
+    weighted Lloyd, samples near the border snapped onto it, corners sampled).
 
     Parameters
     ----------
@@ -157,10 +137,7 @@ def uniform_layout(shape, k: int, *, rng=None) -> np.ndarray:
     rng = np.random.default_rng(rng)
     shape = tuple(int(s) for s in shape)
     k = check_k(k, shape[0] * shape[1])
-    if _place is not None:
-        out = _place(np.ones(shape), k, rng=rng)
-        return np.sort(np.asarray(getattr(out, "flat", out), dtype=np.int64))
-    return _framed_grid(shape, k, rng)
+    return place(np.ones(shape), k, rng=rng)
 
 
 def loo_residuals(points_rc, values) -> np.ndarray:
