@@ -13,7 +13,13 @@ from scipy import ndimage
 
 from simlunar.geometry import Rig
 from simlunar.imaging.exposure import AUTO_EXPOSURE_LEVEL, AUTO_EXPOSURE_PERCENTILE
+from simlunar.render.sparse import LitTracer
 from simlunar.scanner.triangulate import check_rig, projector_visibility, true_correspondences
+
+#: integrators of sparse patterns (dot frames), RenderCapture's ``sparse_integrator``
+SPARSE_INTEGRATORS = ("path", "ptracer", "lit")
+#: light paths per lit projector pixel of the ``"lit"`` sparse integrator
+SPARSE_PARTICLES = 256
 
 #: white-frame radiance percentile mapped to ``target_level`` by the auto exposure (the one
 #: rule of :mod:`simlunar.imaging.exposure`)
@@ -59,16 +65,22 @@ class RenderCapture:
         99.5th-percentile radiance to this fraction of the sensor range (or of 1 without a
         sensor), so thresholds are in [0, 1] frame units. The sensor's own ``exposure`` is
         replaced by it.
-    sparse_integrator : "path" or "ptracer"
+    sparse_integrator : "path", "ptracer" or "lit"
         Integrator for sparse patterns (projector dots): patterns with a lit fraction of at
         most ``sparse_below`` (and some light) are rendered with it
         (:meth:`simlunar.render.scene.TerrainScene.render`); ``"ptracer"`` traces light from
-        the projector, which samples its lit pixels, so the dots get every light path.
+        the projector, which samples its lit pixels, so the dots get every light path, but
+        launches ``sparse_spp`` paths per camera pixel; ``"lit"``
+        (:class:`simlunar.render.sparse.LitTracer`) traces ``sparse_particles`` paths per lit
+        projector pixel, so a dot frame costs what its dots cost, and renders a pattern with
+        nothing lit as black at no cost.
     sparse_spp : int or None
         Samples per pixel for sparse patterns (None: ``spp``); for ``"ptracer"`` light paths
-        per film pixel.
+        per film pixel. Not used by ``"lit"``.
     sparse_below : float
         Largest lit fraction of the projector's pixels that counts as sparse.
+    sparse_particles : int
+        ``"lit"`` only: light paths per lit projector pixel (at pattern value 1).
     """
 
     def __init__(
@@ -91,6 +103,7 @@ class RenderCapture:
         sparse_integrator: str = "path",
         sparse_spp: int | None = None,
         sparse_below: float = 0.01,
+        sparse_particles: int = SPARSE_PARTICLES,
     ) -> None:
         from simlunar.render.lights import ProjectorLight
         from simlunar.render.scene import TerrainScene
@@ -103,13 +116,18 @@ class RenderCapture:
         if camera_blur < 0:
             raise ValueError(f"camera_blur must be >= 0 px, got {camera_blur}")
         self.camera_blur = float(camera_blur)
-        if sparse_integrator not in ("path", "ptracer"):
+        if sparse_integrator not in SPARSE_INTEGRATORS:
             raise ValueError(
-                f"unknown sparse_integrator {sparse_integrator!r}; valid: 'path', 'ptracer'"
+                f"unknown sparse_integrator {sparse_integrator!r}; valid: "
+                + ", ".join(repr(k) for k in SPARSE_INTEGRATORS)
             )
         if sparse_spp is not None and int(sparse_spp) < 1:
             raise ValueError(f"sparse_spp must be >= 1, got {sparse_spp}")
+        if int(sparse_particles) < 1:
+            raise ValueError(f"sparse_particles must be >= 1, got {sparse_particles}")
         self.sparse_integrator = sparse_integrator
+        self.sparse_particles = int(sparse_particles)
+        self._lit = None  # the LitTracer, made on the first sparse frame
         self.sparse_spp = None if sparse_spp is None else int(sparse_spp)
         self.sparse_below = float(sparse_below)
         self.rig = rig
@@ -191,6 +209,8 @@ class RenderCapture:
             )
         self.renders += len(pats)
         em = self.emitted(pats)
+        if self.sparse_integrator == "lit":
+            return self._lens(self._with_ambient(self._render_lit(em)))
         lit = (em > 0).mean(axis=(1, 2))
         sparse = (lit > 0) & (lit <= self.sparse_below)
         if (self.sparse_integrator == "path" and self.sparse_spp is None) or not sparse.any():
@@ -202,6 +222,19 @@ class RenderCapture:
             em[sparse], spp=self.sparse_spp, integrator=self.sparse_integrator
         )
         return self._lens(self._with_ambient(out))
+
+    def _render_lit(self, em: np.ndarray) -> np.ndarray:
+        """``sparse_integrator="lit"``: sparse and black patterns light traced from their lit
+        pixels (:class:`simlunar.render.sparse.LitTracer`), the others path traced."""
+        sparse = (em > 0).mean(axis=(1, 2)) <= self.sparse_below
+        out = np.empty((len(em), *self.scene.shape), np.float32)
+        if (~sparse).any():
+            out[~sparse] = self.scene.render_patterns(em[~sparse])
+        if sparse.any():
+            if self._lit is None:
+                self._lit = LitTracer(self.scene, per_pixel=self.sparse_particles)
+            out[sparse] = self._lit.render(em[sparse], seed=self.scene.seed)
+        return out
 
     def _with_ambient(self, frames: np.ndarray) -> np.ndarray:
         """``frames`` plus the image of the extra lights (linearity of light transport)."""
