@@ -43,6 +43,8 @@ __all__ = ["LitParticles", "LitTracer", "lit_particles"]
 
 #: frac(j * GOLDEN) spreads consecutive particles of one pixel down it (Kronecker sequence)
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+#: largest offset within a projector pixel (float32 resolves 2^-13 px at 1024 px)
+X_MAX = 1.0 - 2.0**-11
 #: path depth after which Russian roulette ends paths (unbounded ``max_depth`` only)
 RR_DEPTH = 5
 #: the most vertices an unbounded path may have
@@ -51,40 +53,73 @@ MAX_VERTICES = 64
 
 @dataclass(frozen=True, eq=False)
 class LitParticles:
-    """Particles leaving the projector, for a stack of frames.
+    """Particles leaving the projector for a stack of frames: a table of the lit pixels.
+
+    Particle ``k`` leaves lit pixel ``i = pixel[k]``; with ``j = k - first[i]`` (the pixel's
+    particles are contiguous) it crosses the pixel at ``(j + offset[i]) / share[i]`` and down it
+    at ``frac(j * GOLDEN + shift[i])`` (:meth:`uv`; the tracer does the same on the device).
 
     Attributes
     ----------
-    frame : (N,) int32
-        Frame of each particle (particles of one frame are contiguous).
-    uv : (N, 2) float32
-        Projector pixel coordinates (u, v) the particle passes through.
+    pixel : (N,) int32
+        Lit pixel (row of the table) of each particle.
+    frame, col, row : (L,) int32
+        Frame and projector pixel of each lit pixel.
+    first : (L,) int64
+        Its first particle.
+    share : (L,) float64
+        Its expected particle count ``N_f v / S_f`` (its actual count is within one of it).
+    offset, shift : (L,) float64
+        Its systematic offset in ``[0, 1)`` and its Kronecker shift.
     power : (n,) float64
         Sum of the emitted pattern over each frame's lit pixels, ``S_f``.
     counts : (n,) int64
         Particles per frame, ``N_f`` (0 for a frame with nothing lit).
     """
 
+    pixel: np.ndarray
     frame: np.ndarray
-    uv: np.ndarray
+    col: np.ndarray
+    row: np.ndarray
+    first: np.ndarray
+    share: np.ndarray
+    offset: np.ndarray
+    shift: np.ndarray
     power: np.ndarray
     counts: np.ndarray
 
     def __len__(self) -> int:
-        return int(self.frame.shape[0])
+        return int(self.pixel.shape[0])
+
+    def uv(self) -> np.ndarray:
+        """(N, 2) float64 projector pixel coordinates (u, v) of the particles."""
+        i = self.pixel
+        j = np.arange(len(i)) - self.first[i]
+        x = np.clip((j + self.offset[i]) / self.share[i], 0.0, X_MAX)
+        y = j * GOLDEN + self.shift[i]
+        y = np.minimum(y - np.floor(y), X_MAX)
+        return np.stack([self.col[i] + x, self.row[i] + y], axis=-1)
 
 
 def lit_particles(emitted, *, per_pixel: float, rng=None) -> LitParticles:
-    """Stratified particles over the lit pixels of each pattern, in proportion to its value.
+    """Systematic particles over the lit pixels of each pattern, in proportion to its value.
+
+    Frame ``f`` gets ``N = ceil(per_pixel * S_f)`` particles; its particle ``k`` takes the lit
+    pixel whose share of the frame's power holds ``(k + xi) / N`` (one random ``xi`` per
+    frame: systematic sampling, so each pixel gets its share ``N v / S`` within one) and
+    crosses it at that number's position within the share (a regular grid); down the pixel
+    its ``j``-th particle goes to ``frac(j * GOLDEN + eta)`` (a Kronecker sequence, one random
+    ``eta`` per pixel). Each particle on its own is uniform over the emitted power, so the
+    estimate is unbiased; the regular placement only lowers its variance.
 
     Parameters
     ----------
     emitted : (n, H, W) float array
         What the projector emits (values >= 0; response and blur already applied).
     per_pixel : float
-        Particles per lit pixel at value 1: frame ``f`` gets ``ceil(per_pixel * S_f)``.
+        Particles per lit pixel at value 1.
     rng : seed or Generator
-        The jitter of the strata and the Kronecker shift.
+        The random shifts.
 
     Returns
     -------
@@ -96,34 +131,36 @@ def lit_particles(emitted, *, per_pixel: float, rng=None) -> LitParticles:
     if not per_pixel > 0:
         raise ValueError(f"per_pixel must be > 0, got {per_pixel}")
     rng = np.random.default_rng(rng)
-    width = em.shape[2]
-    frames, uvs = [], []
-    power = np.zeros(len(em))
+    f, row, col = np.nonzero(em > 0)
+    val = em[f, row, col].astype(np.float64)
+    power = np.bincount(f, weights=val, minlength=len(em))
     counts = np.zeros(len(em), np.int64)
-    for f, pattern in enumerate(em):
-        flat = pattern.ravel()
-        lit = np.flatnonzero(flat > 0)
-        if lit.size == 0:
-            continue
-        val = flat[lit].astype(np.float64)
-        power[f] = val.sum()
-        n = max(1, math.ceil(per_pixel * power[f] - 1e-9))
-        counts[f] = n
-        mass = val / power[f]
-        upper = np.cumsum(mass)
-        j = np.arange(n)
-        u = (j + rng.random(n)) / n
-        i = np.minimum(np.searchsorted(upper, u, side="right"), lit.size - 1)
-        x = np.clip((u - (upper[i] - mass[i])) / mass[i], 0.0, np.nextafter(1.0, 0.0))
-        y = (j * GOLDEN + rng.random()) % 1.0
-        uv = np.empty((n, 2), np.float32)
-        uv[:, 0] = lit[i] % width + x
-        uv[:, 1] = lit[i] // width + y
-        frames.append(np.full(n, f, np.int32))
-        uvs.append(uv)
-    if not frames:
-        return LitParticles(np.empty(0, np.int32), np.empty((0, 2), np.float32), power, counts)
-    return LitParticles(np.concatenate(frames), np.concatenate(uvs), power, counts)
+    lit = power > 0
+    counts[lit] = np.maximum(1, np.ceil(per_pixel * power[lit] - 1e-9)).astype(np.int64)
+    share = val * (counts[f] / power[f])
+    # B: the share of the frame's earlier lit pixels; particle k of the frame is in pixel i
+    # when B_i <= k + xi < B_i + share_i, so the pixel's first is ceil(B_i - xi)
+    start = np.concatenate([[0], np.cumsum(counts)])
+    csum = np.cumsum(share)
+    before = csum - share - np.concatenate([[0.0], csum])[np.searchsorted(f, np.arange(len(em)))][f]
+    xi = rng.random(len(em))[f]
+    local = np.minimum(np.ceil(before - xi), counts[f])  # rounding: never past the frame's end
+    first = start[f] + local.astype(np.int64)
+    nxt = np.append(first[1:], start[-1])
+    pixel = np.repeat(np.arange(len(f), dtype=np.int32), nxt - first)
+    offset = np.clip(local + xi - before, 0.0, 1.0)
+    return LitParticles(
+        pixel=pixel,
+        frame=f.astype(np.int32),
+        col=col.astype(np.int32),
+        row=row.astype(np.int32),
+        first=first,
+        share=share,
+        offset=offset,
+        shift=rng.random(len(f)),
+        power=power,
+        counts=counts,
+    )
 
 
 class LitTracer:
@@ -194,32 +231,38 @@ class LitTracer:
 
         mi = self._mi
         rows, cols = self.shape
-        n = len(parts)
         sampler = self._sampler.clone()
-        sampler.seed(dr.opaque(mi.UInt32, seed), n)
+        sampler.seed(dr.opaque(mi.UInt32, seed), len(parts))
         with np.errstate(divide="ignore", invalid="ignore"):
-            scale = np.where(parts.counts > 0, parts.power / parts.counts, 0.0)
-        # one entry per frame of a full batch, plus one: an array of one element would be a
-        # literal of the kernel, and every new value a new kernel to compile
-        table = np.zeros(self.batch + 1, np.float32)
-        table[:n_frames] = scale * (self.pixel_power * rows * cols)
-        frame = mi.UInt32(parts.frame.astype(np.uint32))
-        throughput = dr.gather(mi.Float, mi.Float(table), frame)
-        ray = mi.Ray3f(mi.Point3f(*(float(c) for c in self._origin)), self._directions(parts.uv))
+            per_particle = np.where(parts.counts > 0, parts.power / parts.counts, 0.0)
+        power = per_particle * (self.pixel_power * rows * cols)
+        i = mi.UInt32(parts.pixel.astype(np.uint32))
+        frame = dr.gather(mi.UInt32, _table(mi.UInt32, parts.frame), i)
+        throughput = dr.gather(mi.Float, _table(mi.Float, power[parts.frame]), i)
+        ray = mi.Ray3f(mi.Point3f(*(float(c) for c in self._origin)), self._directions(parts, i))
         image = dr.zeros(mi.Float, n_frames * rows * cols)
-        base = frame * (rows * cols)
-        self._paths(ray, mi.Color3f(throughput), sampler, image, base)
+        self._paths(ray, mi.Color3f(throughput), sampler, image, frame * (rows * cols))
         dr.eval(image)
         return np.array(image, np.float32).reshape(n_frames, rows, cols)
 
-    def _directions(self, uv: np.ndarray):
-        """World unit directions of the projector rays through pixel coordinates ``uv``."""
-        mi = self._mi
+    def _directions(self, parts: LitParticles, i):
+        """World unit directions of the particles' rays (:meth:`LitParticles.uv` on the device)."""
         import drjit as dr
 
+        mi = self._mi
+        j = mi.Float(
+            dr.arange(mi.UInt32, len(parts))
+            - dr.gather(mi.UInt32, _table(mi.UInt32, parts.first), i)
+        )
+        x = (j + dr.gather(mi.Float, _table(mi.Float, parts.offset), i)) * dr.gather(
+            mi.Float, _table(mi.Float, 1.0 / np.maximum(parts.share, 1e-30)), i
+        )
+        y = j * GOLDEN + dr.gather(mi.Float, _table(mi.Float, parts.shift), i)
+        u = mi.Float(dr.gather(mi.UInt32, _table(mi.UInt32, parts.col), i)) + dr.clip(x, 0.0, X_MAX)
+        v = mi.Float(dr.gather(mi.UInt32, _table(mi.UInt32, parts.row), i)) + dr.minimum(
+            y - dr.floor(y), X_MAX
+        )
         fx, fy, cx, cy = self._k
-        u = mi.Float(np.ascontiguousarray(uv[:, 0]))
-        v = mi.Float(np.ascontiguousarray(uv[:, 1]))
         x, y = (u - cx) / fx, (v - cy) / fy
         r = self._rotation.tolist()
         d = mi.Vector3f(
@@ -293,3 +336,13 @@ class LitTracer:
         ok &= (col >= 0) & (col < cols) & (row >= 0) & (row < rows)
         index = base + mi.UInt32(row * cols + col)
         dr.scatter_reduce(dr.ReduceOp.Add, image, y, index, ok)
+
+
+def _table(kind, values: np.ndarray):
+    """A device array of ``values`` padded to two entries at least: an array of one entry
+    would be a literal of the kernel, and every new value a new kernel to compile."""
+    dtype = np.uint32 if "UInt" in kind.__name__ else np.float32
+    v = np.asarray(values).astype(dtype)
+    if v.size < 2:
+        v = np.concatenate([v, np.zeros(2 - v.size, dtype)])
+    return kind(v)
