@@ -7,14 +7,17 @@ Delaunay-linear interpolation and score the reconstruction against the true dept
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import multiprocessing
 import signal
 import zlib
 from collections.abc import Callable, Sequence
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from simlunar.errors import InfrastructureError
 from simlunar.features import check_image, feature_map
 from simlunar.metrics import METRIC_NAMES, METRICS, check_densities, depth_gradient_weights
 from simlunar.metrics import samples_for_equal_error as _samples_for_equal_error
@@ -373,8 +376,34 @@ def _map_tasks(state, tasks, workers):
     # Numba's dispatcher lock, which another thread of this process (a concurrent unit of
     # LocalPoolExecutor) may hold at the moment of the fork.
     _warm_kernels(state)
-    with ctx.Pool(min(workers, len(tasks)), initializer=_init_worker, initargs=(state,)) as pool:
-        return pool.map(_task, tasks, chunksize=1)
+    # concurrent.futures notices a dead worker (multiprocessing.Pool waits for it forever)
+    pool = cf.ProcessPoolExecutor(
+        min(workers, len(tasks)), mp_context=ctx, initializer=_init_worker, initargs=(state,)
+    )
+    try:
+        out = list(pool.map(_task, tasks))
+    except BrokenProcessPool:
+        _stop(pool)
+        raise InfrastructureError(
+            "a sampling-study worker process died (killed by the system, e.g. out of memory, "
+            "or by an operator)"
+        ) from None
+    except BaseException:
+        _stop(pool)  # Ctrl-C: the workers ignore SIGINT, so end them instead of waiting
+        raise
+    pool.shutdown(wait=True)
+    return out
+
+
+def _stop(pool: cf.ProcessPoolExecutor) -> None:
+    """End a pool's workers now (their tasks are abandoned) and release it."""
+    # the executor has no public way to end running workers; _processes is {pid: Process}
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        try:
+            proc.terminate()
+        except (OSError, ValueError):
+            pass  # already gone
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _warm_kernels(state) -> None:
