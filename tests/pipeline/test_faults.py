@@ -537,3 +537,73 @@ def test_ctrl_c_while_the_summary_is_written_says_what_is_kept(tmp_path, monkeyp
     assert not (out / ".lock").exists() and not (out / "provenance.json").exists()
     monkeypatch.undo()
     assert run_fake(exp, out).units_cached == 4
+
+
+# --------------------------------------------------------------------------- lost pool workers
+def _children(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+POOL_EXP = {
+    **EXP,
+    "study": {
+        "strategies": ["random", "grid", "gradient"],
+        "densities": ["1/4", "1/16", "1/64"],
+        "trials": 12,
+        "metrics": ["mse"],
+    },
+    "sweep": {"render.light.elevation_deg": [10, 30]},
+}
+
+
+def test_a_killed_study_worker_is_exit_3_in_seconds_keeps_units_and_a_rerun_completes(tmp_path):
+    """``--workers 2``: a forked sampling-study process killed (the OOM killer, an operator)
+    ends the run with one line and exit 3 instead of a hang; the finished unit is kept and
+    the rerun gives the folder of an uninterrupted run."""
+    from fake_unit import pool_unit
+
+    exp = write_exp(tmp_path / "exp.yaml", POOL_EXP)
+    ref = tmp_path / "ref"
+    run_experiment(load_experiment(exp), ref, compute=pool_unit, progress=False, figures=False)
+    out, gate, calls = tmp_path / "out", tmp_path / "gate", tmp_path / "calls"
+    env = {
+        "SIMLUNAR_TEST_POOL_UNITS": "1",
+        "SIMLUNAR_TEST_CALLS": str(calls),
+        "SIMLUNAR_TEST_GATE": str(gate),
+        "SIMLUNAR_TEST_GATE_AFTER": "1",
+    }
+    p = cli("run", str(exp), "--out", str(out), "--no-progress", "--workers", "2", env=env)
+    try:
+        # the first unit finishes while the second waits at the gate; then the second's pool
+        # starts and one of its workers is killed
+        wait_for(lambda: (out / "units").is_dir() and len(finished_units(out)) == 1, 120)
+        gate.touch()
+        victims: list[int] = []
+        wait_for(lambda: victims.extend(_children(p.pid)) or victims, 60)
+        os.kill(victims[0], signal.SIGKILL)
+        t0 = time.monotonic()
+        _, stderr = p.communicate(timeout=60)
+        took = time.monotonic() - t0
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+    assert p.returncode == 3, stderr
+    assert took < 20, took
+    lines = stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: a sampling-study worker process died")
+    assert "1 of 2 units finished and kept" in lines[0]
+    assert len(finished_units(out)) == 1 and not (out / ".lock").exists()
+    s = run_experiment(
+        load_experiment(exp), out, compute=pool_unit, progress=False, figures=False
+    )
+    assert (s.units_cached, s.units_computed) == (1, 1)
+    assert tree(out) == tree(ref)
