@@ -602,8 +602,6 @@ def test_a_killed_study_worker_is_exit_3_in_seconds_keeps_units_and_a_rerun_comp
     assert len(lines) == 1 and lines[0].startswith("error: a sampling-study worker process died")
     assert "1 of 2 units finished and kept" in lines[0]
     assert len(finished_units(out)) == 1 and not (out / ".lock").exists()
-    s = run_experiment(
-        load_experiment(exp), out, compute=pool_unit, progress=False, figures=False
-    )
+    s = run_experiment(load_experiment(exp), out, compute=pool_unit, progress=False, figures=False)
     assert (s.units_cached, s.units_computed) == (1, 1)
     assert tree(out) == tree(ref)
