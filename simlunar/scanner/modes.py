@@ -320,7 +320,13 @@ def fill_holes(depth: np.ndarray, *, outside: str = "nearest") -> np.ndarray:
 
     r, c = np.nonzero(np.isfinite(depth))
     if len(r) == 0:
-        raise ValueError("depth map has no measured pixel to reconstruct from")
+        from simlunar.errors import NothingMeasuredError
+
+        raise NothingMeasuredError(
+            "the scan measured no pixel (nothing decoded: projector too faint against the "
+            "sun or the thresholds, or the camera sees no projected pixel), so there is no "
+            "depth to reconstruct"
+        )
     return reconstruct(
         np.stack([r, c], axis=-1).astype(float), depth[r, c], depth.shape, outside=outside
     )
