@@ -87,6 +87,22 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
     return p
 
 
+# --------------------------------------------------------------------------- renderer
+def check_renderer() -> None:
+    """``SIMLUNAR_VARIANT``, when set, must name a Mitsuba variant this machine can run
+    (a known name; ``cuda_ad_rgb`` needs a usable GPU, ``llvm_ad_rgb`` a libLLVM): the
+    backend's own choice, made without importing Mitsuba, before anything is written."""
+    wanted = os.environ.get("SIMLUNAR_VARIANT")
+    if not wanted:
+        return  # the backend falls back by itself
+    from simlunar.render.backend import choose_variant
+
+    try:
+        choose_variant()
+    except (ValueError, RuntimeError) as exc:
+        raise ConfigError(f"SIMLUNAR_VARIANT={wanted}: {exc}") from None
+
+
 # --------------------------------------------------------------------------- input hashes
 
 
@@ -500,8 +516,11 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
     ``render`` is a ``RenderCfg`` (an experiment's or a scene's).
 
     Rays through a grid of pixels (the corners included) are intersected with the terrain's
-    bounding box; if none meets it, no pixel can see the terrain.
+    bounding box; if none meets it, no pixel can see the terrain. The image's pixel count is
+    within :data:`MAX_CELLS`.
     """
+    rows, cols = image_shape(render, facts)
+    check_size(key, f"a {rows} x {cols} image", rows * cols)
     cam = render.camera
     if getattr(cam, "kind", None) == "rover_mast":
         _check_site(cam, facts, key)
@@ -588,7 +607,6 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
     :data:`MAX_CELLS`; scanner sizes are positive and within the limits."""
     s = cfg.study
     n = shape[0] * shape[1]
-    check_size("render.camera", f"a {shape[0]} x {shape[1]} image", n)
     if getattr(s, "kind", "sampling") == "sampling":
         for i, d in enumerate(s.densities):
             k = round(d * n)

@@ -32,6 +32,7 @@ import simlunar
 from simlunar.config.loading import apply_sweep_value, to_plain
 from simlunar.config.schema import ExperimentCfg
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
+from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
@@ -307,6 +308,7 @@ def run_experiment(
     preflight.check_out_dir(out)
     units = expand(cfg)
     checks = preflight.check_units(units)
+    preflight.check_renderer()
     config_text = yaml.safe_dump(to_plain(cfg), sort_keys=False, allow_unicode=True)
     executor = executor or LocalPoolExecutor(1)
     executor_open = getattr(executor, "open", None)
@@ -334,8 +336,11 @@ def run_experiment(
             )
         except RunInterrupted:
             raise
-        except KeyboardInterrupt:
-            # after the units, while the summary or the figures were written
+        except BaseException as exc:
+            if not (isinstance(exc, KeyboardInterrupt) or interrupted()):
+                raise
+            # after the units, while the summary or the figures were written (whatever
+            # the interrupted code raised: the Ctrl-C decides)
             done = len(UnitCache(out).keys() & {u.key for u in units})
             raise RunInterrupted(_kept(out, done, len(units), "interrupted")) from None
         finally:
@@ -537,13 +542,21 @@ def _run_locked(
             n_new += 1
             if bar is not None:
                 bar.advance()
-    except KeyboardInterrupt:
-        raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted")) from None
-    except InfrastructureError as exc:
-        raise InfrastructureError(f"{exc}; {_kept(out, n_cached + n_new, len(units))}") from None
+    except BaseException as exc:
+        if isinstance(exc, KeyboardInterrupt) or interrupted():
+            # a Ctrl-C, whatever the interrupted code made of it (the renderer's start-up
+            # turns it into other errors)
+            raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted")) from None
+        if isinstance(exc, InfrastructureError):
+            raise InfrastructureError(
+                f"{exc}; {_kept(out, n_cached + n_new, len(units))}"
+            ) from None
+        raise
     finally:
         if bar is not None:
             bar.stop()
+    if interrupted():  # a Ctrl-C swallowed by the code it interrupted
+        raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted"))
 
     rows, columns = collect_rows(units, records)
     atomic_write_text(out / "results.csv", csv_text(rows, columns))
