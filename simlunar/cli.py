@@ -269,6 +269,7 @@ def schema(
 ) -> None:
     """JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server)."""
     import json
+    from pathlib import Path
 
     from simlunar.config.docs import SCHEMA_KINDS, json_schema
     from simlunar.errors import ConfigError
@@ -284,8 +285,11 @@ def schema(
     else:
         text = json.dumps(json_schema(kind), indent=2)
     if out:
+        from simlunar.pipeline.preflight import check_out_file
         from simlunar.results.store import atomic_write_text
 
+        check_out_file(out)
+        Path(out).parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(out, text + "\n")
     else:
         typer.echo(text)
@@ -357,15 +361,19 @@ def terrain(
         raise SimlunarError(f"--format must be exr, npz, npy or tif, got {dem_format!r}")
     if out is None and not stats:
         raise SimlunarError("--out is required (unless --stats)")
+    if seed < 0:
+        raise SimlunarError(f"--seed must be >= 0, got {seed}")
     if Path(preset).suffix.lower() in FORMATS + GDAL_FORMATS:
         if not stats or out is not None:
             raise SimlunarError(f"{preset}: a DEM file is only read with --stats (and no --out)")
         import json
         from types import SimpleNamespace
 
+        from simlunar.pipeline.preflight import check_dem_file
+
+        check_dem_file(preset, key="--stats")  # size, finite heights, spacing and extent
         with user_input():
             dem = load_dem(preset)
-        typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
         kw = {"craters": [], "rocks": []}
         side = Path(preset).with_name("features.json")  # written beside it by simlunar terrain
         if side.is_file():
@@ -375,6 +383,8 @@ def terrain(
                 except json.JSONDecodeError as exc:
                     raise ValueError(f"{side}: not valid JSON ({exc})") from None
                 kw = _feature_diameters(side, feats)
+        typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
+        if side.is_file():
             typer.echo(f"features: {side}")
         kw = {k: [SimpleNamespace(diameter=d) for d in v] for k, v in kw.items()}
         for line in terrain_report(dem, **kw):

@@ -76,7 +76,7 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
     if not os.access(anc, os.W_OK | os.X_OK):
         raise ResultFolderError(f"{option} {p}: {anc} is not writable (permission denied)")
     if p.is_dir():
-        for sub in ("units", "figures", "config.yaml"):
+        for sub in ("units", "figures", "scans", "config.yaml"):
             q = p / sub
             want_dir = sub != "config.yaml"
             if q.exists() and q.is_dir() != want_dir:
@@ -101,6 +101,18 @@ def check_renderer() -> None:
         choose_variant()
     except (ValueError, RuntimeError) as exc:
         raise ConfigError(f"SIMLUNAR_VARIANT={wanted}: {exc}") from None
+
+
+def check_out_file(out: str | Path, *, option: str = "--out") -> Path:
+    """Raise :class:`ResultFolderError` unless ``out`` can be written as a file: not a folder,
+    in a folder that exists or can be made (:func:`check_out_dir` of its parent)."""
+    p = Path(out)
+    if p.is_dir():
+        raise ResultFolderError(f"{option} {p}: is a folder, not a file")
+    check_out_dir(p.parent, option=f"{option} {p}:")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise ResultFolderError(f"{option} {p}: is not writable (permission denied)")
+    return p
 
 
 # --------------------------------------------------------------------------- input hashes
@@ -330,21 +342,28 @@ def terrain_facts(t: Any) -> TerrainFacts:
                 p = _preset_params(t)
             except (ValueError, OSError) as exc:
                 raise ConfigError(f"terrain.preset: {exc}") from None
-            where = "terrain.overrides.grid" if "grid" in (t.overrides or {}) else "terrain.preset"
-            check_size(where, f"{p.rows} x {p.cols} cells", p.rows * p.cols)
             half = 0.5 * max(p.rows, p.cols) * p.spacing
             facts = TerrainFacts(
                 p.rows, p.cols, p.spacing, tuple(p.origin), -half, half, 0.0, str(t.preset)
             )
             _check_extent(facts, "terrain.preset")
             _TERRAIN_MEMO[memo] = facts
+        facts = _TERRAIN_MEMO[memo]
+        # every time (not memoised): the limit is a setting of this run
+        grid = getattr(t.overrides, "grid", None) if t.overrides is not None else None
+        where = "terrain.overrides.grid" if grid is not None else "terrain.preset"
+        check_size(where, f"{facts.rows} x {facts.cols} cells", facts.rows * facts.cols)
         return _TERRAIN_MEMO[memo]
     files = [Path(t.file)] + ([Path(t.albedo_file)] if t.albedo_file is not None else [])
     stamps = tuple(_stamp(p) for p in files)
     memo = ("file", *map(str, files), t.spacing_m, stamps)
     if memo not in _TERRAIN_MEMO:
         _TERRAIN_MEMO[memo] = _dem_facts(Path(t.file), t.spacing_m, t.albedo_file)
-    return _TERRAIN_MEMO[memo]
+    facts = _TERRAIN_MEMO[memo]
+    check_size(
+        "terrain.file", f"{t.file}: {facts.rows} x {facts.cols} cells", facts.rows * facts.cols
+    )
+    return facts
 
 
 def _preset_params(t: Any):
@@ -448,8 +467,15 @@ def _check_npz_spacing(path: Path, key: str) -> None:
         raise ConfigError(f"{key}: {path}: 'spacing' must be a positive number, got {v}")
 
 
-def _dem_facts(path: Path, spacing: float | None, albedo_file) -> TerrainFacts:
-    key = "terrain.file"
+def check_dem_file(path: str | Path, *, key: str) -> TerrainFacts:
+    """A DEM file read by a command other than ``run`` (``simlunar terrain --stats``), with
+    the checks of an experiment's ``terrain.file``; errors name ``key``."""
+    return _dem_facts(Path(path), None, None, key=key)
+
+
+def _dem_facts(
+    path: Path, spacing: float | None, albedo_file, *, key: str = "terrain.file"
+) -> TerrainFacts:
     if not path.is_file():
         raise ConfigError(f"{key}: file not found: {path}")
     terrain = _read_grid(path, key, spacing=spacing)

@@ -450,12 +450,12 @@ def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
 
 
 def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
-    from simlunar.results.exports import export_unit_key
+    from simlunar.results.exports import export_complete
 
     name = f"unit{u.index}"
     if scan_dirs.get(name) != u.key:
         return True  # exports nothing (or a unit of the same key does)
-    return export_unit_key(out / "scans" / name) == u.key
+    return export_complete(out / "scans" / name, u.key)
 
 
 def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
@@ -464,7 +464,7 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
     import re
     import shutil
 
-    from simlunar.results.exports import export_unit_key
+    from simlunar.results.exports import export_complete
 
     folder = out / "scans"
     removed: list[Path] = []
@@ -474,7 +474,7 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
         if not (p.is_dir() and re.fullmatch(r"unit\d+", p.name)):
             continue  # only what the runner writes
         key = scan_dirs.get(p.name)
-        if key is None or export_unit_key(p) != key:
+        if key is None or not export_complete(p, key):
             shutil.rmtree(p)
             removed.append(p)
     if not any(folder.iterdir()):
@@ -514,6 +514,8 @@ def _run_locked(
             todo.append(u)
     n_cached = len(units) - len(todo)
     stale = cache.keys() - set(keys)
+    # nothing of a finished folder is removed before this run is known to be able to write
+    _check_writable(out, scan_dirs)
     if todo or stale or not folder_complete(out, keys):
         # the folder's summary and figures no longer describe its units: remove them before
         # any unit changes, so an interrupted run never leaves them beside other units
@@ -588,6 +590,31 @@ def _run_locked(
         written,
         _notes(checks, units, records),
     )
+
+
+def _check_writable(out: Path, scan_dirs: dict[str, str]) -> None:
+    """Write (and remove) a small file in each folder the run writes into, so a full disk,
+    a quota or a folder made read-only fails here (exit 3) before any result is deleted."""
+    import os
+    import tempfile
+
+    folders = [out, out / "units", out / "figures"] + ([out / "scans"] if scan_dirs else [])
+    for d in folders:
+        if d.exists() and not d.is_dir():
+            raise ResultFolderError(f"--out {out}: {d} is not a folder")
+        target = d if d.is_dir() else out
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=".simlunar-probe.", dir=target)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        try:
+            os.write(fd, b"\0" * 65536)
+            os.fsync(fd)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        finally:
+            os.close(fd)
+            os.unlink(tmp)
 
 
 def _kept(out: Path, done: int, total: int, what: str = "") -> str:
