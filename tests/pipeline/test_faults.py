@@ -605,3 +605,36 @@ def test_a_killed_study_worker_is_exit_3_in_seconds_keeps_units_and_a_rerun_comp
     s = run_experiment(load_experiment(exp), out, compute=pool_unit, progress=False, figures=False)
     assert (s.units_cached, s.units_computed) == (1, 1)
     assert tree(out) == tree(ref)
+
+
+# --------------------------------------------------------------------------- Ctrl-C at start-up
+def _maps_have(pid: int, name: str) -> bool:
+    try:
+        return name in Path(f"/proc/{pid}/maps").read_text()
+    except OSError:
+        return False
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("after_s", [0.0, 0.05, 0.2, 0.4])
+def test_ctrl_c_while_the_renderer_starts_is_always_130(after_s, tmp_path):
+    """SIGINT at several points of Mitsuba's and Dr.Jit's import and initialisation (timed
+    from the moment Dr.Jit's library is mapped): exit 130 and the one line, never an internal
+    error, an abort or a finished render."""
+    ROOT = HERE.parents[1]
+    out = tmp_path / "r"
+    p = subprocess.Popen(
+        [sys.executable, "-m", "simlunar.cli", "render", str(ROOT / "scenes" / "quickstart_scene.yaml"), "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )  # fmt: skip
+    try:
+        wait_for(lambda: _maps_have(p.pid, "drjit") or p.poll() is not None, timeout=120)
+        time.sleep(after_s)
+        os.killpg(p.pid, signal.SIGINT)
+        _, stderr = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+    assert p.returncode == 130, stderr
+    assert stderr.splitlines() == ["interrupted"], stderr
