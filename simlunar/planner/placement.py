@@ -7,7 +7,8 @@ density *and* they are evenly spread:
 
 1. :func:`density_from_map`: importance map -> target density (power ``p``, uniform share ``m``).
 2. :func:`halftone`: serpentine Floyd-Steinberg error diffusion of the density scaled to k
-   samples, fixed up to exactly k distinct cells.
+   samples (on blocks of about half a sample at sparse densities), fixed up to exactly k
+   distinct cells.
 3. :func:`lloyd`: weighted Lloyd (centroidal Voronoi) relaxation on the pixel grid with weight =
    density^2 (a 2-D CVT puts sites at density ~ weight^(1/2), Du, Faber & Gunzburger 1999), sites
    within ``border`` local pitches of the image border snapped onto it and the four corners
@@ -243,10 +244,11 @@ def _check_sites(sites, n: int) -> np.ndarray:
 def lloyd(density, sites, *, iterations: int = 20, border: float | None = 0.75) -> np.ndarray:
     """Weighted Lloyd relaxation of pixel sites towards a centroidal Voronoi tessellation.
 
-    Each iteration assigns every cell to its nearest site (discs of
-    :data:`SEARCH_PITCHES` local pitches, a k-d tree for the cells no disc covers) and moves each
-    site to the centroid of its cells weighted by density^2, so the sites end at a local density
-    proportional to ``density``. With ``border`` set, sites within ``border`` local pitches
+    Each iteration assigns every cell to its nearest site and moves each site to the centroid of
+    its cells weighted by density^2, so the sites end at a local density proportional to
+    ``density``. The assignment visits a disc around each site: :data:`SEARCH_PITCHES` local
+    pitches on the first iteration, then :data:`REACH_MARGIN` x (the site's farthest cell + its
+    last move); a k-d tree takes the cells no disc reaches. With ``border`` set, sites within ``border`` local pitches
     (1 / sqrt(samples per cell)) of an image edge are snapped onto it and the sites nearest to
     the four corners are moved onto them, after every iteration; the result is rounded to
     distinct pixels (corners first, a taken pixel's site moved to the nearest free pixel).
