@@ -33,6 +33,7 @@ from simlunar.config.yamlio import dump_yaml, safe_load_text
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
 from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
+from simlunar.pipeline.cache_keys import without_new_defaults
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.results.folder import prune_figures, read_folder_config
@@ -72,6 +73,8 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
         # realisation 0 is the terrain of runs before seed_index existed: same keys
         relevant["terrain"] = {k: v for k, v in terrain.items() if k != "seed_index"}
     study = relevant.get("study")
+    if isinstance(study, dict):
+        relevant["study"] = study = without_new_defaults(study)
     if isinstance(study, dict) and "terrain_seeds" in study:
         # how many realisations run does not change any one unit's numbers
         relevant["study"] = {k: v for k, v in study.items() if k != "terrain_seeds"}
@@ -562,7 +565,12 @@ def _notes(checks, units, records) -> list[str]:
 def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     """Score tables (pooled over terrain seeds, with intervals), samples-saved tables and
     ``scores.csv`` (per-seed and pooled scores) of a sampling experiment."""
-    from simlunar.plotting.tables import Cell, samples_saved_tables, score_tables
+    from simlunar.plotting.tables import (
+        Cell,
+        headroom_tables,
+        samples_saved_tables,
+        score_tables,
+    )
     from simlunar.results import aggregate
 
     recs = [{**records[u.key], "sweep": u.sweep, "config": u.config} for u in units]
@@ -595,21 +603,42 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     md, tex = score_tables(
         labelled, strategies=strategies, metrics=metrics, title=cfg.name, note=note
     )
-    entries = [
-        {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": p.saved_metric,
-         "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
-         "factor": sv.factor, "flag": sv.flag, "summary": sv.summary, "n_summary": sv.n_summary}
-        for p in points
-        for ref, sv in p.saved.items()
-    ]  # fmt: skip
-    md2, tex2 = samples_saved_tables(entries, title=cfg.name)
+    md2, tex2 = samples_saved_tables(_saved_entries(points), title=cfg.name)
     if md2:
         md, tex = md + "\n" + md2, tex + "\n" + tex2
+    md3, tex3 = headroom_tables(_headroom_entries(points), title=cfg.name)
+    if md3:
+        md, tex = md + "\n" + md3, tex + "\n" + tex3
     atomic_write_text(
         out / "scores.csv",
         csv_text(aggregate.scores_csv_rows(points, recs), aggregate.SCORES_CSV_COLUMNS),
     )
     return md, tex
+
+
+def _saved_entries(points) -> list[dict]:
+    """Samples-saved table entries: per point, per reference, the first metric and (with
+    ``score_region: both``) its interior-only twin."""
+    return [
+        {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": metric,
+         "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
+         "factor": sv.factor, "flag": sv.flag, "summary": sv.summary, "n_summary": sv.n_summary}
+        for p in points
+        for metric, saved in ((p.saved_metric, p.saved), (f"{p.saved_metric}_interior",
+                                                          p.saved_interior))
+        for ref, sv in saved.items()
+    ]  # fmt: skip
+
+
+def _headroom_entries(points) -> list[dict]:
+    """Headroom-captured table entries: per point and oracle label."""
+    return [
+        {"label": p.label if len(points) > 1 else "", "oracle": o, "metric": p.saved_metric,
+         "strategies": [s for s in p.strategies if s in by], "captured": by,
+         "saved": p.saved_per_seed, "seeds": p.seeds}
+        for p in points
+        for o, by in p.headroom.items()
+    ]  # fmt: skip
 
 
 def _names(units: list[WorkUnit], key: str) -> list[str]:
