@@ -238,7 +238,9 @@ def run(
 @app.command()
 @user_errors
 def train(
-    config: str = typer.Argument(..., help="training YAML (e.g. experiments/training/learned_quarter.yaml)"),
+    config: str = typer.Argument(
+        ..., help="training YAML (e.g. experiments/training/learned_quarter.yaml)"
+    ),
     out: str = typer.Option(None, "--out", help="model file (.joblib) [default: the YAML's model]"),
 ) -> None:
     """Train the learned importance map: <model>.joblib and its record <model>.json."""
