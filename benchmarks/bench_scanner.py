@@ -48,30 +48,31 @@ DOT_SPP = int(os.environ.get("SIMLUNAR_BENCH_SCANNER_DOT_SPP", "16"))
 def _setup(cam_size, *, max_depth=3, seed=0, spp=SPP):
     from simlunar.config.translate import preset_params
     from simlunar.imaging.sensor import SensorModel
+    from simlunar.render.capture import CaptureOptions, RenderCapture
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
     terr = generate(preset_params("moonyard"), rng=seed, scale=0.35).terrain
     rig = st.aim_rig_at_terrain(terr, proj_size=(1024, 768), cam_size=cam_size)
-    cap = st.RenderCapture(
-        terr, rig, max_depth=max_depth, spp=spp, seed=seed, sensor=SensorModel(), rng=seed
-    )
+    opts = CaptureOptions(max_depth=max_depth, spp=spp, seed=seed)
+    cap = RenderCapture(terr, rig, opts, sensor=SensorModel(), rng=seed)
     return terr, rig, cap
 
 
 def bench_gray_code_scan() -> dict:
     from simlunar.scanner import gray_code as gc
-    from simlunar.scanner import modes
+    from simlunar.scanner import scans as modes
+    from simlunar.scanner.scans import GrayCodeOptions
 
     _, rig, cap = _setup((512, 512))
     cap.render(np.ones((1, 768, 1024), np.float32))  # warm up: kernels compiled once
     r0 = cap.renders
     t0 = time.perf_counter()
-    ref = modes.gray_code_scan(cap, rig, inverses="render")
+    ref = modes.gray_code_scan(cap, rig, GrayCodeOptions(inverses="render"))
     t_ref = time.perf_counter() - t0
     r_ref = cap.renders - r0
     t0 = time.perf_counter()
-    ours = modes.gray_code_scan(cap, rig, inverses="linearity")
+    ours = modes.gray_code_scan(cap, rig, GrayCodeOptions(inverses="linearity"))
     t_ours = time.perf_counter() - t0
     r_ours = cap.renders - r0 - r_ref
     both = ref.decode.valid & ours.decode.valid
@@ -89,7 +90,9 @@ def bench_gray_code_scan() -> dict:
 
 
 def bench_multiplexed_dots(n_dots: int = 3000, exact_subset: int = 100) -> dict:
-    from simlunar.scanner import modes, rigs
+    from simlunar.scanner import rigs
+    from simlunar.scanner import scans as modes
+    from simlunar.scanner.scans import DotOptions
     from simlunar.study import scanner as st
 
     # a one-pixel dot covers a quarter of a camera pixel: with few samples per pixel the
@@ -102,12 +105,18 @@ def bench_multiplexed_dots(n_dots: int = 3000, exact_subset: int = 100) -> dict:
     depth_range = st.depth_range_from_terrain(terr, rig)
     cap.render(np.zeros((1, 768, 1024), np.float32))  # warm up
     t0 = time.perf_counter()
-    multi = modes.dot_scan(cap, rig, uv, depth_range=depth_range, abs_threshold=ABS_THRESHOLD)
+    multi = modes.dot_scan(
+        cap, rig, uv, depth_range=depth_range, options=DotOptions(abs_threshold=ABS_THRESHOLD)
+    )
     t_multi = time.perf_counter() - t0
     sub = rng.choice(n_dots, size=exact_subset, replace=False)
     t0 = time.perf_counter()
     exact = modes.dot_scan(
-        cap, rig, uv[sub], depth_range=depth_range, exact=True, abs_threshold=ABS_THRESHOLD
+        cap,
+        rig,
+        uv[sub],
+        depth_range=depth_range,
+        options=DotOptions(exact=True, abs_threshold=ABS_THRESHOLD),
     )
     t_exact = time.perf_counter() - t0
     d_m = multi.depth[rc[sub, 0], rc[sub, 1]]
@@ -224,6 +233,7 @@ DLP_SPP = 8
 def _dlp_setup():
     from simlunar.config.translate import preset_params
     from simlunar.imaging.sensor import SensorModel
+    from simlunar.render.capture import CaptureOptions, RenderCapture
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
@@ -234,9 +244,8 @@ def _dlp_setup():
         terr, proj_size=DLP_PROJ, cam_size=DLP_CAM, cam_fov_x=np.radians(60.0)
     )
     sensor = SensorModel(full_well_e=20000.0, read_noise_e=5.0, bits=10)
-    cap = st.RenderCapture(
-        terr, rig, max_depth=3, spp=DLP_SPP, seed=0, sensor=sensor, rng=0, camera_blur=1.0
-    )
+    opts = CaptureOptions(max_depth=3, spp=DLP_SPP, seed=0, camera_blur=1.0)
+    cap = RenderCapture(terr, rig, opts, sensor=sensor, rng=0)
     return terr, rig, cap
 
 
@@ -262,7 +271,8 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
     """
     import resource
 
-    from simlunar.scanner import modes
+    from simlunar.scanner import scans as modes
+    from simlunar.scanner.scans import GrayCodeOptions
     from simlunar.scanner.triangulate import Correspondences, depth_at_proj_pixels, triangulate
 
     _warm_up_compiled()
@@ -286,7 +296,7 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
 
         cap.scene.render_patterns = timed
         t0 = time.perf_counter()
-        g = modes.gray_code_scan(cap, rig, subpixel=True)
+        g = modes.gray_code_scan(cap, rig, GrayCodeOptions(subpixel=True))
         total = time.perf_counter() - t0 - save_s
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
         # raw frames in render order (white, black, then the bit patterns) for the reference

@@ -76,7 +76,7 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
     if not os.access(anc, os.W_OK | os.X_OK):
         raise ResultFolderError(f"{option} {p}: {anc} is not writable (permission denied)")
     if p.is_dir():
-        for sub in ("units", "figures", "config.yaml"):
+        for sub in ("units", "figures", "scans", "config.yaml"):
             q = p / sub
             want_dir = sub != "config.yaml"
             if q.exists() and q.is_dir() != want_dir:
@@ -84,6 +84,34 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
                 raise ResultFolderError(f"{option} {p}: {q} is not {kind}")
             if q.is_dir() and not os.access(q, os.W_OK | os.X_OK):
                 raise ResultFolderError(f"{option} {p}: {q} is not writable (permission denied)")
+    return p
+
+
+# --------------------------------------------------------------------------- renderer
+def check_renderer() -> None:
+    """``SIMLUNAR_VARIANT``, when set, must name a Mitsuba variant this machine can run
+    (a known name; ``cuda_ad_rgb`` needs a usable GPU, ``llvm_ad_rgb`` a libLLVM): the
+    backend's own choice, made without importing Mitsuba, before anything is written."""
+    wanted = os.environ.get("SIMLUNAR_VARIANT")
+    if not wanted:
+        return  # the backend falls back by itself
+    from simlunar.render.backend import choose_variant
+
+    try:
+        choose_variant()
+    except (ValueError, RuntimeError) as exc:
+        raise ConfigError(f"SIMLUNAR_VARIANT={wanted}: {exc}") from None
+
+
+def check_out_file(out: str | Path, *, option: str = "--out") -> Path:
+    """Raise :class:`ResultFolderError` unless ``out`` can be written as a file: not a folder,
+    in a folder that exists or can be made (:func:`check_out_dir` of its parent)."""
+    p = Path(out)
+    if p.is_dir():
+        raise ResultFolderError(f"{option} {p}: is a folder, not a file")
+    check_out_dir(p.parent, option=f"{option} {p}:")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise ResultFolderError(f"{option} {p}: is not writable (permission denied)")
     return p
 
 
@@ -159,6 +187,118 @@ def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
     return out
 
 
+# --------------------------------------------------------------------------- size budget
+#: most cells of one grid a run may allocate: terrain cells (a DEM, a preset with its grid
+#: overrides), image, projector and camera pixels. A render costs some hundred bytes per
+#: terrain cell (mesh, acceleration structure, ground truth), so 25 million cells is several
+#: GB. Raise it on a machine with the memory: ``SIMLUNAR_MAX_CELLS=1e9``.
+MAX_CELLS = 25_000_000
+
+#: most pixels of the frames held at once (frames per render call x (projector + camera
+#: pixels)); 5e8 float32 values are 2 GB. ``SIMLUNAR_MAX_FRAME_PIXELS`` raises it.
+MAX_FRAME_PIXELS = 500_000_000
+
+#: environment settings that override the limits above
+LIMIT_SETTINGS = {"SIMLUNAR_MAX_CELLS": MAX_CELLS, "SIMLUNAR_MAX_FRAME_PIXELS": MAX_FRAME_PIXELS}
+
+
+def size_limit(setting: str) -> int:
+    """The limit named by ``setting`` (an environment variable of :data:`LIMIT_SETTINGS`)."""
+    raw = os.environ.get(setting, "").strip()
+    if not raw:
+        return LIMIT_SETTINGS[setting]
+    try:
+        value = float(raw)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value >= 1):
+        raise ConfigError(f"{setting}={raw}: expected a positive count such as 1e9")
+    return int(value)
+
+
+def check_size(key: str, what: str, n: float, setting: str = "SIMLUNAR_MAX_CELLS") -> None:
+    """Refuse ``n`` (cells, pixels) above the limit, in one line naming ``key`` and the size."""
+    limit = size_limit(setting)
+    if n > limit:
+        raise ConfigError(
+            f"{key}: {what} = {n:.3g}, more than the limit of {limit:.3g} "
+            f"(set {setting} to raise it on a machine with the memory)"
+        )
+
+
+def grid_file_shape(path: Path, key: str) -> tuple[int, ...] | None:
+    """The shape of the grid in a DEM / albedo file, read from its header without reading
+    the data, and checked against :data:`MAX_CELLS` (None: a header not read here; the
+    reader reports an unreadable file). A ``.npy`` / ``.npz`` whose header promises more
+    bytes than the file holds is refused (``np.load`` would allocate the promised array
+    before finding out)."""
+    from simlunar.terrain.io import GDAL_FORMATS
+
+    suf = path.suffix.lower()
+    try:
+        if suf == ".npy":
+            with open(path, "rb") as f:
+                shape, nbytes = _npy_header(f)
+                have = path.stat().st_size - f.tell()
+            _check_npy_bytes(key, path, shape, nbytes, have)
+            return shape
+        if suf == ".npz":
+            with zipfile.ZipFile(path) as z:
+                if "heights.npy" not in z.namelist():
+                    return None  # the reader names what is missing
+                info = z.getinfo("heights.npy")
+                with z.open("heights.npy") as f:
+                    shape, nbytes = _npy_header(f)
+                    have = info.file_size - f.tell()
+            _check_npy_bytes(key, f"{path} (heights)", shape, nbytes, have)
+            return shape
+        if suf == ".exr":
+            import OpenEXR
+
+            with OpenEXR.File(str(path), header_only=True) as f:
+                (x0, y0), (x1, y1) = (tuple(v) for v in f.header()["dataWindow"])
+            shape = (int(y1) - int(y0) + 1, int(x1) - int(x0) + 1)
+        elif suf in (".tif", ".tiff", *GDAL_FORMATS):
+            import rasterio
+
+            with rasterio.open(path) as src:
+                shape = (int(src.height), int(src.width))
+        else:
+            return None
+    except ConfigError:
+        raise
+    except Exception:
+        return None
+    check_size(key, f"{path}: a {shape[0]} x {shape[1]} grid", shape[0] * shape[1])
+    return shape
+
+
+def _npy_header(f) -> tuple[tuple[int, ...], int]:
+    from numpy.lib import format as npf
+
+    version = npf.read_magic(f)
+    read = {(1, 0): npf.read_array_header_1_0, (2, 0): npf.read_array_header_2_0}.get(version)
+    if read is None:
+        raise ValueError(f"unsupported .npy version {version}")
+    shape, _fortran, dtype = read(f)
+    n = 1
+    for v in shape:
+        n *= int(v)
+    return tuple(int(v) for v in shape), n * dtype.itemsize
+
+
+def _check_npy_bytes(key: str, path, shape, nbytes: int, have: int) -> None:
+    cells = 1
+    for v in shape:
+        cells *= v
+    check_size(key, f"{path}: a {' x '.join(map(str, shape)) or 'scalar'} array", cells)
+    if nbytes > have:
+        raise ConfigError(
+            f"{key}: {path}: its header promises a {' x '.join(map(str, shape))} array "
+            f"({nbytes} bytes) but the file holds {have} bytes (truncated or not a DEM)"
+        )
+
+
 # --------------------------------------------------------------------------- terrain
 @dataclass(frozen=True)
 class TerrainFacts:
@@ -176,6 +316,7 @@ class TerrainFacts:
     zmax: float
     nan_fraction: float = 0.0
     source: str = ""
+    zmid: float = 0.0  # median height (a DEM's; 0 for a preset, generated around 0)
 
     @property
     def extent(self) -> tuple[float, float, float, float]:
@@ -207,13 +348,22 @@ def terrain_facts(t: Any) -> TerrainFacts:
             )
             _check_extent(facts, "terrain.preset")
             _TERRAIN_MEMO[memo] = facts
+        facts = _TERRAIN_MEMO[memo]
+        # every time (not memoised): the limit is a setting of this run
+        grid = getattr(t.overrides, "grid", None) if t.overrides is not None else None
+        where = "terrain.overrides.grid" if grid is not None else "terrain.preset"
+        check_size(where, f"{facts.rows} x {facts.cols} cells", facts.rows * facts.cols)
         return _TERRAIN_MEMO[memo]
     files = [Path(t.file)] + ([Path(t.albedo_file)] if t.albedo_file is not None else [])
     stamps = tuple(_stamp(p) for p in files)
     memo = ("file", *map(str, files), t.spacing_m, stamps)
     if memo not in _TERRAIN_MEMO:
         _TERRAIN_MEMO[memo] = _dem_facts(Path(t.file), t.spacing_m, t.albedo_file)
-    return _TERRAIN_MEMO[memo]
+    facts = _TERRAIN_MEMO[memo]
+    check_size(
+        "terrain.file", f"{t.file}: {facts.rows} x {facts.cols} cells", facts.rows * facts.cols
+    )
+    return facts
 
 
 def _preset_params(t: Any):
@@ -250,6 +400,7 @@ def _read_grid(path: Path, key: str, *, spacing: float | None):
         if path.stat().st_size == 0:
             raise ConfigError(f"{key}: {path} is empty")
         _check_magic(path, key)
+        grid_file_shape(path, key)  # its size, before reading it
         if path.suffix.lower() == ".npz":
             _check_npz_spacing(path, key)
         return load_dem(path, spacing=spacing)
@@ -272,6 +423,7 @@ def _read_albedo(path: Path, key: str, shape, valid) -> np.ndarray:
         if path.stat().st_size == 0:
             raise ConfigError(f"{key}: {path} is empty")
         _check_magic(path, key)
+        grid_file_shape(path, key)  # its size, before reading it
         return load_albedo(path, shape, valid=valid)
     except ConfigError:
         raise
@@ -315,8 +467,15 @@ def _check_npz_spacing(path: Path, key: str) -> None:
         raise ConfigError(f"{key}: {path}: 'spacing' must be a positive number, got {v}")
 
 
-def _dem_facts(path: Path, spacing: float | None, albedo_file) -> TerrainFacts:
-    key = "terrain.file"
+def check_dem_file(path: str | Path, *, key: str) -> TerrainFacts:
+    """A DEM file read by a command other than ``run`` (``simlunar terrain --stats``), with
+    the checks of an experiment's ``terrain.file``; errors name ``key``."""
+    return _dem_facts(Path(path), None, None, key=key)
+
+
+def _dem_facts(
+    path: Path, spacing: float | None, albedo_file, *, key: str = "terrain.file"
+) -> TerrainFacts:
     if not path.is_file():
         raise ConfigError(f"{key}: file not found: {path}")
     terrain = _read_grid(path, key, spacing=spacing)
@@ -341,7 +500,15 @@ def _dem_facts(path: Path, spacing: float | None, albedo_file) -> TerrainFacts:
             f"(more than {MAX_ABS_COORD_M:.0e} m; check the file's units)"
         )
     facts = TerrainFacts(
-        rows, cols, terrain.spacing, tuple(terrain.origin), zmin, zmax, frac, str(path)
+        rows,
+        cols,
+        terrain.spacing,
+        tuple(terrain.origin),
+        zmin,
+        zmax,
+        frac,
+        str(path),
+        float(np.median(h[finite])),
     )
     _check_extent(facts, key)
     if albedo_file is not None:
@@ -375,8 +542,11 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
     ``render`` is a ``RenderCfg`` (an experiment's or a scene's).
 
     Rays through a grid of pixels (the corners included) are intersected with the terrain's
-    bounding box; if none meets it, no pixel can see the terrain.
+    bounding box; if none meets it, no pixel can see the terrain. The image's pixel count is
+    within :data:`MAX_CELLS`.
     """
+    rows, cols = image_shape(render, facts)
+    check_size(key, f"a {rows} x {cols} image", rows * cols)
     cam = render.camera
     if getattr(cam, "kind", None) == "rover_mast":
         _check_site(cam, facts, key)
@@ -459,7 +629,8 @@ def _ray_box(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np
 
 # --------------------------------------------------------------------------- sizes
 def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
-    """Densities give at least :data:`MIN_SAMPLES` samples; scanner sizes are positive."""
+    """Densities give at least :data:`MIN_SAMPLES` samples; the image is within
+    :data:`MAX_CELLS`; scanner sizes are positive and within the limits."""
     s = cfg.study
     n = shape[0] * shape[1]
     if getattr(s, "kind", "sampling") == "sampling":
@@ -480,14 +651,95 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
             raise ConfigError(
                 f"study.{name}: (width, height) must be at least 2 pixels each, got {list(size)}"
             )
-    budget = getattr(s, "budget", None)
-    cam = getattr(s, "camera_px", None)
-    if budget is not None and cam is not None:
-        k = round(budget * cam[0] * cam[1])
-        if k < 1:
+    check_scanner_budget(s)
+
+
+#: scan modes that project planned dots (the rest project the gray code only)
+DOT_MODES = ("ambiguity_enhancement", "data_reduction")
+
+
+def check_scanner_budget(s: Any) -> None:
+    """A scanner study's sizes against :data:`MAX_CELLS` / :data:`MAX_FRAME_PIXELS`, and its
+    dot budget against the grid the dots are planned on (the projector's: guide pixel (r, c)
+    is projector pixel (r, c)), with the planners' own sample-count rule."""
+    from simlunar.planner import check_k
+    from simlunar.scanner.gray_code import num_bits
+    from simlunar.scanner.scans import SCAN_PLANNERS
+
+    (pw, ph), (cw, ch) = s.projector_px, s.camera_px
+    check_size("study.projector_px", f"{pw} x {ph} pixels", pw * ph)
+    check_size("study.camera_px", f"{cw} x {ch} pixels", cw * ch)
+    per_frame = pw * ph + cw * ch
+    gray = 2 * (num_bits(pw) + num_bits(ph)) + 2  # the pattern stack (+ kept frames)
+    check_size(
+        "study.projector_px",
+        f"{gray} gray-code frames x {per_frame} projector + camera pixels",
+        gray * per_frame,
+        "SIMLUNAR_MAX_FRAME_PIXELS",
+    )
+    if not set(DOT_MODES) & set(s.modes):
+        return
+    batch = s.options.dot_opts.batch
+    check_size(
+        "study.options.dot_opts.batch",
+        f"{batch} frames x {per_frame} projector + camera pixels",
+        batch * per_frame,
+        "SIMLUNAR_MAX_FRAME_PIXELS",
+    )
+    n = pw * ph
+    k = max(1, round(s.budget * n))  # the structured-light sensor: dots planned on the projector
+    for planner in s.planners:
+        if planner in SCAN_PLANNERS:
+            continue
+        try:
+            check_k(k, n)
+        except ValueError as exc:
             raise ConfigError(
-                f"study.budget: {budget:g} of the {cam[0]} x {cam[1]} camera gives no sample"
-            )
+                f"study.budget: {s.budget:g} of the {pw} x {ph} projector gives {k} dots for "
+                f"planner {planner} ({exc})"
+            ) from None
+
+
+# --------------------------------------------------------------------------- scanner rig
+def check_rig(cfg: Any, facts: TerrainFacts, *, key: str = "study.options.rig") -> None:
+    """A scanner study's rig, built as the unit builds it (the library's preset and aiming,
+    so its own checks apply: a zero baseline, ...), must see the terrain: rays of the
+    projector's frustum must meet the terrain's bounding box, and the triangulation camera
+    must see where they meet. A cheap ray cast instead of a render that finds nothing."""
+    from types import SimpleNamespace
+
+    from simlunar.config.translate import rig_kwargs
+    from simlunar.study.scanner import aim_rig_at_terrain
+
+    stand_in = SimpleNamespace(extent=facts.extent, heights=np.array([facts.zmid]))
+    try:
+        rig = aim_rig_at_terrain(stand_in, **rig_kwargs(cfg.study))
+    except ValueError as exc:
+        raise ConfigError(f"{key}: {exc}") from None
+    x0, x1, y0, y1 = facts.extent
+    lo, hi = np.array([x0, y0, facts.zmin]), np.array([x1, y1, facts.zmax])
+    pw, ph = cfg.study.projector_px
+    uu, vv = np.meshgrid(np.linspace(0.5, pw - 0.5, 17), np.linspace(0.5, ph - 0.5, 13))
+    o, d = rig.projector.rays(np.stack([uu, vv], axis=-1).reshape(-1, 2))
+    hit = _ray_box(o, d, lo, hi)
+    if not hit.any():
+        raise ConfigError(
+            f"{key}: the projector at {np.round(rig.projector.position, 3).tolist()} sees no "
+            f"terrain (x [{x0:g}, {x1:g}] m, y [{y0:g}, {y1:g}] m)"
+        )
+    # where the projector's rays reach the terrain's median height: what the camera must see
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (facts.zmid - o[hit, 2]) / d[hit, 2]
+    pts = o[hit] + np.where(np.isfinite(t) & (t > 0), t, np.nan)[:, None] * d[hit]
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    uv, z = rig.camera.project(pts) if len(pts) else (np.zeros((0, 2)), np.zeros(0))
+    cw, ch = cfg.study.camera_px
+    seen = (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < cw) & (uv[:, 1] >= 0) & (uv[:, 1] < ch)
+    if not seen.any():
+        raise ConfigError(
+            f"{key}: the camera at {np.round(rig.camera.position, 3).tolist()} does not see "
+            "the projected pattern on the terrain (check baseline_m, cam_fov_x_deg, verge)"
+        )
 
 
 # --------------------------------------------------------------------------- all units
@@ -515,7 +767,7 @@ class Preflight:
 def check_units(units: list[Any]) -> Preflight:
     """Check every unit (sweep point) before any of them runs.
 
-    ``units`` are :class:`~simlunar.pipeline.runner.WorkUnit` (their plain ``config``).
+    ``units`` are :class:`~simlunar.results.records.WorkUnit` (their plain ``config``).
     Errors of a sweep point name the point: ``sweep point 3 (elevation_deg=0): ...``.
     """
     from simlunar.config.schema import ExperimentCfg
@@ -527,9 +779,11 @@ def check_units(units: list[Any]) -> Preflight:
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))
+            if getattr(cfg.study, "kind", None) == "scanner":
+                check_rig(cfg, f)
         except ConfigError as exc:
             if len(units) > 1 and u.sweep:
-                from simlunar.pipeline.runner import unit_label
+                from simlunar.results.records import unit_label
 
                 raise ConfigError(f"sweep point {u.index} ({unit_label(u)}): {exc}") from None
             raise

@@ -404,6 +404,15 @@ def _largest_clique(w, s0, s1, puv, clique_width, sep, min_proj_spacing, q=4, sl
     return best
 
 
+def check_spacings(min_cam_spacing: float, min_proj_spacing: float) -> None:
+    """Raise ValueError unless both scheduling spacings are > 0 px (finite)."""
+    sep, psp = float(min_cam_spacing), float(min_proj_spacing)
+    if not (0 < sep < float("inf") and 0 < psp < float("inf")):
+        raise ValueError(
+            f"min_cam_spacing and min_proj_spacing must be > 0 px, got {sep} and {psp}"
+        )
+
+
 def dot_schedule(
     rig: Rig,
     proj_uv,
@@ -451,12 +460,9 @@ def dot_schedule(
     DotSchedule
     """
     proj_uv = _as_uv(proj_uv, "dot positions")
+    check_spacings(min_cam_spacing, min_proj_spacing)
     sep = float(min_cam_spacing)
     psp = float(min_proj_spacing)
-    if not (sep > 0 and psp > 0):
-        raise ValueError(
-            f"min_cam_spacing and min_proj_spacing must be > 0 px, got {sep} and {psp}"
-        )
     seg = np.ascontiguousarray(epipolar_segments(rig, proj_uv, depth_range))
     w, s0, s1, reach, clique_width, cyclic, period = _epipolar_coordinates(rig, seg, sep)
     # bands half as wide as the reach: conflicting dots are at most 2 bands apart

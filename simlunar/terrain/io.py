@@ -31,6 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from simlunar.atomic import atomic_write
+from simlunar.imaging.exr import read_exr, write_exr
+from simlunar.imaging.png import write_png_preview
 from simlunar.terrain.mesh import grid_faces, grid_vertices
 from simlunar.terrain.types import Terrain
 
@@ -151,8 +153,6 @@ def save_dem(path, terrain: Terrain) -> Path:
             ),
         )
     elif suf == ".exr":
-        from simlunar.imaging.exr import write_exr
-
         write_exr(path, {"Z": h, "albedo": a}, attrs=meta)
     else:
         _write_geotiff(path, h, a, terrain)
@@ -340,8 +340,6 @@ def load_dem(
                 if "crs" in z:
                     meta["crs"] = str(z["crs"])
         elif suf == ".exr":
-            from simlunar.imaging.exr import read_exr
-
             chans, meta = read_exr(path, with_attrs=True)
             if "Z" in chans:
                 heights = chans["Z"]
@@ -513,7 +511,6 @@ def hillshade_png(
     with_albedo: bool = True,
 ) -> Path:
     """Write a hillshade preview PNG (sRGB, nodata black), optionally modulated by albedo."""
-    from simlunar.imaging.png import write_png_preview
 
     img = hillshade(terrain.heights, terrain.spacing, azimuth=azimuth, elevation=elevation)
     if with_albedo:
@@ -555,7 +552,6 @@ def write_terrain_outputs(
     fmt = dem_format.lower().lstrip(".")
     if f".{fmt}" not in FORMATS:
         raise ValueError(f"unknown DEM format {dem_format!r}; valid: npy, npz, exr, tif")
-    from simlunar.imaging.png import write_png_preview
 
     files = {"dem": save_dem(out / f"dem.{fmt}", result.terrain)}
     files["albedo"] = write_png_preview(out / "albedo.png", result.terrain.albedo, exposure=1.0)

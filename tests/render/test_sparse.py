@@ -202,13 +202,11 @@ def test_black_frames_cost_nothing_and_frames_of_one_launch_stay_apart(scene, mo
 
 @pytest.mark.render
 def test_render_capture_lit_hook(monkeypatch):
-    from simlunar.render.capture import RenderCapture
+    from simlunar.render.capture import CaptureOptions, RenderCapture
 
     rig = rigs.moonyard_rig(proj_size=PROJ, cam_size=CAM)
-    path = RenderCapture(_terrain(), rig, max_depth=2, spp=16, seed=2)
-    light = RenderCapture(
-        _terrain(),
-        rig,
+    path = RenderCapture(_terrain(), rig, CaptureOptions(max_depth=2, spp=16, seed=2))
+    lit_opts = CaptureOptions(
         max_depth=2,
         spp=16,
         seed=2,
@@ -216,6 +214,7 @@ def test_render_capture_lit_hook(monkeypatch):
         sparse_particles=128,
         sparse_below=0.05,  # 35 dots light 1.1 % of this small projector
     )
+    light = RenderCapture(_terrain(), rig, lit_opts)
     stripes = np.zeros((1, *PROJ[::-1]), np.float32)
     stripes[0, :, ::2] = 1.0
     np.testing.assert_array_equal(light.render(stripes), path.render(stripes))  # dense: path
@@ -230,18 +229,19 @@ def test_render_capture_lit_hook(monkeypatch):
     monkeypatch.setattr(light.scene, "render_patterns", no_render)
     assert not light.render(np.zeros((2, *PROJ[::-1]), np.float32)).any()
     with pytest.raises(ValueError, match="'lit'"):
-        RenderCapture(_terrain(), rig, sparse_integrator="bdpt")
+        CaptureOptions(sparse_integrator="bdpt")
     with pytest.raises(ValueError, match="sparse_particles"):
-        RenderCapture(_terrain(), rig, sparse_integrator="lit", sparse_particles=0)
+        CaptureOptions(sparse_integrator="lit", sparse_particles=0)
 
 
 @pytest.mark.render
 @pytest.mark.parametrize("integrator", ["path", "ptracer"])
 def test_black_patterns_are_exactly_black_without_rendering(integrator, monkeypatch):
-    from simlunar.render.capture import RenderCapture
+    from simlunar.render.capture import CaptureOptions, RenderCapture
 
     rig = rigs.moonyard_rig(proj_size=PROJ, cam_size=CAM)
-    cap = RenderCapture(_terrain(), rig, max_depth=3, spp=4, sparse_integrator=integrator)
+    opts = CaptureOptions(max_depth=3, spp=4, sparse_integrator=integrator)
+    cap = RenderCapture(_terrain(), rig, opts)
     black = np.zeros((1, *PROJ[::-1]), np.float32)
     # the shortcut is exact: the projector is the only emitter of the scene
     assert not cap.scene.render_patterns(black).any()
