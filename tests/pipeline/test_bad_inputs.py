@@ -23,7 +23,7 @@ from typer.testing import CliRunner
 
 from simlunar.cli import app
 from simlunar.config.loading import set_path
-from simlunar.pipeline.preflight import MAX_NAN_FRACTION
+from simlunar.pipeline.inputs import MAX_NAN_FRACTION
 
 GOOD = {
     "name": "bad_input_test",
