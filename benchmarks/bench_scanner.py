@@ -307,7 +307,8 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
         dec = g.decode
         out = {"render_s": render_s, "rest_s": total - render_s, "renders": g.renders}
     else:
-        from simlunar.scanner import _reference as ref
+        import reference_scanner as ref
+
         from simlunar.scanner import gray_code as gc
 
         raw = np.load(frames_path)  # white, black, patterns: the radiance the scan rendered

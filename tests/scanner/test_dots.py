@@ -329,7 +329,7 @@ def test_spots_cut_by_the_image_border_are_dropped():
 @pytest.mark.parametrize("seed", range(4))
 @pytest.mark.parametrize("grow", [0, 1, 2, 3])
 def test_compiled_detection_equals_the_scipy_reference(seed, grow):
-    from simlunar.scanner._reference import detect_dots_reference
+    from reference_scanner import detect_dots_reference
 
     rng = np.random.default_rng(seed)
     shape = (70, 90)

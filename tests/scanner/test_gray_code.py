@@ -256,7 +256,7 @@ def _noisy_ramp_case(seed, slope=0.5, noise=0.03, white_threshold=0.1):
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("max_gap", [0, 1, 2, 4])
 def test_compiled_refinement_equals_the_numpy_reference(seed, max_gap):
-    from simlunar.scanner._reference import refine_along_rows_reference
+    from reference_scanner import refine_along_rows_reference
 
     dec, images = _noisy_ramp_case(seed)
     assert (dec.lit & ~dec.valid).sum() > 20 and dec.valid.sum() > 200
