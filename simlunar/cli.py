@@ -393,7 +393,7 @@ def terrain(
         import json
         from types import SimpleNamespace
 
-        from simlunar.pipeline.preflight import check_dem_file
+        from simlunar.pipeline.inputs import check_dem_file
 
         check_dem_file(preset, key="--stats")  # size, finite heights, spacing and extent
         with user_input():

@@ -60,9 +60,9 @@ def check_strategy(name: str, path: str, options: Mapping | None = None) -> None
 
 
 def check_scan_planner(name: str, path: str) -> None:
-    """A planner of the scanner study: a registered strategy (it plans from the guide image)
-    or one of :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
-
+    """A planner of the scanner study: a registered strategy that plans from the guide image
+    alone (not an ``oracle_*``, which reads the truth, nor ``sequential``, which asks a sensor
+    back) or one of :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
     if name in ORACLES or name in MEASURING:
         raise ConfigError(
             f"{path}: {name!r} is a planner of the sampling study only (the scanner study "
@@ -72,7 +72,6 @@ def check_scan_planner(name: str, path: str) -> None:
 
 
 def metric_names() -> list[str]:
-
     return list(METRICS)
 
 

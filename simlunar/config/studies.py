@@ -397,7 +397,7 @@ class DotOptsCfg(_Model):
 
     @model_validator(mode="after")
     def _spacings(self) -> DotOptsCfg:
-        from simlunar.scanner.dots import check_spacings
+        from simlunar.scanner.scheduling import check_spacings
 
         try:
             check_spacings(

@@ -35,6 +35,7 @@ from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.cache_keys import without_new_defaults
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
+from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.results.folder import prune_figures, read_folder_config
 from simlunar.results.records import WorkUnit
@@ -56,11 +57,11 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
     """Cache key of a resolved unit config: what determines its numbers, and nothing else.
 
     It covers the config (less names and figure formats), the SHA-256 of every file the unit
-    reads (``inputs``, :func:`simlunar.pipeline.preflight.input_hashes`; computed when not
+    reads (``inputs``, :func:`simlunar.pipeline.inputs.input_hashes`; computed when not
     given) and the simlunar version.
     """
     if inputs is None:
-        inputs = preflight.input_hashes(config)
+        inputs = input_hashes(config)
     relevant = {k: v for k, v in config.items() if k not in _NON_RESULT_KEYS}
     relevant.pop("figures", None)
     terrain = relevant.get("terrain")
@@ -118,7 +119,7 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
         sweep = {p: v for (p, _), v in zip(axes, combo)}
         n_seeds = int(resolved.get("study", {}).get("terrain_seeds", 1) or 1)
         if n_seeds == 1:
-            inputs = preflight.input_hashes(resolved)
+            inputs = input_hashes(resolved)
             key = unit_key(resolved, inputs)
             units.append(WorkUnit(len(units), key, sweep, resolved, inputs=inputs))
             continue
@@ -126,7 +127,7 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
             one = apply_sweep_value(resolved, "terrain.seed_index", seed_index)
             one = to_plain(ExperimentCfg.model_validate(one))
             one.pop("sweep", None)
-            inputs = preflight.input_hashes(one)
+            inputs = input_hashes(one)
             units.append(
                 WorkUnit(
                     len(units),

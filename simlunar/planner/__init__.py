@@ -30,6 +30,7 @@ from simlunar.planner.strategies import (
     check_k,
     combine_maps,
     plan,
+    strategy_options,
     strategy_weights,
 )
 from simlunar.planner.types import SamplePlan
@@ -61,5 +62,6 @@ __all__ = [
     "plan_sequential",
     "samples_per_cell",
     "score_combination",
+    "strategy_options",
     "strategy_weights",
 ]

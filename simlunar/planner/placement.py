@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from simlunar.planner import _placement_kernels as _k
+import simlunar.planner._placement_kernels as _k
 
 __all__ = ["cvt_energy", "density_from_map", "halftone", "lloyd", "place", "samples_per_cell"]
 

@@ -107,6 +107,12 @@ _OTHER_OPTS = {
 }
 
 
+def strategy_options(strategy: str) -> tuple[str, ...]:
+    """The option names :func:`plan` accepts for a strategy (for config validation)."""
+    base = _resolve(strategy)
+    return _WEIGHTED_OPTS if base in WEIGHTED else _OTHER_OPTS.get(base, ())
+
+
 def check_k(k, n: int) -> int:
     """Validate the sample count against the number of pixels ``n``."""
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
@@ -432,7 +438,7 @@ def plan(
     """
     base = _resolve(strategy)
     rng = np.random.default_rng(rng)
-    allowed = _WEIGHTED_OPTS if base in WEIGHTED else _OTHER_OPTS.get(base, ())
+    allowed = strategy_options(base)
     bad = sorted(set(opts) - set(allowed))
     if bad:
         raise ValueError(

@@ -599,7 +599,7 @@ def test_a_killed_study_worker_is_exit_3_in_seconds_keeps_units_and_a_rerun_comp
     assert p.returncode == 3, stderr
     assert took < 20, took
     lines = stderr.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: a sampling-study worker process died")
+    assert len(lines) == 1 and lines[0].startswith("error: a study worker process died")
     assert "1 of 2 units finished and kept" in lines[0]
     assert len(finished_units(out)) == 1 and not (out / ".lock").exists()
     s = run_experiment(load_experiment(exp), out, compute=pool_unit, progress=False, figures=False)
