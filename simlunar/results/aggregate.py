@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.results.records import WorkUnit, unit_label
 from simlunar.study.sampling import INTERIOR_SUFFIX, scored_metrics
 from simlunar.study.stats import (
     SamplesSaved,
@@ -23,7 +24,6 @@ from simlunar.study.stats import (
     bootstrap_scores,
     samples_saved,
 )
-from simlunar.results.records import WorkUnit, unit_label
 
 SEED_AXIS = "terrain.seed_index"
 #: bootstrap replicates per point and metric
