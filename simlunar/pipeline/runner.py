@@ -591,7 +591,8 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
             }
         labelled.append((p.label, scores))
     strategies = _names(units, "strategies")
-    metrics = _names(units, "metrics")
+    # the scored names: with study.score_region, <metric>_interior rows too
+    metrics = list(dict.fromkeys(m for p in points for m in p.metrics))
     seeds = sorted({len(p.seeds) for p in points})
     trials = sorted({r.n_trials for p in points for r in p.intervals.values()})
     n_seeds = "/".join(map(str, seeds))

@@ -58,6 +58,7 @@ def test_scores_md_has_the_uniform_lloyd_headroom_and_interior_tables(tmp_path):
     run_experiment(cfg, out, compute=synthetic_unit, progress=False, figures=False)
     md = (out / "scores.md").read_text()
     assert "samples saved vs Grid at equal MSE" in md
+    assert "| MSE (interior only) |" in md
     assert "samples saved vs Uniform Lloyd at equal MSE" in md
     assert "samples saved vs Uniform Lloyd at equal MSE (interior only)" in md
     assert "headroom captured vs Oracle greedy (true error) at equal MSE (2 terrain seeds)" in md
