@@ -176,7 +176,8 @@ def test_registered_feature_and_strategy(model, held_out, tmp_path):
     m = feature_map("learned", img, model=str(path), density=DENSITY)
     np.testing.assert_array_equal(m, model.predict(img, density=DENSITY))
     k = round(DENSITY * img.size)
-    p = plan("learned", k, image=img, rng=0, feature_opts={"model": path, "density": DENSITY})
+    opts = {"feature_opts": {"model": path, "density": DENSITY}, "placement": "lloyd"}
+    p = plan("learned", k, image=img, rng=0, **opts)
     assert p.k == k
     with pytest.raises(ValueError, match="needs option"):
         feature_map("learned", img)
