@@ -20,11 +20,12 @@ PUBLISHED = {
 
 
 def _one(name: str) -> dict:
+    from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
     from simlunar.terrain.stats import roughness
 
     t0 = time.perf_counter()
-    t = generate(name, rng=0).terrain
+    t = generate(preset_params(name), rng=0).terrain
     gen = time.perf_counter() - t0
     t0 = time.perf_counter()
     r = roughness(t.heights, t.spacing)
@@ -42,9 +43,10 @@ def _one(name: str) -> dict:
 
 
 def bench_roughness() -> dict:
+    from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    generate("aerial_1", rng=0, scale=0.1)  # warm-up: imports and the crater table
+    generate(preset_params("aerial_1"), rng=0, scale=0.1)  # warm-up: imports and the crater table
     return {f"roughness_{n}": _one(n) for n in ("aerial_1", "aerial_2", "aerial_3", "moonyard")}
 
 

@@ -1,6 +1,6 @@
 """Terrain benchmarks: generate aerial_1 at full size; cost scaling with the number of cells.
 
-terrain_aerial: ``ours_s`` = median wall time of ``generate("aerial_1")`` (1000 x 1600 cells,
+terrain_aerial: ``ours_s`` = median wall time of ``generate(preset_params("aerial_1"))`` (1000 x 1600 cells,
 0.2 m) over 3 seeds after one warm-up (the crater degradation table is built once per process).
 There is no reference implementation, so ``reference_s`` is None (target: under 3 s on 2 cores).
 
@@ -16,21 +16,23 @@ import time
 
 
 def _time_generate(name: str, scale: float, seeds) -> float:
+    from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
     times = []
     for s in seeds:
         t0 = time.perf_counter()
-        generate(name, rng=s, scale=scale)
+        generate(preset_params(name), rng=s, scale=scale)
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
 
 
 def bench_terrain_aerial() -> dict:
+    from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    generate("aerial_1", rng=0, scale=0.1)  # warm-up: imports and the crater table
-    res = generate("aerial_1", rng=1)
+    generate(preset_params("aerial_1"), rng=0, scale=0.1)  # warm-up: imports and the crater table
+    res = generate(preset_params("aerial_1"), rng=1)
     ours = _time_generate("aerial_1", 1.0, seeds=(1, 2, 3))
     rows, cols = res.terrain.shape
     return {
@@ -44,9 +46,10 @@ def bench_terrain_aerial() -> dict:
 
 
 def bench_scaling() -> dict:
+    from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    generate("aerial_1", rng=0, scale=0.1)
+    generate(preset_params("aerial_1"), rng=0, scale=0.1)
     full = _time_generate("aerial_1", 1.0, seeds=(1, 2, 3))
     quarter = _time_generate("aerial_1", 0.5, seeds=(1, 2, 3))
     return {

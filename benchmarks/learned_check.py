@@ -23,7 +23,7 @@ import numpy as np
 
 from simlunar.config.loading import validate_data
 from simlunar.features import feature_map
-from simlunar.features.learned import LearnedMap, LearnedOptions, train_learned_map
+from simlunar.features.learned import LearnedMap, LearnedOptions
 from simlunar.metrics import samples_for_equal_error
 from simlunar.pipeline.unit import (
     fill_invalid,
@@ -33,6 +33,7 @@ from simlunar.pipeline.unit import (
     sensor_image,
     stage_seeds,
 )
+from simlunar.planner.learning import train_learned_map
 from simlunar.planner.placement import density_from_map, place
 from simlunar.planner.sequential import SequentialOptions, plan_sequential
 from simlunar.reconstruction import reconstruct

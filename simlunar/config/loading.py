@@ -8,205 +8,17 @@ reported as a :class:`simlunar.errors.ConfigError` whose one-line message names 
 from __future__ import annotations
 
 import copy
-import re
 from pathlib import Path
 from typing import Any
 
-import yaml
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 
-from simlunar.config.schema import (  # noqa: F401 - re-exported: the schema's public names
-    BsdfCfg,
-    CameraCfg,
-    CameraLightCfg,
-    Deg,
-    Density,
-    DensityRange,
-    ExperimentCfg,
-    FiguresCfg,
-    HapkeCfg,
-    LambertCfg,
-    LightCfg,
-    Metres,
-    OrenNayarCfg,
-    OrthoNadirCfg,
-    PerspectiveCfg,
-    RenderCfg,
-    SamplingStudyCfg,
-    ScannerStudyCfg,
-    SensorCfg,
-    StudyCfg,
-    SunLightCfg,
-    TerrainCfg,
-    _Model,
-)
+from simlunar.config import registry
+from simlunar.config.messages import format_validation_error, model_at, valid_keys
+from simlunar.config.schema import ExperimentCfg
+from simlunar.config.studies import SamplingStudyCfg, ScannerStudyCfg
+from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
-
-
-# --------------------------------------------------------------------------- loading
-def _loc_path(loc: tuple, data: Any) -> str:
-    """Key path of a pydantic error location, dropping union tags that are not real keys."""
-    parts: list[str] = []
-    cur = data
-    for item in loc:
-        if isinstance(cur, dict) and item in cur:
-            parts.append(str(item))
-            cur = cur[item]
-        elif isinstance(cur, list) and isinstance(item, int):
-            parts.append(f"[{item}]")
-            cur = cur[item] if item < len(cur) else None
-        elif isinstance(item, int):
-            parts.append(f"[{item}]")
-            cur = None
-        elif _is_field_name(str(item)):
-            parts.append(str(item))
-            cur = None
-    return ".".join(parts).replace(".[", "[") or "<root>"
-
-
-def _union_tags() -> frozenset[str]:
-    """The ``kind`` values of every model (pydantic puts them in error locations of unions)."""
-    tags: set[str] = set()
-    todo = list(_Model.__subclasses__())
-    while todo:
-        m = todo.pop()
-        todo.extend(m.__subclasses__())
-        f = m.model_fields.get("kind")
-        if f is not None:
-            tags.update(a for a in getattr(f.annotation, "__args__", ()) if isinstance(a, str))
-    return frozenset(tags)
-
-
-def _is_field_name(item: str) -> bool:
-    return item not in _union_tags() and "[" not in item
-
-
-def _message(err: dict) -> str:
-    msg = err["msg"]
-    if err["type"] == "extra_forbidden":
-        return "unknown key"
-    if msg.startswith("Value error, "):
-        msg = msg[len("Value error, ") :]
-    if msg.startswith("Assertion failed, "):
-        msg = msg[len("Assertion failed, ") :]
-    return msg
-
-
-def _unknown_key_hint(path: str, data: dict) -> str:
-    """Suggest the valid keys where an unknown key was found."""
-    parent = path.rsplit(".", 1)[0] if "." in path else ""
-    try:
-        keys = valid_keys(parent, data)
-    except ConfigError:
-        return ""
-    return f" (valid keys: {', '.join(keys)})" if keys else ""
-
-
-def _nested_key(loc: tuple, data: Any, msg: str) -> tuple[str, str] | None:
-    """``(sub.path, problem)`` when a validator reported a key inside its own mapping value.
-
-    A model validator says ``"options.rig.elevation_deg: ..."``; when that key path exists in
-    the data under the error's location, it belongs to the path (union tags in the location,
-    which are not keys of the data, are skipped).
-    """
-    m = re.match(r"^([A-Za-z_]\w*(?:\.\w+)*): (.+)$", msg)
-    if m is None:
-        return None
-    cur: Any = data
-    items = (*loc, *m.group(1).split("."))
-    for i, item in enumerate(items):
-        if isinstance(cur, dict) and item in cur:
-            cur = cur[item]
-        elif isinstance(cur, list) and isinstance(item, int) and item < len(cur):
-            cur = cur[item]
-        elif isinstance(item, str) and item in _union_tags():
-            continue
-        elif i == len(items) - 1 and isinstance(cur, dict):
-            break  # a key the data lacks (a missing value the validator asks for)
-        else:
-            return None
-    return m.group(1), m.group(2)
-
-
-def format_validation_error(exc: ValidationError, data: Any, prefix: str = "") -> str:
-    """One line for the first error of ``exc``: ``<key.path>: <problem>``."""
-    err = exc.errors()[0]
-    path = _loc_path(tuple(err["loc"]), data)
-    msg = _message(err)
-    nested = _nested_key(tuple(err["loc"]), data, msg) if err["type"] == "value_error" else None
-    if nested is not None:
-        path = nested[0] if path == "<root>" else f"{path}.{nested[0]}"
-        msg = nested[1]
-    if prefix:
-        path = f"{prefix}.{path}" if path != "<root>" else prefix
-    if err["type"] == "extra_forbidden" and isinstance(data, dict):
-        msg += _unknown_key_hint(_loc_path(tuple(err["loc"]), data), data)
-    return f"{path}: {msg}"
-
-
-def _model_at(path: str, data: dict) -> type[BaseModel] | None:
-    """The model class that holds the keys under ``path`` (``""`` = root) for this data."""
-    model: type[BaseModel] = ExperimentCfg
-    cur: Any = data
-    if not path:
-        return model
-    for part in path.split("."):
-        if part not in model.model_fields:
-            raise ConfigError(f"{path}: no such key {part!r}")
-        ann = model.model_fields[part].annotation
-        cur = cur.get(part) if isinstance(cur, dict) else None
-        model = _resolve_model(ann, cur, part)
-        if model is None:
-            return None
-    return model
-
-
-def _resolve_model(ann: Any, value: Any, name: str) -> type[BaseModel] | None:
-    """The concrete model of a field annotation, choosing union members by ``kind``."""
-    args = getattr(ann, "__args__", None)
-    if isinstance(ann, type) and issubclass(ann, BaseModel):
-        return ann
-    if args:
-        members = [a for a in _flatten(ann) if isinstance(a, type) and issubclass(a, BaseModel)]
-        if not members:
-            return None
-        kind = value.get("kind") if isinstance(value, dict) else None
-        if kind is not None:
-            for m in members:
-                if m.model_fields.get("kind") and kind in _literal_values(m.model_fields["kind"]):
-                    return m
-        # no kind given: the member with a default kind
-        for m in members:
-            f = m.model_fields.get("kind")
-            if f is None or (f.default is not None and not f.is_required()):
-                return m
-        return members[0]
-    return None
-
-
-def _flatten(ann: Any) -> list:
-    out = []
-    for a in getattr(ann, "__args__", ()) or ():
-        if getattr(a, "__args__", None) and not (isinstance(a, type) and issubclass(a, BaseModel)):
-            out.extend(_flatten(a))
-        else:
-            out.append(a)
-    meta = getattr(ann, "__metadata__", None)
-    if meta is not None and hasattr(ann, "__origin__"):
-        out.extend(_flatten(ann.__origin__))
-    return out
-
-
-def _literal_values(field) -> tuple:
-    return getattr(field.annotation, "__args__", ())
-
-
-def valid_keys(path: str, data: dict) -> list[str]:
-    """Keys allowed under the dotted ``path`` for this data (``kind`` picks union members)."""
-    model = _model_at(path, data)
-    if model is None:
-        return []
-    return [f.alias or name for name, f in model.model_fields.items()]
 
 
 def get_path(data: dict, path: str) -> Any:
@@ -255,8 +67,8 @@ def check_key_path(path: str, data: dict) -> None:
     parts = path.split(".")
     parent = ".".join(parts[:-1])
     try:
-        keys = valid_keys(parent, data)
-        model = _model_at(parent, data)
+        keys = valid_keys(parent, data, ExperimentCfg)
+        model = model_at(parent, data, ExperimentCfg)
     except ConfigError:
         keys, model = [], None
     if model is None or parts[-1] not in keys:
@@ -265,7 +77,11 @@ def check_key_path(path: str, data: dict) -> None:
         for n in range(len(parts) - 1, -1, -1):
             prefix = ".".join(parts[:n])
             try:
-                keys = valid_keys(prefix, data) if _model_at(prefix, data) is not None else []
+                keys = (
+                    valid_keys(prefix, data, ExperimentCfg)
+                    if model_at(prefix, data, ExperimentCfg) is not None
+                    else []
+                )
             except ConfigError:
                 continue
             if keys:
@@ -289,7 +105,7 @@ def validate_data(data: Any, *, base_dir: Path | None = None) -> ExperimentCfg:
     try:
         cfg = ExperimentCfg.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(format_validation_error(exc, data)) from None
+        raise ConfigError(format_validation_error(exc, data, root=ExperimentCfg)) from None
     normalised: dict[str, list] = {}
     for path, values in cfg.sweep.items():
         check_key_path(path, data)
@@ -302,7 +118,7 @@ def validate_data(data: Any, *, base_dir: Path | None = None) -> ExperimentCfg:
                 model = ExperimentCfg.model_validate(point)
             except ValidationError as exc:
                 raise ConfigError(
-                    f"sweep.{path}[{i}]: " + format_validation_error(exc, point)
+                    f"sweep.{path}[{i}]: " + format_validation_error(exc, point, root=ExperimentCfg)
                 ) from None
             normalised[path].append(_normalised_value(v, model, path))
     if normalised != cfg.sweep:
@@ -336,7 +152,6 @@ def _normalised_value(raw: Any, point: ExperimentCfg, path: str) -> Any:
 
 def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
     """Names that select code (preset, strategy, metric) must exist."""
-    from simlunar.config import registry
 
     points = [cfg]
     for path, values in cfg.sweep.items():
@@ -359,6 +174,8 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
                 registry.check_scan_planner(s, f"study.planners[{i}]")
             for i, m in enumerate(p.study.modes):
                 registry.check_scan_mode(m, f"study.modes[{i}]")
+            for i, m in enumerate(p.study.metrics):
+                registry.check_metric(m, f"study.metrics[{i}]")
 
 
 def resolve_terrain_files(cfg, base_dir: Path | None):
@@ -377,61 +194,6 @@ def resolve_terrain_files(cfg, base_dir: Path | None):
     if updates:
         cfg = cfg.model_copy(update={"terrain": t.model_copy(update=updates)})
     return cfg
-
-
-def parse_set(items: list[str]) -> dict[str, Any]:
-    """``--set key.path=value`` overrides; values parsed as YAML (``5``, ``[1, 2]``, ``lambert``)."""
-    out = {}
-    for item in items:
-        if "=" not in item:
-            raise ConfigError(f"--set {item}: expected key.path=value")
-        key, raw = item.split("=", 1)
-        try:
-            out[key.strip()] = yaml.safe_load(raw)
-        except yaml.YAMLError as exc:
-            raise ConfigError(f"--set {key}: value is not valid YAML ({exc.problem})") from None
-    return out
-
-
-class UniqueKeyLoader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` that refuses a key given twice in one mapping (PyYAML keeps the
-    last value silently)."""
-
-    def construct_mapping(self, node, deep=False):
-        seen = {}
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=deep)
-            try:
-                hash(key)
-            except TypeError:
-                continue  # the base class reports unhashable keys
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None,
-                    None,
-                    f"duplicate key {key!r} (first at line {seen[key] + 1})",
-                    key_node.start_mark,
-                )
-            seen[key] = key_node.start_mark.line
-        return super().construct_mapping(node, deep=deep)
-
-
-def load_yaml(path: str | Path) -> dict:
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"experiment file not found: {path}")
-    try:
-        data = yaml.load(path.read_text(), Loader=UniqueKeyLoader)
-    except UnicodeDecodeError:
-        raise ConfigError(f"{path}: not a text file") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or ""
-        if problem.startswith("duplicate key"):
-            raise ConfigError(f"{path}: line {mark.line + 1}: {problem}") from None
-        raise ConfigError(f"{path}: not valid YAML{where}") from None
-    return data if data is not None else {}
 
 
 def load_experiment(path: str | Path, overrides: dict[str, Any] | None = None) -> ExperimentCfg:
@@ -464,32 +226,3 @@ def load_experiment(path: str | Path, overrides: dict[str, Any] | None = None) -
 def to_plain(cfg: ExperimentCfg) -> dict:
     """JSON/YAML-safe dict of a config (paths as strings, aliases used)."""
     return cfg.model_dump(mode="json", by_alias=True)
-
-
-#: document kinds of :func:`json_schema`: experiment YAMLs, scene YAMLs, terrain presets
-SCHEMA_KINDS = ("experiment", "scene", "preset")
-
-
-def schema_model(kind: str = "experiment") -> type[BaseModel]:
-    """The root model of a document kind (:data:`SCHEMA_KINDS`)."""
-    if kind == "experiment":
-        return ExperimentCfg
-    if kind == "scene":
-        from simlunar.config.scene import SceneCfg
-
-        return SceneCfg
-    if kind == "preset":
-        from simlunar.config.schema import TerrainPresetCfg
-
-        return TerrainPresetCfg
-    raise ValueError(f"unknown schema kind {kind!r} (valid: {', '.join(SCHEMA_KINDS)})")
-
-
-def json_schema(kind: str = "experiment") -> dict:
-    """JSON Schema of an experiment, scene or terrain-preset YAML (for editors:
-    yaml-language-server). Unit-bearing keys accept a number or a string with a unit;
-    densities accept a number, a fraction string or (a list) a ``{from, to, count}`` range."""
-    schema = schema_model(kind).model_json_schema(by_alias=True)
-    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
-    schema["title"] = f"simlunar {kind}"
-    return schema

@@ -19,6 +19,8 @@ import zlib
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from simlunar.metrics import METRIC_NAMES
+
 
 @dataclass(frozen=True)
 class Style:
@@ -178,7 +180,6 @@ _UNIT_SUFFIXES = {"_deg": "deg", "_m": "m", "_e": "e⁻", "_px": "px", "_s": "s"
 
 def metric_axis(metric: str, *, what: str = "error") -> str:
     """Axis label of an error metric with its unit, e.g. ``"MSE error (m²)"``."""
-    from simlunar.metrics import METRIC_NAMES
 
     name = METRIC_NAMES.get(metric, metric)
     unit = METRIC_UNITS.get(metric)

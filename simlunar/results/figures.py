@@ -47,7 +47,7 @@ def load_results(out_dir: str | Path) -> dict:
                 else "run `simlunar run EXPERIMENT.yaml` first"
             )
             raise ResultFolderError(f"{out}: not a result folder (missing {name}); {hint}")
-    from simlunar.pipeline.runner import read_folder_config
+    from simlunar.results.folder import read_folder_config
 
     config = read_folder_config(out / "config.yaml")
     prov = _read_provenance(out / "provenance.json")
@@ -118,7 +118,7 @@ def load_unit_arrays(out_dir: str | Path, index: int = 0) -> dict:
 
 
 def _label(rec: dict) -> str:
-    from simlunar.pipeline.runner import WorkUnit, unit_label
+    from simlunar.results.records import WorkUnit, unit_label
 
     config = rec.get("config", {}) or {}
     repeats = int((config.get("study") or {}).get("terrain_seeds", 1) or 1)
@@ -371,7 +371,7 @@ def _scanner_figures(res: dict, emit, captions: dict) -> None:
 
 def write_figures_pruned(out_dir: str | Path) -> list[Path]:
     """:func:`write_figures`, then remove the figures of ``figures/`` it did not write."""
-    from simlunar.pipeline.runner import prune_figures
+    from simlunar.results.folder import prune_figures
 
     written = write_figures(out_dir)
     prune_figures(Path(out_dir), keep=written)

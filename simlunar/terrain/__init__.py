@@ -1,13 +1,13 @@
 """Procedural lunar terrain and DEM I/O (NumPy/SciPy only).
 
-``generate("aerial_1", rng=0)`` -> :class:`TerrainResult` (terrain, craters, rocks); presets in
-``scenes/`` via :func:`load_preset`; files through :mod:`simlunar.terrain.io`.
+``generate(params, rng=0)`` -> :class:`TerrainResult` (terrain, craters, rocks) from
+:class:`TerrainParams`; the presets in ``scenes/`` are read by ``simlunar.config``
+(``simlunar.config.translate.preset_params("aerial_1")``); files through :mod:`simlunar.terrain.io`.
 """
 
 from simlunar.terrain.craters import Crater
 from simlunar.terrain.generate import TerrainResult, generate, make_albedo
-from simlunar.terrain.params import TerrainParams, params_from_dict
-from simlunar.terrain.presets import load_preset, preset_names
+from simlunar.terrain.params import TerrainParams
 from simlunar.terrain.rocks import Rock
 from simlunar.terrain.types import Terrain
 
@@ -18,8 +18,5 @@ __all__ = [
     "TerrainParams",
     "TerrainResult",
     "generate",
-    "load_preset",
     "make_albedo",
-    "params_from_dict",
-    "preset_names",
 ]

@@ -8,11 +8,10 @@ stream (``SeedSequence.spawn``) so turning rocks off does not move the craters.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from simlunar.terrain import sfd
+import simlunar.terrain.sfd as sfd
 from simlunar.terrain.craters import Crater, extent_radii, place_craters, stamp_craters
 from simlunar.terrain.fractal import fbm, undulating_bed
 from simlunar.terrain.params import AlbedoParams, TerrainParams
@@ -84,12 +83,13 @@ def make_albedo(
 
 
 def generate(params, *, rng=None, scale: float = 1.0, nodata=None) -> TerrainResult:
-    """Generate a terrain from a preset name, a preset YAML path, or :class:`TerrainParams`.
+    """Generate a terrain from :class:`TerrainParams`.
 
     Parameters
     ----------
-    params : str, Path or TerrainParams
-        ``"aerial_1"`` etc. (see ``scenes/``), a YAML file, or parameters.
+    params : TerrainParams
+        The generator's parameters (SI units); a preset's come from
+        :func:`simlunar.config.translate.preset_params` (presets are read in ``config/`` only).
     rng : seed or Generator
         Same seed -> bit-identical result.
     scale : float in (0, 1]
@@ -105,17 +105,12 @@ def generate(params, *, rng=None, scale: float = 1.0, nodata=None) -> TerrainRes
         ones centred outside the grid whose blanket reaches in, and invisible degraded ones) and
         ``rocks``.
     """
-    if isinstance(params, (str, Path)):
-        from simlunar.terrain.presets import load_preset
-
-        params = load_preset(params, scale=scale)
-    elif isinstance(params, TerrainParams):
-        params = params.scaled(scale)
-    else:
-        raise ValueError(
-            f"generate needs a preset name, a YAML path or TerrainParams, got {type(params).__name__}"
+    if not isinstance(params, TerrainParams):
+        raise TypeError(
+            f"generate needs TerrainParams, got {type(params).__name__}; for a preset use "
+            "simlunar.config.translate.preset_params('aerial_1')"
         )
-    p = params
+    p = params.scaled(scale)
     g_base, g_bed, g_crd, g_crp, g_rkd, g_rkp, g_rks, g_alb = _seeds(rng, 8)
     shape = (p.rows, p.cols)
     h = fbm(

@@ -11,11 +11,11 @@ YAML presets use unit suffixes (``spacing_m``, ``d_min_m``, ``diffusivity_m2_per
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from simlunar.terrain import sfd
+import simlunar.terrain.sfd as sfd
 
 
 class ParamError(ValueError):
@@ -23,7 +23,7 @@ class ParamError(ValueError):
 
     ``str()`` reads ``"<key> <problem>"``; callers that report key paths themselves use
     ``key`` and ``problem`` separately. (Experiment YAMLs validate presets and overrides with the
-    pipeline's models, :mod:`simlunar.config.presets`; a test keeps both routes equal.)
+    pipeline's models, :mod:`simlunar.config.terrain`; a test keeps both routes equal.)
     """
 
     def __init__(self, key: str, problem: str):
@@ -201,123 +201,3 @@ class TerrainParams:
         if s == 1.0:
             return self
         return replace(self, rows=max(16, round(self.rows * s)), cols=max(16, round(self.cols * s)))
-
-
-_SECTIONS = {
-    "fractal": FractalParams,
-    "bed": BedParams,
-    "craters": CraterParams,
-    "rocks": RockParams,
-    "albedo": AlbedoParams,
-}
-# YAML key (with unit suffix) -> field name
-_RENAMES = {
-    "rms_m": "rms",
-    "rolloff_m": "rolloff",
-    "amplitude_m": "amplitude",
-    "wavelength_m": "wavelength",
-    "d_min_m": "d_min",
-    "d_max_m": "d_max",
-    "diffusivity_m2_per_myr": "diffusivity",
-    "cluster_radius_m": "cluster_radius",
-}
-
-
-def params_from_dict(d: dict, *, where: str = "terrain") -> TerrainParams:
-    """Build :class:`TerrainParams` from a preset-style dict (YAML keys with unit suffixes).
-
-    Top-level keys: ``name``, ``description``, ``sources``, ``grid`` (``rows``, ``cols``,
-    ``spacing_m``, ``origin_m``) and the sections ``fractal``, ``bed``, ``craters``, ``rocks``,
-    ``albedo``. Unknown keys raise ``ValueError`` naming them (``where`` prefixes the message).
-    """
-    if not isinstance(d, dict):
-        raise ValueError(f"{where}: a terrain preset must be a mapping, got {type(d).__name__}")
-    allowed = {"name", "description", "sources", "grid", *_SECTIONS}
-    unknown = sorted(set(d) - allowed)
-    if unknown:
-        raise ValueError(f"{where}: unknown key(s) {unknown}; valid: {sorted(allowed)}")
-    kw: dict = {}
-    grid = d.get("grid", {}) or {}
-    if not isinstance(grid, dict):
-        raise ValueError(f"{where}: grid must be a mapping")
-    gmap = {"rows": "rows", "cols": "cols", "spacing_m": "spacing", "origin_m": "origin"}
-    bad = sorted(set(grid) - set(gmap))
-    if bad:
-        raise ValueError(f"{where}: unknown key(s) grid.{bad}; valid: {sorted(gmap)}")
-    for k, v in grid.items():
-        kw[gmap[k]] = tuple(v) if k == "origin_m" and isinstance(v, list) else v
-    for sec, cls in _SECTIONS.items():
-        sub = d.get(sec)
-        if sub is None:
-            continue
-        if not isinstance(sub, dict):
-            raise ValueError(f"{where}: {sec} must be a mapping, got {type(sub).__name__}")
-        valid = {f.name for f in fields(cls)}
-        inv = {v: k for k, v in _RENAMES.items()}
-        args = {}
-        for k, v in sub.items():
-            name = _RENAMES.get(k, k)
-            if name not in valid or (name in inv and k != inv[name]):
-                shown = sorted(inv.get(f, f) for f in valid)
-                raise ValueError(f"{where}: unknown key {sec}.{k}; valid: {shown}")
-            args[name] = v
-        kw[sec] = cls(**args)
-    for k in ("name", "description"):
-        if k in d:
-            kw[k] = str(d[k])
-    try:
-        return TerrainParams(**kw)
-    except TypeError as exc:  # pragma: no cover - guarded by the key checks above
-        raise ValueError(f"{where}: {exc}") from None
-
-
-_GRID_KEYS = ("rows", "cols", "spacing_m", "origin_m")
-
-
-def override_keys() -> dict[str, list[str]]:
-    """The preset keys an override may set: section -> YAML keys (with unit suffixes).
-
-    Sections are ``grid`` and the parameter sections (``fractal``, ``bed``, ``craters``,
-    ``rocks``, ``albedo``); ``name``, ``description`` and ``sources`` are not parameters.
-    """
-    inv = {v: k for k, v in _RENAMES.items()}
-    out = {"grid": list(_GRID_KEYS)}
-    for sec, cls in _SECTIONS.items():
-        out[sec] = [inv.get(f.name, f.name) for f in fields(cls)]
-    return out
-
-
-def merge_overrides(data: dict, overrides: dict) -> dict:
-    """A preset dict with ``overrides`` deep-merged in (``data`` is not modified).
-
-    Parameters
-    ----------
-    data : dict
-        A preset-style mapping (as read from ``scenes/<name>.yaml``).
-    overrides : dict
-        ``{section: {key: value}}`` with the keys of :func:`override_keys`, e.g.
-        ``{"fractal": {"rms_m": 0.05}}``. Values replace the preset's; other keys are kept.
-
-    Raises
-    ------
-    ParamError
-        An unknown section or key, or a section that is not a mapping; ``key`` is the path
-        (``fractal.rms_mm``) and the message lists the valid keys. Values are checked by
-        :func:`params_from_dict` on the merged dict, not here.
-    """
-    valid = override_keys()
-    if not isinstance(overrides, dict):
-        raise ParamError("", f"must be a mapping of sections, got {type(overrides).__name__}")
-    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in data.items()}
-    for sec, sub in overrides.items():
-        if sec not in valid:
-            raise ParamError(str(sec), f"unknown key (valid keys: {', '.join(valid)})")
-        if not isinstance(sub, dict):
-            raise ParamError(str(sec), f"must be a mapping of keys, got {type(sub).__name__}")
-        for k in sub:
-            if k not in valid[sec]:
-                raise ParamError(f"{sec}.{k}", f"unknown key (valid keys: {', '.join(valid[sec])})")
-        merged = dict(out.get(sec) or {})
-        merged.update(sub)
-        out[sec] = merged
-    return out

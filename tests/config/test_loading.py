@@ -7,14 +7,10 @@ import math
 import pytest
 import yaml
 
-from simlunar.config.loading import (
-    ExperimentCfg,
-    apply_sweep_value,
-    json_schema,
-    load_experiment,
-    parse_set,
-    validate_data,
-)
+from simlunar.config.docs import json_schema
+from simlunar.config.loading import apply_sweep_value, load_experiment, validate_data
+from simlunar.config.schema import ExperimentCfg
+from simlunar.config.yamlio import parse_set
 from simlunar.errors import ConfigError
 
 

@@ -10,7 +10,9 @@ import yaml
 from typer.testing import CliRunner
 
 from simlunar.cli import app
-from simlunar.config.scene import SceneCfg, build_camera, build_lights, load_scene
+from simlunar.config import translate
+from simlunar.config.render import RenderCfg
+from simlunar.config.scene import SceneCfg, load_scene
 from simlunar.errors import ConfigError
 from simlunar.geometry import Camera, OrthoCamera
 from simlunar.render.lights import CameraLight, SunLight
@@ -35,32 +37,39 @@ def _write(tmp_path, data, name="scene.yaml"):
     return p
 
 
-BASE = {
-    "name": "tiny",
-    "terrain": {"file": "dem.npz", "spacing_m": 0.5},
+RENDER = {
     "camera": {"kind": "orthographic_nadir", "altitude_m": 10},
     "light": {"kind": "sun", "elevation_deg": 40, "azimuth_deg": 90},
     "bsdf": {"kind": "lambert"},
     "spp": 2,
     "max_depth": 2,
+    "sensor": None,
 }
+BASE = {"name": "tiny", "terrain": {"file": "dem.npz", "spacing_m": 0.5}, "render": RENDER}
+
+
+def _scene(**render) -> dict:
+    """BASE with keys of its render section replaced."""
+    return {**BASE, "render": {**RENDER, **render}}
 
 
 def test_quickstart_scene_validates():
     cfg = load_scene(REPO / "scenes" / "quickstart_scene.yaml")
     assert cfg.terrain.preset == "aerial_1"
-    assert cfg.light.angular_diameter == pytest.approx(np.radians(0.53))
-    assert cfg.bsdf.kind == "oren_nayar"
+    assert cfg.render.light.angular_diameter == pytest.approx(np.radians(0.53))
+    assert cfg.render.bsdf.kind == "oren_nayar"
 
 
 def test_scene_defaults_and_units():
     cfg = SceneCfg.model_validate(
-        {"terrain": {"preset": "aerial_1"}, "light": {"elevation_deg": "0.5 rad"}}
+        {"terrain": {"preset": "aerial_1"}, "render": {"light": {"elevation_deg": "0.5 rad"}}}
     )
-    assert cfg.camera.kind == "orthographic_nadir"
-    assert cfg.light.kind == "sun"
-    assert cfg.light.elevation == pytest.approx(0.5)
-    assert cfg.spp == 16 and cfg.max_depth == 3 and cfg.sensor is None
+    r = cfg.render
+    assert r.camera.kind == "orthographic_nadir"
+    assert r.light.kind == "sun"
+    assert r.light.elevation == pytest.approx(0.5)
+    # the experiment's render defaults, bounds included: one model for both
+    assert r == RenderCfg.model_validate({"light": {"elevation_deg": "0.5 rad"}})
 
 
 def test_build_camera_from_intrinsics_and_lights():
@@ -68,29 +77,32 @@ def test_build_camera_from_intrinsics_and_lights():
     cfg = SceneCfg.model_validate(
         {
             "terrain": {"preset": "aerial_1"},
-            "camera": {
-                "kind": "perspective",
-                "width": 40,
-                "height": 30,
-                "fx": 50,
-                "fy": 50,
-                "cx": 21.5,
-                "cy": 14.0,
-                "position_m": [0, 0, 10],
-                "look_at_m": [1, 0, 0],
+            "render": {
+                "camera": {
+                    "kind": "perspective",
+                    "width": 40,
+                    "height": 30,
+                    "fx": 50,
+                    "fy": 50,
+                    "cx": 21.5,
+                    "cy": 14.0,
+                    "position_m": [0, 0, 10],
+                    "look_at_m": [1, 0, 0],
+                },
+                "light": {"kind": "camera", "intensity": 3.0},
+                "ambient_radiance": 0.1,
             },
-            "light": {"kind": "camera", "intensity": 3.0},
-            "ambient_radiance": 0.1,
         }
     )
-    cam = build_camera(cfg.camera, t)
+    cam = translate.camera(cfg.render.camera, t)
     assert isinstance(cam, Camera)
     assert (cam.intrinsics.cx, cam.intrinsics.cy, cam.intrinsics.width) == (21.5, 14.0, 40)
     np.testing.assert_allclose(cam.position, [0, 0, 10])
-    lights = build_lights(cfg)
+    lights = translate.lights(cfg.render.light, cfg.render.ambient_radiance)
     assert isinstance(lights[0], CameraLight) and lights[0].intensity == 3.0
     assert lights[1].radiance == 0.1
-    ortho = build_camera(SceneCfg.model_validate({"terrain": {"preset": "aerial_1"}}).camera, t)
+    plain = SceneCfg.model_validate({"terrain": {"preset": "aerial_1"}})
+    ortho = translate.camera(plain.render.camera, t)
     assert isinstance(ortho, OrthoCamera) and ortho.shape == (4, 6)
 
 
@@ -98,10 +110,10 @@ def test_sun_with_disk():
     cfg = SceneCfg.model_validate(
         {
             "terrain": {"preset": "aerial_1"},
-            "light": {"angular_diameter_deg": 0.53, "irradiance": 2},
+            "render": {"light": {"angular_diameter_deg": 0.53, "irradiance": 2}},
         }
     )
-    (sun,) = build_lights(cfg)
+    (sun,) = translate.lights(cfg.render.light, cfg.render.ambient_radiance)
     assert isinstance(sun, SunLight) and sun.irradiance == 2.0
     assert sun.angular_diameter == pytest.approx(np.radians(0.53))
 
@@ -140,7 +152,7 @@ def test_cli_render_writes_outputs(tmp_path):
 @pytest.mark.render
 def test_cli_render_with_sensor(tmp_path):
     _dem(tmp_path)
-    scene = _write(tmp_path, {**BASE, "sensor": {"bits": 8}})
+    scene = _write(tmp_path, _scene(sensor={"bits": 8}))
     res = CliRunner().invoke(app, ["render", str(scene), "--out", str(tmp_path / "o")])
     assert res.exit_code == 0, res.output
     assert (tmp_path / "o" / "sensor.png").is_file()
@@ -149,14 +161,15 @@ def test_cli_render_with_sensor(tmp_path):
 @pytest.mark.parametrize(
     ("patch", "needle"),
     [
-        ({"camera": {"kind": "fisheye"}}, "camera"),
-        ({"spp": -1}, "spp"),
-        ({"spp": 0}, "spp"),
-        ({"light": {"kind": "laser"}}, "light"),
-        ({"bsdf": {"kind": "phong"}}, "bsdf"),
-        ({"bsdf": {"kind": "oren_nayar", "sigma_deg": 120}}, "bsdf.sigma_deg"),
+        ({"camera": {"kind": "fisheye"}}, "render.camera"),
+        ({"spp": -1}, "render.spp"),
+        ({"spp": 0}, "render.spp"),
+        ({"spp": 5000}, "render.spp"),
+        ({"light": {"kind": "laser"}}, "render.light"),
+        ({"bsdf": {"kind": "phong"}}, "render.bsdf"),
+        ({"bsdf": {"kind": "oren_nayar", "sigma_deg": 120}}, "render.bsdf.sigma_deg"),
         ({"light": {"kind": "sun", "elevation_deg": 100}}, "elevation_deg"),
-        ({"colour": "grey"}, "colour"),
+        ({"colour": "grey"}, "render.colour"),
         (
             {
                 "camera": {
@@ -175,7 +188,7 @@ def test_cli_render_with_sensor(tmp_path):
 )
 def test_bad_scene_is_one_line_exit_2(tmp_path, patch, needle):
     _dem(tmp_path)
-    scene = _write(tmp_path, {**BASE, **patch})
+    scene = _write(tmp_path, _scene(**patch))
     res = CliRunner().invoke(app, ["render", str(scene), "--out", str(tmp_path / "o")])
     assert res.exit_code == 2, res.output
     assert "Traceback" not in res.output

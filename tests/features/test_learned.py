@@ -11,14 +11,9 @@ from scipy.stats import rankdata
 
 from simlunar.features import feature_map
 from simlunar.features._stack import FEATURE_NAMES, image_features
-from simlunar.features.learned import (
-    LearnedMap,
-    LearnedOptions,
-    error_target,
-    pitch_of,
-    train_learned_map,
-)
+from simlunar.features.learned import LearnedMap, LearnedOptions, pitch_of
 from simlunar.planner import plan
+from simlunar.planner.learning import error_target, train_learned_map
 
 DENSITY = 1 / 32
 #: held-out rank correlation the learned map must reach on every test terrain; measured 0.63-0.81
@@ -193,6 +188,7 @@ def test_registered_feature_and_strategy(model, held_out, tmp_path):
         ({"max_iter": 1.5}, "max_iter"),
         ({"learning_rate": 0}, "learning_rate"),
         ({"l2_regularization": -1}, "l2_regularization"),
+        ({"threads": 0}, "threads"),
     ],
 )
 def test_options_are_validated(kwargs, match):

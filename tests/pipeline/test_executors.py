@@ -131,7 +131,7 @@ def test_a_listener_that_is_not_a_dask_scheduler_fails_within_the_timeout():
 
 
 def _cfg():
-    from simlunar.config.loading import ExperimentCfg
+    from simlunar.config.schema import ExperimentCfg
 
     return ExperimentCfg.model_validate(
         {

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from simlunar.config.loading import SamplingStudyCfg, load_experiment
+from simlunar.config.loading import load_experiment
+from simlunar.config.studies import SamplingStudyCfg
 from simlunar.pipeline.runner import expand
 
 EXPERIMENTS = sorted((Path(__file__).resolve().parents[2] / "experiments").glob("*.yaml"))

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from fake_unit import fake_unit
 
-from simlunar.config.loading import ExperimentCfg
+from simlunar.config.schema import ExperimentCfg
 from simlunar.pipeline.executors import LocalPoolExecutor, make_executor
 from simlunar.pipeline.runner import expand, run_experiment, unit_key
 

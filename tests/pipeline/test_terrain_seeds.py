@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from fake_unit import fake_unit
 
-from simlunar.config.loading import ExperimentCfg
+from simlunar.config.schema import ExperimentCfg
 from simlunar.pipeline.runner import expand, run_experiment
 from simlunar.pipeline.unit import stage_seeds, terrain_seed_sequence
 from simlunar.results import aggregate

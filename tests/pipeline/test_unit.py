@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simlunar.config.loading import SensorCfg
+from simlunar.config.render import SensorCfg
 from simlunar.pipeline.unit import STAGES, fill_invalid, luminance, sensor_image, stage_seeds
 
 

@@ -51,9 +51,12 @@ def test_nadir_ground_truth_has_no_holes_on_real_terrain(mi):
     # Rays through mesh vertices can slip between triangles; retries closer than float32
     # resolves (2^-24 * width px) change nothing. Regression: before the fix, a full-size
     # aerial_1 had ~850 interior and ~2600 border holes.
+    from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    t = generate("aerial_1", rng=1).terrain  # full size (1000 x 1600): quarter size has no holes
+    t = generate(
+        preset_params("aerial_1"), rng=1
+    ).terrain  # full size (1000 x 1600): quarter size has no holes
     cam = OrthoCamera.nadir_for_grid(t.shape, t.spacing, t.origin, altitude=50.0)
     gt = TerrainScene(t, cam, lights=[SunLight(np.radians(40), 0.3)], spp=1).ground_truth()
     assert gt.valid.all()

@@ -6,6 +6,7 @@ import numpy as np
 from typer.testing import CliRunner
 
 from simlunar.cli import app
+from simlunar.config.translate import preset_params
 from simlunar.terrain import generate
 from simlunar.terrain.io import load_dem
 
@@ -33,7 +34,7 @@ def test_terrain_command_writes_everything(tmp_path):
     names = sorted(p.name for p in out.iterdir())
     assert names == ["albedo.png", "dem.npz", "features.json", "hillshade.png", "mesh.ply"]
     t = load_dem(out / "dem.npz")
-    ref = generate("aerial_3", rng=5, scale=0.05)
+    ref = generate(preset_params("aerial_3"), rng=5, scale=0.05)
     np.testing.assert_array_equal(t.heights, ref.terrain.heights.astype(np.float32))
     feats = json.loads((out / "features.json").read_text())
     assert feats["name"] == "aerial_3" and feats["spacing"] == 0.2
@@ -64,7 +65,7 @@ def test_terrain_stats_prints_slopes_hurst_and_densities(tmp_path):
     # the numbers are those of the library on the same terrain
     from simlunar.terrain.stats import roughness
 
-    ref = generate("aerial_3", rng=5, scale=0.05).terrain
+    ref = generate(preset_params("aerial_3"), rng=5, scale=0.05).terrain
     h = roughness(ref.heights, ref.spacing).hurst
     assert f"H = {h:.3f}" in r.output
     # and a DEM file (a GeoTIFF written by the command) gives the same roughness
@@ -92,7 +93,7 @@ def test_terrain_reads_a_preset_as_experiments_do(tmp_path):
     experiment's terrain; the old preset reader refused them."""
     import yaml
 
-    from simlunar.terrain.presets import SCENES
+    from simlunar.config.terrain import SCENES
 
     data = yaml.safe_load((SCENES / "aerial_3.yaml").read_text())
     data["grid"]["spacing_m"] = "20 cm"

@@ -2,8 +2,12 @@
 
 import numpy as np
 import pytest
+from pydantic import ValidationError
 
-from simlunar.terrain import TerrainParams, generate, load_preset, params_from_dict, preset_names
+from simlunar.config.messages import format_validation_error
+from simlunar.config.terrain import TerrainPresetCfg, preset_names
+from simlunar.config.translate import preset_params
+from simlunar.terrain import TerrainParams, generate
 from simlunar.terrain.params import AlbedoParams, CraterParams, FractalParams, RockParams
 
 
@@ -89,21 +93,21 @@ def test_fresh_ejecta_is_brighter():
 
 @pytest.mark.parametrize("name", ["aerial_1", "aerial_2", "aerial_3", "moonyard"])
 def test_presets_load_and_generate_scaled(name):
-    full = load_preset(name)
+    full = preset_params(name)
     assert full.name == name and full.description
-    small = load_preset(name, scale=0.1)
+    small = preset_params(name, scale=0.1)
     assert small.spacing == full.spacing
     assert small.rows == max(16, round(full.rows * 0.1))
-    res = generate(name, rng=0, scale=0.1)
+    res = generate(preset_params(name), rng=0, scale=0.1)
     assert res.terrain.shape == (small.rows, small.cols)
     assert np.isfinite(res.terrain.heights).all()
 
 
 def test_preset_sizes_match_the_paper():
     for n in ("aerial_1", "aerial_2", "aerial_3"):
-        p = load_preset(n)
+        p = preset_params(n)
         assert (p.rows, p.cols, p.spacing) == (1000, 1600, 0.2)  # 5 voxels / m
-    m = load_preset("moonyard")
+    m = preset_params("moonyard")
     assert (m.rows, m.cols) == (971, 1674)
     assert m.cols * m.spacing == pytest.approx(2.0, abs=0.02)
     assert set(preset_names()) >= {"aerial_1", "aerial_2", "aerial_3", "moonyard"}
@@ -124,23 +128,28 @@ def test_preset_sizes_match_the_paper():
     ],
 )
 def test_bad_parameters_name_the_field(patch, field):
-    with pytest.raises(ValueError, match=field.replace(".", r"\.")):
-        params_from_dict({"grid": {"rows": 32, "cols": 32, "spacing_m": 0.2}} | patch)
+    # a preset file is read through the schema's models (config/), one line per error
+    data = {"grid": {"rows": 32, "cols": 32, "spacing_m": 0.2}} | patch
+    with pytest.raises(ValidationError) as info:
+        TerrainPresetCfg.model_validate(data)
+    assert field in format_validation_error(info.value, data, root=TerrainPresetCfg)
 
 
 def test_bad_preset_names_and_files(tmp_path):
     with pytest.raises(ValueError, match="aerial_1"):
-        load_preset("no_such_preset")
-    with pytest.raises(FileNotFoundError, match=r"missing\.yaml"):
-        load_preset(tmp_path / "missing.yaml")
+        preset_params("no_such_preset")
+    with pytest.raises(ValueError, match=r"missing\.yaml"):
+        preset_params(tmp_path / "missing.yaml")
     bad = tmp_path / "bad.yaml"
     bad.write_text("grid: {rows: 32, cols: 32, spacing_m: 0.2}\nfractal: {hurst: 2}\n")
     with pytest.raises(ValueError, match=r"bad\.yaml.*fractal\.hurst"):
-        load_preset(bad)
+        preset_params(bad)
     with pytest.raises(ValueError, match="scale"):
-        load_preset("aerial_1", scale=0.0)
-    with pytest.raises(ValueError, match="TerrainParams"):
+        preset_params("aerial_1", scale=0.0)
+    with pytest.raises(TypeError, match="TerrainParams"):
         generate(42, rng=0)
+    with pytest.raises(TypeError, match="preset_params"):
+        generate("aerial_1", rng=0)  # presets are read in config/, not by the generator
 
 
 def test_fractal_params_flow_through():

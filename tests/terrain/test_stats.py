@@ -79,9 +79,10 @@ def test_feature_densities_count_cumulatively():
 
 
 def test_terrain_report_lines():
+    from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    res = generate("aerial_3", rng=2, scale=0.05)
+    res = generate(preset_params("aerial_3"), rng=2, scale=0.05)
     lines = terrain_report(res.terrain, craters=res.craters, rocks=res.rocks)
     assert sum("°" in ln for ln in lines) >= 3
     assert any(ln.startswith("Hurst exponent H = ") for ln in lines)

@@ -15,8 +15,9 @@ import pytest
 import yaml
 from pydantic import BaseModel
 
-from simlunar.config import schema, translate
-from simlunar.config.loading import json_schema, schema_model, validate_data
+from simlunar.config import render, schema, studies, terrain, translate
+from simlunar.config.docs import json_schema, schema_model
+from simlunar.config.loading import validate_data
 from simlunar.config.scene import SceneCfg
 from simlunar.errors import ConfigError
 
@@ -112,7 +113,7 @@ def _free_form(ann) -> bool:
 
 def test_no_free_form_dict_field_in_the_config_models():
     models: set = set()
-    for root in (schema.ExperimentCfg, SceneCfg, schema.TerrainPresetCfg):
+    for root in (schema.ExperimentCfg, SceneCfg, terrain.TerrainPresetCfg):
         _models_from(root, models)
     assert len(models) > 25  # the walk reaches the option models
     offenders = [
@@ -124,8 +125,8 @@ def test_no_free_form_dict_field_in_the_config_models():
     ]
     assert offenders == []
     # the text of the model modules too (a field hidden from the walk still fails here)
-    for mod in ("schema.py", "scene.py"):
-        text = (ROOT / "simlunar" / "pipeline" / mod).read_text()
+    for mod in ("fields.py", "terrain.py", "render.py", "studies.py", "schema.py", "scene.py"):
+        text = (ROOT / "simlunar" / "config" / mod).read_text()
         for pattern in ("dict[str, Any]", ": dict =", ": dict\n", "Dict[", "Mapping["):
             assert pattern not in text, f"{mod}: {pattern!r}"
 
@@ -133,7 +134,7 @@ def test_no_free_form_dict_field_in_the_config_models():
 def test_the_free_form_check_can_fail():
     assert _free_form(dict[str, typing.Any]) and _free_form(dict) and _free_form(typing.Any)
     assert _free_form(dict[str, dict[str, typing.Any]]) and _free_form(dict[str, float] | None)
-    assert not _free_form(dict[str, schema.PlannerOptsCfg]) and not _free_form(float | None)
+    assert not _free_form(dict[str, studies.PlannerOptsCfg]) and not _free_form(float | None)
 
 
 # --------------------------------------------------------------------------- option models
@@ -149,31 +150,28 @@ def test_option_defaults_are_the_library_defaults():
     from simlunar.features import maps
     from simlunar.imaging.sensor import SensorModel
     from simlunar.planner import strategies
-    from simlunar.scanner import modes, rigs
+    from simlunar.render.capture import CaptureOptions
+    from simlunar.scanner import rigs
+    from simlunar.scanner.scans import DotOptions, GrayCodeOptions
     from simlunar.study.scanner import aim_rig_at_terrain
 
-    gray = _defaults(modes.gray_code_scan)
-    assert gray.pop("keep_frames") is False  # set by the pipeline for study.save_scans only
-    assert translate.gray_kwargs(schema.GrayOptsCfg()) == gray
-    from simlunar.render.capture import RenderCapture
-
-    capture = {k: v for k, v in _defaults(RenderCapture).items() if k.startswith("sparse_")}
-    assert schema.CaptureOptsCfg().model_dump() == capture
-    dots = _defaults(modes.dot_scan)
-    dots.pop("depth_range", None)
-    assert translate.dot_kwargs(schema.DotOptsCfg()) == dots
+    # the config's defaults are the library's options dataclasses' defaults
+    assert translate.gray_options(studies.GrayOptsCfg()) == GrayCodeOptions()
+    assert translate.dot_options(studies.DotOptsCfg()) == DotOptions()
+    sparse = {k: v for k, v in vars(CaptureOptions()).items() if k.startswith("sparse_")}
+    assert studies.CaptureOptsCfg().model_dump() == sparse
     weighted = _defaults(strategies._weighted)
-    kw = translate.planner_kwargs("wavelet", schema.PlannerOptsCfg())
+    kw = translate.planner_kwargs("wavelet", studies.PlannerOptsCfg())
     assert {k: kw[k] for k in weighted} == weighted
     assert kw["feature_opts"] == _defaults(maps.wavelet)
-    assert translate.planner_kwargs("entropy", schema.PlannerOptsCfg())["feature_opts"] == (
+    assert translate.planner_kwargs("entropy", studies.PlannerOptsCfg())["feature_opts"] == (
         _defaults(maps.entropy)
     )
-    assert schema.RigCfg().fill == _defaults(aim_rig_at_terrain)["fill"]
+    assert studies.RigCfg().fill == _defaults(aim_rig_at_terrain)["fill"]
     make_rig = _defaults(rigs.make_rig)
-    assert schema.RigCfg().verge == make_rig["verge"]
-    assert schema.RigCfg().aperture_radius_m == make_rig["aperture_radius"]
-    s, m = schema.SensorCfg(), SensorModel()
+    assert studies.RigCfg().verge == make_rig["verge"]
+    assert studies.RigCfg().aperture_radius_m == make_rig["aperture_radius"]
+    s, m = render.SensorCfg(), SensorModel()
     assert (s.full_well_e, s.read_noise_e, s.bits, s.response, s.gamma) == (
         m.full_well_e,
         m.read_noise_e,
@@ -271,13 +269,13 @@ def test_translation_converts_units_and_routes_feature_options():
     assert rig["elevation"] == pytest.approx(1.0)
     assert rig["baseline"] == pytest.approx(0.3)
     assert "distance" not in rig and "fov_x" not in rig  # unset: the preset / fit decides
-    opts = translate.scanner_options(cfg.study).kwargs()
-    assert opts["dot_opts"]["radius"] == 1.5
-    assert opts["planner_opts"] == {
+    opts = translate.scanner_options(cfg.study, cfg.render)
+    assert opts.dots.radius == 1.5
+    assert opts.planner_opts == {
         "wavelet": translate.planner_kwargs("wavelet", cfg.study.options.planner_opts["wavelet"])
     }
-    assert opts["planner_opts"]["wavelet"]["feature_opts"]["levels"] == 1
-    combo = schema.PlannerOptsCfg(
+    assert opts.planner_opts["wavelet"]["feature_opts"]["levels"] == 1
+    combo = studies.PlannerOptsCfg(
         coefficients={"wavelet": 1.0, "entropy": 0.5}, feature_opts={"levels": 2, "size": 5}
     )
     kw = translate.planner_kwargs("combination", combo)
@@ -294,11 +292,11 @@ def test_translated_options_run_through_the_planner():
     rng = np.random.default_rng(0)
     image = rng.random((32, 32))
     for base_name, opts in (
-        ("wavelet", schema.PlannerOptsCfg(blue_noise=True, feature_opts={"levels": 1})),
-        ("entropy", schema.PlannerOptsCfg(uniform_mix=0.3, feature_opts={"size": 5})),
-        ("combination", schema.PlannerOptsCfg(coefficients={"gradient": 1, "wavelet": 2})),
-        ("combination", schema.PlannerOptsCfg(coefficients={"uniform": 1, "entropy": 0.5})),
-        ("random", schema.PlannerOptsCfg()),
+        ("wavelet", studies.PlannerOptsCfg(blue_noise=True, feature_opts={"levels": 1})),
+        ("entropy", studies.PlannerOptsCfg(uniform_mix=0.3, feature_opts={"size": 5})),
+        ("combination", studies.PlannerOptsCfg(coefficients={"gradient": 1, "wavelet": 2})),
+        ("combination", studies.PlannerOptsCfg(coefficients={"uniform": 1, "entropy": 0.5})),
+        ("random", studies.PlannerOptsCfg()),
     ):
         p = plan(base_name, 20, image=image, rng=1, **translate.planner_kwargs(base_name, opts))
         assert len(p.rows) == 20
@@ -390,22 +388,6 @@ def test_sweep_keeps_plain_values_as_written():
 
 
 # --------------------------------------------------------------------------- presets
-def test_presets_through_the_models_equal_the_terrain_package():
-    from simlunar.config.presets import merged_preset
-    from simlunar.terrain import load_preset, preset_names
-
-    names = preset_names()
-    assert {"aerial_1", "moonyard"} <= set(names)
-    for name in names:
-        assert translate.terrain_params(merged_preset(name), scale=0.25) == load_preset(
-            name, scale=0.25
-        )
-    ov = schema.TerrainOverridesCfg(fractal={"rms_m": "5 cm"}, rocks={"enabled": False})
-    assert translate.terrain_params(merged_preset("aerial_1", ov)) == load_preset(
-        "aerial_1", overrides={"fractal": {"rms_m": 0.05}, "rocks": {"enabled": False}}
-    )
-
-
 def test_a_bad_preset_file_is_one_line_naming_file_and_key(tmp_path):
     p = tmp_path / "mine.yaml"
     p.write_text(yaml.safe_dump({"grid": {"rows": 32, "cols": 32}, "fractal": {"hurst": 1.5}}))
@@ -474,7 +456,7 @@ figures: {{enabled: false}}
 
 
 def test_albedo_file_of_another_shape_is_one_line(tmp_path):
-    from simlunar.pipeline.unit import build_terrain
+    from simlunar.config.translate import build_terrain
 
     _dem_files(tmp_path, albedo_shape=(32, 40))
     cfg = validate_data(
@@ -500,9 +482,9 @@ def test_albedo_file_of_another_shape_is_one_line(tmp_path):
 )
 def test_the_preflight_rejects_what_the_unit_would_reject(tmp_path, albedo):
     """One albedo reader: a file the unit refuses is refused before anything is written."""
+    from simlunar.config.translate import build_terrain
     from simlunar.errors import ConfigError
-    from simlunar.pipeline.preflight import terrain_facts
-    from simlunar.pipeline.unit import build_terrain
+    from simlunar.pipeline.inputs import terrain_facts
 
     _dem_files(tmp_path)
     np.save(tmp_path / "alb.npy", albedo)

@@ -1,0 +1,182 @@
+"""Render sections of the schema: camera, light, BSDF, sensor and ``render``."""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import (
+    Field,
+    model_validator,
+)
+
+from simlunar.config.fields import (
+    Deg,
+    Metres,
+    _Model,
+    _tagged_union,
+)
+
+# --------------------------------------------------------------------------- render
+#: most samples per pixel of any render (render.spp, the scanner's sparse_spp)
+MAX_SPP = 4096
+
+
+class OrthoNadirCfg(_Model):
+    """Orthographic nadir camera whose pixel (r, c) sees DEM cell (r, c) (aerial view)."""
+
+    kind: Literal["orthographic_nadir"] = "orthographic_nadir"
+    altitude_m: Metres = Field(50.0, gt=0, description="camera height above z = 0 (m)")
+
+
+Vec3 = tuple[float, float, float]
+
+
+class PerspectiveCfg(_Model):
+    """Pinhole (or thin-lens) camera at ``position_m`` looking at ``look_at_m``.
+
+    Give either ``fov_deg`` (horizontal; square pixels, centred principal point) or all of
+    ``fx, fy, cx, cy`` (pixels; pixel centres at i + 0.5, so centred is ``width/2``).
+    """
+
+    kind: Literal["perspective"]
+    width: int = Field(gt=0, le=16384)
+    height: int = Field(gt=0, le=16384)
+    fov_deg: Deg | None = Field(None, gt=0, lt=180, description="horizontal field of view")
+    fx: float | None = Field(None, gt=0, description="focal length (px)")
+    fy: float | None = Field(None, gt=0, description="focal length (px)")
+    cx: float | None = Field(None, description="principal point (px)")
+    cy: float | None = Field(None, description="principal point (px)")
+    position_m: Vec3
+    look_at_m: Vec3
+    up: Vec3 = Field((0.0, 0.0, 1.0), description="world up direction (unit-free)")
+    aperture_radius_m: Metres = Field(0.0, ge=0, description="thin lens; 0 = pinhole")
+    focus_distance_m: Metres | None = Field(None, gt=0)
+
+    @model_validator(mode="after")
+    def _intrinsics(self) -> PerspectiveCfg:
+        k = [self.fx, self.fy, self.cx, self.cy]
+        if self.fov_deg is None and any(v is None for v in k):
+            raise ValueError("give fov_deg or all of fx, fy, cx, cy")
+        if self.fov_deg is not None and any(v is not None for v in k):
+            raise ValueError("give fov_deg or fx, fy, cx, cy, not both")
+        if self.aperture_radius_m > 0 and self.focus_distance_m is None:
+            raise ValueError("a thin lens (aperture_radius_m > 0) needs focus_distance_m")
+        if tuple(self.position_m) == tuple(self.look_at_m):
+            raise ValueError("look_at_m: equals position_m (the camera looks at its own position)")
+        return self
+
+
+class RoverMastCfg(_Model):
+    """Perspective camera on a rover mast: ``height_m`` above the ground at ``site_m``, its
+    optical axis ``depression_deg`` below the horizon, towards ``azimuth_deg``."""
+
+    kind: Literal["rover_mast"]
+    width: int = Field(320, gt=0, le=16384)
+    height: int = Field(240, gt=0, le=16384)
+    fov_deg: Deg = Field(60.0, gt=0, lt=180, description="horizontal field of view")
+    height_m: Metres = Field(1.5, gt=0, description="camera height above the terrain at the site")
+    depression_deg: Deg = Field(
+        30.0, gt=0, le=90, description="optical axis below the horizon (90 = straight down)"
+    )
+    azimuth_deg: Deg = Field(0.0, description="look direction from +y (north) clockwise to +x")
+    site_m: tuple[float, float] | None = Field(
+        None, description="world (x, y) of the mast foot; default the terrain's centre"
+    )
+
+
+CameraCfg = _tagged_union("orthographic_nadir", OrthoNadirCfg, PerspectiveCfg, RoverMastCfg)
+
+
+class SunLightCfg(_Model):
+    """A distant sun. Azimuth from +y (north) clockwise towards +x (east)."""
+
+    kind: Literal["sun"] = "sun"
+    elevation_deg: Deg = Field(30.0, gt=0, le=90, description="above the horizon (0 < e <= 90)")
+    azimuth_deg: Deg = Field(135.0, ge=-360, le=360)
+    irradiance: float = Field(1.0, gt=0, description="W/m^2 at normal incidence (relative)")
+    angular_diameter_deg: Deg = Field(
+        0.0, ge=0, lt=90, description="solar disk; 0.53 = the real sun (soft shadow edges)"
+    )
+
+    @property
+    def elevation(self) -> float:
+        return math.radians(self.elevation_deg)
+
+    @property
+    def azimuth(self) -> float:
+        return math.radians(self.azimuth_deg)
+
+    @property
+    def angular_diameter(self) -> float:
+        return math.radians(self.angular_diameter_deg)
+
+
+class CameraLightCfg(_Model):
+    """A point light at the camera's centre (no visible shadows)."""
+
+    kind: Literal["camera"]
+    intensity: float = Field(1.0, gt=0)
+
+
+LightCfg = _tagged_union("sun", SunLightCfg, CameraLightCfg)
+
+
+class LambertCfg(_Model):
+    kind: Literal["lambert"]
+
+
+class OrenNayarCfg(_Model):
+    """Oren-Nayar (1994); ``sigma_deg`` is the slope standard deviation."""
+
+    kind: Literal["oren_nayar"]
+    sigma_deg: Deg = Field(20.0, ge=0, lt=90, description="slope standard deviation (< 90)")
+    model: Literal["full", "qualitative"] = "full"
+
+    @property
+    def sigma(self) -> float:
+        return math.radians(self.sigma_deg)
+
+
+class HapkeCfg(_Model):
+    """Hapke; unset parameters take the render package's lunar defaults."""
+
+    kind: Literal["hapke"]
+    w: float | None = Field(None, gt=0, le=1, description="single-scattering albedo")
+    b: float | None = Field(None, ge=0, le=1)
+    c: float | None = Field(None, ge=-1, le=1)
+    B0: float | None = Field(None, ge=0)
+    h: float | None = Field(None, gt=0)
+    theta_bar_deg: Deg | None = Field(None, ge=0, le=60)
+
+
+BsdfCfg = _tagged_union(None, LambertCfg, OrenNayarCfg, HapkeCfg)
+
+
+class SensorCfg(_Model):
+    """Camera sensor (:class:`simlunar.imaging.sensor.SensorModel`): shot noise, read noise, ADC."""
+
+    full_well_e: float = Field(20000.0, gt=0, description="saturation capacity (electrons)")
+    read_noise_e: float = Field(5.0, ge=0, description="read noise std (electrons)")
+    bits: int = Field(12, ge=1, le=16, description="ADC resolution")
+    exposure_e: float | None = Field(
+        None,
+        gt=0,
+        description="electrons per unit linear radiance; null = auto exposure: the 99.5th "
+        "percentile of the reference radiance fills 80% of the full well (the guide image; "
+        "the white calibration frame in scanner studies)",
+    )
+    response: Literal["linear", "gamma"] = "linear"
+    gamma: float = Field(2.2, gt=0)
+
+
+class RenderCfg(_Model):
+    camera: CameraCfg = Field(default_factory=OrthoNadirCfg)
+    light: LightCfg = Field(default_factory=SunLightCfg)
+    bsdf: BsdfCfg = Field(default_factory=lambda: OrenNayarCfg(kind="oren_nayar"))
+    ambient_radiance: float = Field(0.0, ge=0, description="constant sky radiance (0 = off)")
+    spp: int = Field(16, ge=1, le=MAX_SPP)
+    max_depth: int = Field(3, ge=2, le=16, description="path depth (2 = direct light only)")
+    sensor: SensorCfg | None = Field(
+        default_factory=SensorCfg, description="null = use noiseless radiance"
+    )

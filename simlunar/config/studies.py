@@ -1,0 +1,415 @@
+"""Study sections of the schema: the sampling study (paper section 4) and the scanner study (section 5)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import (
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PositiveInt,
+    field_validator,
+    model_validator,
+)
+
+from simlunar.config.fields import (
+    Deg,
+    Density,
+    Metres,
+    Px,
+    PxCount,
+    _Model,
+    _tagged_union,
+)
+from simlunar.config.quantities import log_spaced
+from simlunar.config.render import MAX_SPP
+from simlunar.planner import STRATEGIES
+from simlunar.scanner.scans import SCAN_PLANNERS
+
+
+# --------------------------------------------------------------------------- studies
+class DensityRange(_Model):
+    """``count`` densities log-spaced from ``from`` to ``to`` (ends included)."""
+
+    start: Density = Field(alias="from")
+    stop: Density = Field(alias="to")
+    count: int = Field(ge=1, le=64)
+
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, populate_by_name=False, allow_inf_nan=False
+    )
+
+    def values(self) -> list[float]:
+        return log_spaced(self.start, self.stop, self.count)
+
+
+def _densities(value):
+    if isinstance(value, dict):
+        return DensityRange.model_validate(value).values()
+    return value
+
+
+# Planner options. Defaults are the library's (a test compares them with the signatures of
+# simlunar.planner / simlunar.features); the translation passes them to the weighted strategies.
+#: the feature-map options each weighted strategy's map takes
+FEATURE_OPTION_KEYS = {
+    "uniform": (),
+    "gradient": (),
+    "saliency": (),
+    "entropy": ("size", "scale"),
+    "wavelet": ("wavelet", "levels", "boundary"),
+}
+
+
+class FeatureOptsCfg(_Model):
+    """Options of the strategy's importance map (:func:`simlunar.features.feature_map`).
+
+    ``wavelet``, ``levels``, ``boundary`` belong to the wavelet map; ``size``, ``scale`` to the
+    entropy map. A ``combination`` passes each map the options that belong to it.
+    """
+
+    wavelet: str = Field("db2", description="wavelet map: PyWavelets wavelet name")
+    levels: PositiveInt | None = Field(
+        None, description="wavelet map: decomposition levels summed, finest first; null = all"
+    )
+    boundary: Literal["symmetric", "periodic"] = Field("symmetric", description="wavelet map")
+    size: PositiveInt = Field(9, description="entropy map: odd window side (px), 1..63")
+    scale: Literal["minmax", "unit"] = Field("minmax", description="entropy map: 8-bit scaling")
+
+    @field_validator("size")
+    @classmethod
+    def _entropy_window(cls, v: int) -> int:
+        from simlunar.features.maps import check_entropy_size
+
+        check_entropy_size(v)  # the map's own rule
+        return v
+
+    @field_validator("wavelet")
+    @classmethod
+    def _known_wavelet(cls, v: str) -> str:
+        import pywt
+
+        if v not in pywt.wavelist(kind="discrete"):
+            raise ValueError(f"unknown discrete wavelet {v!r} (e.g. db2, haar, sym4)")
+        return v
+
+
+class CoefficientsCfg(_Model):
+    """``combination`` strategy: the weight of each feature map (maps normalised to mean 1;
+    ``uniform`` is the constant map)."""
+
+    uniform: float | None = Field(None, ge=0)
+    gradient: float | None = Field(None, ge=0)
+    entropy: float | None = Field(None, ge=0)
+    wavelet: float | None = Field(None, ge=0)
+    saliency: float | None = Field(None, ge=0)
+
+    def as_mapping(self) -> dict[str, float]:
+        return {k: v for k, v in self.model_dump().items() if v is not None}
+
+
+class PlannerOptsCfg(_Model):
+    """Options of a feature-weighted strategy (:func:`simlunar.planner.plan`)."""
+
+    uniform_mix: float = Field(0.0, ge=0, le=1, description="mixture with uniform sampling")
+    density_cap: float | None = Field(
+        None, ge=1, description="max regional density, a multiple of the mean; null = none"
+    )
+    cap_block: PositiveInt = Field(16, description="block side (px) of density_cap")
+    blue_noise: bool = Field(False, description="Poisson-disk-like weighted sampling")
+    blue_noise_radius: float = Field(0.5, gt=0, description="radius factor of blue_noise")
+    feature_opts: FeatureOptsCfg = Field(default_factory=FeatureOptsCfg)
+    coefficients: CoefficientsCfg = Field(
+        default_factory=CoefficientsCfg, description="combination only: map weights"
+    )
+
+
+class StrategyOptionsCfg(PlannerOptsCfg):
+    """A strategy label's options: ``strategy`` names the registered strategy (default: the
+    label itself), the rest are its planner options."""
+
+    strategy: str | None = Field(None, description="registered strategy; null = the label")
+
+
+def check_planner_options(base: str, opts: PlannerOptsCfg) -> None:
+    """Raise ``ValueError("<key>: problem")`` for options the strategy ``base`` does not take."""
+    default = PlannerOptsCfg()
+    changed = [k for k in PlannerOptsCfg.model_fields if getattr(opts, k) != getattr(default, k)]
+    if base in ("grid", "random"):
+        if changed:
+            raise ValueError(f"{changed[0]}: strategy {base!r} takes no options")
+        return
+    if base == "combination":
+        if not opts.coefficients.as_mapping():
+            raise ValueError("coefficients: strategy 'combination' needs at least one weight")
+        features = list(opts.coefficients.as_mapping())
+    else:
+        if "coefficients" in changed:
+            raise ValueError(f"coefficients: only the combination strategy takes them ({base!r})")
+        features = [base]
+    allowed = {k for f in features for k in FEATURE_OPTION_KEYS.get(f, ())}
+    fdefault = FeatureOptsCfg()
+    for k in FeatureOptsCfg.model_fields:
+        if getattr(opts.feature_opts, k) != getattr(fdefault, k) and k not in allowed:
+            raise ValueError(
+                f"feature_opts.{k}: not an option of the {'/'.join(features)} map "
+                f"(valid: {', '.join(sorted(allowed)) or 'none'})"
+            )
+
+
+class SamplingStudyCfg(_Model):
+    """The sampling study of the paper's section 4."""
+
+    kind: Literal["sampling"] = "sampling"
+    strategies: list[str] = Field(
+        default_factory=lambda: ["random", "grid", "gradient", "entropy", "wavelet"], min_length=1
+    )
+    densities: Annotated[
+        list[Density],
+        BeforeValidator(_densities, json_schema_input_type=list[Density] | DensityRange),
+    ] = Field(min_length=1)
+    trials: int = Field(20, ge=1, le=1000)
+    metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
+    range_noise_std_m: Metres = Field(0.0, ge=0, description="range-sensor noise (m)")
+    strategy_options: dict[str, StrategyOptionsCfg] = Field(
+        default_factory=dict,
+        description="label -> options; a label not registered as a strategy names one in "
+        "'strategy' (e.g. wavelet_bn: {strategy: wavelet, blue_noise: true})",
+    )
+    terrain_seeds: int = Field(
+        1,
+        ge=1,
+        le=100,
+        description="repeat every sweep point on this many terrain realisations "
+        "(terrain.seed_index 0..N-1, one unit each, all else shared); tables pool them "
+        "and give 95 % bootstrap intervals",
+    )
+
+    @field_validator("strategies", "metrics")
+    @classmethod
+    def _unique(cls, v: list[str]) -> list[str]:
+        if len(set(v)) != len(v):
+            raise ValueError(f"names must be unique, got {v}")
+        return v
+
+    @model_validator(mode="after")
+    def _options_fit(self) -> SamplingStudyCfg:
+
+        for label in [*self.strategy_options, *self.strategies]:
+            opts = self.strategy_options.get(label)
+            base = (opts.strategy if opts is not None else None) or label
+            if base not in STRATEGIES:
+                continue  # reported with the registries (unknown strategy, with its path)
+            try:
+                check_planner_options(base, opts or PlannerOptsCfg())
+            except ValueError as exc:
+                where = f"strategy_options.{label}" if opts is not None else f"strategies ({label})"
+                raise ValueError(f"{where}.{exc}") from None
+        return self
+
+
+class RigCfg(_Model):
+    """Adjustments of the rig preset (:mod:`simlunar.scanner.rigs`); null = the preset's."""
+
+    fill: float = Field(0.9, gt=0, le=1, description="projection footprint / terrain side")
+    fov_x_deg: Deg | None = Field(
+        None,
+        gt=0,
+        lt=180,
+        description="projector horizontal field of view (50 moonyard, 30 aerial)",
+    )
+    cam_fov_x_deg: Deg | None = Field(
+        None, gt=0, lt=180, description="triangulation camera field of view; null = projector's"
+    )
+    distance_m: Metres | None = Field(
+        None, gt=0, description="moonyard: projector standoff; null = fit the terrain"
+    )
+    altitude_m: Metres | None = Field(
+        None, gt=0, description="aerial: projector altitude; null = fit the terrain"
+    )
+    elevation_deg: Deg | None = Field(
+        None, gt=0, le=90, description="moonyard: projector elevation (default 70)"
+    )
+    azimuth_deg: Deg | None = Field(None, ge=-360, le=360, description="projector azimuth")
+    baseline_m: Metres | None = Field(
+        None, gt=0, description="camera offset; null = 0.25 (moonyard) / 0.15 (aerial) x standoff"
+    )
+    verge: bool = Field(True, description="camera verged on the target")
+    aperture_radius_m: Metres = Field(0.0, ge=0, description="camera thin lens; 0 = pinhole")
+    focus_distance_m: Metres | None = Field(None, gt=0, description="null = the target")
+
+
+class GrayOptsCfg(_Model):
+    """Gray-code scan options (:func:`simlunar.scanner.scans.gray_code_scan`)."""
+
+    black_threshold: float = Field(0.05, ge=0, le=1, description="validity (frame units)")
+    white_threshold: float = Field(0.01, ge=0, le=1, description="bit reliability (frame units)")
+    inverses: Literal["linearity", "render"] = "linearity"
+    method: Literal["plane", "rays"] = "plane"
+    require_reliable: bool = True
+    subpixel: bool = Field(False, description="sub-pixel stripe-edge refinement")
+
+
+class DotOptsCfg(_Model):
+    """Dot scan options (:func:`simlunar.scanner.scans.dot_scan`)."""
+
+    exact: bool = Field(False, description="one dot per frame (reference mode)")
+    radius_px: Px = Field(0.0, description="dot radius (projector px); 0 = one pixel")
+    min_proj_spacing_px: Px = Field(8.0, description="scheduling spacing (projector px)")
+    min_cam_spacing_px: Px = Field(6.0, description="scheduling spacing (camera px)")
+    tol_px: Px = Field(2.0, description="matching tolerance (camera px)")
+    rel_threshold: float = Field(0.02, ge=0, le=1, description="relative blob threshold")
+    abs_threshold: float = Field(0.02, ge=0, le=1, description="absolute blob threshold")
+    batch: PositiveInt = Field(8, description="frames per render call (memory only)")
+
+    @model_validator(mode="after")
+    def _spacings(self) -> DotOptsCfg:
+        from simlunar.scanner.scheduling import check_spacings
+
+        try:
+            check_spacings(
+                self.min_cam_spacing_px, self.min_proj_spacing_px
+            )  # the scheduler's rule
+        except ValueError:
+            zero = "min_proj_spacing_px" if self.min_proj_spacing_px <= 0 else "min_cam_spacing_px"
+            raise ValueError(f"{zero}: scheduling spacings must be > 0 px") from None
+        return self
+
+
+class CaptureOptsCfg(_Model):
+    """Render-capture options (:class:`simlunar.render.capture.RenderCapture`)."""
+
+    sparse_integrator: Literal["path", "ptracer", "lit"] = Field(
+        "path",
+        description="integrator for sparse patterns (dot frames): path tracer, ptracer "
+        "(Mitsuba's light tracer, paths per camera pixel) or lit (paths per lit projector "
+        "pixel: a dot frame costs what its dots cost; docs/scanner.md)",
+    )
+    sparse_spp: PositiveInt | None = Field(
+        None, le=MAX_SPP, description="samples per pixel for sparse patterns (null: render.spp)"
+    )
+    sparse_below: float = Field(
+        0.01, gt=0, le=1, description="largest lit fraction of projector pixels counted sparse"
+    )
+    sparse_particles: PositiveInt = Field(
+        256, description="lit only: light paths per lit projector pixel (at pattern value 1)"
+    )
+
+
+class ScannerOptionsCfg(_Model):
+    """Scanner study options: rig adjustments, gray-code, dot scan and capture options,
+    planner options."""
+
+    rig: RigCfg = Field(default_factory=RigCfg)
+    gray_opts: GrayOptsCfg = Field(default_factory=GrayOptsCfg)
+    dot_opts: DotOptsCfg = Field(default_factory=DotOptsCfg)
+    capture_opts: CaptureOptsCfg = Field(default_factory=CaptureOptsCfg)
+    planner_opts: dict[str, PlannerOptsCfg] = Field(
+        default_factory=dict, description="planner name -> options (study.planners only)"
+    )
+
+
+class ScannerStudyCfg(_Model):
+    """The structured-light scanner study of the paper's section 5
+    (:func:`simlunar.study.scanner.run_scanner_study`)."""
+
+    kind: Literal["scanner"]
+    modes: list[str] = Field(
+        default_factory=lambda: ["gray_code", "ambiguity_enhancement"],
+        min_length=1,
+        description="scan modes: gray_code, ambiguity_enhancement, data_reduction, ...",
+    )
+    planners: list[str] = Field(
+        default_factory=lambda: ["wavelet", "random"],
+        min_length=1,
+        description="what picks the dots (dot modes): a planner strategy (from the guide "
+        "image) or low_contrast (the gray-code pixels the projector lit least; "
+        "ambiguity_enhancement only)",
+    )
+    budget: Density = Field(0.1, description="fraction of guide pixels rescanned / sampled")
+    trials: int = Field(1, ge=1, le=100)
+    metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
+    rig: Literal["moonyard", "aerial"] = Field("moonyard", description="rig preset")
+    projector_px: tuple[PxCount, PxCount] = Field(
+        (256, 192), description="projector (width, height)"
+    )
+    camera_px: tuple[PxCount, PxCount] = Field((256, 192), description="camera (width, height)")
+    guide_light: Literal["projector", "sun"] = Field(
+        "projector", description="guide image light: camera-centred projector or render.light"
+    )
+    scan_light: Literal["none", "sun"] = Field(
+        "none",
+        description="light on during the scan besides the projector: none (a dark scan, as in "
+        "the paper's lab) or sun (render.light, which must be a sun, and "
+        "render.ambient_radiance stay on: a daylight scan; docs/scanner.md)",
+    )
+    projector_gamma: float = Field(1.0, gt=0)
+    projector_blur_px: float = Field(0.0, ge=0, description="projector defocus sigma (px)")
+    camera_blur_px: float = Field(
+        0.0, ge=0, description="camera lens point-spread function, Gaussian sigma (camera px)"
+    )
+    options: ScannerOptionsCfg = Field(
+        default_factory=ScannerOptionsCfg,
+        description="rig adjustments (rig), gray_opts, dot_opts, planner_opts",
+    )
+    save_scans: bool = Field(
+        False,
+        description="write scans/unit<i>/ per unit: gray-code frames (8/16-bit PNG, OpenCV "
+        "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
+    )
+
+    @field_validator("modes", "planners", "metrics")
+    @classmethod
+    def _unique(cls, v: list[str]) -> list[str]:
+        if len(set(v)) != len(v):
+            raise ValueError(f"names must be unique, got {v}")
+        return v
+
+    @model_validator(mode="after")
+    def _scans_need_gray_code(self):
+        if self.save_scans and not {"gray_code", "ambiguity_enhancement"} & set(self.modes):
+            raise ValueError(
+                "save_scans exports the gray-code scan: modes must include gray_code or "
+                "ambiguity_enhancement"
+            )
+        return self
+
+    @model_validator(mode="after")
+    def _options_fit(self) -> ScannerStudyCfg:
+
+        o = self.options
+        stray = sorted(set(o.planner_opts) - set(self.planners))
+        if stray:
+            raise ValueError(
+                f"options.planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
+            )
+
+        scan_planners = [p for p in self.planners if p in SCAN_PLANNERS]
+        if scan_planners and "data_reduction" in self.modes:
+            raise ValueError(
+                f"planners: {scan_planners[0]} ranks the pixels of the gray-code scan, which "
+                "the data_reduction mode does not make (use it with ambiguity_enhancement)"
+            )
+        for name in scan_planners:
+            if name in o.planner_opts:
+                raise ValueError(f"options.planner_opts.{name}: {name} takes no options")
+        for name in self.planners:
+            opts = o.planner_opts.get(name)
+            if name in STRATEGIES:
+                try:
+                    check_planner_options(name, opts or PlannerOptsCfg())
+                except ValueError as exc:
+                    where = (
+                        f"options.planner_opts.{name}" if opts is not None else f"planners ({name})"
+                    )
+                    raise ValueError(f"{where}.{exc}") from None
+        moonyard_only = ("distance_m", "elevation_deg")
+        aerial_only = ("altitude_m",)
+        for key in aerial_only if self.rig == "moonyard" else moonyard_only:
+            if getattr(o.rig, key) is not None:
+                raise ValueError(f"options.rig.{key}: not an option of the {self.rig} rig")
+        return self
+
+
+StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg)
