@@ -141,16 +141,99 @@ def _density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
     return [(p.label, [units[i] for i in p.unit_indices]) for p in group_points(units)]
 
 
-def write_figures(out_dir: str | Path) -> list[Path]:
-    """Draw every figure the results support; returns the written paths (PNG and PDF)."""
-    from simlunar.results import captions as captions_text
-    from simlunar.plotting import figures as F
-    from simlunar.plotting.style import axis_name
+#: the figures' record of what they were drawn from (``figures/`` of a result folder)
+STAMP = ".inputs.json"
+#: modules whose code draws the figures: a change of any of them redraws every figure
+_DRAWING_MODULES = (
+    "simlunar.plotting.figures",
+    "simlunar.plotting.density",
+    "simlunar.plotting.images",
+    "simlunar.plotting.scanner",
+    "simlunar.plotting.style",
+    "simlunar.results.figures",
+    "simlunar.results.captions",
+    "simlunar.results.aggregate",
+)
 
+
+def figure_inputs(res: dict, formats) -> str:
+    """SHA-256 of everything the figures of a result folder are drawn from: the tables
+    (``results.csv`` and the summary files, as ``provenance.json`` records their digests), the
+    units (their keys), the configuration (less its description), the file formats, the
+    drawing code and the matplotlib version."""
+    import hashlib
+    import importlib.metadata
+    import importlib.util
+
+    cfg = {k: v for k, v in res["config"].items() if k != "description"}
+    code = {}
+    for mod in _DRAWING_MODULES:
+        spec = importlib.util.find_spec(mod)
+        if spec is not None and spec.origin:
+            code[mod] = file_sha256(spec.origin)
+    blob = json.dumps(
+        {
+            "files": res["provenance"].get("files"),
+            "units": res["provenance"].get("unit_keys"),
+            "config": cfg,
+            "formats": list(formats),
+            "code": code,
+            "matplotlib": importlib.metadata.version("matplotlib"),
+        },
+        sort_keys=True,
+        default=str,
+    )
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+def _up_to_date(fig_dir: Path, digest: str) -> list[Path] | None:
+    """The figure files of ``fig_dir`` when its stamp records ``digest`` and they all exist."""
+    try:
+        stamp = json.loads((fig_dir / STAMP).read_text())
+        names = list(stamp["files"])
+        if stamp["inputs"] != digest:
+            return None
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    paths = [fig_dir / n for n in names]
+    return paths if all(p.is_file() for p in paths) else None
+
+
+def write_figures(
+    out_dir: str | Path, *, formats=None, force: bool = False
+) -> list[Path]:
+    """Draw every figure the results support; returns the paths of the figure files.
+
+    Figures are drawn only when their inputs (:func:`figure_inputs`) changed since they were
+    last drawn (``figures/.inputs.json``), or with ``force``; ``formats`` (default: the
+    folder's ``figures.formats``, PNG) names the files per figure.
+    """
     res = load_results(out_dir)
     out = res["dir"]
     cfg = res["config"]
-    formats = (cfg.get("figures") or {}).get("formats") or ["png", "pdf"]
+    formats = list(formats or (cfg.get("figures") or {}).get("formats") or ["png"])
+    fig_dir = out / "figures"
+    digest = figure_inputs(res, formats)
+    if not force:
+        kept = _up_to_date(fig_dir, digest)
+        if kept is not None:
+            return kept
+    (fig_dir / STAMP).unlink(missing_ok=True)  # figures being redrawn belong to no inputs
+    written = _draw(res, formats)
+    atomic_write_bytes(
+        fig_dir / STAMP,
+        json.dumps({"inputs": digest, "files": [p.name for p in written]}, indent=1).encode(),
+    )
+    return written
+
+
+def _draw(res: dict, formats: list[str]) -> list[Path]:
+    from simlunar.plotting import figures as F
+    from simlunar.plotting.style import axis_name
+    from simlunar.results import captions as captions_text
+
+    out = res["dir"]
+    cfg = res["config"]
     fig_dir = out / "figures"
     written: list[Path] = []
 
@@ -369,11 +452,11 @@ def _scanner_figures(res: dict, emit, captions: dict) -> None:
         emit(fig, "gray_code_bit_errors")
 
 
-def write_figures_pruned(out_dir: str | Path) -> list[Path]:
+def write_figures_pruned(out_dir: str | Path, *, formats=None, force: bool = False) -> list[Path]:
     """:func:`write_figures`, then remove the figures of ``figures/`` it did not write."""
     from simlunar.pipeline.runner import prune_figures
 
-    written = write_figures(out_dir)
+    written = write_figures(out_dir, formats=formats, force=force)
     prune_figures(Path(out_dir), keep=written)
     return written
 
