@@ -701,17 +701,28 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     strategies = _names(units, "strategies")
     metrics = _names(units, "metrics")
     seeds = sorted({len(p.seeds) for p in points})
-    trials = sorted({r.n_trials for p in points for r in p.intervals.values()})
+    trials = sorted({int(float(r["trial"])) for r in rows}, reverse=True)[:1]
+    n_trials = "/".join(str(t + 1) for t in trials)
     n_seeds = "/".join(map(str, seeds))
-    note = (
-        f"Scores pool {n_seeds} terrain seed(s) x {'/'.join(map(str, trials))} trials; "
-        "[95 % interval]: paired bootstrap over terrain seeds (one seed: over trials), "
-        "percentile, small-sample widened. Bold: the best score of a row where the paired "
-        "bootstrap 95 % interval of its difference to the runner-up excludes 0."
-    )
-    md, tex = score_tables(
-        labelled, strategies=strategies, metrics=metrics, title=cfg.name, note=note
-    )
+    if any(scores for _, scores in labelled):
+        note = (
+            f"Scores pool {n_seeds} terrain seed(s) x {n_trials} trials; [95 % interval]: "
+            "paired bootstrap over terrain seeds (one seed: over trials), percentile, "
+            "small-sample widened. Bold: the best score of a row where the paired bootstrap "
+            "95 % interval of its difference to the runner-up excludes 0."
+        )
+        md, tex = score_tables(
+            labelled, strategies=strategies, metrics=metrics, title=cfg.name, note=note
+        )
+    else:
+        # no table of dashes: say why there is none
+        no_csv = "" if aggregate.scores_csv_rows(points, recs) else " and no scores.csv"
+        note = (
+            f"No score table{no_csv}: the scores (eq. 4.3) are errors relative to "
+            f"the random strategy, which study.strategies ({', '.join(strategies)}) does not "
+            f"include; add random to get them. The errors are in results.csv."
+        )
+        md, tex = note + "\n", "% " + note + "\n"
     entries = [
         {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": p.saved_metric,
          "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
@@ -722,10 +733,19 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     md2, tex2 = samples_saved_tables(entries, title=cfg.name)
     if md2:
         md, tex = md + "\n" + md2, tex + "\n" + tex2
-    atomic_write_text(
-        out / "scores.csv",
-        csv_text(aggregate.scores_csv_rows(points, recs), aggregate.SCORES_CSV_COLUMNS),
-    )
+    elif not any(p.saved for p in points):
+        why = (
+            "one density (a curve needs two)"
+            if all(len(p.ks) < 2 for p in points)
+            else "neither random nor grid among study.strategies"
+        )
+        line = f"No samples-saved table: it compares against random or grid, and there is {why}."
+        md, tex = f"{md}\n{line}\n", f"{tex}\n% {line}\n"
+    score_rows = aggregate.scores_csv_rows(points, recs)
+    if score_rows:
+        atomic_write_text(out / "scores.csv", csv_text(score_rows, aggregate.SCORES_CSV_COLUMNS))
+    else:
+        (out / "scores.csv").unlink(missing_ok=True)  # scores.md says why there is none
     return md, tex
 
 

@@ -141,8 +141,8 @@ def _density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
     return [(p.label, [units[i] for i in p.unit_indices]) for p in group_points(units)]
 
 
-#: the figures' record of what they were drawn from (``figures/`` of a result folder)
-STAMP = ".inputs.json"
+#: the figures' record of what they were drawn from (in the result folder, beside figures/)
+STAMP = ".figures.json"
 #: modules whose code draws the figures: a change of any of them redraws every figure
 _DRAWING_MODULES = (
     "simlunar.plotting.figures",
@@ -187,9 +187,9 @@ def figure_inputs(res: dict, formats) -> str:
 
 
 def _up_to_date(fig_dir: Path, digest: str) -> list[Path] | None:
-    """The figure files of ``fig_dir`` when its stamp records ``digest`` and they all exist."""
+    """The figure files of ``fig_dir`` when the stamp records ``digest`` and they all exist."""
     try:
-        stamp = json.loads((fig_dir / STAMP).read_text())
+        stamp = json.loads((fig_dir.parent / STAMP).read_text())
         names = list(stamp["files"])
         if stamp["inputs"] != digest:
             return None
@@ -205,7 +205,7 @@ def write_figures(
     """Draw every figure the results support; returns the paths of the figure files.
 
     Figures are drawn only when their inputs (:func:`figure_inputs`) changed since they were
-    last drawn (``figures/.inputs.json``), or with ``force``; ``formats`` (default: the
+    last drawn (``.figures.json``), or with ``force``; ``formats`` (default: the
     folder's ``figures.formats``, PNG) names the files per figure.
     """
     res = load_results(out_dir)
@@ -218,10 +218,10 @@ def write_figures(
         kept = _up_to_date(fig_dir, digest)
         if kept is not None:
             return kept
-    (fig_dir / STAMP).unlink(missing_ok=True)  # figures being redrawn belong to no inputs
+    (out / STAMP).unlink(missing_ok=True)  # figures being redrawn belong to no inputs
     written = _draw(res, formats)
     atomic_write_bytes(
-        fig_dir / STAMP,
+        out / STAMP,
         json.dumps({"inputs": digest, "files": [p.name for p in written]}, indent=1).encode(),
     )
     return written
