@@ -263,3 +263,26 @@ def test_a_rerun_keeps_the_run_time_and_adds_its_own(tmp_path):
     # a new description (outside the cache key, as the docs say) is the same folder
     s = _run(cfg(sweep={}, description="edited"), tmp_path / "o")
     assert s.units_computed == 0
+
+
+def test_a_rerun_redraws_no_figure_unless_its_inputs_changed(tmp_path):
+    from simlunar.results.figures import write_figures
+
+    c = cfg(sweep={}, figures={"sparse_mesh_density": None, "formats": ["png"]})
+    out = tmp_path / "o"
+    s1 = run_experiment(c, out, compute=fake_unit, progress=False)
+    pngs = sorted(p for p in s1.figures if p.suffix == ".png")
+    assert pngs and not any(p.suffix == ".pdf" for p in s1.figures)  # PNG only by default
+    stamp = {p: p.stat().st_mtime_ns for p in pngs}
+    s2 = run_experiment(c, out, compute=fake_unit, progress=False)
+    assert sorted(s2.figures) == sorted(s1.figures)
+    assert {p: p.stat().st_mtime_ns for p in pngs} == stamp  # nothing redrawn
+    # a figure deleted is drawn again; PDF on request; --force redraws
+    pngs[0].unlink()
+    write_figures(out)
+    assert pngs[0].is_file()
+    both = write_figures(out, formats=("png", "pdf"))
+    assert any(p.suffix == ".pdf" for p in both)
+    before = pngs[-1].stat().st_mtime_ns
+    write_figures(out, formats=("png", "pdf"), force=True)
+    assert pngs[-1].stat().st_mtime_ns != before
