@@ -235,7 +235,7 @@ def run(
     for note in summary.notes:
         typer.echo(note)
     typer.echo(
-        f"units: {summary.units_total} ({summary.units_cached} cached, "
+        f"work units: {summary.units_total} ({summary.units_cached} cached, "
         f"{summary.units_computed} computed) in {summary.elapsed_s:.1f} s"
     )
     typer.echo(f"results: {out_dir}")
