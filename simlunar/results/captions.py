@@ -176,7 +176,8 @@ def bit_errors(n_units: int, all_zero: bool, n_bits: int = 0) -> str:
     over = f", mean over trials and {n_units} units" if n_units > 1 else ", mean over trials"
     if all_zero:
         return (
-            f"Not drawn: all {n_bits} per-bit gray-code error rates are 0 (no bit of any "
+            f"Not drawn: all {n_bits} per-bit gray-code error rates are 0 or undefined (no "
+            f"pixel near that bit's stripe edges), so no bit of any "
             f"pixel lit by the projector, near its true stripe edges, was decoded wrongly"
             f"{over}); results.csv holds them as ber_c<i> / ber_r<i>."
         )
