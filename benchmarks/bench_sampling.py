@@ -155,17 +155,20 @@ def _reference_protocol(depth, image, densities, trials, seed):
 
 
 def sampling_protocol() -> dict:
-    from simlunar.study.sampling import paper_densities, run_sampling_study
+    from simlunar.study.sampling import SamplingStudyOptions, paper_densities, run_sampling_study
 
     depth, image = lunar_scene()
     dens = paper_densities()
     small = lunar_scene((64, 96), 1, n_craters=5, n_rocks=5)
-    run_sampling_study(*small, densities=dens[:5], trials=1, rng=0)  # warm the kernels
+    run_sampling_study(
+        *small, SamplingStudyOptions(densities=dens[:5], trials=1), rng=0
+    )  # warm the kernels
     t0 = time.perf_counter()
     _reference_protocol(depth, image, dens, PROTOCOL_TRIALS, 0)
     ref_s = time.perf_counter() - t0
     t0 = time.perf_counter()
-    res = run_sampling_study(depth, image, densities=dens, trials=PROTOCOL_TRIALS, rng=0)
+    opts = SamplingStudyOptions(densities=dens, trials=PROTOCOL_TRIALS)
+    res = run_sampling_study(depth, image, opts, rng=0)
     ours_s = time.perf_counter() - t0
     return {
         "reference_s": round(ref_s, 2),
@@ -177,13 +180,15 @@ def sampling_protocol() -> dict:
 
 
 def sampling_protocol_20trials() -> dict:
-    from simlunar.study.sampling import paper_densities, run_sampling_study
+    from simlunar.study.sampling import SamplingStudyOptions, paper_densities, run_sampling_study
 
     depth, image = lunar_scene()
     small = lunar_scene((64, 96), 1, n_craters=5, n_rocks=5)
-    run_sampling_study(*small, densities=paper_densities()[:5], trials=1, rng=0)
+    run_sampling_study(
+        *small, SamplingStudyOptions(densities=paper_densities()[:5], trials=1), rng=0
+    )
     t0 = time.perf_counter()
-    res = run_sampling_study(depth, image, trials=20, rng=0, workers=2)
+    res = run_sampling_study(depth, image, SamplingStudyOptions(trials=20), rng=0, workers=2)
     ours_s = time.perf_counter() - t0
     scores = res.scores["mse"]
     return {

@@ -6,7 +6,7 @@ ours: render the patterns, white and black and get the inverses by linearity (bi
 then add per-frame sensor noise and decode; the decoded correspondences must agree.
 
 ``multiplexed_dots``: dots planned at random over the 1024 x 768 projector, scheduled into frames
-by epipolar segments (:func:`simlunar.scanner.dots.schedule_dots`). Reference: the exact
+by epipolar segments (:func:`simlunar.scanner.scheduling.schedule_dots`). Reference: the exact
 one-dot-per-frame scan; to keep the benchmark short it is run on a random subset of the dots
 and its time extrapolated per dot (``reference_s`` = measured time per exact frame x dots;
 ``exact_subset`` says how many were rendered). The depth difference between the two modes on
@@ -14,7 +14,7 @@ the subset is compared with the guide pixel's footprint.
 
 ``dot_schedule``: the DLP rig's 10 % rescan (1024 x 768 projector, 2048 x 1536 camera, the full
 moonyard, the rig aimed at it as the scanner study does; nothing rendered): 10 % of the projector
-pixels at random (seeded) scheduled by :func:`simlunar.scanner.dots.dot_schedule`, with its
+pixels at random (seeded) scheduled by :func:`simlunar.scanner.scheduling.dot_schedule`, with its
 frame count, lower bound and time. Reference: the previous scheduler (conflict pairs from a
 k-d tree of segment samples gathered in a Python set, greedy colouring in index order), kept
 here, timed against the new one on the same ``REFERENCE_SUBSET`` dots.
@@ -48,30 +48,31 @@ DOT_SPP = int(os.environ.get("SIMLUNAR_BENCH_SCANNER_DOT_SPP", "16"))
 def _setup(cam_size, *, max_depth=3, seed=0, spp=SPP):
     from simlunar.config.translate import preset_params
     from simlunar.imaging.sensor import SensorModel
+    from simlunar.render.capture import CaptureOptions, RenderCapture
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
     terr = generate(preset_params("moonyard"), rng=seed, scale=0.35).terrain
     rig = st.aim_rig_at_terrain(terr, proj_size=(1024, 768), cam_size=cam_size)
-    cap = st.RenderCapture(
-        terr, rig, max_depth=max_depth, spp=spp, seed=seed, sensor=SensorModel(), rng=seed
-    )
+    opts = CaptureOptions(max_depth=max_depth, spp=spp, seed=seed)
+    cap = RenderCapture(terr, rig, opts, sensor=SensorModel(), rng=seed)
     return terr, rig, cap
 
 
 def bench_gray_code_scan() -> dict:
     from simlunar.scanner import gray_code as gc
-    from simlunar.scanner import modes
+    from simlunar.scanner import scans as modes
+    from simlunar.scanner.scans import GrayCodeOptions
 
     _, rig, cap = _setup((512, 512))
     cap.render(np.ones((1, 768, 1024), np.float32))  # warm up: kernels compiled once
     r0 = cap.renders
     t0 = time.perf_counter()
-    ref = modes.gray_code_scan(cap, rig, inverses="render")
+    ref = modes.gray_code_scan(cap, rig, GrayCodeOptions(inverses="render"))
     t_ref = time.perf_counter() - t0
     r_ref = cap.renders - r0
     t0 = time.perf_counter()
-    ours = modes.gray_code_scan(cap, rig, inverses="linearity")
+    ours = modes.gray_code_scan(cap, rig, GrayCodeOptions(inverses="linearity"))
     t_ours = time.perf_counter() - t0
     r_ours = cap.renders - r0 - r_ref
     both = ref.decode.valid & ours.decode.valid
@@ -89,7 +90,9 @@ def bench_gray_code_scan() -> dict:
 
 
 def bench_multiplexed_dots(n_dots: int = 3000, exact_subset: int = 100) -> dict:
-    from simlunar.scanner import modes, rigs
+    from simlunar.scanner import rigs
+    from simlunar.scanner import scans as modes
+    from simlunar.scanner.scans import DotOptions
     from simlunar.study import scanner as st
 
     # a one-pixel dot covers a quarter of a camera pixel: with few samples per pixel the
@@ -102,12 +105,18 @@ def bench_multiplexed_dots(n_dots: int = 3000, exact_subset: int = 100) -> dict:
     depth_range = st.depth_range_from_terrain(terr, rig)
     cap.render(np.zeros((1, 768, 1024), np.float32))  # warm up
     t0 = time.perf_counter()
-    multi = modes.dot_scan(cap, rig, uv, depth_range=depth_range, abs_threshold=ABS_THRESHOLD)
+    multi = modes.dot_scan(
+        cap, rig, uv, depth_range=depth_range, options=DotOptions(abs_threshold=ABS_THRESHOLD)
+    )
     t_multi = time.perf_counter() - t0
     sub = rng.choice(n_dots, size=exact_subset, replace=False)
     t0 = time.perf_counter()
     exact = modes.dot_scan(
-        cap, rig, uv[sub], depth_range=depth_range, exact=True, abs_threshold=ABS_THRESHOLD
+        cap,
+        rig,
+        uv[sub],
+        depth_range=depth_range,
+        options=DotOptions(exact=True, abs_threshold=ABS_THRESHOLD),
     )
     t_exact = time.perf_counter() - t0
     d_m = multi.depth[rc[sub, 0], rc[sub, 1]]
@@ -176,7 +185,7 @@ def _reference_schedule(rig, proj_uv, *, depth_range, min_proj_spacing=8.0, min_
 
 def bench_dot_schedule(fraction: float = 0.1) -> dict:
     from simlunar.config.translate import preset_params
-    from simlunar.scanner import dots
+    from simlunar.scanner import scheduling
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
@@ -188,16 +197,16 @@ def bench_dot_schedule(fraction: float = 0.1) -> dict:
     n = round(fraction * proj[0] * proj[1])
     flat = rng.choice(proj[0] * proj[1], size=n, replace=False)
     uv = np.c_[flat % proj[0] + 0.5, flat // proj[0] + 0.5]
-    dots.dot_schedule(rig, uv[:500], depth_range=depth_range)  # load the compiled kernels
+    scheduling.dot_schedule(rig, uv[:500], depth_range=depth_range)  # load the compiled kernels
     t0, c0 = time.perf_counter(), time.process_time()
-    sch = dots.dot_schedule(rig, uv, depth_range=depth_range)
+    sch = scheduling.dot_schedule(rig, uv, depth_range=depth_range)
     t_full, c_full = time.perf_counter() - t0, time.process_time() - c0
     sub = uv[:REFERENCE_SUBSET]
     t0 = time.perf_counter()
     ref = _reference_schedule(rig, sub, depth_range=depth_range)
     t_ref = time.perf_counter() - t0
     t0 = time.perf_counter()
-    ours_sub = dots.dot_schedule(rig, sub, depth_range=depth_range)
+    ours_sub = scheduling.dot_schedule(rig, sub, depth_range=depth_range)
     t_ours = time.perf_counter() - t0
     return {
         "reference_s": round(t_ref, 3),
@@ -224,6 +233,7 @@ DLP_SPP = 8
 def _dlp_setup():
     from simlunar.config.translate import preset_params
     from simlunar.imaging.sensor import SensorModel
+    from simlunar.render.capture import CaptureOptions, RenderCapture
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
@@ -234,9 +244,8 @@ def _dlp_setup():
         terr, proj_size=DLP_PROJ, cam_size=DLP_CAM, cam_fov_x=np.radians(60.0)
     )
     sensor = SensorModel(full_well_e=20000.0, read_noise_e=5.0, bits=10)
-    cap = st.RenderCapture(
-        terr, rig, max_depth=3, spp=DLP_SPP, seed=0, sensor=sensor, rng=0, camera_blur=1.0
-    )
+    opts = CaptureOptions(max_depth=3, spp=DLP_SPP, seed=0, camera_blur=1.0)
+    cap = RenderCapture(terr, rig, opts, sensor=sensor, rng=0)
     return terr, rig, cap
 
 
@@ -245,12 +254,13 @@ def _warm_up_compiled():
     from simlunar.imaging.blur import gaussian_blur
     from simlunar.imaging.sensor import SensorModel, apply_sensor
     from simlunar.scanner import gray_code as gc
+    from simlunar.scanner.subpixel import refine_subpixel
 
     apply_sensor(np.ones((4, 4), np.float32), SensorModel(), rng=0)
     gaussian_blur(np.ones((12, 12), np.float32), 1.0)
     st = gc.encode(8, 4).astype(np.float32) / 255
     d = gc.decode(st, np.ones((4, 8)), np.zeros((4, 8)), proj_shape=(4, 8), black_threshold=0.1)
-    gc.refine_subpixel(d, st)
+    refine_subpixel(d, st)
 
 
 def _dlp_worker(mode: str, frames_path: str) -> dict:
@@ -262,7 +272,8 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
     """
     import resource
 
-    from simlunar.scanner import modes
+    from simlunar.scanner import scans as modes
+    from simlunar.scanner.scans import GrayCodeOptions
     from simlunar.scanner.triangulate import Correspondences, depth_at_proj_pixels, triangulate
 
     _warm_up_compiled()
@@ -286,7 +297,7 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
 
         cap.scene.render_patterns = timed
         t0 = time.perf_counter()
-        g = modes.gray_code_scan(cap, rig, subpixel=True)
+        g = modes.gray_code_scan(cap, rig, GrayCodeOptions(subpixel=True))
         total = time.perf_counter() - t0 - save_s
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
         # raw frames in render order (white, black, then the bit patterns) for the reference
@@ -296,7 +307,8 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
         dec = g.decode
         out = {"render_s": render_s, "rest_s": total - render_s, "renders": g.renders}
     else:
-        from simlunar.scanner import _reference as ref
+        import reference_scanner as ref
+
         from simlunar.scanner import gray_code as gc
 
         raw = np.load(frames_path)  # white, black, patterns: the radiance the scan rendered

@@ -13,6 +13,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from simlunar.config import registry
 from simlunar.config.messages import format_validation_error, model_at, valid_keys
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.studies import SamplingStudyCfg, ScannerStudyCfg
@@ -151,7 +152,6 @@ def _normalised_value(raw: Any, point: ExperimentCfg, path: str) -> Any:
 
 def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
     """Names that select code (preset, strategy, metric) must exist."""
-    from simlunar.config import registry
 
     points = [cfg]
     for path, values in cfg.sweep.items():
@@ -174,6 +174,8 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
                 registry.check_scan_planner(s, f"study.planners[{i}]")
             for i, m in enumerate(p.study.modes):
                 registry.check_scan_mode(m, f"study.modes[{i}]")
+            for i, m in enumerate(p.study.metrics):
+                registry.check_metric(m, f"study.metrics[{i}]")
 
 
 def resolve_terrain_files(cfg, base_dir: Path | None):

@@ -10,7 +10,12 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+from simlunar.config.terrain import preset_names as names
 from simlunar.errors import ConfigError
+from simlunar.metrics import METRICS
+from simlunar.planner import STRATEGIES
+from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.sensors.structured_light import MODES
 
 
 def _check(name: str, valid: Iterable[str], path: str, what: str) -> None:
@@ -21,7 +26,6 @@ def _check(name: str, valid: Iterable[str], path: str, what: str) -> None:
 
 def preset_names() -> list[str]:
     """Terrain preset names (``scenes/*.yaml`` via :mod:`simlunar.terrain.presets`)."""
-    from simlunar.config.terrain import preset_names as names
 
     return list(names())
 
@@ -35,8 +39,6 @@ def check_preset(name: str, path: str) -> None:
 
 
 def strategy_names() -> list[str]:
-    from simlunar.planner import STRATEGIES
-
     return list(STRATEGIES)
 
 
@@ -56,16 +58,14 @@ def check_strategy(name: str, path: str, options: Mapping | None = None) -> None
 
 
 def check_scan_planner(name: str, path: str) -> None:
-    """A planner of the scanner study: a registered strategy (it plans from the guide image)
-    or one of :data:`simlunar.scanner.modes.SCAN_PLANNERS` (it ranks the gray-code scan)."""
-    from simlunar.scanner.modes import SCAN_PLANNERS
-
-    _check(name, [*strategy_names(), *SCAN_PLANNERS], path, "planner")
+    """A planner of the scanner study: a registered strategy that plans from the guide image
+    alone (not an ``oracle_*``, which reads the truth) or one of
+    :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
+    image_only = [s for s in strategy_names() if not s.startswith("oracle_")]
+    _check(name, [*image_only, *SCAN_PLANNERS], path, "planner")
 
 
 def metric_names() -> list[str]:
-    from simlunar.metrics import METRICS
-
     return list(METRICS)
 
 
@@ -74,6 +74,5 @@ def check_metric(name: str, path: str) -> None:
 
 
 def check_scan_mode(name: str, path: str) -> None:
-    from simlunar.scanner import modes
 
-    _check(name, list(modes.MODES), path, "scan mode")
+    _check(name, list(MODES), path, "scan mode")

@@ -18,10 +18,14 @@ from simlunar.config.fields import (
     Density,
     Metres,
     Px,
+    PxCount,
     _Model,
     _tagged_union,
 )
 from simlunar.config.quantities import log_spaced
+from simlunar.config.render import MAX_SPP
+from simlunar.planner import STRATEGIES
+from simlunar.scanner.scans import SCAN_PLANNERS
 
 
 # --------------------------------------------------------------------------- studies
@@ -70,8 +74,16 @@ class FeatureOptsCfg(_Model):
         None, description="wavelet map: decomposition levels summed, finest first; null = all"
     )
     boundary: Literal["symmetric", "periodic"] = Field("symmetric", description="wavelet map")
-    size: PositiveInt = Field(9, description="entropy map: window side (px)")
+    size: PositiveInt = Field(9, description="entropy map: odd window side (px), 1..63")
     scale: Literal["minmax", "unit"] = Field("minmax", description="entropy map: 8-bit scaling")
+
+    @field_validator("size")
+    @classmethod
+    def _entropy_window(cls, v: int) -> int:
+        from simlunar.features.maps import check_entropy_size
+
+        check_entropy_size(v)  # the map's own rule
+        return v
 
     @field_validator("wavelet")
     @classmethod
@@ -183,16 +195,17 @@ class SamplingStudyCfg(_Model):
 
     @model_validator(mode="after")
     def _options_fit(self) -> SamplingStudyCfg:
-        from simlunar.planner import STRATEGIES
 
-        for label, opts in self.strategy_options.items():
-            base = opts.strategy or label
+        for label in [*self.strategy_options, *self.strategies]:
+            opts = self.strategy_options.get(label)
+            base = (opts.strategy if opts is not None else None) or label
             if base not in STRATEGIES:
                 continue  # reported with the registries (unknown strategy, with its path)
             try:
-                check_planner_options(base, opts)
+                check_planner_options(base, opts or PlannerOptsCfg())
             except ValueError as exc:
-                raise ValueError(f"strategy_options.{label}.{exc}") from None
+                where = f"strategy_options.{label}" if opts is not None else f"strategies ({label})"
+                raise ValueError(f"{where}.{exc}") from None
         return self
 
 
@@ -237,7 +250,7 @@ class RigCfg(_Model):
 
 
 class GrayOptsCfg(_Model):
-    """Gray-code scan options (:func:`simlunar.scanner.modes.gray_code_scan`)."""
+    """Gray-code scan options (:func:`simlunar.scanner.scans.gray_code_scan`)."""
 
     black_threshold: float = Field(0.05, ge=0, le=1, description="validity (frame units)")
     white_threshold: float = Field(0.01, ge=0, le=1, description="bit reliability (frame units)")
@@ -248,7 +261,7 @@ class GrayOptsCfg(_Model):
 
 
 class DotOptsCfg(_Model):
-    """Dot scan options (:func:`simlunar.scanner.modes.dot_scan`)."""
+    """Dot scan options (:func:`simlunar.scanner.scans.dot_scan`)."""
 
     exact: bool = Field(False, description="one dot per frame (reference mode)")
     radius_px: Px = Field(0.0, description="dot radius (projector px); 0 = one pixel")
@@ -259,20 +272,37 @@ class DotOptsCfg(_Model):
     abs_threshold: float = Field(0.02, ge=0, le=1, description="absolute blob threshold")
     batch: PositiveInt = Field(8, description="frames per render call (memory only)")
 
+    @model_validator(mode="after")
+    def _spacings(self) -> DotOptsCfg:
+        from simlunar.scanner.scheduling import check_spacings
+
+        try:
+            check_spacings(
+                self.min_cam_spacing_px, self.min_proj_spacing_px
+            )  # the scheduler's rule
+        except ValueError:
+            zero = "min_proj_spacing_px" if self.min_proj_spacing_px <= 0 else "min_cam_spacing_px"
+            raise ValueError(f"{zero}: scheduling spacings must be > 0 px") from None
+        return self
+
 
 class CaptureOptsCfg(_Model):
     """Render-capture options (:class:`simlunar.render.capture.RenderCapture`)."""
 
-    sparse_integrator: Literal["path", "ptracer"] = Field(
+    sparse_integrator: Literal["path", "ptracer", "lit"] = Field(
         "path",
-        description="integrator for sparse patterns (dot frames): path tracer, or ptracer "
-        "(light traced from the projector; docs/scanner.md)",
+        description="integrator for sparse patterns (dot frames): path tracer, ptracer "
+        "(Mitsuba's light tracer, paths per camera pixel) or lit (paths per lit projector "
+        "pixel: a dot frame costs what its dots cost; docs/scanner.md)",
     )
     sparse_spp: PositiveInt | None = Field(
-        None, description="samples per pixel for sparse patterns (null: render.spp)"
+        None, le=MAX_SPP, description="samples per pixel for sparse patterns (null: render.spp)"
     )
     sparse_below: float = Field(
         0.01, gt=0, le=1, description="largest lit fraction of projector pixels counted sparse"
+    )
+    sparse_particles: PositiveInt = Field(
+        256, description="lit only: light paths per lit projector pixel (at pattern value 1)"
     )
 
 
@@ -310,12 +340,10 @@ class ScannerStudyCfg(_Model):
     trials: int = Field(1, ge=1, le=100)
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
     rig: Literal["moonyard", "aerial"] = Field("moonyard", description="rig preset")
-    projector_px: tuple[PositiveInt, PositiveInt] = Field(
+    projector_px: tuple[PxCount, PxCount] = Field(
         (256, 192), description="projector (width, height)"
     )
-    camera_px: tuple[PositiveInt, PositiveInt] = Field(
-        (256, 192), description="camera (width, height)"
-    )
+    camera_px: tuple[PxCount, PxCount] = Field((256, 192), description="camera (width, height)")
     guide_light: Literal["projector", "sun"] = Field(
         "projector", description="guide image light: camera-centred projector or render.light"
     )
@@ -340,6 +368,13 @@ class ScannerStudyCfg(_Model):
         "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
     )
 
+    @field_validator("modes", "planners", "metrics")
+    @classmethod
+    def _unique(cls, v: list[str]) -> list[str]:
+        if len(set(v)) != len(v):
+            raise ValueError(f"names must be unique, got {v}")
+        return v
+
     @model_validator(mode="after")
     def _scans_need_gray_code(self):
         if self.save_scans and not {"gray_code", "ambiguity_enhancement"} & set(self.modes):
@@ -351,7 +386,6 @@ class ScannerStudyCfg(_Model):
 
     @model_validator(mode="after")
     def _options_fit(self) -> ScannerStudyCfg:
-        from simlunar.planner import STRATEGIES
 
         o = self.options
         stray = sorted(set(o.planner_opts) - set(self.planners))
@@ -359,7 +393,6 @@ class ScannerStudyCfg(_Model):
             raise ValueError(
                 f"options.planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
             )
-        from simlunar.scanner.modes import SCAN_PLANNERS
 
         scan_planners = [p for p in self.planners if p in SCAN_PLANNERS]
         if scan_planners and "data_reduction" in self.modes:
@@ -370,12 +403,16 @@ class ScannerStudyCfg(_Model):
         for name in scan_planners:
             if name in o.planner_opts:
                 raise ValueError(f"options.planner_opts.{name}: {name} takes no options")
-        for name, opts in o.planner_opts.items():
+        for name in self.planners:
+            opts = o.planner_opts.get(name)
             if name in STRATEGIES:
                 try:
-                    check_planner_options(name, opts)
+                    check_planner_options(name, opts or PlannerOptsCfg())
                 except ValueError as exc:
-                    raise ValueError(f"options.planner_opts.{name}.{exc}") from None
+                    where = (
+                        f"options.planner_opts.{name}" if opts is not None else f"planners ({name})"
+                    )
+                    raise ValueError(f"{where}.{exc}") from None
         moonyard_only = ("distance_m", "elevation_deg")
         aerial_only = ("altitude_m",)
         for key in aerial_only if self.rig == "moonyard" else moonyard_only:

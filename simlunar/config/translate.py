@@ -4,14 +4,13 @@ The schema (:mod:`simlunar.config.schema`) holds YAML keys with unit suffixes (`
 ``_m``, ``_px``); the library takes SI units and radians as arrays, keyword-only options and
 small frozen dataclasses (:class:`~simlunar.imaging.sensor.SensorModel`,
 :class:`~simlunar.terrain.params.TerrainParams`, geometry cameras, light and BSDF specs). Every
-function here takes typed config models and returns such objects or the keyword dicts of the
-library functions as they are today; nothing else converts units.
+function here takes typed config models and returns such objects (options dataclasses beside
+the code that reads them); nothing else converts units.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -24,11 +23,13 @@ from simlunar.config.render import (
     LambertCfg,
     OrenNayarCfg,
     OrthoNadirCfg,
+    RenderCfg,
     RoverMastCfg,
     SensorCfg,
     SunLightCfg,
 )
 from simlunar.config.studies import (
+    FEATURE_OPTION_KEYS,
     DotOptsCfg,
     FeatureOptsCfg,
     GrayOptsCfg,
@@ -43,20 +44,32 @@ from simlunar.config.terrain import (
     TerrainPresetCfg,
     merged_preset,
 )
+from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose, rover_mast_camera
+from simlunar.imaging.exposure import auto_exposure_e
+from simlunar.imaging.sensor import SensorModel
+from simlunar.render.capture import CaptureOptions
+from simlunar.render.lights import make_light
+from simlunar.render.materials import make_bsdf
+from simlunar.scanner.scans import DotOptions, GrayCodeOptions
+from simlunar.study.sampling import SamplingStudyOptions
+from simlunar.study.scanner import ScannerStudyOptions
+from simlunar.terrain import generate
+from simlunar.terrain.io import load_albedo, load_dem
+from simlunar.terrain.params import (
+    AlbedoParams,
+    BedParams,
+    CraterParams,
+    FractalParams,
+    RockParams,
+    TerrainParams,
+)
+from simlunar.terrain.types import Terrain
 
 # --------------------------------------------------------------------------- terrain
 
 
 def terrain_params(preset: TerrainPresetCfg, *, scale: float = 1.0):
     """:class:`~simlunar.terrain.params.TerrainParams` of a validated preset (SI units)."""
-    from simlunar.terrain.params import (
-        AlbedoParams,
-        BedParams,
-        CraterParams,
-        FractalParams,
-        RockParams,
-        TerrainParams,
-    )
 
     g, f, b, c, r, a = (
         preset.grid,
@@ -131,17 +144,11 @@ def preset_params(name: str, *, scale: float = 1.0, overrides: dict | None = Non
 
 def build_terrain(cfg, *, rng):
     """The :class:`~simlunar.terrain.Terrain` of a :class:`~simlunar.config.schema.TerrainCfg`."""
-    from simlunar.terrain.types import Terrain
 
     if cfg.preset is not None:
-        from simlunar.config.terrain import merged_preset
-        from simlunar.terrain import generate
-
         params = terrain_params(merged_preset(cfg.preset, cfg.overrides), scale=cfg.scale)
         terrain = generate(params, rng=rng).terrain
     else:
-        from simlunar.terrain.io import load_albedo, load_dem
-
         terrain = load_dem(cfg.file, spacing=cfg.spacing_m)
         if cfg.albedo_file is not None:
             # the reader the preflight checked the file with (one reader, one verdict)
@@ -170,15 +177,12 @@ def build_terrain(cfg, *, rng):
 def camera(cfg, terrain):
     """Geometry camera of a camera config (orthographic nadir over ``terrain``, rover mast on
     ``terrain``, or perspective)."""
-    from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose
 
     if isinstance(cfg, OrthoNadirCfg):
         return OrthoCamera.nadir_for_grid(
             terrain.shape, terrain.spacing, terrain.origin, altitude=cfg.altitude_m
         )
     if isinstance(cfg, RoverMastCfg):
-        from simlunar.geometry import rover_mast_camera
-
         return rover_mast_camera(
             terrain.heights,
             terrain.spacing,
@@ -205,7 +209,6 @@ def camera(cfg, terrain):
 
 def lights(light, ambient_radiance: float) -> list:
     """Light specs: the configured light, plus the ambient term when > 0."""
-    from simlunar.render.lights import make_light
 
     if isinstance(light, SunLightCfg):
         out = [
@@ -228,7 +231,6 @@ def lights(light, ambient_radiance: float) -> list:
 
 def bsdf(cfg):
     """BSDF spec of a BSDF config (angles in radians)."""
-    from simlunar.render.materials import make_bsdf
 
     if isinstance(cfg, LambertCfg):
         return make_bsdf("lambert")
@@ -249,8 +251,6 @@ def sensor_model(cfg: SensorCfg, reference: np.ndarray | None = None):
     ``reference``; without a reference (a scanner study, which exposes on its own white
     calibration frame) the model's placeholder exposure is returned and replaced there.
     """
-    from simlunar.imaging.exposure import auto_exposure_e
-    from simlunar.imaging.sensor import SensorModel
 
     exposure = cfg.exposure_e
     if exposure is None:
@@ -270,7 +270,6 @@ def sensor_model(cfg: SensorCfg, reference: np.ndarray | None = None):
 
 def feature_opts(base: str, opts: FeatureOptsCfg, features: list[str] | None = None) -> dict:
     """The ``feature_opts`` of :func:`simlunar.planner.plan` for strategy ``base``."""
-    from simlunar.config.studies import FEATURE_OPTION_KEYS
 
     def of(feature: str) -> dict:
         return {k: getattr(opts, k) for k in FEATURE_OPTION_KEYS.get(feature, ())}
@@ -346,40 +345,35 @@ def rig_kwargs(study: ScannerStudyCfg) -> dict[str, Any]:
     return kw
 
 
-def gray_kwargs(opts: GrayOptsCfg) -> dict[str, Any]:
-    """Keywords of :func:`simlunar.scanner.modes.gray_code_scan`."""
-    return opts.model_dump()
+def gray_options(opts: GrayOptsCfg, *, keep_frames: bool = False) -> GrayCodeOptions:
+    """:class:`~simlunar.scanner.scans.GrayCodeOptions` of a config."""
+    return GrayCodeOptions(**opts.model_dump(), keep_frames=keep_frames)
 
 
-def dot_kwargs(opts: DotOptsCfg) -> dict[str, Any]:
-    """Keywords of :func:`simlunar.scanner.modes.dot_scan` (``_px`` suffixes dropped)."""
-    return {k.removesuffix("_px"): v for k, v in opts.model_dump().items()}
+def dot_options(opts: DotOptsCfg) -> DotOptions:
+    """:class:`~simlunar.scanner.scans.DotOptions` of a config (``_px`` suffixes dropped)."""
+    return DotOptions(**{k.removesuffix("_px"): v for k, v in opts.model_dump().items()})
 
 
-@dataclass(frozen=True)
-class ScannerStudyOptions:
-    """The option keywords of :func:`simlunar.study.scanner.run_scanner_study` of a config."""
-
-    modes: tuple[str, ...]
-    planners: tuple[str, ...]
-    budget: float
-    trials: int
-    metrics: tuple[str, ...]
-    guide_light: str
-    projector_gamma: float
-    projector_blur: float
-    camera_blur: float
-    gray_opts: dict = field(default_factory=dict)
-    dot_opts: dict = field(default_factory=dict)
-    planner_opts: dict = field(default_factory=dict)
-    capture_opts: dict = field(default_factory=dict)
-
-    def kwargs(self) -> dict[str, Any]:
-        return {f: getattr(self, f) for f in self.__dataclass_fields__}
+def capture_options(study: ScannerStudyCfg, render: RenderCfg, seed: int) -> CaptureOptions:
+    """:class:`~simlunar.render.capture.CaptureOptions` of a scanner study and its render
+    section (``seed``: the sampler seed of the unit's render stage)."""
+    return CaptureOptions(
+        max_depth=render.max_depth,
+        spp=render.spp,
+        seed=seed,
+        projector_gamma=study.projector_gamma,
+        projector_blur=study.projector_blur_px,
+        camera_blur=study.camera_blur_px,
+        **study.options.capture_opts.model_dump(),
+    )
 
 
-def scanner_options(study: ScannerStudyCfg) -> ScannerStudyOptions:
-    """Study options of a scanner config (the rig is built by :func:`rig_kwargs`)."""
+def scanner_options(
+    study: ScannerStudyCfg, render: RenderCfg, *, seed: int = 0
+) -> ScannerStudyOptions:
+    """:class:`~simlunar.study.scanner.ScannerStudyOptions` of a config (the rig is built by
+    :func:`rig_kwargs`); ``save_scans`` keeps the gray-code frames the export needs."""
     o = study.options
     return ScannerStudyOptions(
         modes=tuple(study.modes),
@@ -388,11 +382,20 @@ def scanner_options(study: ScannerStudyCfg) -> ScannerStudyOptions:
         trials=study.trials,
         metrics=tuple(study.metrics),
         guide_light=study.guide_light,
-        projector_gamma=study.projector_gamma,
-        projector_blur=study.projector_blur_px,
-        camera_blur=study.camera_blur_px,
-        gray_opts=gray_kwargs(o.gray_opts),
-        dot_opts=dot_kwargs(o.dot_opts),
+        capture=capture_options(study, render, seed),
+        gray=gray_options(o.gray_opts, keep_frames=study.save_scans),
+        dots=dot_options(o.dot_opts),
         planner_opts={name: planner_kwargs(name, p) for name, p in o.planner_opts.items()},
-        capture_opts=o.capture_opts.model_dump(),
+    )
+
+
+def sampling_options(study: SamplingStudyCfg) -> SamplingStudyOptions:
+    """:class:`~simlunar.study.sampling.SamplingStudyOptions` of a config."""
+    return SamplingStudyOptions(
+        strategies=tuple(study.strategies),
+        densities=tuple(study.densities),
+        trials=study.trials,
+        metrics=tuple(study.metrics),
+        range_noise_std=study.range_noise_std_m,
+        strategy_options=strategy_options(study),
     )

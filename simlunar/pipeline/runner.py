@@ -26,15 +26,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 import simlunar
 from simlunar.config.loading import apply_sweep_value, to_plain
 from simlunar.config.schema import ExperimentCfg
+from simlunar.config.yamlio import dump_yaml, safe_load_text
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
+from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
+from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
+from simlunar.results.folder import prune_figures, read_folder_config
+from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
     FolderLock,
     UnitCache,
@@ -42,7 +45,6 @@ from simlunar.results.store import (
     atomic_write_text,
     csv_text,
     file_sha256,
-    fmt_value,
 )
 
 #: keys that do not change a unit's numbers (excluded from its cache key)
@@ -50,44 +52,15 @@ _NON_RESULT_KEYS = ("name", "description", "sweep")
 ROW_COLUMNS = ("mode", "planner", "budget", "strategy", "density", "k", "trial", "metric", "value")
 
 
-@dataclass(frozen=True)
-class WorkUnit:
-    """One sweep point.
-
-    Attributes
-    ----------
-    index : int
-        Position in the sweep's cartesian product (results order).
-    key : str
-        SHA-256 (hex, 16 chars) of the resolved configuration: the cache key.
-    sweep : dict
-        Dotted key path -> value of this point (empty without a sweep).
-    config : dict
-        The full resolved configuration (plain, JSON-safe) without ``sweep``.
-    inputs : dict
-        Key path -> ``{"path", "sha256"}`` of every file the unit reads.
-    terrain_seed : int or None
-        The unit's terrain realisation (``terrain.seed_index``) when the experiment repeats
-        over ``study.terrain_seeds`` > 1; None otherwise.
-    """
-
-    index: int
-    key: str
-    sweep: dict[str, Any]
-    config: dict[str, Any]
-    inputs: dict[str, dict[str, str]] = field(default_factory=dict)
-    terrain_seed: int | None = None
-
-
 def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = None) -> str:
     """Cache key of a resolved unit config: what determines its numbers, and nothing else.
 
     It covers the config (less names and figure formats), the SHA-256 of every file the unit
-    reads (``inputs``, :func:`simlunar.pipeline.preflight.input_hashes`; computed when not
+    reads (``inputs``, :func:`simlunar.pipeline.inputs.input_hashes`; computed when not
     given) and the simlunar version.
     """
     if inputs is None:
-        inputs = preflight.input_hashes(config)
+        inputs = input_hashes(config)
     relevant = {k: v for k, v in config.items() if k not in _NON_RESULT_KEYS}
     relevant.pop("figures", None)
     terrain = relevant.get("terrain")
@@ -143,7 +116,7 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
         sweep = {p: v for (p, _), v in zip(axes, combo)}
         n_seeds = int(resolved.get("study", {}).get("terrain_seeds", 1) or 1)
         if n_seeds == 1:
-            inputs = preflight.input_hashes(resolved)
+            inputs = input_hashes(resolved)
             key = unit_key(resolved, inputs)
             units.append(WorkUnit(len(units), key, sweep, resolved, inputs=inputs))
             continue
@@ -151,7 +124,7 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
             one = apply_sweep_value(resolved, "terrain.seed_index", seed_index)
             one = to_plain(ExperimentCfg.model_validate(one))
             one.pop("sweep", None)
-            inputs = preflight.input_hashes(one)
+            inputs = input_hashes(one)
             units.append(
                 WorkUnit(
                     len(units),
@@ -245,25 +218,6 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
     return rows, ["unit", *sweep_cols, *known, *extra, "value"]
 
 
-def unit_label(u: WorkUnit) -> str:
-    """Short human label of a sweep point (``elevation_deg=30``)."""
-    seed = [] if u.terrain_seed is None else [f"terrain_seed={u.terrain_seed}"]
-    if not u.sweep:
-        return ", ".join(seed) or u.config.get("name", f"unit {u.index}")
-    parts = []
-    for path, v in u.sweep.items():
-        name = path.rsplit(".", 1)[-1]
-        if isinstance(v, dict) and "kind" in v:  # e.g. rover_mast(depression_deg=30)
-            rest = ", ".join(f"{k}={fmt_value(x)}" for k, x in v.items() if k != "kind")
-            v = f"{v['kind']}({rest})" if rest else v["kind"]
-        elif isinstance(v, dict):
-            v = json.dumps(v, sort_keys=True)
-        elif v is None:
-            v = "default"
-        parts.append(f"{name}={fmt_value(v)}")
-    return ", ".join(parts + seed)
-
-
 def run_experiment(
     cfg: ExperimentCfg,
     out_dir: str | Path,
@@ -307,7 +261,8 @@ def run_experiment(
     preflight.check_out_dir(out)
     units = expand(cfg)
     checks = preflight.check_units(units)
-    config_text = yaml.safe_dump(to_plain(cfg), sort_keys=False, allow_unicode=True)
+    preflight.check_renderer()
+    config_text = dump_yaml(to_plain(cfg))
     executor = executor or LocalPoolExecutor(1)
     executor_open = getattr(executor, "open", None)
     if executor_open is not None:
@@ -334,8 +289,11 @@ def run_experiment(
             )
         except RunInterrupted:
             raise
-        except KeyboardInterrupt:
-            # after the units, while the summary or the figures were written
+        except BaseException as exc:
+            if not (isinstance(exc, KeyboardInterrupt) or interrupted()):
+                raise
+            # after the units, while the summary or the figures were written (whatever
+            # the interrupted code raised: the Ctrl-C decides)
             done = len(UnitCache(out).keys() & {u.key for u in units})
             raise RunInterrupted(_kept(out, done, len(units), "interrupted")) from None
         finally:
@@ -351,23 +309,6 @@ def _remove_empty(out: Path) -> None:
         out.rmdir()
     except OSError:
         pass
-
-
-def read_folder_config(path: Path) -> dict:
-    """A result folder's ``config.yaml`` as a dict (:class:`ResultFolderError` if unreadable)."""
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (yaml.YAMLError, UnicodeDecodeError, OSError) as exc:
-        what = "not valid YAML" if isinstance(exc, yaml.YAMLError) else "unreadable"
-        raise ResultFolderError(
-            f"{path}: {what}, so the folder's configuration is unknown; "
-            "choose another --out or delete the folder"
-        ) from None
-    if not isinstance(data, dict) or not isinstance(data.get("study"), dict):
-        raise ResultFolderError(
-            f"{path}: not an experiment configuration; choose another --out or delete the folder"
-        )
-    return data
 
 
 def _first_difference(old: Any, new: Any, path: str = "") -> str:
@@ -398,7 +339,7 @@ def claim_folder(out: Path, config_text: str) -> None:
     written only into an empty folder.
     """
     path = out / "config.yaml"
-    new = yaml.safe_load(config_text)
+    new = safe_load_text(config_text)
     if path.exists():
         old = read_folder_config(path)
         if _identity(old) != _identity(new):
@@ -456,12 +397,12 @@ def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
 
 
 def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
-    from simlunar.results.exports import export_unit_key
+    from simlunar.results.exports import export_complete
 
     name = f"unit{u.index}"
     if scan_dirs.get(name) != u.key:
         return True  # exports nothing (or a unit of the same key does)
-    return export_unit_key(out / "scans" / name) == u.key
+    return export_complete(out / "scans" / name, u.key)
 
 
 def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
@@ -470,7 +411,7 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
     import re
     import shutil
 
-    from simlunar.results.exports import export_unit_key
+    from simlunar.results.exports import export_complete
 
     folder = out / "scans"
     removed: list[Path] = []
@@ -480,24 +421,11 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
         if not (p.is_dir() and re.fullmatch(r"unit\d+", p.name)):
             continue  # only what the runner writes
         key = scan_dirs.get(p.name)
-        if key is None or export_unit_key(p) != key:
+        if key is None or not export_complete(p, key):
             shutil.rmtree(p)
             removed.append(p)
     if not any(folder.iterdir()):
         folder.rmdir()
-    return removed
-
-
-def prune_figures(out: Path, keep) -> list[Path]:
-    """Remove ``figures/*.png|pdf`` not in ``keep`` (figures of another state of the folder)."""
-    keep = {Path(p).name for p in keep}
-    fig_dir = out / "figures"
-    removed = []
-    if fig_dir.is_dir():
-        for p in sorted(fig_dir.iterdir()):
-            if p.suffix.lower() in (".png", ".pdf") and p.name not in keep and p.is_file():
-                p.unlink()
-                removed.append(p)
     return removed
 
 
@@ -520,6 +448,8 @@ def _run_locked(
             todo.append(u)
     n_cached = len(units) - len(todo)
     stale = cache.keys() - set(keys)
+    # nothing of a finished folder is removed before this run is known to be able to write
+    _check_writable(out, scan_dirs)
     previous = _read_provenance(out)  # before anything is removed: its run time is kept
     if (
         not todo
@@ -557,13 +487,21 @@ def _run_locked(
             n_new += 1
             if bar is not None:
                 bar.advance()
-    except KeyboardInterrupt:
-        raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted")) from None
-    except InfrastructureError as exc:
-        raise InfrastructureError(f"{exc}; {_kept(out, n_cached + n_new, len(units))}") from None
+    except BaseException as exc:
+        if isinstance(exc, KeyboardInterrupt) or interrupted():
+            # a Ctrl-C, whatever the interrupted code made of it (the renderer's start-up
+            # turns it into other errors)
+            raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted")) from None
+        if isinstance(exc, InfrastructureError):
+            raise InfrastructureError(
+                f"{exc}; {_kept(out, n_cached + n_new, len(units))}"
+            ) from None
+        raise
     finally:
         if bar is not None:
             bar.stop()
+    if interrupted():  # a Ctrl-C swallowed by the code it interrupted
+        raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted"))
 
     rows, columns = collect_rows(units, records)
     atomic_write_text(out / "results.csv", csv_text(rows, columns))
@@ -654,6 +592,31 @@ def _rerun(cfg, out, units, checks, figures, t_start, previous, records) -> RunS
         written,
         _notes(checks, units, records),
     )
+
+
+def _check_writable(out: Path, scan_dirs: dict[str, str]) -> None:
+    """Write (and remove) a small file in each folder the run writes into, so a full disk,
+    a quota or a folder made read-only fails here (exit 3) before any result is deleted."""
+    import os
+    import tempfile
+
+    folders = [out, out / "units", out / "figures"] + ([out / "scans"] if scan_dirs else [])
+    for d in folders:
+        if d.exists() and not d.is_dir():
+            raise ResultFolderError(f"--out {out}: {d} is not a folder")
+        target = d if d.is_dir() else out
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=".simlunar-probe.", dir=target)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        try:
+            os.write(fd, b"\0" * 65536)
+            os.fsync(fd)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        finally:
+            os.close(fd)
+            os.unlink(tmp)
 
 
 def _kept(out: Path, done: int, total: int, what: str = "") -> str:

@@ -18,7 +18,11 @@ import numpy as np
 from scipy.optimize import minimize
 
 from simlunar.features import check_image, feature_map
+from simlunar.metrics import check_densities, depth_gradient_weights
+from simlunar.metrics import metric as error_metric
+from simlunar.metrics import score as eq43
 from simlunar.planner.strategies import COMBINABLE, check_k, combination_map, combine_maps, plan
+from simlunar.reconstruction import reconstruct
 
 #: the maps :func:`fit_combination` weights by default
 DEFAULT_FEATURES = ("uniform", "gradient", "entropy", "wavelet", "saliency")
@@ -48,9 +52,6 @@ class CombinationFit:
 
 
 def _prepare(scenes, maps, features, dens, trials, metric, base, feature_opts):
-    from simlunar.metrics import depth_gradient_weights
-    from simlunar.metrics import metric as error_metric
-    from simlunar.reconstruction import reconstruct
 
     if maps is not None and len(maps) != len(scenes):
         raise ValueError(f"maps: one dict per scene, got {len(maps)} for {len(scenes)} scenes")
@@ -94,7 +95,6 @@ def _prepare(scenes, maps, features, dens, trials, metric, base, feature_opts):
 
 
 def _check(features, densities, scenes):
-    from simlunar.metrics import check_densities
 
     features = list(features)
     bad = [f for f in features if f not in COMBINABLE]
@@ -107,7 +107,6 @@ def _check(features, densities, scenes):
 
 
 def _mean_score(prepared, coefs, dens):
-    from simlunar.metrics import score as eq43
 
     total = 0.0
     for m, errors, e_random in prepared:

@@ -19,6 +19,8 @@ import zlib
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from simlunar.metrics import METRIC_NAMES
+
 
 @dataclass(frozen=True)
 class Style:
@@ -180,7 +182,6 @@ _UNIT_SUFFIXES = {"_deg": "deg", "_m": "m", "_e": "e⁻", "_px": "px", "_s": "s"
 def metric_axis(metric: str, *, what: str = "error", unit: str | None = None) -> str:
     """Axis label of an error metric with its unit, e.g. ``"MSE error (m²)"`` (``unit``
     replaces the SI unit, e.g. ``"mm²"`` for values scaled by 1e6)."""
-    from simlunar.metrics import METRIC_NAMES
 
     name = METRIC_NAMES.get(metric, metric)
     unit = unit or METRIC_UNITS.get(metric)

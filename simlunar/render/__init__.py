@@ -9,6 +9,11 @@ Importing this package does not import Mitsuba; :func:`simlunar.render.backend.i
   ``luminance``
 - BSDF specs: ``LambertBSDF``, ``OrenNayarBSDF``, ``HapkeBSDF``, ``make_bsdf``
 - mesh / cameras: ``terrain_mesh``, ``sensor_dict``
+- time of flight (mitransient): ``TransientOptions``, ``FlashFrame``, ``flash_frame``,
+  ``BeamCapture``, ``BeamReturns``, ``capture_beams``; LIDAR acquisitions:
+  ``SteeredBeamOptions``, ``FlashOptions``, ``LidarScan``, ``beam_capture``,
+  ``steered_beam_scan``, ``flash_scan``, ``micromirror_flash``, ``micromirror_frames``,
+  ``guide_directions``, ``receiver_rc``
 - :mod:`simlunar.render.specs` gathers every light and BSDF spec (NumPy only)
 """
 
@@ -35,6 +40,22 @@ _EXPORTS = {
     "make_bsdf": "materials",
     "terrain_mesh": "mesh",
     "sensor_dict": "cameras",
+    "TransientOptions": "transient",
+    "FlashFrame": "transient",
+    "flash_frame": "transient",
+    "BeamCapture": "transient",
+    "BeamReturns": "transient",
+    "capture_beams": "transient",
+    "SteeredBeamOptions": "lidar_scan",
+    "FlashOptions": "lidar_scan",
+    "LidarScan": "lidar_scan",
+    "beam_capture": "lidar_scan",
+    "steered_beam_scan": "lidar_scan",
+    "flash_scan": "lidar_scan",
+    "micromirror_flash": "lidar_scan",
+    "micromirror_frames": "lidar_scan",
+    "guide_directions": "lidar_scan",
+    "receiver_rc": "lidar_scan",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from simlunar.render.materials import HapkeBSDF, LambertBSDF, OrenNayarBSDF
+from simlunar.render.mesh import grid_texture
 from simlunar.render.plugins.hapke import HAPKE_TABLE_SIZE
 
 __all__ = ["HAPKE_TABLE_SIZE", "bsdf_dict"]
@@ -56,8 +57,6 @@ def bsdf_dict(spec: LambertBSDF | OrenNayarBSDF | HapkeBSDF, reflectance: Any = 
     if isinstance(spec, OrenNayarBSDF):
         sigma: Any = spec.sigma
         if spec.sigma_map is not None:
-            from simlunar.render.mesh import grid_texture
-
             sigma = grid_texture(spec.sigma_map)
         return {"type": "oren_nayar", "reflectance": tex, "sigma": sigma, "model": spec.model}
     if isinstance(spec, HapkeBSDF):

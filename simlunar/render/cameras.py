@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from simlunar.geometry import Camera, OrthoCamera, Pose
+from simlunar.render import backend
 
 #: OpenCV device axes -> Mitsuba sensor axes (x and y flipped, z kept)
 CV_TO_MITSUBA = np.diag([-1.0, -1.0, 1.0])
@@ -154,6 +155,5 @@ def view_direction(camera) -> np.ndarray:
 
 
 def _mi():
-    from simlunar.render import backend
 
     return backend.mitsuba()

@@ -1,18 +1,22 @@
-"""Scanner capture through Mitsuba: pattern renders, per-frame sensor noise, guide view, truth.
-
-Split from :mod:`simlunar.study.scanner` (which re-exports these names).
-"""
+"""Capture of pattern stacks through Mitsuba: pattern renders, per-frame camera model, guide
+view, camera-view truth of the projector correspondences."""
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from scipy import ndimage
 
 from simlunar.geometry import Rig
+from simlunar.imaging.blur import gaussian_blur
 from simlunar.imaging.exposure import AUTO_EXPOSURE_LEVEL, AUTO_EXPOSURE_PERCENTILE
+from simlunar.imaging.sensor import apply_sensor
+from simlunar.render.lights import ProjectorLight, SunLight
+from simlunar.render.scene import TerrainScene, luminance
+from simlunar.render.sparse import LitTracer
 from simlunar.scanner.triangulate import check_rig, projector_visibility, true_correspondences
 
 #: white-frame radiance percentile mapped to ``target_level`` by the auto exposure (the one
@@ -20,20 +24,111 @@ from simlunar.scanner.triangulate import check_rig, projector_visibility, true_c
 EXPOSURE_PERCENTILE = AUTO_EXPOSURE_PERCENTILE
 
 
+class Capture(Protocol):
+    """What the structured-light scans (:mod:`simlunar.scanner.scans`) drive: a camera that
+    sees the scene under projector patterns. :class:`RenderCapture` renders through Mitsuba;
+    tests use NumPy captures."""
+
+    def render(self, patterns: np.ndarray) -> np.ndarray:
+        """Noise-free camera images (n, rows, cols) under ``n`` projector patterns (n, H, W)
+        in [0, 1]; each pattern counts as one render."""
+        ...
+
+    def sense(self, images: np.ndarray) -> np.ndarray:
+        """Captured frames (n, rows, cols): sensor noise, quantisation and response."""
+        ...
+
+
+#: integrators a sparse pattern (a dot frame) may be rendered with
+SPARSE_INTEGRATORS = ("path", "ptracer", "lit")
+#: light paths per lit projector pixel of the ``"lit"`` sparse integrator
+SPARSE_PARTICLES = 256
+
+
+@dataclass(frozen=True)
+class CaptureOptions:
+    """Rendering and optics of a :class:`RenderCapture`.
+
+    Attributes
+    ----------
+    max_depth : int >= 2
+        Path depth (2 = direct only; >= 3 includes interreflections).
+    spp, seed : int
+        Samples per pixel and sampler seed for every pattern.
+    projector_scale : float > 0
+        Projector irradiance scale (Mitsuba ``scale``).
+    projector_gamma : float > 0
+        Projector response: pattern values ``p`` are emitted as ``p ** projector_gamma``.
+    projector_blur : float >= 0
+        Gaussian blur (sigma, projector pixels) of every emitted pattern (projector defocus).
+    camera_blur : float >= 0
+        Gaussian point-spread function (sigma, camera pixels) of the camera lens applied to every
+        rendered frame before the sensor: the finite resolving power of the lens (diffraction
+        and aberrations), independent of depth, unlike the thin-lens defocus of ``rig.camera``.
+    target_level : float in (0, 1]
+        The auto exposure (:mod:`simlunar.imaging.exposure`) maps the white frame's
+        99.5th-percentile radiance to this fraction of the sensor range (or of 1 without a
+        sensor), so thresholds are in [0, 1] frame units.
+    sparse_integrator : "path", "ptracer" or "lit"
+        Integrator of sparse patterns (lit fraction <= ``sparse_below``): the path tracer;
+        Mitsuba's light tracer from the projector (which launches ``sparse_spp`` paths per
+        camera pixel); or ``"lit"`` (:class:`simlunar.render.sparse.LitTracer`), which traces
+        ``sparse_particles`` paths per lit projector pixel, so a dot frame costs what its dots
+        cost. With every integrator a pattern with nothing lit (the black frame) is not
+        rendered: it is exactly black.
+    sparse_spp : int >= 1 or None
+        Samples per pixel of sparse patterns (None: ``spp``); not used by ``"lit"``.
+    sparse_below : float in (0, 1]
+        Largest lit fraction of projector pixels counted as sparse.
+    sparse_particles : int >= 1
+        ``"lit"`` only: light paths per lit projector pixel (at pattern value 1).
+    """
+
+    max_depth: int = 3
+    spp: int = 16
+    seed: int = 0
+    projector_scale: float = 1.0
+    projector_gamma: float = 1.0
+    projector_blur: float = 0.0
+    camera_blur: float = 0.0
+    target_level: float = AUTO_EXPOSURE_LEVEL
+    sparse_integrator: str = "path"
+    sparse_spp: int | None = None
+    sparse_below: float = 0.01
+    sparse_particles: int = SPARSE_PARTICLES
+
+    def __post_init__(self):
+        if not self.projector_gamma > 0:
+            raise ValueError(f"projector_gamma must be > 0, got {self.projector_gamma}")
+        if self.projector_blur < 0:
+            raise ValueError(f"projector_blur must be >= 0 px, got {self.projector_blur}")
+        if self.camera_blur < 0:
+            raise ValueError(f"camera_blur must be >= 0 px, got {self.camera_blur}")
+        if self.sparse_integrator not in SPARSE_INTEGRATORS:
+            raise ValueError(
+                f"unknown sparse_integrator {self.sparse_integrator!r}; valid: "
+                + ", ".join(repr(x) for x in SPARSE_INTEGRATORS)
+            )
+        if self.sparse_spp is not None and int(self.sparse_spp) < 1:
+            raise ValueError(f"sparse_spp must be >= 1, got {self.sparse_spp}")
+        if int(self.sparse_particles) < 1:
+            raise ValueError(f"sparse_particles must be >= 1, got {self.sparse_particles}")
+
+
 class RenderCapture:
-    """Mitsuba-backed capture for :mod:`simlunar.scanner.modes`.
+    """Mitsuba-backed :class:`Capture`: projector patterns seen by the rig's triangulation camera.
 
     Parameters
     ----------
     terrain : Terrain
     rig : Rig
+    options : CaptureOptions, optional
+        Path depth, samples, projector response and blur, lens blur, exposure level, the
+        integrator of sparse patterns.
     bsdf : BSDF spec or None (Lambert)
-    max_depth : int
-        Path depth (2 = direct only; >= 3 includes interreflections).
-    spp, seed : int
-        Samples per pixel and sampler seed for every pattern.
     sensor : SensorModel or None
-        Per-frame noise, quantisation and response; None returns noise-free frames.
+        Per-frame noise, quantisation and response; None returns noise-free frames. Its
+        exposure is set from the white calibration frame (the auto exposure).
     rng : seed or Generator
         Noise stream (separate from the renderer's seed).
     extra_lights : sequence of light specs
@@ -44,92 +139,44 @@ class RenderCapture:
         their light tracing from the projector. It appears in the black frame, which the
         decoders subtract; the sensor noise of every frame is drawn on the sum, so the sun's
         shot noise is in every frame.
-    projector_scale : float
-        Projector irradiance scale (Mitsuba ``scale``).
-    projector_gamma : float
-        Projector response: pattern values ``p`` are emitted as ``p ** projector_gamma``.
-    projector_blur : float
-        Gaussian blur (sigma, projector pixels) of every emitted pattern (projector defocus).
-    camera_blur : float
-        Gaussian point-spread function (sigma, camera pixels) of the camera lens applied to every
-        rendered frame before the sensor: the finite resolving power of the lens (diffraction
-        and aberrations), independent of depth, unlike the thin-lens defocus of ``rig.camera``.
-    target_level : float
-        The auto exposure (:mod:`simlunar.imaging.exposure`) maps the white frame's
-        99.5th-percentile radiance to this fraction of the sensor range (or of 1 without a
-        sensor), so thresholds are in [0, 1] frame units. The sensor's own ``exposure`` is
-        replaced by it.
-    sparse_integrator : "path" or "ptracer"
-        Integrator for sparse patterns (projector dots): patterns with a lit fraction of at
-        most ``sparse_below`` (and some light) are rendered with it
-        (:meth:`simlunar.render.scene.TerrainScene.render`); ``"ptracer"`` traces light from
-        the projector, which samples its lit pixels, so the dots get every light path.
-    sparse_spp : int or None
-        Samples per pixel for sparse patterns (None: ``spp``); for ``"ptracer"`` light paths
-        per film pixel.
-    sparse_below : float
-        Largest lit fraction of the projector's pixels that counts as sparse.
     """
 
     def __init__(
         self,
         terrain,
         rig: Rig,
+        options: CaptureOptions | None = None,
         *,
         bsdf=None,
-        max_depth: int = 3,
-        spp: int = 16,
-        seed: int = 0,
         sensor=None,
         rng=None,
         extra_lights=(),
-        projector_scale: float = 1.0,
-        projector_gamma: float = 1.0,
-        projector_blur: float = 0.0,
-        camera_blur: float = 0.0,
-        target_level: float = AUTO_EXPOSURE_LEVEL,
-        sparse_integrator: str = "path",
-        sparse_spp: int | None = None,
-        sparse_below: float = 0.01,
     ) -> None:
-        from simlunar.render.lights import ProjectorLight
-        from simlunar.render.scene import TerrainScene
-
         check_rig(rig)
-        if not projector_gamma > 0:
-            raise ValueError(f"projector_gamma must be > 0, got {projector_gamma}")
-        if projector_blur < 0:
-            raise ValueError(f"projector_blur must be >= 0 px, got {projector_blur}")
-        if camera_blur < 0:
-            raise ValueError(f"camera_blur must be >= 0 px, got {camera_blur}")
-        self.camera_blur = float(camera_blur)
-        if sparse_integrator not in ("path", "ptracer"):
-            raise ValueError(
-                f"unknown sparse_integrator {sparse_integrator!r}; valid: 'path', 'ptracer'"
-            )
-        if sparse_spp is not None and int(sparse_spp) < 1:
-            raise ValueError(f"sparse_spp must be >= 1, got {sparse_spp}")
-        self.sparse_integrator = sparse_integrator
-        self.sparse_spp = None if sparse_spp is None else int(sparse_spp)
-        self.sparse_below = float(sparse_below)
+        o = options or CaptureOptions()
+        self.options = o
+        self.camera_blur = float(o.camera_blur)
+        self.sparse_integrator = o.sparse_integrator
+        self.sparse_spp = None if o.sparse_spp is None else int(o.sparse_spp)
+        self.sparse_below = float(o.sparse_below)
+        self.sparse_particles = int(o.sparse_particles)
+        self._lit = None  # the LitTracer, made on the first sparse frame
         self.rig = rig
         self.proj_shape = rig.projector.intrinsics.shape
-        self.gamma = float(projector_gamma)
-        self.blur = float(projector_blur)
+        self.gamma = float(o.projector_gamma)
+        self.blur = float(o.projector_blur)
         #: (rows, cols) float32 luminance of ``extra_lights`` alone (None without them),
         #: added to every rendered frame
         self.ambient = None
         if extra_lights:
-            from simlunar.render.scene import luminance
-
             sky = TerrainScene(
                 terrain,
                 rig.camera,
                 lights=list(extra_lights),
                 bsdf=bsdf,
-                max_depth=max_depth,
-                spp=spp,
-                seed=seed,
+                max_depth=o.max_depth,
+                spp=o.spp,
+                seed=o.seed,
             )
             self.ambient = luminance(sky.render()).astype(np.float32)
             del sky  # one scene in memory at a time (a DLP-size terrain mesh is large)
@@ -138,13 +185,13 @@ class RenderCapture:
             rig.camera,
             lights=[
                 ProjectorLight(
-                    rig.projector, np.ones(self.proj_shape, np.float32), scale=projector_scale
+                    rig.projector, np.ones(self.proj_shape, np.float32), scale=o.projector_scale
                 )
             ],
             bsdf=bsdf,
-            max_depth=max_depth,
-            spp=spp,
-            seed=seed,
+            max_depth=o.max_depth,
+            spp=o.spp,
+            seed=o.seed,
         )
         self.rng = np.random.default_rng(rng)
         self.renders = 0
@@ -166,7 +213,7 @@ class RenderCapture:
             self.ambient_ratio = float(self.ambient[on].mean() / lit[0][on].mean())
         white = self._lens(self._with_ambient(lit))[0]
         ref = float(np.percentile(white, EXPOSURE_PERCENTILE))
-        self.gain = target_level / ref
+        self.gain = o.target_level / ref
         self.sensor = None
         if sensor is not None:
             # electrons per unit radiance so that radiance * gain = 1 is the top of the ADC range
@@ -191,17 +238,42 @@ class RenderCapture:
             )
         self.renders += len(pats)
         em = self.emitted(pats)
-        lit = (em > 0).mean(axis=(1, 2))
-        sparse = (lit > 0) & (lit <= self.sparse_below)
+        # a pattern with nothing lit is black: the projector is the scene's only emitter (the
+        # extra lights are the separate ambient image), so its render is exactly zero and is
+        # skipped (the black frame of every gray-code and dot scan)
+        on = (em > 0).any(axis=(1, 2))
+        out = np.zeros((len(em), *self.scene.shape), np.float32)
+        if on.any():
+            out[on] = self._render_emitted(em[on])
+        return self._lens(self._with_ambient(out))
+
+    def _render_emitted(self, em: np.ndarray) -> np.ndarray:
+        """Luminance under emitted patterns with some light, by the integrator of each."""
+        if self.sparse_integrator == "lit":
+            return self._render_lit(em)
+        sparse = (em > 0).mean(axis=(1, 2)) <= self.sparse_below
         if (self.sparse_integrator == "path" and self.sparse_spp is None) or not sparse.any():
-            return self._lens(self._with_ambient(self.scene.render_patterns(em)))
+            return self.scene.render_patterns(em)
         out = np.empty((len(em), *self.scene.shape), np.float32)
         if (~sparse).any():
             out[~sparse] = self.scene.render_patterns(em[~sparse])
         out[sparse] = self.scene.render_patterns(
             em[sparse], spp=self.sparse_spp, integrator=self.sparse_integrator
         )
-        return self._lens(self._with_ambient(out))
+        return out
+
+    def _render_lit(self, em: np.ndarray) -> np.ndarray:
+        """``sparse_integrator="lit"``: sparse patterns light traced from their lit pixels
+        (:class:`simlunar.render.sparse.LitTracer`), the others path traced."""
+        sparse = (em > 0).mean(axis=(1, 2)) <= self.sparse_below
+        out = np.empty((len(em), *self.scene.shape), np.float32)
+        if (~sparse).any():
+            out[~sparse] = self.scene.render_patterns(em[~sparse])
+        if sparse.any():
+            if self._lit is None:
+                self._lit = LitTracer(self.scene, per_pixel=self.sparse_particles)
+            out[sparse] = self._lit.render(em[sparse], seed=self.scene.seed)
+        return out
 
     def _with_ambient(self, frames: np.ndarray) -> np.ndarray:
         """``frames`` plus the image of the extra lights (linearity of light transport)."""
@@ -222,8 +294,6 @@ class RenderCapture:
         frames = np.asarray(frames, np.float32)
         if self.camera_blur <= 0:
             return frames
-        from simlunar.imaging.blur import gaussian_blur
-
         if not frames.flags.writeable:
             frames = frames.copy()
         for i, f in enumerate(frames):
@@ -238,8 +308,6 @@ class RenderCapture:
         imgs = np.asarray(images)
         if self.sensor is None:
             return (imgs * np.float32(self.gain)).astype(np.float32, copy=False)
-        from simlunar.imaging.sensor import apply_sensor
-
         out = np.empty(imgs.shape, np.float32)
         for i, im in enumerate(imgs):
             out[i] = apply_sensor(im, self.sensor, rng=self.rng)
@@ -281,8 +349,6 @@ def render_guide(
         ``projector``: lit by the co-located projector's all-white frame, a camera-centred
         light, so no cast shadows are visible; ``sun``: lit by ``sun`` (a ``SunLight`` spec).
     """
-    from simlunar.render.lights import ProjectorLight, SunLight
-    from simlunar.render.scene import TerrainScene, luminance
 
     H, W = rig.projector.intrinsics.shape
     if light == "projector":

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.geometry import Camera, OrthoCamera, Projector
+from simlunar.render import backend
+from simlunar.render.cameras import to_world_matrix
 
 SUN_ANGULAR_DIAMETER = np.radians(0.53)  # mean apparent diameter of the sun from the Moon
 
@@ -208,8 +210,6 @@ def emitter_dicts(light, camera, *, index: int = 0) -> dict[str, dict]:
     index : int
         Position of the light in the scene's list (keeps ids unique).
     """
-    from simlunar.render import backend
-    from simlunar.render.cameras import to_world_matrix
 
     mi = backend.mitsuba()
     if isinstance(light, SunLight):

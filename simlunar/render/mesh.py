@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from simlunar.render import backend
 from simlunar.terrain.mesh import grid_faces, grid_vertices
 
 
@@ -47,7 +48,6 @@ def terrain_mesh(terrain, *, name: str = "terrain", bsdf=None):
     ValueError
         If no triangle survives (every 2x2 block touches nodata).
     """
-    from simlunar.render import backend
 
     mi = backend.mitsuba()
     heights = np.asarray(terrain.heights, float)
@@ -99,7 +99,6 @@ def grid_texture(values: np.ndarray) -> dict:
     With the terrain UVs every surface point whose nadir projection lies in cell (r, c) reads
     ``values[r, c]`` (albedo, Oren-Nayar roughness, ...).
     """
-    from simlunar.render import backend
 
     mi = backend.mitsuba()
     a = np.ascontiguousarray(np.asarray(values, np.float32)[..., None])

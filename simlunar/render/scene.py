@@ -18,6 +18,9 @@ import numpy as np
 
 from simlunar.geometry import Camera, OrthoCamera
 from simlunar.geometry.types import GroundTruth
+from simlunar.render import backend
+from simlunar.render.bsdfs import bsdf_dict
+from simlunar.render.cameras import sensor_dict
 from simlunar.render.lights import (
     PROJECTOR_ID,
     AmbientLight,
@@ -27,6 +30,8 @@ from simlunar.render.lights import (
     check_pattern,
     emitter_dicts,
 )
+from simlunar.render.materials import LambertBSDF
+from simlunar.render.mesh import albedo_texture, terrain_mesh
 
 #: Rec. 709 / sRGB luminance weights of linear RGB
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722], np.float32)
@@ -71,9 +76,6 @@ def _check_int(name: str, value, minimum: int) -> int:
 
 
 def _bsdf_dict(bsdf, albedo: np.ndarray) -> dict:
-    from simlunar.render.bsdfs import bsdf_dict
-    from simlunar.render.materials import LambertBSDF
-    from simlunar.render.mesh import albedo_texture
 
     sigma_map = getattr(bsdf, "sigma_map", None)
     if sigma_map is not None and sigma_map.shape != np.shape(albedo):
@@ -125,9 +127,6 @@ class TerrainScene:
         spp: int = 16,
         seed: int = 0,
     ) -> None:
-        from simlunar.render import backend
-        from simlunar.render.cameras import sensor_dict
-        from simlunar.render.mesh import terrain_mesh
 
         mi = backend.mitsuba()
         if not isinstance(camera, (Camera, OrthoCamera)):

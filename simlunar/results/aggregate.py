@@ -22,6 +22,7 @@ from simlunar.study.stats import (
     bootstrap_scores,
     samples_saved,
 )
+from simlunar.results.records import WorkUnit, unit_label
 
 SEED_AXIS = "terrain.seed_index"
 #: bootstrap replicates per point and metric
@@ -51,7 +52,6 @@ class Point:
 
 
 def _label(sweep: dict, config: dict) -> str:
-    from simlunar.pipeline.runner import WorkUnit, unit_label
 
     return unit_label(WorkUnit(0, "", sweep, config))
 

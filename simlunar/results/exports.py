@@ -27,7 +27,7 @@ picklable for any executor) and :func:`write_scan_export` (in the runner's proce
 
 from __future__ import annotations
 
-import inspect
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -35,6 +35,10 @@ from typing import Any
 import numpy as np
 
 from simlunar.atomic import atomic_write
+from simlunar.scanner.scans import GrayCodeOptions
+from simlunar.scanner.triangulate import Correspondences, triangulate_plane, triangulate_rays
+from simlunar.imaging.exr import write_exr
+from simlunar.errors import ConfigError
 
 __all__ = [
     "calibration_opencv",
@@ -215,43 +219,28 @@ def read_cloud_ply(path) -> np.ndarray:
     return np.frombuffer(blob, dtype=dtype, count=n, offset=end + len(b"end_header\n"))
 
 
-def _gray_defaults() -> dict[str, Any]:
-    from simlunar.scanner.modes import gray_code_scan
-
-    params = inspect.signature(gray_code_scan).parameters
-    return {
-        k: params[k].default
-        for k in ("black_threshold", "white_threshold", "method", "inverses", "subpixel")
-    }
-
-
-def scan_export_payload(gray, rig, *, gray_opts: dict | None = None) -> dict[str, Any]:
+def scan_export_payload(scan, rig, *, gray: GrayCodeOptions | None = None) -> dict[str, Any]:
     """Everything :func:`write_scan_export` writes, from a gray-code scan and its rig.
 
     Parameters
     ----------
-    gray : :class:`simlunar.scanner.modes.GrayScan`
+    scan : :class:`simlunar.scanner.scans.GrayScan`
         The scan (its captured frames, decode and cloud); scanned with ``keep_frames=True``
         (the streaming decoder keeps no frame stack otherwise).
     rig : Rig
         The rig that scanned.
-    gray_opts : dict, optional
-        The options the scan ran with (:func:`simlunar.scanner.modes.gray_code_scan`); their
-        thresholds and triangulation method are recorded, the defaults filling the rest.
+    gray : GrayCodeOptions, optional
+        The options the scan ran with (default: the defaults); their thresholds and
+        triangulation method are recorded.
 
     Returns
     -------
     dict of arrays and plain data (picklable; no file is written)
     """
-    from simlunar.scanner.triangulate import (
-        Correspondences,
-        triangulate_plane,
-        triangulate_rays,
-    )
 
-    opts = {**_gray_defaults(), **(gray_opts or {})}
-    dec = gray.decode
-    fr = gray.frames
+    opts = dataclasses.asdict(gray or GrayCodeOptions())
+    dec = scan.decode
+    fr = scan.frames
     if "images" not in fr:
         raise ValueError("the gray-code scan kept no frame stack: scan with keep_frames=True")
     frames = np.concatenate(
@@ -319,8 +308,6 @@ def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None =
     """
     from PIL import Image
 
-    from simlunar.imaging.exr import write_exr
-
     folder = Path(folder)
     names = payload["frame_names"]
     width = len(str(len(names) - 1))
@@ -367,6 +354,28 @@ def export_unit_key(folder) -> str | None:
     return key if isinstance(key, str) else None
 
 
+#: files of every scan export besides its frames (manifest.json is written last)
+EXPORT_FILES = ("decode.exr", "cloud.ply", "calibration.yml", "manifest.json")
+
+
+def export_complete(folder, unit_key: str) -> bool:
+    """Whether ``folder`` holds the whole export of the unit ``unit_key``: its manifest names
+    the unit and every file the manifest promises is there (a partly deleted export is
+    written again by the next run)."""
+    folder = Path(folder)
+    if export_unit_key(folder) != unit_key:
+        return False
+    try:
+        frames = json.loads((folder / "manifest.json").read_text()).get("frames")
+    except (OSError, ValueError, AttributeError):
+        return False
+    if not isinstance(frames, list) or not all(isinstance(f, str) for f in frames):
+        return False
+    wanted = [folder / name for name in EXPORT_FILES]
+    wanted += [folder / sub / f for sub in ("frames8", "frames16") for f in frames]
+    return all(p.is_file() for p in wanted)
+
+
 def check_save_scans(cfg) -> None:
     """Refuse ``simlunar run --save-scans`` for an experiment whose scan cannot be exported.
 
@@ -379,7 +388,6 @@ def check_save_scans(cfg) -> None:
     ConfigError
         The experiment's study is not a scanner study with a gray-code scan.
     """
-    from simlunar.errors import ConfigError
 
     study = cfg.study
     if getattr(study, "kind", None) != "scanner":

@@ -47,7 +47,7 @@ def load_results(out_dir: str | Path) -> dict:
                 else "run `simlunar run EXPERIMENT.yaml` first"
             )
             raise ResultFolderError(f"{out}: not a result folder (missing {name}); {hint}")
-    from simlunar.pipeline.runner import read_folder_config
+    from simlunar.results.folder import read_folder_config
 
     config = read_folder_config(out / "config.yaml")
     prov = _read_provenance(out / "provenance.json")
@@ -423,7 +423,7 @@ def _sweep_value(rec: dict, path: str):
 
 def write_figures_pruned(out_dir: str | Path, *, formats=None, force: bool = False) -> list[Path]:
     """:func:`write_figures`, then remove the figures of ``figures/`` it did not write."""
-    from simlunar.pipeline.runner import prune_figures
+    from simlunar.results.folder import prune_figures
 
     written = write_figures(out_dir, formats=formats, force=force)
     prune_figures(Path(out_dir), keep=written)

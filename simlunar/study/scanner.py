@@ -1,48 +1,55 @@
-"""Scanner study: capture through Mitsuba, decode, scan modes, evaluation against ground truth.
+"""The scanner study (paper section 5): the study protocol with the structured-light sensor.
 
-``RenderCapture`` renders projector patterns seen by the rig's triangulation camera in one
-:class:`~simlunar.render.scene.TerrainScene` (patterns swapped without reload), with path depth
-``max_depth`` (Mitsuba convention: 2 = direct light only, >= 3 adds interreflections), optional
-sun/ambient light, projector response (gamma) and blur, camera thin-lens defocus (from the
-rig's :class:`~simlunar.geometry.Camera`) and per-frame sensor noise
-(:func:`simlunar.imaging.sensor.apply_sensor`). ``run_scanner_study`` wires it to the scan
-modes of :mod:`simlunar.scanner.modes` and scores the depth in the guide view.
+A projector-camera rig (:class:`~simlunar.geometry.Rig`) scans a terrain through a
+:class:`~simlunar.render.capture.RenderCapture` in each scan mode of
+:class:`~simlunar.sensors.structured_light.StructuredLight` (a full gray-code scan; ambiguity
+enhancement and data reduction rescan the pixels a planner chose with dots); the protocol
+(:mod:`simlunar.study.protocol`) reconstructs every scan in the guide view and scores it
+against the guide view's ground truth.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from simlunar.features import check_image, feature_map
 from simlunar.geometry import Rig
+from simlunar.metrics import metric
+from simlunar.planner import plan, strategy_weights
 from simlunar.render.capture import (
-    EXPOSURE_PERCENTILE,
+    CaptureOptions,
     GuideView,
     RenderCapture,
     camera_truth,
     render_guide,
 )
 from simlunar.scanner import gray_code as gc
-from simlunar.scanner import modes as scan_modes
-from simlunar.scanner.triangulate import true_correspondences
+from simlunar.scanner.rigs import RIG_PRESETS, rig_preset
+from simlunar.scanner.scans import (
+    SCAN_PLANNERS,
+    DotOptions,
+    GrayCodeOptions,
+    GrayScan,
+    gray_code_scan,
+    low_contrast_pixels,
+)
+from simlunar.sensors.structured_light import MODES, StructuredLight, StructuredLightOptions
+from simlunar.study.protocol import Trials, run_protocol
 
 __all__ = [
-    "EXPOSURE_PERCENTILE",
-    "GuideView",
-    "RenderCapture",
+    "ScannerScene",
+    "ScannerStudyOptions",
     "ScannerStudyResult",
     "aim_rig_at_terrain",
     "bit_error_table",
-    "camera_truth",
     "depth_range_from_terrain",
     "interreflection_comparison",
-    "render_guide",
     "run_scanner_study",
-    "scanner_ambiguity_experiment",
     "score_depth",
     "summarize",
-    "true_correspondences",
 ]
 
 
@@ -96,8 +103,6 @@ def score_depth(
     image : (H, W) guide image (needed for ``sal``)
     mask : (H, W) bool, optional extra evaluation mask
     """
-    from simlunar.metrics import metric
-
     valid = np.isfinite(truth)
     if mask is not None:
         valid &= np.asarray(mask, bool)
@@ -112,37 +117,13 @@ def score_depth(
         if name == "sal":
             if image is None:
                 raise ValueError("metric 'sal' needs the guide image for its saliency weights")
-            from simlunar.features import feature_map
-
             weights = feature_map("saliency", image)
         out[name] = float(metric(name, depth, t, weights=weights, mask=valid))
     return out
 
 
-@dataclass(frozen=True, eq=False)
-class ScannerStudyResult:
-    """Tidy rows plus the scans behind them.
-
-    Attributes
-    ----------
-    rows : list of dict
-        Keys: mode, planner, budget, trial, metric, value, renders. Metrics: the requested
-        sampling-study metrics, ``valid_fraction`` (guide pixels measured directly, before
-        hole filling) and, for ``gray_code``, ``ber_c<i>`` / ``ber_r<i>`` (bit error rate of
-        column / row bit i, MSB first, over camera pixels lit by the projector).
-    guide : GuideView
-    gray : GrayScan or None
-    scans : dict (mode, planner, trial) -> ScanResult
-    """
-
-    rows: list
-    guide: GuideView
-    gray: scan_modes.GrayScan | None
-    scans: dict
-
-
 def bit_error_table(
-    gray: scan_modes.GrayScan, truth: dict, mask=None, *, edge_margin: int = 1
+    gray: GrayScan, truth: dict, mask=None, *, edge_margin: int = 1
 ) -> dict[str, float]:
     """Per-bit error rates of a gray-code decode against camera ground truth.
 
@@ -167,157 +148,257 @@ def bit_error_table(
     return dict(zip(names, (float(r) for r in rates)))
 
 
+@dataclass(frozen=True, eq=False)
+class ScannerScene:
+    """What a scanner study scans: the terrain, the rig and the light.
+
+    Attributes
+    ----------
+    terrain : Terrain
+    rig : Rig (e.g. :func:`aim_rig_at_terrain`)
+    bsdf : BSDF spec or None (Lambert)
+    camera_model : SensorModel or None
+        The triangulation camera's sensor (noise, quantisation); None: noise-free frames.
+    sun : SunLight or None
+        The sun of a sun-lit guide image (``guide_light="sun"``).
+    extra_lights : tuple of light specs
+        Lights on during the scan (a daylight scan: the sun and sky).
+    """
+
+    terrain: object
+    rig: Rig
+    bsdf: object = None
+    camera_model: object = None
+    sun: object = None
+    extra_lights: tuple = ()
+
+
+@dataclass(frozen=True)
+class ScannerStudyOptions:
+    """What a scanner study runs.
+
+    Attributes
+    ----------
+    modes : names from :data:`simlunar.sensors.structured_light.MODES`
+    planners : planner strategy names (:func:`simlunar.planner.plan`) for the dot modes, or
+        ``"low_contrast"`` (:func:`simlunar.scanner.scans.low_contrast_pixels`: the pixels the
+        gray-code scan saw least lit; ambiguity_enhancement only)
+    budget : fraction of guide pixels rescanned / sampled by dots (paper: 0.1)
+    trials : planner draws per (mode, planner); the gray-code scan is shared
+    metrics : sampling-study metric names
+    guide_light : "projector" (all-white frame, camera-centred) or "sun"
+    capture : CaptureOptions (path depth, samples, projector and lens optics)
+    gray, dots : GrayCodeOptions, DotOptions
+    planner_opts : mapping planner name -> planner options (:func:`simlunar.planner.plan`),
+        e.g. ``{"wavelet": {"feature_opts": {"levels": 1}}}``; planners not named get none
+    """
+
+    modes: tuple = ("gray_code", "ambiguity_enhancement")
+    planners: tuple = ("wavelet", "random")
+    budget: float = 0.1
+    trials: int = 1
+    metrics: tuple = ("mse", "grad", "sal")
+    guide_light: str = "projector"
+    capture: CaptureOptions = field(default_factory=CaptureOptions)
+    gray: GrayCodeOptions = field(default_factory=GrayCodeOptions)
+    dots: DotOptions = field(default_factory=DotOptions)
+    planner_opts: Mapping = field(default_factory=dict)
+
+    def __post_init__(self):
+        unknown = [m for m in self.modes if m not in MODES]
+        if unknown:
+            raise ValueError(f"unknown scan mode(s) {unknown}; valid: {sorted(MODES)}")
+        stray = sorted(set(self.planner_opts) - set(self.planners))
+        if stray or not all(isinstance(v, Mapping) for v in self.planner_opts.values()):
+            raise ValueError(
+                f"planner_opts must map planner names {list(self.planners)} to option dicts, "
+                f"got keys {sorted(self.planner_opts)}"
+            )
+        if int(self.trials) < 1:
+            raise ValueError(f"trials must be >= 1, got {self.trials}")
+        if not 0 < self.budget <= 1:
+            raise ValueError(f"budget must be a fraction in (0, 1], got {self.budget}")
+
+
+@dataclass(frozen=True, eq=False)
+class ScannerStudyResult:
+    """Tidy rows plus the scans behind them.
+
+    Attributes
+    ----------
+    rows : list of dict
+        Keys: mode, planner, budget, trial, metric, value, renders. Metrics: the requested
+        sampling-study metrics, ``valid_fraction`` (guide pixels measured directly, before
+        hole filling) and, for ``gray_code``, ``ber_c<i>`` / ``ber_r<i>`` (bit error rate of
+        column / row bit i, MSB first, over camera pixels lit by the projector).
+    guide : GuideView
+    gray : GrayScan or None
+    scans : dict (mode, planner, trial) -> ScanResult
+    """
+
+    rows: list
+    guide: GuideView
+    gray: GrayScan | None
+    scans: dict
+
+
 def run_scanner_study(
-    terrain,
-    rig: Rig,
+    scene: ScannerScene,
+    options: ScannerStudyOptions | None = None,
     *,
-    modes=("gray_code", "ambiguity_enhancement"),
-    planners=("wavelet", "random"),
-    budget: float = 0.1,
-    trials: int = 1,
-    metrics=("mse", "grad", "sal"),
     rng=None,
-    max_depth: int = 3,
-    spp: int = 16,
-    seed: int = 0,
-    sensor=None,
-    bsdf=None,
-    guide_light: str = "projector",
-    sun=None,
-    extra_lights=(),
-    projector_gamma: float = 1.0,
-    projector_blur: float = 0.0,
-    camera_blur: float = 0.0,
-    gray_opts: dict | None = None,
-    dot_opts: dict | None = None,
-    planner_opts: dict | None = None,
-    capture_opts: dict | None = None,
     progress=None,
 ) -> ScannerStudyResult:
     """Scan a terrain with a rig in several modes and score the guide-view depth.
 
     Parameters
     ----------
-    terrain : Terrain
-    rig : Rig (e.g. :func:`simlunar.scanner.rigs.moonyard_rig` aimed at the terrain)
-    modes : names from :data:`simlunar.scanner.modes.MODES`
-    planners : planner strategy names (:func:`simlunar.planner.plan`) for the dot modes, or
-        ``"low_contrast"`` (:func:`simlunar.scanner.modes.low_contrast_pixels`: the pixels
-        the gray-code scan saw least lit; ambiguity_enhancement only)
-    budget : fraction of guide pixels rescanned / sampled by dots (paper: 0.1)
-    trials : planner draws per (mode, planner); the gray-code scan is shared
-    metrics : sampling-study metric names
+    scene : ScannerScene
+    options : ScannerStudyOptions, optional
     rng : seed for the sensor noise and the planners (split with ``SeedSequence.spawn``)
-    max_depth, spp, seed : rendering (Mitsuba path depth convention; sampler seed)
-    sensor : SensorModel or None
-    bsdf : BSDF spec or None
-    guide_light : "projector" (all-white frame, camera-centred) or "sun" (then ``sun``)
-    extra_lights : lights on during the scan (sun, ambient)
-    projector_gamma, projector_blur : projector response and defocus (sigma, projector px)
-    camera_blur : camera lens point-spread function (Gaussian sigma, camera px)
-    gray_opts, dot_opts : options for the gray-code scan and the dot scans
-    planner_opts : dict, optional
-        Planner options (:func:`simlunar.planner.plan`) by planner name, e.g.
-        ``{"wavelet": {"feature_opts": {"levels": 1}}}``; planners not named get none (the
-        ``random`` planner takes no options).
-    capture_opts : dict, optional
-        Further :class:`RenderCapture` options, e.g. ``{"sparse_integrator": "ptracer",
-        "sparse_spp": 1}`` (light tracing for dot frames).
     progress : callable(str) or None
 
     Returns
     -------
     ScannerStudyResult
     """
-    unknown = [m for m in modes if m not in scan_modes.MODES]
-    if unknown:
-        raise ValueError(f"unknown scan mode(s) {unknown}; valid: {sorted(scan_modes.MODES)}")
-    planner_opts = dict(planner_opts or {})
-    stray = sorted(set(planner_opts) - set(planners))
-    if stray or not all(isinstance(v, dict) for v in planner_opts.values()):
-        raise ValueError(
-            f"planner_opts must map planner names {list(planners)} to option dicts, got keys "
-            f"{sorted(planner_opts)}"
-        )
-    if int(trials) < 1:
-        raise ValueError(f"trials must be >= 1, got {trials}")
+    o = options or ScannerStudyOptions()
     say = progress or (lambda _msg: None)
     noise_rng, plan_rng = np.random.default_rng(rng).spawn(2)
+    c = o.capture
     capture = RenderCapture(
-        terrain,
-        rig,
-        bsdf=bsdf,
-        max_depth=max_depth,
-        spp=spp,
-        seed=seed,
-        sensor=sensor,
+        scene.terrain,
+        scene.rig,
+        c,
+        bsdf=scene.bsdf,
+        sensor=scene.camera_model,
         rng=noise_rng,
-        extra_lights=extra_lights,
-        projector_gamma=projector_gamma,
-        projector_blur=projector_blur,
-        camera_blur=camera_blur,
-        **(capture_opts or {}),
+        extra_lights=scene.extra_lights,
     )
     guide = render_guide(
-        terrain, rig, light=guide_light, sun=sun, bsdf=bsdf, max_depth=max_depth, spp=spp, seed=seed
+        scene.terrain,
+        scene.rig,
+        light=o.guide_light,
+        sun=scene.sun,
+        bsdf=scene.bsdf,
+        max_depth=c.max_depth,
+        spp=c.spp,
+        seed=c.seed,
     )
-    truth_depth = np.where(guide.valid, guide.depth, np.nan)
-    depth_range = depth_range_from_terrain(terrain, rig)
+    depth_range = depth_range_from_terrain(scene.terrain, scene.rig)
+    gray = None
+    if "gray_code" in o.modes or "ambiguity_enhancement" in o.modes:
+        say("gray-code scan")
+        gray = gray_code_scan(capture, scene.rig, o.gray)
+    evaluate = _ScanScores(guide, o.metrics, capture, gray)
+    seeds = _plan_seeds(o, plan_rng)
     rows: list[dict] = []
     scans: dict = {}
-
-    def record(mode, planner, trial, res, extra=None):
-        vals = score_depth(res.depth, truth_depth, metrics=metrics, image=guide.image)
-        measured = np.isfinite(res.measured) & guide.valid
-        vals["valid_fraction"] = float(measured.sum() / max(guide.valid.sum(), 1))
-        vals.update(extra or {})
-        for name, v in vals.items():
-            rows.append(
-                {
-                    "mode": mode,
-                    "planner": planner,
-                    "budget": budget if planner else 0.0,
-                    "trial": trial,
-                    "metric": name,
-                    "value": v,
-                    "renders": res.renders,
-                }
-            )
-        scans[(mode, planner, trial)] = res
-
-    gray = None
-    if "gray_code" in modes or "ambiguity_enhancement" in modes:
-        say("gray-code scan")
-        gray = scan_modes.gray_code_scan(capture, rig, **(gray_opts or {}))
-        if "gray_code" in modes:
-            res = scan_modes.ScanResult(
-                "gray_code", scan_modes.fill_holes(gray.depth), gray.depth, gray.renders, gray=gray
-            )
-            extra = bit_error_table(gray, camera_truth(capture, guide))
-            if capture.ambient is not None:  # a daylight scan: how bright the sun was
-                extra["ambient_ratio"] = capture.ambient_ratio
-            record("gray_code", "", 0, res, extra)
-    plan_rngs = iter(plan_rng.spawn(len(planners) * int(trials) * len(modes)))
-    for mode in modes:
-        if mode == "gray_code":
-            continue
-        for planner in planners:
-            for trial in range(int(trials)):
-                say(f"{mode} / {planner} / trial {trial}")
-                kw = {
-                    "guide_image": guide.image,
-                    "planner": planner,
-                    "rng": next(plan_rngs),
-                    "depth_range": depth_range,
-                    "budget": budget,
-                    "dot_opts": dot_opts,
-                    "planner_opts": planner_opts.get(planner),
-                }
-                if mode == "ambiguity_enhancement":
-                    kw["gray"] = gray
-                res = scan_modes.scan(mode, capture, rig, **kw)
-                record(mode, planner, trial, res)
+    for mode in sorted(o.modes, key=lambda m: m != "gray_code"):  # the gray code first
+        sensor = StructuredLight(
+            capture,
+            scene.rig,
+            depth_range=depth_range,
+            options=StructuredLightOptions(mode, o.gray, o.dots),
+            gray=gray,
+        )
+        trials = _mode_trials(o, mode, sensor, guide, seeds)
+        for outcomes in run_protocol(sensor, trials, evaluate):
+            for oc in outcomes:
+                planner = "" if mode == "gray_code" else oc.label
+                say(f"{mode} / {planner} / trial {oc.trial}" if planner else "")
+                rows += _rows(mode, planner, oc, o.budget)
+                scans[(mode, planner, oc.trial)] = oc.acquisition.detail
     return ScannerStudyResult(rows=rows, guide=guide, gray=gray, scans=scans)
+
+
+def _plan_seeds(o: ScannerStudyOptions, plan_rng) -> dict:
+    """(mode, planner, trial) -> planner rng, in the order the study has always drawn them."""
+    it = iter(plan_rng.spawn(len(o.planners) * int(o.trials) * len(o.modes)))
+    return {
+        (mode, planner, t): next(it)
+        for mode in o.modes
+        if mode != "gray_code"
+        for planner in o.planners
+        for t in range(int(o.trials))
+    }
+
+
+def _mode_trials(o, mode: str, sensor: StructuredLight, guide: GuideView, seeds) -> Trials:
+    """The protocol's trials of one scan mode: no plan for the gray code."""
+    if mode == "gray_code":
+        return Trials({"": None}, [0], 1, lambda *_: (None, None))
+    H, W = sensor.proj_shape
+    k = max(1, round(o.budget * H * W))
+    planners = {p: _scan_planner(p, o, mode, guide, sensor) for p in o.planners}
+    return Trials(planners, [k], int(o.trials), lambda p, t, _b: (seeds[(mode, p, t)], None))
+
+
+def _scan_planner(name: str, o, mode: str, guide: GuideView, sensor: StructuredLight):
+    """The planner of the guide pixels to rescan: from the guide image, or from the gray-code
+    scan for a :data:`~simlunar.scanner.scans.SCAN_PLANNERS` planner."""
+    opts = dict(o.planner_opts.get(name, {}))
+    if name in SCAN_PLANNERS:
+        if mode != "ambiguity_enhancement":
+            raise ValueError(
+                f"planner {name!r} ranks the pixels of a gray-code scan: use it with the "
+                "ambiguity_enhancement mode"
+            )
+        if opts:
+            raise ValueError(f"planner {name!r} takes no options, got {sorted(opts)}")
+        return lambda k, rng: low_contrast_pixels(sensor.gray_scan(), k, rng=rng)
+    image = check_image(np.asarray(guide.image, float))
+    weights = strategy_weights(
+        name,
+        image,
+        feature_opts=opts.pop("feature_opts", None),
+        coefficients=opts.get("coefficients"),
+    )
+    opts.pop("coefficients", None)
+
+    def planner(k, rng):
+        p = plan(name, int(k), weights=weights, shape=image.shape, rng=rng, **opts)
+        return np.stack([np.asarray(p.rows), np.asarray(p.cols)], axis=-1).astype(np.int64)
+
+    return planner
+
+
+class _ScanScores:
+    """Scores of a reconstructed scan in the guide view, its valid fraction and, for the
+    gray code, its bit error rates (and the sun-to-projector ratio of a daylight scan)."""
+
+    def __init__(self, guide: GuideView, metrics, capture: RenderCapture, gray):
+        self.guide = guide
+        self.truth = np.where(guide.valid, guide.depth, np.nan)
+        self.metrics = tuple(metrics)
+        self.capture = capture
+        self.gray = gray
+
+    def __call__(self, recon: np.ndarray, acquisition) -> dict:
+        g = self.guide
+        vals = score_depth(recon, self.truth, metrics=self.metrics, image=g.image)
+        measured = np.isfinite(acquisition.detail.measured) & g.valid
+        vals["valid_fraction"] = float(measured.sum() / max(g.valid.sum(), 1))
+        if acquisition.detail.mode == "gray_code":
+            vals.update(bit_error_table(self.gray, camera_truth(self.capture, g)))
+            if self.capture.ambient is not None:  # a daylight scan: how bright the sun was
+                vals["ambient_ratio"] = self.capture.ambient_ratio
+        return vals
+
+
+def _rows(mode: str, planner: str, oc, budget: float) -> list[dict]:
+    return [
+        {
+            "mode": mode,
+            "planner": planner,
+            "budget": budget if planner else 0.0,
+            "trial": oc.trial,
+            "metric": name,
+            "value": v,
+            "renders": oc.acquisition.frames,
+        }
+        for name, v in oc.scores.items()
+    ]
 
 
 def interreflection_comparison(
@@ -329,7 +410,7 @@ def interreflection_comparison(
     spp: int = 16,
     seed: int = 0,
     bsdf=None,
-    gray_opts: dict | None = None,
+    gray: GrayCodeOptions | None = None,
 ) -> dict:
     """Gray-code bit error rates with and without interreflections.
 
@@ -346,8 +427,10 @@ def interreflection_comparison(
     guide = render_guide(terrain, rig, spp=spp, seed=seed, bsdf=bsdf, max_depth=2)
     out = {}
     for depth in depths:
-        cap = RenderCapture(terrain, rig, bsdf=bsdf, max_depth=depth, spp=spp, seed=seed)
-        g = scan_modes.gray_code_scan(cap, rig, **(gray_opts or {}))
+        cap = RenderCapture(
+            terrain, rig, CaptureOptions(max_depth=depth, spp=spp, seed=seed), bsdf=bsdf
+        )
+        g = gray_code_scan(cap, rig, gray)
         truth = camera_truth(cap, guide)
         mask = None
         if mask_fn is not None:
@@ -370,8 +453,6 @@ def aim_rig_at_terrain(
     The projector's horizontal footprint is ``fill`` times the smaller side of the terrain (so
     every guide pixel sees terrain). Extra keywords go to the preset (elevation, baseline, ...).
     """
-    from simlunar.scanner.rigs import RIG_PRESETS, rig_preset
-
     if preset not in RIG_PRESETS:
         raise ValueError(f"unknown rig preset {preset!r}; valid: {sorted(RIG_PRESETS)}")
     xmin, xmax, ymin, ymax = terrain.extent
@@ -388,79 +469,6 @@ def aim_rig_at_terrain(
     return rig_preset(
         preset, target=target, proj_size=tuple(proj_size), cam_size=tuple(cam_size), fov_x=fov, **kw
     )
-
-
-def scanner_ambiguity_experiment(
-    *,
-    terrain: str = "moonyard",
-    terrain_scale: float = 0.35,
-    seed: int = 0,
-    rig_preset: str = "moonyard",
-    proj_size=(128, 96),
-    cam_size=(256, 192),
-    budget: float = 0.1,
-    planners=("wavelet", "random"),
-    trials: int = 3,
-    spp: int = 32,
-    max_depth: int = 3,
-    sensor: bool = True,
-    projector_blur: float = 0.0,
-    camera_blur: float = 1.0,
-    subpixel: bool = True,
-    cam_fov_x_deg: float | None = 60.0,
-    wavelet_levels: int | None = 1,
-    metrics=("mse", "grad", "sal"),
-    progress=None,
-) -> list[dict]:
-    """The paper's ambiguity-enhancement experiment (section 5) with plain arguments.
-
-    Generates the terrain preset (``terrain_scale`` shrinks the grid), aims the rig preset at
-    it, scans with full gray code and then rescans ``budget`` of the guide pixels with dots
-    chosen by each planner, and returns tidy rows (see :func:`run_scanner_study`). With
-    ``sensor`` a 12-bit sensor with shot and read noise captures every frame.
-
-    The defaults are the conditions of ``experiments/scanner_ambiguity.yaml``: a camera lens
-    PSF of ``camera_blur`` px (sigma), sub-pixel stripe-edge refinement (``subpixel``), a
-    triangulation camera field of view of ``cam_fov_x_deg`` (None: the projector's) so it sees
-    the whole projection, and the wavelet planner's map restricted to the finest
-    ``wavelet_levels`` levels (None: all levels).
-    """
-    from simlunar.terrain import generate
-
-    t_rng, s_rng = np.random.default_rng(seed).spawn(2)
-    terr = generate(terrain, rng=t_rng, scale=terrain_scale).terrain
-    rig_kw = {} if cam_fov_x_deg is None else {"cam_fov_x": np.radians(cam_fov_x_deg)}
-    rig = aim_rig_at_terrain(
-        terr, preset=rig_preset, proj_size=proj_size, cam_size=cam_size, **rig_kw
-    )
-    planner_opts = {}
-    if wavelet_levels is not None and "wavelet" in planners:
-        planner_opts["wavelet"] = {"feature_opts": {"levels": int(wavelet_levels)}}
-    sens = None
-    if sensor:
-        from simlunar.imaging.sensor import SensorModel
-
-        sens = SensorModel(full_well_e=20000.0, read_noise_e=5.0, bits=12)
-    res = run_scanner_study(
-        terr,
-        rig,
-        modes=("gray_code", "ambiguity_enhancement"),
-        planners=planners,
-        budget=budget,
-        trials=trials,
-        metrics=metrics,
-        rng=s_rng,
-        max_depth=max_depth,
-        spp=spp,
-        seed=seed,
-        sensor=sens,
-        projector_blur=projector_blur,
-        camera_blur=camera_blur,
-        gray_opts={"subpixel": bool(subpixel)},
-        planner_opts=planner_opts,
-        progress=progress,
-    )
-    return res.rows
 
 
 def summarize(rows: list[dict], metric: str = "mse") -> dict[str, float]:

@@ -12,6 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from simlunar.planner import plan
+from simlunar.reconstruction import reconstruct
+
 
 def _heights(heights) -> np.ndarray:
     h = np.asarray(heights, dtype=np.float64)
@@ -110,8 +113,6 @@ def random_grid_mse_ratio(field, density: float, *, trials: int = 4, rng) -> flo
     Both use simlunar's planners (``random``, ``grid``) and Delaunay-linear reconstruction;
     errors are averaged over ``trials`` independent plans before the ratio.
     """
-    from simlunar.planner import plan
-    from simlunar.reconstruction import reconstruct
 
     f = _heights(field)
     rng = np.random.default_rng(rng)

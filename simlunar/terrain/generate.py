@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.terrain import sfd
+import simlunar.terrain.sfd as sfd
 from simlunar.terrain.craters import Crater, extent_radii, place_craters, stamp_craters
 from simlunar.terrain.fractal import fbm, undulating_bed
 from simlunar.terrain.params import AlbedoParams, TerrainParams

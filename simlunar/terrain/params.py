@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from simlunar.terrain import sfd
+import simlunar.terrain.sfd as sfd
 
 
 class ParamError(ValueError):

@@ -150,19 +150,16 @@ def test_option_defaults_are_the_library_defaults():
     from simlunar.features import maps
     from simlunar.imaging.sensor import SensorModel
     from simlunar.planner import strategies
-    from simlunar.scanner import modes, rigs
+    from simlunar.render.capture import CaptureOptions
+    from simlunar.scanner import rigs
+    from simlunar.scanner.scans import DotOptions, GrayCodeOptions
     from simlunar.study.scanner import aim_rig_at_terrain
 
-    gray = _defaults(modes.gray_code_scan)
-    assert gray.pop("keep_frames") is False  # set by the pipeline for study.save_scans only
-    assert translate.gray_kwargs(studies.GrayOptsCfg()) == gray
-    from simlunar.render.capture import RenderCapture
-
-    capture = {k: v for k, v in _defaults(RenderCapture).items() if k.startswith("sparse_")}
-    assert studies.CaptureOptsCfg().model_dump() == capture
-    dots = _defaults(modes.dot_scan)
-    dots.pop("depth_range", None)
-    assert translate.dot_kwargs(studies.DotOptsCfg()) == dots
+    # the config's defaults are the library's options dataclasses' defaults
+    assert translate.gray_options(studies.GrayOptsCfg()) == GrayCodeOptions()
+    assert translate.dot_options(studies.DotOptsCfg()) == DotOptions()
+    sparse = {k: v for k, v in vars(CaptureOptions()).items() if k.startswith("sparse_")}
+    assert studies.CaptureOptsCfg().model_dump() == sparse
     weighted = _defaults(strategies._weighted)
     kw = translate.planner_kwargs("wavelet", studies.PlannerOptsCfg())
     assert {k: kw[k] for k in weighted} == weighted
@@ -272,12 +269,12 @@ def test_translation_converts_units_and_routes_feature_options():
     assert rig["elevation"] == pytest.approx(1.0)
     assert rig["baseline"] == pytest.approx(0.3)
     assert "distance" not in rig and "fov_x" not in rig  # unset: the preset / fit decides
-    opts = translate.scanner_options(cfg.study).kwargs()
-    assert opts["dot_opts"]["radius"] == 1.5
-    assert opts["planner_opts"] == {
+    opts = translate.scanner_options(cfg.study, cfg.render)
+    assert opts.dots.radius == 1.5
+    assert opts.planner_opts == {
         "wavelet": translate.planner_kwargs("wavelet", cfg.study.options.planner_opts["wavelet"])
     }
-    assert opts["planner_opts"]["wavelet"]["feature_opts"]["levels"] == 1
+    assert opts.planner_opts["wavelet"]["feature_opts"]["levels"] == 1
     combo = studies.PlannerOptsCfg(
         coefficients={"wavelet": 1.0, "entropy": 0.5}, feature_opts={"levels": 2, "size": 5}
     )
@@ -459,7 +456,7 @@ figures: {{enabled: false}}
 
 
 def test_albedo_file_of_another_shape_is_one_line(tmp_path):
-    from simlunar.pipeline.unit import build_terrain
+    from simlunar.config.translate import build_terrain
 
     _dem_files(tmp_path, albedo_shape=(32, 40))
     cfg = validate_data(
@@ -485,9 +482,9 @@ def test_albedo_file_of_another_shape_is_one_line(tmp_path):
 )
 def test_the_preflight_rejects_what_the_unit_would_reject(tmp_path, albedo):
     """One albedo reader: a file the unit refuses is refused before anything is written."""
+    from simlunar.config.translate import build_terrain
     from simlunar.errors import ConfigError
-    from simlunar.pipeline.preflight import terrain_facts
-    from simlunar.pipeline.unit import build_terrain
+    from simlunar.pipeline.inputs import terrain_facts
 
     _dem_files(tmp_path)
     np.save(tmp_path / "alb.npy", albedo)

@@ -11,9 +11,9 @@ from typer.testing import CliRunner
 
 from simlunar.cli import app
 from simlunar.config.loading import check_key_path, load_experiment, validate_data
+from simlunar.config.translate import build_terrain
 from simlunar.errors import ConfigError
 from simlunar.pipeline.runner import expand, unit_key
-from simlunar.pipeline.unit import build_terrain
 
 BASE = {
     "name": "ovr",

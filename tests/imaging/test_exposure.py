@@ -38,7 +38,7 @@ def test_sampling_sensor_fills_80_percent_of_the_well():
 def test_scanner_capture_uses_the_rule_on_its_white_frame():
     """RenderCapture exposes the sensor by the same rule, on its white calibration frame."""
     from simlunar.imaging.sensor import SensorModel
-    from simlunar.render.capture import RenderCapture
+    from simlunar.render.capture import CaptureOptions, RenderCapture
     from simlunar.scanner import rigs
     from simlunar.terrain.types import Terrain
 
@@ -49,7 +49,7 @@ def test_scanner_capture_uses_the_rule_on_its_white_frame():
     terr = Terrain(heights, albedo.astype(np.float32), 2.0 / n, (-1.0, 1.0))
     rig = rigs.moonyard_rig(proj_size=(32, 24), cam_size=(40, 30))
     sensor = SensorModel(exposure=1.0, full_well_e=5000.0, read_noise_e=0.0, bits=12)
-    cap = RenderCapture(terr, rig, max_depth=2, spp=2, seed=1, sensor=sensor)
+    cap = RenderCapture(terr, rig, CaptureOptions(max_depth=2, spp=2, seed=1), sensor=sensor)
     white = cap._lens(cap.scene.render_patterns(np.ones((1, 24, 32), np.float32)))[0]
     assert cap.gain == pytest.approx(auto_gain(white), rel=1e-6)
     assert cap.sensor.exposure == pytest.approx(auto_exposure_e(white, 5000.0), rel=1e-6)

@@ -165,7 +165,7 @@ def _one_error_line(r, expect: str) -> None:
         (("render", "{d}/nope.yaml", "--out", "{d}/r"), "scene file not found"),
         (("render", "{d}/scene.yaml", "--out", "{d}/file"), "is a file, not a folder"),
         (("render", "{d}/bad_dem_scene.yaml", "--out", "{d}/r"), "every height is NaN"),
-        (("render", "{d}/away_scene.yaml", "--out", "{d}/r"), "camera: the camera at"),
+        (("render", "{d}/away_scene.yaml", "--out", "{d}/r"), "render.camera: the camera at"),
         (("figures", "{d}/file"), "is a file, not a folder"),
         (("figures", "{d}/nothing"), "no such folder"),
     ],

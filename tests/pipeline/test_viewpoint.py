@@ -9,8 +9,9 @@ import pytest
 
 from simlunar.config.loading import load_experiment, validate_data
 from simlunar.errors import ConfigError
-from simlunar.pipeline.runner import expand, unit_label
+from simlunar.pipeline.runner import expand
 from simlunar.pipeline.unit import scene_inputs
+from simlunar.results.records import unit_label
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -7,9 +7,17 @@ import pytest
 
 from simlunar.metrics import depth_gradient_weights, metric
 from simlunar.planner import plan, strategy_weights
+from simlunar.plotting.tables import score_tables
 from simlunar.reconstruction import reconstruct
 from simlunar.study import sampling
-from simlunar.study.sampling import paper_densities, run_sampling_study
+from simlunar.study.sampling import SamplingStudyOptions, paper_densities
+
+
+def run_sampling_study(depth, image, *, rng, workers=1, progress=None, **options):
+    """The study with its options as keywords (SamplingStudyOptions fields)."""
+    return sampling.run_sampling_study(
+        depth, image, SamplingStudyOptions(**options), rng=rng, workers=workers, progress=progress
+    )
 
 
 def lunar_dem(shape, rng, *, bed_std=0.05, n_craters=100, n_rocks=100):
@@ -160,12 +168,13 @@ def test_range_noise_and_full_density(scene):
 def test_tables_layout(scene):
     depth, image = scene
     res = run_sampling_study(depth, image, densities=DENS, trials=1, rng=0)
-    md = res.score_table_markdown().splitlines()
+    # one score table, formatted by plotting.tables (the study returns numbers only)
+    md, tex = score_tables([("", res.scores)], strategies=res.strategies, metrics=res.metrics)
+    md = [line for line in md.splitlines() if line.startswith("|")]
     assert md[0] == "| Metric | Grid | Random | Gradient | Entropy | Wavelet |"
     assert [line.split("|")[1].strip() for line in md[2:]] == ["MSE", "GRAD", "SAL"]
-    assert md[2].split("|")[3].strip() == "1.00"
-    tex = res.score_table_latex()
-    assert tex.startswith("\\begin{tabular}{lrrrrr}") and "GRAD & " in tex
+    assert md[2].split("|")[3].strip().strip("*") == "1.00"
+    assert "\\begin{tabular}{lrrrrr}" in tex and "GRAD & " in tex
 
 
 def test_samples_for_equal_error_summary(scene):
@@ -286,6 +295,7 @@ def test_tables_use_registry_labels_for_variants(scene):
             "my_variant": {"strategy": "wavelet"},
         },
     )  # fmt: skip
-    md = res.score_table_markdown().splitlines()
+    md, tex = score_tables([("", res.scores)], strategies=res.strategies, metrics=res.metrics)
+    md = [line for line in md.splitlines() if line.startswith("|")]
     assert md[0] == "| Metric | Random | Wavelet, blue noise | My variant |"
-    assert "_" not in res.score_table_latex().split("\\midrule")[0].replace("\\_", "")
+    assert "_" not in tex.split("\\midrule")[0].replace("\\_", "")

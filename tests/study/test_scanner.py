@@ -7,7 +7,17 @@ import pytest
 from scipy import ndimage
 
 from simlunar.geometry import Camera, Intrinsics, Pose, Projector, Rig
-from simlunar.scanner import modes, rigs
+from simlunar.render.capture import (
+    EXPOSURE_PERCENTILE,
+    CaptureOptions,
+    RenderCapture,
+    camera_truth,
+    render_guide,
+)
+from simlunar.scanner import rigs
+from simlunar.scanner import scans as modes
+from simlunar.scanner.scans import GrayCodeOptions
+from simlunar.scanner.triangulate import true_correspondences
 from simlunar.study import scanner as st
 from simlunar.terrain.types import Terrain
 
@@ -31,9 +41,23 @@ def rig():
     return rigs.moonyard_rig(proj_size=(64, 48), cam_size=(80, 60))
 
 
+def capture(terr, rig, *, bsdf=None, sensor=None, rng=None, extra_lights=(), **options):
+    """A RenderCapture with its CaptureOptions as keywords."""
+    opts = CaptureOptions(**options)
+    return RenderCapture(
+        terr, rig, opts, bsdf=bsdf, sensor=sensor, rng=rng, extra_lights=extra_lights
+    )
+
+
+def run_study(terr, rig, *, rng=None, spp=16, max_depth=3, **options):
+    """The scanner study with its options as keywords."""
+    opts = st.ScannerStudyOptions(capture=CaptureOptions(spp=spp, max_depth=max_depth), **options)
+    return st.run_scanner_study(st.ScannerScene(terr, rig), opts, rng=rng)
+
+
 def scan(terr, rig, max_depth=3):
-    cap = st.RenderCapture(terr, rig, max_depth=max_depth, spp=4, seed=1)
-    guide = st.render_guide(terr, rig, spp=4)
+    cap = capture(terr, rig, max_depth=max_depth, spp=4, seed=1)
+    guide = render_guide(terr, rig, spp=4)
     return cap, guide, modes.gray_code_scan(cap, rig)
 
 
@@ -59,9 +83,9 @@ def test_subpixel_refinement_cuts_the_column_quantisation_on_a_tilted_plane():
     # a camera 2.5x finer than the projector resolves every stripe edge
     rig = rigs.moonyard_rig(proj_size=(64, 48), cam_size=(160, 120))
     xx, _ = grid()
-    cap = st.RenderCapture(terrain(0.3 * xx), rig, max_depth=2, spp=4, seed=1)
+    cap = capture(terrain(0.3 * xx), rig, max_depth=2, spp=4, seed=1)
     whole = modes.gray_code_scan(cap, rig)
-    sub = modes.gray_code_scan(cap, rig, subpixel=True)
+    sub = modes.gray_code_scan(cap, rig, GrayCodeOptions(subpixel=True))
     # same frames, same validity: the refinement only moves points inside their projector pixel
     np.testing.assert_array_equal(sub.decode.valid, whole.decode.valid)
     pos = np.asarray(cap.scene.ground_truth().position)
@@ -81,8 +105,8 @@ def test_subpixel_refinement_cuts_the_column_quantisation_on_a_tilted_plane():
 
 def test_camera_blur_is_the_lens_psf_on_every_frame(rig):
     flat = terrain(np.zeros((N, N)))
-    sharp = st.RenderCapture(flat, rig, max_depth=2, spp=2, seed=4)
-    soft = st.RenderCapture(flat, rig, max_depth=2, spp=2, seed=4, camera_blur=1.5)
+    sharp = capture(flat, rig, max_depth=2, spp=2, seed=4)
+    soft = capture(flat, rig, max_depth=2, spp=2, seed=4, camera_blur=1.5)
     pats = np.zeros((2, 48, 64), np.float32)
     pats[0, :, ::8] = 1.0
     pats[1, ::6] = 1.0
@@ -94,7 +118,7 @@ def test_camera_blur_is_the_lens_psf_on_every_frame(rig):
     )
     assert soft.renders == 2
     with pytest.raises(ValueError, match="camera_blur must be >= 0"):
-        st.RenderCapture(flat, rig, max_depth=2, spp=1, camera_blur=-1.0)
+        capture(flat, rig, max_depth=2, spp=1, camera_blur=-1.0)
 
 
 def test_projector_shadow_is_masked_not_wrong():
@@ -106,8 +130,8 @@ def test_projector_shadow_is_masked_not_wrong():
     xx, yy = grid()
     h = np.where((np.abs(xx) < 0.06) & (np.abs(yy) < 0.06), 0.4, 0.0)
     cap, guide, g = scan(terrain(h), rig)
-    truth = st.camera_truth(cap, guide)
-    frustum = st.true_correspondences(cap.scene.ground_truth().position, rig.projector)[0] >= 0
+    truth = camera_truth(cap, guide)
+    frustum = true_correspondences(cap.scene.ground_truth().position, rig.projector)[0] >= 0
     shadow = truth["valid"] & frustum & ~truth["lit"]
     core = ndimage.binary_erosion(shadow, iterations=1)
     assert shadow.sum() >= 20 and core.sum() >= 5  # a real shadow in the camera's view
@@ -156,7 +180,7 @@ def test_interreflections_corrupt_coarse_bits_in_a_crater():
 
 def test_capture_rejects_bad_input(rig):
     flat = terrain(np.zeros((N, N)))
-    cap = st.RenderCapture(flat, rig, max_depth=2, spp=1)
+    cap = capture(flat, rig, max_depth=2, spp=1)
     with pytest.raises(ValueError, match=r"patterns must have shape \(n, 48, 64\)"):
         cap.render(np.ones((1, 48, 63)))
     away = Camera(
@@ -164,13 +188,13 @@ def test_capture_rejects_bad_input(rig):
         Pose.look_at(rig.camera.position, rig.camera.position + np.array([0, 0, 1.0])),
     )
     with pytest.raises(ValueError, match="does not see the projected area"):
-        st.RenderCapture(flat, Rig(rig.projector, away), max_depth=2, spp=1)
+        capture(flat, Rig(rig.projector, away), max_depth=2, spp=1)
 
 
 def test_run_scanner_study_rows_and_modes(rig):
     xx, yy = grid()
     h = 0.05 * np.exp(-((xx - 0.1) ** 2 + yy**2) / 0.02)  # a 5 cm mound
-    res = st.run_scanner_study(
+    res = run_study(
         terrain(h),
         rig,
         modes=("gray_code", "ambiguity_enhancement", "data_reduction"),
@@ -202,22 +226,19 @@ def test_run_scanner_study_rows_and_modes(rig):
     np.testing.assert_array_equal(ae.measured[hit], ae.dots.depth[hit])
     assert ae.renders == ae.dots.renders  # the gray-code scan is shared, not counted again
     with pytest.raises(ValueError, match="unknown scan mode"):
-        st.run_scanner_study(terrain(h), rig, modes=("lidar",))
+        st.ScannerStudyOptions(modes=("lidar",))
     # planner options are per planner name (random takes none); checked before rendering
     with pytest.raises(ValueError, match=r"planner_opts must map planner names \['random'\]"):
-        st.run_scanner_study(terrain(h), rig, planners=("random",), planner_opts={"levels": 1})
+        st.ScannerStudyOptions(planners=("random",), planner_opts={"levels": 1})
+    with pytest.raises(ValueError, match="use it with the ambiguity_enhancement mode"):
+        run_study(terrain(h), rig, modes=("data_reduction",), planners=("low_contrast",), spp=1)
 
 
-def test_scanner_ambiguity_experiment_plain_arguments():
-    rows = st.scanner_ambiguity_experiment(
-        terrain_scale=0.08,
-        proj_size=(32, 24),
-        cam_size=(64, 48),
-        trials=1,
-        spp=4,
-        seed=2,
-        metrics=("mse",),
-    )
+def test_scanner_study_is_seeded_and_summarised(rig):
+    xx, yy = grid()
+    h = 0.05 * np.exp(-((xx - 0.1) ** 2 + yy**2) / 0.02)
+    kw = {"planners": ("wavelet", "random"), "metrics": ("mse",), "rng": 2, "spp": 2}
+    rows = run_study(terrain(h), rig, **kw).rows
     mse = st.summarize(rows, "mse")
     assert set(mse) == {
         "gray_code",
@@ -225,19 +246,9 @@ def test_scanner_ambiguity_experiment_plain_arguments():
         "ambiguity_enhancement/random",
     }
     assert all(v > 0 for v in mse.values())
-    gray = [r for r in rows if r["mode"] == "gray_code"]
-    assert {r["renders"] for r in gray} == {5 + 5 + 2}
-    # same seed, same rows (terrain, noise and planner streams are all seeded)
-    again = st.scanner_ambiguity_experiment(
-        terrain_scale=0.08,
-        proj_size=(32, 24),
-        cam_size=(64, 48),
-        trials=1,
-        spp=4,
-        seed=2,
-        metrics=("mse",),
-    )
-    assert st.summarize(again, "mse") == mse
+    assert {r["renders"] for r in rows if r["mode"] == "gray_code"} == {6 + 6 + 2}
+    # same seed, same rows (noise and planner streams are all seeded)
+    assert st.summarize(run_study(terrain(h), rig, **kw).rows, "mse") == mse
 
 
 def test_grad_score_ignores_the_holes_of_the_truth(rng):
@@ -265,8 +276,8 @@ def test_light_traced_dot_frames_equal_path_traced_ones():
     x, y = grid()
     bumpy = terrain(0.04 * np.sin(3 * x) * np.cos(2 * y), albedo=0.6)
     rig = rigs.moonyard_rig(proj_size=(64, 48), cam_size=(128, 96))
-    path = st.RenderCapture(bumpy, rig, max_depth=3, spp=64, seed=2)
-    light = st.RenderCapture(
+    path = capture(bumpy, rig, max_depth=3, spp=64, seed=2)
+    light = capture(
         bumpy, rig, max_depth=3, spp=64, seed=2, sparse_integrator="ptracer", sparse_spp=16
     )
     rng = np.random.default_rng(0)
@@ -288,7 +299,7 @@ def test_light_traced_dot_frames_equal_path_traced_ones():
     stripes[0, :, ::2] = 1.0
     np.testing.assert_array_equal(light.render(stripes), path.render(stripes))
     with pytest.raises(ValueError, match="sparse_integrator"):
-        st.RenderCapture(bumpy, rig, sparse_integrator="bdpt")
+        capture(bumpy, rig, sparse_integrator="bdpt")
 
 
 def test_daylight_scan_adds_the_sun_by_linearity_and_still_decodes(rig):
@@ -301,7 +312,7 @@ def test_daylight_scan_adds_the_sun_by_linearity_and_still_decodes(rig):
     x, _ = grid()
     tilted = terrain(0.3 * x)
     sun = SunLight(elevation=np.radians(50.0), azimuth=np.radians(120.0), irradiance=0.5)
-    day = st.RenderCapture(tilted, rig, max_depth=2, spp=64, seed=3, extra_lights=(sun,))
+    day = capture(tilted, rig, max_depth=2, spp=64, seed=3, extra_lights=(sun,))
     assert day.ambient is not None and day.ambient.mean() > 0 and day.ambient_ratio > 0
     stripes = np.zeros((1, 48, 64), np.float32)
     stripes[0, :, ::4] = 1.0
@@ -326,9 +337,9 @@ def test_daylight_scan_adds_the_sun_by_linearity_and_still_decodes(rig):
     assert day.ambient_ratio == pytest.approx(day.ambient[on].mean() / lit[on].mean(), rel=1e-6)
     # the exposure is set on projector plus sun: the white frame's 99.5th percentile at 0.8
     white = day.sense(day.render(np.ones_like(stripes)))[0]
-    assert np.percentile(white, st.EXPOSURE_PERCENTILE) == pytest.approx(0.8, rel=1e-5)
-    dark = st.RenderCapture(tilted, rig, max_depth=2, spp=16, seed=3)
-    day16 = st.RenderCapture(tilted, rig, max_depth=2, spp=16, seed=3, extra_lights=(sun,))
+    assert np.percentile(white, EXPOSURE_PERCENTILE) == pytest.approx(0.8, rel=1e-5)
+    dark = capture(tilted, rig, max_depth=2, spp=16, seed=3)
+    day16 = capture(tilted, rig, max_depth=2, spp=16, seed=3, extra_lights=(sun,))
     g_dark, g_day = modes.gray_code_scan(dark, rig), modes.gray_code_scan(day16, rig)
     v_dark, v_day = g_dark.decode.valid.mean(), g_day.decode.valid.mean()
     assert v_day >= 0.9 * v_dark > 0.3
@@ -342,7 +353,7 @@ def test_low_contrast_rescans_the_least_lit_pixels_of_the_gray_code_scan(rig):
     # are low_contrast_pixels of that scan, and the fused depth is no worse than gray code
     xx, yy = grid()
     h = 0.05 * np.exp(-((xx - 0.1) ** 2 + yy**2) / 0.02)
-    res = st.run_scanner_study(
+    res = run_study(
         terrain(h),
         rig,
         modes=("gray_code", "ambiguity_enhancement"),

@@ -2,9 +2,9 @@
 
 Each module documents its plugin's parameters in a table and defines a ``register(mi)`` that
 builds the plugin class (a subclass of ``mi.BSDF``, which exists only once a variant is set)
-and registers it under its Mitsuba name. Importing this package registers those functions
-with :func:`simlunar.render.backend.register_plugin_hook`; :func:`simlunar.render.backend.init`
-imports it right after ``mi.set_variant`` and runs them. Importing it never imports Mitsuba.
+and registers it under its Mitsuba name; :func:`simlunar.render.backend.init` runs every
+``register`` of :data:`PLUGINS` right after ``mi.set_variant``. Importing this package never
+imports Mitsuba.
 
 =============  =========================================  ==================================
 name           module                                     model
@@ -16,11 +16,9 @@ name           module                                     model
 
 from __future__ import annotations
 
-from simlunar.render import backend
 from simlunar.render.plugins import hapke, oren_nayar
+
+__all__ = ["PLUGINS"]
 
 #: plugin name -> module (each with ``register(mi)``)
 PLUGINS = {"oren_nayar": oren_nayar, "hapke": hapke}
-
-for _module in PLUGINS.values():
-    backend.register_plugin_hook(_module.register)

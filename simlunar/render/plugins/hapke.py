@@ -43,6 +43,7 @@ import math
 import numpy as np
 
 from simlunar.render import reference as ref
+from simlunar.render.materials import HapkeBSDF
 from simlunar.render.plugins._common import (
     INV_PI,
     cosine_bsdf_base,
@@ -65,8 +66,6 @@ def register(mi) -> None:
     if variant in _REGISTERED:
         return
     import drjit as dr
-
-    from simlunar.render.materials import HapkeBSDF
 
     inv_pi = INV_PI
 

@@ -1,11 +1,15 @@
-"""Scan modes on exact synthetic planes (NumPy capture, no Mitsuba)."""
+"""Structured-light scans and the scanner sensor's modes on exact synthetic planes (NumPy
+capture, no Mitsuba)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from simlunar.scanner import modes, rigs
+from simlunar.scanner import rigs
+from simlunar.scanner import scans as modes
+from simlunar.scanner.scans import DotOptions, GrayCodeOptions
+from simlunar.sensors import StructuredLight, StructuredLightOptions
 from tests.scanner._synthetic import PlaneCapture
 
 
@@ -17,7 +21,7 @@ def rig():
 @pytest.mark.parametrize("normal", [(0, 0, 1.0), (0.3, -0.2, 1.0)])
 def test_gray_code_scan_of_plane_matches_truth(rig, normal):
     cap = PlaneCapture(rig, normal, 0.0, noise=0.002)
-    g = modes.gray_code_scan(cap, rig, black_threshold=0.2, white_threshold=0.05)
+    g = modes.gray_code_scan(cap, rig, GrayCodeOptions(black_threshold=0.2, white_threshold=0.05))
     assert g.renders == 6 + 6 + 2 == cap.renders  # bits + 2 with inverses by linearity
     truth = cap.true_depth(rig.guide)
     ok = np.isfinite(g.depth)
@@ -31,7 +35,7 @@ def test_gray_code_scan_of_plane_matches_truth(rig, normal):
     assert np.all(err <= dz)
     assert np.median(err / dz) < 0.5
     ref = modes.gray_code_scan(
-        cap, rig, black_threshold=0.2, white_threshold=0.05, inverses="render"
+        cap, rig, GrayCodeOptions(black_threshold=0.2, white_threshold=0.05, inverses="render")
     )
     assert ref.renders == 2 * 12 + 2
     np.testing.assert_array_equal(ref.decode.col, g.decode.col)
@@ -44,8 +48,10 @@ def test_dot_scan_exact_and_multiplexed_agree(rig, rng):
     rc = np.unique(rc, axis=0)
     uv = np.c_[rc[:, 1] + 0.5, rc[:, 0] + 0.5]
     rng_z = (np.nanmin(truth) * 0.9, np.nanmax(truth) * 1.1)
-    multi = modes.dot_scan(cap, rig, uv, depth_range=rng_z, abs_threshold=0.05)
-    exact = modes.dot_scan(cap, rig, uv, depth_range=rng_z, exact=True, abs_threshold=0.05)
+    multi = modes.dot_scan(cap, rig, uv, depth_range=rng_z, options=DotOptions(abs_threshold=0.05))
+    exact = modes.dot_scan(
+        cap, rig, uv, depth_range=rng_z, options=DotOptions(exact=True, abs_threshold=0.05)
+    )
     assert exact.renders == len(uv) + 1
     assert multi.renders * 5 < exact.renders
     both = multi.found & exact.found
@@ -62,20 +68,49 @@ def test_dot_scan_exact_and_multiplexed_agree(rig, rng):
     assert np.median(np.abs(d_e - z) / dz_cam) < 1.0
 
 
-def test_empty_dot_set_and_bad_budget_are_rejected(rig):
+def test_empty_dot_set_and_bad_options_are_rejected(rig):
     cap = PlaneCapture(rig, (0, 0, 1.0), 0.0)
     with pytest.raises(ValueError, match="dot set is empty"):
         modes.dot_scan(cap, rig, np.empty((0, 2)), depth_range=(1.0, 2.0))
-    with pytest.raises(ValueError, match="budget"):
-        modes._budget_k(0.0, 100)
     with pytest.raises(ValueError, match=r"valid: \['ambiguity_enhancement', 'data_reduction'"):
-        modes.scan("laser", cap, rig)
+        StructuredLightOptions(mode="laser")
+    with pytest.raises(ValueError, match="unknown inverses"):
+        GrayCodeOptions(inverses="both")
+    with pytest.raises(ValueError, match="batch must be >= 1"):
+        DotOptions(batch=0)
+    with pytest.raises(ValueError, match=r"min_proj_spacing must be >= 0"):
+        DotOptions(min_proj_spacing=-1.0)
 
 
-def test_gray_code_mode_fills_holes(rig):
+def test_gray_code_mode_measures_the_decoded_pixels(rig):
     cap = PlaneCapture(rig, (0, 0, 1.0), 0.0)
-    res = modes.scan("gray_code", cap, rig, gray_opts={"black_threshold": 0.2})
-    assert np.isfinite(res.depth).all() and np.isnan(res.measured).any()
+    gray = StructuredLightOptions("gray_code", gray=GrayCodeOptions(black_threshold=0.2))
+    sensor = StructuredLight(cap, rig, depth_range=(1.0, 3.0), options=gray)
+    assert not sensor.needs_plan
+    acq = sensor.acquire(None)
+    res = acq.detail
+    assert np.isnan(res.measured).any() and acq.frames == res.renders == 14
+    # the acquisition holds exactly the finite cells of the measured map, row-major
+    np.testing.assert_array_equal(acq.measured_map(), res.measured)
+    assert len(acq.values) == np.isfinite(res.measured).sum()
+
+
+def test_ambiguity_enhancement_shares_the_gray_code_and_fuses_dots(rig):
+    cap = PlaneCapture(rig, (0.1, 0.0, 1.0), 0.0, noise=0.0)
+    opts = StructuredLightOptions(
+        "ambiguity_enhancement", gray=GrayCodeOptions(black_threshold=0.2)
+    )
+    sensor = StructuredLight(cap, rig, depth_range=(1.0, 3.0), options=opts)
+    rc = np.array([[10, 10], [20, 30], [40, 50]])
+    acq = sensor.acquire(rc)
+    res = acq.detail
+    hit = np.isfinite(res.dots.depth)
+    assert hit.any()
+    np.testing.assert_array_equal(res.measured[hit], res.dots.depth[hit])
+    assert acq.frames == res.dots.renders  # the shared gray code is not counted again
+    assert sensor.acquire(rc).detail.gray is res.gray  # scanned once
+    with pytest.raises(ValueError, match="rc is required"):
+        sensor.acquire(None)
 
 
 def _decode_of(contrast: np.ndarray, proj_shape=(2, 4)):
@@ -126,12 +161,3 @@ def test_low_contrast_planner_takes_the_dimmest_camera_pixel_of_a_projector_pixe
     g = modes.GrayScan(decode=dec, cloud=None, depth=np.zeros((H, W)), renders=0, frames={})
     # row 0 by the lower contrast of its two camera pixels: 0.15, 0.3, 0.5, 0.8
     assert modes.low_contrast_pixels(g, 4, rng=0).tolist() == [[0, 1], [0, 3], [0, 2], [0, 0]]
-
-
-def test_low_contrast_planner_needs_the_gray_code_scan(rig):
-    cap = PlaneCapture(rig, (0, 0, 1.0), 0.0, noise=0.0)
-    with pytest.raises(ValueError, match="use it with the ambiguity_enhancement mode"):
-        modes.scan_data_reduction(
-            cap, rig, guide_image=np.ones((48, 64)), planner="low_contrast", rng=0,
-            depth_range=(1.0, 3.0), budget=0.01,
-        )  # fmt: skip

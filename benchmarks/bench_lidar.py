@@ -1,0 +1,135 @@
+"""LIDAR benchmarks (see ``benchmarks/run.py``).
+
+``lidar``: a steered-beam scan of the aerial scene (``aerial_1`` at quarter scale, 50 m x 80 m
+at 0.2 m, seed 0) from 50 m above its centre: ``N_BEAMS`` beams towards uniformly random
+points of a 512 x 512 guide view, each beam's footprint (1 mrad Gaussian) sampled by
+``FOOTPRINT_SAMPLES`` rays, rendered with mitransient in batches of ``BATCH`` beams (direct
+light, 5 cm bins over an 8 m window per batch), then pulse shaping, photon noise with the
+sun's background, matched-filter ranging. ``ours_s`` is that scan's time without ordering
+(after a warm-up scan that compiles the kernels); ``reference_s`` a plain ray cast of the same beams' centre
+rays (Mitsuba ``ray_intersect``, one ray per beam, no transport). ``beams_per_s`` =
+N_BEAMS / ours_s; ``scan_100k_s`` = 100 000 / beams_per_s + the measured ordering (NN + 2-opt)
+of 100 000 random pointings in a 0.8 x 0.8 rad field, which is not linear and is timed at
+full size (``order_100k_s``); ``scan_100k_simulated_s_*`` are the simulated mechanical scan
+times (default :class:`SteeringOptions`) in the planner's (random) order and ordered.
+``flash_128_s`` / ``flash_128_mb``: one 128 x 128 flash frame (64 spp, bins over the
+terrain in view) and its transient film's size (rows x cols x bins x 4 channels x 4 bytes);
+``flash_rss_mb`` the growth of the process's peak resident memory during that frame.
+"""
+
+from __future__ import annotations
+
+import resource
+import time
+
+import numpy as np
+
+N_BEAMS = 16_384
+BATCH = 8192
+FOOTPRINT_SAMPLES = 16
+SCALE = 0.25
+HEIGHT_M = 50.0
+
+
+def _setup():
+    from simlunar.geometry import Camera, Pose
+    from simlunar.terrain import generate
+
+    t = generate("aerial_1", rng=0, scale=SCALE).terrain
+    xmin, xmax, ymin, ymax = t.extent
+    c = np.array([(xmin + xmax) / 2, (ymin + ymax) / 2, float(np.nanmean(t.heights))])
+    pose = Pose.look_at(c + np.array([0.0, 0.0, HEIGHT_M]), c, up=(0.0, 1.0, 0.0))
+    fov = 2 * np.degrees(np.arctan(0.45 * min(xmax - xmin, ymax - ymin) / HEIGHT_M))
+    return t, pose, fov, Camera
+
+
+def lidar() -> dict:
+    from simlunar.geometry import Intrinsics
+    from simlunar.lidar import (
+        DetectorOptions,
+        FootprintOptions,
+        OrderOptions,
+        SteeringOptions,
+        order_scan,
+        pointing_angles,
+        scan_timing,
+    )
+    from simlunar.render import backend
+    from simlunar.render.lidar_scan import (
+        FlashOptions,
+        SteeredBeamOptions,
+        beam_capture,
+        flash_scan,
+        range_window,
+        steered_beam_scan,
+    )
+    from simlunar.render.lights import SunLight
+    from simlunar.render.transient import TransientOptions
+
+    backend.init()
+    t, pose, fov, Camera = _setup()
+    guide = Camera(Intrinsics.from_fov(512, 512, fov), pose)
+    rng = np.random.default_rng(0)
+    _, d = guide.rays(rng.uniform(0, 512, (N_BEAMS, 2)))
+    sun = SunLight(elevation=np.radians(20.0), azimuth=np.radians(90.0))
+    opts = SteeredBeamOptions(
+        footprint=FootprintOptions(1e-3, samples=FOOTPRINT_SAMPLES),
+        detector=DetectorOptions(signal_photons=2e6, background_photons_per_s=1e9),
+        steering=SteeringOptions(),
+        order=OrderOptions(method="given"),  # ordering is timed at full size below
+        batch=BATCH,
+    )
+    cap = beam_capture(t, pose.position, options=opts, sun=sun)
+    steered_beam_scan(cap, d[:BATCH], options=opts, rng=0)  # warm-up: kernels compiled
+    t0 = time.perf_counter()
+    scan = steered_beam_scan(cap, d, options=opts, rng=1)
+    ours_s = time.perf_counter() - t0
+    cap.cast(d)
+    t0 = time.perf_counter()
+    truth = cap.cast(d)
+    reference_s = time.perf_counter() - t0
+    err = np.abs(scan.ranges - truth)[scan.valid]
+
+    big = pose.rotation @ np.vstack([rng.uniform(-0.4, 0.4, (2, 100_000)), np.ones(100_000)])
+    ang = pointing_angles((big / np.linalg.norm(big, axis=0)).T, pose)
+    order_scan(ang[:1000], steering=opts.steering)  # warm-up: numba kernels loaded
+    t0 = time.perf_counter()
+    order = order_scan(ang, steering=opts.steering)
+    order_100k_s = time.perf_counter() - t0
+    planner_100k = scan_timing(ang, options=opts.steering).total_s
+    ordered_100k = scan_timing(ang, order, options=opts.steering).total_s
+
+    flash_cam = Camera(Intrinsics.from_fov(128, 128, fov), pose)
+    fopts = FlashOptions(transient=TransientOptions(spp=64))
+    bins = range_window(t, flash_cam, bin_range_m=fopts.bin_range_m, margin_m=fopts.margin_m)
+    flash_scan(t, flash_cam, options=fopts, rng=0)  # warm-up
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t0 = time.perf_counter()
+    flash_scan(t, flash_cam, options=fopts, rng=0)
+    flash_s = time.perf_counter() - t0
+    rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    beams_per_s = N_BEAMS / ours_s
+    return {
+        "reference_s": round(reference_s, 4),
+        "ours_s": round(ours_s, 3),
+        "beams": N_BEAMS,
+        "batch": BATCH,
+        "footprint_samples": FOOTPRINT_SAMPLES,
+        "terrain": f"aerial_1 x{SCALE} ({t.shape[0]}x{t.shape[1]} cells)",
+        "beams_per_s": round(beams_per_s, 1),
+        "order_100k_s": round(order_100k_s, 2),
+        "scan_100k_s": round(1e5 / beams_per_s + order_100k_s, 2),
+        "valid_fraction": round(float(scan.valid.mean()), 4),
+        "median_abs_range_error_m": round(float(np.median(err)), 4),
+        "scan_16k_simulated_s_planner_order": round(scan.seconds, 2),
+        "scan_100k_simulated_s_planner_order": round(planner_100k, 1),
+        "scan_100k_simulated_s_ordered": round(ordered_100k, 1),
+        "flash_128_s": round(flash_s, 3),
+        "flash_bins": bins.count,
+        "flash_128_mb": round(128 * 128 * bins.count * 4 * 4 / 2**20, 1),
+        "flash_rss_mb": round((rss1 - rss0) / 1024, 1),
+        "variant": backend.info().variant,
+    }
+
+
+BENCHMARKS = {"lidar": lidar}

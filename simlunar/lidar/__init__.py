@@ -1,0 +1,86 @@
+"""Time-of-flight range sensing on arrays (NumPy / SciPy / numba only).
+
+- :mod:`~simlunar.lidar.waveform`: time bins (round-trip optical path length), pulse and
+  detector timing response applied to rendered impulse responses
+- :mod:`~simlunar.lidar.detector`: expected photon counts (laser return + sun background +
+  dark counts), Poisson shot noise, SPAD dead time / pile-up, Coates correction
+- :mod:`~simlunar.lidar.ranging`: range extraction (peak / matched filter; first, last or
+  strongest return)
+- :mod:`~simlunar.lidar.footprint`: the beam's angular profile and footprint geometry
+- :mod:`~simlunar.lidar.steering`: two-axis steering mechanics and scan time
+- :mod:`~simlunar.lidar.ordering`: raster reference and nearest neighbour + 2-opt ordering
+
+The rendering of the histograms lives in :mod:`simlunar.render.transient`.
+"""
+
+from simlunar.lidar.detector import (
+    DetectorOptions,
+    LinkBudget,
+    coates_correction,
+    expected_counts,
+    photon_counts,
+    photon_counts_dead_time,
+)
+from simlunar.lidar.footprint import (
+    FootprintOptions,
+    cone_offsets,
+    footprint_radius,
+    tilted_plane_spread,
+)
+from simlunar.lidar.ordering import (
+    OrderOptions,
+    exact_order,
+    nearest_neighbour_order,
+    order_scan,
+    raster_order,
+    two_opt,
+)
+from simlunar.lidar.ranging import RangeOptions, RangeResult, extract_ranges
+from simlunar.lidar.steering import (
+    ScanTiming,
+    SteeringOptions,
+    axis_move_time,
+    move_time,
+    pointing_angles,
+    scan_timing,
+)
+from simlunar.lidar.waveform import (
+    SPEED_OF_LIGHT,
+    PulseOptions,
+    TimeBins,
+    pulse_kernel,
+    shape_waveform,
+)
+
+__all__ = [
+    "SPEED_OF_LIGHT",
+    "DetectorOptions",
+    "FootprintOptions",
+    "LinkBudget",
+    "OrderOptions",
+    "PulseOptions",
+    "RangeOptions",
+    "RangeResult",
+    "ScanTiming",
+    "SteeringOptions",
+    "TimeBins",
+    "axis_move_time",
+    "coates_correction",
+    "cone_offsets",
+    "exact_order",
+    "expected_counts",
+    "extract_ranges",
+    "footprint_radius",
+    "move_time",
+    "nearest_neighbour_order",
+    "order_scan",
+    "photon_counts",
+    "photon_counts_dead_time",
+    "pointing_angles",
+    "pulse_kernel",
+    "raster_order",
+    "scan_timing",
+    "shape_waveform",
+    "tilted_plane_spread",
+    "two_opt",
+]

@@ -1,0 +1,250 @@
+"""Photon counting: expected counts per bin, shot noise, SPAD dead time and pile-up.
+
+The renderer gives two noise-free images in radiance units: the laser's return per time bin
+(``signal``, the transient film of a scene lit by the laser alone) and the sun's steady
+radiance seen by the same receiver (``background``, an ordinary render; the sun is never a
+transient emitter, whose light would land at a bogus path length). The sun is continuous, so
+its expected photons per bin are its radiance times the bin duration; the laser's are its
+binned return times the pulse's photon scale. Summed over ``pulses`` shots (a histogramming
+receiver), the counts are Poisson with that mean in linear mode.
+
+A SPAD is blind for ``dead_time_s`` after each detection; with strong returns or sunlight
+that distorts the histogram towards early bins (pile-up). ``dead_time_s = inf`` is the
+classic one-detection-per-pulse (TCSPC) receiver, simulated exactly as a multinomial per
+pulse; a finite dead time is simulated pulse by pulse.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from simlunar.lidar.waveform import SPEED_OF_LIGHT, TimeBins
+
+
+@dataclass(frozen=True)
+class DetectorOptions:
+    """Receiver photon model.
+
+    Parameters
+    ----------
+    signal_photons : float
+        Expected detected photons per pulse per unit of the rendered transient value
+        (photons; lumps pulse energy, receiver aperture, optics and quantum efficiency).
+    background_photons_per_s : float
+        Expected detected photons per second per unit of the rendered steady sun radiance
+        (photons/s; lumps aperture, field of view, filter bandwidth and efficiency).
+    dark_count_rate_hz : float
+        Dark counts per second (1/s), uniform in time.
+    pulses : int
+        Shots accumulated into one histogram.
+    dead_time_s : float
+        SPAD dead time (s): 0 = linear mode (no pile-up), ``inf`` = at most one detection
+        per pulse, finite = non-paralysable dead time.
+    """
+
+    signal_photons: float = 100.0
+    background_photons_per_s: float = 1e9
+    dark_count_rate_hz: float = 0.0
+    pulses: int = 1
+    dead_time_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("signal_photons", "background_photons_per_s", "dark_count_rate_hz"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+        if int(self.pulses) < 1:
+            raise ValueError(f"pulses must be >= 1, got {self.pulses}")
+        if not self.dead_time_s >= 0:
+            raise ValueError(f"dead_time_s must be >= 0 s, got {self.dead_time_s}")
+
+
+def expected_counts(
+    signal: np.ndarray,
+    background: np.ndarray | float,
+    bins: TimeBins,
+    options: DetectorOptions,
+) -> np.ndarray:
+    """Expected detected photons per bin and per pulse.
+
+    Parameters
+    ----------
+    signal : (..., count) float
+        Laser return per bin (rendered transient value, already shaped by the pulse).
+    background : (...) float or float
+        Steady sun radiance seen by each receiver pixel / beam (rendered; 0 without sun).
+    bins : TimeBins
+    options : DetectorOptions
+
+    Returns
+    -------
+    (..., count) float64
+        Mean photons per bin for one pulse (>= 0).
+    """
+    s = np.asarray(signal, float)
+    b = np.asarray(background, float)
+    rate = b * options.background_photons_per_s + options.dark_count_rate_hz
+    lam = s * options.signal_photons + (rate * bins.bin_s)[..., None]
+    return np.maximum(lam, 0.0)
+
+
+def photon_counts(expected: np.ndarray, *, options: DetectorOptions, rng=None) -> np.ndarray:
+    """Draw a histogram of detections accumulated over ``options.pulses`` pulses.
+
+    Parameters
+    ----------
+    expected : (..., count) float
+        Mean photons per bin and pulse (:func:`expected_counts`).
+    options : DetectorOptions
+    rng : seed or Generator
+
+    Returns
+    -------
+    (..., count) int64
+        Detections per bin summed over the pulses.
+    """
+    rng = np.random.default_rng(rng)
+    lam = np.asarray(expected, float)
+    n = int(options.pulses)
+    if options.dead_time_s == 0:
+        return rng.poisson(lam * n)
+    if np.isinf(options.dead_time_s):
+        return _first_photon_counts(lam, n, rng)
+    raise ValueError(
+        "a finite dead time needs the bin width: call photon_counts_dead_time(expected, bins, "
+        "options=..., rng=...)"
+    )
+
+
+def _first_photon_counts(lam: np.ndarray, n: int, rng) -> np.ndarray:
+    """One detection at most per pulse: the first bin with a photon (exact, multinomial)."""
+    cum = np.cumsum(lam, axis=-1)
+    before = np.concatenate([np.zeros((*lam.shape[:-1], 1)), cum[..., :-1]], axis=-1)
+    p = np.exp(-before) * -np.expm1(-lam)  # nothing before bin i, something in bin i
+    p_none = np.exp(-cum[..., -1:])
+    pv = np.concatenate([p, p_none], axis=-1)
+    pv /= pv.sum(axis=-1, keepdims=True)
+    flat = pv.reshape(-1, pv.shape[-1])
+    out = rng.multinomial(n, flat)[:, :-1]
+    return out.reshape(lam.shape).astype(np.int64)
+
+
+def photon_counts_dead_time(
+    expected: np.ndarray, bins: TimeBins, *, options: DetectorOptions, rng=None
+) -> np.ndarray:
+    """Detections with a non-paralysable dead time, simulated pulse by pulse.
+
+    The detector is armed at the start of every pulse's window; a detection in bin i blinds it
+    for ``ceil(dead_time_s / bin_s)`` bins. Shapes and units as :func:`photon_counts`. Cost:
+    pulses x beams x bins; use ``dead_time_s = inf`` (exact, vectorised) when the dead time
+    exceeds the window.
+    """
+    rng = np.random.default_rng(rng)
+    lam = np.asarray(expected, float)
+    if options.dead_time_s == 0 or np.isinf(options.dead_time_s):
+        return photon_counts(lam, options=options, rng=rng)
+    dead = int(np.ceil(options.dead_time_s / bins.bin_s))
+    flat = lam.reshape(-1, lam.shape[-1])
+    n = int(options.pulses)
+    counts = np.zeros(flat.shape, np.int64)
+    blind_until = np.zeros((n, flat.shape[0]), np.int64)
+    for i in range(flat.shape[1]):
+        hit = (rng.random((n, flat.shape[0])) < -np.expm1(-flat[:, i])) & (blind_until <= i)
+        counts[:, i] = hit.sum(axis=0)
+        blind_until[hit] = i + 1 + dead
+    return counts.reshape(lam.shape)
+
+
+def coates_correction(counts: np.ndarray, pulses: int) -> np.ndarray:
+    """Estimate the mean photons per bin and pulse from a one-detection-per-pulse histogram.
+
+    Coates (1968): ``lambda_i = -ln(1 - h_i / (N - sum_{j < i} h_j))`` undoes pile-up when the
+    dead time exceeds the window (``dead_time_s = inf``).
+
+    Parameters
+    ----------
+    counts : (..., count) int
+        Detections per bin over ``pulses`` pulses.
+    pulses : int
+
+    Returns
+    -------
+    (..., count) float64
+        Estimated mean photons per bin and pulse (inf where every remaining pulse fired).
+    """
+    h = np.asarray(counts, float)
+    before = np.cumsum(h, axis=-1) - h
+    armed = pulses - before
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac = np.where(armed > 0, h / armed, 0.0)
+        return -np.log1p(-np.minimum(frac, 1.0))
+
+
+#: Planck constant (J s)
+PLANCK = 6.62607015e-34
+
+
+@dataclass(frozen=True)
+class LinkBudget:
+    """Photon scales of a LIDAR from its hardware (the lidar equation of an extended target).
+
+    The renderer's laser is an isotropic point of 1 W/sr (``TransientOptions.laser_intensity``)
+    and its sun delivers an irradiance of 1 on a surface facing it, so a rendered radiance
+    ``L`` becomes photons as follows. Laser: a pulse of energy ``E`` spread over the lit solid
+    angle ``lit_sr`` has intensity ``E / lit_sr``; a receiver pixel of aperture ``A`` and field
+    ``field_sr`` collects ``L E / lit_sr * A * field_sr * efficiency / (h nu)`` photons
+    (for a steered beam ``field_sr = lit_sr`` and this is ``L E A eta / (h nu)``, i.e.
+    ``E rho A eta / (pi R^2 h nu)`` on a Lambertian target). Sun: ``L * sun_band_w_m2 * A *
+    field_sr * efficiency / (h nu)`` photons per second.
+
+    Parameters
+    ----------
+    pulse_energy_j : float
+        Laser energy per pulse (J).
+    wavelength_m : float
+        Laser wavelength (m).
+    aperture_m2 : float
+        Receiver aperture area (m^2).
+    efficiency : float
+        Optics transmission times detection efficiency, in (0, 1].
+    field_sr : float
+        Solid angle seen by one receiver pixel / beam (sr).
+    lit_sr : float
+        Solid angle the pulse lights (sr): the beam's for a steered beam, the whole field of
+        view for a flash.
+    sun_band_w_m2 : float
+        Solar irradiance inside the receiver's filter band (W/m^2), e.g. 0.64 W/m^2/nm x 1 nm
+        at 1064 nm.
+    """
+
+    pulse_energy_j: float = 10e-6
+    wavelength_m: float = 1064e-9
+    aperture_m2: float = 2e-3
+    efficiency: float = 0.3
+    field_sr: float = 7.85e-7
+    lit_sr: float = 7.85e-7
+    sun_band_w_m2: float = 0.64
+
+    def __post_init__(self) -> None:
+        for name, value in dataclasses.asdict(self).items():
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be finite and > 0, got {value}")
+        if self.efficiency > 1:
+            raise ValueError(f"efficiency must be <= 1, got {self.efficiency}")
+
+    @property
+    def photon_energy_j(self) -> float:
+        """Energy of one laser photon, h c / lambda (J)."""
+        return PLANCK * SPEED_OF_LIGHT / self.wavelength_m
+
+    def detector(self, **fields) -> DetectorOptions:
+        """:class:`DetectorOptions` with this budget's photon scales (other fields passed on)."""
+        collect = self.aperture_m2 * self.field_sr * self.efficiency / self.photon_energy_j
+        return DetectorOptions(
+            signal_photons=self.pulse_energy_j / self.lit_sr * collect,
+            background_photons_per_s=self.sun_band_w_m2 * collect,
+            **fields,
+        )

@@ -1,0 +1,133 @@
+"""Inputs of a sampling unit's figures: the image panels (a wavelet plan and its reconstruction)
+and the sparse-mesh renders of the paper's Fig. 4."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+
+from simlunar.features import feature_map
+from simlunar.planner import plan
+from simlunar.reconstruction import reconstruct
+from simlunar.render import render
+from simlunar.render.materials import OrenNayarBSDF, sigma_map_from_energy
+from simlunar.render.scene import luminance
+from simlunar.terrain.types import Terrain
+
+__all__ = ["RENDER_LOCK", "RenderScene", "panel_arrays", "sparse_mesh_render"]
+
+#: Renders of units running concurrently in threads (``LocalPoolExecutor``) take turns: each
+#: render already uses every core, and Mitsuba scenes are built and rendered one at a time.
+RENDER_LOCK = threading.RLock()
+
+
+@dataclass(frozen=True, eq=False)
+class RenderScene:
+    """A scene and its render settings (as the unit renders it)."""
+
+    terrain: Terrain
+    camera: object
+    lights: list
+    bsdf: object
+    spp: int
+    seed: int
+    max_depth: int
+
+
+def panel_arrays(image, depth, energy, density: float, *, rng) -> dict:
+    """Arrays for the image panels: wavelet energy, one wavelet plan and its reconstruction.
+
+    ``energy`` is ``feature_map("wavelet", image)`` (float64), the map the plan samples from.
+    """
+    n = image.size
+    k = max(3, round(density * n))
+    p = plan("wavelet", k, weights=energy, rng=rng)
+    pts = p.rc  # index coordinates: cell (r, c) sits at (r, c)
+    filled = np.where(np.isfinite(depth), depth, np.nanmean(depth))
+    recon = reconstruct(pts, filled[p.rows, p.cols], image.shape)
+    return {
+        "wavelet_energy": energy.astype(np.float32),
+        "plan_rows": np.asarray(p.rows, np.int32),
+        "plan_cols": np.asarray(p.cols, np.int32),
+        "reconstruction": recon.astype(np.float64),
+    }
+
+
+def sparse_mesh_render(
+    scene: RenderScene,
+    image,
+    *,
+    density: float,
+    rng,
+    sigma_range: tuple[float, float] | None = None,
+    threshold: float | None = None,
+    energy: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
+    """Paper Fig. 4: render the terrain rebuilt from wavelet-planned samples of ``image``.
+
+    ``density * N`` pixels are planned by wavelet energy; for the nadir orthographic camera
+    pixel (r, c) is cell (r, c), so those cells' heights are Delaunay-interpolated back to the
+    grid and the rebuilt terrain is rendered with the same camera, lights, BSDF and seed
+    (constant roughness). With ``sigma_range`` and an Oren-Nayar ``bsdf`` it is rendered a
+    second time with the paper's inferred roughness: per cell of the rebuilt DEM (= per mesh
+    vertex, through the terrain UVs) the Oren-Nayar sigma is
+    :func:`simlunar.render.materials.sigma_map_from_energy` of the guide image's wavelet
+    energy, in ``sigma_range``; cells with normalised energy >= ``threshold`` keep the minimum
+    (the planner sampled them densely, so their relief is real geometry).
+
+    Parameters
+    ----------
+    scene : RenderScene
+        The scene and render settings of the full-resolution render (nadir orthographic camera).
+    image : (rows, cols) float
+        Guide image (pixel (r, c) = cell (r, c)).
+    density : float
+        Sample fraction k / N.
+    rng : numpy Generator
+        Drives the wavelet plan.
+    sigma_range : (float, float) or None
+        ``(sigma_min, sigma_max)`` radians; None (or a non-Oren-Nayar ``bsdf``) skips the
+        modulated render.
+    threshold : float or None
+        Normalised-energy threshold above which the geometry is kept metric.
+    energy : (rows, cols) float64 or None
+        ``feature_map("wavelet", image)`` when already computed (the plan samples from it).
+
+    Returns
+    -------
+    dict
+        ``sparse_mesh_render`` (rows, cols) float32 linear luminance (constant roughness);
+        with modulation also ``sparse_mesh_render_rough`` (same, per-cell roughness) and
+        ``sparse_mesh_sigma`` (rows, cols) float32 radians.
+    """
+    terrain, bsdf = scene.terrain, scene.bsdf
+    if energy is None:
+        energy = feature_map("wavelet", image)
+    k = max(3, round(density * image.size))
+    p = plan("wavelet", k, weights=energy, rng=rng)
+    pts = p.rc  # index coordinates: cell (r, c) sits at (r, c)
+    heights = np.asarray(terrain.heights, np.float64)
+    recon = reconstruct(pts, heights[p.rows, p.cols], heights.shape)
+    sparse = Terrain(recon, terrain.albedo, terrain.spacing, terrain.origin)
+    kw = {
+        "lights": scene.lights,
+        "spp": scene.spp,
+        "seed": scene.seed,
+        "max_depth": scene.max_depth,
+    }
+    bsdfs = {"sparse_mesh_render": bsdf}
+    out = {}
+    if sigma_range is not None and isinstance(bsdf, OrenNayarBSDF):
+        lo, hi = sigma_range
+        sigma = sigma_map_from_energy(energy, sigma_min=lo, sigma_max=hi, threshold=threshold)
+        bsdfs["sparse_mesh_render_rough"] = OrenNayarBSDF(bsdf.sigma, bsdf.model, sigma_map=sigma)
+        out["sparse_mesh_sigma"] = sigma.astype(np.float32)
+    # only the renders take the lock: the plan and the reconstruction above run while another
+    # unit of a parallel sweep renders
+    for name, b in bsdfs.items():
+        with RENDER_LOCK:
+            radiance = render(sparse, scene.camera, bsdf=b, **kw).image
+        out[name] = luminance(radiance)
+    return out

@@ -1,0 +1,422 @@
+"""LIDAR acquisitions: steered-beam scans, flash frames and micromirror-steered flash.
+
+Each entry point renders the returns (:mod:`simlunar.render.transient`), applies the sensor
+physics of :mod:`simlunar.lidar` (pulse and jitter, photon counts with the sun's background
+and its shot noise, dead time, range extraction) and prices the acquisition in seconds:
+
+- :func:`steered_beam_scan`: a gimbal / galvanometer beam visits planned directions in the
+  order of :func:`simlunar.lidar.order_scan`; time from the steering mechanics.
+- :func:`flash_scan`: a receiver array lit by whole-field pulses; time = pulses / rate.
+- :func:`micromirror_flash`: a micromirror projector co-located with the receiver lights only
+  planned directions; dots that share a receiver pixel go to different frames.
+
+Ranges are slant ranges from the sensor's origin along the beam / pixel ray (m).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.geometry import Camera, Pose, Projector
+from simlunar.lidar import (
+    DetectorOptions,
+    FootprintOptions,
+    OrderOptions,
+    PulseOptions,
+    RangeOptions,
+    ScanTiming,
+    SteeringOptions,
+    TimeBins,
+    expected_counts,
+    extract_ranges,
+    order_scan,
+    photon_counts,
+    photon_counts_dead_time,
+    pointing_angles,
+    scan_timing,
+    shape_waveform,
+)
+from simlunar.render.lights import ProjectorLight
+from simlunar.render.transient import (
+    BeamCapture,
+    TransientOptions,
+    capture_beams,
+    flash_frame,
+)
+
+
+@dataclass(frozen=True)
+class SteeredBeamOptions:
+    """A steered-beam LIDAR (gimbaled altimeter or galvanometer scanner).
+
+    Parameters
+    ----------
+    footprint : FootprintOptions
+        Divergence (rad), profile and rays per beam.
+    pulse : PulseOptions
+        Pulse FWHM and timing jitter (s).
+    detector : DetectorOptions
+        Photon scales, dark counts, dead time (its ``pulses`` is replaced by
+        ``steering.pulses_per_point``).
+    ranging : RangeOptions
+    steering : SteeringOptions
+        Slew rate (rad/s), acceleration (rad/s^2), settle (s), pulse rate (Hz), pulses/point.
+    order : OrderOptions
+    transient : TransientOptions
+        Rendering (path depth, seed, laser intensity W/sr).
+    bin_range_m : float
+        Range width of a time bin (m).
+    window_m : float
+        Range window of each rendered batch (m); ``margin_m`` on both sides of the
+        ray-cast ranges.
+    margin_m : float
+    batch : int
+        Beams per render launch.
+    """
+
+    footprint: FootprintOptions = field(default_factory=FootprintOptions)
+    pulse: PulseOptions = field(default_factory=PulseOptions)
+    detector: DetectorOptions = field(default_factory=DetectorOptions)
+    ranging: RangeOptions = field(default_factory=RangeOptions)
+    steering: SteeringOptions = field(default_factory=SteeringOptions)
+    order: OrderOptions = field(default_factory=OrderOptions)
+    transient: TransientOptions = field(default_factory=TransientOptions)
+    bin_range_m: float = 0.05
+    window_m: float = 8.0
+    margin_m: float = 2.0
+    batch: int = 4096
+
+    def __post_init__(self) -> None:
+        if not (self.bin_range_m > 0 and self.window_m > 2 * self.margin_m >= 0):
+            raise ValueError("need bin_range_m > 0 and window_m > 2 margin_m >= 0")
+        if int(self.batch) < 1:
+            raise ValueError(f"batch must be >= 1, got {self.batch}")
+
+    @property
+    def window(self) -> TimeBins:
+        """Bins of one batch's window (start set per batch)."""
+        return TimeBins.for_ranges(0.0, self.window_m, self.bin_range_m)
+
+
+@dataclass(frozen=True, eq=False)
+class LidarScan:
+    """Ranges of one acquisition and its cost (arrays in the input order of the samples).
+
+    Attributes
+    ----------
+    ranges : (n,) float64
+        Slant range (m); NaN where invalid.
+    valid : (n,) bool
+    points : (n, 3) float64
+        World points ``origin + range * direction`` (m); NaN where invalid.
+    photons : (n,) float64
+        Estimated signal photons of the reported return.
+    order : (n,) int64
+        Visiting order (indices into the samples); ``arange(n)`` for flash sensors.
+    seconds : float
+        Acquisition time (s).
+    frames : int
+        Pulses fired (steered beam) or flash frames.
+    timing : ScanTiming or None
+        Breakdown for steered beams.
+    """
+
+    ranges: np.ndarray
+    valid: np.ndarray
+    points: np.ndarray
+    photons: np.ndarray
+    order: np.ndarray
+    seconds: float
+    frames: int
+    timing: ScanTiming | None = None
+
+    def depth(self, camera: Camera) -> np.ndarray:
+        """z-depth (m) of :attr:`points` along ``camera``'s optical axis (the guide view's
+        depth convention of :class:`~simlunar.geometry.types.GroundTruth`); NaN where invalid."""
+        return (self.points - camera.pose.position) @ camera.pose.forward
+
+
+def guide_directions(camera: Camera, rc: np.ndarray) -> np.ndarray:
+    """Unit world directions (k, 3) through the centres of guide pixels ``rc`` (k, 2) (row, col)."""
+    rc = np.asarray(rc, float).reshape(-1, 2)
+    return camera.rays(rc[:, ::-1] + 0.5)[1]
+
+
+def receiver_rc(receiver_shape, guide_shape) -> np.ndarray:
+    """Receiver pixel centres as guide (row, col) index coordinates, (rows * cols, 2) float.
+
+    A co-boresighted receiver of the same field of view: receiver pixel (i, j) has its centre at
+    guide (u, v) = ((j + 1/2) W / w, (i + 1/2) H / h), i.e. index coordinates (v - 1/2, u - 1/2),
+    row-major (the order of a flash scan's flattened arrays).
+    """
+    (h, w), (gh, gw) = receiver_shape, guide_shape
+    i, j = np.mgrid[0:h, 0:w]
+    v, u = (i.ravel() + 0.5) * gh / h, (j.ravel() + 0.5) * gw / w
+    return np.stack([v - 0.5, u - 0.5], axis=1)
+
+
+def beam_capture(terrain, origin, *, options: SteeredBeamOptions, sun=None, bsdf=None):
+    """The reusable render of a steered beam at ``origin`` (3,) m over ``terrain``."""
+    return BeamCapture(
+        terrain,
+        origin,
+        footprint=options.footprint,
+        window=options.window,
+        options=options.transient,
+        bsdf=bsdf,
+        sun=sun,
+        batch=options.batch,
+    )
+
+
+def _counts(hist, background, bins: TimeBins, pulse, detector: DetectorOptions, rng):
+    lam = expected_counts(shape_waveform(hist, bins, pulse), background, bins, detector)
+    if 0 < detector.dead_time_s < np.inf:
+        return photon_counts_dead_time(lam, bins, options=detector, rng=rng)
+    return photon_counts(lam, options=detector, rng=rng)
+
+
+def steered_beam_scan(
+    capture: BeamCapture,
+    directions: np.ndarray,
+    *,
+    options: SteeredBeamOptions,
+    rng=None,
+    boresight: Pose | None = None,
+) -> LidarScan:
+    """Scan planned directions with a steered beam.
+
+    Parameters
+    ----------
+    capture : BeamCapture
+        From :func:`beam_capture` (terrain, origin, sun, BSDF).
+    directions : (n, 3) float
+        Unit world directions of the planned samples, in the planner's order.
+    options : SteeredBeamOptions
+    rng : seed or Generator
+        Photon noise.
+    boresight : Pose or None
+        Gimbal zero (its forward axis); None = looking along the mean direction.
+
+    Returns
+    -------
+    LidarScan
+    """
+    rng = np.random.default_rng(rng)
+    d = np.asarray(directions, float)
+    d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    det = dataclasses.replace(options.detector, pulses=options.steering.pulses_per_point)
+    ret = capture_beams(capture, d, margin_m=options.margin_m, seed=options.transient.seed)
+    bins = options.window
+    bg = 0.0 if ret.sun is None else ret.sun
+    counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng)
+    res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging)
+    valid = res.valid & np.isfinite(ret.start_opl)
+    ranges = np.where(valid, res.range + ret.start_opl / 2.0, np.nan)
+    if boresight is None:
+        boresight = Pose.look_at(capture.origin, capture.origin + d.mean(axis=0))
+    angles = pointing_angles(d, boresight)
+    order = order_scan(angles, steering=options.steering, options=options.order)
+    timing = scan_timing(angles, order, options=options.steering)
+    return LidarScan(
+        ranges=ranges,
+        valid=valid,
+        points=capture.origin + ranges[:, None] * d,
+        photons=res.photons,
+        order=order,
+        seconds=timing.total_s,
+        frames=len(d) * int(options.steering.pulses_per_point),
+        timing=timing,
+    )
+
+
+@dataclass(frozen=True)
+class FlashOptions:
+    """A flash LIDAR: a receiver array lit by whole-field pulses.
+
+    Parameters
+    ----------
+    pulse, detector, ranging, transient
+        As for :class:`SteeredBeamOptions`; ``detector.pulses`` pulses per frame.
+    bin_range_m : float
+        Range width of a time bin (m).
+    margin_m : float
+        Range margin (m) around the terrain's nearest and farthest point in view.
+    pulse_rate_hz : float
+        Pulse repetition rate (1/s): a frame takes ``detector.pulses / pulse_rate_hz``.
+    """
+
+    pulse: PulseOptions = field(default_factory=PulseOptions)
+    detector: DetectorOptions = field(default_factory=DetectorOptions)
+    ranging: RangeOptions = field(default_factory=RangeOptions)
+    transient: TransientOptions = field(default_factory=TransientOptions)
+    bin_range_m: float = 0.05
+    margin_m: float = 2.0
+    pulse_rate_hz: float = 30.0
+
+    def __post_init__(self) -> None:
+        if not (self.bin_range_m > 0 and self.margin_m >= 0 and self.pulse_rate_hz > 0):
+            raise ValueError("need bin_range_m > 0, margin_m >= 0 and pulse_rate_hz > 0")
+
+
+def range_window(terrain, camera: Camera, *, bin_range_m: float, margin_m: float) -> TimeBins:
+    """Bins covering every terrain cell in ``camera``'s view, with ``margin_m`` (m) each side."""
+    p = terrain.points().reshape(-1, 3)
+    p = p[np.isfinite(p).all(axis=1)]
+    stride = max(1, len(p) // 200_000)
+    p = p[::stride]
+    uv, z = camera.project(p)
+    u, v = uv[:, 0], uv[:, 1]
+    h, w = camera.shape
+    inside = (z > 0) & (u >= 0) & (u <= w) & (v >= 0) & (v <= h)
+    if not inside.any():
+        raise ValueError("camera: no terrain cell in view")
+    r = np.linalg.norm(p[inside] - camera.pose.position, axis=1)
+    near = max(float(r.min()) - margin_m, 0.0)
+    return TimeBins.for_ranges(near, float(r.max()) + margin_m, bin_range_m)
+
+
+def _read_frame(frame, options: FlashOptions, rng):
+    bg = 0.0 if frame.sun is None else frame.sun
+    counts = _counts(frame.histograms, bg, frame.bins, options.pulse, options.detector, rng)
+    return extract_ranges(counts, frame.bins, pulse=options.pulse, options=options.ranging)
+
+
+def flash_scan(
+    terrain, camera: Camera, *, options: FlashOptions, rng=None, sun=None, bsdf=None
+) -> LidarScan:
+    """One flash frame read by every receiver pixel (arrays (rows, cols) of ``camera``).
+
+    Parameters
+    ----------
+    terrain : Terrain
+    camera : geometry.Camera
+        The receiver array (e.g. 128 x 128), co-boresighted with the guide camera.
+    options : FlashOptions
+    rng : seed or Generator
+    sun : SunLight or None
+    bsdf : BSDF spec or None
+
+    Returns
+    -------
+    LidarScan
+        ``points`` along each pixel centre's ray; ``frames`` = 1.
+    """
+    rng = np.random.default_rng(rng)
+    bins = range_window(terrain, camera, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
+    frame = flash_frame(terrain, camera, bins=bins, options=options.transient, bsdf=bsdf, sun=sun)
+    res = _read_frame(frame, options, rng)
+    _, d = camera.rays(camera.pixel_centers())
+    return LidarScan(
+        ranges=res.range,
+        valid=res.valid,
+        points=camera.pose.position + res.range[..., None] * d,
+        photons=res.photons,
+        order=np.arange(res.range.size).reshape(res.range.shape),
+        seconds=options.detector.pulses / options.pulse_rate_hz,
+        frames=1,
+    )
+
+
+def micromirror_frames(pixels: np.ndarray, camera: Camera, receiver_shape) -> np.ndarray:
+    """Frame index (k,) of each planned pixel: dots sharing a receiver pixel never share a frame.
+
+    ``pixels`` (k, 2) are (u, v) in ``camera``; the receiver (rows, cols) sees the same field
+    of view, so receiver pixel = floor of the scaled (u, v), at any depth (co-located).
+    """
+    rh, rw = receiver_shape
+    h, w = camera.shape
+    uv = np.asarray(pixels, float)
+    cell = np.floor(uv[:, 1] * rh / h).astype(np.int64) * rw + np.floor(uv[:, 0] * rw / w)
+    cell = cell.astype(np.int64)
+    order = np.argsort(cell, kind="stable")
+    sc = cell[order]
+    first = np.searchsorted(sc, sc, side="left")
+    frames = np.empty(len(uv), np.int64)
+    frames[order] = np.arange(len(uv)) - first
+    return frames
+
+
+def micromirror_flash(
+    terrain,
+    camera: Camera,
+    pixels: np.ndarray,
+    *,
+    options: FlashOptions,
+    receiver_shape: tuple[int, int] = (64, 64),
+    rng=None,
+    sun=None,
+    bsdf=None,
+) -> LidarScan:
+    """Micromirror-steered flash: light only the planned pixels, time them on a small receiver.
+
+    A micromirror projector with ``camera``'s pose and intrinsics lights the planned pixels
+    (one projector pixel each); a co-located receiver of ``receiver_shape`` with the same
+    field of view times the returns. Dots in the same receiver pixel go to different frames
+    (:func:`micromirror_frames`). Every receiver pixel ray only gets light where it meets a
+    lit dot, so the render needs ``options.transient.spp`` of about
+    ``(camera pixels / receiver pixels) x 16`` for a clean return.
+
+    Parameters
+    ----------
+    terrain : Terrain
+    camera : geometry.Camera
+        The guide camera (centred principal point, square pixels).
+    pixels : (k, 2) float
+        Planned (u, v) pixel coordinates in ``camera``.
+    options : FlashOptions
+    receiver_shape : (rows, cols)
+    rng, sun, bsdf
+        As for :func:`flash_scan`.
+
+    Returns
+    -------
+    LidarScan
+        Arrays over the k planned pixels; ``frames`` = flash frames fired.
+    """
+    rng = np.random.default_rng(rng)
+    uv = np.asarray(pixels, float).reshape(-1, 2)
+    h, w = camera.shape
+    rh, rw = (int(x) for x in receiver_shape)
+    receiver = Camera(camera.intrinsics.scaled(rw / w), camera.pose)
+    if receiver.shape != (rh, rw):
+        raise ValueError(f"receiver_shape {receiver_shape} must keep the aspect of {(h, w)}")
+    projector = Projector(camera.intrinsics, camera.pose)
+    bins = range_window(terrain, camera, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
+    frame_of = micromirror_frames(uv, camera, (rh, rw))
+    ranges, photons = np.full(len(uv), np.nan), np.zeros(len(uv))
+    col = np.clip(np.floor(uv[:, 0] * rw / w).astype(int), 0, rw - 1)
+    row = np.clip(np.floor(uv[:, 1] * rh / h).astype(int), 0, rh - 1)
+    n_frames = int(frame_of.max()) + 1 if len(uv) else 0
+    for f in range(n_frames):
+        sel = np.flatnonzero(frame_of == f)
+        pattern = np.zeros((h, w), np.float32)
+        pattern[
+            np.clip(uv[sel, 1].astype(int), 0, h - 1), np.clip(uv[sel, 0].astype(int), 0, w - 1)
+        ] = 1.0
+        light = ProjectorLight(projector, pattern, scale=options.transient.laser_intensity)
+        fr = flash_frame(
+            terrain,
+            receiver,
+            bins=bins,
+            options=options.transient,
+            bsdf=bsdf,
+            sun=sun,
+            projector=light,
+        )
+        res = _read_frame(fr, options, rng)
+        ranges[sel], photons[sel] = res.range[row[sel], col[sel]], res.photons[row[sel], col[sel]]
+    _, d = camera.rays(uv)
+    valid = np.isfinite(ranges)
+    return LidarScan(
+        ranges=ranges,
+        valid=valid,
+        points=camera.pose.position + ranges[:, None] * d,
+        photons=photons,
+        order=np.arange(len(uv)),
+        seconds=n_frames * options.detector.pulses / options.pulse_rate_hz,
+        frames=n_frames,
+    )

@@ -1,0 +1,358 @@
+"""Structured-light scans: a full gray-code scan and a dot scan of given projector pixels.
+
+The scans are NumPy-only and drive any *capture* object (the
+:class:`~simlunar.render.capture.Capture` protocol) with two methods:
+
+``capture.render(patterns) -> (n, rows, cols) float``
+    Noise-free camera images of the scene under ``n`` projector patterns (projector shape
+    (H, W), values in [0, 1]). Each pattern counts as one render.
+``capture.sense(images) -> (n, rows, cols) float``
+    Captured frames: sensor noise, quantisation and response applied per frame.
+
+:class:`simlunar.render.capture.RenderCapture` is the Mitsuba-backed capture; tests use NumPy
+ones. The scan *modes* (gray code, ambiguity enhancement, data reduction) are modes of the
+structured-light sensor, :mod:`simlunar.sensors.structured_light`.
+Inverse patterns come from linearity of light transport (``bits + 2`` renders instead of
+``2 * bits + 2``) unless ``inverses="render"``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.geometry import Rig
+from simlunar.scanner import dots as _dots
+from simlunar.scanner import gray_code as gc
+from simlunar.scanner.scheduling import schedule_dots
+from simlunar.scanner.subpixel import refine_subpixel_from_diff
+from simlunar.scanner.triangulate import (
+    Correspondences,
+    PointCloud,
+    check_rig,
+    depth_at_proj_pixels,
+    triangulate,
+)
+
+__all__ = [
+    "SCAN_PLANNERS",
+    "DotOptions",
+    "DotScan",
+    "GrayCodeOptions",
+    "GrayScan",
+    "dot_scan",
+    "gray_code_scan",
+    "low_contrast_pixels",
+]
+
+
+@dataclass(frozen=True)
+class GrayCodeOptions:
+    """Options of :func:`gray_code_scan` (OpenCV's decoder conventions).
+
+    Attributes
+    ----------
+    black_threshold, white_threshold : float in [0, 1]
+        OpenCV's validity and bit-reliability thresholds in captured-frame units.
+    inverses : "linearity" or "render"
+        Obtain inverse-pattern images from white, black and pattern renders, or render them.
+    method : "plane" (camera ray x projector column plane) or "rays" (column and row rays)
+    require_reliable : bool
+        A pixel with any unreliable bit is invalid (OpenCV's behaviour).
+    subpixel : bool
+        Sub-pixel stripe-edge refinement of the decoded columns and rows
+        (:func:`simlunar.scanner.subpixel.refine_subpixel`) instead of projector pixel centres.
+    keep_frames : bool
+        Keep the captured stack in ``GrayScan.frames["images"]`` (white and black are always
+        kept).
+    """
+
+    black_threshold: float = 0.05
+    white_threshold: float = 0.01
+    inverses: str = "linearity"
+    method: str = "plane"
+    require_reliable: bool = True
+    subpixel: bool = False
+    keep_frames: bool = False
+
+    def __post_init__(self):
+        for name in ("black_threshold", "white_threshold"):
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name} must lie in [0, 1] (frame units), got {v}")
+        if self.inverses not in ("linearity", "render"):
+            raise ValueError(
+                f"unknown inverses option {self.inverses!r}; valid: 'linearity', 'render'"
+            )
+        if self.method not in ("plane", "rays"):
+            raise ValueError(f"unknown method {self.method!r}; valid: 'plane', 'rays'")
+
+
+@dataclass(frozen=True)
+class DotOptions:
+    """Options of :func:`dot_scan`.
+
+    Attributes
+    ----------
+    exact : bool
+        One dot per frame (reference mode) instead of multiplexed frames.
+    radius : float >= 0
+        Dot radius in projector pixels (0 = one pixel).
+    min_proj_spacing, min_cam_spacing, tol : float >= 0
+        Scheduling spacings (projector px, camera px) and the matching tolerance (camera px).
+    rel_threshold, abs_threshold : float in [0, 1]
+        Blob detection thresholds (relative to the frame's brightest dot; absolute in frame
+        units). The relative one stays low because a multiplexed frame mixes bright and dark
+        surfaces: a dot on dark soil must not be lost next to one on a bright rock.
+    batch : int >= 1
+        Frames rendered per ``capture.render`` call (memory bound only).
+    """
+
+    exact: bool = False
+    radius: float = 0.0
+    min_proj_spacing: float = 8.0
+    min_cam_spacing: float = 6.0
+    tol: float = 2.0
+    rel_threshold: float = 0.02
+    abs_threshold: float = 0.02
+    batch: int = 8
+
+    def __post_init__(self):
+        for name in ("radius", "min_proj_spacing", "min_cam_spacing", "tol"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"{name} must be >= 0 px, got {getattr(self, name)}")
+        for name in ("rel_threshold", "abs_threshold"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(f"{name} must lie in [0, 1], got {getattr(self, name)}")
+        if int(self.batch) < 1:
+            raise ValueError(f"batch must be >= 1, got {self.batch}")
+
+
+@dataclass(frozen=True, eq=False)
+class GrayScan:
+    """Result of a full gray-code scan.
+
+    Attributes
+    ----------
+    decode : GrayDecode (camera view)
+    cloud : PointCloud of every valid camera pixel
+    depth : (H, W) float64 z-depth in the guide (projector) view, NaN holes
+    renders : int number of rendered frames
+    frames : dict of the captured 'white' and 'black' frames and, with ``keep_frames``, the
+        'images' (OpenCV-ordered stack)
+    """
+
+    decode: gc.GrayDecode
+    cloud: PointCloud
+    depth: np.ndarray
+    renders: int
+    frames: dict = field(repr=False)
+
+
+@dataclass(frozen=True, eq=False)
+class DotScan:
+    """Result of scanning a set of dots.
+
+    Attributes
+    ----------
+    proj_uv : (n, 2) projector coordinates of the dots asked for
+    found : (n,) bool dots detected and triangulated
+    cam_uv : (n, 2) camera centroids (NaN where not found)
+    cloud : PointCloud of the found dots
+    depth : (H, W) guide-view depth with only the found dots' pixels set (NaN elsewhere)
+    renders : int frames rendered (dot frames + one black frame)
+    frames_per_dot : list of index arrays (the schedule)
+    n_ghosts : int blobs rejected as interreflection ghosts or ambiguities
+    """
+
+    proj_uv: np.ndarray
+    found: np.ndarray
+    cam_uv: np.ndarray
+    cloud: PointCloud
+    depth: np.ndarray
+    renders: int
+    frames_per_dot: list
+    n_ghosts: int
+
+
+def _check_patterns(capture, patterns: np.ndarray) -> np.ndarray:
+    imgs = np.asarray(capture.render(patterns))
+    if imgs.ndim != 3 or imgs.shape[0] != len(patterns):
+        raise ValueError(f"capture.render returned shape {imgs.shape} for {len(patterns)} patterns")
+    if imgs.dtype not in (np.float32, np.float64):
+        imgs = imgs.astype(np.float64)
+    return imgs
+
+
+def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) -> GrayScan:
+    """Full gray-code scan (columns and rows) decoded and triangulated.
+
+    Frames are streamed into a :class:`~simlunar.scanner.gray_code.GrayDecoder` as they are
+    captured: white and black are rendered first, then each bit's pattern (and its inverse,
+    by linearity or rendered) is rendered, sensed and decoded before the next, so memory
+    holds a few frames plus the per-pixel bits, never the whole stack. Frames are sensed in
+    OpenCV stack order (pattern, inverse pairs, then white and black).
+
+    Parameters
+    ----------
+    capture : object with ``render`` and ``sense`` (module docstring)
+    rig : Rig
+    options : GrayCodeOptions, optional
+        Thresholds, inverses, triangulation method, sub-pixel refinement, kept frames.
+
+    Returns
+    -------
+    GrayScan
+    """
+    check_rig(rig)
+    o = options or GrayCodeOptions()
+    H, W = rig.projector.intrinsics.shape
+    stack = gc.encode(W, H)
+    n_bits = len(stack) // 2
+    wb_r = _check_patterns(
+        capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
+    )
+    renders = 2
+    dec = gc.GrayDecoder(
+        (H, W),
+        wb_r.shape[1:],
+        black_threshold=o.black_threshold,
+        white_threshold=o.white_threshold,
+        keep_diff=o.subpixel,
+    )
+    kept = [] if o.keep_frames else None
+    for k in range(n_bits):
+        if o.inverses == "linearity":
+            pat_r = _check_patterns(capture, stack[2 * k : 2 * k + 1].astype(np.float32) / 255.0)
+            pair_r = np.concatenate([pat_r, gc.inverses_by_linearity(pat_r, wb_r[0], wb_r[1])])
+            renders += 1
+        else:
+            pair_r = _check_patterns(capture, stack[2 * k : 2 * k + 2].astype(np.float32) / 255.0)
+            renders += 2
+        pair = np.asarray(capture.sense(pair_r))
+        dec.add_pair(k, pair[0], pair[1])
+        if kept is not None:
+            kept.append(pair)
+    white, black = np.asarray(capture.sense(wb_r))
+    dec.add_white_black(white, black)
+    result = dec.result(require_reliable=o.require_reliable)
+    if o.subpixel:
+        result = refine_subpixel_from_diff(result, dec.diff)
+    cloud = triangulate(rig, Correspondences.from_gray(result), method=o.method)
+    depth = depth_at_proj_pixels(cloud, rig.guide)
+    frames = {"white": white, "black": black}
+    if kept is not None:
+        frames["images"] = np.concatenate(kept)
+    return GrayScan(
+        decode=result,
+        cloud=cloud,
+        depth=depth,
+        renders=renders,
+        frames=frames,
+    )
+
+
+def dot_scan(
+    capture,
+    rig: Rig,
+    proj_uv,
+    *,
+    depth_range: tuple[float, float],
+    options: DotOptions | None = None,
+) -> DotScan:
+    """Scan dots (one projector pixel or a small disk each), multiplexed or one per frame.
+
+    Parameters
+    ----------
+    capture : object with ``render`` and ``sense``
+    rig : Rig
+    proj_uv : (n, 2) projector pixel coordinates of the dots (n >= 1)
+    depth_range : (near, far) projector z-depths bounding the scene (m): sets the epipolar
+        segments used for scheduling and matching
+    options : DotOptions, optional
+        Dot size, scheduling spacings, matching tolerance, detection thresholds, batch.
+
+    Returns
+    -------
+    DotScan
+    """
+    check_rig(rig)
+    proj_uv = np.asarray(proj_uv, float)
+    if proj_uv.ndim != 2 or proj_uv.shape[1] != 2 or len(proj_uv) == 0:
+        raise ValueError(
+            f"dot set is empty or not (n, 2): got shape {proj_uv.shape}; a dot scan "
+            "needs at least one dot"
+        )
+    o = options or DotOptions()
+    H, W = rig.projector.intrinsics.shape
+    schedule = schedule_dots(
+        rig,
+        proj_uv,
+        depth_range=depth_range,
+        min_proj_spacing=o.min_proj_spacing,
+        min_cam_spacing=o.min_cam_spacing,
+        exact=o.exact,
+    )
+    black = np.asarray(capture.sense(_check_patterns(capture, np.zeros((1, H, W), np.float32))))[0]
+    segments = _dots.epipolar_segments(rig, proj_uv, depth_range)
+    cam_uv = np.full((len(proj_uv), 2), np.nan)
+    n_ghosts = 0
+    for start in range(0, len(schedule), o.batch):
+        group = schedule[start : start + o.batch]
+        pats = np.stack([_dots.dot_pattern((H, W), proj_uv[f], radius=o.radius) for f in group])
+        frames = np.asarray(capture.sense(_check_patterns(capture, pats)))
+        for f, frame in zip(group, frames):
+            det = _dots.detect_dots(
+                frame,
+                background=black,
+                rel_threshold=o.rel_threshold,
+                abs_threshold=o.abs_threshold,
+            )
+            m = _dots.match_dots(det, segments[f], tol=o.tol)
+            cam_uv[f[m.dot]] = m.cam_uv
+            n_ghosts += m.n_ghosts
+    found = np.isfinite(cam_uv).all(axis=1)
+    cloud = triangulate(rig, Correspondences(cam_uv[found], proj_uv[found]), method="rays")
+    depth = depth_at_proj_pixels(cloud, rig.guide)
+    return DotScan(
+        proj_uv=proj_uv,
+        found=found,
+        cam_uv=cam_uv,
+        cloud=cloud,
+        depth=depth,
+        renders=len(schedule) + 1,
+        frames_per_dot=schedule,
+        n_ghosts=n_ghosts,
+    )
+
+
+#: rescan planners that rank pixels by the gray-code scan itself rather than by the guide
+#: image (``ambiguity_enhancement`` only: they need the scan)
+SCAN_PLANNERS = ("low_contrast",)
+
+
+def low_contrast_pixels(gray: GrayScan, k: int, *, rng) -> np.ndarray:
+    """The ``k`` guide pixels the gray-code scan saw with the least contrast: (k, 2) (row, col).
+
+    Each projector pixel (= guide pixel) gets the lowest ``white - black`` contrast of the lit
+    camera pixels whose gray code decodes to it (whether or not every bit was reliable: a
+    dim pixel's code is what it is, and a wrong code puts a wrong depth at the pixel it names);
+    the ``k`` lowest are rescanned, ties in random order. Projector pixels no lit camera pixel
+    decodes to come last: the camera cannot see a dot there either. The threshold ablation
+    (docs/scanner.md) finds most of the gray code's squared error in its lowest-contrast
+    pixels.
+    """
+    dec = gray.decode
+    if dec.contrast is None:
+        raise ValueError("low_contrast needs a decode with its contrast (GrayDecoder.result)")
+    H, W = dec.proj_shape
+    if not 1 <= int(k) <= H * W:
+        raise ValueError(f"k must be in 1..{H * W}, got {k}")
+    col, row = dec.decoded_index()
+    ok = dec.lit & (col < W) & (row < H)
+    lowest = np.full(H * W, np.inf)
+    np.minimum.at(lowest, (row[ok] * W + col[ok]).ravel(), dec.contrast[ok].ravel())
+    tie = np.random.default_rng(rng).random(H * W)
+    order = np.lexsort((tie, lowest))[: int(k)]
+    return np.stack([order // W, order % W], axis=-1).astype(np.int64)

@@ -1,0 +1,97 @@
+"""Photon counting: Poisson shot noise with the rendered mean, pile-up, Coates."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from simlunar.lidar import (
+    DetectorOptions,
+    TimeBins,
+    coates_correction,
+    expected_counts,
+    photon_counts,
+    photon_counts_dead_time,
+)
+
+BINS = TimeBins(start_opl=90.0, bin_opl=0.3, count=40)
+
+
+def test_expected_counts_adds_sun_per_bin_and_dark_counts():
+    sig = np.zeros((2, BINS.count))
+    sig[0, 10] = 2.0
+    opts = DetectorOptions(
+        signal_photons=50.0, background_photons_per_s=1e9, dark_count_rate_hz=1e6
+    )
+    lam = expected_counts(sig, np.array([0.5, 0.0]), BINS, opts)
+    per_bin = (0.5 * 1e9 + 1e6) * BINS.bin_s  # sun radiance * scale * bin duration
+    assert lam[0, 0] == pytest.approx(per_bin)
+    assert lam[0, 10] == pytest.approx(100.0 + per_bin)
+    assert lam[1, 5] == pytest.approx(1e6 * BINS.bin_s)
+
+
+def test_counts_are_poisson_with_the_rendered_mean():
+    # dispersion test: for Poisson, sum (x - m)^2 / m over N draws is chi^2 with N dof
+    mean = np.full(20_000, 3.7)
+    x = photon_counts(mean, options=DetectorOptions(pulses=1), rng=1)
+    d = np.sum((x - 3.7) ** 2 / 3.7)
+    p = stats.chi2.sf(d, df=x.size)
+    assert 0.001 < p < 0.999
+    assert x.mean() == pytest.approx(3.7, rel=0.02)
+    # pulses accumulate: mean and variance scale with their number
+    y = photon_counts(np.full(20_000, 0.2), options=DetectorOptions(pulses=10), rng=2)
+    assert y.mean() == pytest.approx(2.0, rel=0.03)
+    assert y.var() == pytest.approx(2.0, rel=0.05)
+
+
+def test_first_photon_receiver_piles_up_and_coates_undoes_it():
+    lam = np.zeros(BINS.count)
+    lam[:] = 0.02
+    lam[20] = 1.0  # strong return
+    opts = DetectorOptions(pulses=20_000, dead_time_s=np.inf)
+    h = photon_counts(np.broadcast_to(lam, (4, BINS.count)), options=opts, rng=3)
+    assert (h.sum(axis=1) <= opts.pulses).all()
+    # early bins see every armed pulse, late bins are starved after the strong return
+    assert h[:, 25:].mean() < 0.5 * h[:, :15].mean()
+    est = coates_correction(h, opts.pulses).mean(axis=0)
+    assert est[20] == pytest.approx(1.0, rel=0.05)
+    assert est[30] == pytest.approx(0.02, rel=0.25)
+
+
+def test_finite_dead_time_blinds_the_following_bins():
+    lam = np.full((2000, BINS.count), 0.0)
+    lam[:, 10] = 50.0  # surely detected
+    lam[:, 11:14] = 5.0
+    dead = 2.5 * BINS.bin_s  # -> 3 bins blind after a detection
+    opts = DetectorOptions(pulses=1, dead_time_s=dead)
+    h = photon_counts_dead_time(lam, BINS, options=opts, rng=4)
+    assert h[:, 10].mean() > 0.99
+    assert h[:, 11:14].sum() == 0  # blind
+    with pytest.raises(ValueError, match="bin width"):
+        photon_counts(lam, options=opts, rng=0)
+
+
+def test_bad_options_are_rejected():
+    with pytest.raises(ValueError, match="pulses"):
+        DetectorOptions(pulses=0)
+    with pytest.raises(ValueError, match="signal_photons"):
+        DetectorOptions(signal_photons=-1.0)
+
+
+def test_link_budget_is_the_lidar_equation():
+    # 10 uJ at 1064 nm, 2e-3 m^2, 30 %: a Lambertian plane of albedo 0.12 at 50 m returns
+    # E rho A eta / (pi R^2 h nu) photons; the renderer gives L = rho / (pi R^2) at 1 W/sr
+    from simlunar.lidar import LinkBudget
+
+    lb = LinkBudget()
+    hnu = 6.62607015e-34 * 299_792_458.0 / 1064e-9
+    want = 10e-6 * 0.12 * 2e-3 * 0.3 / (np.pi * 50.0**2 * hnu)
+    det = lb.detector(pulses=3)
+    assert det.pulses == 3
+    assert det.signal_photons * 0.12 / (np.pi * 50.0**2) == pytest.approx(want)
+    flash = LinkBudget(field_sr=1e-6, lit_sr=1e-2)  # one pixel of a 10^4-pixel flash
+    # field / lit = 1e-4: the pulse's energy shared by 10^4 pixels
+    assert flash.detector().signal_photons == pytest.approx(lb.detector().signal_photons * 1e-4)
+    with pytest.raises(ValueError, match="efficiency"):
+        LinkBudget(efficiency=1.5)

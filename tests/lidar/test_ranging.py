@@ -1,0 +1,79 @@
+"""Range extraction on synthetic waveforms: within one bin; first / last / strongest."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.lidar import (
+    DetectorOptions,
+    PulseOptions,
+    RangeOptions,
+    TimeBins,
+    expected_counts,
+    extract_ranges,
+    photon_counts,
+    shape_waveform,
+)
+
+BINS = TimeBins.for_ranges(40.0, 60.0, 0.05)  # 400 bins of 5 cm
+PULSE = PulseOptions(fwhm_s=1e-9, jitter_s=0.1e-9)
+
+
+def _impulse(ranges, weights=None):
+    """Impulse responses with their returns at ``ranges`` (m), split linearly between bins."""
+    ranges = np.atleast_2d(ranges)
+    w = np.ones_like(ranges) if weights is None else np.atleast_2d(weights)
+    h = np.zeros((ranges.shape[0], BINS.count))
+    x = (2 * ranges - BINS.start_opl) / BINS.bin_opl - 0.5  # fractional bin centre index
+    i0 = np.floor(x).astype(int)
+    f = x - i0
+    for r in range(ranges.shape[0]):
+        for j in range(ranges.shape[1]):
+            h[r, i0[r, j]] += w[r, j] * (1 - f[r, j])
+            h[r, i0[r, j] + 1] += w[r, j] * f[r, j]
+    return h
+
+
+@pytest.mark.parametrize("method, photons", [("matched", 40.0), ("peak", 200.0)])
+def test_noisy_single_returns_within_one_bin(method, photons):
+    rng = np.random.default_rng(0)
+    truth = rng.uniform(42.0, 58.0, 300)
+    sig = shape_waveform(_impulse(truth[:, None]), BINS, PULSE)
+    det = DetectorOptions(signal_photons=photons, background_photons_per_s=5e8)
+    counts = photon_counts(expected_counts(sig, 1.0, BINS, det), options=det, rng=1)
+    res = extract_ranges(counts, BINS, pulse=PULSE, options=RangeOptions(method=method))
+    assert res.valid.mean() > 0.98
+    err = np.abs(res.range[res.valid] - truth[res.valid])
+    assert np.quantile(err, 0.99) < BINS.bin_range
+    assert res.photons[res.valid].mean() == pytest.approx(photons, rel=0.3)
+
+
+def test_noise_free_reading_is_sub_bin():
+    truth = np.linspace(45.0, 55.0, 37)
+    sig = shape_waveform(_impulse(truth[:, None]), BINS, PULSE)
+    res = extract_ranges(100 * sig, BINS, pulse=PULSE)
+    assert np.abs(res.range - truth).max() < 0.25 * BINS.bin_range
+
+
+def test_first_last_strongest_of_two_returns():
+    truth = np.array([[47.0, 52.0]])
+    sig = 100 * shape_waveform(_impulse(truth, [[0.3, 1.0]]), BINS, PULSE)
+    for which, want in (("first", 47.0), ("last", 52.0), ("strongest", 52.0)):
+        res = extract_ranges(sig, BINS, pulse=PULSE, options=RangeOptions(which=which))
+        assert res.returns[0] == 2
+        assert res.range[0] == pytest.approx(want, abs=BINS.bin_range)
+
+
+def test_background_alone_gives_no_return():
+    det = DetectorOptions(background_photons_per_s=2e9)
+    lam = expected_counts(np.zeros((500, BINS.count)), 1.0, BINS, det)
+    counts = photon_counts(lam, options=det, rng=5)
+    res = extract_ranges(counts, BINS, pulse=PULSE)
+    assert res.valid.mean() < 0.01
+    assert np.isnan(res.range[~res.valid]).all()
+
+
+def test_unknown_method_lists_the_valid_ones():
+    with pytest.raises(ValueError, match="matched, peak"):
+        RangeOptions(method="cfd")

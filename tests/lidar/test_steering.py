@@ -1,0 +1,84 @@
+"""Steering mechanics: move, settle and dwell times by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.geometry import Pose
+from simlunar.lidar import (
+    SteeringOptions,
+    axis_move_time,
+    move_time,
+    pointing_angles,
+    raster_order,
+    scan_timing,
+)
+
+# v = 1 rad/s, a = 10 rad/s^2: the axis reaches full speed after v^2/a = 0.1 rad
+OPTS = SteeringOptions(
+    max_rate_rad_s=1.0,
+    max_accel_rad_s2=10.0,
+    settle_s=0.01,
+    pulse_rate_hz=100.0,
+    pulses_per_point=2,
+)
+
+
+def test_axis_move_time_triangle_and_trapezoid():
+    # 0.1 rad: triangle, 2 sqrt(0.1 / 10) = 0.2 s; 0.4 rad: 0.4 / 1 + 1 / 10 = 0.5 s
+    assert axis_move_time([0.1, -0.4, 0.0], OPTS) == pytest.approx([0.2, 0.5, 0.0])
+    assert axis_move_time(0.025, OPTS) == pytest.approx(0.1)
+
+
+def test_both_axes_move_at_once():
+    a = np.array([[0.0, 0.0]])
+    b = np.array([[0.1, 0.4]])
+    assert move_time(a, b, OPTS) == pytest.approx([0.5 + 0.01])
+    assert move_time(a, a, OPTS) == pytest.approx([0.0])  # no move, no settle
+
+
+def test_scan_time_by_hand():
+    pts = np.array([[0.0, 0.0], [0.1, 0.0], [0.1, 0.4], [0.1, 0.4]])
+    t = scan_timing(pts, options=OPTS)
+    # moves: 0.2 s (0.1 rad), 0.5 s (0.4 rad), none; 2 settles; 4 dwells of 2 / 100 s
+    assert t.move_s == pytest.approx(0.7)
+    assert t.settle_s == pytest.approx(0.02)
+    assert t.dwell_s == pytest.approx(0.08)
+    assert t.total_s == pytest.approx(0.8)
+    # from a start pointing, the first move counts too; an order permutes the points
+    t2 = scan_timing(pts, [1, 0, 2, 3], options=OPTS, start=[0.1, 0.0])
+    assert t2.total_s == pytest.approx((0.0 + 0.2 + 0.5) + 2 * 0.01 + 0.08)
+
+
+def test_raster_scan_time_by_hand():
+    # 2 x 3 grid, pitch 0.1 rad: serpentine = 5 moves of 0.1 rad (0.2 s each, +0.01 settle)
+    az, el = np.meshgrid([0.0, 0.1, 0.2], [0.1, 0.0])
+    pts = np.stack([az.ravel(), el.ravel()], axis=1)[[4, 0, 5, 2, 1, 3]]  # shuffled
+    order = raster_order(pts, 0.1)
+    ordered = pts[order]
+    assert np.allclose(ordered[:, 1], [0.1, 0.1, 0.1, 0.0, 0.0, 0.0])
+    assert np.allclose(ordered[:, 0], [0.0, 0.1, 0.2, 0.2, 0.1, 0.0])
+    assert scan_timing(pts, order, options=OPTS).total_s == pytest.approx(5 * 0.21 + 6 * 0.02)
+
+
+def test_pointing_angles_of_a_nadir_gimbal():
+    pose = Pose.look_at([0.0, 0.0, 50.0], [0.0, 0.0, 0.0], up=(0.0, 1.0, 0.0))
+    right = pose.rotation[:, 0]
+    up = -pose.rotation[:, 1]
+    d = np.stack(
+        [
+            pose.forward,
+            np.cos(0.1) * pose.forward + np.sin(0.1) * right,
+            np.cos(0.2) * pose.forward + np.sin(0.2) * up,
+        ]
+    )
+    ang = pointing_angles(d, pose)
+    assert ang == pytest.approx(np.array([[0, 0], [0.1, 0], [0, 0.2]]), abs=1e-12)
+
+
+def test_bad_mechanics_are_rejected():
+    with pytest.raises(ValueError, match="max_rate_rad_s"):
+        SteeringOptions(max_rate_rad_s=0.0)
+    with pytest.raises(ValueError, match="shape"):
+        scan_timing(np.zeros((3, 3)), options=OPTS)

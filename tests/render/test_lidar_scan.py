@@ -1,0 +1,139 @@
+"""LIDAR acquisitions end to end on a plane: steered beam, flash, micromirror flash."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.geometry import Camera, Intrinsics, Pose
+from simlunar.lidar import (
+    DetectorOptions,
+    FootprintOptions,
+    OrderOptions,
+    PulseOptions,
+    SteeringOptions,
+    scan_timing,
+)
+from simlunar.terrain import Terrain
+
+pytestmark = pytest.mark.render
+
+H = 50.0
+# about 50 signal photons per pulse from the plane at 50 m (rendered L = 0.2 / (pi R^2))
+DET = DetectorOptions(signal_photons=2e6, background_photons_per_s=0.0, pulses=4)
+
+
+def _plane(size: float = 80.0) -> Terrain:
+    n = int(size)
+    return Terrain(
+        heights=np.zeros((n, n)),
+        albedo=np.full((n, n), 0.2, np.float32),
+        spacing=1.0,
+        origin=(-size / 2, size / 2),
+    )
+
+
+def _camera(px: int, fov_deg: float) -> Camera:
+    pose = Pose.look_at([0.0, 0.0, H], [0.0, 0.0, 0.0], up=(0.0, 1.0, 0.0))
+    return Camera(Intrinsics.from_fov(px, px, fov_deg), pose)
+
+
+def test_steered_beam_scan_on_a_plane(mi):
+    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+
+    steer = SteeringOptions(
+        max_rate_rad_s=1.0,
+        max_accel_rad_s2=10.0,
+        settle_s=1e-3,
+        pulse_rate_hz=1000.0,
+        pulses_per_point=4,
+    )
+    opts = SteeredBeamOptions(
+        footprint=FootprintOptions(5e-4, samples=8),
+        pulse=PulseOptions(fwhm_s=1e-9),
+        detector=DET,
+        steering=steer,
+        window_m=4.0,
+        margin_m=1.0,
+        batch=32,
+    )
+    cam = _camera(64, 40.0)
+    uv = np.random.default_rng(0).uniform(0, 64, (50, 2))
+    from simlunar.render.lidar_scan import guide_directions
+
+    d = guide_directions(cam, uv[:, ::-1] - 0.5)  # the same rays, from (row, col)
+    assert d == pytest.approx(cam.rays(uv)[1])
+    scan = steered_beam_scan(
+        beam_capture(_plane(), cam.position, options=opts),
+        d,
+        options=opts,
+        rng=1,
+        boresight=cam.pose,
+    )
+    truth = H / -d[:, 2]
+    assert scan.valid.all()
+    assert np.abs(scan.ranges - truth).max() < opts.bin_range_m
+    assert scan.points[:, 2] == pytest.approx(0.0, abs=opts.bin_range_m)
+    assert scan.depth(cam) == pytest.approx(H, abs=opts.bin_range_m)  # nadir view of z = 0
+    from simlunar.lidar import pointing_angles
+
+    ang = pointing_angles(d, cam.pose)
+    assert sorted(scan.order) == list(range(50))
+    assert scan.seconds == pytest.approx(scan_timing(ang, scan.order, options=steer).total_s)
+    assert scan.seconds <= scan_timing(ang, options=steer).total_s
+    assert scan.frames == 200
+    raster = steered_beam_scan(
+        beam_capture(_plane(), cam.position, options=opts),
+        d,
+        rng=1,
+        boresight=cam.pose,
+        options=SteeredBeamOptions(**{**opts.__dict__, "order": OrderOptions(method="raster")}),
+    )
+    assert scan.seconds < raster.seconds
+
+
+def test_flash_scan_on_a_plane(mi):
+    from simlunar.render.lidar_scan import FlashOptions, flash_scan
+    from simlunar.render.transient import TransientOptions
+
+    cam = _camera(16, 4.0)
+    opts = FlashOptions(
+        detector=DET,
+        pulse=PulseOptions(fwhm_s=1e-9),
+        transient=TransientOptions(spp=8),
+        pulse_rate_hz=20.0,
+    )
+    scan = flash_scan(_plane(), cam, options=opts, rng=0)
+    assert scan.ranges.shape == (16, 16)
+    d = cam.rays(cam.pixel_centers())[1]
+    assert scan.valid.all()
+    assert np.abs(scan.ranges - H / -d[..., 2]).max() < opts.bin_range_m
+    assert scan.seconds == pytest.approx(4 / 20.0)
+    from simlunar.render.lidar_scan import receiver_rc
+
+    # a 16 x 16 receiver on a 64 x 64 guide: receiver pixel (0, 0) centre = guide (2, 2) - 1/2
+    rc = receiver_rc((16, 16), (64, 64))
+    assert rc[0] == pytest.approx([1.5, 1.5]) and rc[17] == pytest.approx([5.5, 5.5])
+
+
+def test_micromirror_flash_lights_only_the_planned_pixels(mi):
+    from simlunar.render.lidar_scan import FlashOptions, micromirror_flash, micromirror_frames
+    from simlunar.render.transient import TransientOptions
+
+    cam = _camera(32, 6.0)
+    uv = np.array([[3.5, 3.5], [2.5, 2.5], [20.5, 9.5], [30.5, 30.5], [12.5, 27.5]])
+    # receiver 8 x 8: the first two dots share receiver pixel (0, 0)
+    assert list(micromirror_frames(uv, cam, (8, 8))) == [0, 1, 0, 0, 0]
+    det = DetectorOptions(signal_photons=2e6 * 16, background_photons_per_s=0.0, pulses=4)
+    opts = FlashOptions(
+        detector=det,
+        pulse=PulseOptions(fwhm_s=1e-9),
+        transient=TransientOptions(spp=256),
+        pulse_rate_hz=20.0,
+    )
+    scan = micromirror_flash(_plane(), cam, uv, options=opts, receiver_shape=(8, 8), rng=0)
+    d = cam.rays(uv)[1]
+    assert scan.frames == 2
+    assert scan.seconds == pytest.approx(2 * 4 / 20.0)
+    assert scan.valid.all()
+    assert np.abs(scan.ranges - H / -d[:, 2]).max() < opts.bin_range_m
