@@ -239,6 +239,15 @@ class RigCfg(_Model):
     aperture_radius_m: Metres = Field(0.0, ge=0, description="camera thin lens; 0 = pinhole")
     focus_distance_m: Metres | None = Field(None, gt=0, description="null = the target")
 
+    @model_validator(mode="after")
+    def _focus_needs_lens(self) -> RigCfg:
+        if self.aperture_radius_m == 0 and self.focus_distance_m is not None:
+            raise ValueError(
+                "focus_distance_m: has no effect on a pinhole camera (aperture_radius_m 0); "
+                "set aperture_radius_m > 0 for a thin lens or leave focus_distance_m null"
+            )
+        return self
+
 
 class GrayOptsCfg(_Model):
     """Gray-code scan options (:func:`simlunar.scanner.scans.gray_code_scan`)."""

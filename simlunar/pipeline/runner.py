@@ -322,6 +322,15 @@ def _first_difference(old: Any, new: Any, path: str = "") -> str:
     return f"{path or '<root>'}: {json.dumps(old, default=str)} in the folder, {json.dumps(new, default=str)} now"
 
 
+def _identity(config: dict) -> dict:
+    """The part of a plain config that a result folder belongs to: all but the description
+    and the figure file formats (they change no unit, table or figure content)."""
+    out = {k: v for k, v in config.items() if k != "description"}
+    if isinstance(out.get("figures"), dict):
+        out["figures"] = {k: v for k, v in out["figures"].items() if k != "formats"}
+    return out
+
+
 def claim_folder(out: Path, config_text: str) -> None:
     """Make ``out`` the folder of this configuration, or refuse (nothing is written then).
 
@@ -333,13 +342,15 @@ def claim_folder(out: Path, config_text: str) -> None:
     new = safe_load_text(config_text)
     if path.exists():
         old = read_folder_config(path)
-        if old != new:
+        if _identity(old) != _identity(new):
             raise ResultFolderError(
                 f"{out} holds the results of another configuration "
                 f"({_first_difference(old, new)}); choose another --out or delete the folder"
             )
         if path.read_text() != config_text:
-            atomic_write_text(path, config_text)  # same config, written by an older version
+            # same results: written by an older version, or another description or figure
+            # file format (which change no number)
+            atomic_write_text(path, config_text)
         return
     others = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
     if others:
@@ -439,6 +450,15 @@ def _run_locked(
     stale = cache.keys() - set(keys)
     # nothing of a finished folder is removed before this run is known to be able to write
     _check_writable(out, scan_dirs)
+    previous = _read_provenance(out)  # before anything is removed: its run time is kept
+    if (
+        not todo
+        and not stale
+        and folder_complete(out, keys)
+        and previous.get("tables_code") == tables_code()
+    ):
+        # nothing changed: the tables stand; provenance adds this rerun's time
+        return _rerun(cfg, out, units, checks, figures, t_start, previous, records)
     if todo or stale or not folder_complete(out, keys):
         # the folder's summary and figures no longer describe its units: remove them before
         # any unit changes, so an interrupted run never leaves them beside other units
@@ -496,7 +516,11 @@ def _run_locked(
     atomic_write_text(out / "scores.tex", tex)
 
     elapsed = time.perf_counter() - t_start
-    _write_provenance(out, cfg, units, records, executor, n_cached, elapsed, checks)
+    timings = {"run_s": round(elapsed, 3)}
+    if not todo and "run_s" in (previous.get("timings") or {}):
+        # every unit cached: the run that computed them keeps its time; this one is added
+        timings = {"run_s": previous["timings"]["run_s"], "rerun_s": round(elapsed, 3)}
+    _write_provenance(out, cfg, units, records, executor, n_cached, timings, checks)
 
     written: list[Path] = []
     if figures and cfg.figures.enabled:
@@ -508,6 +532,61 @@ def _run_locked(
         len(units),
         n_cached,
         len(todo),
+        time.perf_counter() - t_start,
+        md,
+        written,
+        _notes(checks, units, records),
+    )
+
+
+#: modules that write the tables: a change of any of them rewrites the tables of a rerun
+_TABLE_MODULES = (
+    "simlunar.pipeline.runner",
+    "simlunar.plotting.tables",
+    "simlunar.results.aggregate",
+    "simlunar.study.stats",
+)
+
+
+def tables_code() -> str:
+    """SHA-256 of the code that writes a folder's tables (recorded in ``provenance.json``)."""
+    import importlib.util
+
+    h = hashlib.sha256()
+    for mod in _TABLE_MODULES:
+        spec = importlib.util.find_spec(mod)
+        h.update(file_sha256(spec.origin).encode() if spec and spec.origin else mod.encode())
+    return h.hexdigest()
+
+
+def _read_provenance(out: Path) -> dict:
+    try:
+        prov = json.loads((out / "provenance.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return prov if isinstance(prov, dict) else {}
+
+
+def _rerun(cfg, out, units, checks, figures, t_start, previous, records) -> RunSummary:
+    """A rerun with nothing to compute: the tables stand, provenance records the rerun's
+    time beside the original run's, the figures are redrawn only if their inputs changed."""
+    md = (out / "scores.md").read_text()
+    prov = dict(previous)
+    timings = dict(prov.get("timings") or {})
+    timings["rerun_s"] = round(time.perf_counter() - t_start, 3)
+    prov["timings"] = timings
+    prov["units"] = {"total": len(units), "cached": len(units), "computed": 0}
+    atomic_write_json(out / "provenance.json", prov)
+    written: list[Path] = []
+    if figures and cfg.figures.enabled:
+        from simlunar.results.figures import write_figures_pruned
+
+        written = write_figures_pruned(out)
+    return RunSummary(
+        out,
+        len(units),
+        len(units),
+        0,
         time.perf_counter() - t_start,
         md,
         written,
@@ -585,17 +664,28 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     strategies = _names(units, "strategies")
     metrics = _names(units, "metrics")
     seeds = sorted({len(p.seeds) for p in points})
-    trials = sorted({r.n_trials for p in points for r in p.intervals.values()})
+    trials = sorted({int(float(r["trial"])) for r in rows}, reverse=True)[:1]
+    n_trials = "/".join(str(t + 1) for t in trials)
     n_seeds = "/".join(map(str, seeds))
-    note = (
-        f"Scores pool {n_seeds} terrain seed(s) x {'/'.join(map(str, trials))} trials; "
-        "[95 % interval]: paired bootstrap over terrain seeds (one seed: over trials), "
-        "percentile, small-sample widened. Bold: the best score of a row where the paired "
-        "bootstrap 95 % interval of its difference to the runner-up excludes 0."
-    )
-    md, tex = score_tables(
-        labelled, strategies=strategies, metrics=metrics, title=cfg.name, note=note
-    )
+    if any(scores for _, scores in labelled):
+        note = (
+            f"Scores pool {n_seeds} terrain seed(s) x {n_trials} trials; [95 % interval]: "
+            "paired bootstrap over terrain seeds (one seed: over trials), percentile, "
+            "small-sample widened. Bold: the best score of a row where the paired bootstrap "
+            "95 % interval of its difference to the runner-up excludes 0."
+        )
+        md, tex = score_tables(
+            labelled, strategies=strategies, metrics=metrics, title=cfg.name, note=note
+        )
+    else:
+        # no table of dashes: say why there is none
+        no_csv = "" if aggregate.scores_csv_rows(points, recs) else " and no scores.csv"
+        note = (
+            f"No score table{no_csv}: the scores (eq. 4.3) are errors relative to "
+            f"the random strategy, which study.strategies ({', '.join(strategies)}) does not "
+            f"include; add random to get them. The errors are in results.csv."
+        )
+        md, tex = note + "\n", "% " + note + "\n"
     entries = [
         {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": p.saved_metric,
          "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
@@ -606,10 +696,19 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     md2, tex2 = samples_saved_tables(entries, title=cfg.name)
     if md2:
         md, tex = md + "\n" + md2, tex + "\n" + tex2
-    atomic_write_text(
-        out / "scores.csv",
-        csv_text(aggregate.scores_csv_rows(points, recs), aggregate.SCORES_CSV_COLUMNS),
-    )
+    elif not any(p.saved for p in points):
+        why = (
+            "one density (a curve needs two)"
+            if all(len(p.ks) < 2 for p in points)
+            else "neither random nor grid among study.strategies"
+        )
+        line = f"No samples-saved table: it compares against random or grid, and there is {why}."
+        md, tex = f"{md}\n{line}\n", f"{tex}\n% {line}\n"
+    score_rows = aggregate.scores_csv_rows(points, recs)
+    if score_rows:
+        atomic_write_text(out / "scores.csv", csv_text(score_rows, aggregate.SCORES_CSV_COLUMNS))
+    else:
+        (out / "scores.csv").unlink(missing_ok=True)  # scores.md says why there is none
     return md, tex
 
 
@@ -622,7 +721,7 @@ def _names(units: list[WorkUnit], key: str) -> list[str]:
     return out
 
 
-def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapsed, checks) -> None:
+def _write_provenance(out: Path, cfg, units, records, executor, n_cached, timings, checks) -> None:
     from simlunar.render.backend import versions
 
     variants = sorted(
@@ -642,11 +741,12 @@ def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapse
         "executor": executor.describe(),
         "units": {"total": len(units), "cached": n_cached, "computed": len(units) - n_cached},
         "timings": {
-            "run_s": round(elapsed, 3),
+            **timings,
             "units": {u.key: records[u.key].get("timings", {}) for u in units},
         },
         "unit_keys": [u.key for u in units],
         "simlunar": simlunar.__version__,
+        "tables_code": tables_code(),
         "inputs": _inputs(units),
         "terrain_holes": checks.holes(),
         "filled_pixels": {

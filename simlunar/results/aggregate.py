@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.results.records import WorkUnit, unit_label
 from simlunar.study.stats import (
     SamplesSaved,
     ScoreIntervals,
@@ -22,7 +23,6 @@ from simlunar.study.stats import (
     bootstrap_scores,
     samples_saved,
 )
-from simlunar.results.records import WorkUnit, unit_label
 
 SEED_AXIS = "terrain.seed_index"
 #: bootstrap replicates per point and metric
@@ -135,17 +135,17 @@ def summarise(
     """
     points = group_points(records)
     for i, p in enumerate(points):
-        if "random" not in p.strategies:
-            continue
         for m in p.metrics:
             dens, ks, errs = error_arrays(rows, p, m)
             if not p.densities:
                 p.densities, p.ks = dens, ks
+            p.mean_errors[m] = {s: e.mean(axis=(0, 2)) for s, e in errs.items()}
+            if "random" not in p.strategies:
+                continue  # eq. 4.3 scores are relative to random; samples saved vs grid are not
             rng = np.random.default_rng(np.random.SeedSequence([seed, i, p.metrics.index(m)]))
             res = bootstrap_scores(errs, dens, n_boot=n_boot, rng=rng)
             p.intervals[m] = res
             p.separation[m] = best_separation(res)
-            p.mean_errors[m] = {s: e.mean(axis=(0, 2)) for s, e in errs.items()}
         if len(p.ks) >= 2 and p.metrics:
             m = p.metrics[0]
             p.saved_metric = m
