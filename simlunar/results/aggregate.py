@@ -184,3 +184,16 @@ def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:
 
 
 SCORES_CSV_COLUMNS = ["point", "terrain_seed", "metric", "strategy", "score", "ci_low", "ci_high"]
+
+
+#: sweep axes that repeat a scene rather than change it (their units are pooled as seeds)
+SEED_AXES = ("seed", SEED_AXIS)
+
+
+def sweep_value(rec: dict, path: str):
+    """A unit's value on sweep axis ``path`` as a plot position or label: numbers as they
+    are, a model (dict) by its ``kind``, null as ``"preset default"``."""
+    v = rec["sweep"][path]
+    if isinstance(v, dict):
+        return v.get("kind", json.dumps(v, sort_keys=True))
+    return "preset default" if v is None else v

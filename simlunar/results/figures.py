@@ -11,13 +11,15 @@ import json
 from pathlib import Path
 
 from simlunar.errors import ResultFolderError
-from simlunar.results.aggregate import SEED_AXIS
+from simlunar.results import aggregate
+from simlunar.results import captions as captions_text
+from simlunar.results.aggregate import SEED_AXIS, group_points
+from simlunar.results.folder import prune_figures, read_folder_config
 from simlunar.results.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
 
 MAX_UNIT_PANELS = 6
 #: sweep axes that repeat an experiment over realisations (pooled, not plotted against): the
 #: experiment seed and the terrain realisation
-SEED_AXES = ("seed", SEED_AXIS)
 
 
 def load_results(out_dir: str | Path) -> dict:
@@ -47,7 +49,6 @@ def load_results(out_dir: str | Path) -> dict:
                 else "run `simlunar run EXPERIMENT.yaml` first"
             )
             raise ResultFolderError(f"{out}: not a result folder (missing {name}); {hint}")
-    from simlunar.results.folder import read_folder_config
 
     config = read_folder_config(out / "config.yaml")
     prov = _read_provenance(out / "provenance.json")
@@ -150,7 +151,6 @@ def _density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
     as it has sweep points, not seeds times points.
     """
     from simlunar.plotting.style import point_title
-    from simlunar.results.aggregate import group_points
 
     return [(point_title(p.sweep), [units[i] for i in p.unit_indices]) for p in group_points(units)]
 
@@ -243,7 +243,6 @@ def write_figures(out_dir: str | Path, *, formats=None, force: bool = False) -> 
 
 def _draw(res: dict, formats: list[str]) -> list[Path]:
     from simlunar.plotting import figures as F
-    from simlunar.results import captions as captions_text
 
     out = res["dir"]
     cfg = res["config"]
@@ -350,8 +349,6 @@ def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:
     95 % interval, as ``scores.csv`` holds them (none without random: no scores)."""
     from simlunar.plotting import figures as F
     from simlunar.plotting.style import axis_name
-    from simlunar.results import captions as captions_text
-    from simlunar.results.aggregate import group_points
 
     cfg = res["config"]
     study = cfg.get("study", {})
@@ -382,7 +379,7 @@ def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:
         points = []
         for i, p in enumerate(groups):
             scores = {s: cells[(i, m, s)] for s in strategies if (i, m, s) in cells}
-            points.append((_sweep_value({"sweep": p.sweep}, path), {m: scores}))
+            points.append((aggregate.sweep_value({"sweep": p.sweep}, path), {m: scores}))
         if not any(sc[m] for _, sc in points):
             continue
         fig, _ = F.score_vs_sweep(
@@ -405,18 +402,8 @@ def write_captions(fig_dir: Path, captions: dict[str, str], written: list[Path])
     written.append(path)
 
 
-def _sweep_value(rec: dict, path: str):
-    """A unit's value on sweep axis ``path`` as a plot position or label: numbers as they
-    are, a model (dict) by its ``kind``, null as ``"preset default"``."""
-    v = rec["sweep"][path]
-    if isinstance(v, dict):
-        return v.get("kind", json.dumps(v, sort_keys=True))
-    return "preset default" if v is None else v
-
-
 def write_figures_pruned(out_dir: str | Path, *, formats=None, force: bool = False) -> list[Path]:
     """:func:`write_figures`, then remove the figures of ``figures/`` it did not write."""
-    from simlunar.results.folder import prune_figures
 
     written = write_figures(out_dir, formats=formats, force=force)
     prune_figures(Path(out_dir), keep=written)
@@ -428,8 +415,6 @@ def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
     (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
     from simlunar.plotting import figures as F
     from simlunar.plotting.style import point_title
-    from simlunar.results import aggregate
-    from simlunar.results import captions as captions_text
 
     points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
     points = [p for p in points if p.saved][:MAX_UNIT_PANELS]

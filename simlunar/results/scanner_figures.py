@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simlunar.results.figures import SEED_AXES, _sweep_value
+from simlunar.results.aggregate import SEED_AXES, sweep_value
 
 
 def _scanner_pooled(rows: list[dict], metrics: list[str]) -> list[dict]:
@@ -68,7 +68,7 @@ def scanner_figures(res: dict, emit, captions: dict) -> None:
             by_unit.setdefault(str(r.get("unit")), []).append(r)
         points = [
             (
-                _sweep_value(rec, path),
+                sweep_value(rec, path),
                 _scanner_pooled(by_unit.get(str(rec.get("index", 0)), []), shown),
             )
             for rec in units
