@@ -24,8 +24,10 @@ from simlunar.config.fields import (
 )
 from simlunar.config.quantities import log_spaced
 from simlunar.config.render import MAX_SPP
+from simlunar.features.maps import check_entropy_size
 from simlunar.planner import STRATEGIES
 from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.scanner.scheduling import check_spacings
 
 
 # --------------------------------------------------------------------------- studies
@@ -80,7 +82,6 @@ class FeatureOptsCfg(_Model):
     @field_validator("size")
     @classmethod
     def _entropy_window(cls, v: int) -> int:
-        from simlunar.features.maps import check_entropy_size
 
         check_entropy_size(v)  # the map's own rule
         return v
@@ -274,7 +275,6 @@ class DotOptsCfg(_Model):
 
     @model_validator(mode="after")
     def _spacings(self) -> DotOptsCfg:
-        from simlunar.scanner.scheduling import check_spacings
 
         try:
             check_spacings(

@@ -35,6 +35,9 @@ from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_key
 from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
+from simlunar.plotting.tables import scanner_tables
+from simlunar.results.exports import write_scan_export
+from simlunar.results.figures import write_figures_pruned
 from simlunar.results.folder import (
     _check_writable,
     _invalidate,
@@ -344,8 +347,6 @@ def _run_locked(
             arrays = result.pop("arrays", {}) or {}
             scans = result.pop("scans", None)
             if scans is not None:  # before the cache entry: a cached unit has its scans
-                from simlunar.results.exports import write_scan_export
-
                 write_scan_export(out / "scans" / f"unit{u.index}", scans, unit_key=u.key)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
             cache.save(u.key, record, arrays)
@@ -373,8 +374,6 @@ def _run_locked(
     atomic_write_text(out / "results.csv", csv_text(rows, columns))
 
     if cfg.study.kind == "scanner":
-        from simlunar.plotting.tables import scanner_tables
-
         md, tex = scanner_tables(rows, metrics=_names(units, "metrics"), title=cfg.name)
     else:
         md, tex = _sampling_tables(cfg, units, records, rows, out)
@@ -390,8 +389,6 @@ def _run_locked(
 
     written: list[Path] = []
     if figures and cfg.figures.enabled:
-        from simlunar.results.figures import write_figures_pruned
-
         written = write_figures_pruned(out)
     return RunSummary(
         out,
@@ -417,8 +414,6 @@ def _rerun(cfg, out, units, checks, figures, t_start, previous, records) -> RunS
     atomic_write_json(out / "provenance.json", prov)
     written: list[Path] = []
     if figures and cfg.figures.enabled:
-        from simlunar.results.figures import write_figures_pruned
-
         written = write_figures_pruned(out)
     return RunSummary(
         out,

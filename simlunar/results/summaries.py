@@ -9,6 +9,9 @@ from pathlib import Path
 from typing import Any
 
 import simlunar
+from simlunar.plotting.tables import Cell, samples_saved_tables, score_tables
+from simlunar.render.backend import versions
+from simlunar.results import aggregate
 from simlunar.results.folder import RESULT_FILES
 from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
@@ -81,8 +84,6 @@ def _notes(checks, units, records) -> list[str]:
 def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     """Score tables (pooled over terrain seeds, with intervals), samples-saved tables and
     ``scores.csv`` (per-seed and pooled scores) of a sampling experiment."""
-    from simlunar.plotting.tables import Cell, samples_saved_tables, score_tables
-    from simlunar.results import aggregate
 
     recs = [{**records[u.key], "sweep": u.sweep, "config": u.config} for u in units]
     points = aggregate.summarise(recs, rows, seed=cfg.seed)
@@ -161,7 +162,6 @@ def _names(units: list[WorkUnit], key: str) -> list[str]:
 
 
 def _write_provenance(out: Path, cfg, units, records, executor, n_cached, timings, checks) -> None:
-    from simlunar.render.backend import versions
 
     variants = sorted(
         {
