@@ -232,6 +232,11 @@ def write_figures(out_dir: str | Path, *, formats=None, force: bool = False) -> 
         kept = _up_to_date(fig_dir, digest)
         if kept is not None:
             return kept
+    # a damaged unit is reported before anything of the folder changes
+    cache = UnitCache(out)
+    for rec in res["units"]:
+        if not cache.arrays_readable(rec["key"]):
+            cache.load_arrays(rec["key"], strict=True)  # raises, naming the file
     (out / STAMP).unlink(missing_ok=True)  # figures being redrawn belong to no inputs
     written = _draw(res, formats)
     atomic_write_bytes(
