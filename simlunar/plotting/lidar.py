@@ -1,11 +1,22 @@
-"""LIDAR figures: a return waveform with its detected returns."""
+"""LIDAR figures and tables: a return waveform with its detected returns; error against scan
+time (and samples) per planner from a LIDAR study's tidy rows."""
 
 from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
 
-__all__ = ["waveform"]
+from simlunar.metrics import METRIC_NAMES
+from simlunar.plotting.style import metric_axis, styles
+
+__all__ = ["error_vs_time", "lidar_summary", "lidar_tables", "waveform"]
+
+#: what the band of :func:`error_vs_time` shows, by how many terrain seeds (units) it pools
+BAND_TRIALS = "band: ±1 s.d. over trials"
+BAND_SEEDS = "band: 95 % interval of the mean over terrain seeds"
 
 
 def waveform(
@@ -59,3 +70,142 @@ def waveform(
     ax.legend(fontsize=7, frameon=False)
     fig.tight_layout()
     return fig, ax
+
+
+def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = None) -> dict:
+    """Per planner and sample count: scan time, error and its interval.
+
+    Parameters
+    ----------
+    rows : iterable of dict
+        Tidy LIDAR rows (planner, k, trial, metric, value, seconds; ``unit`` when several
+        units, e.g. terrain seeds; strings from CSV are fine).
+    metric : str
+    where : dict, optional
+        Column filters compared as strings (a list value keeps any of its items).
+
+    Returns
+    -------
+    dict planner -> dict of float64 arrays over k ascending: ``k``, ``seconds`` (mean),
+    ``value`` (mean), ``lo``, ``hi`` (the band: with several units, the 95 % t-free normal
+    interval 1.96 s.e. of the mean of per-unit means; else ±1 s.d. over trials) and ``units``.
+    """
+    ok = {
+        c: {str(x) for x in v} if isinstance(v, list | tuple | set) else {str(v)}
+        for c, v in (where or {}).items()
+    }
+    acc: dict = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))
+    for r in rows:
+        if r["metric"] != metric or any(str(r.get(c)) not in a for c, a in ok.items()):
+            continue
+        cell = acc[str(r["planner"])][int(float(r["k"]))][str(r.get("unit", 0))]
+        cell.append((float(r["seconds"]), float(r["value"])))
+    out = {}
+    for planner, by_k in acc.items():
+        ks = sorted(by_k)
+        cols: dict = {c: [] for c in ("seconds", "value", "lo", "hi", "units")}
+        for k in ks:
+            units = list(by_k[k].values())
+            allv = np.array([v for u in units for _, v in u])
+            mean = float(allv.mean())
+            if len(units) > 1:
+                per = np.array([np.mean([v for _, v in u]) for u in units])
+                half = 1.96 * per.std(ddof=1) / np.sqrt(len(per))
+            else:
+                half = float(allv.std())
+            cols["seconds"].append(np.mean([s for u in units for s, _ in u]))
+            cols["value"].append(mean)
+            cols["lo"].append(mean - half)
+            cols["hi"].append(mean + half)
+            cols["units"].append(len(units))
+        out[planner] = {
+            "k": np.array(ks, float),
+            **{c: np.array(v, float) for c, v in cols.items()},
+        }
+    return out
+
+
+def error_vs_time(
+    rows: Iterable[dict],
+    *,
+    metric: str = "mse",
+    x: str = "seconds",
+    planners: Sequence[str] | None = None,
+    where: dict | None = None,
+    title: str = "",
+    ax=None,
+):
+    """Mean error of each planner against modelled scan time (``x="seconds"``) or sample
+    count (``x="k"``), log-log, with its band (:func:`lidar_summary`).
+
+    Returns
+    -------
+    (Figure, Axes)
+    """
+    if ax is None:
+        fig = Figure(figsize=(3.4, 2.8), layout="constrained")
+        ax = fig.add_subplot()
+    else:
+        fig = ax.figure
+    summary = lidar_summary(rows, metric=metric, where=where)
+    names = [p for p in (planners or list(summary)) if p in summary]
+    st = styles(names)
+    pooled = False
+    for p in names:
+        d = summary[p]
+        xs = d[x]
+        ax.plot(xs, d["value"], marker=st[p].marker, color=st[p].colour, label=st[p].label, lw=1.2)
+        ax.fill_between(xs, d["lo"], d["hi"], color=st[p].colour, alpha=0.2, lw=0)
+        pooled |= bool((d["units"] > 1).any())
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("scan time (s)" if x == "seconds" else "samples k")
+    ax.set_ylabel(metric_axis(metric))
+    if title:
+        ax.set_title(title, fontsize=8)
+    ax.legend(fontsize=7, frameon=False, title=BAND_SEEDS if pooled else BAND_TRIALS,
+              title_fontsize=6)  # fmt: skip
+    return fig, ax
+
+
+def lidar_tables(
+    rows: list[dict], *, metrics: Sequence[str], title: str = "", by: str | None = None
+) -> tuple[str, str]:
+    """Markdown and LaTeX tables of a LIDAR study: per (point, planner, k) the mean scan time
+    and the mean of each metric over trials and units (``by``: a column splitting the rows
+    into points, e.g. a sweep axis)."""
+    extra = [m for m in ("valid_fraction", "hazard_precision", "hazard_recall")
+             if m not in metrics and any(r["metric"] == m for r in rows)]  # fmt: skip
+    names = [*metrics, *extra]
+    points = sorted({str(r.get(by)) for r in rows}) if by else [None]
+    header = [
+        "Planner",
+        "k",
+        "scan time (s)",
+        *[METRIC_NAMES.get(m, m.replace("_", " ")) for m in names],
+    ]
+    body = []
+    for pt in points:
+        where = {by: pt} if by else None
+        sums = {m: lidar_summary(rows, metric=m, where=where) for m in names}
+        first = sums[names[0]]
+        for planner, d in first.items():
+            for i, k in enumerate(d["k"]):
+                cells = [f"{int(k)}", f"{d['seconds'][i]:.3g}"]
+                for m in names:
+                    v = sums[m].get(planner)
+                    cells.append(
+                        f"{v['value'][i]:.3g}" if v is not None and i < len(v["k"]) else "–"
+                    )
+                label = planner if pt is None else f"{by}={pt}: {planner}"
+                body.append((label, cells))
+    md = [f"### {title}: LIDAR study (means over trials and terrain seeds)", "",
+          "| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]  # fmt: skip
+    md += ["| " + " | ".join([lab, *c]) + " |" for lab, c in body]
+    esc = [h.replace("_", "\\_") for h in header]
+    tex = ["\\begin{table}[t]", "\\centering", f"\\caption{{{title}: LIDAR study}}",
+           f"\\begin{{tabular}}{{l{'r' * (len(header) - 1)}}}", "\\toprule",
+           " & ".join(esc) + " \\\\", "\\midrule"]  # fmt: skip
+    tex += [" & ".join([lab.replace("_", "\\_"), *c]) + " \\\\" for lab, c in body]
+    tex += ["\\bottomrule", "\\end{tabular}", "\\end{table}"]
+    return "\n".join(md) + "\n", "\n".join(tex).replace("–", "--") + "\n"

@@ -154,3 +154,27 @@ def samples_saved(metric: str, references: list[str], point: str) -> str:
         f"trials. Hollow markers: outside the reference's measured range (extrapolated, "
         f"clipped to [1, N]); they are left out of the tables' geometric-mean summary.{where}"
     )
+
+
+def lidar_error(metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1) -> str:
+    """Caption of ``lidar_error_vs_<time|samples>_<metric>`` (``x``: ``seconds`` or ``k``)."""
+    sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
+    trials = study.get("trials", 3)
+    axis = (
+        "the modelled acquisition time of the scan (s: steering moves, settling and pulses of "
+        "a steered beam; frames x pulses / pulse rate of a flash)"
+        if x == "seconds"
+        else "the number of planned samples k"
+    )
+    band = (
+        f"95 % interval (1.96 standard errors) of the mean over {seeds} terrain seeds"
+        if seeds > 1
+        else f"±1 standard deviation over {trials} trials"
+    )
+    per = " One panel per sweep point." if n_panels > 1 else ""
+    return (
+        f"Image-directed LIDAR ({sensor}): {_metric(metric)} of the reconstructed guide-view "
+        f"depth against {axis}, per planner, log-log; points: one per density, mean over "
+        f"{trials} trials{f' and {seeds} terrain seeds' if seeds > 1 else ''}; shaded band: "
+        f"{band}.{per}"
+    )

@@ -163,6 +163,10 @@ def write_figures(out_dir: str | Path) -> list[Path]:
 
     study = cfg.get("study", {})
     captions: dict[str, str] = {}
+    if study.get("kind") == "lidar":
+        _lidar_figures(res, emit, captions)
+        write_captions(fig_dir, captions, written)
+        return written
     if study.get("kind", "sampling") != "sampling":
         _scanner_figures(res, emit, captions)
         write_captions(fig_dir, captions, written)
@@ -403,3 +407,32 @@ def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
         stem = "samples_saved" if len(points) == 1 else f"samples_saved_point{i}"
         emit(fig, stem)
         captions[stem] = captions_text.samples_saved(p.saved_metric, list(p.saved), p.label)
+
+
+def _lidar_figures(res: dict, emit, captions: dict) -> None:
+    """Error against scan time and against samples per planner; one panel per sweep point
+    (units of one point, i.e. its terrain seeds, pooled into the interval)."""
+    from simlunar.plotting import figures as F
+    from simlunar.plotting.lidar import error_vs_time
+    from simlunar.results import captions as captions_text
+
+    study = res["config"].get("study", {})
+    groups = _density_panels(res["units"])[:MAX_UNIT_PANELS]
+    seeds = max(len(members) for _, members in groups)
+    for m in study.get("metrics") or []:
+        for x, name in (("seconds", "time"), ("k", "samples")):
+            fig, axes = F.panel_grid(len(groups))
+            for ax, (title, members) in zip(axes, groups):
+                error_vs_time(
+                    res["rows"],
+                    metric=m,
+                    x=x,
+                    planners=study.get("planners"),
+                    where={"unit": [rec.get("index", 0) for rec in members]},
+                    title=title if len(groups) > 1 else "",
+                    ax=ax,
+                )
+            emit(fig, f"lidar_error_vs_{name}_{m}")
+            captions[f"lidar_error_vs_{name}_{m}"] = captions_text.lidar_error(
+                m, study, x, len(groups), seeds=seeds
+            )
