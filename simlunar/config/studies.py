@@ -257,16 +257,20 @@ class DotOptsCfg(_Model):
 class CaptureOptsCfg(_Model):
     """Render-capture options (:class:`simlunar.render.capture.RenderCapture`)."""
 
-    sparse_integrator: Literal["path", "ptracer"] = Field(
+    sparse_integrator: Literal["path", "ptracer", "lit"] = Field(
         "path",
-        description="integrator for sparse patterns (dot frames): path tracer, or ptracer "
-        "(light traced from the projector; docs/scanner.md)",
+        description="integrator for sparse patterns (dot frames): path tracer, ptracer "
+        "(Mitsuba's light tracer, paths per camera pixel) or lit (paths per lit projector "
+        "pixel: a dot frame costs what its dots cost; docs/scanner.md)",
     )
     sparse_spp: PositiveInt | None = Field(
         None, description="samples per pixel for sparse patterns (null: render.spp)"
     )
     sparse_below: float = Field(
         0.01, gt=0, le=1, description="largest lit fraction of projector pixels counted sparse"
+    )
+    sparse_particles: PositiveInt = Field(
+        256, description="lit only: light paths per lit projector pixel (at pattern value 1)"
     )
 
 

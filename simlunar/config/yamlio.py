@@ -9,7 +9,17 @@ import yaml
 
 from simlunar.errors import ConfigError
 
-__all__ = ["UniqueKeyLoader", "load_yaml", "parse_set"]
+#: what the YAML reader raises on invalid text
+YAMLError = yaml.YAMLError
+
+__all__ = [
+    "UniqueKeyLoader",
+    "YAMLError",
+    "dump_yaml",
+    "load_yaml",
+    "parse_set",
+    "safe_load_text",
+]
 
 
 def parse_set(items: list[str]) -> dict[str, Any]:
@@ -65,3 +75,13 @@ def load_yaml(path: str | Path) -> dict:
             raise ConfigError(f"{path}: line {mark.line + 1}: {problem}") from None
         raise ConfigError(f"{path}: not valid YAML{where}") from None
     return data if data is not None else {}
+
+
+def dump_yaml(data: Any) -> str:
+    """YAML text of plain data, keys in their given order (a result folder's ``config.yaml``)."""
+    return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+
+
+def safe_load_text(text: str) -> Any:
+    """Plain data of YAML text written by :func:`dump_yaml` (``yaml.YAMLError`` if invalid)."""
+    return yaml.safe_load(text)

@@ -515,7 +515,7 @@ class Preflight:
 def check_units(units: list[Any]) -> Preflight:
     """Check every unit (sweep point) before any of them runs.
 
-    ``units`` are :class:`~simlunar.pipeline.runner.WorkUnit` (their plain ``config``).
+    ``units`` are :class:`~simlunar.results.records.WorkUnit` (their plain ``config``).
     Errors of a sweep point name the point: ``sweep point 3 (elevation_deg=0): ...``.
     """
     from simlunar.config.schema import ExperimentCfg

@@ -26,11 +26,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 import simlunar
 from simlunar.config.loading import apply_sweep_value, to_plain
 from simlunar.config.schema import ExperimentCfg
+from simlunar.config.yamlio import dump_yaml, safe_load_text
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
@@ -260,7 +259,7 @@ def run_experiment(
     preflight.check_out_dir(out)
     units = expand(cfg)
     checks = preflight.check_units(units)
-    config_text = yaml.safe_dump(to_plain(cfg), sort_keys=False, allow_unicode=True)
+    config_text = dump_yaml(to_plain(cfg))
     executor = executor or LocalPoolExecutor(1)
     executor_open = getattr(executor, "open", None)
     if executor_open is not None:
@@ -325,7 +324,7 @@ def claim_folder(out: Path, config_text: str) -> None:
     written only into an empty folder.
     """
     path = out / "config.yaml"
-    new = yaml.safe_load(config_text)
+    new = safe_load_text(config_text)
     if path.exists():
         old = read_folder_config(path)
         if old != new:

@@ -1,7 +1,23 @@
 """Sample planners: which k pixels of the native grid a range sensor should measure."""
 
 from simlunar.planner.combination import CombinationFit, fit_combination, score_combination
+from simlunar.planner.oracle import (
+    ORACLES,
+    framed_grid,
+    hessian_norm,
+    oracle_greedy,
+    oracle_hessian,
+)
+from simlunar.planner.placement import (
+    cvt_energy,
+    density_from_map,
+    halftone,
+    lloyd,
+    place,
+    samples_per_cell,
+)
 from simlunar.planner.strategies import (
+    PLACEMENTS,
     STRATEGIES,
     STRATEGY_NAMES,
     WEIGHTED,
@@ -13,6 +29,8 @@ from simlunar.planner.strategies import (
 from simlunar.planner.types import SamplePlan
 
 __all__ = [
+    "ORACLES",
+    "PLACEMENTS",
     "STRATEGIES",
     "STRATEGY_NAMES",
     "WEIGHTED",
@@ -20,8 +38,18 @@ __all__ = [
     "SamplePlan",
     "check_k",
     "combine_maps",
+    "cvt_energy",
+    "density_from_map",
     "fit_combination",
+    "framed_grid",
+    "halftone",
+    "hessian_norm",
+    "lloyd",
+    "oracle_greedy",
+    "oracle_hessian",
+    "place",
     "plan",
+    "samples_per_cell",
     "score_combination",
     "strategy_weights",
 ]

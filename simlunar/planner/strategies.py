@@ -24,6 +24,30 @@ Options of the weighted strategies (keyword arguments of :func:`plan`):
     Options for :func:`simlunar.features.feature_map` when the map is computed from ``image``.
 ``coefficients`` (dict name -> float)
     For ``combination``: the weight of each feature map (each map normalised to mean 1 first).
+``placement`` (``"random"`` or ``"lloyd"``, default ``"random"``)
+    How samples follow the map. ``"random"``: the paper's weighted random draw without
+    replacement (paper parity; the options above). ``"lloyd"``: deterministic variable-density
+    placement (:func:`simlunar.planner.placement.place`: error-diffusion halftone of the density,
+    weighted Lloyd relaxation, border snapped, corners sampled); the density is
+    :func:`~simlunar.planner.placement.density_from_map` of the map with ``density_power`` and
+    ``uniform_mix``. ``density_cap`` and ``blue_noise`` apply to ``"random"`` only.
+``density_power`` (float > 0, default 1 for ``"random"``, 0.5 for ``"lloyd"``)
+    Exponent applied to the map before normalising.
+``uniform_mix`` default for ``"lloyd"``: 0.25 (0 for ``"random"``).
+``lloyd_iterations`` (int >= 0, default 20), ``border_pitch`` (float >= 0 or None, default 0.75)
+    Lloyd iterations and border snap distance in local pitches (``"lloyd"`` placement,
+    ``lloyd_uniform`` and ``oracle_hessian``).
+
+Image-free layout (no map): ``lloyd_uniform`` places a uniform density with the ``"lloyd"``
+placement (options ``lloyd_iterations``, ``border_pitch``): the fair image-free reference for the
+image-directed ``"lloyd"`` layouts.
+
+Oracles (:data:`ORACLES`, labels "Oracle ..."): they READ THE TRUE DEPTH, passed as
+``plan(..., truth=depth)``, and can never be realised; they bound the headroom.
+``oracle_greedy`` (options ``start_share`` 0.25, ``batch_share`` 0.15, ``smooth_pitch`` 0.25,
+``nms_pitch`` 1, see
+:func:`simlunar.planner.oracle.oracle_greedy`) and ``oracle_hessian`` (``density_power`` 0.5,
+``uniform_mix`` 0.25, ``lloyd_iterations``, ``border_pitch``). No other strategy reads ``truth``.
 """
 
 from __future__ import annotations
@@ -34,6 +58,8 @@ import numpy as np
 
 from simlunar.features import FEATURES, check_image, feature_map
 from simlunar.planner._bluenoise import poisson_accept
+from simlunar.planner.oracle import ORACLES, oracle_greedy, oracle_hessian
+from simlunar.planner.placement import density_from_map, place
 from simlunar.planner.types import SamplePlan
 
 WEIGHTED = ("gradient", "entropy", "wavelet", "saliency", "combination")
@@ -46,7 +72,17 @@ STRATEGY_NAMES = {
     "wavelet": "Wavelet",
     "saliency": "Saliency",
     "combination": "Combination",
+    "lloyd_uniform": "Uniform Lloyd (no image)",
+    "oracle_greedy": "Oracle greedy (true error)",
+    "oracle_hessian": "Oracle Hessian (true depth)",
 }
+# ---- learned importance map (issue 20, simlunar.features.learned): a weighted strategy whose
+# map comes from a trained model: feature_opts={"model": "<name>.joblib", "density": k / N}
+WEIGHTED += ("learned",)
+STRATEGY_NAMES["learned"] = "Learned"
+# ----
+#: how weighted strategies place samples: the paper's weighted random draw, or halftone + Lloyd
+PLACEMENTS = ("random", "lloyd")
 _WEIGHTED_OPTS = (
     "uniform_mix",
     "density_cap",
@@ -55,7 +91,19 @@ _WEIGHTED_OPTS = (
     "blue_noise_radius",
     "feature_opts",
     "coefficients",
+    "placement",
+    "density_power",
+    "lloyd_iterations",
+    "border_pitch",
 )
+_LLOYD_OPTS = ("lloyd_iterations", "border_pitch")
+_RANDOM_ONLY = ("density_cap", "cap_block", "blue_noise", "blue_noise_radius")
+#: options of the strategies that are not weighted (grid and random take none)
+_OTHER_OPTS = {
+    "lloyd_uniform": _LLOYD_OPTS,
+    "oracle_greedy": ("start_share", "batch_share", "smooth_pitch", "nms_pitch"),
+    "oracle_hessian": ("density_power", "uniform_mix", *_LLOYD_OPTS),
+}
 
 
 def check_k(k, n: int) -> int:
@@ -116,7 +164,7 @@ def strategy_weights(
     :func:`plan` as ``weights=``.
     """
     base = _resolve(strategy)
-    if base in ("grid", "random"):
+    if base not in WEIGHTED:
         return None
     feature_opts = feature_opts or {}
     if base == "combination":
@@ -248,16 +296,96 @@ def _random_strategy(k, shape, weights, rng, **opts):
     return rng.choice(shape[0] * shape[1], size=k, replace=False)
 
 
-def _weighted_strategy(k, shape, weights, rng, **opts):
+def _weighted_strategy(
+    k, shape, weights, rng, *, placement="random", density_power=None, **opts
+) -> np.ndarray:
     opts.pop("feature_opts", None)
     opts.pop("coefficients", None)
-    return _weighted(k, shape, weights.ravel(), rng, **opts)
+    if density_power is not None and not density_power > 0:
+        raise ValueError(f"density_power must be > 0, got {density_power}")
+    if placement == "random":
+        lloyd_only = sorted(set(opts) & set(_LLOYD_OPTS))
+        if lloyd_only:
+            raise ValueError(f"option(s) {lloyd_only} need placement='lloyd'")
+        w = weights.ravel()
+        # the paper's draw is proportional to the map: power 1 leaves its rng stream untouched
+        if density_power is not None and density_power != 1:
+            w = w**density_power
+        return _weighted(k, shape, w, rng, **opts)
+    if placement == "lloyd":
+        random_only = sorted(set(opts) & set(_RANDOM_ONLY))
+        if random_only:
+            raise ValueError(f"option(s) {random_only} apply to placement='random' only")
+        return _lloyd_placed(
+            k, weights, rng, power=0.5 if density_power is None else density_power, **opts
+        )
+    raise ValueError(f"unknown placement {placement!r}; valid: {', '.join(PLACEMENTS)}")
+
+
+def _lloyd_placed(
+    k, weights, rng, *, power, uniform_mix=0.25, lloyd_iterations=20, border_pitch=0.75
+) -> np.ndarray:
+    density = density_from_map(weights, power=power, mix=uniform_mix)
+    return place(density, k, rng=rng, iterations=lloyd_iterations, border=border_pitch)
+
+
+def _lloyd_uniform_strategy(k, shape, weights, rng, **opts):
+    return _lloyd_placed(k, np.ones(shape), rng, power=1.0, uniform_mix=0.0, **opts)
+
+
+def _oracle_greedy_strategy(
+    k,
+    shape,
+    weights,
+    rng,
+    *,
+    truth,
+    start_share=0.25,
+    batch_share=0.15,
+    smooth_pitch=0.25,
+    nms_pitch=1.0,
+):
+    return oracle_greedy(
+        truth,
+        k,
+        rng=rng,
+        start=start_share,
+        batch=batch_share,
+        smooth=smooth_pitch,
+        window=nms_pitch,
+    )
+
+
+def _oracle_hessian_strategy(
+    k,
+    shape,
+    weights,
+    rng,
+    *,
+    truth,
+    density_power=0.5,
+    uniform_mix=0.25,
+    lloyd_iterations=20,
+    border_pitch=0.75,
+):
+    return oracle_hessian(
+        truth,
+        k,
+        rng=rng,
+        power=density_power,
+        mix=uniform_mix,
+        iterations=lloyd_iterations,
+        border=border_pitch,
+    )
 
 
 STRATEGIES: dict[str, Callable[..., np.ndarray]] = {
     "grid": _grid_strategy,
     "random": _random_strategy,
     **{name: _weighted_strategy for name in WEIGHTED},
+    "lloyd_uniform": _lloyd_uniform_strategy,
+    "oracle_greedy": _oracle_greedy_strategy,
+    "oracle_hessian": _oracle_hessian_strategy,
 }
 
 
@@ -268,6 +396,7 @@ def plan(
     image=None,
     weights=None,
     shape=None,
+    truth=None,
     rng,
     **opts,
 ) -> SamplePlan:
@@ -285,6 +414,8 @@ def plan(
         Precomputed importance map (>= 0, finite), e.g. from :func:`strategy_weights`.
     shape : tuple of int, optional
         Grid shape when neither image nor weights is given (grid and random).
+    truth : ndarray, shape (rows, cols), optional
+        True depth, required by the ``oracle_*`` strategies and read by no other.
     rng : None, int, SeedSequence or Generator
         Randomness (the grid shift, the draws).
     **opts
@@ -297,7 +428,7 @@ def plan(
     """
     base = _resolve(strategy)
     rng = np.random.default_rng(rng)
-    allowed = _WEIGHTED_OPTS if base in WEIGHTED else ()
+    allowed = _WEIGHTED_OPTS if base in WEIGHTED else _OTHER_OPTS.get(base, ())
     bad = sorted(set(opts) - set(allowed))
     if bad:
         raise ValueError(
@@ -316,6 +447,14 @@ def plan(
         shapes["weights"] = weights.shape
     if shape is not None:
         shapes["shape"] = tuple(int(s) for s in shape)
+    if base in ORACLES:
+        if truth is None:
+            raise ValueError(
+                f"strategy {strategy!r} is an oracle: it needs truth= (the true depth)"
+            )
+        truth = np.asarray(truth, dtype=np.float64)
+        shapes["truth"] = truth.shape
+        opts["truth"] = truth
     if not shapes:
         raise ValueError("plan needs one of image, weights or shape to know the grid")
     if len(set(shapes.values())) > 1:

@@ -16,6 +16,7 @@ from simlunar.imaging.exposure import AUTO_EXPOSURE_LEVEL, AUTO_EXPOSURE_PERCENT
 from simlunar.imaging.sensor import apply_sensor
 from simlunar.render.lights import ProjectorLight, SunLight
 from simlunar.render.scene import TerrainScene, luminance
+from simlunar.render.sparse import LitTracer
 from simlunar.scanner.triangulate import check_rig, projector_visibility, true_correspondences
 
 #: white-frame radiance percentile mapped to ``target_level`` by the auto exposure (the one
@@ -39,7 +40,9 @@ class Capture(Protocol):
 
 
 #: integrators a sparse pattern (a dot frame) may be rendered with
-SPARSE_INTEGRATORS = ("path", "ptracer")
+SPARSE_INTEGRATORS = ("path", "ptracer", "lit")
+#: light paths per lit projector pixel of the ``"lit"`` sparse integrator
+SPARSE_PARTICLES = 256
 
 
 @dataclass(frozen=True)
@@ -66,13 +69,18 @@ class CaptureOptions:
         The auto exposure (:mod:`simlunar.imaging.exposure`) maps the white frame's
         99.5th-percentile radiance to this fraction of the sensor range (or of 1 without a
         sensor), so thresholds are in [0, 1] frame units.
-    sparse_integrator : "path" or "ptracer"
-        Integrator of sparse patterns (lit fraction <= ``sparse_below``): the path tracer, or
-        Mitsuba's light tracer from the projector.
+    sparse_integrator : "path", "ptracer" or "lit"
+        Integrator of sparse patterns (lit fraction <= ``sparse_below``): the path tracer;
+        Mitsuba's light tracer from the projector (which launches ``sparse_spp`` paths per
+        camera pixel); or ``"lit"`` (:class:`simlunar.render.sparse.LitTracer`), which traces
+        ``sparse_particles`` paths per lit projector pixel, so a dot frame costs what its dots
+        cost and a pattern with nothing lit is black at no cost.
     sparse_spp : int >= 1 or None
-        Samples per pixel of sparse patterns (None: ``spp``).
+        Samples per pixel of sparse patterns (None: ``spp``); not used by ``"lit"``.
     sparse_below : float in (0, 1]
         Largest lit fraction of projector pixels counted as sparse.
+    sparse_particles : int >= 1
+        ``"lit"`` only: light paths per lit projector pixel (at pattern value 1).
     """
 
     max_depth: int = 3
@@ -86,6 +94,7 @@ class CaptureOptions:
     sparse_integrator: str = "path"
     sparse_spp: int | None = None
     sparse_below: float = 0.01
+    sparse_particles: int = SPARSE_PARTICLES
 
     def __post_init__(self):
         if not self.projector_gamma > 0:
@@ -101,6 +110,8 @@ class CaptureOptions:
             )
         if self.sparse_spp is not None and int(self.sparse_spp) < 1:
             raise ValueError(f"sparse_spp must be >= 1, got {self.sparse_spp}")
+        if int(self.sparse_particles) < 1:
+            raise ValueError(f"sparse_particles must be >= 1, got {self.sparse_particles}")
 
 
 class RenderCapture:
@@ -147,6 +158,8 @@ class RenderCapture:
         self.sparse_integrator = o.sparse_integrator
         self.sparse_spp = None if o.sparse_spp is None else int(o.sparse_spp)
         self.sparse_below = float(o.sparse_below)
+        self.sparse_particles = int(o.sparse_particles)
+        self._lit = None  # the LitTracer, made on the first sparse frame
         self.rig = rig
         self.proj_shape = rig.projector.intrinsics.shape
         self.gamma = float(o.projector_gamma)
@@ -224,6 +237,8 @@ class RenderCapture:
             )
         self.renders += len(pats)
         em = self.emitted(pats)
+        if self.sparse_integrator == "lit":
+            return self._lens(self._with_ambient(self._render_lit(em)))
         lit = (em > 0).mean(axis=(1, 2))
         sparse = (lit > 0) & (lit <= self.sparse_below)
         if (self.sparse_integrator == "path" and self.sparse_spp is None) or not sparse.any():
@@ -235,6 +250,19 @@ class RenderCapture:
             em[sparse], spp=self.sparse_spp, integrator=self.sparse_integrator
         )
         return self._lens(self._with_ambient(out))
+
+    def _render_lit(self, em: np.ndarray) -> np.ndarray:
+        """``sparse_integrator="lit"``: sparse and black patterns light traced from their lit
+        pixels (:class:`simlunar.render.sparse.LitTracer`), the others path traced."""
+        sparse = (em > 0).mean(axis=(1, 2)) <= self.sparse_below
+        out = np.empty((len(em), *self.scene.shape), np.float32)
+        if (~sparse).any():
+            out[~sparse] = self.scene.render_patterns(em[~sparse])
+        if sparse.any():
+            if self._lit is None:
+                self._lit = LitTracer(self.scene, per_pixel=self.sparse_particles)
+            out[sparse] = self._lit.render(em[sparse], seed=self.scene.seed)
+        return out
 
     def _with_ambient(self, frames: np.ndarray) -> np.ndarray:
         """``frames`` plus the image of the extra lights (linearity of light transport)."""

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from simlunar.planner import STRATEGIES, WEIGHTED, SamplePlan, combine_maps, plan
+from simlunar.planner import ORACLES, STRATEGIES, WEIGHTED, SamplePlan, combine_maps, plan
 
 SHAPE = (60, 80)
 
@@ -219,4 +219,4 @@ def test_bad_input(args, kwargs, match):
 
 
 def test_registry_names():
-    assert set(STRATEGIES) == {"grid", "random", *WEIGHTED}
+    assert set(STRATEGIES) == {"grid", "random", *WEIGHTED, "lloyd_uniform", *ORACLES}

@@ -1,0 +1,201 @@
+"""Oracle planners: they READ THE TRUE DEPTH, so no sensor can realise them.
+
+They bound what any planner could gain and are labelled "Oracle ..." in every table:
+
+- :func:`oracle_greedy`: error feedback on the truth. A framed grid of ``start`` k samples (the
+  image border rows and columns included), then batches of about ``batch`` (15 %) more samples at
+  the non-maximum-suppressed peaks of the smoothed true squared error of the current
+  Delaunay-linear reconstruction, until exactly k.
+- :func:`oracle_hessian`: the true depth's Hessian norm |H|^p as the density, placed by
+  :func:`simlunar.planner.placement.place` (halftone + weighted Lloyd with the border covered).
+
+Both take the truth as an array; through :func:`simlunar.planner.plan` they are the strategies
+``oracle_greedy`` and ``oracle_hessian`` and need ``truth=``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from simlunar.planner.placement import density_from_map, place
+from simlunar.reconstruction import reconstruct
+
+__all__ = ["ORACLES", "framed_grid", "hessian_norm", "oracle_greedy", "oracle_hessian"]
+
+#: the oracle strategies (read the truth; never realisable)
+ORACLES = ("oracle_greedy", "oracle_hessian")
+
+
+def _check_truth(truth, k) -> np.ndarray:
+    truth = np.asarray(truth, dtype=np.float64)
+    if truth.ndim != 2 or min(truth.shape) < 2:
+        raise ValueError(
+            f"truth must be a (rows, cols) depth map, rows, cols >= 2; got {truth.shape}"
+        )
+    if not np.all(np.isfinite(truth)):
+        raise ValueError("truth contains NaN or infinite values")
+    if not 4 <= k <= truth.size:
+        raise ValueError(f"k = {k} must be in [4, {truth.size}] for an oracle")
+    return truth
+
+
+def framed_grid(shape, k: int) -> np.ndarray:
+    """A lattice of at most k cells whose outer rows and columns lie on the image border.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        Grid (rows, cols), each >= 2.
+    k : int
+        Sample budget, >= 4.
+
+    Returns
+    -------
+    ndarray of int64, shape (n_r * n_c,)
+        Sorted flat indices, n_r n_c <= k, n_r, n_c >= 2, aspect close to the grid's.
+    """
+    nr, nc = int(shape[0]), int(shape[1])
+    n_r = int(np.clip(np.floor(np.sqrt(k * nr / nc)), 2, nr))
+    n_c = int(np.clip(k // n_r, 2, nc))
+    n_r = int(np.clip(min(n_r, k // n_c), 2, nr))
+    rows = np.unique(np.rint(np.linspace(0, nr - 1, n_r)).astype(np.int64))
+    cols = np.unique(np.rint(np.linspace(0, nc - 1, n_c)).astype(np.int64))
+    return np.sort((rows[:, None] * nc + cols[None, :]).ravel())
+
+
+def _batch(score, sampled, m, window) -> np.ndarray:
+    """The m unsampled cells of highest score, peaks of a ``window``-wide maximum filter first."""
+    peaks = (score == ndimage.maximum_filter(score, size=window, mode="nearest")).ravel()
+    peaks &= ~sampled
+    cand = np.flatnonzero(peaks)
+    flat = score.ravel()
+    if cand.size < m:  # too few peaks: the best of the remaining cells
+        rest = np.flatnonzero(~sampled & ~peaks)
+        top = rest[np.argpartition(-flat[rest], m - cand.size - 1)[: m - cand.size]]
+        return np.concatenate((cand, top))
+    return cand[np.argpartition(-flat[cand], m - 1)[:m]]
+
+
+def oracle_greedy(
+    truth,
+    k: int,
+    *,
+    rng=None,
+    start: float = 0.25,
+    batch: float = 0.15,
+    smooth: float = 0.25,
+    window: float = 1.0,
+) -> np.ndarray:
+    """Greedy error-feedback refiner on the true depth (an oracle bound, never realisable).
+
+    Parameters
+    ----------
+    truth : array_like, shape (rows, cols)
+        True depth (finite), read everywhere.
+    k : int
+        Number of samples, 4 <= k <= rows * cols.
+    rng : None, int, SeedSequence or Generator
+        Unused: the refiner is deterministic given the truth (accepted for the planner interface).
+    start : float in (0, 1]
+        Share of k in the initial framed grid (:func:`framed_grid`).
+    batch : float, > 0
+        Batch size as a share of the current sample count.
+    smooth : float, >= 0
+        Gaussian sigma of the squared-error smoothing, in current pitches sqrt(N / n).
+    window : float, > 0
+        Non-maximum suppression window, in current pitches (odd, >= 3 cells): a batch takes
+        the highest local maxima of the smoothed error within that window.
+
+    Returns
+    -------
+    ndarray of int64, shape (k,)
+        Sorted distinct flat indices.
+
+    Notes
+    -----
+    Cells where the smoothed error is (numerically) zero rank by their distance to the nearest
+    sample, so flat regions fill their largest holes first.
+    """
+    del rng
+    truth = _check_truth(truth, k)
+    if not 0 < start <= 1 or not batch > 0 or not smooth >= 0 or not window > 0:
+        raise ValueError(
+            "need 0 < start <= 1, batch > 0, smooth >= 0, window > 0; "
+            f"got {start}, {batch}, {smooth}, {window}"
+        )
+    shape, n = truth.shape, truth.size
+    flat = framed_grid(shape, max(4, int(start * k)))
+    sampled = np.zeros(n, dtype=bool)
+    sampled[flat] = True
+    while flat.size < k:
+        rec = reconstruct(np.column_stack(np.divmod(flat, shape[1])), truth.ravel()[flat], shape)
+        pitch = np.sqrt(n / flat.size)
+        e2 = ndimage.gaussian_filter((rec - truth) ** 2, sigma=smooth * pitch, mode="nearest")
+        hole = ndimage.distance_transform_edt(~sampled.reshape(shape))
+        top = float(e2.max())
+        # the hole term only orders cells whose error is negligible against the largest
+        score = e2 + (1e-9 * top if top > 0 else 1.0) * hole / max(float(hole.max()), 1.0)
+        m = min(int(np.ceil(batch * flat.size)), k - flat.size)
+        new = _batch(score, sampled, m, max(3, 2 * int(window * pitch / 2) + 1))
+        sampled[new] = True
+        flat = np.concatenate((flat, new))
+    return np.sort(flat)
+
+
+def hessian_norm(truth, *, sigma: float = 1.0) -> np.ndarray:
+    """Frobenius norm of the depth's Hessian (finite differences), Gaussian-smoothed.
+
+    Parameters
+    ----------
+    truth : array_like, shape (rows, cols)
+        Depth map.
+    sigma : float, >= 0
+        Gaussian sigma (pixels) of the smoothing of the norm (0: none).
+
+    Returns
+    -------
+    ndarray of float64, shape (rows, cols)
+        |H| >= 0 (depth units per pixel^2).
+    """
+    z = np.asarray(truth, dtype=np.float64)
+    gr, gc = np.gradient(z)
+    hrr, hrc = np.gradient(gr)
+    hcr, hcc = np.gradient(gc)
+    h = np.sqrt(hrr**2 + hrc**2 + hcr**2 + hcc**2)
+    return ndimage.gaussian_filter(h, sigma) if sigma > 0 else h
+
+
+def oracle_hessian(
+    truth,
+    k: int,
+    *,
+    rng=None,
+    power: float = 0.5,
+    mix: float = 0.25,
+    iterations: int = 20,
+    border: float | None = 0.75,
+) -> np.ndarray:
+    """Density |H|^p of the true depth, placed by halftone + weighted Lloyd (an oracle bound).
+
+    Parameters
+    ----------
+    truth : array_like, shape (rows, cols)
+        True depth (finite).
+    k : int
+        Number of samples, 4 <= k <= rows * cols.
+    rng : None, int, SeedSequence or Generator
+        Randomness of the halftone.
+    power, mix : float
+        Density mapping of :func:`simlunar.planner.placement.density_from_map`.
+    iterations, border
+        Lloyd iterations and border snap of :func:`simlunar.planner.placement.place`.
+
+    Returns
+    -------
+    ndarray of int64, shape (k,)
+        Sorted distinct flat indices.
+    """
+    truth = _check_truth(truth, k)
+    density = density_from_map(hessian_norm(truth), power=power, mix=mix)
+    return place(density, k, rng=rng, iterations=iterations, border=border)

@@ -1,0 +1,328 @@
+"""Region-based iterative enhancement (paper section 5): multi-round sequential sampling.
+
+A range sensor that can be asked again places its samples in rounds: a uniform layout of part
+of the budget first, then batches where the measured samples themselves say the surface is
+rough. The planner reads the depth only through the sensor callback ``measure`` at the cells it
+samples; the error estimate is built from what a sensor would know:
+
+1. leave-one-out residuals: each measured sample against the least-squares plane through its
+   Delaunay neighbours (the error a linear interpolant would make there without it);
+2. their squares interpolated to the grid (Delaunay-linear), averaged over one pitch of the
+   current layout (Gaussian sigma), raised to ``temper`` (1/2: the local RMS residual; an
+   untempered estimate over-concentrates and loses to the uniform layout) and mixed with a
+   uniform share, times an optional prior map (wavelet energy, learned importance);
+3. the batch at the non-maximum-suppressed peaks of a(x) dist(x)^2, dist = distance to the
+   nearest sample (placed greedily: peaks are taken, distances updated, peaks taken again).
+
+Measured in ``shared/REFERENCES.md`` (issue 20): 1.09-1.14x fewer samples than a uniform Lloyd
+layout at equal MSE on quarter-scale presets in 5-11 rounds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from simlunar.planner.placement import place
+from simlunar.planner.strategies import check_k
+from simlunar.planner.types import SamplePlan
+from simlunar.reconstruction import reconstruct, triangulate
+
+__all__ = [
+    "SequentialOptions",
+    "SequentialPlan",
+    "error_estimate",
+    "loo_residuals",
+    "plan_sequential",
+    "uniform_layout",
+]
+
+
+@dataclass(frozen=True)
+class SequentialOptions:
+    """Options of :func:`plan_sequential`.
+
+    Attributes
+    ----------
+    max_rounds : int >= 2
+        Rounds cap, the first layout included; the last allowed round takes the rest.
+    first_share : float in (0, 1)
+        Share of k placed by the first, uniform round.
+    batch_share : float in (0, 1]
+        Samples per later round as a share of k (rounded up).
+    temper : float in (0, 1]
+        Power of the smoothed squared residual (1/2: RMS residual).
+    uniform_mix : float in [0, 1]
+        Uniform share of the tempered estimate (normalised to mean 1 first).
+    prior_power : float > 0
+        Power of the prior map (normalised to mean 1) that multiplies the estimate.
+    nms_pitches : float > 0
+        Non-maximum-suppression radius in pitches sqrt(N / k) of the final budget.
+    """
+
+    max_rounds: int = 12
+    first_share: float = 0.3
+    batch_share: float = 0.12
+    temper: float = 0.5
+    uniform_mix: float = 0.5
+    prior_power: float = 0.5
+    nms_pitches: float = 0.7
+
+    def __post_init__(self):
+        if isinstance(self.max_rounds, bool) or not isinstance(self.max_rounds, int):
+            raise ValueError(f"max_rounds must be an integer, got {self.max_rounds!r}")
+        checks = {
+            "max_rounds": (self.max_rounds >= 2, ">= 2"),
+            "first_share": (0.0 < self.first_share < 1.0, "in (0, 1)"),
+            "batch_share": (0.0 < self.batch_share <= 1.0, "in (0, 1]"),
+            "temper": (0.0 < self.temper <= 1.0, "in (0, 1]"),
+            "uniform_mix": (0.0 <= self.uniform_mix <= 1.0, "in [0, 1]"),
+            "prior_power": (self.prior_power > 0.0, "> 0"),
+            "nms_pitches": (self.nms_pitches > 0.0, "> 0"),
+        }
+        for name, (ok, what) in checks.items():
+            if not ok:
+                raise ValueError(f"{name} must be {what}, got {getattr(self, name)!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class SequentialPlan:
+    """Outcome of :func:`plan_sequential`.
+
+    Attributes
+    ----------
+    plan : SamplePlan
+        The k distinct sampled cells, row-major order.
+    values : ndarray of float64, shape (k,)
+        What ``measure`` returned for each cell of ``plan`` (same order; read-only).
+    round_of : ndarray of int64, shape (k,)
+        Round (0 = first layout) in which each cell of ``plan`` was measured (read-only).
+    rounds : int
+        Number of sensor rounds, the first layout included.
+    """
+
+    plan: SamplePlan
+    values: np.ndarray
+    round_of: np.ndarray
+    rounds: int
+
+    @property
+    def round_sizes(self) -> tuple[int, ...]:
+        """Samples measured per round."""
+        return tuple(int(n) for n in np.bincount(self.round_of, minlength=self.rounds))
+
+
+def uniform_layout(shape, k: int, *, rng=None) -> np.ndarray:
+    """An image-free, evenly spread layout of k cells with the border covered.
+
+    Lloyd placement of a uniform density (:func:`simlunar.planner.placement.place`: halftone,
+    weighted Lloyd, samples near the border snapped onto it, corners sampled).
+
+    Parameters
+    ----------
+    shape : tuple of int
+        Grid (rows, cols).
+    k : int
+        Number of cells, 3 <= k <= rows * cols.
+    rng : None, int, SeedSequence or Generator
+
+    Returns
+    -------
+    ndarray of int64, shape (k,)
+        Sorted distinct flat (row-major) indices.
+    """
+    rng = np.random.default_rng(rng)
+    shape = tuple(int(s) for s in shape)
+    k = check_k(k, shape[0] * shape[1])
+    return place(np.ones(shape), k, rng=rng)
+
+
+def loo_residuals(points_rc, values) -> np.ndarray:
+    """Leave-one-out residual of each sample against the plane through its Delaunay neighbours.
+
+    Parameters
+    ----------
+    points_rc : ndarray, shape (n, 2)
+        Distinct sample positions (row, col).
+    values : ndarray, shape (n,)
+        Measured values.
+
+    Returns
+    -------
+    ndarray of float64, shape (n,)
+        value_i - plane_i(position_i), the plane the least-squares fit to the neighbours of i
+        in the Delaunay triangulation of all samples; 0 where the fit is degenerate (fewer than
+        three neighbours, or all collinear).
+    """
+    pts = np.asarray(points_rc, dtype=np.float64)
+    z = np.asarray(values, dtype=np.float64)
+    tris = triangulate(pts)
+    out = np.zeros(len(pts))
+    if len(tris) == 0:
+        return out
+    e = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]).astype(np.int64)
+    e = np.unique(np.sort(e, axis=1), axis=0)
+    i, j = np.concatenate((e[:, 0], e[:, 1])), np.concatenate((e[:, 1], e[:, 0]))
+    dr, dc, dz = pts[j, 0] - pts[i, 0], pts[j, 1] - pts[i, 1], z[j] - z[i]
+    n = len(pts)
+
+    def total(x):
+        return np.bincount(i, weights=x, minlength=n)
+
+    cnt = np.bincount(i, minlength=n).astype(np.float64)
+    srr, scc, src = total(dr * dr), total(dc * dc), total(dr * dc)
+    sr, sc = total(dr), total(dc)
+    m = np.stack(
+        [np.stack([cnt, sr, sc], -1), np.stack([sr, srr, src], -1), np.stack([sc, src, scc], -1)],
+        axis=1,
+    )
+    rhs = np.stack([total(dz), total(dz * dr), total(dz * dc)], -1)
+    det = np.linalg.det(m)
+    scale = np.maximum(cnt * srr * scc, 1e-300)
+    ok = (cnt >= 3) & (np.abs(det) > 1e-9 * scale)
+    # the fit is dz ~ a + b dr + c dc about sample i, so the plane predicts a at i
+    a = np.linalg.solve(m[ok], rhs[ok][..., None])[:, 0, 0]
+    out[ok] = -a
+    return out
+
+
+def _mean_one(m: np.ndarray) -> np.ndarray:
+    mean = float(m.mean())
+    return m / mean if mean > 0 else np.ones_like(m)
+
+
+def error_estimate(points_rc, values, shape, *, prior=None, options=None) -> np.ndarray:
+    """The tempered, prior-weighted error estimate a(x) of the measured samples.
+
+    Parameters
+    ----------
+    points_rc : ndarray, shape (n, 2)
+        Distinct sample positions (row, col), n >= 3.
+    values : ndarray, shape (n,)
+        Measured values.
+    shape : tuple of int
+        Grid (rows, cols).
+    prior : ndarray, shape (rows, cols), optional
+        Importance map >= 0 (wavelet energy, learned importance); used as
+        (prior / mean)^prior_power.
+    options : SequentialOptions, optional
+
+    Returns
+    -------
+    ndarray of float64, shape (rows, cols), > 0 where the uniform share is > 0
+        ((1 - m) s / mean(s) + m) * prior term, s = (G_pitch * interp(residual^2))^temper.
+    """
+    opt = options or SequentialOptions()
+    pts = np.asarray(points_rc, dtype=np.float64)
+    res = loo_residuals(pts, values)
+    # rounding residuals of an exact plane must not become a (normalised) signal
+    res[np.abs(res) <= 1e-9 * float(np.ptp(values))] = 0.0
+    pitch = float(np.sqrt(shape[0] * shape[1] / len(pts)))
+    sq = reconstruct(pts, res * res, shape)
+    s = ndimage.gaussian_filter(sq, pitch, mode="nearest")
+    a = _mean_one(np.maximum(s, 0.0) ** opt.temper)
+    a = (1.0 - opt.uniform_mix) * a + opt.uniform_mix
+    if prior is not None:
+        a = a * _mean_one(np.asarray(prior, dtype=np.float64)) ** opt.prior_power
+    return a
+
+
+def _select(a: np.ndarray, taken: np.ndarray, m: int, radius: float, rng) -> np.ndarray:
+    """m new flat cells at the non-maximum-suppressed peaks of a * dist^2 (greedy in steps)."""
+    size = max(3, 2 * int(np.ceil(radius)) + 1)
+    jitter = 1.0 + 1e-9 * rng.random(a.shape)  # breaks plateaus (uniform a, equal distances)
+    taken = taken.copy()
+    chosen = []
+    while m > 0:
+        dist2 = ndimage.distance_transform_edt(~taken) ** 2
+        score = np.where(taken, 0.0, a * dist2 * jitter)
+        peaks = (score == ndimage.maximum_filter(score, size, mode="constant")) & (score > 0)
+        cand = np.flatnonzero(peaks)
+        if cand.size == 0:  # every cell with a positive score is taken: fill at random
+            cand = rng.permutation(np.flatnonzero(~taken.ravel()))
+        else:
+            cand = cand[np.argsort(-score.ravel()[cand], kind="stable")]
+        pick = cand[:m]
+        taken.ravel()[pick] = True
+        chosen.append(pick)
+        m -= pick.size
+    return np.concatenate(chosen)
+
+
+def _measure(measure: Callable, rc: np.ndarray) -> np.ndarray:
+    vals = np.asarray(measure(rc), dtype=np.float64)
+    if vals.shape != (len(rc),):
+        raise ValueError(f"measure returned shape {vals.shape} for {len(rc)} cells")
+    if not np.all(np.isfinite(vals)):
+        raise ValueError("measure returned NaN or infinite values")
+    return vals
+
+
+def _check_prior(prior, shape):
+    if prior is None:
+        return None
+    p = np.asarray(prior, dtype=np.float64)
+    if p.shape != shape or not np.all(np.isfinite(p)) or p.min() < 0:
+        raise ValueError(f"prior must be a finite map >= 0 of shape {shape}, got {p.shape}")
+    return p
+
+
+def plan_sequential(
+    k: int, *, shape, measure: Callable, prior=None, options=None, rng
+) -> SequentialPlan:
+    """Place k samples in rounds, each round's batch from the samples measured so far.
+
+    Parameters
+    ----------
+    k : int
+        Total samples, 3 <= k <= rows * cols.
+    shape : tuple of int
+        Grid (rows, cols).
+    measure : callable (ndarray int64 (m, 2) of (row, col)) -> array_like (m,)
+        The sensor: values at the given cells, called once per round with cells not measured
+        before. The planner reads the depth through nothing else.
+    prior : ndarray, shape (rows, cols), optional
+        Importance map >= 0 that multiplies the error estimate (see :func:`error_estimate`).
+    options : SequentialOptions, optional
+    rng : None, int, SeedSequence or Generator
+
+    Returns
+    -------
+    SequentialPlan
+        Exactly k distinct cells, their measured values and the round of each.
+    """
+    opt = options or SequentialOptions()
+    if not isinstance(opt, SequentialOptions):
+        raise ValueError(f"options must be a SequentialOptions, got {type(opt).__name__}")
+    rng = np.random.default_rng(rng)
+    shape = tuple(int(s) for s in shape)
+    n = shape[0] * shape[1]
+    k = check_k(k, n)
+    prior = _check_prior(prior, shape)
+    first = max(3, min(k, round(opt.first_share * k)))
+    batch = max(1, int(np.ceil(opt.batch_share * k)))
+    flat = uniform_layout(shape, first, rng=rng)
+    vals = [_measure(measure, np.column_stack(np.divmod(flat, shape[1])))]
+    flats, rounds = [flat], 1
+    radius = opt.nms_pitches * float(np.sqrt(n / k))
+    while (done := sum(f.size for f in flats)) < k:
+        m = k - done if rounds == opt.max_rounds - 1 else min(batch, k - done)
+        cur = np.concatenate(flats)
+        rc = np.column_stack(np.divmod(cur, shape[1]))
+        a = error_estimate(rc, np.concatenate(vals), shape, prior=prior, options=opt)
+        taken = np.zeros(shape, dtype=bool)
+        taken.ravel()[cur] = True
+        new = _select(a, taken, m, radius, rng)
+        vals.append(_measure(measure, np.column_stack(np.divmod(new, shape[1]))))
+        flats.append(new)
+        rounds += 1
+    cur = np.concatenate(flats)
+    order = np.argsort(cur, kind="stable")
+    round_of = np.concatenate([np.full(f.size, i) for i, f in enumerate(flats)])[order]
+    values, round_of = np.concatenate(vals)[order], round_of.astype(np.int64)
+    values.flags.writeable = False
+    round_of.flags.writeable = False
+    return SequentialPlan(SamplePlan.from_flat(cur[order], shape), values, round_of, rounds)
