@@ -8,6 +8,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.style import metric_axis, styles
@@ -16,7 +17,7 @@ __all__ = ["error_vs_time", "lidar_summary", "lidar_tables", "waveform"]
 
 #: what the band of :func:`error_vs_time` shows, by how many terrain seeds (units) it pools
 BAND_TRIALS = "band: ±1 s.d. over trials"
-BAND_SEEDS = "band: 95 % interval of the mean over terrain seeds"
+BAND_SEEDS = "band: 95 % bootstrap interval over terrain seeds"
 
 
 def waveform(
@@ -72,6 +73,15 @@ def waveform(
     return fig, ax
 
 
+def _bootstrap_mean(values: np.ndarray, n_boot: int = 2000) -> tuple[float, float]:
+    """95 % percentile bootstrap interval of the mean of ``values`` (fixed seed: a figure
+    redraws identically)."""
+    rng = np.random.default_rng(0)
+    means = values[rng.integers(0, len(values), (n_boot, len(values)))].mean(axis=1)
+    lo, hi = np.percentile(means, [2.5, 97.5])
+    return float(lo), float(hi)
+
+
 def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = None) -> dict:
     """Per planner and sample count: scan time, error and its interval.
 
@@ -87,8 +97,9 @@ def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = Non
     Returns
     -------
     dict planner -> dict of float64 arrays over k ascending: ``k``, ``seconds`` (mean),
-    ``value`` (mean), ``lo``, ``hi`` (the band: with several units, the 95 % t-free normal
-    interval 1.96 s.e. of the mean of per-unit means; else ±1 s.d. over trials) and ``units``.
+    ``value`` (mean), ``lo``, ``hi`` (the band: with several units, the 95 % bootstrap
+    percentile interval of the mean of the per-unit means; else ±1 s.d. over trials) and
+    ``units``.
     """
     ok = {
         c: {str(x) for x in v} if isinstance(v, list | tuple | set) else {str(v)}
@@ -110,13 +121,13 @@ def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = Non
             mean = float(allv.mean())
             if len(units) > 1:
                 per = np.array([np.mean([v for _, v in u]) for u in units])
-                half = 1.96 * per.std(ddof=1) / np.sqrt(len(per))
+                lo, hi = _bootstrap_mean(per)
             else:
-                half = float(allv.std())
+                lo, hi = mean - float(allv.std()), mean + float(allv.std())
             cols["seconds"].append(np.mean([s for u in units for s, _ in u]))
             cols["value"].append(mean)
-            cols["lo"].append(mean - half)
-            cols["hi"].append(mean + half)
+            cols["lo"].append(lo)
+            cols["hi"].append(hi)
             cols["units"].append(len(units))
         out[planner] = {
             "k": np.array(ks, float),
@@ -159,6 +170,7 @@ def error_vs_time(
         pooled |= bool((d["units"] > 1).any())
     ax.set_xscale("log")
     ax.set_yscale("log")
+    ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels of a short range collide
     ax.set_xlabel("scan time (s)" if x == "seconds" else "samples k")
     ax.set_ylabel(metric_axis(metric))
     if title:

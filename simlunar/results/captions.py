@@ -167,14 +167,16 @@ def lidar_error(metric: str, study: dict, x: str, n_panels: int, *, seeds: int =
         else "the number of planned samples k"
     )
     band = (
-        f"95 % interval (1.96 standard errors) of the mean over {seeds} terrain seeds"
+        f"95 % percentile-bootstrap interval of the mean over the {seeds} terrain seeds "
+        "(of each seed's mean over trials)"
         if seeds > 1
-        else f"±1 standard deviation over {trials} trials"
+        else f"±1 standard deviation over the {trials} trials"
     )
     per = " One panel per sweep point." if n_panels > 1 else ""
+    runs = f"{trials} trial{'s' if trials != 1 else ''}"
     return (
-        f"Image-directed LIDAR ({sensor}): {_metric(metric)} of the reconstructed guide-view "
-        f"depth against {axis}, per planner, log-log; points: one per density, mean over "
-        f"{trials} trials{f' and {seeds} terrain seeds' if seeds > 1 else ''}; shaded band: "
-        f"{band}.{per}"
+        f"Image-directed LIDAR ({sensor}): error of the reconstructed guide-view depth "
+        f"({_metric(metric)}) against {axis}, per planner, log-log; points: one per density, "
+        f"mean over {runs}{f' on each of {seeds} terrain seeds' if seeds > 1 else ''}; shaded "
+        f"band: {band}.{per}"
     )
