@@ -254,3 +254,40 @@ def time_table(rows: list[dict], metric: str = "mse") -> dict[str, dict[str, np.
             "value": np.array([np.mean([v for _, v in by_k[k]]) for k in ks]),
         }
     return out
+
+
+def equal_time_errors(rows: list[dict], times, *, metric: str = "mse") -> dict[str, np.ndarray]:
+    """Each planner's error at equal scan time, per unit (terrain seed).
+
+    Per (unit, planner) the mean ``seconds`` and mean ``metric`` over trials at every k are
+    interpolated linearly in log-log at ``times`` (s); NaN outside the scanned range.
+
+    Returns
+    -------
+    dict planner -> float64 (units, len(times)), units in ascending order of ``unit``.
+    """
+    acc: dict = {}
+    for r in rows:
+        if r["metric"] != metric:
+            continue
+        key = (str(r["planner"]), int(float(r.get("unit", 0) or 0)))
+        acc.setdefault(key, {}).setdefault(int(float(r["k"])), []).append(
+            (float(r["seconds"]), float(r["value"]))
+        )
+    t = np.log(np.asarray(times, float))
+    units = sorted({u for _, u in acc})
+    out = {}
+    for planner in dict.fromkeys(p for p, _ in acc):
+        grid = np.full((len(units), len(t)), np.nan)
+        for i, u in enumerate(units):
+            by_k = acc.get((planner, u), {})
+            pts = sorted(
+                (np.mean([s for s, _ in v]), np.mean([e for _, e in v])) for v in by_k.values()
+            )
+            if len(pts) < 2:
+                continue
+            x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+            inside = (t >= x[0]) & (t <= x[-1])
+            grid[i, inside] = np.exp(np.interp(t[inside], x, y))
+        out[planner] = grid
+    return out

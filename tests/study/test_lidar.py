@@ -85,3 +85,17 @@ def test_options_refuse_unknown_names():
         LidarStudyOptions(planners=("psychic",))
     with pytest.raises(ValueError, match="must be FlashLidarOptions"):
         LidarStudyOptions(sensor="flash", sensor_options=HazardOptions())
+
+
+def test_equal_time_errors_interpolate_in_log_log():
+    from simlunar.study.lidar import equal_time_errors
+
+    rows = [
+        {"unit": u, "planner": "grid", "k": k, "metric": "mse", "value": v * (1 + u), "seconds": s}
+        for u in (0, 1)
+        for k, s, v in ((10, 1.0, 1e-2), (100, 10.0, 1e-3))
+    ]
+    e = equal_time_errors(rows, [np.sqrt(10.0), 20.0])["grid"]
+    assert e.shape == (2, 2)
+    assert e[:, 0] == pytest.approx([10**-2.5, 2 * 10**-2.5])
+    assert np.isnan(e[:, 1]).all()  # beyond the longest scan
