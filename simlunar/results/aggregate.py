@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.results.records import WorkUnit, unit_label
 from simlunar.study.stats import (
     SamplesSaved,
     ScoreIntervals,
@@ -22,7 +23,6 @@ from simlunar.study.stats import (
     bootstrap_scores,
     samples_saved,
 )
-from simlunar.results.records import WorkUnit, unit_label
 
 SEED_AXIS = "terrain.seed_index"
 #: bootstrap replicates per point and metric

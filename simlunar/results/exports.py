@@ -35,10 +35,10 @@ from typing import Any
 import numpy as np
 
 from simlunar.atomic import atomic_write
+from simlunar.errors import ConfigError
+from simlunar.imaging.exr import write_exr
 from simlunar.scanner.scans import GrayCodeOptions
 from simlunar.scanner.triangulate import Correspondences, triangulate_plane, triangulate_rays
-from simlunar.imaging.exr import write_exr
-from simlunar.errors import ConfigError
 
 __all__ = [
     "calibration_opencv",

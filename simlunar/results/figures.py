@@ -143,9 +143,9 @@ def _density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
 
 def write_figures(out_dir: str | Path) -> list[Path]:
     """Draw every figure the results support; returns the written paths (PNG and PDF)."""
-    from simlunar.results import captions as captions_text
     from simlunar.plotting import figures as F
     from simlunar.plotting.style import axis_name
+    from simlunar.results import captions as captions_text
 
     res = load_results(out_dir)
     out = res["dir"]
@@ -316,9 +316,9 @@ def _ambient_axis(rows: list[dict], units: list[dict], path: str):
 def _scanner_figures(res: dict, emit, captions: dict) -> None:
     import numpy as np
 
-    from simlunar.results import captions as captions_text
     from simlunar.plotting import figures as F
     from simlunar.plotting.style import axis_name
+    from simlunar.results import captions as captions_text
 
     rows = res["rows"]
     cfg = res["config"]
@@ -385,9 +385,9 @@ def write_figures_pruned(out_dir: str | Path) -> list[Path]:
 def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
     """``samples_saved``: per sweep point (pooled over terrain seeds), one panel per reference
     (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
+    from simlunar.plotting import figures as F
     from simlunar.results import aggregate
     from simlunar.results import captions as captions_text
-    from simlunar.plotting import figures as F
 
     points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
     points = [p for p in points if p.saved][:MAX_UNIT_PANELS]

@@ -3,10 +3,9 @@ typed record and the dict form executors carry and the unit cache stores)."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from typing import Any
-
-import json
 
 import numpy as np
 

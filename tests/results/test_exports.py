@@ -18,8 +18,8 @@ from typer.testing import CliRunner
 from simlunar.cli import app
 from simlunar.imaging.exr import read_exr
 from simlunar.imaging.sensor import SensorModel
-from simlunar.results import exports
 from simlunar.render.capture import CaptureOptions, RenderCapture
+from simlunar.results import exports
 from simlunar.scanner import rigs, scans
 from simlunar.scanner.scans import GrayCodeOptions
 from simlunar.terrain.types import Terrain
