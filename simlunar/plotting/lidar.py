@@ -96,7 +96,8 @@ def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = Non
 
     Returns
     -------
-    dict planner -> dict of float64 arrays over k ascending: ``k``, ``seconds`` (mean),
+    dict planner -> dict of float64 arrays over k ascending: ``k``, ``seconds`` and
+    ``samples`` (means; ``samples`` = measured range samples, ``k`` for rows without it),
     ``value`` (mean), ``lo``, ``hi`` (the band: with several units, the 95 % bootstrap
     percentile interval of the mean of the per-unit means; else ±1 s.d. over trials) and
     ``units``.
@@ -110,21 +111,22 @@ def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = Non
         if r["metric"] != metric or any(str(r.get(c)) not in a for c, a in ok.items()):
             continue
         cell = acc[str(r["planner"])][int(float(r["k"]))][str(r.get("unit", 0))]
-        cell.append((float(r["seconds"]), float(r["value"])))
+        cell.append((float(r["seconds"]), float(r["value"]), float(r.get("samples") or r["k"])))
     out = {}
     for planner, by_k in acc.items():
         ks = sorted(by_k)
-        cols: dict = {c: [] for c in ("seconds", "value", "lo", "hi", "units")}
+        cols: dict = {c: [] for c in ("seconds", "samples", "value", "lo", "hi", "units")}
         for k in ks:
             units = list(by_k[k].values())
-            allv = np.array([v for u in units for _, v in u])
+            allv = np.array([v for u in units for _, v, _ in u])
             mean = float(allv.mean())
             if len(units) > 1:
-                per = np.array([np.mean([v for _, v in u]) for u in units])
+                per = np.array([np.mean([v for _, v, _ in u]) for u in units])
                 lo, hi = _bootstrap_mean(per)
             else:
                 lo, hi = mean - float(allv.std()), mean + float(allv.std())
-            cols["seconds"].append(np.mean([s for u in units for s, _ in u]))
+            cols["seconds"].append(np.mean([s for u in units for s, _, _ in u]))
+            cols["samples"].append(np.mean([n for u in units for _, _, n in u]))
             cols["value"].append(mean)
             cols["lo"].append(lo)
             cols["hi"].append(hi)
@@ -146,8 +148,8 @@ def error_vs_time(
     title: str = "",
     ax=None,
 ):
-    """Mean error of each planner against modelled scan time (``x="seconds"``) or sample
-    count (``x="k"``), log-log, with its band (:func:`lidar_summary`).
+    """Mean error of each planner against modelled scan time (``x="seconds"``) or the range
+    samples measured (``x="samples"``), log-log, with its band (:func:`lidar_summary`).
 
     Returns
     -------
@@ -159,7 +161,9 @@ def error_vs_time(
     else:
         fig = ax.figure
     summary = lidar_summary(rows, metric=metric, where=where)
-    names = [p for p in (planners or list(summary)) if p in summary]
+    # the requested planners first, then any other label of the rows (a planless flash: none)
+    names = [p for p in (planners or []) if p in summary]
+    names += [p for p in summary if p not in names]
     st = styles(names)
     pooled = False
     for p in names:
@@ -171,7 +175,7 @@ def error_vs_time(
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels of a short range collide
-    ax.set_xlabel("scan time (s)" if x == "seconds" else "samples k")
+    ax.set_xlabel("scan time (s)" if x == "seconds" else "range samples measured")
     ax.set_ylabel(metric_axis(metric))
     if title:
         ax.set_title(title, fontsize=8)

@@ -157,14 +157,16 @@ def samples_saved(metric: str, references: list[str], point: str) -> str:
 
 
 def lidar_error(metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1) -> str:
-    """Caption of ``lidar_error_vs_<time|samples>_<metric>`` (``x``: ``seconds`` or ``k``)."""
+    """Caption of ``lidar_error_vs_<time|samples>_<metric>`` (``x``: ``seconds`` or
+    ``samples``)."""
     sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
     trials = study.get("trials", 3)
     axis = (
         "the modelled acquisition time of the scan (s: steering moves, settling and pulses of "
         "a steered beam; frames x pulses / pulse rate of a flash)"
         if x == "seconds"
-        else "the number of planned samples k"
+        else "the number of range samples measured (the planned pixels that returned; a "
+        "flash: its receiver pixels)"
     )
     band = (
         f"95 % percentile-bootstrap interval of the mean over the {seeds} terrain seeds "

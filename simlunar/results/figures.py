@@ -420,7 +420,7 @@ def _lidar_figures(res: dict, emit, captions: dict) -> None:
     groups = _density_panels(res["units"])[:MAX_UNIT_PANELS]
     seeds = max(len(members) for _, members in groups)
     for m in study.get("metrics") or []:
-        for x, name in (("seconds", "time"), ("k", "samples")):
+        for x, name in (("seconds", "time"), ("samples", "samples")):
             fig, axes = F.panel_grid(len(groups))
             for ax, (title, members) in zip(axes, groups):
                 error_vs_time(

@@ -87,7 +87,10 @@ def _to_guide(scan: LidarScan, camera: Camera, rc=None, *, detail=None, **cost) 
     pts = scan.points.reshape(-1, 3)[valid]
     uv, z = camera.project(pts)
     if rc is None:
-        rc = np.stack([uv[:, 1] - 0.5, uv[:, 0] - 0.5], axis=-1)
+        # receiver pixel centres land on lattices of the guide grid up to rounding (1e-13);
+        # snapped, they are exact lattices, whose Delaunay triangles are well shaped (nearly
+        # co-circular float points gave sliver triangles that the rasteriser extrapolated)
+        rc = np.round(np.stack([uv[:, 1] - 0.5, uv[:, 0] - 0.5], axis=-1), 6)
     else:
         rc = np.asarray(rc).reshape(-1, 2)[valid]
     return Acquisition(rc, z, camera.shape, detail=scan if detail is None else detail, **cost)

@@ -111,7 +111,8 @@ class LidarStudyResult:
     Attributes
     ----------
     rows : list of dict
-        Keys: planner, density, k, trial, metric, value, seconds, frames. Metrics: the requested
+        Keys: planner, density, k (planned pixels), trial, metric, value, seconds, frames,
+        samples (range samples measured; a flash's receiver pixels). Metrics: the requested
         ones, ``valid_fraction`` (measured over planned samples; over receiver pixels for a
         flash) and, with hazards, ``hazard_precision`` / ``hazard_recall``.
     examples : dict planner -> Acquisition
@@ -230,7 +231,8 @@ def _rows(oc, density: float) -> list[dict]:
     acq = oc.acquisition
     return [
         {"planner": oc.label, "density": density, "k": oc.k, "trial": oc.trial, "metric": m,
-         "value": float(v), "seconds": float(acq.seconds), "frames": int(acq.frames)}
+         "value": float(v), "seconds": float(acq.seconds), "frames": int(acq.frames),
+         "samples": len(acq.values)}
         for m, v in oc.scores.items()
     ]  # fmt: skip
 

@@ -45,7 +45,7 @@ def test_a_tiny_steered_beam_study_runs_end_to_end(tmp_path):
     assert "| Planner | k | scan time (s) | MSE | GRAD | valid fraction |" in r.output
     with (out / "results.csv").open() as f:
         rows = list(csv.DictReader(f))
-    assert {"planner", "k", "seconds", "frames", "value"} <= set(rows[0])
+    assert {"planner", "k", "seconds", "frames", "samples", "value"} <= set(rows[0])
     assert len(rows) == 2 * 2 * 3  # planners x densities x (mse, grad, valid_fraction)
     assert {r["k"] for r in rows} == {"128", "32"}
     for row in rows:

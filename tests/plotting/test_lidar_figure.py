@@ -64,8 +64,9 @@ def test_error_vs_time_draws_a_curve_per_planner(tmp_path):
     assert [ln.get_label() for ln in ax.lines] == ["Wavelet", "Grid"]
     assert ax.lines[1].get_xdata().tolist() == [4.0, 12.0]
     assert ax.get_xlabel() == "scan time (s)"
-    _, ax = error_vs_time(_rows(), metric="mse", x="k")
-    assert ax.get_xlabel() == "samples k"
+    _, ax = error_vs_time(_rows(), metric="mse", x="samples")  # rows without it: k
+    assert ax.get_xlabel() == "range samples measured"
+    assert ax.lines[0].get_xdata().tolist() == [64, 256]
     fig.savefig(tmp_path / "t.png")
 
 

@@ -55,6 +55,21 @@ def test_tile_camera_sees_one_tile_of_the_guide_field():
     assert uv == pytest.approx(np.array([[0.0, 0.0], [8.0, 8.0], [4.0, 4.0]]))
 
 
+def test_receiver_samples_snap_to_the_guide_lattice():
+    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.sensors.lidar import _to_guide
+
+    guide = _camera(32, 20.0)
+    # receiver pixel centres of an 8 x 8 receiver: guide (u, v) = 4 j + 2, up to float rounding
+    uv = np.array([[2.0, 2.0], [6.0, 30.0]]) * (1 + 1e-14)
+    o, d = guide.rays(uv)
+    pts = o + 40.0 * d
+    scan = LidarScan(np.full(2, 40.0), np.ones(2, bool), pts, np.ones(2), np.arange(2), 0.1, 1)
+    acq = _to_guide(scan, guide)
+    # exact lattice coordinates: nearly co-circular float points give sliver triangles
+    assert acq.rc.tolist() == [[1.5, 1.5], [29.5, 5.5]]
+
+
 def test_flash_options_refuse_more_revisits_than_tiles():
     from simlunar.sensors.lidar import FlashLidarOptions
 
