@@ -15,9 +15,9 @@ from simlunar.plotting.style import metric_axis, styles
 
 __all__ = ["error_vs_time", "lidar_summary", "lidar_tables", "waveform"]
 
-#: what the band of :func:`error_vs_time` shows, by how many terrain seeds (units) it pools
-BAND_TRIALS = "band: ±1 s.d. over trials"
-BAND_SEEDS = "band: 95 % bootstrap interval over terrain seeds"
+#: what the error bars of :func:`error_vs_time` show, by how many terrain seeds (units) it pools
+BAND_TRIALS = "bars: ±1 s.d. over trials"
+BAND_SEEDS = "bars: 95 % bootstrap interval over terrain seeds"
 
 
 def waveform(
@@ -82,7 +82,9 @@ def _bootstrap_mean(values: np.ndarray, n_boot: int = 2000) -> tuple[float, floa
     return float(lo), float(hi)
 
 
-def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = None) -> dict:
+def lidar_summary(
+    rows: Iterable[dict], *, metric: str, where: dict | None = None, by: str | None = None
+) -> dict:
     """Per planner and sample count: scan time, error and its interval.
 
     Parameters
@@ -93,14 +95,18 @@ def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = Non
     metric : str
     where : dict, optional
         Column filters compared as strings (a list value keeps any of its items).
+    by : str, optional
+        A column (e.g. a sweep axis that changes the acquisition, such as a flash's revisits)
+        whose values are separate points of each planner's curve; units of the same point are
+        pooled.
 
     Returns
     -------
-    dict planner -> dict of float64 arrays over k ascending: ``k``, ``seconds`` and
-    ``samples`` (means; ``samples`` = measured range samples, ``k`` for rows without it),
-    ``value`` (mean), ``lo``, ``hi`` (the band: with several units, the 95 % bootstrap
-    percentile interval of the mean of the per-unit means; else ±1 s.d. over trials) and
-    ``units``.
+    dict planner -> dict of float64 arrays over its points (k ascending, then scan time):
+    ``k``, ``seconds`` and ``samples`` (means; ``samples`` = measured range samples, ``k``
+    for rows without it), ``value`` (mean), ``lo``, ``hi`` (with several units, the 95 %
+    bootstrap percentile interval of the mean of the per-unit means; else ±1 s.d. over
+    trials) and ``units``.
     """
     ok = {
         c: {str(x) for x in v} if isinstance(v, list | tuple | set) else {str(v)}
@@ -110,32 +116,28 @@ def lidar_summary(rows: Iterable[dict], *, metric: str, where: dict | None = Non
     for r in rows:
         if r["metric"] != metric or any(str(r.get(c)) not in a for c, a in ok.items()):
             continue
-        cell = acc[str(r["planner"])][int(float(r["k"]))][str(r.get("unit", 0))]
+        point = (int(float(r["k"])), str(r.get(by)) if by else "")
+        cell = acc[str(r["planner"])][point][str(r.get("unit", 0))]
         cell.append((float(r["seconds"]), float(r["value"]), float(r.get("samples") or r["k"])))
-    out = {}
-    for planner, by_k in acc.items():
-        ks = sorted(by_k)
-        cols: dict = {c: [] for c in ("seconds", "samples", "value", "lo", "hi", "units")}
-        for k in ks:
-            units = list(by_k[k].values())
-            allv = np.array([v for u in units for _, v, _ in u])
-            mean = float(allv.mean())
-            if len(units) > 1:
-                per = np.array([np.mean([v for _, v, _ in u]) for u in units])
-                lo, hi = _bootstrap_mean(per)
-            else:
-                lo, hi = mean - float(allv.std()), mean + float(allv.std())
-            cols["seconds"].append(np.mean([s for u in units for s, _, _ in u]))
-            cols["samples"].append(np.mean([n for u in units for _, _, n in u]))
-            cols["value"].append(mean)
-            cols["lo"].append(lo)
-            cols["hi"].append(hi)
-            cols["units"].append(len(units))
-        out[planner] = {
-            "k": np.array(ks, float),
-            **{c: np.array(v, float) for c, v in cols.items()},
-        }
-    return out
+    return {planner: _curve(by_point) for planner, by_point in acc.items()}
+
+
+def _curve(by_point: dict) -> dict:
+    """One planner's points: (k, point) -> unit -> [(seconds, value, samples)]."""
+    cols: dict = {c: [] for c in ("k", "seconds", "samples", "value", "lo", "hi", "units")}
+    for (k, _), by_unit in by_point.items():
+        units = [np.array(u, float) for u in by_unit.values()]
+        allv = np.concatenate([u[:, 1] for u in units])
+        mean = float(allv.mean())
+        if len(units) > 1:
+            lo, hi = _bootstrap_mean(np.array([u[:, 1].mean() for u in units]))
+        else:
+            lo, hi = mean - float(allv.std()), mean + float(allv.std())
+        both = np.concatenate(units)
+        for c, v in zip(cols, (k, both[:, 0].mean(), both[:, 2].mean(), mean, lo, hi, len(units))):
+            cols[c].append(v)
+    order = np.lexsort((cols["seconds"], cols["k"]))
+    return {c: np.array(v, float)[order] for c, v in cols.items()}
 
 
 def error_vs_time(
@@ -145,11 +147,13 @@ def error_vs_time(
     x: str = "seconds",
     planners: Sequence[str] | None = None,
     where: dict | None = None,
+    by: str | None = None,
     title: str = "",
     ax=None,
 ):
     """Mean error of each planner against modelled scan time (``x="seconds"``) or the range
-    samples measured (``x="samples"``), log-log, with its band (:func:`lidar_summary`).
+    samples measured (``x="samples"``), log-log, with its interval as error bars
+    (:func:`lidar_summary`; ``by`` a column whose values are separate points).
 
     Returns
     -------
@@ -160,7 +164,7 @@ def error_vs_time(
         ax = fig.add_subplot()
     else:
         fig = ax.figure
-    summary = lidar_summary(rows, metric=metric, where=where)
+    summary = lidar_summary(rows, metric=metric, where=where, by=by)
     # the requested planners first, then any other label of the rows (a planless flash: none)
     names = [p for p in (planners or []) if p in summary]
     names += [p for p in summary if p not in names]
@@ -168,9 +172,9 @@ def error_vs_time(
     pooled = False
     for p in names:
         d = summary[p]
-        xs = d[x]
-        ax.plot(xs, d["value"], marker=st[p].marker, color=st[p].colour, label=st[p].label, lw=1.2)
-        ax.fill_between(xs, d["lo"], d["hi"], color=st[p].colour, alpha=0.2, lw=0)
+        err = np.clip([d["value"] - d["lo"], d["hi"] - d["value"]], 0, None)
+        ax.errorbar(d[x], d["value"], yerr=err, marker=st[p].marker, color=st[p].colour,
+                    label=st[p].label, lw=1.2, capsize=2, ms=4)  # fmt: skip
         pooled |= bool((d["units"] > 1).any())
     ax.set_xscale("log")
     ax.set_yscale("log")

@@ -156,7 +156,9 @@ def samples_saved(metric: str, references: list[str], point: str) -> str:
     )
 
 
-def lidar_error(metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1) -> str:
+def lidar_error(
+    metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1, by: str | None = None
+) -> str:
     """Caption of ``lidar_error_vs_<time|samples>_<metric>`` (``x``: ``seconds`` or
     ``samples``)."""
     sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
@@ -168,17 +170,19 @@ def lidar_error(metric: str, study: dict, x: str, n_panels: int, *, seeds: int =
         else "the number of range samples measured (the planned pixels that returned; a "
         "flash: its receiver pixels)"
     )
-    band = (
+    bars = (
         f"95 % percentile-bootstrap interval of the mean over the {seeds} terrain seeds "
         "(of each seed's mean over trials)"
         if seeds > 1
         else f"±1 standard deviation over the {trials} trials"
     )
     per = " One panel per sweep point." if n_panels > 1 else ""
+    if by:
+        per = f" Each point of a curve is one value of {by} (and density)."
     runs = f"{trials} trial{'s' if trials != 1 else ''}"
     return (
         f"Image-directed LIDAR ({sensor}): error of the reconstructed guide-view depth "
         f"({_metric(metric)}) against {axis}, per planner, log-log; points: one per density, "
-        f"mean over {runs}{f' on each of {seeds} terrain seeds' if seeds > 1 else ''}; shaded "
-        f"band: {band}.{per}"
+        f"mean over {runs}{f' on each of {seeds} terrain seeds' if seeds > 1 else ''}; error "
+        f"bars: {bars}.{per}"
     )

@@ -417,8 +417,13 @@ def _lidar_figures(res: dict, emit, captions: dict) -> None:
     from simlunar.results import captions as captions_text
 
     study = res["config"].get("study", {})
-    groups = _density_panels(res["units"])[:MAX_UNIT_PANELS]
+    sweep = list(res["config"].get("sweep") or {})
+    # a swept sensor option changes each acquisition's cost: its points are one curve
+    by = sweep[0] if len(sweep) == 1 and sweep[0].startswith("study.options.") else None
+    groups = [("", res["units"])] if by else _density_panels(res["units"])[:MAX_UNIT_PANELS]
     seeds = max(len(members) for _, members in groups)
+    if by:
+        seeds = max(1, int(study.get("terrain_seeds", 1) or 1))
     for m in study.get("metrics") or []:
         for x, name in (("seconds", "time"), ("samples", "samples")):
             fig, axes = F.panel_grid(len(groups))
@@ -429,10 +434,11 @@ def _lidar_figures(res: dict, emit, captions: dict) -> None:
                     x=x,
                     planners=study.get("planners"),
                     where={"unit": [rec.get("index", 0) for rec in members]},
+                    by=by,
                     title=title if len(groups) > 1 else "",
                     ax=ax,
                 )
             emit(fig, f"lidar_error_vs_{name}_{m}")
             captions[f"lidar_error_vs_{name}_{m}"] = captions_text.lidar_error(
-                m, study, x, len(groups), seeds=seeds
+                m, study, x, len(groups), seeds=seeds, by=by
             )

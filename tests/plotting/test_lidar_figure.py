@@ -61,12 +61,12 @@ def test_error_vs_time_draws_a_curve_per_planner(tmp_path):
     from simlunar.plotting.lidar import error_vs_time
 
     fig, ax = error_vs_time(_rows(), metric="mse", planners=["wavelet", "grid", "absent"])
-    assert [ln.get_label() for ln in ax.lines] == ["Wavelet", "Grid"]
-    assert ax.lines[1].get_xdata().tolist() == [4.0, 12.0]
+    assert [c.get_label() for c in ax.containers] == ["Wavelet", "Grid"]
+    assert ax.containers[1].lines[0].get_xdata().tolist() == [4.0, 12.0]
     assert ax.get_xlabel() == "scan time (s)"
     _, ax = error_vs_time(_rows(), metric="mse", x="samples")  # rows without it: k
     assert ax.get_xlabel() == "range samples measured"
-    assert ax.lines[0].get_xdata().tolist() == [64, 256]
+    assert ax.containers[0].lines[0].get_xdata().tolist() == [64, 256]
     fig.savefig(tmp_path / "t.png")
 
 
@@ -77,3 +77,17 @@ def test_lidar_tables_list_time_and_metrics():
     assert "| Planner | k | scan time (s) | MSE |" in md
     assert "| grid | 64 | 4 |" in md and "| wavelet | 256 | 24 |" in md
     assert "\\begin{tabular}{lrrr}" in tex
+
+
+def test_a_swept_option_makes_separate_points_of_one_curve():
+    from simlunar.plotting.lidar import lidar_summary
+
+    rows = [
+        {"planner": "wavelet", "k": "256", "metric": "mse", "value": str(v), "seconds": str(s),
+         "revisits": str(n), "unit": str(u)}
+        for u, n, s, v in ((0, 2, 0.4, 2.0), (1, 2, 0.4, 4.0), (2, 4, 0.67, 1.0))
+    ]  # fmt: skip
+    d = lidar_summary(rows, metric="mse", by="revisits")["wavelet"]
+    assert d["seconds"].tolist() == [0.4, 0.67] and d["value"].tolist() == [3.0, 1.0]
+    assert d["units"].tolist() == [2, 1]
+    assert lidar_summary(rows, metric="mse")["wavelet"]["units"].tolist() == [3]
