@@ -8,7 +8,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.ticker import NullFormatter
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.style import metric_axis, styles
@@ -178,7 +178,10 @@ def error_vs_time(
         pooled |= bool((d["units"] > 1).any())
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels of a short range collide
+    # 1-2-5 labels: a scan-time range within one decade still gets tick labels
+    ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("scan time (s)" if x == "seconds" else "range samples measured")
     ax.set_ylabel(metric_axis(metric))
     if title:
