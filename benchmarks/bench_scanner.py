@@ -6,7 +6,7 @@ ours: render the patterns, white and black and get the inverses by linearity (bi
 then add per-frame sensor noise and decode; the decoded correspondences must agree.
 
 ``multiplexed_dots``: dots planned at random over the 1024 x 768 projector, scheduled into frames
-by epipolar segments (:func:`simlunar.scanner.dots.schedule_dots`). Reference: the exact
+by epipolar segments (:func:`simlunar.scanner.scheduling.schedule_dots`). Reference: the exact
 one-dot-per-frame scan; to keep the benchmark short it is run on a random subset of the dots
 and its time extrapolated per dot (``reference_s`` = measured time per exact frame x dots;
 ``exact_subset`` says how many were rendered). The depth difference between the two modes on
@@ -14,7 +14,7 @@ the subset is compared with the guide pixel's footprint.
 
 ``dot_schedule``: the DLP rig's 10 % rescan (1024 x 768 projector, 2048 x 1536 camera, the full
 moonyard, the rig aimed at it as the scanner study does; nothing rendered): 10 % of the projector
-pixels at random (seeded) scheduled by :func:`simlunar.scanner.dots.dot_schedule`, with its
+pixels at random (seeded) scheduled by :func:`simlunar.scanner.scheduling.dot_schedule`, with its
 frame count, lower bound and time. Reference: the previous scheduler (conflict pairs from a
 k-d tree of segment samples gathered in a Python set, greedy colouring in index order), kept
 here, timed against the new one on the same ``REFERENCE_SUBSET`` dots.
@@ -185,7 +185,7 @@ def _reference_schedule(rig, proj_uv, *, depth_range, min_proj_spacing=8.0, min_
 
 def bench_dot_schedule(fraction: float = 0.1) -> dict:
     from simlunar.config.translate import preset_params
-    from simlunar.scanner import dots
+    from simlunar.scanner import scheduling
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
@@ -197,16 +197,16 @@ def bench_dot_schedule(fraction: float = 0.1) -> dict:
     n = round(fraction * proj[0] * proj[1])
     flat = rng.choice(proj[0] * proj[1], size=n, replace=False)
     uv = np.c_[flat % proj[0] + 0.5, flat // proj[0] + 0.5]
-    dots.dot_schedule(rig, uv[:500], depth_range=depth_range)  # load the compiled kernels
+    scheduling.dot_schedule(rig, uv[:500], depth_range=depth_range)  # load the compiled kernels
     t0, c0 = time.perf_counter(), time.process_time()
-    sch = dots.dot_schedule(rig, uv, depth_range=depth_range)
+    sch = scheduling.dot_schedule(rig, uv, depth_range=depth_range)
     t_full, c_full = time.perf_counter() - t0, time.process_time() - c0
     sub = uv[:REFERENCE_SUBSET]
     t0 = time.perf_counter()
     ref = _reference_schedule(rig, sub, depth_range=depth_range)
     t_ref = time.perf_counter() - t0
     t0 = time.perf_counter()
-    ours_sub = dots.dot_schedule(rig, sub, depth_range=depth_range)
+    ours_sub = scheduling.dot_schedule(rig, sub, depth_range=depth_range)
     t_ours = time.perf_counter() - t0
     return {
         "reference_s": round(t_ref, 3),
@@ -254,12 +254,13 @@ def _warm_up_compiled():
     from simlunar.imaging.blur import gaussian_blur
     from simlunar.imaging.sensor import SensorModel, apply_sensor
     from simlunar.scanner import gray_code as gc
+    from simlunar.scanner.subpixel import refine_subpixel
 
     apply_sensor(np.ones((4, 4), np.float32), SensorModel(), rng=0)
     gaussian_blur(np.ones((12, 12), np.float32), 1.0)
     st = gc.encode(8, 4).astype(np.float32) / 255
     d = gc.decode(st, np.ones((4, 8)), np.zeros((4, 8)), proj_shape=(4, 8), black_threshold=0.1)
-    gc.refine_subpixel(d, st)
+    refine_subpixel(d, st)
 
 
 def _dlp_worker(mode: str, frames_path: str) -> dict:
@@ -306,7 +307,8 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
         dec = g.decode
         out = {"render_s": render_s, "rest_s": total - render_s, "renders": g.renders}
     else:
-        from simlunar.scanner import _reference as ref
+        import reference_scanner as ref
+
         from simlunar.scanner import gray_code as gc
 
         raw = np.load(frames_path)  # white, black, patterns: the radiance the scan rendered

@@ -7,6 +7,7 @@ cache entry: readers see the old file or the new one. On failure the temporary f
 
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
 from collections.abc import Callable
@@ -33,9 +34,12 @@ def atomic_write(
         path.parent.mkdir(parents=True, exist_ok=True)
     elif not path.parent.exists():
         raise FileNotFoundError(f"folder for {path} does not exist")
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{path.name}.", suffix=f".tmp{path.suffix}", dir=path.parent
-    )
+    try:
+        fd, tmp = tempfile.mkstemp(
+            prefix=f".{path.name}.", suffix=f".tmp{path.suffix}", dir=path.parent
+        )
+    except OSError as exc:  # name the file asked for, not the temporary one
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from exc
     os.close(fd)
     try:
         write(tmp)
@@ -48,8 +52,40 @@ def atomic_write(
             # the OS reports a full disk from write()/fsync() without a file name: name
             # the file the user asked for (not the temporary one)
             raise OSError(exc.errno, exc.strerror or os.strerror(exc.errno), str(path)) from exc
+        code = None if isinstance(exc, OSError) else environment_errno(exc, path.parent)
+        if code is not None:
+            # a writer that wraps the OS error in its own (OpenEXR: RuntimeError "... No
+            # space left on device."): the environment failed, not the code
+            raise OSError(code, os.strerror(code), str(path)) from exc
         raise
     return path
+
+
+#: errno values a writing library may wrap in its own exception (message = strerror)
+WRAPPED_ERRNOS = tuple(
+    getattr(errno, n)
+    for n in ("ENOSPC", "EDQUOT", "EROFS", "EIO", "EACCES", "EFBIG")
+    if hasattr(errno, n)
+)
+
+
+def environment_errno(exc: BaseException, folder: Path) -> int | None:
+    """The errno of an environment failure hidden in a non-OSError ``exc`` raised while
+    writing into ``folder``: its message names the OS error (``strerror``), or the folder's
+    filesystem has no space left. None when ``exc`` looks like anything else."""
+    if not isinstance(exc, Exception):
+        return None
+    msg = str(exc).lower()
+    for code in WRAPPED_ERRNOS:
+        if os.strerror(code).lower() in msg:
+            return code
+    try:
+        st = os.statvfs(folder)
+    except OSError:
+        return None
+    if st.f_bfree == 0 or (st.f_bavail == 0 and os.geteuid() != 0):
+        return errno.ENOSPC
+    return None
 
 
 def atomic_write_bytes(path: str | Path, data: bytes, *, make_parents: bool = True) -> Path:

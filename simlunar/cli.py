@@ -73,31 +73,66 @@ def user_errors(fn):
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
+        from simlunar import interrupts
+
         try:
-            return fn(*args, **kwargs)
-        except typer.Exit:
+            out = fn(*args, **kwargs)
+        except typer.Exit as exc:
+            if interrupts.interrupted() and exc.exit_code != EXIT_INTERRUPTED:
+                raise _exit_for(KeyboardInterrupt()) from None
             raise
-        except SimlunarError as exc:
-            typer.echo(f"error: {_one_line(exc)}", err=True)
-            raise typer.Exit(EXIT_USER) from None
-        except InfrastructureError as exc:
-            typer.echo(f"error: {_one_line(exc)}", err=True)
-            raise typer.Exit(EXIT_INFRA) from None
-        except KeyboardInterrupt as exc:
-            msg = _one_line(exc) if str(exc) else "interrupted"
-            typer.echo(msg, err=True)
-            raise typer.Exit(EXIT_INTERRUPTED) from None
-        except OSError as exc:
-            if exc.filename is None and exc.errno not in ENVIRONMENT_ERRNOS:
-                raise _internal(exc) from None
-            # a write refused after the checks passed (disk full, quota, read-only file
-            # system, I/O error, permissions changed); the OS names no file for a full disk
-            typer.echo(f"error: {_one_line(exc)}", err=True)
-            raise typer.Exit(EXIT_INFRA) from None
-        except Exception as exc:
-            raise _internal(exc) from None
+        except BaseException as exc:
+            raise _exit_for(exc) from None
+        if interrupts.interrupted():  # a Ctrl-C that the interrupted code swallowed
+            raise _exit_for(KeyboardInterrupt())
+        return out
 
     return wrapper
+
+
+def _exit_for(exc: BaseException) -> typer.Exit:
+    """Print the line for ``exc`` and return the :class:`typer.Exit` of its exit code.
+
+    A Ctrl-C decides the exit whatever exception it caused (:mod:`simlunar.interrupts`).
+    """
+    from simlunar import interrupts
+    from simlunar.errors import RunInterrupted
+
+    if isinstance(exc, KeyboardInterrupt) or interrupts.interrupted():
+        msg = _one_line(exc) if isinstance(exc, RunInterrupted) and str(exc) else "interrupted"
+        typer.echo(msg, err=True)
+        return typer.Exit(EXIT_INTERRUPTED)
+    if isinstance(exc, BrokenPipeError):
+        return _closed_stdout()
+    if isinstance(exc, SimlunarError):
+        typer.echo(f"error: {_one_line(exc)}", err=True)
+        return typer.Exit(EXIT_USER)
+    if isinstance(exc, InfrastructureError):
+        typer.echo(f"error: {_one_line(exc)}", err=True)
+        return typer.Exit(EXIT_INFRA)
+    if isinstance(exc, OSError):
+        if exc.filename is None and exc.errno not in ENVIRONMENT_ERRNOS:
+            return _internal(exc)
+        # a write refused after the checks passed (disk full, quota, read-only file
+        # system, I/O error, permissions changed); the OS names no file for a full disk
+        typer.echo(f"error: {_one_line(exc)}", err=True)
+        return typer.Exit(EXIT_INFRA)
+    if isinstance(exc, (SystemExit, GeneratorExit)):
+        raise exc
+    return _internal(exc)
+
+
+#: exit code when stdout is closed early (``simlunar run ... | head -1``): quiet, as a shell
+#: reports a program ended by SIGPIPE (128 + 13)
+EXIT_PIPE = 141
+
+
+def _closed_stdout() -> typer.Exit:
+    """stdout's reader went away: nothing more can be said there, and nothing on stderr."""
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # the interpreter's last flush must not fail
+    return typer.Exit(EXIT_PIPE)
 
 
 def _internal(exc: BaseException) -> typer.Exit:
@@ -114,8 +149,10 @@ def _internal(exc: BaseException) -> typer.Exit:
 @user_errors
 def doctor(short: bool = typer.Option(False, "--short", help="One line only.")) -> None:
     """Versions, the chosen Mitsuba variant and why, libLLVM, kernel cache, cores, GPU."""
+    from simlunar.pipeline.preflight import check_renderer
     from simlunar.render import backend
 
+    check_renderer()  # a bad SIMLUNAR_VARIANT in one line
     info = backend.choose_variant()
     if short:
         typer.echo(f"simlunar doctor: variant {info.variant} ({info.reason})")
@@ -232,6 +269,7 @@ def schema(
 ) -> None:
     """JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server)."""
     import json
+    from pathlib import Path
 
     from simlunar.config.docs import SCHEMA_KINDS, json_schema
     from simlunar.errors import ConfigError
@@ -247,8 +285,11 @@ def schema(
     else:
         text = json.dumps(json_schema(kind), indent=2)
     if out:
+        from simlunar.pipeline.preflight import check_out_file
         from simlunar.results.store import atomic_write_text
 
+        check_out_file(out)
+        Path(out).parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(out, text + "\n")
     else:
         typer.echo(text)
@@ -264,13 +305,19 @@ def render(
     from pathlib import Path
 
     from simlunar.config.scene import load_scene
-    from simlunar.pipeline.preflight import check_camera, check_out_dir, terrain_facts
+    from simlunar.pipeline.preflight import (
+        check_camera,
+        check_out_dir,
+        check_renderer,
+        terrain_facts,
+    )
     from simlunar.pipeline.scene import render_scene
 
     with user_input():
         cfg = load_scene(scene)
     out_dir = Path(out) if out else Path("results") / "render" / cfg.name
     check_out_dir(out_dir)
+    check_renderer()
     check_camera(
         cfg.render, terrain_facts(cfg.terrain)
     )  # DEM contents and the view, before rendering
@@ -314,15 +361,19 @@ def terrain(
         raise SimlunarError(f"--format must be exr, npz, npy or tif, got {dem_format!r}")
     if out is None and not stats:
         raise SimlunarError("--out is required (unless --stats)")
+    if seed < 0:
+        raise SimlunarError(f"--seed must be >= 0, got {seed}")
     if Path(preset).suffix.lower() in FORMATS + GDAL_FORMATS:
         if not stats or out is not None:
             raise SimlunarError(f"{preset}: a DEM file is only read with --stats (and no --out)")
         import json
         from types import SimpleNamespace
 
+        from simlunar.pipeline.inputs import check_dem_file
+
+        check_dem_file(preset, key="--stats")  # size, finite heights, spacing and extent
         with user_input():
             dem = load_dem(preset)
-        typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
         kw = {"craters": [], "rocks": []}
         side = Path(preset).with_name("features.json")  # written beside it by simlunar terrain
         if side.is_file():
@@ -332,6 +383,8 @@ def terrain(
                 except json.JSONDecodeError as exc:
                     raise ValueError(f"{side}: not valid JSON ({exc})") from None
                 kw = _feature_diameters(side, feats)
+        typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
+        if side.is_file():
             typer.echo(f"features: {side}")
         kw = {k: [SimpleNamespace(diameter=d) for d in v] for k, v in kw.items()}
         for line in terrain_report(dem, **kw):
@@ -385,17 +438,54 @@ def _feature_diameters(path, feats) -> dict[str, list[float]]:
     return out
 
 
-def main() -> None:
+def _usage_errors():
+    """Typer's click exceptions module (vendored as ``typer._click`` by newer Typer)."""
     try:
-        app(prog_name="simlunar")
-    except SystemExit as exc:
-        if exc.code == EXIT_INTERRUPTED:
-            # threads of units still running (and their forked study processes) would be
-            # waited for at interpreter exit; the message is out and the lock released
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os._exit(EXIT_INTERRUPTED)
-        raise
+        from typer._click import exceptions
+    except ImportError:  # Typer on the click package
+        from click import exceptions
+    return exceptions
+
+
+def main() -> None:
+    from simlunar import interrupts
+
+    cx = _usage_errors()
+
+    interrupts.clear()
+    interrupts.install()
+    try:
+        code = app(prog_name="simlunar", standalone_mode=False)
+        code = code if isinstance(code, int) else 0
+    except cx.NoArgsIsHelpError as exc:
+        typer.echo(exc.ctx.get_help() if exc.ctx else str(exc))
+        code = EXIT_USER
+    except cx.UsageError as exc:
+        # one line (click draws a box of 5-6 lines): the command, the problem, where to look
+        where = exc.ctx.command_path if exc.ctx else "simlunar"
+        msg = " ".join(exc.format_message().split())
+        typer.echo(f"error: {where}: {msg} (see {where} --help)", err=True)
+        code = EXIT_USER
+    except typer.Exit as exc:
+        code = exc.exit_code
+    except (KeyboardInterrupt, typer.Abort):
+        typer.echo("interrupted", err=True)
+        code = EXIT_INTERRUPTED
+    except BrokenPipeError:
+        code = _closed_stdout().exit_code
+    if interrupts.interrupted() and code not in (EXIT_INTERRUPTED, EXIT_PIPE):
+        typer.echo("interrupted", err=True)  # after the command's own handling
+        code = EXIT_INTERRUPTED
+    try:
+        sys.stdout.flush()
+    except (BrokenPipeError, ValueError):
+        code = _closed_stdout().exit_code if code == 0 else code
+    sys.stderr.flush()
+    if code in (EXIT_INTERRUPTED, EXIT_INFRA):
+        # threads of units still running (and their forked study processes) would be
+        # waited for at interpreter exit; the message is out and the lock released
+        os._exit(code)
+    sys.exit(code)
 
 
 if __name__ == "__main__":

@@ -16,6 +16,12 @@ class ResultFolderError(SimlunarError):
     or holding files that disagree with each other; the message names the path."""
 
 
+class NothingMeasuredError(SimlunarError, ValueError):
+    """A scan measured no pixel (nothing decoded: the projector too faint against the sun,
+    thresholds too strict, the camera seeing no projected pixel): the configuration's
+    doing, reported in one line (exit 2) during the run; finished units are kept."""
+
+
 class InfrastructureError(Exception):
     """The environment failed during a run (Dask scheduler or workers lost, a write refused
     by the filesystem): not the user's input, not a bug. Finished units are kept."""

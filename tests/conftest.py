@@ -11,8 +11,11 @@ import pytest
 # the fake work unit and CLI of tests/pipeline importable by name from any test folder (spawned
 # pool workers unpickle the fake unit by reference)
 _FAKES = str(Path(__file__).resolve().parent / "pipeline")
-if _FAKES not in sys.path:
-    sys.path.insert(0, _FAKES)
+# the slow reference implementations the fast paths are checked (and benchmarked) against
+_REFERENCES = str(Path(__file__).resolve().parents[1] / "benchmarks")
+for _path in (_FAKES, _REFERENCES):
+    if _path not in sys.path:
+        sys.path.insert(0, _path)
 
 
 @pytest.fixture

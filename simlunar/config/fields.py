@@ -38,7 +38,28 @@ Metres = Annotated[
     BeforeValidator(lambda v: parse_quantity(v, "m"), json_schema_input_type=_QUANTITY_INPUT),
 ]
 Density = Annotated[float, BeforeValidator(parse_fraction, json_schema_input_type=_FRACTION_INPUT)]
-Px = Annotated[float, Field(ge=0)]
+Px = Annotated[
+    float,
+    BeforeValidator(lambda v: parse_quantity(v, "px"), json_schema_input_type=_QUANTITY_INPUT),
+    Field(ge=0),
+]
+
+
+def _whole_px(v):
+    """A pixel count: an integer, or a string such as ``"256 px"`` naming one."""
+    if isinstance(v, str):
+        f = parse_quantity(v, "px")
+        if f != int(f):
+            raise ValueError(f"expected a whole number of pixels, got {v!r}")
+        return int(f)
+    return v
+
+
+PxCount = Annotated[
+    int,
+    BeforeValidator(_whole_px, json_schema_input_type=int | str),
+    Field(gt=0),
+]
 
 
 class _Model(BaseModel):

@@ -174,6 +174,8 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
                 registry.check_scan_planner(s, f"study.planners[{i}]")
             for i, m in enumerate(p.study.modes):
                 registry.check_scan_mode(m, f"study.modes[{i}]")
+            for i, m in enumerate(p.study.metrics):
+                registry.check_metric(m, f"study.metrics[{i}]")
         if isinstance(p.study, LidarStudyCfg):
             for i, s in enumerate(p.study.planners):
                 registry.check_strategy(s, f"study.planners[{i}]")

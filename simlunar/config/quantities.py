@@ -17,7 +17,8 @@ _QUANTITY = re.compile(rf"^\s*({_NUM})\s*([^\d\s].*?)?\s*$")
 #: factor that converts a value in the named unit into the key's unit
 ANGLE_UNITS = {"deg": 1.0, "degree": 1.0, "degrees": 1.0, "°": 1.0, "rad": 180.0 / math.pi}
 LENGTH_UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "km": 1000.0, "um": 1e-6}
-UNITS_BY_SUFFIX = {"deg": ANGLE_UNITS, "m": LENGTH_UNITS}
+PIXEL_UNITS = {"px": 1.0}
+UNITS_BY_SUFFIX = {"deg": ANGLE_UNITS, "m": LENGTH_UNITS, "px": PIXEL_UNITS}
 
 
 def parse_quantity(value, suffix: str) -> float:
@@ -28,7 +29,7 @@ def parse_quantity(value, suffix: str) -> float:
     value : float, int or str
         ``30``, ``"30"``, ``"30 deg"``, ``"0.52 rad"``, ``"20 cm"``.
     suffix : str
-        The key's unit suffix: ``"deg"`` or ``"m"``.
+        The key's unit suffix: ``"deg"``, ``"m"`` or ``"px"``.
 
     Returns
     -------

@@ -39,7 +39,6 @@ def check_preset(name: str, path: str) -> None:
 
 
 def strategy_names() -> list[str]:
-
     return list(STRATEGIES)
 
 
@@ -59,14 +58,14 @@ def check_strategy(name: str, path: str, options: Mapping | None = None) -> None
 
 
 def check_scan_planner(name: str, path: str) -> None:
-    """A planner of the scanner study: a registered strategy (it plans from the guide image)
-    or one of :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
-
-    _check(name, [*strategy_names(), *SCAN_PLANNERS], path, "planner")
+    """A planner of the scanner study: a registered strategy that plans from the guide image
+    alone (not an ``oracle_*``, which reads the truth) or one of
+    :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
+    image_only = [s for s in strategy_names() if not s.startswith("oracle_")]
+    _check(name, [*image_only, *SCAN_PLANNERS], path, "planner")
 
 
 def metric_names() -> list[str]:
-
     return list(METRICS)
 
 

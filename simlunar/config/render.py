@@ -17,8 +17,11 @@ from simlunar.config.fields import (
     _tagged_union,
 )
 
-
 # --------------------------------------------------------------------------- render
+#: most samples per pixel of any render (render.spp, the scanner's sparse_spp)
+MAX_SPP = 4096
+
+
 class OrthoNadirCfg(_Model):
     """Orthographic nadir camera whose pixel (r, c) sees DEM cell (r, c) (aerial view)."""
 
@@ -172,7 +175,7 @@ class RenderCfg(_Model):
     light: LightCfg = Field(default_factory=SunLightCfg)
     bsdf: BsdfCfg = Field(default_factory=lambda: OrenNayarCfg(kind="oren_nayar"))
     ambient_radiance: float = Field(0.0, ge=0, description="constant sky radiance (0 = off)")
-    spp: int = Field(16, ge=1, le=4096)
+    spp: int = Field(16, ge=1, le=MAX_SPP)
     max_depth: int = Field(3, ge=2, le=16, description="path depth (2 = direct light only)")
     sensor: SensorCfg | None = Field(
         default_factory=SensorCfg, description="null = use noiseless radiance"

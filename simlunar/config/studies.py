@@ -19,11 +19,13 @@ from simlunar.config.fields import (
     Density,
     Metres,
     Px,
+    PxCount,
     _Model,
     _tagged_union,
 )
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.quantities import log_spaced
+from simlunar.config.render import MAX_SPP
 from simlunar.planner import STRATEGIES
 from simlunar.scanner.scans import SCAN_PLANNERS
 
@@ -74,8 +76,16 @@ class FeatureOptsCfg(_Model):
         None, description="wavelet map: decomposition levels summed, finest first; null = all"
     )
     boundary: Literal["symmetric", "periodic"] = Field("symmetric", description="wavelet map")
-    size: PositiveInt = Field(9, description="entropy map: window side (px)")
+    size: PositiveInt = Field(9, description="entropy map: odd window side (px), 1..63")
     scale: Literal["minmax", "unit"] = Field("minmax", description="entropy map: 8-bit scaling")
+
+    @field_validator("size")
+    @classmethod
+    def _entropy_window(cls, v: int) -> int:
+        from simlunar.features.maps import check_entropy_size
+
+        check_entropy_size(v)  # the map's own rule
+        return v
 
     @field_validator("wavelet")
     @classmethod
@@ -188,14 +198,16 @@ class SamplingStudyCfg(_Model):
     @model_validator(mode="after")
     def _options_fit(self) -> SamplingStudyCfg:
 
-        for label, opts in self.strategy_options.items():
-            base = opts.strategy or label
+        for label in [*self.strategy_options, *self.strategies]:
+            opts = self.strategy_options.get(label)
+            base = (opts.strategy if opts is not None else None) or label
             if base not in STRATEGIES:
                 continue  # reported with the registries (unknown strategy, with its path)
             try:
-                check_planner_options(base, opts)
+                check_planner_options(base, opts or PlannerOptsCfg())
             except ValueError as exc:
-                raise ValueError(f"strategy_options.{label}.{exc}") from None
+                where = f"strategy_options.{label}" if opts is not None else f"strategies ({label})"
+                raise ValueError(f"{where}.{exc}") from None
         return self
 
 
@@ -253,6 +265,19 @@ class DotOptsCfg(_Model):
     abs_threshold: float = Field(0.02, ge=0, le=1, description="absolute blob threshold")
     batch: PositiveInt = Field(8, description="frames per render call (memory only)")
 
+    @model_validator(mode="after")
+    def _spacings(self) -> DotOptsCfg:
+        from simlunar.scanner.scheduling import check_spacings
+
+        try:
+            check_spacings(
+                self.min_cam_spacing_px, self.min_proj_spacing_px
+            )  # the scheduler's rule
+        except ValueError:
+            zero = "min_proj_spacing_px" if self.min_proj_spacing_px <= 0 else "min_cam_spacing_px"
+            raise ValueError(f"{zero}: scheduling spacings must be > 0 px") from None
+        return self
+
 
 class CaptureOptsCfg(_Model):
     """Render-capture options (:class:`simlunar.render.capture.RenderCapture`)."""
@@ -264,7 +289,7 @@ class CaptureOptsCfg(_Model):
         "pixel: a dot frame costs what its dots cost; docs/scanner.md)",
     )
     sparse_spp: PositiveInt | None = Field(
-        None, description="samples per pixel for sparse patterns (null: render.spp)"
+        None, le=MAX_SPP, description="samples per pixel for sparse patterns (null: render.spp)"
     )
     sparse_below: float = Field(
         0.01, gt=0, le=1, description="largest lit fraction of projector pixels counted sparse"
@@ -308,12 +333,10 @@ class ScannerStudyCfg(_Model):
     trials: int = Field(1, ge=1, le=100)
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
     rig: Literal["moonyard", "aerial"] = Field("moonyard", description="rig preset")
-    projector_px: tuple[PositiveInt, PositiveInt] = Field(
+    projector_px: tuple[PxCount, PxCount] = Field(
         (256, 192), description="projector (width, height)"
     )
-    camera_px: tuple[PositiveInt, PositiveInt] = Field(
-        (256, 192), description="camera (width, height)"
-    )
+    camera_px: tuple[PxCount, PxCount] = Field((256, 192), description="camera (width, height)")
     guide_light: Literal["projector", "sun"] = Field(
         "projector", description="guide image light: camera-centred projector or render.light"
     )
@@ -337,6 +360,13 @@ class ScannerStudyCfg(_Model):
         description="write scans/unit<i>/ per unit: gray-code frames (8/16-bit PNG, OpenCV "
         "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
     )
+
+    @field_validator("modes", "planners", "metrics")
+    @classmethod
+    def _unique(cls, v: list[str]) -> list[str]:
+        if len(set(v)) != len(v):
+            raise ValueError(f"names must be unique, got {v}")
+        return v
 
     @model_validator(mode="after")
     def _scans_need_gray_code(self):
@@ -366,12 +396,16 @@ class ScannerStudyCfg(_Model):
         for name in scan_planners:
             if name in o.planner_opts:
                 raise ValueError(f"options.planner_opts.{name}: {name} takes no options")
-        for name, opts in o.planner_opts.items():
+        for name in self.planners:
+            opts = o.planner_opts.get(name)
             if name in STRATEGIES:
                 try:
-                    check_planner_options(name, opts)
+                    check_planner_options(name, opts or PlannerOptsCfg())
                 except ValueError as exc:
-                    raise ValueError(f"options.planner_opts.{name}.{exc}") from None
+                    where = (
+                        f"options.planner_opts.{name}" if opts is not None else f"planners ({name})"
+                    )
+                    raise ValueError(f"{where}.{exc}") from None
         moonyard_only = ("distance_m", "elevation_deg")
         aerial_only = ("altitude_m",)
         for key in aerial_only if self.rig == "moonyard" else moonyard_only:

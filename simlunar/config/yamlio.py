@@ -1,4 +1,5 @@
-"""Reading YAML: duplicate keys refused, one-line errors naming the file and line; ``--set`` values."""
+"""Reading YAML: duplicate keys refused, merge keys accepted, alias expansion bounded, one-line
+errors naming the file and line; ``--set`` values."""
 
 from __future__ import annotations
 
@@ -13,11 +14,13 @@ from simlunar.errors import ConfigError
 YAMLError = yaml.YAMLError
 
 __all__ = [
+    "MAX_YAML_NODES",
     "UniqueKeyLoader",
     "YAMLError",
     "dump_yaml",
     "load_yaml",
     "parse_set",
+    "safe_load_bounded",
     "safe_load_text",
 ]
 
@@ -30,19 +33,24 @@ def parse_set(items: list[str]) -> dict[str, Any]:
             raise ConfigError(f"--set {item}: expected key.path=value")
         key, raw = item.split("=", 1)
         try:
-            out[key.strip()] = yaml.safe_load(raw)
+            out[key.strip()] = safe_load_bounded(raw)
         except yaml.YAMLError as exc:
             raise ConfigError(f"--set {key}: value is not valid YAML ({exc.problem})") from None
+        except ValueError as exc:
+            raise ConfigError(f"--set {key}: {exc}") from None
     return out
 
 
 class UniqueKeyLoader(yaml.SafeLoader):
     """``yaml.SafeLoader`` that refuses a key given twice in one mapping (PyYAML keeps the
-    last value silently)."""
+    last value silently). Merge keys (``<<: *anchor``) work: a key given explicitly
+    overrides the merged one, as YAML specifies; only explicit keys must be unique."""
 
     def construct_mapping(self, node, deep=False):
         seen = {}
         for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                continue  # flattened by the base class; its keys may be overridden
             key = self.construct_object(key_node, deep=deep)
             try:
                 hash(key)
@@ -59,14 +67,65 @@ class UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
+#: most nodes a document may hold once its aliases are expanded: an alias names its anchor's
+#: value without copying it, so a few lines of nested aliases ("billion laughs") stand for a
+#: tree that every later step (validation, sweeps, config.yaml) would walk in full
+MAX_YAML_NODES = 1_000_000
+
+
+def _expanded_size(root) -> int:
+    """Nodes of the tree under ``root`` with every alias expanded (ValueError beyond
+    :data:`MAX_YAML_NODES` or for a recursive alias)."""
+    memo: dict[int, int] = {}
+    active: set[int] = set()
+
+    def size(node) -> int:
+        key = id(node)
+        if key in memo:
+            return memo[key]
+        if key in active:
+            raise ValueError("a recursive alias (an anchor used inside its own value)")
+        active.add(key)
+        n = 1
+        if isinstance(node, yaml.SequenceNode):
+            n += sum(size(c) for c in node.value)
+        elif isinstance(node, yaml.MappingNode):
+            n += sum(size(k) + size(v) for k, v in node.value)
+        active.discard(key)
+        if n > MAX_YAML_NODES:
+            raise ValueError(
+                f"its aliases expand to more than {MAX_YAML_NODES:,} values (an alias bomb?)"
+            )
+        memo[key] = n
+        return n
+
+    return size(root)
+
+
+def safe_load_bounded(text: str):
+    """``yaml.load`` with :class:`UniqueKeyLoader`, refusing documents whose aliases expand
+    beyond :data:`MAX_YAML_NODES` (``ValueError``); YAML errors as ``yaml.YAMLError``."""
+    loader = UniqueKeyLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _expanded_size(node)
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
 def load_yaml(path: str | Path) -> dict:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"experiment file not found: {path}")
     try:
-        data = yaml.load(path.read_text(), Loader=UniqueKeyLoader)
+        data = safe_load_bounded(path.read_text())
     except UnicodeDecodeError:
         raise ConfigError(f"{path}: not a text file") from None
+    except ValueError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark else ""

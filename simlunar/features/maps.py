@@ -70,6 +70,22 @@ def gradient(image) -> np.ndarray:
 _NLOG_N = np.array([0.0] + [n * np.log2(n) for n in range(1, 4097)])
 
 
+#: largest entropy window side (the sliding histogram counts at most 4096 pixels)
+MAX_ENTROPY_SIZE = 63
+
+
+def check_entropy_size(size: int) -> None:
+    """Raise ValueError unless ``size`` is an odd entropy window side in 1..63."""
+    if (
+        isinstance(size, bool)
+        or int(size) != size
+        or size < 1
+        or size % 2 == 0
+        or size > MAX_ENTROPY_SIZE
+    ):
+        raise ValueError(f"entropy window size must be odd, 1..{MAX_ENTROPY_SIZE}, got {size}")
+
+
 def entropy(image, *, size: int = 9, scale: str = "minmax") -> np.ndarray:
     """Local Shannon entropy (bits) in a ``size`` x ``size`` window, MATLAB ``entropyfilt``.
 
@@ -93,8 +109,7 @@ def entropy(image, *, size: int = 9, scale: str = "minmax") -> np.ndarray:
     scale : {"minmax", "unit"}
         8-bit quantisation, see :func:`to_uint8`; ``"unit"`` for MATLAB parity.
     """
-    if size < 1 or size % 2 == 0 or size * size > 4096:
-        raise ValueError(f"entropy window size must be odd, 1..63, got {size}")
+    check_entropy_size(size)
     u8 = to_uint8(to_gray(image), scale=scale)
     half = size // 2
     padded = np.pad(u8, half, mode="symmetric")

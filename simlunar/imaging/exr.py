@@ -99,6 +99,13 @@ def write_exr(path, channels, *, attrs: dict | None = None) -> Path:
     def write(tmp: str) -> None:
         with OpenEXR.File(header, chans) as f:
             f.write(tmp)
+        # OpenEXR loses a failed last flush (a small file on a full disk): read the header
+        # back, so such a file is an error here (atomic_write tells a full disk by its space)
+        try:
+            with OpenEXR.File(tmp, header_only=True):
+                pass
+        except Exception as exc:
+            raise RuntimeError(f"{path}: the EXR written is unreadable ({exc})") from None
 
     atomic_write(path, write)
     return path

@@ -35,6 +35,11 @@ def _scenes(res: dict, seeds: list[int]) -> list[tuple]:
     out = []
     for s in seeds:
         arr = cache.load_arrays(by_seed[s]["key"])
+        if arr is None or "depth" not in arr or "image" not in arr:
+            raise ValueError(
+                f"{res['dir']}: unit of seed {s} has no cached guide image and depth "
+                "(rerun its experiment into the folder)"
+            )
         out.append((arr["depth"], arr["image"]))
     return out
 
@@ -55,7 +60,20 @@ def run_fit(
 ) -> dict:
     """Fit on the training seeds' units, score on the test seeds'; returns the report dict."""
 
+    for name, v, least in (
+        ("maxiter", maxiter, 1),
+        ("restarts", restarts, 0),
+        ("trials", trials, 1),
+    ):
+        if isinstance(v, bool) or int(v) != v or v < least:
+            raise ValueError(f"--{name} must be an integer >= {least}, got {v}")
     res = load_results(out_dir)
+    kind = ((res["config"] or {}).get("study") or {}).get("kind", "sampling")
+    if kind != "sampling":
+        raise ValueError(
+            f"{out_dir}: holds a {kind} study; the fit reads the guide images and depths of a "
+            "sampling experiment swept over seed (experiments/fit_combination.yaml)"
+        )
     if set(train_seeds) & set(test_seeds):
         raise ValueError("train and test seeds must not overlap")
     train, test = _scenes(res, train_seeds), _scenes(res, test_seeds)
@@ -116,9 +134,19 @@ def _markdown(r: dict) -> str:
     return "\n".join(lines)
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors in one line, exit 2 (the CLI's promise)."""
+
+    def error(self, message: str):
+        self.exit(2, f"error: {self.prog}: {' '.join(message.split())} (see --help)\n")
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Command line: ``python -m simlunar.pipeline.fit RESULTS --train-seeds ... --test-seeds ...``."""
-    p = argparse.ArgumentParser(prog="python -m simlunar.pipeline.fit", description=__doc__)
+    """Command line: ``python -m simlunar.pipeline.fit RESULTS --train-seeds ... --test-seeds ...``.
+
+    Exit codes as ``simlunar``'s: 2 a user error, 3 a write refused, 130 Ctrl-C, each one line.
+    """
+    p = _Parser(prog="python -m simlunar.pipeline.fit", description=__doc__)
     p.add_argument("results", help="result folder of a sampling experiment swept over seed")
     p.add_argument("--train-seeds", type=int, nargs="+", required=True)
     p.add_argument("--test-seeds", type=int, nargs="+", required=True)
@@ -136,9 +164,21 @@ def main(argv: list[str] | None = None) -> int:
             trials=a.trials,
         )
     except (FileNotFoundError, ValueError, SimlunarError) as e:
-        print(f"error: {e}", file=sys.stderr)
+        print(f"error: {' '.join(str(e).split())}", file=sys.stderr)
         return 2
-    print(_markdown(report))
+    except OSError as e:  # a write refused (disk full, read-only, permissions)
+        print(f"error: {e.filename or a.results}: {e.strerror or e}", file=sys.stderr)
+        return 3
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    try:
+        print(_markdown(report))
+    except BrokenPipeError:
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     return 0
 
 

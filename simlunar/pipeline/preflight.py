@@ -21,10 +21,7 @@ of the unit's cache key, so a changed DEM is recomputed.
 
 from __future__ import annotations
 
-import contextlib
-import math
 import os
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,16 +29,13 @@ from typing import Any
 import numpy as np
 
 from simlunar.errors import ConfigError, ResultFolderError
-from simlunar.results.store import file_sha256
-
-#: NaN heights (holes) a DEM may have. Holes leave the terrain mesh open; the rays that miss
-#: it take the depth of their nearest valid pixel (``stages.fill_invalid``) and are scored as
-#: truth, so beyond a few per cent the ground truth is mostly invented and the run stops.
-MAX_NAN_FRACTION = 0.05
-
-#: Largest |coordinate| (heights, terrain extent, camera position) in metres: the renderer
-#: works in float32, so a scene larger than this (1000 km) cannot resolve terrain relief.
-MAX_ABS_COORD_M = 1e6
+from simlunar.pipeline.inputs import (
+    MAX_ABS_COORD_M,
+    MAX_NAN_FRACTION,
+    TerrainFacts,
+    check_size,
+    terrain_facts,
+)
 
 #: smallest sample count of a density (the planners and the Delaunay reconstruction need 3)
 MIN_SAMPLES = 3
@@ -76,7 +70,7 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
     if not os.access(anc, os.W_OK | os.X_OK):
         raise ResultFolderError(f"{option} {p}: {anc} is not writable (permission denied)")
     if p.is_dir():
-        for sub in ("units", "figures", "config.yaml"):
+        for sub in ("units", "figures", "scans", "config.yaml"):
             q = p / sub
             want_dir = sub != "config.yaml"
             if q.exists() and q.is_dir() != want_dir:
@@ -87,277 +81,35 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
     return p
 
 
+# --------------------------------------------------------------------------- renderer
+def check_renderer() -> None:
+    """``SIMLUNAR_VARIANT``, when set, must name a Mitsuba variant this machine can run
+    (a known name; ``cuda_ad_rgb`` needs a usable GPU, ``llvm_ad_rgb`` a libLLVM): the
+    backend's own choice, made without importing Mitsuba, before anything is written."""
+    wanted = os.environ.get("SIMLUNAR_VARIANT")
+    if not wanted:
+        return  # the backend falls back by itself
+    from simlunar.render.backend import choose_variant
+
+    try:
+        choose_variant()
+    except (ValueError, RuntimeError) as exc:
+        raise ConfigError(f"SIMLUNAR_VARIANT={wanted}: {exc}") from None
+
+
+def check_out_file(out: str | Path, *, option: str = "--out") -> Path:
+    """Raise :class:`ResultFolderError` unless ``out`` can be written as a file: not a folder,
+    in a folder that exists or can be made (:func:`check_out_dir` of its parent)."""
+    p = Path(out)
+    if p.is_dir():
+        raise ResultFolderError(f"{option} {p}: is a folder, not a file")
+    check_out_dir(p.parent, option=f"{option} {p}:")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise ResultFolderError(f"{option} {p}: is not writable (permission denied)")
+    return p
+
+
 # --------------------------------------------------------------------------- input hashes
-
-
-def input_files(config: dict[str, Any]) -> dict[str, Path]:
-    """The files a unit (resolved plain config) reads, by the key path that names them.
-
-    ``terrain.preset`` -> the preset YAML (``scenes/<name>.yaml``), ``terrain.file`` (and the
-    ``.json`` side file of a ``.npy`` DEM when present), ``terrain.albedo_file``; for a raster
-    GDAL reads, every other file it reads (:func:`gdal_files`) as ``terrain.file+<name>``.
-    """
-    t = config.get("terrain") or {}
-    out: dict[str, Path] = {}
-    preset = t.get("preset")
-    if preset:
-        from simlunar.config.terrain import PresetError, preset_path
-
-        with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
-            out["terrain.preset"] = preset_path(str(preset))
-    for key in ("file", "albedo_file"):
-        if t.get(key):
-            out[f"terrain.{key}"] = Path(t[key])
-    dem = out.get("terrain.file")
-    if dem is not None and dem.suffix.lower() == ".npy":
-        side = dem.with_name(dem.name + ".json")
-        if side.is_file():
-            out["terrain.file.json"] = side
-    for key in ("terrain.file", "terrain.albedo_file"):
-        main = out.get(key)
-        if main is not None:
-            for extra in gdal_files(main):
-                # named relative to the main file, so a moved data folder keeps its keys
-                out[f"{key}+{os.path.relpath(extra, main.parent)}"] = extra
-    return out
-
-
-def gdal_files(path: Path) -> list[Path]:
-    """The files other than ``path`` that GDAL reads for a raster (rasterio's ``src.files``):
-    the sources of a ``.vrt``, the image of a PDS ``.lbl``, ``.tfw`` / ``.aux.xml`` sidecars.
-
-    Empty for the formats simlunar reads itself (.npy, .npz, .exr) and for a file GDAL cannot
-    open (the checks report that one).
-    """
-    if path.suffix.lower() in (".npy", ".npz", ".exr") or not path.is_file():
-        return []
-    try:
-        import rasterio
-
-        with rasterio.open(path) as src:
-            files = list(src.files)
-    except Exception:  # an unreadable raster is reported by the checks
-        return []
-    me = path.resolve()
-    out = []
-    for f in files:
-        q = Path(f)
-        if q.resolve() != me and q.is_file() and q not in out:
-            out.append(q)
-    return sorted(out)
-
-
-def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
-    """``{key path: {"path": str, "sha256": hex}}`` of :func:`input_files`."""
-    out = {}
-    for key, p in input_files(config).items():
-        try:
-            digest = file_sha256(p)
-        except OSError as exc:
-            raise ConfigError(f"{key}: cannot read {p} ({exc.strerror or exc})") from None
-        out[key] = {"path": str(p), "sha256": digest}
-    return out
-
-
-# --------------------------------------------------------------------------- terrain
-@dataclass(frozen=True)
-class TerrainFacts:
-    """What the checks need to know of a unit's terrain, without generating it.
-
-    ``zmin``/``zmax`` bound the heights (exact for a DEM; for a preset, a generous bound of
-    half the larger side, since its relief is generated later).
-    """
-
-    rows: int
-    cols: int
-    spacing: float
-    origin: tuple[float, float]
-    zmin: float
-    zmax: float
-    nan_fraction: float = 0.0
-    source: str = ""
-
-    @property
-    def extent(self) -> tuple[float, float, float, float]:
-        x0, y0 = self.origin
-        return (x0, x0 + self.cols * self.spacing, y0 - self.rows * self.spacing, y0)
-
-
-_TERRAIN_MEMO: dict[tuple, TerrainFacts] = {}
-
-
-def terrain_facts(t: Any) -> TerrainFacts:
-    """Check a unit's terrain section (a ``TerrainCfg``) and return its :class:`TerrainFacts`.
-
-    Raises
-    ------
-    ConfigError
-        One line naming ``terrain.<key>`` and, for files, the file.
-    """
-    if t.preset is not None:
-        memo = ("preset", str(t.preset), t.scale, repr(t.overrides))
-        if memo not in _TERRAIN_MEMO:
-            try:
-                p = _preset_params(t)
-            except (ValueError, OSError) as exc:
-                raise ConfigError(f"terrain.preset: {exc}") from None
-            half = 0.5 * max(p.rows, p.cols) * p.spacing
-            facts = TerrainFacts(
-                p.rows, p.cols, p.spacing, tuple(p.origin), -half, half, 0.0, str(t.preset)
-            )
-            _check_extent(facts, "terrain.preset")
-            _TERRAIN_MEMO[memo] = facts
-        return _TERRAIN_MEMO[memo]
-    files = [Path(t.file)] + ([Path(t.albedo_file)] if t.albedo_file is not None else [])
-    stamps = tuple(_stamp(p) for p in files)
-    memo = ("file", *map(str, files), t.spacing_m, stamps)
-    if memo not in _TERRAIN_MEMO:
-        _TERRAIN_MEMO[memo] = _dem_facts(Path(t.file), t.spacing_m, t.albedo_file)
-    return _TERRAIN_MEMO[memo]
-
-
-def _preset_params(t: Any):
-    """The preset's ``TerrainParams`` (grid size, spacing, origin) as the unit will build them."""
-    from simlunar.config.terrain import merged_preset
-    from simlunar.config.translate import terrain_params
-
-    return terrain_params(merged_preset(t.preset, t.overrides), scale=t.scale)
-
-
-def _stamp(p: Path):
-    try:
-        st = p.stat()
-        return (st.st_size, st.st_mtime_ns)
-    except OSError:
-        return None
-
-
-def _check_extent(f: TerrainFacts, key: str) -> None:
-    x0, x1, y0, y1 = f.extent
-    big = max(abs(x0), abs(x1), abs(y0), abs(y1))
-    if not math.isfinite(big) or big > MAX_ABS_COORD_M:
-        raise ConfigError(
-            f"{key}: the terrain reaches {big:.3g} m from the origin "
-            f"(more than {MAX_ABS_COORD_M:.0e} m; check spacing_m and the file's units)"
-        )
-
-
-def _read_grid(path: Path, key: str, *, spacing: float | None):
-    """``load_dem`` with every failure of the file turned into one line naming it."""
-    from simlunar.terrain.io import load_dem
-
-    try:
-        if path.stat().st_size == 0:
-            raise ConfigError(f"{key}: {path} is empty")
-        _check_magic(path, key)
-        if path.suffix.lower() == ".npz":
-            _check_npz_spacing(path, key)
-        return load_dem(path, spacing=spacing)
-    except ConfigError:
-        raise
-    except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
-        # a file the reader cannot make sense of (truncated, garbage, wrong layout)
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        if str(path) in msg:
-            raise ConfigError(f"{key}: {msg}") from None
-        raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
-
-
-def _read_albedo(path: Path, key: str, shape, valid) -> np.ndarray:
-    """:func:`simlunar.terrain.io.load_albedo` (the unit's reader) with every failure turned
-    into one line naming ``key`` and the file."""
-    from simlunar.terrain.io import load_albedo
-
-    try:
-        if path.stat().st_size == 0:
-            raise ConfigError(f"{key}: {path} is empty")
-        _check_magic(path, key)
-        return load_albedo(path, shape, valid=valid)
-    except ConfigError:
-        raise
-    except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        if str(path) in msg:
-            raise ConfigError(f"{key}: {msg}") from None
-        raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
-
-
-_MAGIC = {".npy": (b"\x93NUMPY", "a NumPy .npy file"), ".npz": (b"PK", "a NumPy .npz archive")}
-
-
-def _check_magic(path: Path, key: str) -> None:
-    """A ``.npy``/``.npz`` must start as one (``np.load`` guesses the format from the bytes
-    and leaves the file open when a guessed zip is not one)."""
-    magic, what = _MAGIC.get(path.suffix.lower(), (None, ""))
-    if magic is None:
-        return
-    with open(path, "rb") as f:
-        head = f.read(len(magic))
-    if head != magic or (path.suffix.lower() == ".npz" and not zipfile.is_zipfile(path)):
-        raise ConfigError(f"{key}: {path} is not {what}")
-
-
-def _check_npz_spacing(path: Path, key: str) -> None:
-    try:
-        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
-            if "spacing" not in z.files:
-                return
-            sp = np.asarray(z["spacing"])
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
-        raise ConfigError(f"{key}: cannot read {path}: {exc}") from None
-    if sp.size != 1 or sp.dtype.kind not in "fiu":
-        raise ConfigError(
-            f"{key}: {path}: 'spacing' must be one number (metres per cell), "
-            f"got shape {list(sp.shape)} of {sp.dtype}"
-        )
-    v = float(sp.reshape(()))
-    if not (math.isfinite(v) and v > 0):
-        raise ConfigError(f"{key}: {path}: 'spacing' must be a positive number, got {v}")
-
-
-def _dem_facts(path: Path, spacing: float | None, albedo_file) -> TerrainFacts:
-    key = "terrain.file"
-    if not path.is_file():
-        raise ConfigError(f"{key}: file not found: {path}")
-    terrain = _read_grid(path, key, spacing=spacing)
-    h = np.asarray(terrain.heights)
-    rows, cols = h.shape
-    if rows < 2 or cols < 2:
-        raise ConfigError(f"{key}: {path}: a DEM needs at least 2 x 2 cells, got {rows} x {cols}")
-    finite = np.isfinite(h)
-    n_nan = int(h.size - finite.sum())
-    if n_nan == h.size:
-        raise ConfigError(f"{key}: {path}: every height is NaN (no terrain)")
-    frac = n_nan / h.size
-    if frac > MAX_NAN_FRACTION:
-        raise ConfigError(
-            f"{key}: {path}: {100 * frac:.1f}% of the heights are NaN (holes); at most "
-            f"{100 * MAX_NAN_FRACTION:g}% are filled from the nearest valid pixel"
-        )
-    zmin, zmax = float(h[finite].min()), float(h[finite].max())
-    if max(abs(zmin), abs(zmax)) > MAX_ABS_COORD_M:
-        raise ConfigError(
-            f"{key}: {path}: heights reach {max(abs(zmin), abs(zmax)):.3g} m "
-            f"(more than {MAX_ABS_COORD_M:.0e} m; check the file's units)"
-        )
-    facts = TerrainFacts(
-        rows, cols, terrain.spacing, tuple(terrain.origin), zmin, zmax, frac, str(path)
-    )
-    _check_extent(facts, key)
-    if albedo_file is not None:
-        akey, apath = "terrain.albedo_file", Path(albedo_file)
-        if not apath.is_file():
-            raise ConfigError(f"{akey}: file not found: {apath}")
-        _read_albedo(apath, akey, h.shape, finite)  # the reader the unit uses
-        return facts
-    a = np.asarray(terrain.albedo)[finite]
-    if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
-        bad = a[~(np.isfinite(a) & (a >= 0) & (a <= 1))][0]
-        raise ConfigError(
-            f"{key}: {path}: albedo must be finite and within [0, 1] where the DEM has "
-            f"heights, found {bad}"
-        )
-    return facts
 
 
 # --------------------------------------------------------------------------- camera
@@ -375,8 +127,11 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
     ``render`` is a ``RenderCfg`` (an experiment's or a scene's).
 
     Rays through a grid of pixels (the corners included) are intersected with the terrain's
-    bounding box; if none meets it, no pixel can see the terrain.
+    bounding box; if none meets it, no pixel can see the terrain. The image's pixel count is
+    within :data:`MAX_CELLS`.
     """
+    rows, cols = image_shape(render, facts)
+    check_size(key, f"a {rows} x {cols} image", rows * cols)
     cam = render.camera
     if getattr(cam, "kind", None) == "rover_mast":
         _check_site(cam, facts, key)
@@ -459,7 +214,8 @@ def _ray_box(o: np.ndarray, d: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np
 
 # --------------------------------------------------------------------------- sizes
 def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
-    """Densities give at least :data:`MIN_SAMPLES` samples; scanner sizes are positive."""
+    """Densities give at least :data:`MIN_SAMPLES` samples; the image is within
+    :data:`MAX_CELLS`; scanner sizes are positive and within the limits."""
     s = cfg.study
     n = shape[0] * shape[1]
     if getattr(s, "kind", "sampling") == "sampling":
@@ -480,14 +236,95 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
             raise ConfigError(
                 f"study.{name}: (width, height) must be at least 2 pixels each, got {list(size)}"
             )
-    budget = getattr(s, "budget", None)
-    cam = getattr(s, "camera_px", None)
-    if budget is not None and cam is not None:
-        k = round(budget * cam[0] * cam[1])
-        if k < 1:
+    check_scanner_budget(s)
+
+
+#: scan modes that project planned dots (the rest project the gray code only)
+DOT_MODES = ("ambiguity_enhancement", "data_reduction")
+
+
+def check_scanner_budget(s: Any) -> None:
+    """A scanner study's sizes against :data:`MAX_CELLS` / :data:`MAX_FRAME_PIXELS`, and its
+    dot budget against the grid the dots are planned on (the projector's: guide pixel (r, c)
+    is projector pixel (r, c)), with the planners' own sample-count rule."""
+    from simlunar.planner import check_k
+    from simlunar.scanner.gray_code import num_bits
+    from simlunar.scanner.scans import SCAN_PLANNERS
+
+    (pw, ph), (cw, ch) = s.projector_px, s.camera_px
+    check_size("study.projector_px", f"{pw} x {ph} pixels", pw * ph)
+    check_size("study.camera_px", f"{cw} x {ch} pixels", cw * ch)
+    per_frame = pw * ph + cw * ch
+    gray = 2 * (num_bits(pw) + num_bits(ph)) + 2  # the pattern stack (+ kept frames)
+    check_size(
+        "study.projector_px",
+        f"{gray} gray-code frames x {per_frame} projector + camera pixels",
+        gray * per_frame,
+        "SIMLUNAR_MAX_FRAME_PIXELS",
+    )
+    if not set(DOT_MODES) & set(s.modes):
+        return
+    batch = s.options.dot_opts.batch
+    check_size(
+        "study.options.dot_opts.batch",
+        f"{batch} frames x {per_frame} projector + camera pixels",
+        batch * per_frame,
+        "SIMLUNAR_MAX_FRAME_PIXELS",
+    )
+    n = pw * ph
+    k = max(1, round(s.budget * n))  # the structured-light sensor: dots planned on the projector
+    for planner in s.planners:
+        if planner in SCAN_PLANNERS:
+            continue
+        try:
+            check_k(k, n)
+        except ValueError as exc:
             raise ConfigError(
-                f"study.budget: {budget:g} of the {cam[0]} x {cam[1]} camera gives no sample"
-            )
+                f"study.budget: {s.budget:g} of the {pw} x {ph} projector gives {k} dots for "
+                f"planner {planner} ({exc})"
+            ) from None
+
+
+# --------------------------------------------------------------------------- scanner rig
+def check_rig(cfg: Any, facts: TerrainFacts, *, key: str = "study.options.rig") -> None:
+    """A scanner study's rig, built as the unit builds it (the library's preset and aiming,
+    so its own checks apply: a zero baseline, ...), must see the terrain: rays of the
+    projector's frustum must meet the terrain's bounding box, and the triangulation camera
+    must see where they meet. A cheap ray cast instead of a render that finds nothing."""
+    from types import SimpleNamespace
+
+    from simlunar.config.translate import rig_kwargs
+    from simlunar.study.scanner import aim_rig_at_terrain
+
+    stand_in = SimpleNamespace(extent=facts.extent, heights=np.array([facts.zmid]))
+    try:
+        rig = aim_rig_at_terrain(stand_in, **rig_kwargs(cfg.study))
+    except ValueError as exc:
+        raise ConfigError(f"{key}: {exc}") from None
+    x0, x1, y0, y1 = facts.extent
+    lo, hi = np.array([x0, y0, facts.zmin]), np.array([x1, y1, facts.zmax])
+    pw, ph = cfg.study.projector_px
+    uu, vv = np.meshgrid(np.linspace(0.5, pw - 0.5, 17), np.linspace(0.5, ph - 0.5, 13))
+    o, d = rig.projector.rays(np.stack([uu, vv], axis=-1).reshape(-1, 2))
+    hit = _ray_box(o, d, lo, hi)
+    if not hit.any():
+        raise ConfigError(
+            f"{key}: the projector at {np.round(rig.projector.position, 3).tolist()} sees no "
+            f"terrain (x [{x0:g}, {x1:g}] m, y [{y0:g}, {y1:g}] m)"
+        )
+    # where the projector's rays reach the terrain's median height: what the camera must see
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (facts.zmid - o[hit, 2]) / d[hit, 2]
+    pts = o[hit] + np.where(np.isfinite(t) & (t > 0), t, np.nan)[:, None] * d[hit]
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    uv, z = rig.camera.project(pts) if len(pts) else (np.zeros((0, 2)), np.zeros(0))
+    cw, ch = cfg.study.camera_px
+    seen = (z > 0) & (uv[:, 0] >= 0) & (uv[:, 0] < cw) & (uv[:, 1] >= 0) & (uv[:, 1] < ch)
+    if not seen.any():
+        raise ConfigError(
+            f"{key}: the camera at {np.round(rig.camera.position, 3).tolist()} does not see "
+            "the projected pattern on the terrain (check baseline_m, cam_fov_x_deg, verge)"
+        )
 
 
 # --------------------------------------------------------------------------- all units
@@ -527,6 +364,8 @@ def check_units(units: list[Any]) -> Preflight:
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))
+            if getattr(cfg.study, "kind", None) == "scanner":
+                check_rig(cfg, f)
         except ConfigError as exc:
             if len(units) > 1 and u.sweep:
                 from simlunar.results.records import unit_label

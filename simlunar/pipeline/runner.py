@@ -31,8 +31,10 @@ from simlunar.config.loading import apply_sweep_value, to_plain
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.yamlio import dump_yaml, safe_load_text
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
+from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
+from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.results.folder import prune_figures, read_folder_config
 from simlunar.results.records import WorkUnit
@@ -54,11 +56,11 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
     """Cache key of a resolved unit config: what determines its numbers, and nothing else.
 
     It covers the config (less names and figure formats), the SHA-256 of every file the unit
-    reads (``inputs``, :func:`simlunar.pipeline.preflight.input_hashes`; computed when not
+    reads (``inputs``, :func:`simlunar.pipeline.inputs.input_hashes`; computed when not
     given) and the simlunar version.
     """
     if inputs is None:
-        inputs = preflight.input_hashes(config)
+        inputs = input_hashes(config)
     relevant = {k: v for k, v in config.items() if k not in _NON_RESULT_KEYS}
     relevant.pop("figures", None)
     terrain = relevant.get("terrain")
@@ -114,7 +116,7 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
         sweep = {p: v for (p, _), v in zip(axes, combo)}
         n_seeds = int(resolved.get("study", {}).get("terrain_seeds", 1) or 1)
         if n_seeds == 1:
-            inputs = preflight.input_hashes(resolved)
+            inputs = input_hashes(resolved)
             key = unit_key(resolved, inputs)
             units.append(WorkUnit(len(units), key, sweep, resolved, inputs=inputs))
             continue
@@ -122,7 +124,7 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
             one = apply_sweep_value(resolved, "terrain.seed_index", seed_index)
             one = to_plain(ExperimentCfg.model_validate(one))
             one.pop("sweep", None)
-            inputs = preflight.input_hashes(one)
+            inputs = input_hashes(one)
             units.append(
                 WorkUnit(
                     len(units),
@@ -259,6 +261,7 @@ def run_experiment(
     preflight.check_out_dir(out)
     units = expand(cfg)
     checks = preflight.check_units(units)
+    preflight.check_renderer()
     config_text = dump_yaml(to_plain(cfg))
     executor = executor or LocalPoolExecutor(1)
     executor_open = getattr(executor, "open", None)
@@ -286,8 +289,11 @@ def run_experiment(
             )
         except RunInterrupted:
             raise
-        except KeyboardInterrupt:
-            # after the units, while the summary or the figures were written
+        except BaseException as exc:
+            if not (isinstance(exc, KeyboardInterrupt) or interrupted()):
+                raise
+            # after the units, while the summary or the figures were written (whatever
+            # the interrupted code raised: the Ctrl-C decides)
             done = len(UnitCache(out).keys() & {u.key for u in units})
             raise RunInterrupted(_kept(out, done, len(units), "interrupted")) from None
         finally:
@@ -380,12 +386,12 @@ def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
 
 
 def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
-    from simlunar.results.exports import export_unit_key
+    from simlunar.results.exports import export_complete
 
     name = f"unit{u.index}"
     if scan_dirs.get(name) != u.key:
         return True  # exports nothing (or a unit of the same key does)
-    return export_unit_key(out / "scans" / name) == u.key
+    return export_complete(out / "scans" / name, u.key)
 
 
 def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
@@ -394,7 +400,7 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
     import re
     import shutil
 
-    from simlunar.results.exports import export_unit_key
+    from simlunar.results.exports import export_complete
 
     folder = out / "scans"
     removed: list[Path] = []
@@ -404,7 +410,7 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
         if not (p.is_dir() and re.fullmatch(r"unit\d+", p.name)):
             continue  # only what the runner writes
         key = scan_dirs.get(p.name)
-        if key is None or export_unit_key(p) != key:
+        if key is None or not export_complete(p, key):
             shutil.rmtree(p)
             removed.append(p)
     if not any(folder.iterdir()):
@@ -431,6 +437,8 @@ def _run_locked(
             todo.append(u)
     n_cached = len(units) - len(todo)
     stale = cache.keys() - set(keys)
+    # nothing of a finished folder is removed before this run is known to be able to write
+    _check_writable(out, scan_dirs)
     if todo or stale or not folder_complete(out, keys):
         # the folder's summary and figures no longer describe its units: remove them before
         # any unit changes, so an interrupted run never leaves them beside other units
@@ -459,13 +467,21 @@ def _run_locked(
             n_new += 1
             if bar is not None:
                 bar.advance()
-    except KeyboardInterrupt:
-        raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted")) from None
-    except InfrastructureError as exc:
-        raise InfrastructureError(f"{exc}; {_kept(out, n_cached + n_new, len(units))}") from None
+    except BaseException as exc:
+        if isinstance(exc, KeyboardInterrupt) or interrupted():
+            # a Ctrl-C, whatever the interrupted code made of it (the renderer's start-up
+            # turns it into other errors)
+            raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted")) from None
+        if isinstance(exc, InfrastructureError):
+            raise InfrastructureError(
+                f"{exc}; {_kept(out, n_cached + n_new, len(units))}"
+            ) from None
+        raise
     finally:
         if bar is not None:
             bar.stop()
+    if interrupted():  # a Ctrl-C swallowed by the code it interrupted
+        raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted"))
 
     rows, columns = collect_rows(units, records)
     atomic_write_text(out / "results.csv", csv_text(rows, columns))
@@ -503,6 +519,31 @@ def _run_locked(
         written,
         _notes(checks, units, records),
     )
+
+
+def _check_writable(out: Path, scan_dirs: dict[str, str]) -> None:
+    """Write (and remove) a small file in each folder the run writes into, so a full disk,
+    a quota or a folder made read-only fails here (exit 3) before any result is deleted."""
+    import os
+    import tempfile
+
+    folders = [out, out / "units", out / "figures"] + ([out / "scans"] if scan_dirs else [])
+    for d in folders:
+        if d.exists() and not d.is_dir():
+            raise ResultFolderError(f"--out {out}: {d} is not a folder")
+        target = d if d.is_dir() else out
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=".simlunar-probe.", dir=target)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        try:
+            os.write(fd, b"\0" * 65536)
+            os.fsync(fd)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        finally:
+            os.close(fd)
+            os.unlink(tmp)
 
 
 def _kept(out: Path, done: int, total: int, what: str = "") -> str:

@@ -24,6 +24,7 @@ from simlunar.planner.strategies import (
     check_k,
     combine_maps,
     plan,
+    strategy_options,
     strategy_weights,
 )
 from simlunar.planner.types import SamplePlan
@@ -51,5 +52,6 @@ __all__ = [
     "plan",
     "samples_per_cell",
     "score_combination",
+    "strategy_options",
     "strategy_weights",
 ]

@@ -108,8 +108,12 @@ def pick_in_blocks(keys, count, b):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def assign(sr, sc, rad, nr, nc, best, owner):  # pragma: no cover - compiled
+def assign(sr, sc, rad, order, nr, nc, best, owner):  # pragma: no cover - compiled
     """Nearest site of each cell among the sites whose disc of radius ``rad`` covers it.
+
+    Serial on purpose: measured on the shared 2-core machine, a 2-thread version (row bands
+    in parallel) ran 1.4-2x slower in wall time under load (barrier waits), and the study
+    already runs planners in parallel processes.
 
     Parameters
     ----------
@@ -117,16 +121,20 @@ def assign(sr, sc, rad, nr, nc, best, owner):  # pragma: no cover - compiled
         Site positions (row, col) in index coordinates.
     rad : ndarray of float64, shape (k,)
         Search radius of each site (pixels).
+    order : ndarray of int64, shape (k,)
+        Visiting order of the sites (sorted by row, so successive discs share cache lines;
+        ties go to the site first in this order).
     nr, nc : int
         Grid shape.
-    best : ndarray of float64, shape (rows * cols,)
+    best : ndarray of float32, shape (rows * cols,)
         Work array (overwritten): squared distance to the owner.
-    owner : ndarray of int64, shape (rows * cols,)
+    owner : ndarray of int32, shape (rows * cols,)
         Output: index of the nearest covering site, -1 where no disc covers the cell.
     """
     best[:] = np.inf
     owner[:] = -1
-    for s in range(sr.size):
+    for j in range(order.size):
+        s = order[j]
         r0 = sr[s]
         c0 = sc[s]
         rr = rad[s]
@@ -139,33 +147,41 @@ def assign(sr, sc, rad, nr, nc, best, owner):  # pragma: no cover - compiled
             c_hi = min(int(np.floor(c0 + half)), nc - 1)
             base = r * nc
             for c in range(c_lo, c_hi + 1):
-                d = dr2 + (c - c0) * (c - c0)
+                d = np.float32(dr2 + (c - c0) * (c - c0))
                 if d < best[base + c]:
                     best[base + c] = d
                     owner[base + c] = s
 
 
 @numba.njit(cache=True, nogil=True)
-def centroids(owner, weight, nc, k):  # pragma: no cover - compiled
-    """Weighted centroid of each site's cells.
+def centroids(owner, best, weight, nc, k):  # pragma: no cover - compiled
+    """Weighted centroid of each site's cells, and the squared distance to its farthest cell.
 
     Returns
     -------
     mass, mr, mc : ndarray of float64, shape (k,)
         Total weight and the weighted sums of row and column of each site's cells.
+    far2 : ndarray of float64, shape (k,)
+        Largest squared distance from the site to one of its cells (``best``).
     """
     mass = np.zeros(k)
     mr = np.zeros(k)
     mc = np.zeros(k)
-    for i in range(owner.size):
-        s = owner[i]
-        w = weight[i]
-        if s < 0 or w == 0.0:
-            continue
-        mass[s] += w
-        mr[s] += w * (i // nc)
-        mc[s] += w * (i % nc)
-    return mass, mr, mc
+    far2 = np.zeros(k)
+    nr = owner.size // nc
+    for r in range(nr):
+        for c in range(nc):
+            i = r * nc + c
+            s = owner[i]
+            if s < 0:
+                continue
+            if best[i] > far2[s]:
+                far2[s] = best[i]
+            w = weight[i]
+            mass[s] += w
+            mr[s] += w * r
+            mc[s] += w * c
+    return mass, mr, mc, far2
 
 
 @numba.njit(cache=True, nogil=True)

@@ -7,7 +7,8 @@ density *and* they are evenly spread:
 
 1. :func:`density_from_map`: importance map -> target density (power ``p``, uniform share ``m``).
 2. :func:`halftone`: serpentine Floyd-Steinberg error diffusion of the density scaled to k
-   samples, fixed up to exactly k distinct cells.
+   samples (on blocks of about half a sample at sparse densities), fixed up to exactly k
+   distinct cells.
 3. :func:`lloyd`: weighted Lloyd (centroidal Voronoi) relaxation on the pixel grid with weight =
    density^2 (a 2-D CVT puts sites at density ~ weight^(1/2), Du, Faber & Gunzburger 1999), sites
    within ``border`` local pitches of the image border snapped onto it and the four corners
@@ -22,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from simlunar.planner import _placement_kernels as _k
+import simlunar.planner._placement_kernels as _k
 
 __all__ = ["cvt_energy", "density_from_map", "halftone", "lloyd", "place", "samples_per_cell"]
 
@@ -30,6 +31,8 @@ __all__ = ["cvt_energy", "density_from_map", "halftone", "lloyd", "place", "samp
 THRESHOLD_JITTER = 0.1
 #: Voronoi search radius of a site, in local pitches (a CVT cell's circumradius is ~0.62)
 SEARCH_PITCHES = 1.25
+#: margin on a site's previous reach when it sets the next iteration's search radius
+REACH_MARGIN = 1.25
 #: samples per halftone block at the mean density (error diffusion is poor far below ~0.3)
 BLOCK_SAMPLES = 0.5
 
@@ -216,14 +219,16 @@ def _site_pitch(sr, sc, t):
     return 1.0 / np.sqrt(np.maximum(t[r, c], 1e-6))
 
 
-def _assign_all(sr, sc, pitch, shape, work):
+def _assign_all(sr, sc, radius, shape, work):
     """Owner (nearest site) of every cell: covering discs, then a k-d tree for the rest."""
     best, owner = work
-    _k.assign(sr, sc, SEARCH_PITCHES * pitch, shape[0], shape[1], best, owner)
+    order = np.argsort(sr, kind="stable")
+    _k.assign(sr, sc, radius, order, shape[0], shape[1], best, owner)
     missing = np.flatnonzero(owner < 0)
     if missing.size:
         cells = np.column_stack(np.divmod(missing, shape[1])).astype(np.float64)
-        owner[missing] = cKDTree(np.column_stack((sr, sc))).query(cells)[1]
+        dist, owner[missing] = cKDTree(np.column_stack((sr, sc))).query(cells)
+        best[missing] = dist**2
     return owner
 
 
@@ -239,10 +244,11 @@ def _check_sites(sites, n: int) -> np.ndarray:
 def lloyd(density, sites, *, iterations: int = 20, border: float | None = 0.75) -> np.ndarray:
     """Weighted Lloyd relaxation of pixel sites towards a centroidal Voronoi tessellation.
 
-    Each iteration assigns every cell to its nearest site (discs of
-    :data:`SEARCH_PITCHES` local pitches, a k-d tree for the cells no disc covers) and moves each
-    site to the centroid of its cells weighted by density^2, so the sites end at a local density
-    proportional to ``density``. With ``border`` set, sites within ``border`` local pitches
+    Each iteration assigns every cell to its nearest site and moves each site to the centroid of
+    its cells weighted by density^2, so the sites end at a local density proportional to
+    ``density``. The assignment visits a disc around each site: :data:`SEARCH_PITCHES` local
+    pitches on the first iteration, then :data:`REACH_MARGIN` x (the site's farthest cell + its
+    last move); a k-d tree takes the cells no disc reaches. With ``border`` set, sites within ``border`` local pitches
     (1 / sqrt(samples per cell)) of an image edge are snapped onto it and the sites nearest to
     the four corners are moved onto them, after every iteration; the result is rounded to
     distinct pixels (corners first, a taken pixel's site moved to the nearest free pixel).
@@ -275,23 +281,33 @@ def lloyd(density, sites, *, iterations: int = 20, border: float | None = 0.75) 
     weight = (t * t).ravel()
     rows, cols = np.divmod(sites, shape[1])
     sr, sc = rows.astype(np.float64), cols.astype(np.float64)
-    work = (np.empty(t.size), np.empty(t.size, dtype=np.int64))
+    work = (np.empty(t.size, dtype=np.float32), np.empty(t.size, dtype=np.int32))
     corners = np.empty(0, dtype=np.int64)
-    for _ in range(iterations + 1):
+    pitch = _site_pitch(sr, sc, t)
+    for it in range(iterations + 1):
         if border is not None:
-            _snap(sr, sc, _site_pitch(sr, sc, t), shape, border)
+            _snap(sr, sc, pitch, shape, border)
             corners = _corner_sites(sr, sc, shape)
-        if _ == iterations:
+        if it == iterations:
             break
-        owner = _assign_all(sr, sc, _site_pitch(sr, sc, t), shape, work)
-        mass, mr, mc = _k.centroids(owner, weight, shape[1], k)
+        if it == 0:
+            radius = SEARCH_PITCHES * pitch
+        owner = _assign_all(sr, sc, radius, shape, work)
+        mass, mr, mc, far2 = _k.centroids(owner, work[0], weight, shape[1], k)
         has = mass > 0
         new_r = np.where(has, mr / np.where(has, mass, 1.0), sr)
         new_c = np.where(has, mc / np.where(has, mass, 1.0), sc)
-        move = max(float(np.abs(new_r - sr).max()), float(np.abs(new_c - sc).max()))
+        step = np.hypot(new_r - sr, new_c - sc)
+        move = float(step.max())
+        # next search radius: the site's farthest cell plus its move, with a margin (cells
+        # change owner only near the Voronoi edges, which move about as much as the sites);
+        # on a 1000 x 1600 map it visits ~2 cells per cell instead of ~5 and misassigns
+        # ~5e-5 of the cells (a k-d tree takes any cell no disc reaches)
+        radius = np.maximum(REACH_MARGIN * (np.sqrt(far2) + step), 1.5)
         sr, sc = new_r, new_c
+        pitch = _site_pitch(sr, sc, t)
         if move < 0.01:
-            iterations = _ + 1  # snap once more, then stop
+            iterations = it + 1  # snap once more, then stop
     order = np.concatenate((corners, np.setdiff1d(np.arange(k), corners)))
     r = np.clip(np.rint(sr[order]).astype(np.int64), 0, shape[0] - 1)
     c = np.clip(np.rint(sc[order]).astype(np.int64), 0, shape[1] - 1)

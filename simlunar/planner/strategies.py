@@ -106,6 +106,12 @@ _OTHER_OPTS = {
 }
 
 
+def strategy_options(strategy: str) -> tuple[str, ...]:
+    """The option names :func:`plan` accepts for a strategy (for config validation)."""
+    base = _resolve(strategy)
+    return _WEIGHTED_OPTS if base in WEIGHTED else _OTHER_OPTS.get(base, ())
+
+
 def check_k(k, n: int) -> int:
     """Validate the sample count against the number of pixels ``n``."""
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
@@ -333,50 +339,25 @@ def _lloyd_uniform_strategy(k, shape, weights, rng, **opts):
     return _lloyd_placed(k, np.ones(shape), rng, power=1.0, uniform_mix=0.0, **opts)
 
 
-def _oracle_greedy_strategy(
-    k,
-    shape,
-    weights,
-    rng,
-    *,
-    truth,
-    start_share=0.25,
-    batch_share=0.15,
-    smooth_pitch=0.25,
-    nms_pitch=1.0,
-):
-    return oracle_greedy(
-        truth,
-        k,
-        rng=rng,
-        start=start_share,
-        batch=batch_share,
-        smooth=smooth_pitch,
-        window=nms_pitch,
-    )
+#: plan option name -> keyword of the oracle function
+_ORACLE_KEYS = {
+    "start_share": "start",
+    "batch_share": "batch",
+    "smooth_pitch": "smooth",
+    "nms_pitch": "window",
+    "density_power": "power",
+    "uniform_mix": "mix",
+    "lloyd_iterations": "iterations",
+    "border_pitch": "border",
+}
 
 
-def _oracle_hessian_strategy(
-    k,
-    shape,
-    weights,
-    rng,
-    *,
-    truth,
-    density_power=0.5,
-    uniform_mix=0.25,
-    lloyd_iterations=20,
-    border_pitch=0.75,
-):
-    return oracle_hessian(
-        truth,
-        k,
-        rng=rng,
-        power=density_power,
-        mix=uniform_mix,
-        iterations=lloyd_iterations,
-        border=border_pitch,
-    )
+def _oracle_greedy_strategy(k, shape, weights, rng, *, truth, **opts):
+    return oracle_greedy(truth, k, rng=rng, **{_ORACLE_KEYS[n]: v for n, v in opts.items()})
+
+
+def _oracle_hessian_strategy(k, shape, weights, rng, *, truth, **opts):
+    return oracle_hessian(truth, k, rng=rng, **{_ORACLE_KEYS[n]: v for n, v in opts.items()})
 
 
 STRATEGIES: dict[str, Callable[..., np.ndarray]] = {
@@ -387,6 +368,34 @@ STRATEGIES: dict[str, Callable[..., np.ndarray]] = {
     "oracle_greedy": _oracle_greedy_strategy,
     "oracle_hessian": _oracle_hessian_strategy,
 }
+
+
+def _grid_inputs(image, weights, shape, truth):
+    """Validated inputs and the one grid shape they agree on."""
+    shapes = {}
+    if image is not None:
+        image = check_image(image)
+        shapes["image"] = image.shape[:2]
+    if weights is not None:
+        weights = np.asarray(weights, dtype=np.float64)
+        if weights.ndim != 2:
+            raise ValueError(f"weights must have shape (rows, cols), got {weights.shape}")
+        if not np.all(np.isfinite(weights)) or weights.min() < 0:
+            raise ValueError("weights must be finite and >= 0")
+        shapes["weights"] = weights.shape
+    if shape is not None:
+        shapes["shape"] = tuple(int(s) for s in shape)
+    if truth is not None:
+        truth = np.asarray(truth, dtype=np.float64)
+        shapes["truth"] = truth.shape
+    if not shapes:
+        raise ValueError("plan needs one of image, weights or shape to know the grid")
+    if len(set(shapes.values())) > 1:
+        raise ValueError(f"mismatched grid shapes: {shapes}")
+    grid_shape = next(iter(shapes.values()))
+    if len(grid_shape) != 2 or min(grid_shape) < 1:
+        raise ValueError(f"shape must be (rows, cols) > 0, got {grid_shape}")
+    return grid_shape, image, weights, truth
 
 
 def plan(
@@ -428,40 +437,19 @@ def plan(
     """
     base = _resolve(strategy)
     rng = np.random.default_rng(rng)
-    allowed = _WEIGHTED_OPTS if base in WEIGHTED else _OTHER_OPTS.get(base, ())
+    allowed = strategy_options(base)
     bad = sorted(set(opts) - set(allowed))
     if bad:
         raise ValueError(
             f"unknown option(s) {bad} for strategy {strategy!r}; valid: {', '.join(allowed) or 'none'}"
         )
-    shapes = {}
-    if image is not None:
-        image = check_image(image)
-        shapes["image"] = image.shape[:2]
-    if weights is not None:
-        weights = np.asarray(weights, dtype=np.float64)
-        if weights.ndim != 2:
-            raise ValueError(f"weights must have shape (rows, cols), got {weights.shape}")
-        if not np.all(np.isfinite(weights)) or weights.min() < 0:
-            raise ValueError("weights must be finite and >= 0")
-        shapes["weights"] = weights.shape
-    if shape is not None:
-        shapes["shape"] = tuple(int(s) for s in shape)
+    grid_shape, image, weights, truth = _grid_inputs(image, weights, shape, truth)
     if base in ORACLES:
         if truth is None:
             raise ValueError(
                 f"strategy {strategy!r} is an oracle: it needs truth= (the true depth)"
             )
-        truth = np.asarray(truth, dtype=np.float64)
-        shapes["truth"] = truth.shape
         opts["truth"] = truth
-    if not shapes:
-        raise ValueError("plan needs one of image, weights or shape to know the grid")
-    if len(set(shapes.values())) > 1:
-        raise ValueError(f"mismatched grid shapes: {shapes}")
-    grid_shape = next(iter(shapes.values()))
-    if len(grid_shape) != 2 or min(grid_shape) < 1:
-        raise ValueError(f"shape must be (rows, cols) > 0, got {grid_shape}")
     k = check_k(k, grid_shape[0] * grid_shape[1])
     if base in WEIGHTED and weights is None:
         if image is None:

@@ -145,6 +145,11 @@ def _probe(
         )
         ok = res.returncode == 0 and res.stdout.strip().endswith("ok")
         tail = (res.stdout + res.stderr).strip().splitlines()
+        from simlunar.interrupts import interrupted
+
+        if interrupted() or res.returncode in (-2, 130) or "KeyboardInterrupt" in res.stderr:
+            # a Ctrl-C reached the probe (same process group): no verdict on the library
+            raise KeyboardInterrupt
         msg = "ok" if ok else f"exit {res.returncode}: {tail[-1] if tail else 'no output'}"
     except subprocess.TimeoutExpired:
         # not cached: a slow start on a loaded machine says nothing about the library
@@ -239,9 +244,16 @@ def init(prefer: str | None = None) -> BackendInfo:
     os.environ["DRJIT_CACHE_DIR"] = str(cache_dir)
     if info.libllvm:
         os.environ["DRJIT_LIBLLVM_PATH"] = info.libllvm
-    import mitsuba as mi
+    from simlunar.interrupts import deferred
 
-    mi.set_variant(info.variant)
+    # a Ctrl-C inside Mitsuba's and Dr.Jit's import and initialisation leaves them half set
+    # up (NameError: _drjit_ext, aborts, the interrupt swallowed): it is raised after them
+    with deferred():
+        import mitsuba as mi
+
+        mi.set_variant(info.variant)
+        _register_plugins(mi)
+    _INFO, _MI = info, mi
     if not info.is_jit:
         warnings.warn(
             "simlunar: rendering with the slow scalar_rgb variant "
@@ -250,13 +262,15 @@ def init(prefer: str | None = None) -> BackendInfo:
             ScalarFallbackWarning,
             stacklevel=2,
         )
-    _INFO, _MI = info, mi
+    return info
+
+
+def _register_plugins(mi) -> None:
     # the variant is set: now plugins that subclass mi.BSDF may be defined and registered
     for module in PLUGINS.values():
         module.register(mi)
     for hook in _PLUGIN_HOOKS:
         hook(mi)
-    return info
 
 
 def set_render_threads(n: int | None) -> int:

@@ -74,7 +74,8 @@ class CaptureOptions:
         Mitsuba's light tracer from the projector (which launches ``sparse_spp`` paths per
         camera pixel); or ``"lit"`` (:class:`simlunar.render.sparse.LitTracer`), which traces
         ``sparse_particles`` paths per lit projector pixel, so a dot frame costs what its dots
-        cost and a pattern with nothing lit is black at no cost.
+        cost. With every integrator a pattern with nothing lit (the black frame) is not
+        rendered: it is exactly black.
     sparse_spp : int >= 1 or None
         Samples per pixel of sparse patterns (None: ``spp``); not used by ``"lit"``.
     sparse_below : float in (0, 1]
@@ -237,23 +238,33 @@ class RenderCapture:
             )
         self.renders += len(pats)
         em = self.emitted(pats)
+        # a pattern with nothing lit is black: the projector is the scene's only emitter (the
+        # extra lights are the separate ambient image), so its render is exactly zero and is
+        # skipped (the black frame of every gray-code and dot scan)
+        on = (em > 0).any(axis=(1, 2))
+        out = np.zeros((len(em), *self.scene.shape), np.float32)
+        if on.any():
+            out[on] = self._render_emitted(em[on])
+        return self._lens(self._with_ambient(out))
+
+    def _render_emitted(self, em: np.ndarray) -> np.ndarray:
+        """Luminance under emitted patterns with some light, by the integrator of each."""
         if self.sparse_integrator == "lit":
-            return self._lens(self._with_ambient(self._render_lit(em)))
-        lit = (em > 0).mean(axis=(1, 2))
-        sparse = (lit > 0) & (lit <= self.sparse_below)
+            return self._render_lit(em)
+        sparse = (em > 0).mean(axis=(1, 2)) <= self.sparse_below
         if (self.sparse_integrator == "path" and self.sparse_spp is None) or not sparse.any():
-            return self._lens(self._with_ambient(self.scene.render_patterns(em)))
+            return self.scene.render_patterns(em)
         out = np.empty((len(em), *self.scene.shape), np.float32)
         if (~sparse).any():
             out[~sparse] = self.scene.render_patterns(em[~sparse])
         out[sparse] = self.scene.render_patterns(
             em[sparse], spp=self.sparse_spp, integrator=self.sparse_integrator
         )
-        return self._lens(self._with_ambient(out))
+        return out
 
     def _render_lit(self, em: np.ndarray) -> np.ndarray:
-        """``sparse_integrator="lit"``: sparse and black patterns light traced from their lit
-        pixels (:class:`simlunar.render.sparse.LitTracer`), the others path traced."""
+        """``sparse_integrator="lit"``: sparse patterns light traced from their lit pixels
+        (:class:`simlunar.render.sparse.LitTracer`), the others path traced."""
         sparse = (em > 0).mean(axis=(1, 2)) <= self.sparse_below
         out = np.empty((len(em), *self.scene.shape), np.float32)
         if (~sparse).any():

@@ -177,7 +177,7 @@ class LitTracer:
         Frames traced in one launch (memory: ``batch`` camera images of float32).
     """
 
-    def __init__(self, scene, *, per_pixel: float = 256.0, batch: int = 16) -> None:
+    def __init__(self, scene, *, per_pixel: float = 256.0, batch: int = 8) -> None:
         if scene.projector is None:
             raise ValueError("scene: the lit tracer needs a scene with a ProjectorLight")
         if not per_pixel > 0:

@@ -354,6 +354,28 @@ def export_unit_key(folder) -> str | None:
     return key if isinstance(key, str) else None
 
 
+#: files of every scan export besides its frames (manifest.json is written last)
+EXPORT_FILES = ("decode.exr", "cloud.ply", "calibration.yml", "manifest.json")
+
+
+def export_complete(folder, unit_key: str) -> bool:
+    """Whether ``folder`` holds the whole export of the unit ``unit_key``: its manifest names
+    the unit and every file the manifest promises is there (a partly deleted export is
+    written again by the next run)."""
+    folder = Path(folder)
+    if export_unit_key(folder) != unit_key:
+        return False
+    try:
+        frames = json.loads((folder / "manifest.json").read_text()).get("frames")
+    except (OSError, ValueError, AttributeError):
+        return False
+    if not isinstance(frames, list) or not all(isinstance(f, str) for f in frames):
+        return False
+    wanted = [folder / name for name in EXPORT_FILES]
+    wanted += [folder / sub / f for sub in ("frames8", "frames16") for f in frames]
+    return all(p.is_file() for p in wanted)
+
+
 def check_save_scans(cfg) -> None:
     """Refuse ``simlunar run --save-scans`` for an experiment whose scan cannot be exported.
 

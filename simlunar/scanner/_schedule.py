@@ -1,6 +1,6 @@
 """Compiled kernels of the epipolar dot scheduler (Numba, cached on disk).
 
-See :func:`simlunar.scanner.dots.dot_schedule` for the geometry. Every dot has a band
+See :func:`simlunar.scanner.scheduling.dot_schedule` for the geometry. Every dot has a band
 coordinate ``w`` (angle of its camera epipolar line about the epipole, or its offset when the
 lines are parallel), an interval ``[s0, s1]`` along that line (distance from the epipole) and its
 camera segment and projector position. Two dots whose segments come within ``sep`` always have

@@ -25,6 +25,8 @@ import numpy as np
 from simlunar.geometry import Rig
 from simlunar.scanner import dots as _dots
 from simlunar.scanner import gray_code as gc
+from simlunar.scanner.scheduling import schedule_dots
+from simlunar.scanner.subpixel import refine_subpixel_from_diff
 from simlunar.scanner.triangulate import (
     Correspondences,
     PointCloud,
@@ -60,7 +62,7 @@ class GrayCodeOptions:
         A pixel with any unreliable bit is invalid (OpenCV's behaviour).
     subpixel : bool
         Sub-pixel stripe-edge refinement of the decoded columns and rows
-        (:func:`simlunar.scanner.gray_code.refine_subpixel`) instead of projector pixel centres.
+        (:func:`simlunar.scanner.subpixel.refine_subpixel`) instead of projector pixel centres.
     keep_frames : bool
         Keep the captured stack in ``GrayScan.frames["images"]`` (white and black are always
         kept).
@@ -236,7 +238,7 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     dec.add_white_black(white, black)
     result = dec.result(require_reliable=o.require_reliable)
     if o.subpixel:
-        result = gc.refine_subpixel_from_diff(result, dec.diff)
+        result = refine_subpixel_from_diff(result, dec.diff)
     cloud = triangulate(rig, Correspondences.from_gray(result), method=o.method)
     depth = depth_at_proj_pixels(cloud, rig.guide)
     frames = {"white": white, "black": black}
@@ -284,7 +286,7 @@ def dot_scan(
         )
     o = options or DotOptions()
     H, W = rig.projector.intrinsics.shape
-    schedule = _dots.schedule_dots(
+    schedule = schedule_dots(
         rig,
         proj_uv,
         depth_range=depth_range,

@@ -14,11 +14,14 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from simlunar.errors import NothingMeasuredError
+
 __all__ = ["Acquisition", "NothingMeasured", "Sensor"]
 
 
-class NothingMeasured(ValueError):
-    """An acquisition measured no pixel at all: nothing to reconstruct from."""
+#: an acquisition measured no pixel at all: nothing to reconstruct from (a ValueError and a
+#: user-facing SimlunarError: one line, exit 2)
+NothingMeasured = NothingMeasuredError
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,7 +63,11 @@ class Acquisition:
         """
         r, c = np.nonzero(np.isfinite(measured))
         if len(r) == 0:
-            raise NothingMeasured("depth map has no measured pixel to reconstruct from")
+            raise NothingMeasured(
+                "the scan measured no pixel (nothing decoded: projector too faint against the "
+                "sun or the thresholds, or the camera sees no projected pixel), so there is no "
+                "depth to reconstruct"
+            )
         rc = np.stack([r, c], axis=-1).astype(float)
         return cls(rc, measured[r, c], tuple(measured.shape), **kw)
 

@@ -12,13 +12,16 @@ Arrays only: no files, no configuration objects.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import multiprocessing
 import signal
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.errors import InfrastructureError
 from simlunar.reconstruction import OUTSIDE_POLICIES, reconstruct
 from simlunar.sensors.base import Acquisition, Sensor
 
@@ -150,8 +153,34 @@ def _map_tasks(state, tasks, workers):
     # fork shares the arrays with the workers without pickling them
     ctx = multiprocessing.get_context("fork" if "fork" in methods else None)
     _warm_kernels(state["outside"])
-    with ctx.Pool(min(workers, len(tasks)), initializer=_init_worker, initargs=(state,)) as pool:
-        return iter(pool.map(_worker_task, tasks, chunksize=1))
+    # concurrent.futures notices a dead worker (multiprocessing.Pool waits for it forever)
+    pool = cf.ProcessPoolExecutor(
+        min(workers, len(tasks)), mp_context=ctx, initializer=_init_worker, initargs=(state,)
+    )
+    try:
+        out = list(pool.map(_worker_task, tasks))
+    except BrokenProcessPool:
+        _stop(pool)
+        raise InfrastructureError(
+            "a study worker process died (killed by the system, e.g. out of memory, "
+            "or by an operator)"
+        ) from None
+    except BaseException:
+        _stop(pool)  # Ctrl-C: the workers ignore SIGINT, so end them instead of waiting
+        raise
+    pool.shutdown(wait=True)
+    return iter(out)
+
+
+def _stop(pool: cf.ProcessPoolExecutor) -> None:
+    """End a pool's workers now (their tasks are abandoned) and release it."""
+    # the executor has no public way to end running workers; _processes is {pid: Process}
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        try:
+            proc.terminate()
+        except (OSError, ValueError):
+            pass  # already gone
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _warm_kernels(outside: str) -> None:

@@ -19,11 +19,12 @@ def test_scanner_experiment_uses_the_documented_scanner_conditions():
     s = cfg.study
     assert s.kind == "scanner" and s.budget == 0.1 and s.planners == ["wavelet", "random"]
     assert s.camera_blur_px == 1.0
-    # what the scanner study receives (pipeline.translate): radians, library option names
+    # what the scanner study receives (config.translate): radians, library option objects
     from simlunar.config import translate
 
-    opts = translate.scanner_options(s)
-    assert opts.gray_opts["subpixel"] is True
+    opts = translate.scanner_options(s, cfg.render)
+    assert opts.gray.subpixel is True
+    assert opts.capture.camera_blur == 1.0 and opts.capture.spp == cfg.render.spp
     assert opts.planner_opts["wavelet"]["feature_opts"]["levels"] == 1
     assert translate.rig_kwargs(s)["cam_fov_x"] == pytest.approx(1.0472, abs=1e-4)
 

@@ -269,12 +269,12 @@ def test_translation_converts_units_and_routes_feature_options():
     assert rig["elevation"] == pytest.approx(1.0)
     assert rig["baseline"] == pytest.approx(0.3)
     assert "distance" not in rig and "fov_x" not in rig  # unset: the preset / fit decides
-    opts = translate.scanner_options(cfg.study).kwargs()
-    assert opts["dot_opts"]["radius"] == 1.5
-    assert opts["planner_opts"] == {
+    opts = translate.scanner_options(cfg.study, cfg.render)
+    assert opts.dots.radius == 1.5
+    assert opts.planner_opts == {
         "wavelet": translate.planner_kwargs("wavelet", cfg.study.options.planner_opts["wavelet"])
     }
-    assert opts["planner_opts"]["wavelet"]["feature_opts"]["levels"] == 1
+    assert opts.planner_opts["wavelet"]["feature_opts"]["levels"] == 1
     combo = studies.PlannerOptsCfg(
         coefficients={"wavelet": 1.0, "entropy": 0.5}, feature_opts={"levels": 2, "size": 5}
     )
@@ -484,7 +484,7 @@ def test_the_preflight_rejects_what_the_unit_would_reject(tmp_path, albedo):
     """One albedo reader: a file the unit refuses is refused before anything is written."""
     from simlunar.config.translate import build_terrain
     from simlunar.errors import ConfigError
-    from simlunar.pipeline.preflight import terrain_facts
+    from simlunar.pipeline.inputs import terrain_facts
 
     _dem_files(tmp_path)
     np.save(tmp_path / "alb.npy", albedo)

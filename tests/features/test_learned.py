@@ -11,14 +11,9 @@ from scipy.stats import rankdata
 
 from simlunar.features import feature_map
 from simlunar.features._stack import FEATURE_NAMES, image_features
-from simlunar.features.learned import (
-    LearnedMap,
-    LearnedOptions,
-    error_target,
-    pitch_of,
-    train_learned_map,
-)
+from simlunar.features.learned import LearnedMap, LearnedOptions, pitch_of
 from simlunar.planner import plan
+from simlunar.planner.learning import error_target, train_learned_map
 
 DENSITY = 1 / 32
 #: held-out rank correlation the learned map must reach on every test terrain; measured 0.63-0.81

@@ -146,7 +146,7 @@ def test_shot_noise_above_the_threshold_has_poisson_mean_variance_and_skew(mean)
 
 
 def test_sampler_matches_numpys_poisson_in_distribution():
-    from simlunar.scanner._reference import apply_sensor_reference
+    from reference_scanner import apply_sensor_reference
 
     m = SensorModel(exposure=30.0, full_well_e=2000.0, read_noise_e=2.0, bits=12)
     rad = np.repeat(np.array([0.0, 0.05, 0.6, 1.9, 20.0, 80.0]), 40_000).reshape(6, -1)

@@ -22,6 +22,10 @@ if os.environ.get("SIMLUNAR_TEST_REAL_UNITS"):  # the real units, behind the tes
     from simlunar.pipeline.unit import compute_unit
 
     runner.run_experiment.__kwdefaults__["compute"] = gated(compute_unit)
+elif os.environ.get("SIMLUNAR_TEST_POOL_UNITS"):  # the real sampling study, no render
+    from fake_unit import pool_unit
+
+    runner.run_experiment.__kwdefaults__["compute"] = pool_unit
 else:
     runner.run_experiment.__kwdefaults__["compute"] = fake_unit
 

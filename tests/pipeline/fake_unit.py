@@ -106,3 +106,40 @@ def fake_unit_with_progress(payload: dict, *, progress=None) -> dict:
             progress("study", done + 1, 3)
             PROGRESS_CALLS.append((payload["config"]["render"]["light"]["elevation_deg"], done + 1))
     return fake_unit(payload)
+
+
+def pool_unit(payload: dict, *, study_workers: int = 1) -> dict:
+    """``fake_unit``'s rows from the real sampling study on a synthetic scene (no render), on
+    ``study_workers`` forked processes as a real unit's study: the pool's faults are real."""
+    from simlunar.study.sampling import SamplingStudyOptions, run_sampling_study
+
+    cfg = ExperimentCfg.model_validate(payload["config"])
+    enter_unit(payload)
+    s = cfg.study
+    seeds = stage_seeds(cfg.seed)
+    rng = np.random.default_rng(seeds["terrain"])
+    shift = getattr(cfg.render.light, "elevation_deg", 45.0) / 90.0
+    depth = np.cumsum(np.cumsum(rng.normal(size=(96, 96)), 0), 1) * 0.01
+    image = np.abs(np.gradient(depth)[0]) * (1 + shift)
+    opts = SamplingStudyOptions(
+        strategies=list(s.strategies),
+        densities=list(s.densities),
+        trials=s.trials,
+        metrics=list(s.metrics),
+    )
+    res = run_sampling_study(depth, image, opts, rng=seeds["study"], workers=study_workers)
+    img = image.astype(np.float32)
+    return {
+        "rows": res.rows,
+        "scores": {m: {k: float(v) for k, v in d.items()} for m, d in res.scores.items()},
+        "timings": {"study_s": 0.0},
+        "arrays": {
+            "image": img,
+            "depth": depth,
+            "wavelet_energy": img**2,
+            "plan_rows": np.arange(8, dtype=np.int32),
+            "plan_cols": np.arange(8, dtype=np.int32),
+            "reconstruction": depth * 1.01,
+        },
+        "meta": {"variant": "fake"},
+    }

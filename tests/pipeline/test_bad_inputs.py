@@ -23,7 +23,7 @@ from typer.testing import CliRunner
 
 from simlunar.cli import app
 from simlunar.config.loading import set_path
-from simlunar.pipeline.preflight import MAX_NAN_FRACTION
+from simlunar.pipeline.inputs import MAX_NAN_FRACTION
 
 GOOD = {
     "name": "bad_input_test",
@@ -47,6 +47,11 @@ PERSPECTIVE = {
     "look_at_m": [20.0, -12.5, 0.0],
 }
 SCANNER = {"kind": "scanner", "modes": ["gray_code"], "planners": ["random"], "budget": 0.1}
+SCAN_DOTS = {**SCANNER, "modes": ["ambiguity_enhancement"]}
+#: nine levels of ten aliases each: 10^9 values from a few lines
+ALIAS_BOMB = "name: x\nl0: &l0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n" + "".join(
+    f"l{i}: &l{i} [{', '.join([f'*l{i - 1}'] * 10)}]\n" for i in range(1, 9)
+)
 
 
 def with_(path: str, value, base: dict | None = None) -> dict:
@@ -99,6 +104,36 @@ def npz(**arrays):
     return lambda p: np.savez(p, **arrays)
 
 
+def npy_header(shape):
+    """A .npy file whose header promises a float64 array of ``shape`` and holds 100 bytes."""
+
+    def write(p: Path) -> None:
+        import io
+
+        from numpy.lib import format as npf
+
+        head = io.BytesIO()
+        npf.write_array_header_1_0(
+            head, {"descr": "<f8", "fortran_order": False, "shape": tuple(shape)}
+        )
+        p.write_bytes(head.getvalue() + bytes(100))
+
+    return write
+
+
+def npz_header(shape):
+    def write(p: Path) -> None:
+        import zipfile
+
+        tmp = p.with_suffix(".part.npy")
+        npy_header(shape)(tmp)
+        with zipfile.ZipFile(p, "w") as z:
+            z.write(tmp, "heights.npy")
+        tmp.unlink()
+
+    return write
+
+
 def a_file(p: Path) -> None:
     p.write_text("not a folder\n")
 
@@ -117,6 +152,7 @@ class Case:
     setup: Callable[[Path], None] | None = None
     out: str = "results"
     marks: list = field(default_factory=list)
+    env: dict = field(default_factory=dict)
 
 
 CASES = [
@@ -237,10 +273,53 @@ CASES = [
     Case("sun guide light without a sun", {**with_("study", {**SCANNER, "guide_light": "sun"}), "render": {**GOOD.get("render", {}), "light": {"kind": "camera"}}}, "study.guide_light: sun needs render.light.kind sun"),
     Case("low_contrast without the gray code", with_("study", {**SCANNER, "modes": ["data_reduction"], "planners": ["low_contrast"]}), "planners: low_contrast ranks the pixels of the gray-code scan"),
     Case("options for low_contrast", with_("study", {**SCANNER, "planners": ["low_contrast"], "options": {"planner_opts": {"low_contrast": {"feature_opts": {"levels": 1}}}}}), "options.planner_opts.low_contrast: low_contrast takes no options"),
-    Case("unknown scanner planner", with_("study", {**SCANNER, "planners": ["low_contrst"]}), "study.planners[0]: unknown planner 'low_contrst' (valid: combination, entropy, gradient, grid, low_contrast, random, saliency, wavelet)"),
+    Case("unknown scanner planner", with_("study", {**SCANNER, "planners": ["low_contrst"]}), "study.planners[0]: unknown planner 'low_contrst' (valid: combination, entropy, gradient, grid, learned, lloyd_uniform, low_contrast, random, saliency, wavelet)"),
     Case("unknown scan light", with_("study", {**SCANNER, "scan_light": "moon"}), "scan_light"),
     Case("unknown rig option", with_("study", {**SCANNER, "options": {"rig": {"tilt_deg": 3}}}), "tilt"),
     Case("unknown strategy option", with_("study.strategy_options", {"wavelet": {"blue_nose": True}}), "blue_nose"),
+    # issue 22: scanner options checked with the library's rules before anything runs
+    Case("scanner metric unknown", with_("study", {**SCANNER, "metrics": ["msee"]}), "study.metrics[0]: unknown metric 'msee'"),
+    Case("scanner planners twice", with_("study", {**SCAN_DOTS, "planners": ["random", "random"]}), "study.planners: names must be unique"),
+    Case("scanner metrics twice", with_("study", {**SCANNER, "metrics": ["mse", "mse"]}), "study.metrics: names must be unique"),
+    Case("scanner modes twice", with_("study", {**SCANNER, "modes": ["gray_code", "gray_code"]}), "study.modes: names must be unique"),
+    Case("dot budget below 3 on the projector", with_("study", {**SCAN_DOTS, "budget": 0.001, "projector_px": [32, 24], "camera_px": [256, 192]}), "study.budget: 0.001 of the 32 x 24 projector gives 1 dots for planner random"),
+    Case("projector spacing 0", with_("study", {**SCAN_DOTS, "options": {"dot_opts": {"min_proj_spacing_px": 0}}}), "min_proj_spacing_px: scheduling spacings must be > 0 px"),
+    Case("camera spacing 0", with_("study", {**SCAN_DOTS, "options": {"dot_opts": {"min_cam_spacing_px": 0}}}), "min_cam_spacing_px: scheduling spacings must be > 0 px"),
+    Case("scanner entropy window even", with_("study", {**SCAN_DOTS, "planners": ["entropy"], "options": {"planner_opts": {"entropy": {"feature_opts": {"size": 8}}}}}), "entropy window size must be odd, 1..63, got 8"),
+    Case("sampling entropy window huge", with_("study.strategy_options", {"entropy": {"feature_opts": {"size": 100001}}}), "entropy window size must be odd, 1..63, got 100001"),
+    Case("sampling entropy window even", with_("study.strategy_options", {"entropy": {"feature_opts": {"size": 10}}}), "feature_opts.size"),
+    Case("scanner combination without coefficients", with_("study", {**SCAN_DOTS, "planners": ["combination"]}), "planners (combination).coefficients: strategy 'combination' needs at least one weight"),
+    Case("sampling combination without coefficients", with_("study.strategies", ["random", "combination"]), "strategies (combination).coefficients"),
+    Case("sparse_spp without a maximum", with_("study", {**SCAN_DOTS, "options": {"capture_opts": {"sparse_spp": 10**9}}}), "sparse_spp: Input should be less than or equal to 4096"),
+    Case("dot px with a length unit", with_("study", {**SCAN_DOTS, "options": {"dot_opts": {"tol_px": "1 m"}}}), "bad unit 'm' for a _px key"),
+    Case("projector px not whole", with_("study", {**SCANNER, "projector_px": ["64.5 px", 48]}), "whole number of pixels"),
+    Case("rig zero baseline", with_("study", {**SCANNER, "options": {"rig": {"baseline_m": 1e-12}}}), "study.options.rig: baseline is zero"),
+    Case("rig camera not seeing the pattern", with_("study", {**SCANNER, "options": {"rig": {"verge": False, "baseline_m": 5000}}}), "study.options.rig: the camera at"),
+    Case("scanner sweep point with a bad rig", {**with_("study", SCANNER), "sweep": {"study.options.rig.baseline_m": [1.0, 1e-12]}}, "sweep point 1 (baseline_m=1e-12): study.options.rig: baseline is zero"),
+    # sizes, with the limits lowered so that a regression allocates little (the enormous
+    # sizes themselves: test_enormous_sizes_are_refused_under_a_memory_limit)
+    Case("terrain cells above the limit", GOOD, "terrain.preset: 125 x 200 cells = 2.5e+04, more than the limit of 1e+03 (set SIMLUNAR_MAX_CELLS", env={"SIMLUNAR_MAX_CELLS": "1000"}),
+    Case("grid override above the limit", with_("terrain", {"preset": "aerial_1", "overrides": {"grid": {"rows": 400, "cols": 400}}}), "terrain.overrides.grid: 400 x 400 cells", env={"SIMLUNAR_MAX_CELLS": "100000"}),
+    Case("DEM cells above the limit", dem_cfg(), "terrain.file: ", setup=files(dem__npy=good_dem), env={"SIMLUNAR_MAX_CELLS": "100"}),
+    Case("perspective image above the limit", with_("render.camera", {**PERSPECTIVE, "width": 320, "height": 240}), "render.camera: a 240 x 320 image = 7.68e+04, more than the limit", env={"SIMLUNAR_MAX_CELLS": "30000"}),
+    Case("projector above the limit", with_("study", {**SCANNER, "projector_px": [400, 300]}), "study.projector_px: 400 x 300 pixels", env={"SIMLUNAR_MAX_CELLS": "100000"}),
+    Case("camera above the limit", with_("study", {**SCANNER, "projector_px": [40, 30], "camera_px": [400, 300]}), "study.camera_px: 400 x 300 pixels", env={"SIMLUNAR_MAX_CELLS": "100000"}),
+    Case("gray-code frames x pixels above the limit", with_("study", SCANNER), "gray-code frames x", env={"SIMLUNAR_MAX_FRAME_PIXELS": "100000"}),
+    Case("dot batch x pixels above the limit", with_("study", {**SCAN_DOTS, "options": {"dot_opts": {"batch": 100000}}}), "study.options.dot_opts.batch: 100000 frames x"),
+    Case("limit setting not a number", GOOD, "SIMLUNAR_MAX_CELLS=lots: expected a positive count", env={"SIMLUNAR_MAX_CELLS": "lots"}),
+    Case("DEM header promises more than the file", dem_cfg(), "its header promises a 300 x 400 array (960000 bytes) but the file holds", setup=files(dem__npy=npy_header((300, 400)))),
+    Case("albedo header promises more than the file", dem_cfg(albedo_file="alb.npy"), "terrain.albedo_file: ", setup=files(dem__npy=good_dem, alb__npy=npy_header((24, 32)))),
+    Case("DEM npz header promises more than the file", {**GOOD, "terrain": {"file": "dem.npz", "spacing_m": 0.2}}, "(heights): its header promises", setup=files(dem__npz=npz_header((300, 400)))),
+    # YAML
+    Case("alias bomb", ALIAS_BOMB, "aliases expand to more than 1,000,000 values"),
+    Case("recursive alias", "name: x\nseed: &a [1, *a]\n", "recursive alias"),
+    Case("merge key with a duplicate explicit key", "base: &b {preset: aerial_1}\nname: x\nterrain: {<<: *b, scale: 0.1, scale: 0.2}\n", "duplicate key 'scale'"),
+    Case("merge key of a scalar", "name: x\nterrain: {<<: 3}\n", "exp.yaml"),
+    # the renderer asked for by the environment
+    Case("unknown SIMLUNAR_VARIANT", GOOD, "SIMLUNAR_VARIANT=rgb_fast: unknown variant 'rgb_fast'", env={"SIMLUNAR_VARIANT": "rgb_fast"}),
+    Case("CUDA variant without a GPU", GOOD, "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
+    # a finished folder whose scans is a file: refused before anything is deleted
+    Case("--save-scans with scans a file", with_("study", SCANNER), "scans is not a folder", args=("--save-scans",), setup=lambda d: ((d / "results").mkdir(), (d / "results" / "config.yaml").write_text("x: 1\n"), (d / "results" / "results.csv").write_text("unit\n"), (d / "results" / "scans").write_text("a file"))),
 ]  # fmt: skip
 
 
@@ -264,6 +343,8 @@ def _run_case(case: Case, tmp_path: Path, monkeypatch) -> None:
     if case.setup is not None:
         case.setup(d)
     out = d / case.out
+    for k, v in case.env.items():
+        monkeypatch.setenv(k, v)
     if case.name == "out read-only":
         _make_read_only(d / "results", monkeypatch)
     existed = out.exists()
@@ -300,7 +381,9 @@ def _make_read_only(folder: Path, monkeypatch) -> None:
     monkeypatch.setattr(os, "statvfs", statvfs)
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+@pytest.mark.parametrize(
+    "case", [pytest.param(c, marks=c.marks) for c in CASES], ids=[c.name for c in CASES]
+)
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(case, tmp_path, monkeypatch):
     _run_case(case, tmp_path, monkeypatch)
 
@@ -331,3 +414,189 @@ def test_the_good_config_passes_the_checks(tmp_path):
     nan_dem(MAX_NAN_FRACTION * 0.9)(tmp_path / "dem.npy")
     facts = check_units(expand(validate_data(dem_cfg(), base_dir=tmp_path)))
     assert 0 < facts.holes()[0]["nan_fraction"] <= MAX_NAN_FRACTION
+
+
+# --------------------------------------------------------------------------- every subcommand
+# The entry point itself (``simlunar.cli.main``, as the ``simlunar`` script runs it, and
+# ``python -m simlunar.pipeline.fit``), so usage errors are checked as the user sees them.
+SCENE = {
+    "name": "bad_scene",
+    "terrain": {"preset": "aerial_1", "scale": 0.125},
+    "render": {"spp": 2},
+}
+
+
+def yaml_file(name: str, data):
+    def write(d: Path) -> None:
+        text = data if isinstance(data, str) else yaml.safe_dump(data, sort_keys=False)
+        (d / name).write_text(text)
+
+    return write
+
+
+def side_json(spacing):
+    def write(d: Path) -> None:
+        good_dem(d / "dem.npy")
+        (d / "dem.npy.json").write_text(f'{{"spacing": {spacing}}}')
+
+    return write
+
+
+def dem_file(writer, name="dem.npy"):
+    return lambda d: writer(d / name)
+
+
+def both(*setups):
+    def setup(d: Path) -> None:
+        for s in setups:
+            s(d)
+
+    return setup
+
+
+@dataclass
+class Cmd:
+    name: str
+    argv: tuple[str, ...]
+    expect: str
+    code: int = 2
+    setup: Callable[[Path], None] | None = None
+    env: dict = field(default_factory=dict)
+    marks: list = field(default_factory=list)
+
+
+CMDS = [
+    # usage errors: one line, not click's box
+    Cmd("--workers abc", ("run", "exp.yaml", "--workers", "abc"), "simlunar run: Invalid value for '--workers'", setup=yaml_file("exp.yaml", GOOD)),
+    Cmd("run without its argument", ("run",), "simlunar run: Missing argument"),
+    Cmd("misspelt command", ("runn", "exp.yaml"), "No such command 'runn'"),
+    Cmd("unknown option", ("run", "exp.yaml", "--wrokers", "2"), "No such option"),
+    Cmd("missing experiment file", ("run", "nope.yaml"), "experiment file not found: nope.yaml"),
+    # terrain
+    Cmd("terrain --seed -1", ("terrain", "aerial_1", "--out", "t", "--seed", "-1"), "--seed must be >= 0, got -1"),
+    Cmd("terrain --scale 2", ("terrain", "aerial_1", "--out", "t", "--scale", "2"), "--scale must lie in (0, 1]"),
+    Cmd("terrain --scale abc", ("terrain", "aerial_1", "--out", "t", "--scale", "abc"), "Invalid value for '--scale'"),
+    Cmd("terrain --mesh stl", ("terrain", "aerial_1", "--out", "t", "--mesh", "stl"), "--mesh must be ply, obj or none"),
+    Cmd("terrain --format png", ("terrain", "aerial_1", "--out", "t", "--format", "png"), "--format must be exr, npz, npy or tif"),
+    Cmd("terrain without --out", ("terrain", "aerial_1"), "--out is required"),
+    Cmd("terrain unknown preset", ("terrain", "aerial_9", "--out", "t"), "aerial_9"),
+    Cmd("terrain --out a file", ("terrain", "aerial_1", "--out", "t", "--scale", "0.125"), "--out t: is a file, not a folder", setup=lambda d: (d / "t").write_text("x")),
+    Cmd("terrain --stats absurd sidecar spacing", ("terrain", "dem.npy", "--stats"), "--stats: the terrain reaches", setup=side_json("1e308")),
+    Cmd("terrain --stats zero sidecar spacing", ("terrain", "dem.npy", "--stats"), "spacing", setup=side_json("0")),
+    Cmd("terrain --stats header promises more", ("terrain", "dem.npy", "--stats"), "its header promises a 300 x 400 array", setup=dem_file(npy_header((300, 400)))),
+    Cmd("terrain --stats DEM above the limit", ("terrain", "dem.npy", "--stats"), "more than the limit of 100", setup=side_json("0.2"), env={"SIMLUNAR_MAX_CELLS": "100"}),
+    Cmd("terrain --stats all-NaN DEM", ("terrain", "dem.npy", "--stats"), "every height is NaN", setup=both(dem_file(lambda p: _npy(p, np.full((8, 8), np.nan))), lambda d: (d / "dem.npy.json").write_text('{"spacing": 1}'))),
+    Cmd("terrain --stats bad features.json", ("terrain", "dem.npy", "--stats"), "features.json: not valid JSON", setup=both(side_json("0.2"), lambda d: (d / "features.json").write_text("{"))),
+    # schema
+    Cmd("schema --out a folder", ("schema", "--out", "s"), "--out s: is a folder, not a file", setup=lambda d: (d / "s").mkdir()),
+    Cmd("schema --out below a file", ("schema", "--out", "f/s.json"), "--out f/s.json: f: is a file, not a folder", setup=lambda d: (d / "f").write_text("x")),
+    Cmd("schema --kind bogus", ("schema", "--kind", "bogus"), "--kind bogus: unknown document kind"),
+    # figures
+    Cmd("figures of a missing folder", ("figures", "nope"), "nope: no such folder"),
+    Cmd("figures of a file", ("figures", "f"), "is a file, not a folder", setup=lambda d: (d / "f").write_text("x")),
+    # render
+    Cmd("render missing scene", ("render", "nope.yaml", "--out", "r"), "nope.yaml"),
+    Cmd("render scene above the size limit", ("render", "scene.yaml", "--out", "r"), "terrain.overrides.grid: 400 x 400 cells", setup=yaml_file("scene.yaml", {**SCENE, "terrain": {"preset": "aerial_1", "overrides": {"grid": {"rows": 400, "cols": 400}}}}), env={"SIMLUNAR_MAX_CELLS": "100000"}),
+    Cmd("render --out a file", ("render", "scene.yaml", "--out", "r"), "--out r: is a file", setup=both(yaml_file("scene.yaml", SCENE), lambda d: (d / "r").write_text("x"))),
+    Cmd("render unknown SIMLUNAR_VARIANT", ("render", "scene.yaml", "--out", "r"), "SIMLUNAR_VARIANT=rgb_fast: unknown variant", setup=yaml_file("scene.yaml", SCENE), env={"SIMLUNAR_VARIANT": "rgb_fast"}),
+    Cmd("render merge-key duplicate", ("render", "scene.yaml", "--out", "r"), "duplicate key 'scale'", setup=yaml_file("scene.yaml", "b: &b {preset: aerial_1}\nname: s\nterrain: {<<: *b, scale: 0.1, scale: 0.2}\n")),
+    # doctor
+    Cmd("doctor unknown SIMLUNAR_VARIANT", ("doctor", "--short"), "SIMLUNAR_VARIANT=rgb_fast: unknown variant", env={"SIMLUNAR_VARIANT": "rgb_fast"}),
+    Cmd("doctor CUDA without a GPU", ("doctor",), "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
+    # fit (python -m simlunar.pipeline.fit)
+    Cmd("fit --maxiter -5", ("fit", "res", "--train-seeds", "1", "--test-seeds", "2", "--maxiter", "-5"), "--maxiter must be an integer >= 1, got -5"),
+    Cmd("fit --trials 0", ("fit", "res", "--train-seeds", "1", "--test-seeds", "2", "--trials", "0"), "--trials must be an integer >= 1, got 0"),
+    Cmd("fit --restarts -1", ("fit", "res", "--train-seeds", "1", "--test-seeds", "2", "--restarts", "-1"), "--restarts must be an integer >= 0"),
+    Cmd("fit --maxiter abc", ("fit", "res", "--train-seeds", "1", "--test-seeds", "2", "--maxiter", "abc"), "argument --maxiter: invalid int value: 'abc'"),
+    Cmd("fit without seeds", ("fit", "res"), "the following arguments are required"),
+    Cmd("fit of a missing folder", ("fit", "nope", "--train-seeds", "1", "--test-seeds", "2"), "nope"),
+]  # fmt: skip
+
+
+def _main(argv, monkeypatch) -> int:
+    """Exit code of ``simlunar <argv>`` (or the fit command) run in this process."""
+    import signal
+    import sys
+
+    if argv[0] == "fit":
+        from simlunar.pipeline.fit import main as fit_main
+
+        try:
+            return fit_main(list(argv[1:]))
+        except SystemExit as exc:  # argparse's usage errors
+            return int(exc.code)
+    from simlunar.cli import main
+
+    monkeypatch.setattr(sys, "argv", ["simlunar", *argv])
+    handler = signal.getsignal(signal.SIGINT)
+    try:
+        main()
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    finally:
+        signal.signal(signal.SIGINT, handler)  # main() routes Ctrl-C through its flag
+    return 0
+
+
+@pytest.mark.parametrize(
+    "case", [pytest.param(c, marks=c.marks) for c in CMDS], ids=[c.name for c in CMDS]
+)
+def test_every_subcommand_keeps_the_promise(case, tmp_path, monkeypatch, capsys):
+    d = tmp_path / "case"
+    d.mkdir()
+    if case.setup is not None:
+        case.setup(d)
+    for k, v in case.env.items():
+        monkeypatch.setenv(k, v)
+    before = tree_hash(d)
+    monkeypatch.chdir(d)
+    code = _main(case.argv, monkeypatch)
+    out, err = capsys.readouterr()
+    assert code == case.code, (code, out, err)
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("error: "), lines[0]
+    assert case.expect in lines[0], lines[0]
+    assert "Traceback" not in out + err and out == ""
+    assert tree_hash(d) == before
+
+
+def test_there_are_at_least_40_new_cases_across_subcommands():
+    assert len(CMDS) + len(CASES) >= 89 + 40
+    assert len({c.name for c in CMDS}) == len(CMDS)
+
+
+# --------------------------------------------------------------------------- enormous sizes
+ENORMOUS = {
+    "grid override": (with_("terrain", {"preset": "aerial_1", "overrides": {"grid": {"rows": 50000, "cols": 50000}}}), None, "terrain.overrides.grid: 50000 x 50000 cells"),
+    "projector": (with_("study", {**SCANNER, "projector_px": [100000, 100000]}), None, "study.projector_px: 100000 x 100000 pixels"),
+    "camera": (with_("study", {**SCANNER, "camera_px": [100000, 100000]}), None, "study.camera_px: 100000 x 100000 pixels"),
+    ".npy header": (dem_cfg(), npy_header((200000, 200000)), "a 200000 x 200000 array = 4e+10, more than the limit"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", list(ENORMOUS))
+def test_enormous_sizes_are_refused_under_a_memory_limit(name, tmp_path):
+    """Refused before allocating: the CLI runs with a 3 GB address space, so a regression
+    fails with a MemoryError here instead of taking the machine's memory."""
+    import resource
+    import subprocess
+    import sys
+
+    data, writer, expect = ENORMOUS[name]
+    exp = tmp_path / "exp.yaml"
+    exp.write_text(yaml.safe_dump(data, sort_keys=False))
+    if writer is not None:
+        writer(tmp_path / "dem.npy")
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+
+    r = subprocess.run(
+        [sys.executable, "-m", "simlunar.cli", "run", str(exp), "--out", str(tmp_path / "o"), "--no-progress"],
+        capture_output=True, text=True, timeout=300, preexec_fn=limit, cwd=tmp_path,
+    )  # fmt: skip
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1 and expect in lines[0], r.stderr
+    assert not (tmp_path / "o").exists()

@@ -165,7 +165,7 @@ def _one_error_line(r, expect: str) -> None:
         (("render", "{d}/nope.yaml", "--out", "{d}/r"), "scene file not found"),
         (("render", "{d}/scene.yaml", "--out", "{d}/file"), "is a file, not a folder"),
         (("render", "{d}/bad_dem_scene.yaml", "--out", "{d}/r"), "every height is NaN"),
-        (("render", "{d}/away_scene.yaml", "--out", "{d}/r"), "camera: the camera at"),
+        (("render", "{d}/away_scene.yaml", "--out", "{d}/r"), "render.camera: the camera at"),
         (("figures", "{d}/file"), "is a file, not a folder"),
         (("figures", "{d}/nothing"), "no such folder"),
     ],
@@ -179,8 +179,8 @@ def test_terrain_render_figures_file_errors_are_one_line(args, expect, tmp_path)
     np.save(tmp_path / "nan.npy", np.full((8, 8), np.nan))
     (tmp_path / "bad_dem_scene.yaml").write_text("terrain: {file: nan.npy, spacing_m: 0.2}\n")
     (tmp_path / "away_scene.yaml").write_text(
-        "terrain: {preset: aerial_1, scale: 0.125}\ncamera: {kind: perspective, width: 32, "
-        "height: 24, fov_deg: 30, position_m: [0, 0, 60], look_at_m: [0, 0, 90]}\n"
+        "terrain: {preset: aerial_1, scale: 0.125}\nrender: {camera: {kind: perspective, "
+        "width: 32, height: 24, fov_deg: 30, position_m: [0, 0, 60], look_at_m: [0, 0, 90]}}\n"
     )
     before = sorted((p.name, p.stat().st_size) for p in tmp_path.rglob("*"))
     r = invoke(*[a.format(d=tmp_path) for a in args])

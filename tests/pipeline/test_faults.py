@@ -537,3 +537,104 @@ def test_ctrl_c_while_the_summary_is_written_says_what_is_kept(tmp_path, monkeyp
     assert not (out / ".lock").exists() and not (out / "provenance.json").exists()
     monkeypatch.undo()
     assert run_fake(exp, out).units_cached == 4
+
+
+# --------------------------------------------------------------------------- lost pool workers
+def _children(pid: int) -> list[int]:
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.append(int(stat.parent.name))
+    return out
+
+
+POOL_EXP = {
+    **EXP,
+    "study": {
+        "strategies": ["random", "grid", "gradient"],
+        "densities": ["1/4", "1/16", "1/64"],
+        "trials": 12,
+        "metrics": ["mse"],
+    },
+    "sweep": {"render.light.elevation_deg": [10, 30]},
+}
+
+
+def test_a_killed_study_worker_is_exit_3_in_seconds_keeps_units_and_a_rerun_completes(tmp_path):
+    """``--workers 2``: a forked sampling-study process killed (the OOM killer, an operator)
+    ends the run with one line and exit 3 instead of a hang; the finished unit is kept and
+    the rerun gives the folder of an uninterrupted run."""
+    from fake_unit import pool_unit
+
+    exp = write_exp(tmp_path / "exp.yaml", POOL_EXP)
+    ref = tmp_path / "ref"
+    run_experiment(load_experiment(exp), ref, compute=pool_unit, progress=False, figures=False)
+    out, gate, calls = tmp_path / "out", tmp_path / "gate", tmp_path / "calls"
+    env = {
+        "SIMLUNAR_TEST_POOL_UNITS": "1",
+        "SIMLUNAR_TEST_CALLS": str(calls),
+        "SIMLUNAR_TEST_GATE": str(gate),
+        "SIMLUNAR_TEST_GATE_AFTER": "1",
+    }
+    p = cli("run", str(exp), "--out", str(out), "--no-progress", "--workers", "2", env=env)
+    try:
+        # the first unit finishes while the second waits at the gate; then the second's pool
+        # starts and one of its workers is killed
+        wait_for(lambda: (out / "units").is_dir() and len(finished_units(out)) == 1, 120)
+        gate.touch()
+        victims: list[int] = []
+        wait_for(lambda: victims.extend(_children(p.pid)) or victims, 60)
+        os.kill(victims[0], signal.SIGKILL)
+        t0 = time.monotonic()
+        _, stderr = p.communicate(timeout=60)
+        took = time.monotonic() - t0
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+    assert p.returncode == 3, stderr
+    assert took < 20, took
+    lines = stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: a study worker process died")
+    assert "1 of 2 units finished and kept" in lines[0]
+    assert len(finished_units(out)) == 1 and not (out / ".lock").exists()
+    s = run_experiment(load_experiment(exp), out, compute=pool_unit, progress=False, figures=False)
+    assert (s.units_cached, s.units_computed) == (1, 1)
+    assert tree(out) == tree(ref)
+
+
+# --------------------------------------------------------------------------- Ctrl-C at start-up
+def _maps_have(pid: int, name: str) -> bool:
+    try:
+        return name in Path(f"/proc/{pid}/maps").read_text()
+    except OSError:
+        return False
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("after_s", [0.0, 0.05, 0.2, 0.4])
+def test_ctrl_c_while_the_renderer_starts_is_always_130(after_s, tmp_path):
+    """SIGINT at several points of Mitsuba's and Dr.Jit's import and initialisation (timed
+    from the moment Dr.Jit's library is mapped): exit 130 and the one line, never an internal
+    error, an abort or a finished render."""
+    ROOT = HERE.parents[1]
+    out = tmp_path / "r"
+    p = subprocess.Popen(
+        [sys.executable, "-m", "simlunar.cli", "render", str(ROOT / "scenes" / "quickstart_scene.yaml"), "--out", str(out)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )  # fmt: skip
+    try:
+        wait_for(lambda: _maps_have(p.pid, "drjit") or p.poll() is not None, timeout=120)
+        time.sleep(after_s)
+        os.killpg(p.pid, signal.SIGINT)
+        _, stderr = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+    assert p.returncode == 130, stderr
+    assert stderr.splitlines() == ["interrupted"], stderr

@@ -9,14 +9,9 @@ import numpy as np
 import pytest
 
 from simlunar.errors import ConfigError
-from simlunar.pipeline.preflight import (
-    TerrainFacts,
-    _ray_box,
-    check_study_sizes,
-    file_sha256,
-    input_files,
-    input_hashes,
-)
+from simlunar.pipeline.inputs import TerrainFacts, input_files, input_hashes
+from simlunar.pipeline.preflight import _ray_box, check_study_sizes
+from simlunar.results.store import file_sha256
 
 LO, HI = np.array([0.0, -10.0, -1.0]), np.array([20.0, 0.0, 1.0])
 

@@ -19,6 +19,7 @@ from simlunar.planner import (
     place,
     plan,
     samples_per_cell,
+    strategy_options,
 )
 
 SHAPE = (60, 80)
@@ -245,3 +246,12 @@ def test_existing_plans_unchanged():
 
 
 GOLDEN = "99f8d236dc82e90ad274754314fa07319fc9cc013b2b08dd95c6082ec8e67675"
+
+
+def test_strategy_options_lists_what_plan_accepts():
+    assert "placement" in strategy_options("wavelet")
+    assert strategy_options("lloyd_uniform") == ("lloyd_iterations", "border_pitch")
+    assert "nms_pitch" in strategy_options("oracle_greedy")
+    assert strategy_options("grid") == ()
+    with pytest.raises(ValueError, match="unknown strategy"):
+        strategy_options("stipple")

@@ -232,3 +232,25 @@ def test_render_capture_lit_hook(monkeypatch):
         CaptureOptions(sparse_integrator="bdpt")
     with pytest.raises(ValueError, match="sparse_particles"):
         CaptureOptions(sparse_integrator="lit", sparse_particles=0)
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("integrator", ["path", "ptracer"])
+def test_black_patterns_are_exactly_black_without_rendering(integrator, monkeypatch):
+    from simlunar.render.capture import CaptureOptions, RenderCapture
+
+    rig = rigs.moonyard_rig(proj_size=PROJ, cam_size=CAM)
+    opts = CaptureOptions(max_depth=3, spp=4, sparse_integrator=integrator)
+    cap = RenderCapture(_terrain(), rig, opts)
+    black = np.zeros((1, *PROJ[::-1]), np.float32)
+    # the shortcut is exact: the projector is the only emitter of the scene
+    assert not cap.scene.render_patterns(black).any()
+    assert not cap.scene.render_patterns(black, integrator="ptracer").any()
+    calls = []
+    orig = cap.scene.render_patterns
+    monkeypatch.setattr(
+        cap.scene, "render_patterns", lambda p, **kw: calls.append(len(p)) or orig(p, **kw)
+    )
+    frames = cap.render(np.concatenate([black, _dots(), black]))
+    assert calls == [1] and not frames[0].any() and not frames[2].any() and frames[1].any()
+    assert cap.renders == 3  # still three captured frames

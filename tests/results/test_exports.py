@@ -305,3 +305,60 @@ def test_scan_folders_follow_their_units(tmp_path, monkeypatch):
     text, new_keys = run()
     assert "(0 cached, 2 computed)" in text and set(new_keys).isdisjoint(keys)
     assert exported() == {"unit0": new_keys[0], "unit1": new_keys[1]}
+
+
+def test_a_partly_deleted_export_is_restored_and_a_full_disk_is_exit_3(tmp_path, monkeypatch):
+    """Deleting a frame and the decoded maps of a finished export makes the next run write
+    it again, byte for byte; a disk full while OpenEXR writes (its RuntimeError wraps the
+    OS error) is one line and exit 3, with the units kept."""
+    import hashlib
+
+    import OpenEXR
+
+    out = tmp_path / "scan"
+    args = [
+        "run",
+        str(ROOT / "experiments" / "scanner_ambiguity.yaml"),
+        "--out",
+        str(out),
+        "--no-progress",
+        "--no-figures",
+        "--save-scans",
+        *("--set", "terrain.scale=0.125"),
+        *("--set", "study.projector_px=[16, 12]"),
+        *("--set", "study.camera_px=[24, 18]"),
+        *("--set", "render.spp=1"),
+        *("--set", "study.modes=[gray_code]"),
+        *("--set", "study.metrics=[mse]"),
+        *("--set", "sweep={}"),
+    ]
+    unit = out / "scans" / "unit0"
+
+    def export_tree():
+        return {
+            str(p.relative_to(unit)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(unit.rglob("*"))
+            if p.is_file()
+        }
+
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0, r.output
+    first = export_tree()
+    (unit / "decode.exr").unlink()
+    sorted((unit / "frames16").glob("*.png"))[3].unlink()
+
+    def full_disk(self, path):
+        raise RuntimeError(
+            f'Failed to write pixel data to image file "{path}". No space left on device.'
+        )
+
+    with monkeypatch.context() as m:
+        m.setattr(OpenEXR.File, "write", full_disk)
+        r = CliRunner().invoke(app, args)
+    assert r.exit_code == 3, r.output
+    assert r.stderr.splitlines() == [f"error: {unit / 'decode.exr'}: No space left on device"]
+    assert len(list((out / "units").glob("*.json"))) == 1
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0, r.output
+    assert "(0 cached, 1 computed)" in r.output
+    assert export_tree() == first

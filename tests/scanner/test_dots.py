@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simlunar.scanner import dots, rigs
+from simlunar.scanner import dots, rigs, scheduling
 from simlunar.scanner import triangulate as tri
 
 
@@ -85,7 +85,7 @@ def test_ghosts_are_rejected(rig):
 
 def test_schedule_respects_spacing_and_covers_every_dot(rig, rng):
     proj_uv = rng.uniform([0, 0], [128, 96], size=(600, 2))
-    frames = dots.schedule_dots(
+    frames = scheduling.schedule_dots(
         rig, proj_uv, depth_range=(1.4, 1.8), min_proj_spacing=6.0, min_cam_spacing=5.0
     )
     allidx = np.sort(np.concatenate(frames))
@@ -106,24 +106,24 @@ def test_schedule_respects_spacing_and_covers_every_dot(rig, rng):
             d = dots.point_segment_distance(samples[i], s[others])
             assert d.min() >= 5.0 - 1e-9
     assert len(frames) < 600 / 5  # multiplexing actually packs dots
-    exact = dots.schedule_dots(rig, proj_uv, depth_range=(1.4, 1.8), exact=True)
+    exact = scheduling.schedule_dots(rig, proj_uv, depth_range=(1.4, 1.8), exact=True)
     assert len(exact) == 600 and all(len(f) == 1 for f in exact)
 
 
 def test_the_scan_path_skips_the_lower_bound(rig, rng, monkeypatch):
     proj_uv = rng.uniform([0, 0], [128, 96], size=(300, 2))
     kw = {"depth_range": (1.4, 1.8), "min_proj_spacing": 6.0, "min_cam_spacing": 5.0}
-    full = dots.dot_schedule(rig, proj_uv, **kw)
+    full = scheduling.dot_schedule(rig, proj_uv, **kw)
     assert full.lower_bound > 1
 
     def no_search(*a, **k):
         raise AssertionError("the lower bound was searched")
 
-    monkeypatch.setattr(dots, "_largest_clique", no_search)
-    fast = dots.dot_schedule(rig, proj_uv, bound=False, **kw)
+    monkeypatch.setattr(scheduling, "_largest_clique", no_search)
+    fast = scheduling.dot_schedule(rig, proj_uv, bound=False, **kw)
     assert fast.lower_bound == 0 and fast.clique.size == 0
     np.testing.assert_array_equal(fast.colour, full.colour)  # the same frames
-    frames = dots.schedule_dots(rig, proj_uv, **kw)
+    frames = scheduling.schedule_dots(rig, proj_uv, **kw)
     assert [f.tolist() for f in frames] == [f.tolist() for f in full.frames]
 
 
@@ -208,7 +208,7 @@ def test_schedule_is_conflict_free_under_the_exact_test(name, rng):
     uv = np.unique(np.floor(rng.uniform([0, 0], [256, 192], size=(2500, 2))) + 0.5, axis=0)
     n = len(uv)
     psp, sep = 8.0, 6.0
-    sch = dots.dot_schedule(
+    sch = scheduling.dot_schedule(
         rig, uv, depth_range=depth_range, min_proj_spacing=psp, min_cam_spacing=sep
     )
     np.testing.assert_array_equal(np.sort(np.concatenate(sch.frames)), np.arange(n))
@@ -236,7 +236,7 @@ def test_dots_on_one_epipolar_line_get_the_optimal_schedule(rng):
     cols = np.sort(rng.choice(256, size=120, replace=False)) + 0.5
     uv = np.c_[cols, np.full(120, 77.5)]
     sep = 6.0
-    sch = dots.dot_schedule(
+    sch = scheduling.dot_schedule(
         rig, uv, depth_range=(1.3, 2.0), min_proj_spacing=1.0, min_cam_spacing=sep
     )
     seg = dots.epipolar_segments(rig, uv, (1.3, 2.0))
@@ -256,7 +256,7 @@ def test_schedule_around_an_epipole_inside_the_image():
     rig = _behind(rigs.moonyard_rig(proj_size=(256, 192), cam_size=(512, 384)))
     ang = np.linspace(0, 2 * np.pi, 400, endpoint=False)
     uv = np.c_[128 + 60 * np.cos(ang), 96 + 60 * np.sin(ang)]
-    sch = dots.dot_schedule(rig, uv, depth_range=(1.3, 2.0), min_proj_spacing=2.0)
+    sch = scheduling.dot_schedule(rig, uv, depth_range=(1.3, 2.0), min_proj_spacing=2.0)
     seg = dots.epipolar_segments(rig, uv, (1.3, 2.0))
     i, j = np.triu_indices(len(uv), 1)
     bad = _conflicts(seg, uv, i, j, 2.0, 6.0) & (sch.colour[i] == sch.colour[j])
@@ -283,8 +283,8 @@ def test_multiplexed_frames_decode_like_one_dot_frames(rig, rng):
             found[f[m.dot]] = m.cam_uv
         return found
 
-    multi = dots.schedule_dots(rig, proj_uv, depth_range=rng_z)
-    exact = dots.schedule_dots(rig, proj_uv, depth_range=rng_z, exact=True)
+    multi = scheduling.schedule_dots(rig, proj_uv, depth_range=rng_z)
+    exact = scheduling.schedule_dots(rig, proj_uv, depth_range=rng_z, exact=True)
     fm, fe = run(multi), run(exact)
     ok = np.isfinite(fm).all(1) & np.isfinite(fe).all(1)
     # spots within a few pixels of the image border are dropped (truncated centroids)
@@ -316,7 +316,7 @@ def test_camera_that_does_not_see_the_projection_is_rejected():
     with pytest.raises(ValueError, match="does not see the projected area"):
         dots.epipolar_segments(bad, [[16.0, 12.0]], (0.5, 1.5))
     with pytest.raises(ValueError, match="empty"):
-        dots.schedule_dots(r, np.empty((0, 2)), depth_range=(0.5, 1.5))
+        scheduling.schedule_dots(r, np.empty((0, 2)), depth_range=(0.5, 1.5))
 
 
 def test_spots_cut_by_the_image_border_are_dropped():
@@ -329,7 +329,7 @@ def test_spots_cut_by_the_image_border_are_dropped():
 @pytest.mark.parametrize("seed", range(4))
 @pytest.mark.parametrize("grow", [0, 1, 2, 3])
 def test_compiled_detection_equals_the_scipy_reference(seed, grow):
-    from simlunar.scanner._reference import detect_dots_reference
+    from reference_scanner import detect_dots_reference
 
     rng = np.random.default_rng(seed)
     shape = (70, 90)

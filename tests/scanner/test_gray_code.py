@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from simlunar.scanner import gray_code as gc
+from simlunar.scanner import subpixel
 
 
 def test_num_bits_matches_ceil_log2():
@@ -172,7 +173,7 @@ def test_refine_subpixel_recovers_linear_projector_coordinates():
         images, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.0
     )
     assert np.array_equal(dec.col[dec.valid], np.floor(u).astype(int)[dec.valid])
-    ref = gc.refine_subpixel(dec, images)
+    ref = subpixel.refine_subpixel(dec, images)
     sub = ref.subpixel
     refined = np.isfinite(sub).all(axis=-1) & dec.valid
     # every pixel bracketed by two edges in its row and column: all but the image borders
@@ -194,12 +195,12 @@ def test_refine_subpixel_stays_inside_the_decoded_pixel_and_rejects_wrong_stack(
     dec = gc.decode(
         noisy, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.0
     )
-    sub = gc.refine_subpixel(dec, noisy).subpixel
+    sub = subpixel.refine_subpixel(dec, noisy).subpixel
     ok = np.isfinite(sub[..., 0])
     assert ok.any()
     assert np.all(np.floor(sub[..., 0][ok]) == dec.col[ok])
     with pytest.raises(ValueError, match="gray-code stack"):
-        gc.refine_subpixel(dec, noisy[:-2])
+        subpixel.refine_subpixel(dec, noisy[:-2])
 
 
 def test_refine_subpixel_finds_edges_across_unreliable_edge_pixels():
@@ -214,15 +215,15 @@ def test_refine_subpixel_finds_edges_across_unreliable_edge_pixels():
         images, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.15
     )
     assert (dec.lit & ~dec.valid).sum() > 50  # lit but unreliable pixels at stripe edges
-    adjacent = gc.refine_subpixel(dec, images, max_gap=0).subpixel
-    across = gc.refine_subpixel(dec, images, max_gap=2).subpixel
+    adjacent = subpixel.refine_subpixel(dec, images, max_gap=0).subpixel
+    across = subpixel.refine_subpixel(dec, images, max_gap=2).subpixel
     n_adj = np.isfinite(adjacent).all(-1).sum()
     ok = np.isfinite(across).all(-1)
     assert ok.sum() > n_adj + 50
     # the zero crossing is found in the unreliable pixel's signal: still exact on ramps
     np.testing.assert_allclose(across[ok], np.stack([u, v], -1)[ok], atol=1e-9)
     with pytest.raises(ValueError, match="max_gap must be >= 0"):
-        gc.refine_subpixel(dec, images, max_gap=-1)
+        subpixel.refine_subpixel(dec, images, max_gap=-1)
 
 
 # --- streaming decoder and compiled refinement against the NumPy reference implementations ---
@@ -255,7 +256,7 @@ def _noisy_ramp_case(seed, slope=0.5, noise=0.03, white_threshold=0.1):
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("max_gap", [0, 1, 2, 4])
 def test_compiled_refinement_equals_the_numpy_reference(seed, max_gap):
-    from simlunar.scanner._reference import refine_along_rows_reference
+    from reference_scanner import refine_along_rows_reference
 
     dec, images = _noisy_ramp_case(seed)
     assert (dec.lit & ~dec.valid).sum() > 20 and dec.valid.sum() > 200
@@ -270,13 +271,15 @@ def test_compiled_refinement_equals_the_numpy_reference(seed, max_gap):
         dec.n_row_bits,
         max_gap,
     ).T
-    sub = gc.refine_subpixel(dec, images, max_gap=max_gap).subpixel
+    sub = subpixel.refine_subpixel(dec, images, max_gap=max_gap).subpixel
     np.testing.assert_array_equal(np.isfinite(sub[..., 0]), np.isfinite(ref_u))
     np.testing.assert_array_equal(np.isfinite(sub[..., 1]), np.isfinite(ref_v))
     np.testing.assert_allclose(sub[..., 0], ref_u, rtol=0, atol=1e-12)
     np.testing.assert_allclose(sub[..., 1], ref_v, rtol=0, atol=1e-12)
     # float32 signals (what a streamed scan keeps) move the result by float32 rounding only
-    sub32 = gc.refine_subpixel_from_diff(dec, diff.astype(np.float32), max_gap=max_gap).subpixel
+    sub32 = subpixel.refine_subpixel_from_diff(
+        dec, diff.astype(np.float32), max_gap=max_gap
+    ).subpixel
     both = np.isfinite(sub32) & np.isfinite(sub)
     assert both.sum() >= 0.99 * np.isfinite(sub).sum()
     np.testing.assert_allclose(sub32[both], sub[both], atol=1e-5)

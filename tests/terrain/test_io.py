@@ -9,6 +9,7 @@ from PIL import Image
 
 from simlunar.terrain import Terrain
 from simlunar.terrain import io as tio
+from simlunar.terrain.geotiff import LUNAR_CRS
 
 
 @pytest.fixture
@@ -227,16 +228,16 @@ def test_generated_terrain_geotiff_reads_back_in_rasterio(tmp_path):
         assert src.count == 2 and src.descriptions == ("height", "albedo")
         assert src.res == (t.spacing, t.spacing)
         assert src.transform == Affine(t.spacing, 0, t.origin[0], 0, -t.spacing, t.origin[1])
-        assert src.crs == CRS.from_string(tio.LUNAR_CRS) and src.crs.linear_units == "metre"
+        assert src.crs == CRS.from_string(LUNAR_CRS) and src.crs.linear_units == "metre"
         assert src.units[0] == "m"
         np.testing.assert_array_equal(src.read(1), t.heights.astype(np.float32))
         np.testing.assert_array_equal(src.read(2), t.albedo)
     back = tio.load_dem(p)
-    assert CRS.from_wkt(back.crs) == CRS.from_string(tio.LUNAR_CRS)
+    assert CRS.from_wkt(back.crs) == CRS.from_string(LUNAR_CRS)
     # a loaded CRS is carried to the next file (GeoTIFF and npz)
     q = tio.save_dem(tmp_path / "again.tif", back)
     with rasterio.open(q) as src:
-        assert src.crs == CRS.from_string(tio.LUNAR_CRS)
+        assert src.crs == CRS.from_string(LUNAR_CRS)
     assert tio.load_dem(tio.save_dem(tmp_path / "a.npz", back)).crs == back.crs
 
 

@@ -1,0 +1,454 @@
+"""A work unit's input files: which files it reads and their SHA-256 (the cache key), the size
+budget of everything that scales with input, and the facts of its terrain (grid, extent, heights)
+read from the files' headers and contents before anything is allocated or written."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from simlunar.errors import ConfigError
+from simlunar.results.store import file_sha256
+
+#: NaN heights (holes) a DEM may have. Holes leave the terrain mesh open; the rays that miss
+#: it take the depth of their nearest valid pixel (``pipeline.unit.fill_invalid``) and are scored as
+#: truth, so beyond a few per cent the ground truth is mostly invented and the run stops.
+MAX_NAN_FRACTION = 0.05
+
+#: Largest |coordinate| (heights, terrain extent, camera position) in metres: the renderer
+#: works in float32, so a scene larger than this (1000 km) cannot resolve terrain relief.
+MAX_ABS_COORD_M = 1e6
+
+
+__all__ = [
+    "LIMIT_SETTINGS",
+    "MAX_CELLS",
+    "MAX_FRAME_PIXELS",
+    "TerrainFacts",
+    "check_dem_file",
+    "check_size",
+    "gdal_files",
+    "grid_file_shape",
+    "input_files",
+    "input_hashes",
+    "size_limit",
+    "terrain_facts",
+]
+
+
+def input_files(config: dict[str, Any]) -> dict[str, Path]:
+    """The files a unit (resolved plain config) reads, by the key path that names them.
+
+    ``terrain.preset`` -> the preset YAML (``scenes/<name>.yaml``), ``terrain.file`` (and the
+    ``.json`` side file of a ``.npy`` DEM when present), ``terrain.albedo_file``; for a raster
+    GDAL reads, every other file it reads (:func:`gdal_files`) as ``terrain.file+<name>``.
+    """
+    t = config.get("terrain") or {}
+    out: dict[str, Path] = {}
+    preset = t.get("preset")
+    if preset:
+        from simlunar.config.terrain import PresetError, preset_path
+
+        with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
+            out["terrain.preset"] = preset_path(str(preset))
+    for key in ("file", "albedo_file"):
+        if t.get(key):
+            out[f"terrain.{key}"] = Path(t[key])
+    dem = out.get("terrain.file")
+    if dem is not None and dem.suffix.lower() == ".npy":
+        side = dem.with_name(dem.name + ".json")
+        if side.is_file():
+            out["terrain.file.json"] = side
+    for key in ("terrain.file", "terrain.albedo_file"):
+        main = out.get(key)
+        if main is not None:
+            for extra in gdal_files(main):
+                # named relative to the main file, so a moved data folder keeps its keys
+                out[f"{key}+{os.path.relpath(extra, main.parent)}"] = extra
+    return out
+
+
+def gdal_files(path: Path) -> list[Path]:
+    """The files other than ``path`` that GDAL reads for a raster (rasterio's ``src.files``):
+    the sources of a ``.vrt``, the image of a PDS ``.lbl``, ``.tfw`` / ``.aux.xml`` sidecars.
+
+    Empty for the formats simlunar reads itself (.npy, .npz, .exr) and for a file GDAL cannot
+    open (the checks report that one).
+    """
+    if path.suffix.lower() in (".npy", ".npz", ".exr") or not path.is_file():
+        return []
+    try:
+        import rasterio
+
+        with rasterio.open(path) as src:
+            files = list(src.files)
+    except Exception:  # an unreadable raster is reported by the checks
+        return []
+    me = path.resolve()
+    out = []
+    for f in files:
+        q = Path(f)
+        if q.resolve() != me and q.is_file() and q not in out:
+            out.append(q)
+    return sorted(out)
+
+
+def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
+    """``{key path: {"path": str, "sha256": hex}}`` of :func:`input_files`."""
+    out = {}
+    for key, p in input_files(config).items():
+        try:
+            digest = file_sha256(p)
+        except OSError as exc:
+            raise ConfigError(f"{key}: cannot read {p} ({exc.strerror or exc})") from None
+        out[key] = {"path": str(p), "sha256": digest}
+    return out
+
+
+# --------------------------------------------------------------------------- size budget
+#: most cells of one grid a run may allocate: terrain cells (a DEM, a preset with its grid
+#: overrides), image, projector and camera pixels. A render costs some hundred bytes per
+#: terrain cell (mesh, acceleration structure, ground truth), so 25 million cells is several
+#: GB. Raise it on a machine with the memory: ``SIMLUNAR_MAX_CELLS=1e9``.
+MAX_CELLS = 25_000_000
+
+
+#: most pixels of the frames held at once (frames per render call x (projector + camera
+#: pixels)); 5e8 float32 values are 2 GB. ``SIMLUNAR_MAX_FRAME_PIXELS`` raises it.
+MAX_FRAME_PIXELS = 500_000_000
+
+
+#: environment settings that override the limits above
+LIMIT_SETTINGS = {"SIMLUNAR_MAX_CELLS": MAX_CELLS, "SIMLUNAR_MAX_FRAME_PIXELS": MAX_FRAME_PIXELS}
+
+
+def size_limit(setting: str) -> int:
+    """The limit named by ``setting`` (an environment variable of :data:`LIMIT_SETTINGS`)."""
+    raw = os.environ.get(setting, "").strip()
+    if not raw:
+        return LIMIT_SETTINGS[setting]
+    try:
+        value = float(raw)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value >= 1):
+        raise ConfigError(f"{setting}={raw}: expected a positive count such as 1e9")
+    return int(value)
+
+
+def check_size(key: str, what: str, n: float, setting: str = "SIMLUNAR_MAX_CELLS") -> None:
+    """Refuse ``n`` (cells, pixels) above the limit, in one line naming ``key`` and the size."""
+    limit = size_limit(setting)
+    if n > limit:
+        raise ConfigError(
+            f"{key}: {what} = {n:.3g}, more than the limit of {limit:.3g} "
+            f"(set {setting} to raise it on a machine with the memory)"
+        )
+
+
+def grid_file_shape(path: Path, key: str) -> tuple[int, ...] | None:
+    """The shape of the grid in a DEM / albedo file, read from its header without reading
+    the data, and checked against :data:`MAX_CELLS` (None: a header not read here; the
+    reader reports an unreadable file). A ``.npy`` / ``.npz`` whose header promises more
+    bytes than the file holds is refused (``np.load`` would allocate the promised array
+    before finding out)."""
+    from simlunar.terrain.io import GDAL_FORMATS
+
+    suf = path.suffix.lower()
+    try:
+        if suf == ".npy":
+            with open(path, "rb") as f:
+                shape, nbytes = _npy_header(f)
+                have = path.stat().st_size - f.tell()
+            _check_npy_bytes(key, path, shape, nbytes, have)
+            return shape
+        if suf == ".npz":
+            with zipfile.ZipFile(path) as z:
+                if "heights.npy" not in z.namelist():
+                    return None  # the reader names what is missing
+                info = z.getinfo("heights.npy")
+                with z.open("heights.npy") as f:
+                    shape, nbytes = _npy_header(f)
+                    have = info.file_size - f.tell()
+            _check_npy_bytes(key, f"{path} (heights)", shape, nbytes, have)
+            return shape
+        if suf == ".exr":
+            import OpenEXR
+
+            with OpenEXR.File(str(path), header_only=True) as f:
+                (x0, y0), (x1, y1) = (tuple(v) for v in f.header()["dataWindow"])
+            shape = (int(y1) - int(y0) + 1, int(x1) - int(x0) + 1)
+        elif suf in (".tif", ".tiff", *GDAL_FORMATS):
+            import rasterio
+
+            with rasterio.open(path) as src:
+                shape = (int(src.height), int(src.width))
+        else:
+            return None
+    except ConfigError:
+        raise
+    except Exception:
+        return None
+    check_size(key, f"{path}: a {shape[0]} x {shape[1]} grid", shape[0] * shape[1])
+    return shape
+
+
+def _npy_header(f) -> tuple[tuple[int, ...], int]:
+    from numpy.lib import format as npf
+
+    version = npf.read_magic(f)
+    read = {(1, 0): npf.read_array_header_1_0, (2, 0): npf.read_array_header_2_0}.get(version)
+    if read is None:
+        raise ValueError(f"unsupported .npy version {version}")
+    shape, _fortran, dtype = read(f)
+    n = 1
+    for v in shape:
+        n *= int(v)
+    return tuple(int(v) for v in shape), n * dtype.itemsize
+
+
+def _check_npy_bytes(key: str, path, shape, nbytes: int, have: int) -> None:
+    cells = 1
+    for v in shape:
+        cells *= v
+    check_size(key, f"{path}: a {' x '.join(map(str, shape)) or 'scalar'} array", cells)
+    if nbytes > have:
+        raise ConfigError(
+            f"{key}: {path}: its header promises a {' x '.join(map(str, shape))} array "
+            f"({nbytes} bytes) but the file holds {have} bytes (truncated or not a DEM)"
+        )
+
+
+# --------------------------------------------------------------------------- terrain
+@dataclass(frozen=True)
+class TerrainFacts:
+    """What the checks need to know of a unit's terrain, without generating it.
+
+    ``zmin``/``zmax`` bound the heights (exact for a DEM; for a preset, a generous bound of
+    half the larger side, since its relief is generated later).
+    """
+
+    rows: int
+    cols: int
+    spacing: float
+    origin: tuple[float, float]
+    zmin: float
+    zmax: float
+    nan_fraction: float = 0.0
+    source: str = ""
+    zmid: float = 0.0  # median height (a DEM's; 0 for a preset, generated around 0)
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        x0, y0 = self.origin
+        return (x0, x0 + self.cols * self.spacing, y0 - self.rows * self.spacing, y0)
+
+
+_TERRAIN_MEMO: dict[tuple, TerrainFacts] = {}
+
+
+def terrain_facts(t: Any) -> TerrainFacts:
+    """Check a unit's terrain section (a ``TerrainCfg``) and return its :class:`TerrainFacts`.
+
+    Raises
+    ------
+    ConfigError
+        One line naming ``terrain.<key>`` and, for files, the file.
+    """
+    if t.preset is not None:
+        memo = ("preset", str(t.preset), t.scale, repr(t.overrides))
+        if memo not in _TERRAIN_MEMO:
+            try:
+                p = _preset_params(t)
+            except (ValueError, OSError) as exc:
+                raise ConfigError(f"terrain.preset: {exc}") from None
+            half = 0.5 * max(p.rows, p.cols) * p.spacing
+            facts = TerrainFacts(
+                p.rows, p.cols, p.spacing, tuple(p.origin), -half, half, 0.0, str(t.preset)
+            )
+            _check_extent(facts, "terrain.preset")
+            _TERRAIN_MEMO[memo] = facts
+        facts = _TERRAIN_MEMO[memo]
+        # every time (not memoised): the limit is a setting of this run
+        grid = getattr(t.overrides, "grid", None) if t.overrides is not None else None
+        where = "terrain.overrides.grid" if grid is not None else "terrain.preset"
+        check_size(where, f"{facts.rows} x {facts.cols} cells", facts.rows * facts.cols)
+        return _TERRAIN_MEMO[memo]
+    files = [Path(t.file)] + ([Path(t.albedo_file)] if t.albedo_file is not None else [])
+    stamps = tuple(_stamp(p) for p in files)
+    memo = ("file", *map(str, files), t.spacing_m, stamps)
+    if memo not in _TERRAIN_MEMO:
+        _TERRAIN_MEMO[memo] = _dem_facts(Path(t.file), t.spacing_m, t.albedo_file)
+    facts = _TERRAIN_MEMO[memo]
+    check_size(
+        "terrain.file", f"{t.file}: {facts.rows} x {facts.cols} cells", facts.rows * facts.cols
+    )
+    return facts
+
+
+def _preset_params(t: Any):
+    """The preset's ``TerrainParams`` (grid size, spacing, origin) as the unit will build them."""
+    from simlunar.config.terrain import merged_preset
+    from simlunar.config.translate import terrain_params
+
+    return terrain_params(merged_preset(t.preset, t.overrides), scale=t.scale)
+
+
+def _stamp(p: Path):
+    try:
+        st = p.stat()
+        return (st.st_size, st.st_mtime_ns)
+    except OSError:
+        return None
+
+
+def _check_extent(f: TerrainFacts, key: str) -> None:
+    x0, x1, y0, y1 = f.extent
+    big = max(abs(x0), abs(x1), abs(y0), abs(y1))
+    if not math.isfinite(big) or big > MAX_ABS_COORD_M:
+        raise ConfigError(
+            f"{key}: the terrain reaches {big:.3g} m from the origin "
+            f"(more than {MAX_ABS_COORD_M:.0e} m; check spacing_m and the file's units)"
+        )
+
+
+def _read_grid(path: Path, key: str, *, spacing: float | None):
+    """``load_dem`` with every failure of the file turned into one line naming it."""
+    from simlunar.terrain.io import load_dem
+
+    try:
+        if path.stat().st_size == 0:
+            raise ConfigError(f"{key}: {path} is empty")
+        _check_magic(path, key)
+        grid_file_shape(path, key)  # its size, before reading it
+        if path.suffix.lower() == ".npz":
+            _check_npz_spacing(path, key)
+        return load_dem(path, spacing=spacing)
+    except ConfigError:
+        raise
+    except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+        # a file the reader cannot make sense of (truncated, garbage, wrong layout)
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        if str(path) in msg:
+            raise ConfigError(f"{key}: {msg}") from None
+        raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
+
+
+def _read_albedo(path: Path, key: str, shape, valid) -> np.ndarray:
+    """:func:`simlunar.terrain.io.load_albedo` (the unit's reader) with every failure turned
+    into one line naming ``key`` and the file."""
+    from simlunar.terrain.io import load_albedo
+
+    try:
+        if path.stat().st_size == 0:
+            raise ConfigError(f"{key}: {path} is empty")
+        _check_magic(path, key)
+        grid_file_shape(path, key)  # its size, before reading it
+        return load_albedo(path, shape, valid=valid)
+    except ConfigError:
+        raise
+    except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        if str(path) in msg:
+            raise ConfigError(f"{key}: {msg}") from None
+        raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
+
+
+_MAGIC = {".npy": (b"\x93NUMPY", "a NumPy .npy file"), ".npz": (b"PK", "a NumPy .npz archive")}
+
+
+def _check_magic(path: Path, key: str) -> None:
+    """A ``.npy``/``.npz`` must start as one (``np.load`` guesses the format from the bytes
+    and leaves the file open when a guessed zip is not one)."""
+    magic, what = _MAGIC.get(path.suffix.lower(), (None, ""))
+    if magic is None:
+        return
+    with open(path, "rb") as f:
+        head = f.read(len(magic))
+    if head != magic or (path.suffix.lower() == ".npz" and not zipfile.is_zipfile(path)):
+        raise ConfigError(f"{key}: {path} is not {what}")
+
+
+def _check_npz_spacing(path: Path, key: str) -> None:
+    try:
+        with open(path, "rb") as f, np.load(f, allow_pickle=False) as z:
+            if "spacing" not in z.files:
+                return
+            sp = np.asarray(z["spacing"])
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+        raise ConfigError(f"{key}: cannot read {path}: {exc}") from None
+    if sp.size != 1 or sp.dtype.kind not in "fiu":
+        raise ConfigError(
+            f"{key}: {path}: 'spacing' must be one number (metres per cell), "
+            f"got shape {list(sp.shape)} of {sp.dtype}"
+        )
+    v = float(sp.reshape(()))
+    if not (math.isfinite(v) and v > 0):
+        raise ConfigError(f"{key}: {path}: 'spacing' must be a positive number, got {v}")
+
+
+def check_dem_file(path: str | Path, *, key: str) -> TerrainFacts:
+    """A DEM file read by a command other than ``run`` (``simlunar terrain --stats``), with
+    the checks of an experiment's ``terrain.file``; errors name ``key``."""
+    return _dem_facts(Path(path), None, None, key=key)
+
+
+def _dem_facts(
+    path: Path, spacing: float | None, albedo_file, *, key: str = "terrain.file"
+) -> TerrainFacts:
+    if not path.is_file():
+        raise ConfigError(f"{key}: file not found: {path}")
+    terrain = _read_grid(path, key, spacing=spacing)
+    h = np.asarray(terrain.heights)
+    rows, cols = h.shape
+    if rows < 2 or cols < 2:
+        raise ConfigError(f"{key}: {path}: a DEM needs at least 2 x 2 cells, got {rows} x {cols}")
+    finite = np.isfinite(h)
+    n_nan = int(h.size - finite.sum())
+    if n_nan == h.size:
+        raise ConfigError(f"{key}: {path}: every height is NaN (no terrain)")
+    frac = n_nan / h.size
+    if frac > MAX_NAN_FRACTION:
+        raise ConfigError(
+            f"{key}: {path}: {100 * frac:.1f}% of the heights are NaN (holes); at most "
+            f"{100 * MAX_NAN_FRACTION:g}% are filled from the nearest valid pixel"
+        )
+    zmin, zmax = float(h[finite].min()), float(h[finite].max())
+    if max(abs(zmin), abs(zmax)) > MAX_ABS_COORD_M:
+        raise ConfigError(
+            f"{key}: {path}: heights reach {max(abs(zmin), abs(zmax)):.3g} m "
+            f"(more than {MAX_ABS_COORD_M:.0e} m; check the file's units)"
+        )
+    facts = TerrainFacts(
+        rows,
+        cols,
+        terrain.spacing,
+        tuple(terrain.origin),
+        zmin,
+        zmax,
+        frac,
+        str(path),
+        float(np.median(h[finite])),
+    )
+    _check_extent(facts, key)
+    if albedo_file is not None:
+        akey, apath = "terrain.albedo_file", Path(albedo_file)
+        if not apath.is_file():
+            raise ConfigError(f"{akey}: file not found: {apath}")
+        _read_albedo(apath, akey, h.shape, finite)  # the reader the unit uses
+        return facts
+    a = np.asarray(terrain.albedo)[finite]
+    if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > 1:
+        bad = a[~(np.isfinite(a) & (a >= 0) & (a <= 1))][0]
+        raise ConfigError(
+            f"{key}: {path}: albedo must be finite and within [0, 1] where the DEM has "
+            f"heights, found {bad}"
+        )
+    return facts
