@@ -18,7 +18,13 @@ DESCENT = EXPERIMENTS / "lidar_descent_altimeter.yaml"
 
 
 @pytest.mark.parametrize(
-    "name", ["lidar_descent_altimeter", "lidar_hazard_flash", "lidar_rover_mast"]
+    "name",
+    [
+        "lidar_descent_altimeter",
+        "lidar_descent_micromirror",
+        "lidar_hazard_flash",
+        "lidar_rover_mast",
+    ],
 )
 def test_the_shipped_lidar_experiments_validate(name):
     cfg = load_experiment(EXPERIMENTS / f"{name}.yaml")
