@@ -163,12 +163,8 @@ def write_figures(out_dir: str | Path) -> list[Path]:
 
     study = cfg.get("study", {})
     captions: dict[str, str] = {}
-    if study.get("kind") == "lidar":
-        _lidar_figures(res, emit, captions)
-        write_captions(fig_dir, captions, written)
-        return written
     if study.get("kind", "sampling") != "sampling":
-        _scanner_figures(res, emit, captions)
+        (_lidar_figures if study.get("kind") == "lidar" else _scanner_figures)(res, emit, captions)
         write_captions(fig_dir, captions, written)
         return written
     strategies = list(study.get("strategies") or [])
