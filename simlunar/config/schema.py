@@ -43,7 +43,11 @@ from simlunar.config.terrain import TerrainCfg
 
 class FiguresCfg(_Model):
     enabled: bool = True
-    formats: list[Literal["png", "pdf"]] = Field(default_factory=lambda: ["png", "pdf"])
+    formats: list[Literal["png", "pdf"]] = Field(
+        default_factory=lambda: ["png"],
+        min_length=1,
+        description="figure files: png (300 dpi); add pdf for vector figures (or run --pdf)",
+    )
     panel_density: Density = Field(1 / 64, description="density shown in the image panels")
     sparse_mesh_density: Density | None = Field(
         1 / 80,

@@ -26,8 +26,10 @@ from simlunar.config.fields import (
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.quantities import log_spaced
 from simlunar.config.render import MAX_SPP
+from simlunar.features.maps import check_entropy_size
 from simlunar.planner import STRATEGIES
 from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.scanner.scheduling import check_spacings
 
 
 # --------------------------------------------------------------------------- studies
@@ -82,7 +84,6 @@ class FeatureOptsCfg(_Model):
     @field_validator("size")
     @classmethod
     def _entropy_window(cls, v: int) -> int:
-        from simlunar.features.maps import check_entropy_size
 
         check_entropy_size(v)  # the map's own rule
         return v
@@ -241,6 +242,15 @@ class RigCfg(_Model):
     aperture_radius_m: Metres = Field(0.0, ge=0, description="camera thin lens; 0 = pinhole")
     focus_distance_m: Metres | None = Field(None, gt=0, description="null = the target")
 
+    @model_validator(mode="after")
+    def _focus_needs_lens(self) -> RigCfg:
+        if self.aperture_radius_m == 0 and self.focus_distance_m is not None:
+            raise ValueError(
+                "focus_distance_m: has no effect on a pinhole camera (aperture_radius_m 0); "
+                "set aperture_radius_m > 0 for a thin lens or leave focus_distance_m null"
+            )
+        return self
+
 
 class GrayOptsCfg(_Model):
     """Gray-code scan options (:func:`simlunar.scanner.scans.gray_code_scan`)."""
@@ -267,7 +277,6 @@ class DotOptsCfg(_Model):
 
     @model_validator(mode="after")
     def _spacings(self) -> DotOptsCfg:
-        from simlunar.scanner.scheduling import check_spacings
 
         try:
             check_spacings(

@@ -28,7 +28,10 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.config.schema import ExperimentCfg
+from simlunar.config.translate import rig_kwargs
 from simlunar.errors import ConfigError, ResultFolderError
+from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.pipeline.inputs import (
     MAX_ABS_COORD_M,
     MAX_NAN_FRACTION,
@@ -36,6 +39,12 @@ from simlunar.pipeline.inputs import (
     check_size,
     terrain_facts,
 )
+from simlunar.planner import check_k
+from simlunar.render.backend import choose_variant
+from simlunar.results.records import unit_label
+from simlunar.scanner.gray_code import num_bits
+from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.study.scanner import aim_rig_at_terrain
 
 #: smallest sample count of a density (the planners and the Delaunay reconstruction need 3)
 MIN_SAMPLES = 3
@@ -89,7 +98,6 @@ def check_renderer() -> None:
     wanted = os.environ.get("SIMLUNAR_VARIANT")
     if not wanted:
         return  # the backend falls back by itself
-    from simlunar.render.backend import choose_variant
 
     try:
         choose_variant()
@@ -138,7 +146,6 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
         return
     if getattr(cam, "kind", None) != "perspective":
         return
-    from simlunar.geometry import Camera, Intrinsics, Pose
 
     pos = np.asarray(cam.position_m, float)
     target = np.asarray(cam.look_at_m, float)
@@ -248,9 +255,6 @@ def check_scanner_budget(s: Any) -> None:
     """A scanner study's sizes against :data:`MAX_CELLS` / :data:`MAX_FRAME_PIXELS`, and its
     dot budget against the grid the dots are planned on (the projector's: guide pixel (r, c)
     is projector pixel (r, c)), with the planners' own sample-count rule."""
-    from simlunar.planner import check_k
-    from simlunar.scanner.gray_code import num_bits
-    from simlunar.scanner.scans import SCAN_PLANNERS
 
     (pw, ph), (cw, ch) = s.projector_px, s.camera_px
     check_size("study.projector_px", f"{pw} x {ph} pixels", pw * ph)
@@ -293,9 +297,6 @@ def check_rig(cfg: Any, facts: TerrainFacts, *, key: str = "study.options.rig") 
     projector's frustum must meet the terrain's bounding box, and the triangulation camera
     must see where they meet. A cheap ray cast instead of a render that finds nothing."""
     from types import SimpleNamespace
-
-    from simlunar.config.translate import rig_kwargs
-    from simlunar.study.scanner import aim_rig_at_terrain
 
     stand_in = SimpleNamespace(extent=facts.extent, heights=np.array([facts.zmid]))
     try:
@@ -356,7 +357,6 @@ def check_units(units: list[Any]) -> Preflight:
     ``units`` are :class:`~simlunar.results.records.WorkUnit` (their plain ``config``).
     Errors of a sweep point name the point: ``sweep point 3 (elevation_deg=0): ...``.
     """
-    from simlunar.config.schema import ExperimentCfg
 
     facts = []
     for u in units:
@@ -369,8 +369,6 @@ def check_units(units: list[Any]) -> Preflight:
                 check_rig(cfg, f)
         except ConfigError as exc:
             if len(units) > 1 and u.sweep:
-                from simlunar.results.records import unit_label
-
                 raise ConfigError(f"sweep point {u.index} ({unit_label(u)}): {exc}") from None
             raise
         facts.append(f)

@@ -135,17 +135,17 @@ def summarise(
     """
     points = group_points(records)
     for i, p in enumerate(points):
-        if "random" not in p.strategies:
-            continue
         for m in p.metrics:
             dens, ks, errs = error_arrays(rows, p, m)
             if not p.densities:
                 p.densities, p.ks = dens, ks
+            p.mean_errors[m] = {s: e.mean(axis=(0, 2)) for s, e in errs.items()}
+            if "random" not in p.strategies:
+                continue  # eq. 4.3 scores are relative to random; samples saved vs grid are not
             rng = np.random.default_rng(np.random.SeedSequence([seed, i, p.metrics.index(m)]))
             res = bootstrap_scores(errs, dens, n_boot=n_boot, rng=rng)
             p.intervals[m] = res
             p.separation[m] = best_separation(res)
-            p.mean_errors[m] = {s: e.mean(axis=(0, 2)) for s, e in errs.items()}
         if len(p.ks) >= 2 and p.metrics:
             m = p.metrics[0]
             p.saved_metric = m
@@ -184,3 +184,16 @@ def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:
 
 
 SCORES_CSV_COLUMNS = ["point", "terrain_seed", "metric", "strategy", "score", "ci_low", "ci_high"]
+
+
+#: sweep axes that repeat a scene rather than change it (their units are pooled as seeds)
+SEED_AXES = ("seed", SEED_AXIS)
+
+
+def sweep_value(rec: dict, path: str):
+    """A unit's value on sweep axis ``path`` as a plot position or label: numbers as they
+    are, a model (dict) by its ``kind``, null as ``"preset default"``."""
+    v = rec["sweep"][path]
+    if isinstance(v, dict):
+        return v.get("kind", json.dumps(v, sort_keys=True))
+    return "preset default" if v is None else v
