@@ -1,4 +1,5 @@
-"""Study sections of the schema: the sampling study (paper section 4) and the scanner study (section 5)."""
+"""Study sections of the schema: the sampling study (paper section 4), the scanner study
+(section 5) and the image-directed LIDAR study (its sensor options in :mod:`simlunar.config.lidar`)."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from simlunar.config.fields import (
     _Model,
     _tagged_union,
 )
+from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.quantities import log_spaced
 from simlunar.config.render import MAX_SPP
 from simlunar.features.maps import check_entropy_size
@@ -421,4 +423,87 @@ class ScannerStudyCfg(_Model):
         return self
 
 
-StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg)
+#: the LIDARs of a lidar study and the block of ``options`` each reads
+LIDAR_BLOCKS = {
+    "steered_beam": "steered_beam",
+    "flash": "flash",
+    "micromirror_flash": "micromirror",
+}
+
+
+class LidarStudyCfg(_Model):
+    """Image-directed LIDAR (:func:`simlunar.study.lidar.run_lidar_study`; docs/lidar.md):
+    planners -> a time-of-flight sensor at the guide camera -> reconstruction -> scores, every
+    row with its modelled scan time (``seconds``)."""
+
+    kind: Literal["lidar"]
+    sensor: Literal["steered_beam", "flash", "micromirror_flash"] = Field(
+        "steered_beam",
+        description="steered_beam (gimbal / galvanometer), flash (receiver array; revisits "
+        "directed by the plan) or micromirror_flash (lights only the planned pixels)",
+    )
+    planners: list[str] = Field(
+        default_factory=lambda: ["wavelet", "random", "grid"],
+        min_length=1,
+        description="planner strategies (from the guide image); unused by a flash without revisits",
+    )
+    densities: Annotated[
+        list[Density],
+        BeforeValidator(_densities, json_schema_input_type=list[Density] | DensityRange),
+    ] = Field(
+        default_factory=lambda: [1 / 64, 1 / 256],
+        min_length=1,
+        description="planned pixels k / N of the guide view",
+    )
+    trials: int = Field(3, ge=1, le=1000, description="planner draws and photon noise")
+    metrics: list[str] = Field(default_factory=lambda: ["mse", "grad"], min_length=1)
+    planner_opts: dict[str, PlannerOptsCfg] = Field(
+        default_factory=dict, description="planner name -> options (study.planners only)"
+    )
+    hazard: HazardCfg | None = Field(
+        None, description="also score landing-hazard detection (precision / recall); null = off"
+    )
+    options: LidarOptionsCfg = Field(
+        default_factory=LidarOptionsCfg,
+        description="pulse, detector, ranging, transient, and the sensor's own block",
+    )
+    terrain_seeds: int = Field(
+        1,
+        ge=1,
+        le=100,
+        description="repeat every sweep point on this many terrain realisations (intervals "
+        "over terrain seeds in the figures)",
+    )
+
+    @field_validator("planners", "metrics")
+    @classmethod
+    def _unique(cls, v: list[str]) -> list[str]:
+        if len(set(v)) != len(v):
+            raise ValueError(f"names must be unique, got {v}")
+        return v
+
+    @model_validator(mode="after")
+    def _options_fit(self) -> LidarStudyCfg:
+        mine = LIDAR_BLOCKS[self.sensor]
+        default = LidarOptionsCfg()
+        for block in LIDAR_BLOCKS.values():
+            if block != mine and getattr(self.options, block) != getattr(default, block):
+                raise ValueError(
+                    f"options.{block}: not an option of the {self.sensor} sensor (set "
+                    f"options.{mine})"
+                )
+        stray = sorted(set(self.planner_opts) - set(self.planners))
+        if stray:
+            raise ValueError(
+                f"planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
+            )
+        for name, opts in self.planner_opts.items():
+            if name in STRATEGIES:
+                try:
+                    check_planner_options(name, opts)
+                except ValueError as exc:
+                    raise ValueError(f"planner_opts.{name}.{exc}") from None
+        return self
+
+
+StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg, LidarStudyCfg)

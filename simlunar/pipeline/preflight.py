@@ -225,7 +225,8 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
     :data:`MAX_CELLS`; scanner sizes are positive and within the limits."""
     s = cfg.study
     n = shape[0] * shape[1]
-    if getattr(s, "kind", "sampling") == "sampling":
+    kind = getattr(s, "kind", "sampling")
+    if kind in ("sampling", "lidar"):  # a lidar study plans k = density x guide pixels too
         for i, d in enumerate(s.densities):
             k = round(d * n)
             if k < MIN_SAMPLES:

@@ -375,6 +375,12 @@ def _run_locked(
 
     if cfg.study.kind == "scanner":
         md, tex = scanner_tables(rows, metrics=_names(units, "metrics"), title=cfg.name)
+    elif cfg.study.kind == "lidar":
+        from simlunar.plotting.lidar import lidar_tables
+
+        # one table block per sweep point; terrain seeds pooled (their interval in the figures)
+        by = next(iter(cfg.sweep)) if len(cfg.sweep) == 1 else ("unit" if cfg.sweep else None)
+        md, tex = lidar_tables(rows, metrics=_names(units, "metrics"), title=cfg.name, by=by)
     else:
         md, tex = _sampling_tables(cfg, units, records, rows, out)
     atomic_write_text(out / "scores.md", md)

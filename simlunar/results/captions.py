@@ -203,3 +203,35 @@ def samples_saved(metric: str, references: list[str], point: str) -> str:
         f"trials. Hollow markers: outside the reference's measured range (extrapolated, "
         f"clipped to [1, N]); they are left out of the tables' geometric-mean summary.{where}"
     )
+
+
+def lidar_error(
+    metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1, by: str | None = None
+) -> str:
+    """Caption of ``lidar_error_vs_<time|samples>_<metric>`` (``x``: ``seconds`` or
+    ``samples``)."""
+    sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
+    trials = study.get("trials", 3)
+    axis = (
+        "the modelled acquisition time of the scan (s: steering moves, settling and pulses of "
+        "a steered beam; frames x pulses / pulse rate of a flash)"
+        if x == "seconds"
+        else "the number of range samples measured (the planned pixels that returned; a "
+        "flash: its receiver pixels)"
+    )
+    bars = (
+        f"95 % percentile-bootstrap interval of the mean over the {seeds} terrain seeds "
+        "(of each seed's mean over trials)"
+        if seeds > 1
+        else f"±1 standard deviation over the {trials} trials"
+    )
+    per = " One panel per sweep point." if n_panels > 1 else ""
+    if by:
+        per = f" Each point of a curve is one value of {by} (and density)."
+    runs = f"{trials} trial{'s' if trials != 1 else ''}"
+    return (
+        f"Image-directed LIDAR ({sensor}): error of the reconstructed guide-view depth "
+        f"({_metric(metric)}) against {axis}, per planner, log-log; points: one per density, "
+        f"mean over {runs}{f' on each of {seeds} terrain seeds' if seeds > 1 else ''}; error "
+        f"bars: {bars}.{per}"
+    )

@@ -164,9 +164,11 @@ _DRAWING_MODULES = (
     "simlunar.plotting.density",
     "simlunar.plotting.images",
     "simlunar.plotting.scanner",
+    "simlunar.plotting.lidar",
     "simlunar.plotting.style",
     "simlunar.results.figures",
     "simlunar.results.scanner_figures",
+    "simlunar.results.lidar_figures",
     "simlunar.results.captions",
     "simlunar.results.aggregate",
 )
@@ -264,9 +266,12 @@ def _draw(res: dict, formats: list[str]) -> list[Path]:
     study = cfg.get("study", {})
     captions: dict[str, str] = {}
     if study.get("kind", "sampling") != "sampling":
-        from simlunar.results.scanner_figures import scanner_figures
+        from simlunar.results import lidar_figures, scanner_figures
 
-        scanner_figures(res, emit, captions)
+        lidar = study.get("kind") == "lidar"
+        (lidar_figures.lidar_figures if lidar else scanner_figures.scanner_figures)(
+            res, emit, captions
+        )
         write_captions(fig_dir, captions, written)
         return written
     strategies = list(study.get("strategies") or [])
