@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.plotting.style import point_title
 from simlunar.results.records import WorkUnit, unit_label
 from simlunar.study.stats import (
     SamplesSaved,
@@ -197,3 +198,33 @@ def sweep_value(rec: dict, path: str):
     if isinstance(v, dict):
         return v.get("kind", json.dumps(v, sort_keys=True))
     return "preset default" if v is None else v
+
+
+def density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
+    """The panels of ``error_vs_density``: ``[(title, unit records)]`` in results order.
+
+    One panel per sweep point (:func:`simlunar.results.aggregate.group_points`): the units of
+    a point that differ only by terrain seed share a panel, whose curves pool their rows (mean
+    and spread over terrain seeds and trials), so a repeated experiment draws as many panels
+    as it has sweep points, not seeds times points.
+    """
+    return [(point_title(p.sweep), [units[i] for i in p.unit_indices]) for p in group_points(units)]
+
+
+#: the figures' record of what they were drawn from (in the result folder, beside figures/)
+STAMP = ".figures.json"
+#: modules whose code draws the figures: a change of any of them redraws every figure
+_DRAWING_MODULES = (
+    "simlunar.plotting.figures",
+    "simlunar.plotting.layout",
+    "simlunar.plotting.density",
+    "simlunar.plotting.images",
+    "simlunar.plotting.scanner",
+    "simlunar.plotting.lidar",
+    "simlunar.plotting.style",
+    "simlunar.results.figures",
+    "simlunar.results.scanner_figures",
+    "simlunar.results.lidar_figures",
+    "simlunar.results.captions",
+    "simlunar.results.aggregate",
+)

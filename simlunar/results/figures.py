@@ -142,19 +142,6 @@ def _spacing(rec: dict) -> float | None:
     return float(sp) if sp else None
 
 
-def _density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
-    """The panels of ``error_vs_density``: ``[(title, unit records)]`` in results order.
-
-    One panel per sweep point (:func:`simlunar.results.aggregate.group_points`): the units of
-    a point that differ only by terrain seed share a panel, whose curves pool their rows (mean
-    and spread over terrain seeds and trials), so a repeated experiment draws as many panels
-    as it has sweep points, not seeds times points.
-    """
-    from simlunar.plotting.style import point_title
-
-    return [(point_title(p.sweep), [units[i] for i in p.unit_indices]) for p in group_points(units)]
-
-
 #: the figures' record of what they were drawn from (in the result folder, beside figures/)
 STAMP = ".figures.json"
 #: modules whose code draws the figures: a change of any of them redraws every figure
@@ -283,7 +270,7 @@ def _draw(res: dict, formats: list[str]) -> list[Path]:
     # not a silently missing panel
     shown_arrays = [cache.load_arrays(rec["key"], strict=True) for rec in shown]
 
-    groups = _density_panels(units)[:MAX_UNIT_PANELS]
+    groups = aggregate.density_panels(units)[:MAX_UNIT_PANELS]
     pooled = any(len(members) > 1 for _, members in groups)
     for m in metrics:
         fig, axes = F.panel_grid(len(groups))

@@ -6,7 +6,7 @@ from __future__ import annotations
 from simlunar.plotting.layout import panel_grid
 from simlunar.plotting.lidar import error_vs_time
 from simlunar.results import captions as captions_text
-from simlunar.results.figures import _density_panels
+from simlunar.results.aggregate import density_panels
 
 __all__ = ["lidar_figures"]
 
@@ -22,7 +22,7 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
     study = res["config"].get("study", {})
     sweep = list(res["config"].get("sweep") or {})
     by = sweep[0] if len(sweep) == 1 and sweep[0].startswith("study.options.") else None
-    groups = [("", res["units"])] if by else _density_panels(res["units"])[:MAX_PANELS]
+    groups = [("", res["units"])] if by else density_panels(res["units"])[:MAX_PANELS]
     seeds = max(len(members) for _, members in groups)
     if by:
         seeds = max(1, int(study.get("terrain_seeds", 1) or 1))
