@@ -15,8 +15,9 @@ from pydantic import ValidationError
 
 from simlunar.config import registry
 from simlunar.config.messages import format_validation_error, model_at, valid_keys
+from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.schema import ExperimentCfg
-from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg, ScannerStudyCfg
+from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
 

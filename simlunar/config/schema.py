@@ -37,8 +37,12 @@ from simlunar.config.fields import (  # noqa: F401
     _tagged_union,
 )
 from simlunar.config.render import OrthoNadirCfg, PerspectiveCfg, RenderCfg, SunLightCfg
-from simlunar.config.studies import LIDAR_BLOCKS, LidarStudyCfg, ScannerStudyCfg, StudyCfg
+from simlunar.config.scanner import ScannerStudyCfg
+from simlunar.config.studies import LIDAR_BLOCKS, LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.terrain import TerrainCfg
+
+#: the study of an experiment, chosen by its ``kind``; the kind picks the range sensor
+StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg, LidarStudyCfg)
 
 
 class FiguresCfg(_Model):

@@ -29,16 +29,13 @@ from simlunar.config.render import (
     SensorCfg,
     SunLightCfg,
 )
+from simlunar.config.scanner import DotOptsCfg, GrayOptsCfg, RigCfg, ScannerStudyCfg
 from simlunar.config.studies import (
     FEATURE_OPTION_KEYS,
-    DotOptsCfg,
     FeatureOptsCfg,
-    GrayOptsCfg,
     LidarStudyCfg,
     PlannerOptsCfg,
-    RigCfg,
     SamplingStudyCfg,
-    ScannerStudyCfg,
 )
 from simlunar.config.terrain import (
     PresetError,

@@ -16,6 +16,7 @@ import yaml
 from pydantic import BaseModel
 
 from simlunar.config import render, schema, studies, terrain, translate
+from simlunar.config import scanner as scanner_cfg
 from simlunar.config.docs import json_schema, schema_model
 from simlunar.config.loading import validate_data
 from simlunar.config.scene import SceneCfg
@@ -156,10 +157,10 @@ def test_option_defaults_are_the_library_defaults():
     from simlunar.study.scanner import aim_rig_at_terrain
 
     # the config's defaults are the library's options dataclasses' defaults
-    assert translate.gray_options(studies.GrayOptsCfg()) == GrayCodeOptions()
-    assert translate.dot_options(studies.DotOptsCfg()) == DotOptions()
+    assert translate.gray_options(scanner_cfg.GrayOptsCfg()) == GrayCodeOptions()
+    assert translate.dot_options(scanner_cfg.DotOptsCfg()) == DotOptions()
     sparse = {k: v for k, v in vars(CaptureOptions()).items() if k.startswith("sparse_")}
-    assert studies.CaptureOptsCfg().model_dump() == sparse
+    assert scanner_cfg.CaptureOptsCfg().model_dump() == sparse
     weighted = _defaults(strategies._weighted)
     kw = translate.planner_kwargs("wavelet", studies.PlannerOptsCfg())
     assert {k: kw[k] for k in weighted} == weighted
@@ -167,10 +168,10 @@ def test_option_defaults_are_the_library_defaults():
     assert translate.planner_kwargs("entropy", studies.PlannerOptsCfg())["feature_opts"] == (
         _defaults(maps.entropy)
     )
-    assert studies.RigCfg().fill == _defaults(aim_rig_at_terrain)["fill"]
+    assert scanner_cfg.RigCfg().fill == _defaults(aim_rig_at_terrain)["fill"]
     make_rig = _defaults(rigs.make_rig)
-    assert studies.RigCfg().verge == make_rig["verge"]
-    assert studies.RigCfg().aperture_radius_m == make_rig["aperture_radius"]
+    assert scanner_cfg.RigCfg().verge == make_rig["verge"]
+    assert scanner_cfg.RigCfg().aperture_radius_m == make_rig["aperture_radius"]
     s, m = render.SensorCfg(), SensorModel()
     assert (s.full_well_e, s.read_noise_e, s.bits, s.response, s.gamma) == (
         m.full_well_e,
