@@ -21,6 +21,7 @@ of the unit's cache key, so a changed DEM is recomputed.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -251,6 +252,39 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
 DOT_MODES = ("ambiguity_enhancement", "data_reduction")
 
 
+#: time-histogram channels the transient film keeps per pixel and bin (mitransient's RGBA)
+TRANSIENT_CHANNELS = 4
+
+
+def check_time_bins(s: Any, facts: TerrainFacts) -> None:
+    """A LIDAR study's transient films (pixels x time bins x channels) against
+    :data:`MAX_FRAME_PIXELS`, before anything is rendered.
+
+    A steered beam renders ``batch`` beams over ``window_m``; a flash receiver covers the
+    terrain's depth span in view, bounded here by the diagonal of its bounding box, plus the
+    margin on both sides (its exact window is known only after the guide render).
+    """
+    o = s.options
+    if s.sensor == "steered_beam":
+        bins = math.ceil(o.steered_beam.window_m / o.bin_range_m)
+        pixels = o.steered_beam.batch
+        what = f"{pixels} beams"
+    else:
+        xmin, xmax, ymin, ymax = facts.extent
+        span = math.hypot(xmax - xmin, ymax - ymin, facts.zmax - facts.zmin)
+        bins = math.ceil((span + 2 * o.margin_m) / o.bin_range_m)
+        block = o.flash if s.sensor == "flash" else o.micromirror
+        w, h = block.receiver_px
+        pixels = w * h
+        what = f"{w} x {h} receiver pixels"
+    check_size(
+        "study.options.bin_range_m",
+        f"{what} x {bins} time bins x {TRANSIENT_CHANNELS} channels",
+        pixels * bins * TRANSIENT_CHANNELS,
+        "SIMLUNAR_MAX_FRAME_PIXELS",
+    )
+
+
 def check_scanner_budget(s: Any) -> None:
     """A scanner study's sizes against :data:`MAX_CELLS` / :data:`MAX_FRAME_PIXELS`, and its
     dot budget against the grid the dots are planned on (the projector's: guide pixel (r, c)
@@ -365,6 +399,8 @@ def check_units(units: list[Any]) -> Preflight:
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))
+            if getattr(cfg.study, "kind", None) == "lidar":
+                check_time_bins(cfg.study, f)
             if getattr(cfg.study, "kind", None) == "scanner":
                 check_rig(cfg, f)
         except ConfigError as exc:
