@@ -25,6 +25,9 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    # plain click help: rich markup would swallow the "[default: ...]" of the help strings
+    # and print "<bool>" after every flag
+    rich_markup_mode=None,
     help="simlunar: image-directed range scanning of lunar terrain, simulated.",
 )
 
@@ -32,8 +35,25 @@ EXIT_USER, EXIT_INTERNAL, EXIT_INFRA, EXIT_INTERRUPTED = 2, 1, 3, 130
 REPORT_URL = "https://github.com/simlunar/simlunar/issues"
 
 
+def _version(value: bool) -> None:
+    if value:
+        import simlunar
+
+        typer.echo(f"simlunar {simlunar.__version__}")
+        raise typer.Exit()
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: bool = typer.Option(
+        False,
+        "--version",
+        callback=_version,
+        is_eager=True,
+        help="Print the version and exit.",
+        show_default=False,
+    ),
+) -> None:
     """simlunar: image-directed range scanning of lunar terrain, simulated."""
 
 
@@ -147,7 +167,9 @@ def _internal(exc: BaseException) -> typer.Exit:
 
 @app.command()
 @user_errors
-def doctor(short: bool = typer.Option(False, "--short", help="One line only.")) -> None:
+def doctor(
+    short: bool = typer.Option(False, "--short", help="One line only.", show_default=False),
+) -> None:
     """Versions, the chosen Mitsuba variant and why, libLLVM, kernel cache, cores, GPU."""
     from simlunar.pipeline.preflight import check_renderer
     from simlunar.render import backend
@@ -173,7 +195,13 @@ def doctor(short: bool = typer.Option(False, "--short", help="One line only.")) 
     typer.echo(f"  {'GPU':<15} {gpu}")
 
 
-_SET_OPTION = typer.Option(None, "--set", help="override a key: --set render.spp=32 (repeatable)")
+_SET_OPTION = typer.Option(
+    None,
+    "--set",
+    metavar="KEY=VALUE",
+    help="override a key: --set render.spp=32 (repeatable)",
+    show_default=False,
+)
 
 
 @app.command()
@@ -187,13 +215,30 @@ def run(
         help="units at a time, as threads of this process; each sampling study on N forked processes [default: 1]",
     ),
     scheduler: str = typer.Option(
-        None, "--scheduler", help="Dask scheduler address, e.g. tcp://host:8786"
+        None,
+        "--scheduler",
+        help="Dask scheduler address, e.g. tcp://host:8786 [default: none, this machine]",
     ),
     set_: list[str] | None = _SET_OPTION,
-    no_progress: bool = typer.Option(False, "--no-progress", help="no progress bar"),
-    no_figures: bool = typer.Option(False, "--no-figures", help="skip figures/"),
+    progress: bool = typer.Option(
+        True, "--progress/--no-progress", help="progress bar with ETA on stderr"
+    ),
+    figures: bool = typer.Option(
+        True,
+        "--figures/--no-figures",
+        help="draw figures/ (redrawn only when the tables they read changed)",
+    ),
+    pdf: bool = typer.Option(
+        False,
+        "--pdf",
+        help="figures as PDF too (as figures.formats: [png, pdf]) [default: PNG only]",
+        show_default=False,
+    ),
     save_scans: bool = typer.Option(
-        False, "--save-scans", help="scanner studies: export each unit's scan to scans/unit<i>/"
+        False,
+        "--save-scans",
+        help="scanner studies: export each unit's scan to scans/unit<i>/",
+        show_default=False,
     ),
 ) -> None:
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
@@ -206,6 +251,8 @@ def run(
 
     with user_input():
         overrides = parse_set(set_ or [])
+        if pdf:
+            overrides = {**overrides, "figures.formats": ["png", "pdf"]}
         cfg = load_experiment(experiment, overrides)
         if save_scans:
             from simlunar.results.exports import check_save_scans
@@ -220,14 +267,12 @@ def run(
         # a lost scheduler or worker is reported in one line; Dask's own log would add pages
         logging.getLogger("distributed").setLevel(logging.CRITICAL)
     out_dir = Path(out) if out else Path("results") / cfg.name
-    summary = run_experiment(
-        cfg, out_dir, executor=executor, progress=not no_progress, figures=not no_figures
-    )
+    summary = run_experiment(cfg, out_dir, executor=executor, progress=progress, figures=figures)
     typer.echo(summary.scores_markdown)
     for note in summary.notes:
         typer.echo(note)
     typer.echo(
-        f"units: {summary.units_total} ({summary.units_cached} cached, "
+        f"work units: {summary.units_total} ({summary.units_cached} cached, "
         f"{summary.units_computed} computed) in {summary.elapsed_s:.1f} s"
     )
     typer.echo(f"results: {out_dir}")
@@ -263,8 +308,20 @@ def train(
 @user_errors
 def figures(
     results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`"),
+    pdf: bool = typer.Option(
+        False,
+        "--pdf",
+        help="PDF besides PNG [default: the folder's figures.formats]",
+        show_default=False,
+    ),
+    force: bool = typer.Option(
+        False,
+        "--force",
+        help="redraw even when the figures' inputs are unchanged",
+        show_default=False,
+    ),
 ) -> None:
-    """Redraw the figures of a result folder (PNG and PDF) without recomputing."""
+    """Draw the figures of a result folder without recomputing (only those whose inputs changed)."""
     from pathlib import Path
 
     from simlunar.pipeline.preflight import check_out_dir
@@ -275,7 +332,9 @@ def figures(
     if not Path(results_dir).is_dir():
         raise SimlunarError(f"{results_dir}: no such folder")
     with FolderLock(results_dir):  # not while a run writes into the folder
-        paths = write_figures_pruned(results_dir)
+        paths = write_figures_pruned(
+            results_dir, formats=("png", "pdf") if pdf else None, force=force
+        )
     for p in paths:
         typer.echo(str(p))
 
@@ -288,7 +347,10 @@ def schema(
         "experiment", "--kind", help="document kind: experiment, scene or preset"
     ),
     markdown: bool = typer.Option(
-        False, "--markdown", help="the YAML reference as Markdown (docs/experiments.md)"
+        False,
+        "--markdown",
+        help="the YAML reference as Markdown (docs/experiments.md)",
+        show_default=False,
     ),
 ) -> None:
     """JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server)."""
@@ -335,12 +397,13 @@ def render(
         check_renderer,
         terrain_facts,
     )
-    from simlunar.pipeline.scene import render_scene
+    from simlunar.pipeline.scene import check_render_folder, render_scene
 
     with user_input():
         cfg = load_scene(scene)
     out_dir = Path(out) if out else Path("results") / "render" / cfg.name
     check_out_dir(out_dir)
+    check_render_folder(out_dir)
     check_renderer()
     check_camera(
         cfg.render, terrain_facts(cfg.terrain)
@@ -365,7 +428,10 @@ def terrain(
     ),
     mesh: str = typer.Option("ply", "--mesh", help="mesh file: ply, obj or none"),
     stats: bool = typer.Option(
-        False, "--stats", help="print RMS slopes at several baselines, Hurst exponent, densities"
+        False,
+        "--stats",
+        help="print RMS slopes at several baselines, Hurst exponent, densities",
+        show_default=False,
     ),
 ) -> None:
     """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""

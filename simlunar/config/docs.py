@@ -80,7 +80,12 @@ def _default(field) -> str:
 
 
 def _unit(name: str) -> str:
-    for suffix, unit in (("_deg", "deg"), ("_m", "m"), ("_px", "px"), ("_e", "e-")):
+    units = (
+        ("_deg", "deg"), ("_m", "m"), ("_px", "px"), ("_e", "e-"), ("_ns", "ns"),
+        ("_ms", "ms"), ("_mrad", "mrad"), ("_hz", "1/s"), ("_per_s", "1/s"),
+        ("_rad_s2", "rad/s²"), ("_rad_s", "rad/s"), ("_w_sr", "W/sr"),
+    )  # fmt: skip
+    for suffix, unit in units:
         if name.endswith(suffix):
             return unit
     return ""

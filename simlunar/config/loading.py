@@ -15,8 +15,9 @@ from pydantic import ValidationError
 
 from simlunar.config import registry
 from simlunar.config.messages import format_validation_error, model_at, valid_keys
+from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.schema import ExperimentCfg
-from simlunar.config.studies import SamplingStudyCfg, ScannerStudyCfg
+from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
 
@@ -174,6 +175,11 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
                 registry.check_scan_planner(s, f"study.planners[{i}]")
             for i, m in enumerate(p.study.modes):
                 registry.check_scan_mode(m, f"study.modes[{i}]")
+            for i, m in enumerate(p.study.metrics):
+                registry.check_metric(m, f"study.metrics[{i}]")
+        if isinstance(p.study, LidarStudyCfg):
+            for i, s in enumerate(p.study.planners):
+                registry.check_strategy(s, f"study.planners[{i}]")
             for i, m in enumerate(p.study.metrics):
                 registry.check_metric(m, f"study.metrics[{i}]")
 

@@ -106,7 +106,10 @@ def format_validation_error(
 ) -> str:
     """One line for the first error of ``exc``: ``<key.path>: <problem>``; an unknown key lists
     the valid keys of its section when ``root`` (the model ``data`` was validated against) is given."""
-    err = exc.errors()[0]
+    errors = exc.errors()
+    # an unknown key first: a misspelt key (``studdy:``) also leaves its real key missing,
+    # and "study: Field required" alone would not name what the user wrote
+    err = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
     path = _loc_path(tuple(err["loc"]), data)
     msg = _message(err)
     nested = _nested_key(tuple(err["loc"]), data, msg) if err["type"] == "value_error" else None

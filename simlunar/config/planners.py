@@ -9,6 +9,7 @@ from typing import Literal
 from pydantic import Field, PositiveInt, field_validator, model_validator
 
 from simlunar.config.fields import _Model
+from simlunar.features.maps import check_entropy_size
 
 __all__ = [
     "FEATURE_OPTION_KEYS",
@@ -66,8 +67,6 @@ class FeatureOptsCfg(_Model):
     @field_validator("size")
     @classmethod
     def _entropy_window(cls, v: int) -> int:
-        from simlunar.features.maps import check_entropy_size
-
         check_entropy_size(v)  # the map's own rule
         return v
 

@@ -62,6 +62,11 @@ class PerspectiveCfg(_Model):
             raise ValueError("give fov_deg or fx, fy, cx, cy, not both")
         if self.aperture_radius_m > 0 and self.focus_distance_m is None:
             raise ValueError("a thin lens (aperture_radius_m > 0) needs focus_distance_m")
+        if self.aperture_radius_m == 0 and self.focus_distance_m is not None:
+            raise ValueError(
+                "focus_distance_m: has no effect on a pinhole camera (aperture_radius_m 0); "
+                "set aperture_radius_m > 0 for a thin lens or leave focus_distance_m null"
+            )
         if tuple(self.position_m) == tuple(self.look_at_m):
             raise ValueError("look_at_m: equals position_m (the camera looks at its own position)")
         return self
@@ -167,7 +172,15 @@ class SensorCfg(_Model):
         "the white calibration frame in scanner studies)",
     )
     response: Literal["linear", "gamma"] = "linear"
-    gamma: float = Field(2.2, gt=0)
+    gamma: float = Field(2.2, gt=0, description="exponent of response gamma")
+
+    @model_validator(mode="after")
+    def _gamma_used(self) -> SensorCfg:
+        if self.response == "linear" and self.gamma != type(self).model_fields["gamma"].default:
+            raise ValueError(
+                "gamma: has no effect with response linear; set response: gamma to use it"
+            )
+        return self
 
 
 class RenderCfg(_Model):

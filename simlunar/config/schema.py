@@ -36,14 +36,22 @@ from simlunar.config.fields import (  # noqa: F401
     _SetKeysModel,
     _tagged_union,
 )
-from simlunar.config.render import RenderCfg, SunLightCfg
-from simlunar.config.studies import ScannerStudyCfg, StudyCfg
+from simlunar.config.render import OrthoNadirCfg, PerspectiveCfg, RenderCfg, SunLightCfg
+from simlunar.config.scanner import ScannerStudyCfg
+from simlunar.config.studies import LIDAR_BLOCKS, LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.terrain import TerrainCfg
+
+#: the study of an experiment, chosen by its ``kind``; the kind picks the range sensor
+StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg, LidarStudyCfg)
 
 
 class FiguresCfg(_Model):
     enabled: bool = True
-    formats: list[Literal["png", "pdf"]] = Field(default_factory=lambda: ["png", "pdf"])
+    formats: list[Literal["png", "pdf"]] = Field(
+        default_factory=lambda: ["png"],
+        min_length=1,
+        description="figure files: png (300 dpi); add pdf for vector figures (or run --pdf)",
+    )
     panel_density: Density = Field(1 / 64, description="density shown in the image panels")
     sparse_mesh_density: Density | None = Field(
         1 / 80,
@@ -117,4 +125,31 @@ class ExperimentCfg(_Model):
                         f"study.{key}: sun needs render.light.kind sun (got "
                         f"{self.render.light.kind})"
                     )
+        return self
+
+    @model_validator(mode="after")
+    def _lidar_fits_camera(self) -> ExperimentCfg:
+        s, cam = self.study, self.render.camera
+        if not isinstance(s, LidarStudyCfg):
+            return self
+        if isinstance(cam, OrthoNadirCfg) or getattr(cam, "aperture_radius_m", 0.0) > 0:
+            raise ValueError(
+                "render.camera: a lidar study needs a perspective pinhole camera (the sensor "
+                "sits at its centre): kind perspective or rover_mast"
+            )
+        if s.sensor == "steered_beam":
+            return self
+        block = LIDAR_BLOCKS[s.sensor]
+        rw, rh = getattr(s.options, block).receiver_px
+        if round(cam.height * rw / cam.width) != rh:
+            raise ValueError(
+                f"study.options.{block}.receiver_px: ({rw}, {rh}) must keep the camera's "
+                f"aspect ({cam.width} x {cam.height}), e.g. ({rw}, {round(cam.height * rw / cam.width)})"
+            )
+        if s.sensor == "micromirror_flash" and isinstance(cam, PerspectiveCfg):
+            if cam.fov_deg is None and (cam.cx, cam.cy) != (cam.width / 2, cam.height / 2):
+                raise ValueError(
+                    "render.camera: a micromirror flash needs a centred principal point "
+                    "(give fov_deg)"
+                )
         return self

@@ -1,4 +1,5 @@
-"""Study sections of the schema: the sampling study (paper section 4) and the scanner study (section 5)."""
+"""Study sections of the schema: the sampling study (paper section 4), the scanner study
+(section 5) and the image-directed LIDAR study (its sensor options in :mod:`simlunar.config.lidar`)."""
 
 from __future__ import annotations
 
@@ -8,20 +9,16 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
-    PositiveInt,
     field_validator,
     model_validator,
 )
 
 from simlunar.config.fields import (
-    Deg,
     Density,
     Metres,
-    Px,
-    PxCount,
     _Model,
-    _tagged_union,
 )
+from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
     FEATURE_OPTION_KEYS,
     CoefficientsCfg,
@@ -33,9 +30,7 @@ from simlunar.config.planners import (  # noqa: F401 - the schema's planner mode
     check_planner_options,
 )
 from simlunar.config.quantities import log_spaced
-from simlunar.config.render import MAX_SPP
 from simlunar.planner import MEASURING, ORACLES, STRATEGIES
-from simlunar.scanner.scans import SCAN_PLANNERS
 
 
 # --------------------------------------------------------------------------- studies
@@ -122,157 +117,59 @@ class SamplingStudyCfg(_Model):
         return self
 
 
-class RigCfg(_Model):
-    """Adjustments of the rig preset (:mod:`simlunar.scanner.rigs`); null = the preset's."""
+#: the LIDARs of a lidar study and the block of ``options`` each reads
+LIDAR_BLOCKS = {
+    "steered_beam": "steered_beam",
+    "flash": "flash",
+    "micromirror_flash": "micromirror",
+}
 
-    fill: float = Field(0.9, gt=0, le=1, description="projection footprint / terrain side")
-    fov_x_deg: Deg | None = Field(
-        None,
-        gt=0,
-        lt=180,
-        description="projector horizontal field of view (50 moonyard, 30 aerial)",
+
+class LidarStudyCfg(_Model):
+    """Image-directed LIDAR (:func:`simlunar.study.lidar.run_lidar_study`; docs/lidar.md):
+    planners -> a time-of-flight sensor at the guide camera -> reconstruction -> scores, every
+    row with its modelled scan time (``seconds``)."""
+
+    kind: Literal["lidar"]
+    sensor: Literal["steered_beam", "flash", "micromirror_flash"] = Field(
+        "steered_beam",
+        description="steered_beam (gimbal / galvanometer), flash (receiver array; revisits "
+        "directed by the plan) or micromirror_flash (lights only the planned pixels)",
     )
-    cam_fov_x_deg: Deg | None = Field(
-        None, gt=0, lt=180, description="triangulation camera field of view; null = projector's"
+    planners: list[str] = Field(
+        default_factory=lambda: ["wavelet", "random", "grid"],
+        min_length=1,
+        description="planner strategies (from the guide image); unused by a flash without revisits",
     )
-    distance_m: Metres | None = Field(
-        None, gt=0, description="moonyard: projector standoff; null = fit the terrain"
+    densities: Annotated[
+        list[Density],
+        BeforeValidator(_densities, json_schema_input_type=list[Density] | DensityRange),
+    ] = Field(
+        default_factory=lambda: [1 / 64, 1 / 256],
+        min_length=1,
+        description="planned pixels k / N of the guide view",
     )
-    altitude_m: Metres | None = Field(
-        None, gt=0, description="aerial: projector altitude; null = fit the terrain"
-    )
-    elevation_deg: Deg | None = Field(
-        None, gt=0, le=90, description="moonyard: projector elevation (default 70)"
-    )
-    azimuth_deg: Deg | None = Field(None, ge=-360, le=360, description="projector azimuth")
-    baseline_m: Metres | None = Field(
-        None, gt=0, description="camera offset; null = 0.25 (moonyard) / 0.15 (aerial) x standoff"
-    )
-    verge: bool = Field(True, description="camera verged on the target")
-    aperture_radius_m: Metres = Field(0.0, ge=0, description="camera thin lens; 0 = pinhole")
-    focus_distance_m: Metres | None = Field(None, gt=0, description="null = the target")
-
-
-class GrayOptsCfg(_Model):
-    """Gray-code scan options (:func:`simlunar.scanner.scans.gray_code_scan`)."""
-
-    black_threshold: float = Field(0.05, ge=0, le=1, description="validity (frame units)")
-    white_threshold: float = Field(0.01, ge=0, le=1, description="bit reliability (frame units)")
-    inverses: Literal["linearity", "render"] = "linearity"
-    method: Literal["plane", "rays"] = "plane"
-    require_reliable: bool = True
-    subpixel: bool = Field(False, description="sub-pixel stripe-edge refinement")
-
-
-class DotOptsCfg(_Model):
-    """Dot scan options (:func:`simlunar.scanner.scans.dot_scan`)."""
-
-    exact: bool = Field(False, description="one dot per frame (reference mode)")
-    radius_px: Px = Field(0.0, description="dot radius (projector px); 0 = one pixel")
-    min_proj_spacing_px: Px = Field(8.0, description="scheduling spacing (projector px)")
-    min_cam_spacing_px: Px = Field(6.0, description="scheduling spacing (camera px)")
-    tol_px: Px = Field(2.0, description="matching tolerance (camera px)")
-    rel_threshold: float = Field(0.02, ge=0, le=1, description="relative blob threshold")
-    abs_threshold: float = Field(0.02, ge=0, le=1, description="absolute blob threshold")
-    batch: PositiveInt = Field(8, description="frames per render call (memory only)")
-
-    @model_validator(mode="after")
-    def _spacings(self) -> DotOptsCfg:
-        from simlunar.scanner.scheduling import check_spacings
-
-        try:
-            check_spacings(
-                self.min_cam_spacing_px, self.min_proj_spacing_px
-            )  # the scheduler's rule
-        except ValueError:
-            zero = "min_proj_spacing_px" if self.min_proj_spacing_px <= 0 else "min_cam_spacing_px"
-            raise ValueError(f"{zero}: scheduling spacings must be > 0 px") from None
-        return self
-
-
-class CaptureOptsCfg(_Model):
-    """Render-capture options (:class:`simlunar.render.capture.RenderCapture`)."""
-
-    sparse_integrator: Literal["path", "ptracer", "lit"] = Field(
-        "path",
-        description="integrator for sparse patterns (dot frames): path tracer, ptracer "
-        "(Mitsuba's light tracer, paths per camera pixel) or lit (paths per lit projector "
-        "pixel: a dot frame costs what its dots cost; docs/scanner.md)",
-    )
-    sparse_spp: PositiveInt | None = Field(
-        None, le=MAX_SPP, description="samples per pixel for sparse patterns (null: render.spp)"
-    )
-    sparse_below: float = Field(
-        0.01, gt=0, le=1, description="largest lit fraction of projector pixels counted sparse"
-    )
-    sparse_particles: PositiveInt = Field(
-        256, description="lit only: light paths per lit projector pixel (at pattern value 1)"
-    )
-
-
-class ScannerOptionsCfg(_Model):
-    """Scanner study options: rig adjustments, gray-code, dot scan and capture options,
-    planner options."""
-
-    rig: RigCfg = Field(default_factory=RigCfg)
-    gray_opts: GrayOptsCfg = Field(default_factory=GrayOptsCfg)
-    dot_opts: DotOptsCfg = Field(default_factory=DotOptsCfg)
-    capture_opts: CaptureOptsCfg = Field(default_factory=CaptureOptsCfg)
+    trials: int = Field(3, ge=1, le=1000, description="planner draws and photon noise")
+    metrics: list[str] = Field(default_factory=lambda: ["mse", "grad"], min_length=1)
     planner_opts: dict[str, PlannerOptsCfg] = Field(
         default_factory=dict, description="planner name -> options (study.planners only)"
     )
-
-
-class ScannerStudyCfg(_Model):
-    """The structured-light scanner study of the paper's section 5
-    (:func:`simlunar.study.scanner.run_scanner_study`)."""
-
-    kind: Literal["scanner"]
-    modes: list[str] = Field(
-        default_factory=lambda: ["gray_code", "ambiguity_enhancement"],
-        min_length=1,
-        description="scan modes: gray_code, ambiguity_enhancement, data_reduction, ...",
+    hazard: HazardCfg | None = Field(
+        None, description="also score landing-hazard detection (precision / recall); null = off"
     )
-    planners: list[str] = Field(
-        default_factory=lambda: ["wavelet", "random"],
-        min_length=1,
-        description="what picks the dots (dot modes): a planner strategy (from the guide "
-        "image) or low_contrast (the gray-code pixels the projector lit least; "
-        "ambiguity_enhancement only)",
+    options: LidarOptionsCfg = Field(
+        default_factory=LidarOptionsCfg,
+        description="pulse, detector, ranging, transient, and the sensor's own block",
     )
-    budget: Density = Field(0.1, description="fraction of guide pixels rescanned / sampled")
-    trials: int = Field(1, ge=1, le=100)
-    metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
-    rig: Literal["moonyard", "aerial"] = Field("moonyard", description="rig preset")
-    projector_px: tuple[PxCount, PxCount] = Field(
-        (256, 192), description="projector (width, height)"
-    )
-    camera_px: tuple[PxCount, PxCount] = Field((256, 192), description="camera (width, height)")
-    guide_light: Literal["projector", "sun"] = Field(
-        "projector", description="guide image light: camera-centred projector or render.light"
-    )
-    scan_light: Literal["none", "sun"] = Field(
-        "none",
-        description="light on during the scan besides the projector: none (a dark scan, as in "
-        "the paper's lab) or sun (render.light, which must be a sun, and "
-        "render.ambient_radiance stay on: a daylight scan; docs/scanner.md)",
-    )
-    projector_gamma: float = Field(1.0, gt=0)
-    projector_blur_px: float = Field(0.0, ge=0, description="projector defocus sigma (px)")
-    camera_blur_px: float = Field(
-        0.0, ge=0, description="camera lens point-spread function, Gaussian sigma (camera px)"
-    )
-    options: ScannerOptionsCfg = Field(
-        default_factory=ScannerOptionsCfg,
-        description="rig adjustments (rig), gray_opts, dot_opts, planner_opts",
-    )
-    save_scans: bool = Field(
-        False,
-        description="write scans/unit<i>/ per unit: gray-code frames (8/16-bit PNG, OpenCV "
-        "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
+    terrain_seeds: int = Field(
+        1,
+        ge=1,
+        le=100,
+        description="repeat every sweep point on this many terrain realisations (intervals "
+        "over terrain seeds in the figures)",
     )
 
-    @field_validator("modes", "planners", "metrics")
+    @field_validator("planners", "metrics")
     @classmethod
     def _unique(cls, v: list[str]) -> list[str]:
         if len(set(v)) != len(v):
@@ -280,49 +177,24 @@ class ScannerStudyCfg(_Model):
         return v
 
     @model_validator(mode="after")
-    def _scans_need_gray_code(self):
-        if self.save_scans and not {"gray_code", "ambiguity_enhancement"} & set(self.modes):
-            raise ValueError(
-                "save_scans exports the gray-code scan: modes must include gray_code or "
-                "ambiguity_enhancement"
-            )
-        return self
-
-    @model_validator(mode="after")
-    def _options_fit(self) -> ScannerStudyCfg:
-
-        o = self.options
-        stray = sorted(set(o.planner_opts) - set(self.planners))
+    def _options_fit(self) -> LidarStudyCfg:
+        mine = LIDAR_BLOCKS[self.sensor]
+        default = LidarOptionsCfg()
+        for block in LIDAR_BLOCKS.values():
+            if block != mine and getattr(self.options, block) != getattr(default, block):
+                raise ValueError(
+                    f"options.{block}: not an option of the {self.sensor} sensor (set "
+                    f"options.{mine})"
+                )
+        stray = sorted(set(self.planner_opts) - set(self.planners))
         if stray:
             raise ValueError(
-                f"options.planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
+                f"planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
             )
-
-        scan_planners = [p for p in self.planners if p in SCAN_PLANNERS]
-        if scan_planners and "data_reduction" in self.modes:
-            raise ValueError(
-                f"planners: {scan_planners[0]} ranks the pixels of the gray-code scan, which "
-                "the data_reduction mode does not make (use it with ambiguity_enhancement)"
-            )
-        for name in scan_planners:
-            if name in o.planner_opts:
-                raise ValueError(f"options.planner_opts.{name}: {name} takes no options")
-        for name in self.planners:
-            opts = o.planner_opts.get(name)
+        for name, opts in self.planner_opts.items():
             if name in STRATEGIES:
                 try:
-                    check_planner_options(name, opts or PlannerOptsCfg())
+                    check_planner_options(name, opts)
                 except ValueError as exc:
-                    where = (
-                        f"options.planner_opts.{name}" if opts is not None else f"planners ({name})"
-                    )
-                    raise ValueError(f"{where}.{exc}") from None
-        moonyard_only = ("distance_m", "elevation_deg")
-        aerial_only = ("altitude_m",)
-        for key in aerial_only if self.rig == "moonyard" else moonyard_only:
-            if getattr(o.rig, key) is not None:
-                raise ValueError(f"options.rig.{key}: not an option of the {self.rig} rig")
+                    raise ValueError(f"planner_opts.{name}.{exc}") from None
         return self
-
-
-StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg)

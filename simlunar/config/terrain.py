@@ -188,6 +188,18 @@ class TerrainCfg(_Model):
                 raise ValueError(f"preset: {exc.problem}") from None
         if self.file is not None and self.seed_index != 0:
             raise ValueError("seed_index applies to a preset only (a DEM file has one terrain)")
+        # every key set must change the result: a DEM file's keys on a preset (and the
+        # preset's scale on a file) would be recorded in config.yaml yet change nothing
+        if self.preset is not None and self.spacing_m is not None:
+            raise ValueError(
+                "spacing_m: the cell size of a DEM file (terrain.file) has no effect on a "
+                "preset; change the preset's grid with overrides: {grid: {spacing_m: ...}}"
+            )
+        if self.file is not None and self.scale != 1.0:
+            raise ValueError(
+                "scale: shrinks a preset's grid and has no effect on a DEM file (terrain.file); "
+                "resample the file instead"
+            )
         return self
 
 

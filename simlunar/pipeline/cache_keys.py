@@ -39,6 +39,8 @@ def without_new_defaults(study: dict) -> dict:
 
     if isinstance(out.get("strategy_options"), dict):
         out["strategy_options"] = {k: strip(v) for k, v in out["strategy_options"].items()}
+    if isinstance(out.get("planner_opts"), dict):  # the lidar study's planners
+        out["planner_opts"] = {k: strip(v) for k, v in out["planner_opts"].items()}
     options = out.get("options")
     if isinstance(options, dict) and isinstance(options.get("planner_opts"), dict):
         planner_opts = {k: strip(v) for k, v in options["planner_opts"].items()}

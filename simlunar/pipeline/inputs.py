@@ -14,8 +14,11 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.config.terrain import PresetError, merged_preset, preset_path
+from simlunar.config.translate import terrain_params
 from simlunar.errors import ConfigError
 from simlunar.results.store import file_sha256
+from simlunar.terrain.io import GDAL_FORMATS, load_albedo, load_dem
 
 #: NaN heights (holes) a DEM may have. Holes leave the terrain mesh open; the rays that miss
 #: it take the depth of their nearest valid pixel (``pipeline.unit.fill_invalid``) and are scored as
@@ -54,8 +57,6 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
     out: dict[str, Path] = {}
     preset = t.get("preset")
     if preset:
-        from simlunar.config.terrain import PresetError, preset_path
-
         with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
             out["terrain.preset"] = preset_path(str(preset))
     for key in ("file", "albedo_file"):
@@ -159,7 +160,6 @@ def grid_file_shape(path: Path, key: str) -> tuple[int, ...] | None:
     reader reports an unreadable file). A ``.npy`` / ``.npz`` whose header promises more
     bytes than the file holds is refused (``np.load`` would allocate the promised array
     before finding out)."""
-    from simlunar.terrain.io import GDAL_FORMATS
 
     suf = path.suffix.lower()
     try:
@@ -295,8 +295,6 @@ def terrain_facts(t: Any) -> TerrainFacts:
 
 def _preset_params(t: Any):
     """The preset's ``TerrainParams`` (grid size, spacing, origin) as the unit will build them."""
-    from simlunar.config.terrain import merged_preset
-    from simlunar.config.translate import terrain_params
 
     return terrain_params(merged_preset(t.preset, t.overrides), scale=t.scale)
 
@@ -321,7 +319,6 @@ def _check_extent(f: TerrainFacts, key: str) -> None:
 
 def _read_grid(path: Path, key: str, *, spacing: float | None):
     """``load_dem`` with every failure of the file turned into one line naming it."""
-    from simlunar.terrain.io import load_dem
 
     try:
         if path.stat().st_size == 0:
@@ -344,7 +341,6 @@ def _read_grid(path: Path, key: str, *, spacing: float | None):
 def _read_albedo(path: Path, key: str, shape, valid) -> np.ndarray:
     """:func:`simlunar.terrain.io.load_albedo` (the unit's reader) with every failure turned
     into one line naming ``key`` and the file."""
-    from simlunar.terrain.io import load_albedo
 
     try:
         if path.stat().st_size == 0:

@@ -21,6 +21,7 @@ of the unit's cache key, so a changed DEM is recomputed.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,7 +29,10 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.config.schema import ExperimentCfg
+from simlunar.config.translate import rig_kwargs
 from simlunar.errors import ConfigError, ResultFolderError
+from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.pipeline.inputs import (
     MAX_ABS_COORD_M,
     MAX_NAN_FRACTION,
@@ -36,6 +40,12 @@ from simlunar.pipeline.inputs import (
     check_size,
     terrain_facts,
 )
+from simlunar.planner import check_k
+from simlunar.render.backend import choose_variant
+from simlunar.results.records import unit_label
+from simlunar.scanner.gray_code import num_bits
+from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.study.scanner import aim_rig_at_terrain
 
 #: smallest sample count of a density (the planners and the Delaunay reconstruction need 3)
 MIN_SAMPLES = 3
@@ -89,7 +99,6 @@ def check_renderer() -> None:
     wanted = os.environ.get("SIMLUNAR_VARIANT")
     if not wanted:
         return  # the backend falls back by itself
-    from simlunar.render.backend import choose_variant
 
     try:
         choose_variant()
@@ -138,7 +147,6 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
         return
     if getattr(cam, "kind", None) != "perspective":
         return
-    from simlunar.geometry import Camera, Intrinsics, Pose
 
     pos = np.asarray(cam.position_m, float)
     target = np.asarray(cam.look_at_m, float)
@@ -218,7 +226,8 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
     :data:`MAX_CELLS`; scanner sizes are positive and within the limits."""
     s = cfg.study
     n = shape[0] * shape[1]
-    if getattr(s, "kind", "sampling") == "sampling":
+    kind = getattr(s, "kind", "sampling")
+    if kind in ("sampling", "lidar"):  # a lidar study plans k = density x guide pixels too
         for i, d in enumerate(s.densities):
             k = round(d * n)
             if k < MIN_SAMPLES:
@@ -243,13 +252,43 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
 DOT_MODES = ("ambiguity_enhancement", "data_reduction")
 
 
+#: time-histogram channels the transient film keeps per pixel and bin (mitransient's RGBA)
+TRANSIENT_CHANNELS = 4
+
+
+def check_time_bins(s: Any, facts: TerrainFacts) -> None:
+    """A LIDAR study's transient films (pixels x time bins x channels) against
+    :data:`MAX_FRAME_PIXELS`, before anything is rendered.
+
+    A steered beam renders ``batch`` beams over ``window_m``; a flash receiver covers the
+    terrain's depth span in view, bounded here by the diagonal of its bounding box, plus the
+    margin on both sides (its exact window is known only after the guide render).
+    """
+    o = s.options
+    if s.sensor == "steered_beam":
+        bins = math.ceil(o.steered_beam.window_m / o.bin_range_m)
+        pixels = o.steered_beam.batch
+        what = f"{pixels} beams"
+    else:
+        xmin, xmax, ymin, ymax = facts.extent
+        span = math.hypot(xmax - xmin, ymax - ymin, facts.zmax - facts.zmin)
+        bins = math.ceil((span + 2 * o.margin_m) / o.bin_range_m)
+        block = o.flash if s.sensor == "flash" else o.micromirror
+        w, h = block.receiver_px
+        pixels = w * h
+        what = f"{w} x {h} receiver pixels"
+    check_size(
+        "study.options.bin_range_m",
+        f"{what} x {bins} time bins x {TRANSIENT_CHANNELS} channels",
+        pixels * bins * TRANSIENT_CHANNELS,
+        "SIMLUNAR_MAX_FRAME_PIXELS",
+    )
+
+
 def check_scanner_budget(s: Any) -> None:
     """A scanner study's sizes against :data:`MAX_CELLS` / :data:`MAX_FRAME_PIXELS`, and its
     dot budget against the grid the dots are planned on (the projector's: guide pixel (r, c)
     is projector pixel (r, c)), with the planners' own sample-count rule."""
-    from simlunar.planner import check_k
-    from simlunar.scanner.gray_code import num_bits
-    from simlunar.scanner.scans import SCAN_PLANNERS
 
     (pw, ph), (cw, ch) = s.projector_px, s.camera_px
     check_size("study.projector_px", f"{pw} x {ph} pixels", pw * ph)
@@ -292,9 +331,6 @@ def check_rig(cfg: Any, facts: TerrainFacts, *, key: str = "study.options.rig") 
     projector's frustum must meet the terrain's bounding box, and the triangulation camera
     must see where they meet. A cheap ray cast instead of a render that finds nothing."""
     from types import SimpleNamespace
-
-    from simlunar.config.translate import rig_kwargs
-    from simlunar.study.scanner import aim_rig_at_terrain
 
     stand_in = SimpleNamespace(extent=facts.extent, heights=np.array([facts.zmid]))
     try:
@@ -355,7 +391,6 @@ def check_units(units: list[Any]) -> Preflight:
     ``units`` are :class:`~simlunar.results.records.WorkUnit` (their plain ``config``).
     Errors of a sweep point name the point: ``sweep point 3 (elevation_deg=0): ...``.
     """
-    from simlunar.config.schema import ExperimentCfg
 
     facts = []
     for u in units:
@@ -364,12 +399,12 @@ def check_units(units: list[Any]) -> Preflight:
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))
+            if getattr(cfg.study, "kind", None) == "lidar":
+                check_time_bins(cfg.study, f)
             if getattr(cfg.study, "kind", None) == "scanner":
                 check_rig(cfg, f)
         except ConfigError as exc:
             if len(units) > 1 and u.sweep:
-                from simlunar.results.records import unit_label
-
                 raise ConfigError(f"sweep point {u.index} ({unit_label(u)}): {exc}") from None
             raise
         facts.append(f)

@@ -18,8 +18,6 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-import subprocess
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -29,15 +27,29 @@ from typing import Any
 import simlunar
 from simlunar.config.loading import apply_sweep_value, to_plain
 from simlunar.config.schema import ExperimentCfg
-from simlunar.config.yamlio import dump_yaml, safe_load_text
+from simlunar.config.yamlio import dump_yaml
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
 from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.cache_keys import without_new_defaults
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.inputs import input_hashes
+from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
-from simlunar.results.folder import prune_figures, read_folder_config
+from simlunar.plotting.tables import scanner_tables
+from simlunar.results.exports import write_scan_export
+from simlunar.results.figures import write_figures_pruned
+from simlunar.results.folder import (
+    _check_writable,
+    _invalidate,
+    _read_provenance,
+    _remove_empty,
+    _scans_present,
+    claim_folder,
+    folder_complete,
+    prune_scans,
+    scan_folders,
+)
 from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
     FolderLock,
@@ -45,7 +57,13 @@ from simlunar.results.store import (
     atomic_write_json,
     atomic_write_text,
     csv_text,
-    file_sha256,
+)
+from simlunar.results.summaries import (
+    _names,
+    _notes,
+    _sampling_tables,
+    _write_provenance,
+    tables_code,
 )
 
 #: keys that do not change a unit's numbers (excluded from its cache key)
@@ -155,30 +173,6 @@ class RunSummary:
     @property
     def figures_dir(self) -> Path:
         return self.out_dir / "figures"
-
-
-def _git_commit() -> dict[str, Any]:
-    root = Path(__file__).resolve().parents[2]
-    try:
-        head = subprocess.run(
-            ["git", "-C", str(root), "rev-parse", "HEAD"],
-            capture_output=True,
-            text=True,
-            timeout=10,
-            check=True,
-        ).stdout.strip()
-        dirty = (
-            subprocess.run(
-                ["git", "-C", str(root), "status", "--porcelain", "--", "simlunar"],
-                capture_output=True,
-                text=True,
-                timeout=10,
-            ).stdout.strip()
-            != ""
-        )
-        return {"commit": head, "dirty": dirty}
-    except (OSError, subprocess.SubprocessError):
-        return {"commit": None, "dirty": None}
 
 
 def _sort_rows(rows: list[dict], config: dict) -> list[dict]:
@@ -307,120 +301,6 @@ def run_experiment(
             close()
 
 
-def _remove_empty(out: Path) -> None:
-    try:
-        out.rmdir()
-    except OSError:
-        pass
-
-
-def _first_difference(old: Any, new: Any, path: str = "") -> str:
-    """``key.path: <old> here, <new> now`` for the first difference of two plain configs."""
-    if isinstance(old, dict) and isinstance(new, dict):
-        for k in list(old) + [k for k in new if k not in old]:
-            if old.get(k, "<absent>") != new.get(k, "<absent>"):
-                return _first_difference(
-                    old.get(k, "<absent>"), new.get(k, "<absent>"), f"{path}.{k}" if path else k
-                )
-    return f"{path or '<root>'}: {json.dumps(old, default=str)} in the folder, {json.dumps(new, default=str)} now"
-
-
-def claim_folder(out: Path, config_text: str) -> None:
-    """Make ``out`` the folder of this configuration, or refuse (nothing is written then).
-
-    A folder with a ``config.yaml`` takes only that same configuration (a resume or a rerun);
-    a folder without one must be empty (hidden files aside). The new ``config.yaml`` is
-    written only into an empty folder.
-    """
-    path = out / "config.yaml"
-    new = safe_load_text(config_text)
-    if path.exists():
-        old = read_folder_config(path)
-        if old != new:
-            raise ResultFolderError(
-                f"{out} holds the results of another configuration "
-                f"({_first_difference(old, new)}); choose another --out or delete the folder"
-            )
-        if path.read_text() != config_text:
-            atomic_write_text(path, config_text)  # same config, written by an older version
-        return
-    others = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
-    if others:
-        raise ResultFolderError(
-            f"{out}: not empty and not a simlunar result folder (no config.yaml, found "
-            f"{others[0]}); choose an empty or new folder"
-        )
-    atomic_write_text(path, config_text)
-
-
-#: files that summarise the units; removed before the units change, written again at the end
-#: (provenance.json first: without it the folder reads as unfinished)
-RESULT_FILES = ("provenance.json", "results.csv", "scores.md", "scores.tex", "scores.csv")
-
-
-def folder_complete(out: Path, keys: list[str]) -> bool:
-    """Whether the summary files are present and belong to these units and this config."""
-    try:
-        prov = json.loads((out / "provenance.json").read_text())
-        files = prov["files"]
-        if prov["unit_keys"] != keys:
-            return False
-        return all(file_sha256(out / name) == digest for name, digest in files.items())
-    except (OSError, ValueError, KeyError, TypeError):
-        return False
-
-
-def _invalidate(out: Path) -> None:
-    for name in RESULT_FILES:
-        (out / name).unlink(missing_ok=True)
-    prune_figures(out, keep=())
-
-
-def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
-    """``{"unit<i>": unit key}``: the ``scans/`` folders these units export (units with
-    ``study.save_scans``; of units sharing a key, the first, which is the one computed)."""
-    out: dict[str, str] = {}
-    seen: set[str] = set()
-    for u in units:
-        if (u.config.get("study") or {}).get("save_scans") and u.key not in seen:
-            seen.add(u.key)
-            out[f"unit{u.index}"] = u.key
-    return out
-
-
-def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
-    from simlunar.results.exports import export_complete
-
-    name = f"unit{u.index}"
-    if scan_dirs.get(name) != u.key:
-        return True  # exports nothing (or a unit of the same key does)
-    return export_complete(out / "scans" / name, u.key)
-
-
-def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
-    """Remove ``scans/unit<i>/`` folders that do not hold the export of the unit that now
-    has index i (another configuration's, an interrupted one, or save_scans turned off)."""
-    import re
-    import shutil
-
-    from simlunar.results.exports import export_complete
-
-    folder = out / "scans"
-    removed: list[Path] = []
-    if not folder.is_dir():
-        return removed
-    for p in sorted(folder.iterdir()):
-        if not (p.is_dir() and re.fullmatch(r"unit\d+", p.name)):
-            continue  # only what the runner writes
-        key = scan_dirs.get(p.name)
-        if key is None or not export_complete(p, key):
-            shutil.rmtree(p)
-            removed.append(p)
-    if not any(folder.iterdir()):
-        folder.rmdir()
-    return removed
-
-
 def _run_locked(
     cfg, out, units, checks, config_text, executor, compute, progress, figures, t_start
 ) -> RunSummary:
@@ -442,6 +322,15 @@ def _run_locked(
     stale = cache.keys() - set(keys)
     # nothing of a finished folder is removed before this run is known to be able to write
     _check_writable(out, scan_dirs)
+    previous = _read_provenance(out)  # before anything is removed: its run time is kept
+    if (
+        not todo
+        and not stale
+        and folder_complete(out, keys)
+        and previous.get("tables_code") == tables_code()
+    ):
+        # nothing changed: the tables stand; provenance adds this rerun's time
+        return _rerun(cfg, out, units, checks, figures, t_start, previous, records)
     if todo or stale or not folder_complete(out, keys):
         # the folder's summary and figures no longer describe its units: remove them before
         # any unit changes, so an interrupted run never leaves them beside other units
@@ -461,8 +350,6 @@ def _run_locked(
             arrays = result.pop("arrays", {}) or {}
             scans = result.pop("scans", None)
             if scans is not None:  # before the cache entry: a cached unit has its scans
-                from simlunar.results.exports import write_scan_export
-
                 write_scan_export(out / "scans" / f"unit{u.index}", scans, unit_key=u.key)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
             cache.save(u.key, record, arrays)
@@ -490,21 +377,27 @@ def _run_locked(
     atomic_write_text(out / "results.csv", csv_text(rows, columns))
 
     if cfg.study.kind == "scanner":
-        from simlunar.plotting.tables import scanner_tables
-
         md, tex = scanner_tables(rows, metrics=_names(units, "metrics"), title=cfg.name)
+    elif cfg.study.kind == "lidar":
+        from simlunar.plotting.lidar import lidar_tables
+
+        # one table block per sweep point; terrain seeds pooled (their interval in the figures)
+        by = next(iter(cfg.sweep)) if len(cfg.sweep) == 1 else ("unit" if cfg.sweep else None)
+        md, tex = lidar_tables(rows, metrics=_names(units, "metrics"), title=cfg.name, by=by)
     else:
         md, tex = _sampling_tables(cfg, units, records, rows, out)
     atomic_write_text(out / "scores.md", md)
     atomic_write_text(out / "scores.tex", tex)
 
     elapsed = time.perf_counter() - t_start
-    _write_provenance(out, cfg, units, records, executor, n_cached, elapsed, checks)
+    timings = {"run_s": round(elapsed, 3)}
+    if not todo and "run_s" in (previous.get("timings") or {}):
+        # every unit cached: the run that computed them keeps its time; this one is added
+        timings = {"run_s": previous["timings"]["run_s"], "rerun_s": round(elapsed, 3)}
+    _write_provenance(out, cfg, units, records, executor, n_cached, timings, checks)
 
     written: list[Path] = []
     if figures and cfg.figures.enabled:
-        from simlunar.results.figures import write_figures_pruned
-
         written = write_figures_pruned(out)
     return RunSummary(
         out,
@@ -518,29 +411,29 @@ def _run_locked(
     )
 
 
-def _check_writable(out: Path, scan_dirs: dict[str, str]) -> None:
-    """Write (and remove) a small file in each folder the run writes into, so a full disk,
-    a quota or a folder made read-only fails here (exit 3) before any result is deleted."""
-    import os
-    import tempfile
-
-    folders = [out, out / "units", out / "figures"] + ([out / "scans"] if scan_dirs else [])
-    for d in folders:
-        if d.exists() and not d.is_dir():
-            raise ResultFolderError(f"--out {out}: {d} is not a folder")
-        target = d if d.is_dir() else out
-        try:
-            fd, tmp = tempfile.mkstemp(prefix=".simlunar-probe.", dir=target)
-        except OSError as exc:
-            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
-        try:
-            os.write(fd, b"\0" * 65536)
-            os.fsync(fd)
-        except OSError as exc:
-            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
-        finally:
-            os.close(fd)
-            os.unlink(tmp)
+def _rerun(cfg, out, units, checks, figures, t_start, previous, records) -> RunSummary:
+    """A rerun with nothing to compute: the tables stand, provenance records the rerun's
+    time beside the original run's, the figures are redrawn only if their inputs changed."""
+    md = (out / "scores.md").read_text()
+    prov = dict(previous)
+    timings = dict(prov.get("timings") or {})
+    timings["rerun_s"] = round(time.perf_counter() - t_start, 3)
+    prov["timings"] = timings
+    prov["units"] = {"total": len(units), "cached": len(units), "computed": 0}
+    atomic_write_json(out / "provenance.json", prov)
+    written: list[Path] = []
+    if figures and cfg.figures.enabled:
+        written = write_figures_pruned(out)
+    return RunSummary(
+        out,
+        len(units),
+        len(units),
+        0,
+        time.perf_counter() - t_start,
+        md,
+        written,
+        _notes(checks, units, records),
+    )
 
 
 def _kept(out: Path, done: int, total: int, what: str = "") -> str:
@@ -549,199 +442,3 @@ def _kept(out: Path, done: int, total: int, what: str = "") -> str:
         f"{head}{done} of {total} units finished and kept in {out / 'units'}; "
         "rerun the same command to resume"
     )
-
-
-def _notes(checks, units, records) -> list[str]:
-    """Lines for the user about what the run did to its inputs (NaN holes filled)."""
-    notes = []
-    for h in checks.holes():
-        notes.append(
-            f"note: {h['file']}: {100 * h['nan_fraction']:.2f}% of the DEM heights are NaN "
-            "(holes); ground-truth pixels without a hit take the depth of the nearest valid "
-            "pixel (see provenance.json)"
-        )
-    return notes
-
-
-def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
-    """Score tables (pooled over terrain seeds, with intervals), samples-saved tables and
-    ``scores.csv`` (per-seed and pooled scores) of a sampling experiment."""
-    from simlunar.plotting.tables import (
-        Cell,
-        headroom_tables,
-        samples_saved_tables,
-        score_tables,
-    )
-    from simlunar.results import aggregate
-
-    recs = [{**records[u.key], "sweep": u.sweep, "config": u.config} for u in units]
-    points = aggregate.summarise(recs, rows, seed=cfg.seed)
-    labelled = []
-    for p in points:
-        scores = {}
-        for m in p.metrics:
-            res, sep = p.intervals.get(m), p.separation.get(m)
-            if res is None:
-                continue
-            scores[m] = {
-                s: Cell(
-                    *res.interval(s), bold=sep is not None and sep.significant and s == sep.best
-                )
-                for s in res.strategies
-            }
-        labelled.append((p.label, scores))
-    strategies = _names(units, "strategies")
-    # the scored names: with study.score_region, <metric>_interior rows too
-    metrics = list(dict.fromkeys(m for p in points for m in p.metrics))
-    seeds = sorted({len(p.seeds) for p in points})
-    trials = sorted({r.n_trials for p in points for r in p.intervals.values()})
-    n_seeds = "/".join(map(str, seeds))
-    note = (
-        f"Scores pool {n_seeds} terrain seed(s) x {'/'.join(map(str, trials))} trials; "
-        "[95 % interval]: paired bootstrap over terrain seeds (one seed: over trials), "
-        "percentile, small-sample widened. Bold: the best score of a row where the paired "
-        "bootstrap 95 % interval of its difference to the runner-up excludes 0."
-    )
-    md, tex = score_tables(
-        labelled, strategies=strategies, metrics=metrics, title=cfg.name, note=note
-    )
-    md2, tex2 = samples_saved_tables(_saved_entries(points), title=cfg.name)
-    if md2:
-        md, tex = md + "\n" + md2, tex + "\n" + tex2
-    md3, tex3 = headroom_tables(_headroom_entries(points), title=cfg.name)
-    if md3:
-        md, tex = md + "\n" + md3, tex + "\n" + tex3
-    atomic_write_text(
-        out / "scores.csv",
-        csv_text(aggregate.scores_csv_rows(points, recs), aggregate.SCORES_CSV_COLUMNS),
-    )
-    return md, tex
-
-
-def _saved_entries(points) -> list[dict]:
-    """Samples-saved table entries: per point, per reference, the first metric and (with
-    ``score_region: both``) its interior-only twin."""
-    return [
-        {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": metric,
-         "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
-         "factor": sv.factor, "flag": sv.flag, "summary": sv.summary, "n_summary": sv.n_summary}
-        for p in points
-        for metric, saved in ((p.saved_metric, p.saved), (f"{p.saved_metric}_interior",
-                                                          p.saved_interior))
-        for ref, sv in saved.items()
-    ]  # fmt: skip
-
-
-def _headroom_entries(points) -> list[dict]:
-    """Headroom-captured table entries: per point and oracle label."""
-    return [
-        {"label": p.label if len(points) > 1 else "", "oracle": o, "metric": p.saved_metric,
-         "strategies": [s for s in p.strategies if s in by], "captured": by,
-         "saved": p.saved_per_seed, "seeds": p.seeds}
-        for p in points
-        for o, by in p.headroom.items()
-    ]  # fmt: skip
-
-
-def _names(units: list[WorkUnit], key: str) -> list[str]:
-    out: list[str] = []
-    for u in units:
-        for n in u.config.get("study", {}).get(key) or []:
-            if n not in out:
-                out.append(n)
-    return out
-
-
-def _write_provenance(out: Path, cfg, units, records, executor, n_cached, elapsed, checks) -> None:
-    from simlunar.render.backend import versions
-
-    variants = sorted(
-        {
-            str(r.get("meta", {}).get("variant"))
-            for r in records.values()
-            if r.get("meta", {}).get("variant")
-        }
-    )
-    prov = {
-        "experiment": cfg.name,
-        "seed": cfg.seed,
-        "versions": versions(),
-        "variant": variants[0] if len(variants) == 1 else variants,
-        "git": _git_commit(),
-        "python": sys.version.split()[0],
-        "executor": executor.describe(),
-        "units": {"total": len(units), "cached": n_cached, "computed": len(units) - n_cached},
-        "timings": {
-            "run_s": round(elapsed, 3),
-            "units": {u.key: records[u.key].get("timings", {}) for u in units},
-        },
-        "unit_keys": [u.key for u in units],
-        "simlunar": simlunar.__version__,
-        "inputs": _inputs(units),
-        "terrain_holes": checks.holes(),
-        "filled_pixels": {
-            u.key: records[u.key].get("meta", {}).get("invalid_pixels_filled") for u in units
-        },
-        # the folder's files this provenance belongs to (checked by `simlunar figures`)
-        "files": {
-            name: file_sha256(out / name)
-            for name in ("config.yaml", *RESULT_FILES[1:])
-            if (out / name).is_file()
-        },
-    }
-    atomic_write_json(out / "provenance.json", prov)
-
-
-def _inputs(units: list[WorkUnit]) -> list[dict[str, str]]:
-    """Distinct input files of the units: key path, path and SHA-256."""
-    seen: dict[tuple, dict[str, str]] = {}
-    for u in units:
-        for key, v in u.inputs.items():
-            seen.setdefault((key, v["path"], v["sha256"]), {"key": key, **v})
-    return list(seen.values())
-
-
-class _Bar:
-    def __init__(self, total: int, done: int, name: str):
-        from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
-
-        self.p = Progress(
-            TextColumn(f"[bold]{name}[/] units"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            TextColumn("ETA"),
-            TimeRemainingColumn(),
-            console=Console(stderr=True),
-            transient=False,
-        )
-        self.task = self.p.add_task("units", total=total, completed=done)
-        self.sub = None
-        self.p.start()
-
-    def stage(self, name: str, done: int, total: int) -> None:
-        """Within-unit progress (in-process runs only): a second bar for the current stage."""
-        if self.sub is None:
-            self.sub = self.p.add_task(name, total=total)
-        self.p.update(self.sub, completed=done, total=total, description=name)
-
-    def advance(self) -> None:
-        self.p.advance(self.task)
-        if self.sub is not None:
-            self.p.remove_task(self.sub)
-            self.sub = None
-
-    def stop(self) -> None:
-        self.p.stop()
-
-
-def _progress(enabled: bool, total: int, done: int, name: str) -> _Bar | None:
-    return _Bar(total, done, name) if enabled else None

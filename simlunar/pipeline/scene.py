@@ -15,12 +15,33 @@ import numpy as np
 
 from simlunar.atomic import atomic_write
 from simlunar.config.scene import SceneCfg
+from simlunar.errors import ResultFolderError
 from simlunar.imaging.exr import write_exr
 from simlunar.imaging.png import write_png_preview
 from simlunar.pipeline.unit import int_seed, luminance, scene_inputs, sensor_image, stage_seeds
 from simlunar.render import render
 
-__all__ = ["render_scene"]
+__all__ = ["check_render_folder", "render_scene"]
+
+#: the file that marks a folder as written by ``simlunar render``
+RENDER_MARK = "scene.json"
+
+
+def check_render_folder(out_dir) -> None:
+    """Refuse (:class:`ResultFolderError`) a non-empty ``out_dir`` that is not a render
+    folder (no ``scene.json``), as ``simlunar run`` refuses a folder that is not its own:
+    rendering into an experiment's result folder, or any other, would mix files."""
+    out = Path(out_dir)
+    if not out.is_dir() or (out / RENDER_MARK).is_file():
+        return
+    others = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
+    if others:
+        what = (
+            "an experiment's result folder"
+            if (out / "config.yaml").is_file()
+            else f"not a render folder (no {RENDER_MARK}, found {others[0]})"
+        )
+        raise ResultFolderError(f"--out {out}: not empty and {what}; choose an empty or new folder")
 
 
 def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
@@ -81,7 +102,7 @@ def render_scene(cfg: SceneCfg, out_dir) -> dict[str, Path]:
         "render_s": round(t2 - t1, 3),
         "shape": list(res.image.shape[:2]),
     }
-    paths["scene"] = _write_text(out / "scene.json", json.dumps(meta, indent=1))
+    paths["scene"] = _write_text(out / RENDER_MARK, json.dumps(meta, indent=1))
     return paths
 
 

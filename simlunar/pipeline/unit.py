@@ -25,7 +25,7 @@ from scipy import ndimage
 from simlunar.config import translate
 from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
 from simlunar.config.schema import ExperimentCfg
-from simlunar.config.studies import SamplingStudyCfg
+from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.features import feature_map
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
@@ -39,6 +39,8 @@ from simlunar.render import backend, render
 from simlunar.render.scene import luminance
 from simlunar.results.exports import scan_export_payload
 from simlunar.results.records import UnitRecord
+from simlunar.sensors.lidar import LidarScene
+from simlunar.study.lidar import run_lidar_study
 from simlunar.study.sampling import run_sampling_study
 from simlunar.study.scanner import ScannerScene, aim_rig_at_terrain, run_scanner_study
 
@@ -188,17 +190,19 @@ def compute_unit(
     scene = RenderScene(
         terrain, camera, lights, bsdf, r.spp, int_seed(seeds["render"]), r.max_depth
     )
-    if not isinstance(cfg.study, SamplingStudyCfg):
+    if isinstance(cfg.study, SamplingStudyCfg):
+        record = _sampling_unit(cfg, scene, seeds, timings, progress, study_workers)
+    elif isinstance(cfg.study, LidarStudyCfg):
+        record = _lidar_unit(cfg, scene, seeds, timings)
+    else:
         # the scanner study renders throughout (one scene per pattern sequence)
         with RENDER_LOCK:
             record = _scanner_unit(cfg, scene, seeds, timings)
-    else:
-        record = _sampling_unit(cfg, scene, seeds, timings, progress, study_workers)
     return record.to_dict()
 
 
-def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -> UnitRecord:
-    """Render the guide view, then the sampling study with the ideal sensor."""
+def _render_guide(cfg, scene: RenderScene, seeds, timings):
+    """The guide view: ``(image in [0, 1], radiance, render result with its ground truth)``."""
     t = time.perf_counter()
     with RENDER_LOCK:
         result = render(
@@ -214,8 +218,16 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
     t = time.perf_counter()
     radiance = luminance(result.image)
     image = sensor_image(radiance, cfg.render.sensor, rng=np.random.default_rng(seeds["sensor"]))
-    depth, n_invalid = fill_invalid(np.where(result.gt.valid, result.gt.depth, np.nan))
     timings["sensor_s"] = time.perf_counter() - t
+    return image, radiance, result
+
+
+def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -> UnitRecord:
+    """Render the guide view, then the sampling study with the ideal sensor."""
+    image, radiance, result = _render_guide(cfg, scene, seeds, timings)
+    t = time.perf_counter()
+    depth, n_invalid = fill_invalid(np.where(result.gt.valid, result.gt.depth, np.nan))
+    timings["sensor_s"] += time.perf_counter() - t
     # Figure arrays first (their seeds are their own, so the order changes no number): a
     # unit's last step is then its study, whose tasks spread over every worker, instead of a
     # render that leaves the other cores idle at the end of a parallel sweep.
@@ -324,4 +336,37 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
         timings=timings,
         meta={"shape": list(scene.terrain.shape), "variant": backend.info().variant},
         scans=scans,
+    )
+
+
+def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
+    """Render the guide view, then the LIDAR study with the sensor at the guide camera (the
+    sun of a sun-lit scene is the LIDAR's background)."""
+    image, _, result = _render_guide(cfg, scene, seeds, timings)
+    depth = np.where(result.gt.valid, result.gt.depth, np.nan).astype(np.float64)
+    sun = scene.lights[0] if isinstance(cfg.render.light, SunLightCfg) else None
+    lidar_scene = LidarScene(scene.terrain, scene.camera, bsdf=scene.bsdf, sun=sun)
+    t = time.perf_counter()
+    with RENDER_LOCK:  # the sensor renders every acquisition
+        res = run_lidar_study(
+            lidar_scene,
+            (image, depth),
+            translate.lidar_options(cfg.study, seed=scene.seed),
+            rng=np.random.default_rng(seeds["study"]),
+        )
+    timings["study_s"] = time.perf_counter() - t
+    arrays = {"image": image, "depth": depth}
+    for label, acq in res.examples.items():
+        # where the example acquisition measured, and what: (row, col, depth) per sample
+        arrays[f"samples_{label}"] = np.c_[acq.rc, acq.values].astype(np.float64)
+    return UnitRecord(
+        rows=[dict(row) for row in res.rows],
+        scores={},
+        arrays=arrays,
+        timings=timings,
+        meta={
+            "shape": list(image.shape),
+            "sensor": cfg.study.sensor,
+            "variant": backend.info().variant,
+        },
     )

@@ -16,6 +16,7 @@ from dataclasses import asdict
 import numpy as np
 from scipy import ndimage
 from sklearn.ensemble import HistGradientBoostingRegressor
+from threadpoolctl import threadpool_limits
 
 from simlunar.features._stack import FEATURE_NAMES, FEATURE_SET_VERSION, image_features
 from simlunar.features.learned import (
@@ -145,7 +146,8 @@ def train_learned_map(
             early_stopping=False,
             random_state=int(rng.integers(2**31 - 1)),
         )
-        models[d] = model.fit(x, y)
+        with threadpool_limits(opt.threads):
+            models[d] = model.fit(x, y)
     meta = {
         "format": FORMAT,
         "feature_set_version": FEATURE_SET_VERSION,

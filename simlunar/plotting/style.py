@@ -63,7 +63,8 @@ REGISTRY: dict[str, Style] = {
     "oracle_greedy": Style("#fdb863", "*", "Oracle greedy (true error)"),
     "oracle_hessian": Style("#e08214", "*", "Oracle Hessian (true depth)"),
     # labelled variants of the shipped experiments
-    "wavelet_bn": Style("#e377c2", "d", "Wavelet, blue noise"),
+    # a hue far from Wavelet's red (pink read as a second red beside it)
+    "wavelet_bn": Style("#6a3d9a", "d", "Wavelet, blue noise"),
     "wavelet_bn_mix": Style("#17becf", "h", "Wavelet, blue noise + uniform"),
     "fitted_combination": Style("#bcbd22", "*", "Fitted combination"),
     # the scanner's scan-ranking rescan planner
@@ -179,7 +180,7 @@ AXIS_NAMES = {
     "render.sensor.read_noise_e": "sensor read noise (e⁻)",
     "render.sensor.full_well_e": "sensor full well (e⁻)",
     "terrain.preset": "terrain preset",
-    "terrain.albedo": "terrain albedo (null = preset's)",
+    "terrain.albedo": "terrain albedo",
     "terrain.overrides.fractal.rms_m": "fractal roughness RMS (m)",
     "terrain.seed": "terrain seed",
     "seed": "seed",
@@ -188,11 +189,12 @@ AXIS_NAMES = {
 _UNIT_SUFFIXES = {"_deg": "deg", "_m": "m", "_e": "e⁻", "_px": "px", "_s": "s"}
 
 
-def metric_axis(metric: str, *, what: str = "error") -> str:
-    """Axis label of an error metric with its unit, e.g. ``"MSE error (m²)"``."""
+def metric_axis(metric: str, *, what: str = "error", unit: str | None = None) -> str:
+    """Axis label of an error metric with its unit, e.g. ``"MSE error (m²)"`` (``unit``
+    replaces the SI unit, e.g. ``"mm²"`` for values scaled by 1e6)."""
 
     name = METRIC_NAMES.get(metric, metric)
-    unit = METRIC_UNITS.get(metric)
+    unit = unit or METRIC_UNITS.get(metric)
     return f"{name} {what} ({unit})" if unit else f"{name} {what}"
 
 
@@ -206,3 +208,58 @@ def axis_name(path: str) -> str:
         if key.endswith(suffix):
             return f"{key[: -len(suffix)].replace('_', ' ')} ({unit})"
     return key.replace("_", " ")
+
+
+def _name_and_unit(path: str) -> tuple[str, str]:
+    """``("sun elevation", "deg")`` of a sweep path (unit "" when it has none)."""
+    text = axis_name(path)
+    if text.endswith(")") and " (" in text:
+        name, _, unit = text[:-1].rpartition(" (")
+        if " " not in unit or unit in ("W/m²",):
+            return name, unit
+    return text, ""
+
+
+def _with_unit(value, unit: str) -> str:
+    v = f"{value:g}" if isinstance(value, float) else str(value)
+    if unit == "deg":
+        return f"{v}°"
+    return f"{v} {unit}" if unit else v
+
+
+def _model_text(value: dict) -> str:
+    """``{"kind": "sun", "elevation_deg": 30}`` -> ``"Sun (elevation 30°)"``."""
+    parts = []
+    for k, v in value.items():
+        if k == "kind" or v is None or isinstance(v, (dict, list)):
+            continue
+        unit = ""
+        for suffix, u in _UNIT_SUFFIXES.items():
+            if k.endswith(suffix):
+                k, unit = k[: -len(suffix)], u
+                break
+        parts.append(f"{k.replace('_', ' ')} {_with_unit(v, unit)}")
+    head = label(str(value.get("kind", "")))
+    return f"{head} ({', '.join(parts)})" if parts else head
+
+
+def point_title(sweep: dict) -> str:
+    """Title of a sweep point in one style for every figure: the axis's readable name, then
+    the value with its unit (``"sun elevation: 5°"``); a model by its registry label and
+    parameters (``"light source: Sun (elevation 30°, azimuth 135°)"``); null as the preset's
+    default. Axes joined by ``"; "``."""
+    parts = []
+    for path, v in sweep.items():
+        name, unit = _name_and_unit(path)
+        if isinstance(v, dict):
+            text = _model_text(v)
+        elif v is None:
+            text = "preset default"
+        elif isinstance(v, str):
+            text = label(v)
+        elif isinstance(v, bool):
+            text = "yes" if v else "no"
+        else:
+            text = _with_unit(v, unit)
+        parts.append(f"{name}: {text}")
+    return "; ".join(parts)

@@ -416,7 +416,8 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
     md_lines = ["| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]
     tex_rows = []
     for e in summary:
-        cells = [cell(e[c]) for c in cols] + [
+        # a fraction near 1 at 3 significant digits reads "1" for 0.99958: 5 decimals
+        cells = [cell(e[c], "{:.5f}" if c == "valid_fraction" else "{:.3g}") for c in cols] + [
             cell(e["renders"], "{:.0f}"),
             cell(e["ratio"], "{:.3f}"),
         ]

@@ -47,6 +47,21 @@ from simlunar.render.transient import (
     flash_frame,
 )
 
+__all__ = [
+    "FlashOptions",
+    "LidarScan",
+    "SteeredBeamOptions",
+    "beam_capture",
+    "flash_scan",
+    "guide_directions",
+    "micromirror_flash",
+    "micromirror_frames",
+    "range_window",
+    "read_flash",
+    "receiver_rc",
+    "steered_beam_scan",
+]
+
 
 @dataclass(frozen=True)
 class SteeredBeamOptions:
@@ -305,9 +320,15 @@ def flash_scan(
     LidarScan
         ``points`` along each pixel centre's ray; ``frames`` = 1.
     """
-    rng = np.random.default_rng(rng)
     bins = range_window(terrain, camera, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
     frame = flash_frame(terrain, camera, bins=bins, options=options.transient, bsdf=bsdf, sun=sun)
+    return read_flash(frame, camera, options=options, rng=rng)
+
+
+def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> LidarScan:
+    """Read a rendered flash frame (:func:`~simlunar.render.transient.flash_frame` through
+    ``camera``) with fresh photon noise: a frame rendered once serves many noisy reads."""
+    rng = np.random.default_rng(rng)
     res = _read_frame(frame, options, rng)
     _, d = camera.rays(camera.pixel_centers())
     return LidarScan(

@@ -27,8 +27,12 @@ import numpy as np
 from simlunar.geometry import Camera
 from simlunar.lidar.footprint import FootprintOptions
 from simlunar.lidar.waveform import TimeBins
+from simlunar.render import backend
 from simlunar.render import beams as _beams
-from simlunar.render.scene import LUMINANCE, _bsdf_dict, luminance
+from simlunar.render.cameras import film_dict, sensor_dict
+from simlunar.render.lights import emitter_dicts
+from simlunar.render.mesh import terrain_mesh
+from simlunar.render.scene import LUMINANCE, TerrainScene, _bsdf_dict, luminance
 
 _RGB = LUMINANCE.astype(np.float64)
 
@@ -86,7 +90,6 @@ class FlashFrame:
 
 def _mitsuba():
     """Mitsuba with mitransient's plugins and the beam array registered."""
-    from simlunar.render import backend
 
     mi = backend.mitsuba()
     import mitransient  # noqa: F401  (registers transient_path, transient_hdr_film)
@@ -109,7 +112,6 @@ def transient_film(width: int, height: int, bins: TimeBins) -> dict:
 
 
 def _terrain_entries(mi, terrain, bsdf) -> dict:
-    from simlunar.render.mesh import terrain_mesh
 
     return {"terrain": terrain_mesh(terrain, bsdf=mi.load_dict(_bsdf_dict(bsdf, terrain.albedo)))}
 
@@ -155,7 +157,6 @@ def flash_frame(
     -------
     FlashFrame
     """
-    from simlunar.render.cameras import sensor_dict
 
     if not isinstance(camera, Camera) or camera.aperture_radius > 0:
         raise ValueError("camera: a flash receiver must be a pinhole geometry.Camera")
@@ -172,8 +173,6 @@ def flash_frame(
     if projector is None:
         scene.update(_laser(camera.pose.position, options))
     else:
-        from simlunar.render.lights import emitter_dicts
-
         scene.update(emitter_dicts(projector, camera))
     steady, hist = mi.render(mi.load_dict(scene), spp=options.spp, seed=options.seed)
     hist = np.asarray(hist, np.float32)  # (rows, cols, bins, channels)
@@ -181,8 +180,6 @@ def flash_frame(
     steady_l = luminance(np.asarray(steady, np.float32)[..., :3])
     sun_img = None
     if sun is not None:
-        from simlunar.render.scene import TerrainScene
-
         ts = TerrainScene(
             terrain,
             camera,
@@ -257,8 +254,6 @@ class BeamCapture:
         sun=None,
         batch: int = 4096,
     ) -> None:
-        from simlunar.render.cameras import film_dict
-        from simlunar.render.lights import emitter_dicts
 
         mi = self._mi = _mitsuba()
         self.batch, self.window = int(batch), window

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.plotting.style import point_title
 from simlunar.results.records import WorkUnit, unit_label
 from simlunar.study.sampling import INTERIOR_SUFFIX, scored_metrics
 from simlunar.study.stats import (
@@ -148,17 +149,17 @@ def summarise(
     """
     points = group_points(records)
     for i, p in enumerate(points):
-        if "random" not in p.strategies:
-            continue
         for m in p.metrics:
             dens, ks, errs = error_arrays(rows, p, m)
             if not p.densities:
                 p.densities, p.ks = dens, ks
+            p.mean_errors[m] = {s: e.mean(axis=(0, 2)) for s, e in errs.items()}
+            if "random" not in p.strategies:
+                continue  # eq. 4.3 scores are relative to random; samples saved vs grid are not
             rng = np.random.default_rng(np.random.SeedSequence([seed, i, p.metrics.index(m)]))
             res = bootstrap_scores(errs, dens, n_boot=n_boot, rng=rng)
             p.intervals[m] = res
             p.separation[m] = best_separation(res)
-            p.mean_errors[m] = {s: e.mean(axis=(0, 2)) for s, e in errs.items()}
         if len(p.ks) >= 2 and p.metrics:
             _saved(p, rows)
     return points
@@ -228,3 +229,46 @@ def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:
 
 
 SCORES_CSV_COLUMNS = ["point", "terrain_seed", "metric", "strategy", "score", "ci_low", "ci_high"]
+
+
+#: sweep axes that repeat a scene rather than change it (their units are pooled as seeds)
+SEED_AXES = ("seed", SEED_AXIS)
+
+
+def sweep_value(rec: dict, path: str):
+    """A unit's value on sweep axis ``path`` as a plot position or label: numbers as they
+    are, a model (dict) by its ``kind``, null as ``"preset default"``."""
+    v = rec["sweep"][path]
+    if isinstance(v, dict):
+        return v.get("kind", json.dumps(v, sort_keys=True))
+    return "preset default" if v is None else v
+
+
+def density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
+    """The panels of ``error_vs_density``: ``[(title, unit records)]`` in results order.
+
+    One panel per sweep point (:func:`simlunar.results.aggregate.group_points`): the units of
+    a point that differ only by terrain seed share a panel, whose curves pool their rows (mean
+    and spread over terrain seeds and trials), so a repeated experiment draws as many panels
+    as it has sweep points, not seeds times points.
+    """
+    return [(point_title(p.sweep), [units[i] for i in p.unit_indices]) for p in group_points(units)]
+
+
+#: the figures' record of what they were drawn from (in the result folder, beside figures/)
+STAMP = ".figures.json"
+#: modules whose code draws the figures: a change of any of them redraws every figure
+_DRAWING_MODULES = (
+    "simlunar.plotting.figures",
+    "simlunar.plotting.layout",
+    "simlunar.plotting.density",
+    "simlunar.plotting.images",
+    "simlunar.plotting.scanner",
+    "simlunar.plotting.lidar",
+    "simlunar.plotting.style",
+    "simlunar.results.figures",
+    "simlunar.results.scanner_figures",
+    "simlunar.results.lidar_figures",
+    "simlunar.results.captions",
+    "simlunar.results.aggregate",
+)

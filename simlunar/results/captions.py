@@ -18,6 +18,11 @@ _METRIC_TEXT = {
 }
 
 
+def _strategy_list(names) -> str:
+    """Display labels joined by semicolons (labels such as "Wavelet, blue noise" hold commas)."""
+    return "; ".join(label(s) for s in names)
+
+
 def _metric(m: str) -> str:
     unit = METRIC_UNITS.get(m, "")
     return f"{_METRIC_TEXT.get(m, METRIC_NAMES.get(m, m))}{f', in {unit}' if unit else ''}"
@@ -26,8 +31,13 @@ def _metric(m: str) -> str:
 def error_vs_density(metric: str, study: dict, n_panels: int, *, seeds: int = 1) -> str:
     """Caption of ``error_vs_density_<metric>`` (``seeds``: terrain seeds pooled per panel)."""
     trials = study.get("trials", 20)
-    strategies = ", ".join(label(s) for s in study.get("strategies") or [])
+    strategies = _strategy_list(study.get("strategies") or [])
     per = " One panel per scene or sweep point." if n_panels > 1 else ""
+    ref = (
+        " Random, the reference of every score, is dashed and drawn on top."
+        if "random" in (study.get("strategies") or [])
+        else ""
+    )
     if seeds > 1:
         over = (
             f"mean over {seeds} terrain seeds × {trials} trials per density (every trial of "
@@ -45,65 +55,102 @@ def error_vs_density(metric: str, study: dict, n_panels: int, *, seeds: int = 1)
         f"right, as in the paper's Fig. 3). y: {_metric(metric)} of the Delaunay "
         f"reconstruction from k range samples against the full-resolution ground truth. "
         f"Lines: {over}, clipped below at half the smallest mean on the log axis. "
-        f"Strategies: {strategies}.{per}"
+        f"Strategies: {strategies}.{ref}{per}"
     )
 
 
-def panels(density_label: str, point: str) -> str:
-    """Caption of ``panels_unit<i>``."""
+def panels(density_label: str, point: str, *, metres: bool = True) -> str:
+    """Caption of ``panels_unit<i>`` (``metres``: axes in metres, a nadir orthographic view)."""
     at = f" at {density_label}" if density_label else ""
+    scene = f" ({point})" if point else ""
+    axes = (
+        "Axes in metres on the ground (a pixel is one terrain cell). "
+        if metres
+        else "Axes in image pixels (a perspective view). "
+    )
     return (
-        f"Image-directed sampling of one scene ({point}). Top: the guide image (sensor "
+        f"Image-directed sampling of one scene{scene}. {axes}Top: the guide image (sensor "
         f"output, 0-1); its db2 wavelet detail-energy map (log10, dimensionless), the map the "
         f"Wavelet planner samples from; the Wavelet planner's samples{at} (red dots) on the "
-        f"guide image. Bottom: the true depth and the Delaunay reconstruction from those "
-        f"samples on one colour scale (m); the error reconstruction - truth (m) on a "
-        f"symmetric scale clipped at the 99th percentile of |error|."
+        f"guide image. Bottom: the true depth from the camera and the Delaunay reconstruction "
+        f"from those samples on one colour scale (m); the error reconstruction - truth (m) on "
+        f"a symmetric scale clipped at the 99th percentile of |error|. Dashed: the convex hull "
+        f"of the samples; outside it (bands along the borders) the reconstruction takes the "
+        f"nearest sample's depth instead of interpolating, so the error grows there."
     )
 
 
-def sparse_mesh(n_samples: int | None, rough: bool) -> str:
+def sparse_mesh(n_samples: int | None, rough: bool, *, threshold: float | None = None) -> str:
     """Caption of ``sparse_mesh_unit<i>`` (paper Fig. 4)."""
     n = f"{n_samples} " if n_samples else ""
-    diff = (
-        "The sparse mesh rendered with Oren-Nayar roughness modulated by the wavelet energy, "
-        "and the difference of that render from the constant-roughness one (energy - "
-        "constant, in units of the shared exposure, symmetric scale; its title gives the "
-        "largest |difference|); "
+    thr = (
+        f" Cells whose normalised energy is {threshold:g} or more keep the minimum roughness "
+        f"(the threshold that keeps major features metric); the energy map is piecewise "
+        f"constant over wavelet blocks, so the modulated render and the difference show "
+        f"blocks."
+        if rough and threshold
+        else " The energy map is piecewise constant over wavelet blocks, so the modulated "
+        "render and the difference show blocks."
         if rough
         else ""
     )
+    diff = (
+        "Top: the sparse mesh rendered with Oren-Nayar roughness modulated per cell by the "
+        "wavelet energy, the sparse mesh with constant roughness, the full-resolution "
+        "terrain. Below: the difference of the modulated render from the constant one (in "
+        "units of the shared exposure, symmetric scale clipped at the 99th percentile of "
+        f"|difference|, so a few extreme pixels do not flatten it) and the frequency (wavelet "
+        f"energy) map, log10.{thr} "
+        if rough
+        else "The sparse mesh with constant roughness; the full-resolution terrain; the "
+        "frequency (wavelet energy) map, log10. "
+    )
     return (
         f"Rendering a terrain rebuilt from {n}wavelet-planned samples (paper Fig. 4). "
-        f"{diff}the sparse mesh with constant roughness; the full-resolution terrain; the "
-        f"frequency (wavelet energy) map, log10. All renders share one exposure (the 99.5th "
-        f"percentile of the full-resolution render), so brightness differences are real."
+        f"{diff}All renders share one exposure (the 99.5th percentile of the full-resolution "
+        f"render), so brightness differences are real. Dark wedges along the borders of the "
+        f"sparse-mesh renders lie outside the samples' convex hull, where the mesh takes the "
+        f"nearest sample's height (terraces with steps between them): steps facing away from "
+        f"the sun render dark, more so the lower the sun."
     )
 
 
-def score_vs_sweep(metric: str, path: str, study: dict) -> str:
+def score_vs_sweep(metric: str, path: str, study: dict, *, seeds: int = 1) -> str:
     """Caption of ``score_vs_<axis>_<metric>`` (ablations)."""
     trials = study.get("trials", 20)
+    over = "terrain seeds" if seeds > 1 else "trials (one terrain seed)"
     return (
         f"{METRIC_NAMES.get(metric, metric)} score (paper eq. 4.3: the inverse-density-"
         f"weighted mean over densities of e_random / e_strategy, {trials} trials per density; "
         f"random = 1 by construction, dotted line; higher is better) against "
-        f"{axis_name(path)} (sweep key `{path}`). Each point is one sweep point's score; a "
-        f"categorical axis shows unconnected markers, offset side by side per strategy. "
-        f"The score has no interval here: differences of a few hundredths are within the "
-        f"trial-to-trial spread."
+        f"{axis_name(path)} (sweep key `{path}`). Each point is one sweep point's score, its "
+        f"error bar the 95 % interval of scores.md (paired bootstrap over {over}); a "
+        f"categorical axis shows unconnected markers, offset side by side per strategy."
     )
 
 
-def scanner_errors(metrics: list[str], n_units: int) -> str:
-    """Caption of ``scanner_errors`` (section 5)."""
+def scanner_errors(
+    metrics: list[str], n_units: int, *, n_min: int = 2, relative: bool = False
+) -> str:
+    """Caption of ``scanner_errors`` (section 5; ``n_min``: the fewest values of a bar)."""
     ms = "; ".join(f"{METRIC_NAMES.get(m, m)}: {_metric(m)}" for m in metrics)
     seeds = f" and {n_units} sweep points (seeds)" if n_units > 1 else ""
+    spread = (
+        "error bars: ±1 standard deviation over the same values (n in each tick label)"
+        if n_min >= 2
+        else "error bars where a bar pools 2 or more values (n in each tick label): ±1 "
+        "standard deviation; a bar of one value has none"
+    )
+    rel = (
+        " Bottom row: each scan's error divided by the gray-code scan's (dotted line at 1; the "
+        "change in per cent above each bar), the comparison of the paper's section 5."
+        if relative
+        else ""
+    )
     return (
         f"Structured-light scanner study: depth error of each scan mode / dot planner against "
-        f"the ground truth on the guide grid ({ms}). Bars: mean over all trials{seeds}; "
-        f"error bars: ±1 standard deviation over the same values (n in each tick label). "
-        f"Lower is better."
+        f"the ground truth on the guide grid ({ms}; axes in the unit that suits the values). "
+        f"Bars: mean over all trials{seeds}; {spread}. Lower is better.{rel}"
     )
 
 
@@ -124,15 +171,17 @@ def scanner_vs_sweep(metrics: list[str], path: str, trials: int) -> str:
     )
 
 
-def bit_errors(n_units: int, all_zero: bool) -> str:
-    """Caption of ``gray_code_bit_errors``."""
-    zero = (
-        " Every rate is zero here: no bit of any stably lit pixel was decoded wrongly, and "
-        "the figure says so instead of drawing a flat line."
-        if all_zero
-        else ""
-    )
+def bit_errors(n_units: int, all_zero: bool, n_bits: int = 0) -> str:
+    """Caption of ``gray_code_bit_errors`` (with ``all_zero``: why no figure is drawn)."""
     over = f", mean over trials and {n_units} units" if n_units > 1 else ", mean over trials"
+    if all_zero:
+        return (
+            f"Not drawn: all {n_bits} per-bit gray-code error rates are 0 or undefined (no "
+            f"pixel near that bit's stripe edges), so no bit of any "
+            f"pixel lit by the projector, near its true stripe edges, was decoded wrongly"
+            f"{over}); results.csv holds them as ber_c<i> / ber_r<i>."
+        )
+    zero = ""
     return (
         f"Gray-code bit error rate per bit (0 = most significant; column bits and row bits): "
         f"the fraction of camera pixels lit by the projector, and at least one pixel from "
@@ -153,4 +202,36 @@ def samples_saved(metric: str, references: list[str], point: str) -> str:
         f"samples than the reference for the same error. Errors pool the terrain seeds and "
         f"trials. Hollow markers: outside the reference's measured range (extrapolated, "
         f"clipped to [1, N]); they are left out of the tables' geometric-mean summary.{where}"
+    )
+
+
+def lidar_error(
+    metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1, by: str | None = None
+) -> str:
+    """Caption of ``lidar_error_vs_<time|samples>_<metric>`` (``x``: ``seconds`` or
+    ``samples``)."""
+    sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
+    trials = study.get("trials", 3)
+    axis = (
+        "the modelled acquisition time of the scan (s: steering moves, settling and pulses of "
+        "a steered beam; frames x pulses / pulse rate of a flash)"
+        if x == "seconds"
+        else "the number of range samples measured (the planned pixels that returned; a "
+        "flash: its receiver pixels)"
+    )
+    bars = (
+        f"95 % percentile-bootstrap interval of the mean over the {seeds} terrain seeds "
+        "(of each seed's mean over trials)"
+        if seeds > 1
+        else f"±1 standard deviation over the {trials} trials"
+    )
+    per = " One panel per sweep point." if n_panels > 1 else ""
+    if by:
+        per = f" Each point of a curve is one value of {by} (and density)."
+    runs = f"{trials} trial{'s' if trials != 1 else ''}"
+    return (
+        f"Image-directed LIDAR ({sensor}): error of the reconstructed guide-view depth "
+        f"({_metric(metric)}) against {axis}, per planner, log-log; points: one per density, "
+        f"mean over {runs}{f' on each of {seeds} terrain seeds' if seeds > 1 else ''}; error "
+        f"bars: {bars}.{per}"
     )

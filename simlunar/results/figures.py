@@ -11,13 +11,15 @@ import json
 from pathlib import Path
 
 from simlunar.errors import ResultFolderError
-from simlunar.results.aggregate import SEED_AXIS
+from simlunar.results import aggregate
+from simlunar.results import captions as captions_text
+from simlunar.results.aggregate import SEED_AXIS, group_points
+from simlunar.results.folder import prune_figures, read_folder_config
 from simlunar.results.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
 
 MAX_UNIT_PANELS = 6
 #: sweep axes that repeat an experiment over realisations (pooled, not plotted against): the
 #: experiment seed and the terrain realisation
-SEED_AXES = ("seed", SEED_AXIS)
 
 
 def load_results(out_dir: str | Path) -> dict:
@@ -47,7 +49,6 @@ def load_results(out_dir: str | Path) -> dict:
                 else "run `simlunar run EXPERIMENT.yaml` first"
             )
             raise ResultFolderError(f"{out}: not a result folder (missing {name}); {hint}")
-    from simlunar.results.folder import read_folder_config
 
     config = read_folder_config(out / "config.yaml")
     prov = _read_provenance(out / "provenance.json")
@@ -118,39 +119,127 @@ def load_unit_arrays(out_dir: str | Path, index: int = 0) -> dict:
 
 
 def _label(rec: dict) -> str:
-    from simlunar.results.records import WorkUnit, unit_label
+    """Title of one unit: its sweep point (:func:`simlunar.plotting.style.point_title`) and,
+    when the experiment repeats terrains, its terrain seed."""
+    from simlunar.plotting.style import point_title
 
     config = rec.get("config", {}) or {}
+    sweep = {k: v for k, v in (rec.get("sweep") or {}).items() if k != SEED_AXIS}
+    text = point_title(sweep)
     repeats = int((config.get("study") or {}).get("terrain_seeds", 1) or 1)
-    seed = int((config.get("terrain") or {}).get("seed_index", 0) or 0) if repeats > 1 else None
-    return unit_label(
-        WorkUnit(rec.get("index", 0), rec["key"], rec.get("sweep", {}), config, terrain_seed=seed)
+    if repeats > 1 or SEED_AXIS in (rec.get("sweep") or {}):
+        seed = int((config.get("terrain") or {}).get("seed_index", 0) or 0)
+        text = f"{text}; terrain seed {seed}" if text else f"terrain seed {seed}"
+    return text
+
+
+def _spacing(rec: dict) -> float | None:
+    """Cell size (m) of a unit whose camera is nadir orthographic (a pixel is a cell)."""
+    camera = ((rec.get("config") or {}).get("render") or {}).get("camera") or {}
+    if camera.get("kind", "orthographic_nadir") != "orthographic_nadir":
+        return None
+    sp = (rec.get("meta") or {}).get("spacing_m")
+    return float(sp) if sp else None
+
+
+#: the figures' record of what they were drawn from (in the result folder, beside figures/)
+STAMP = ".figures.json"
+#: modules whose code draws the figures: a change of any of them redraws every figure
+_DRAWING_MODULES = (
+    "simlunar.plotting.figures",
+    "simlunar.plotting.layout",
+    "simlunar.plotting.density",
+    "simlunar.plotting.images",
+    "simlunar.plotting.scanner",
+    "simlunar.plotting.lidar",
+    "simlunar.plotting.style",
+    "simlunar.results.figures",
+    "simlunar.results.scanner_figures",
+    "simlunar.results.lidar_figures",
+    "simlunar.results.captions",
+    "simlunar.results.aggregate",
+)
+
+
+def figure_inputs(res: dict, formats) -> str:
+    """SHA-256 of everything the figures of a result folder are drawn from: the tables
+    (``results.csv`` and the summary files, as ``provenance.json`` records their digests), the
+    units (their keys), the configuration (less its description), the file formats, the
+    drawing code and the matplotlib version."""
+    import hashlib
+    import importlib.metadata
+    import importlib.util
+
+    cfg = {k: v for k, v in res["config"].items() if k != "description"}
+    code = {}
+    for mod in _DRAWING_MODULES:
+        spec = importlib.util.find_spec(mod)
+        if spec is not None and spec.origin:
+            code[mod] = file_sha256(spec.origin)
+    blob = json.dumps(
+        {
+            "files": res["provenance"].get("files"),
+            "units": res["provenance"].get("unit_keys"),
+            "config": cfg,
+            "formats": list(formats),
+            "code": code,
+            "matplotlib": importlib.metadata.version("matplotlib"),
+        },
+        sort_keys=True,
+        default=str,
     )
+    return hashlib.sha256(blob.encode()).hexdigest()
 
 
-def _density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
-    """The panels of ``error_vs_density``: ``[(title, unit records)]`` in results order.
+def _up_to_date(fig_dir: Path, digest: str) -> list[Path] | None:
+    """The figure files of ``fig_dir`` when the stamp records ``digest`` and they all exist."""
+    try:
+        stamp = json.loads((fig_dir.parent / STAMP).read_text())
+        names = list(stamp["files"])
+        if stamp["inputs"] != digest:
+            return None
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    paths = [fig_dir / n for n in names]
+    return paths if all(p.is_file() for p in paths) else None
 
-    One panel per sweep point (:func:`simlunar.results.aggregate.group_points`): the units of
-    a point that differ only by terrain seed share a panel, whose curves pool their rows (mean
-    and spread over terrain seeds and trials), so a repeated experiment draws as many panels
-    as it has sweep points, not seeds times points.
+
+def write_figures(out_dir: str | Path, *, formats=None, force: bool = False) -> list[Path]:
+    """Draw every figure the results support; returns the paths of the figure files.
+
+    Figures are drawn only when their inputs (:func:`figure_inputs`) changed since they were
+    last drawn (``.figures.json``), or with ``force``; ``formats`` (default: the
+    folder's ``figures.formats``, PNG) names the files per figure.
     """
-    from simlunar.results.aggregate import group_points
-
-    return [(p.label, [units[i] for i in p.unit_indices]) for p in group_points(units)]
-
-
-def write_figures(out_dir: str | Path) -> list[Path]:
-    """Draw every figure the results support; returns the written paths (PNG and PDF)."""
-    from simlunar.plotting import figures as F
-    from simlunar.plotting.style import axis_name
-    from simlunar.results import captions as captions_text
-
     res = load_results(out_dir)
     out = res["dir"]
     cfg = res["config"]
-    formats = (cfg.get("figures") or {}).get("formats") or ["png", "pdf"]
+    formats = list(formats or (cfg.get("figures") or {}).get("formats") or ["png"])
+    fig_dir = out / "figures"
+    digest = figure_inputs(res, formats)
+    if not force:
+        kept = _up_to_date(fig_dir, digest)
+        if kept is not None:
+            return kept
+    # a damaged unit is reported before anything of the folder changes
+    cache = UnitCache(out)
+    for rec in res["units"]:
+        if not cache.arrays_readable(rec["key"]):
+            cache.load_arrays(rec["key"], strict=True)  # raises, naming the file
+    (out / STAMP).unlink(missing_ok=True)  # figures being redrawn belong to no inputs
+    written = _draw(res, formats)
+    atomic_write_bytes(
+        out / STAMP,
+        json.dumps({"inputs": digest, "files": [p.name for p in written]}, indent=1).encode(),
+    )
+    return written
+
+
+def _draw(res: dict, formats: list[str]) -> list[Path]:
+    from simlunar.plotting import figures as F
+
+    out = res["dir"]
+    cfg = res["config"]
     fig_dir = out / "figures"
     written: list[Path] = []
 
@@ -164,7 +253,12 @@ def write_figures(out_dir: str | Path) -> list[Path]:
     study = cfg.get("study", {})
     captions: dict[str, str] = {}
     if study.get("kind", "sampling") != "sampling":
-        _scanner_figures(res, emit, captions)
+        from simlunar.results import lidar_figures, scanner_figures
+
+        lidar = study.get("kind") == "lidar"
+        (lidar_figures.lidar_figures if lidar else scanner_figures.scanner_figures)(
+            res, emit, captions
+        )
         write_captions(fig_dir, captions, written)
         return written
     strategies = list(study.get("strategies") or [])
@@ -176,7 +270,7 @@ def write_figures(out_dir: str | Path) -> list[Path]:
     # not a silently missing panel
     shown_arrays = [cache.load_arrays(rec["key"], strict=True) for rec in shown]
 
-    groups = _density_panels(units)[:MAX_UNIT_PANELS]
+    groups = aggregate.density_panels(units)[:MAX_UNIT_PANELS]
     pooled = any(len(members) > 1 for _, members in groups)
     for m in metrics:
         fig, axes = F.panel_grid(len(groups))
@@ -212,14 +306,18 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             density_label=label,
             planner="wavelet",
             point=_label(rec) if len(units) > 1 else "",
+            spacing_m=_spacing(rec),
         )
         emit(fig, f"panels_unit{rec.get('index', 0)}")
-        captions[f"panels_unit{rec.get('index', 0)}"] = captions_text.panels(label, _label(rec))
+        captions[f"panels_unit{rec.get('index', 0)}"] = captions_text.panels(
+            label, _label(rec), metres=_spacing(rec) is not None
+        )
 
     for rec, arr in zip(shown, shown_arrays):
         if "sparse_mesh_render" not in arr or "radiance" not in arr:
             continue
-        dens = (rec.get("config", {}).get("figures") or {}).get("sparse_mesh_density")
+        fig_cfg = rec.get("config", {}).get("figures") or {}
+        dens = fig_cfg.get("sparse_mesh_density")
         n = round(dens * arr["radiance"].size) if dens else None
         fig, _ = F.sparse_mesh_panels(
             arr["sparse_mesh_render"],
@@ -228,27 +326,65 @@ def write_figures(out_dir: str | Path) -> list[Path]:
             rough=arr.get("sparse_mesh_render_rough"),
             n_samples=n,
             point=_label(rec) if len(units) > 1 else "",
+            spacing_m=_spacing(rec),
         )
         emit(fig, f"sparse_mesh_unit{rec.get('index', 0)}")
         captions[f"sparse_mesh_unit{rec.get('index', 0)}"] = captions_text.sparse_mesh(
-            n, "sparse_mesh_render_rough" in arr
+            n,
+            "sparse_mesh_render_rough" in arr,
+            threshold=fig_cfg.get("sparse_mesh_roughness_threshold"),
         )
 
     _samples_saved_figures(res, emit, captions)
-
-    sweep = cfg.get("sweep") or {}
-    if len(sweep) == 1 and len(units) > 1:
-        (path,) = sweep
-        points = [(_sweep_value(rec, path), rec.get("scores", {})) for rec in units]
-        axis = path.rsplit(".", 1)[-1]
-        for m in metrics:
-            fig, _ = F.score_vs_sweep(
-                points, metric=m, strategies=strategies, axis_label=axis_name(path)
-            )
-            emit(fig, f"score_vs_{axis}_{m}")
-            captions[f"score_vs_{axis}_{m}"] = captions_text.score_vs_sweep(m, path, study)
+    _score_figures(res, emit, captions)
     write_captions(fig_dir, captions, written)
     return written
+
+
+def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:
+    """``score_vs_<axis>_<metric>`` of a one-axis sweep: each point's pooled score with its
+    95 % interval, as ``scores.csv`` holds them (none without random: no scores)."""
+    from simlunar.plotting import figures as F
+    from simlunar.plotting.style import axis_name
+
+    cfg = res["config"]
+    study = cfg.get("study", {})
+    sweep = {k: v for k, v in (cfg.get("sweep") or {}).items() if k != SEED_AXIS}
+    path_csv = res["dir"] / "scores.csv"
+    if len(sweep) != 1 or not path_csv.is_file():
+        return
+    (path,) = sweep
+    groups = group_points(res["units"])
+    if len(groups) < 2:
+        return
+    # scores.csv lists the points in results order (the order of group_points); matched by
+    # position, since a label may spell a model's keys in another order than the records do
+    cells: dict[tuple[int, str, str], tuple] = {}
+    order: dict[str, int] = {}
+    for r in read_csv(path_csv):
+        if r.get("terrain_seed") == "all":
+            i = order.setdefault(r["point"], len(order))
+            cells[(i, r["metric"], r["strategy"])] = tuple(
+                float(r[c]) if r[c] not in ("", None) else None
+                for c in ("score", "ci_low", "ci_high")
+            )
+    if len(order) != len(groups):
+        return
+    strategies = list(study.get("strategies") or [])
+    axis = path.rsplit(".", 1)[-1]
+    for m in study.get("metrics") or []:
+        points = []
+        for i, p in enumerate(groups):
+            scores = {s: cells[(i, m, s)] for s in strategies if (i, m, s) in cells}
+            points.append((aggregate.sweep_value({"sweep": p.sweep}, path), {m: scores}))
+        if not any(sc[m] for _, sc in points):
+            continue
+        fig, _ = F.score_vs_sweep(
+            points, metric=m, strategies=strategies, axis_label=axis_name(path)
+        )
+        emit(fig, f"score_vs_{axis}_{m}")
+        seeds = max(len(p.unit_indices) for p in groups)
+        captions[f"score_vs_{axis}_{m}"] = captions_text.score_vs_sweep(m, path, study, seeds=seeds)
 
 
 def write_captions(fig_dir: Path, captions: dict[str, str], written: list[Path]) -> None:
@@ -263,117 +399,10 @@ def write_captions(fig_dir: Path, captions: dict[str, str], written: list[Path])
     written.append(path)
 
 
-def _scanner_pooled(rows: list[dict], metrics: list[str]) -> list[dict]:
-    """Mean, s.d. and count of each metric per (mode, planner) over all units and trials."""
-    import numpy as np
-
-    groups: dict[tuple, dict[str, list[float]]] = {}
-    for r in rows:
-        key = (r["mode"], r.get("planner") or "")
-        groups.setdefault(key, {}).setdefault(r["metric"], []).append(float(r["value"]))
-    out = []
-    for (mode, planner), vals in groups.items():
-        e = {"mode": mode, "planner": planner}
-        for m in metrics:
-            v = np.asarray(vals.get(m, []), float)
-            v = v[np.isfinite(v)]
-            e[m] = float(v.mean()) if v.size else None
-            e[f"{m}_sd"] = float(v.std(ddof=1)) if v.size > 1 else None
-            e["n"] = int(v.size)
-        out.append(e)
-    return out
-
-
-def _sweep_value(rec: dict, path: str):
-    """A unit's value on sweep axis ``path`` as a plot position or label: numbers as they
-    are, a model (dict) by its ``kind``, null as ``"preset default"``."""
-    v = rec["sweep"][path]
-    if isinstance(v, dict):
-        return v.get("kind", json.dumps(v, sort_keys=True))
-    return "preset default" if v is None else v
-
-
-def _ambient_axis(rows: list[dict], units: list[dict], path: str):
-    """``(factor, label)`` of a sun-to-projector axis when every unit of a one-axis sweep is a
-    daylight scan whose ``ambient_ratio`` is proportional to the swept value (the sun's
-    irradiance), else None."""
-    ratio = {str(r.get("unit")): float(r["value"]) for r in rows if r["metric"] == "ambient_ratio"}
-    k = []
-    for rec in units:
-        x, v = rec["sweep"].get(path), ratio.get(str(rec.get("index", 0)))
-        if v is None or not isinstance(x, (int, float)) or isinstance(x, bool) or x <= 0:
-            return None
-        k.append(v / x)
-    if not k or max(k) - min(k) > 1e-3 * max(k) or not max(k) > 0:
-        return None
-    return float(sum(k) / len(k)), "sun / projector white, as the camera sees it"
-
-
-def _scanner_figures(res: dict, emit, captions: dict) -> None:
-    import numpy as np
-
-    from simlunar.plotting import figures as F
-    from simlunar.plotting.style import axis_name
-    from simlunar.results import captions as captions_text
-
-    rows = res["rows"]
-    cfg = res["config"]
-    metrics = list(cfg["study"].get("metrics") or [])
-    sweep = cfg.get("sweep") or {}
-    units = res["units"]
-    n_units = len({str(r.get("unit", "0")) for r in rows})
-    if len(sweep) == 1 and next(iter(sweep)) not in SEED_AXES and len(units) > 1:
-        # an ablation: the errors against the swept value (pooling across it would mix
-        # errors of different conditions into one bar)
-        (path,) = sweep
-        shown = [*metrics, "valid_fraction"]
-        by_unit: dict[str, list[dict]] = {}
-        for r in rows:
-            by_unit.setdefault(str(r.get("unit")), []).append(r)
-        points = [
-            (
-                _sweep_value(rec, path),
-                _scanner_pooled(by_unit.get(str(rec.get("index", 0)), []), shown),
-            )
-            for rec in units
-        ]
-        fig, axes = F.panel_grid(len(shown), height=2.8)
-        secondary = _ambient_axis(rows, units, path)
-        for ax, m in zip(axes, shown):
-            F.scanner_vs_sweep(
-                points, metric=m, axis_label=axis_name(path), ax=ax, secondary=secondary
-            )
-        F.shared_legend(fig, axes, prune_labels=False)
-        axis = path.rsplit(".", 1)[-1]
-        emit(fig, f"scanner_vs_{axis}")
-        captions[f"scanner_vs_{axis}"] = captions_text.scanner_vs_sweep(
-            metrics, path, int(cfg["study"].get("trials", 1))
-        )
-    else:
-        summary = _scanner_pooled(rows, metrics)
-        fig, axes = F.panel_row(len(metrics))
-        for ax, m in zip(axes, metrics):
-            F.scanner_bars(summary, metric=m, ax=ax)
-        emit(fig, "scanner_errors")
-        captions["scanner_errors"] = captions_text.scanner_errors(metrics, n_units)
-    ber = sorted(
-        {r["metric"] for r in rows if r["metric"].startswith("ber_")},
-        key=lambda n: (n[4], int(n[5:])),
-    )
-    if ber:
-        vals = {n: np.mean([float(r["value"]) for r in rows if r["metric"] == n]) for n in ber}
-        captions["gray_code_bit_errors"] = captions_text.bit_errors(
-            n_units, all(v == 0 for v in vals.values())
-        )
-        fig, ax = F.bit_error_rates(vals)
-        emit(fig, "gray_code_bit_errors")
-
-
-def write_figures_pruned(out_dir: str | Path) -> list[Path]:
+def write_figures_pruned(out_dir: str | Path, *, formats=None, force: bool = False) -> list[Path]:
     """:func:`write_figures`, then remove the figures of ``figures/`` it did not write."""
-    from simlunar.results.folder import prune_figures
 
-    written = write_figures(out_dir)
+    written = write_figures(out_dir, formats=formats, force=force)
     prune_figures(Path(out_dir), keep=written)
     return written
 
@@ -382,13 +411,12 @@ def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
     """``samples_saved``: per sweep point (pooled over terrain seeds), one panel per reference
     (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
     from simlunar.plotting import figures as F
-    from simlunar.results import aggregate
-    from simlunar.results import captions as captions_text
+    from simlunar.plotting.style import point_title
 
     points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
     points = [p for p in points if p.saved][:MAX_UNIT_PANELS]
     for i, p in enumerate(points):
-        fig, axes = F.panel_row(len(p.saved))
+        fig, axes = F.panel_row(len(p.saved), width=2.9 * len(p.saved) + 0.3, height=2.5)
         for ax, (ref, sv) in zip(axes, p.saved.items()):
             F.samples_saved_plot(
                 p.densities,
@@ -398,8 +426,11 @@ def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
                 metric=p.saved_metric,
                 strategies=p.strategies,
                 ax=ax,
-                title=f"{p.label}: vs {ref}" if len(points) > 1 else None,
             )
+        F.shared_legend(fig, axes, prune_labels=False, union=True)
+        title = point_title(p.sweep)
+        if len(points) > 1 and title:
+            fig.suptitle(title, fontsize=8)
         stem = "samples_saved" if len(points) == 1 else f"samples_saved_point{i}"
         emit(fig, stem)
-        captions[stem] = captions_text.samples_saved(p.saved_metric, list(p.saved), p.label)
+        captions[stem] = captions_text.samples_saved(p.saved_metric, list(p.saved), title)

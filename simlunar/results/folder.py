@@ -1,13 +1,29 @@
-"""A result folder's own files: its configuration and its figures."""
+"""A result folder: one configuration per folder (``config.yaml``), its summary files, its
+scans and figures; checks that it can be written before anything finished is removed."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+from typing import Any
 
 from simlunar.config.yamlio import YAMLError, safe_load_text
 from simlunar.errors import ResultFolderError
+from simlunar.results.records import WorkUnit
+from simlunar.results.store import (
+    atomic_write_text,
+    file_sha256,
+)
 
-__all__ = ["prune_figures", "read_folder_config"]
+__all__ = [
+    "RESULT_FILES",
+    "claim_folder",
+    "folder_complete",
+    "prune_figures",
+    "prune_scans",
+    "read_folder_config",
+    "scan_folders",
+]
 
 
 def read_folder_config(path: Path) -> dict:
@@ -38,3 +54,161 @@ def prune_figures(out: Path, keep) -> list[Path]:
                 p.unlink()
                 removed.append(p)
     return removed
+
+
+def _remove_empty(out: Path) -> None:
+    try:
+        out.rmdir()
+    except OSError:
+        pass
+
+
+def _first_difference(old: Any, new: Any, path: str = "") -> str:
+    """``key.path: <old> here, <new> now`` for the first difference of two plain configs."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        for k in list(old) + [k for k in new if k not in old]:
+            if old.get(k, "<absent>") != new.get(k, "<absent>"):
+                return _first_difference(
+                    old.get(k, "<absent>"), new.get(k, "<absent>"), f"{path}.{k}" if path else k
+                )
+    return f"{path or '<root>'}: {json.dumps(old, default=str)} in the folder, {json.dumps(new, default=str)} now"
+
+
+def _identity(config: dict) -> dict:
+    """The part of a plain config that a result folder belongs to: all but the description
+    and the figure file formats (they change no unit, table or figure content)."""
+    out = {k: v for k, v in config.items() if k != "description"}
+    if isinstance(out.get("figures"), dict):
+        out["figures"] = {k: v for k, v in out["figures"].items() if k != "formats"}
+    return out
+
+
+def claim_folder(out: Path, config_text: str) -> None:
+    """Make ``out`` the folder of this configuration, or refuse (nothing is written then).
+
+    A folder with a ``config.yaml`` takes only that same configuration (a resume or a rerun);
+    a folder without one must be empty (hidden files aside). The new ``config.yaml`` is
+    written only into an empty folder.
+    """
+    path = out / "config.yaml"
+    new = safe_load_text(config_text)
+    if path.exists():
+        old = read_folder_config(path)
+        if _identity(old) != _identity(new):
+            raise ResultFolderError(
+                f"{out} holds the results of another configuration "
+                f"({_first_difference(old, new)}); choose another --out or delete the folder"
+            )
+        if path.read_text() != config_text:
+            # same results: written by an older version, or another description or figure
+            # file format (which change no number)
+            atomic_write_text(path, config_text)
+        return
+    others = sorted(p.name for p in out.iterdir() if not p.name.startswith("."))
+    if others:
+        raise ResultFolderError(
+            f"{out}: not empty and not a simlunar result folder (no config.yaml, found "
+            f"{others[0]}); choose an empty or new folder"
+        )
+    atomic_write_text(path, config_text)
+
+
+#: files that summarise the units; removed before the units change, written again at the end
+#: (provenance.json first: without it the folder reads as unfinished)
+RESULT_FILES = ("provenance.json", "results.csv", "scores.md", "scores.tex", "scores.csv")
+
+
+def folder_complete(out: Path, keys: list[str]) -> bool:
+    """Whether the summary files are present and belong to these units and this config."""
+    try:
+        prov = json.loads((out / "provenance.json").read_text())
+        files = prov["files"]
+        if prov["unit_keys"] != keys:
+            return False
+        return all(file_sha256(out / name) == digest for name, digest in files.items())
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+
+
+def _invalidate(out: Path) -> None:
+    for name in RESULT_FILES:
+        (out / name).unlink(missing_ok=True)
+    prune_figures(out, keep=())
+
+
+def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
+    """``{"unit<i>": unit key}``: the ``scans/`` folders these units export (units with
+    ``study.save_scans``; of units sharing a key, the first, which is the one computed)."""
+    out: dict[str, str] = {}
+    seen: set[str] = set()
+    for u in units:
+        if (u.config.get("study") or {}).get("save_scans") and u.key not in seen:
+            seen.add(u.key)
+            out[f"unit{u.index}"] = u.key
+    return out
+
+
+def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
+    from simlunar.results.exports import export_complete
+
+    name = f"unit{u.index}"
+    if scan_dirs.get(name) != u.key:
+        return True  # exports nothing (or a unit of the same key does)
+    return export_complete(out / "scans" / name, u.key)
+
+
+def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
+    """Remove ``scans/unit<i>/`` folders that do not hold the export of the unit that now
+    has index i (another configuration's, an interrupted one, or save_scans turned off)."""
+    import re
+    import shutil
+
+    from simlunar.results.exports import export_complete
+
+    folder = out / "scans"
+    removed: list[Path] = []
+    if not folder.is_dir():
+        return removed
+    for p in sorted(folder.iterdir()):
+        if not (p.is_dir() and re.fullmatch(r"unit\d+", p.name)):
+            continue  # only what the runner writes
+        key = scan_dirs.get(p.name)
+        if key is None or not export_complete(p, key):
+            shutil.rmtree(p)
+            removed.append(p)
+    if not any(folder.iterdir()):
+        folder.rmdir()
+    return removed
+
+
+def _read_provenance(out: Path) -> dict:
+    try:
+        prov = json.loads((out / "provenance.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return prov if isinstance(prov, dict) else {}
+
+
+def _check_writable(out: Path, scan_dirs: dict[str, str]) -> None:
+    """Write (and remove) a small file in each folder the run writes into, so a full disk,
+    a quota or a folder made read-only fails here (exit 3) before any result is deleted."""
+    import os
+    import tempfile
+
+    folders = [out, out / "units", out / "figures"] + ([out / "scans"] if scan_dirs else [])
+    for d in folders:
+        if d.exists() and not d.is_dir():
+            raise ResultFolderError(f"--out {out}: {d} is not a folder")
+        target = d if d.is_dir() else out
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=".simlunar-probe.", dir=target)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        try:
+            os.write(fd, b"\0" * 65536)
+            os.fsync(fd)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
+        finally:
+            os.close(fd)
+            os.unlink(tmp)

@@ -4,8 +4,17 @@
 options class and one line here (CONTRIBUTING.md shows the ideal sampler as the example).
 """
 
+from simlunar.render.lidar_scan import SteeredBeamOptions
 from simlunar.sensors.base import Acquisition, NothingMeasured, Sensor
 from simlunar.sensors.ideal import IdealOptions, IdealSampler
+from simlunar.sensors.lidar import (
+    FlashLidar,
+    FlashLidarOptions,
+    LidarScene,
+    MicromirrorFlash,
+    MicromirrorOptions,
+    SteeredBeam,
+)
 from simlunar.sensors.structured_light import (
     MODES,
     ScanResult,
@@ -17,17 +26,27 @@ from simlunar.sensors.structured_light import (
 SENSORS = {
     "ideal": (IdealSampler, IdealOptions),
     "structured_light": (StructuredLight, StructuredLightOptions),
+    "steered_beam": (SteeredBeam, SteeredBeamOptions),
+    "flash": (FlashLidar, FlashLidarOptions),
+    "micromirror_flash": (MicromirrorFlash, MicromirrorOptions),
 }
 
 __all__ = [
     "MODES",
     "SENSORS",
     "Acquisition",
+    "FlashLidar",
+    "FlashLidarOptions",
     "IdealOptions",
     "IdealSampler",
+    "LidarScene",
+    "MicromirrorFlash",
+    "MicromirrorOptions",
     "NothingMeasured",
     "ScanResult",
     "Sensor",
+    "SteeredBeam",
+    "SteeredBeamOptions",
     "StructuredLight",
     "StructuredLightOptions",
 ]

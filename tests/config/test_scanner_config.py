@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from simlunar.config.loading import load_experiment
-from simlunar.config.studies import ScannerStudyCfg
+from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.yamlio import parse_set
 from simlunar.errors import ConfigError
 

@@ -16,6 +16,7 @@ import yaml
 from pydantic import BaseModel
 
 from simlunar.config import render, schema, studies, terrain, translate
+from simlunar.config import scanner as scanner_cfg
 from simlunar.config.docs import json_schema, schema_model
 from simlunar.config.loading import validate_data
 from simlunar.config.scene import SceneCfg
@@ -156,10 +157,10 @@ def test_option_defaults_are_the_library_defaults():
     from simlunar.study.scanner import aim_rig_at_terrain
 
     # the config's defaults are the library's options dataclasses' defaults
-    assert translate.gray_options(studies.GrayOptsCfg()) == GrayCodeOptions()
-    assert translate.dot_options(studies.DotOptsCfg()) == DotOptions()
+    assert translate.gray_options(scanner_cfg.GrayOptsCfg()) == GrayCodeOptions()
+    assert translate.dot_options(scanner_cfg.DotOptsCfg()) == DotOptions()
     sparse = {k: v for k, v in vars(CaptureOptions()).items() if k.startswith("sparse_")}
-    assert studies.CaptureOptsCfg().model_dump() == sparse
+    assert scanner_cfg.CaptureOptsCfg().model_dump() == sparse
     weighted = _defaults(strategies._weighted)
     kw = translate.planner_kwargs("wavelet", studies.PlannerOptsCfg())
     assert {k: kw[k] for k in weighted} == weighted
@@ -167,10 +168,10 @@ def test_option_defaults_are_the_library_defaults():
     assert translate.planner_kwargs("entropy", studies.PlannerOptsCfg())["feature_opts"] == (
         _defaults(maps.entropy)
     )
-    assert studies.RigCfg().fill == _defaults(aim_rig_at_terrain)["fill"]
+    assert scanner_cfg.RigCfg().fill == _defaults(aim_rig_at_terrain)["fill"]
     make_rig = _defaults(rigs.make_rig)
-    assert studies.RigCfg().verge == make_rig["verge"]
-    assert studies.RigCfg().aperture_radius_m == make_rig["aperture_radius"]
+    assert scanner_cfg.RigCfg().verge == make_rig["verge"]
+    assert scanner_cfg.RigCfg().aperture_radius_m == make_rig["aperture_radius"]
     s, m = render.SensorCfg(), SensorModel()
     assert (s.full_well_e, s.read_noise_e, s.bits, s.response, s.gamma) == (
         m.full_well_e,
@@ -514,3 +515,60 @@ def test_the_schema_command_prints_what_the_test_validates_against(tmp_path):
     assert r.exit_code == 2 and "--kind recipe: unknown document kind" in r.output
     r = CliRunner().invoke(app, ["schema", "--markdown"])
     assert r.exit_code == 0 and "#### `study.options.gray_opts`" in r.output
+
+
+# --------------------------------------------------------------------------- keys with no effect
+_PERSPECTIVE = {
+    "kind": "perspective",
+    "width": 32,
+    "height": 24,
+    "fov_deg": 30,
+    "position_m": [0, 0, 60],
+    "look_at_m": [0, 0, 0],
+}
+
+
+@pytest.mark.parametrize(
+    "data, message",
+    [
+        (
+            base(terrain={"preset": "aerial_1", "spacing_m": 200}),
+            "terrain.spacing_m: the cell size of a DEM file (terrain.file) has no effect on a "
+            "preset",
+        ),
+        (
+            base(terrain={"file": "dem.npy", "spacing_m": 0.2, "scale": 0.5}),
+            "terrain.scale: shrinks a preset's grid and has no effect on a DEM file",
+        ),
+        (
+            base(render={"sensor": {"gamma": 1.8}}),
+            "render.sensor.gamma: has no effect with response linear",
+        ),
+        (
+            base(render={"camera": {**_PERSPECTIVE, "focus_distance_m": 60}}),
+            "render.camera.focus_distance_m: has no effect on a pinhole camera",
+        ),
+        (
+            scanner(options={"rig": {"focus_distance_m": 2.0}}),
+            "study.options.rig.focus_distance_m: has no effect on a pinhole camera",
+        ),
+    ],
+)
+def test_a_key_without_effect_is_refused_in_one_line(data, message):
+    # the issue's silent trap: spacing_m: 200 on a preset was recorded in config.yaml and
+    # ignored (results byte-identical to the 0.2 m run)
+    assert error_of(data).startswith(message)
+
+
+def test_the_keys_that_do_act_still_validate():
+    validate_data(base(render={"sensor": {"response": "gamma", "gamma": 1.8}}))
+    validate_data(
+        base(render={"camera": {**_PERSPECTIVE, "aperture_radius_m": 0.01, "focus_distance_m": 60}})
+    )
+    validate_data(base(terrain={"preset": "aerial_1", "overrides": {"grid": {"spacing_m": 0.4}}}))
+
+
+def test_a_misspelt_top_level_key_is_named_not_only_the_missing_one():
+    data = base()
+    data["studdy"] = data.pop("study")
+    assert error_of(data).startswith("studdy: unknown key (valid keys: name, description")

@@ -171,7 +171,8 @@ def test_registered_feature_and_strategy(model, held_out, tmp_path):
     m = feature_map("learned", img, model=str(path), density=DENSITY)
     np.testing.assert_array_equal(m, model.predict(img, density=DENSITY))
     k = round(DENSITY * img.size)
-    p = plan("learned", k, image=img, rng=0, feature_opts={"model": path, "density": DENSITY})
+    opts = {"feature_opts": {"model": path, "density": DENSITY}, "placement": "lloyd"}
+    p = plan("learned", k, image=img, rng=0, **opts)
     assert p.k == k
     with pytest.raises(ValueError, match="needs option"):
         feature_map("learned", img)
@@ -187,6 +188,7 @@ def test_registered_feature_and_strategy(model, held_out, tmp_path):
         ({"max_iter": 1.5}, "max_iter"),
         ({"learning_rate": 0}, "learning_rate"),
         ({"l2_regularization": -1}, "l2_regularization"),
+        ({"threads": 0}, "threads"),
     ],
 )
 def test_options_are_validated(kwargs, match):

@@ -305,6 +305,9 @@ CASES = [
     Case("projector above the limit", with_("study", {**SCANNER, "projector_px": [400, 300]}), "study.projector_px: 400 x 300 pixels", env={"SIMLUNAR_MAX_CELLS": "100000"}),
     Case("camera above the limit", with_("study", {**SCANNER, "projector_px": [40, 30], "camera_px": [400, 300]}), "study.camera_px: 400 x 300 pixels", env={"SIMLUNAR_MAX_CELLS": "100000"}),
     Case("gray-code frames x pixels above the limit", with_("study", SCANNER), "gray-code frames x", env={"SIMLUNAR_MAX_FRAME_PIXELS": "100000"}),
+    # transient films: receiver pixels x time bins x channels, before any render
+    Case("lidar time bins above the limit", with_("study", {"kind": "lidar", "sensor": "flash", "planners": ["random"], "densities": ["1/64"], "options": {"bin_range_m": 1e-5, "flash": {"receiver_px": [32, 24]}}}, with_("render.camera", PERSPECTIVE)), "study.options.bin_range_m: 32 x 24 receiver pixels x "),
+    Case("steered-beam batch x time bins above the limit", with_("study", {"kind": "lidar", "sensor": "steered_beam", "planners": ["random"], "densities": ["1/64"], "options": {"steered_beam": {"batch": 4096, "window_m": 8}}}, with_("render.camera", PERSPECTIVE)), "study.options.bin_range_m: 4096 beams x 160 time bins x 4 channels", env={"SIMLUNAR_MAX_FRAME_PIXELS": "1000000"}),
     Case("dot batch x pixels above the limit", with_("study", {**SCAN_DOTS, "options": {"dot_opts": {"batch": 100000}}}), "study.options.dot_opts.batch: 100000 frames x"),
     Case("limit setting not a number", GOOD, "SIMLUNAR_MAX_CELLS=lots: expected a positive count", env={"SIMLUNAR_MAX_CELLS": "lots"}),
     Case("DEM header promises more than the file", dem_cfg(), "its header promises a 300 x 400 array (960000 bytes) but the file holds", setup=files(dem__npy=npy_header((300, 400)))),

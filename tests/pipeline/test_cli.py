@@ -186,3 +186,51 @@ def test_terrain_render_figures_file_errors_are_one_line(args, expect, tmp_path)
     r = invoke(*[a.format(d=tmp_path) for a in args])
     _one_error_line(r, expect)
     assert sorted((p.name, p.stat().st_size) for p in tmp_path.rglob("*")) == before
+
+
+# --------------------------------------------------------------------------- first contact
+def test_run_help_shows_the_defaults_and_the_flag_pairs():
+    r = CliRunner().invoke(app, ["run", "--help"], terminal_width=200)
+    assert r.exit_code == 0, r.output
+    assert "[default: results/<name>]" in r.output
+    assert "[default: 1]" in r.output  # --workers
+    assert "--figures / --no-figures" in r.output
+    assert "--progress / --no-progress" in r.output
+    assert "<bool>" not in r.output  # a flag takes no value
+
+
+def test_version():
+    import simlunar
+
+    r = invoke("--version")
+    assert r.exit_code == 0, r.output
+    assert r.output.strip() == f"simlunar {simlunar.__version__}"
+
+
+@pytest.mark.parametrize("flag", ["--figures", "--no-figures"])
+def test_figure_flags_take_no_value(flag, tmp_path):
+    # before, `--no-figures` showed as `--no-figures <bool>` and `--no-figures true` failed;
+    # a bad scheduler stops the run before anything is computed, after the options parsed
+    r = invoke("run", write(tmp_path, GOOD), flag, "--scheduler", "nope://x", "--no-progress")
+    assert "No such option" not in r.output
+    assert r.exit_code == 2
+
+
+def test_render_refuses_a_folder_that_is_not_a_render_folder(tmp_path):
+    scene = tmp_path / "scene.yaml"
+    scene.write_text("terrain: {preset: aerial_1, scale: 0.125}\n")
+    experiment = tmp_path / "exp_folder"  # a result folder of `simlunar run`
+    experiment.mkdir()
+    (experiment / "config.yaml").write_text("name: x\n")
+    (experiment / "results.csv").write_text("unit,metric,value\n")
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "notes.txt").write_text("mine\n")
+    for folder, expect in (
+        (experiment, "not empty and an experiment's result folder"),
+        (other, "not empty and not a render folder (no scene.json, found notes.txt)"),
+    ):
+        before = sorted(p.name for p in folder.iterdir())
+        r = invoke("render", str(scene), "--out", str(folder))
+        _one_error_line(r, expect)
+        assert sorted(p.name for p in folder.iterdir()) == before

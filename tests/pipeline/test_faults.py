@@ -456,7 +456,7 @@ def test_an_environment_errno_without_a_file_name_is_exit_3(tmp_path, monkeypatc
 
 
 def test_claim_folder_refuses_an_unrelated_folder(tmp_path):
-    from simlunar.pipeline.runner import claim_folder
+    from simlunar.results.folder import claim_folder
 
     (tmp_path / "thesis.tex").write_text("x")
     with pytest.raises(ResultFolderError, match=r"not a simlunar result folder .* thesis\.tex"):

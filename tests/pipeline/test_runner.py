@@ -234,3 +234,55 @@ def test_progress_bar_gets_within_unit_progress_in_process(tmp_path, capsys):
         cfg(), tmp_path / "q", compute=fu.fake_unit_with_progress, progress=False, figures=False
     )
     assert fu.PROGRESS_CALLS == []
+
+
+def test_without_random_the_tables_say_why_and_the_vs_grid_table_stays(tmp_path):
+    # docs/experiments.md's first --set example (study.strategies=[grid, wavelet]) wrote a
+    # score table of dashes, an empty scores.csv and no samples-saved table
+    study = {**cfg().study.model_dump(), "strategies": ["grid", "wavelet"]}
+    study["densities"] = [0.5, 0.25, 0.125, 0.0625, 0.03125]
+    s = _run(cfg(sweep={}, study=study), tmp_path / "o")
+    md = (tmp_path / "o" / "scores.md").read_text()
+    assert s.scores_markdown == md
+    assert "the random strategy, which study.strategies (grid, wavelet) does not include" in md
+    assert "| –" not in md and "x  trials" not in md
+    assert "### sweep_test: samples saved vs Grid at equal MSE" in md
+    assert "| Wavelet |" in md
+    # never a scores.csv of a header only (this fake unit has per-unit scores, a real one
+    # without random has none: then scores.md says "no scores.csv")
+    csv_lines = (tmp_path / "o" / "scores.csv").read_text().splitlines()
+    assert len(csv_lines) > 1 and "no scores.csv" not in md
+
+
+def test_a_rerun_keeps_the_run_time_and_adds_its_own(tmp_path):
+    _run(cfg(sweep={}), tmp_path / "o")
+    first = json.loads((tmp_path / "o" / "provenance.json").read_text())["timings"]
+    _run(cfg(sweep={}), tmp_path / "o")
+    again = json.loads((tmp_path / "o" / "provenance.json").read_text())["timings"]
+    assert again["run_s"] == first["run_s"] and "rerun_s" in again
+    # a new description (outside the cache key, as the docs say) is the same folder
+    s = _run(cfg(sweep={}, description="edited"), tmp_path / "o")
+    assert s.units_computed == 0
+
+
+def test_a_rerun_redraws_no_figure_unless_its_inputs_changed(tmp_path):
+    from simlunar.results.figures import write_figures
+
+    c = cfg(sweep={}, figures={"sparse_mesh_density": None, "formats": ["png"]})
+    out = tmp_path / "o"
+    s1 = run_experiment(c, out, compute=fake_unit, progress=False)
+    pngs = sorted(p for p in s1.figures if p.suffix == ".png")
+    assert pngs and not any(p.suffix == ".pdf" for p in s1.figures)  # PNG only by default
+    stamp = {p: p.stat().st_mtime_ns for p in pngs}
+    s2 = run_experiment(c, out, compute=fake_unit, progress=False)
+    assert sorted(s2.figures) == sorted(s1.figures)
+    assert {p: p.stat().st_mtime_ns for p in pngs} == stamp  # nothing redrawn
+    # a figure deleted is drawn again; PDF on request; --force redraws
+    pngs[0].unlink()
+    write_figures(out)
+    assert pngs[0].is_file()
+    both = write_figures(out, formats=("png", "pdf"))
+    assert any(p.suffix == ".pdf" for p in both)
+    before = pngs[-1].stat().st_mtime_ns
+    write_figures(out, formats=("png", "pdf"), force=True)
+    assert pngs[-1].stat().st_mtime_ns != before

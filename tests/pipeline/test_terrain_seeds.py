@@ -156,7 +156,7 @@ def test_figure_titles_name_the_terrain_seed():
 
     rec = {"index": 3, "key": "k", "sweep": {}, "config": cfg(3).model_dump(mode="json")}
     rec["config"]["terrain"]["seed_index"] = 2
-    assert "terrain_seed=2" in _label(rec)
+    assert "terrain seed 2" in _label(rec)
     single = {"index": 0, "key": "k", "sweep": {}, "config": cfg(1).model_dump(mode="json")}
     assert "terrain_seed" not in _label(single)
 
@@ -172,7 +172,7 @@ def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monke
         for u in expand(cfg(3))
     ]
     panels = PF._density_panels(units)
-    assert [t for t, _ in panels] == ["elevation_deg=10", "elevation_deg=60"]
+    assert [t for t, _ in panels] == ["sun elevation: 10°", "sun elevation: 60°"]
     assert [[r["index"] for r in members] for _, members in panels] == [[0, 1, 2], [3, 4, 5]]
 
     _run(cfg(3), tmp_path / "r")
@@ -196,7 +196,7 @@ def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monke
 
 def test_scanner_ablation_axis_of_the_sun_to_projector_ratio():
     # the top axis appears only when ambient_ratio is proportional to the swept irradiance
-    from simlunar.results.figures import _ambient_axis
+    from simlunar.results.scanner_figures import _ambient_axis
 
     units = [{"index": i, "sweep": {"render.light.irradiance": x}} for i, x in enumerate([1, 10])]
     rows = [

@@ -59,7 +59,7 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
 
     from simlunar.features import feature_map
     from simlunar.geometry import OrthoCamera
-    from simlunar.pipeline.unit import sparse_mesh_render
+    from simlunar.pipeline.figure_inputs import RenderScene, sparse_mesh_render
     from simlunar.render.lights import SunLight
     from simlunar.render.materials import LambertBSDF, OrenNayarBSDF, sigma_map_from_energy
     from simlunar.terrain.types import Terrain
@@ -72,11 +72,13 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
     sun = [SunLight(np.radians(30.0), np.radians(100.0))]
     image = rng.random(shape).astype(np.float32) * gaussian_filter(h, 1.0) ** 2
     on = OrenNayarBSDF(np.radians(20.0))
-    kw = {"density": 1 / 8, "spp": 2, "seed": 1, "max_depth": 2}
+    kw = {"density": 1 / 8}
+
+    def scene(bsdf):
+        return RenderScene(t, cam, sun, bsdf, spp=2, seed=1, max_depth=2)
+
     lo, hi = np.radians(20.0), np.radians(45.0)
-    out = sparse_mesh_render(
-        t, cam, sun, on, image, rng=3, sigma_range=(lo, hi), threshold=0.8, **kw
-    )
+    out = sparse_mesh_render(scene(on), image, rng=3, sigma_range=(lo, hi), threshold=0.8, **kw)
     assert set(out) == {"sparse_mesh_render", "sparse_mesh_render_rough", "sparse_mesh_sigma"}
     want = sigma_map_from_energy(
         feature_map("wavelet", image), sigma_min=lo, sigma_max=hi, threshold=0.8
@@ -94,7 +96,7 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
     # the scalar path's (tests/render/test_bsdfs.py), and a pixel sums 2 spp of 1 BSDF value
     # each, so 16 float32 ulp relative bound it there (a 1e-5 relative change of sigma moves
     # BSDF values by 42-250 ulp on the eval grid of test_bsdfs.py; the check above covers the map)
-    flat = sparse_mesh_render(t, cam, sun, on, image, rng=3, sigma_range=(on.sigma, on.sigma), **kw)
+    flat = sparse_mesh_render(scene(on), image, rng=3, sigma_range=(on.sigma, on.sigma), **kw)
     import mitsuba as mi  # the variant the renders above ran on
 
     if mi.variant().startswith("cuda"):
@@ -104,8 +106,8 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
         np.testing.assert_array_equal(flat["sparse_mesh_render_rough"], const)
     # the same plan (same rng) gives the same constant render; no modulation without a range
     # or for a BSDF without roughness
-    plain = sparse_mesh_render(t, cam, sun, on, image, rng=3, **kw)
+    plain = sparse_mesh_render(scene(on), image, rng=3, **kw)
     assert set(plain) == {"sparse_mesh_render"}
     np.testing.assert_array_equal(plain["sparse_mesh_render"], const)
-    lam = sparse_mesh_render(t, cam, sun, LambertBSDF(), image, rng=3, sigma_range=(lo, hi), **kw)
+    lam = sparse_mesh_render(scene(LambertBSDF()), image, rng=3, sigma_range=(lo, hi), **kw)
     assert set(lam) == {"sparse_mesh_render"}

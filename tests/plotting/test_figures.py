@@ -138,11 +138,12 @@ def test_sparse_mesh_panels_with_roughness_modulated_render_and_difference(rng):
     sparse, rough, energy = 0.9 * full, 0.7 * full, rng.random((20, 30))
     fig, axes = F.sparse_mesh_panels(sparse, full, energy, rough=rough, n_samples=9)
     top = np.percentile(full, 99.5)
-    lim = np.max(np.abs(rough - sparse)) / top
+    # the difference's scale: the 99th percentile of |difference| (not a few extreme pixels)
+    lim = np.percentile(np.abs(rough - sparse) / top, 99)
     titles = [a.get_title() for a in axes]
     assert titles == [
         "sparse mesh (9 samples),\nroughness from energy",
-        f"energy - constant roughness\n(max {100 * lim:.2g} % of exposure)",
+        "energy - constant roughness",
         "sparse mesh (9 samples),\nconstant roughness",
         "full resolution",
         "frequency map",
@@ -228,7 +229,10 @@ def test_shared_legend_replaces_panel_legends_and_inner_labels():
         F.error_vs_density(rows(), metric="mse", ax=ax, band_label=F.BAND_LABEL_SEEDS)
     F.shared_legend(fig, axes)
     assert all(ax.get_legend() is None for ax in axes)
-    (leg,) = fig.legends
+    # the legend fills the grid's free sixth cell (no empty slot, nothing on the data)
+    (slot,) = [ax for ax in fig.axes if ax not in axes]
+    assert slot.get_subplotspec().rowspan.start == 1 and slot.get_subplotspec().colspan.start == 2
+    leg = slot.get_legend()
     assert [t.get_text() for t in leg.get_texts()] == ["Random", "Wavelet", F.BAND_LABEL_SEEDS]
     ylabels = [ax.get_ylabel() for ax in axes]
     assert ylabels == ["MSE error (m²)", "", "", "MSE error (m²)", ""]

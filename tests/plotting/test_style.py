@@ -107,3 +107,27 @@ def test_axis_names_and_metric_units():
     assert S.metric_axis("mse") == "MSE error (m²)"
     assert S.metric_axis("rmse") == "RMSE error (m)"
     assert S.metric_axis("unknown") == "unknown error"
+
+
+def test_point_titles_have_one_style_with_registry_labels_and_units():
+    from simlunar.plotting.style import point_title
+
+    assert point_title({"render.light.elevation_deg": 5}) == "sun elevation: 5°"
+    light = {"kind": "sun", "elevation_deg": 30, "azimuth_deg": 135}
+    assert point_title({"render.light": light}) == (
+        "light source: Sun (elevation 30°, azimuth 135°)"
+    )
+    assert point_title({"render.light": {"kind": "camera"}}) == "light source: Camera-centred light"
+    assert point_title({"terrain.albedo": None}) == "terrain albedo: preset default"
+    assert point_title({"render.sensor.read_noise_e": 200}) == "sensor read noise: 200 e⁻"
+
+
+def test_density_labels_are_fractions():
+    from simlunar.plotting.density import density_label
+
+    assert [density_label(d) for d in (0.5, 1 / 128, 0.15, 1 / 280)] == [
+        "1/2",
+        "1/128",
+        "1/6.7",
+        "1/280",
+    ]

@@ -10,11 +10,13 @@ def test_captions_state_units_trials_and_bands():
     text = C.error_vs_density("grad", {"trials": 7, "strategies": ["grid", "wavelet_bn"]}, 1)
     assert "in m²" in text and "mean over 7 trials" in text
     assert "±1 standard deviation over those trials" in text
-    assert "Grid, Wavelet, blue noise" in text  # registry labels, as in the legend
+    # registry labels, as in the legend, separated by semicolons (labels hold commas)
+    assert "Grid; Wavelet, blue noise" in text
     assert "error bars: ±1 standard deviation" in C.scanner_errors(["mse"], 4)
     assert "4 sweep points" in C.scanner_errors(["mse"], 4)
-    assert "Every rate is zero" in C.bit_errors(1, True)
-    assert "Every rate is zero" not in C.bit_errors(1, False)
+    # all rates zero: no figure, and its caption says why
+    assert C.bit_errors(1, True, 14).startswith("Not drawn: all 14 per-bit gray-code error rates")
+    assert "Not drawn" not in C.bit_errors(1, False, 14)
     assert "sun elevation (deg)" in C.score_vs_sweep("mse", "render.light.elevation_deg", {})
 
 
@@ -33,3 +35,15 @@ def test_error_vs_density_caption_of_pooled_terrain_seeds():
     assert "mean over 5 terrain seeds × 4 trials" in text
     assert "over those 20 runs" in text and "One panel per scene or sweep point" in text
     assert "terrain seeds" not in C.error_vs_density("mse", {"trials": 4}, 1)
+
+
+def test_scanner_error_bars_are_described_only_where_drawn():
+    one = C.scanner_errors(["mse"], 1, n_min=1, relative=True)
+    assert "a bar of one value has none" in one and "divided by the gray-code scan's" in one
+    assert "±1 standard deviation over the same values" in C.scanner_errors(["mse"], 1)
+
+
+def test_panel_captions_explain_the_border_bands_and_the_scale():
+    text = C.panels("k/N = 1/32", "sun elevation: 5°")
+    assert "Axes in metres" in text and "convex hull" in text and "nearest sample" in text
+    assert "Axes in image pixels" in C.panels("", "", metres=False)

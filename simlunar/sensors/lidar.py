@@ -1,0 +1,353 @@
+"""Time-of-flight range sensors: steered beam, flash LIDAR and micromirror-steered flash.
+
+Each wraps an acquisition of :mod:`simlunar.render.lidar_scan` behind the
+:class:`~simlunar.sensors.base.Sensor` protocol. A sensor is bound to a scene (terrain, BSDF,
+sun) and to the guide camera; its ranges become z-depths in the guide view
+(:meth:`~simlunar.render.lidar_scan.LidarScan.depth`) at the guide (row, col) index coordinates
+where each measured point projects, and its cost is the modelled acquisition time.
+
+- :class:`SteeredBeam`: one beam visits the planned pixels' directions from the guide camera's
+  centre, in the order of :func:`simlunar.lidar.order_scan`; seconds from the steering
+  mechanics (:func:`simlunar.lidar.scan_timing`).
+- :class:`FlashLidar`: a low-resolution receiver co-boresighted with the guide camera takes one
+  full-field frame; with ``revisits`` > 0 the planned pixels direct that many zoomed frames at
+  the sub-fields (tiles of ``1 / zoom`` of the field) holding most planned pixels, whose finer
+  samples replace the full-field ones there. Seconds: frames x pulses / pulse rate.
+- :class:`MicromirrorFlash`: a micromirror projector at the guide camera lights only the
+  planned pixels; a small receiver times them (dots sharing a receiver pixel go to different
+  frames).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.geometry import Camera, Intrinsics
+from simlunar.render.lidar_scan import (
+    FlashOptions,
+    LidarScan,
+    SteeredBeamOptions,
+    beam_capture,
+    guide_directions,
+    micromirror_flash,
+    range_window,
+    read_flash,
+    steered_beam_scan,
+)
+from simlunar.render.transient import flash_frame
+from simlunar.sensors.base import Acquisition, NothingMeasured
+
+__all__ = [
+    "FlashLidar",
+    "FlashLidarOptions",
+    "LidarScene",
+    "MicromirrorFlash",
+    "MicromirrorOptions",
+    "SteeredBeam",
+    "revisit_tiles",
+    "tile_camera",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class LidarScene:
+    """What a LIDAR measures: terrain, guide camera (the sensor's origin and boresight),
+    BSDF spec and sun (rendered as background).
+
+    Attributes
+    ----------
+    terrain : Terrain
+    camera : geometry.Camera
+        Perspective pinhole guide camera (square pixels); the sensor sits at its centre.
+    bsdf : BSDF spec or None (Lambert)
+    sun : SunLight or None
+    """
+
+    terrain: object
+    camera: Camera
+    bsdf: object = None
+    sun: object = None
+
+    def __post_init__(self):
+        if not isinstance(self.camera, Camera) or self.camera.aperture_radius > 0:
+            raise ValueError(
+                "a LIDAR needs a perspective pinhole guide camera (the sensor sits at its "
+                f"centre), got {type(self.camera).__name__}"
+            )
+
+
+def _to_guide(scan: LidarScan, camera: Camera, rc=None, *, detail=None, **cost) -> Acquisition:
+    """The valid points of a scan as guide-view (row, col) and z-depth: at the planned ``rc``
+    (one per sample of ``scan``) or, without a plan, where each point projects."""
+    valid = np.asarray(scan.valid).ravel()
+    if not valid.any():
+        raise NothingMeasured("the LIDAR detected no return")
+    pts = scan.points.reshape(-1, 3)[valid]
+    uv, z = camera.project(pts)
+    if rc is None:
+        # receiver pixel centres land on lattices of the guide grid up to rounding (1e-13);
+        # snapped, they are exact lattices, whose Delaunay triangles are well shaped (nearly
+        # co-circular float points gave sliver triangles that the rasteriser extrapolated)
+        rc = np.round(np.stack([uv[:, 1] - 0.5, uv[:, 0] - 0.5], axis=-1), 6)
+    else:
+        rc = np.asarray(rc).reshape(-1, 2)[valid]
+    return Acquisition(rc, z, camera.shape, detail=scan if detail is None else detail, **cost)
+
+
+class SteeredBeam:
+    """A gimbaled altimeter / galvanometer scanner at the guide camera's centre.
+
+    The beam capture (terrain, origin, sun) is built once and reused by every plan; the gimbal's
+    zero is the guide camera's boresight.
+
+    Parameters
+    ----------
+    scene : LidarScene
+    options : SteeredBeamOptions, optional
+    """
+
+    name = "steered_beam"
+    needs_plan = True
+
+    def __init__(self, scene: LidarScene, options: SteeredBeamOptions | None = None) -> None:
+        self.scene = scene
+        self.options = options or SteeredBeamOptions()
+        self.capture = beam_capture(
+            scene.terrain,
+            scene.camera.position,
+            options=self.options,
+            sun=scene.sun,
+            bsdf=scene.bsdf,
+        )
+
+    def acquire(self, rc: np.ndarray | None, *, rng=None) -> Acquisition:
+        """Range the planned guide pixels ``rc`` ((k, 2) int (row, col)); ``rng``: photon noise."""
+        if rc is None:
+            raise ValueError("a steered beam ranges planned pixels: rc is required")
+        cam = self.scene.camera
+        d = guide_directions(cam, rc)
+        scan = steered_beam_scan(self.capture, d, options=self.options, rng=rng, boresight=cam.pose)
+        return _to_guide(scan, cam, rc, frames=scan.frames, seconds=scan.seconds)
+
+
+@dataclass(frozen=True)
+class FlashLidarOptions:
+    """Options of :class:`FlashLidar`.
+
+    Attributes
+    ----------
+    flash : FlashOptions
+        Pulse, detector (its ``pulses`` per frame), ranging, rendering, pulse rate (Hz).
+    receiver_px : (rows, cols)
+        Receiver array; the same field of view as the guide camera (same aspect).
+    revisits : int >= 0
+        Zoomed frames directed by the plan after the full-field frame (0: no plan).
+    zoom : int >= 2
+        A revisit frame sees 1 / zoom of the field on each axis (tiles of a zoom x zoom grid).
+    """
+
+    flash: FlashOptions = field(default_factory=FlashOptions)
+    receiver_px: tuple[int, int] = (64, 64)
+    revisits: int = 0
+    zoom: int = 4
+
+    def __post_init__(self):
+        if len(self.receiver_px) != 2 or min(self.receiver_px) < 1:
+            raise ValueError(f"receiver_px must be (rows, cols) >= 1, got {self.receiver_px}")
+        if int(self.revisits) < 0 or int(self.zoom) < 2:
+            raise ValueError(f"need revisits >= 0 and zoom >= 2, got {self.revisits}, {self.zoom}")
+        if int(self.revisits) > int(self.zoom) ** 2:
+            raise ValueError(f"revisits {self.revisits} > the {self.zoom}^2 tiles of the field")
+
+
+def revisit_tiles(rc: np.ndarray, shape, zoom: int, count: int) -> np.ndarray:
+    """The ``count`` tiles (of a zoom x zoom grid over ``shape``) holding most planned pixels.
+
+    Returns (count, 2) int (tile row, tile col), most planned pixels first (ties: row-major).
+    """
+    h, w = shape
+    rc = np.asarray(rc, float).reshape(-1, 2)
+    ti = np.clip((rc[:, 0] * zoom // h).astype(int), 0, zoom - 1)
+    tj = np.clip((rc[:, 1] * zoom // w).astype(int), 0, zoom - 1)
+    hist = np.bincount(ti * zoom + tj, minlength=zoom * zoom)
+    best = np.argsort(-hist, kind="stable")[: int(count)]
+    return np.stack([best // zoom, best % zoom], axis=-1)
+
+
+def tile_camera(guide: Camera, tile, zoom: int, receiver_px) -> Camera:
+    """The receiver of a revisit: ``guide``'s pose, its field narrowed to one tile of a
+    zoom x zoom grid (an off-centre principal point), ``receiver_px`` (rows, cols) pixels."""
+    k = guide.intrinsics
+    rh, rw = receiver_px
+    s = rw * zoom / k.width  # receiver px per guide px
+    u0, v0 = tile[1] * k.width / zoom, tile[0] * k.height / zoom
+    kk = Intrinsics(k.fx * s, k.fy * s, (k.cx - u0) * s, (k.cy - v0) * s, rw, rh)
+    return Camera(kk, guide.pose)
+
+
+class FlashLidar:
+    """A flash LIDAR co-boresighted with the guide camera, with optional plan-directed revisits.
+
+    Parameters
+    ----------
+    scene : LidarScene
+    options : FlashLidarOptions, optional
+    """
+
+    name = "flash"
+
+    def __init__(self, scene: LidarScene, options: FlashLidarOptions | None = None) -> None:
+        self.scene = scene
+        self.options = options or FlashLidarOptions()
+        rh, rw = self.options.receiver_px
+        k = scene.camera.intrinsics
+        self.receiver = Camera(k.scaled(rw / k.width), scene.camera.pose)
+        if self.receiver.shape != (rh, rw):
+            raise ValueError(
+                f"receiver_px {(rh, rw)} must keep the guide camera's aspect {k.shape}"
+            )
+        self._frames: dict = {}
+
+    @property
+    def needs_plan(self) -> bool:
+        return self.options.revisits > 0
+
+    def _frame(self, camera: Camera, key, rng) -> LidarScan:
+        """A frame through ``camera``: rendered once per field (``key``), read with fresh noise."""
+        s, f = self.scene, self.options.flash
+        if key not in self._frames:
+            bins = range_window(s.terrain, camera, bin_range_m=f.bin_range_m, margin_m=f.margin_m)
+            self._frames[key] = flash_frame(
+                s.terrain, camera, bins=bins, options=f.transient, bsdf=s.bsdf, sun=s.sun
+            )
+        return read_flash(self._frames[key], camera, options=f, rng=rng)
+
+    def acquire(self, rc: np.ndarray | None, *, rng=None) -> Acquisition:
+        """One full-field frame, then ``revisits`` zoomed frames at the sub-fields with most
+        planned pixels ``rc`` ((k, 2) (row, col); ignored without revisits)."""
+        o, cam = self.options, self.scene.camera
+        rngs = np.random.default_rng(rng).spawn(1 + int(o.revisits))
+        full = self._frame(self.receiver, None, rngs[0])
+        scans = [full]
+        tiles = np.zeros((0, 2), int)
+        if o.revisits > 0:
+            if rc is None:
+                raise ValueError("flash revisits are directed by a plan: rc is required")
+            tiles = revisit_tiles(rc, cam.shape, o.zoom, o.revisits)
+            for t, r in zip(tiles, rngs[1:]):
+                tcam = tile_camera(cam, t, o.zoom, o.receiver_px)
+                scans.append(self._frame(tcam, tuple(int(x) for x in t), r))
+        flat = [_flat(s) for s in scans]
+        if len(tiles):
+            # the finer revisit samples supersede the full frame's inside their tiles
+            uv, _ = cam.project(np.where(flat[0].valid[:, None], flat[0].points, 0.0))
+            t = np.stack([uv[:, 1] * o.zoom // cam.shape[0], uv[:, 0] * o.zoom // cam.shape[1]], -1)
+            inside = (t[:, None, :] == tiles[None]).all(-1).any(-1)
+            flat[0] = _subset(flat[0], ~inside)
+        merged = _concat(flat)
+        per_frame = o.flash.detector.pulses / o.flash.pulse_rate_hz
+        return _to_guide(
+            merged, cam, frames=len(scans), seconds=len(scans) * per_frame, detail=merged
+        )
+
+
+def _flat(s: LidarScan) -> LidarScan:
+    return LidarScan(
+        s.ranges.ravel(),
+        s.valid.ravel(),
+        s.points.reshape(-1, 3),
+        s.photons.ravel(),
+        np.arange(s.ranges.size),
+        s.seconds,
+        s.frames,
+    )
+
+
+def _subset(s: LidarScan, keep: np.ndarray) -> LidarScan:
+    return LidarScan(
+        s.ranges[keep],
+        s.valid[keep],
+        s.points[keep],
+        s.photons[keep],
+        np.arange(int(keep.sum())),
+        s.seconds,
+        s.frames,
+    )
+
+
+def _concat(scans: list[LidarScan]) -> LidarScan:
+    cat = np.concatenate
+    n = sum(s.ranges.size for s in scans)
+    return LidarScan(
+        cat([s.ranges for s in scans]),
+        cat([s.valid for s in scans]),
+        cat([s.points for s in scans]),
+        cat([s.photons for s in scans]),
+        np.arange(n),
+        float(sum(s.seconds for s in scans)),
+        int(sum(s.frames for s in scans)),
+    )
+
+
+@dataclass(frozen=True)
+class MicromirrorOptions:
+    """Options of :class:`MicromirrorFlash`.
+
+    Attributes
+    ----------
+    flash : FlashOptions
+        As for the flash LIDAR; ``transient.spp`` needs about
+        ``(guide pixels / receiver pixels) x 16`` for a clean return (docs/lidar.md).
+    receiver_px : (rows, cols)
+        The receiver timing the dots (same field of view as the guide camera).
+    """
+
+    flash: FlashOptions = field(default_factory=FlashOptions)
+    receiver_px: tuple[int, int] = (64, 64)
+
+    def __post_init__(self):
+        if len(self.receiver_px) != 2 or min(self.receiver_px) < 1:
+            raise ValueError(f"receiver_px must be (rows, cols) >= 1, got {self.receiver_px}")
+
+
+class MicromirrorFlash:
+    """The paper's envisioned sensor: a micromirror array at the guide camera lights only the
+    planned pixels; a low-resolution receiver times their returns.
+
+    Parameters
+    ----------
+    scene : LidarScene
+        Its guide camera needs a centred principal point (the projector emitter).
+    options : MicromirrorOptions, optional
+    """
+
+    name = "micromirror_flash"
+    needs_plan = True
+
+    def __init__(self, scene: LidarScene, options: MicromirrorOptions | None = None) -> None:
+        if not scene.camera.intrinsics.is_centred:
+            raise ValueError(
+                "a micromirror flash needs a guide camera with a centred principal point"
+            )
+        self.scene = scene
+        self.options = options or MicromirrorOptions()
+
+    def acquire(self, rc: np.ndarray | None, *, rng=None) -> Acquisition:
+        """Light and time the planned guide pixels ``rc`` ((k, 2) int (row, col))."""
+        if rc is None:
+            raise ValueError("a micromirror flash lights planned pixels: rc is required")
+        s, o = self.scene, self.options
+        uv = np.asarray(rc, float)[:, ::-1] + 0.5
+        scan = micromirror_flash(
+            s.terrain,
+            s.camera,
+            uv,
+            options=o.flash,
+            receiver_shape=tuple(o.receiver_px),
+            rng=rng,
+            sun=s.sun,
+            bsdf=s.bsdf,
+        )
+        return _to_guide(scan, s.camera, rc, frames=scan.frames, seconds=scan.seconds)

@@ -1,0 +1,295 @@
+"""The LIDAR study: the study protocol with a time-of-flight sensor, scored at equal scan time.
+
+For every planner, sample budget (a density k / N of guide pixels) and trial, the planner picks
+guide pixels from the guide image, a LIDAR of :mod:`simlunar.sensors.lidar` measures them (a
+steered beam ranges them in a time-optimised order; a micromirror flash lights them; a flash
+LIDAR directs its zoomed revisits at the sub-fields holding most of them), the protocol
+(:mod:`simlunar.study.protocol`) reconstructs the guide-view depth and scores it. Every row
+carries the acquisition's modelled ``seconds`` and ``frames`` beside its sample count, so
+error can be read against scan time as well as against samples. A sensor that needs no plan (a
+flash LIDAR without revisits) runs once per trial under the planner label ``"none"``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.features import check_image
+from simlunar.metrics import METRICS
+from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
+from simlunar.planner import STRATEGIES, plan, strategy_weights
+from simlunar.sensors import SENSORS
+from simlunar.sensors.base import Acquisition
+from simlunar.sensors.lidar import LidarScene
+from simlunar.study.protocol import Trials, run_protocol
+from simlunar.study.sampling import _seed, sample_count
+from simlunar.study.scanner import score_depth
+
+__all__ = [
+    "LIDARS",
+    "NO_PLAN",
+    "LidarStudyOptions",
+    "LidarStudyResult",
+    "run_lidar_study",
+    "time_table",
+]
+
+#: the planner label of a sensor that needs no plan
+NO_PLAN = "none"
+#: the LIDAR sensors of :data:`simlunar.sensors.SENSORS`
+LIDARS = ("steered_beam", "flash", "micromirror_flash")
+
+
+@dataclass(frozen=True)
+class LidarStudyOptions:
+    """What a LIDAR study runs.
+
+    Attributes
+    ----------
+    sensor : str
+        A LIDAR of :data:`simlunar.sensors.SENSORS`: ``steered_beam``, ``flash`` or
+        ``micromirror_flash``.
+    sensor_options : options object of that sensor, or None (its defaults)
+    planners : sequence of str
+        Strategy names of :data:`simlunar.planner.STRATEGIES` (from the guide image).
+    densities : sequence of float
+        Planned pixels k / N of the guide view, each in (0, 1].
+    trials : int >= 1
+        Planner draws and photon noise per (planner, density).
+    metrics : sequence of str
+        Names of :data:`simlunar.metrics.METRICS` (against the guide view's true depth).
+    planner_opts : mapping str -> mapping
+        Per planner options of :func:`simlunar.planner.plan` (``feature_opts`` included).
+    hazard : HazardOptions or None
+        Also score hazard detection (``hazard_precision``, ``hazard_recall``) of the
+        reconstruction against the true depth's hazards.
+    outside : {"nearest", "nan"}
+        Reconstruction policy outside the measured cells' hull.
+    """
+
+    sensor: str = "steered_beam"
+    sensor_options: object = None
+    planners: Sequence[str] = ("wavelet", "random", "grid")
+    densities: Sequence[float] = (1 / 64, 1 / 256)
+    trials: int = 3
+    metrics: Sequence[str] = ("mse", "grad")
+    planner_opts: Mapping[str, Mapping] = field(default_factory=dict)
+    hazard: HazardOptions | None = None
+    outside: str = "nearest"
+
+    def __post_init__(self):
+        if self.sensor not in LIDARS:
+            raise ValueError(f"unknown LIDAR {self.sensor!r}; valid: {', '.join(LIDARS)}")
+        opts_cls = SENSORS[self.sensor][1]
+        if self.sensor_options is not None and not isinstance(self.sensor_options, opts_cls):
+            raise ValueError(
+                f"sensor_options of {self.sensor!r} must be {opts_cls.__name__}, "
+                f"got {type(self.sensor_options).__name__}"
+            )
+        if isinstance(self.trials, bool) or int(self.trials) < 1:
+            raise ValueError(f"trials must be an integer >= 1, got {self.trials!r}")
+        bad = [m for m in self.metrics if m not in METRICS]
+        if bad:
+            raise ValueError(f"unknown metric {bad[0]!r}; valid: {', '.join(METRICS)}")
+        bad = [p for p in self.planners if p not in STRATEGIES]
+        if bad or not self.planners:
+            raise ValueError(f"unknown planner {bad}; valid: {', '.join(STRATEGIES)}")
+        if not self.densities or not all(0 < d <= 1 for d in self.densities):
+            raise ValueError(f"densities must be in (0, 1], got {list(self.densities)}")
+        stray = sorted(set(self.planner_opts) - set(self.planners))
+        if stray:
+            raise ValueError(f"planner_opts for planners not in the study: {stray}")
+
+
+@dataclass(frozen=True, eq=False)
+class LidarStudyResult:
+    """Tidy rows and one example acquisition per planner.
+
+    Attributes
+    ----------
+    rows : list of dict
+        Keys: planner, density, k (planned pixels), trial, metric, value, seconds, frames,
+        samples (range samples measured; a flash's receiver pixels). Metrics: the requested
+        ones, ``valid_fraction`` (measured over planned samples; over receiver pixels for a
+        flash) and, with hazards, ``hazard_precision`` / ``hazard_recall``.
+    examples : dict planner -> Acquisition
+        Trial 0 at the largest density (for figures).
+    """
+
+    rows: list
+    examples: dict
+
+
+class _Scores:
+    """Scores of one reconstruction in the guide view (and its acquisition's yield)."""
+
+    def __init__(self, truth, image, camera, metrics, hazard: HazardOptions | None):
+        self.truth = np.asarray(truth, float)
+        self.image = image
+        self.camera = camera
+        self.metrics = tuple(metrics)
+        self.hazard = hazard
+        self.true_hazards = None
+        if hazard is not None:
+            self.true_hazards = hazard_map(camera.unproject_depth(self.truth), hazard)
+
+    def __call__(self, recon: np.ndarray, acq: Acquisition) -> dict:
+        out = score_depth(recon, self.truth, metrics=self.metrics, image=self.image)
+        detail = acq.detail
+        asked = np.asarray(detail.valid).size if detail is not None else len(acq.values)
+        out["valid_fraction"] = float(len(acq.values) / max(asked, 1))
+        if self.hazard is not None:
+            found = hazard_map(self.camera.unproject_depth(recon), self.hazard)
+            out.update(detection_scores(found, self.true_hazards, np.isfinite(self.truth)))
+        return out
+
+
+def _planner(name: str, image: np.ndarray, opts: Mapping) -> Callable:
+    opts = dict(opts)
+    weights = strategy_weights(
+        name,
+        image,
+        feature_opts=opts.pop("feature_opts", None),
+        coefficients=opts.get("coefficients"),
+    )
+    opts.pop("coefficients", None)
+    plan(name, 3, weights=weights, shape=image.shape[:2], rng=0, **opts)  # options checked once
+
+    def planner(k, rng):
+        return plan(name, int(k), weights=weights, shape=image.shape[:2], rng=rng, **opts).rc
+
+    return planner
+
+
+def run_lidar_study(
+    scene: LidarScene,
+    guide: tuple[np.ndarray, np.ndarray],
+    options: LidarStudyOptions | None = None,
+    *,
+    rng,
+    sensor=None,
+    progress: Callable[[str], None] | None = None,
+) -> LidarStudyResult:
+    """Plan, acquire with a LIDAR, reconstruct and score, for every planner, density and trial.
+
+    Parameters
+    ----------
+    scene : LidarScene
+        Terrain, guide camera (the LIDAR's origin and boresight), BSDF, sun.
+    guide : (image (rows, cols), depth (rows, cols))
+        The guide camera's image and true z-depth (m; NaN where the view misses the terrain).
+    options : LidarStudyOptions, optional
+    rng : seed of the study; split per (planner label, trial, density) and purpose
+        (planner, photon noise) with ``SeedSequence``, so adding a planner changes no other's
+        numbers.
+    sensor : Sensor, optional
+        Measures instead of ``options.sensor`` built on ``scene`` (tests, shared captures).
+    progress : callable(str), optional
+
+    Returns
+    -------
+    LidarStudyResult
+    """
+    o = options or LidarStudyOptions()
+    image = check_image(np.asarray(guide[0], float))
+    depth = np.asarray(guide[1], float)
+    if image.shape[:2] != depth.shape:
+        raise ValueError(f"image {image.shape[:2]} and depth {depth.shape} must have the same grid")
+    if sensor is None:
+        cls, opts_cls = SENSORS[o.sensor]
+        sensor = cls(scene, o.sensor_options or opts_cls())
+    camera = scene.camera
+    base = int(np.random.default_rng(rng).integers(0, 2**63))
+    if sensor.needs_plan:
+        planners = {p: _planner(p, image, o.planner_opts.get(p, {})) for p in o.planners}
+        dens = [float(d) for d in o.densities]
+        ks = [sample_count(d, depth.size) for d in dens]
+    else:
+        planners, dens, ks = {NO_PLAN: None}, [0.0], [0]
+
+    def seeds(label, trial, di):
+        return _seed(base, label, trial, di, 0), _seed(base, label, trial, di, 1)
+
+    trials = Trials(planners, ks, int(o.trials), seeds)
+    evaluate = _Scores(depth, image, camera, o.metrics, o.hazard)
+    rows, examples = [], {}
+    top = int(np.argmax(dens))
+    for outcomes in run_protocol(sensor, trials, evaluate, outside=o.outside):
+        for oc in outcomes:
+            rows += _rows(oc, dens[oc.budget_index])
+            if oc.trial == 0 and oc.budget_index == top:
+                examples[oc.label] = oc.acquisition
+        if progress is not None:
+            progress(f"{outcomes[0].label} / trial {outcomes[0].trial}")
+    return LidarStudyResult(rows=rows, examples=examples)
+
+
+def _rows(oc, density: float) -> list[dict]:
+    acq = oc.acquisition
+    return [
+        {"planner": oc.label, "density": density, "k": oc.k, "trial": oc.trial, "metric": m,
+         "value": float(v), "seconds": float(acq.seconds), "frames": int(acq.frames),
+         "samples": len(acq.values)}
+        for m, v in oc.scores.items()
+    ]  # fmt: skip
+
+
+def time_table(rows: list[dict], metric: str = "mse") -> dict[str, dict[str, np.ndarray]]:
+    """Per planner, arrays over densities (ascending k): ``k``, mean ``seconds`` and mean
+    ``value`` of ``metric`` over trials (and any other grouping the rows carry, pooled)."""
+    acc: dict = {}
+    for r in rows:
+        if r["metric"] != metric:
+            continue
+        acc.setdefault(str(r["planner"]), {}).setdefault(int(r["k"]), []).append(
+            (float(r["seconds"]), float(r["value"]))
+        )
+    out = {}
+    for label, by_k in acc.items():
+        ks = sorted(by_k)
+        out[label] = {
+            "k": np.array(ks),
+            "seconds": np.array([np.mean([s for s, _ in by_k[k]]) for k in ks]),
+            "value": np.array([np.mean([v for _, v in by_k[k]]) for k in ks]),
+        }
+    return out
+
+
+def equal_time_errors(rows: list[dict], times, *, metric: str = "mse") -> dict[str, np.ndarray]:
+    """Each planner's error at equal scan time, per unit (terrain seed).
+
+    Per (unit, planner) the mean ``seconds`` and mean ``metric`` over trials at every k are
+    interpolated linearly in log-log at ``times`` (s); NaN outside the scanned range.
+
+    Returns
+    -------
+    dict planner -> float64 (units, len(times)), units in ascending order of ``unit``.
+    """
+    acc: dict = {}
+    for r in rows:
+        if r["metric"] != metric:
+            continue
+        key = (str(r["planner"]), int(float(r.get("unit", 0) or 0)))
+        acc.setdefault(key, {}).setdefault(int(float(r["k"])), []).append(
+            (float(r["seconds"]), float(r["value"]))
+        )
+    t = np.log(np.asarray(times, float))
+    units = sorted({u for _, u in acc})
+    out = {}
+    for planner in dict.fromkeys(p for p, _ in acc):
+        grid = np.full((len(units), len(t)), np.nan)
+        for i, u in enumerate(units):
+            by_k = acc.get((planner, u), {})
+            pts = sorted(
+                (np.mean([s for s, _ in v]), np.mean([e for _, e in v])) for v in by_k.values()
+            )
+            if len(pts) < 2:
+                continue
+            x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+            inside = (t >= x[0]) & (t <= x[-1])
+            grid[i, inside] = np.exp(np.interp(t[inside], x, y))
+        out[planner] = grid
+    return out

@@ -1,0 +1,56 @@
+"""Landing hazards: slopes and rocks on hand-made surfaces, detection precision and recall."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
+
+
+def _grid(z: np.ndarray, spacing: float = 0.5) -> np.ndarray:
+    r, c = np.mgrid[0 : z.shape[0], 0 : z.shape[1]] * spacing
+    return np.stack([c, -r, z], axis=-1)
+
+
+def test_a_flat_plane_has_no_hazard():
+    assert not hazard_map(_grid(np.zeros((30, 30)))).any()
+
+
+@pytest.mark.parametrize("angle, steep", [(10.0, False), (20.0, True)])
+def test_a_tilted_plane_is_steep_above_the_limit(angle, steep):
+    c = np.mgrid[0:30, 0:30][1] * 0.5
+    flags = hazard_map(_grid(np.tan(np.radians(angle)) * c), HazardOptions(slope_deg=15.0))
+    inner = flags[2:-2, 2:-2]  # central differences need baseline_px cells each side
+    assert inner.all() if steep else not inner.any()
+
+
+def test_a_rock_stands_above_the_local_median():
+    z = np.zeros((40, 40))
+    z[18:21, 18:21] = 0.5  # a 1.5 m wide, 0.5 m high block
+    flags = hazard_map(_grid(z), HazardOptions(relief_m=0.3, slope_deg=89.0))
+    assert flags[18:21, 18:21].all()
+    assert flags.sum() == 9
+
+
+def test_unknown_points_are_never_hazards():
+    z = np.zeros((20, 20))
+    z[5, 5] = np.nan
+    assert not hazard_map(_grid(z))[5, 5]
+
+
+def test_detection_scores_by_hand():
+    truth = np.zeros((4, 4), bool)
+    truth[0, :2] = True
+    found = np.zeros((4, 4), bool)
+    found[0, 0] = found[3, 3] = True
+    assert detection_scores(found, truth) == {"hazard_precision": 0.5, "hazard_recall": 0.5}
+    none = np.zeros((4, 4), bool)
+    assert detection_scores(none, none) == {"hazard_precision": 1.0, "hazard_recall": 1.0}
+
+
+def test_hazard_options_refuse_bad_values():
+    with pytest.raises(ValueError, match="window_px"):
+        HazardOptions(window_px=4)
+    with pytest.raises(ValueError, match="slope_deg"):
+        HazardOptions(slope_deg=0.0)

@@ -1,0 +1,57 @@
+"""A tiny lidar experiment end to end through `simlunar run`: results.csv carries scan time."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from simlunar.cli import app
+
+pytestmark = [pytest.mark.render, pytest.mark.slow]
+
+ROOT = Path(__file__).resolve().parents[2]
+TINY = [
+    "--set",
+    "terrain.overrides.grid={rows: 80, cols: 80}",
+    "--set",
+    "render.camera.position_m=[8.0, -8.0, 20.0]",
+    "--set",
+    "render.camera.look_at_m=[8.0, -8.0, 0.0]",
+    "--set",
+    "render.camera.width=32",
+    "--set",
+    "render.camera.height=32",
+    "--set",
+    "render.spp=4",
+    "--set",
+    "study.planners=[random, grid]",
+    "--set",
+    "study.densities=[1/8, 1/32]",
+    "--set",
+    "study.trials=1",
+    "--set",
+    "study.terrain_seeds=1",
+]
+
+
+def test_a_tiny_steered_beam_study_runs_end_to_end(tmp_path):
+    out = tmp_path / "lidar"
+    args = ["run", str(ROOT / "experiments" / "lidar_descent_altimeter.yaml"), "--out", str(out)]
+    r = CliRunner().invoke(app, [*args, *TINY, "--no-progress"])
+    assert r.exit_code == 0, r.output
+    assert "| Planner | k | scan time (s) | MSE | GRAD | valid fraction |" in r.output
+    with (out / "results.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert {"planner", "k", "seconds", "frames", "samples", "value"} <= set(rows[0])
+    assert len(rows) == 2 * 2 * 3  # planners x densities x (mse, grad, valid_fraction)
+    assert {r["k"] for r in rows} == {"128", "32"}
+    for row in rows:
+        # 4 pulses per point; a scan of more points takes longer
+        assert float(row["seconds"]) > 0 and int(row["frames"]) == 4 * int(row["k"])
+    by_k = {int(r["k"]): float(r["seconds"]) for r in rows if r["planner"] == "grid"}
+    assert by_k[128] > by_k[32]
+    figs = {p.name for p in (out / "figures").iterdir()}
+    assert {"lidar_error_vs_time_mse.png", "lidar_error_vs_samples_grad.png"} <= figs

@@ -1,0 +1,184 @@
+"""The LIDAR sensors through the Sensor protocol on a plane: depths at the planned pixels,
+cost from the steering / pulse-rate model, plan-directed flash revisits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.geometry import Camera, Intrinsics, Pose
+from simlunar.lidar import (
+    DetectorOptions,
+    FootprintOptions,
+    PulseOptions,
+    SteeringOptions,
+    pointing_angles,
+    scan_timing,
+)
+from simlunar.terrain import Terrain
+
+H = 50.0
+DET = DetectorOptions(signal_photons=2e6, background_photons_per_s=0.0, pulses=4)
+
+
+def _plane(size: float = 80.0) -> Terrain:
+    n = int(size)
+    return Terrain(
+        heights=np.zeros((n, n)),
+        albedo=np.full((n, n), 0.2, np.float32),
+        spacing=1.0,
+        origin=(-size / 2, size / 2),
+    )
+
+
+def _camera(px: int, fov_deg: float) -> Camera:
+    pose = Pose.look_at([0.0, 0.0, H], [0.0, 0.0, 0.0], up=(0.0, 1.0, 0.0))
+    return Camera(Intrinsics.from_fov(px, px, fov_deg), pose)
+
+
+def test_revisit_tiles_pick_the_most_planned_subfields():
+    from simlunar.sensors.lidar import revisit_tiles
+
+    rc = np.array([[1, 1], [2, 2], [3, 1], [10, 12], [11, 13], [15, 0]])
+    # 16 x 16 guide, zoom 2: tile (0, 0) has 3, (1, 1) 2, (1, 0) 1
+    assert revisit_tiles(rc, (16, 16), 2, 2).tolist() == [[0, 0], [1, 1]]
+
+
+def test_tile_camera_sees_one_tile_of_the_guide_field():
+    from simlunar.sensors.lidar import tile_camera
+
+    guide = _camera(32, 20.0)
+    cam = tile_camera(guide, (1, 0), 4, (8, 8))
+    # the tile's corners (guide u in [0, 8], v in [8, 16]) map to the receiver's corners
+    _, d = guide.rays(np.array([[0.0, 8.0], [8.0, 16.0], [4.0, 12.0]]))
+    uv, _ = cam.project(guide.position + 30.0 * d)
+    assert uv == pytest.approx(np.array([[0.0, 0.0], [8.0, 8.0], [4.0, 4.0]]))
+
+
+def test_receiver_samples_snap_to_the_guide_lattice():
+    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.sensors.lidar import _to_guide
+
+    guide = _camera(32, 20.0)
+    # receiver pixel centres of an 8 x 8 receiver: guide (u, v) = 4 j + 2, up to float rounding
+    uv = np.array([[2.0, 2.0], [6.0, 30.0]]) * (1 + 1e-14)
+    o, d = guide.rays(uv)
+    pts = o + 40.0 * d
+    scan = LidarScan(np.full(2, 40.0), np.ones(2, bool), pts, np.ones(2), np.arange(2), 0.1, 1)
+    acq = _to_guide(scan, guide)
+    # exact lattice coordinates: nearly co-circular float points give sliver triangles
+    assert acq.rc.tolist() == [[1.5, 1.5], [29.5, 5.5]]
+
+
+def test_flash_options_refuse_more_revisits_than_tiles():
+    from simlunar.sensors.lidar import FlashLidarOptions
+
+    with pytest.raises(ValueError, match="tiles"):
+        FlashLidarOptions(revisits=5, zoom=2)
+    with pytest.raises(ValueError, match="zoom"):
+        FlashLidarOptions(zoom=1)
+
+
+def test_a_lidar_needs_a_perspective_guide_camera():
+    from simlunar.geometry import OrthoCamera
+    from simlunar.sensors.lidar import LidarScene
+
+    ortho = OrthoCamera.nadir_for_grid((8, 8), 1.0, (0.0, 8.0), altitude=10.0)
+    with pytest.raises(ValueError, match="perspective"):
+        LidarScene(_plane(), ortho)
+
+
+def test_registry_names_the_lidar_sensors():
+    from simlunar.sensors import SENSORS
+
+    assert {"steered_beam", "flash", "micromirror_flash"} <= set(SENSORS)
+    for name in ("steered_beam", "flash", "micromirror_flash"):
+        cls, opts = SENSORS[name]
+        assert cls.name == name and opts() is not None
+
+
+@pytest.mark.render
+def test_steered_beam_ranges_the_planned_pixels(mi):
+    from simlunar.render.lidar_scan import SteeredBeamOptions, guide_directions
+    from simlunar.sensors import LidarScene, SteeredBeam
+
+    steer = SteeringOptions(1.0, 10.0, 1e-3, 1000.0, 4)
+    opts = SteeredBeamOptions(
+        footprint=FootprintOptions(5e-4, samples=8),
+        pulse=PulseOptions(fwhm_s=1e-9),
+        detector=DET,
+        steering=steer,
+        window_m=4.0,
+        margin_m=1.0,
+        batch=32,
+    )
+    cam = _camera(32, 40.0)
+    sensor = SteeredBeam(LidarScene(_plane(), cam), opts)
+    assert sensor.needs_plan
+    rc = np.random.default_rng(0).integers(0, 32, (40, 2))
+    acq = sensor.acquire(rc, rng=1)
+    assert acq.rc.tolist() == rc.tolist() and acq.shape == (32, 32)
+    assert acq.values == pytest.approx(H, abs=opts.bin_range_m)  # z-depth of z = 0 from 50 m
+    ang = pointing_angles(guide_directions(cam, rc), cam.pose)
+    order = acq.detail.order
+    assert acq.seconds == pytest.approx(scan_timing(ang, order, options=steer).total_s)
+    assert acq.seconds > 0 and acq.frames == 40 * 4
+    with pytest.raises(ValueError, match="rc is required"):
+        sensor.acquire(None, rng=0)
+
+
+@pytest.mark.render
+def test_flash_lidar_with_and_without_revisits(mi):
+    from simlunar.render.lidar_scan import FlashOptions
+    from simlunar.render.transient import TransientOptions
+    from simlunar.sensors import FlashLidar, FlashLidarOptions, LidarScene
+
+    flash = FlashOptions(
+        detector=DET,
+        pulse=PulseOptions(fwhm_s=1e-9),
+        transient=TransientOptions(spp=8),
+        pulse_rate_hz=20.0,
+    )
+    scene = LidarScene(_plane(), _camera(32, 8.0))
+    plain = FlashLidar(scene, FlashLidarOptions(flash, receiver_px=(8, 8)))
+    assert not plain.needs_plan
+    acq = plain.acquire(None, rng=0)
+    assert len(acq.values) == 64 and acq.frames == 1
+    assert acq.seconds == pytest.approx(4 / 20.0)
+    assert acq.values == pytest.approx(H, abs=flash.bin_range_m)
+    # receiver pixel (0, 0) of 8 x 8 on a 32 x 32 guide: centre at guide (row, col) (1.5, 1.5)
+    assert acq.rc[0] == pytest.approx([1.5, 1.5])
+
+    directed = FlashLidar(scene, FlashLidarOptions(flash, receiver_px=(8, 8), revisits=1, zoom=2))
+    rc = np.array([[20, 3], [25, 10], [30, 14], [2, 30]])  # most in tile (1, 0)
+    acq = directed.acquire(rc, rng=0)
+    assert acq.frames == 2 and acq.seconds == pytest.approx(2 * 4 / 20.0)
+    assert acq.values == pytest.approx(H, abs=flash.bin_range_m)
+    in_tile = (acq.rc[:, 0] >= 16) & (acq.rc[:, 1] < 16)
+    # the revisit's 64 samples replace the full frame's 16 in that quarter of the field
+    assert in_tile.sum() == 64 and len(acq.values) == 48 + 64
+    directed.acquire(rc, rng=1)
+    assert len(directed._frames) == 2  # frames rendered once, read with fresh noise
+
+
+@pytest.mark.render
+def test_micromirror_flash_ranges_the_planned_pixels(mi):
+    from simlunar.render.lidar_scan import FlashOptions
+    from simlunar.render.transient import TransientOptions
+    from simlunar.sensors import LidarScene, MicromirrorFlash, MicromirrorOptions
+
+    det = DetectorOptions(signal_photons=2e6 * 16, background_photons_per_s=0.0, pulses=4)
+    flash = FlashOptions(
+        detector=det,
+        pulse=PulseOptions(fwhm_s=1e-9),
+        transient=TransientOptions(spp=256),
+        pulse_rate_hz=20.0,
+    )
+    sensor = MicromirrorFlash(
+        LidarScene(_plane(), _camera(32, 6.0)), MicromirrorOptions(flash, receiver_px=(8, 8))
+    )
+    rc = np.array([[3, 3], [2, 2], [9, 20], [30, 30], [27, 12]])  # two share receiver (0, 0)
+    acq = sensor.acquire(rc, rng=0)
+    assert acq.rc.tolist() == rc.tolist()
+    assert acq.frames == 2 and acq.seconds == pytest.approx(2 * 4 / 20.0)
+    assert acq.values == pytest.approx(H, abs=flash.bin_range_m)

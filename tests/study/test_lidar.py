@@ -1,0 +1,101 @@
+"""The LIDAR study through the protocol with a stand-in sensor (no rendering): rows carry
+scan time and sample count; seeds are per (planner, trial, density)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.geometry import Camera, Intrinsics, Pose
+from simlunar.metrics.hazard import HazardOptions
+from simlunar.sensors import Acquisition, LidarScene
+from simlunar.study.lidar import LidarStudyOptions, run_lidar_study, time_table
+from simlunar.terrain import Terrain
+
+
+class _Timed:
+    """The true depth at the planned pixels, 1 ms per sample."""
+
+    name = "timed"
+
+    def __init__(self, depth, needs_plan=True):
+        self.depth = depth
+        self.needs_plan = needs_plan
+
+    def acquire(self, rc, *, rng=None):
+        if rc is None:
+            r, c = np.mgrid[0:32:4, 0:32:4]
+            rc = np.stack([r.ravel(), c.ravel()], -1)
+        v = self.depth[rc[:, 0], rc[:, 1]]
+        return Acquisition(rc, v, self.depth.shape, frames=len(rc), seconds=1e-3 * len(rc))
+
+
+def _scene():
+    n = 40
+    terrain = Terrain(np.zeros((n, n)), np.full((n, n), 0.2, np.float32), 1.0, (-20.0, 20.0))
+    pose = Pose.look_at([0.0, 0.0, 30.0], [0.0, 0.0, 0.0], up=(0.0, 1.0, 0.0))
+    return LidarScene(terrain, Camera(Intrinsics.from_fov(32, 32, 40.0), pose))
+
+
+def _guide():
+    r, c = np.mgrid[0:32, 0:32]
+    depth = 30.0 + 0.5 * np.sin(r / 3.0) * np.cos(c / 4.0)
+    return depth.astype(np.float32), depth
+
+
+def test_rows_carry_seconds_frames_and_k():
+    image, depth = _guide()
+    o = LidarStudyOptions(planners=("random", "grid"), densities=(1 / 16, 1 / 64), trials=2)
+    res = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Timed(depth))
+    assert len(res.rows) == 2 * 2 * 2 * 3  # planners x densities x trials x (mse, grad, valid)
+    for row in res.rows:
+        assert row["seconds"] == pytest.approx(1e-3 * row["k"])
+        assert row["frames"] == row["k"]
+    assert {r["k"] for r in res.rows} == {64, 16}
+    tab = time_table(res.rows)
+    assert list(tab["grid"]["k"]) == [16, 64]
+    assert tab["grid"]["seconds"] == pytest.approx([0.016, 0.064])
+    assert set(res.examples) == {"random", "grid"}
+
+
+def test_a_planner_never_changes_another_planners_numbers():
+    image, depth = _guide()
+    one = LidarStudyOptions(planners=("random",), densities=(1 / 16,), trials=2)
+    two = LidarStudyOptions(planners=("grid", "random"), densities=(1 / 16,), trials=2)
+    a = run_lidar_study(_scene(), (image, depth), one, rng=3, sensor=_Timed(depth)).rows
+    b = run_lidar_study(_scene(), (image, depth), two, rng=3, sensor=_Timed(depth)).rows
+    assert a == [r for r in b if r["planner"] == "random"]
+
+
+def test_a_sensor_without_plan_runs_once_per_trial_as_none():
+    image, depth = _guide()
+    o = LidarStudyOptions(densities=(1 / 16, 1 / 4), trials=1, hazard=HazardOptions())
+    rows = run_lidar_study(
+        _scene(), (image, depth), o, rng=0, sensor=_Timed(depth, needs_plan=False)
+    ).rows
+    assert {r["planner"] for r in rows} == {"none"} and {r["k"] for r in rows} == {0}
+    names = {r["metric"] for r in rows}
+    assert {"hazard_precision", "hazard_recall", "valid_fraction"} <= names
+
+
+def test_options_refuse_unknown_names():
+    with pytest.raises(ValueError, match="unknown LIDAR"):
+        LidarStudyOptions(sensor="sonar")
+    with pytest.raises(ValueError, match="unknown planner"):
+        LidarStudyOptions(planners=("psychic",))
+    with pytest.raises(ValueError, match="must be FlashLidarOptions"):
+        LidarStudyOptions(sensor="flash", sensor_options=HazardOptions())
+
+
+def test_equal_time_errors_interpolate_in_log_log():
+    from simlunar.study.lidar import equal_time_errors
+
+    rows = [
+        {"unit": u, "planner": "grid", "k": k, "metric": "mse", "value": v * (1 + u), "seconds": s}
+        for u in (0, 1)
+        for k, s, v in ((10, 1.0, 1e-2), (100, 10.0, 1e-3))
+    ]
+    e = equal_time_errors(rows, [np.sqrt(10.0), 20.0])["grid"]
+    assert e.shape == (2, 2)
+    assert e[:, 0] == pytest.approx([10**-2.5, 2 * 10**-2.5])
+    assert np.isnan(e[:, 1]).all()  # beyond the longest scan
