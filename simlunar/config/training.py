@@ -27,12 +27,15 @@ class LearnedOptsCfg(_Model):
     """Options of :class:`simlunar.features.learned.LearnedOptions` (same defaults)."""
 
     layouts: int = Field(3, ge=1, le=100, description="uniform layouts averaged per target")
-    pixels_per_example: int = Field(20_000, ge=100, description="training pixels per example")
+    pixels_per_example: int = Field(10_000, ge=100, description="training pixels per example")
     max_iter: int = Field(200, ge=1, le=10_000, description="boosting rounds")
     max_leaf_nodes: int = Field(31, ge=2, description="leaves per tree")
     min_samples_leaf: int = Field(50, ge=1, description="pixels per leaf (at least)")
     learning_rate: float = Field(0.1, gt=0, description="boosting learning rate")
     l2_regularization: float = Field(0.0, ge=0, description="leaf-value L2 penalty")
+    threads: int = Field(
+        1, ge=1, le=64, description="OpenMP threads of the boosting (1: fastest on a loaded machine)"
+    )
 
 
 class TrainCfg(_Model):

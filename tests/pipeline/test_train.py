@@ -84,6 +84,15 @@ def test_train_writes_a_model_with_its_record_and_a_study_uses_it(tmp_path, monk
     assert np.isfinite(out.errors("mse")["learned_lloyd"]).all()
 
 
+def test_training_options_are_the_library_defaults():
+    from dataclasses import asdict
+
+    from simlunar.config.training import LearnedOptsCfg
+    from simlunar.features.learned import LearnedOptions
+
+    assert LearnedOptsCfg().model_dump() == asdict(LearnedOptions())
+
+
 def test_training_yaml_errors_are_one_line(tmp_path):
     with pytest.raises(ConfigError, match=r"held_out_presets\[0\]: 'moonyard' is in none"):
         load_training(_yaml(tmp_path, held_out_presets=["moonyard"]))
