@@ -282,6 +282,30 @@ def run(
 
 @app.command()
 @user_errors
+def train(
+    config: str = typer.Argument(
+        ..., help="training YAML (e.g. experiments/training/learned_quarter.yaml)"
+    ),
+    out: str = typer.Option(None, "--out", help="model file (.joblib) [default: the YAML's model]"),
+) -> None:
+    """Train the learned importance map: <model>.joblib and its record <model>.json."""
+    import shlex
+
+    from simlunar.config.training import load_training
+    from simlunar.pipeline.train import train_from_config
+
+    with user_input():
+        cfg, experiments = load_training(config)
+    if out is not None and not out.endswith(".joblib"):
+        raise SimlunarError(f"--out {out}: a learned model file ends in .joblib")
+    command = shlex.join(["simlunar", "train", config, *(["--out", out] if out else [])])
+    model, record = train_from_config(cfg, experiments, out=out, command=command, log=typer.echo)
+    typer.echo(f"model:  {model}")
+    typer.echo(f"record: {record}")
+
+
+@app.command()
+@user_errors
 def figures(
     results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`"),
     pdf: bool = typer.Option(

@@ -13,7 +13,7 @@ from pathlib import Path
 from simlunar.config.terrain import preset_names as names
 from simlunar.errors import ConfigError
 from simlunar.metrics import METRICS
-from simlunar.planner import STRATEGIES
+from simlunar.planner import MEASURING, ORACLES, STRATEGIES
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.sensors.structured_light import MODES
 
@@ -39,7 +39,9 @@ def check_preset(name: str, path: str) -> None:
 
 
 def strategy_names() -> list[str]:
-    return list(STRATEGIES)
+    """Strategies of a sampling study: the planner's, the oracles (they read the truth, the
+    study gives it to them only) and the measuring ones (``sequential``)."""
+    return [*STRATEGIES, *MEASURING]
 
 
 def check_strategy(name: str, path: str, options: Mapping | None = None) -> None:
@@ -59,10 +61,14 @@ def check_strategy(name: str, path: str, options: Mapping | None = None) -> None
 
 def check_scan_planner(name: str, path: str) -> None:
     """A planner of the scanner study: a registered strategy that plans from the guide image
-    alone (not an ``oracle_*``, which reads the truth) or one of
-    :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
-    image_only = [s for s in strategy_names() if not s.startswith("oracle_")]
-    _check(name, [*image_only, *SCAN_PLANNERS], path, "planner")
+    alone (not an ``oracle_*``, which reads the truth, nor ``sequential``, which asks a sensor
+    back) or one of :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
+    if name in ORACLES or name in MEASURING:
+        raise ConfigError(
+            f"{path}: {name!r} is a planner of the sampling study only (the scanner study "
+            "gives no planner the truth or a sensor to ask back)"
+        )
+    _check(name, [*STRATEGIES, *SCAN_PLANNERS], path, "planner")
 
 
 def metric_names() -> list[str]:

@@ -9,7 +9,6 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
-    PositiveInt,
     field_validator,
     model_validator,
 )
@@ -20,9 +19,18 @@ from simlunar.config.fields import (
     _Model,
 )
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
+from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
+    FEATURE_OPTION_KEYS,
+    CoefficientsCfg,
+    FeatureOptsCfg,
+    OracleOptsCfg,
+    PlannerOptsCfg,
+    SequentialCfg,
+    StrategyOptionsCfg,
+    check_planner_options,
+)
 from simlunar.config.quantities import log_spaced
-from simlunar.features.maps import check_entropy_size
-from simlunar.planner import STRATEGIES
+from simlunar.planner import MEASURING, ORACLES, STRATEGIES
 
 
 # --------------------------------------------------------------------------- studies
@@ -47,113 +55,6 @@ def _densities(value):
     return value
 
 
-# Planner options. Defaults are the library's (a test compares them with the signatures of
-# simlunar.planner / simlunar.features); the translation passes them to the weighted strategies.
-#: the feature-map options each weighted strategy's map takes
-FEATURE_OPTION_KEYS = {
-    "uniform": (),
-    "gradient": (),
-    "saliency": (),
-    "entropy": ("size", "scale"),
-    "wavelet": ("wavelet", "levels", "boundary"),
-}
-
-
-class FeatureOptsCfg(_Model):
-    """Options of the strategy's importance map (:func:`simlunar.features.feature_map`).
-
-    ``wavelet``, ``levels``, ``boundary`` belong to the wavelet map; ``size``, ``scale`` to the
-    entropy map. A ``combination`` passes each map the options that belong to it.
-    """
-
-    wavelet: str = Field("db2", description="wavelet map: PyWavelets wavelet name")
-    levels: PositiveInt | None = Field(
-        None, description="wavelet map: decomposition levels summed, finest first; null = all"
-    )
-    boundary: Literal["symmetric", "periodic"] = Field("symmetric", description="wavelet map")
-    size: PositiveInt = Field(9, description="entropy map: odd window side (px), 1..63")
-    scale: Literal["minmax", "unit"] = Field("minmax", description="entropy map: 8-bit scaling")
-
-    @field_validator("size")
-    @classmethod
-    def _entropy_window(cls, v: int) -> int:
-
-        check_entropy_size(v)  # the map's own rule
-        return v
-
-    @field_validator("wavelet")
-    @classmethod
-    def _known_wavelet(cls, v: str) -> str:
-        import pywt
-
-        if v not in pywt.wavelist(kind="discrete"):
-            raise ValueError(f"unknown discrete wavelet {v!r} (e.g. db2, haar, sym4)")
-        return v
-
-
-class CoefficientsCfg(_Model):
-    """``combination`` strategy: the weight of each feature map (maps normalised to mean 1;
-    ``uniform`` is the constant map)."""
-
-    uniform: float | None = Field(None, ge=0)
-    gradient: float | None = Field(None, ge=0)
-    entropy: float | None = Field(None, ge=0)
-    wavelet: float | None = Field(None, ge=0)
-    saliency: float | None = Field(None, ge=0)
-
-    def as_mapping(self) -> dict[str, float]:
-        return {k: v for k, v in self.model_dump().items() if v is not None}
-
-
-class PlannerOptsCfg(_Model):
-    """Options of a feature-weighted strategy (:func:`simlunar.planner.plan`)."""
-
-    uniform_mix: float = Field(0.0, ge=0, le=1, description="mixture with uniform sampling")
-    density_cap: float | None = Field(
-        None, ge=1, description="max regional density, a multiple of the mean; null = none"
-    )
-    cap_block: PositiveInt = Field(16, description="block side (px) of density_cap")
-    blue_noise: bool = Field(False, description="Poisson-disk-like weighted sampling")
-    blue_noise_radius: float = Field(0.5, gt=0, description="radius factor of blue_noise")
-    feature_opts: FeatureOptsCfg = Field(default_factory=FeatureOptsCfg)
-    coefficients: CoefficientsCfg = Field(
-        default_factory=CoefficientsCfg, description="combination only: map weights"
-    )
-
-
-class StrategyOptionsCfg(PlannerOptsCfg):
-    """A strategy label's options: ``strategy`` names the registered strategy (default: the
-    label itself), the rest are its planner options."""
-
-    strategy: str | None = Field(None, description="registered strategy; null = the label")
-
-
-def check_planner_options(base: str, opts: PlannerOptsCfg) -> None:
-    """Raise ``ValueError("<key>: problem")`` for options the strategy ``base`` does not take."""
-    default = PlannerOptsCfg()
-    changed = [k for k in PlannerOptsCfg.model_fields if getattr(opts, k) != getattr(default, k)]
-    if base in ("grid", "random"):
-        if changed:
-            raise ValueError(f"{changed[0]}: strategy {base!r} takes no options")
-        return
-    if base == "combination":
-        if not opts.coefficients.as_mapping():
-            raise ValueError("coefficients: strategy 'combination' needs at least one weight")
-        features = list(opts.coefficients.as_mapping())
-    else:
-        if "coefficients" in changed:
-            raise ValueError(f"coefficients: only the combination strategy takes them ({base!r})")
-        features = [base]
-    allowed = {k for f in features for k in FEATURE_OPTION_KEYS.get(f, ())}
-    fdefault = FeatureOptsCfg()
-    for k in FeatureOptsCfg.model_fields:
-        if getattr(opts.feature_opts, k) != getattr(fdefault, k) and k not in allowed:
-            raise ValueError(
-                f"feature_opts.{k}: not an option of the {'/'.join(features)} map "
-                f"(valid: {', '.join(sorted(allowed)) or 'none'})"
-            )
-
-
 class SamplingStudyCfg(_Model):
     """The sampling study of the paper's section 4."""
 
@@ -172,6 +73,12 @@ class SamplingStudyCfg(_Model):
         default_factory=dict,
         description="label -> options; a label not registered as a strategy names one in "
         "'strategy' (e.g. wavelet_bn: {strategy: wavelet, blue_noise: true})",
+    )
+    score_region: Literal["full", "interior", "both"] = Field(
+        "full",
+        description="score the full image, the interior (cells farther than the sparsest "
+        "density's pitch from the border: no extrapolation; metrics named <metric>_interior) "
+        "or both",
     )
     terrain_seeds: int = Field(
         1,
@@ -195,8 +102,13 @@ class SamplingStudyCfg(_Model):
         for label in [*self.strategy_options, *self.strategies]:
             opts = self.strategy_options.get(label)
             base = (opts.strategy if opts is not None else None) or label
-            if base not in STRATEGIES:
+            if base not in STRATEGIES and base not in MEASURING:
                 continue  # reported with the registries (unknown strategy, with its path)
+            if base in ORACLES and not label.startswith("oracle"):
+                raise ValueError(
+                    f"strategy_options.{label}: a label of an oracle ({base}) starts with "
+                    "'oracle', so every table shows it as a bound"
+                )
             try:
                 check_planner_options(base, opts or PlannerOptsCfg())
             except ValueError as exc:

@@ -55,6 +55,7 @@ from simlunar.lidar import (
     SteeringOptions,
 )
 from simlunar.metrics.hazard import HazardOptions
+from simlunar.planner import SequentialOptions
 from simlunar.render.capture import CaptureOptions
 from simlunar.render.lidar_scan import FlashOptions, SteeredBeamOptions
 from simlunar.render.lights import make_light
@@ -293,16 +294,46 @@ def feature_opts(base: str, opts: FeatureOptsCfg, features: list[str] | None = N
 
 def planner_kwargs(base: str, opts: PlannerOptsCfg) -> dict[str, Any]:
     """Keyword options of :func:`simlunar.planner.plan` for strategy ``base`` (none for grid
-    and random, which take none)."""
+    and random, which take none).
+
+    ``sequential`` (not a :func:`~simlunar.planner.plan` strategy: it measures while it plans)
+    gets ``{"sequential": SequentialOptions, "prior": map name or None, "feature_opts": ...}``
+    for the study's planner adapter (:mod:`simlunar.study.sampling`).
+    """
     if base in ("grid", "random"):
         return {}
-    kw: dict[str, Any] = {
-        "uniform_mix": opts.uniform_mix,
-        "density_cap": opts.density_cap,
-        "cap_block": opts.cap_block,
-        "blue_noise": opts.blue_noise,
-        "blue_noise_radius": opts.blue_noise_radius,
-    }
+    lloyd = {"lloyd_iterations": opts.lloyd_iterations, "border_pitch": opts.border_pitch}
+    if base == "lloyd_uniform":
+        return lloyd
+    if base == "oracle_greedy":
+        return opts.oracle.model_dump()
+    if base == "oracle_hessian":  # the oracle's own density defaults unless the YAML sets them
+        kw = {"density_power": opts.density_power, "uniform_mix": opts.uniform_mix, **lloyd}
+        if opts.density_power is None:
+            kw.pop("density_power")
+        if "uniform_mix" not in opts.model_fields_set:
+            kw.pop("uniform_mix")
+        return kw
+    if base == "sequential":
+        q = opts.sequential.model_dump()
+        prior = q.pop("prior")
+        return {
+            "sequential": SequentialOptions(**q),
+            "prior": None if prior == "none" else prior,
+            "feature_opts": feature_opts(prior, opts.feature_opts),
+        }
+    kw: dict[str, Any] = {"uniform_mix": opts.uniform_mix}
+    if opts.placement == "random":
+        kw.update(
+            density_cap=opts.density_cap,
+            cap_block=opts.cap_block,
+            blue_noise=opts.blue_noise,
+            blue_noise_radius=opts.blue_noise_radius,
+        )
+        if opts.density_power is not None:
+            kw["density_power"] = opts.density_power
+    else:
+        kw.update(placement="lloyd", density_power=opts.density_power, **lloyd)
     coeffs = opts.coefficients.as_mapping()
     kw["feature_opts"] = feature_opts(base, opts.feature_opts, list(coeffs))
     if base == "combination":
@@ -410,6 +441,7 @@ def sampling_options(study: SamplingStudyCfg) -> SamplingStudyOptions:
         metrics=tuple(study.metrics),
         range_noise_std=study.range_noise_std_m,
         strategy_options=strategy_options(study),
+        score_region=study.score_region,
     )
 
 

@@ -31,6 +31,7 @@ from simlunar.config.yamlio import dump_yaml
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
 from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
+from simlunar.pipeline.cache_keys import without_new_defaults
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.progress import _progress
@@ -91,6 +92,8 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
         # realisation 0 is the terrain of runs before seed_index existed: same keys
         relevant["terrain"] = {k: v for k, v in terrain.items() if k != "seed_index"}
     study = relevant.get("study")
+    if isinstance(study, dict):
+        relevant["study"] = study = without_new_defaults(study)
     if isinstance(study, dict) and "terrain_seeds" in study:
         # how many realisations run does not change any one unit's numbers
         relevant["study"] = {k: v for k, v in study.items() if k != "terrain_seeds"}

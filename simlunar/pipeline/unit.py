@@ -260,8 +260,17 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
             "spacing_m": scene.terrain.spacing,
             "variant": backend.info().variant,
             "invalid_pixels_filled": n_invalid,
+            **_rounds(study),
         },
     )
+
+
+def _rounds(study) -> dict:
+    """Sensor rounds of each multi-round label (each round costs sensor time): mean over
+    trials per density, densities in the study's order; nothing for one-shot studies."""
+    if not study.rounds:
+        return {}
+    return {"rounds": {s: r.mean(axis=1).tolist() for s, r in study.rounds.items()}}
 
 
 def _figure_arrays(cfg, scene: RenderScene, image, depth, seeds, timings) -> dict:

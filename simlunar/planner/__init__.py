@@ -16,6 +16,12 @@ from simlunar.planner.placement import (
     place,
     samples_per_cell,
 )
+from simlunar.planner.sequential import (
+    MEASURING,
+    SequentialOptions,
+    SequentialPlan,
+    plan_sequential,
+)
 from simlunar.planner.strategies import (
     PLACEMENTS,
     STRATEGIES,
@@ -30,6 +36,7 @@ from simlunar.planner.strategies import (
 from simlunar.planner.types import SamplePlan
 
 __all__ = [
+    "MEASURING",
     "ORACLES",
     "PLACEMENTS",
     "STRATEGIES",
@@ -37,6 +44,8 @@ __all__ = [
     "WEIGHTED",
     "CombinationFit",
     "SamplePlan",
+    "SequentialOptions",
+    "SequentialPlan",
     "check_k",
     "combine_maps",
     "cvt_energy",
@@ -50,6 +59,7 @@ __all__ = [
     "oracle_hessian",
     "place",
     "plan",
+    "plan_sequential",
     "samples_per_cell",
     "score_combination",
     "strategy_options",

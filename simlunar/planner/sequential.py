@@ -32,6 +32,7 @@ from simlunar.planner.types import SamplePlan
 from simlunar.reconstruction import reconstruct, triangulate
 
 __all__ = [
+    "MEASURING",
     "SequentialOptions",
     "SequentialPlan",
     "error_estimate",
@@ -39,6 +40,10 @@ __all__ = [
     "plan_sequential",
     "uniform_layout",
 ]
+
+#: strategies that measure while they plan (they need a sensor, not only an image): the study
+#: runs them through :func:`plan_sequential` with the sensor's ``acquire`` as ``measure``
+MEASURING = ("sequential",)
 
 
 @dataclass(frozen=True)

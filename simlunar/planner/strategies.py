@@ -75,6 +75,7 @@ STRATEGY_NAMES = {
     "lloyd_uniform": "Uniform Lloyd (no image)",
     "oracle_greedy": "Oracle greedy (true error)",
     "oracle_hessian": "Oracle Hessian (true depth)",
+    "sequential": "Sequential (multi-round)",
 }
 # ---- learned importance map (issue 20, simlunar.features.learned): a weighted strategy whose
 # map comes from a trained model: feature_opts={"model": "<name>.joblib", "density": k / N}

@@ -52,6 +52,16 @@ REGISTRY: dict[str, Style] = {
     # simlunar's other strategies
     "saliency": Style("#9467bd", "P", "Saliency"),
     "combination": Style("#8c564b", "X", "Combination"),
+    # image-free and image-directed layouts with halftone + Lloyd placement, multi-round
+    # planning and the truth-reading bounds (oracle labels start "Oracle")
+    "lloyd_uniform": Style("#000000", "s", "Uniform Lloyd"),
+    "wavelet_lloyd": Style("#b2182b", "D", "Wavelet, Lloyd"),
+    "learned": Style("#542788", "P", "Learned"),
+    "learned_lloyd": Style("#8073ac", "P", "Learned, Lloyd"),
+    "sequential": Style("#1b7837", ">", "Sequential"),
+    "sequential_wavelet": Style("#5aae61", ">", "Sequential, wavelet prior"),
+    "oracle_greedy": Style("#fdb863", "*", "Oracle greedy (true error)"),
+    "oracle_hessian": Style("#e08214", "*", "Oracle Hessian (true depth)"),
     # labelled variants of the shipped experiments
     # a hue far from Wavelet's red (pink read as a second red beside it)
     "wavelet_bn": Style("#6a3d9a", "d", "Wavelet, blue noise"),

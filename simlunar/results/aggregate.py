@@ -16,6 +16,7 @@ import numpy as np
 
 from simlunar.plotting.style import point_title
 from simlunar.results.records import WorkUnit, unit_label
+from simlunar.study.sampling import INTERIOR_SUFFIX, scored_metrics
 from simlunar.study.stats import (
     SamplesSaved,
     ScoreIntervals,
@@ -28,8 +29,11 @@ from simlunar.study.stats import (
 SEED_AXIS = "terrain.seed_index"
 #: bootstrap replicates per point and metric
 N_BOOT = 2000
-#: references of the samples-saved tables and figure
-SAVED_REFERENCES = ("random", "grid")
+#: references of the samples-saved tables and figure (lloyd_uniform: the image-free layout
+#: of the same placement as the image-directed Lloyd layouts, the fair reference)
+SAVED_REFERENCES = ("random", "grid", "lloyd_uniform")
+#: the reference of the headroom: samples saved vs it, over the oracle's
+HEADROOM_REFERENCE = "lloyd_uniform"
 
 
 @dataclass
@@ -50,6 +54,13 @@ class Point:
     saved_metric: str | None = None
     saved: dict[str, SamplesSaved] = field(default_factory=dict)
     mean_errors: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    #: samples saved on the interior-only metric (``<metric>_interior``), by reference
+    saved_interior: dict[str, SamplesSaved] = field(default_factory=dict)
+    #: oracle label -> strategy -> per terrain seed: log(saved vs lloyd_uniform) / log(the
+    #: oracle's saved vs lloyd_uniform) (paired on the seed; nan where undefined)
+    headroom: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    #: strategy -> per terrain seed: geometric-mean samples saved vs lloyd_uniform
+    saved_per_seed: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def _label(sweep: dict, config: dict) -> str:
@@ -76,7 +87,9 @@ def group_points(records: list[dict]) -> list[Point]:
                 unit_indices=[],
                 seeds=[],
                 strategies=list(study.get("strategies") or []),
-                metrics=list(study.get("metrics") or []),
+                metrics=scored_metrics(
+                    study.get("metrics") or [], study.get("score_region") or "full"
+                ),
             )
         p = points[key]
         p.unit_indices.append(i)
@@ -148,15 +161,46 @@ def summarise(
             p.intervals[m] = res
             p.separation[m] = best_separation(res)
         if len(p.ks) >= 2 and p.metrics:
-            m = p.metrics[0]
-            p.saved_metric = m
-            n_pix = p.n_pixels or np.inf
-            for ref in SAVED_REFERENCES:
-                if ref in p.strategies:
-                    p.saved[ref] = samples_saved(
-                        p.mean_errors[m], p.ks, reference=ref, n_pixels=n_pix
-                    )
+            _saved(p, rows)
     return points
+
+
+def _saved(p: Point, rows: list[dict]) -> None:
+    """Samples saved vs each reference (first metric, and its interior twin) and the headroom."""
+    m = p.metrics[0]
+    p.saved_metric = m
+    n_pix = p.n_pixels or np.inf
+    inner = m + INTERIOR_SUFFIX if not m.endswith(INTERIOR_SUFFIX) else None
+    for ref in SAVED_REFERENCES:
+        if ref in p.strategies:
+            p.saved[ref] = samples_saved(p.mean_errors[m], p.ks, reference=ref, n_pixels=n_pix)
+            if inner in p.mean_errors:
+                p.saved_interior[ref] = samples_saved(
+                    p.mean_errors[inner], p.ks, reference=ref, n_pixels=n_pix
+                )
+    if HEADROOM_REFERENCE in p.strategies:
+        _headroom(p, rows, m, n_pix)
+
+
+def _headroom(p: Point, rows: list[dict], metric: str, n_pix: float) -> None:
+    """Per seed: samples saved vs the uniform layout, and the share of each oracle's saving a
+    strategy captures, log(saved) / log(oracle saved) (paired by terrain seed)."""
+    _, _, errs = error_arrays(rows, p, metric)
+    per_seed = {s: np.full(len(p.seeds), np.nan) for s in p.strategies}
+    for j in range(len(p.seeds)):
+        means = {s: e[j].mean(axis=1) for s, e in errs.items()}
+        sv = samples_saved(means, p.ks, reference=HEADROOM_REFERENCE, n_pixels=n_pix)
+        for s in p.strategies:
+            per_seed[s][j] = sv.summary[s]
+    p.saved_per_seed = per_seed
+    for o in (s for s in p.strategies if s.startswith("oracle")):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            log_o = np.log(per_seed[o])
+            p.headroom[o] = {
+                s: np.where(log_o > 0, np.log(per_seed[s]) / log_o, np.nan)
+                for s in p.strategies
+                if s != o and s != HEADROOM_REFERENCE
+            }
 
 
 def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:

@@ -27,7 +27,10 @@ from simlunar.sensors.base import Acquisition, Sensor
 
 __all__ = ["Outcome", "Planner", "Trials", "run_protocol"]
 
-#: a planner of the protocol: ``planner(k, rng) -> (k, 2) int64 (row, col)`` guide pixels
+#: a planner of the protocol: ``planner(k, rng) -> (k, 2) int64 (row, col)`` guide pixels.
+#: A planner that measures while it plans (multi-round: it asks the sensor back) has
+#: ``measures = True`` and ``planner.acquire(k, sensor, plan_rng, sensor_rng) -> (Acquisition,
+#: rounds)`` instead; it reads the scene through ``sensor.acquire`` only.
 Planner = Callable[[int, object], np.ndarray]
 #: scores of one reconstruction: ``evaluate(recon (rows, cols), acquisition) -> {metric: value}``
 Evaluate = Callable[[np.ndarray, Acquisition], dict]
@@ -72,6 +75,7 @@ class Outcome:
     k: int
     acquisition: Acquisition
     scores: dict
+    rounds: int = 1
 
 
 def run_protocol(
@@ -115,10 +119,14 @@ def _task_outcomes(state, label: str, trial: int) -> list[Outcome]:
     out = []
     for bi, k in enumerate(tr.ks):
         plan_rng, sensor_rng = tr.seeds(label, trial, bi)
-        rc = None if planner is None else planner(k, plan_rng)
-        acq = sensor.acquire(rc, rng=sensor_rng)
+        rounds = 1
+        if getattr(planner, "measures", False):
+            acq, rounds = planner.acquire(k, sensor, plan_rng, sensor_rng)
+        else:
+            rc = None if planner is None else planner(k, plan_rng)
+            acq = sensor.acquire(rc, rng=sensor_rng)
         recon = reconstruct(acq.rc, acq.values, acq.shape, outside=state["outside"])
-        out.append(Outcome(label, trial, bi, k, acq, state["evaluate"](recon, acq)))
+        out.append(Outcome(label, trial, bi, k, acq, state["evaluate"](recon, acq), rounds))
     return out
 
 
@@ -136,7 +144,7 @@ def _init_worker(state):
 def _worker_task(task):
     # in a worker, only the scores travel back (the acquisition's arrays stay)
     return [
-        Outcome(o.label, o.trial, o.budget_index, o.k, _light(o.acquisition), o.scores)
+        Outcome(o.label, o.trial, o.budget_index, o.k, _light(o.acquisition), o.scores, o.rounds)
         for o in _task_outcomes(_STATE, *task)
     ]
 

@@ -20,21 +20,46 @@ from simlunar.metrics import METRICS, check_densities, depth_gradient_weights
 from simlunar.metrics import samples_for_equal_error as _samples_for_equal_error
 from simlunar.metrics import score as _score
 from simlunar.metrics._fast import error_sums
-from simlunar.planner import STRATEGIES, check_k, plan, strategy_weights
+from simlunar.metrics.interior import interior_mask, sparsest_pitch
+from simlunar.planner import (
+    MEASURING,
+    ORACLES,
+    STRATEGIES,
+    check_k,
+    plan,
+    plan_sequential,
+    strategy_weights,
+)
+from simlunar.sensors.base import Acquisition
 from simlunar.sensors.ideal import IdealOptions, IdealSampler
 from simlunar.study.protocol import Trials, run_protocol
 from simlunar.study.stats import bootstrap_scores, samples_saved
 
 __all__ = [
+    "INTERIOR_SUFFIX",
     "PAPER_STRATEGIES",
+    "SCORE_REGIONS",
     "SamplingStudyOptions",
     "SamplingStudyResult",
     "paper_densities",
     "run_sampling_study",
     "sample_count",
+    "scored_metrics",
 ]
 
 PAPER_STRATEGIES = ("grid", "random", "gradient", "entropy", "wavelet")
+#: where a reconstruction is scored: the full image, the interior (cells farther than the
+#: sparsest density's pitch from the border, :mod:`simlunar.metrics.interior`) or both
+SCORE_REGIONS = ("full", "interior", "both")
+#: metric name suffix of interior-only scores (``mse_interior``)
+INTERIOR_SUFFIX = "_interior"
+
+
+def scored_metrics(metrics: Sequence[str], region: str) -> list[str]:
+    """Names of the scores a study reports: ``m`` (full image) and / or ``m_interior``."""
+    full = list(metrics) if region in ("full", "both") else []
+    inner = [m + INTERIOR_SUFFIX for m in metrics] if region in ("interior", "both") else []
+    return full + inner
 
 
 def paper_densities() -> list[float]:
@@ -65,9 +90,12 @@ class SamplingStudyResult:
         metric -> strategy -> score (eq. 4.3) against ``reference``; empty if the reference
         strategy was not run.
     strategies, metrics : list of str
+        ``metrics``: the scored names (``mse``, ``mse_interior``, ...; see ``score_region``).
     densities : list of float
     ks : list of int
     reference : str
+    rounds : dict of str -> ndarray of int64, shape (densities, trials)
+        Sensor rounds of each measuring (multi-round) label; a one-shot label takes 1.
     """
 
     rows: list[dict]
@@ -78,6 +106,7 @@ class SamplingStudyResult:
     metrics: list[str]
     reference: str = "random"
     _errors: dict = field(default_factory=dict, repr=False)
+    rounds: dict = field(default_factory=dict)
 
     def errors(self, metric: str) -> dict[str, np.ndarray]:
         """strategy -> errors, float64 (densities, trials)."""
@@ -160,7 +189,15 @@ class SamplingStudyOptions:
         Standard deviation of additive Gaussian noise on each range sample (units of depth):
         the ideal sampler's option (:class:`~simlunar.sensors.ideal.IdealOptions`).
     strategy_options : mapping str -> mapping, optional
-        Per label planner options (see ``simlunar.planner``), plus ``"strategy"``.
+        Per label planner options (see ``simlunar.planner``), plus ``"strategy"``. Labels of
+        :data:`simlunar.planner.ORACLES` are the ONLY ones given the true depth (``truth=``);
+        ``sequential`` (:data:`simlunar.planner.MEASURING`) takes ``{"sequential":
+        SequentialOptions, "prior": map name or None, "feature_opts": ...}`` and reads the scene
+        through the sensor's ``acquire`` only, round by round. The ``learned`` map is computed
+        per density (``feature_opts={"model": path}``; the density is the study's).
+    score_region : {"full", "interior", "both"}
+        Score the full image, the interior (cells farther than the sparsest density's pitch
+        from the border; metric names ``<metric>_interior``) or both.
     outside : {"nearest", "nan"}
         Reconstruction policy outside the samples' convex hull (same for every strategy).
     reference : str
@@ -175,8 +212,13 @@ class SamplingStudyOptions:
     strategy_options: Mapping[str, Mapping] = field(default_factory=dict)
     outside: str = "nearest"
     reference: str = "random"
+    score_region: str = "full"
 
     def __post_init__(self):
+        if self.score_region not in SCORE_REGIONS:
+            raise ValueError(
+                f"unknown score_region {self.score_region!r}; valid: {', '.join(SCORE_REGIONS)}"
+            )
         trials = self.trials
         if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or trials < 1:
             raise ValueError(f"trials must be an integer >= 1, got {trials!r}")
@@ -237,66 +279,142 @@ def run_sampling_study(
     dens = check_densities(paper_densities() if o.densities is None else o.densities)
     sensor = IdealSampler(depth, IdealOptions(range_noise_std=float(o.range_noise_std)))
     ks = [sample_count(d, depth.size) for d in dens]
-    planners, maps_cache = _planners(o, image, depth.shape)
-    evaluate = _Evaluator(depth, image, list(o.metrics), maps_cache)
+    planners, maps_cache = _planners(o, image, depth, ks)
+    inner = None
+    if o.score_region != "full":
+        inner = interior_mask(depth.shape, sparsest_pitch(depth.shape, dens))
+    evaluate = _Evaluator(depth, image, list(o.metrics), maps_cache, inner, o.score_region)
     base_seed = int(np.random.default_rng(rng).integers(0, 2**63))
     trials = Trials(planners, ks, int(o.trials), lambda lb, t, di: _seeds(base_seed, lb, t, di))
     if workers > 1:
         error_sums(np.zeros(1), np.zeros(1), np.ones((evaluate.rows.shape[0], 1)))  # compile
     strategies = list(o.strategies)
-    errors = {m: {s: np.empty((len(ks), o.trials)) for s in strategies} for m in o.metrics}
+    names = scored_metrics(o.metrics, o.score_region)
+    errors = {m: {s: np.empty((len(ks), o.trials)) for s in strategies} for m in names}
+    rounds = {s: np.ones((len(ks), o.trials), np.int64) for s in strategies}
     total, done = len(strategies) * o.trials * len(ks), 0
     for outcomes in run_protocol(sensor, trials, evaluate, outside=o.outside, workers=workers):
         for oc in outcomes:
             for m, v in oc.scores.items():
                 errors[m][oc.label][oc.budget_index, oc.trial] = v
+            rounds[oc.label][oc.budget_index, oc.trial] = oc.rounds
         done += len(ks)
         if progress is not None:
             progress(done, total)
-    return _result(o, strategies, dens, ks, errors)
+    res = _result(o, strategies, dens, ks, errors, names)
+    res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], _Measuring)}
+    return res
 
 
-def _planners(o: SamplingStudyOptions, image, shape) -> tuple[dict, dict]:
-    """Label -> protocol planner; each distinct importance map computed once."""
+def _planners(o: SamplingStudyOptions, image, depth, ks) -> tuple[dict, dict]:
+    """Label -> protocol planner; each distinct importance map computed once.
+
+    Only the ``oracle_*`` labels get the true depth; ``sequential`` gets the sensor (through
+    the protocol), never the depth.
+    """
     planners, maps_cache = {}, {}
     for label in o.strategies:
         opts = dict(o.strategy_options.get(label, {}))
         base = opts.pop("strategy", label)
-        if base not in STRATEGIES:
-            raise ValueError(f"unknown strategy {base!r}; valid: {', '.join(STRATEGIES)}")
-        key = (base, repr(opts.get("feature_opts")), repr(opts.get("coefficients")))
-        if key not in maps_cache:
-            maps_cache[key] = strategy_weights(
-                base,
-                image,
-                feature_opts=opts.get("feature_opts"),
-                coefficients=opts.get("coefficients"),
-            )
+        if base not in STRATEGIES and base not in MEASURING:
+            valid = ", ".join([*STRATEGIES, *MEASURING])
+            raise ValueError(f"unknown strategy {base!r}; valid: {valid}")
+        if base in MEASURING:
+            planners[label] = _measuring(opts, image, depth.shape, ks, maps_cache)
+            continue
+        weights = _maps(base, opts, image, ks, maps_cache)
         plan_opts = {k: v for k, v in opts.items() if k not in ("feature_opts", "coefficients")}
+        truth = depth if base in ORACLES else None  # the oracles, and nothing else, read it
         # validate options once, before any long loop
-        plan(base, 3, weights=maps_cache[key], shape=shape, rng=0, **plan_opts)
-        planners[label] = _Planner(base, maps_cache[key], shape, plan_opts)
+        plan(base, 4, weights=weights[ks[0]], shape=depth.shape, truth=truth, rng=0, **plan_opts)
+        planners[label] = _Planner(base, weights, depth.shape, plan_opts, truth)
     return planners, maps_cache
+
+
+def _maps(base: str, opts: dict, image, ks, cache: dict) -> dict:
+    """k -> the strategy's importance map (one map for every k but the learned one's, which
+    is per density)."""
+    fo = opts.get("feature_opts")
+    n = image.shape[0] * image.shape[1]
+    out = {}
+    for k in ks:
+        if base == "learned":
+            fo = {**(opts.get("feature_opts") or {}), "density": k / n}
+        key = (base, repr(fo), repr(opts.get("coefficients")))
+        if key not in cache:
+            cache[key] = strategy_weights(
+                base, image, feature_opts=fo, coefficients=opts.get("coefficients")
+            )
+        out[k] = cache[key]
+    return out
+
+
+def _measuring(opts: dict, image, shape, ks, cache: dict) -> _Measuring:
+    prior = opts.get("prior")
+    maps = None
+    if prior is not None:
+        maps = _maps(prior, {"feature_opts": opts.get("feature_opts")}, image, ks, cache)
+    return _Measuring(opts.get("sequential"), maps, tuple(shape))
 
 
 @dataclass(frozen=True, eq=False)
 class _Planner:
-    """A strategy of :func:`simlunar.planner.plan` with its map: ``(k, rng) -> (k, 2) rc``."""
+    """A strategy of :func:`simlunar.planner.plan` with its map(s): ``(k, rng) -> (k, 2) rc``.
+
+    ``truth`` is the true depth for an oracle strategy and None for every other.
+    """
 
     base: str
-    weights: np.ndarray | None
+    weights: dict
     shape: tuple
     opts: dict
+    truth: np.ndarray | None = None
 
     def __call__(self, k: int, rng) -> np.ndarray:
-        return plan(self.base, k, weights=self.weights, shape=self.shape, rng=rng, **self.opts).rc
+        return plan(
+            self.base, k, weights=self.weights[k], shape=self.shape, truth=self.truth, rng=rng,
+            **self.opts,
+        ).rc  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class _Measuring:
+    """Region-based iterative enhancement (:func:`simlunar.planner.plan_sequential`): the
+    sensor's ``acquire`` is its ``measure``, so it reads the scene at the cells it samples
+    only, round by round."""
+
+    options: object
+    priors: dict | None
+    shape: tuple
+    measures = True
+
+    def acquire(self, k: int, sensor, plan_rng, sensor_rng) -> tuple[Acquisition, int]:
+        gen = np.random.default_rng(sensor_rng)
+        cost = [0, 0.0]
+
+        def measure(rc):
+            acq = sensor.acquire(rc, rng=gen)
+            if len(acq.values) != len(rc):
+                raise ValueError(f"sensor {sensor.name!r} lost cells: multi-round needs all")
+            cost[0] += acq.frames
+            cost[1] += acq.seconds
+            return acq.values
+
+        prior = None if self.priors is None else self.priors[k]
+        sp = plan_sequential(
+            k, shape=self.shape, measure=measure, prior=prior, options=self.options, rng=plan_rng
+        )
+        acq = Acquisition(sp.plan.rc, np.asarray(sp.values), self.shape, cost[0], cost[1])
+        return acq, sp.rounds
 
 
 class _Evaluator:
     """All metrics of one reconstruction in one pass (same definitions as ``metric``); metric
-    weights computed once per study."""
+    weights computed once per study. With an interior mask, the same metrics on the interior
+    cells (``<metric>_interior``) too or instead (``region``)."""
 
-    def __init__(self, depth, image, metrics: list[str], maps_cache: dict):
+    def __init__(self, depth, image, metrics: list[str], maps_cache: dict, inner=None,
+                 region: str = "full"):  # fmt: skip
         n = depth.size
         metric_w = {}
         if "grad" in metrics:
@@ -311,24 +429,37 @@ class _Evaluator:
         self.metrics = metrics
         self.names = list(metric_w)
         self.rows = np.stack([metric_w[m] for m in self.names]) if self.names else np.zeros((0, n))
+        self.region = region
+        self.inner = None if inner is None else np.flatnonzero(np.asarray(inner).ravel())
 
     def __call__(self, recon: np.ndarray, acquisition) -> dict[str, float]:
-        count, sse, sae, wse, wsum = error_sums(recon.ravel(), self.truth, self.rows)
+        flat = recon.ravel()
+        out = {}
+        if self.region in ("full", "both"):
+            out.update(self._scores(flat, self.truth, self.rows, ""))
+        if self.inner is not None:
+            i = self.inner
+            out.update(self._scores(flat[i], self.truth[i], self.rows[:, i], INTERIOR_SUFFIX))
+        return out
+
+    def _scores(self, recon, truth, rows, suffix: str) -> dict[str, float]:
+        count, sse, sae, wse, wsum = error_sums(recon, truth, np.ascontiguousarray(rows))
         if count == 0:
             raise ValueError("reconstruction has no finite cell to evaluate")
         out = {}
         for m in self.metrics:
             if m == "mse":
-                out[m] = sse / count
+                v = sse / count
             elif m == "rmse":
-                out[m] = float(np.sqrt(sse / count))
+                v = float(np.sqrt(sse / count))
             elif m == "mae":
-                out[m] = sae / count
+                v = sae / count
             else:
                 j = self.names.index(m)
                 if wsum[j] <= 0:
                     raise ValueError(f"metric {m!r} weights sum to zero over the evaluated cells")
-                out[m] = float(wse[j] / wsum[j])
+                v = float(wse[j] / wsum[j])
+            out[m + suffix] = v
         return out
 
 
@@ -340,25 +471,25 @@ def _seeds(base: int, label: str, trial: int, density_index: int) -> tuple:
     )
 
 
-def _result(o, strategies, dens, ks, errors) -> SamplingStudyResult:
+def _result(o, strategies, dens, ks, errors, names) -> SamplingStudyResult:
     rows = [
         {"strategy": label, "density": float(dens[di]), "k": k, "trial": trial,
          "metric": m, "value": float(errors[m][label][di, trial])}
         for label in strategies
         for trial in range(o.trials)
         for di, k in enumerate(ks)
-        for m in o.metrics
+        for m in names
     ]  # fmt: skip
     scores = {}
     if o.reference in strategies:
-        scores = {m: _score(errors[m], dens, reference=o.reference) for m in o.metrics}
+        scores = {m: _score(errors[m], dens, reference=o.reference) for m in names}
     return SamplingStudyResult(
         rows=rows,
         scores=scores,
         strategies=strategies,
         densities=[float(d) for d in dens],
         ks=ks,
-        metrics=list(o.metrics),
+        metrics=names,
         reference=o.reference,
         _errors=errors,
     )

@@ -1,0 +1,114 @@
+"""The training YAML of the learned importance map (``simlunar train``).
+
+A training run renders guide views of the scenes of one or more experiment YAMLs (their terrain,
+camera, light, BSDF and sensor, so the model sees the images the studies will see) on terrain
+realisations the experiments do not use (another ``seed``), under several sun elevations, and
+fits :func:`simlunar.features.learned.train_learned_map`. Presets listed in
+``held_out_presets`` are never trained on (evaluate on them). Example:
+``experiments/training/learned_quarter.yaml``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pydantic import Field, ValidationError, field_validator, model_validator
+
+from simlunar.config.fields import Deg, Density, _Model
+from simlunar.config.loading import load_experiment
+from simlunar.config.messages import format_validation_error
+from simlunar.config.yamlio import load_yaml
+from simlunar.errors import ConfigError
+
+__all__ = ["LearnedOptsCfg", "TrainCfg", "load_training"]
+
+
+class LearnedOptsCfg(_Model):
+    """Options of :class:`simlunar.features.learned.LearnedOptions` (same defaults)."""
+
+    layouts: int = Field(3, ge=1, le=100, description="uniform layouts averaged per target")
+    pixels_per_example: int = Field(20_000, ge=100, description="training pixels per example")
+    max_iter: int = Field(200, ge=1, le=10_000, description="boosting rounds")
+    max_leaf_nodes: int = Field(31, ge=2, description="leaves per tree")
+    min_samples_leaf: int = Field(50, ge=1, description="pixels per leaf (at least)")
+    learning_rate: float = Field(0.1, gt=0, description="boosting learning rate")
+    l2_regularization: float = Field(0.0, ge=0, description="leaf-value L2 penalty")
+
+
+class TrainCfg(_Model):
+    """A training run of the learned importance map."""
+
+    name: str = Field(description="names the run (recorded with the model)")
+    description: str = ""
+    seed: int = Field(
+        ge=0,
+        description="terrain and training seed; use one no experiment uses, so every terrain "
+        "the model sees is held out from the studies",
+    )
+    experiments: list[str] = Field(
+        min_length=1, description="experiment YAMLs whose scenes are rendered (relative paths: "
+        "to this file)",
+    )  # fmt: skip
+    scale: float = Field(1.0, gt=0, le=1, description="terrain.scale of every scene")
+    held_out_presets: list[str] = Field(
+        default_factory=list, description="presets of the experiments never trained on"
+    )
+    terrain_seeds: int = Field(2, ge=1, le=100, description="realisations per preset")
+    sun_elevations_deg: list[Deg] | None = Field(
+        None, description="sun elevations rendered per terrain; null = each experiment's own"
+    )
+    densities: list[Density] = Field(min_length=1, description="one model per density k / N")
+    options: LearnedOptsCfg = Field(default_factory=LearnedOptsCfg)
+    model: str = Field(description="output model file (.joblib, its .json beside it)")
+
+    @field_validator("model")
+    @classmethod
+    def _joblib(cls, v: str) -> str:
+        if not v.endswith(".joblib"):
+            raise ValueError(f"a learned model file ends in .joblib, got {v!r}")
+        return v
+
+    @model_validator(mode="after")
+    def _distinct(self) -> TrainCfg:
+        if len(set(self.densities)) != len(self.densities):
+            raise ValueError(f"densities: must be distinct, got {self.densities}")
+        return self
+
+
+def load_training(path: str | Path):
+    """``(TrainCfg, [ExperimentCfg, ...])`` of a training YAML; one-line ``ConfigError``s."""
+    path = Path(path)
+    data = load_yaml(path)
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: <root>: expected a mapping of keys")
+    try:
+        cfg = TrainCfg.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(f"{path}: " + format_validation_error(exc, data, root=TrainCfg)) from None
+    experiments = []
+    for i, name in enumerate(cfg.experiments):
+        p = Path(name) if Path(name).is_absolute() else path.parent / name
+        if not p.is_file():
+            raise ConfigError(f"{path}: experiments[{i}]: file not found: {p}")
+        exp = load_experiment(p)
+        if exp.study.kind != "sampling":
+            raise ConfigError(f"{path}: experiments[{i}]: {p} is not a sampling experiment")
+        experiments.append(exp)
+    presets = {_preset(e, v) for e in experiments for v in _sweep_presets(e)}
+    for i, name in enumerate(cfg.held_out_presets):
+        if name not in presets:
+            raise ConfigError(
+                f"{path}: held_out_presets[{i}]: {name!r} is in none of the experiments "
+                f"(have: {', '.join(sorted(presets))})"
+            )
+    if not presets - set(cfg.held_out_presets):
+        raise ConfigError(f"{path}: held_out_presets: leaves no preset to train on")
+    return cfg, experiments
+
+
+def _sweep_presets(exp) -> list:
+    return list(exp.sweep.get("terrain.preset") or [exp.terrain.preset])
+
+
+def _preset(exp, value) -> str:
+    return str(value if value is not None else exp.terrain.preset)

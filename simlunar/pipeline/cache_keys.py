@@ -1,0 +1,46 @@
+"""Cache keys that survive new options: a key added to the schema at the value that changes
+no number is left out of a unit's cache key, so results computed before it existed stay valid.
+
+:func:`simlunar.pipeline.runner.unit_key` applies :func:`without_new_defaults` to the study
+section; the tables below must equal the schema's defaults (a test keeps them so).
+"""
+
+from __future__ import annotations
+
+__all__ = ["NEW_PLANNER_DEFAULTS", "NEW_STUDY_DEFAULTS", "without_new_defaults"]
+
+#: study keys added after caches existed, with the value that gives the numbers of before
+NEW_STUDY_DEFAULTS = {"score_region": "full"}
+#: planner option keys added after caches existed (issue 20), with their defaults
+NEW_PLANNER_DEFAULTS = {
+    "placement": "random",
+    "density_power": None,
+    "lloyd_iterations": 20,
+    "border_pitch": 0.75,
+    "oracle": {"start_share": 0.25, "batch_share": 0.15, "smooth_pitch": 0.25, "nms_pitch": 1.0},
+    "sequential": {"max_rounds": 12, "first_share": 0.3, "batch_share": 0.12, "temper": 0.5,
+                   "uniform_mix": 0.5, "prior_power": 0.5, "nms_pitches": 0.7, "prior": "none"},
+}  # fmt: skip
+
+
+def without_new_defaults(study: dict) -> dict:
+    """The study section less keys added later at the value that changes nothing, so the
+    cache keys of earlier runs stay valid (tests/pipeline/test_runner.py keeps the tables
+    equal to the schema's defaults)."""
+    out = {k: v for k, v in study.items() if NEW_STUDY_DEFAULTS.get(k, object()) != v}
+
+    def strip(opts):
+        if not isinstance(opts, dict):
+            return opts
+        fo = opts.get("feature_opts")
+        if isinstance(fo, dict) and fo.get("model", 0) is None:
+            opts = {**opts, "feature_opts": {k: v for k, v in fo.items() if k != "model"}}
+        return {k: v for k, v in opts.items() if NEW_PLANNER_DEFAULTS.get(k, object()) != v}
+
+    if isinstance(out.get("strategy_options"), dict):
+        out["strategy_options"] = {k: strip(v) for k, v in out["strategy_options"].items()}
+    options = out.get("options")
+    if isinstance(options, dict) and isinstance(options.get("planner_opts"), dict):
+        planner_opts = {k: strip(v) for k, v in options["planner_opts"].items()}
+        out["options"] = {**options, "planner_opts": planner_opts}
+    return out

@@ -1,0 +1,95 @@
+"""``simlunar train``: a training YAML -> a learned model file and its record, usable by name
+from an experiment's ``learned`` strategy."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from simlunar.cli import app
+from simlunar.config.loading import validate_data
+from simlunar.config.training import load_training
+from simlunar.errors import ConfigError
+from simlunar.features.learned import LearnedMap
+from simlunar.pipeline import train as train_mod
+from simlunar.study.sampling import run_sampling_study
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _synthetic_view(cfg):
+    """A planted relation: the terrain is rough where the image is bright (no render)."""
+    rng = np.random.default_rng(cfg.terrain.seed_index + 10 * int(cfg.render.light.elevation_deg))
+    rows, cols = 48, 64
+    bright = np.zeros((rows, cols))
+    r0, c0 = rng.integers(8, 40), rng.integers(8, 56)
+    bright[max(r0 - 8, 0) : r0 + 8, max(c0 - 8, 0) : c0 + 8] = 1.0
+    depth = 0.01 * np.arange(cols)[None, :] + bright * rng.normal(0, 0.5, (rows, cols))
+    image = (0.2 + 0.6 * bright + 0.02 * rng.random((rows, cols))).astype(np.float32)
+    return image, depth
+
+
+def _yaml(tmp_path, **over) -> Path:
+    d = {
+        "name": "tiny",
+        "seed": 100,
+        "experiments": [str(ROOT / "experiments" / "table1_aerial.yaml")],
+        "scale": 0.25,
+        "held_out_presets": ["aerial_2"],
+        "terrain_seeds": 2,
+        "sun_elevations_deg": [30, 60],
+        "densities": ["1/16"],
+        "options": {"layouts": 1, "pixels_per_example": 500, "max_iter": 10},
+        "model": str(tmp_path / "models" / "tiny.joblib"),
+    }
+    d.update(over)
+    path = tmp_path / "train.yaml"
+    path.write_text(yaml.safe_dump(d))
+    return path
+
+
+def test_train_writes_a_model_with_its_record_and_a_study_uses_it(tmp_path, monkeypatch):
+    monkeypatch.setattr(train_mod, "guide_view", _synthetic_view)
+    res = CliRunner().invoke(app, ["train", str(_yaml(tmp_path))])
+    assert res.exit_code == 0, res.output
+    model = tmp_path / "models" / "tiny.joblib"
+    record = json.loads(model.with_suffix(".json").read_text())
+    prov = record["provenance"]
+    assert prov["command"].startswith("simlunar train ")
+    # 2 presets (aerial_2 held out) x 2 terrain seeds x 2 suns
+    assert len(prov["examples"]) == record["examples"] == 8
+    assert {e["preset"] for e in prov["examples"]} == {"aerial_1", "aerial_3"}
+    assert prov["held_out_presets"] == ["aerial_2"] and prov["experiments"][0]["seed"] == 1
+    assert len(record["input_sha256"]) == 8 and record["model_sha256"]
+    assert record["densities"] == [1 / 16]
+    LearnedMap.load(model)
+    # the learned strategy of an experiment loads it by path
+    cfg = validate_data(
+        {"name": "t", "seed": 1, "terrain": {"preset": "aerial_1", "scale": 0.125},
+         "study": {"strategies": ["random", "lloyd_uniform", "learned_lloyd"],
+                   "strategy_options": {"learned_lloyd": {
+                       "strategy": "learned", "placement": "lloyd",
+                       "feature_opts": {"model": str(model)}}},
+                   "densities": ["1/16"], "trials": 1, "metrics": ["mse"]}}
+    )  # fmt: skip
+    from simlunar.config import translate
+
+    image, depth = _synthetic_view(validate_data({**cfg.model_dump(mode="json", by_alias=True)}))
+    out = run_sampling_study(depth, image, translate.sampling_options(cfg.study), rng=0)
+    assert np.isfinite(out.errors("mse")["learned_lloyd"]).all()
+
+
+def test_training_yaml_errors_are_one_line(tmp_path):
+    with pytest.raises(ConfigError, match=r"held_out_presets\[0\]: 'moonyard' is in none"):
+        load_training(_yaml(tmp_path, held_out_presets=["moonyard"]))
+    with pytest.raises(ConfigError, match="held_out_presets: leaves no preset"):
+        load_training(_yaml(tmp_path, held_out_presets=["aerial_1", "aerial_2", "aerial_3"]))
+    with pytest.raises(ConfigError, match=r"model: .*ends in \.joblib"):
+        load_training(_yaml(tmp_path, model="m.pkl"))
+    res = CliRunner().invoke(app, ["train", str(_yaml(tmp_path, densities=[]))])
+    assert res.exit_code == 2 and "densities" in res.output
