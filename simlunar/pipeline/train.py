@@ -18,9 +18,10 @@ import numpy as np
 from simlunar.config.loading import to_plain
 from simlunar.config.training import TrainCfg, _preset, _sweep_presets
 from simlunar.config.yamlio import dump_yaml
-from simlunar.features.learned import LearnedOptions, train_learned_map
+from simlunar.features.learned import LearnedOptions
 from simlunar.pipeline.figure_inputs import RENDER_LOCK
 from simlunar.pipeline.unit import fill_invalid, int_seed, scene_inputs, sensor_image, stage_seeds
+from simlunar.planner.learning import train_learned_map
 from simlunar.render import render
 from simlunar.render.scene import luminance
 
