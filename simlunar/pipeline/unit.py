@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from simlunar.config import translate
+from simlunar.config import lidar_translate, translate
 from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
@@ -351,7 +351,7 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
         res = run_lidar_study(
             lidar_scene,
             (image, depth),
-            translate.lidar_options(cfg.study, seed=scene.seed),
+            lidar_translate.lidar_options(cfg.study, seed=scene.seed),
             rng=np.random.default_rng(seeds["study"]),
         )
     timings["study_s"] = time.perf_counter() - t

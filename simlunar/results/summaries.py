@@ -103,7 +103,7 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
         labelled.append((p.label, scores))
     strategies = _names(units, "strategies")
     # the scored names: with study.score_region, <metric>_interior rows too
-    metrics = list(dict.fromkeys(m for p in points for m in p.metrics)) or _names(units, "metrics")
+    metrics = list(dict.fromkeys(m for p in points for m in p.metrics))
     seeds = sorted({len(p.seeds) for p in points})
     trials = sorted({int(float(r["trial"])) for r in rows}, reverse=True)[:1]
     n_trials = "/".join(str(t + 1) for t in trials)
@@ -128,11 +128,11 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
         )
         md, tex = note + "\n", "% " + note + "\n"
     md2, tex2 = samples_saved_tables(_saved_entries(points), title=cfg.name)
+    md3, tex3 = headroom_tables(_headroom_entries(points), title=cfg.name)
+    if md3:
+        md2, tex2 = md2 + "\n" + md3, tex2 + "\n" + tex3
     if md2:
         md, tex = md + "\n" + md2, tex + "\n" + tex2
-        md3, tex3 = headroom_tables(_headroom_entries(points), title=cfg.name)
-        if md3:
-            md, tex = md + "\n" + md3, tex + "\n" + tex3
     elif not any(p.saved for p in points):
         why = (
             "one density (a curve needs two)"
@@ -147,31 +147,6 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
     else:
         (out / "scores.csv").unlink(missing_ok=True)  # scores.md says why there is none
     return md, tex
-
-
-def _saved_entries(points) -> list[dict]:
-    """Samples-saved table entries: per point, per reference, the first metric and (with
-    ``score_region: both``) its interior-only twin."""
-    return [
-        {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": metric,
-         "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
-         "factor": sv.factor, "flag": sv.flag, "summary": sv.summary, "n_summary": sv.n_summary}
-        for p in points
-        for metric, saved in ((p.saved_metric, p.saved),
-                              (f"{p.saved_metric}_interior", p.saved_interior))
-        for ref, sv in saved.items()
-    ]  # fmt: skip
-
-
-def _headroom_entries(points) -> list[dict]:
-    """Headroom-captured table entries: per point and oracle label."""
-    return [
-        {"label": p.label if len(points) > 1 else "", "oracle": o, "metric": p.saved_metric,
-         "strategies": [s for s in p.strategies if s in by], "captured": by,
-         "saved": p.saved_per_seed, "seeds": p.seeds}
-        for p in points
-        for o, by in p.headroom.items()
-    ]  # fmt: skip
 
 
 def _names(units: list[WorkUnit], key: str) -> list[str]:
@@ -230,3 +205,28 @@ def _inputs(units: list[WorkUnit]) -> list[dict[str, str]]:
         for key, v in u.inputs.items():
             seen.setdefault((key, v["path"], v["sha256"]), {"key": key, **v})
     return list(seen.values())
+
+
+def _saved_entries(points) -> list[dict]:
+    """Samples-saved table entries: per point, per reference, the first metric and (with
+    ``score_region: both``) its interior-only twin."""
+    return [
+        {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": metric,
+         "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
+         "factor": sv.factor, "flag": sv.flag, "summary": sv.summary, "n_summary": sv.n_summary}
+        for p in points
+        for metric, saved in ((p.saved_metric, p.saved), (f"{p.saved_metric}_interior",
+                                                          p.saved_interior))
+        for ref, sv in saved.items()
+    ]  # fmt: skip
+
+
+def _headroom_entries(points) -> list[dict]:
+    """Headroom-captured table entries: per point and oracle label."""
+    return [
+        {"label": p.label if len(points) > 1 else "", "oracle": o, "metric": p.saved_metric,
+         "strategies": [s for s in p.strategies if s in by], "captured": by,
+         "saved": p.saved_per_seed, "seeds": p.seeds}
+        for p in points
+        for o, by in p.headroom.items()
+    ]  # fmt: skip

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from simlunar.config import translate
+from simlunar.config import lidar_translate
 from simlunar.config.loading import load_experiment
 from simlunar.config.yamlio import parse_set
 from simlunar.errors import ConfigError
@@ -33,7 +33,7 @@ def test_the_shipped_lidar_experiments_validate(name):
 
 def test_descent_translates_to_si_options():
     s = load_experiment(DESCENT).study
-    opts = translate.lidar_options(s, seed=7)
+    opts = lidar_translate.lidar_options(s, seed=7)
     so = opts.sensor_options
     assert isinstance(so, SteeredBeamOptions) and opts.sensor == "steered_beam"
     assert so.pulse.fwhm_s == pytest.approx(1e-9) and so.pulse.jitter_s == pytest.approx(1e-10)
@@ -55,7 +55,7 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
             ]
         ),
     )
-    so = translate.lidar_options(cfg.study).sensor_options
+    so = lidar_translate.lidar_options(cfg.study).sensor_options
     assert isinstance(so, FlashLidarOptions) and so.receiver_px == (32, 32) and so.revisits == 2
     assert so.flash.detector.dead_time_s == float("inf")  # one detection per pulse
     cfg = load_experiment(
@@ -68,7 +68,7 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
             ]
         ),
     )
-    so = translate.lidar_options(cfg.study).sensor_options
+    so = lidar_translate.lidar_options(cfg.study).sensor_options
     assert isinstance(so, MicromirrorOptions) and so.receiver_px == (16, 16)
 
 
