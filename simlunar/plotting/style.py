@@ -60,6 +60,7 @@ REGISTRY: dict[str, Style] = {
     "learned_lloyd": Style("#8073ac", "P", "Learned, Lloyd"),
     "sequential": Style("#1b7837", ">", "Sequential"),
     "sequential_wavelet": Style("#5aae61", ">", "Sequential, wavelet prior"),
+    "sequential_learned": Style("#a6dba0", ">", "Sequential, learned prior"),
     "oracle_greedy": Style("#fdb863", "*", "Oracle greedy (true error)"),
     "oracle_hessian": Style("#e08214", "*", "Oracle Hessian (true depth)"),
     # labelled variants of the shipped experiments
