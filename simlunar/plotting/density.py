@@ -335,7 +335,10 @@ def samples_saved_plot(
     ax.tick_params(axis="y", labelsize=TICK_PT)
     ref = label(reference)
     mname = METRIC_NAMES.get(metric, metric)
-    ax.set_ylabel(f"samples saved vs {ref} (×, equal {mname})", fontsize=LABEL_PT - 0.5)
+    # the panel title names the reference and the metric; the label stays short enough not to
+    # run into the figure's title
+    ylabel = "samples saved (×)" if title is None else f"samples saved vs {ref} (×)"
+    ax.set_ylabel(ylabel, fontsize=LABEL_PT - 0.5)
     ax.set_title(title or f"vs {ref}, at equal {mname}", fontsize=TITLE_PT)
     legend_outside(ax, handles=handles, labels=labels)
     ax.grid(True, which="major", alpha=0.3)
