@@ -68,7 +68,8 @@ def check_scan_planner(name: str, path: str) -> None:
             f"{path}: {name!r} is a planner of the sampling study only (the scanner study "
             "gives no planner the truth or a sensor to ask back)"
         )
-    _check(name, [*STRATEGIES, *SCAN_PLANNERS], path, "planner")
+    image_only = [s for s in STRATEGIES if s not in ORACLES and s not in MEASURING]
+    _check(name, [*image_only, *SCAN_PLANNERS], path, "planner")
 
 
 def metric_names() -> list[str]:

@@ -34,7 +34,10 @@ class LearnedOptsCfg(_Model):
     learning_rate: float = Field(0.1, gt=0, description="boosting learning rate")
     l2_regularization: float = Field(0.0, ge=0, description="leaf-value L2 penalty")
     threads: int = Field(
-        1, ge=1, le=64, description="OpenMP threads of the boosting (1: fastest on a loaded machine)"
+        1,
+        ge=1,
+        le=64,
+        description="OpenMP threads of the boosting (1: fastest on a loaded machine)",
     )
 
 

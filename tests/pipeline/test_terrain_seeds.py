@@ -166,12 +166,13 @@ def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monke
     # with the band and caption saying so
     from simlunar.plotting import figures as F
     from simlunar.results import figures as PF
+    from simlunar.results.aggregate import density_panels
 
     units = [
         {"index": u.index, "key": u.key, "sweep": u.sweep, "config": u.config}
         for u in expand(cfg(3))
     ]
-    panels = PF._density_panels(units)
+    panels = density_panels(units)
     assert [t for t, _ in panels] == ["sun elevation: 10°", "sun elevation: 60°"]
     assert [[r["index"] for r in members] for _, members in panels] == [[0, 1, 2], [3, 4, 5]]
 
