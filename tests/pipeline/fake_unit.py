@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import time
-import uuid
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +29,17 @@ def enter_unit(payload: dict) -> None:
     n_calls = 0
     if calls:
         Path(calls).mkdir(parents=True, exist_ok=True)
-        (Path(calls) / f"{uuid.uuid4().hex}.call").write_text(payload["config"]["name"])
-        n_calls = len(list(Path(calls).glob("*.call")))
+        # this call's number, taken atomically (O_EXCL): counting the files after writing one
+        # let two concurrent units both see 2 calls, and both wait at the gate for ever
+        while True:
+            n_calls += 1
+            try:
+                fd = os.open(Path(calls) / f"{n_calls}.call", os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            except FileExistsError:
+                continue
+            with os.fdopen(fd, "w") as f:
+                f.write(payload["config"]["name"])
+            break
     gate = os.environ.get("SIMLUNAR_TEST_GATE")
     after = int(os.environ.get("SIMLUNAR_TEST_GATE_AFTER", "0"))
     if gate and (not calls or n_calls > after):
