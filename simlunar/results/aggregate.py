@@ -253,22 +253,3 @@ def density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
     as it has sweep points, not seeds times points.
     """
     return [(point_title(p.sweep), [units[i] for i in p.unit_indices]) for p in group_points(units)]
-
-
-#: the figures' record of what they were drawn from (in the result folder, beside figures/)
-STAMP = ".figures.json"
-#: modules whose code draws the figures: a change of any of them redraws every figure
-_DRAWING_MODULES = (
-    "simlunar.plotting.figures",
-    "simlunar.plotting.layout",
-    "simlunar.plotting.density",
-    "simlunar.plotting.images",
-    "simlunar.plotting.scanner",
-    "simlunar.plotting.lidar",
-    "simlunar.plotting.style",
-    "simlunar.results.figures",
-    "simlunar.results.scanner_figures",
-    "simlunar.results.lidar_figures",
-    "simlunar.results.captions",
-    "simlunar.results.aggregate",
-)
