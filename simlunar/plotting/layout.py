@@ -40,7 +40,7 @@ def legend_outside(ax, *, handles=None, labels=None, ncols: int = 2) -> None:
         handles,
         labels,
         loc="upper center",
-        bbox_to_anchor=(0.5, -0.2),
+        bbox_to_anchor=(0.5, -0.27),  # below the x label and its tick labels
         borderaxespad=0.0,
         fontsize=LEGEND_PT - 1,
         frameon=False,
