@@ -8,23 +8,31 @@ import numpy as np
 
 from simlunar.atomic import atomic_write
 
-#: auto exposure maps this percentile of the finite pixel values ...
+#: auto exposure maps the median of the positive pixel values to photographic middle grey
+#: (the "key" 0.18 of Reinhard et al. 2002, "Photographic tone reproduction for digital images",
+#: SIGGRAPH), as a camera's averaging meter does ...
+AUTO_KEY = 0.18
+#: ... unless that would push this percentile ...
 AUTO_PERCENTILE = 99.0
-#: ... to this linear value (before the sRGB curve), leaving a little headroom for highlights
+#: ... above this linear value (before the sRGB curve): high-contrast scenes keep their highlights
 AUTO_TARGET = 0.9
 
 
 def auto_exposure(image: np.ndarray) -> float:
-    """Scale factor mapping the 99th percentile of finite, positive values to 0.9.
+    """Scale factor of a preview: the median of finite, positive values to middle grey (0.18),
+    or the 99th percentile to 0.9 where that is the smaller factor.
 
-    Returns 1.0 for an image with no positive finite value (all black stays black).
+    Mapping the 99th percentile alone washed low-contrast lunar scenes out (the quickstart
+    render's median came out at 211/255); the regolith is dark (albedo about 0.12), and a metered
+    photograph shows it mid-grey. Returns 1.0 for an image with no positive finite value (all
+    black stays black).
     """
     a = np.asarray(image, dtype=np.float64)
     vals = a[np.isfinite(a) & (a > 0)]
     if vals.size == 0:
         return 1.0
-    p = float(np.percentile(vals, AUTO_PERCENTILE))
-    return AUTO_TARGET / p if p > 0 else 1.0
+    median, p = np.percentile(vals, [50.0, AUTO_PERCENTILE])
+    return float(min(AUTO_KEY / median, AUTO_TARGET / p))
 
 
 def to_srgb8(image: np.ndarray, *, exposure: float | None = None) -> np.ndarray:
@@ -64,7 +72,8 @@ def write_png_preview(path, image: np.ndarray, *, exposure: float | None = None)
     image : (rows, cols) or (rows, cols, 3) array
         Linear radiance (grey or RGB).
     exposure : float, optional
-        Linear multiplier; ``None`` maps the 99th percentile to 0.9 (auto exposure).
+        Linear multiplier; ``None``: :func:`auto_exposure` (median to middle grey, the 99th
+        percentile at most 0.9).
 
     Returns
     -------
