@@ -19,6 +19,14 @@ def scalar(props, key: str, default: float) -> float:
     return float(props.get(key, default))
 
 
+def choice(props, key: str, default: str, valid: tuple[str, ...], plugin: str) -> str:
+    """A string plugin property that must be one of ``valid`` (``plugin`` names the error)."""
+    value = str(props.get(key, default))
+    if value not in valid:
+        raise ValueError(f"{plugin}: {key} must be {' or '.join(valid)}, got {value!r}")
+    return value
+
+
 def opaque(mi, value) -> Any:
     """``mi.Float(value)`` made opaque: a new value reuses the compiled kernels."""
     import drjit as dr

@@ -46,6 +46,7 @@ from simlunar.render import reference as ref
 from simlunar.render.materials import HapkeBSDF
 from simlunar.render.plugins._common import (
     INV_PI,
+    choice,
     cosine_bsdf_base,
     local_angles,
     opaque,
@@ -155,10 +156,7 @@ def _plugin_class(mi) -> type:
         def __init__(self, props):
             super().__init__(props)
             self.reflectance = props.get_texture("reflectance", 0.12)
-            mode = str(props.get("albedo_mode", "normal"))
-            if mode not in ("normal", "w"):
-                raise ValueError(f"hapke: albedo_mode must be normal or w, got {mode!r}")
-            self.albedo_mode = mode
+            self.albedo_mode = choice(props, "albedo_mode", "normal", ("normal", "w"), NAME)
             d = ref.LUNAR_HAPKE
             vals = {k: scalar(props, k, getattr(d, k)) for k in self._keys}
             HapkeBSDF(**vals)  # validates and names the offending field

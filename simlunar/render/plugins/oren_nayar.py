@@ -41,6 +41,7 @@ import numpy as np
 
 from simlunar.render.plugins._common import (
     INV_PI,
+    choice,
     cosine_bsdf_base,
     local_angles,
     opaque,
@@ -131,10 +132,7 @@ def _plugin_class(mi) -> type:
         def __init__(self, props):
             super().__init__(props)
             self.reflectance = props.get_texture("reflectance", 0.5)
-            model = str(props.get("model", "full"))
-            if model not in ("full", "qualitative"):
-                raise ValueError(f"oren_nayar: model must be full or qualitative, got {model!r}")
-            self.model = model
+            self.model = choice(props, "model", "full", ("full", "qualitative"), NAME)
             raw = props.get("sigma", 0.0)
             if isinstance(raw, mi.Texture):
                 _check_sigma_texture(mi, raw)
