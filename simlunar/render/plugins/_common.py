@@ -37,14 +37,15 @@ def opaque(mi, value) -> Any:
 
 
 def register_plugin(mi, name: str, registered: set[str], build) -> None:
-    """Register the BSDF class ``build(mi)`` as plugin ``name`` for the current variant, once.
+    """Register the BSDF class ``build(mi, base)`` as plugin ``name`` for the current variant,
+    once; ``base`` is the variant's :func:`cosine_bsdf_base`, which the class subclasses.
 
     ``registered`` holds the variants the plugin is registered for (one set per plugin).
     """
     variant = mi.variant()
     if variant in registered:
         return
-    plugin = build(mi)
+    plugin = build(mi, cosine_bsdf_base(mi))
     mi.register_bsdf(name, lambda props: plugin(props))
     registered.add(variant)
 

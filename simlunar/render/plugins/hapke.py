@@ -47,7 +47,6 @@ from simlunar.render.materials import HapkeBSDF
 from simlunar.render.plugins._common import (
     INV_PI,
     choice,
-    cosine_bsdf_base,
     local_angles,
     opaque,
     register_plugin,
@@ -142,11 +141,11 @@ def _phase(cos_g, b, c):
     return 0.5 * (1.0 + c) * back + 0.5 * (1.0 - c) * fwd
 
 
-def _plugin_class(mi) -> type:
-    """The plugin class for the current variant."""
+def _plugin_class(mi, base: type) -> type:
+    """The plugin class for the current variant, a subclass of ``base`` (cosine sampling)."""
     import drjit as dr  # heavy and optional: only once a Mitsuba variant is set
 
-    class HapkePlugin(cosine_bsdf_base(mi)):
+    class HapkePlugin(base):
         """Hapke BRDF; see :func:`simlunar.render.reference.hapke`."""
 
         flags = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide

@@ -42,7 +42,6 @@ import numpy as np
 from simlunar.render.plugins._common import (
     INV_PI,
     choice,
-    cosine_bsdf_base,
     local_angles,
     opaque,
     register_plugin,
@@ -122,11 +121,11 @@ def _full_terms(factors, cdp, sin_a, sin_b, cos_a, cos_b, tan_b):
     return g1, g2
 
 
-def _plugin_class(mi) -> type:
-    """The plugin class for the current variant."""
+def _plugin_class(mi, base: type) -> type:
+    """The plugin class for the current variant, a subclass of ``base`` (cosine sampling)."""
     import drjit as dr  # heavy and optional: only once a Mitsuba variant is set
 
-    class OrenNayarPlugin(cosine_bsdf_base(mi)):
+    class OrenNayarPlugin(base):
         """Oren-Nayar (1994) BRDF; see :func:`simlunar.render.reference.oren_nayar`."""
 
         def __init__(self, props):
