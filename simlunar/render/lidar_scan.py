@@ -64,44 +64,59 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class SteeredBeamOptions:
-    """A steered-beam LIDAR (gimbaled altimeter or galvanometer scanner).
+class _ReturnOptions:
+    """What every LIDAR here shares: rendering the returns and reading ranges from them.
 
     Parameters
     ----------
-    footprint : FootprintOptions
-        Divergence (rad), profile and rays per beam.
     pulse : PulseOptions
         Pulse FWHM and timing jitter (s).
     detector : DetectorOptions
-        Photon scales, dark counts, dead time (its ``pulses`` is replaced by
-        ``steering.pulses_per_point``).
+        Photon scales, dark counts, dead time, pulses per reading.
     ranging : RangeOptions
-    steering : SteeringOptions
-        Slew rate (rad/s), acceleration (rad/s^2), settle (s), pulse rate (Hz), pulses/point.
-    order : OrderOptions
     transient : TransientOptions
         Rendering (path depth, seed, laser intensity W/sr).
     bin_range_m : float
         Range width of a time bin (m).
-    window_m : float
-        Range window of each rendered batch (m); ``margin_m`` on both sides of the
-        ray-cast ranges.
     margin_m : float
+        Range margin (m) around the expected ranges.
+    """
+
+    pulse: PulseOptions = field(default_factory=PulseOptions)
+    detector: DetectorOptions = field(default_factory=DetectorOptions)
+    ranging: RangeOptions = field(default_factory=RangeOptions)
+    transient: TransientOptions = field(default_factory=TransientOptions)
+    bin_range_m: float = 0.05
+    margin_m: float = 2.0
+
+
+@dataclass(frozen=True)
+class SteeredBeamOptions(_ReturnOptions):
+    """A steered-beam LIDAR (gimbaled altimeter or galvanometer scanner).
+
+    Parameters
+    ----------
+    pulse, ranging, transient, bin_range_m
+        As for every LIDAR here (:class:`_ReturnOptions`).
+    detector : DetectorOptions
+        Its ``pulses`` is replaced by ``steering.pulses_per_point``.
+    margin_m : float
+        Range margin (m) on both sides of the ray-cast ranges in each batch's window.
+    footprint : FootprintOptions
+        Divergence (rad), profile and rays per beam.
+    steering : SteeringOptions
+        Slew rate (rad/s), acceleration (rad/s^2), settle (s), pulse rate (Hz), pulses/point.
+    order : OrderOptions
+    window_m : float
+        Range window of each rendered batch (m).
     batch : int
         Beams per render launch.
     """
 
     footprint: FootprintOptions = field(default_factory=FootprintOptions)
-    pulse: PulseOptions = field(default_factory=PulseOptions)
-    detector: DetectorOptions = field(default_factory=DetectorOptions)
-    ranging: RangeOptions = field(default_factory=RangeOptions)
     steering: SteeringOptions = field(default_factory=SteeringOptions)
     order: OrderOptions = field(default_factory=OrderOptions)
-    transient: TransientOptions = field(default_factory=TransientOptions)
-    bin_range_m: float = 0.05
     window_m: float = 8.0
-    margin_m: float = 2.0
     batch: int = 4096
 
     def __post_init__(self) -> None:
@@ -249,27 +264,19 @@ def steered_beam_scan(
 
 
 @dataclass(frozen=True)
-class FlashOptions:
+class FlashOptions(_ReturnOptions):
     """A flash LIDAR: a receiver array lit by whole-field pulses.
 
     Parameters
     ----------
-    pulse, detector, ranging, transient
-        As for :class:`SteeredBeamOptions`; ``detector.pulses`` pulses per frame.
-    bin_range_m : float
-        Range width of a time bin (m).
+    pulse, detector, ranging, transient, bin_range_m
+        As for every LIDAR here (:class:`_ReturnOptions`); ``detector.pulses`` pulses per frame.
     margin_m : float
         Range margin (m) around the terrain's nearest and farthest point in view.
     pulse_rate_hz : float
         Pulse repetition rate (1/s): a frame takes ``detector.pulses / pulse_rate_hz``.
     """
 
-    pulse: PulseOptions = field(default_factory=PulseOptions)
-    detector: DetectorOptions = field(default_factory=DetectorOptions)
-    ranging: RangeOptions = field(default_factory=RangeOptions)
-    transient: TransientOptions = field(default_factory=TransientOptions)
-    bin_range_m: float = 0.05
-    margin_m: float = 2.0
     pulse_rate_hz: float = 30.0
 
     def __post_init__(self) -> None:

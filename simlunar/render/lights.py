@@ -199,6 +199,24 @@ def check_pattern(pattern, shape: tuple[int, int]) -> np.ndarray:
 PROJECTOR_ID = "projector"
 
 
+def _camera_light_dict(mi, light: CameraLight, camera) -> dict:
+    """A light at the camera: directional along an orthographic camera's axis, else a point."""
+    value = {"type": "uniform", "value": float(light.intensity)}
+    if isinstance(camera, OrthoCamera):
+        return {
+            "type": "directional",
+            "direction": mi.ScalarVector3f(camera.pose.forward),
+            "irradiance": value,
+        }
+    if isinstance(camera, Camera):
+        return {
+            "type": "point",
+            "position": mi.ScalarPoint3f(camera.pose.position),
+            "intensity": value,
+        }
+    raise ValueError(f"camera: unknown camera type {type(camera).__name__}")
+
+
 def emitter_dicts(light, camera, *, index: int = 0) -> dict[str, dict]:
     """Mitsuba emitter dictionaries (keyed by scene id) for one light spec.
 
@@ -223,23 +241,7 @@ def emitter_dicts(light, camera, *, index: int = 0) -> dict[str, dict]:
             for k, (d, e) in enumerate(zip(dirs, irr))
         }
     if isinstance(light, CameraLight):
-        if isinstance(camera, OrthoCamera):
-            return {
-                f"camlight{index}": {
-                    "type": "directional",
-                    "direction": mi.ScalarVector3f(camera.pose.forward),
-                    "irradiance": {"type": "uniform", "value": float(light.intensity)},
-                }
-            }
-        if isinstance(camera, Camera):
-            return {
-                f"camlight{index}": {
-                    "type": "point",
-                    "position": mi.ScalarPoint3f(camera.pose.position),
-                    "intensity": {"type": "uniform", "value": float(light.intensity)},
-                }
-            }
-        raise ValueError(f"camera: unknown camera type {type(camera).__name__}")
+        return {f"camlight{index}": _camera_light_dict(mi, light, camera)}
     if isinstance(light, ProjectorLight):
         k = light.projector.intrinsics
         return {

@@ -93,6 +93,29 @@ def lambert(wi, wo, n, albedo=1.0) -> np.ndarray:
     return np.where(up, np.asarray(albedo, dtype=np.float64) / np.pi, 0.0)
 
 
+def _oren_nayar_qualitative(rho, s2, cdp, alpha, tan_beta):
+    """The qualitative model ``rho/pi [A + B max(0, cos dphi) sin(alpha) tan(beta)]``."""
+    a = 1.0 - 0.5 * s2 / (s2 + 0.33)
+    b = 0.45 * s2 / (s2 + 0.09)
+    return rho / np.pi * (a + b * np.maximum(cdp, 0.0) * np.sin(alpha) * tan_beta)
+
+
+def _oren_nayar_full(rho, s2, cdp, alpha, beta, tan_beta):
+    """The full model ``f1 + f2`` (C1, C2, C3 and the rho^2 inter-reflection term)."""
+    c1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
+    k = s2 / (s2 + 0.09)
+    c2 = np.where(
+        cdp >= 0,
+        0.45 * k * np.sin(alpha),
+        0.45 * k * (np.sin(alpha) - (2.0 * beta / np.pi) ** 3),
+    )
+    c3 = 0.125 * k * (4.0 * alpha * beta / np.pi**2) ** 2
+    tan_mid = np.tan(np.minimum((alpha + beta) / 2.0, np.pi / 2 - 1e-9))
+    f1 = rho / np.pi * (c1 + cdp * c2 * tan_beta + (1.0 - np.abs(cdp)) * c3 * tan_mid)
+    f2 = 0.17 * rho**2 / np.pi * s2 / (s2 + 0.13) * (1.0 - cdp * (2.0 * beta / np.pi) ** 2)
+    return f1 + f2
+
+
 def oren_nayar(wi, wo, n, albedo=1.0, sigma=0.0, model: str = "full") -> np.ndarray:
     """Oren-Nayar rough diffuse BRDF (Oren & Nayar, SIGGRAPH 1994, "Generalization of
     Lambert's reflectance model").
@@ -156,24 +179,10 @@ def oren_nayar(wi, wo, n, albedo=1.0, sigma=0.0, model: str = "full") -> np.ndar
     beta = np.minimum(ti, to)
     # beta < pi/2 wherever up holds; clip keeps tan finite on the masked-out entries
     tan_beta = np.tan(np.minimum(beta, np.pi / 2 - 1e-9))
-    s2 = sigma * sigma
     if model == "qualitative":
-        a = 1.0 - 0.5 * s2 / (s2 + 0.33)
-        b = 0.45 * s2 / (s2 + 0.09)
-        f = rho / np.pi * (a + b * np.maximum(cdp, 0.0) * np.sin(alpha) * tan_beta)
+        f = _oren_nayar_qualitative(rho, sigma * sigma, cdp, alpha, tan_beta)
     else:
-        c1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
-        k = s2 / (s2 + 0.09)
-        c2 = np.where(
-            cdp >= 0,
-            0.45 * k * np.sin(alpha),
-            0.45 * k * (np.sin(alpha) - (2.0 * beta / np.pi) ** 3),
-        )
-        c3 = 0.125 * k * (4.0 * alpha * beta / np.pi**2) ** 2
-        tan_mid = np.tan(np.minimum((alpha + beta) / 2.0, np.pi / 2 - 1e-9))
-        f1 = rho / np.pi * (c1 + cdp * c2 * tan_beta + (1.0 - np.abs(cdp)) * c3 * tan_mid)
-        f2 = 0.17 * rho**2 / np.pi * s2 / (s2 + 0.13) * (1.0 - cdp * (2.0 * beta / np.pi) ** 2)
-        f = f1 + f2
+        f = _oren_nayar_full(rho, sigma * sigma, cdp, alpha, beta, tan_beta)
     return np.where(up, f, 0.0)
 
 
@@ -188,7 +197,7 @@ class HapkeParams:
     Attributes
     ----------
     w : float
-        Single-scattering albedo in [0, 1].
+        Single-scattering albedo in [0, 1] (:func:`hapke` also takes a per-point array).
     b : float
         Henyey-Greenstein lobe width parameter in [0, 1).
     c : float
@@ -306,17 +315,7 @@ def _roughness(cos_i, cos_e, cos_psi, theta_bar):
     )
 
 
-def hapke(
-    wi,
-    wo,
-    n,
-    w=LUNAR_HAPKE.w,
-    b=LUNAR_HAPKE.b,
-    c=LUNAR_HAPKE.c,
-    B0=LUNAR_HAPKE.B0,
-    h=LUNAR_HAPKE.h,
-    theta_bar=LUNAR_HAPKE.theta_bar,
-) -> np.ndarray:
+def hapke(wi, wo, n, params: HapkeParams = LUNAR_HAPKE) -> np.ndarray:
     """Hapke BRDF in the form used for the LROC WAC Hapke maps (Sato et al. 2014).
 
     Bidirectional reflectance (Hapke 2012, with shadow-hiding opposition effect only, porosity
@@ -335,14 +334,11 @@ def hapke(
     ----------
     wi, wo, n : (..., 3) arrays
         See the module conventions.
-    w : float or (...) array
-        Single-scattering albedo in [0, 1].
-    b, c : float
-        Double Henyey-Greenstein parameters (:func:`hapke_phase`).
-    B0, h : float
-        Opposition surge amplitude (>= 0) and width (> 0).
-    theta_bar : float
-        Mean macroscopic slope angle in radians.
+    params : HapkeParams
+        ``w`` (single-scattering albedo in [0, 1], a float or a (...) array, e.g.
+        ``dataclasses.replace(LUNAR_HAPKE, w=w_grid)``), ``b``, ``c`` (double Henyey-Greenstein,
+        :func:`hapke_phase`), ``B0``, ``h`` (opposition surge amplitude >= 0 and width > 0) and
+        ``theta_bar`` (mean macroscopic slope angle in radians).
 
     Returns
     -------
@@ -352,15 +348,16 @@ def hapke(
     cos_i, cos_e, cos_psi = local_angles(wi_u, wo_u, n)
     up = (cos_i > 0) & (cos_e > 0)
     cos_g = np.clip(np.sum(wi_u * wo_u, axis=-1), -1.0, 1.0)
-    mu0e, mue, S = _roughness(cos_i, cos_e, cos_psi, float(theta_bar))
-    w = np.asarray(w, dtype=np.float64)
+    mu0e, mue, S = _roughness(cos_i, cos_e, cos_psi, float(params.theta_bar))
+    w = np.asarray(params.w, dtype=np.float64)
     # |wi - wo| / |wi + wo| = tan(g/2), accurate near g = 0 where the surge peaks
     tan_half_g = np.linalg.norm(wi_u - wo_u, axis=-1) / np.maximum(
         np.linalg.norm(wi_u + wo_u, axis=-1), 1e-12
     )
-    surge = 1.0 + B0 / (1.0 + tan_half_g / h)
+    surge = 1.0 + params.B0 / (1.0 + tan_half_g / params.h)
     multiple = hapke_h_function(mu0e, w) * hapke_h_function(mue, w) - 1.0
-    r = w / (4 * np.pi) * mu0e / (mu0e + mue) * (hapke_phase(cos_g, b, c) * surge + multiple) * S
+    phase = hapke_phase(cos_g, params.b, params.c)
+    r = w / (4 * np.pi) * mu0e / (mu0e + mue) * (phase * surge + multiple) * S
     return np.where(up, r / np.maximum(cos_i, 1e-9), 0.0)
 
 

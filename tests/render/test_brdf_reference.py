@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,11 @@ def sph(theta, phi=0.0):
     """Unit vector(s) from polar angle theta and azimuth phi (radians), z up."""
     theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
     return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
+
+
+def lunar(**changes) -> R.HapkeParams:
+    """The lunar Hapke parameters with ``changes``."""
+    return dataclasses.replace(R.LUNAR_HAPKE, **changes)
 
 
 def upper_dirs(rng, k):
@@ -40,8 +47,8 @@ MODELS = [
     (R.oren_nayar, dict(albedo=0.9, sigma=1.2)),
     (R.oren_nayar, dict(albedo=0.8, sigma=0.4, model="qualitative")),
     (R.hapke, {}),
-    (R.hapke, dict(w=0.9, B0=2.0, h=0.03, theta_bar=0.6, b=0.4, c=-0.3)),
-    (R.hapke, dict(w=0.5, theta_bar=0.0)),
+    (R.hapke, dict(params=lunar(w=0.9, B0=2.0, h=0.03, theta_bar=0.6, b=0.4, c=-0.3))),
+    (R.hapke, dict(params=lunar(w=0.5, theta_bar=0.0))),
 ]
 
 
@@ -122,7 +129,7 @@ def test_hapke_directional_albedo_at_most_one(kw):
     # with w = 1 AND a strong backscatter lobe plus surge the model reflects more than it
     # receives (1.08-1.28 measured while writing this test); for w <= 0.95 it stays below 1
     for theta_i in (0.0, 0.6, 1.2, 1.5):
-        a = directional_albedo(R.hapke, theta_i, **kw)
+        a = directional_albedo(R.hapke, theta_i, params=lunar(**kw))
         assert 0.0 < a <= 1.0, (theta_i, a)
 
 
@@ -213,7 +220,7 @@ def test_h_function_against_chandrasekhar():
 def test_hapke_hand_value_at_normal_geometry():
     # theta_bar = 0, isotropic particles (b = 0), no surge, w = 1, i = e = g = 0:
     # f = w/(4 pi) * 1/(1 + 1) * [1 + H(1)^2 - 1] = H(1)^2 / (8 pi), H(1) = 2.885390
-    f = R.hapke(sph(0.0), sph(0.0), N_UP, w=1.0, b=0.0, c=0.0, B0=0.0, h=0.1, theta_bar=0.0)
+    f = R.hapke(sph(0.0), sph(0.0), N_UP, lunar(w=1.0, b=0.0, c=0.0, B0=0.0, h=0.1, theta_bar=0.0))
     assert f == pytest.approx(2.885390**2 / (8 * np.pi), rel=1e-6)
 
 
@@ -221,7 +228,7 @@ def test_hapke_lommel_seeliger_limit(rng):
     # dark, isotropic, smooth, no surge: single scattering only, f = w / (4 pi (mu0 + mu))
     wi, wo = upper_dirs(rng, 200), upper_dirs(rng, 200)
     w = 1e-5
-    f = R.hapke(wi, wo, N_UP, w=w, b=0.0, c=0.0, B0=0.0, h=0.1, theta_bar=0.0)
+    f = R.hapke(wi, wo, N_UP, lunar(w=w, b=0.0, c=0.0, B0=0.0, h=0.1, theta_bar=0.0))
     ls = w / (4 * np.pi * (wi[:, 2] + wo[:, 2]))
     np.testing.assert_allclose(f, ls, rtol=1e-4)
 
@@ -233,7 +240,7 @@ def test_hapke_surge_shape():
     g = 2 * np.arctan(np.array([0.0, h, 4 * h]))
     wi = np.broadcast_to(sph(0.5), (3, 3))
     wo = sph(0.5 + g)  # same azimuth plane: phase angle g
-    f = R.hapke(wi, wo, N_UP, w=w, b=0.3, c=0.2, B0=B0, h=h, theta_bar=0.0)
+    f = R.hapke(wi, wo, N_UP, lunar(w=w, b=0.3, c=0.2, B0=B0, h=h, theta_bar=0.0))
     surge = f * (wi[:, 2] + wo[:, 2]) * 4 * np.pi / (w * R.hapke_phase(np.cos(g), 0.3, 0.2)) - 1
     np.testing.assert_allclose(surge, [B0, B0 / 2, B0 / 5], rtol=1e-4)
 
@@ -250,7 +257,7 @@ def test_hapke_opposition_surge_at_zero_phase():
     assert np.dot(wi0, wo0) == pytest.approx(1.0)
     assert np.degrees(np.arccos(np.dot(wi10, wo10))) == pytest.approx(10.0)
     with_surge = R.hapke(wi0, wo0, N_UP) / R.hapke(wi10, wo10, N_UP)
-    no_surge = R.hapke(wi0, wo0, N_UP, B0=0.0) / R.hapke(wi10, wo10, N_UP, B0=0.0)
+    no_surge = R.hapke(wi0, wo0, N_UP, lunar(B0=0.0)) / R.hapke(wi10, wo10, N_UP, lunar(B0=0.0))
     # lunar defaults (B0 = 1, h = 0.07): the single-scattering term gains (1 + B0) / (1 +
     # B0 B(10 deg)) = 2 / 1.555 between 10 deg and 0; the whole BRDF at least 20 %
     assert with_surge > 1.2
@@ -259,8 +266,8 @@ def test_hapke_opposition_surge_at_zero_phase():
 
 
 def test_hapke_roughness_is_neutral_at_normal_geometry():
-    a = R.hapke(sph(0.0), sph(0.0), N_UP, theta_bar=0.0)
-    b = R.hapke(sph(0.0), sph(0.0), N_UP, theta_bar=0.5)
+    a = R.hapke(sph(0.0), sph(0.0), N_UP, lunar(theta_bar=0.0))
+    b = R.hapke(sph(0.0), sph(0.0), N_UP, lunar(theta_bar=0.5))
     chi = 1 / np.sqrt(1 + np.pi * np.tan(0.5) ** 2)
     # S = 1, only the H functions see mu0e = mue = chi instead of 1
     h1 = R.hapke_h_function(1.0, R.LUNAR_HAPKE.w)
@@ -271,11 +278,11 @@ def test_hapke_roughness_is_neutral_at_normal_geometry():
 
 def test_hapke_roughness_darkens_grazing_light():
     wi, wo = sph(1.4), sph(0.0)
-    assert R.hapke(wi, wo, N_UP, theta_bar=0.4) < R.hapke(wi, wo, N_UP, theta_bar=0.0)
+    assert R.hapke(wi, wo, N_UP, lunar(theta_bar=0.4)) < R.hapke(wi, wo, N_UP, lunar(theta_bar=0.0))
 
 
 def test_normal_albedo_round_trip():
-    f0 = R.hapke(sph(0.0), sph(0.0), N_UP, w=0.3)
+    f0 = R.hapke(sph(0.0), sph(0.0), N_UP, lunar(w=0.3))
     assert np.pi * f0 == pytest.approx(R.hapke_normal_albedo(0.3), rel=1e-9)
     a = np.array([0.0, 0.05, 0.12, 0.3, 0.6])
     w = R.hapke_w_from_normal_albedo(a)

@@ -19,6 +19,14 @@ def scalar(props, key: str, default: float) -> float:
     return float(props.get(key, default))
 
 
+def choice(props, key: str, default: str, valid: tuple[str, ...], plugin: str) -> str:
+    """A string plugin property that must be one of ``valid`` (``plugin`` names the error)."""
+    value = str(props.get(key, default))
+    if value not in valid:
+        raise ValueError(f"{plugin}: {key} must be {' or '.join(valid)}, got {value!r}")
+    return value
+
+
 def opaque(mi, value) -> Any:
     """``mi.Float(value)`` made opaque: a new value reuses the compiled kernels."""
     import drjit as dr
@@ -26,6 +34,20 @@ def opaque(mi, value) -> Any:
     v = mi.Float(value)
     dr.make_opaque(v)
     return v
+
+
+def register_plugin(mi, name: str, registered: set[str], build) -> None:
+    """Register the BSDF class ``build(mi, base)`` as plugin ``name`` for the current variant,
+    once; ``base`` is the variant's :func:`cosine_bsdf_base`, which the class subclasses.
+
+    ``registered`` holds the variants the plugin is registered for (one set per plugin).
+    """
+    variant = mi.variant()
+    if variant in registered:
+        return
+    plugin = build(mi, cosine_bsdf_base(mi))
+    mi.register_bsdf(name, lambda props: plugin(props))
+    registered.add(variant)
 
 
 def local_angles(si, wo):
@@ -86,28 +108,29 @@ def cosine_bsdf_base(mi) -> type:
             bs.pdf = dr.select(active, bs.pdf, 0.0)
             return bs, dr.select(active, value, 0.0)
 
+        @staticmethod
+        def _both_up(si, wo, active):
+            """cos(theta_o) and ``active`` where light and viewer are above the surface."""
+            cos_i = mi.Frame3f.cos_theta(si.wi)
+            cos_o = mi.Frame3f.cos_theta(wo)
+            return cos_o, mi.Bool(active) & (cos_i > 0) & (cos_o > 0)
+
         def eval(self, ctx, si, wo, active=True):
             if not self._enabled(ctx):
                 return mi.Color3f(0.0)
-            cos_i = mi.Frame3f.cos_theta(si.wi)
-            cos_o = mi.Frame3f.cos_theta(wo)
-            active = mi.Bool(active) & (cos_i > 0) & (cos_o > 0)
+            cos_o, active = self._both_up(si, wo, active)
             return dr.select(active, self._f(si, wo, active) * cos_o, 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
             if not self._enabled(ctx):
                 return mi.Float(0.0)
-            cos_i = mi.Frame3f.cos_theta(si.wi)
-            cos_o = mi.Frame3f.cos_theta(wo)
-            ok = mi.Bool(active) & (cos_i > 0) & (cos_o > 0)
+            _, ok = self._both_up(si, wo, active)
             return dr.select(ok, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
 
         def eval_pdf(self, ctx, si, wo, active=True):
             if not self._enabled(ctx):
                 return mi.Color3f(0.0), mi.Float(0.0)
-            cos_i = mi.Frame3f.cos_theta(si.wi)
-            cos_o = mi.Frame3f.cos_theta(wo)
-            ok = mi.Bool(active) & (cos_i > 0) & (cos_o > 0)
+            cos_o, ok = self._both_up(si, wo, active)
             value = dr.select(ok, self._f(si, wo, ok) * cos_o, 0.0)
             return value, dr.select(ok, cos_o * INV_PI, 0.0)
 

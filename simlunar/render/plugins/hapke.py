@@ -46,9 +46,10 @@ from simlunar.render import reference as ref
 from simlunar.render.materials import HapkeBSDF
 from simlunar.render.plugins._common import (
     INV_PI,
-    cosine_bsdf_base,
+    choice,
     local_angles,
     opaque,
+    register_plugin,
     scalar,
 )
 
@@ -62,14 +63,89 @@ _REGISTERED: set[str] = set()
 
 def register(mi) -> None:
     """Define and register the plugin for the current variant (idempotent)."""
-    variant = mi.variant()
-    if variant in _REGISTERED:
-        return
+    register_plugin(mi, NAME, _REGISTERED, _plugin_class)
+
+
+# The kernels below take drjit arrays and import drjit (heavy, optional) when traced, like the
+# plugin classes: importing this module never imports Mitsuba or drjit.
+
+
+def _w_from_table(mi, w_table, albedo, active):
+    """Per-channel w of a normal ``albedo`` (Color3f): linear interpolation in ``w_table``."""
+    import drjit as dr
+
+    n = HAPKE_TABLE_SIZE
+    out = []
+    for ch in range(3):
+        t = dr.clip(albedo[ch], 0.0, 1.0) * (n - 1)
+        i0 = mi.UInt32(dr.minimum(dr.floor(t), n - 2))
+        fr = t - mi.Float(i0)
+        w0 = dr.gather(mi.Float, w_table, i0, active)
+        w1 = dr.gather(mi.Float, w_table, i0 + 1, active)
+        out.append(dr.fma(fr, w1 - w0, w0))
+    return mi.Color3f(out[0], out[1], out[2])
+
+
+def _h(x, w):
+    """Hapke's (2002) H function (:func:`simlunar.render.reference.hapke_h_function`)."""
+    import drjit as dr
+
+    x = dr.maximum(x, 1e-6)
+    gamma = dr.sqrt(dr.maximum(1.0 - w, 0.0))
+    r0 = (1.0 - gamma) / (1.0 + gamma)
+    return dr.rcp(1.0 - w * x * (r0 + (1.0 - 2.0 * r0 * x) * 0.5 * dr.log((1.0 + x) / x)))
+
+
+def _roughness(mu0, mu, sin_i, sin_e, cpsi, theta_bar):
+    """Hapke (1984) macroscopic roughness: ``(mu0e, mue, shadowing)``.
+
+    ``mu0``, ``mu`` are the cosines of incidence and emission (clipped to [1e-6, 1]), ``sin_i``,
+    ``sin_e`` their sines, ``cpsi`` the cosine of the azimuth difference. theta_bar = 0 is
+    approached, not special-cased.
+    """
     import drjit as dr
 
     inv_pi = INV_PI
+    sin_i = dr.maximum(sin_i, 1e-6)
+    sin_e = dr.maximum(sin_e, 1e-6)
+    tb = dr.maximum(dr.tan(theta_bar), 1e-4)
+    cot_tb = dr.rcp(tb)
+    chi = dr.rsqrt(1.0 + math.pi * tb * tb)
+    cot_i = mu0 / sin_i
+    cot_e = mu / sin_e
+    e1i = dr.exp(-2.0 * inv_pi * cot_tb * cot_i)
+    e1e = dr.exp(-2.0 * inv_pi * cot_tb * cot_e)
+    e2i = dr.exp(-inv_pi * cot_tb * cot_tb * cot_i * cot_i)
+    e2e = dr.exp(-inv_pi * cot_tb * cot_tb * cot_e * cot_e)
+    eta_i = chi * (mu0 + sin_i * tb * e2i / (2.0 - e1i))
+    eta_e = chi * (mu + sin_e * tb * e2e / (2.0 - e1e))
+    psi = dr.safe_acos(cpsi)
+    s2 = dr.square(dr.sin(0.5 * psi))
+    fpsi = dr.exp(-2.0 * dr.tan(0.5 * dr.minimum(psi, math.pi - 1e-3)))
+    first = mu0 >= mu  # i <= e
+    d = dr.select(first, 2.0 - e1e - psi * inv_pi * e1i, 2.0 - e1i - psi * inv_pi * e1e)
+    mu0e = chi * (mu0 + sin_i * tb * dr.select(first, cpsi * e2e + s2 * e2i, e2i - s2 * e2e) / d)
+    mue = chi * (mu + sin_e * tb * dr.select(first, e2e - s2 * e2i, cpsi * e2i + s2 * e2e) / d)
+    ratio = dr.select(first, mu0 / eta_i, mu / eta_e)
+    shadow = mue / eta_e * mu0 / eta_i * chi / (1.0 - fpsi + fpsi * chi * ratio)
+    return mu0e, mue, shadow
 
-    class HapkePlugin(cosine_bsdf_base(mi)):
+
+def _phase(cos_g, b, c):
+    """Double Henyey-Greenstein phase function (:func:`simlunar.render.reference.hapke_phase`)."""
+    import drjit as dr
+
+    b2 = b * b
+    back = (1.0 - b2) / dr.power(1.0 - 2.0 * b * cos_g + b2, 1.5)
+    fwd = (1.0 - b2) / dr.power(1.0 + 2.0 * b * cos_g + b2, 1.5)
+    return 0.5 * (1.0 + c) * back + 0.5 * (1.0 - c) * fwd
+
+
+def _plugin_class(mi, base: type) -> type:
+    """The plugin class for the current variant, a subclass of ``base`` (cosine sampling)."""
+    import drjit as dr  # heavy and optional: only once a Mitsuba variant is set
+
+    class HapkePlugin(base):
         """Hapke BRDF; see :func:`simlunar.render.reference.hapke`."""
 
         flags = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
@@ -79,10 +155,7 @@ def register(mi) -> None:
         def __init__(self, props):
             super().__init__(props)
             self.reflectance = props.get_texture("reflectance", 0.12)
-            mode = str(props.get("albedo_mode", "normal"))
-            if mode not in ("normal", "w"):
-                raise ValueError(f"hapke: albedo_mode must be normal or w, got {mode!r}")
-            self.albedo_mode = mode
+            self.albedo_mode = choice(props, "albedo_mode", "normal", ("normal", "w"), NAME)
             d = ref.LUNAR_HAPKE
             vals = {k: scalar(props, k, getattr(d, k)) for k in self._keys}
             HapkeBSDF(**vals)  # validates and names the offending field
@@ -103,66 +176,22 @@ def register(mi) -> None:
             a = self.reflectance.eval(si, active)
             if self.albedo_mode == "w":
                 return dr.clip(a, 0.0, 1.0)
-            n = HAPKE_TABLE_SIZE
-            out = []
-            for ch in range(3):
-                t = dr.clip(a[ch], 0.0, 1.0) * (n - 1)
-                i0 = mi.UInt32(dr.minimum(dr.floor(t), n - 2))
-                fr = t - mi.Float(i0)
-                w0 = dr.gather(mi.Float, self.w_table, i0, active)
-                w1 = dr.gather(mi.Float, self.w_table, i0 + 1, active)
-                out.append(dr.fma(fr, w1 - w0, w0))
-            return mi.Color3f(out[0], out[1], out[2])
-
-        @staticmethod
-        def _h(x, w):
-            x = dr.maximum(x, 1e-6)
-            gamma = dr.sqrt(dr.maximum(1.0 - w, 0.0))
-            r0 = (1.0 - gamma) / (1.0 + gamma)
-            return dr.rcp(1.0 - w * x * (r0 + (1.0 - 2.0 * r0 * x) * 0.5 * dr.log((1.0 + x) / x)))
+            return _w_from_table(mi, self.w_table, a, active)
 
         def _f(self, si, wo, active):
             w = self._w(si, active)
-            mu0, mu, si_, se, cpsi = local_angles(si, wo)
+            mu0, mu, sin_i, sin_e, cpsi = local_angles(si, wo)
             mu0 = dr.clip(mu0, 1e-6, 1.0)
             mu = dr.clip(mu, 1e-6, 1.0)
-            si_ = dr.maximum(si_, 1e-6)
-            se = dr.maximum(se, 1e-6)
-            # macroscopic roughness (Hapke 1984); theta_bar = 0 is approached, not special-cased
-            tb = dr.maximum(dr.tan(self.theta_bar), 1e-4)
-            cot_tb = dr.rcp(tb)
-            chi = dr.rsqrt(1.0 + math.pi * tb * tb)
-            cot_i = mu0 / si_
-            cot_e = mu / se
-            e1i = dr.exp(-2.0 * inv_pi * cot_tb * cot_i)
-            e1e = dr.exp(-2.0 * inv_pi * cot_tb * cot_e)
-            e2i = dr.exp(-inv_pi * cot_tb * cot_tb * cot_i * cot_i)
-            e2e = dr.exp(-inv_pi * cot_tb * cot_tb * cot_e * cot_e)
-            eta_i = chi * (mu0 + si_ * tb * e2i / (2.0 - e1i))
-            eta_e = chi * (mu + se * tb * e2e / (2.0 - e1e))
-            psi = dr.safe_acos(cpsi)
-            s2 = dr.square(dr.sin(0.5 * psi))
-            fpsi = dr.exp(-2.0 * dr.tan(0.5 * dr.minimum(psi, math.pi - 1e-3)))
-            first = mu0 >= mu  # i <= e
-            d = dr.select(first, 2.0 - e1e - psi * inv_pi * e1i, 2.0 - e1i - psi * inv_pi * e1e)
-            mu0e = chi * (
-                mu0 + si_ * tb * dr.select(first, cpsi * e2e + s2 * e2i, e2i - s2 * e2e) / d
-            )
-            mue = chi * (mu + se * tb * dr.select(first, e2e - s2 * e2i, cpsi * e2i + s2 * e2e) / d)
-            ratio = dr.select(first, mu0 / eta_i, mu / eta_e)
-            shadow = mue / eta_e * mu0 / eta_i * chi / (1.0 - fpsi + fpsi * chi * ratio)
+            mu0e, mue, shadow = _roughness(mu0, mu, sin_i, sin_e, cpsi, self.theta_bar)
             # phase function and opposition surge (phase angle g between wi and wo)
             cos_g = dr.clip(dr.dot(si.wi, wo), -1.0, 1.0)
-            b, c = self.b, self.c
-            b2 = b * b
-            back = (1.0 - b2) / dr.power(1.0 - 2.0 * b * cos_g + b2, 1.5)
-            fwd = (1.0 - b2) / dr.power(1.0 + 2.0 * b * cos_g + b2, 1.5)
-            p = 0.5 * (1.0 + c) * back + 0.5 * (1.0 - c) * fwd
+            p = _phase(cos_g, self.b, self.c)
             # |wi - wo| / |wi + wo| = tan(g/2), accurate near g = 0 where the surge peaks
             tan_half_g = dr.norm(si.wi - wo) / dr.maximum(dr.norm(si.wi + wo), 1e-7)
             surge = 1.0 + self.B0 / (1.0 + tan_half_g / self.h)
-            multiple = self._h(mu0e, w) * self._h(mue, w) - 1.0
-            scale = 0.25 * inv_pi * mu0e / (mu0e + mue) * shadow / mu0
+            multiple = _h(mu0e, w) * _h(mue, w) - 1.0
+            scale = 0.25 * INV_PI * mu0e / (mu0e + mue) * shadow / mu0
             return w * scale * (p * surge + multiple)
 
         def traverse(self, callback):
@@ -179,5 +208,4 @@ def register(mi) -> None:
             p = ", ".join(f"{k}={v:.6g}" for k, v in self._params().items())
             return f"Hapke[{p}, albedo_mode={self.albedo_mode}, reflectance={self.reflectance}]"
 
-    mi.register_bsdf(NAME, lambda props: HapkePlugin(props))
-    _REGISTERED.add(variant)
+    return HapkePlugin

@@ -39,7 +39,13 @@ import math
 
 import numpy as np
 
-from simlunar.render.plugins._common import INV_PI, cosine_bsdf_base, local_angles, opaque
+from simlunar.render.plugins._common import (
+    INV_PI,
+    choice,
+    local_angles,
+    opaque,
+    register_plugin,
+)
 
 NAME = "oren_nayar"
 
@@ -60,75 +66,98 @@ def on_factors(sigma):
 
 def register(mi) -> None:
     """Define and register the plugin for the current variant (idempotent)."""
-    variant = mi.variant()
-    if variant in _REGISTERED:
-        return
+    register_plugin(mi, NAME, _REGISTERED, _plugin_class)
+
+
+def _check_sigma(sigma: float) -> None:
+    if not (math.isfinite(sigma) and 0.0 <= sigma < math.pi / 2):
+        raise ValueError(f"oren_nayar: sigma must be in [0, pi/2) radians, got {sigma}")
+
+
+def _check_sigma_texture(mi, tex) -> None:
+    """Every float parameter of a sigma texture (``data``, ``value``) in [0, pi/2)."""
+    params = mi.traverse(tex)
+    for key in params.keys():
+        if not (key == "data" or key == "value" or key.endswith((".data", ".value"))):
+            continue
+        v = np.asarray(params[key], dtype=np.float64).ravel()
+        if v.size and (not np.isfinite(v).all() or v.min() < 0.0 or v.max() >= math.pi / 2):
+            raise ValueError(
+                f"oren_nayar: sigma texture values must be finite and in [0, pi/2) "
+                f"radians; {key} has range [{np.nanmin(v):.6g}, {np.nanmax(v):.6g}]"
+            )
+
+
+# The kernels below take drjit arrays and import drjit (heavy, optional) when traced, like the
+# plugin class: importing this module never imports Mitsuba or drjit.
+
+
+def _alpha_beta(cos_i, cos_o, sin_i, sin_o):
+    """sin and cos of alpha = max(theta_i, theta_o) and beta = min(theta_i, theta_o), tan(beta)."""
     import drjit as dr
 
-    inv_pi = INV_PI
+    sin_a = dr.maximum(sin_i, sin_o)
+    sin_b = dr.minimum(sin_i, sin_o)
+    cos_a = dr.minimum(cos_i, cos_o)
+    cos_b = dr.maximum(cos_i, cos_o)
+    tan_b = sin_b / dr.maximum(cos_b, 1e-7)
+    return sin_a, sin_b, cos_a, cos_b, tan_b
 
-    def _check_sigma_texture(tex) -> None:
-        """Every float parameter of a sigma texture (``data``, ``value``) in [0, pi/2)."""
-        params = mi.traverse(tex)
-        for key in params.keys():
-            if not (key == "data" or key == "value" or key.endswith((".data", ".value"))):
-                continue
-            v = np.asarray(params[key], dtype=np.float64).ravel()
-            if v.size and (not np.isfinite(v).all() or v.min() < 0.0 or v.max() >= math.pi / 2):
-                raise ValueError(
-                    f"oren_nayar: sigma texture values must be finite and in [0, pi/2) "
-                    f"radians; {key} has range [{np.nanmin(v):.6g}, {np.nanmax(v):.6g}]"
-                )
 
-    class OrenNayarPlugin(cosine_bsdf_base(mi)):
+def _full_terms(factors, cdp, sin_a, sin_b, cos_a, cos_b, tan_b):
+    """The full model's factors of rho and of rho^2 (``f = (rho g1 + rho^2 g2) / pi``)."""
+    import drjit as dr
+
+    c1, c2k, c3k, c4 = factors
+    alpha = dr.safe_acos(cos_a)
+    beta = dr.safe_acos(cos_b)
+    two_b_pi = 2.0 * INV_PI * beta
+    c2 = c2k * dr.select(cdp >= 0, sin_a, sin_a - two_b_pi * two_b_pi * two_b_pi)
+    q = alpha * beta
+    # tan((alpha + beta)/2) = (sin a + sin b) / (cos a + cos b): no tan needed
+    tan_mid = (sin_a + sin_b) / dr.maximum(cos_a + cos_b, 1e-7)
+    g1 = c1 + cdp * c2 * tan_b + (1.0 - dr.abs(cdp)) * (c3k * q * q) * tan_mid
+    g2 = c4 * (1.0 - cdp * two_b_pi * two_b_pi)
+    return g1, g2
+
+
+def _plugin_class(mi, base: type) -> type:
+    """The plugin class for the current variant, a subclass of ``base`` (cosine sampling)."""
+    import drjit as dr  # heavy and optional: only once a Mitsuba variant is set
+
+    class OrenNayarPlugin(base):
         """Oren-Nayar (1994) BRDF; see :func:`simlunar.render.reference.oren_nayar`."""
 
         def __init__(self, props):
             super().__init__(props)
             self.reflectance = props.get_texture("reflectance", 0.5)
-            model = str(props.get("model", "full"))
-            if model not in ("full", "qualitative"):
-                raise ValueError(f"oren_nayar: model must be full or qualitative, got {model!r}")
-            self.model = model
+            self.model = choice(props, "model", "full", ("full", "qualitative"), NAME)
             raw = props.get("sigma", 0.0)
             if isinstance(raw, mi.Texture):
-                _check_sigma_texture(raw)
+                _check_sigma_texture(mi, raw)
                 self.sigma_texture = raw
                 self.sigma = None
                 return
             self.sigma_texture = None
             sigma = float(raw)
-            if not (math.isfinite(sigma) and 0.0 <= sigma < math.pi / 2):
-                raise ValueError(f"oren_nayar: sigma must be in [0, pi/2) radians, got {sigma}")
+            _check_sigma(sigma)
             self.sigma = opaque(mi, sigma)
             self._constants()
 
         def _f(self, si, wo, active):
             rho = self.reflectance.eval(si, active)
             if self.sigma_texture is None:
-                c1, c2k, c3k, c4 = self.c1, self.c2k, self.c3k, self.c4
+                factors = self.c1, self.c2k, self.c3k, self.c4
             else:
-                c1, c2k, c3k, c4 = on_factors(self.sigma_texture.eval_1(si, active))
+                factors = on_factors(self.sigma_texture.eval_1(si, active))
             cos_i, cos_o, sin_i, sin_o, cdp = local_angles(si, wo)
-            # alpha = max(theta_i, theta_o), beta = min(theta_i, theta_o)
-            sin_a = dr.maximum(sin_i, sin_o)
-            sin_b = dr.minimum(sin_i, sin_o)
-            cos_a = dr.minimum(cos_i, cos_o)
-            cos_b = dr.maximum(cos_i, cos_o)
-            tan_b = sin_b / dr.maximum(cos_b, 1e-7)
+            sin_a, sin_b, cos_a, cos_b, tan_b = _alpha_beta(cos_i, cos_o, sin_i, sin_o)
             if self.model == "qualitative":
+                c1, c2k, _, _ = factors
                 g = c1 + c2k * dr.maximum(cdp, 0.0) * sin_a * tan_b
-                return rho * (inv_pi * g)
-            alpha = dr.safe_acos(cos_a)
-            beta = dr.safe_acos(cos_b)
-            two_b_pi = 2.0 * inv_pi * beta
-            c2 = c2k * dr.select(cdp >= 0, sin_a, sin_a - two_b_pi * two_b_pi * two_b_pi)
-            q = alpha * beta
-            # tan((alpha + beta)/2) = (sin a + sin b) / (cos a + cos b): no tan needed
-            tan_mid = (sin_a + sin_b) / dr.maximum(cos_a + cos_b, 1e-7)
-            g1 = c1 + cdp * c2 * tan_b + (1.0 - dr.abs(cdp)) * (c3k * q * q) * tan_mid
-            g2 = c4 * (1.0 - cdp * two_b_pi * two_b_pi)
-            return inv_pi * (rho * g1 + rho * rho * g2)
+                return rho * (INV_PI * g)
+            g1, g2 = _full_terms(factors, cdp, sin_a, sin_b, cos_a, cos_b, tan_b)
+            return INV_PI * (rho * g1 + rho * rho * g2)
 
         def _constants(self):
             """sigma-only factors, computed once (opaque: a new sigma reuses the kernels)."""
@@ -147,11 +176,9 @@ def register(mi) -> None:
 
         def parameters_changed(self, keys):
             if self.sigma_texture is not None:
-                _check_sigma_texture(self.sigma_texture)
+                _check_sigma_texture(mi, self.sigma_texture)
                 return
-            s = float(self.sigma[0])
-            if not (math.isfinite(s) and 0.0 <= s < math.pi / 2):
-                raise ValueError(f"oren_nayar: sigma must be in [0, pi/2) radians, got {s}")
+            _check_sigma(float(self.sigma[0]))
             self._constants()
 
         def to_string(self):
@@ -160,5 +187,4 @@ def register(mi) -> None:
             )
             return f"OrenNayar[sigma={sigma}, model={self.model}, reflectance={self.reflectance}]"
 
-    mi.register_bsdf(NAME, lambda props: OrenNayarPlugin(props))
-    _REGISTERED.add(variant)
+    return OrenNayarPlugin
