@@ -46,6 +46,7 @@ __all__ = [
     "aim_rig_at_terrain",
     "bit_error_table",
     "depth_range_from_terrain",
+    "guided_weights",
     "interreflection_comparison",
     "run_scanner_study",
     "score_depth",
