@@ -67,6 +67,13 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
+def unique_names(v: list[str]) -> list[str]:
+    """A list of names without repeats (the field validator of a study's name lists)."""
+    if len(set(v)) != len(v):
+        raise ValueError(f"names must be unique, got {v}")
+    return v
+
+
 class _SetKeysModel(_Model):
     """Serialises the keys that are set (not None) only: an override names what it changes."""
 

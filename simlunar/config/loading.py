@@ -165,23 +165,23 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
     for p in points:
         if p.terrain.preset is not None:
             registry.check_preset(p.terrain.preset, "terrain.preset")
-        if isinstance(p.study, SamplingStudyCfg):
-            for i, s in enumerate(p.study.strategies):
-                registry.check_strategy(s, f"study.strategies[{i}]", p.study.strategy_options)
-            for i, m in enumerate(p.study.metrics):
-                registry.check_metric(m, f"study.metrics[{i}]")
-        if isinstance(p.study, ScannerStudyCfg):
-            for i, s in enumerate(p.study.planners):
-                registry.check_scan_planner(s, f"study.planners[{i}]")
-            for i, m in enumerate(p.study.modes):
-                registry.check_scan_mode(m, f"study.modes[{i}]")
-            for i, m in enumerate(p.study.metrics):
-                registry.check_metric(m, f"study.metrics[{i}]")
-        if isinstance(p.study, LidarStudyCfg):
-            for i, s in enumerate(p.study.planners):
-                registry.check_strategy(s, f"study.planners[{i}]")
-            for i, m in enumerate(p.study.metrics):
-                registry.check_metric(m, f"study.metrics[{i}]")
+        study = p.study
+        if isinstance(study, SamplingStudyCfg):
+            _check_names(study, "strategies", registry.check_strategy, study.strategy_options)
+            _check_names(study, "metrics", registry.check_metric)
+        if isinstance(study, ScannerStudyCfg):
+            _check_names(study, "planners", registry.check_scan_planner)
+            _check_names(study, "modes", registry.check_scan_mode)
+            _check_names(study, "metrics", registry.check_metric)
+        if isinstance(study, LidarStudyCfg):
+            _check_names(study, "planners", registry.check_strategy)
+            _check_names(study, "metrics", registry.check_metric)
+
+
+def _check_names(study, key: str, check, *args) -> None:
+    """``check(name, "study.<key>[i]", *args)`` for every name of the study's list ``key``."""
+    for i, name in enumerate(getattr(study, key)):
+        check(name, f"study.{key}[{i}]", *args)
 
 
 def resolve_terrain_files(cfg, base_dir: Path | None):

@@ -7,14 +7,17 @@ project reads reports its errors the same way.
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
 
 from simlunar.config.fields import _Model
 from simlunar.errors import ConfigError
 
-__all__ = ["format_validation_error", "model_at", "valid_keys"]
+#: a pydantic model class
+M = TypeVar("M", bound=BaseModel)
+
+__all__ = ["format_validation_error", "model_at", "valid_keys", "validate_file_data"]
 
 
 def _loc_path(loc: tuple, data: Any) -> str:
@@ -187,3 +190,12 @@ def valid_keys(path: str, data: dict, root: type[BaseModel]) -> list[str]:
     if model is None:
         return []
     return [f.alias or name for name, f in model.model_fields.items()]
+
+
+def validate_file_data(model: type[M], data: Any, path) -> M:
+    """``model`` validated from ``data``, the YAML mapping read from file ``path``; otherwise a
+    one-line :class:`~simlunar.errors.ConfigError` ``<path>: <key.path>: <problem>``."""
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(f"{path}: {format_validation_error(exc, data, root=model)}") from None

@@ -19,6 +19,7 @@ from simlunar.config.fields import (
     Px,
     PxCount,
     _Model,
+    unique_names,
 )
 from simlunar.config.render import MAX_SPP
 from simlunar.config.studies import PlannerOptsCfg, check_planner_options
@@ -194,12 +195,7 @@ class ScannerStudyCfg(_Model):
         "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
     )
 
-    @field_validator("modes", "planners", "metrics")
-    @classmethod
-    def _unique(cls, v: list[str]) -> list[str]:
-        if len(set(v)) != len(v):
-            raise ValueError(f"names must be unique, got {v}")
-        return v
+    _unique = field_validator("modes", "planners", "metrics")(unique_names)
 
     @model_validator(mode="after")
     def _scans_need_gray_code(self):

@@ -14,11 +14,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import Field, ValidationError
+from pydantic import Field
 
 from simlunar.config.fields import _Model
 from simlunar.config.loading import resolve_terrain_files
-from simlunar.config.messages import format_validation_error
+from simlunar.config.messages import validate_file_data
 from simlunar.config.render import RenderCfg
 from simlunar.config.terrain import TerrainCfg
 from simlunar.config.yamlio import load_yaml
@@ -51,8 +51,5 @@ def load_scene(path) -> SceneCfg:
     data = load_yaml(path)
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: <root>: expected a mapping of keys, got {type(data).__name__}")
-    try:
-        cfg = SceneCfg.model_validate(data)
-    except ValidationError as exc:
-        raise ConfigError(f"{path}: {format_validation_error(exc, data, root=SceneCfg)}") from None
+    cfg = validate_file_data(SceneCfg, data, path)
     return resolve_terrain_files(cfg, path.parent)

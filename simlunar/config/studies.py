@@ -17,6 +17,7 @@ from simlunar.config.fields import (
     Density,
     Metres,
     _Model,
+    unique_names,
 )
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
@@ -89,12 +90,7 @@ class SamplingStudyCfg(_Model):
         "and give 95 % bootstrap intervals",
     )
 
-    @field_validator("strategies", "metrics")
-    @classmethod
-    def _unique(cls, v: list[str]) -> list[str]:
-        if len(set(v)) != len(v):
-            raise ValueError(f"names must be unique, got {v}")
-        return v
+    _unique = field_validator("strategies", "metrics")(unique_names)
 
     @model_validator(mode="after")
     def _options_fit(self) -> SamplingStudyCfg:
@@ -169,12 +165,7 @@ class LidarStudyCfg(_Model):
         "over terrain seeds in the figures)",
     )
 
-    @field_validator("planners", "metrics")
-    @classmethod
-    def _unique(cls, v: list[str]) -> list[str]:
-        if len(set(v)) != len(v):
-            raise ValueError(f"names must be unique, got {v}")
-        return v
+    _unique = field_validator("planners", "metrics")(unique_names)
 
     @model_validator(mode="after")
     def _options_fit(self) -> LidarStudyCfg:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
+from typing import ClassVar
 
 import yaml
 from pydantic import Field, ValidationError, model_validator
@@ -19,8 +20,22 @@ from simlunar.terrain.sfd import get_law
 # The terrain preset files (scenes/aerial_1.yaml, ...) and an experiment's terrain.overrides use
 # these models; :mod:`simlunar.config.translate` turns them into
 # :class:`simlunar.terrain.params.TerrainParams`. Defaults are the terrain package's.
-def _check_law(kind: str, law: str, coefficient, exponent) -> None:
-    get_law(kind, law, coefficient=coefficient, exponent=exponent)
+class _PopulationCfg(_Model):
+    """Shared check of a crater or rock population (each declares the fields ``law``,
+    ``d_min_m``, ``d_max_m``, ``coefficient`` and ``exponent``, with its own defaults):
+    a non-empty diameter range and a size-frequency law the terrain package knows."""
+
+    #: the population kind of :func:`simlunar.terrain.sfd.get_law`
+    _kind: ClassVar[str]
+
+    @model_validator(mode="after")
+    def _range_and_law(self):
+        if self.d_max_m <= self.d_min_m:
+            raise ValueError(
+                f"d_max_m: the diameter range is empty ({self.d_max_m} <= d_min_m {self.d_min_m})"
+            )
+        get_law(self._kind, self.law, coefficient=self.coefficient, exponent=self.exponent)
+        return self
 
 
 class GridCfg(_Model):
@@ -48,7 +63,7 @@ class BedCfg(_Model):
     wavelength_m: Metres = Field(1.0, gt=0)
 
 
-class CratersCfg(_Model):
+class CratersCfg(_PopulationCfg):
     """Crater population: cumulative size-frequency law, diameter range, degradation."""
 
     enabled: bool = True
@@ -60,17 +75,10 @@ class CratersCfg(_Model):
     diffusivity_m2_per_myr: float = Field(5.5, ge=0, description="topographic diffusion")
     max_age_myr: float = Field(20.0, ge=0)
 
-    @model_validator(mode="after")
-    def _range_and_law(self):
-        if self.d_max_m <= self.d_min_m:
-            raise ValueError(
-                f"d_max_m: the diameter range is empty ({self.d_max_m} <= d_min_m {self.d_min_m})"
-            )
-        _check_law("craters", self.law, self.coefficient, self.exponent)
-        return self
+    _kind: ClassVar[str] = "craters"  # of the law (simlunar.terrain.sfd.get_law)
 
 
-class RocksCfg(_Model):
+class RocksCfg(_PopulationCfg):
     """Rock population: cumulative law, diameter range, clustering, albedo contrast."""
 
     enabled: bool = True
@@ -84,14 +92,7 @@ class RocksCfg(_Model):
     mean_per_cluster: float = Field(8.0, ge=1)
     albedo_contrast: float = Field(0.1, ge=-0.9, le=5)
 
-    @model_validator(mode="after")
-    def _range_and_law(self):
-        if self.d_max_m <= self.d_min_m:
-            raise ValueError(
-                f"d_max_m: the diameter range is empty ({self.d_max_m} <= d_min_m {self.d_min_m})"
-            )
-        _check_law("rocks", self.law, self.coefficient, self.exponent)
-        return self
+    _kind: ClassVar[str] = "rocks"  # of the law (simlunar.terrain.sfd.get_law)
 
 
 class AlbedoCfg(_Model):

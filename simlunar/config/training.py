@@ -12,11 +12,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from simlunar.config.fields import Deg, Density, _Model
 from simlunar.config.loading import load_experiment
-from simlunar.config.messages import format_validation_error
+from simlunar.config.messages import validate_file_data
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
 
@@ -87,10 +87,7 @@ def load_training(path: str | Path):
     data = load_yaml(path)
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: <root>: expected a mapping of keys")
-    try:
-        cfg = TrainCfg.model_validate(data)
-    except ValidationError as exc:
-        raise ConfigError(f"{path}: " + format_validation_error(exc, data, root=TrainCfg)) from None
+    cfg = validate_file_data(TrainCfg, data, path)
     experiments = []
     for i, name in enumerate(cfg.experiments):
         p = Path(name) if Path(name).is_absolute() else path.parent / name

@@ -69,54 +69,26 @@ from simlunar.terrain.types import Terrain
 def terrain_params(preset: TerrainPresetCfg, *, scale: float = 1.0):
     """:class:`~simlunar.terrain.params.TerrainParams` of a validated preset (SI units)."""
 
-    g, f, b, c, r, a = (
-        preset.grid,
-        preset.fractal,
-        preset.bed,
-        preset.craters,
-        preset.rocks,
-        preset.albedo,
-    )
     params = TerrainParams(
-        rows=g.rows,
-        cols=g.cols,
-        spacing=g.spacing_m,
-        origin=tuple(g.origin_m),
-        fractal=FractalParams(hurst=f.hurst, rms=f.rms_m, periodic=f.periodic, rolloff=f.rolloff_m),
-        bed=BedParams(amplitude=b.amplitude_m, wavelength=b.wavelength_m),
+        **_keywords(preset.grid),
+        fractal=FractalParams(**_keywords(preset.fractal)),
+        bed=BedParams(**_keywords(preset.bed)),
         craters=CraterParams(
-            enabled=c.enabled,
-            law=c.law,
-            d_min=c.d_min_m,
-            d_max=c.d_max_m,
-            coefficient=c.coefficient,
-            exponent=c.exponent,
-            diffusivity=c.diffusivity_m2_per_myr,
-            max_age_myr=c.max_age_myr,
+            **_keywords(preset.craters, {"diffusivity_m2_per_myr": "diffusivity"})
         ),
-        rocks=RockParams(
-            enabled=r.enabled,
-            law=r.law,
-            d_min=r.d_min_m,
-            d_max=r.d_max_m,
-            coefficient=r.coefficient,
-            exponent=r.exponent,
-            cluster_fraction=r.cluster_fraction,
-            cluster_radius=r.cluster_radius_m,
-            mean_per_cluster=r.mean_per_cluster,
-            albedo_contrast=r.albedo_contrast,
-        ),
-        albedo=AlbedoParams(
-            mean=a.mean,
-            variation=a.variation,
-            noise=a.noise,
-            ejecta_brightening=a.ejecta_brightening,
-            uniform=a.uniform,
-        ),
+        rocks=RockParams(**_keywords(preset.rocks)),
+        albedo=AlbedoParams(**_keywords(preset.albedo)),
         name=preset.name,
         description=preset.description,
     )
     return params.scaled(scale)
+
+
+def _keywords(section, renamed: dict[str, str] | None = None) -> dict:
+    """A preset section's values under the names of its :mod:`simlunar.terrain.params` class:
+    each key without its ``_m`` suffix (the values are metres already), or ``renamed[key]``."""
+    renamed = renamed or {}
+    return {renamed.get(k, k.removesuffix("_m")): v for k, v in section.model_dump().items()}
 
 
 def preset_params(name: str, *, scale: float = 1.0, overrides: dict | None = None):

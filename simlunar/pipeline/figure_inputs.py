@@ -35,6 +35,19 @@ class RenderScene:
     seed: int
     max_depth: int
 
+    def render(self, terrain: Terrain | None = None, *, bsdf=None):
+        """:func:`simlunar.render.render` of this scene with its camera, lights and settings:
+        of ``terrain`` in place of its own and with ``bsdf`` in place of its own where given."""
+        return render(
+            self.terrain if terrain is None else terrain,
+            self.camera,
+            lights=self.lights,
+            bsdf=self.bsdf if bsdf is None else bsdf,
+            spp=self.spp,
+            seed=self.seed,
+            max_depth=self.max_depth,
+        )
+
 
 def panel_arrays(image, depth, energy, density: float, *, rng) -> dict:
     """Arrays for the image panels: wavelet energy, one wavelet plan and its reconstruction.
@@ -111,12 +124,6 @@ def sparse_mesh_render(
     heights = np.asarray(terrain.heights, np.float64)
     recon = reconstruct(pts, heights[p.rows, p.cols], heights.shape)
     sparse = Terrain(recon, terrain.albedo, terrain.spacing, terrain.origin)
-    kw = {
-        "lights": scene.lights,
-        "spp": scene.spp,
-        "seed": scene.seed,
-        "max_depth": scene.max_depth,
-    }
     bsdfs = {"sparse_mesh_render": bsdf}
     out = {}
     if sigma_range is not None and isinstance(bsdf, OrenNayarBSDF):
@@ -128,6 +135,6 @@ def sparse_mesh_render(
     # unit of a parallel sweep renders
     for name, b in bsdfs.items():
         with RENDER_LOCK:
-            radiance = render(sparse, scene.camera, bsdf=b, **kw).image
+            radiance = scene.render(sparse, bsdf=b).image
         out[name] = luminance(radiance)
     return out

@@ -320,37 +320,35 @@ def _check_extent(f: TerrainFacts, key: str) -> None:
 def _read_grid(path: Path, key: str, *, spacing: float | None):
     """``load_dem`` with every failure of the file turned into one line naming it."""
 
-    try:
-        if path.stat().st_size == 0:
-            raise ConfigError(f"{key}: {path} is empty")
-        _check_magic(path, key)
-        grid_file_shape(path, key)  # its size, before reading it
+    def read():
         if path.suffix.lower() == ".npz":
             _check_npz_spacing(path, key)
         return load_dem(path, spacing=spacing)
-    except ConfigError:
-        raise
-    except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
-        # a file the reader cannot make sense of (truncated, garbage, wrong layout)
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        if str(path) in msg:
-            raise ConfigError(f"{key}: {msg}") from None
-        raise ConfigError(f"{key}: cannot read {path}: {msg}") from None
+
+    return _read_checked(path, key, read)
 
 
 def _read_albedo(path: Path, key: str, shape, valid) -> np.ndarray:
     """:func:`simlunar.terrain.io.load_albedo` (the unit's reader) with every failure turned
     into one line naming ``key`` and the file."""
+    return _read_checked(path, key, lambda: load_albedo(path, shape, valid=valid))
+
+
+def _read_checked(path: Path, key: str, read):
+    """``read()`` of a grid file after the checks every one passes first (not empty, the
+    magic bytes of its format, its size), with every failure turned into one line naming
+    ``key`` and the file."""
 
     try:
         if path.stat().st_size == 0:
             raise ConfigError(f"{key}: {path} is empty")
         _check_magic(path, key)
         grid_file_shape(path, key)  # its size, before reading it
-        return load_albedo(path, shape, valid=valid)
+        return read()
     except ConfigError:
         raise
     except (ValueError, TypeError, OSError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+        # a file the reader cannot make sense of (truncated, garbage, wrong layout)
         msg = " ".join(str(exc).split()) or type(exc).__name__
         if str(path) in msg:
             raise ConfigError(f"{key}: {msg}") from None

@@ -35,7 +35,7 @@ from simlunar.pipeline.figure_inputs import (
     panel_arrays,
     sparse_mesh_render,
 )
-from simlunar.render import backend, render
+from simlunar.render import backend
 from simlunar.render.scene import luminance
 from simlunar.results.exports import scan_export_payload
 from simlunar.results.records import UnitRecord
@@ -205,15 +205,7 @@ def _render_guide(cfg, scene: RenderScene, seeds, timings):
     """The guide view: ``(image in [0, 1], radiance, render result with its ground truth)``."""
     t = time.perf_counter()
     with RENDER_LOCK:
-        result = render(
-            scene.terrain,
-            scene.camera,
-            lights=scene.lights,
-            bsdf=scene.bsdf,
-            spp=scene.spp,
-            seed=scene.seed,
-            max_depth=scene.max_depth,
-        )
+        result = scene.render()
     timings["render_s"] = time.perf_counter() - t
     t = time.perf_counter()
     radiance = luminance(result.image)

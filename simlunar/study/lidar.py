@@ -20,13 +20,13 @@ import numpy as np
 from simlunar.features import check_image
 from simlunar.metrics import METRICS
 from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
-from simlunar.planner import STRATEGIES, plan, strategy_weights
+from simlunar.planner import STRATEGIES, plan
 from simlunar.sensors import SENSORS
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import LidarScene
 from simlunar.study.protocol import Trials, run_protocol
 from simlunar.study.sampling import _seed, sample_count
-from simlunar.study.scanner import score_depth
+from simlunar.study.scanner import guided_weights, score_depth
 
 __all__ = [
     "LIDARS",
@@ -148,14 +148,7 @@ class _Scores:
 
 
 def _planner(name: str, image: np.ndarray, opts: Mapping) -> Callable:
-    opts = dict(opts)
-    weights = strategy_weights(
-        name,
-        image,
-        feature_opts=opts.pop("feature_opts", None),
-        coefficients=opts.get("coefficients"),
-    )
-    opts.pop("coefficients", None)
+    weights, opts = guided_weights(name, image, opts)
     plan(name, 3, weights=weights, shape=image.shape[:2], rng=0, **opts)  # options checked once
 
     def planner(k, rng):

@@ -46,6 +46,7 @@ __all__ = [
     "aim_rig_at_terrain",
     "bit_error_table",
     "depth_range_from_terrain",
+    "guided_weights",
     "interreflection_comparison",
     "run_scanner_study",
     "score_depth",
@@ -334,10 +335,20 @@ def _mode_trials(o, mode: str, sensor: StructuredLight, guide: GuideView, seeds)
     return Trials(planners, [k], int(o.trials), lambda p, t, _b: (seeds[(mode, p, t)], None))
 
 
+def guided_weights(name: str, image: np.ndarray, opts: Mapping) -> tuple[np.ndarray, dict]:
+    """The weights of strategy ``name`` on the guide ``image`` (with the ``feature_opts`` and
+    ``coefficients`` of its options ``opts``) and the rest of ``opts``: the keywords of its
+    :func:`~simlunar.planner.plan`."""
+    rest = dict(opts)
+    feature_opts = rest.pop("feature_opts", None)
+    coefficients = rest.pop("coefficients", None)
+    return strategy_weights(name, image, feature_opts=feature_opts, coefficients=coefficients), rest
+
+
 def _scan_planner(name: str, o, mode: str, guide: GuideView, sensor: StructuredLight):
     """The planner of the guide pixels to rescan: from the guide image, or from the gray-code
     scan for a :data:`~simlunar.scanner.scans.SCAN_PLANNERS` planner."""
-    opts = dict(o.planner_opts.get(name, {}))
+    opts = o.planner_opts.get(name, {})
     if name in SCAN_PLANNERS:
         if mode != "ambiguity_enhancement":
             raise ValueError(
@@ -348,13 +359,7 @@ def _scan_planner(name: str, o, mode: str, guide: GuideView, sensor: StructuredL
             raise ValueError(f"planner {name!r} takes no options, got {sorted(opts)}")
         return lambda k, rng: low_contrast_pixels(sensor.gray_scan(), k, rng=rng)
     image = check_image(np.asarray(guide.image, float))
-    weights = strategy_weights(
-        name,
-        image,
-        feature_opts=opts.pop("feature_opts", None),
-        coefficients=opts.get("coefficients"),
-    )
-    opts.pop("coefficients", None)
+    weights, opts = guided_weights(name, image, opts)
 
     def planner(k, rng):
         p = plan(name, int(k), weights=weights, shape=image.shape, rng=rng, **opts)
