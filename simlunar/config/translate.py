@@ -161,9 +161,7 @@ def camera(cfg, terrain):
             height_above=cfg.height_m,
             depression_deg=cfg.depression_deg,
             azimuth_deg=cfg.azimuth_deg,
-            width=cfg.width,
-            height=cfg.height,
-            fov_x_deg=cfg.fov_deg,
+            intrinsics=Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg),
         )
     if cfg.fov_deg is not None:
         k = Intrinsics.from_fov(cfg.width, cfg.height, cfg.fov_deg)

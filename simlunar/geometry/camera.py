@@ -389,17 +389,15 @@ def grid_height_at(heights, spacing: float, origin, x: float, y: float) -> float
 
 
 def rover_mast_camera(
-    heights,
+    heights: np.ndarray,
     spacing: float,
-    origin=(0.0, 0.0),
+    origin: tuple[float, float] = (0.0, 0.0),
     *,
     site=None,
     height_above: float = 1.5,
     depression_deg: float = 30.0,
     azimuth_deg: float = 0.0,
-    width: int = 320,
-    height: int = 240,
-    fov_x_deg: float = 60.0,
+    intrinsics: Intrinsics | None = None,
 ) -> Camera:
     """Pinhole camera on a rover mast over a height grid.
 
@@ -413,10 +411,9 @@ def rover_mast_camera(
         Camera centre height above the (bilinear) ground at the site, metres.
     depression_deg, azimuth_deg : float
         Optical axis angle below the horizon, and heading from +y clockwise towards +x.
-    width, height : int
-        Image size (px); square pixels, centred principal point.
-    fov_x_deg : float
-        Horizontal field of view.
+    intrinsics : Intrinsics, optional
+        The image; default ``Intrinsics.from_fov(320, 240, 60.0)`` (320 x 240 px, square
+        pixels, centred principal point, 60 degrees horizontal field of view).
 
     Returns
     -------
@@ -432,7 +429,9 @@ def rover_mast_camera(
     ground = grid_height_at(heights, spacing, origin, float(site[0]), float(site[1]))
     eye = (float(site[0]), float(site[1]), ground + height_above)
     pose = Pose.from_heading(eye, azimuth_deg=azimuth_deg, depression_deg=depression_deg)
-    return Camera(Intrinsics.from_fov(width, height, fov_x_deg), pose)
+    if intrinsics is None:
+        intrinsics = Intrinsics.from_fov(320, 240, 60.0)
+    return Camera(intrinsics, pose)
 
 
 def pixel_centers(rows: int, cols: int) -> np.ndarray:

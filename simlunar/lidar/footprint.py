@@ -25,7 +25,7 @@ class FootprintOptions:
 
     Parameters
     ----------
-    divergence_rad : float
+    divergence_rad : float in [0, pi/2)
         Full divergence angle (rad): twice the 1/e^2 intensity half-angle for
         ``"gaussian"``, the full cone angle for ``"uniform"``; 0 = a single ray.
     profile : "gaussian" or "uniform"

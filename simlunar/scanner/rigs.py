@@ -8,9 +8,41 @@ camera rows and gray-code columns carry the depth).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from simlunar.geometry import Camera, Intrinsics, Pose, Projector, Rig
+
+
+@dataclass(frozen=True)
+class RigCamera:
+    """The triangulation camera of :func:`make_rig` (its position comes from the projector's pose
+    and the baseline).
+
+    Parameters
+    ----------
+    size : (width, height) in pixels
+    fov_x : horizontal field of view (rad); None = the projector's
+    verge : if True the camera looks at the target; else its axis is parallel to the projector's
+    aperture_radius, focus_distance : thin lens (m); 0 = pinhole; focus defaults to the
+        camera-target distance
+    """
+
+    size: tuple[int, int] = (1024, 768)
+    fov_x: float | None = None
+    verge: bool = True
+    aperture_radius: float = 0.0
+    focus_distance: float | None = None
+
+
+#: the presets' camera keywords (also those of :func:`rig_preset`) and their RigCamera fields
+_CAMERA_KEYWORDS = {
+    "cam_fov_x": "fov_x",
+    "verge": "verge",
+    "aperture_radius": "aperture_radius",
+    "focus_distance": "focus_distance",
+}
 
 
 def make_rig(
@@ -22,11 +54,7 @@ def make_rig(
     baseline: float,
     proj_size: tuple[int, int] = (1024, 768),
     proj_fov_x: float,
-    cam_size: tuple[int, int] = (1024, 768),
-    cam_fov_x: float | None = None,
-    verge: bool = True,
-    aperture_radius: float = 0.0,
-    focus_distance: float | None = None,
+    camera: RigCamera | None = None,
 ) -> Rig:
     """Projector looking at ``target`` from ``distance``; camera offset by ``baseline``.
 
@@ -37,16 +65,17 @@ def make_rig(
     elevation : angle of the projector above the target's horizon (rad, pi/2 = nadir)
     azimuth : direction from target to projector, clockwise from +y (north) towards +x (rad)
     baseline : offset of the triangulation camera along the projector's x axis (m); must not be 0
-    proj_size, cam_size : (width, height) in pixels
-    proj_fov_x, cam_fov_x : horizontal fields of view (rad); ``cam_fov_x`` defaults to the projector's
-    verge : if True the camera looks at ``target``; else its axis is parallel to the projector's
-    aperture_radius, focus_distance : camera thin lens (m); 0 = pinhole; focus defaults to the
-        camera-target distance
+    proj_size : (width, height) in pixels
+    proj_fov_x : horizontal field of view (rad)
+    camera : RigCamera, optional
+        Size, field of view, verging and lens of the triangulation camera (default
+        ``RigCamera()``: 1024 x 768 px, the projector's field of view, verged, pinhole).
 
     Returns
     -------
     Rig
     """
+    cam = RigCamera() if camera is None else camera
     if not distance > 0:
         raise ValueError(f"distance must be > 0 m, got {distance}")
     if not 0 < elevation <= np.pi / 2:
@@ -64,16 +93,31 @@ def make_rig(
     pK = Intrinsics.from_fov(pw, ph, np.degrees(proj_fov_x))
     projector = Projector(pK, ppose)
     cam_eye = eye + baseline * ppose.rotation[:, 0]
-    if verge:
+    if cam.verge:
         cpose = Pose.look_at(cam_eye, target, up=-ppose.rotation[:, 1])
     else:
         cpose = Pose(ppose.rotation, cam_eye)
-    cw, ch = cam_size
-    cK = Intrinsics.from_fov(cw, ch, np.degrees(cam_fov_x if cam_fov_x is not None else proj_fov_x))
-    if aperture_radius > 0 and focus_distance is None:
+    cw, ch = cam.size
+    cK = Intrinsics.from_fov(cw, ch, np.degrees(cam.fov_x if cam.fov_x is not None else proj_fov_x))
+    focus_distance = cam.focus_distance
+    if cam.aperture_radius > 0 and focus_distance is None:
         focus_distance = float(np.linalg.norm(target - cam_eye))
-    camera = Camera(cK, cpose, aperture_radius=aperture_radius, focus_distance=focus_distance)
+    camera = Camera(cK, cpose, aperture_radius=cam.aperture_radius, focus_distance=focus_distance)
     return Rig(projector, camera)
+
+
+def _camera_keywords(kw: dict, cam_size) -> dict:
+    """A preset's extra keywords for :func:`make_rig`: the camera ones (``cam_fov_x``,
+    ``verge``, ``aperture_radius``, ``focus_distance``) gathered with ``cam_size`` into
+    ``camera``, the others (``azimuth``) as they are."""
+    if "camera" in kw:
+        raise TypeError(
+            "a rig preset takes the camera as cam_size, cam_fov_x, verge, aperture_radius and "
+            "focus_distance, not camera="
+        )
+    cam = {field: kw[key] for key, field in _CAMERA_KEYWORDS.items() if key in kw}
+    rest = {k: v for k, v in kw.items() if k not in _CAMERA_KEYWORDS}
+    return {"camera": RigCamera(size=cam_size, **cam), **rest}
 
 
 def moonyard_rig(
@@ -91,6 +135,8 @@ def moonyard_rig(
 
     Defaults: projector 1.6 m from the target at 70 deg elevation, 50 deg horizontal field of view
     (about 1.5 m across at the target), camera 0.35 m to the side, verged on the target.
+    Further keywords: ``azimuth`` and the camera's ``cam_fov_x``, ``verge``,
+    ``aperture_radius``, ``focus_distance`` (:class:`RigCamera`).
     """
     return make_rig(
         target=target,
@@ -99,8 +145,7 @@ def moonyard_rig(
         baseline=baseline,
         proj_size=proj_size,
         proj_fov_x=fov_x,
-        cam_size=cam_size,
-        **kw,
+        **_camera_keywords(kw, cam_size),
     )
 
 
@@ -117,7 +162,7 @@ def aerial_rig(
     """Aerial altimeter geometry: nadir projector at ``altitude`` m, camera ``baseline`` m aside.
 
     The defaults give a 54 m wide footprint (5 cm projector pixels at 1024 columns) and a
-    base-to-height ratio of 0.15.
+    base-to-height ratio of 0.15. Further keywords as for :func:`moonyard_rig`.
     """
     return make_rig(
         target=target,
@@ -126,8 +171,7 @@ def aerial_rig(
         baseline=baseline,
         proj_size=proj_size,
         proj_fov_x=fov_x,
-        cam_size=cam_size,
-        **kw,
+        **_camera_keywords(kw, cam_size),
     )
 
 

@@ -46,6 +46,14 @@ __all__ = [
     "low_contrast_pixels",
 ]
 
+#: how a gray-code scan obtains the inverse-pattern images, and how it triangulates
+_INVERSES = ("linearity", "render")
+_METHODS = ("plane", "rays")
+
+
+def _valid(names) -> str:
+    return ", ".join(map(repr, names))
+
 
 @dataclass(frozen=True)
 class GrayCodeOptions:
@@ -81,12 +89,12 @@ class GrayCodeOptions:
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name} must lie in [0, 1] (frame units), got {v}")
-        if self.inverses not in ("linearity", "render"):
+        if self.inverses not in _INVERSES:
             raise ValueError(
-                f"unknown inverses option {self.inverses!r}; valid: 'linearity', 'render'"
+                f"unknown inverses option {self.inverses!r}; valid: {_valid(_INVERSES)}"
             )
-        if self.method not in ("plane", "rays"):
-            raise ValueError(f"unknown method {self.method!r}; valid: 'plane', 'rays'")
+        if self.method not in _METHODS:
+            raise ValueError(f"unknown method {self.method!r}; valid: {_valid(_METHODS)}")
 
 
 @dataclass(frozen=True)

@@ -109,16 +109,26 @@ def _dist_to_segments(p: np.ndarray, seg: np.ndarray) -> np.ndarray:
     return point_segment_distance(np.asarray(p, float)[None], seg)[0]
 
 
-def _largest_clique(w, s0, s1, puv, clique_width, sep, min_proj_spacing, q=4, slab=None):
-    """Largest set of pairwise conflicting dots among two kinds of windows.
+def _largest_clique(w, s0, s1, puv, clique_width, sep, min_proj_spacing):
+    """Largest set of pairwise conflicting dots among two kinds of windows: the larger of
+    :func:`_camera_clique` and (for ``min_proj_spacing > 0``) :func:`_projector_clique`."""
+    best = _camera_clique(w, s0, s1, clique_width, sep)
+    if min_proj_spacing > 0:
+        proj = _projector_clique(puv, min_proj_spacing)
+        if proj is not None and len(proj) > len(best):
+            best = proj
+    return best
 
-    Camera: the line positions are cut into slabs (``slab`` long, default 8 ``sep``). In each,
-    for a few margins m, dots whose intervals widened by m share a point s* of the slab, and
-    whose band coordinates lie in ``q`` consecutive bins of width
+
+def _camera_clique(w, s0, s1, clique_width, sep, q=4, slab=None):
+    """Largest set of dots whose camera segments conflict pairwise, found in windows.
+
+    The line positions are cut into slabs (``slab`` long, default 8 ``sep``). In each, for a
+    few margins m, dots whose intervals widened by m share a point s* of the slab, and whose
+    band coordinates lie in ``q`` consecutive bins of width
     ``clique_width(slab end + m, sqrt(sep^2 - 4 m^2)) / q``: each has a point within m of
     distance s* from the epipole, and two such points are less than
-    ``sqrt((2 m)^2 + sep^2 - 4 m^2) = sep`` apart. Projector: dots in a square of ``q`` x ``q``
-    bins of side ``min_proj_spacing / (q sqrt 2)`` (pairwise closer than the spacing).
+    ``sqrt((2 m)^2 + sep^2 - 4 m^2) = sep`` apart.
     """
     best = np.empty(0, np.int64)
     slab = 8.0 * sep if slab is None else slab
@@ -143,23 +153,26 @@ def _largest_clique(w, s0, s1, puv, clique_width, sep, min_proj_spacing, q=4, sl
             if depth > len(best):
                 inwin = (b >= b0) & (b < b0 + q) & (c0 <= s_star) & (c1 >= s_star)
                 best = sel[inwin]
-    if min_proj_spacing > 0:
-        side = min_proj_spacing / (q * np.sqrt(2)) * (1 - 1e-9)
-        ij = np.floor((puv - puv.min(axis=0)) / side).astype(np.int64)
-        nx = int(ij[:, 0].max()) + q + 1
-        if nx * (int(ij[:, 1].max()) + q + 1) < 2**62:
-            # every q x q window of bins that holds a dot, keyed by its lower corner
-            dy, dx = np.divmod(np.arange(q * q), q)
-            key = (ij[:, 1, None] - dy + q) * nx + (ij[:, 0, None] - dx + q)
-            keys, counts = np.unique(key.ravel(), return_counts=True)
-            k = int(np.argmax(counts))
-            if counts[k] > len(best):
-                y0, x0 = divmod(int(keys[k]), nx)
-                x0, y0 = x0 - q, y0 - q
-                inwin = (ij[:, 0] >= x0) & (ij[:, 0] < x0 + q)
-                inwin &= (ij[:, 1] >= y0) & (ij[:, 1] < y0 + q)
-                best = np.flatnonzero(inwin)
     return best
+
+
+def _projector_clique(puv, min_proj_spacing, q=4):
+    """Most dots in one square of ``q`` x ``q`` bins of side ``min_proj_spacing / (q sqrt 2)``
+    (pairwise closer than the spacing), or None where the bin grid is too large to key."""
+    side = min_proj_spacing / (q * np.sqrt(2)) * (1 - 1e-9)
+    ij = np.floor((puv - puv.min(axis=0)) / side).astype(np.int64)
+    nx = int(ij[:, 0].max()) + q + 1
+    if nx * (int(ij[:, 1].max()) + q + 1) >= 2**62:
+        return None
+    # every q x q window of bins that holds a dot, keyed by its lower corner
+    dy, dx = np.divmod(np.arange(q * q), q)
+    key = (ij[:, 1, None] - dy + q) * nx + (ij[:, 0, None] - dx + q)
+    keys, counts = np.unique(key.ravel(), return_counts=True)
+    y0, x0 = divmod(int(keys[int(np.argmax(counts))]), nx)
+    x0, y0 = x0 - q, y0 - q
+    inwin = (ij[:, 0] >= x0) & (ij[:, 0] < x0 + q)
+    inwin &= (ij[:, 1] >= y0) & (ij[:, 1] < y0 + q)
+    return np.flatnonzero(inwin)
 
 
 def check_spacings(min_cam_spacing: float, min_proj_spacing: float) -> None:
@@ -223,9 +236,36 @@ def dot_schedule(
     psp = float(min_proj_spacing)
     seg = np.ascontiguousarray(epipolar_segments(rig, proj_uv, depth_range))
     w, s0, s1, reach, clique_width, cyclic, period = _epipolar_coordinates(rig, seg, sep)
-    # bands half as wide as the reach: conflicting dots are at most 2 bands apart
+    bands, reach_bands = _band_index(w, s0, reach, cyclic, period)
+    max_len = float(np.max(s1 - s0))
+    puv = np.ascontiguousarray(proj_uv)
+    cells = _projector_cells(proj_uv, psp)
+    # sweep: all bands at once by interval start
+    seq = np.lexsort((bands[0], s0)).astype(np.int64)
+    args = (seq, *bands, s0, s1, seg, sep, reach_bands, cyclic, max_len, puv, *cells, psp)
+    if not bound:
+        colour = _sched.greedy_colour(*args)
+        clique = np.empty(0, np.int64)
+        return DotSchedule(frames=_frames_from_colour(colour), colour=colour, clique=clique)
+    # the lower bound is independent of the colouring: search it on a second core meanwhile
+    # (both kernels release the GIL)
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        search = pool.submit(_largest_clique, w, s0, s1, proj_uv, clique_width, sep, psp)
+        colour = _sched.greedy_colour(*args)
+        clique = search.result()
+    return DotSchedule(frames=_frames_from_colour(colour), colour=colour, clique=clique)
+
+
+def _band_index(w, s0, reach: float, cyclic: bool, period: float):
+    """Dots binned into bands of the band coordinate ``w``, half as wide as the reach (so
+    conflicting dots are at most 2 bands apart; at most ~65k bands).
+
+    Returns ``((band, band_start, band_s0, band_idx), reach_bands)``: each dot's band, where
+    each band starts in the band order, the interval starts and the dot indices in that order
+    (by band, then start), and the bands a conflict can reach.
+    """
     reach_bands = 2
-    bw = max(reach / reach_bands, float(np.ptp(w)) / 65536)  # at most ~65k bands
+    bw = max(reach / reach_bands, float(np.ptp(w)) / 65536)
     reach_bands = int(np.ceil(reach / bw))
     if cyclic:
         nb = max(int(np.floor(period / bw)), 1)
@@ -238,48 +278,23 @@ def dot_schedule(
     by_band = np.lexsort((s0, band))
     band_start = np.searchsorted(band[by_band], np.arange(nb + 1)).astype(np.int64)
     band_s0 = np.ascontiguousarray(s0[by_band])
-    max_len = float(np.max(s1 - s0))
-    # projector grid, cells one spacing wide
+    return (band, band_start, band_s0, by_band.astype(np.int64)), reach_bands
+
+
+def _projector_cells(proj_uv, psp: float):
+    """The dots in a projector grid of cells one spacing wide (at most 4096^2 cells).
+
+    Returns ``(cell_start, cell_idx, cell_of, nx, ny)``: where each cell starts in the cell
+    order, the dot indices in that order, each dot's cell and the grid size.
+    """
     pmin = proj_uv.min(axis=0)
-    pcs = max(psp, float(np.ptp(proj_uv, axis=0).max()) / 4096)  # at most 4096^2 cells
+    pcs = max(psp, float(np.ptp(proj_uv, axis=0).max()) / 4096)
     pij = np.floor((proj_uv - pmin) / pcs).astype(np.int64)
     pnx, pny = int(pij[:, 0].max()) + 1, int(pij[:, 1].max()) + 1
     pcell = pij[:, 1] * pnx + pij[:, 0]
     pidx = np.argsort(pcell, kind="stable")
     pstart = np.searchsorted(pcell[pidx], np.arange(pnx * pny + 1)).astype(np.int64)
-    # sweep: all bands at once by interval start
-    seq = np.lexsort((band, s0))
-    args = (
-        band,
-        band_start,
-        band_s0,
-        by_band.astype(np.int64),
-        s0,
-        s1,
-        seg,
-        sep,
-        reach_bands,
-        cyclic,
-        max_len,
-        np.ascontiguousarray(proj_uv),
-        pstart,
-        pidx.astype(np.int64),
-        pcell,
-        pnx,
-        pny,
-        psp,
-    )
-    if not bound:
-        colour = _sched.greedy_colour(seq.astype(np.int64), *args)
-        clique = np.empty(0, np.int64)
-        return DotSchedule(frames=_frames_from_colour(colour), colour=colour, clique=clique)
-    # the lower bound is independent of the colouring: search it on a second core meanwhile
-    # (both kernels release the GIL)
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        bound = pool.submit(_largest_clique, w, s0, s1, proj_uv, clique_width, sep, psp)
-        colour = _sched.greedy_colour(seq.astype(np.int64), *args)
-        clique = bound.result()
-    return DotSchedule(frames=_frames_from_colour(colour), colour=colour, clique=clique)
+    return pstart, pidx.astype(np.int64), pcell, pnx, pny
 
 
 def _frames_from_colour(colour: np.ndarray) -> list[np.ndarray]:
@@ -292,25 +307,25 @@ def schedule_dots(
     rig: Rig,
     proj_uv,
     *,
+    exact: bool = False,
     depth_range: tuple[float, float],
     min_proj_spacing: float = 8.0,
     min_cam_spacing: float = 6.0,
-    exact: bool = False,
 ) -> list[np.ndarray]:
     """Group dots into frames that the camera can decode without confusion.
 
     The frames of :func:`dot_schedule` (two dots share a frame only if they are at least
     ``min_proj_spacing`` projector pixels apart and their camera epipolar segments for
-    ``depth_range`` stay at least ``min_cam_spacing`` camera pixels apart).
+    ``depth_range`` stay at least ``min_cam_spacing`` camera pixels apart), without its
+    lower bound; or, with ``exact``, one dot per frame (the reference mode that multiplexing
+    is checked against).
 
     Parameters
     ----------
-    rig : Rig
-    proj_uv : (n, 2) projector pixel coordinates of the dots
-    depth_range : (near, far) projector z-depth bounds of the scene (m)
-    min_proj_spacing, min_cam_spacing : float
     exact : bool
-        One dot per frame (the reference mode that multiplexing is checked against).
+        One dot per frame instead of the multiplexed frames.
+    rig, proj_uv, depth_range, min_proj_spacing, min_cam_spacing
+        As for :func:`dot_schedule`.
 
     Returns
     -------

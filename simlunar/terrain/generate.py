@@ -113,6 +113,31 @@ def generate(params, *, rng=None, scale: float = 1.0, nodata=None) -> TerrainRes
     p = params.scaled(scale)
     g_base, g_bed, g_crd, g_crp, g_rkd, g_rkp, g_rks, g_alb = _seeds(rng, 8)
     shape = (p.rows, p.cols)
+    h = _base_surface(p, g_base, g_bed)
+    fresh = np.zeros(shape) if p.albedo.ejecta_brightening > 0 else None
+    craters: list[Crater] = []
+    if p.craters.enabled:
+        craters = _add_craters(h, p, fresh, g_crd, g_crp)
+    rocks: list[Rock] = []
+    rock_factor = None
+    if p.rocks.enabled:
+        rocks, rock_factor = _add_rocks(h, p, g_rkd, g_rkp, g_rks)
+    if nodata is not None:
+        h[_nodata_mask(nodata, shape)] = np.nan
+    alb = make_albedo(
+        shape,
+        spacing=p.spacing,
+        params=p.albedo,
+        freshness=fresh,
+        rock_factor=rock_factor,
+        rng=g_alb,
+    )
+    return TerrainResult(Terrain(h, alb, p.spacing, p.origin), craters, rocks, p)
+
+
+def _base_surface(p: TerrainParams, g_base, g_bed) -> np.ndarray:
+    """fBm heights plus the undulating bed (when it has an amplitude)."""
+    shape = (p.rows, p.cols)
     h = fbm(
         shape,
         spacing=p.spacing,
@@ -130,68 +155,71 @@ def generate(params, *, rng=None, scale: float = 1.0, nodata=None) -> TerrainRes
             wavelength=p.bed.wavelength,
             rng=g_bed,
         )
+    return h
+
+
+def _widened(extent, margin: float) -> tuple[tuple[float, float, float, float], float]:
+    """``extent`` (xmin, xmax, ymin, ymax) grown by ``margin`` on every side, and its area."""
+    xmin, xmax, ymin, ymax = extent
+    ext = (xmin - margin, xmax + margin, ymin - margin, ymax + margin)
+    return ext, (ext[1] - ext[0]) * (ext[3] - ext[2])
+
+
+def _add_craters(h, p: TerrainParams, fresh, g_crd, g_crp) -> list[Crater]:
+    """Sample, place and stamp the crater population into ``h`` (and ``fresh``); the craters
+    whose footprint reaches the grid, oldest first."""
+    c = p.craters
     xmin, xmax, ymin, ymax = p.extent
-    craters: list[Crater] = []
-    fresh = np.zeros(shape) if p.albedo.ejecta_brightening > 0 else None
-    if p.craters.enabled:
-        c = p.craters
-        # craters centred up to one ejecta radius outside the grid still cut into it
-        m = extent_radii(0.0) * c.d_max / 2.0
-        ext = (xmin - m, xmax + m, ymin - m, ymax + m)
-        area = (ext[1] - ext[0]) * (ext[3] - ext[2])
-        d = sfd.sample_diameters(c.law_fn(), area, c.d_min, c.d_max, rng=g_crd, what="craters")
-        craters = place_craters(
-            d, extent=ext, diffusivity=c.diffusivity, max_age_myr=c.max_age_myr, rng=g_crp
-        )
-        # drop the ones whose footprint misses the grid entirely (cheaper lists, same terrain)
-        craters = [
-            k
-            for k in craters
-            if (
-                xmin - extent_radii(0.0) * k.diameter / 2
-                <= k.x
-                <= xmax + extent_radii(0.0) * k.diameter / 2
-            )
-            and (
-                ymin - extent_radii(0.0) * k.diameter / 2
-                <= k.y
-                <= ymax + extent_radii(0.0) * k.diameter / 2
-            )
-        ]
-        stamp_craters(h, craters, spacing=p.spacing, origin=p.origin, freshness=fresh)
-    rocks: list[Rock] = []
-    rock_factor = None
-    if p.rocks.enabled:
-        r = p.rocks
-        # rocks centred just outside the grid still show their part inside it
-        m = 0.7 * r.d_max
-        ext = (xmin - m, xmax + m, ymin - m, ymax + m)
-        area = (ext[1] - ext[0]) * (ext[3] - ext[2])
-        d = sfd.sample_diameters(r.law_fn(), area, r.d_min, r.d_max, rng=g_rkd, what="rocks")
-        rocks = place_rocks(
-            d,
-            extent=ext,
-            cluster_fraction=r.cluster_fraction,
-            cluster_radius_m=r.cluster_radius,
-            mean_per_cluster=r.mean_per_cluster,
-            albedo_contrast=r.albedo_contrast,
-            rng=g_rkp,
-        )
-        rock_factor = np.ones(shape)
-        stamp_rocks(h, rock_factor, rocks, spacing=p.spacing, origin=p.origin, rng=g_rks)
-    if nodata is not None:
-        mask = np.asarray(nodata)
-        if mask.shape != shape or mask.dtype != bool:
-            raise ValueError(
-                f"nodata must be a boolean mask of shape {shape}, got {mask.dtype} {mask.shape}"
-            )
-        h[mask] = np.nan
-    alb = make_albedo(
-        shape,
-        spacing=p.spacing,
-        params=p.albedo,
-        freshness=fresh,
-        rock_factor=rock_factor,
-        rng=g_alb,
+    # craters centred up to one ejecta radius outside the grid still cut into it
+    ext, area = _widened(p.extent, extent_radii(0.0) * c.d_max / 2.0)
+    d = sfd.sample_diameters(c.law_fn(), area, c.d_min, c.d_max, rng=g_crd, what="craters")
+    craters = place_craters(
+        d, extent=ext, diffusivity=c.diffusivity, max_age_myr=c.max_age_myr, rng=g_crp
     )
-    return TerrainResult(Terrain(h, alb, p.spacing, p.origin), craters, rocks, p)
+    # drop the ones whose footprint misses the grid entirely (cheaper lists, same terrain)
+    craters = [
+        k
+        for k in craters
+        if (
+            xmin - extent_radii(0.0) * k.diameter / 2
+            <= k.x
+            <= xmax + extent_radii(0.0) * k.diameter / 2
+        )
+        and (
+            ymin - extent_radii(0.0) * k.diameter / 2
+            <= k.y
+            <= ymax + extent_radii(0.0) * k.diameter / 2
+        )
+    ]
+    stamp_craters(h, craters, spacing=p.spacing, origin=p.origin, freshness=fresh)
+    return craters
+
+
+def _add_rocks(h, p: TerrainParams, g_rkd, g_rkp, g_rks) -> tuple[list[Rock], np.ndarray]:
+    """Sample, place and stamp the rocks into ``h``; the rocks and their albedo factor grid."""
+    r = p.rocks
+    # rocks centred just outside the grid still show their part inside it
+    ext, area = _widened(p.extent, 0.7 * r.d_max)
+    d = sfd.sample_diameters(r.law_fn(), area, r.d_min, r.d_max, rng=g_rkd, what="rocks")
+    rocks = place_rocks(
+        d,
+        extent=ext,
+        cluster_fraction=r.cluster_fraction,
+        cluster_radius_m=r.cluster_radius,
+        mean_per_cluster=r.mean_per_cluster,
+        albedo_contrast=r.albedo_contrast,
+        rng=g_rkp,
+    )
+    rock_factor = np.ones((p.rows, p.cols))
+    stamp_rocks(h, rock_factor, rocks, spacing=p.spacing, origin=p.origin, rng=g_rks)
+    return rocks, rock_factor
+
+
+def _nodata_mask(nodata, shape) -> np.ndarray:
+    """``nodata`` checked to be a boolean mask of the grid's ``shape``."""
+    mask = np.asarray(nodata)
+    if mask.shape != shape or mask.dtype != bool:
+        raise ValueError(
+            f"nodata must be a boolean mask of shape {shape}, got {mask.dtype} {mask.shape}"
+        )
+    return mask

@@ -79,6 +79,101 @@ def _write_geotiff(path: Path, h: np.ndarray, a: np.ndarray, terrain: Terrain) -
     atomic_write(path, write)
 
 
+def _simlunar_meta(tags: dict) -> dict:
+    """simlunar's own meta in a raster's tags (an old simlunar .tif, before GeoTIFF output,
+    kept it in the image description); empty for a foreign raster."""
+    for key in ("simlunar", "TIFFTAG_IMAGEDESCRIPTION"):
+        try:
+            d = json.loads(tags.get(key, ""))
+        except ValueError:
+            continue
+        if key == "TIFFTAG_IMAGEDESCRIPTION" and isinstance(d, dict):
+            d = json.loads(d["simlunar"]) if "simlunar" in d else {}
+        if isinstance(d, dict) and d:
+            return d
+    return {}
+
+
+def _square_grid(src, path: Path, *, resample: bool) -> tuple[tuple[int, int], float]:
+    """Read shape and cell size of a georeferenced raster: north-up and projected, its cells
+    made square (resampled to the smaller side when ``resample``), else a ValueError."""
+    tr = src.transform
+    if abs(tr.b) > 0 or abs(tr.d) > 0:
+        raise ValueError(
+            f"{path}: rotated or sheared geotransform {tuple(tr)[:6]}; "
+            "warp it north-up first (gdalwarp)"
+        )
+    if src.crs is not None and src.crs.is_geographic:
+        raise ValueError(
+            f"{path}: CRS {src.crs.to_string()} is geographic (degrees); reproject "
+            "to a projected CRS in metres first (gdalwarp -t_srs)"
+        )
+    shape = (src.height, src.width)
+    sx, sy = abs(tr.a), abs(tr.e)
+    if not math.isclose(sx, sy, rel_tol=1e-9):
+        if not resample:
+            raise ValueError(
+                f"{path}: non-square pixels {sx} x {sy}; pass resample=True to "
+                "resample to square cells, or resample with gdalwarp -tr"
+            )
+        sp = min(sx, sy)
+        shape = (round(src.height * sy / sp), round(src.width * sx / sp))
+        sx = sp
+    return shape, sx
+
+
+def _read_albedo(src, path: Path, *, ours: bool, georef: bool, kw: dict) -> np.ndarray | None:
+    """The albedo band of a raster (a second band of ours or one described ``albedo``), or
+    None."""
+    if src.count >= 2 and (ours or (src.descriptions[1] or "").lower() == "albedo"):
+        return np.ma.filled(src.read(2, masked=True, **kw).astype(np.float32), np.nan)
+    if ours and src.driver == "GTiff" and not georef:
+        # a pre-GeoTIFF simlunar .tif: albedo is the second page, which GDAL does not
+        # show as a band
+        import tifffile
+
+        stack = tifffile.imread(path)
+        if stack.ndim == 3 and stack.shape[0] == 2:
+            return stack[1].astype(np.float32)
+    return None
+
+
+def _to_metres(src, path: Path, h: np.ndarray) -> np.ndarray:
+    """Heights of band 1 in metres: its scale and offset, then its vertical unit."""
+    unit = (src.units[0] or "").strip().lower()
+    if unit not in _VERTICAL_UNITS:
+        raise ValueError(
+            f"{path}: unknown vertical unit {src.units[0]!r}; "
+            f"valid: {', '.join(u for u in _VERTICAL_UNITS if u)}"
+        )
+    scale, offset = src.scales[0], src.offsets[0]
+    if scale != 1.0 or offset != 0.0:
+        h = h * scale + offset
+    if _VERTICAL_UNITS[unit] != 1.0:
+        h = h * _VERTICAL_UNITS[unit]
+    return h
+
+
+def _north_up(src, h, albedo, *, shape, sx: float):
+    """Heights and albedo flipped into the north-up frame, and the meta of the transform
+    (spacing and origin in metres, the CRS as WKT)."""
+    tr = src.transform
+    lin = 1.0
+    if src.crs is not None and src.crs.is_projected:
+        lin = float(src.crs.linear_units_factor[1])
+    x0, y0 = tr.c, tr.f
+    if tr.e > 0:  # south-up: flip the rows into the north-up frame
+        h, y0 = h[::-1], tr.f + shape[0] * sx
+        albedo = None if albedo is None else albedo[::-1]
+    if tr.a < 0:  # east-to-west columns
+        h, x0 = h[:, ::-1], tr.c - shape[1] * sx
+        albedo = None if albedo is None else albedo[:, ::-1]
+    meta = {"spacing": sx * lin, "origin": [x0 * lin, y0 * lin]}
+    if src.crs is not None:
+        meta["crs"] = src.crs.to_wkt()
+    return h, albedo, meta
+
+
 def _read_gdal(path: Path, *, resample: bool) -> tuple[np.ndarray, np.ndarray | None, dict]:
     """Heights (float64 metres, NaN holes), albedo or None, and meta of a GDAL raster."""
     import warnings
@@ -94,83 +189,19 @@ def _read_gdal(path: Path, *, resample: bool) -> tuple[np.ndarray, np.ndarray | 
         except RasterioIOError as exc:
             raise ValueError(f"cannot read DEM {path}: {exc}") from None
         with src_cm as src:
-            tags = src.tags()
-            # an old simlunar .tif (before GeoTIFF output) kept its meta in the description
-            meta: dict = {}
-            for key in ("simlunar", "TIFFTAG_IMAGEDESCRIPTION"):
-                try:
-                    d = json.loads(tags.get(key, ""))
-                except ValueError:
-                    continue
-                if key == "TIFFTAG_IMAGEDESCRIPTION" and isinstance(d, dict):
-                    d = json.loads(d["simlunar"]) if "simlunar" in d else {}
-                if isinstance(d, dict) and d:
-                    meta = d
-                    break
-            tr = src.transform
-            georef = src.crs is not None or not tr.is_identity
-            shape = (src.height, src.width)
+            meta = _simlunar_meta(src.tags())
+            georef = src.crs is not None or not src.transform.is_identity
+            shape, sx = (src.height, src.width), None
             if georef:
-                if abs(tr.b) > 0 or abs(tr.d) > 0:
-                    raise ValueError(
-                        f"{path}: rotated or sheared geotransform {tuple(tr)[:6]}; "
-                        "warp it north-up first (gdalwarp)"
-                    )
-                if src.crs is not None and src.crs.is_geographic:
-                    raise ValueError(
-                        f"{path}: CRS {src.crs.to_string()} is geographic (degrees); reproject "
-                        "to a projected CRS in metres first (gdalwarp -t_srs)"
-                    )
-                sx, sy = abs(tr.a), abs(tr.e)
-                if not math.isclose(sx, sy, rel_tol=1e-9):
-                    if not resample:
-                        raise ValueError(
-                            f"{path}: non-square pixels {sx} x {sy}; pass resample=True to "
-                            "resample to square cells, or resample with gdalwarp -tr"
-                        )
-                    sp = min(sx, sy)
-                    shape = (round(src.height * sy / sp), round(src.width * sx / sp))
-                    sx = sy = sp
+                shape, sx = _square_grid(src, path, resample=resample)
             kw = {}
             if shape != (src.height, src.width):
                 kw = {"out_shape": shape, "resampling": Resampling.bilinear}
             band = src.read(1, masked=True, **kw)
             h = np.ma.filled(band.astype(np.float64), np.nan)
-            albedo = None
             ours = meta.get("format") == "simlunar-dem-1"
-            if src.count >= 2 and (ours or (src.descriptions[1] or "").lower() == "albedo"):
-                albedo = np.ma.filled(src.read(2, masked=True, **kw).astype(np.float32), np.nan)
-            elif ours and src.driver == "GTiff" and not georef:
-                # a pre-GeoTIFF simlunar .tif: albedo is the second page, which GDAL does not
-                # show as a band
-                import tifffile
-
-                stack = tifffile.imread(path)
-                if stack.ndim == 3 and stack.shape[0] == 2:
-                    albedo = stack[1].astype(np.float32)
-            unit = (src.units[0] or "").strip().lower()
-            if unit not in _VERTICAL_UNITS:
-                raise ValueError(
-                    f"{path}: unknown vertical unit {src.units[0]!r}; "
-                    f"valid: {', '.join(u for u in _VERTICAL_UNITS if u)}"
-                )
-            scale, offset = src.scales[0], src.offsets[0]
-            if scale != 1.0 or offset != 0.0:
-                h = h * scale + offset
-            if _VERTICAL_UNITS[unit] != 1.0:
-                h = h * _VERTICAL_UNITS[unit]
+            albedo = _read_albedo(src, path, ours=ours, georef=georef, kw=kw)
+            h = _to_metres(src, path, h)
             if georef:
-                lin = 1.0
-                if src.crs is not None and src.crs.is_projected:
-                    lin = float(src.crs.linear_units_factor[1])
-                x0, y0 = tr.c, tr.f
-                if tr.e > 0:  # south-up: flip the rows into the north-up frame
-                    h, y0 = h[::-1], tr.f + shape[0] * sx
-                    albedo = None if albedo is None else albedo[::-1]
-                if tr.a < 0:  # east-to-west columns
-                    h, x0 = h[:, ::-1], tr.c - shape[1] * sx
-                    albedo = None if albedo is None else albedo[:, ::-1]
-                meta = {"spacing": sx * lin, "origin": [x0 * lin, y0 * lin]}
-                if src.crs is not None:
-                    meta["crs"] = src.crs.to_wkt()
+                h, albedo, meta = _north_up(src, h, albedo, shape=shape, sx=sx)
     return np.ascontiguousarray(h), albedo, meta

@@ -115,6 +115,58 @@ def _split(arr: np.ndarray, path: Path) -> tuple[np.ndarray, np.ndarray | None]:
     )
 
 
+def _read_npy(path: Path):
+    """A .npy (heights or a [heights, albedo] stack) and the meta of its sidecar .json."""
+    arr = _check_array(np.load(path, allow_pickle=False), path, "the array")
+    heights, albedo = _split(arr, path)
+    side = path.with_name(path.name + ".json")
+    meta = json.loads(side.read_text()) if side.is_file() else {}
+    return heights, albedo, meta
+
+
+def _read_npz(path: Path):
+    """A .npz: ``heights``, optional ``albedo``, and ``spacing``, ``origin``, ``crs`` as meta."""
+    meta: dict = {}
+    albedo = None
+    with np.load(path, allow_pickle=False) as z:
+        if "heights" not in z:
+            raise ValueError(f"{path}: no 'heights' array (found {sorted(z.files)})")
+        heights = _check_array(z["heights"], path, "heights")
+        if "albedo" in z:
+            albedo = _check_array(z["albedo"], path, "albedo")
+        if "spacing" in z:
+            meta["spacing"] = float(z["spacing"])
+        if "origin" in z:
+            meta["origin"] = [float(v) for v in z["origin"]]
+        if "crs" in z:
+            meta["crs"] = str(z["crs"])
+    return heights, albedo, meta
+
+
+def _read_exr_dem(path: Path):
+    """An .exr: channel ``Z`` (or ``Y``) heights, optional ``albedo``, meta in the header."""
+    chans, meta = read_exr(path, with_attrs=True)
+    if "Z" in chans:
+        heights = chans["Z"]
+    elif "Y" in chans:
+        heights = chans["Y"]
+    else:
+        raise ValueError(f"{path}: no 'Z' (or 'Y') height channel (found {sorted(chans)})")
+    return heights, chans.get("albedo"), meta
+
+
+def _read_file(path: Path, suf: str, *, resample: bool):
+    """Heights, albedo (or None) and the file's meta (whichever of spacing, origin and crs it
+    carries) of a DEM file in the format of suffix ``suf``."""
+    if suf == ".npy":
+        return _read_npy(path)
+    if suf == ".npz":
+        return _read_npz(path)
+    if suf == ".exr":
+        return _read_exr_dem(path)
+    return _read_gdal(path, resample=resample)
+
+
 def load_dem(
     path,
     *,
@@ -158,39 +210,8 @@ def load_dem(
     suf = _suffix(path, read=True)
     if not path.is_file():
         raise FileNotFoundError(f"DEM file not found: {path}")
-    meta: dict = {}
-    albedo = None
     try:
-        if suf == ".npy":
-            arr = _check_array(np.load(path, allow_pickle=False), path, "the array")
-            heights, albedo = _split(arr, path)
-            side = path.with_name(path.name + ".json")
-            if side.is_file():
-                meta = json.loads(side.read_text())
-        elif suf == ".npz":
-            with np.load(path, allow_pickle=False) as z:
-                if "heights" not in z:
-                    raise ValueError(f"{path}: no 'heights' array (found {sorted(z.files)})")
-                heights = _check_array(z["heights"], path, "heights")
-                if "albedo" in z:
-                    albedo = _check_array(z["albedo"], path, "albedo")
-                if "spacing" in z:
-                    meta["spacing"] = float(z["spacing"])
-                if "origin" in z:
-                    meta["origin"] = [float(v) for v in z["origin"]]
-                if "crs" in z:
-                    meta["crs"] = str(z["crs"])
-        elif suf == ".exr":
-            chans, meta = read_exr(path, with_attrs=True)
-            if "Z" in chans:
-                heights = chans["Z"]
-            elif "Y" in chans:
-                heights = chans["Y"]
-            else:
-                raise ValueError(f"{path}: no 'Z' (or 'Y') height channel (found {sorted(chans)})")
-            albedo = chans.get("albedo")
-        else:
-            heights, albedo, meta = _read_gdal(path, resample=resample)
+        heights, albedo, meta = _read_file(path, suf, resample=resample)
     except (ValueError, OSError, KeyError, EOFError) as exc:
         msg = str(exc)
         raise ValueError(msg if str(path) in msg else f"cannot read DEM {path}: {msg}") from None

@@ -50,6 +50,17 @@ def _num(v, name, *, lo=None, lo_open=False, hi=None, hi_open=False) -> float:
     return v
 
 
+def _check_diameters(what: str, d_min, d_max) -> None:
+    """A population's diameter range: positive numbers (m), ``d_max`` above ``d_min``."""
+    _num(d_min, f"{what}.d_min_m", lo=0.0, lo_open=True)
+    _num(d_max, f"{what}.d_max_m", lo=0.0, lo_open=True)
+    if d_max <= d_min:
+        raise ValueError(
+            f"{what} diameter range is empty: {what}.d_max_m ({d_max}) must exceed "
+            f"{what}.d_min_m ({d_min})"
+        )
+
+
 @dataclass(frozen=True)
 class FractalParams:
     """fBm base: Hurst exponent in (0, 1), RMS height (m), periodic, roll-off wavelength (m)."""
@@ -92,13 +103,7 @@ class CraterParams:
     max_age_myr: float = 20.0
 
     def __post_init__(self):
-        _num(self.d_min, "craters.d_min_m", lo=0.0, lo_open=True)
-        _num(self.d_max, "craters.d_max_m", lo=0.0, lo_open=True)
-        if self.d_max <= self.d_min:
-            raise ValueError(
-                f"craters diameter range is empty: craters.d_max_m ({self.d_max}) must exceed "
-                f"craters.d_min_m ({self.d_min})"
-            )
+        _check_diameters("craters", self.d_min, self.d_max)
         _num(self.diffusivity, "craters.diffusivity_m2_per_myr", lo=0.0)
         _num(self.max_age_myr, "craters.max_age_myr", lo=0.0)
         self.law_fn()  # unknown law / bad power-law parameters fail here
@@ -125,13 +130,7 @@ class RockParams:
     albedo_contrast: float = 0.1
 
     def __post_init__(self):
-        _num(self.d_min, "rocks.d_min_m", lo=0.0, lo_open=True)
-        _num(self.d_max, "rocks.d_max_m", lo=0.0, lo_open=True)
-        if self.d_max <= self.d_min:
-            raise ValueError(
-                f"rocks diameter range is empty: rocks.d_max_m ({self.d_max}) must exceed "
-                f"rocks.d_min_m ({self.d_min})"
-            )
+        _check_diameters("rocks", self.d_min, self.d_max)
         _num(self.cluster_fraction, "rocks.cluster_fraction", lo=0.0, hi=1.0)
         _num(self.cluster_radius, "rocks.cluster_radius_m", lo=0.0, lo_open=True)
         _num(self.mean_per_cluster, "rocks.mean_per_cluster", lo=1.0)

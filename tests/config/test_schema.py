@@ -169,7 +169,7 @@ def test_option_defaults_are_the_library_defaults():
         _defaults(maps.entropy)
     )
     assert scanner_cfg.RigCfg().fill == _defaults(aim_rig_at_terrain)["fill"]
-    make_rig = _defaults(rigs.make_rig)
+    make_rig = _defaults(rigs.RigCamera)  # the camera options of make_rig
     assert scanner_cfg.RigCfg().verge == make_rig["verge"]
     assert scanner_cfg.RigCfg().aperture_radius_m == make_rig["aperture_radius"]
     s, m = render.SensorCfg(), SensorModel()

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simlunar.geometry import Pose, grid_height_at, rover_mast_camera
+from simlunar.geometry import Intrinsics, Pose, grid_height_at, rover_mast_camera
 from simlunar.render.lights import SunLight
 from simlunar.render.scene import TerrainScene
 from simlunar.terrain.types import Terrain
@@ -89,7 +89,7 @@ def test_oblique_ground_truth_matches_a_numpy_ray_cast_of_the_dem(mi, depression
     t = Terrain(h, np.full(h.shape, 0.15, np.float32), sp, origin=(2.0, 3.0))
     cam = rover_mast_camera(
         t.heights, sp, t.origin, site=(6.0, -3.5), height_above=1.5,
-        depression_deg=depression, azimuth_deg=20.0, width=48, height=36, fov_x_deg=60.0,
+        depression_deg=depression, azimuth_deg=20.0, intrinsics=Intrinsics.from_fov(48, 36, 60.0),
     )  # fmt: skip
     gt = TerrainScene(t, cam, lights=[SunLight(np.radians(40), 0.3)], spp=1).ground_truth()
     rng = np.random.default_rng(5)

@@ -304,7 +304,7 @@ def test_camera_that_does_not_see_the_projection_is_rejected():
         baseline=0.3,
         proj_size=(32, 24),
         proj_fov_x=0.5,
-        verge=False,
+        camera=rigs.RigCamera(verge=False),
     )
     from simlunar.geometry import Camera, Pose, Rig
 
