@@ -81,6 +81,7 @@ def oracle_greedy(
     truth,
     k: int,
     *,
+    rng=None,
     start: float = 0.25,
     batch: float = 0.15,
     smooth: float = 0.25,
@@ -94,6 +95,8 @@ def oracle_greedy(
         True depth (finite), read everywhere.
     k : int
         Number of samples, 4 <= k <= rows * cols.
+    rng : None, int, SeedSequence or Generator
+        Unused: the refiner is deterministic given the truth (accepted for the planner interface).
     start : float in (0, 1]
         Share of k in the initial framed grid (:func:`framed_grid`).
     batch : float, > 0
@@ -111,11 +114,10 @@ def oracle_greedy(
 
     Notes
     -----
-    The refiner is deterministic given the truth: it takes no ``rng`` (the ``oracle_greedy``
-    strategy of :func:`simlunar.planner.plan` accepts one and leaves it unused).
     Cells where the smoothed error is (numerically) zero rank by their distance to the nearest
     sample, so flat regions fill their largest holes first.
     """
+    del rng
     truth = _check_truth(truth, k)
     if not 0 < start <= 1 or not batch > 0 or not smooth >= 0 or not window > 0:
         raise ValueError(

@@ -369,8 +369,7 @@ _ORACLE_KEYS = {
 
 
 def _oracle_greedy_strategy(k, shape, weights, rng, *, truth, **opts):
-    # deterministic given the truth: the plan's rng is not used
-    return oracle_greedy(truth, k, **{_ORACLE_KEYS[n]: v for n, v in opts.items()})
+    return oracle_greedy(truth, k, rng=rng, **{_ORACLE_KEYS[n]: v for n, v in opts.items()})
 
 
 def _oracle_hessian_strategy(k, shape, weights, rng, *, truth, **opts):
