@@ -18,9 +18,13 @@ import time
 from pathlib import Path
 
 from simlunar.errors import SimlunarError
-from simlunar.planner import fit_combination, score_combination
+from simlunar.planner import NelderMeadOptions, ScoreProtocol, fit_combination, score_combination
+from simlunar.planner.combination import DEFAULT_PROTOCOL
 from simlunar.results.figures import load_results
 from simlunar.results.store import UnitCache, atomic_write_bytes
+
+#: the fit's search: shorter than :func:`fit_combination`'s default (40 iterations, 1 restart)
+FIT_SEARCH = NelderMeadOptions(maxiter=40, restarts=1)
 
 
 def _scenes(res: dict, seeds: list[int]) -> list[tuple]:
@@ -50,20 +54,21 @@ def run_fit(
     train_seeds: list[int],
     test_seeds: list[int],
     features: tuple[str, ...] = ("uniform", "gradient", "entropy", "wavelet", "saliency"),
-    densities: tuple[float, ...] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024),
-    trials: int = 2,
-    metric: str = "mse",
-    maxiter: int = 40,
-    restarts: int = 1,
+    protocol: ScoreProtocol = DEFAULT_PROTOCOL,
+    search: NelderMeadOptions = FIT_SEARCH,
     entropy_scale: str = "unit",
     rng: int = 0,
 ) -> dict:
-    """Fit on the training seeds' units, score on the test seeds'; returns the report dict."""
+    """Fit on the training seeds' units, score on the test seeds'; returns the report dict.
+
+    ``protocol`` (densities, trials, metric) scores both the fit and the held-out seeds;
+    ``search`` is the Nelder-Mead search of the fit (its ``maxiter`` and ``restarts``).
+    """
 
     for name, v, least in (
-        ("maxiter", maxiter, 1),
-        ("restarts", restarts, 0),
-        ("trials", trials, 1),
+        ("maxiter", search.maxiter, 1),
+        ("restarts", search.restarts, 0),
+        ("trials", protocol.trials, 1),
     ):
         if isinstance(v, bool) or int(v) != v or v < least:
             raise ValueError(f"--{name} must be an integer >= {least}, got {v}")
@@ -78,11 +83,9 @@ def run_fit(
         raise ValueError("train and test seeds must not overlap")
     train, test = _scenes(res, train_seeds), _scenes(res, test_seeds)
     fopts = {"entropy": {"scale": entropy_scale}}
-    kw = dict(densities=densities, trials=trials, metric=metric, feature_opts=fopts)
+    kw = dict(protocol=protocol, feature_opts=fopts)
     t = time.perf_counter()
-    fit = fit_combination(
-        train, features=features, rng=rng, maxiter=maxiter, restarts=restarts, **kw
-    )
+    fit = fit_combination(train, features=features, rng=rng, search=search, **kw)
     fit_s = time.perf_counter() - t
     start = {f: 1.0 / len(features) for f in features}
     test_scores = {"fitted": score_combination(test, fit.coefficients, rng=rng + 1, **kw)}
@@ -94,9 +97,9 @@ def run_fit(
         "train_seeds": list(train_seeds),
         "test_seeds": list(test_seeds),
         "features": list(features),
-        "densities": list(densities),
-        "trials": trials,
-        "metric": metric,
+        "densities": list(protocol.densities),
+        "trials": protocol.trials,
+        "metric": protocol.metric,
         "entropy_scale": entropy_scale,
         "coefficients": fit.coefficients,
         "train_score": fit.score,
@@ -159,9 +162,8 @@ def main(argv: list[str] | None = None) -> int:
             a.results,
             train_seeds=a.train_seeds,
             test_seeds=a.test_seeds,
-            maxiter=a.maxiter,
-            restarts=a.restarts,
-            trials=a.trials,
+            protocol=ScoreProtocol(trials=a.trials),
+            search=NelderMeadOptions(maxiter=a.maxiter, restarts=a.restarts),
         )
     except (FileNotFoundError, ValueError, SimlunarError) as e:
         print(f"error: {' '.join(str(e).split())}", file=sys.stderr)

@@ -20,6 +20,7 @@ import itertools
 import json
 import time
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -261,18 +262,9 @@ def run_experiment(
     preflight.check_renderer()
     config_text = dump_yaml(to_plain(cfg))
     executor = executor or LocalPoolExecutor(1)
-    executor_open = getattr(executor, "open", None)
-    if executor_open is not None:
-        executor_open()  # connect before writing anything: a bad address leaves no folder
-    try:
-        created = not out.exists()
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-            lock = FolderLock(out).acquire()
-        except OSError as exc:
-            raise ResultFolderError(
-                f"--out {out}: cannot create the folder ({exc.strerror or exc})"
-            ) from None
+    run = _Run(cfg, out, units, checks, figures, t_start, executor, compute, progress)
+    with _connected(executor):
+        lock, created = _lock_folder(out)
         try:
             try:
                 claim_folder(out, config_text)
@@ -281,9 +273,7 @@ def run_experiment(
                 if created:
                     _remove_empty(out)
                 raise
-            return _run_locked(
-                cfg, out, units, checks, config_text, executor, compute, progress, figures, t_start
-            )
+            return _run_locked(run)
         except RunInterrupted:
             raise
         except BaseException as exc:
@@ -295,29 +285,57 @@ def run_experiment(
             raise RunInterrupted(_kept(out, done, len(units), "interrupted")) from None
         finally:
             lock.release()
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One run of :func:`run_experiment`: its experiment, folder, units and how it computes."""
+
+    cfg: ExperimentCfg
+    out: Path
+    units: list[WorkUnit]
+    checks: preflight.Preflight
+    figures: bool
+    t_start: float
+    executor: Executor
+    compute: Callable[[dict], dict]
+    progress: bool
+
+
+@contextmanager
+def _connected(executor: Executor):
+    """The executor opened (connect before writing anything: a bad address leaves no
+    folder) and closed whatever happens."""
+    executor_open = getattr(executor, "open", None)
+    if executor_open is not None:
+        executor_open()
+    try:
+        yield executor
     finally:
         close = getattr(executor, "close", None)
         if close is not None:
             close()
 
 
-def _run_locked(
-    cfg, out, units, checks, config_text, executor, compute, progress, figures, t_start
-) -> RunSummary:
+def _lock_folder(out: Path) -> tuple[FolderLock, bool]:
+    """The folder created if needed and locked; whether this run created it."""
+    created = not out.exists()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        lock = FolderLock(out).acquire()
+    except OSError as exc:
+        raise ResultFolderError(
+            f"--out {out}: cannot create the folder ({exc.strerror or exc})"
+        ) from None
+    return lock, created
+
+
+def _run_locked(run: _Run) -> RunSummary:
+    out, units = run.out, run.units
     cache = UnitCache(out)
     keys = [u.key for u in units]
     scan_dirs = scan_folders(units)
-    records: dict[str, dict] = {}
-    todo: list[WorkUnit] = []
-    for u in units:
-        rec = cache.load(u.key)
-        # a cached unit whose scan export is missing (deleted, interrupted) is computed again:
-        # the numbers are the same (seeded), the export comes back
-        scans_ok = _scans_present(out, scan_dirs, u)
-        if rec is not None and cache.arrays_readable(u.key) and scans_ok:
-            records[u.key] = rec
-        elif u.key not in {t.key for t in todo}:
-            todo.append(u)
+    records, todo = _cached_records(cache, out, units, scan_dirs)
     n_cached = len(units) - len(todo)
     stale = cache.keys() - set(keys)
     # nothing of a finished folder is removed before this run is known to be able to write
@@ -330,7 +348,7 @@ def _run_locked(
         and previous.get("tables_code") == tables_code()
     ):
         # nothing changed: the tables stand; provenance adds this rerun's time
-        return _rerun(cfg, out, units, checks, figures, t_start, previous, records)
+        return _rerun(run, previous, records)
     if todo or stale or not folder_complete(out, keys):
         # the folder's summary and figures no longer describe its units: remove them before
         # any unit changes, so an interrupted run never leaves them beside other units
@@ -338,14 +356,51 @@ def _run_locked(
         cache.remove_except(set(keys))
     prune_scans(out, scan_dirs)  # the exports of units no longer produced go with them
 
-    bar = _progress(progress, len(units), n_cached, cfg.name)
+    _compute_missing(run, cache, todo, records, n_cached)
+
+    rows, columns = collect_rows(units, records)
+    atomic_write_text(out / "results.csv", csv_text(rows, columns))
+    md, tex = _tables(run.cfg, units, records, rows, out)
+    atomic_write_text(out / "scores.md", md)
+    atomic_write_text(out / "scores.tex", tex)
+
+    elapsed = time.perf_counter() - run.t_start
+    timings = {"run_s": round(elapsed, 3)}
+    if not todo and "run_s" in (previous.get("timings") or {}):
+        # every unit cached: the run that computed them keeps its time; this one is added
+        timings = {"run_s": previous["timings"]["run_s"], "rerun_s": round(elapsed, 3)}
+    _write_provenance(out, run.cfg, units, records, run.executor, n_cached, timings, run.checks)
+    return _summary(run, n_cached, len(todo), md, records)
+
+
+def _cached_records(cache: UnitCache, out: Path, units, scan_dirs):
+    """The records of the units already finished, and the units (one per key) to compute."""
+    records: dict[str, dict] = {}
+    todo: list[WorkUnit] = []
+    for u in units:
+        rec = cache.load(u.key)
+        # a cached unit whose scan export is missing (deleted, interrupted) is computed again:
+        # the numbers are the same (seeded), the export comes back
+        scans_ok = _scans_present(out, scan_dirs, u)
+        if rec is not None and cache.arrays_readable(u.key) and scans_ok:
+            records[u.key] = rec
+        elif u.key not in {t.key for t in todo}:
+            todo.append(u)
+    return records, todo
+
+
+def _compute_missing(run: _Run, cache: UnitCache, todo, records: dict, n_cached: int) -> None:
+    """Compute the ``todo`` units on the executor, caching each (and its scan export) as it
+    comes; its record is added to ``records``. A Ctrl-C or a cluster failure says what is kept."""
+    out, total = run.out, len(run.units)
+    bar = _progress(run.progress, total, n_cached, run.cfg.name)
     n_new = 0
     try:
         payloads = [{"config": u.config} for u in todo]
-        hook = bar.stage if bar is not None and accepts_keyword(compute, "progress") else None
+        hook = bar.stage if bar is not None and accepts_keyword(run.compute, "progress") else None
         # executors written against the older two-argument run() still work without a hook
         kw = {"progress": hook} if hook is not None else {}
-        for i, result in executor.run(compute, payloads, **kw):
+        for i, result in run.executor.run(run.compute, payloads, **kw):
             u = todo[i]
             arrays = result.pop("arrays", {}) or {}
             scans = result.pop("scans", None)
@@ -361,78 +416,60 @@ def _run_locked(
         if isinstance(exc, KeyboardInterrupt) or interrupted():
             # a Ctrl-C, whatever the interrupted code made of it (the renderer's start-up
             # turns it into other errors)
-            raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted")) from None
+            raise RunInterrupted(_kept(out, n_cached + n_new, total, "interrupted")) from None
         if isinstance(exc, InfrastructureError):
-            raise InfrastructureError(
-                f"{exc}; {_kept(out, n_cached + n_new, len(units))}"
-            ) from None
+            raise InfrastructureError(f"{exc}; {_kept(out, n_cached + n_new, total)}") from None
         raise
     finally:
         if bar is not None:
             bar.stop()
     if interrupted():  # a Ctrl-C swallowed by the code it interrupted
-        raise RunInterrupted(_kept(out, n_cached + n_new, len(units), "interrupted"))
+        raise RunInterrupted(_kept(out, n_cached + n_new, total, "interrupted"))
 
-    rows, columns = collect_rows(units, records)
-    atomic_write_text(out / "results.csv", csv_text(rows, columns))
 
+def _tables(cfg: ExperimentCfg, units, records: dict, rows: list[dict], out: Path):
+    """``scores.md`` and ``scores.tex`` of the study's kind."""
     if cfg.study.kind == "scanner":
-        md, tex = scanner_tables(rows, metrics=_names(units, "metrics"), title=cfg.name)
-    elif cfg.study.kind == "lidar":
+        return scanner_tables(rows, metrics=_names(units, "metrics"), title=cfg.name)
+    if cfg.study.kind == "lidar":
+        # lazy: simlunar.plotting.lidar imports matplotlib, which a run without LIDAR tables
+        # (and without figures) never loads
         from simlunar.plotting.lidar import lidar_tables
 
         # one table block per sweep point; terrain seeds pooled (their interval in the figures)
         by = next(iter(cfg.sweep)) if len(cfg.sweep) == 1 else ("unit" if cfg.sweep else None)
-        md, tex = lidar_tables(rows, metrics=_names(units, "metrics"), title=cfg.name, by=by)
-    else:
-        md, tex = _sampling_tables(cfg, units, records, rows, out)
-    atomic_write_text(out / "scores.md", md)
-    atomic_write_text(out / "scores.tex", tex)
-
-    elapsed = time.perf_counter() - t_start
-    timings = {"run_s": round(elapsed, 3)}
-    if not todo and "run_s" in (previous.get("timings") or {}):
-        # every unit cached: the run that computed them keeps its time; this one is added
-        timings = {"run_s": previous["timings"]["run_s"], "rerun_s": round(elapsed, 3)}
-    _write_provenance(out, cfg, units, records, executor, n_cached, timings, checks)
-
-    written: list[Path] = []
-    if figures and cfg.figures.enabled:
-        written = write_figures_pruned(out)
-    return RunSummary(
-        out,
-        len(units),
-        n_cached,
-        len(todo),
-        time.perf_counter() - t_start,
-        md,
-        written,
-        _notes(checks, units, records),
-    )
+        return lidar_tables(rows, metrics=_names(units, "metrics"), title=cfg.name, by=by)
+    return _sampling_tables(cfg, units, records, rows, out)
 
 
-def _rerun(cfg, out, units, checks, figures, t_start, previous, records) -> RunSummary:
+def _rerun(run: _Run, previous: dict, records: dict) -> RunSummary:
     """A rerun with nothing to compute: the tables stand, provenance records the rerun's
     time beside the original run's, the figures are redrawn only if their inputs changed."""
-    md = (out / "scores.md").read_text()
+    md = (run.out / "scores.md").read_text()
     prov = dict(previous)
     timings = dict(prov.get("timings") or {})
-    timings["rerun_s"] = round(time.perf_counter() - t_start, 3)
+    timings["rerun_s"] = round(time.perf_counter() - run.t_start, 3)
     prov["timings"] = timings
-    prov["units"] = {"total": len(units), "cached": len(units), "computed": 0}
-    atomic_write_json(out / "provenance.json", prov)
+    n = len(run.units)
+    prov["units"] = {"total": n, "cached": n, "computed": 0}
+    atomic_write_json(run.out / "provenance.json", prov)
+    return _summary(run, n, 0, md, records)
+
+
+def _summary(run: _Run, n_cached: int, n_computed: int, md: str, records: dict) -> RunSummary:
+    """The figures written (when asked for and enabled) and the run's summary."""
     written: list[Path] = []
-    if figures and cfg.figures.enabled:
-        written = write_figures_pruned(out)
+    if run.figures and run.cfg.figures.enabled:
+        written = write_figures_pruned(run.out)
     return RunSummary(
-        out,
-        len(units),
-        len(units),
-        0,
-        time.perf_counter() - t_start,
+        run.out,
+        len(run.units),
+        n_cached,
+        n_computed,
+        time.perf_counter() - run.t_start,
         md,
         written,
-        _notes(checks, units, records),
+        _notes(run.checks, run.units, records),
     )
 
 

@@ -1,6 +1,12 @@
 """Sample planners: which k pixels of the native grid a range sensor should measure."""
 
-from simlunar.planner.combination import CombinationFit, fit_combination, score_combination
+from simlunar.planner.combination import (
+    CombinationFit,
+    NelderMeadOptions,
+    ScoreProtocol,
+    fit_combination,
+    score_combination,
+)
 from simlunar.planner.oracle import (
     ORACLES,
     framed_grid,
@@ -43,7 +49,9 @@ __all__ = [
     "STRATEGY_NAMES",
     "WEIGHTED",
     "CombinationFit",
+    "NelderMeadOptions",
     "SamplePlan",
+    "ScoreProtocol",
     "SequentialOptions",
     "SequentialPlan",
     "check_k",

@@ -29,6 +29,58 @@ DEFAULT_FEATURES = ("uniform", "gradient", "entropy", "wavelet", "saliency")
 
 
 @dataclass(frozen=True)
+class ScoreProtocol:
+    """How coefficients are scored: the eq. 4.3 protocol of the fit and of the held-out score.
+
+    Attributes
+    ----------
+    densities : sequence of float
+        Densities k / N in (0, 1] of the protocol.
+    trials : int
+        Trials per density; the seeds are fixed across objective evaluations (common random
+        numbers), so the objective is deterministic and Nelder-Mead can compare points.
+    metric : str
+        Error metric the score uses (``mse``, ``rmse``, ``mae``, ``grad``; ``sal`` uses the
+        image's saliency map).
+    """
+
+    densities: Sequence[float] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024)
+    trials: int = 2
+    metric: str = "mse"
+
+
+@dataclass(frozen=True)
+class NelderMeadOptions:
+    """The search of :func:`fit_combination`.
+
+    Attributes
+    ----------
+    maxiter : int
+        Nelder-Mead iterations.
+    x0 : sequence of float, optional
+        Starting coefficients (default all ones).
+    step : float
+        Initial simplex size in log-ratio space: each simplex vertex multiplies one
+        coefficient by e^step (scipy's default 5 % steps are too small for the nearly
+        piecewise-constant objective of a sampled plan). Coefficients that are 0 in ``x0``
+        start at 1e-6 of the largest.
+    restarts : int
+        Nelder-Mead runs after the first, each from the best point so far with a fresh
+        simplex (``maxiter`` iterations each).
+    """
+
+    maxiter: int = 60
+    x0: Sequence[float] | None = None
+    step: float = 1.0
+    restarts: int = 2
+
+
+#: the protocol and the search :func:`fit_combination` uses unless told otherwise
+DEFAULT_PROTOCOL = ScoreProtocol()
+DEFAULT_SEARCH = NelderMeadOptions()
+
+
+@dataclass(frozen=True)
 class CombinationFit:
     """Result of :func:`fit_combination`.
 
@@ -51,8 +103,9 @@ class CombinationFit:
     nfev: int
 
 
-def _prepare(scenes, maps, features, dens, trials, metric, base, feature_opts):
+def _prepare(scenes, maps, features, dens, protocol, base, feature_opts):
 
+    trials, metric = protocol.trials, protocol.metric
     if maps is not None and len(maps) != len(scenes):
         raise ValueError(f"maps: one dict per scene, got {len(maps)} for {len(scenes)} scenes")
     prepared = []
@@ -116,18 +169,63 @@ def _mean_score(prepared, coefs, dens):
     return total / len(prepared)
 
 
+def _start_point(x0, n: int) -> np.ndarray:
+    start = np.ones(n) if x0 is None else np.asarray(x0, dtype=np.float64)
+    if start.shape != (n,):
+        raise ValueError(f"x0 must have {n} entries, got {start.shape}")
+    start = np.abs(start)
+    if not start.sum() > 0:
+        raise ValueError("x0 must have a non-zero entry")
+    return start
+
+
+def _log_ratio_space(start: np.ndarray):
+    """The search space of the coefficients: ``(coefs_of, z0)``.
+
+    Search in log-ratios z_i = log(a_i / a_ref) against the largest start coefficient: the
+    score does not depend on the scale of a, so this drops the flat direction, keeps every
+    weight positive, and makes a simplex step a factor (e^step) rather than an increment.
+    ``coefs_of(z)`` maps a point to coefficients summing to 1; ``z0`` is the start's point.
+    """
+    ref = int(np.argmax(start))
+    free = [i for i in range(len(start)) if i != ref]
+    floor = 1e-6 * start[ref]
+
+    def coefs_of(z):
+        logs = np.zeros(len(start))
+        logs[free] = z
+        a = np.exp(logs - logs.max())
+        return a / a.sum()
+
+    return coefs_of, np.log(np.maximum(start[free], floor) / start[ref])
+
+
+def _nelder_mead(objective, z, search: NelderMeadOptions):
+    """Best point of ``search.restarts + 1`` Nelder-Mead runs: ``(z, f(z), f(start))``."""
+    fz = objective(z)
+    initial = fz
+    for _ in range(search.restarts + 1 if z.size else 0):
+        # restarting from the best vertex with a fresh simplex (as is usual with fminsearch)
+        # escapes a simplex that collapsed on a plateau of the sampled objective
+        simplex = np.vstack([z, z + search.step * np.eye(z.size)])
+        res = minimize(
+            objective,
+            z,
+            method="Nelder-Mead",
+            options={"maxiter": search.maxiter, "initial_simplex": simplex},
+        )
+        if res.fun < fz:
+            z, fz = res.x, float(res.fun)
+    return z, fz, initial
+
+
 def fit_combination(
     scenes: Sequence[tuple[np.ndarray, np.ndarray]],
     *,
     features: Sequence[str] = DEFAULT_FEATURES,
-    densities: Sequence[float] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024),
-    trials: int = 2,
-    metric: str = "mse",
+    protocol: ScoreProtocol = DEFAULT_PROTOCOL,
     rng,
-    maxiter: int = 60,
-    x0: Sequence[float] | None = None,
-    step: float = 1.0,
-    restarts: int = 2,
+    search: NelderMeadOptions = DEFAULT_SEARCH,
     maps: Sequence[dict[str, np.ndarray]] | None = None,
     feature_opts: dict[str, dict] | None = None,
 ) -> CombinationFit:
@@ -140,27 +238,11 @@ def fit_combination(
     features : sequence of str
         Maps to combine (names of :data:`simlunar.planner.strategies.COMBINABLE`: ``uniform``
         and the feature maps).
-    densities : sequence of float
-        Densities k / N in (0, 1] of the training protocol.
-    trials : int
-        Trials per density; the seeds are fixed across objective evaluations (common random
-        numbers), so the objective is deterministic and Nelder-Mead can compare points.
-    metric : str
-        Error metric the score uses (``mse``, ``rmse``, ``mae``, ``grad``; ``sal`` uses the
-        image's saliency map).
+    protocol : ScoreProtocol
+        Densities, trials and metric of the training score.
     rng : None, int, SeedSequence or Generator
-    maxiter : int
-        Nelder-Mead iterations.
-    x0 : sequence of float, optional
-        Starting coefficients (default all ones).
-    step : float
-        Initial simplex size in log-ratio space: each simplex vertex multiplies one
-        coefficient by e^step (scipy's default 5 % steps are too small for the nearly
-        piecewise-constant objective of a sampled plan). Coefficients that are 0 in ``x0``
-        start at 1e-6 of the largest.
-    restarts : int
-        Nelder-Mead runs after the first, each from the best point so far with a fresh
-        simplex (``maxiter`` iterations each).
+    search : NelderMeadOptions
+        Iterations, start, initial simplex and restarts of the search.
     maps : sequence of dict, optional
         Per scene, precomputed maps by name (used instead of computing them from the image).
     feature_opts : dict of str -> dict, optional
@@ -171,28 +253,10 @@ def fit_combination(
     CombinationFit
         The best vertex Nelder-Mead found (never worse than the start, which is a vertex).
     """
-    features, dens = _check(features, densities, scenes)
+    features, dens = _check(features, protocol.densities, scenes)
     base = int(np.random.default_rng(rng).integers(0, 2**63))
-    prepared = _prepare(scenes, maps, features, dens, trials, metric, base, feature_opts)
-    start = np.ones(len(features)) if x0 is None else np.asarray(x0, dtype=np.float64)
-    if start.shape != (len(features),):
-        raise ValueError(f"x0 must have {len(features)} entries, got {start.shape}")
-    start = np.abs(start)
-    if not start.sum() > 0:
-        raise ValueError("x0 must have a non-zero entry")
-    # Search in log-ratios z_i = log(a_i / a_ref) against the largest start coefficient: the
-    # score does not depend on the scale of a, so this drops the flat direction, keeps every
-    # weight positive, and makes a simplex step a factor (e^step) rather than an increment.
-    ref = int(np.argmax(start))
-    free = [i for i in range(len(features)) if i != ref]
-    floor = 1e-6 * start[ref]
-
-    def coefs_of(z):
-        logs = np.zeros(len(features))
-        logs[free] = z
-        a = np.exp(logs - logs.max())
-        return a / a.sum()
-
+    prepared = _prepare(scenes, maps, features, dens, protocol, base, feature_opts)
+    coefs_of, z0 = _log_ratio_space(_start_point(search.x0, len(features)))
     nfev = 0
 
     def objective(z):
@@ -200,26 +264,12 @@ def fit_combination(
         nfev += 1
         return -_mean_score(prepared, dict(zip(features, coefs_of(z))), dens)
 
-    z = np.log(np.maximum(start[free], floor) / start[ref])
-    fz = objective(z)
-    initial = -fz
-    for _ in range(restarts + 1 if free else 0):
-        # restarting from the best vertex with a fresh simplex (as is usual with fminsearch)
-        # escapes a simplex that collapsed on a plateau of the sampled objective
-        simplex = np.vstack([z, z + step * np.eye(len(free))])
-        res = minimize(
-            objective,
-            z,
-            method="Nelder-Mead",
-            options={"maxiter": maxiter, "initial_simplex": simplex},
-        )
-        if res.fun < fz:
-            z, fz = res.x, float(res.fun)
+    z, fz, f_start = _nelder_mead(objective, z0, search)
     a = coefs_of(z)
     return CombinationFit(
         coefficients={f: float(v) for f, v in zip(features, a)},
         score=float(-fz),
-        initial_score=float(initial),
+        initial_score=float(-f_start),
         nfev=nfev,
     )
 
@@ -228,15 +278,13 @@ def score_combination(
     scenes: Sequence[tuple[np.ndarray, np.ndarray]],
     coefficients: dict[str, float],
     *,
-    densities: Sequence[float] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024),
-    trials: int = 2,
-    metric: str = "mse",
+    protocol: ScoreProtocol = DEFAULT_PROTOCOL,
     rng,
     maps: Sequence[dict[str, np.ndarray]] | None = None,
     feature_opts: dict[str, dict] | None = None,
 ) -> float:
     """Mean eq. 4.3 score of fixed coefficients over (held-out) scenes, as in the fit."""
-    features, dens = _check(list(coefficients), densities, scenes)
+    features, dens = _check(list(coefficients), protocol.densities, scenes)
     base = int(np.random.default_rng(rng).integers(0, 2**63))
-    prepared = _prepare(scenes, maps, features, dens, trials, metric, base, feature_opts)
+    prepared = _prepare(scenes, maps, features, dens, protocol, base, feature_opts)
     return _mean_score(prepared, dict(coefficients), dens)

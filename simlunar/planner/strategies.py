@@ -53,6 +53,7 @@ Oracles (:data:`ORACLES`, labels "Oracle ..."): they READ THE TRUE DEPTH, passed
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -250,18 +251,19 @@ def _capped(keys: np.ndarray, k: int, shape, cap: float, block: int) -> np.ndarr
     return accepted[:k]
 
 
-def _weighted(
-    k: int,
-    shape,
-    w: np.ndarray,
-    rng: np.random.Generator,
-    *,
-    uniform_mix: float = 0.0,
-    density_cap: float | None = None,
-    cap_block: int = 16,
-    blue_noise: bool = False,
-    blue_noise_radius: float = 0.5,
-) -> np.ndarray:
+@dataclass(frozen=True)
+class _RandomDraw:
+    """Options of the paper's weighted random draw (``placement="random"``; module docstring)."""
+
+    uniform_mix: float = 0.0
+    density_cap: float | None = None
+    cap_block: int = 16
+    blue_noise: bool = False
+    blue_noise_radius: float = 0.5
+
+
+def _mixed(w: np.ndarray, uniform_mix: float) -> np.ndarray:
+    """The map as probabilities, mixed with a ``uniform_mix`` share of uniform sampling."""
     n = w.size
     if not 0.0 <= uniform_mix <= 1.0:
         raise ValueError(f"uniform_mix must be in [0, 1], got {uniform_mix}")
@@ -273,25 +275,38 @@ def _weighted(
         w = w / total
     if uniform_mix > 0:
         w = (1.0 - uniform_mix) * w + uniform_mix / n
+    return w
+
+
+def _blue_noise(keys: np.ndarray, k: int, shape, w: np.ndarray, radius_factor: float):
+    if radius_factor <= 0:
+        raise ValueError(f"blue_noise_radius must be > 0, got {radius_factor}")
+    n = w.size
+    m = min(n, 8 * k)
+    cand = np.argpartition(keys, m - 1)[:m] if m < n else np.arange(n)
+    cand = cand[np.argsort(keys[cand], kind="stable")]
+    rho = np.maximum(k * w, 1e-12)
+    # cap the radius at 4 lattice spacings so near-zero weights do not search the image
+    radius = np.minimum(radius_factor / np.sqrt(rho), 4.0 * np.sqrt(n / k))
+    return poisson_accept(cand, radius, np.asarray(shape, dtype=np.int64), k)
+
+
+def _weighted(
+    k: int, shape, w: np.ndarray, rng: np.random.Generator, draw: _RandomDraw
+) -> np.ndarray:
+    w = _mixed(w, draw.uniform_mix)
     keys = _priority_keys(w, rng)
-    if density_cap is not None:
-        if density_cap < 1 or cap_block < 1:
+    if draw.density_cap is not None:
+        if draw.density_cap < 1 or draw.cap_block < 1:
             raise ValueError(
-                f"density_cap must be >= 1 and cap_block >= 1, got {density_cap}, {cap_block}"
+                "density_cap must be >= 1 and cap_block >= 1, "
+                f"got {draw.density_cap}, {draw.cap_block}"
             )
-        return _capped(keys, k, shape, float(density_cap), int(cap_block))
-    if blue_noise:
-        if blue_noise_radius <= 0:
-            raise ValueError(f"blue_noise_radius must be > 0, got {blue_noise_radius}")
-        m = min(n, 8 * k)
-        cand = np.argpartition(keys, m - 1)[:m] if m < n else np.arange(n)
-        cand = cand[np.argsort(keys[cand], kind="stable")]
-        rho = np.maximum(k * w, 1e-12)
-        # cap the radius at 4 lattice spacings so near-zero weights do not search the image
-        radius = np.minimum(blue_noise_radius / np.sqrt(rho), 4.0 * np.sqrt(n / k))
-        return poisson_accept(cand, radius, np.asarray(shape, dtype=np.int64), k)
-    if k == n:
-        return np.arange(n)
+        return _capped(keys, k, shape, float(draw.density_cap), int(draw.cap_block))
+    if draw.blue_noise:
+        return _blue_noise(keys, k, shape, w, draw.blue_noise_radius)
+    if k == w.size:
+        return np.arange(w.size)
     return np.argpartition(keys, k - 1)[:k]
 
 
@@ -318,7 +333,7 @@ def _weighted_strategy(
         # the paper's draw is proportional to the map: power 1 leaves its rng stream untouched
         if density_power is not None and density_power != 1:
             w = w**density_power
-        return _weighted(k, shape, w, rng, **opts)
+        return _weighted(k, shape, w, rng, _RandomDraw(**opts))
     if placement == "lloyd":
         random_only = sorted(set(opts) & set(_RANDOM_ONLY))
         if random_only:

@@ -142,19 +142,7 @@ def image_panels(
     (Figure, ndarray of Axes)
     """
     ext = _extent(np.shape(image), spacing_m)
-    if axes is None:
-        extra = 0.5 if ext is not None else 0.3
-        fig, axes = plt.subplots(
-            2,
-            3,
-            figsize=(PAGE_W, _panel_height(np.shape(image), 1.45, 2, extra)),
-            constrained_layout=True,
-        )
-    else:
-        fig = axes[0].figure if isinstance(axes, (list, tuple)) else np.ravel(axes)[0].figure
-    axes = np.asarray(axes).ravel()
-    if len(axes) < 6:
-        raise ValueError(f"axes: 6 panels need 6 axes, got {len(axes)}")
+    fig, axes = _panel_axes(axes, np.shape(image), ext)
     top = max(float(np.nanmax(image)), 1e-12)
     im = _show(axes[0], image, "guide image", extent=ext, vmin=0, vmax=top)
     _cbar(fig, im, axes[0], "sensor value (0-1)")
@@ -162,41 +150,9 @@ def image_panels(
     _cbar(fig, im, axes[1], "log10 energy")
     dens = f", {density_label.strip('() ')}" if density_label else ""
     _show(axes[2], image, f"{label(planner)} samples{dens}", extent=ext, vmin=0, vmax=top)
-    k = len(np.asarray(plan_rows))
-    xy = np.column_stack([np.asarray(plan_cols), np.asarray(plan_rows)])
-    if ext is not None:
-        xy = (xy + 0.5) * spacing_m
-    axes[2].scatter(
-        xy[:, 0],
-        xy[:, 1],
-        s=sample_marker_area(axes[2], k),
-        c="#d62728",
-        linewidths=0,
-        rasterized=k > 2000,  # a PDF of tens of thousands of vector dots is slow to open
-    )
-    vmin, vmax = float(np.nanmin(truth)), float(np.nanmax(truth))
-    _show(axes[3], truth, "true depth", cmap=DEPTH_CMAP, extent=ext, vmin=vmin, vmax=vmax)
-    im = _show(
-        axes[4],
-        reconstruction,
-        f"reconstruction ({k} samples)",
-        cmap=DEPTH_CMAP,
-        extent=ext,
-        vmin=vmin,
-        vmax=vmax,
-    )
-    _cbar(fig, im, axes[3:5].tolist(), "depth (m)")
-    err = np.asarray(reconstruction, float) - np.asarray(truth, float)
-    lim = float(np.nanpercentile(np.abs(err), 99)) or 1e-12
-    im = _show(
-        axes[5],
-        err,
-        "error: reconstruction - truth\n(dashed: samples' hull)",
-        cmap="coolwarm",
-        extent=ext,
-        vmin=-lim,
-        vmax=lim,
-    )
+    k = _scatter_samples(axes[2], plan_rows, plan_cols, spacing_m if ext is not None else None)
+    _depth_panels(fig, axes[3:5], truth, reconstruction, f"reconstruction ({k} samples)", ext)
+    im = _error_panel(axes[5], reconstruction, truth, ext)
     _hull(axes[5], plan_rows, plan_cols, spacing_m if ext is not None else None)
     _cbar(fig, im, axes[5], "error (m)")
     if ext is not None:
@@ -204,6 +160,65 @@ def image_panels(
     if point:
         fig.suptitle(point, fontsize=TITLE_PT)
     return fig, axes
+
+
+def _panel_axes(axes, shape, ext):
+    """The figure and the six axes of :func:`image_panels` (new ones unless given)."""
+    if axes is None:
+        extra = 0.5 if ext is not None else 0.3
+        fig, axes = plt.subplots(
+            2,
+            3,
+            figsize=(PAGE_W, _panel_height(shape, 1.45, 2, extra)),
+            constrained_layout=True,
+        )
+    else:
+        fig = axes[0].figure if isinstance(axes, (list, tuple)) else np.ravel(axes)[0].figure
+    axes = np.asarray(axes).ravel()
+    if len(axes) < 6:
+        raise ValueError(f"axes: 6 panels need 6 axes, got {len(axes)}")
+    return fig, axes
+
+
+def _scatter_samples(ax, plan_rows, plan_cols, spacing_m) -> int:
+    """The sampled pixels as dots over the image (pixel centres in metres when
+    ``spacing_m``); returns their number."""
+    k = len(np.asarray(plan_rows))
+    xy = np.column_stack([np.asarray(plan_cols), np.asarray(plan_rows)])
+    if spacing_m:
+        xy = (xy + 0.5) * spacing_m
+    ax.scatter(
+        xy[:, 0],
+        xy[:, 1],
+        s=sample_marker_area(ax, k),
+        c="#d62728",
+        linewidths=0,
+        rasterized=k > 2000,  # a PDF of tens of thousands of vector dots is slow to open
+    )
+    return k
+
+
+def _depth_panels(fig, axes, truth, reconstruction, title, ext) -> None:
+    """True depth and reconstruction on one colour scale, one colour bar for both."""
+    vmin, vmax = float(np.nanmin(truth)), float(np.nanmax(truth))
+    _show(axes[0], truth, "true depth", cmap=DEPTH_CMAP, extent=ext, vmin=vmin, vmax=vmax)
+    im = _show(axes[1], reconstruction, title, cmap=DEPTH_CMAP, extent=ext, vmin=vmin, vmax=vmax)
+    _cbar(fig, im, axes.tolist(), "depth (m)")
+
+
+def _error_panel(ax, reconstruction, truth, ext):
+    """Reconstruction - truth on a symmetric scale at the 99th percentile of |error|."""
+    err = np.asarray(reconstruction, float) - np.asarray(truth, float)
+    lim = float(np.nanpercentile(np.abs(err), 99)) or 1e-12
+    return _show(
+        ax,
+        err,
+        "error: reconstruction - truth\n(dashed: samples' hull)",
+        cmap="coolwarm",
+        extent=ext,
+        vmin=-lim,
+        vmax=lim,
+    )
 
 
 def _mesh_layout(n: int, shape, rough: bool):
@@ -280,21 +295,7 @@ def sparse_mesh_panels(
     label_ = f"sparse mesh ({n_samples} samples)" if n_samples else "sparse mesh"
     i = 0
     if rough is not None:
-        _show(axes[i], np.clip(rough / top, 0, 1), f"{label_},\nroughness from energy", extent=ext)
-        diff = np.asarray(rough, float) / top - np.asarray(sparse, float) / top
-        if diff.ndim == 3:
-            diff = diff.mean(axis=2)
-        lim = float(np.nanpercentile(np.abs(diff), 99)) or 1e-12
-        im = _show(
-            axes[i + 1],
-            diff,
-            "energy - constant roughness",
-            cmap="coolwarm",
-            extent=ext,
-            vmin=-lim,
-            vmax=lim,
-        )
-        _cbar(fig, im, axes[i + 1], "Δ radiance / exposure\n(clipped at 99th pct.)")
+        _roughness_panels(fig, axes[i : i + 2], rough, sparse, top, label_, ext)
         i += 2
     _show(axes[i], np.clip(sparse / top, 0, 1), f"{label_},\nconstant roughness", extent=ext)
     _show(axes[i + 1], np.clip(full / top, 0, 1), "full resolution", extent=ext)
@@ -302,12 +303,37 @@ def sparse_mesh_panels(
         im = _show(axes[i + 2], _log_energy(energy), "frequency map", cmap="magma", extent=ext)
         _cbar(fig, im, axes[i + 2], "log10 wavelet energy")
     if ext is not None:
-        # the y label on the first panel of each row: the rough render and the difference
-        firsts = {0, 1} if n > 3 else {0}
-        for j, ax in enumerate(axes[:n]):
-            ax.set_xlabel("x (m)", fontsize=LABEL_PT - 1, labelpad=1)
-            if j in firsts:
-                ax.set_ylabel("y (m)", fontsize=LABEL_PT - 1, labelpad=1)
+        _mesh_metre_labels(axes[:n])
     if point:
         fig.suptitle(point, fontsize=TITLE_PT)
     return fig, np.asarray(axes[:n])
+
+
+def _roughness_panels(fig, axes, rough, sparse, top, title, ext) -> None:
+    """The render with roughness from energy, and its difference from the constant-roughness
+    render (in units of the exposure ``top``, symmetric at the 99th percentile)."""
+    _show(axes[0], np.clip(rough / top, 0, 1), f"{title},\nroughness from energy", extent=ext)
+    diff = np.asarray(rough, float) / top - np.asarray(sparse, float) / top
+    if diff.ndim == 3:
+        diff = diff.mean(axis=2)
+    lim = float(np.nanpercentile(np.abs(diff), 99)) or 1e-12
+    im = _show(
+        axes[1],
+        diff,
+        "energy - constant roughness",
+        cmap="coolwarm",
+        extent=ext,
+        vmin=-lim,
+        vmax=lim,
+    )
+    _cbar(fig, im, axes[1], "Δ radiance / exposure\n(clipped at 99th pct.)")
+
+
+def _mesh_metre_labels(axes) -> None:
+    """``x (m)`` under every panel; ``y (m)`` on the first panel of each row (the rough
+    render and the difference when there are two rows)."""
+    firsts = {0, 1} if len(axes) > 3 else {0}
+    for j, ax in enumerate(axes):
+        ax.set_xlabel("x (m)", fontsize=LABEL_PT - 1, labelpad=1)
+        if j in firsts:
+            ax.set_ylabel("y (m)", fontsize=LABEL_PT - 1, labelpad=1)

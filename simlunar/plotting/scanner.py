@@ -13,6 +13,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from simlunar.metrics import METRIC_NAMES
+from simlunar.plotting.density import _category_ticks, _sweep_positions
 from simlunar.plotting.layout import COLUMN_W, LABEL_PT, TICK_PT, TITLE_PT, legend_outside, new_axes
 from simlunar.plotting.style import METRIC_UNITS, metric_axis, pair_label, style
 
@@ -142,24 +143,10 @@ def scanner_vs_sweep(
     A numeric axis spanning more than a factor of 20 (all positive) is drawn on a log scale;
     a categorical one gets one tick per label, markers unconnected.
     """
-    from simlunar.plotting.density import _category_ticks, _sweep_positions
-
     fig, ax = new_axes(ax, (COLUMN_W + 1.5, 2.6))
     xs = [p[0] for p in points]
     numeric, pos = _sweep_positions(xs)
-    keys = list(dict.fromkeys((e["mode"], e.get("planner") or "") for _, s in points for e in s))
-    series = []
-    for mode, planner in keys:
-        y, sd = [], []
-        for _, summary in points:
-            e = next(
-                (e for e in summary if (e["mode"], e.get("planner") or "") == (mode, planner)), {}
-            )
-            v = e.get(metric)
-            y.append(math.nan if v is None else float(v))
-            s_ = e.get(f"{metric}_sd")
-            sd.append(0.0 if s_ is None else float(s_))
-        series.append((mode, planner, np.asarray(y), np.asarray(sd)))
+    series = _sweep_series(points, metric)
     allv = [v for *_, y, _ in series for v in y if np.isfinite(v)]
     log_y = metric != "valid_fraction" and allv and min(allv) > 0 and max(allv) / min(allv) > 20
     k, unit = (1.0, "") if metric == "valid_fraction" or log_y else error_scale(metric, allv)
@@ -189,6 +176,37 @@ def scanner_vs_sweep(
         top = ax.secondary_xaxis("top", functions=(lambda x: x * f, lambda x: x / f))
         top.set_xlabel(text, fontsize=TICK_PT)
         top.tick_params(labelsize=TICK_PT - 1)
+    _sweep_y_axis(ax, metric, allv, log_y, unit)
+    ax.tick_params(labelsize=TICK_PT)
+    ax.set_xlabel(axis_label, fontsize=LABEL_PT)
+    if title:
+        ax.set_title(title, fontsize=TITLE_PT)
+    legend_outside(ax)
+    ax.grid(True, alpha=0.3)
+    return fig, ax
+
+
+def _sweep_series(points, metric: str) -> list[tuple]:
+    """Per (mode, planner) in order of appearance: ``(mode, planner, y, sd)`` over the points
+    (NaN where a point lacks the pair, s.d. 0 where it has none)."""
+    keys = list(dict.fromkeys((e["mode"], e.get("planner") or "") for _, s in points for e in s))
+    series = []
+    for mode, planner in keys:
+        y, sd = [], []
+        for _, summary in points:
+            e = next(
+                (e for e in summary if (e["mode"], e.get("planner") or "") == (mode, planner)), {}
+            )
+            v = e.get(metric)
+            y.append(math.nan if v is None else float(v))
+            s_ = e.get(f"{metric}_sd")
+            sd.append(0.0 if s_ is None else float(s_))
+        series.append((mode, planner, np.asarray(y), np.asarray(sd)))
+    return series
+
+
+def _sweep_y_axis(ax, metric: str, allv: list, log_y: bool, unit: str) -> None:
+    """The y scale, limits and label of :func:`scanner_vs_sweep`."""
     if metric == "valid_fraction":
         lo = min(allv) if allv else 0.0
         if lo > 0.5:  # all close to 1: zoom in so a change of a few tenths of a percent shows
@@ -201,13 +219,6 @@ def scanner_vs_sweep(
         if log_y:
             ax.set_yscale("log")
         ax.set_ylabel(metric_axis(metric, unit=unit), fontsize=LABEL_PT)
-    ax.tick_params(labelsize=TICK_PT)
-    ax.set_xlabel(axis_label, fontsize=LABEL_PT)
-    if title:
-        ax.set_title(title, fontsize=TITLE_PT)
-    legend_outside(ax)
-    ax.grid(True, alpha=0.3)
-    return fig, ax
 
 
 def bit_error_rates(rates: dict[str, float], *, ax=None):

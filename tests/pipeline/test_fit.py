@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 
 from simlunar.cli import app
 from simlunar.pipeline import fit as F
+from simlunar.planner import NelderMeadOptions, ScoreProtocol
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -44,10 +45,8 @@ def test_fit_reads_the_seeds_units_and_writes_a_report(results):
         results,
         train_seeds=[1, 2],
         test_seeds=[3],
-        densities=(1 / 16, 1 / 64),
-        trials=1,
-        maxiter=4,
-        restarts=0,
+        protocol=ScoreProtocol(densities=(1 / 16, 1 / 64), trials=1),
+        search=NelderMeadOptions(maxiter=4, restarts=0),
     )
     assert report["train_seeds"] == [1, 2] and report["test_seeds"] == [3]
     assert set(report["coefficients"]) == {"uniform", "gradient", "entropy", "wavelet", "saliency"}

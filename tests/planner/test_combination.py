@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from simlunar.features import wavelet
-from simlunar.planner import fit_combination, plan, score_combination
+from simlunar.planner import (
+    NelderMeadOptions,
+    ScoreProtocol,
+    fit_combination,
+    plan,
+    score_combination,
+)
 
 
 def _scene(seed, shape=(48, 64)):
@@ -48,9 +54,12 @@ def _known_optimum_scene(seed, shape=(40, 48)):
 
 def test_fit_finds_the_known_optimum_and_improves_on_the_start():
     train = [_known_optimum_scene(s) for s in (1, 2)]
-    kw = dict(densities=(1 / 8, 1 / 32), trials=2, rng=0)
+    kw = dict(protocol=ScoreProtocol(densities=(1 / 8, 1 / 32), trials=2), rng=0)
     fit = fit_combination(
-        [s for s, _ in train], maps=[m for _, m in train], maxiter=30, restarts=1, **kw
+        [s for s, _ in train],
+        maps=[m for _, m in train],
+        search=NelderMeadOptions(maxiter=30, restarts=1),
+        **kw,
     )
     # equal weights (the start) put 0.2 on each map: a fit that returns its start fails here
     assert fit.coefficients["wavelet"] >= 0.8
@@ -74,11 +83,8 @@ def test_fit_is_deterministic_and_plugs_into_the_strategy():
     scenes = [_scene(1), _scene(2)]
     kw = dict(
         features=("gradient", "entropy", "wavelet"),
-        densities=(1 / 8, 1 / 32),
-        trials=1,
-        maxiter=8,
-        restarts=0,
-        x0=(1.0, 0.0, 0.0),
+        protocol=ScoreProtocol(densities=(1 / 8, 1 / 32), trials=1),
+        search=NelderMeadOptions(maxiter=8, restarts=0, x0=(1.0, 0.0, 0.0)),
     )
     fit = fit_combination(scenes, rng=0, **kw)
     assert fit.score >= fit.initial_score  # the start is a simplex vertex
@@ -97,14 +103,19 @@ def test_fit_is_deterministic_and_plugs_into_the_strategy():
     ("kwargs", "match"),
     [
         ({"features": ("sobel",)}, "unknown feature"),
-        ({"densities": (0.0,)}, "densities"),
-        ({"x0": (1.0,)}, "x0 must have 5"),
+        ({"protocol": ScoreProtocol(densities=(0.0,), trials=1)}, "densities"),
+        ({"search": NelderMeadOptions(maxiter=1, x0=(1.0,))}, "x0 must have 5"),
         ({"maps": [{}, {}]}, "one dict per scene"),
     ],
 )
 def test_fit_bad_input(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        fit_combination([_scene(1)], rng=0, trials=1, maxiter=1, **kwargs)
+        kwargs = {
+            "protocol": ScoreProtocol(trials=1),
+            "search": NelderMeadOptions(maxiter=1),
+            **kwargs,
+        }
+        fit_combination([_scene(1)], rng=0, **kwargs)
 
 
 def test_fit_rejects_mismatched_scene():
