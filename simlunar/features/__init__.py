@@ -32,8 +32,9 @@ FEATURES: dict[str, Callable[..., np.ndarray]] = {
 
 # ---- maps that need a trained model (issue 20), apart from the image-only maps above -----------
 def _learned(image, *, model, density: float) -> np.ndarray:
-    """``simlunar.features.learned.learned``, imported on use: that module imports the planner
-    and the reconstruction (for its training target), which import this package."""
+    """``simlunar.features.learned.learned``, imported on use: that module imports
+    scikit-learn and joblib, which every importer of this package (the planner, the studies,
+    the runner) would otherwise load without a trained model to use them."""
     from simlunar.features.learned import learned
 
     return learned(image, model=model, density=density)

@@ -27,6 +27,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from simlunar.interrupts import deferred, interrupted
 from simlunar.render import llvm as _llvm
 from simlunar.render.plugins import PLUGINS
 
@@ -145,8 +146,6 @@ def _probe(
         )
         ok = res.returncode == 0 and res.stdout.strip().endswith("ok")
         tail = (res.stdout + res.stderr).strip().splitlines()
-        from simlunar.interrupts import interrupted
-
         if interrupted() or res.returncode in (-2, 130) or "KeyboardInterrupt" in res.stderr:
             # a Ctrl-C reached the probe (same process group): no verdict on the library
             raise KeyboardInterrupt
@@ -244,8 +243,6 @@ def init(prefer: str | None = None) -> BackendInfo:
     os.environ["DRJIT_CACHE_DIR"] = str(cache_dir)
     if info.libllvm:
         os.environ["DRJIT_LIBLLVM_PATH"] = info.libllvm
-    from simlunar.interrupts import deferred
-
     # a Ctrl-C inside Mitsuba's and Dr.Jit's import and initialisation leaves them half set
     # up (NameError: _drjit_ext, aborts, the interrupt swallowed): it is raised after them
     with deferred():

@@ -11,15 +11,8 @@ import json
 from pathlib import Path
 
 from simlunar.errors import ResultFolderError
-from simlunar.results import aggregate
-from simlunar.results import captions as captions_text
-from simlunar.results.aggregate import SEED_AXIS, group_points
 from simlunar.results.folder import prune_figures, read_folder_config
 from simlunar.results.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
-
-MAX_UNIT_PANELS = 6
-#: sweep axes that repeat an experiment over realisations (pooled, not plotted against): the
-#: experiment seed and the terrain realisation
 
 
 def load_results(out_dir: str | Path) -> dict:
@@ -118,30 +111,6 @@ def load_unit_arrays(out_dir: str | Path, index: int = 0) -> dict:
     return UnitCache(res["dir"]).load_arrays(rec["key"])
 
 
-def _label(rec: dict) -> str:
-    """Title of one unit: its sweep point (:func:`simlunar.plotting.style.point_title`) and,
-    when the experiment repeats terrains, its terrain seed."""
-    from simlunar.plotting.style import point_title
-
-    config = rec.get("config", {}) or {}
-    sweep = {k: v for k, v in (rec.get("sweep") or {}).items() if k != SEED_AXIS}
-    text = point_title(sweep)
-    repeats = int((config.get("study") or {}).get("terrain_seeds", 1) or 1)
-    if repeats > 1 or SEED_AXIS in (rec.get("sweep") or {}):
-        seed = int((config.get("terrain") or {}).get("seed_index", 0) or 0)
-        text = f"{text}; terrain seed {seed}" if text else f"terrain seed {seed}"
-    return text
-
-
-def _spacing(rec: dict) -> float | None:
-    """Cell size (m) of a unit whose camera is nadir orthographic (a pixel is a cell)."""
-    camera = ((rec.get("config") or {}).get("render") or {}).get("camera") or {}
-    if camera.get("kind", "orthographic_nadir") != "orthographic_nadir":
-        return None
-    sp = (rec.get("meta") or {}).get("spacing_m")
-    return float(sp) if sp else None
-
-
 #: the figures' record of what they were drawn from (in the result folder, beside figures/)
 STAMP = ".figures.json"
 #: modules whose code draws the figures: a change of any of them redraws every figure
@@ -154,6 +123,7 @@ _DRAWING_MODULES = (
     "simlunar.plotting.lidar",
     "simlunar.plotting.style",
     "simlunar.results.figures",
+    "simlunar.results.sampling_figures",
     "simlunar.results.scanner_figures",
     "simlunar.results.lidar_figures",
     "simlunar.results.captions",
@@ -236,155 +206,32 @@ def write_figures(out_dir: str | Path, *, formats=None, force: bool = False) -> 
 
 
 def _draw(res: dict, formats: list[str]) -> list[Path]:
-    from simlunar.plotting import figures as F
+    """Draw the figures of the folder's study kind into ``figures/`` with their captions;
+    returns the files written."""
+    # the drawing modules import matplotlib: imported when a figure is drawn, not by every
+    # importer of this module (the runner, even with --no-figures; the fit; notebooks)
+    from simlunar.plotting.figures import close, save
+    from simlunar.results import lidar_figures, sampling_figures, scanner_figures
 
-    out = res["dir"]
-    cfg = res["config"]
-    fig_dir = out / "figures"
+    fig_dir = res["dir"] / "figures"
     written: list[Path] = []
 
     def emit(fig, stem):
-        for suffix, data in F.save(fig, stem, formats):
+        for suffix, data in save(fig, stem, formats):
             path = fig_dir / f"{stem}.{suffix}"
             atomic_write_bytes(path, data)
             written.append(path)
-        F.close(fig)
+        close(fig)
 
-    study = cfg.get("study", {})
+    draw = {
+        "sampling": sampling_figures.sampling_figures,
+        "scanner": scanner_figures.scanner_figures,
+        "lidar": lidar_figures.lidar_figures,
+    }[res["config"].get("study", {}).get("kind", "sampling")]
     captions: dict[str, str] = {}
-    if study.get("kind", "sampling") != "sampling":
-        from simlunar.results import lidar_figures, scanner_figures
-
-        lidar = study.get("kind") == "lidar"
-        (lidar_figures.lidar_figures if lidar else scanner_figures.scanner_figures)(
-            res, emit, captions
-        )
-        write_captions(fig_dir, captions, written)
-        return written
-    strategies = list(study.get("strategies") or [])
-    metrics = list(study.get("metrics") or [])
-    units = res["units"]
-    shown = units[:MAX_UNIT_PANELS]
-    cache = UnitCache(out)
-    # each .npz read once, before any figure is written; a corrupt one is an error naming it,
-    # not a silently missing panel
-    shown_arrays = [cache.load_arrays(rec["key"], strict=True) for rec in shown]
-
-    groups = aggregate.density_panels(units)[:MAX_UNIT_PANELS]
-    pooled = any(len(members) > 1 for _, members in groups)
-    for m in metrics:
-        fig, axes = F.panel_grid(len(groups))
-        for ax, (title, members) in zip(axes, groups):
-            F.error_vs_density(
-                res["rows"],
-                metric=m,
-                strategies=strategies,
-                ax=ax,
-                where={"unit": [rec.get("index", 0) for rec in members]},
-                title=title if len(units) > 1 else None,
-                band_label=F.BAND_LABEL_SEEDS if pooled else F.BAND_LABEL,
-            )
-        if len(axes) > 1:
-            F.shared_legend(fig, axes)
-        emit(fig, f"error_vs_density_{m}")
-        captions[f"error_vs_density_{m}"] = captions_text.error_vs_density(
-            m, study, len(groups), seeds=max(len(members) for _, members in groups)
-        )
-
-    for rec, arr in zip(shown, shown_arrays):
-        if not {"image", "wavelet_energy", "plan_rows", "reconstruction", "depth"} <= set(arr):
-            continue
-        density = (rec.get("config", {}).get("figures") or {}).get("panel_density")
-        label = f"k/N = 1/{round(1 / density)}" if density else ""
-        fig, _ = F.image_panels(
-            arr["image"],
-            arr["wavelet_energy"],
-            arr["plan_rows"],
-            arr["plan_cols"],
-            arr["reconstruction"],
-            arr["depth"],
-            density_label=label,
-            planner="wavelet",
-            point=_label(rec) if len(units) > 1 else "",
-            spacing_m=_spacing(rec),
-        )
-        emit(fig, f"panels_unit{rec.get('index', 0)}")
-        captions[f"panels_unit{rec.get('index', 0)}"] = captions_text.panels(
-            label, _label(rec), metres=_spacing(rec) is not None
-        )
-
-    for rec, arr in zip(shown, shown_arrays):
-        if "sparse_mesh_render" not in arr or "radiance" not in arr:
-            continue
-        fig_cfg = rec.get("config", {}).get("figures") or {}
-        dens = fig_cfg.get("sparse_mesh_density")
-        n = round(dens * arr["radiance"].size) if dens else None
-        fig, _ = F.sparse_mesh_panels(
-            arr["sparse_mesh_render"],
-            arr["radiance"],
-            arr.get("wavelet_energy"),
-            rough=arr.get("sparse_mesh_render_rough"),
-            n_samples=n,
-            point=_label(rec) if len(units) > 1 else "",
-            spacing_m=_spacing(rec),
-        )
-        emit(fig, f"sparse_mesh_unit{rec.get('index', 0)}")
-        captions[f"sparse_mesh_unit{rec.get('index', 0)}"] = captions_text.sparse_mesh(
-            n,
-            "sparse_mesh_render_rough" in arr,
-            threshold=fig_cfg.get("sparse_mesh_roughness_threshold"),
-        )
-
-    _samples_saved_figures(res, emit, captions)
-    _score_figures(res, emit, captions)
+    draw(res, emit, captions)
     write_captions(fig_dir, captions, written)
     return written
-
-
-def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:
-    """``score_vs_<axis>_<metric>`` of a one-axis sweep: each point's pooled score with its
-    95 % interval, as ``scores.csv`` holds them (none without random: no scores)."""
-    from simlunar.plotting import figures as F
-    from simlunar.plotting.style import axis_name
-
-    cfg = res["config"]
-    study = cfg.get("study", {})
-    sweep = {k: v for k, v in (cfg.get("sweep") or {}).items() if k != SEED_AXIS}
-    path_csv = res["dir"] / "scores.csv"
-    if len(sweep) != 1 or not path_csv.is_file():
-        return
-    (path,) = sweep
-    groups = group_points(res["units"])
-    if len(groups) < 2:
-        return
-    # scores.csv lists the points in results order (the order of group_points); matched by
-    # position, since a label may spell a model's keys in another order than the records do
-    cells: dict[tuple[int, str, str], tuple] = {}
-    order: dict[str, int] = {}
-    for r in read_csv(path_csv):
-        if r.get("terrain_seed") == "all":
-            i = order.setdefault(r["point"], len(order))
-            cells[(i, r["metric"], r["strategy"])] = tuple(
-                float(r[c]) if r[c] not in ("", None) else None
-                for c in ("score", "ci_low", "ci_high")
-            )
-    if len(order) != len(groups):
-        return
-    strategies = list(study.get("strategies") or [])
-    axis = path.rsplit(".", 1)[-1]
-    for m in study.get("metrics") or []:
-        points = []
-        for i, p in enumerate(groups):
-            scores = {s: cells[(i, m, s)] for s in strategies if (i, m, s) in cells}
-            points.append((aggregate.sweep_value({"sweep": p.sweep}, path), {m: scores}))
-        if not any(sc[m] for _, sc in points):
-            continue
-        fig, _ = F.score_vs_sweep(
-            points, metric=m, strategies=strategies, axis_label=axis_name(path)
-        )
-        emit(fig, f"score_vs_{axis}_{m}")
-        seeds = max(len(p.unit_indices) for p in groups)
-        captions[f"score_vs_{axis}_{m}"] = captions_text.score_vs_sweep(m, path, study, seeds=seeds)
 
 
 def write_captions(fig_dir: Path, captions: dict[str, str], written: list[Path]) -> None:
@@ -401,36 +248,6 @@ def write_captions(fig_dir: Path, captions: dict[str, str], written: list[Path])
 
 def write_figures_pruned(out_dir: str | Path, *, formats=None, force: bool = False) -> list[Path]:
     """:func:`write_figures`, then remove the figures of ``figures/`` it did not write."""
-
     written = write_figures(out_dir, formats=formats, force=force)
     prune_figures(Path(out_dir), keep=written)
     return written
-
-
-def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
-    """``samples_saved``: per sweep point (pooled over terrain seeds), one panel per reference
-    (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
-    from simlunar.plotting import figures as F
-    from simlunar.plotting.style import point_title
-
-    points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
-    points = [p for p in points if p.saved][:MAX_UNIT_PANELS]
-    for i, p in enumerate(points):
-        fig, axes = F.panel_row(len(p.saved), width=2.9 * len(p.saved) + 0.3, height=2.5)
-        for ax, (ref, sv) in zip(axes, p.saved.items()):
-            F.samples_saved_plot(
-                p.densities,
-                sv.factor,
-                sv.flag,
-                reference=ref,
-                metric=p.saved_metric,
-                strategies=p.strategies,
-                ax=ax,
-            )
-        F.shared_legend(fig, axes, prune_labels=False, union=True)
-        title = point_title(p.sweep)
-        if len(points) > 1 and title:
-            fig.suptitle(title, fontsize=8)
-        stem = "samples_saved" if len(points) == 1 else f"samples_saved_point{i}"
-        emit(fig, stem)
-        captions[stem] = captions_text.samples_saved(p.saved_metric, list(p.saved), title)

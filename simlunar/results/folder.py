@@ -4,11 +4,16 @@ scans and figures; checks that it can be written before anything finished is rem
 from __future__ import annotations
 
 import json
+import os
+import re
+import shutil
+import tempfile
 from pathlib import Path
 from typing import Any
 
 from simlunar.config.yamlio import YAMLError, safe_load_text
 from simlunar.errors import ResultFolderError
+from simlunar.results.exports import export_complete
 from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
     atomic_write_text,
@@ -149,8 +154,6 @@ def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
 
 
 def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
-    from simlunar.results.exports import export_complete
-
     name = f"unit{u.index}"
     if scan_dirs.get(name) != u.key:
         return True  # exports nothing (or a unit of the same key does)
@@ -160,11 +163,6 @@ def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
 def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
     """Remove ``scans/unit<i>/`` folders that do not hold the export of the unit that now
     has index i (another configuration's, an interrupted one, or save_scans turned off)."""
-    import re
-    import shutil
-
-    from simlunar.results.exports import export_complete
-
     folder = out / "scans"
     removed: list[Path] = []
     if not folder.is_dir():
@@ -192,9 +190,6 @@ def _read_provenance(out: Path) -> dict:
 def _check_writable(out: Path, scan_dirs: dict[str, str]) -> None:
     """Write (and remove) a small file in each folder the run writes into, so a full disk,
     a quota or a folder made read-only fails here (exit 3) before any result is deleted."""
-    import os
-    import tempfile
-
     folders = [out, out / "units", out / "figures"] + ([out / "scans"] if scan_dirs else [])
     for d in folders:
         if d.exists() and not d.is_dir():

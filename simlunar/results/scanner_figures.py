@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from simlunar.plotting import figures as F
+from simlunar.plotting.style import axis_name
+from simlunar.results import captions as captions_text
 from simlunar.results.aggregate import SEED_AXES, sweep_value
 
 
 def _scanner_pooled(rows: list[dict], metrics: list[str]) -> list[dict]:
     """Mean, s.d. and count of each metric per (mode, planner) over all units and trials."""
-    import numpy as np
-
     groups: dict[tuple, dict[str, list[float]]] = {}
     for r in rows:
         key = (r["mode"], r.get("planner") or "")
@@ -48,10 +49,6 @@ def _ambient_axis(rows: list[dict], units: list[dict], path: str):
 
 def scanner_figures(res: dict, emit, captions: dict) -> None:
     """Draw the scanner figures through ``emit(fig, stem)``; captions into ``captions``."""
-    from simlunar.plotting import figures as F
-    from simlunar.plotting.style import axis_name
-    from simlunar.results import captions as captions_text
-
     rows = res["rows"]
     cfg = res["config"]
     metrics = list(cfg["study"].get("metrics") or [])

@@ -199,6 +199,39 @@ def test_run_help_shows_the_defaults_and_the_flag_pairs():
     assert "<bool>" not in r.output  # a flag takes no value
 
 
+def test_the_command_list_shows_each_commands_own_help_line():
+    # `simlunar --help` lists the lines of simlunar.cli.COMMANDS without importing a command
+    import typer
+
+    from simlunar.cli import COMMANDS
+
+    group = typer.main.get_command(app)
+    ctx = typer.Context(group)
+    assert group.list_commands(ctx) == list(COMMANDS)
+    for name, (_, line) in COMMANDS.items():
+        assert group.get_command(ctx, name).help.strip() == line, name
+
+
+def test_help_and_version_import_no_command(tmp_path):
+    import subprocess
+    import sys
+
+    probe = (
+        "import sys, runpy; sys.argv = ['simlunar', *sys.argv[1:]]\n"
+        "try:\n    runpy.run_module('simlunar.cli', run_name='__main__')\n"
+        "except SystemExit:\n    pass\n"
+        "loaded = sorted(m for m in sys.modules if m.startswith('simlunar.') and m not in "
+        "('simlunar.cli', 'simlunar.cli.common', 'simlunar.cli.__main__', 'simlunar.errors', "
+        "'simlunar.interrupts'))\n"
+        "print('LOADED', loaded)\n"
+    )
+    for args in (["--help"], ["--version"], []):
+        r = subprocess.run(
+            [sys.executable, "-c", probe, *args], capture_output=True, text=True, check=False
+        )
+        assert "LOADED []" in r.stdout, (args, r.stdout, r.stderr)
+
+
 def test_version():
     import simlunar
 

@@ -152,7 +152,7 @@ def test_a_sweep_over_seed_index_is_pooled_too():
 
 def test_figure_titles_name_the_terrain_seed():
     # panels of a repeated experiment say which terrain realisation they show
-    from simlunar.results.figures import _label
+    from simlunar.results.sampling_figures import _label
 
     rec = {"index": 3, "key": "k", "sweep": {}, "config": cfg(3).model_dump(mode="json")}
     rec["config"]["terrain"]["seed_index"] = 2

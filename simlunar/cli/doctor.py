@@ -1,0 +1,35 @@
+"""``simlunar doctor``: the renderer this machine would use, and why."""
+
+from __future__ import annotations
+
+import os
+import platform
+
+import typer
+
+from simlunar.cli.common import flag
+from simlunar.pipeline.preflight import check_renderer
+from simlunar.render import backend
+
+
+def doctor(short: bool = flag("--short", "One line only.")) -> None:
+    """Versions, the chosen Mitsuba variant and why, libLLVM, kernel cache, cores, GPU."""
+    check_renderer()  # a bad SIMLUNAR_VARIANT in one line
+    info = backend.choose_variant()
+    if short:
+        typer.echo(f"simlunar doctor: variant {info.variant} ({info.reason})")
+        return
+    vers = backend.versions()
+    typer.echo("simlunar doctor")
+    for k, v in vers.items():
+        typer.echo(f"  {k:<15} {v}")
+    typer.echo(f"  {'variant':<15} {info.variant}")
+    typer.echo(f"  {'why':<15} {info.reason}")
+    for k, v in info.probes.items():
+        typer.echo(f"  {'probe ' + k:<15} {v}")
+    typer.echo(f"  {'libLLVM':<15} {info.libllvm or 'none'}")
+    typer.echo(f"  {'kernel cache':<15} {info.cache_dir}")
+    typer.echo(f"  {'cores':<15} {os.cpu_count()}")
+    typer.echo(f"  {'machine':<15} {platform.machine()} {platform.system()}")
+    gpu = "CUDA device present" if backend._cuda_present() else "none"
+    typer.echo(f"  {'GPU':<15} {gpu}")

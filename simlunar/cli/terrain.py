@@ -1,0 +1,119 @@
+"""``simlunar terrain``: a terrain preset generated into a folder, or the statistics of a DEM."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import typer
+
+from simlunar.cli.common import flag, user_input
+from simlunar.config.terrain import merged_preset
+from simlunar.config.translate import terrain_params
+from simlunar.errors import SimlunarError
+from simlunar.pipeline.inputs import check_dem_file
+from simlunar.pipeline.preflight import check_out_dir
+from simlunar.terrain import generate
+from simlunar.terrain.io import FORMATS, GDAL_FORMATS, load_dem, write_terrain_outputs
+from simlunar.terrain.stats import terrain_report
+
+
+def terrain(
+    preset: str = typer.Argument(
+        ..., help="preset name (aerial_1..3, moonyard), a terrain YAML, or a DEM file with --stats"
+    ),
+    out: str = typer.Option(None, "--out", help="output folder (optional with --stats)"),
+    seed: int = typer.Option(0, "--seed", help="random seed (same seed, same terrain)"),
+    scale: float = typer.Option(1.0, "--scale", help="shrink the grid (same spacing), in (0, 1]"),
+    dem_format: str = typer.Option(
+        "exr", "--format", help="DEM file: exr, npz, npy or tif (GeoTIFF)"
+    ),
+    mesh: str = typer.Option("ply", "--mesh", help="mesh file: ply, obj or none"),
+    stats: bool = flag(
+        "--stats", "print RMS slopes at several baselines, Hurst exponent, densities"
+    ),
+) -> None:
+    """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""
+    if mesh.lower() not in ("ply", "obj", "none"):
+        raise SimlunarError(f"--mesh must be ply, obj or none, got {mesh!r}")
+    if dem_format.lower() not in ("exr", "npz", "npy", "tif"):
+        raise SimlunarError(f"--format must be exr, npz, npy or tif, got {dem_format!r}")
+    if out is None and not stats:
+        raise SimlunarError("--out is required (unless --stats)")
+    if seed < 0:
+        raise SimlunarError(f"--seed must be >= 0, got {seed}")
+    if Path(preset).suffix.lower() in FORMATS + GDAL_FORMATS:
+        if not stats or out is not None:
+            raise SimlunarError(f"{preset}: a DEM file is only read with --stats (and no --out)")
+        _dem_stats(preset)
+        return
+    if not 0 < scale <= 1:
+        raise SimlunarError(f"--scale must lie in (0, 1], got {scale}")
+    with user_input():
+        # the preset file through the schema's models (the same path as an experiment's terrain)
+        params = terrain_params(merged_preset(preset), scale=scale)
+    if out is not None:
+        check_out_dir(out)
+    t0 = time.perf_counter()
+    res = generate(params, rng=seed)
+    t_gen = time.perf_counter() - t0
+    rows, cols = res.terrain.shape
+    typer.echo(
+        f"{res.params.name}: {rows} x {cols} cells at {res.terrain.spacing} m, "
+        f"{len(res.craters)} craters, {len(res.rocks)} rocks, generated in {t_gen:.2f} s"
+    )
+    if stats:
+        for line in terrain_report(res.terrain, craters=res.craters, rocks=res.rocks):
+            typer.echo(line)
+    if out is None:
+        return
+    files = write_terrain_outputs(
+        res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
+    )
+    for name, path in files.items():
+        typer.echo(f"{name:<10} {path}")
+
+
+def _dem_stats(path: str) -> None:
+    """Print the statistics of a DEM file, with the craters and rocks of the ``features.json``
+    beside it (as ``simlunar terrain`` writes them) when there is one."""
+    check_dem_file(path, key="--stats")  # size, finite heights, spacing and extent
+    with user_input():
+        dem = load_dem(path)
+    diameters = {"craters": [], "rocks": []}
+    side = Path(path).with_name("features.json")
+    if side.is_file():
+        with user_input():
+            diameters = _feature_diameters(side)
+    typer.echo(f"{path}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
+    if side.is_file():
+        typer.echo(f"features: {side}")
+    features = {k: [SimpleNamespace(diameter=d) for d in v] for k, v in diameters.items()}
+    for line in terrain_report(dem, **features):
+        typer.echo(line)
+
+
+def _feature_diameters(path: Path) -> dict[str, list[float]]:
+    """``{"craters": [diameter, ...], "rocks": [...]}`` of a features.json (as written by
+    ``simlunar terrain``); a file of another layout raises ValueError naming it."""
+    try:
+        feats = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(feats, dict):
+        raise ValueError(f"{path}: expected a mapping with 'craters' and 'rocks' lists")
+    out = {}
+    for key in ("craters", "rocks"):
+        items = feats.get(key, [])
+        if not isinstance(items, list):
+            raise ValueError(f"{path}: {key}: expected a list, got {type(items).__name__}")
+        out[key] = []
+        for i, f in enumerate(items):
+            d = f.get("diameter") if isinstance(f, dict) else None
+            if isinstance(d, bool) or not isinstance(d, (int, float)) or not math.isfinite(d):
+                raise ValueError(f"{path}: {key}[{i}].diameter: expected a number (metres)")
+            out[key].append(float(d))
+    return out

@@ -1,0 +1,204 @@
+"""The figures of a sampling-study result folder (paper section 4): error against sampling
+density per metric (one panel per sweep point, its terrain seeds pooled), the image panels and
+sparse-mesh renders of the first units, the samples saved against each reference and, for a
+one-axis sweep, the score against the swept value."""
+
+from __future__ import annotations
+
+from simlunar.plotting import figures as F
+from simlunar.plotting.style import axis_name, point_title
+from simlunar.results import aggregate
+from simlunar.results import captions as captions_text
+from simlunar.results.aggregate import SEED_AXIS, group_points
+from simlunar.results.store import UnitCache, read_csv
+
+__all__ = ["MAX_UNIT_PANELS", "sampling_figures"]
+
+#: at most this many panels (sweep points, units) per figure, and units with figures of their own
+MAX_UNIT_PANELS = 6
+
+
+def sampling_figures(res: dict, emit, captions: dict[str, str]) -> None:
+    """Draw the sampling figures through ``emit(fig, stem)``; captions into ``captions``."""
+    units = res["units"]
+    shown = units[:MAX_UNIT_PANELS]
+    cache = UnitCache(res["dir"])
+    # each .npz read once, before any figure is written; a corrupt one is an error naming it,
+    # not a silently missing panel
+    shown_arrays = [cache.load_arrays(rec["key"], strict=True) for rec in shown]
+    _error_vs_density_figures(res, emit, captions)
+    titled = len(units) > 1
+    for rec, arr in zip(shown, shown_arrays):
+        _image_panels(rec, arr, emit, captions, titled=titled)
+    for rec, arr in zip(shown, shown_arrays):
+        _sparse_mesh_panels(rec, arr, emit, captions, titled=titled)
+    _samples_saved_figures(res, emit, captions)
+    _score_figures(res, emit, captions)
+
+
+def _label(rec: dict) -> str:
+    """Title of one unit: its sweep point (:func:`simlunar.plotting.style.point_title`) and,
+    when the experiment repeats terrains, its terrain seed."""
+    config = rec.get("config", {}) or {}
+    sweep = {k: v for k, v in (rec.get("sweep") or {}).items() if k != SEED_AXIS}
+    text = point_title(sweep)
+    repeats = int((config.get("study") or {}).get("terrain_seeds", 1) or 1)
+    if repeats > 1 or SEED_AXIS in (rec.get("sweep") or {}):
+        seed = int((config.get("terrain") or {}).get("seed_index", 0) or 0)
+        text = f"{text}; terrain seed {seed}" if text else f"terrain seed {seed}"
+    return text
+
+
+def _spacing(rec: dict) -> float | None:
+    """Cell size (m) of a unit whose camera is nadir orthographic (a pixel is a cell)."""
+    camera = ((rec.get("config") or {}).get("render") or {}).get("camera") or {}
+    if camera.get("kind", "orthographic_nadir") != "orthographic_nadir":
+        return None
+    sp = (rec.get("meta") or {}).get("spacing_m")
+    return float(sp) if sp else None
+
+
+def _error_vs_density_figures(res: dict, emit, captions: dict[str, str]) -> None:
+    """``error_vs_density_<metric>``: one panel per sweep point, its units pooled."""
+    study = res["config"].get("study", {})
+    strategies = list(study.get("strategies") or [])
+    units = res["units"]
+    groups = aggregate.density_panels(units)[:MAX_UNIT_PANELS]
+    pooled = any(len(members) > 1 for _, members in groups)
+    for m in study.get("metrics") or []:
+        fig, axes = F.panel_grid(len(groups))
+        for ax, (title, members) in zip(axes, groups):
+            F.error_vs_density(
+                res["rows"],
+                metric=m,
+                strategies=strategies,
+                ax=ax,
+                where={"unit": [rec.get("index", 0) for rec in members]},
+                title=title if len(units) > 1 else None,
+                band_label=F.BAND_LABEL_SEEDS if pooled else F.BAND_LABEL,
+            )
+        if len(axes) > 1:
+            F.shared_legend(fig, axes)
+        emit(fig, f"error_vs_density_{m}")
+        captions[f"error_vs_density_{m}"] = captions_text.error_vs_density(
+            m, study, len(groups), seeds=max(len(members) for _, members in groups)
+        )
+
+
+def _image_panels(rec: dict, arr: dict, emit, captions: dict[str, str], *, titled: bool) -> None:
+    """``panels_unit<i>``: guide image, importance, plan, reconstruction and depth of a unit."""
+    if not {"image", "wavelet_energy", "plan_rows", "reconstruction", "depth"} <= set(arr):
+        return
+    density = (rec.get("config", {}).get("figures") or {}).get("panel_density")
+    label = f"k/N = 1/{round(1 / density)}" if density else ""
+    fig, _ = F.image_panels(
+        arr["image"],
+        arr["wavelet_energy"],
+        arr["plan_rows"],
+        arr["plan_cols"],
+        arr["reconstruction"],
+        arr["depth"],
+        density_label=label,
+        planner="wavelet",
+        point=_label(rec) if titled else "",
+        spacing_m=_spacing(rec),
+    )
+    stem = f"panels_unit{rec.get('index', 0)}"
+    emit(fig, stem)
+    captions[stem] = captions_text.panels(label, _label(rec), metres=_spacing(rec) is not None)
+
+
+def _sparse_mesh_panels(
+    rec: dict, arr: dict, emit, captions: dict[str, str], *, titled: bool
+) -> None:
+    """``sparse_mesh_unit<i>``: the render of a unit's sparse mesh beside its radiance."""
+    if "sparse_mesh_render" not in arr or "radiance" not in arr:
+        return
+    fig_cfg = rec.get("config", {}).get("figures") or {}
+    dens = fig_cfg.get("sparse_mesh_density")
+    n = round(dens * arr["radiance"].size) if dens else None
+    fig, _ = F.sparse_mesh_panels(
+        arr["sparse_mesh_render"],
+        arr["radiance"],
+        arr.get("wavelet_energy"),
+        rough=arr.get("sparse_mesh_render_rough"),
+        n_samples=n,
+        point=_label(rec) if titled else "",
+        spacing_m=_spacing(rec),
+    )
+    stem = f"sparse_mesh_unit{rec.get('index', 0)}"
+    emit(fig, stem)
+    captions[stem] = captions_text.sparse_mesh(
+        n,
+        "sparse_mesh_render_rough" in arr,
+        threshold=fig_cfg.get("sparse_mesh_roughness_threshold"),
+    )
+
+
+def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
+    """``samples_saved``: per sweep point (pooled over terrain seeds), one panel per reference
+    (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
+    points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
+    points = [p for p in points if p.saved][:MAX_UNIT_PANELS]
+    for i, p in enumerate(points):
+        fig, axes = F.panel_row(len(p.saved), width=2.9 * len(p.saved) + 0.3, height=2.5)
+        for ax, (ref, sv) in zip(axes, p.saved.items()):
+            F.samples_saved_plot(
+                p.densities,
+                sv.factor,
+                sv.flag,
+                reference=ref,
+                metric=p.saved_metric,
+                strategies=p.strategies,
+                ax=ax,
+            )
+        F.shared_legend(fig, axes, prune_labels=False, union=True)
+        title = point_title(p.sweep)
+        if len(points) > 1 and title:
+            fig.suptitle(title, fontsize=8)
+        stem = "samples_saved" if len(points) == 1 else f"samples_saved_point{i}"
+        emit(fig, stem)
+        captions[stem] = captions_text.samples_saved(p.saved_metric, list(p.saved), title)
+
+
+def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:
+    """``score_vs_<axis>_<metric>`` of a one-axis sweep: each point's pooled score with its
+    95 % interval, as ``scores.csv`` holds them (none without random: no scores)."""
+    cfg = res["config"]
+    study = cfg.get("study", {})
+    sweep = {k: v for k, v in (cfg.get("sweep") or {}).items() if k != SEED_AXIS}
+    path_csv = res["dir"] / "scores.csv"
+    if len(sweep) != 1 or not path_csv.is_file():
+        return
+    (path,) = sweep
+    groups = group_points(res["units"])
+    if len(groups) < 2:
+        return
+    # scores.csv lists the points in results order (the order of group_points); matched by
+    # position, since a label may spell a model's keys in another order than the records do
+    cells: dict[tuple[int, str, str], tuple] = {}
+    order: dict[str, int] = {}
+    for r in read_csv(path_csv):
+        if r.get("terrain_seed") == "all":
+            i = order.setdefault(r["point"], len(order))
+            cells[(i, r["metric"], r["strategy"])] = tuple(
+                float(r[c]) if r[c] not in ("", None) else None
+                for c in ("score", "ci_low", "ci_high")
+            )
+    if len(order) != len(groups):
+        return
+    strategies = list(study.get("strategies") or [])
+    axis = path.rsplit(".", 1)[-1]
+    for m in study.get("metrics") or []:
+        points = []
+        for i, p in enumerate(groups):
+            scores = {s: cells[(i, m, s)] for s in strategies if (i, m, s) in cells}
+            points.append((aggregate.sweep_value({"sweep": p.sweep}, path), {m: scores}))
+        if not any(sc[m] for _, sc in points):
+            continue
+        fig, _ = F.score_vs_sweep(
+            points, metric=m, strategies=strategies, axis_label=axis_name(path)
+        )
+        emit(fig, f"score_vs_{axis}_{m}")
+        seeds = max(len(p.unit_indices) for p in groups)
+        captions[f"score_vs_{axis}_{m}"] = captions_text.score_vs_sweep(m, path, study, seeds=seeds)
