@@ -23,6 +23,7 @@ from simlunar.plotting.density import (
 from simlunar.plotting.images import (
     DEPTH_CMAP,
     SAMPLE_INK,
+    PanelText,
     image_panels,
     sample_marker_area,
     sparse_mesh_panels,
@@ -61,6 +62,7 @@ __all__ = [
     "PAGE_W",
     "SAMPLE_INK",
     "STRATEGY_COLORS",
+    "PanelText",
     "bit_error_rates",
     "close",
     "density_axis",

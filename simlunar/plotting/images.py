@@ -7,6 +7,8 @@ Panels of a nadir orthographic view, where a pixel is a terrain cell, are drawn 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -96,18 +98,34 @@ def _hull(ax, rows, cols, spacing_m) -> None:
     ax.plot(v[:, 0], v[:, 1], color="k", lw=0.6, ls="--")
 
 
+@dataclass(frozen=True)
+class PanelText:
+    """The words of :func:`image_panels`.
+
+    Attributes
+    ----------
+    density_label : str
+        Sweep-independent density text for the samples panel, e.g. ``"k/N = 1/32"``.
+    planner : str
+        Strategy that placed the samples (its display label titles the samples panel).
+    point : str
+        Sweep point or scene the panels show (figure title), e.g. ``"sun elevation 30 deg"``.
+    """
+
+    density_label: str = ""
+    planner: str = "wavelet"
+    point: str = ""
+
+
 def image_panels(
     image: np.ndarray,
     energy: np.ndarray,
-    plan_rows: np.ndarray,
-    plan_cols: np.ndarray,
+    samples: tuple[np.ndarray, np.ndarray],
     reconstruction: np.ndarray,
     truth: np.ndarray,
     *,
     axes=None,
-    density_label: str = "",
-    planner: str = "wavelet",
-    point: str = "",
+    text: PanelText = PanelText(),
     spacing_m: float | None = None,
 ):
     """Guide image, wavelet energy map, sample locations, truth, reconstruction and error map.
@@ -123,17 +141,13 @@ def image_panels(
         Guide (sensor) image.
     energy : (rows, cols) float
         Frequency map (wavelet energy), shown on a log scale.
-    plan_rows, plan_cols : (k,) int
+    samples : (plan_rows, plan_cols), two (k,) int arrays
         Sampled pixels.
     reconstruction, truth : (rows, cols) float
         Reconstructed and true depth from the camera (m); the error map is their difference.
     axes : sequence of 6 Axes, optional
-    density_label : str
-        Sweep-independent density text for the samples panel, e.g. ``"k/N = 1/32"``.
-    planner : str
-        Strategy that placed the samples (its display label titles the samples panel).
-    point : str
-        Sweep point or scene the panels show (figure title), e.g. ``"sun elevation 30 deg"``.
+    text : PanelText
+        The density label, the planner's name and the figure title.
     spacing_m : float, optional
         Cell size of a nadir orthographic view (pixel = cell): axes in metres; None = pixels.
 
@@ -141,6 +155,7 @@ def image_panels(
     -------
     (Figure, ndarray of Axes)
     """
+    plan_rows, plan_cols = samples
     ext = _extent(np.shape(image), spacing_m)
     fig, axes = _panel_axes(axes, np.shape(image), ext)
     top = max(float(np.nanmax(image)), 1e-12)
@@ -148,8 +163,8 @@ def image_panels(
     _cbar(fig, im, axes[0], "sensor value (0-1)")
     im = _show(axes[1], _log_energy(energy), "wavelet energy", cmap="magma", extent=ext)
     _cbar(fig, im, axes[1], "log10 energy")
-    dens = f", {density_label.strip('() ')}" if density_label else ""
-    _show(axes[2], image, f"{label(planner)} samples{dens}", extent=ext, vmin=0, vmax=top)
+    dens = f", {text.density_label.strip('() ')}" if text.density_label else ""
+    _show(axes[2], image, f"{label(text.planner)} samples{dens}", extent=ext, vmin=0, vmax=top)
     k = _scatter_samples(axes[2], plan_rows, plan_cols, spacing_m if ext is not None else None)
     _depth_panels(fig, axes[3:5], truth, reconstruction, f"reconstruction ({k} samples)", ext)
     im = _error_panel(axes[5], reconstruction, truth, ext)
@@ -157,8 +172,8 @@ def image_panels(
     _cbar(fig, im, axes[5], "error (m)")
     if ext is not None:
         _metre_labels(axes, left={0, 3}, bottom={3, 4, 5})
-    if point:
-        fig.suptitle(point, fontsize=TITLE_PT)
+    if text.point:
+        fig.suptitle(text.point, fontsize=TITLE_PT)
     return fig, axes
 
 

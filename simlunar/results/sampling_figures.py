@@ -94,13 +94,10 @@ def _image_panels(rec: dict, arr: dict, emit, captions: dict[str, str], *, title
     fig, _ = F.image_panels(
         arr["image"],
         arr["wavelet_energy"],
-        arr["plan_rows"],
-        arr["plan_cols"],
+        (arr["plan_rows"], arr["plan_cols"]),
         arr["reconstruction"],
         arr["depth"],
-        density_label=label,
-        planner="wavelet",
-        point=_label(rec) if titled else "",
+        text=F.PanelText(label, "wavelet", _label(rec) if titled else ""),
         spacing_m=_spacing(rec),
     )
     stem = f"panels_unit{rec.get('index', 0)}"

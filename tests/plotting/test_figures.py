@@ -111,8 +111,8 @@ def _colorbar_labels(fig):
 def test_image_panels_name_planner_and_point_and_have_colour_bars(rng):
     img = rng.random((20, 30))
     fig, axes = F.image_panels(
-        img, img**2, np.array([1, 2]), np.array([3, 4]), img * 2, img * 2.1,
-        density_label="k/N = 1/32", planner="wavelet_bn", point="elevation_deg=30",
+        img, img**2, (np.array([1, 2]), np.array([3, 4])), img * 2, img * 2.1,
+        text=F.PanelText("k/N = 1/32", "wavelet_bn", "elevation_deg=30"),
     )  # fmt: skip
     assert len(axes) == 6
     assert axes[2].get_title() == "Wavelet, blue noise samples, k/N = 1/32"
@@ -246,14 +246,14 @@ def test_sample_markers_cover_a_bounded_share_of_the_panel(rng):
     # 25 000 samples (Table 1 at 1/64) must not paint the samples panel solid red
     img = rng.random((120, 200))
     r, c = rng.integers(0, 120, 25_000), rng.integers(0, 200, 25_000)
-    _fig, axes = F.image_panels(img, img, r, c, img, img)
+    _fig, axes = F.image_panels(img, img, (r, c), img, img)
     ax = axes[2]
     (sizes,) = {float(s) for s in ax.collections[0].get_sizes()}
     area_pt2 = ax.bbox.width * ax.bbox.height * (72 / ax.figure.dpi) ** 2
     assert sizes * 25_000 <= F.SAMPLE_INK * area_pt2 * 1.0001 or sizes == 0.05
     assert ax.collections[0].get_rasterized()
     # a handful of samples get big markers, capped at 4 pt²
-    _fig, axes = F.image_panels(img, img, r[:10], c[:10], img, img)
+    _fig, axes = F.image_panels(img, img, (r[:10], c[:10]), img, img)
     assert float(axes[2].collections[0].get_sizes()[0]) == 4.0
     assert not axes[2].collections[0].get_rasterized()
 
