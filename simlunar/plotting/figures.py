@@ -20,6 +20,7 @@ from simlunar.plotting.density import (
     samples_saved_plot,
     score_vs_sweep,
 )
+from simlunar.plotting.headroom import headroom_plot
 from simlunar.plotting.images import (
     DEPTH_CMAP,
     SAMPLE_INK,
@@ -69,6 +70,7 @@ __all__ = [
     "density_label",
     "error_scale",
     "error_vs_density",
+    "headroom_plot",
     "image_panels",
     "legend_outside",
     "mean_error_by_density",

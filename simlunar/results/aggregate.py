@@ -203,6 +203,19 @@ def _headroom(p: Point, rows: list[dict], metric: str, n_pix: float) -> None:
             }
 
 
+def headroom_entries(points: list[Point]) -> list[dict]:
+    """The headroom each strategy captures, one entry per (sweep point, oracle), as
+    :func:`simlunar.plotting.tables.headroom_tables` and
+    :func:`simlunar.plotting.headroom.headroom_plot` take them."""
+    return [
+        {"label": p.label if len(points) > 1 else "", "oracle": o, "metric": p.saved_metric,
+         "strategies": [s for s in p.strategies if s in by], "captured": by,
+         "saved": p.saved_per_seed, "seeds": p.seeds}
+        for p in points
+        for o, by in p.headroom.items()
+    ]  # fmt: skip
+
+
 def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:
     """Per-seed scores (from each unit) and pooled scores with intervals, one row each."""
     out = []

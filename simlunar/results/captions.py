@@ -205,6 +205,21 @@ def samples_saved(metric: str, references: list[str], point: str) -> str:
     )
 
 
+def headroom(metric: str, seeds: int) -> str:
+    """Caption of ``headroom``."""
+    n = f"{seeds} terrain seed{'s' * (seeds != 1)}"
+    return (
+        f"Headroom captured at equal {_metric(metric)}, paired by terrain seed: for each "
+        f"strategy, log(samples saved vs Uniform Lloyd) / log(the oracle's samples saved vs "
+        f"Uniform Lloyd), the savings being geometric means over the densities inside the "
+        f"reference's measured range. 1 (dotted) is the oracle's saving, 0 (solid) the uniform "
+        f"layout's, below 0 worse than the uniform layout. Bars: the mean over the {n}; dots: "
+        f"each seed. The oracle reads the true error and cannot be realised: it is a bound, not "
+        f"a planner. One panel per sweep point and oracle; scores.md holds the same numbers "
+        f"(mean [min, max])."
+    )
+
+
 def lidar_error(
     metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1, by: str | None = None
 ) -> str:

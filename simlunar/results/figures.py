@@ -119,6 +119,7 @@ _DRAWING_MODULES = (
     "simlunar.plotting.layout",
     "simlunar.plotting.density",
     "simlunar.plotting.images",
+    "simlunar.plotting.headroom",
     "simlunar.plotting.scanner",
     "simlunar.plotting.lidar",
     "simlunar.plotting.style",

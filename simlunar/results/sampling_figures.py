@@ -32,7 +32,9 @@ def sampling_figures(res: dict, emit, captions: dict[str, str]) -> None:
         _image_panels(rec, arr, emit, captions, titled=titled)
     for rec, arr in zip(shown, shown_arrays):
         _sparse_mesh_panels(rec, arr, emit, captions, titled=titled)
-    _samples_saved_figures(res, emit, captions)
+    points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
+    _samples_saved_figures(points, emit, captions)
+    _headroom_figure(points, emit, captions)
     _score_figures(res, emit, captions)
 
 
@@ -132,10 +134,9 @@ def _sparse_mesh_panels(
     )
 
 
-def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
+def _samples_saved_figures(points: list, emit, captions: dict[str, str]) -> None:
     """``samples_saved``: per sweep point (pooled over terrain seeds), one panel per reference
     (random, grid), the first metric; ``samples_saved_point<i>`` when there are several."""
-    points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
     points = [p for p in points if p.saved][:MAX_UNIT_PANELS]
     for i, p in enumerate(points):
         fig, axes = F.panel_row(len(p.saved), width=2.9 * len(p.saved) + 0.3, height=2.5)
@@ -156,6 +157,16 @@ def _samples_saved_figures(res: dict, emit, captions: dict[str, str]) -> None:
         stem = "samples_saved" if len(points) == 1 else f"samples_saved_point{i}"
         emit(fig, stem)
         captions[stem] = captions_text.samples_saved(p.saved_metric, list(p.saved), title)
+
+
+def _headroom_figure(points: list, emit, captions: dict[str, str]) -> None:
+    """``headroom``: each strategy's headroom captured (vs uniform Lloyd, of each oracle), one
+    panel per sweep point and oracle; drawn when the study has an oracle and uniform Lloyd."""
+    entries = aggregate.headroom_entries(points)[:MAX_UNIT_PANELS]
+    if not entries:
+        return
+    emit(F.headroom_plot(entries), "headroom")
+    captions["headroom"] = captions_text.headroom(entries[0]["metric"], len(entries[0]["seeds"]))
 
 
 def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:

@@ -51,6 +51,7 @@ def _git_commit() -> dict[str, Any]:
 #: modules that write the tables: a change of any of them rewrites the tables of a rerun
 _TABLE_MODULES = (
     "simlunar.pipeline.runner",
+    "simlunar.plotting.lidar",  # lidar_summary and lidar_tables write the LIDAR study's tables
     "simlunar.results.summaries",
     "simlunar.plotting.tables",
     "simlunar.results.aggregate",
@@ -128,7 +129,7 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
         )
         md, tex = note + "\n", "% " + note + "\n"
     md2, tex2 = samples_saved_tables(_saved_entries(points), title=cfg.name)
-    md3, tex3 = headroom_tables(_headroom_entries(points), title=cfg.name)
+    md3, tex3 = headroom_tables(aggregate.headroom_entries(points), title=cfg.name)
     if md3:
         md2, tex2 = md2 + "\n" + md3, tex2 + "\n" + tex3
     if md2:
@@ -218,15 +219,4 @@ def _saved_entries(points) -> list[dict]:
         for metric, saved in ((p.saved_metric, p.saved), (f"{p.saved_metric}_interior",
                                                           p.saved_interior))
         for ref, sv in saved.items()
-    ]  # fmt: skip
-
-
-def _headroom_entries(points) -> list[dict]:
-    """Headroom-captured table entries: per point and oracle label."""
-    return [
-        {"label": p.label if len(points) > 1 else "", "oracle": o, "metric": p.saved_metric,
-         "strategies": [s for s in p.strategies if s in by], "captured": by,
-         "saved": p.saved_per_seed, "seeds": p.seeds}
-        for p in points
-        for o, by in p.headroom.items()
     ]  # fmt: skip

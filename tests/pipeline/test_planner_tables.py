@@ -10,6 +10,7 @@ import numpy as np
 from simlunar.config import translate
 from simlunar.config.schema import ExperimentCfg
 from simlunar.pipeline.runner import run_experiment
+from simlunar.results.figures import write_figures
 from simlunar.pipeline.unit import stage_seeds, terrain_seed_sequence
 from simlunar.study.sampling import run_sampling_study
 
@@ -72,3 +73,8 @@ def test_scores_md_has_the_uniform_lloyd_headroom_and_interior_tables(tmp_path):
     metas = [json.loads(p.read_text())["meta"] for p in (out / "units").glob("*.json")]
     assert len(metas) == 2
     assert all(min(m["rounds"]["sequential"]) >= 2 for m in metas)
+    # the study has an oracle and the uniform layout: the folder gets the headroom figure
+    written = write_figures(out)
+    assert out / "figures" / "headroom.png" in written
+    captions = (out / "figures" / "captions.md").read_text()
+    assert "## headroom" in captions and "cannot be realised" in captions
