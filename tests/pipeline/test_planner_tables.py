@@ -10,8 +10,8 @@ import numpy as np
 from simlunar.config import translate
 from simlunar.config.schema import ExperimentCfg
 from simlunar.pipeline.runner import run_experiment
-from simlunar.results.figures import write_figures
 from simlunar.pipeline.unit import stage_seeds, terrain_seed_sequence
+from simlunar.results.figures import write_figures
 from simlunar.study.sampling import run_sampling_study
 
 
