@@ -8,12 +8,17 @@ import platform
 import typer
 
 from simlunar.cli.common import flag
-from simlunar.pipeline.preflight import check_renderer
-from simlunar.render import backend
+
+# The library is imported inside each command, not at the top: importing it takes about 3 s (the
+# scientific stack, and config.registry, which reads every planner, sensor and renderer), which
+# `simlunar doctor --help` and a mistyped option should not pay (0.3 s with these imports here).
 
 
 def doctor(short: bool = flag("--short", "One line only.")) -> None:
     """Versions, the chosen Mitsuba variant and why, libLLVM, kernel cache, cores, GPU."""
+    from simlunar.pipeline.preflight import check_renderer
+    from simlunar.render import backend
+
     check_renderer()  # a bad SIMLUNAR_VARIANT in one line
     info = backend.choose_variant()
     if short:

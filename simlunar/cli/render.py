@@ -7,9 +7,10 @@ from pathlib import Path
 import typer
 
 from simlunar.cli.common import user_input
-from simlunar.config.scene import load_scene
-from simlunar.pipeline.preflight import check_camera, check_out_dir, check_renderer, terrain_facts
-from simlunar.pipeline.scene import check_render_folder, render_scene
+
+# The library is imported inside each command, not at the top: importing it takes about 3 s (the
+# scientific stack, and config.registry, which reads every planner, sensor and renderer), which
+# `simlunar render --help` and a mistyped option should not pay (0.3 s with these imports here).
 
 
 def render(
@@ -17,6 +18,15 @@ def render(
     out: str = typer.Option(None, "--out", help="output folder [default: results/render/<name>]"),
 ) -> None:
     """Render a scene: radiance.exr (linear), preview.png, ground_truth.exr/.npz, scene.json."""
+    from simlunar.config.scene import load_scene
+    from simlunar.pipeline.preflight import (
+        check_camera,
+        check_out_dir,
+        check_renderer,
+        terrain_facts,
+    )
+    from simlunar.pipeline.scene import check_render_folder, render_scene
+
     with user_input():
         cfg = load_scene(scene)
     out_dir = Path(out) if out else Path("results") / "render" / cfg.name

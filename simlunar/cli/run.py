@@ -9,15 +9,9 @@ from pathlib import Path
 import typer
 
 from simlunar.cli.common import flag, user_input
-from simlunar.config.loading import load_experiment
 from simlunar.config.yamlio import parse_set
 from simlunar.errors import SimlunarError
 from simlunar.pipeline.executors import make_executor
-from simlunar.pipeline.preflight import check_out_dir
-from simlunar.pipeline.runner import run_experiment
-from simlunar.results.exports import check_save_scans
-from simlunar.results.figures import write_figures_pruned
-from simlunar.results.store import FolderLock
 
 _SET_OPTION = typer.Option(
     None,
@@ -26,6 +20,10 @@ _SET_OPTION = typer.Option(
     help="override a key: --set render.spp=32 (repeatable)",
     show_default=False,
 )
+
+# The library is imported inside each command, not at the top: importing it takes about 3 s (the
+# scientific stack, and config.registry, which reads every planner, sensor and renderer), which
+# `simlunar run --help` and a mistyped option should not pay (0.3 s with these imports here).
 
 
 def run(
@@ -58,6 +56,10 @@ def run(
     ),
 ) -> None:
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
+    from simlunar.config.loading import load_experiment
+    from simlunar.pipeline.runner import run_experiment
+    from simlunar.results.exports import check_save_scans
+
     with user_input():
         overrides = parse_set(set_ or [])
         if pdf:
@@ -91,6 +93,10 @@ def figures(
     force: bool = flag("--force", "redraw even when the figures' inputs are unchanged"),
 ) -> None:
     """Draw the figures of a result folder without recomputing (only those whose inputs changed)."""
+    from simlunar.pipeline.preflight import check_out_dir
+    from simlunar.results.figures import write_figures_pruned
+    from simlunar.results.store import FolderLock
+
     check_out_dir(results_dir, option="figures")
     if not Path(results_dir).is_dir():
         raise SimlunarError(f"{results_dir}: no such folder")

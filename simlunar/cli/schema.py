@@ -8,10 +8,11 @@ from pathlib import Path
 import typer
 
 from simlunar.cli.common import flag
-from simlunar.config.docs import SCHEMA_KINDS, json_schema, reference_markdown
 from simlunar.errors import ConfigError
-from simlunar.pipeline.preflight import check_out_file
-from simlunar.results.store import atomic_write_text
+
+# The library is imported inside each command, not at the top: importing it takes about 3 s (the
+# scientific stack, and config.registry, which reads every planner, sensor and renderer), which
+# `simlunar schema --help` and a mistyped option should not pay (0.3 s with these imports here).
 
 
 def schema(
@@ -22,6 +23,10 @@ def schema(
     markdown: bool = flag("--markdown", "the YAML reference as Markdown (docs/experiments.md)"),
 ) -> None:
     """JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server)."""
+    from simlunar.config.docs import SCHEMA_KINDS, json_schema, reference_markdown
+    from simlunar.pipeline.preflight import check_out_file
+    from simlunar.results.store import atomic_write_text
+
     if kind not in SCHEMA_KINDS:
         raise ConfigError(
             f"--kind {kind}: unknown document kind (valid: {', '.join(SCHEMA_KINDS)})"

@@ -11,14 +11,11 @@ from types import SimpleNamespace
 import typer
 
 from simlunar.cli.common import flag, user_input
-from simlunar.config.terrain import merged_preset
-from simlunar.config.translate import terrain_params
 from simlunar.errors import SimlunarError
-from simlunar.pipeline.inputs import check_dem_file
-from simlunar.pipeline.preflight import check_out_dir
-from simlunar.terrain import generate
-from simlunar.terrain.io import FORMATS, GDAL_FORMATS, load_dem, write_terrain_outputs
-from simlunar.terrain.stats import terrain_report
+
+# The library is imported inside the command, not at the top: importing it takes about 3 s (the
+# scientific stack, and config.registry, which reads every planner, sensor and renderer), which
+# `simlunar terrain --help` and a mistyped option should not pay (0.3 s with these imports here).
 
 
 def terrain(
@@ -32,21 +29,26 @@ def terrain(
         "exr", "--format", help="DEM file: exr, npz, npy or tif (GeoTIFF)"
     ),
     mesh: str = typer.Option("ply", "--mesh", help="mesh file: ply, obj or none"),
-    stats: bool = flag(
+    print_stats: bool = flag(
         "--stats", "print RMS slopes at several baselines, Hurst exponent, densities"
     ),
 ) -> None:
     """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""
+    from simlunar.config.terrain import merged_preset
+    from simlunar.config.translate import terrain_params
+    from simlunar.pipeline.preflight import check_out_dir
+    from simlunar.terrain import generate, io, stats
+
     if mesh.lower() not in ("ply", "obj", "none"):
         raise SimlunarError(f"--mesh must be ply, obj or none, got {mesh!r}")
     if dem_format.lower() not in ("exr", "npz", "npy", "tif"):
         raise SimlunarError(f"--format must be exr, npz, npy or tif, got {dem_format!r}")
-    if out is None and not stats:
+    if out is None and not print_stats:
         raise SimlunarError("--out is required (unless --stats)")
     if seed < 0:
         raise SimlunarError(f"--seed must be >= 0, got {seed}")
-    if Path(preset).suffix.lower() in FORMATS + GDAL_FORMATS:
-        if not stats or out is not None:
+    if Path(preset).suffix.lower() in io.FORMATS + io.GDAL_FORMATS:
+        if not print_stats or out is not None:
             raise SimlunarError(f"{preset}: a DEM file is only read with --stats (and no --out)")
         _dem_stats(preset)
         return
@@ -65,12 +67,12 @@ def terrain(
         f"{res.params.name}: {rows} x {cols} cells at {res.terrain.spacing} m, "
         f"{len(res.craters)} craters, {len(res.rocks)} rocks, generated in {t_gen:.2f} s"
     )
-    if stats:
-        for line in terrain_report(res.terrain, craters=res.craters, rocks=res.rocks):
+    if print_stats:
+        for line in stats.terrain_report(res.terrain, craters=res.craters, rocks=res.rocks):
             typer.echo(line)
     if out is None:
         return
-    files = write_terrain_outputs(
+    files = io.write_terrain_outputs(
         res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
     )
     for name, path in files.items():
@@ -80,9 +82,12 @@ def terrain(
 def _dem_stats(path: str) -> None:
     """Print the statistics of a DEM file, with the craters and rocks of the ``features.json``
     beside it (as ``simlunar terrain`` writes them) when there is one."""
+    from simlunar.pipeline.inputs import check_dem_file
+    from simlunar.terrain import io, stats
+
     check_dem_file(path, key="--stats")  # size, finite heights, spacing and extent
     with user_input():
-        dem = load_dem(path)
+        dem = io.load_dem(path)
     diameters = {"craters": [], "rocks": []}
     side = Path(path).with_name("features.json")
     if side.is_file():
@@ -92,7 +97,7 @@ def _dem_stats(path: str) -> None:
     if side.is_file():
         typer.echo(f"features: {side}")
     features = {k: [SimpleNamespace(diameter=d) for d in v] for k, v in diameters.items()}
-    for line in terrain_report(dem, **features):
+    for line in stats.terrain_report(dem, **features):
         typer.echo(line)
 
 

@@ -7,9 +7,11 @@ import shlex
 import typer
 
 from simlunar.cli.common import user_input
-from simlunar.config.training import load_training
 from simlunar.errors import SimlunarError
-from simlunar.pipeline.train import train_from_config
+
+# The library is imported inside each command, not at the top: importing it takes about 3 s (the
+# scientific stack, and config.registry, which reads every planner, sensor and renderer), which
+# `simlunar train --help` and a mistyped option should not pay (0.3 s with these imports here).
 
 
 def train(
@@ -19,6 +21,9 @@ def train(
     out: str = typer.Option(None, "--out", help="model file (.joblib) [default: the YAML's model]"),
 ) -> None:
     """Train the learned importance map: <model>.joblib and its record <model>.json."""
+    from simlunar.config.training import load_training
+    from simlunar.pipeline.train import train_from_config
+
     with user_input():
         cfg, experiments = load_training(config)
     if out is not None and not out.endswith(".joblib"):
