@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.stats import t as student_t
 
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.style import label as display_label
@@ -425,6 +426,7 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
         tex_rows.append(" & ".join([tex_escape(e["label"]), *cells]) + " \\\\")
     cap = f"{title}: scanner study (means over trials; lower error is better)"
     md = f"### {cap}\n\n" + "\n".join(md_lines) + "\n"
+    md_iv, tex_iv = scanner_interval_table(summary, title=title)
     tex = "\n".join(
         [
             "\\begin{table}[t]",
@@ -440,4 +442,84 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
             "\\end{table}",
         ]
     )
-    return md, tex.replace("–", "--") + "\n"
+    return md + md_iv, (tex + tex_iv).replace("–", "--") + "\n"
+
+
+def t_interval(values) -> tuple[float, float, float]:
+    """Mean and two-sided 95 % Student t interval of independent values (at least two).
+
+    ``mean +- t(0.975, n - 1) * s / sqrt(n)`` with the sample standard deviation ``s``: the
+    interval for a handful of terrain seeds, where a bootstrap's percentiles would be too
+    narrow.
+    """
+    v = np.asarray(values, dtype=float)
+    if v.size < 2:
+        raise ValueError(f"a t interval needs at least two values, got {v.size}")
+    m = float(v.mean())
+    h = float(student_t.ppf(0.975, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size))
+    return m, m - h, m + h
+
+
+def scanner_interval_table(summary: list[dict], *, title: str = "") -> tuple[str, str]:
+    """Intervals over units (terrain seeds) of the scanner study's key ratios.
+
+    Per dot mode and planner: MSE / gray code (each unit's trial-mean MSE over its gray-code
+    MSE) and, paired by unit, the MSE over the random planner's in the same mode and unit;
+    each as the mean over units with its 95 % t interval, and the number of units where the
+    planner's MSE is below random's. Empty with fewer than two units (nothing to pool).
+
+    Parameters
+    ----------
+    summary : list of dict
+        Per-unit rows of :func:`scanner_summary` with ``ratio`` (MSE / gray code) added.
+    """
+    per = [e for e in summary if e.get("unit") is not None and e.get("planner")]
+    units = sorted({e["unit"] for e in per})
+    if len(units) < 2:
+        return "", ""
+    by = {(e["mode"], e["planner"], e["unit"]): e for e in per}
+    pairs = list(dict.fromkeys((e["mode"], e["planner"]) for e in per))
+    has_random = any(p == "random" for _, p in pairs)
+    header = ["Mode / planner", "units", "MSE / gray code", "MSE / random's, paired"]
+    header.append("units below random")
+    rows = []
+    for mode, planner in pairs:
+        mine = [by.get((mode, planner, u)) for u in units]
+        ratio = [e["ratio"] for e in mine if e is not None and e.get("ratio") is not None]
+        cells = [str(len(ratio)), _interval_text(ratio)]
+        rand = [by.get((mode, "random", u)) for u in units]
+        paired = [
+            a["mse"] / b["mse"]
+            for a, b in zip(mine, rand)
+            if a is not None and b is not None and a.get("mse") and b.get("mse")
+        ]
+        if planner == "random":
+            cells += ["1 (reference)", "–"]
+        elif has_random and paired:
+            below = sum(1 for x in paired if x < 1.0)
+            cells += [_interval_text(paired), f"{below} of {len(paired)}"]
+        else:
+            cells += ["– (no random planner)", "–"]
+        rows.append((pair_label(mode, planner), cells))
+    n = len(units)
+    cap = (
+        f"{title}: MSE ratios over {n} units (terrain seeds), mean [95 % t interval over units]; "
+        "paired: each unit's MSE over the random planner's in the same unit and mode"
+    )
+    lines = ["| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]
+    lines += ["| " + " | ".join([lab, *c]) + " |" for lab, c in rows]
+    md = f"\n### {cap}\n\n" + "\n".join(lines) + "\n"
+    out = _tex_begin(cap, len(header))
+    out += [" & ".join(tex_escape(h) for h in header) + " \\\\", "\\midrule"]
+    out += [" & ".join([tex_escape(lab), *(tex_escape(x) for x in c)]) + " \\\\" for lab, c in rows]
+    return md, "\n" + _tex_end(out)
+
+
+def _interval_text(values: list[float]) -> str:
+    """``mean [low, high]`` (3 decimals) of a t interval; the value alone for one unit."""
+    if not values:
+        return "–"
+    if len(values) == 1:
+        return f"{values[0]:.3f}"
+    m, lo, hi = t_interval(values)
+    return f"{m:.3f} [{lo:.3f}, {hi:.3f}]"

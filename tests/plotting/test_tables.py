@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from simlunar.plotting.tables import score_tables
 
 # paper Table 2 (moonyard), MSE/GRAD/SAL rows, Grid/Random/Gradient/Entropy/Wavelet
@@ -123,6 +125,58 @@ def test_scanner_table_labels_sweep_points_and_pools_units():
     # pooled: mean MSE (3 + 1) / 2 = 2 and mean of the per-unit ratios (0.75 + 0.5) / 2
     assert "| mean of 2 units: Ambiguity enhancement / Wavelet | 2 | – | 10 | 0.625 |" in md
     assert "| mean of 2 units: Gray code | 3 | – | 10 | 1.000 |" in md
+
+
+def test_t_interval_by_hand():
+    from simlunar.plotting.tables import t_interval
+
+    # [1, 2, 3]: mean 2, s = 1, t(0.975, 2) = 4.302653 -> half width 4.302653 / sqrt(3) = 2.48414
+    m, lo, hi = t_interval([1.0, 2.0, 3.0])
+    assert m == 2.0
+    assert lo == pytest.approx(2.0 - 2.484138, abs=1e-6)
+    assert hi == pytest.approx(2.0 + 2.484138, abs=1e-6)
+    with pytest.raises(ValueError, match="at least two"):
+        t_interval([1.0])
+
+
+def test_scanner_interval_table_pairs_each_unit_with_random():
+    from simlunar.plotting.tables import scanner_tables
+
+    def row(unit, mode, planner, trial, value):
+        return {"unit": unit, "seed": str(5 + int(unit)), "mode": mode, "planner": planner,
+                "trial": trial, "metric": "mse", "value": value, "renders": "10"}  # fmt: skip
+
+    rows = []
+    # gray code 10 in every unit; wavelet's trial means 8, 9, 7; random's 9, 9, 8
+    for u, (w, r) in enumerate([(("7", "9"), ("9", "9")), (("9", "9"), ("9", "9")),
+                                (("7", "7"), ("8", "8"))]):  # fmt: skip
+        rows.append(row(str(u), "gray_code", "", "0", "10"))
+        for t in range(2):
+            rows.append(row(str(u), "ambiguity_enhancement", "wavelet", str(t), w[t]))
+            rows.append(row(str(u), "ambiguity_enhancement", "random", str(t), r[t]))
+    md, tex = scanner_tables(rows, metrics=["mse"], title="s")
+    # MSE / gray code of wavelet: 0.8, 0.9, 0.7 -> mean 0.8, s 0.1, half width 4.302653 x 0.1 / sqrt 3
+    h = 4.302653 * 0.1 / 3**0.5
+    want = f"0.800 [{0.8 - h:.3f}, {0.8 + h:.3f}]"
+    line = next(
+        x for x in md.splitlines() if x.startswith("| Ambiguity enhancement / Wavelet | 3 |")
+    )
+    assert want in line
+    # paired with random per unit: 8/9, 9/9, 7/8; below random in 2 of 3 units; random
+    # itself: 0.9, 0.9, 0.8 of gray code, mean 0.867
+    paired = [8 / 9, 1.0, 7 / 8]
+    mean = sum(paired) / 3
+    assert f"| {mean:.3f} [" in line.split(want)[1] and line.endswith("| 2 of 3 |")
+    assert "| Ambiguity enhancement / Random | 3 | 0.867 [" in md and "1 (reference)" in md
+    assert "95 % t interval over units" in md and "MSE / random's, paired" in tex
+
+
+def test_scanner_interval_table_needs_two_units():
+    from simlunar.plotting.tables import scanner_interval_table
+
+    one = [{"unit": "0", "mode": "ambiguity_enhancement", "planner": "wavelet", "ratio": 0.9,
+            "mse": 1.0}]  # fmt: skip
+    assert scanner_interval_table(one) == ("", "")
 
 
 def test_intervals_print_and_bold_only_where_marked():
