@@ -221,6 +221,19 @@ def _sweep_y_axis(ax, metric: str, allv: list, log_y: bool, unit: str) -> None:
         ax.set_ylabel(metric_axis(metric, unit=unit), fontsize=LABEL_PT)
 
 
+def _rate_unit(top: float) -> tuple[float, str]:
+    """A readable unit for error rates up to ``top``: (its size as a fraction, its name).
+
+    Rates of 1e-7 on an axis of fractions print as "1e-7" offset text above the axis, a unit
+    nobody reads; per million (or billion) pixels gives the axis plain numbers.
+    """
+    for per, unit in ((1e-2, "per 100 pixels"), (1e-3, "per thousand pixels"),
+                      (1e-6, "per million pixels"), (1e-9, "per billion pixels")):  # fmt: skip
+        if top >= per:
+            return per, unit
+    return 1e-9, "per billion pixels"
+
+
 def bit_error_rates(rates: dict[str, float], *, ax=None):
     """Gray-code bit error rate per bit (``ber_c<i>`` columns, ``ber_r<i>`` rows; MSB = 0).
 
@@ -228,6 +241,8 @@ def bit_error_rates(rates: dict[str, float], *, ax=None):
     result folders draw no figure then (:mod:`simlunar.results.figures`).
     """
     fig, ax = new_axes(ax, (COLUMN_W, 2.4))
+    vals = [float(v) for v in rates.values()]
+    per, unit = _rate_unit(max(vals, default=0.0))
     drawn = False
     for prefix, name, color in (
         ("ber_c", "column bits", "#1f77b4"),
@@ -237,7 +252,7 @@ def bit_error_rates(rates: dict[str, float], *, ax=None):
         if items:
             ax.plot(
                 [i for i, _ in items],
-                [v for _, v in items],
+                [v / per for _, v in items],
                 marker="o",
                 ms=3,
                 color=color,
@@ -245,8 +260,8 @@ def bit_error_rates(rates: dict[str, float], *, ax=None):
             )
             drawn = True
     ax.set_xlabel("bit (0 = most significant)", fontsize=LABEL_PT)
-    ax.set_ylabel("bit error rate (fraction of pixels)", fontsize=LABEL_PT)
-    vals = [float(v) for v in rates.values()]
+    ax.set_ylabel(f"bit errors {unit}", fontsize=LABEL_PT)
+    ax.tick_params(labelsize=TICK_PT)
     if drawn and vals and max(vals) == 0:
         ax.set_ylim(-0.05, 1.0)
         ax.text(
@@ -259,7 +274,7 @@ def bit_error_rates(rates: dict[str, float], *, ax=None):
             fontsize=LABEL_PT,
         )
     elif drawn:
-        ax.set_ylim(0, max(vals) * 1.15)
+        ax.set_ylim(0, max(vals) / per * 1.15)
     if drawn:
         ax.legend(fontsize=TICK_PT, frameon=False)
     ax.grid(True, alpha=0.3)

@@ -185,8 +185,9 @@ def bit_errors(n_units: int, all_zero: bool, n_bits: int = 0) -> str:
     return (
         f"Gray-code bit error rate per bit (0 = most significant; column bits and row bits): "
         f"the fraction of camera pixels lit by the projector, and at least one pixel from "
-        f"that bit's true stripe edges, whose decoded bit differs from the truth{over}."
-        f"{zero}"
+        f"that bit's true stripe edges, whose decoded bit differs from the truth{over}; "
+        f"drawn per 100, thousand, million or billion pixels, whichever keeps the numbers "
+        f"plain (the axis label says which).{zero}"
     )
 
 

@@ -185,6 +185,17 @@ def test_bit_error_plot_with_no_errors_says_so():
     assert texts == ["no bit errors: all 3 per-bit rates are 0"]
     _fig, ax = F.bit_error_rates({"ber_c0": 0.02, "ber_c1": 0.0})
     assert len(ax.texts) == 0 and ax.get_ylim()[0] == 0.0
+    assert ax.get_ylabel() == "bit errors per 100 pixels"
+    assert list(ax.lines[0].get_ydata()) == pytest.approx([2.0, 0.0])
+
+
+def test_small_bit_error_rates_get_a_unit_not_an_offset():
+    # 1.66e-7 on a fraction axis printed "1e-7" above the axis (the DLP run's figure)
+    fig, ax = F.bit_error_rates({"ber_c7": 0.0, "ber_c8": 1.66e-7, "ber_r8": 0.0})
+    assert ax.get_ylabel() == "bit errors per billion pixels"
+    assert max(ax.lines[0].get_ydata()) == pytest.approx(166.0)
+    fig.canvas.draw()
+    assert ax.yaxis.get_offset_text().get_text() == ""
 
 
 def test_save_is_deterministic():
