@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage, stats
+from scipy import ndimage
 
 from simlunar.lidar.waveform import PulseOptions, TimeBins, pulse_kernel
 
@@ -116,6 +116,10 @@ def extract_ranges(
     m = max(1, int(np.ceil(1.5 * pulse.sigma_bins(bins))))
     win = ndimage.uniform_filter1d(c, 2 * m + 1, axis=1, mode="constant") * (2 * m + 1)
     mu = np.maximum(bg * (2 * m + 1), 1e-9)
+    # scipy.stats is imported where a threshold is set: it adds 0.45 s to every import of the
+    # library (the LIDAR sensors are in the sensor registry that config reads)
+    from scipy import stats
+
     c_thr = stats.poisson.isf(stats.norm.sf(options.threshold_sigma), mu)
     full = ndimage.uniform_filter1d(c, 2 * half + 1, axis=1, mode="constant") * (2 * half + 1)
     photons = full - bg * (2 * half + 1)

@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.stats import t as student_t
 
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.style import label as display_label
@@ -452,6 +451,9 @@ def t_interval(values) -> tuple[float, float, float]:
     interval for a handful of terrain seeds, where a bootstrap's percentiles would be too
     narrow.
     """
+    # scipy.stats costs 0.45 s to import; tables of sampling studies never need it
+    from scipy.stats import t as student_t
+
     v = np.asarray(values, dtype=float)
     if v.size < 2:
         raise ValueError(f"a t interval needs at least two values, got {v.size}")
