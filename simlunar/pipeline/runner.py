@@ -37,7 +37,7 @@ from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_key
 from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
-from simlunar.plotting.tables import scanner_tables
+from simlunar.plotting.scanner_tables import scanner_tables
 from simlunar.results.exports import write_scan_export
 from simlunar.results.figures import write_figures_pruned
 from simlunar.results.folder import (

@@ -54,6 +54,7 @@ _TABLE_MODULES = (
     "simlunar.plotting.lidar",  # lidar_summary and lidar_tables write the LIDAR study's tables
     "simlunar.results.summaries",
     "simlunar.plotting.tables",
+    "simlunar.plotting.scanner_tables",
     "simlunar.results.aggregate",
     "simlunar.study.stats",
 )

@@ -12,7 +12,8 @@ from matplotlib.colors import to_hex
 
 from simlunar.plotting import figures as F
 from simlunar.plotting import style as S
-from simlunar.plotting.tables import scanner_tables, score_tables
+from simlunar.plotting.scanner_tables import scanner_tables
+from simlunar.plotting.tables import score_tables
 
 BASE = ("random", "grid", "gradient", "entropy", "wavelet")
 

@@ -59,7 +59,7 @@ def test_missing_scores_show_a_dash():
 
 
 def test_scanner_table_means_and_ratio_to_gray_code():
-    from simlunar.plotting.tables import scanner_tables
+    from simlunar.plotting.scanner_tables import scanner_tables
 
     rows = [
         {
@@ -99,7 +99,7 @@ def test_scanner_table_means_and_ratio_to_gray_code():
 
 
 def test_scanner_table_labels_sweep_points_and_pools_units():
-    from simlunar.plotting.tables import scanner_tables
+    from simlunar.plotting.scanner_tables import scanner_tables
 
     def row(unit, seed, mode, planner, value):
         return {
@@ -128,7 +128,7 @@ def test_scanner_table_labels_sweep_points_and_pools_units():
 
 
 def test_t_interval_by_hand():
-    from simlunar.plotting.tables import t_interval
+    from simlunar.plotting.scanner_tables import t_interval
 
     # [1, 2, 3]: mean 2, s = 1, t(0.975, 2) = 4.302653 -> half width 4.302653 / sqrt(3) = 2.48414
     m, lo, hi = t_interval([1.0, 2.0, 3.0])
@@ -140,7 +140,7 @@ def test_t_interval_by_hand():
 
 
 def test_scanner_interval_table_pairs_each_unit_with_random():
-    from simlunar.plotting.tables import scanner_tables
+    from simlunar.plotting.scanner_tables import scanner_tables
 
     def row(unit, mode, planner, trial, value):
         return {"unit": unit, "seed": str(5 + int(unit)), "mode": mode, "planner": planner,
@@ -172,7 +172,7 @@ def test_scanner_interval_table_pairs_each_unit_with_random():
 
 
 def test_scanner_interval_table_needs_two_units():
-    from simlunar.plotting.tables import scanner_interval_table
+    from simlunar.plotting.scanner_tables import scanner_interval_table
 
     one = [{"unit": "0", "mode": "ambiguity_enhancement", "planner": "wavelet", "ratio": 0.9,
             "mse": 1.0}]  # fmt: skip
