@@ -228,7 +228,7 @@ def _rate_unit(top: float) -> tuple[float, str]:
     nobody reads; per million (or billion) pixels gives the axis plain numbers.
     """
     for per, unit in ((1e-2, "per 100 pixels"), (1e-3, "per thousand pixels"),
-                      (1e-6, "per million pixels"), (1e-9, "per billion pixels")):  # fmt: skip
+                      (1e-6, "per million pixels")):  # fmt: skip
         if top >= per:
             return per, unit
     return 1e-9, "per billion pixels"

@@ -168,8 +168,8 @@ def scanner_interval_table(summary: list[dict], *, title: str = "") -> tuple[str
     by = {(e["mode"], e["planner"], e["unit"]): e for e in per}
     pairs = list(dict.fromkeys((e["mode"], e["planner"]) for e in per))
     has_random = any(p == "random" for _, p in pairs)
-    header = ["Mode / planner", "units", "MSE / gray code", "MSE / random's, paired"]
-    header.append("units below random")
+    header = ["Mode / planner", "units", "MSE / gray code", "MSE / random's, paired",
+              "units below random"]  # fmt: skip
     rows = []
     for mode, planner in pairs:
         mine = [by.get((mode, planner, u)) for u in units]
