@@ -14,7 +14,12 @@ from typing import Any
 from pydantic import ValidationError
 
 from simlunar.config import registry
-from simlunar.config.messages import format_validation_error, model_at, valid_keys
+from simlunar.config.messages import (
+    format_validation_error,
+    is_label_mapping,
+    model_at,
+    valid_keys,
+)
 from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
@@ -62,11 +67,14 @@ def check_key_path(path: str, data: dict) -> None:
     """Raise ConfigError unless ``path`` names a settable key of the schema for this data
     (``terrain.overrides.fractal.rms_m`` included: the overrides are typed preset sections).
 
-    Keys inside mappings with free labels (``study.strategy_options.<label>``) are not
-    settable one by one; set the whole mapping.
+    A mapping with free labels (``study.strategy_options``) takes any label, whose value is
+    checked when the whole experiment is validated, and the keys inside a label
+    (``study.strategy_options.wavelet_lloyd.uniform_mix``) are checked like any other.
     """
     parts = path.split(".")
     parent = ".".join(parts[:-1])
+    if parts[0] not in ("sweep", "name") and is_label_mapping(parent, data, ExperimentCfg):
+        return
     try:
         keys = valid_keys(parent, data, ExperimentCfg)
         model = model_at(parent, data, ExperimentCfg)

@@ -7,6 +7,7 @@ project reads reports its errors the same way.
 from __future__ import annotations
 
 import re
+import typing
 from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
@@ -17,7 +18,13 @@ from simlunar.errors import ConfigError
 #: a pydantic model class
 M = TypeVar("M", bound=BaseModel)
 
-__all__ = ["format_validation_error", "model_at", "valid_keys", "validate_file_data"]
+__all__ = [
+    "format_validation_error",
+    "is_label_mapping",
+    "model_at",
+    "valid_keys",
+    "validate_file_data",
+]
 
 
 def _loc_path(loc: tuple, data: Any) -> str:
@@ -128,19 +135,47 @@ def format_validation_error(
 
 def model_at(path: str, data: dict, root: type[BaseModel]) -> type[BaseModel] | None:
     """The model class that holds the keys under ``path`` (``""`` = ``root``) for this data."""
-    model: type[BaseModel] = root
+    model: type[BaseModel] | None = root
     cur: Any = data
-    if not path:
-        return model
-    for part in path.split("."):
+    parts = path.split(".") if path else []
+    i = 0
+    while i < len(parts) and model is not None:
+        part = parts[i]
         if part not in model.model_fields:
             raise ConfigError(f"{path}: no such key {part!r}")
         ann = model.model_fields[part].annotation
         cur = cur.get(part) if isinstance(cur, dict) else None
-        model = _resolve_model(ann, cur, part)
-        if model is None:
-            return None
+        value_ann = _mapping_value(ann)
+        if value_ann is None:
+            model = _resolve_model(ann, cur, part)
+            i += 1
+        elif i + 1 == len(parts):
+            return None  # a mapping with free labels (study.strategy_options) has no fixed keys
+        else:  # the next part is a label of the mapping; its value is the model
+            label = parts[i + 1]
+            cur = cur.get(label) if isinstance(cur, dict) else None
+            model = _resolve_model(value_ann, cur, label)
+            i += 2
     return model
+
+
+def _mapping_value(ann: Any) -> Any:
+    """The value annotation of a ``dict[str, X]`` field (``X | None`` unwrapped), else None."""
+    for a in (ann, *getattr(ann, "__args__", ())):
+        if typing.get_origin(a) is dict:
+            return typing.get_args(a)[1]
+    return None
+
+
+def is_label_mapping(path: str, data: dict, root: type[BaseModel]) -> bool:
+    """Whether ``path`` names a mapping whose keys are free labels (``study.strategy_options``)."""
+    parent, _, last = path.rpartition(".")
+    try:
+        model = model_at(parent, data, root)
+    except ConfigError:
+        return False
+    field = model.model_fields.get(last) if model is not None else None
+    return field is not None and _mapping_value(field.annotation) is not None
 
 
 def _resolve_model(ann: Any, value: Any, name: str) -> type[BaseModel] | None:

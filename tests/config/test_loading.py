@@ -196,6 +196,40 @@ def test_load_experiment_prefixes_the_file_and_applies_overrides(tmp_path):
         load_experiment(tmp_path / "missing.yaml")
 
 
+def test_set_adds_a_labelled_strategy_and_checks_the_keys_inside_it(tmp_path):
+    # study.strategy_options is a mapping with free labels: --set of a new label used to be
+    # refused as "no such key" with the option keys listed as if they were the labels
+    p = tmp_path / "e.yaml"
+    d = base()
+    d["study"]["strategy_options"] = {
+        "wavelet_lloyd": {"strategy": "wavelet", "placement": "lloyd"}
+    }
+    d["study"]["strategies"] = ["random", "wavelet_lloyd"]
+    p.write_text(yaml.safe_dump(d))
+    cfg = load_experiment(
+        p,
+        {
+            "study.strategies": ["random", "wavelet_lloyd", "lloyd_half"],
+            "study.strategy_options.lloyd_half": {"strategy": "wavelet", "placement": "lloyd"},
+            "study.strategy_options.wavelet_lloyd.uniform_mix": 0.5,
+        },
+    )
+    assert cfg.study.strategy_options["lloyd_half"].placement == "lloyd"
+    assert cfg.study.strategy_options["wavelet_lloyd"].uniform_mix == 0.5
+    with pytest.raises(
+        ConfigError,
+        match=r"--set study.strategy_options.wavelet_lloyd.placemnt: no such key in the "
+        r"experiment schema \(valid keys under study.strategy_options.wavelet_lloyd: placement,",
+    ):
+        load_experiment(p, {"study.strategy_options.wavelet_lloyd.placemnt": "lloyd"})
+    with pytest.raises(ConfigError, match=r"study.strategy_options.x.placemnt: unknown key"):
+        load_experiment(p, {"study.strategy_options.x": {"placemnt": "lloyd"}})
+    # a sweep over one option of one labelled strategy
+    d["sweep"] = {"study.strategy_options.wavelet_lloyd.uniform_mix": [0.0, 0.5]}
+    cfg = validate_data(d)
+    assert cfg.sweep["study.strategy_options.wavelet_lloyd.uniform_mix"] == [0.0, 0.5]
+
+
 def test_json_schema_forbids_unknown_keys():
     s = json_schema()
     assert s["title"] == "simlunar experiment"
