@@ -41,11 +41,23 @@ class ScoreProtocol:
     metric : str
         Error metric the score uses (``mse``, ``rmse``, ``mae``, ``grad``; ``sal`` uses the
         image's saliency map).
+    placement : {"random", "lloyd"}
+        How the combined map places its samples: the paper's weighted random draw, or the
+        deterministic halftone + weighted Lloyd layout (:mod:`simlunar.planner.placement`,
+        border covered), whose plan changes smoothly with the coefficients. The reference of
+        the eq. 4.3 score stays uniform random sampling either way; with ``lloyd`` the weight
+        on ``uniform`` is the share of the uniform Lloyd layout, so "all on uniform" is the
+        image-free reference layout.
     """
 
     densities: Sequence[float] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024)
     trials: int = 2
     metric: str = "mse"
+    placement: str = "random"
+
+    def __post_init__(self):
+        if self.placement not in ("random", "lloyd"):
+            raise ValueError(f"placement must be 'random' or 'lloyd', got {self.placement!r}")
 
 
 @dataclass(frozen=True)
@@ -105,6 +117,7 @@ class CombinationFit:
 def _prepare(scenes, maps, features, dens, protocol, base, feature_opts):
 
     trials, metric = protocol.trials, protocol.metric
+    placed = {"placement": protocol.placement}
     if maps is not None and len(maps) != len(scenes):
         raise ValueError(f"maps: one dict per scene, got {len(maps)} for {len(scenes)} scenes")
     prepared = []
@@ -135,9 +148,12 @@ def _prepare(scenes, maps, features, dens, protocol, base, feature_opts):
 
         def errors(strategy, weights, depth=depth, ks=ks, seeds=seeds, mw=mw):
             e = np.empty((len(ks), trials))
+            opts = placed if strategy == "combination" else {}
             for di, k in enumerate(ks):
                 for t in range(trials):
-                    p = plan(strategy, k, weights=weights, shape=depth.shape, rng=seeds[di][t])
+                    p = plan(
+                        strategy, k, weights=weights, shape=depth.shape, rng=seeds[di][t], **opts
+                    )
                     rec = reconstruct(p.rc, depth[p.rows, p.cols], depth.shape)
                     e[di, t] = error_metric(metric, rec, depth, weights=mw)
             return e

@@ -65,3 +65,19 @@ def test_fit_command_errors_name_the_problem(results, capsys):
     assert F.main([str(results), "--train-seeds", "1", "--test-seeds", "1"]) == 2
     assert "must not overlap" in capsys.readouterr().err
     assert F.main([str(results / "nope"), "--train-seeds", "1", "--test-seeds", "2"]) == 2
+
+
+def test_fit_with_lloyd_placement_writes_its_own_report(results, capsys):
+    before = (results / "fit.json").read_bytes() if (results / "fit.json").exists() else None
+    argv = [str(results), "--train-seeds", "1", "2", "--test-seeds", "3", "--maxiter", "2"]
+    assert F.main([*argv, "--restarts", "0", "--trials", "1", "--placement", "lloyd"]) == 0
+    report = json.loads((results / "fit_lloyd.json").read_text())
+    assert report["placement"] == "lloyd" and report["trials"] == 1
+    assert "placement halftone + Lloyd" in (results / "fit_lloyd.md").read_text()
+    assert "placement halftone + Lloyd" in capsys.readouterr().out
+    after = (results / "fit.json").read_bytes() if (results / "fit.json").exists() else None
+    assert after == before  # the weighted draw's fit is not overwritten
+    with pytest.raises(SystemExit) as exc:  # argparse's usage error: one line, exit 2
+        F.main([*argv, "--placement", "halftone"])
+    assert exc.value.code == 2
+    assert "invalid choice: 'halftone'" in capsys.readouterr().err

@@ -122,3 +122,35 @@ def test_fit_rejects_mismatched_scene():
     depth, image = _scene(1)
     with pytest.raises(ValueError, match="scene 0"):
         fit_combination([(depth[:10], image)], rng=0)
+
+
+def test_lloyd_placement_all_on_uniform_is_the_uniform_lloyd_layout():
+    # with placement="lloyd" the combined map is placed by halftone + Lloyd: all weight on
+    # "uniform" must score exactly as the image-free lloyd_uniform strategy against random,
+    # with the protocol's seeds (common random numbers: one SeedSequence per scene, density
+    # and trial), and differently from the paper's weighted draw of the same map
+    from simlunar.metrics import metric, score
+    from simlunar.reconstruction import reconstruct
+
+    depth, image = _scene(4)
+    dens = (1 / 16, 1 / 64)
+    proto = ScoreProtocol(densities=dens, trials=2, placement="lloyd")
+    got = score_combination([(depth, image)], {"uniform": 1.0}, protocol=proto, rng=7)
+
+    base = int(np.random.default_rng(7).integers(0, 2**63))
+    errs = {"random": np.empty((2, 2)), "lloyd": np.empty((2, 2))}
+    for di, d in enumerate(dens):
+        k = round(d * depth.size)
+        for t in range(2):
+            for name, strategy in (("random", "random"), ("lloyd", "lloyd_uniform")):
+                seed = np.random.SeedSequence(base, spawn_key=(0, di, t))
+                p = plan(strategy, k, shape=depth.shape, rng=seed)
+                rec = reconstruct(p.rc, depth[p.rows, p.cols], depth.shape)
+                errs[name][di, t] = metric("mse", rec, depth)
+    assert got == pytest.approx(score(errs, dens)["lloyd"], rel=1e-12)
+    drawn = score_combination(
+        [(depth, image)], {"uniform": 1.0}, protocol=ScoreProtocol(densities=dens, trials=2), rng=7
+    )
+    assert abs(drawn - got) > 0.05
+    with pytest.raises(ValueError, match="placement must be 'random' or 'lloyd'"):
+        ScoreProtocol(placement="halftone")
