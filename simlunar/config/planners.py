@@ -123,6 +123,17 @@ class SequentialCfg(_Model):
     prior: Literal["none", "wavelet", "gradient", "entropy", "saliency", "learned"] = Field(
         "none", description="image map multiplying the estimate (feature_opts are its options)"
     )
+    first_round: Literal["uniform", "prior"] = Field(
+        "uniform",
+        description="first layout: uniform Lloyd, or the Lloyd layout of the prior map "
+        "(prior^prior_power, 25 % uniform; needs a prior)",
+    )
+
+    @model_validator(mode="after")
+    def _first_round_needs_a_prior(self):
+        if self.first_round == "prior" and self.prior == "none":
+            raise ValueError("first_round: 'prior' needs a prior map (sequential.prior)")
+        return self
 
 
 #: lloyd placement options (placement: lloyd, lloyd_uniform, oracle_hessian)

@@ -7,7 +7,12 @@ section; the tables below must equal the schema's defaults (a test keeps them so
 
 from __future__ import annotations
 
-__all__ = ["NEW_PLANNER_DEFAULTS", "NEW_STUDY_DEFAULTS", "without_new_defaults"]
+__all__ = [
+    "NEW_NESTED_DEFAULTS",
+    "NEW_PLANNER_DEFAULTS",
+    "NEW_STUDY_DEFAULTS",
+    "without_new_defaults",
+]
 
 #: study keys added after caches existed, with the value that gives the numbers of before
 NEW_STUDY_DEFAULTS = {"score_region": "full"}
@@ -21,6 +26,8 @@ NEW_PLANNER_DEFAULTS = {
     "sequential": {"max_rounds": 12, "first_share": 0.3, "batch_share": 0.12, "temper": 0.5,
                    "uniform_mix": 0.5, "prior_power": 0.5, "nms_pitches": 0.7, "prior": "none"},
 }  # fmt: skip
+#: keys added inside a planner option section after the table above, with their defaults
+NEW_NESTED_DEFAULTS = {"sequential": {"first_round": "uniform"}}
 
 
 def without_new_defaults(study: dict) -> dict:
@@ -35,6 +42,11 @@ def without_new_defaults(study: dict) -> dict:
         fo = opts.get("feature_opts")
         if isinstance(fo, dict) and fo.get("model", 0) is None:
             opts = {**opts, "feature_opts": {k: v for k, v in fo.items() if k != "model"}}
+        for section, news in NEW_NESTED_DEFAULTS.items():
+            sub = opts.get(section)
+            if isinstance(sub, dict):
+                sub = {k: v for k, v in sub.items() if news.get(k, object()) != v}
+                opts = {**opts, section: sub}
         return {k: v for k, v in opts.items() if NEW_PLANNER_DEFAULTS.get(k, object()) != v}
 
     if isinstance(out.get("strategy_options"), dict):

@@ -1,8 +1,8 @@
 """Region-based iterative enhancement (paper section 5): multi-round sequential sampling.
 
-A range sensor that can be asked again places its samples in rounds: a uniform layout of part
-of the budget first, then batches where the measured samples themselves say the surface is
-rough. The planner reads the depth only through the sensor callback ``measure`` at the cells it
+A range sensor that can be asked again places its samples in rounds: a layout of part of the
+budget first (uniform, or the one-shot Lloyd layout of the prior map: ``first_round="prior"``),
+then batches where the measured samples themselves say the surface is rough. The planner reads the depth only through the sensor callback ``measure`` at the cells it
 samples; the error estimate is built from what a sensor would know:
 
 1. leave-one-out residuals: each measured sample against the least-squares plane through its
@@ -26,12 +26,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from simlunar.planner.placement import place
+from simlunar.planner.placement import density_from_map, place
 from simlunar.planner.strategies import check_k
 from simlunar.planner.types import SamplePlan
 from simlunar.reconstruction import reconstruct, triangulate
 
 __all__ = [
+    "FIRST_ROUND_MIX",
     "MEASURING",
     "SequentialOptions",
     "SequentialPlan",
@@ -44,6 +45,9 @@ __all__ = [
 #: strategies that measure while they plan (they need a sensor, not only an image): the study
 #: runs them through :func:`plan_sequential` with the sensor's ``acquire`` as ``measure``
 MEASURING = ("sequential",)
+
+#: uniform share of a prior-placed first round (the ``lloyd`` placement's default mix)
+FIRST_ROUND_MIX = 0.25
 
 
 @dataclass(frozen=True)
@@ -66,6 +70,11 @@ class SequentialOptions:
         Power of the prior map (normalised to mean 1) that multiplies the estimate.
     nms_pitches : float > 0
         Non-maximum-suppression radius in pitches sqrt(N / k) of the final budget.
+    first_round : {"uniform", "prior"}
+        The first layout: uniform (halftone + Lloyd of a constant density), or the one-shot
+        layout of the prior map (halftone + Lloyd of the density prior^prior_power mixed with
+        :data:`FIRST_ROUND_MIX` uniform, as the ``lloyd`` placement of a map); "prior" needs
+        a prior.
     """
 
     max_rounds: int = 12
@@ -75,6 +84,7 @@ class SequentialOptions:
     uniform_mix: float = 0.5
     prior_power: float = 0.5
     nms_pitches: float = 0.7
+    first_round: str = "uniform"
 
     def __post_init__(self):
         if isinstance(self.max_rounds, bool) or not isinstance(self.max_rounds, int):
@@ -87,6 +97,7 @@ class SequentialOptions:
             "uniform_mix": (0.0 <= self.uniform_mix <= 1.0, "in [0, 1]"),
             "prior_power": (self.prior_power > 0.0, "> 0"),
             "nms_pitches": (self.nms_pitches > 0.0, "> 0"),
+            "first_round": (self.first_round in ("uniform", "prior"), "'uniform' or 'prior'"),
         }
         for name, (ok, what) in checks.items():
             if not ok:
@@ -307,9 +318,15 @@ def plan_sequential(
     n = shape[0] * shape[1]
     k = check_k(k, n)
     prior = _check_prior(prior, shape)
+    if opt.first_round == "prior" and prior is None:
+        raise ValueError("first_round='prior' needs a prior map")
     first = max(3, min(k, round(opt.first_share * k)))
     batch = max(1, int(np.ceil(opt.batch_share * k)))
-    flat = uniform_layout(shape, first, rng=rng)
+    if opt.first_round == "prior":
+        density = density_from_map(prior, power=opt.prior_power, mix=FIRST_ROUND_MIX)
+        flat = place(density, first, rng=rng)
+    else:
+        flat = uniform_layout(shape, first, rng=rng)
     vals = [_measure(measure, np.column_stack(np.divmod(flat, shape[1])))]
     flats, rounds = [flat], 1
     radius = opt.nms_pitches * float(np.sqrt(n / k))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import json
 from dataclasses import asdict
 
 import pytest
@@ -10,7 +11,11 @@ import pytest
 from simlunar.config import studies, translate
 from simlunar.config.loading import validate_data
 from simlunar.errors import ConfigError
-from simlunar.pipeline.cache_keys import NEW_PLANNER_DEFAULTS, NEW_STUDY_DEFAULTS
+from simlunar.pipeline.cache_keys import (
+    NEW_NESTED_DEFAULTS,
+    NEW_PLANNER_DEFAULTS,
+    NEW_STUDY_DEFAULTS,
+)
 from simlunar.pipeline.runner import unit_key
 from simlunar.planner import SequentialOptions, strategies
 
@@ -63,7 +68,9 @@ def test_oracle_and_sequential_defaults_are_the_library_defaults():
     assert seq["sequential"] == SequentialOptions() and seq["prior"] is None
     # the cache-key tables hold the schema's defaults
     d = studies.PlannerOptsCfg().model_dump(mode="json")
-    assert {k: d[k] for k in NEW_PLANNER_DEFAULTS} == NEW_PLANNER_DEFAULTS
+    tables = {k: {**v, **NEW_NESTED_DEFAULTS.get(k, {})} if isinstance(v, dict) else v
+              for k, v in NEW_PLANNER_DEFAULTS.items()}  # fmt: skip
+    assert {k: d[k] for k in NEW_PLANNER_DEFAULTS} == tables
     s = studies.SamplingStudyCfg(densities=[0.5]).model_dump(mode="json")
     assert {k: s[k] for k in NEW_STUDY_DEFAULTS} == NEW_STUDY_DEFAULTS
     assert asdict(SequentialOptions()).items() <= studies.SequentialCfg().model_dump().items()
@@ -87,6 +94,12 @@ def test_oracle_and_sequential_defaults_are_the_library_defaults():
             {"strategies": ["random", "wavelet"],
              "strategy_options": {"wavelet": {"lloyd_iterations": 5}}},
             "study.strategy_options.wavelet.lloyd_iterations: needs placement: lloyd",
+        ),
+        (
+            {"strategies": ["random", "s"],
+             "strategy_options": {"s": {"strategy": "sequential",
+                                        "sequential": {"first_round": "prior"}}}},
+            "study.strategy_options.s.sequential.first_round: 'prior' needs a prior map",
         ),
         (
             {"strategies": ["random", "oracle_magic"]},
@@ -170,3 +183,13 @@ def test_cache_keys_of_runs_without_the_new_options_are_unchanged():
              strategy_options={"w": {"strategy": "wavelet", "placement": "lloyd"}})
     ).model_dump(mode="json", by_alias=True)  # fmt: skip
     assert unit_key(lloyd, {}) != unit_key(dumped, {})
+    # a key added inside the sequential section (first_round) leaves keys of before unchanged
+    seq = validate_data(
+        base(strategies=["random", "s"],
+             strategy_options={"s": {"strategy": "sequential", "sequential": {"prior": "wavelet"}}})
+    ).model_dump(mode="json", by_alias=True)  # fmt: skip
+    before = json.loads(json.dumps(seq))
+    del before["study"]["strategy_options"]["s"]["sequential"]["first_round"]
+    assert unit_key(seq, {}) == unit_key(before, {})
+    seq["study"]["strategy_options"]["s"]["sequential"]["first_round"] = "prior"
+    assert unit_key(seq, {}) != unit_key(before, {})

@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from simlunar.planner.placement import density_from_map, place
 from simlunar.planner.sequential import (
+    FIRST_ROUND_MIX,
     SequentialOptions,
     error_estimate,
     loo_residuals,
@@ -177,6 +179,7 @@ def test_uniform_layout_is_exact_and_covers_the_corners():
         ({"uniform_mix": -0.1}, "uniform_mix"),
         ({"prior_power": 0}, "prior_power"),
         ({"nms_pitches": 0}, "nms_pitches"),
+        ({"first_round": "grid"}, "first_round"),
     ],
 )
 def test_options_are_validated(kwargs, match):
@@ -200,3 +203,30 @@ def test_bad_inputs_are_refused():
         plan_sequential(5000, shape=depth.shape, measure=measure, rng=0)
     with pytest.raises(ValueError, match="SequentialOptions"):
         plan_sequential(50, shape=depth.shape, measure=measure, options={"temper": 1}, rng=0)
+
+
+def test_a_prior_first_round_is_the_prior_maps_lloyd_layout():
+    depth = rough_patch(4)
+    cc = np.mgrid[0 : depth.shape[0], 0 : depth.shape[1]][1]
+    prior = np.where(cc < depth.shape[1] // 2, 16.0, 1.0)  # the left half 16x as important
+    k = depth.size // 32
+    opt = SequentialOptions(first_round="prior", first_share=0.6)
+    truth = GuardedTruth(depth)
+    sp = plan_sequential(k, shape=depth.shape, measure=truth.measure, prior=prior, options=opt,
+                         rng=9)  # fmt: skip
+    first = sp.plan.flat[sp.round_of == 0]
+    assert first.size == round(0.6 * k)
+    want = place(
+        density_from_map(prior, power=opt.prior_power, mix=FIRST_ROUND_MIX), first.size,
+        rng=np.random.default_rng(9),
+    )  # fmt: skip
+    np.testing.assert_array_equal(np.sort(first), np.sort(want))
+    # density ~ prior^(1/2) mixed 25 % uniform: (0.75 * 4/5 + 0.125) / (0.75 * 1/5 + 0.125)
+    left = np.count_nonzero(first % depth.shape[1] < depth.shape[1] // 2)
+    assert 2.2 < left / (first.size - left) < 3.0
+    uniform = plan_sequential(k, shape=depth.shape, measure=truth.measure, prior=prior, rng=9)
+    u_first = uniform.plan.flat[uniform.round_of == 0]
+    u_left = np.count_nonzero(u_first % depth.shape[1] < depth.shape[1] // 2)
+    assert 0.9 < u_left / (u_first.size - u_left) < 1.1
+    with pytest.raises(ValueError, match="needs a prior"):
+        plan_sequential(k, shape=depth.shape, measure=truth.measure, options=opt, rng=0)
