@@ -32,12 +32,12 @@ from simlunar.config.yamlio import dump_yaml
 from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
 from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
-from simlunar.pipeline.cache_keys import without_new_defaults
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
 from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.plotting.scanner_tables import scanner_tables
+from simlunar.results.cache_keys import without_new_defaults
 from simlunar.results.exports import write_scan_export
 from simlunar.results.figures import write_figures_pruned
 from simlunar.results.folder import (

@@ -13,6 +13,7 @@ from typing import Any
 
 from simlunar.config.yamlio import YAMLError, safe_load_text
 from simlunar.errors import ResultFolderError
+from simlunar.results.cache_keys import without_new_defaults
 from simlunar.results.exports import export_complete
 from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
@@ -80,9 +81,13 @@ def _first_difference(old: Any, new: Any, path: str = "") -> str:
 
 
 def _identity(config: dict) -> dict:
-    """The part of a plain config that a result folder belongs to: all but the description
-    and the figure file formats (they change no unit, table or figure content)."""
+    """The part of a plain config that a result folder belongs to: all but the description,
+    the figure file formats (they change no unit, table or figure content) and study keys
+    added later at the value that changes nothing (a folder written before them is the same
+    experiment)."""
     out = {k: v for k, v in config.items() if k != "description"}
+    if isinstance(out.get("study"), dict):  # keys added later, at their no-change default
+        out["study"] = without_new_defaults(out["study"])
     if isinstance(out.get("figures"), dict):
         out["figures"] = {k: v for k, v in out["figures"].items() if k != "formats"}
     return out

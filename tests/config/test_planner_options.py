@@ -11,13 +11,13 @@ import pytest
 from simlunar.config import studies, translate
 from simlunar.config.loading import validate_data
 from simlunar.errors import ConfigError
-from simlunar.pipeline.cache_keys import (
+from simlunar.pipeline.runner import unit_key
+from simlunar.planner import SequentialOptions, strategies
+from simlunar.results.cache_keys import (
     NEW_NESTED_DEFAULTS,
     NEW_PLANNER_DEFAULTS,
     NEW_STUDY_DEFAULTS,
 )
-from simlunar.pipeline.runner import unit_key
-from simlunar.planner import SequentialOptions, strategies
 
 
 def base(**study) -> dict:

@@ -464,6 +464,27 @@ def test_claim_folder_refuses_an_unrelated_folder(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["thesis.tex"]
 
 
+def test_a_folder_written_before_a_new_option_takes_the_same_experiment(tmp_path):
+    # first_round was added to the sequential options after result folders existed: a rerun
+    # into such a folder was refused as "another configuration" though no number changes
+    import yaml
+
+    from simlunar.results.folder import claim_folder
+
+    seq = {"strategy": "sequential", "sequential": {"prior": "wavelet", "max_rounds": 12}}
+    old = {"name": "x", "study": {"strategies": ["random", "s"], "strategy_options": {"s": seq}}}
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(old))
+    new = json.loads(json.dumps(old))
+    new["study"]["strategy_options"]["s"]["sequential"]["first_round"] = "uniform"
+    claim_folder(tmp_path, yaml.safe_dump(new))  # the same experiment
+    assert yaml.safe_load((tmp_path / "config.yaml").read_text()) == new
+    new["study"]["strategy_options"]["s"]["sequential"]["first_round"] = "prior"
+    with pytest.raises(
+        ResultFolderError, match=r"first_round: \"uniform\" in the folder, \"prior\" now"
+    ):
+        claim_folder(tmp_path, yaml.safe_dump(new))
+
+
 def test_a_lost_cluster_is_one_line_exit_3_and_keeps_finished_units(tmp_path, monkeypatch):
     from simlunar.errors import InfrastructureError
     from simlunar.pipeline import runner

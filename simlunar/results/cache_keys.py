@@ -2,7 +2,9 @@
 no number is left out of a unit's cache key, so results computed before it existed stay valid.
 
 :func:`simlunar.pipeline.runner.unit_key` applies :func:`without_new_defaults` to the study
-section; the tables below must equal the schema's defaults (a test keeps them so).
+section, and so does a result folder's identity (:func:`simlunar.results.folder.claim_folder`:
+a folder written before a key existed takes a rerun of the same experiment); the tables below
+must equal the schema's defaults (a test keeps them so).
 """
 
 from __future__ import annotations
