@@ -227,7 +227,8 @@ def test_progress_bar_gets_within_unit_progress_in_process(tmp_path, capsys):
     )
     assert s.units_computed == 4
     assert fu.PROGRESS_CALLS == [(e, d) for e in (10, 30, 60, 90) for d in (1, 2, 3)]
-    assert "sweep_test units" in capsys.readouterr().err
+    # stderr is not a terminal here: progress as lines, one per unit
+    assert "sweep_test: 4/4 units, " in capsys.readouterr().err
     # without a bar, the unit function is called without a callback
     fu.PROGRESS_CALLS.clear()
     run_experiment(
