@@ -41,6 +41,7 @@ __all__ = [
     "grid_file_shape",
     "input_files",
     "input_hashes",
+    "model_files",
     "size_limit",
     "terrain_facts",
 ]
@@ -73,6 +74,34 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
             for extra in gdal_files(main):
                 # named relative to the main file, so a moved data folder keeps its keys
                 out[f"{key}+{os.path.relpath(extra, main.parent)}"] = extra
+    out.update(model_files(config.get("study") or {}))
+    return out
+
+
+def model_files(study: dict[str, Any]) -> dict[str, Path]:
+    """The learned-model files a study reads: every ``feature_opts.model`` of its planner
+    options (``strategy_options``, the LIDAR study's ``planner_opts``), the ``.joblib`` and its
+    ``.json`` record, by key path. A retrained model at the same path is another input, so its
+    units are computed again; a missing one is reported before any work."""
+    sections = {
+        "study.strategy_options": study.get("strategy_options"),
+        "study.planner_opts": study.get("planner_opts"),
+        "study.options.planner_opts": (study.get("options") or {}).get("planner_opts")
+        if isinstance(study.get("options"), dict)
+        else None,
+    }
+    out: dict[str, Path] = {}
+    for where, opts in sections.items():
+        if not isinstance(opts, dict):
+            continue
+        for label, o in opts.items():
+            model = (
+                ((o or {}).get("feature_opts") or {}).get("model") if isinstance(o, dict) else None
+            )
+            if model:
+                key = f"{where}.{label}.feature_opts.model"
+                out[key] = Path(model)
+                out[f"{key}.json"] = Path(model).with_suffix(".json")
     return out
 
 
@@ -108,7 +137,12 @@ def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
         try:
             digest = file_sha256(p)
         except OSError as exc:
-            raise ConfigError(f"{key}: cannot read {p} ({exc.strerror or exc})") from None
+            hint = (
+                " (a learned model: make it with `simlunar train <training yaml>`)"
+                if ".feature_opts.model" in key
+                else ""
+            )
+            raise ConfigError(f"{key}: cannot read {p} ({exc.strerror or exc}){hint}") from None
         out[key] = {"path": str(p), "sha256": digest}
     return out
 

@@ -323,6 +323,9 @@ CASES = [
     Case("CUDA variant without a GPU", GOOD, "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
     # a finished folder whose scans is a file: refused before anything is deleted
     Case("--save-scans with scans a file", with_("study", SCANNER), "scans is not a folder", args=("--save-scans",), setup=lambda d: ((d / "results").mkdir(), (d / "results" / "config.yaml").write_text("x: 1\n"), (d / "results" / "results.csv").write_text("unit\n"), (d / "results" / "scans").write_text("a file"))),
+    # a learned map whose model file was never trained: once found only after the render, as
+    # an internal error; now an input of the unit, checked (and hashed) before any work
+    Case("learned model file missing", with_("study.strategy_options", {"l": {"strategy": "learned", "placement": "lloyd", "feature_opts": {"model": "models/none.joblib"}}}, with_("study.strategies", ["random", "l"])), "study.strategy_options.l.feature_opts.model: cannot read models/none.joblib (No such file or directory) (a learned model: make it with `simlunar train"),
 ]  # fmt: skip
 
 

@@ -119,3 +119,21 @@ def test_the_cache_key_follows_a_world_file(tmp_path):
     # a plain GeoTIFF reads one file
     _tif(tmp_path / "plain.tif", np.zeros((4, 5)))
     assert set(input_files({"terrain": {"file": str(tmp_path / "plain.tif")}})) == {"terrain.file"}
+
+
+def test_a_learned_model_and_its_record_are_inputs_of_the_unit(tmp_path):
+    # a model retrained at the same path must not reuse the units of the old one
+    from simlunar.pipeline.runner import unit_key
+
+    model = tmp_path / "m.joblib"
+    model.write_bytes(b"model one")
+    model.with_suffix(".json").write_text("{}")
+    opts = {"l": {"strategy": "learned", "feature_opts": {"model": str(model)}}, "w": {}}
+    config = {"name": "x", "study": {"strategy_options": opts}}
+    inputs = input_hashes(config)
+    key = "study.strategy_options.l.feature_opts.model"
+    assert set(inputs) == {key, f"{key}.json"}
+    assert inputs[key]["path"] == str(model)
+    before = unit_key(config, inputs)
+    model.write_bytes(b"model two")
+    assert unit_key(config, input_hashes(config)) != before
