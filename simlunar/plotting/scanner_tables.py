@@ -4,15 +4,11 @@ over the units, paired against the random planner."""
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.style import pair_label
-from simlunar.plotting.tables import _name, _tex_begin, _tex_end, tex_escape
+from simlunar.plotting.tables import _name, _tex_begin, _tex_end, t_interval, tex_escape
 
-__all__ = ["scanner_interval_table", "scanner_summary", "scanner_tables", "t_interval"]
+__all__ = ["scanner_interval_table", "scanner_summary", "scanner_tables"]
 
 _SCANNER_ROW_KEYS = {"unit", "mode", "planner", "budget", "trial", "metric", "value", "renders"}
 
@@ -128,24 +124,6 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
         ]
     )
     return md + md_iv, (tex + tex_iv).replace("–", "--") + "\n"
-
-
-def t_interval(values) -> tuple[float, float, float]:
-    """Mean and two-sided 95 % Student t interval of independent values (at least two).
-
-    ``mean +- t(0.975, n - 1) * s / sqrt(n)`` with the sample standard deviation ``s``: the
-    interval for a handful of terrain seeds, where a bootstrap's percentiles would be too
-    narrow.
-    """
-    # scipy.stats costs 0.45 s to import; tables of sampling studies never need it
-    from scipy.stats import t as student_t
-
-    v = np.asarray(values, dtype=float)
-    if v.size < 2:
-        raise ValueError(f"a t interval needs at least two values, got {v.size}")
-    m = float(v.mean())
-    h = float(student_t.ppf(0.975, v.size - 1) * v.std(ddof=1) / math.sqrt(v.size))
-    return m, m - h, m + h
 
 
 def scanner_interval_table(summary: list[dict], *, title: str = "") -> tuple[str, str]:

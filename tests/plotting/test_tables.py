@@ -128,7 +128,7 @@ def test_scanner_table_labels_sweep_points_and_pools_units():
 
 
 def test_t_interval_by_hand():
-    from simlunar.plotting.scanner_tables import t_interval
+    from simlunar.plotting.tables import t_interval
 
     # [1, 2, 3]: mean 2, s = 1, t(0.975, 2) = 4.302653 -> half width 4.302653 / sqrt(3) = 2.48414
     m, lo, hi = t_interval([1.0, 2.0, 3.0])
@@ -226,3 +226,38 @@ def test_samples_saved_table():
     assert "| Random |" not in md  # the reference is not its own row
     assert "Grid & 1.23* & 12.3 & 12.34 (1) \\\\" in tex
     assert samples_saved_tables([], title="t") == ("", "")
+
+
+def test_headroom_table_gives_t_intervals_over_seeds_by_hand():
+    from simlunar.plotting.tables import headroom_tables
+
+    entry = {
+        "label": "", "oracle": "oracle_greedy", "metric": "mse", "strategies": ["wavelet_lloyd"],
+        "seeds": [0, 1, 2],
+        "saved": {"oracle_greedy": [2.0, 2.0, 2.0], "wavelet_lloyd": [1.1, 1.2, 1.3]},
+        "captured": {"wavelet_lloyd": [0.1, 0.2, 0.3]},
+    }  # fmt: skip
+    md, tex = headroom_tables([entry], title="t")
+    # saved, in log space: ln 1.1, ln 1.2, ln 1.3 -> mean 0.1799987, s = 0.0835512,
+    # half width t(0.975, 2) s / sqrt(3) = 4.302653 * 0.0482383 = 0.207553:
+    # exp(0.1800) = 1.197, [exp(-0.02755), exp(0.38755)] = [0.973, 1.473]
+    # captured [0.1, 0.2, 0.3]: 0.2 +- 4.302653 * 0.1 / sqrt(3) = 0.2 +- 0.248414
+    assert (
+        "| Wavelet, Lloyd | 1.20 [0.97, 1.47] | 1.10–1.30 | 0.20 [-0.05, 0.45] | 0.10–0.30 |" in md
+    )
+    # the oracle: every seed 2.0 -> a zero-width interval; it is the bound
+    assert "| 2.00 [2.00, 2.00] | 2.00–2.00 | 1 (bound) |" in md
+    assert "95 % Student t interval" in md
+    assert "1.10--1.30" in tex and "–" not in tex
+
+
+def test_headroom_table_with_one_seed_prints_the_value_alone():
+    from simlunar.plotting.tables import headroom_tables
+
+    entry = {
+        "label": "", "oracle": "oracle_greedy", "metric": "mse", "strategies": ["wavelet_lloyd"],
+        "seeds": [0], "saved": {"oracle_greedy": [2.0], "wavelet_lloyd": [1.25]},
+        "captured": {"wavelet_lloyd": [float("nan")]},
+    }  # fmt: skip
+    md, _ = headroom_tables([entry], title="t")
+    assert "| Wavelet, Lloyd | 1.25 |  | – |  |" in md
