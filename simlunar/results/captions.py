@@ -217,7 +217,7 @@ def headroom(metric: str, seeds: int) -> str:
         f"layout's, below 0 worse than the uniform layout. Bars: the mean over the {n}; dots: "
         f"each seed. The oracle reads the true error and cannot be realised: it is a bound, not "
         f"a planner. One panel per sweep point and oracle; scores.md holds the same numbers "
-        f"(mean [min, max])."
+        f"(mean [95 % t interval over the seeds] and the per-seed range)."
     )
 
 
