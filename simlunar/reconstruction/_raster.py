@@ -14,6 +14,9 @@ import numba
 # inside, so cells on an edge shared by two triangles (or on the hull) are always covered; they
 # are written twice with values equal to rounding.
 _EPS = 1e-9
+# Height (in cells, over the longest edge) under which a triangle is clamped to its vertices'
+# values (see rasterise_linear).
+_THIN = 1e-3
 
 
 @numba.njit(cache=True, nogil=True)
@@ -83,10 +86,23 @@ def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compi
         r1, c1 = pts[i1, 0], pts[i1, 1]
         r2, c2 = pts[i2, 0], pts[i2, 1]
         det = (r1 - r0) * (c2 - c0) - (r2 - r0) * (c1 - c0)
-        if det == 0.0:
+        # skip slivers: a triangle less than _EPS high over its longest edge holds no cell
+        # that its neighbours do not already cover (their spans reach _EPS past a shared edge),
+        # and its plane is too steep to read (nearly collinear float points, e.g. lattice
+        # points off by rounding, gave values 1e14x outside the samples' range)
+        e2 = max((r1 - r0) ** 2 + (c1 - c0) ** 2, (r2 - r0) ** 2 + (c2 - c0) ** 2,
+                 (r2 - r1) ** 2 + (c2 - c1) ** 2)  # fmt: skip
+        if det == 0.0 or det * det < _EPS * _EPS * e2:
             continue
         inv = 1.0 / det
         v0 = vals[i0]
+        # a linear interpolant lies within its vertices' values: a thin triangle (less than
+        # _THIN high over its longest edge) is clamped to them, which bounds what its steep
+        # plane gives at cells within _EPS outside its edges (a fat one's plane moves by less
+        # than 1e-6 of its values' range there; unclamped, its row loop stays vectorised)
+        thin = det * det < _THIN * _THIN * e2
+        vlo = min(v0, vals[i1], vals[i2])
+        vhi = max(v0, vals[i1], vals[i2])
         d1, d2 = vals[i1] - v0, vals[i2] - v0
         gr = (d1 * (c2 - c0) - d2 * (c1 - c0)) * inv
         gc = (d2 * (r1 - r0) - d1 * (r2 - r0)) * inv
@@ -101,19 +117,33 @@ def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compi
         rlo = max(math.ceil(ra - _EPS), 0)
         rhi = min(math.floor(rc + _EPS), nr - 1)
         for r in range(rlo, rhi + 1):
-            x1 = _span(ra, ca, rc, cc, r)
+            # a row within _EPS above the top vertex (below the bottom one) is spanned as the
+            # triangle's first (last) row; where the top (bottom) edge is within _EPS of
+            # horizontal, as that edge's other end's row, so the whole edge is covered (float
+            # points off a lattice row by rounding)
+            rr = min(max(float(r), ra), rc)
+            if rr == ra and rb - ra <= _EPS:
+                rr = rb
+            elif rr == rc and rc - rb <= _EPS:
+                rr = rb
+            x1 = _span(ra, ca, rc, cc, rr)
             # the other edge: a-b above b, b-c from b down; a horizontal edge reaches b
-            if r < rb or rc == rb:
-                x2 = _span(ra, ca, rb, cb, r)
+            if rr < rb or rc == rb:
+                x2 = _span(ra, ca, rb, cb, rr)
             else:
-                x2 = _span(rb, cb, rc, cc, r)
+                x2 = _span(rb, cb, rc, cc, rr)
             lo, hi = min(x1, x2), max(x1, x2)
             clo = max(math.ceil(lo - _EPS), 0)
             chi = min(math.floor(hi + _EPS), nc - 1)
             base = v0 + gr * (r - r0)
-            for c in range(clo, chi + 1):
-                out[r, c] = base + gc * (c - c0)
-                covered[r, c] = True
+            if thin:
+                for c in range(clo, chi + 1):
+                    out[r, c] = min(max(base + gc * (c - c0), vlo), vhi)
+                    covered[r, c] = True
+            else:
+                for c in range(clo, chi + 1):
+                    out[r, c] = base + gc * (c - c0)
+                    covered[r, c] = True
     # a sample on a cell is that cell's value, not the plane's rounding of it
     for i in range(pts.shape[0]):
         r, c = pts[i, 0], pts[i, 1]
