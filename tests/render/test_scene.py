@@ -9,8 +9,10 @@ from scipy.ndimage import gaussian_filter
 from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose, Projector
 from simlunar.render.lights import AmbientLight, CameraLight, ProjectorLight, SunLight
 from simlunar.render.scene import (
+    FINITE_TRIES,
     RenderResult,
     TerrainScene,
+    finite_pixels,
     inverse_by_linearity,
     luminance,
     render,
@@ -319,3 +321,43 @@ def test_thin_lens_defocuses_out_of_focus_plane(mi, rng):
     pinhole, defocused, focused = (np.abs(np.diff(i, axis=1)).mean() for i in imgs)
     assert defocused < 0.6 * pinhole
     assert focused > 0.8 * pinhole  # in focus at the plane's distance: sharp again
+
+
+def test_finite_pixels_re_estimates_only_the_non_finite_pixels():
+    # Mitsuba's light tracer on cuda_ad_rgb put one inf pixel into some dot frames: such a
+    # pixel takes the value of a render with another seed, every other pixel keeps its own
+    calls = []
+
+    def launch(seed):
+        calls.append(seed)
+        img = np.full((2, 3, 3), float(len(calls)), np.float32)
+        if len(calls) == 1:
+            img[0, 1, :] = np.inf
+            img[1, 2, 0] = np.nan
+        return img
+
+    out = finite_pixels(launch, 7)
+    assert calls == [7, (7 + 0x9E3779B1) % 2**32]
+    assert np.isfinite(out).all()
+    assert (out[0, 1] == 2).all() and out[1, 2, 0] == 2
+    bad = np.zeros(out.shape, bool)
+    bad[0, 1, :] = bad[1, 2, 0] = True
+    assert (out[~bad] == 1).all()
+    # a finite image is one render
+    calls.clear()
+    assert (
+        finite_pixels(lambda s: calls.append(s) or np.ones((2, 2, 3), np.float32), 3) == 1
+    ).all()
+    assert calls == [3]
+
+
+def test_finite_pixels_gives_up_on_a_degenerate_scene():
+    calls = []
+
+    def launch(seed):
+        calls.append(seed)
+        return np.full((2, 2, 3), np.inf, np.float32)
+
+    with pytest.raises(RuntimeError, match=f"12 non-finite pixels in {FINITE_TRIES} renders"):
+        finite_pixels(launch, 0)
+    assert len(calls) == FINITE_TRIES and len(set(calls)) == FINITE_TRIES
