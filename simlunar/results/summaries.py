@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import subprocess
 import sys
@@ -60,15 +61,24 @@ _TABLE_MODULES = (
 )
 
 
+@functools.cache
 def tables_code() -> str:
-    """SHA-256 of the code that writes a folder's tables (recorded in ``provenance.json``)."""
-    import importlib.util
+    """SHA-256 of the code that writes a folder's tables (recorded in ``provenance.json``).
 
+    Hashed once per process, when this module is imported (with the modules that write the
+    tables): the code the process runs. Hashed at write time instead, a table module edited
+    during a long run labelled the tables its old code wrote with the new code's hash, and
+    the next rerun kept them.
+    """
+    root = Path(simlunar.__file__).parent  # module paths without importing them
     h = hashlib.sha256()
     for mod in _TABLE_MODULES:
-        spec = importlib.util.find_spec(mod)
-        h.update(file_sha256(spec.origin).encode() if spec and spec.origin else mod.encode())
+        path = root.joinpath(*mod.split(".")[1:]).with_suffix(".py")
+        h.update(file_sha256(path).encode() if path.is_file() else mod.encode())
     return h.hexdigest()
+
+
+tables_code()
 
 
 def _notes(checks, units, records) -> list[str]:

@@ -287,3 +287,13 @@ def test_a_rerun_redraws_no_figure_unless_its_inputs_changed(tmp_path):
     before = pngs[-1].stat().st_mtime_ns
     write_figures(out, formats=("png", "pdf"), force=True)
     assert pngs[-1].stat().st_mtime_ns != before
+
+
+def test_the_tables_code_is_the_code_this_process_loaded(monkeypatch):
+    # hashed when the run starts, not when it writes its tables: a table module edited during
+    # a long run labelled the old code's tables with the new code's hash, so a rerun kept them
+    from simlunar.results import summaries
+
+    before = summaries.tables_code()
+    monkeypatch.setattr(summaries, "file_sha256", lambda path: "edited since")
+    assert summaries.tables_code() == before
