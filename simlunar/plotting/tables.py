@@ -329,14 +329,49 @@ def headroom_tables(entries: list[dict], *, title: str = "") -> tuple[str, str]:
         n = len(e["seeds"])
         cap = (f"{title}: {where}headroom captured vs {display_label(e['oracle'])} at equal "
                f"{metric} ({n} terrain seed{'s' * (n != 1)})")  # fmt: skip
-        lines = ["| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]
-        lines += ["| " + " | ".join([lab, *c]) + " |" for lab, c in rows]
-        md.append(f"### {cap}\n\n" + "\n".join(lines) + "\n")
-        out = _tex_begin(cap, len(header))
-        out += [" & ".join(tex_escape(h) for h in header) + " \\\\", "\\midrule"]
-        out += [" & ".join([tex_escape(lab), *(tex_escape(x) for x in c)]) + " \\\\"
-                for lab, c in rows]  # fmt: skip
-        tex.append(_tex_end(out).replace("–", "--"))
+        _append_seed_table(md, tex, cap, header, rows)
+    return "\n".join(md), "\n".join(tex)
+
+
+def _append_seed_table(md: list, tex: list, cap: str, header: list, rows: list) -> None:
+    """One Markdown and one LaTeX table of text cells (``rows``: (label, cells))."""
+    lines = ["| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]
+    lines += ["| " + " | ".join([lab, *c]) + " |" for lab, c in rows]
+    md.append(f"### {cap}\n\n" + "\n".join(lines) + "\n")
+    out = _tex_begin(cap, len(header))
+    out += [" & ".join(tex_escape(h) for h in header) + " \\\\", "\\midrule"]
+    out += [" & ".join([tex_escape(lab), *(tex_escape(x) for x in c)]) + " \\\\"
+            for lab, c in rows]  # fmt: skip
+    tex.append(_tex_end(out).replace("–", "--"))
+
+
+def paired_saved_tables(entries: list[dict], *, title: str = "") -> tuple[str, str]:
+    """Markdown and LaTeX tables of the samples saved vs Uniform Lloyd, paired by terrain
+    seed, for studies without an oracle (with one, :func:`headroom_tables` holds them).
+
+    Parameters
+    ----------
+    entries : list of dict
+        One per sweep point: ``label``, ``metric``, ``strategies`` (row order), ``saved``
+        (strategy -> per-seed geometric-mean samples saved vs uniform Lloyd), ``seeds``.
+    """
+    if not entries:
+        return "", ""
+    expl = (
+        "Samples saved vs Uniform Lloyd, paired by terrain seed (per seed, the geometric mean "
+        "over the interpolated densities): geometric mean over seeds [95 % Student t "
+        "interval, in log space], and the per-seed range."
+    )
+    md, tex = [expl + "\n"], ["% " + expl + "\n"]
+    header = ["Strategy", "saved vs Uniform Lloyd", "seeds: range"]
+    for e in entries:
+        rows = [(display_label(s), list(_seed_summary(np.asarray(e["saved"][s]), log=True)))
+                for s in e["strategies"] if s in e["saved"]]  # fmt: skip
+        where = f"{e['label']}: " if e.get("label") else ""
+        n = len(e["seeds"])
+        cap = (f"{title}: {where}samples saved vs Uniform Lloyd at equal "
+               f"{_name(METRIC_NAMES, e['metric'])}, paired by seed ({n} terrain seeds)")  # fmt: skip
+        _append_seed_table(md, tex, cap, header, rows)
     return "\n".join(md), "\n".join(tex)
 
 

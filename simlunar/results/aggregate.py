@@ -216,6 +216,19 @@ def headroom_entries(points: list[Point]) -> list[dict]:
     ]  # fmt: skip
 
 
+def paired_saved_entries(points: list[Point]) -> list[dict]:
+    """Samples saved vs uniform Lloyd paired by terrain seed, for the points that have the
+    uniform layout and at least two seeds but no oracle (with one, the headroom table holds
+    the same numbers), as :func:`simlunar.plotting.tables.paired_saved_tables` takes them."""
+    return [
+        {"label": p.label if len(points) > 1 else "", "metric": p.saved_metric,
+         "strategies": [s for s in p.strategies if s != HEADROOM_REFERENCE],
+         "saved": p.saved_per_seed, "seeds": p.seeds}
+        for p in points
+        if p.saved_per_seed and not p.headroom and len(p.seeds) >= 2
+    ]  # fmt: skip
+
+
 def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:
     """Per-seed scores (from each unit) and pooled scores with intervals, one row each."""
     out = []

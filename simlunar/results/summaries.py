@@ -10,7 +10,13 @@ from pathlib import Path
 from typing import Any
 
 import simlunar
-from simlunar.plotting.tables import Cell, headroom_tables, samples_saved_tables, score_tables
+from simlunar.plotting.tables import (
+    Cell,
+    headroom_tables,
+    paired_saved_tables,
+    samples_saved_tables,
+    score_tables,
+)
 from simlunar.render.backend import versions
 from simlunar.results import aggregate
 from simlunar.results.folder import RESULT_FILES
@@ -141,6 +147,9 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
         md, tex = note + "\n", "% " + note + "\n"
     md2, tex2 = samples_saved_tables(_saved_entries(points), title=cfg.name)
     md3, tex3 = headroom_tables(aggregate.headroom_entries(points), title=cfg.name)
+    md4, tex4 = paired_saved_tables(aggregate.paired_saved_entries(points), title=cfg.name)
+    if md4:
+        md3, tex3 = (md3 + "\n" + md4, tex3 + "\n" + tex4) if md3 else (md4, tex4)
     if md3:
         md2, tex2 = md2 + "\n" + md3, tex2 + "\n" + tex3
     if md2:

@@ -68,6 +68,7 @@ def test_scores_md_has_the_uniform_lloyd_headroom_and_interior_tables(tmp_path):
     head = md.split("headroom captured vs")[1]
     assert "| Oracle greedy (true error) |" in head and "1 (bound)" in head
     assert "| Sequential |" in head and "| Grid |" in head
+    assert "paired by seed (2 terrain seeds)" not in md  # the headroom table holds those numbers
     rows = (out / "results.csv").read_text()
     assert ",mse_interior," in rows and ",mse," in rows
     metas = [json.loads(p.read_text())["meta"] for p in (out / "units").glob("*.json")]
@@ -78,3 +79,30 @@ def test_scores_md_has_the_uniform_lloyd_headroom_and_interior_tables(tmp_path):
     assert out / "figures" / "headroom.png" in written
     captions = (out / "figures" / "captions.md").read_text()
     assert "## headroom" in captions and "cannot be realised" in captions
+
+
+def test_without_an_oracle_scores_md_still_pairs_the_layouts_by_seed(tmp_path):
+    cfg = ExperimentCfg.model_validate(
+        {
+            "name": "no_oracle",
+            "seed": 3,
+            "terrain": {"preset": "aerial_1", "scale": 0.125},
+            "study": {
+                "strategies": ["grid", "lloyd_uniform", "wavelet_lloyd"],
+                "strategy_options": {"wavelet_lloyd": {"strategy": "wavelet", "placement": "lloyd"}},
+                "densities": {"from": "1/4", "to": "1/32", "count": 4},
+                "trials": 1,
+                "metrics": ["mse"],
+                "terrain_seeds": 2,
+            },
+        }
+    )  # fmt: skip
+    out = tmp_path / "run"
+    run_experiment(cfg, out, compute=synthetic_unit, progress=False, figures=False)
+    md = (out / "scores.md").read_text()
+    assert "headroom captured" not in md
+    table = md.split(
+        "samples saved vs Uniform Lloyd at equal MSE, paired by seed (2 terrain seeds)"
+    )[1]
+    assert "| Wavelet, Lloyd |" in table and "| Grid |" in table
+    assert "| Uniform Lloyd |" not in table  # the reference is 1 by definition

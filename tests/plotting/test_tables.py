@@ -261,3 +261,17 @@ def test_headroom_table_with_one_seed_prints_the_value_alone():
     }  # fmt: skip
     md, _ = headroom_tables([entry], title="t")
     assert "| Wavelet, Lloyd | 1.25 |  | – |  |" in md
+
+
+def test_paired_saved_table_without_an_oracle_by_hand():
+    from simlunar.plotting.tables import paired_saved_tables
+
+    entry = {"label": "", "metric": "mse", "strategies": ["grid", "wavelet_lloyd"],
+             "seeds": [0, 1, 2],
+             "saved": {"grid": [0.9, 0.9, 0.9], "wavelet_lloyd": [1.1, 1.2, 1.3]}}  # fmt: skip
+    md, tex = paired_saved_tables([entry], title="t")
+    # as in the headroom table: exp(mean ln) = 1.197, [0.973, 1.473]
+    assert "| Wavelet, Lloyd | 1.20 [0.97, 1.47] | 1.10–1.30 |" in md
+    assert "| Grid | 0.90 [0.90, 0.90] | 0.90–0.90 |" in md
+    assert "paired by seed (3 terrain seeds)" in md and "1.10--1.30" in tex
+    assert paired_saved_tables([], title="t") == ("", "")
