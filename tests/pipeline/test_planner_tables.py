@@ -36,28 +36,30 @@ def synthetic_unit(payload: dict) -> dict:
     }  # fmt: skip
 
 
-def test_scores_md_has_the_uniform_lloyd_headroom_and_interior_tables(tmp_path):
+def _run_two_seeds(tmp_path, strategies: list[str], **study) -> str:
+    """scores.md of a 2-seed study of ``strategies`` (wavelet_lloyd: the wavelet map placed by
+    Lloyd) on the synthetic scenes."""
+    options = {"wavelet_lloyd": {"strategy": "wavelet", "placement": "lloyd"},
+               **study.pop("strategy_options", {})}  # fmt: skip
     cfg = ExperimentCfg.model_validate(
-        {
-            "name": "planners",
-            "seed": 3,
-            "terrain": {"preset": "aerial_1", "scale": 0.125},
-            "study": {
-                "strategies": ["random", "grid", "lloyd_uniform", "wavelet_lloyd", "sequential",
-                               "oracle_greedy"],
-                "strategy_options": {"wavelet_lloyd": {"strategy": "wavelet", "placement": "lloyd"},
-                                     "sequential": {"sequential": {"max_rounds": 4}}},
-                "densities": {"from": "1/4", "to": "1/32", "count": 4},
-                "trials": 2,
-                "metrics": ["mse"],
-                "score_region": "both",
-                "terrain_seeds": 2,
-            },
-        }
+        {"name": "planners", "seed": 3, "terrain": {"preset": "aerial_1", "scale": 0.125},
+         "study": {"strategies": strategies, "strategy_options": options,
+                   "densities": {"from": "1/4", "to": "1/32", "count": 4}, "metrics": ["mse"],
+                   "terrain_seeds": 2, **study}}
     )  # fmt: skip
+    run_experiment(cfg, tmp_path / "run", compute=synthetic_unit, progress=False, figures=False)
+    return (tmp_path / "run" / "scores.md").read_text()
+
+
+def test_scores_md_has_the_uniform_lloyd_headroom_and_interior_tables(tmp_path):
+    md = _run_two_seeds(
+        tmp_path,
+        ["random", "grid", "lloyd_uniform", "wavelet_lloyd", "sequential", "oracle_greedy"],
+        strategy_options={"sequential": {"sequential": {"max_rounds": 4}}},
+        trials=2,
+        score_region="both",
+    )
     out = tmp_path / "run"
-    run_experiment(cfg, out, compute=synthetic_unit, progress=False, figures=False)
-    md = (out / "scores.md").read_text()
     assert "samples saved vs Grid at equal MSE" in md
     assert "| MSE (interior only) |" in md
     assert "samples saved vs Uniform Lloyd at equal MSE" in md
@@ -82,24 +84,7 @@ def test_scores_md_has_the_uniform_lloyd_headroom_and_interior_tables(tmp_path):
 
 
 def test_without_an_oracle_scores_md_still_pairs_the_layouts_by_seed(tmp_path):
-    cfg = ExperimentCfg.model_validate(
-        {
-            "name": "no_oracle",
-            "seed": 3,
-            "terrain": {"preset": "aerial_1", "scale": 0.125},
-            "study": {
-                "strategies": ["grid", "lloyd_uniform", "wavelet_lloyd"],
-                "strategy_options": {"wavelet_lloyd": {"strategy": "wavelet", "placement": "lloyd"}},
-                "densities": {"from": "1/4", "to": "1/32", "count": 4},
-                "trials": 1,
-                "metrics": ["mse"],
-                "terrain_seeds": 2,
-            },
-        }
-    )  # fmt: skip
-    out = tmp_path / "run"
-    run_experiment(cfg, out, compute=synthetic_unit, progress=False, figures=False)
-    md = (out / "scores.md").read_text()
+    md = _run_two_seeds(tmp_path, ["grid", "lloyd_uniform", "wavelet_lloyd"], trials=1)
     assert "headroom captured" not in md
     table = md.split(
         "samples saved vs Uniform Lloyd at equal MSE, paired by seed (2 terrain seeds)"
