@@ -379,17 +379,21 @@ def _seed_summary(v: np.ndarray, *, log: bool, digits: int = 2) -> tuple[str, st
     """``(mean [95 % t interval], min–max)`` of per-seed values, finite ones only.
 
     ``log``: values are ratios (> 0); mean and interval in log space (a geometric mean and a
-    multiplicative interval). One seed: the value alone and no range.
+    multiplicative interval). One seed: the value alone and no range. Seeds left out (no
+    finite value: no density inside the reference's range, or an oracle that saves nothing)
+    are counted in the range cell ("(2 of 3 seeds)").
     """
+    n = v.size
     v = v[np.isfinite(v)]
     if log:
         v = v[v > 0]
+    of = f" ({v.size} of {n} seeds)" if v.size < n else ""
     if v.size == 0:
-        return "–", ""
+        return "–", of.strip()
     if v.size == 1:
-        return f"{v[0]:.{digits}f}", ""
+        return f"{v[0]:.{digits}f}", of.strip()
     m, lo, hi = t_interval(np.log(v) if log else v)
     if log:
-        m, lo, hi = math.exp(m), math.exp(lo), math.exp(hi)
+        m, lo, hi = np.exp(m), np.exp(lo), np.exp(hi)
     return (f"{m:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]",
-            f"{v.min():.{digits}f}–{v.max():.{digits}f}")  # fmt: skip
+            f"{v.min():.{digits}f}–{v.max():.{digits}f}{of}")  # fmt: skip

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 # Tolerance (in cells) of the span test: a cell within _EPS of a triangle's edge counts as
 # inside, so cells on an edge shared by two triangles (or on the hull) are always covered; they
@@ -69,6 +70,84 @@ def _span(ra, ca, rb, cb, r):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
+def _by_row(r0, c0, r1, c1, r2, c2):  # pragma: no cover - compiled
+    """The vertices ordered by row: a (top) <= b <= c (bottom)."""
+    ra, ca, rb, cb, rc, cc = r0, c0, r1, c1, r2, c2
+    if rb < ra:
+        ra, ca, rb, cb = rb, cb, ra, ca
+    if rc < rb:
+        rb, cb, rc, cc = rc, cc, rb, cb
+        if rb < ra:
+            ra, ca, rb, cb = rb, cb, ra, ca
+    return ra, ca, rb, cb, rc, cc
+
+
+@numba.njit(cache=True, nogil=True)
+def _row_run(ra, ca, rb, cb, rc, cc, r, nc):  # pragma: no cover - compiled
+    """First and last column of row ``r`` that the triangle a, b, c (by row) covers.
+
+    A row within _EPS above the top vertex (below the bottom one) is spanned as the
+    triangle's first (last) row; a row beside an edge within _EPS of horizontal, as that
+    edge's lower (upper) end's row, so the whole edge is covered (float points off a lattice
+    row by rounding).
+    """
+    rr = min(max(float(r), ra), rc)
+    if rb - ra <= _EPS and rr <= rb:
+        rr = rb
+    elif rc - rb <= _EPS and rr >= rb:
+        rr = rb
+    x1 = _span(ra, ca, rc, cc, rr)
+    # the other edge: a-b above b, b-c from b down; a horizontal edge reaches b
+    if rr < rb or rc == rb:
+        x2 = _span(ra, ca, rb, cb, rr)
+    else:
+        x2 = _span(rb, cb, rc, cc, rr)
+    lo, hi = min(x1, x2), max(x1, x2)
+    return max(math.ceil(lo - _EPS), 0), min(math.floor(hi + _EPS), nc - 1)
+
+
+@numba.njit(cache=True, nogil=True)
+def _along(r, c, ra, ca, va, rb, cb, vb, rm, cm, vm):  # pragma: no cover - compiled
+    """Value at (r, c) of a sliver: projected onto its longest edge a-b and interpolated
+    piecewise linearly through a, the middle vertex m (projected too) and b."""
+    dr, dc = rb - ra, cb - ca
+    l2 = dr * dr + dc * dc
+    if l2 == 0.0:
+        return va
+    t = min(max(((r - ra) * dr + (c - ca) * dc) / l2, 0.0), 1.0)
+    tm = min(max(((rm - ra) * dr + (cm - ca) * dc) / l2, 0.0), 1.0)
+    if t <= tm:
+        return va + (vm - va) * (t / tm) if tm > 0.0 else vm
+    return vm + (vb - vm) * ((t - tm) / (1.0 - tm)) if tm < 1.0 else vm
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_sliver(pts, vals, i0, i1, i2, out, covered):  # pragma: no cover - compiled
+    """Cells of a sliver that no other triangle covered, valued along its longest edge."""
+    nr, nc = out.shape
+    # the longest edge a-b and the middle vertex m
+    ia, ib, im = i0, i1, i2
+    best = (pts[i1, 0] - pts[i0, 0]) ** 2 + (pts[i1, 1] - pts[i0, 1]) ** 2
+    d = (pts[i2, 0] - pts[i0, 0]) ** 2 + (pts[i2, 1] - pts[i0, 1]) ** 2
+    if d > best:
+        ia, ib, im, best = i0, i2, i1, d
+    d = (pts[i2, 0] - pts[i1, 0]) ** 2 + (pts[i2, 1] - pts[i1, 1]) ** 2
+    if d > best:
+        ia, ib, im = i1, i2, i0
+    ra, ca, rb, cb, rc, cc = _by_row(pts[i0, 0], pts[i0, 1], pts[i1, 0], pts[i1, 1],
+                                     pts[i2, 0], pts[i2, 1])  # fmt: skip
+    rlo = max(math.ceil(ra - _EPS), 0)
+    rhi = min(math.floor(rc + _EPS), nr - 1)
+    for r in range(rlo, rhi + 1):
+        clo, chi = _row_run(ra, ca, rb, cb, rc, cc, r, nc)
+        for c in range(clo, chi + 1):
+            if not covered[r, c]:
+                out[r, c] = _along(r, c, pts[ia, 0], pts[ia, 1], vals[ia], pts[ib, 0],
+                                   pts[ib, 1], vals[ib], pts[im, 0], pts[im, 1], vals[im])  # fmt: skip
+                covered[r, c] = True
+
+
+@numba.njit(cache=True, nogil=True)
 def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compiled
     """Linear interpolation of ``vals`` over triangles ``tris`` onto every covered cell.
 
@@ -78,63 +157,41 @@ def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compi
     Scan conversion: for each row a triangle spans, the two edges crossing that row bound a
     run of cells, each set from the triangle's plane ``v0 + gr (r - r0) + gc (c - c0)`` (one
     multiply-add per cell). A sample that sits exactly on a cell sets that cell to its own value.
+
+    Slivers (less than _EPS high over their longest edge: nearly collinear float points, e.g.
+    lattice points off by rounding) have planes too steep to read (values 1e14x outside the
+    samples' range were seen): they go last and only fill cells no other triangle covered,
+    with the value along their longest edge. A thin triangle (less than _THIN high) is
+    clamped to its vertices' values, which bounds its plane at cells within _EPS outside its
+    edges (a fat one's plane moves by less than 1e-6 of its values' range there; unclamped,
+    its row loop stays vectorised).
     """
     nr, nc = out.shape
+    slivers = np.zeros(tris.shape[0], np.bool_)
     for t in range(tris.shape[0]):
         i0, i1, i2 = tris[t, 0], tris[t, 1], tris[t, 2]
         r0, c0 = pts[i0, 0], pts[i0, 1]
         r1, c1 = pts[i1, 0], pts[i1, 1]
         r2, c2 = pts[i2, 0], pts[i2, 1]
         det = (r1 - r0) * (c2 - c0) - (r2 - r0) * (c1 - c0)
-        # skip slivers: a triangle less than _EPS high over its longest edge holds no cell
-        # that its neighbours do not already cover (their spans reach _EPS past a shared edge),
-        # and its plane is too steep to read (nearly collinear float points, e.g. lattice
-        # points off by rounding, gave values 1e14x outside the samples' range)
         e2 = max((r1 - r0) ** 2 + (c1 - c0) ** 2, (r2 - r0) ** 2 + (c2 - c0) ** 2,
                  (r2 - r1) ** 2 + (c2 - c1) ** 2)  # fmt: skip
         if det == 0.0 or det * det < _EPS * _EPS * e2:
+            slivers[t] = True
             continue
         inv = 1.0 / det
         v0 = vals[i0]
-        # a linear interpolant lies within its vertices' values: a thin triangle (less than
-        # _THIN high over its longest edge) is clamped to them, which bounds what its steep
-        # plane gives at cells within _EPS outside its edges (a fat one's plane moves by less
-        # than 1e-6 of its values' range there; unclamped, its row loop stays vectorised)
         thin = det * det < _THIN * _THIN * e2
         vlo = min(v0, vals[i1], vals[i2])
         vhi = max(v0, vals[i1], vals[i2])
         d1, d2 = vals[i1] - v0, vals[i2] - v0
         gr = (d1 * (c2 - c0) - d2 * (c1 - c0)) * inv
         gc = (d2 * (r1 - r0) - d1 * (r2 - r0)) * inv
-        # vertices ordered by row: a (top) <= b <= c (bottom)
-        ra, ca, rb, cb, rc, cc = r0, c0, r1, c1, r2, c2
-        if rb < ra:
-            ra, ca, rb, cb = rb, cb, ra, ca
-        if rc < rb:
-            rb, cb, rc, cc = rc, cc, rb, cb
-            if rb < ra:
-                ra, ca, rb, cb = rb, cb, ra, ca
+        ra, ca, rb, cb, rc, cc = _by_row(r0, c0, r1, c1, r2, c2)
         rlo = max(math.ceil(ra - _EPS), 0)
         rhi = min(math.floor(rc + _EPS), nr - 1)
         for r in range(rlo, rhi + 1):
-            # a row within _EPS above the top vertex (below the bottom one) is spanned as the
-            # triangle's first (last) row; where the top (bottom) edge is within _EPS of
-            # horizontal, as that edge's other end's row, so the whole edge is covered (float
-            # points off a lattice row by rounding)
-            rr = min(max(float(r), ra), rc)
-            if rr == ra and rb - ra <= _EPS:
-                rr = rb
-            elif rr == rc and rc - rb <= _EPS:
-                rr = rb
-            x1 = _span(ra, ca, rc, cc, rr)
-            # the other edge: a-b above b, b-c from b down; a horizontal edge reaches b
-            if rr < rb or rc == rb:
-                x2 = _span(ra, ca, rb, cb, rr)
-            else:
-                x2 = _span(rb, cb, rc, cc, rr)
-            lo, hi = min(x1, x2), max(x1, x2)
-            clo = max(math.ceil(lo - _EPS), 0)
-            chi = min(math.floor(hi + _EPS), nc - 1)
+            clo, chi = _row_run(ra, ca, rb, cb, rc, cc, r, nc)
             base = v0 + gr * (r - r0)
             if thin:
                 for c in range(clo, chi + 1):
@@ -144,6 +201,9 @@ def rasterise_linear(pts, vals, tris, out, covered):  # pragma: no cover - compi
                 for c in range(clo, chi + 1):
                     out[r, c] = base + gc * (c - c0)
                     covered[r, c] = True
+    for t in range(tris.shape[0]):
+        if slivers[t]:
+            _fill_sliver(pts, vals, tris[t, 0], tris[t, 1], tris[t, 2], out, covered)
     # a sample on a cell is that cell's value, not the plane's rounding of it
     for i in range(pts.shape[0]):
         r, c = pts[i, 0], pts[i, 1]

@@ -74,7 +74,9 @@ def tables_code() -> str:
     Hashed once per process, when this module is imported (with the modules that write the
     tables): the code the process runs. Hashed at write time instead, a table module edited
     during a long run labelled the tables its old code wrote with the new code's hash, and
-    the next rerun kept them.
+    the next rerun kept them. (``simlunar.plotting.lidar`` is imported only when a LIDAR
+    study writes its tables, so an edit of it during such a run is the one case left: its
+    tables then carry the start's hash and are rewritten by the next rerun.)
     """
     root = Path(simlunar.__file__).parent  # module paths without importing them
     h = hashlib.sha256()

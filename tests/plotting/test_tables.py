@@ -260,7 +260,18 @@ def test_headroom_table_with_one_seed_prints_the_value_alone():
         "captured": {"wavelet_lloyd": [float("nan")]},
     }  # fmt: skip
     md, _ = headroom_tables([entry], title="t")
-    assert "| Wavelet, Lloyd | 1.25 |  | – |  |" in md
+    assert "| Wavelet, Lloyd | 1.25 |  | – | (0 of 1 seeds) |" in md
+
+
+def test_seeds_without_a_value_are_counted_not_hidden():
+    from simlunar.plotting.tables import paired_saved_tables
+
+    entry = {"label": "", "metric": "mse", "strategies": ["a", "b"], "seeds": [0, 1, 2],
+             "saved": {"a": [1.1, float("nan"), 1.3], "b": [float("nan"), 0.9, float("nan")]}}  # fmt: skip
+    md, _ = paired_saved_tables([entry], title="t")
+    # a: exp(mean(ln 1.1, ln 1.3)) = 1.196 over 2 of the 3 seeds; b: one value left
+    assert "| 1.20 [" in md and "| 1.10–1.30 (2 of 3 seeds) |" in md
+    assert "| 0.90 | (1 of 3 seeds) |" in md
 
 
 def test_paired_saved_table_without_an_oracle_by_hand():

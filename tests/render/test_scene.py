@@ -361,3 +361,33 @@ def test_finite_pixels_gives_up_on_a_degenerate_scene():
     with pytest.raises(RuntimeError, match=f"12 non-finite pixels in {FINITE_TRIES} renders"):
         finite_pixels(launch, 0)
     assert len(calls) == FINITE_TRIES and len(set(calls)) == FINITE_TRIES
+
+
+def test_a_render_re_estimates_a_non_finite_pixel_of_the_renderer(mi, rng):
+    # TerrainScene.render goes through finite_pixels: an inf that Mitsuba returns (as its
+    # light tracer did on CUDA) is replaced by the same pixel of the render with the next seed
+    t = smooth_dem(rng, shape=(16, 20))
+    cam = OrthoCamera.nadir_for_grid(t.shape, t.spacing, t.origin, altitude=20.0)
+    scene = TerrainScene(t, cam, lights=[SunLight(np.radians(40), 0.3)], spp=4)
+    plain = scene.render(seed=5)
+    retry = scene.render(seed=(5 + 0x9E3779B1) % 2**32)
+
+    class Faulty:
+        calls = 0
+
+        def __getattr__(self, name):
+            return getattr(mi, name)
+
+        def render(self, *args, **kwargs):
+            img = np.array(mi.render(*args, **kwargs))
+            if Faulty.calls == 0:
+                img[3, 4, 1] = np.inf
+            Faulty.calls += 1
+            return img
+
+    scene._mi = Faulty()
+    out = scene.render(seed=5)
+    assert Faulty.calls == 2 and np.isfinite(out).all()
+    assert out[3, 4, 1] == retry[3, 4, 1]
+    out[3, 4, 1] = plain[3, 4, 1]
+    np.testing.assert_array_equal(out, plain)
