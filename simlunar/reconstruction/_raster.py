@@ -92,9 +92,7 @@ def _row_run(ra, ca, rb, cb, rc, cc, r, nc):  # pragma: no cover - compiled
     row by rounding).
     """
     rr = min(max(float(r), ra), rc)
-    if rb - ra <= _EPS and rr <= rb:
-        rr = rb
-    elif rc - rb <= _EPS and rr >= rb:
+    if (rb - ra <= _EPS and rr <= rb) or (rc - rb <= _EPS and rr >= rb):
         rr = rb
     x1 = _span(ra, ca, rc, cc, rr)
     # the other edge: a-b above b, b-c from b down; a horizontal edge reaches b
