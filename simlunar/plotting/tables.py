@@ -325,12 +325,16 @@ def headroom_tables(entries: list[dict], *, title: str = "") -> tuple[str, str]:
             cap = np.asarray(e["captured"][s], dtype=float)
             rows.append((display_label(s), [*_seed_summary(np.asarray(e["saved"][s]), log=True),
                                             *_seed_summary(cap, log=False)]))  # fmt: skip
-        where = f"{e['label']}: " if e.get("label") else ""
-        n = len(e["seeds"])
-        cap = (f"{title}: {where}headroom captured vs {display_label(e['oracle'])} at equal "
-               f"{metric} ({n} terrain seed{'s' * (n != 1)})")  # fmt: skip
-        _append_seed_table(md, tex, cap, header, rows)
+        what = f"headroom captured vs {display_label(e['oracle'])} at equal {metric}"
+        _append_seed_table(md, tex, _seed_caption(title, e, what), header, rows)
     return "\n".join(md), "\n".join(tex)
+
+
+def _seed_caption(title: str, e: dict, what: str) -> str:
+    """``title: point: what (n terrain seeds)`` of a per-seed table."""
+    where = f"{e['label']}: " if e.get("label") else ""
+    n = len(e["seeds"])
+    return f"{title}: {where}{what} ({n} terrain seed{'s' * (n != 1)})"
 
 
 def _append_seed_table(md: list, tex: list, cap: str, header: list, rows: list) -> None:
@@ -367,11 +371,9 @@ def paired_saved_tables(entries: list[dict], *, title: str = "") -> tuple[str, s
     for e in entries:
         rows = [(display_label(s), list(_seed_summary(np.asarray(e["saved"][s]), log=True)))
                 for s in e["strategies"] if s in e["saved"]]  # fmt: skip
-        where = f"{e['label']}: " if e.get("label") else ""
-        n = len(e["seeds"])
-        cap = (f"{title}: {where}samples saved vs Uniform Lloyd at equal "
-               f"{_name(METRIC_NAMES, e['metric'])}, paired by seed ({n} terrain seeds)")  # fmt: skip
-        _append_seed_table(md, tex, cap, header, rows)
+        what = (f"samples saved vs Uniform Lloyd at equal {_name(METRIC_NAMES, e['metric'])}, "
+                "paired by seed")  # fmt: skip
+        _append_seed_table(md, tex, _seed_caption(title, e, what), header, rows)
     return "\n".join(md), "\n".join(tex)
 
 
