@@ -338,7 +338,11 @@ def _seed_caption(title: str, e: dict, what: str) -> str:
 
 
 def _append_seed_table(md: list, tex: list, cap: str, header: list, rows: list) -> None:
-    """One Markdown and one LaTeX table of text cells (``rows``: (label, cells))."""
+    """One Markdown and one LaTeX table of text cells (``rows``: (label, cells)); a column
+    empty in every row (the seed range of a one-seed study) is left out."""
+    keep = [j for j in range(len(header) - 1) if any(c[j] for _, c in rows)]
+    header = [header[0], *(header[j + 1] for j in keep)]
+    rows = [(lab, [c[j] for j in keep]) for lab, c in rows]
     lines = ["| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]
     lines += ["| " + " | ".join([lab, *c]) + " |" for lab, c in rows]
     md.append(f"### {cap}\n\n" + "\n".join(lines) + "\n")

@@ -260,7 +260,9 @@ def test_headroom_table_with_one_seed_prints_the_value_alone():
         "captured": {"wavelet_lloyd": [float("nan")]},
     }  # fmt: skip
     md, _ = headroom_tables([entry], title="t")
-    assert "| Wavelet, Lloyd | 1.25 |  | – | (0 of 1 seeds) |" in md
+    # one seed: no range column (it would be empty), but a seed without a value is counted
+    assert "| Strategy | saved vs Uniform Lloyd | headroom captured | seeds: range |" in md
+    assert "| Wavelet, Lloyd | 1.25 | – | (0 of 1 seeds) |" in md
 
 
 def test_seeds_without_a_value_are_counted_not_hidden():
