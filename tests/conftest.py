@@ -30,3 +30,45 @@ def mi():
 
     backend.init()
     return backend.mitsuba()
+
+
+#: the shipped experiment files
+EXPERIMENTS_DIR = Path(__file__).resolve().parents[1] / "experiments"
+
+
+@pytest.fixture(scope="session")
+def _shipped_models_dir(tmp_path_factory) -> Path:
+    """A working folder holding every learned-model file the shipped experiments name.
+
+    The real models are results (``simlunar train``, seconds to minutes), never committed, so a
+    fresh clone has none and the experiments that name one stop at their input check. These
+    are real model files of the same format, trained here in about a second on small
+    synthetic pairs: enough for the checks (which hash and read them), not for science.
+    """
+    import re
+
+    from scipy import ndimage
+
+    from simlunar.features.learned import LearnedOptions
+    from simlunar.planner.learning import train_learned_map
+
+    gen = np.random.default_rng(7)
+    pairs = []
+    for _ in range(2):
+        z = ndimage.gaussian_filter(gen.standard_normal((48, 64)), 3) * 5
+        img = np.clip(0.5 + ndimage.gaussian_filter(gen.standard_normal((48, 64)), 1), 0.01, 1)
+        pairs.append((img, z))
+    opts = LearnedOptions(pixels_per_example=500, max_iter=5)
+    model = train_learned_map(pairs, densities=[1 / 16], options=opts, rng=0)
+    root = tmp_path_factory.mktemp("work")
+    text = "".join(p.read_text() for p in EXPERIMENTS_DIR.glob("*.yaml"))
+    for rel in sorted(set(re.findall(r"models/[\w.-]+\.joblib", text))):
+        model.save(root / rel)
+    return root
+
+
+@pytest.fixture
+def with_shipped_models(_shipped_models_dir, monkeypatch) -> Path:
+    """Run the test in a working folder with the shipped experiments' model files."""
+    monkeypatch.chdir(_shipped_models_dir)
+    return _shipped_models_dir

@@ -531,8 +531,9 @@ def test_real_units_a_dem_multiplied_by_5_is_recomputed(tmp_path):
     assert len(finished_units(out)) == 1
 
 
-def test_every_shipped_experiment_passes_the_checks():
-    """No false alarm: the preflight accepts every experiment in experiments/."""
+def test_every_shipped_experiment_passes_the_checks(with_shipped_models):
+    """No false alarm: the preflight accepts every experiment in experiments/ (in a working
+    folder with the learned-model files two of them name, as `simlunar train` makes them)."""
     from simlunar.pipeline.preflight import check_units
     from simlunar.pipeline.runner import expand
 
