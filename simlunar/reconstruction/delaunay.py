@@ -140,9 +140,10 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
       lattice square): both triangulations are then valid but may pick different diagonals, and
       values inside such a square differ by up to the difference of the two planes.
     - Float points that are nearly collinear (lattice points off by rounding, as projected
-      sensor points are) make sliver triangles: the rasteriser skips those under 1e-9 cells
-      high (their neighbours cover their cells) and clamps thin ones to their vertices'
-      values, so the result stays within the samples' range.
+      sensor points are) make sliver triangles: the rasteriser draws those under 1e-9 cells
+      high last, only into cells no other triangle covered and with the value along their
+      longest edge, and clamps thin ones to their vertices' values, so the result stays
+      within the samples' range.
     """
     if outside not in OUTSIDE_POLICIES:
         raise ValueError(

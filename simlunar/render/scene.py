@@ -47,10 +47,10 @@ def finite_pixels(launch, seed: int) -> np.ndarray:
     A pixel value is a Monte Carlo estimate; a sample that fails in float32 makes it inf or
     NaN (Mitsuba's light tracer on ``cuda_ad_rgb`` put one inf pixel into 2 of 6 frames of
     a 96 x 128 dot pattern at 16 spp; ``llvm_ad_rgb`` never did). Such values (per pixel
-    and channel) are taken from a render with another seed (``seed + i * 0x9E3779B1`` mod 2^32, i = 1, 2, ...),
-    an independent estimate of the same expectation, so the image stays unbiased and
-    reproducible; the finite pixels are left as they are. Raises ``RuntimeError`` after
-    :data:`FINITE_TRIES` renders still leave one.
+    and channel) are taken from a render with another seed, ``seed + i * 0x9E3779B1`` mod
+    2^32 for i = 1, 2, ...: an independent estimate of the same expectation, so the image
+    stays unbiased and reproducible; the finite values are left as they are. Raises
+    ``RuntimeError`` when :data:`FINITE_TRIES` renders still leave one.
     """
     img = launch(seed)
     for i in range(1, FINITE_TRIES):

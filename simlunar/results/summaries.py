@@ -148,12 +148,13 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
         )
         md, tex = note + "\n", "% " + note + "\n"
     md2, tex2 = samples_saved_tables(_saved_entries(points), title=cfg.name)
-    md3, tex3 = headroom_tables(aggregate.headroom_entries(points), title=cfg.name)
-    md4, tex4 = paired_saved_tables(aggregate.paired_saved_entries(points), title=cfg.name)
-    if md4:
-        md3, tex3 = (md3 + "\n" + md4, tex3 + "\n" + tex4) if md3 else (md4, tex4)
-    if md3:
-        md2, tex2 = md2 + "\n" + md3, tex2 + "\n" + tex3
+    # per-seed tables: the headroom (with an oracle) or the paired savings (without one)
+    for md3, tex3 in (
+        headroom_tables(aggregate.headroom_entries(points), title=cfg.name),
+        paired_saved_tables(aggregate.paired_saved_entries(points), title=cfg.name),
+    ):
+        if md3:
+            md2, tex2 = md2 + "\n" + md3, tex2 + "\n" + tex3
     if md2:
         md, tex = md + "\n" + md2, tex + "\n" + tex2
     elif not any(p.saved for p in points):
