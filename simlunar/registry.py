@@ -1,0 +1,183 @@
+"""Registries of named components: one entry per component, carrying its options class.
+
+A component (a reconstruction, a planner, a coding, a BSDF, ...) is registered once, as
+``name -> (callable or class, OptionsClass)``. Everything else derives from that entry: the
+name check (an unknown name is a ``ValueError`` that lists the valid names and suggests the
+closest), the stray-key check of its options (:func:`build_options`), and the option bounds
+(declared once with :func:`option`, checked by :func:`check_bounds` in the options class's
+``__post_init__`` and read by ``config/`` to derive the YAML schema).
+
+The options class is a small frozen dataclass that lives beside the code that reads it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = [
+    "Entry",
+    "Registry",
+    "UnknownNameError",
+    "build_options",
+    "check_bounds",
+    "did_you_mean",
+    "option",
+    "option_info",
+]
+
+
+def did_you_mean(name: str, valid) -> str:
+    """`` (did you mean 'x'?)`` for the closest valid name, or an empty string."""
+    close = difflib.get_close_matches(str(name), [str(v) for v in valid], n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+class UnknownNameError(ValueError, KeyError):
+    """An unknown component or option name (a ``ValueError``; a ``KeyError`` too, so that a
+    registry behaves as a mapping)."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+def option(
+    default: Any = dataclasses.MISSING,
+    *,
+    doc: str,
+    unit: str | None = None,
+    ge: float | None = None,
+    gt: float | None = None,
+    le: float | None = None,
+    lt: float | None = None,
+    choices: tuple | None = None,
+    default_factory: Callable[[], Any] | Any = dataclasses.MISSING,
+):
+    """A dataclass field with its documentation, unit and bounds written once.
+
+    ``unit`` is the SI unit of the library value (the YAML key may carry a suffix that
+    ``config/`` converts); ``ge``/``gt``/``le``/``lt`` are inclusive / exclusive bounds and
+    ``choices`` the allowed values, checked by :func:`check_bounds`.
+    """
+    meta = {"doc": doc, "unit": unit, "ge": ge, "gt": gt, "le": le, "lt": lt, "choices": choices}
+    if default_factory is not dataclasses.MISSING:
+        return field(default_factory=default_factory, metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+def option_info(options_cls) -> dict[str, dict]:
+    """name -> {"default", "doc", "unit", "ge", "gt", "le", "lt", "choices", "type"} of each
+    field of an options dataclass (the input of the derived YAML schema and docs)."""
+    out = {}
+    for f in dataclasses.fields(options_cls):
+        if f.default is not dataclasses.MISSING:
+            default = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            default = f.default_factory()
+        else:
+            default = dataclasses.MISSING
+        meta = {k: f.metadata.get(k) for k in ("doc", "unit", "ge", "gt", "le", "lt", "choices")}
+        out[f.name] = {"default": default, "type": f.type, **meta}
+    return out
+
+
+def check_bounds(obj) -> None:
+    """Check every field of an options dataclass against the bounds declared by
+    :func:`option`; a ``ValueError`` naming the field, its value and the rule."""
+    for f in dataclasses.fields(obj):
+        m = f.metadata
+        v = getattr(obj, f.name)
+        if m.get("choices") is not None and v not in m["choices"]:
+            valid = ", ".join(map(repr, m["choices"]))
+            hint = did_you_mean(v, m["choices"])
+            raise ValueError(f"{f.name} must be one of {valid}, got {v!r}{hint}")
+        rules = [(k, m.get(k)) for k in ("ge", "gt", "le", "lt") if m.get(k) is not None]
+        if not rules or v is None:
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ValueError(f"{f.name} must be a finite number, got {v!r}")
+        for k, bound in rules:
+            ok = {"ge": v >= bound, "gt": v > bound, "le": v <= bound, "lt": v < bound}[k]
+            if not ok:
+                sign = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}[k]
+                raise ValueError(f"{f.name} must be {sign} {bound:g}, got {v!r}")
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One registered component: its name, what runs it and its options class."""
+
+    name: str
+    target: Any
+    options: type
+    summary: str = ""
+    meta: Mapping[str, Any] = field(default_factory=dict)
+
+    def make_options(self, values: Mapping[str, Any] | None = None):
+        """The options object from plain values (see :func:`build_options`)."""
+        return build_options(self.options, values, what=self.name)
+
+
+def build_options(options_cls, values: Mapping[str, Any] | None = None, *, what: str = ""):
+    """``options_cls(**values)`` after checking every key is one of its fields.
+
+    A stray key is a ``ValueError`` naming it, the valid keys and the closest one; bounds are
+    the class's own (its ``__post_init__``).
+    """
+    values = dict(values or {})
+    names = [f.name for f in dataclasses.fields(options_cls)]
+    for key in values:
+        if key not in names:
+            where = f" of {what}" if what else ""
+            raise UnknownNameError(
+                f"unknown option {key!r}{where}; valid: {', '.join(names) or '(none)'}"
+                f"{did_you_mean(key, names)}"
+            )
+    return options_cls(**values)
+
+
+class Registry(Mapping):
+    """``name -> Entry`` of one kind of component (``Registry("reconstruction")``).
+
+    ``registry[name]`` raises :class:`UnknownNameError` (a ``ValueError``) listing the valid
+    names and the closest one; ``name in registry`` and iteration work as for a dict.
+    """
+
+    def __init__(self, kind: str):
+        self.kind = kind
+        self._entries: dict[str, Entry] = {}
+
+    def register(self, name: str, target: Any, options: type, *, summary: str = "", **meta):
+        """Add one component; a name registered twice is an error (one entry per name)."""
+        if name in self._entries:
+            raise ValueError(f"{self.kind} {name!r} is registered twice")
+        if not dataclasses.is_dataclass(options):
+            raise TypeError(f"{self.kind} {name!r}: options must be a dataclass, got {options!r}")
+        entry = Entry(name, target, options, summary, dict(meta))
+        self._entries[name] = entry
+        return entry
+
+    def __getitem__(self, name: str) -> Entry:
+        try:
+            return self._entries[name]
+        except (KeyError, TypeError):
+            raise UnknownNameError(
+                f"unknown {self.kind} {name!r}; valid: {', '.join(self._entries)}"
+                f"{did_you_mean(name, self._entries)}"
+            ) from None
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._entries
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def names(self) -> tuple[str, ...]:
+        return tuple(self._entries)

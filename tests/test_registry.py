@@ -1,0 +1,86 @@
+"""The generic registry: one entry per component, name and option checks derived from it."""
+
+from dataclasses import dataclass
+
+import pytest
+
+from simlunar.registry import (
+    Registry,
+    UnknownNameError,
+    build_options,
+    check_bounds,
+    did_you_mean,
+    option,
+    option_info,
+)
+
+
+@dataclass(frozen=True)
+class _Opts:
+    gain: float = option(1.0, doc="a gain", ge=0.0, le=4.0)
+    sigma: float = option(2.0, doc="a width", unit="cell", gt=0.0)
+    mode: str = option("a", doc="a mode", choices=("a", "b"))
+
+    def __post_init__(self):
+        check_bounds(self)
+
+
+def test_unknown_name_lists_valid_and_suggests_the_closest():
+    reg = Registry("widget")
+    reg.register("shading", print, _Opts)
+    reg.register("linear", print, _Opts)
+    with pytest.raises(
+        ValueError,
+        match=r"unknown widget 'shadng'; valid: shading, linear \(did you mean 'shading'\?\)",
+    ):
+        reg["shadng"]
+    with pytest.raises(KeyError):  # a mapping too
+        reg["nothing"]
+    assert "linear" in reg and "x" not in reg
+    assert list(reg) == ["shading", "linear"] and len(reg) == 2
+
+
+def test_a_name_is_registered_once_and_options_must_be_a_dataclass():
+    reg = Registry("widget")
+    reg.register("a", print, _Opts)
+    with pytest.raises(ValueError, match="registered twice"):
+        reg.register("a", print, _Opts)
+    with pytest.raises(TypeError, match="must be a dataclass"):
+        reg.register("b", print, dict)
+
+
+def test_stray_option_key_is_refused_with_a_suggestion():
+    with pytest.raises(
+        UnknownNameError,
+        match=r"unknown option 'gian' of x; valid: gain, sigma, mode \(did you mean 'gain'\?\)",
+    ):
+        build_options(_Opts, {"gian": 1.0}, what="x")
+    assert build_options(_Opts, {"gain": 2.0}).gain == 2.0
+    assert build_options(_Opts, None) == _Opts()
+
+
+@pytest.mark.parametrize(
+    ("kw", "msg"),
+    [
+        ({"gain": -0.1}, "gain must be >= 0"),
+        ({"gain": 4.5}, "gain must be <= 4"),
+        ({"sigma": 0.0}, "sigma must be > 0"),
+        ({"sigma": float("nan")}, "sigma must be a finite number"),
+        ({"gain": True}, "gain must be a finite number"),
+        ({"mode": "c"}, "mode must be one of 'a', 'b'"),
+    ],
+)
+def test_bounds_declared_once_are_checked(kw, msg):
+    with pytest.raises(ValueError, match=msg):
+        _Opts(**kw)
+
+
+def test_option_info_carries_doc_unit_bounds_and_default():
+    info = option_info(_Opts)
+    assert info["sigma"]["unit"] == "cell" and info["sigma"]["gt"] == 0.0
+    assert info["gain"]["default"] == 1.0 and info["gain"]["doc"] == "a gain"
+    assert info["mode"]["choices"] == ("a", "b")
+
+
+def test_did_you_mean_is_empty_when_nothing_is_close():
+    assert did_you_mean("zzzz", ["linear", "shading"]) == ""
