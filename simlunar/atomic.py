@@ -13,6 +13,8 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
+__all__ = ["WRAPPED_ERRNOS", "atomic_write", "atomic_write_bytes", "environment_errno"]
+
 
 def _umask() -> int:
     mask = os.umask(0)

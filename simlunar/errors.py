@@ -2,6 +2,15 @@
 
 from __future__ import annotations
 
+__all__ = [
+    "ConfigError",
+    "InfrastructureError",
+    "NothingMeasuredError",
+    "ResultFolderError",
+    "RunInterrupted",
+    "SimlunarError",
+]
+
 
 class SimlunarError(Exception):
     """A problem with the user's input (configuration, file, option)."""

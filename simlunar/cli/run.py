@@ -13,6 +13,8 @@ from simlunar.config.yamlio import parse_set
 from simlunar.errors import SimlunarError
 from simlunar.pipeline.executors import make_executor
 
+__all__ = ["figures", "run"]
+
 _SET_OPTION = typer.Option(
     None,
     "--set",

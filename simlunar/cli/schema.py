@@ -10,6 +10,8 @@ import typer
 from simlunar.cli.common import flag
 from simlunar.errors import ConfigError
 
+__all__ = ["schema"]
+
 # The library is imported inside each command, not at the top: importing it takes about 3 s (the
 # scientific stack, and config.registry, which reads every planner, sensor and renderer), which
 # `simlunar schema --help` and a mistyped option should not pay (0.3 s with these imports here).

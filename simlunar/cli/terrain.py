@@ -13,6 +13,8 @@ import typer
 from simlunar.cli.common import flag, user_input
 from simlunar.errors import SimlunarError
 
+__all__ = ["terrain"]
+
 # The library is imported inside the command, not at the top: importing it takes about 3 s (the
 # scientific stack, and config.registry, which reads every planner, sensor and renderer), which
 # `simlunar terrain --help` and a mistyped option should not pay (0.3 s with these imports here).

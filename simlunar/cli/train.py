@@ -9,6 +9,8 @@ import typer
 from simlunar.cli.common import user_input
 from simlunar.errors import SimlunarError
 
+__all__ = ["train"]
+
 # The library is imported inside each command, not at the top: importing it takes about 3 s (the
 # scientific stack, and config.registry, which reads every planner, sensor and renderer), which
 # `simlunar train --help` and a mistyped option should not pay (0.3 s with these imports here).

@@ -22,6 +22,8 @@ from pydantic import (
 
 from simlunar.config.quantities import parse_fraction, parse_quantity
 
+__all__ = ["Deg", "Density", "Metres", "Px", "PxCount", "unique_names"]
+
 #: what a unit-bearing key accepts in the YAML (for the editor schema): a number in the key's
 #: unit or a string with an explicit unit ("0.5 rad", "20 cm")
 _QUANTITY_INPUT = float | Annotated[str, StringConstraints(pattern=r"^\s*[-+]?[0-9.]")]

@@ -26,6 +26,17 @@ from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
 
+__all__ = [
+    "apply_sweep_value",
+    "check_key_path",
+    "get_path",
+    "load_experiment",
+    "resolve_terrain_files",
+    "set_path",
+    "to_plain",
+    "validate_data",
+]
+
 
 def get_path(data: dict, path: str) -> Any:
     cur: Any = data

@@ -11,6 +11,16 @@ import math
 import re
 from fractions import Fraction
 
+__all__ = [
+    "ANGLE_UNITS",
+    "LENGTH_UNITS",
+    "PIXEL_UNITS",
+    "UNITS_BY_SUFFIX",
+    "log_spaced",
+    "parse_fraction",
+    "parse_quantity",
+]
+
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _QUANTITY = re.compile(rf"^\s*({_NUM})\s*([^\d\s].*?)?\s*$")
 

@@ -17,6 +17,17 @@ from simlunar.planner import MEASURING, ORACLES, STRATEGIES
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.sensors.structured_light import MODES
 
+__all__ = [
+    "check_metric",
+    "check_preset",
+    "check_scan_mode",
+    "check_scan_planner",
+    "check_strategy",
+    "metric_names",
+    "preset_names",
+    "strategy_names",
+]
+
 
 def _check(name: str, valid: Iterable[str], path: str, what: str) -> None:
     valid = sorted(set(valid))

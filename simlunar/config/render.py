@@ -17,6 +17,24 @@ from simlunar.config.fields import (
     _tagged_union,
 )
 
+__all__ = [
+    "MAX_SPP",
+    "BsdfCfg",
+    "CameraCfg",
+    "CameraLightCfg",
+    "HapkeCfg",
+    "LambertCfg",
+    "LightCfg",
+    "OrenNayarCfg",
+    "OrthoNadirCfg",
+    "PerspectiveCfg",
+    "RenderCfg",
+    "RoverMastCfg",
+    "SensorCfg",
+    "SunLightCfg",
+    "Vec3",
+]
+
 # --------------------------------------------------------------------------- render
 #: most samples per pixel of any render (render.spp, the scanner's sparse_spp)
 MAX_SPP = 4096

@@ -24,6 +24,8 @@ from simlunar.config.terrain import TerrainCfg
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
 
+__all__ = ["SceneCfg", "load_scene"]
+
 
 class SceneCfg(_Model):
     """One rendered view: terrain, camera, light, BSDF and sampling."""

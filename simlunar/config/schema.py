@@ -41,6 +41,8 @@ from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.studies import LIDAR_BLOCKS, LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.terrain import TerrainCfg
 
+__all__ = ["ExperimentCfg", "FiguresCfg", "StudyCfg"]
+
 #: the study of an experiment, chosen by its ``kind``; the kind picks the range sensor
 StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg, LidarStudyCfg)
 

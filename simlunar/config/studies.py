@@ -33,6 +33,17 @@ from simlunar.config.planners import (  # noqa: F401 - the schema's planner mode
 from simlunar.config.quantities import log_spaced
 from simlunar.planner import MEASURING, ORACLES, STRATEGIES
 
+__all__ = [
+    "FEATURE_OPTION_KEYS",
+    "LIDAR_BLOCKS",
+    "DensityRange",
+    "FeatureOptsCfg",
+    "LidarStudyCfg",
+    "PlannerOptsCfg",
+    "SamplingStudyCfg",
+    "check_planner_options",
+]
+
 
 # --------------------------------------------------------------------------- studies
 class DensityRange(_Model):

@@ -15,6 +15,25 @@ from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
 from simlunar.terrain.sfd import get_law
 
+__all__ = [
+    "PRESET_SECTIONS",
+    "SCENES",
+    "AlbedoCfg",
+    "BedCfg",
+    "CratersCfg",
+    "FractalCfg",
+    "GridCfg",
+    "PresetError",
+    "RocksCfg",
+    "TerrainCfg",
+    "TerrainOverridesCfg",
+    "TerrainPresetCfg",
+    "merged_preset",
+    "preset_data",
+    "preset_names",
+    "preset_path",
+]
+
 
 # --------------------------------------------------------------------------- terrain
 # The terrain preset files (scenes/aerial_1.yaml, ...) and an experiment's terrain.overrides use

@@ -63,6 +63,25 @@ from simlunar.terrain.params import (
 )
 from simlunar.terrain.types import Terrain
 
+__all__ = [
+    "bsdf",
+    "build_terrain",
+    "camera",
+    "capture_options",
+    "dot_options",
+    "feature_opts",
+    "gray_options",
+    "lights",
+    "planner_kwargs",
+    "preset_params",
+    "rig_kwargs",
+    "sampling_options",
+    "scanner_options",
+    "sensor_model",
+    "strategy_options",
+    "terrain_params",
+]
+
 # --------------------------------------------------------------------------- terrain
 
 

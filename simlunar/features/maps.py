@@ -10,6 +10,20 @@ import pywt
 
 from simlunar.features._kernels import sliding_entropy
 
+__all__ = [
+    "BOUNDARIES",
+    "MAX_ENTROPY_SIZE",
+    "RGB2GRAY",
+    "check_entropy_size",
+    "check_image",
+    "entropy",
+    "gradient",
+    "to_gray",
+    "to_uint8",
+    "wavelet",
+    "wavelet_levels",
+]
+
 # MATLAB rgb2gray weights (Rec. 601 luma as rounded by MATLAB's documentation), so that the
 # paper's MATLAB features see the same gray image.
 RGB2GRAY = np.array([0.298936021293775, 0.587043074451121, 0.114020904255103])

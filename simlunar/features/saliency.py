@@ -16,6 +16,8 @@ from scipy import ndimage
 
 from simlunar.features.maps import check_image
 
+__all__ = ["normalise", "saliency"]
+
 _BINOMIAL = np.array([1.0, 4.0, 6.0, 4.0, 1.0]) / 16.0
 _ANGLES = (0.0, np.pi / 4, np.pi / 2, 3 * np.pi / 4)
 

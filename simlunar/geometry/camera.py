@@ -18,6 +18,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+__all__ = [
+    "Camera",
+    "Intrinsics",
+    "OrthoCamera",
+    "Pose",
+    "Projector",
+    "Rig",
+    "grid_height_at",
+    "pixel_centers",
+    "rover_mast_camera",
+]
+
 
 def _ro(a, dtype=np.float64) -> np.ndarray:
     arr = np.array(a, dtype=dtype, copy=True)

@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+__all__ = ["gaussian_blur", "gaussian_kernel1d"]
+
 
 def gaussian_kernel1d(sigma: float, truncate: float = 4.0) -> np.ndarray:
     """Normalised 1-D Gaussian weights of radius ``int(truncate * sigma + 0.5)`` (SciPy's)."""

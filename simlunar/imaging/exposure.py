@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["AUTO_EXPOSURE_LEVEL", "AUTO_EXPOSURE_PERCENTILE", "auto_exposure_e", "auto_gain"]
+
 #: percentile of the reference radiance that the auto exposure places at ...
 AUTO_EXPOSURE_PERCENTILE = 99.5
 #: ... this fraction of the sensor range (of the full well; of 1 without a sensor)

@@ -15,6 +15,8 @@ import numpy as np
 
 from simlunar.atomic import atomic_write
 
+__all__ = ["read_exr", "write_exr"]
+
 _ATTR_KEY = "simlunar_attrs"
 # standard EXR header entries: structure, not user metadata
 _STANDARD = {

@@ -8,6 +8,15 @@ import numpy as np
 
 from simlunar.atomic import atomic_write
 
+__all__ = [
+    "AUTO_KEY",
+    "AUTO_PERCENTILE",
+    "AUTO_TARGET",
+    "auto_exposure",
+    "to_srgb8",
+    "write_png_preview",
+]
+
 #: auto exposure maps the median of the positive pixel values to photographic middle grey
 #: (the "key" 0.18 of Reinhard et al. 2002, "Photographic tone reproduction for digital images",
 #: SIGGRAPH), as a camera's averaging meter does ...

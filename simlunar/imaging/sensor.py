@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+__all__ = ["POISSON_EXACT_BELOW", "RESPONSES", "SensorModel", "apply_sensor", "poisson_from_normal"]
+
 RESPONSES = ("linear", "gamma")
 
 

@@ -23,6 +23,16 @@ import numpy as np
 
 from simlunar.lidar.waveform import SPEED_OF_LIGHT, TimeBins
 
+__all__ = [
+    "PLANCK",
+    "DetectorOptions",
+    "LinkBudget",
+    "coates_correction",
+    "expected_counts",
+    "photon_counts",
+    "photon_counts_dead_time",
+]
+
 
 @dataclass(frozen=True)
 class DetectorOptions:

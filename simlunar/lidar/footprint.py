@@ -16,6 +16,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+__all__ = [
+    "PROFILES",
+    "FootprintOptions",
+    "cone_offsets",
+    "footprint_radius",
+    "tilted_plane_spread",
+]
+
 PROFILES = ("gaussian", "uniform")
 
 

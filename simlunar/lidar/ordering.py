@@ -21,6 +21,16 @@ from scipy.spatial import cKDTree
 
 from simlunar.lidar.steering import SteeringOptions, move_time, scan_timing
 
+__all__ = [
+    "METHODS",
+    "OrderOptions",
+    "exact_order",
+    "nearest_neighbour_order",
+    "order_scan",
+    "raster_order",
+    "two_opt",
+]
+
 METHODS = ("nn2opt", "raster", "given")
 
 

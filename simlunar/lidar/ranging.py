@@ -21,6 +21,8 @@ from scipy import ndimage
 
 from simlunar.lidar.waveform import PulseOptions, TimeBins, pulse_kernel
 
+__all__ = ["METHODS", "RETURNS", "RangeOptions", "RangeResult", "extract_ranges"]
+
 METHODS = ("matched", "peak")
 RETURNS = ("strongest", "first", "last")
 

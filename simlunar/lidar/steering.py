@@ -17,6 +17,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+__all__ = [
+    "ScanTiming",
+    "SteeringOptions",
+    "axis_move_time",
+    "move_time",
+    "pointing_angles",
+    "scan_timing",
+]
+
 
 @dataclass(frozen=True)
 class SteeringOptions:

@@ -17,6 +17,15 @@ import numpy as np
 from scipy import ndimage
 from scipy.special import erf
 
+__all__ = [
+    "FWHM_PER_SIGMA",
+    "SPEED_OF_LIGHT",
+    "PulseOptions",
+    "TimeBins",
+    "pulse_kernel",
+    "shape_waveform",
+]
+
 #: speed of light in vacuum (m/s)
 SPEED_OF_LIGHT = 299_792_458.0
 

@@ -19,6 +19,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+__all__ = ["METRICS", "METRIC_NAMES", "depth_gradient_weights", "metric"]
+
 
 def _weighted_mse(err, w):
     total = float(w.sum())

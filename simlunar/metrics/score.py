@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["check_densities", "samples_for_equal_error", "score"]
+
 
 def check_densities(densities) -> np.ndarray:
     """Densities k/N as float64 (n,), each in (0, 1]."""

@@ -1,1 +1,3 @@
 """simlunar.pipeline"""
+
+__all__ = []

@@ -17,6 +17,17 @@ from typing import Any
 
 from simlunar.errors import ConfigError, InfrastructureError
 
+__all__ = [
+    "DaskExecutor",
+    "Executor",
+    "LocalPoolExecutor",
+    "SerialExecutor",
+    "accepts_keyword",
+    "default_workers",
+    "make_executor",
+    "parse_scheduler_address",
+]
+
 
 def default_workers() -> int:
     """Worker count when none is given: 1 (rendering already uses every core; ``--workers``

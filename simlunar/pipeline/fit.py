@@ -24,6 +24,8 @@ from simlunar.planner.combination import DEFAULT_PROTOCOL
 from simlunar.results.figures import load_results
 from simlunar.results.store import UnitCache, atomic_write_bytes
 
+__all__ = ["FIT_SEARCH", "main", "run_fit"]
+
 #: the fit's search: shorter than :func:`fit_combination`'s default (40 iterations, 1 restart)
 FIT_SEARCH = NelderMeadOptions(maxiter=40, restarts=1)
 

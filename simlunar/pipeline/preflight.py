@@ -47,6 +47,25 @@ from simlunar.scanner.gray_code import num_bits
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.study.scanner import aim_rig_at_terrain
 
+__all__ = [
+    "DOT_MODES",
+    "MAX_NAN_FRACTION",
+    "MIN_SAMPLES",
+    "TRANSIENT_CHANNELS",
+    "Preflight",
+    "check_camera",
+    "check_out_dir",
+    "check_out_file",
+    "check_renderer",
+    "check_rig",
+    "check_scanner_budget",
+    "check_study_sizes",
+    "check_time_bins",
+    "check_units",
+    "image_shape",
+    "terrain_facts",
+]
+
 #: smallest sample count of a density (the planners and the Delaunay reconstruction need 3)
 MIN_SAMPLES = 3
 

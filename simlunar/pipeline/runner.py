@@ -67,6 +67,8 @@ from simlunar.results.summaries import (
     tables_code,
 )
 
+__all__ = ["ROW_COLUMNS", "RunSummary", "collect_rows", "expand", "run_experiment", "unit_key"]
+
 #: keys that do not change a unit's numbers (excluded from its cache key)
 _NON_RESULT_KEYS = ("name", "description", "sweep")
 ROW_COLUMNS = ("mode", "planner", "budget", "strategy", "density", "k", "trial", "metric", "value")

@@ -23,6 +23,17 @@ from simlunar.metrics import score as eq43
 from simlunar.planner.strategies import COMBINABLE, check_k, combination_map, combine_maps, plan
 from simlunar.reconstruction import reconstruct
 
+__all__ = [
+    "DEFAULT_FEATURES",
+    "DEFAULT_PROTOCOL",
+    "DEFAULT_SEARCH",
+    "CombinationFit",
+    "NelderMeadOptions",
+    "ScoreProtocol",
+    "fit_combination",
+    "score_combination",
+]
+
 #: the maps :func:`fit_combination` weights by default
 DEFAULT_FEATURES = ("uniform", "gradient", "entropy", "wavelet", "saliency")
 

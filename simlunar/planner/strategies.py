@@ -63,6 +63,21 @@ from simlunar.planner.oracle import ORACLES, oracle_greedy, oracle_hessian
 from simlunar.planner.placement import density_from_map, place
 from simlunar.planner.types import SamplePlan
 
+__all__ = [
+    "COMBINABLE",
+    "PLACEMENTS",
+    "STRATEGIES",
+    "STRATEGY_NAMES",
+    "WEIGHTED",
+    "check_k",
+    "combination_map",
+    "combine_maps",
+    "normalised_map",
+    "plan",
+    "strategy_options",
+    "strategy_weights",
+]
+
 WEIGHTED = ("gradient", "entropy", "wavelet", "saliency", "combination")
 #: display names of the strategies (paper spelling), for tables and figure legends
 STRATEGY_NAMES = {

@@ -1,1 +1,3 @@
 """simlunar.plotting"""
+
+__all__ = []

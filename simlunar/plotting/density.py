@@ -19,6 +19,21 @@ from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.layout import LABEL_PT, TICK_PT, TITLE_PT, legend_outside, new_axes
 from simlunar.plotting.style import label, metric_axis, styles
 
+__all__ = [
+    "BAND_LABEL",
+    "BAND_LABEL_SEEDS",
+    "LEGEND_RIGHT_SIZE",
+    "NICE_RATIOS",
+    "REFERENCE",
+    "density_axis",
+    "density_label",
+    "error_vs_density",
+    "mean_error_by_density",
+    "ratio_axis",
+    "samples_saved_plot",
+    "score_vs_sweep",
+]
+
 #: what the shaded band of :func:`error_vs_density` shows (legend entry and caption text)
 BAND_LABEL = "band: ±1 s.d. over trials"
 #: the band when each panel pools the realisations of several terrain seeds

@@ -15,6 +15,15 @@ import numpy as np
 from simlunar.plotting.layout import LABEL_PT, PAGE_W, TICK_PT, TITLE_PT
 from simlunar.plotting.style import label
 
+__all__ = [
+    "DEPTH_CMAP",
+    "SAMPLE_INK",
+    "PanelText",
+    "image_panels",
+    "sample_marker_area",
+    "sparse_mesh_panels",
+]
+
 #: colour map of depth (perceptually uniform; no land/water reading as "terrain" had)
 DEPTH_CMAP = "cividis"
 #: at most this share of a samples panel is covered by sample markers (the rest shows the

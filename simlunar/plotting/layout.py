@@ -14,6 +14,23 @@ from collections.abc import Sequence
 import matplotlib.pyplot as plt
 from matplotlib.figure import Figure
 
+__all__ = [
+    "COLUMN_W",
+    "LABEL_PT",
+    "LEGEND_PT",
+    "MAX_COLS",
+    "PAGE_W",
+    "TICK_PT",
+    "TITLE_PT",
+    "close",
+    "legend_outside",
+    "new_axes",
+    "panel_grid",
+    "panel_row",
+    "save",
+    "shared_legend",
+]
+
 COLUMN_W = 3.4  # in, one column of a two-column paper
 PAGE_W = 7.0  # in, full page width
 #: panels per row of a multi-panel figure (three single-column panels fill a page width)

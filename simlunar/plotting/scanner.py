@@ -17,6 +17,15 @@ from simlunar.plotting.density import _category_ticks, _sweep_positions
 from simlunar.plotting.layout import COLUMN_W, LABEL_PT, TICK_PT, TITLE_PT, legend_outside, new_axes
 from simlunar.plotting.style import METRIC_UNITS, metric_axis, pair_label, style
 
+__all__ = [
+    "REFERENCE_MODE",
+    "bit_error_rates",
+    "error_scale",
+    "scanner_bars",
+    "scanner_relative_bars",
+    "scanner_vs_sweep",
+]
+
 #: units of an error axis, largest first: (name, factor from the SI unit)
 _SCALES = {
     "m²": (("m²", 1.0), ("cm²", 1e4), ("mm²", 1e6), ("µm²", 1e12)),

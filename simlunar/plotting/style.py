@@ -21,6 +21,23 @@ from dataclasses import dataclass
 
 from simlunar.metrics import METRIC_NAMES
 
+__all__ = [
+    "AXIS_NAMES",
+    "METRIC_UNITS",
+    "PLAIN_LABELS",
+    "REGISTRY",
+    "SPARE_COLOURS",
+    "SPARE_MARKERS",
+    "Style",
+    "axis_name",
+    "label",
+    "metric_axis",
+    "pair_label",
+    "point_title",
+    "style",
+    "styles",
+]
+
 
 @dataclass(frozen=True)
 class Style:

@@ -18,6 +18,16 @@ import numpy as np
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.style import label as display_label
 
+__all__ = [
+    "Cell",
+    "headroom_tables",
+    "paired_saved_tables",
+    "samples_saved_tables",
+    "score_tables",
+    "t_interval",
+    "tex_escape",
+]
+
 
 def _name(table: dict, key: str) -> str:
     if key.endswith("_interior") and key.removesuffix("_interior") in table:

@@ -18,6 +18,8 @@ from triangle.core import triang
 
 from simlunar.reconstruction._raster import rasterise_linear, scan_points
 
+__all__ = ["EXACT_INTEGER_EXTENT", "OUTSIDE_POLICIES", "reconstruct", "triangulate"]
+
 OUTSIDE_POLICIES = ("nearest", "nan")
 
 

@@ -31,6 +31,23 @@ from simlunar.interrupts import deferred, interrupted
 from simlunar.render import llvm as _llvm
 from simlunar.render.plugins import PLUGINS
 
+__all__ = [
+    "JIT_VARIANTS",
+    "KNOWN_VARIANTS",
+    "SCALAR_VARIANT",
+    "BackendInfo",
+    "ScalarFallbackWarning",
+    "choose_variant",
+    "default_cache_dir",
+    "info",
+    "init",
+    "is_initialised",
+    "mitsuba",
+    "register_plugin_hook",
+    "set_render_threads",
+    "versions",
+]
+
 JIT_VARIANTS = ("cuda_ad_rgb", "llvm_ad_rgb")
 SCALAR_VARIANT = "scalar_rgb"
 KNOWN_VARIANTS = (*JIT_VARIANTS, SCALAR_VARIANT)

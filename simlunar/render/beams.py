@@ -17,6 +17,8 @@ import numpy as np
 
 from simlunar.lidar.footprint import FootprintOptions
 
+__all__ = ["SENSOR_NAME", "register", "sensor_dict", "set_beams", "tangent_frames"]
+
 SENSOR_NAME = "simlunar_beam_array"
 _REGISTERED: list[bool] = []
 

@@ -23,6 +23,16 @@ import numpy as np
 from simlunar.geometry import Camera, OrthoCamera, Pose
 from simlunar.render import backend
 
+__all__ = [
+    "CV_TO_MITSUBA",
+    "clip_range",
+    "film_dict",
+    "principal_point_offsets",
+    "sensor_dict",
+    "to_world_matrix",
+    "view_direction",
+]
+
 #: OpenCV device axes -> Mitsuba sensor axes (x and y flipped, z kept)
 CV_TO_MITSUBA = np.diag([-1.0, -1.0, 1.0])
 

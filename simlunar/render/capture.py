@@ -19,6 +19,18 @@ from simlunar.render.scene import TerrainScene, luminance
 from simlunar.render.sparse import LitTracer
 from simlunar.scanner.triangulate import check_rig, projector_visibility, true_correspondences
 
+__all__ = [
+    "EXPOSURE_PERCENTILE",
+    "SPARSE_INTEGRATORS",
+    "SPARSE_PARTICLES",
+    "Capture",
+    "CaptureOptions",
+    "GuideView",
+    "RenderCapture",
+    "camera_truth",
+    "render_guide",
+]
+
 #: white-frame radiance percentile mapped to ``target_level`` by the auto exposure (the one
 #: rule of :mod:`simlunar.imaging.exposure`)
 EXPOSURE_PERCENTILE = AUTO_EXPOSURE_PERCENTILE

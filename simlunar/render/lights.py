@@ -29,6 +29,20 @@ from simlunar.geometry import Camera, OrthoCamera, Projector
 from simlunar.render import backend
 from simlunar.render.cameras import to_world_matrix
 
+__all__ = [
+    "LIGHTS",
+    "PROJECTOR_ID",
+    "SUN_ANGULAR_DIAMETER",
+    "AmbientLight",
+    "CameraLight",
+    "ProjectorLight",
+    "SunLight",
+    "check_pattern",
+    "emitter_dicts",
+    "make_light",
+    "sun_direction",
+]
+
 SUN_ANGULAR_DIAMETER = np.radians(0.53)  # mean apparent diameter of the sun from the Moon
 
 

@@ -20,6 +20,15 @@ import sysconfig
 from dataclasses import dataclass
 from pathlib import Path
 
+__all__ = [
+    "MIN_LLVM_MAJOR",
+    "LLVMCandidate",
+    "candidates",
+    "find_libllvm",
+    "llvm_major_from_name",
+    "main",
+]
+
 MIN_LLVM_MAJOR = 16
 
 _VERSION_RE = re.compile(r"libLLVM(?:-|\.so\.)(\d+)")

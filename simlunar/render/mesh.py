@@ -24,6 +24,8 @@ import numpy as np
 from simlunar.render import backend
 from simlunar.terrain.mesh import grid_faces, grid_vertices
 
+__all__ = ["albedo_texture", "grid_texture", "terrain_mesh"]
+
 
 def terrain_mesh(terrain, *, name: str = "terrain", bsdf=None):
     """Build the ``mi.Mesh`` of ``terrain`` (flat-shaded: no vertex normals).

@@ -33,6 +33,17 @@ from simlunar.render.lights import (
 from simlunar.render.materials import LambertBSDF
 from simlunar.render.mesh import albedo_texture, terrain_mesh
 
+__all__ = [
+    "FINITE_TRIES",
+    "LUMINANCE",
+    "RenderResult",
+    "TerrainScene",
+    "finite_pixels",
+    "inverse_by_linearity",
+    "luminance",
+    "render",
+]
+
 #: Rec. 709 / sRGB luminance weights of linear RGB
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722], np.float32)
 

@@ -34,6 +34,16 @@ from simlunar.render.lights import emitter_dicts
 from simlunar.render.mesh import terrain_mesh
 from simlunar.render.scene import LUMINANCE, TerrainScene, _bsdf_dict, luminance
 
+__all__ = [
+    "BeamCapture",
+    "BeamReturns",
+    "FlashFrame",
+    "TransientOptions",
+    "capture_beams",
+    "flash_frame",
+    "transient_film",
+]
+
 _RGB = LUMINANCE.astype(np.float64)
 
 

@@ -26,6 +26,24 @@ from simlunar.study.stats import (
     samples_saved,
 )
 
+__all__ = [
+    "HEADROOM_REFERENCE",
+    "N_BOOT",
+    "SAVED_REFERENCES",
+    "SCORES_CSV_COLUMNS",
+    "SEED_AXES",
+    "SEED_AXIS",
+    "Point",
+    "density_panels",
+    "error_arrays",
+    "group_points",
+    "headroom_entries",
+    "paired_saved_entries",
+    "scores_csv_rows",
+    "summarise",
+    "sweep_value",
+]
+
 SEED_AXIS = "terrain.seed_index"
 #: bootstrap replicates per point and metric
 N_BOOT = 2000

@@ -9,6 +9,19 @@ from __future__ import annotations
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.style import METRIC_UNITS, axis_name, label
 
+__all__ = [
+    "bit_errors",
+    "error_vs_density",
+    "headroom",
+    "lidar_error",
+    "panels",
+    "samples_saved",
+    "scanner_errors",
+    "scanner_vs_sweep",
+    "score_vs_sweep",
+    "sparse_mesh",
+]
+
 _METRIC_TEXT = {
     "mse": "mean squared depth error over all cells",
     "grad": "mean squared depth error weighted by the true depth-gradient magnitude (GRAD)",

@@ -14,6 +14,16 @@ from simlunar.errors import ResultFolderError
 from simlunar.results.folder import prune_figures, read_folder_config
 from simlunar.results.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
 
+__all__ = [
+    "STAMP",
+    "figure_inputs",
+    "load_results",
+    "load_unit_arrays",
+    "write_captions",
+    "write_figures",
+    "write_figures_pruned",
+]
+
 
 def load_results(out_dir: str | Path) -> dict:
     """Everything a figure needs from a result folder.

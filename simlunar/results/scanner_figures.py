@@ -11,6 +11,8 @@ from simlunar.plotting.style import axis_name
 from simlunar.results import captions as captions_text
 from simlunar.results.aggregate import SEED_AXES, sweep_value
 
+__all__ = ["scanner_figures"]
+
 
 def _scanner_pooled(rows: list[dict], metrics: list[str]) -> list[dict]:
     """Mean, s.d. and count of each metric per (mode, planner) over all units and trials."""

@@ -37,6 +37,21 @@ import numpy as np
 from simlunar.atomic import atomic_write_bytes
 from simlunar.errors import ResultFolderError
 
+__all__ = [
+    "LOCK_NAME",
+    "UNITS_DIR",
+    "FolderLock",
+    "UnitCache",
+    "atomic_write_bytes",
+    "atomic_write_json",
+    "atomic_write_text",
+    "csv_text",
+    "file_sha256",
+    "fmt_value",
+    "npz_bytes",
+    "read_csv",
+]
+
 UNITS_DIR = "units"
 
 

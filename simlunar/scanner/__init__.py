@@ -1,1 +1,3 @@
 """simlunar.scanner"""
+
+__all__ = []

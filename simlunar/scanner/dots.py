@@ -19,6 +19,17 @@ from scipy import ndimage
 from simlunar.geometry import Rig
 from simlunar.scanner.triangulate import check_rig
 
+__all__ = [
+    "Detections",
+    "DotMatches",
+    "detect_dots",
+    "dot_pattern",
+    "epipolar_segments",
+    "match_dots",
+    "point_segment_distance",
+    "segment_distance",
+]
+
 
 def _as_uv(uv, name: str) -> np.ndarray:
     a = np.asarray(uv, dtype=float)

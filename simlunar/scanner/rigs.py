@@ -14,6 +14,16 @@ import numpy as np
 
 from simlunar.geometry import Camera, Intrinsics, Pose, Projector, Rig
 
+__all__ = [
+    "RIG_PRESETS",
+    "RigCamera",
+    "aerial_rig",
+    "footprint",
+    "make_rig",
+    "moonyard_rig",
+    "rig_preset",
+]
+
 
 @dataclass(frozen=True)
 class RigCamera:

@@ -15,6 +15,14 @@ import numpy as np
 from simlunar.planner import plan
 from simlunar.reconstruction import reconstruct
 
+__all__ = [
+    "dct_power",
+    "gaussian_field",
+    "random_grid_mse_ratio",
+    "sample_pitch",
+    "variance_share_above",
+]
+
 
 def _heights(heights) -> np.ndarray:
     h = np.asarray(heights, dtype=np.float64)

@@ -24,6 +24,20 @@ import numpy as np
 
 from simlunar.metrics import check_densities
 
+__all__ = [
+    "FEWER",
+    "INTERPOLATED",
+    "MORE",
+    "SamplesSaved",
+    "ScoreIntervals",
+    "Separation",
+    "best_separation",
+    "bootstrap_scores",
+    "resample_weights",
+    "samples_at_equal_error",
+    "samples_saved",
+]
+
 
 # --------------------------------------------------------------------------- scores
 def _check_errors(errors: dict, n_densities: int) -> tuple[list[str], np.ndarray]:

@@ -28,6 +28,18 @@ import numpy as np
 
 from simlunar.terrain._window import feature_window
 
+__all__ = [
+    "EJECTA_END",
+    "S_MAX",
+    "Crater",
+    "crater_profile",
+    "extent_radii",
+    "fresh_depth",
+    "fresh_rim_height",
+    "place_craters",
+    "stamp_craters",
+]
+
 #: ejecta taper radius (in crater radii)
 EJECTA_END = 3.0
 #: largest tabulated relative diffusion length s = sqrt(2 kappa t) / R; beyond it the crater is

@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import fft as sfft
 
+__all__ = ["fbm", "radial_power_spectrum", "undulating_bed"]
+
 
 def _check_shape(shape) -> tuple[int, int]:
     if len(shape) != 2 or any(int(n) < 2 for n in shape):

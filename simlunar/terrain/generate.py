@@ -18,6 +18,8 @@ from simlunar.terrain.params import AlbedoParams, TerrainParams
 from simlunar.terrain.rocks import Rock, place_rocks, stamp_rocks
 from simlunar.terrain.types import Terrain
 
+__all__ = ["TerrainResult", "generate", "make_albedo"]
+
 
 @dataclass(frozen=True, eq=False)
 class TerrainResult:

@@ -36,6 +36,20 @@ from simlunar.terrain.geotiff import _meta, _read_gdal, _write_geotiff
 from simlunar.terrain.mesh import grid_faces, grid_vertices
 from simlunar.terrain.types import Terrain
 
+__all__ = [
+    "DEFAULT_ALBEDO",
+    "FORMATS",
+    "GDAL_FORMATS",
+    "export_mesh",
+    "features_json",
+    "hillshade",
+    "hillshade_png",
+    "load_albedo",
+    "load_dem",
+    "save_dem",
+    "write_terrain_outputs",
+]
+
 #: formats :func:`save_dem` writes (and :func:`load_dem` reads)
 FORMATS = (".npy", ".npz", ".exr", ".tif", ".tiff")
 #: further raster formats :func:`load_dem` reads through GDAL (rasterio)

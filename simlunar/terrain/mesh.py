@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["grid_faces", "grid_uv", "grid_vertices"]
+
 
 def grid_vertices(heights: np.ndarray, spacing: float, origin=(0.0, 0.0)) -> np.ndarray:
     """(rows * cols, 3) float64 world positions of cell centres."""

@@ -17,6 +17,16 @@ import numpy as np
 
 import simlunar.terrain.sfd as sfd
 
+__all__ = [
+    "AlbedoParams",
+    "BedParams",
+    "CraterParams",
+    "FractalParams",
+    "ParamError",
+    "RockParams",
+    "TerrainParams",
+]
+
 
 class ParamError(ValueError):
     """An invalid terrain parameter: ``key`` is its YAML path (``fractal.rms_m``).

@@ -20,6 +20,8 @@ import numpy as np
 
 from simlunar.terrain._window import feature_window
 
+__all__ = ["Rock", "place_rocks", "stamp_rocks"]
+
 _HARMONICS = (2, 3, 4)
 
 

@@ -19,6 +19,16 @@ from functools import partial
 
 import numpy as np
 
+__all__ = [
+    "CRATER_LAWS",
+    "ROCK_LAWS",
+    "expected_count",
+    "get_law",
+    "power_law",
+    "sample_diameters",
+    "viper_craters",
+]
+
 
 def power_law(d: np.ndarray, *, coefficient: float, exponent: float) -> np.ndarray:
     """Cumulative density ``coefficient * D**-exponent`` (per m^2, D in m)."""

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+__all__ = ["Roughness", "default_baselines", "feature_densities", "roughness", "terrain_report"]
+
 
 @dataclass(frozen=True)
 class Roughness:

@@ -53,6 +53,8 @@ from simlunar.render.plugins._common import (
     scalar,
 )
 
+__all__ = ["HAPKE_TABLE_SIZE", "NAME", "register"]
+
 NAME = "hapke"
 
 #: entries of the normal albedo -> w lookup table (albedo in [0, 1])

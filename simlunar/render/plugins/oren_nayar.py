@@ -47,6 +47,8 @@ from simlunar.render.plugins._common import (
     register_plugin,
 )
 
+__all__ = ["NAME", "on_factors", "register"]
+
 NAME = "oren_nayar"
 
 _REGISTERED: set[str] = set()
