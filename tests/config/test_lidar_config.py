@@ -6,12 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from simlunar.config import lidar_translate
 from simlunar.config.loading import load_experiment
 from simlunar.config.yamlio import parse_set
 from simlunar.errors import ConfigError
-from simlunar.render.lidar_scan import SteeredBeamOptions
-from simlunar.sensors import FlashLidarOptions, MicromirrorOptions
 
 EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments"
 DESCENT = EXPERIMENTS / "lidar_descent_altimeter.yaml"
@@ -29,47 +26,6 @@ DESCENT = EXPERIMENTS / "lidar_descent_altimeter.yaml"
 def test_the_shipped_lidar_experiments_validate(name):
     cfg = load_experiment(EXPERIMENTS / f"{name}.yaml")
     assert cfg.study.kind == "lidar"
-
-
-def test_descent_translates_to_si_options():
-    s = load_experiment(DESCENT).study
-    opts = lidar_translate.lidar_options(s, seed=7)
-    so = opts.sensor_options
-    assert isinstance(so, SteeredBeamOptions) and opts.sensor == "steered_beam"
-    assert so.pulse.fwhm_s == pytest.approx(1e-9) and so.pulse.jitter_s == pytest.approx(1e-10)
-    assert so.footprint.divergence_rad == pytest.approx(1e-3)
-    assert so.steering.settle_s == pytest.approx(1e-3)
-    assert so.steering.pulses_per_point == 4 and so.transient.seed == 7
-    assert opts.densities[0] == pytest.approx(1 / 16) and len(opts.densities) == 5
-
-
-def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
-    cfg = load_experiment(
-        DESCENT,
-        parse_set(
-            [
-                "study.sensor=flash",
-                "study.options.steered_beam={}",
-                "study.options.flash={receiver_px: [32, 32], revisits: 2, zoom: 4}",
-                "study.options.detector.dead_time_ns=null",
-            ]
-        ),
-    )
-    so = lidar_translate.lidar_options(cfg.study).sensor_options
-    assert isinstance(so, FlashLidarOptions) and so.receiver_px == (32, 32) and so.revisits == 2
-    assert so.flash.detector.dead_time_s == float("inf")  # one detection per pulse
-    cfg = load_experiment(
-        DESCENT,
-        parse_set(
-            [
-                "study.sensor=micromirror_flash",
-                "study.options.steered_beam={}",
-                "study.options.micromirror={receiver_px: [16, 16]}",
-            ]
-        ),
-    )
-    so = lidar_translate.lidar_options(cfg.study).sensor_options
-    assert isinstance(so, MicromirrorOptions) and so.receiver_px == (16, 16)
 
 
 @pytest.mark.parametrize(

@@ -1,0 +1,113 @@
+"""The LIDAR study's configuration in SI units: ns -> s, mrad -> rad, ms -> s, the receiver's
+(width, height) -> (rows, cols), no dead time -> one detection per pulse; hazard options."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from simlunar.config import lidar_translate
+from simlunar.config.lidar import HazardCfg
+from simlunar.config.loading import load_experiment
+from simlunar.config.studies import LidarStudyCfg
+from simlunar.config.yamlio import parse_set
+from simlunar.metrics.hazard import HazardOptions
+from simlunar.render.lidar_scan import SteeredBeamOptions
+from simlunar.sensors import FlashLidarOptions, MicromirrorOptions
+
+EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments"
+DESCENT = EXPERIMENTS / "lidar_descent_altimeter.yaml"
+
+
+def test_descent_translates_to_si_options():
+    s = load_experiment(DESCENT).study
+    opts = lidar_translate.lidar_options(s, seed=7)
+    so = opts.sensor_options
+    assert isinstance(so, SteeredBeamOptions) and opts.sensor == "steered_beam"
+    assert so.pulse.fwhm_s == pytest.approx(1e-9) and so.pulse.jitter_s == pytest.approx(1e-10)
+    assert so.footprint.divergence_rad == pytest.approx(1e-3)
+    assert so.steering.settle_s == pytest.approx(1e-3)
+    assert so.steering.pulses_per_point == 4 and so.transient.seed == 7
+    assert opts.densities[0] == pytest.approx(1 / 16) and len(opts.densities) == 5
+
+
+def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
+    cfg = load_experiment(
+        DESCENT,
+        parse_set(
+            [
+                "study.sensor=flash",
+                "study.options.steered_beam={}",
+                "study.options.flash={receiver_px: [32, 32], revisits: 2, zoom: 4}",
+                "study.options.detector.dead_time_ns=null",
+            ]
+        ),
+    )
+    so = lidar_translate.lidar_options(cfg.study).sensor_options
+    assert isinstance(so, FlashLidarOptions) and so.receiver_px == (32, 32) and so.revisits == 2
+    assert so.flash.detector.dead_time_s == float("inf")  # one detection per pulse
+    cfg = load_experiment(
+        DESCENT,
+        parse_set(
+            [
+                "study.sensor=micromirror_flash",
+                "study.options.steered_beam={}",
+                "study.options.micromirror={receiver_px: [16, 16]}",
+            ]
+        ),
+    )
+    so = lidar_translate.lidar_options(cfg.study).sensor_options
+    assert isinstance(so, MicromirrorOptions) and so.receiver_px == (16, 16)
+
+
+def test_every_unit_of_a_hand_written_steered_beam_study():
+    study = LidarStudyCfg(
+        kind="lidar",
+        planners=["grid", "wavelet"],
+        densities=[0.25],
+        trials=2,
+        metrics=["mse"],
+        planner_opts={"wavelet": {"placement": "lloyd"}},
+        options={
+            "pulse": {"fwhm_ns": 4, "jitter_ns": 0.5},
+            "detector": {"dead_time_ns": 20, "dark_count_rate_hz": 100},
+            "ranging": {"method": "peak", "which": "first"},
+            "transient": {"spp": 8, "max_depth": 3, "laser_intensity_w_sr": 2},
+            "bin_range_m": "10 cm",
+            "margin_m": 1,
+            "steered_beam": {"divergence_mrad": 2, "settle_ms": 5, "max_accel_rad_s2": 10,
+                             "order": "raster", "window_m": 4, "batch": 64},
+        },
+    )  # fmt: skip
+    opts = lidar_translate.lidar_options(study, seed=3)
+    assert opts.planners == ("grid", "wavelet") and opts.densities == (0.25,)
+    assert opts.trials == 2 and opts.metrics == ("mse",) and opts.hazard is None
+    assert opts.planner_opts["wavelet"]["placement"] == "lloyd"
+    so = opts.sensor_options
+    assert so.pulse.fwhm_s == pytest.approx(4e-9) and so.pulse.jitter_s == pytest.approx(5e-10)
+    assert so.detector.dead_time_s == pytest.approx(2e-8)
+    assert so.detector.dark_count_rate_hz == 100
+    assert (so.ranging.method, so.ranging.which) == ("peak", "first")
+    t = so.transient
+    assert (t.spp, t.max_depth, t.seed, t.laser_intensity) == (8, 3, 3, 2.0)
+    assert so.bin_range_m == pytest.approx(0.1) and so.margin_m == 1.0
+    assert so.footprint.divergence_rad == pytest.approx(2e-3)
+    assert so.steering.settle_s == pytest.approx(5e-3)
+    assert so.steering.max_accel_rad_s2 == 10
+    assert so.order.method == "raster" and so.window_m == 4 and so.batch == 64
+
+
+def test_flash_receiver_width_height_becomes_rows_cols():
+    study = LidarStudyCfg(kind="lidar", sensor="flash",
+                          options={"flash": {"receiver_px": [40, 30], "zoom": 3}})  # fmt: skip
+    so = lidar_translate.lidar_sensor_options(study)
+    assert so.receiver_px == (30, 40) and so.zoom == 3
+
+
+def test_hazard_options():
+    assert lidar_translate.hazard_options(None) is None
+    h = lidar_translate.hazard_options(HazardCfg(slope_deg="0.2 rad", relief_m="20 cm"))
+    assert isinstance(h, HazardOptions)
+    assert h.slope_deg == pytest.approx(11.459155902616464) and h.relief_m == pytest.approx(0.2)
+    assert (h.window_px, h.baseline_px) == (15, 2)

@@ -1,0 +1,123 @@
+"""The study models, built directly: log-spaced density ranges, unique names, each strategy's
+options checked with the path of the label, oracles labelled as bounds, a LIDAR reading only its
+own options block."""
+
+from __future__ import annotations
+
+import pytest
+from pydantic import ValidationError
+
+from simlunar.config.studies import (
+    LIDAR_BLOCKS,
+    DensityRange,
+    LidarStudyCfg,
+    SamplingStudyCfg,
+)
+
+
+def _msg(cls, **kw) -> str:
+    with pytest.raises(ValidationError) as info:
+        cls(**kw)
+    return info.value.errors()[0]["msg"]
+
+
+def test_a_density_range_is_log2_spaced_with_its_ends():
+    r = DensityRange.model_validate({"from": "1/2", "to": "1/8", "count": 3})
+    assert r.values() == [0.5, 0.25, 0.125]
+    assert DensityRange.model_validate({"from": 0.5, "to": 0.5, "count": 1}).values() == [0.5]
+    # 1/2 .. 1/2048 in 11 steps is exactly the powers of two (the paper's section 4.1)
+    big = DensityRange.model_validate({"from": "1/2", "to": "1/2048", "count": 11}).values()
+    assert big == [2.0**-i for i in range(1, 12)]
+    with pytest.raises(ValidationError, match="Field required"):
+        DensityRange.model_validate({"start": 0.5, "stop": 0.1, "count": 2})  # the keys are from/to
+    with pytest.raises(ValidationError, match="less than or equal to 64"):
+        DensityRange.model_validate({"from": 0.5, "to": 0.1, "count": 65})
+
+
+def test_a_study_takes_a_list_or_a_range_of_densities():
+    s = SamplingStudyCfg(densities={"from": "1/4", "to": "1/16", "count": 2})
+    assert s.densities == [0.25, 0.0625]
+    assert SamplingStudyCfg(densities=["1/2", 0.1]).densities == [0.5, 0.1]
+    assert s.strategies == ["random", "grid", "gradient", "entropy", "wavelet"]
+    assert (s.trials, s.metrics, s.score_region, s.terrain_seeds) == (
+        20,
+        ["mse", "grad", "sal"],
+        "full",
+        1,
+    )
+    assert "at least 1 item" in _msg(SamplingStudyCfg, densities=[])
+
+
+def test_names_are_unique():
+    assert _msg(SamplingStudyCfg, densities=[0.5], strategies=["grid", "grid"]) == (
+        "Value error, names must be unique, got ['grid', 'grid']"
+    )
+    assert "names must be unique" in _msg(LidarStudyCfg, kind="lidar", metrics=["mse", "mse"])
+
+
+def test_strategy_options_are_checked_with_the_label_in_the_path():
+    ok = SamplingStudyCfg(
+        densities=[0.5],
+        strategies=["random", "wavelet_bn"],
+        strategy_options={"wavelet_bn": {"strategy": "wavelet", "blue_noise": True}},
+    )
+    assert ok.strategy_options["wavelet_bn"].blue_noise
+    assert (
+        _msg(
+            SamplingStudyCfg,
+            densities=[0.5],
+            strategies=["w"],
+            strategy_options={"w": {"strategy": "wavelet", "coefficients": {"wavelet": 1}}},
+        )
+        == "Value error, strategy_options.w.coefficients: only the combination strategy takes them ('wavelet')"
+    )
+    # a strategy without options block is checked with the defaults, named by its list entry
+    assert _msg(SamplingStudyCfg, densities=[0.5], strategies=["combination"]) == (
+        "Value error, strategies (combination).coefficients: strategy 'combination' needs at "
+        "least one weight"
+    )
+
+
+def test_an_oracle_label_starts_with_oracle_and_unknown_names_are_left_to_the_registries():
+    assert _msg(
+        SamplingStudyCfg,
+        densities=[0.5],
+        strategies=["bound"],
+        strategy_options={"bound": {"strategy": "oracle_hessian"}},
+    ) == (
+        "Value error, strategy_options.bound: a label of an oracle (oracle_hessian) starts "
+        "with 'oracle', so every table shows it as a bound"
+    )
+    SamplingStudyCfg(densities=[0.5], strategies=["oracle_tight"],
+                     strategy_options={"oracle_tight": {"strategy": "oracle_hessian"}})  # fmt: skip
+    SamplingStudyCfg(densities=[0.5], strategies=["no_such_planner"])  # reported elsewhere
+
+
+def test_a_lidar_reads_only_its_own_options_block():
+    assert set(LIDAR_BLOCKS) == set(LidarStudyCfg.model_fields["sensor"].annotation.__args__)
+    s = LidarStudyCfg(kind="lidar", sensor="flash", options={"flash": {"revisits": 2}})
+    assert s.options.flash.revisits == 2
+    assert s.densities == [1 / 64, 1 / 256] and s.planners == ["wavelet", "random", "grid"]
+    assert (
+        _msg(
+            LidarStudyCfg, kind="lidar", sensor="flash", options={"steered_beam": {"settle_ms": 2}}
+        )
+        == "Value error, options.steered_beam: not an option of the flash sensor (set options.flash)"
+    )
+    assert _msg(
+        LidarStudyCfg, kind="lidar", sensor="micromirror_flash", options={"flash": {"zoom": 2}}
+    ) == (
+        "Value error, options.flash: not an option of the micromirror_flash sensor "
+        "(set options.micromirror)"
+    )
+
+
+def test_lidar_planner_options_belong_to_its_planners():
+    assert _msg(LidarStudyCfg, kind="lidar", planners=["grid"],
+                planner_opts={"wavelet": {}}) == (
+        "Value error, planner_opts.wavelet: not in study.planners (grid)"
+    )  # fmt: skip
+    assert _msg(LidarStudyCfg, kind="lidar", planners=["grid"],
+                planner_opts={"grid": {"uniform_mix": 0.5}}) == (
+        "Value error, planner_opts.grid.uniform_mix: strategy 'grid' takes no options"
+    )  # fmt: skip
