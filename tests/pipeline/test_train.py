@@ -7,14 +7,11 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pytest
 import yaml
 from typer.testing import CliRunner
 
 from simlunar.cli import app
 from simlunar.config.loading import validate_data
-from simlunar.config.training import load_training
-from simlunar.errors import ConfigError
 from simlunar.features.learned import LearnedMap
 from simlunar.pipeline import train as train_mod
 from simlunar.study.sampling import run_sampling_study
@@ -82,23 +79,3 @@ def test_train_writes_a_model_with_its_record_and_a_study_uses_it(tmp_path, monk
     image, depth = _synthetic_view(validate_data({**cfg.model_dump(mode="json", by_alias=True)}))
     out = run_sampling_study(depth, image, translate.sampling_options(cfg.study), rng=0)
     assert np.isfinite(out.errors("mse")["learned_lloyd"]).all()
-
-
-def test_training_options_are_the_library_defaults():
-    from dataclasses import asdict
-
-    from simlunar.config.training import LearnedOptsCfg
-    from simlunar.features.learned import LearnedOptions
-
-    assert LearnedOptsCfg().model_dump() == asdict(LearnedOptions())
-
-
-def test_training_yaml_errors_are_one_line(tmp_path):
-    with pytest.raises(ConfigError, match=r"held_out_presets\[0\]: 'moonyard' is in none"):
-        load_training(_yaml(tmp_path, held_out_presets=["moonyard"]))
-    with pytest.raises(ConfigError, match="held_out_presets: leaves no preset"):
-        load_training(_yaml(tmp_path, held_out_presets=["aerial_1", "aerial_2", "aerial_3"]))
-    with pytest.raises(ConfigError, match=r"model: .*ends in \.joblib"):
-        load_training(_yaml(tmp_path, model="m.pkl"))
-    res = CliRunner().invoke(app, ["train", str(_yaml(tmp_path, densities=[]))])
-    assert res.exit_code == 2 and "densities" in res.output
