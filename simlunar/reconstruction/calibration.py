@@ -122,10 +122,15 @@ class Calibration:
 
 
 def valid_pixels(image, options: CalibrationOptions | None = None) -> np.ndarray:
-    """Pixels neither shadowed nor saturated (bool, shape of ``image``)."""
+    """Pixels neither shadowed nor saturated (bool, shape of ``image``).
+
+    Shadowed: at or below ``shadow`` x the 99th percentile of the image (taken over every
+    7th pixel on large images); saturated: at or above ``saturation``.
+    """
     o = options or CalibrationOptions()
     img = np.asarray(image, dtype=np.float64)
-    ref = float(np.percentile(img, 99.0))
+    flat = img.ravel()
+    ref = float(np.percentile(flat if flat.size < 100_000 else flat[::7], 99.0))
     valid = img < o.saturation
     if ref > 0:
         valid &= img > o.shadow * ref
@@ -156,10 +161,12 @@ def _stats(x, y):
     return x.T @ x, x.T @ y, float(y @ y), float(y.sum()), len(y)
 
 
-def _r2(theta, stats):
+def _r2(theta, stats, level):
+    """R^2 of ``theta`` on ``stats`` of a centred ``y``; 0 when ``y`` varies by less than
+    1e-10 of its ``level`` (a constant image, to rounding)."""
     xtx, xty, yty, ysum, n = stats
     ss_tot = yty - ysum * ysum / n
-    if ss_tot <= 1e-24 * max(yty, 1e-300):
+    if ss_tot <= n * (1e-10 * level) ** 2 or ss_tot <= 0:
         return 0.0
     ss_res = yty - 2.0 * theta @ xty + theta @ xtx @ theta
     return float(1.0 - max(ss_res, 0.0) / ss_tot)
@@ -230,21 +237,22 @@ def calibrate(
     y = ib.ravel()[idx]
     gr = gr_b.ravel()[idx]
     gc = gc_b.ravel()[idx]
-    x, y = _design(gr, gc, y)
+    level = float(np.mean(y))
+    x, y = _design(gr, gc, y - level)  # centred: the sums below keep their precision
     scale = float(np.mean(gr * gr + gc * gc))
-    full = _stats(x, y)
-    theta = _solve(full[0], full[1], scale)
-    share = max(_r2(theta, full), 0.0)
     # held out: checkerboard blocks, fitted on one colour and scored on the other, both ways
     block = max(o.block_pitches * lin.pitch / f, 1.0)
     cols = inner.shape[1]
     colour = ((idx // cols) // block + (idx % cols) // block).astype(np.int64) % 2 == 0
+    halves = [_stats(x[colour], y[colour]), _stats(x[~colour], y[~colour])]
+    full = tuple(p + q for p, q in zip(*halves, strict=True))
+    theta = _solve(full[0], full[1], scale)
+    share = max(_r2(theta, full, abs(level)), 0.0)
+    theta[0] += level
     held = []
-    for half in (colour, ~colour):
-        if half.sum() >= 10 and (~half).sum() >= 10:
-            s_fit = _stats(x[half], y[half])
-            s_out = _stats(x[~half], y[~half])
-            held.append(_r2(_solve(s_fit[0], s_fit[1], scale), s_out))
+    if min(halves[0][4], halves[1][4]) >= 10:
+        for fit, out in (halves, halves[::-1]):
+            held.append(_r2(_solve(fit[0], fit[1], scale), out, abs(level)))
     heldout = float(np.mean(held)) if held else math.nan
     b = theta[1:].copy()
     gain = float(np.hypot(*b))

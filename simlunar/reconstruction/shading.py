@@ -46,6 +46,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import ndimage
 
 from simlunar.reconstruction._anchor import LinearField, linear_field, reanchored_detail
 from simlunar.reconstruction.base import Guide, Reconstructed
@@ -55,11 +56,7 @@ from simlunar.reconstruction.calibration import (
     calibrate,
     valid_pixels,
 )
-from simlunar.reconstruction.integrate import (
-    central_gradient,
-    frankot_chellappa,
-    gaussian_smooth,
-)
+from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
 from simlunar.registry import check_bounds, option
 
 __all__ = ["ShadingOptions", "fallback_gamma", "fuse_slopes", "shading", "shading_frames"]
@@ -164,7 +161,7 @@ def shading_frames(guide: Guide, options: ShadingOptions | None = None):
 
 def _image_slope(image, valid, cal: Calibration, lin_along, o: ShadingOptions):
     """Slope along ``cal.direction`` read from one frame (linear's where invalid)."""
-    smooth = gaussian_smooth(image, o.image_sigma)
+    smooth = ndimage.gaussian_filter(image, o.image_sigma, truncate=3.0) if o.image_sigma else image
     p = (smooth - cal.a) / (o.gain * cal.gain)
     np.clip(p, -o.clip, o.clip, out=p)
     return np.where(valid, p, lin_along)
