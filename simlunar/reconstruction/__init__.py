@@ -7,13 +7,21 @@ reconstruction, :mod:`simlunar.registry`); every one has the signature of
 """
 
 from simlunar.reconstruction.base import Guide, LinearOptions, Reconstructed, linear
+from simlunar.reconstruction.control import SmoothedOptions, smoothed
 from simlunar.reconstruction.delaunay import OUTSIDE_POLICIES, reconstruct, triangulate
+from simlunar.reconstruction.shading import ShadingOptions, shading
 from simlunar.registry import Registry
 
 #: reconstruction name -> Entry(function, options class); ``meta["guided"]``: reads the guide
 RECONSTRUCTIONS = Registry("reconstruction")
 RECONSTRUCTIONS.register(
     "linear", linear, LinearOptions, summary="Delaunay-linear (the paper's)", guided=False
+)
+RECONSTRUCTIONS.register(
+    "shading", shading, ShadingOptions, summary="slope along the sun, anchored", guided=True
+)
+RECONSTRUCTIONS.register(
+    "smoothed", smoothed, SmoothedOptions, summary="image-free control", guided=False
 )
 
 
@@ -56,8 +64,12 @@ __all__ = [
     "Guide",
     "LinearOptions",
     "Reconstructed",
+    "ShadingOptions",
+    "SmoothedOptions",
     "linear",
     "reconstruct",
     "run_reconstruction",
+    "shading",
+    "smoothed",
     "triangulate",
 ]

@@ -1,0 +1,85 @@
+"""What the image-anchored reconstructions share: the linear reconstruction with its hull,
+the sample pitch, and re-anchoring a detail field to the samples."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import ndimage
+
+from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
+
+__all__ = ["LinearField", "at_points", "linear_field", "reanchored_detail", "sample_pitch"]
+
+
+class LinearField:
+    """The Delaunay-linear reconstruction of the samples and where it interpolates.
+
+    Attributes
+    ----------
+    points : ndarray, shape (k, 2)
+        The samples (row, col) as float64.
+    values : ndarray, shape (k,)
+    shape : tuple of int
+    heights : ndarray, shape (rows, cols)
+        Linear inside the samples' convex hull, the nearest sample's value outside
+        (exactly what the registry's ``linear`` returns).
+    hull : ndarray of bool, shape (rows, cols)
+        Cells inside the convex hull (those the triangles cover).
+    pitch : float
+        ``density^(-1/2)`` cells, density = k / (rows cols).
+    """
+
+    def __init__(self, points_rc, values, shape):
+        pts, vals, shape = _check_inputs(points_rc, values, shape)
+        self.points, self.values, self.shape = pts, vals, shape
+        inside = reconstruct(pts, vals, shape, outside="nan")
+        self.hull = np.isfinite(inside)
+        if self.hull.all():
+            self.heights = inside
+        else:
+            self.heights = reconstruct(pts, vals, shape, outside="nearest")
+        self.pitch = sample_pitch(len(pts), shape)
+
+    def interpolate(self, at_samples) -> np.ndarray:
+        """Linear interpolation of other values at the same samples (same triangles)."""
+        return reconstruct(self.points, at_samples, self.shape, outside="nearest")
+
+
+def linear_field(points_rc, values, shape) -> LinearField:
+    """:class:`LinearField` of the samples (input checks of :func:`.delaunay.reconstruct`)."""
+    return LinearField(points_rc, values, shape)
+
+
+def sample_pitch(k: int, shape) -> float:
+    """Mean sample spacing in cells: ``density^(-1/2)`` with density = k / (rows cols)."""
+    return math.sqrt(shape[0] * shape[1] / max(int(k), 1))
+
+
+def at_points(field: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Values of ``field`` at (row, col) points: a lookup on integer points, bilinear (edge
+    values beyond the grid) otherwise."""
+    r, c = points[:, 0], points[:, 1]
+    rows, cols = field.shape
+    ri, ci = np.rint(r), np.rint(c)
+    if (
+        np.array_equal(ri, r)
+        and np.array_equal(ci, c)
+        and (ri >= 0).all()
+        and (ri < rows).all()
+        and (ci >= 0).all()
+        and (ci < cols).all()
+    ):
+        return field[ri.astype(np.intp), ci.astype(np.intp)]
+    return ndimage.map_coordinates(field, [r, c], order=1, mode="nearest")
+
+
+def reanchored_detail(field: np.ndarray, lin: LinearField) -> np.ndarray:
+    """``z_a - z_lin`` for ``z_a = field + linear_interp(samples of (z - field))``.
+
+    By linearity of the interpolation this is ``field - linear_interp(field at the samples)``:
+    zero at every sample, and zero everywhere inside the hull when ``field`` is linear
+    (a plane).
+    """
+    return field - lin.interpolate(at_points(field, lin.points))
