@@ -8,12 +8,21 @@ reconstruction, :mod:`simlunar.registry`); every one has the signature of
 
 from simlunar.reconstruction.base import Guide, LinearOptions, Reconstructed, linear
 from simlunar.reconstruction.delaunay import OUTSIDE_POLICIES, reconstruct, triangulate
+from simlunar.reconstruction.learned import LearnedReconOptions, learned_reconstruction
 from simlunar.registry import Registry
 
 #: reconstruction name -> Entry(function, options class); ``meta["guided"]``: reads the guide
 RECONSTRUCTIONS = Registry("reconstruction")
 RECONSTRUCTIONS.register(
     "linear", linear, LinearOptions, summary="Delaunay-linear (the paper's)", guided=False
+)
+RECONSTRUCTIONS.register(
+    "learned",
+    learned_reconstruction,
+    LearnedReconOptions,
+    summary="linear + a trained image residual",
+    guided=True,
+    needs_model=True,
 )
 
 
