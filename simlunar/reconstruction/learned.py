@@ -145,8 +145,8 @@ def sample_scale(points_rc, values) -> tuple[float, np.ndarray]:
     Returns
     -------
     (float, ndarray)
-        h (same unit as the values; 0 when every sample lies on its neighbours' plane or there
-        are fewer than 4 distinct samples), and each distinct sample's residual, shape (k',),
+        h (same unit as the values; 0 when every sample lies on its neighbours' plane to
+        1e-9 of the largest |value|, or there are fewer than 4 distinct samples), and each distinct sample's residual, shape (k',),
         with the distinct positions as computed by ``np.unique(points_rc, axis=0)``.
     """
     # loo_residuals lives with the planner that uses it first; imported here because the
@@ -155,7 +155,9 @@ def sample_scale(points_rc, values) -> tuple[float, np.ndarray]:
 
     pts, vals = _distinct(np.asarray(points_rc, float), np.asarray(values, float))
     loo = loo_residuals(pts, vals) if len(pts) >= 4 else np.zeros(len(pts))
-    return float(np.sqrt(np.mean(loo**2))), loo
+    h = float(np.sqrt(np.mean(loo**2))) if len(loo) else 0.0
+    # rounding of a plane's fit (about 1e-16 of the values) is no relief
+    return (h if h > 1e-9 * float(np.abs(vals).max(initial=0.0)) else 0.0), loo
 
 
 def _gray(image) -> np.ndarray:
