@@ -64,10 +64,13 @@ __all__ = [
     "RECON_FEATURE_VERSION",
     "LearnedReconOptions",
     "LearnedReconstruction",
+    "anchor",
+    "check_model_file",
     "feature_names",
     "learned_reconstruction",
     "residual_features",
     "sample_scale",
+    "shading_heights",
 ]
 
 #: identifies the JSON record of a learned-reconstruction model file
@@ -379,7 +382,7 @@ class LearnedReconstruction:
         across versions) and a joblib file whose SHA-256 differs from the record's (a
         truncated or replaced file), all before unpickling.
         """
-        path, meta = _checked_record(path)
+        path, meta = check_model_file(path)
         import joblib
 
         try:
@@ -391,8 +394,22 @@ class LearnedReconstruction:
         return cls(payload["model"], {k: v for k, v in meta.items() if k != "model_file"})
 
 
-def _checked_record(path) -> tuple[Path, dict]:
-    """The model file and its parsed record, after every check that needs no unpickling."""
+def check_model_file(path) -> tuple[Path, dict]:
+    """The model file and its parsed record, after every check that needs no unpickling.
+
+    What :meth:`LearnedReconstruction.load` checks before it unpickles (a preflight can call it
+    to refuse a bad model file before any work): one-line ``ValueError`` naming the file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.joblib`` model file.
+
+    Returns
+    -------
+    (Path, dict)
+        The path and its JSON record.
+    """
     import sklearn
 
     from simlunar.features.learned import _model_path, _sha256_file

@@ -377,3 +377,9 @@ def test_shading_feature_comes_from_the_registered_reconstruction(monkeypatch, t
         "learned", pts, vals, z.shape, guide=Guide(img), options={"model": str(path)}
     )
     assert calls == [0.5]  # the recorded shading options, at reconstruction too
+
+
+def test_check_model_file_reads_the_record_without_unpickling(model, tmp_path, no_unpickling):
+    path, record = model.save(tmp_path / "m.joblib")
+    got, meta = lr.check_model_file(str(path))
+    assert got == path and meta == json.loads(record.read_text())
