@@ -1,4 +1,5 @@
-"""``simlunar train``: the learned importance map from a training YAML."""
+"""``simlunar train``: the learned importance map or learned reconstruction from a training
+YAML."""
 
 from __future__ import annotations
 
@@ -22,7 +23,8 @@ def train(
     ),
     out: str = typer.Option(None, "--out", help="model file (.joblib) [default: the YAML's model]"),
 ) -> None:
-    """Train the learned importance map: <model>.joblib and its record <model>.json."""
+    """Train the learned importance map, or the learned reconstruction (target: reconstruction):
+    <model>.joblib and its record <model>.json."""
     from simlunar.config.training import load_training
     from simlunar.pipeline.train import train_from_config
 

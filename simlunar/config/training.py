@@ -1,16 +1,20 @@
-"""The training YAML of the learned importance map (``simlunar train``).
+"""The training YAML of the learned importance map or learned reconstruction (``simlunar train``).
 
 A training run renders guide views of the scenes of one or more experiment YAMLs (their terrain,
 camera, light, BSDF and sensor, so the model sees the images the studies will see) on terrain
 realisations the experiments do not use (another ``seed``), under several sun elevations, and
-fits :func:`simlunar.features.learned.train_learned_map`. Presets listed in
-``held_out_presets`` are never trained on (evaluate on them). Example:
-``experiments/training/learned_quarter.yaml``.
+fits, by ``target``, the learned importance map (``map``, the default:
+:func:`simlunar.planner.learning.train_learned_map`) or the residual model of the ``learned``
+reconstruction (``reconstruction``: :func:`simlunar.planner.learning.train_learned_reconstruction`,
+options of its features in the section ``reconstruction``). Presets listed in
+``held_out_presets`` are never trained on (evaluate on them). Examples:
+``experiments/training/learned_quarter.yaml``, ``experiments/training/learned_recon_quarter.yaml``.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -20,7 +24,7 @@ from simlunar.config.messages import validate_file_data
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
 
-__all__ = ["LearnedOptsCfg", "TrainCfg", "load_training"]
+__all__ = ["LearnedOptsCfg", "LearnedReconCfg", "TrainCfg", "load_training"]
 
 
 class LearnedOptsCfg(_Model):
@@ -41,11 +45,44 @@ class LearnedOptsCfg(_Model):
     )
 
 
+class LearnedReconCfg(_Model):
+    """Features of the learned reconstruction (``target: reconstruction`` only)."""
+
+    with_shading: bool = Field(
+        False,
+        description="add the detail of the registered `shading` reconstruction as a feature "
+        "(the model then runs it at every reconstruction)",
+    )
+    shading_options: dict[str, Any] = Field(
+        default_factory=dict, description="options of the `shading` reconstruction"
+    )
+
+    @model_validator(mode="after")
+    def _shading(self) -> LearnedReconCfg:
+        if self.shading_options and not self.with_shading:
+            raise ValueError("shading_options: only with with_shading: true")
+        if self.with_shading:
+            from simlunar.reconstruction import RECONSTRUCTIONS
+
+            if "shading" not in RECONSTRUCTIONS:
+                raise ValueError(
+                    "with_shading: needs the reconstruction 'shading', which this simlunar "
+                    f"does not register (have: {', '.join(RECONSTRUCTIONS)})"
+                )
+            RECONSTRUCTIONS["shading"].make_options(self.shading_options)
+        return self
+
+
 class TrainCfg(_Model):
-    """A training run of the learned importance map."""
+    """A training run of the learned importance map or of the learned reconstruction."""
 
     name: str = Field(description="names the run (recorded with the model)")
     description: str = ""
+    target: Literal["map", "reconstruction"] = Field(
+        "map",
+        description="what is learned: the importance map (features.learned) or the residual "
+        "of the `learned` reconstruction (reconstruction.learned)",
+    )
     seed: int = Field(
         ge=0,
         description="terrain and training seed; use one no experiment uses, so every terrain "
@@ -63,8 +100,15 @@ class TrainCfg(_Model):
     sun_elevations_deg: list[Deg] | None = Field(
         None, description="sun elevations rendered per terrain; null = each experiment's own"
     )
-    densities: list[Density] = Field(min_length=1, description="one model per density k / N")
+    densities: list[Density] = Field(
+        min_length=1,
+        description="densities k / N trained: map, one model each; reconstruction, the "
+        "layouts' densities of one model (density is a feature)",
+    )
     options: LearnedOptsCfg = Field(default_factory=LearnedOptsCfg)
+    reconstruction: LearnedReconCfg | None = Field(
+        None, description="features of the learned reconstruction (target: reconstruction)"
+    )
     model: str = Field(description="output model file (.joblib, its .json beside it)")
 
     @field_validator("model")
@@ -78,6 +122,8 @@ class TrainCfg(_Model):
     def _distinct(self) -> TrainCfg:
         if len(set(self.densities)) != len(self.densities):
             raise ValueError(f"densities: must be distinct, got {self.densities}")
+        if self.reconstruction is not None and self.target != "reconstruction":
+            raise ValueError("reconstruction: only with target: reconstruction")
         return self
 
 

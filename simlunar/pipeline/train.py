@@ -1,4 +1,5 @@
-"""``simlunar train``: render training examples from a training YAML and fit the learned map.
+"""``simlunar train``: render training examples from a training YAML and fit the learned map
+or the learned reconstruction's residual model (the YAML's ``target``).
 
 Each example is the guide view and true depth of one (experiment scene, preset, terrain
 realisation, sun elevation), rendered exactly as a sampling unit renders it (same terrain,
@@ -16,12 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from simlunar.config.loading import to_plain
-from simlunar.config.training import TrainCfg, _preset, _sweep_presets
+from simlunar.config.training import LearnedReconCfg, TrainCfg, _preset, _sweep_presets
 from simlunar.config.yamlio import dump_yaml
 from simlunar.features.learned import LearnedOptions
 from simlunar.pipeline.figure_inputs import RENDER_LOCK
 from simlunar.pipeline.unit import fill_invalid, int_seed, scene_inputs, sensor_image, stage_seeds
-from simlunar.planner.learning import train_learned_map
+from simlunar.planner.learning import train_learned_map, train_learned_reconstruction
 from simlunar.render import render
 from simlunar.render.scene import luminance
 
@@ -68,7 +69,8 @@ def _scenes(cfg: TrainCfg, experiments) -> list[tuple[dict, object]]:
 
 def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = None,
                       command: str = "", log=print) -> tuple[Path, Path]:  # fmt: skip
-    """Render the examples, train, save ``model`` (``out`` overrides it) and its record.
+    """Render the examples, train the ``cfg.target`` (map or reconstruction), save ``model``
+    (``out`` overrides it) and its record.
 
     Returns
     -------
@@ -96,12 +98,25 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
         ],
         "render_seconds": round(render_s, 3),
     }
-    model = train_learned_map(
-        examples,
-        densities=cfg.densities,
-        options=LearnedOptions(**cfg.options.model_dump()),
-        rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 20])),
-        provenance=provenance,
-    )
+    options = LearnedOptions(**cfg.options.model_dump())
+    if cfg.target == "reconstruction":
+        recon = cfg.reconstruction or LearnedReconCfg()
+        model = train_learned_reconstruction(
+            examples,
+            densities=cfg.densities,
+            options=options,
+            with_shading=recon.with_shading,
+            shading_options=recon.shading_options,
+            rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 21])),
+            provenance=provenance,
+        )
+    else:
+        model = train_learned_map(
+            examples,
+            densities=cfg.densities,
+            options=options,
+            rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 20])),
+            provenance=provenance,
+        )
     path = Path(out) if out is not None else Path(cfg.model)
     return model.save(path)

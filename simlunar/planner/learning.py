@@ -1,9 +1,11 @@
 """Training the learned importance map (the paper's "learn a mapping", section 3.1): the
 target is where a uniform layout's reconstruction error lies; the model
 (:class:`simlunar.features.learned.LearnedMap`) then predicts it from the guide image alone.
+And training the learned reconstruction (:mod:`simlunar.reconstruction.learned`): the target
+is the residual truth - linear of uniform layouts.
 
-Training lives in ``planner/`` because its target is made with a layout and a reconstruction;
-the prediction (``features.learned``) needs only the image.
+Training lives in ``planner/`` because its targets are made with layouts and a reconstruction;
+the predictions (``features.learned``, ``reconstruction.learned``) need no layout.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from simlunar.features.maps import check_image
 from simlunar.planner.sequential import uniform_layout
 from simlunar.reconstruction import reconstruct
 
-__all__ = ["error_target", "train_learned_map"]
+__all__ = ["error_target", "train_learned_map", "train_learned_reconstruction"]
 
 
 def error_target(truth, *, density: float, layouts: int = 3, rng=None) -> np.ndarray:
@@ -162,3 +164,143 @@ def train_learned_map(
     }
     json.dumps(meta)  # fail here, not at save time, on a provenance JSON cannot hold
     return LearnedMap(models, meta)
+
+
+def _recon_training_set(examples, densities, options, with_shading, shading_options, rng):
+    """Features and residual / h targets: ``options.pixels_per_example`` pixels per example and
+    density, spread over ``options.layouts`` uniform Lloyd layouts."""
+    from simlunar.reconstruction.base import Guide
+    from simlunar.reconstruction.learned import residual_features, shading_heights
+
+    xs, ys = [], []
+    for image, truth in examples:
+        guide = Guide(image) if with_shading else None
+        n = truth.size
+        for d in densities:
+            k = max(4, round(d * n))
+            for j in range(options.layouts):
+                r, c = np.divmod(uniform_layout(truth.shape, k, rng=rng), truth.shape[1])
+                pts = np.column_stack((r, c))
+                vals = truth[r, c]
+                shade = None
+                if with_shading:
+                    shade = shading_heights(
+                        pts, vals, truth.shape, guide=guide, options=shading_options
+                    )
+                x, h, z_lin = residual_features(image, pts, vals, shading=shade)
+                if h == 0:  # linear is exact on these samples: no residual to learn
+                    continue
+                y = ((truth - z_lin) / h).ravel()
+                share = options.pixels_per_example // options.layouts
+                share += j < options.pixels_per_example % options.layouts
+                take = rng.choice(n, min(share, n), replace=False)
+                xs.append(x[take])
+                ys.append(y[take])
+    if not xs:
+        raise ValueError("every training layout's samples lie on planes: nothing to learn")
+    return np.concatenate(xs), np.concatenate(ys)
+
+
+def train_learned_reconstruction(
+    examples: Sequence[tuple[np.ndarray, np.ndarray]],
+    *,
+    densities: Sequence[float],
+    options: LearnedOptions | None = None,
+    with_shading: bool = False,
+    shading_options: dict | None = None,
+    rng,
+    provenance: dict | None = None,
+):
+    """Learn the residual model of the ``learned`` reconstruction from rendered examples.
+
+    For every example, density and layout (``options.layouts`` uniform Lloyd layouts,
+    :func:`simlunar.planner.sequential.uniform_layout`) the truth is sampled at the layout's
+    cells, reconstructed by Delaunay-linear, and ``options.pixels_per_example / layouts``
+    pixels drawn uniformly contribute their features
+    (:func:`simlunar.reconstruction.learned.residual_features`) and target (truth - z_lin) / h.
+    One ``HistGradientBoostingRegressor`` (squared error, no early stopping, seeded) fits all
+    densities together, log2 density being a feature.
+
+    Parameters
+    ----------
+    examples : sequence of (image, truth)
+        image (rows, cols) or (rows, cols, 3) guide image; truth (rows, cols) true depth or
+        height (m). Shapes may differ between examples.
+    densities : sequence of float in (0, 1]
+        Sample fractions k / N of the training layouts (distinct).
+    options : LearnedOptions, optional
+        Layouts, pixels and boosting settings (shared with the learned map).
+    with_shading : bool
+        Add the feature ``shading_detail`` of the registered ``shading`` reconstruction
+        (a ``ValueError`` if none is registered); the model then needs it at reconstruction.
+    shading_options : dict, optional
+        Options of the ``shading`` reconstruction (recorded, and used again at
+        reconstruction).
+    rng : None, int, SeedSequence or Generator
+        Draws the layouts, the training pixels and the boosting's seed.
+    provenance : dict, optional
+        JSON-serialisable description of the examples' origin; saved with the model.
+
+    Returns
+    -------
+    simlunar.reconstruction.learned.LearnedReconstruction
+    """
+    from simlunar.reconstruction.learned import (
+        FORMAT as RECON_FORMAT,
+    )
+    from simlunar.reconstruction.learned import (
+        RECON_FEATURE_VERSION,
+        LearnedReconstruction,
+        feature_names,
+    )
+
+    opt = options or LearnedOptions()
+    rng = np.random.default_rng(rng)
+    ex = _check_examples(examples)
+    dens = sorted({float(d) for d in densities})
+    if not dens or len(dens) != len(list(densities)):
+        raise ValueError(f"densities must be distinct and non-empty, got {list(densities)}")
+    for d in dens:
+        pitch_of(d)
+    if shading_options and not with_shading:
+        raise ValueError("shading_options given without with_shading=True")
+    if with_shading:
+        from simlunar.reconstruction import RECONSTRUCTIONS
+
+        if "shading" not in RECONSTRUCTIONS:
+            raise ValueError(
+                "with_shading needs the reconstruction 'shading', which is not registered "
+                f"(have: {', '.join(RECONSTRUCTIONS)})"
+            )
+        RECONSTRUCTIONS["shading"].make_options(shading_options)  # bad keys fail before work
+    t0 = time.perf_counter()
+    x, y = _recon_training_set(ex, dens, opt, with_shading, shading_options, rng)
+    model = HistGradientBoostingRegressor(
+        max_iter=opt.max_iter,
+        learning_rate=opt.learning_rate,
+        max_leaf_nodes=opt.max_leaf_nodes,
+        min_samples_leaf=opt.min_samples_leaf,
+        l2_regularization=opt.l2_regularization,
+        early_stopping=False,
+        random_state=int(rng.integers(2**31 - 1)),
+    )
+    with threadpool_limits(opt.threads):
+        model.fit(x, y)
+    meta = {
+        "format": RECON_FORMAT,
+        "recon_feature_version": RECON_FEATURE_VERSION,
+        "feature_set_version": FEATURE_SET_VERSION,
+        "feature_names": list(feature_names(with_shading)),
+        "with_shading": bool(with_shading),
+        "shading_options": dict(shading_options or {}),
+        "densities": dens,
+        "options": asdict(opt),
+        "examples": len(ex),
+        "training_pixels": len(y),
+        "input_sha256": [[_sha256_array(i), _sha256_array(t)] for i, t in ex],
+        "train_seconds": round(time.perf_counter() - t0, 3),
+        "versions": _versions(),
+        "provenance": provenance or {},
+    }
+    json.dumps(meta)  # fail here, not at save time, on a provenance JSON cannot hold
+    return LearnedReconstruction(model, meta)

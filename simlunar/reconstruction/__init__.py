@@ -9,6 +9,7 @@ reconstruction, :mod:`simlunar.registry`); every one has the signature of
 from simlunar.reconstruction.base import Guide, LinearOptions, Reconstructed, linear
 from simlunar.reconstruction.control import SmoothedOptions, smoothed
 from simlunar.reconstruction.delaunay import OUTSIDE_POLICIES, reconstruct, triangulate
+from simlunar.reconstruction.learned import LearnedReconOptions, learned_reconstruction
 from simlunar.reconstruction.shading import ShadingOptions, shading
 from simlunar.registry import Registry
 
@@ -22,6 +23,14 @@ RECONSTRUCTIONS.register(
 )
 RECONSTRUCTIONS.register(
     "smoothed", smoothed, SmoothedOptions, summary="image-free control", guided=False
+)
+RECONSTRUCTIONS.register(
+    "learned",
+    learned_reconstruction,
+    LearnedReconOptions,
+    summary="linear + a trained image residual",
+    guided=True,
+    needs_model=True,
 )
 
 
@@ -62,10 +71,12 @@ __all__ = [
     "OUTSIDE_POLICIES",
     "RECONSTRUCTIONS",
     "Guide",
+    "LearnedReconOptions",
     "LinearOptions",
     "Reconstructed",
     "ShadingOptions",
     "SmoothedOptions",
+    "learned_reconstruction",
     "linear",
     "reconstruct",
     "run_reconstruction",

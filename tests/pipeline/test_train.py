@@ -7,11 +7,13 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 from typer.testing import CliRunner
 
 from simlunar.cli import app
-from simlunar.config.loading import validate_data
+from simlunar.config.loading import ConfigError, validate_data
+from simlunar.config.training import load_training
 from simlunar.features.learned import LearnedMap
 from simlunar.pipeline import train as train_mod
 from simlunar.study.sampling import run_sampling_study
@@ -79,3 +81,69 @@ def test_train_writes_a_model_with_its_record_and_a_study_uses_it(tmp_path, monk
     image, depth = _synthetic_view(validate_data({**cfg.model_dump(mode="json", by_alias=True)}))
     out = run_sampling_study(depth, image, translate.sampling_options(cfg.study), rng=0)
     assert np.isfinite(out.errors("mse")["learned_lloyd"]).all()
+
+
+def _recon_view(cfg):
+    """A planted image-height relation (as tests/reconstruction/test_learned.py), no render."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(cfg.terrain.seed_index + 10 * int(cfg.render.light.elevation_deg))
+    shape = (48, 64)
+    d = ndimage.gaussian_filter(rng.standard_normal(shape), 1.5)
+    d /= d.std()
+    depth = 50 + ndimage.gaussian_filter(rng.standard_normal(shape), 12) * 30 + d
+    image = (0.5 + 0.15 * d).astype(np.float32)
+    return image, depth
+
+
+def test_train_a_learned_reconstruction_and_run_it_by_name(tmp_path, monkeypatch):
+    from simlunar.reconstruction import Guide, reconstruct, run_reconstruction
+    from simlunar.reconstruction.learned import FORMAT, LearnedReconstruction, feature_names
+
+    monkeypatch.setattr(train_mod, "guide_view", _recon_view)
+    path = _yaml(tmp_path, target="reconstruction", densities=["1/16", "1/32"],
+                 options={"layouts": 1, "pixels_per_example": 1000, "max_iter": 30})  # fmt: skip
+    res = CliRunner().invoke(app, ["train", str(path)])
+    assert res.exit_code == 0, res.output
+    model = tmp_path / "models" / "tiny.joblib"
+    record = json.loads(model.with_suffix(".json").read_text())
+    assert record["format"] == FORMAT and record["feature_names"] == list(feature_names())
+    assert record["densities"] == [1 / 32, 1 / 16] and record["examples"] == 8
+    assert record["provenance"]["training_config"]["target"] == "reconstruction"
+    assert record["training_pixels"] == 8 * 2 * 1000
+    LearnedReconstruction.load(model)
+    # a held-out view (another terrain seed): better than linear, by name
+    from types import SimpleNamespace as NS
+
+    image, depth = _recon_view(NS(terrain=NS(seed_index=7), render=NS(light=NS(elevation_deg=30))))
+    r, c = np.divmod(np.random.default_rng(0).choice(depth.size, 120, replace=False), 64)
+    pts, vals = np.column_stack((r, c)), depth[r, c]
+    out = run_reconstruction("learned", pts, vals, depth.shape, guide=Guide(image),
+                             options={"model": str(model)})  # fmt: skip
+    lin = reconstruct(pts, vals, depth.shape)
+    assert np.mean((out.heights - depth) ** 2) < 0.5 * np.mean((lin - depth) ** 2)
+
+
+def test_reconstruction_training_yaml_errors(tmp_path, monkeypatch):
+    from simlunar.reconstruction import RECONSTRUCTIONS
+
+    with pytest.raises(ConfigError, match="reconstruction: only with target: reconstruction"):
+        load_training(_yaml(tmp_path, reconstruction={"with_shading": False}))
+    with pytest.raises(ConfigError, match="target"):
+        load_training(_yaml(tmp_path, target="maps"))
+    monkeypatch.delitem(RECONSTRUCTIONS._entries, "shading", raising=False)
+    with pytest.raises(ConfigError, match="with_shading: needs the reconstruction 'shading'"):
+        load_training(_yaml(tmp_path, target="reconstruction",
+                            reconstruction={"with_shading": True}))  # fmt: skip
+    with pytest.raises(ConfigError, match="shading_options: only with with_shading"):
+        load_training(_yaml(tmp_path, target="reconstruction",
+                            reconstruction={"shading_options": {"gain": 1}}))  # fmt: skip
+    # the map stays the default target
+    cfg, _ = load_training(_yaml(tmp_path))
+    assert cfg.target == "map" and cfg.reconstruction is None
+
+
+def test_shipped_reconstruction_training_yaml_loads():
+    cfg, exps = load_training(ROOT / "experiments" / "training" / "learned_recon_quarter.yaml")
+    assert cfg.target == "reconstruction" and cfg.model.endswith(".joblib")
+    assert cfg.seed not in {e.seed for e in exps} and cfg.scale <= 0.25

@@ -1,0 +1,498 @@
+"""The ``learned`` reconstruction: a residual model that corrects Delaunay-linear with the image.
+
+The Delaunay-linear reconstruction z_lin of the samples (the paper's, section 4.1) misses the
+relief between samples; the guide image shows some of it (paper eq. 3.5: I ~ a + b (s . grad z)
+on dry, barren terrain under one sun). A regression learns the residual ``truth - z_lin`` per
+pixel from what a reconstruction may see, on rendered training terrains:
+
+- the guide image's feature stack at the sample pitch
+  (:func:`simlunar.features._stack.image_features`: 42 multi-scale energies, local statistics,
+  shadow, border distance), plus signed image features the stack (made for *where* the error
+  lies, so all energies) lacks: the image minus its Gaussian blur at half, one and two pitches,
+  and its Gaussian derivatives along rows and columns at 1 px and half a pitch;
+- from the samples: z_lin's detail (z_lin minus its blur at one pitch), its slope along rows and
+  columns and its magnitude, its Laplacian at half a pitch, the local leave-one-out residual of
+  the samples (each sample against the plane through its Delaunay neighbours, interpolated
+  linearly: how wrong linear is around here), the distance to the nearest sample in pitches,
+  and log2 of the density k / N;
+- optionally (training option ``with_shading``) the detail of the registered ``shading``
+  reconstruction, ``z_shading - z_lin`` (integrated slope along the sun, anchored to the
+  samples).
+
+Heights enter in units of h, the RMS leave-one-out residual of the samples (an estimate, from
+the samples alone, of linear's error at this layout), and slopes over one pitch, so one model
+serves terrains of any relief and any density. **One model for all densities, density a
+feature**: with heights in units of h and distances in pitches the residual's relation to the
+features changes little with density (unlike the learned map's *log error*, whose structure
+changes, :mod:`simlunar.features.learned`), so the densities pool their training pixels into
+one model and any density between them is served without a nearest-density switch.
+
+At reconstruction: ``z = z_lin + h r - L(h r at the samples)``, r the predicted residual and L
+the Delaunay-linear interpolation, so every measured cell keeps its measured value (a sample at
+a non-integer position reads r bilinearly).
+
+Measured in ``shared/REFERENCES.md`` (quarter-scale aerial presets, 30 deg sun, uniform Lloyd
+layouts, samples saved at equal MSE vs linear, geometric mean over 1/64-1/2048): a
+gradient-boosting residual on image features 1.65x (aerial_1) / 2.05x (aerial_3); with the
+integrated slope as a feature 1.85x / 2.41x.
+
+Model files are results, as the learned map's: ``name.joblib`` beside ``name.json`` (training
+options, densities, feature names, library versions, hashes of the training inputs, the joblib
+file's SHA-256). :meth:`LearnedReconstruction.load` checks the record (format, feature names,
+scikit-learn version, SHA-256) **before** unpickling; unpickling runs code, so load only model
+files you made. scikit-learn and joblib are imported on use, not with this module.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+from simlunar.features._stack import FEATURE_NAMES, FEATURE_SET_VERSION, image_features
+from simlunar.features.maps import to_gray
+from simlunar.reconstruction.base import Reconstructed
+from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
+from simlunar.registry import check_bounds, option
+
+__all__ = [
+    "FORMAT",
+    "RECON_FEATURE_VERSION",
+    "LearnedReconOptions",
+    "LearnedReconstruction",
+    "anchor",
+    "check_model_file",
+    "feature_names",
+    "learned_reconstruction",
+    "residual_features",
+    "sample_scale",
+    "shading_heights",
+]
+
+#: identifies the JSON record of a learned-reconstruction model file
+FORMAT = "simlunar-learned-reconstruction/1"
+
+#: bump whenever a feature below (not the image stack: that has its own version) changes
+RECON_FEATURE_VERSION = 1
+
+#: signed image features: high-pass at (half, one, two) pitches, derivatives at 1 px, pitch / 2
+IMAGE_SIGNED = (
+    "img_hp_half",
+    "img_hp_one",
+    "img_hp_two",
+    "img_dr_s1",
+    "img_dc_s1",
+    "img_dr_half",
+    "img_dc_half",
+)
+#: features of the samples and their linear reconstruction
+SAMPLE_FEATURES = (
+    "lin_detail",
+    "lin_dr",
+    "lin_dc",
+    "lin_slope",
+    "lin_laplace",
+    "loo_local",
+    "dist_pitch",
+    "log2_density",
+)
+#: the optional feature of the registered ``shading`` reconstruction
+SHADING_FEATURE = "shading_detail"
+
+
+def feature_names(with_shading: bool = False) -> tuple[str, ...]:
+    """Feature names in column order (image stack, signed image, samples[, shading])."""
+    names = (*(f"image_{n}" for n in FEATURE_NAMES), *IMAGE_SIGNED, *SAMPLE_FEATURES)
+    return (*names, SHADING_FEATURE) if with_shading else names
+
+
+@dataclass(frozen=True)
+class LearnedReconOptions:
+    """Options of the ``learned`` reconstruction."""
+
+    model: str = option(
+        "",
+        doc="model file (.joblib, its .json record beside it) made by `simlunar train` with "
+        "target: reconstruction (required)",
+    )
+    threads: int = option(1, doc="OpenMP threads of the prediction", ge=1, le=64)
+
+    def __post_init__(self):
+        if not isinstance(self.model, (str, Path)):
+            raise ValueError(f"model must be a path to a .joblib file, got {self.model!r}")
+        object.__setattr__(self, "model", str(self.model))
+        if isinstance(self.threads, bool) or not isinstance(self.threads, int):
+            raise ValueError(f"threads must be an integer, got {self.threads!r}")
+        check_bounds(self)
+
+
+def _distinct(points_rc, values):
+    """Distinct positions (duplicates averaged, as the linear reconstruction merges them)."""
+    uniq, inverse, counts = np.unique(points_rc, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    return uniq, np.bincount(inverse, weights=values, minlength=len(uniq)) / counts
+
+
+def sample_scale(points_rc, values) -> tuple[float, np.ndarray]:
+    """The height unit h of the features: the RMS leave-one-out residual of the samples.
+
+    Parameters
+    ----------
+    points_rc : ndarray, shape (k, 2)
+    values : ndarray, shape (k,)
+
+    Returns
+    -------
+    (float, ndarray)
+        h (same unit as the values; 0 when every sample lies on its neighbours' plane to
+        1e-9 of the largest |value|, or there are fewer than 4 distinct samples), and each distinct sample's residual, shape (k',),
+        with the distinct positions as computed by ``np.unique(points_rc, axis=0)``.
+    """
+    # loo_residuals lives with the planner that uses it first; imported here because the
+    # planner imports this package
+    from simlunar.planner.sequential import loo_residuals
+
+    pts, vals = _distinct(np.asarray(points_rc, float), np.asarray(values, float))
+    loo = loo_residuals(pts, vals) if len(pts) >= 4 else np.zeros(len(pts))
+    h = float(np.sqrt(np.mean(loo**2))) if len(loo) else 0.0
+    # rounding of a plane's fit (about 1e-16 of the values) is no relief
+    return (h if h > 1e-9 * float(np.abs(vals).max(initial=0.0)) else 0.0), loo
+
+
+def _gray(image) -> np.ndarray:
+    g = to_gray(image)
+    mean = float(g.mean())
+    return g / mean if mean > 0 else g
+
+
+def residual_features(
+    image,
+    points_rc,
+    values,
+    *,
+    z_lin: np.ndarray | None = None,
+    shading: np.ndarray | None = None,
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """Per-pixel features of the learned residual, :func:`feature_names` in order.
+
+    Parameters
+    ----------
+    image : ndarray, shape (rows, cols) or (rows, cols, 3)
+        Guide image (any intensity scale; divided by its mean), finite.
+    points_rc : array_like, shape (k, 2)
+        Measured cells (row, col).
+    values : array_like, shape (k,)
+        Measured heights or depths (m).
+    z_lin : ndarray, shape (rows, cols), optional
+        The Delaunay-linear reconstruction of the samples (nearest outside the hull); computed
+        when not given.
+    shading : ndarray, shape (rows, cols), optional
+        Heights of the ``shading`` reconstruction: adds the feature ``shading_detail``.
+
+    Returns
+    -------
+    (features, h, z_lin)
+        features float32 (rows * cols, n_features); h the height unit (:func:`sample_scale`,
+        m; 1.0 substituted when it is 0 so the features stay finite); z_lin float64
+        (rows, cols).
+    """
+    g = _gray(image)
+    shape = g.shape
+    pts, vals, _ = _check_inputs(points_rc, values, shape)
+    if z_lin is None:
+        z_lin = reconstruct(pts, vals, shape)
+    z_lin = np.asarray(z_lin, dtype=np.float64)
+    if z_lin.shape != shape or not np.isfinite(z_lin).all():
+        raise ValueError(f"z_lin must be finite with the image's shape {shape}, got {z_lin.shape}")
+    upts, _ = _distinct(pts, vals)
+    density = min(1.0, len(upts) / (shape[0] * shape[1]))
+    pitch = max(1.0, density**-0.5)
+    h, loo = sample_scale(pts, vals)
+    unit = h if h > 0 else 1.0
+
+    cols = [image_features(g, pitch=pitch).reshape(-1, len(FEATURE_NAMES))]
+
+    def blur(a, s):
+        return ndimage.gaussian_filter(a, s, mode="reflect")
+
+    signed = [g - blur(g, f * pitch) for f in (0.5, 1.0, 2.0)]
+    for s in (1.0, 0.5 * pitch):
+        signed += [
+            ndimage.gaussian_filter(g, s, order=o, mode="reflect") * s for o in ((1, 0), (0, 1))
+        ]
+    dr, dc = np.gradient(z_lin)
+    slope = pitch / unit
+    lap = ndimage.gaussian_laplace(z_lin, 0.5 * pitch, mode="nearest") * pitch**2 / unit
+    loo_map = reconstruct(upts, np.abs(loo), shape) / unit if len(upts) else np.zeros(shape)
+    mask = np.ones(shape, dtype=bool)
+    cells = np.rint(upts).astype(np.int64)
+    inside = (cells >= 0).all(1) & (cells[:, 0] < shape[0]) & (cells[:, 1] < shape[1])
+    mask[cells[inside, 0], cells[inside, 1]] = False
+    dist = ndimage.distance_transform_edt(mask) if not mask.all() else np.full(shape, 4 * pitch)
+    sample = [
+        (z_lin - ndimage.gaussian_filter(z_lin, pitch, mode="nearest")) / unit,
+        dr * slope,
+        dc * slope,
+        np.hypot(dr, dc) * slope,
+        lap,
+        loo_map,
+        dist / pitch,
+        np.full(shape, math.log2(density)),
+    ]
+    extra = []
+    if shading is not None:
+        s = np.asarray(shading, dtype=np.float64)
+        if s.shape != shape:
+            raise ValueError(f"shading must have the image's shape {shape}, got {s.shape}")
+        extra = [np.nan_to_num((s - z_lin) / unit, nan=0.0, posinf=0.0, neginf=0.0)]
+    stack = np.stack([a.astype(np.float32).ravel() for a in (*signed, *sample, *extra)], axis=1)
+    return np.concatenate([cols[0], stack], axis=1), float(h), z_lin
+
+
+def shading_heights(points_rc, values, shape, *, guide, options: dict | None) -> np.ndarray:
+    """Heights of the registered ``shading`` reconstruction (the optional feature's source).
+
+    A ``ValueError`` when no reconstruction ``shading`` is registered.
+    """
+    from simlunar.reconstruction import RECONSTRUCTIONS, run_reconstruction
+
+    if "shading" not in RECONSTRUCTIONS:
+        raise ValueError(
+            "the learned reconstruction's shading feature needs the reconstruction 'shading', "
+            f"which is not registered (have: {', '.join(RECONSTRUCTIONS)})"
+        )
+    return run_reconstruction(
+        "shading", points_rc, values, shape, guide=guide, options=dict(options or {})
+    ).heights
+
+
+def anchor(z_lin, residual, points_rc) -> np.ndarray:
+    """``z_lin + residual - L(residual at the samples)``: measured cells keep z_lin's values.
+
+    Parameters
+    ----------
+    z_lin, residual : ndarray, shape (rows, cols)
+    points_rc : ndarray, shape (k, 2)
+
+    Returns
+    -------
+    ndarray of float64, shape (rows, cols)
+    """
+    pts = np.asarray(points_rc, dtype=np.float64)
+    at = ndimage.map_coordinates(residual, pts.T, order=1, mode="nearest")
+    return z_lin + residual - reconstruct(pts, at, residual.shape)
+
+
+@dataclass(frozen=True, eq=False)
+class LearnedReconstruction:
+    """A trained residual model and its record.
+
+    Attributes
+    ----------
+    model : HistGradientBoostingRegressor
+        Residual / h from :func:`feature_names` (``meta["with_shading"]``).
+    meta : dict
+        The JSON record (format, feature names, densities, options, input hashes, versions,
+        provenance).
+    """
+
+    model: object
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def with_shading(self) -> bool:
+        return bool(self.meta.get("with_shading", False))
+
+    def reconstruct(self, points_rc, values, shape, *, guide, threads: int = 1) -> Reconstructed:
+        """Linear + predicted residual, anchored to the samples.
+
+        Parameters
+        ----------
+        points_rc : array_like, shape (k, 2)
+        values : array_like, shape (k,)
+        shape : tuple of int
+            (rows, cols), the guide image's shape.
+        guide : Guide
+        threads : int
+            OpenMP threads of the prediction.
+
+        Returns
+        -------
+        Reconstructed
+            heights float64 (rows, cols); info: ``scale_m`` (h), ``residual_rms_m`` (RMS of
+            the correction added to linear), ``model_sha256`` (first 12 hex digits).
+        """
+        from threadpoolctl import threadpool_limits
+
+        shape = tuple(int(s) for s in shape)
+        if guide.shape != shape:
+            raise ValueError(f"guide image has shape {guide.shape}, the output grid {shape}")
+        pts, vals, _ = _check_inputs(points_rc, values, shape)
+        z_lin = reconstruct(pts, vals, shape)
+        shade = None
+        if self.with_shading:
+            shade = shading_heights(
+                pts, vals, shape, guide=guide, options=self.meta.get("shading_options")
+            )
+        x, h, z_lin = residual_features(guide.image, pts, vals, z_lin=z_lin, shading=shade)
+        info = {"scale_m": h, "model_sha256": str(self.meta.get("model_sha256", ""))[:12]}
+        if h == 0:  # every sample on its neighbours' plane: nothing for a residual to scale
+            return Reconstructed(z_lin, {**info, "residual_rms_m": 0.0})
+        with threadpool_limits(int(threads)):
+            r = self.model.predict(x).reshape(shape) * h
+        z = anchor(z_lin, r, pts)
+        info["residual_rms_m"] = float(np.sqrt(np.mean((z - z_lin) ** 2)))
+        return Reconstructed(z, info)
+
+    def save(self, path) -> tuple[Path, Path]:
+        """Write ``path`` (joblib of the regressor) and its JSON record (``.json``).
+
+        Parameters
+        ----------
+        path : str or Path
+            Ends in ``.joblib``; parent folders are created.
+
+        Returns
+        -------
+        (Path, Path)
+            The joblib file and its record.
+        """
+        import joblib
+
+        from simlunar.features.learned import _model_path, _sha256_file
+
+        path = _model_path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        joblib.dump({"format": FORMAT, "model": self.model}, path)
+        meta = {**self.meta, "model_file": path.name, "model_sha256": _sha256_file(path)}
+        sidecar = path.with_suffix(".json")
+        sidecar.write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+        return path, sidecar
+
+    @classmethod
+    def load(cls, path) -> LearnedReconstruction:
+        """Load a model saved by :meth:`save`, after checking its record.
+
+        Refuses (one-line ``ValueError`` naming the file) a missing or unreadable record,
+        another format or feature set, another scikit-learn version (pickles do not carry
+        across versions) and a joblib file whose SHA-256 differs from the record's (a
+        truncated or replaced file), all before unpickling.
+        """
+        path, meta = check_model_file(path)
+        import joblib
+
+        try:
+            payload = joblib.load(path)
+        except Exception as e:  # the hash matched, so this is a library mismatch
+            raise ValueError(f"{path}: cannot be read back ({type(e).__name__}: {e})") from None
+        if not isinstance(payload, dict) or payload.get("format") != FORMAT:
+            raise ValueError(f"{path}: not a {FORMAT} model file")
+        return cls(payload["model"], {k: v for k, v in meta.items() if k != "model_file"})
+
+
+def check_model_file(path) -> tuple[Path, dict]:
+    """The model file and its parsed record, after every check that needs no unpickling.
+
+    What :meth:`LearnedReconstruction.load` checks before it unpickles (a preflight can call it
+    to refuse a bad model file before any work): one-line ``ValueError`` naming the file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.joblib`` model file.
+
+    Returns
+    -------
+    (Path, dict)
+        The path and its JSON record.
+    """
+    import sklearn
+
+    from simlunar.features.learned import _model_path, _sha256_file
+
+    path = _model_path(path)
+    sidecar = path.with_suffix(".json")
+    if not path.is_file() or not sidecar.is_file():
+        raise ValueError(f"learned reconstruction {path} needs both {path.name} and {sidecar.name}")
+    try:
+        meta = json.loads(sidecar.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise ValueError(f"{sidecar}: not a readable JSON record ({e})") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        got = meta.get("format") if isinstance(meta, dict) else None
+        raise ValueError(f"{path}: not a {FORMAT} model (format {got!r})")
+    want = list(feature_names(bool(meta.get("with_shading"))))
+    if (
+        meta.get("feature_names") != want
+        or meta.get("recon_feature_version") != RECON_FEATURE_VERSION
+        or meta.get("feature_set_version") != FEATURE_SET_VERSION
+    ):
+        raise ValueError(
+            f"{path}: trained on another feature set (version {meta.get('recon_feature_version')!r}"
+            f", image stack {meta.get('feature_set_version')!r}; this simlunar computes "
+            f"{RECON_FEATURE_VERSION}, {FEATURE_SET_VERSION}): retrain the model"
+        )
+    saved = meta.get("versions", {}).get("scikit-learn")
+    if saved != sklearn.__version__:
+        raise ValueError(
+            f"{path}: saved with scikit-learn {saved}, installed {sklearn.__version__}: retrain"
+        )
+    if _sha256_file(path) != meta.get("model_sha256"):
+        raise ValueError(
+            f"{path}: SHA-256 does not match its record (truncated, modified or replaced)"
+        )
+    return path, meta
+
+
+_CACHE: dict[tuple[str, str], LearnedReconstruction] = {}
+
+
+def _cached(model) -> LearnedReconstruction:
+    """The model file ``model``, loaded once per (resolved path, SHA-256 of the file)."""
+    from simlunar.features.learned import _model_path, _sha256_file
+
+    path = _model_path(model).resolve()
+    if not path.is_file():
+        raise ValueError(f"learned reconstruction model file not found: {model}")
+    key = (str(path), _sha256_file(path))
+    if key not in _CACHE:
+        loaded = LearnedReconstruction.load(path)
+        if len(_CACHE) >= 4:
+            _CACHE.clear()
+        _CACHE[key] = loaded
+    return _CACHE[key]
+
+
+def learned_reconstruction(
+    points_rc, values, shape, *, guide=None, options: LearnedReconOptions | None = None
+) -> Reconstructed:
+    """The registered ``learned`` reconstruction: :meth:`LearnedReconstruction.reconstruct` of
+    the model file ``options.model`` (loaded once per path and file hash).
+
+    Parameters
+    ----------
+    points_rc : array_like, shape (k, 2)
+    values : array_like, shape (k,)
+    shape : tuple of int
+    guide : Guide
+        Required (the image is the model's main input).
+    options : LearnedReconOptions
+        ``model`` is required.
+
+    Returns
+    -------
+    Reconstructed
+    """
+    o = options or LearnedReconOptions()
+    if not o.model:
+        raise ValueError(
+            "reconstruction 'learned' needs option 'model': a .joblib file made by "
+            "`simlunar train <yaml>` with target: reconstruction"
+        )
+    if guide is None:
+        raise ValueError("reconstruction 'learned' needs the guide image (guide=Guide(...))")
+    return _cached(o.model).reconstruct(points_rc, values, shape, guide=guide, threads=o.threads)
