@@ -29,6 +29,7 @@ from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.features import feature_map
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
+from simlunar.metrics import score as eq43_score
 from simlunar.pipeline.figure_inputs import (
     RENDER_LOCK,
     RenderScene,
@@ -253,6 +254,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
             "variant": backend.info().variant,
             "invalid_pixels_filled": n_invalid,
             **_rounds(study),
+            **_reconstruction_meta(study),
         },
     )
 
@@ -263,6 +265,35 @@ def _rounds(study) -> dict:
     if not study.rounds:
         return {}
     return {"rounds": {s: r.mean(axis=1).tolist() for s, r in study.rounds.items()}}
+
+
+def _reconstruction_meta(study) -> dict:
+    """With reconstructions besides the first: each one's eq. 4.3 scores (the record's
+    ``scores`` are the first's) and the diagnostics each reported (e.g. ``shading_share``),
+    mean over trials per density (densities in the study's order); nothing for ``linear``
+    alone, so its records are as before."""
+    out: dict = {}
+    others = study.reconstructions[1:]
+    if others and study.reference in study.strategies:
+        out["reconstruction_scores"] = {
+            r: {
+                m: {
+                    s: float(v)
+                    for s, v in eq43_score(
+                        study.errors(m, r), study.densities, reference=study.reference
+                    ).items()
+                }
+                for m in study.metrics
+            }
+            for r in others
+        }
+    if study.info:
+        out["reconstruction_info"] = {
+            r: {s: {k: np.nanmean(v, axis=1).tolist() for k, v in keys.items()}
+                for s, keys in by.items()}
+            for r, by in study.info.items()
+        }  # fmt: skip
+    return out
 
 
 def _figure_arrays(cfg, scene: RenderScene, image, depth, seeds, timings) -> dict:

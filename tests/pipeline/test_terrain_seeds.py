@@ -104,7 +104,7 @@ def test_results_keep_per_seed_rows_and_tables_pool_them(tmp_path):
     _run(cfg(1), tmp_path / "one")
     one = (tmp_path / "one" / "results.csv").read_text()
     assert one.splitlines()[0] == (
-        "unit,render.light.elevation_deg,strategy,density,k,trial,metric,value"
+        "unit,render.light.elevation_deg,strategy,reconstruction,density,k,trial,metric,value"
     )
     _run(cfg(3), tmp_path / "three")
     rows = list(csv.DictReader(io.StringIO((tmp_path / "three" / "results.csv").read_text())))
