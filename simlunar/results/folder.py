@@ -125,7 +125,10 @@ def claim_folder(out: Path, config_text: str) -> None:
 
 #: files that summarise the units; removed before the units change, written again at the end
 #: (provenance.json first: without it the folder reads as unfinished)
-RESULT_FILES = ("provenance.json", "results.csv", "scores.md", "scores.tex", "scores.csv")
+RESULT_FILES = (
+    "provenance.json", "results.csv", "scores.md", "scores.tex", "scores.csv",
+    "samples_saved.csv", "reconstructions.csv",
+)  # fmt: skip
 
 
 def folder_complete(out: Path, keys: list[str]) -> bool:
