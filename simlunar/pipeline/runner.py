@@ -38,7 +38,7 @@ from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.plotting.scanner_tables import scanner_tables
-from simlunar.results.cache_keys import without_new_defaults
+from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
 from simlunar.results.exports import write_scan_export
 from simlunar.results.figures import write_figures_pruned
 from simlunar.results.folder import (
@@ -100,6 +100,8 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
     if isinstance(terrain, dict) and not terrain.get("seed_index"):
         # realisation 0 is the terrain of runs before seed_index existed: same keys
         relevant["terrain"] = {k: v for k, v in terrain.items() if k != "seed_index"}
+    if isinstance(relevant.get("render"), dict):
+        relevant["render"] = render_without_new_defaults(relevant["render"])
     study = relevant.get("study")
     if isinstance(study, dict):
         relevant["study"] = study = without_new_defaults(study)

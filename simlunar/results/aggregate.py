@@ -103,8 +103,8 @@ def group_points(records: list[dict], *, per_reconstruction: bool = True) -> lis
         for name in names:
             if (key, name) not in points:
                 label = _label(sweep, cfg)
-                if len(names) > 1:
-                    label = f"{label}, reconstruction={name}"
+                if len(names) > 1:  # without a sweep, the name alone (the title has the rest)
+                    label = f"{label}, reconstruction={name}" if sweep else f"reconstruction={name}"
                 points[(key, name)] = Point(
                     label=label,
                     sweep=sweep,

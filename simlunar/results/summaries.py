@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -295,7 +296,10 @@ def _recon_csv_rows(entries: list[dict]) -> list[dict]:
                 for seed, x in zip(e["seeds"], v):
                     out.append({**base, "terrain_seed": seed, "saved_vs_linear": x,
                                 "ci_low": "", "ci_high": "", "n": ""})  # fmt: skip
-                m, lo, hi, n = seed_summary_numbers(v, log=True)
+                m, lo, hi, n = (
+                    "" if isinstance(x, float) and math.isnan(x) else x
+                    for x in seed_summary_numbers(v, log=True)
+                )
                 out.append({**base, "terrain_seed": "all", "saved_vs_linear": m,
                             "ci_low": lo, "ci_high": hi, "n": n})  # fmt: skip
     return out

@@ -42,8 +42,8 @@ def test_points_are_per_reconstruction_and_read_their_own_rows():
     recs = _records(2)
     points = aggregate.group_points(recs)
     assert [(p.reconstruction, p.label) for p in points] == [
-        ("linear", "t, reconstruction=linear"),
-        ("smooth", "t, reconstruction=smooth"),
+        ("linear", "reconstruction=linear"),
+        ("smooth", "reconstruction=smooth"),
     ]
     rows = _rows([2.0, 4.0])
     _, ks, lin = aggregate.error_arrays(rows, points[0], "mse")
