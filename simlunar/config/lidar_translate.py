@@ -4,6 +4,7 @@ study options."""
 
 from __future__ import annotations
 
+from simlunar.config.derived import reconstruction_mapping
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.studies import (
     LidarStudyCfg,
@@ -99,4 +100,5 @@ def lidar_options(study: LidarStudyCfg, *, seed: int = 0) -> LidarStudyOptions:
         metrics=tuple(study.metrics),
         planner_opts={n: planner_kwargs(n, p) for n, p in study.planner_opts.items()},
         hazard=hazard_options(study.hazard),
+        reconstructions=reconstruction_mapping(study.reconstructions),
     )

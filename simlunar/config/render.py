@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import (
+    AfterValidator,
     Field,
     model_validator,
 )
@@ -145,6 +146,31 @@ class CameraLightCfg(_Model):
 LightCfg = _tagged_union("sun", SunLightCfg, CameraLightCfg)
 
 
+class GuideSunCfg(_Model):
+    """A further sun of a guide frame (the same camera, terrain and sensor model)."""
+
+    elevation_deg: Deg = Field(gt=0, le=90, description="above the horizon (0 < e <= 90)")
+    azimuth_deg: Deg = Field(ge=-360, le=360, description="from +y (north) clockwise to +x")
+    irradiance: float = Field(1.0, gt=0, description="W/m^2 at normal incidence (relative)")
+
+
+class GuideSunFrameCfg(_Model):
+    """``{sun: {elevation_deg: .., azimuth_deg: ..}}``: a guide frame under another sun."""
+
+    sun: GuideSunCfg
+
+
+#: an extra guide frame: ``camera`` (camera-centred light: nearly pure albedo) or another sun
+GuideFrameCfg = Literal["camera"] | GuideSunFrameCfg
+
+
+def _unique_frames(frames: list) -> list:
+    seen = [f if isinstance(f, str) else f.model_dump_json() for f in frames]
+    if len(set(seen)) != len(seen):
+        raise ValueError("guide_frames: a frame is listed twice")
+    return frames
+
+
 class LambertCfg(_Model):
     kind: Literal["lambert"]
 
@@ -208,6 +234,20 @@ class RenderCfg(_Model):
     ambient_radiance: float = Field(0.0, ge=0, description="constant sky radiance (0 = off)")
     spp: int = Field(16, ge=1, le=MAX_SPP)
     max_depth: int = Field(3, ge=2, le=16, description="path depth (2 = direct light only)")
+    guide_frames: Annotated[list[GuideFrameCfg], AfterValidator(_unique_frames)] = Field(
+        default_factory=list,
+        description="extra frames of the guide view for the guided reconstructions (sampling "
+        "and LIDAR studies): camera (camera-centred light, the albedo frame) or {sun: "
+        "{elevation_deg, azimuth_deg}}; each is one more exposure through the same sensor",
+    )
     sensor: SensorCfg | None = Field(
         default_factory=SensorCfg, description="null = use noiseless radiance"
     )
+
+    @model_validator(mode="after")
+    def _guide_frames_differ_from_the_light(self):
+        if isinstance(self.light, CameraLightCfg) and "camera" in self.guide_frames:
+            raise ValueError(
+                "guide_frames: camera is the guide view's own light (render.light) already"
+            )
+        return self

@@ -22,7 +22,12 @@ from simlunar.config.fields import (
     unique_names,
 )
 from simlunar.config.render import MAX_SPP
-from simlunar.config.studies import PlannerOptsCfg, check_planner_options
+from simlunar.config.studies import (
+    PlannerOptsCfg,
+    Reconstructions,
+    _reconstructions_field,
+    check_planner_options,
+)
 from simlunar.planner import STRATEGIES
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.scanner.scheduling import check_spacings
@@ -194,6 +199,7 @@ class ScannerStudyCfg(_Model):
         description="write scans/unit<i>/ per unit: gray-code frames (8/16-bit PNG, OpenCV "
         "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
     )
+    reconstructions: Reconstructions = _reconstructions_field()
 
     _unique = field_validator("modes", "planners", "metrics")(unique_names)
 

@@ -13,6 +13,7 @@ from pydantic import (
     model_validator,
 )
 
+from simlunar.config.derived import reconstruction_specs
 from simlunar.config.fields import (
     Density,
     Metres,
@@ -40,9 +41,27 @@ __all__ = [
     "FeatureOptsCfg",
     "LidarStudyCfg",
     "PlannerOptsCfg",
+    "Reconstructions",
     "SamplingStudyCfg",
     "check_planner_options",
 ]
+
+#: ``study.reconstructions``: names of :data:`simlunar.reconstruction.RECONSTRUCTIONS` or
+#: ``{name: {options}}`` mappings, the options' schema derived from each entry's options class
+#: (:func:`simlunar.config.derived.reconstruction_specs`)
+Reconstructions = Annotated[
+    list,
+    BeforeValidator(reconstruction_specs, json_schema_input_type=list[str | dict[str, dict]]),
+]
+
+
+def _reconstructions_field():
+    return Field(
+        default_factory=lambda: ["linear"],
+        description="reconstructions run on every acquisition, each scored: a name or "
+        "{name: {options}} (linear: the paper's Delaunay-linear; guided ones read the guide "
+        "frames of render.guide_frames)",
+    )
 
 
 # --------------------------------------------------------------------------- studies
@@ -100,6 +119,7 @@ class SamplingStudyCfg(_Model):
         "(terrain.seed_index 0..N-1, one unit each, all else shared); tables pool them "
         "and give 95 % bootstrap intervals",
     )
+    reconstructions: Reconstructions = _reconstructions_field()
 
     _unique = field_validator("strategies", "metrics")(unique_names)
 
@@ -175,6 +195,7 @@ class LidarStudyCfg(_Model):
         description="repeat every sweep point on this many terrain realisations (intervals "
         "over terrain seeds in the figures)",
     )
+    reconstructions: Reconstructions = _reconstructions_field()
 
     _unique = field_validator("planners", "metrics")(unique_names)
 

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
+from simlunar.config.derived import reconstruction_mapping
 from simlunar.config.messages import format_validation_error
 from simlunar.config.render import (
     CameraLightCfg,
@@ -403,6 +404,7 @@ def scanner_options(
         gray=gray_options(o.gray_opts, keep_frames=study.save_scans),
         dots=dot_options(o.dot_opts),
         planner_opts={name: planner_kwargs(name, p) for name, p in o.planner_opts.items()},
+        reconstructions=reconstruction_mapping(study.reconstructions),
     )
 
 
@@ -416,6 +418,7 @@ def sampling_options(study: SamplingStudyCfg) -> SamplingStudyOptions:
         range_noise_std=study.range_noise_std_m,
         strategy_options=strategy_options(study),
         score_region=study.score_region,
+        reconstructions=reconstruction_mapping(study.reconstructions),
     )
 
 

@@ -9,7 +9,8 @@ finished one reruns instantly and a changed input is recomputed.
 A run owns its folder (:class:`~simlunar.results.store.FolderLock`), and a folder belongs to
 one configuration: a run whose config differs from the folder's ``config.yaml`` is refused.
 Every sweep point is checked (:mod:`simlunar.pipeline.preflight`) before anything is written. ``results.csv`` is assembled in a fixed order (units in sweep
-order; rows by strategy, density, trial and metric in config order) from the cache, so the
+order; rows by strategy, reconstruction, density, trial and metric in config order) from the
+cache, so the
 same seed always gives a byte-identical file whatever the executor or completion order.
 """
 
@@ -37,7 +38,7 @@ from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.plotting.scanner_tables import scanner_tables
-from simlunar.results.cache_keys import without_new_defaults
+from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
 from simlunar.results.exports import write_scan_export
 from simlunar.results.figures import write_figures_pruned
 from simlunar.results.folder import (
@@ -71,7 +72,14 @@ __all__ = ["ROW_COLUMNS", "RunSummary", "collect_rows", "expand", "run_experimen
 
 #: keys that do not change a unit's numbers (excluded from its cache key)
 _NON_RESULT_KEYS = ("name", "description", "sweep")
-ROW_COLUMNS = ("mode", "planner", "budget", "strategy", "density", "k", "trial", "metric", "value")
+#: the row columns in their fixed order (each present when some row has it); ``reconstruction``
+#: is in every row (``linear`` for rows cached before reconstructions were configurable)
+ROW_COLUMNS = (
+    "mode", "planner", "budget", "strategy", "reconstruction", "guide_frames", "exposures",
+    "density", "k", "trial", "metric", "value",
+)  # fmt: skip
+#: the reconstruction of every row written before rows named theirs
+DEFAULT_RECONSTRUCTION = "linear"
 
 
 def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = None) -> str:
@@ -94,6 +102,8 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
     if isinstance(terrain, dict) and not terrain.get("seed_index"):
         # realisation 0 is the terrain of runs before seed_index existed: same keys
         relevant["terrain"] = {k: v for k, v in terrain.items() if k != "seed_index"}
+    if isinstance(relevant.get("render"), dict):
+        relevant["render"] = render_without_new_defaults(relevant["render"])
     study = relevant.get("study")
     if isinstance(study, dict):
         relevant["study"] = study = without_new_defaults(study)
@@ -182,6 +192,9 @@ def _sort_rows(rows: list[dict], config: dict) -> list[dict]:
     study = config.get("study", {})
     strategies = list(study.get("strategies") or [])
     metrics = list(study.get("metrics") or [])
+    recons = [
+        r if isinstance(r, str) else next(iter(r)) for r in study.get("reconstructions") or []
+    ]
 
     def order(seq, v):
         return seq.index(v) if v in seq else len(seq)
@@ -190,6 +203,8 @@ def _sort_rows(rows: list[dict], config: dict) -> list[dict]:
         return (
             order(strategies, r.get("strategy")),
             str(r.get("strategy", "")),
+            order(recons, r.get("reconstruction")),
+            str(r.get("reconstruction", "")),
             -float(r.get("density", 0.0) or 0.0),
             int(r.get("trial", 0) or 0),
             order(metrics, r.get("metric")),
@@ -208,7 +223,9 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
     rows: list[dict] = []
     for u in units:
         point = {**u.sweep, "terrain_seed": u.terrain_seed}
-        for r in _sort_rows(records[u.key]["rows"], u.config):
+        cached = records[u.key]["rows"]
+        cached = [{"reconstruction": DEFAULT_RECONSTRUCTION, **r} for r in cached]
+        for r in _sort_rows(cached, u.config):
             for c in r:
                 if c not in ROW_COLUMNS and c not in extra:
                     extra.append(c)
@@ -431,17 +448,30 @@ def _compute_missing(run: _Run, cache: UnitCache, todo, records: dict, n_cached:
 
 def _tables(cfg: ExperimentCfg, units, records: dict, rows: list[dict], out: Path):
     """``scores.md`` and ``scores.tex`` of the study's kind."""
-    if cfg.study.kind == "scanner":
-        return scanner_tables(rows, metrics=_names(units, "metrics"), title=cfg.name)
-    if cfg.study.kind == "lidar":
-        # lazy: simlunar.plotting.lidar imports matplotlib, which a run without LIDAR tables
-        # (and without figures) never loads
-        from simlunar.plotting.lidar import lidar_tables
-
-        # one table block per sweep point; terrain seeds pooled (their interval in the figures)
-        by = next(iter(cfg.sweep)) if len(cfg.sweep) == 1 else ("unit" if cfg.sweep else None)
-        return lidar_tables(rows, metrics=_names(units, "metrics"), title=cfg.name, by=by)
+    if cfg.study.kind in ("scanner", "lidar"):
+        # one set of tables per reconstruction (the one set of before for linear alone)
+        groups: dict[str, list[dict]] = {}
+        for r in rows:
+            groups.setdefault(str(r.get("reconstruction", DEFAULT_RECONSTRUCTION)), []).append(r)
+        parts = []
+        for name, group in groups.items():
+            title = cfg.name if len(groups) == 1 else f"{cfg.name} -- reconstruction {name}"
+            parts.append(_sensor_tables(cfg, units, group, title))
+        return "\n".join(md for md, _ in parts), "\n".join(tex for _, tex in parts)
     return _sampling_tables(cfg, units, records, rows, out)
+
+
+def _sensor_tables(cfg: ExperimentCfg, units, rows: list[dict], title: str):
+    """The scanner or LIDAR tables of rows of one reconstruction."""
+    if cfg.study.kind == "scanner":
+        return scanner_tables(rows, metrics=_names(units, "metrics"), title=title)
+    # lazy: simlunar.plotting.lidar imports matplotlib, which a run without LIDAR tables
+    # (and without figures) never loads
+    from simlunar.plotting.lidar import lidar_tables
+
+    # one table block per sweep point; terrain seeds pooled (their interval in the figures)
+    by = next(iter(cfg.sweep)) if len(cfg.sweep) == 1 else ("unit" if cfg.sweep else None)
+    return lidar_tables(rows, metrics=_names(units, "metrics"), title=title, by=by)
 
 
 def _rerun(run: _Run, previous: dict, records: dict) -> RunSummary:

@@ -29,12 +29,15 @@ from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.features import feature_map
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
+from simlunar.metrics import score as eq43_score
 from simlunar.pipeline.figure_inputs import (
     RENDER_LOCK,
     RenderScene,
     panel_arrays,
     sparse_mesh_render,
 )
+from simlunar.pipeline.guide import build_guide
+from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
 from simlunar.render.scene import luminance
 from simlunar.results.exports import scan_export_payload
@@ -59,7 +62,7 @@ __all__ = [
 ]
 
 #: stage name -> spawn index; append only (reordering would change every result)
-STAGES = ("terrain", "render", "sensor", "study", "panels")
+STAGES = ("terrain", "render", "sensor", "study", "panels", "guide")
 
 #: bump when a change makes cached unit results invalid
 #: 2: figure arrays use index coordinates (no half-cell offset)
@@ -232,6 +235,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
     }
     if cfg.figures.enabled:
         arrays.update(_figure_arrays(cfg, scene, image, depth, seeds, timings))
+    guide, guide_meta = _guide(cfg, scene, image, seeds, timings, arrays)
     t = time.perf_counter()
     study = run_sampling_study(
         depth,
@@ -240,6 +244,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
         rng=np.random.default_rng(seeds["study"]),
         workers=workers,
         progress=None if progress is None else (lambda d, n: progress("sampling study", d, n)),
+        guide=guide,
     )
     timings["study_s"] = time.perf_counter() - t
     return UnitRecord(
@@ -253,8 +258,29 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
             "variant": backend.info().variant,
             "invalid_pixels_filled": n_invalid,
             **_rounds(study),
+            **_reconstruction_meta(study),
+            **guide_meta,
         },
     )
+
+
+def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict):
+    """The guided reconstructions' :class:`~simlunar.reconstruction.Guide` (the guide view's
+    image and the extra frames of ``render.guide_frames``, :mod:`simlunar.pipeline.guide`)
+    and the unit meta naming its frames; ``(None, {})`` when no configured reconstruction reads
+    the image (no extra frame is rendered then: nothing would read it)."""
+    names = [r if isinstance(r, str) else next(iter(r)) for r in cfg.study.reconstructions]
+    if not any(RECONSTRUCTIONS[n].meta.get("guided") for n in names):
+        return None, {}
+
+    def develop(radiance, rng):
+        return sensor_image(radiance, cfg.render.sensor, rng=rng)
+
+    guide, frames = build_guide(
+        cfg, scene, image, seeds["guide"], develop=develop, lock=RENDER_LOCK, timings=timings
+    )
+    arrays.update({f"guide_{name}": img for name, img in frames.items()})
+    return guide, {"guide_frames": list(guide.frames)}
 
 
 def _rounds(study) -> dict:
@@ -263,6 +289,35 @@ def _rounds(study) -> dict:
     if not study.rounds:
         return {}
     return {"rounds": {s: r.mean(axis=1).tolist() for s, r in study.rounds.items()}}
+
+
+def _reconstruction_meta(study) -> dict:
+    """With reconstructions besides the first: each one's eq. 4.3 scores (the record's
+    ``scores`` are the first's) and the diagnostics each reported (e.g. ``shading_share``),
+    mean over trials per density (densities in the study's order); nothing for ``linear``
+    alone, so its records are as before."""
+    out: dict = {}
+    others = study.reconstructions[1:]
+    if others and study.reference in study.strategies:
+        out["reconstruction_scores"] = {
+            r: {
+                m: {
+                    s: float(v)
+                    for s, v in eq43_score(
+                        study.errors(m, r), study.densities, reference=study.reference
+                    ).items()
+                }
+                for m in study.metrics
+            }
+            for r in others
+        }
+    if study.info:
+        out["reconstruction_info"] = {
+            r: {s: {k: np.nanmean(v, axis=1).tolist() for k, v in keys.items()}
+                for s, keys in by.items()}
+            for r, by in study.info.items()
+        }  # fmt: skip
+    return out
 
 
 def _figure_arrays(cfg, scene: RenderScene, image, depth, seeds, timings) -> dict:
@@ -336,6 +391,8 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
     sun of a sun-lit scene is the LIDAR's background)."""
     image, _, result = _render_guide(cfg, scene, seeds, timings)
     depth = np.where(result.gt.valid, result.gt.depth, np.nan).astype(np.float64)
+    arrays: dict = {}
+    guide, guide_meta = _guide(cfg, scene, image, seeds, timings, arrays)
     sun = scene.lights[0] if isinstance(cfg.render.light, SunLightCfg) else None
     lidar_scene = LidarScene(scene.terrain, scene.camera, bsdf=scene.bsdf, sun=sun)
     t = time.perf_counter()
@@ -345,9 +402,10 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
             (image, depth),
             lidar_translate.lidar_options(cfg.study, seed=scene.seed),
             rng=np.random.default_rng(seeds["study"]),
+            reconstruction_guide=guide,
         )
     timings["study_s"] = time.perf_counter() - t
-    arrays = {"image": image, "depth": depth}
+    arrays = {"image": image, "depth": depth, **arrays}
     for label, acq in res.examples.items():
         # where the example acquisition measured, and what: (row, col, depth) per sample
         arrays[f"samples_{label}"] = np.c_[acq.rc, acq.values].astype(np.float64)
@@ -360,5 +418,6 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
             "shape": list(image.shape),
             "sensor": cfg.study.sensor,
             "variant": backend.info().variant,
+            **guide_meta,
         },
     )

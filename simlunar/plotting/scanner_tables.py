@@ -10,7 +10,10 @@ from simlunar.plotting.tables import _name, _tex_begin, _tex_end, t_interval, te
 
 __all__ = ["scanner_interval_table", "scanner_summary", "scanner_tables"]
 
-_SCANNER_ROW_KEYS = {"unit", "mode", "planner", "budget", "trial", "metric", "value", "renders"}
+_SCANNER_ROW_KEYS = {
+    "unit", "mode", "planner", "reconstruction", "guide_frames", "exposures", "budget", "trial",
+    "metric", "value", "renders",
+}  # fmt: skip
 
 
 def scanner_summary(rows: list[dict], *, metrics: list[str]) -> list[dict]:

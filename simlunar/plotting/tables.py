@@ -413,3 +413,67 @@ def _seed_summary(v: np.ndarray, *, log: bool, digits: int = 2) -> tuple[str, st
         m, lo, hi = np.exp(m), np.exp(lo), np.exp(hi)
     return (f"{m:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]",
             f"{v.min():.{digits}f}–{v.max():.{digits}f}{of}")  # fmt: skip
+
+
+def reconstruction_saved_tables(entries: list[dict], *, title: str = "") -> tuple[str, str]:
+    """Markdown and LaTeX tables of the samples each reconstruction saves over ``linear`` on
+    the same layouts, paired by terrain seed.
+
+    Parameters
+    ----------
+    entries : list of dict
+        One per sweep point (:func:`simlunar.results.aggregate.reconstruction_saved_entries`):
+        ``label``, ``metric``, ``strategies`` (row order), ``reconstructions`` (column order),
+        ``saved`` (reconstruction -> strategy -> per-seed geometric-mean samples saved vs
+        linear), ``seeds``.
+
+    Returns
+    -------
+    (markdown, latex) : tuple of str
+        Per strategy (layout) and reconstruction: the geometric mean over seeds [95 % Student
+        t interval, in log space] (one seed: the value) and the per-seed range; > 1: linear
+        needs more samples for that reconstruction's error.
+    """
+    if not entries:
+        return "", ""
+    expl = (
+        "Samples saved by each reconstruction vs Delaunay-linear on the same layout (the same "
+        "planned samples), paired by terrain seed: per seed, the samples linear needs for the "
+        "reconstruction's mean error over the reconstruction's samples (geometric mean over "
+        "the interpolated densities); geometric mean over seeds [95 % Student t interval, in "
+        "log space], and the per-seed range. > 1: the reconstruction needs fewer samples."
+    )
+    md, tex = [expl + "\n"], ["% " + expl + "\n"]
+    for e in entries:
+        header = ["Strategy"]
+        for r in e["reconstructions"]:
+            header += [f"{display_label(r)} vs linear", "seeds: range"]
+        rows = []
+        for s in e["strategies"]:
+            cells = []
+            for r in e["reconstructions"]:
+                cells += list(_seed_summary(np.asarray(e["saved"][r][s], dtype=float), log=True))
+            rows.append((display_label(s), cells))
+        what = (
+            f"samples saved vs linear at equal {_name(METRIC_NAMES, e['metric'])}, paired by seed"
+        )
+        _append_seed_table(md, tex, _seed_caption(title, e, what), header, rows)
+    return "\n".join(md), "\n".join(tex)
+
+
+def seed_summary_numbers(values, *, log: bool) -> tuple[float, float, float, int]:
+    """``(mean, low, high, n)`` of the finite per-seed values (positive ones with ``log``):
+    the geometric mean with its 95 % t interval in log space (``log``) or the mean with its
+    t interval; with one value, the value and NaN bounds; with none, NaNs and 0."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if log:
+        v = v[v > 0]
+    if v.size == 0:
+        return math.nan, math.nan, math.nan, 0
+    if v.size == 1:
+        return float(v[0]), math.nan, math.nan, 1
+    m, lo, hi = t_interval(np.log(v) if log else v)
+    if log:
+        m, lo, hi = math.exp(m), math.exp(lo), math.exp(hi)
+    return m, lo, hi, int(v.size)

@@ -1,9 +1,12 @@
 """Pool a sampling experiment's units over terrain seeds: score intervals and samples saved.
 
 Units that differ only in their terrain realisation (``study.terrain_seeds``, or a sweep over
-``terrain.seed_index``) form one *point*; every point gets its eq. 4.3 scores with bootstrap
+``terrain.seed_index``) form one *point* per reconstruction (``study.reconstructions``; one
+point per sweep point for ``linear`` alone); every point gets its eq. 4.3 scores with bootstrap
 intervals (:func:`simlunar.study.stats.bootstrap_scores`), the test of its best strategy
 against the runner-up, and the samples saved at equal error against random and the grid.
+Each reconstruction is also compared with ``linear`` on the same layouts
+(:func:`reconstruction_saved_entries`): the samples linear needs for its error, paired by seed.
 """
 
 from __future__ import annotations
@@ -45,6 +48,9 @@ __all__ = [
 ]
 
 SEED_AXIS = "terrain.seed_index"
+#: the reconstruction of rows that name none (written before reconstructions were configurable)
+#: and the baseline of the reconstruction-vs-linear tables
+BASELINE_RECONSTRUCTION = "linear"
 #: bootstrap replicates per point and metric
 N_BOOT = 2000
 #: references of the samples-saved tables and figure (lloyd_uniform: the image-free layout
@@ -79,6 +85,10 @@ class Point:
     headroom: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
     #: strategy -> per terrain seed: geometric-mean samples saved vs lloyd_uniform
     saved_per_seed: dict[str, np.ndarray] = field(default_factory=dict)
+    #: the reconstruction whose rows this point holds
+    reconstruction: str = BASELINE_RECONSTRUCTION
+    #: the sweep point's key (the same for every reconstruction of it)
+    sweep_key: str = ""
 
 
 def _label(sweep: dict, config: dict) -> str:
@@ -86,40 +96,62 @@ def _label(sweep: dict, config: dict) -> str:
     return unit_label(WorkUnit(0, "", sweep, config))
 
 
-def group_points(records: list[dict]) -> list[Point]:
+def reconstruction_names(study: dict) -> list[str]:
+    """The names of a study section's ``reconstructions`` (items a name or ``{name: opts}``),
+    ``[linear]`` when it has none."""
+    items = study.get("reconstructions") or [BASELINE_RECONSTRUCTION]
+    return [i if isinstance(i, str) else next(iter(i)) for i in items]
+
+
+def group_points(records: list[dict], *, per_reconstruction: bool = True) -> list[Point]:
     """Units (records in results order: ``sweep``, ``config``) grouped into points.
 
     Two units belong to one point when their sweep values agree on every axis but
-    ``terrain.seed_index``; points keep the order of their first unit.
+    ``terrain.seed_index`` (and, with ``per_reconstruction``, the point is one per configured
+    reconstruction); points keep the order of their first unit, the reconstructions their
+    configured order. With several reconstructions the label names the reconstruction.
     """
-    points: dict[str, Point] = {}
+    points: dict[tuple, Point] = {}
     for i, rec in enumerate(records):
         sweep = {k: v for k, v in (rec.get("sweep") or {}).items() if k != SEED_AXIS}
         key = json.dumps(sweep, sort_keys=True, default=str)
         cfg = rec.get("config") or {}
         study = cfg.get("study") or {}
-        if key not in points:
-            points[key] = Point(
-                label=_label(sweep, cfg),
-                sweep=sweep,
-                unit_indices=[],
-                seeds=[],
-                strategies=list(study.get("strategies") or []),
-                metrics=scored_metrics(
-                    study.get("metrics") or [], study.get("score_region") or "full"
-                ),
-            )
-        p = points[key]
-        p.unit_indices.append(i)
-        p.seeds.append(int((cfg.get("terrain") or {}).get("seed_index", 0) or 0))
-        shape = (rec.get("meta") or {}).get("shape")
-        if shape:
-            p.n_pixels = int(np.prod(shape[:2]))
+        names = reconstruction_names(study) if per_reconstruction else [BASELINE_RECONSTRUCTION]
+        for name in names:
+            if (key, name) not in points:
+                label = _label(sweep, cfg)
+                if len(names) > 1:  # without a sweep, the name alone (the title has the rest)
+                    label = f"{label}, reconstruction={name}" if sweep else f"reconstruction={name}"
+                points[(key, name)] = Point(
+                    label=label,
+                    sweep=sweep,
+                    unit_indices=[],
+                    seeds=[],
+                    strategies=list(study.get("strategies") or []),
+                    metrics=scored_metrics(
+                        study.get("metrics") or [], study.get("score_region") or "full"
+                    ),
+                    reconstruction=name,
+                    sweep_key=key,
+                )
+            p = points[(key, name)]
+            p.unit_indices.append(i)
+            p.seeds.append(int((cfg.get("terrain") or {}).get("seed_index", 0) or 0))
+            shape = (rec.get("meta") or {}).get("shape")
+            if shape:
+                p.n_pixels = int(np.prod(shape[:2]))
     return list(points.values())
 
 
+def row_reconstruction(row: dict) -> str:
+    """The reconstruction of a results row (``linear`` for rows that name none)."""
+    return str(row.get("reconstruction") or BASELINE_RECONSTRUCTION)
+
+
 def error_arrays(rows: list[dict], point: Point, metric: str):
-    """``(densities, ks, {strategy: errors (seeds, densities, trials)})`` of one point.
+    """``(densities, ks, {strategy: errors (seeds, densities, trials)})`` of one point (its
+    reconstruction's rows).
 
     Densities descending (the results order). Rows may hold strings (read from CSV).
     """
@@ -130,6 +162,8 @@ def error_arrays(rows: list[dict], point: Point, metric: str):
     for r in rows:
         j = units.get(str(r.get("unit")))
         if j is None or r.get("metric") != metric or r.get("strategy") not in cells:
+            continue
+        if row_reconstruction(r) != point.reconstruction:
             continue
         d = float(r["density"])
         t = int(float(r["trial"]))
@@ -251,14 +285,15 @@ def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:
     """Per-seed scores (from each unit) and pooled scores with intervals, one row each."""
     out = []
     for p in points:
+        r = p.reconstruction
         for m in p.metrics:
             for j, seed in zip(p.unit_indices, p.seeds):
-                sc = (records[j].get("scores") or {}).get(m, {})
+                sc = _unit_scores(records[j], r).get(m, {})
                 for s in p.strategies:
                     if s in sc:
                         out.append(
                             {"point": p.label, "terrain_seed": seed, "metric": m, "strategy": s,
-                             "score": sc[s], "ci_low": "", "ci_high": ""}
+                             "reconstruction": r, "score": sc[s], "ci_low": "", "ci_high": ""}
                         )  # fmt: skip
             res = p.intervals.get(m)
             if res is None:
@@ -267,12 +302,76 @@ def scores_csv_rows(points: list[Point], records: list[dict]) -> list[dict]:
                 sc, lo, hi = res.interval(s)
                 out.append(
                     {"point": p.label, "terrain_seed": "all", "metric": m, "strategy": s,
-                     "score": sc, "ci_low": lo, "ci_high": hi}
+                     "reconstruction": r, "score": sc, "ci_low": lo, "ci_high": hi}
                 )  # fmt: skip
     return out
 
 
-SCORES_CSV_COLUMNS = ["point", "terrain_seed", "metric", "strategy", "score", "ci_low", "ci_high"]
+def _unit_scores(record: dict, reconstruction: str) -> dict:
+    """A unit's eq. 4.3 scores of one reconstruction: the record's ``scores`` are the first
+    reconstruction's, the others' are in ``meta["reconstruction_scores"]``."""
+    others = (record.get("meta") or {}).get("reconstruction_scores") or {}
+    if reconstruction in others:
+        return others[reconstruction]
+    first = reconstruction_names((record.get("config") or {}).get("study") or {})[0]
+    return (record.get("scores") or {}) if reconstruction == first else {}
+
+
+SCORES_CSV_COLUMNS = [
+    "point", "terrain_seed", "metric", "strategy", "reconstruction", "score", "ci_low", "ci_high",
+]  # fmt: skip
+
+
+def reconstruction_saved_entries(points: list[Point], rows: list[dict]) -> list[dict]:
+    """Per sweep point with a reconstruction besides ``linear``: the samples ``linear`` needs
+    for each reconstruction's error on the same layout (strategy), paired by terrain seed.
+
+    Per (strategy, seed), :func:`simlunar.study.stats.samples_saved` of the reconstruction's
+    mean error (over trials) against linear's on the same plans, summarised as the geometric
+    mean over the densities where the two error curves overlap; > 1: the reconstruction
+    needs fewer samples. The tables summarise the seeds as a geometric mean with a 95 %
+    Student t interval in log space.
+
+    Returns
+    -------
+    list of dict
+        ``label`` (the sweep point's, empty for a single one), ``metric``, ``strategies``,
+        ``reconstructions`` (the compared ones, configured order), ``saved``
+        (reconstruction -> strategy -> float64 (seeds,)), ``seeds``.
+    """
+    by_key: dict[str, dict[str, Point]] = {}
+    for p in points:
+        by_key.setdefault(p.sweep_key, {})[p.reconstruction] = p
+    n_sweep = len(by_key)
+    out = []
+    for group in by_key.values():
+        base = group.get(BASELINE_RECONSTRUCTION)
+        others = [p for r, p in group.items() if r != BASELINE_RECONSTRUCTION]
+        if base is None or not others or len(base.ks) < 2 or not base.metrics:
+            continue
+        m = base.metrics[0]
+        _, ks, e_base = error_arrays(rows, base, m)
+        n_pix = base.n_pixels or np.inf
+        saved: dict[str, dict[str, np.ndarray]] = {}
+        for p in others:
+            _, _, e_other = error_arrays(rows, p, m)
+            saved[p.reconstruction] = {
+                s: np.array([
+                    samples_saved(
+                        {BASELINE_RECONSTRUCTION: e_base[s][j].mean(axis=1),
+                         p.reconstruction: e_other[s][j].mean(axis=1)},
+                        ks, reference=BASELINE_RECONSTRUCTION, n_pixels=n_pix,
+                    ).summary[p.reconstruction]
+                    for j in range(len(base.seeds))
+                ])
+                for s in base.strategies
+            }  # fmt: skip
+        label = _label(base.sweep, {}) if n_sweep > 1 else ""
+        out.append(
+            {"label": label, "metric": m, "strategies": list(base.strategies),
+             "reconstructions": list(saved), "saved": saved, "seeds": list(base.seeds)}
+        )  # fmt: skip
+    return out
 
 
 #: sweep axes that repeat a scene rather than change it (their units are pooled as seeds)
@@ -296,4 +395,7 @@ def density_panels(units: list[dict]) -> list[tuple[str, list[dict]]]:
     and spread over terrain seeds and trials), so a repeated experiment draws as many panels
     as it has sweep points, not seeds times points.
     """
-    return [(point_title(p.sweep), [units[i] for i in p.unit_indices]) for p in group_points(units)]
+    return [
+        (point_title(p.sweep), [units[i] for i in p.unit_indices])
+        for p in group_points(units, per_reconstruction=False)
+    ]

@@ -12,12 +12,14 @@ from __future__ import annotations
 __all__ = [
     "NEW_NESTED_DEFAULTS",
     "NEW_PLANNER_DEFAULTS",
+    "NEW_RENDER_DEFAULTS",
     "NEW_STUDY_DEFAULTS",
+    "render_without_new_defaults",
     "without_new_defaults",
 ]
 
 #: study keys added after caches existed, with the value that gives the numbers of before
-NEW_STUDY_DEFAULTS = {"score_region": "full"}
+NEW_STUDY_DEFAULTS = {"score_region": "full", "reconstructions": ["linear"]}
 #: planner option keys added after caches existed (issue 20), with their defaults
 NEW_PLANNER_DEFAULTS = {
     "placement": "random",
@@ -28,6 +30,8 @@ NEW_PLANNER_DEFAULTS = {
     "sequential": {"max_rounds": 12, "first_share": 0.3, "batch_share": 0.12, "temper": 0.5,
                    "uniform_mix": 0.5, "prior_power": 0.5, "nms_pitches": 0.7, "prior": "none"},
 }  # fmt: skip
+#: render keys added after caches existed, with the value that gives the numbers of before
+NEW_RENDER_DEFAULTS = {"guide_frames": []}
 #: keys added inside a planner option section after the table above, with their defaults
 NEW_NESTED_DEFAULTS = {"sequential": {"first_round": "uniform"}}
 
@@ -60,3 +64,9 @@ def without_new_defaults(study: dict) -> dict:
         planner_opts = {k: strip(v) for k, v in options["planner_opts"].items()}
         out["options"] = {**options, "planner_opts": planner_opts}
     return out
+
+
+def render_without_new_defaults(render: dict) -> dict:
+    """The render section less keys added later at the value that changes nothing (no extra
+    guide frames), so the cache keys of earlier runs stay valid."""
+    return {k: v for k, v in render.items() if NEW_RENDER_DEFAULTS.get(k, object()) != v}

@@ -13,7 +13,7 @@ from typing import Any
 
 from simlunar.config.yamlio import YAMLError, safe_load_text
 from simlunar.errors import ResultFolderError
-from simlunar.results.cache_keys import without_new_defaults
+from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
 from simlunar.results.exports import export_complete
 from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
@@ -88,6 +88,8 @@ def _identity(config: dict) -> dict:
     out = {k: v for k, v in config.items() if k != "description"}
     if isinstance(out.get("study"), dict):  # keys added later, at their no-change default
         out["study"] = without_new_defaults(out["study"])
+    if isinstance(out.get("render"), dict):
+        out["render"] = render_without_new_defaults(out["render"])
     if isinstance(out.get("figures"), dict):
         out["figures"] = {k: v for k, v in out["figures"].items() if k != "formats"}
     return out
@@ -125,7 +127,10 @@ def claim_folder(out: Path, config_text: str) -> None:
 
 #: files that summarise the units; removed before the units change, written again at the end
 #: (provenance.json first: without it the folder reads as unfinished)
-RESULT_FILES = ("provenance.json", "results.csv", "scores.md", "scores.tex", "scores.csv")
+RESULT_FILES = (
+    "provenance.json", "results.csv", "scores.md", "scores.tex", "scores.csv",
+    "samples_saved.csv", "reconstructions.csv",
+)  # fmt: skip
 
 
 def folder_complete(out: Path, keys: list[str]) -> bool:

@@ -67,6 +67,10 @@ def _error_vs_density_figures(res: dict, emit, captions: dict[str, str]) -> None
     units = res["units"]
     groups = aggregate.density_panels(units)[:MAX_UNIT_PANELS]
     pooled = any(len(members) > 1 for _, members in groups)
+    # the first configured reconstruction's curves (linear's by default; the others are
+    # compared with linear in the reconstruction tables and figure)
+    first = aggregate.reconstruction_names(study)[0]
+    only = {"reconstruction": first} if res["rows"] and "reconstruction" in res["rows"][0] else {}
     for m in study.get("metrics") or []:
         fig, axes = F.panel_grid(len(groups))
         for ax, (title, members) in zip(axes, groups):
@@ -75,7 +79,7 @@ def _error_vs_density_figures(res: dict, emit, captions: dict[str, str]) -> None
                 metric=m,
                 strategies=strategies,
                 ax=ax,
-                where={"unit": [rec.get("index", 0) for rec in members]},
+                where={"unit": [rec.get("index", 0) for rec in members], **only},
                 title=title if len(units) > 1 else None,
                 band_label=F.BAND_LABEL_SEEDS if pooled else F.BAND_LABEL,
             )
@@ -179,7 +183,9 @@ def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:
     if len(sweep) != 1 or not path_csv.is_file():
         return
     (path,) = sweep
-    groups = group_points(res["units"])
+    # the first reconstruction's scores (linear's by default), as the error curves
+    first = aggregate.reconstruction_names(study)[0]
+    groups = [p for p in group_points(res["units"]) if p.reconstruction == first]
     if len(groups) < 2:
         return
     # scores.csv lists the points in results order (the order of group_points); matched by
@@ -187,7 +193,7 @@ def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:
     cells: dict[tuple[int, str, str], tuple] = {}
     order: dict[str, int] = {}
     for r in read_csv(path_csv):
-        if r.get("terrain_seed") == "all":
+        if r.get("terrain_seed") == "all" and (r.get("reconstruction") or first) == first:
             i = order.setdefault(r["point"], len(order))
             cells[(i, r["metric"], r["strategy"])] = tuple(
                 float(r[c]) if r[c] not in ("", None) else None

@@ -1,9 +1,13 @@
-"""What a run writes beside its units: the score tables (scores.md/.tex/.csv), the notes of its checks and provenance.json (config, versions, inputs, timings, the code that wrote the tables)."""
+"""What a run writes beside its units: the score tables (scores.md/.tex/.csv), the
+samples-saved tables as CSV (samples_saved.csv; reconstructions.csv: each reconstruction vs
+linear on the same layouts), the notes of its checks and provenance.json (config, versions,
+inputs, timings, the code that wrote the tables)."""
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -14,8 +18,10 @@ from simlunar.plotting.tables import (
     Cell,
     headroom_tables,
     paired_saved_tables,
+    reconstruction_saved_tables,
     samples_saved_tables,
     score_tables,
+    seed_summary_numbers,
 )
 from simlunar.render.backend import versions
 from simlunar.results import aggregate
@@ -28,7 +34,21 @@ from simlunar.results.store import (
     file_sha256,
 )
 
-__all__ = ["tables_code"]
+__all__ = ["RECONSTRUCTIONS_CSV_COLUMNS", "SAVED_CSV_COLUMNS", "tables_code"]
+
+#: columns of samples_saved.csv: per point (and reconstruction), reference, metric, strategy
+#: and density, the factor (``extrapolated`` 1 beyond the reference's range); the
+#: ``density`` "geo_mean" rows hold the summary over ``n`` densities
+SAVED_CSV_COLUMNS = [
+    "point", "reconstruction", "reference", "metric", "strategy", "density", "k", "factor",
+    "extrapolated", "n",
+]  # fmt: skip
+#: columns of reconstructions.csv: samples linear needs for each reconstruction's error on the
+#: same layout, per terrain seed and ("all") geometric mean over seeds with its 95 % t interval
+RECONSTRUCTIONS_CSV_COLUMNS = [
+    "point", "metric", "strategy", "reconstruction", "terrain_seed", "saved_vs_linear",
+    "ci_low", "ci_high", "n",
+]  # fmt: skip
 
 
 def _git_commit() -> dict[str, Any]:
@@ -147,11 +167,18 @@ def _sampling_tables(cfg, units, records, rows, out: Path) -> tuple[str, str]:
             f"include; add random to get them. The errors are in results.csv."
         )
         md, tex = note + "\n", "% " + note + "\n"
-    md2, tex2 = samples_saved_tables(_saved_entries(points), title=cfg.name)
+    saved_entries = _saved_entries(points)
+    recon_entries = aggregate.reconstruction_saved_entries(points, rows)
+    md2, tex2 = samples_saved_tables(saved_entries, title=cfg.name)
+    _write_csv(out / "samples_saved.csv", _saved_csv_rows(saved_entries), SAVED_CSV_COLUMNS)
+    _write_csv(
+        out / "reconstructions.csv", _recon_csv_rows(recon_entries), RECONSTRUCTIONS_CSV_COLUMNS
+    )
     # per-seed tables: the headroom (with an oracle) or the paired savings (without one)
     for md3, tex3 in (
         headroom_tables(aggregate.headroom_entries(points), title=cfg.name),
         paired_saved_tables(aggregate.paired_saved_entries(points), title=cfg.name),
+        reconstruction_saved_tables(recon_entries, title=cfg.name),
     ):
         if md3:
             md2, tex2 = md2 + "\n" + md3, tex2 + "\n" + tex3
@@ -231,13 +258,61 @@ def _inputs(units: list[WorkUnit]) -> list[dict[str, str]]:
     return list(seen.values())
 
 
+def _write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
+    """``rows`` as CSV, or no file where there are none (scores.md says what is missing)."""
+    if rows:
+        atomic_write_text(path, csv_text(rows, columns))
+    else:
+        path.unlink(missing_ok=True)
+
+
+def _saved_csv_rows(entries: list[dict]) -> list[dict]:
+    """The samples-saved tables (vs random, grid, uniform Lloyd; per reconstruction) as rows."""
+    out = []
+    for e in entries:
+        base = {"point": e["label"], "reconstruction": e.get("reconstruction", "linear"),
+                "reference": e["reference"], "metric": e["metric"]}  # fmt: skip
+        for s in e["strategies"]:
+            if s == e["reference"] or s not in e["factor"]:
+                continue
+            for d, k, v, f in zip(e["densities"], e["ks"], e["factor"][s], e["flag"][s]):
+                out.append({**base, "strategy": s, "density": d, "k": k, "factor": v,
+                            "extrapolated": int(bool(f)), "n": ""})  # fmt: skip
+            out.append({**base, "strategy": s, "density": "geo_mean", "k": "",
+                        "factor": e["summary"][s], "extrapolated": "",
+                        "n": e["n_summary"][s]})  # fmt: skip
+    return out
+
+
+def _recon_csv_rows(entries: list[dict]) -> list[dict]:
+    """The reconstruction-vs-linear tables as rows: per seed, then over seeds."""
+    out = []
+    for e in entries:
+        for r in e["reconstructions"]:
+            for s in e["strategies"]:
+                v = e["saved"][r][s]
+                base = {"point": e["label"], "metric": e["metric"], "strategy": s,
+                        "reconstruction": r}  # fmt: skip
+                for seed, x in zip(e["seeds"], v):
+                    out.append({**base, "terrain_seed": seed, "saved_vs_linear": x,
+                                "ci_low": "", "ci_high": "", "n": ""})  # fmt: skip
+                m, lo, hi, n = (
+                    "" if isinstance(x, float) and math.isnan(x) else x
+                    for x in seed_summary_numbers(v, log=True)
+                )
+                out.append({**base, "terrain_seed": "all", "saved_vs_linear": m,
+                            "ci_low": lo, "ci_high": hi, "n": n})  # fmt: skip
+    return out
+
+
 def _saved_entries(points) -> list[dict]:
     """Samples-saved table entries: per point, per reference, the first metric and (with
     ``score_region: both``) its interior-only twin."""
     return [
         {"label": p.label if len(points) > 1 else "", "reference": ref, "metric": metric,
          "strategies": p.strategies, "ks": p.ks, "densities": p.densities,
-         "factor": sv.factor, "flag": sv.flag, "summary": sv.summary, "n_summary": sv.n_summary}
+         "factor": sv.factor, "flag": sv.flag, "summary": sv.summary, "n_summary": sv.n_summary,
+         "reconstruction": p.reconstruction}
         for p in points
         for metric, saved in ((p.saved_metric, p.saved), (f"{p.saved_metric}_interior",
                                                           p.saved_interior))

@@ -21,11 +21,17 @@ from simlunar.features import check_image
 from simlunar.metrics import METRICS
 from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
 from simlunar.planner import STRATEGIES, plan
+from simlunar.reconstruction import Guide
 from simlunar.sensors import SENSORS
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import LidarScene
-from simlunar.study.protocol import Trials, run_protocol
-from simlunar.study.sampling import _seed, sample_count
+from simlunar.study.protocol import (
+    DEFAULT_RECONSTRUCTION,
+    Trials,
+    reconstruction_options,
+    run_protocol,
+)
+from simlunar.study.sampling import _cost, _seed, sample_count
 from simlunar.study.scanner import guided_weights, score_depth
 
 __all__ = [
@@ -67,7 +73,10 @@ class LidarStudyOptions:
         Also score hazard detection (``hazard_precision``, ``hazard_recall``) of the
         reconstruction against the true depth's hazards.
     outside : {"nearest", "nan"}
-        Reconstruction policy outside the measured cells' hull.
+        Policy of ``linear`` outside the measured cells' hull.
+    reconstructions : mapping name -> options, or names
+        Reconstructions of :data:`simlunar.reconstruction.RECONSTRUCTIONS` run on every
+        acquisition (default ``linear`` alone); a guided one reads the guide camera's image.
     """
 
     sensor: str = "steered_beam"
@@ -79,8 +88,10 @@ class LidarStudyOptions:
     planner_opts: Mapping[str, Mapping] = field(default_factory=dict)
     hazard: HazardOptions | None = None
     outside: str = "nearest"
+    reconstructions: Mapping | Sequence = (DEFAULT_RECONSTRUCTION,)
 
     def __post_init__(self):
+        reconstruction_options(self.reconstructions, outside=self.outside)
         if self.sensor not in LIDARS:
             raise ValueError(f"unknown LIDAR {self.sensor!r}; valid: {', '.join(LIDARS)}")
         opts_cls = SENSORS[self.sensor][1]
@@ -111,8 +122,9 @@ class LidarStudyResult:
     Attributes
     ----------
     rows : list of dict
-        Keys: planner, density, k (planned pixels), trial, metric, value, seconds, frames,
-        samples (range samples measured; a flash's receiver pixels). Metrics: the requested
+        Keys: planner, reconstruction, density, k (planned pixels), trial, metric, value,
+        seconds, frames, samples (range samples measured; a flash's receiver pixels) and, for
+        a reconstruction that read guide frames, guide_frames and exposures. Metrics: the requested
         ones, ``valid_fraction`` (measured over planned samples; over receiver pixels for a
         flash) and, with hazards, ``hazard_precision`` / ``hazard_recall``.
     examples : dict planner -> Acquisition
@@ -165,6 +177,7 @@ def run_lidar_study(
     rng,
     sensor=None,
     progress: Callable[[str], None] | None = None,
+    reconstruction_guide: Guide | None = None,
 ) -> LidarStudyResult:
     """Plan, acquire with a LIDAR, reconstruct and score, for every planner, density and trial.
 
@@ -181,6 +194,9 @@ def run_lidar_study(
     sensor : Sensor, optional
         Measures instead of ``options.sensor`` built on ``scene`` (tests, shared captures).
     progress : callable(str), optional
+    reconstruction_guide : Guide, optional
+        What the guided reconstructions read; default ``Guide(image)`` (the guide camera's
+        frame, light unknown: the camera is not a nadir view in general).
 
     Returns
     -------
@@ -210,7 +226,11 @@ def run_lidar_study(
     evaluate = _Scores(depth, image, camera, o.metrics, o.hazard)
     rows, examples = [], {}
     top = int(np.argmax(dens))
-    for outcomes in run_protocol(sensor, trials, evaluate, outside=o.outside):
+    recons = reconstruction_options(o.reconstructions, outside=o.outside)
+    rguide = reconstruction_guide if reconstruction_guide is not None else Guide(image)
+    for outcomes in run_protocol(
+        sensor, trials, evaluate, outside=o.outside, reconstructions=recons, guide=rguide
+    ):
         for oc in outcomes:
             rows += _rows(oc, dens[oc.budget_index])
             if oc.trial == 0 and oc.budget_index == top:
@@ -223,10 +243,12 @@ def run_lidar_study(
 def _rows(oc, density: float) -> list[dict]:
     acq = oc.acquisition
     return [
-        {"planner": oc.label, "density": density, "k": oc.k, "trial": oc.trial, "metric": m,
+        {"planner": oc.label, "reconstruction": r, **_cost(oc.recon_info[r]),
+         "density": density, "k": oc.k, "trial": oc.trial, "metric": m,
          "value": float(v), "seconds": float(acq.seconds), "frames": int(acq.frames),
          "samples": len(acq.values)}
-        for m, v in oc.scores.items()
+        for r, scores in oc.recon_scores.items()
+        for m, v in scores.items()
     ]  # fmt: skip
 
 

@@ -1,9 +1,13 @@
-"""The one study protocol: guide image -> planner -> sensor -> reconstruction -> metrics.
+"""The one study protocol: guide image -> planner -> sensor -> reconstructions -> metrics.
 
 For every planner label, trial and sample budget: the planner chooses guide pixels (from the
 guide image, or nothing for a sensor that needs no plan), the sensor measures range there and
-says what it cost (:class:`~simlunar.sensors.base.Acquisition`), the measured cells are
-reconstructed to the full grid by Delaunay-linear interpolation and scored against the truth.
+says what it cost (:class:`~simlunar.sensors.base.Acquisition`), and EVERY configured
+reconstruction (:data:`simlunar.reconstruction.RECONSTRUCTIONS`; by default the
+Delaunay-linear interpolation of the paper alone) fills the full grid from the same measured
+cells, with the guide (:class:`~simlunar.reconstruction.Guide`: what the camera saw) for the
+reconstructions that read it; each is scored against the truth. Every reconstruction of one
+acquisition sees the same samples, so their scores are paired.
 The sampling study (ideal sensor, paper section 4) and the scanner study (structured light,
 section 5) are this loop with their own planners, seeds and scores; so is any new sensor.
 
@@ -22,10 +26,27 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.errors import InfrastructureError
-from simlunar.reconstruction import OUTSIDE_POLICIES, reconstruct
+from simlunar.reconstruction import (
+    OUTSIDE_POLICIES,
+    RECONSTRUCTIONS,
+    Guide,
+    reconstruct,
+    run_reconstruction,
+)
 from simlunar.sensors.base import Acquisition, Sensor
 
-__all__ = ["Outcome", "Planner", "Trials", "run_protocol"]
+__all__ = [
+    "DEFAULT_RECONSTRUCTION",
+    "Outcome",
+    "Planner",
+    "Trials",
+    "guide_cost",
+    "reconstruction_options",
+    "run_protocol",
+]
+
+#: the reconstruction every study ran before reconstructions were configurable (paper 4.1)
+DEFAULT_RECONSTRUCTION = "linear"
 
 #: a planner of the protocol: ``planner(k, rng) -> (k, 2) int64 (row, col)`` guide pixels.
 #: A planner that measures while it plans (multi-round: it asks the sensor back) has
@@ -67,7 +88,21 @@ class Trials:
 
 @dataclass(frozen=True, eq=False)
 class Outcome:
-    """One (label, trial, budget) of the protocol: what was measured and its scores."""
+    """One (label, trial, budget) of the protocol: what was measured and its scores.
+
+    Attributes
+    ----------
+    scores : dict metric -> float
+        Scores of the FIRST configured reconstruction (``linear`` by default): what a caller
+        that runs one reconstruction reads.
+    recon_scores : dict reconstruction -> dict metric -> float
+        Scores of every configured reconstruction, in the configured order.
+    recon_info : dict reconstruction -> dict
+        What each reconstruction reported about itself (:attr:`Reconstructed.info`, e.g.
+        ``shading_share``), plus ``guide_frames`` (the guide frames it read, a tuple of names;
+        empty for an image-free reconstruction) and ``exposures`` (their count: each frame is
+        one camera exposure).
+    """
 
     label: str
     trial: int
@@ -76,6 +111,78 @@ class Outcome:
     acquisition: Acquisition
     scores: dict
     rounds: int = 1
+    recon_scores: dict | None = None
+    recon_info: dict | None = None
+
+    def __post_init__(self):
+        if self.recon_scores is None:
+            object.__setattr__(self, "recon_scores", {DEFAULT_RECONSTRUCTION: self.scores})
+        if self.recon_info is None:
+            info = {n: {"guide_frames": (), "exposures": 0} for n in self.recon_scores}
+            object.__setattr__(self, "recon_info", info)
+
+
+def reconstruction_options(
+    reconstructions: Mapping | Sequence | None = None, *, outside: str = "nearest"
+) -> dict:
+    """``name -> options object`` of the reconstructions to run, in order.
+
+    Parameters
+    ----------
+    reconstructions : mapping name -> (options object, mapping of its fields, or None), or a
+        sequence of names; None: ``{"linear": None}`` (the paper's).
+    outside : {"nearest", "nan"}
+        The ``outside`` policy of ``linear`` when its options do not name one (the studies'
+        own ``outside`` option, kept for the callers that set it).
+
+    Raises
+    ------
+    ValueError
+        An unknown name (listing the valid ones), a stray option key or a bound broken.
+    """
+    if reconstructions is None:
+        reconstructions = {DEFAULT_RECONSTRUCTION: None}
+    if isinstance(reconstructions, str):
+        raise ValueError(
+            f"reconstructions must be a list or mapping of names, got the string "
+            f"{reconstructions!r}"
+        )
+    if not isinstance(reconstructions, Mapping):
+        names = list(reconstructions)
+        if len(set(names)) != len(names):
+            raise ValueError(f"reconstructions must be distinct names, got {names}")
+        reconstructions = dict.fromkeys(names)
+    if not reconstructions:
+        raise ValueError("the protocol needs at least one reconstruction")
+    out = {}
+    for name, opts in reconstructions.items():
+        entry = RECONSTRUCTIONS[name]  # unknown: a ValueError listing the valid names
+        if opts is None or isinstance(opts, Mapping):
+            values = dict(opts or {})
+            if name == DEFAULT_RECONSTRUCTION:
+                values.setdefault("outside", outside)
+            opts = entry.make_options(values)
+        elif not isinstance(opts, entry.options):
+            raise TypeError(
+                f"reconstruction {name!r} takes {entry.options.__name__}, got {type(opts).__name__}"
+            )
+        out[str(name)] = opts
+    return out
+
+
+def guide_cost(name: str, guide: Guide | None, info: Mapping | None = None) -> tuple:
+    """``(frames, exposures)`` a reconstruction read: the frames its info names (``frames``)
+    or, for a guided reconstruction that names none, every frame of the guide; an image-free
+    one reads none. One frame is one camera exposure."""
+    if guide is None or not RECONSTRUCTIONS[name].meta.get("guided"):
+        return (), 0
+    frames = (info or {}).get("frames")
+    if frames is None:
+        frames = guide.frames
+    elif isinstance(frames, str):
+        frames = tuple(f for f in frames.split("+") if f)
+    frames = tuple(str(f) for f in frames)
+    return frames, len(frames)
 
 
 def run_protocol(
@@ -85,6 +192,8 @@ def run_protocol(
     *,
     outside: str = "nearest",
     workers: int = 1,
+    reconstructions: Mapping | Sequence | None = None,
+    guide: Guide | None = None,
 ) -> Iterator[list[Outcome]]:
     """Run the protocol; yields, per (label, trial) task in order, its outcomes per budget.
 
@@ -94,12 +203,22 @@ def run_protocol(
         Bound to the scene (its truth or its capture).
     trials : Trials
     evaluate : Evaluate
-        Scores of a reconstruction (and of its acquisition: valid fraction, bit errors).
+        Scores of a reconstruction (and of its acquisition: valid fraction, bit errors); called
+        once per reconstruction with its grid.
     outside : {"nearest", "nan"}
-        Reconstruction policy outside the measured cells' convex hull.
+        Policy of ``linear`` outside the measured cells' convex hull (unless its options in
+        ``reconstructions`` name one).
     workers : int
         Forked processes running (label, trial) tasks in parallel (a sensor that renders
         keeps 1); results do not depend on it, every task having its own seeds.
+    reconstructions : mapping name -> options (object, mapping or None), or names, optional
+        The reconstructions run on every acquisition, in order (:func:`reconstruction_options`);
+        default ``linear`` alone.
+    guide : Guide, optional
+        What the camera saw, on the acquisitions' grid; required by a guided reconstruction.
+        The sample values reach the reconstruction as the sensor measured them (a camera
+        distance -- depth -- falls where height rises: a reconstruction that relates the
+        samples to the image must fit a signed gain, as the shading calibration does).
     """
     if outside not in OUTSIDE_POLICIES:
         raise ValueError(
@@ -107,7 +226,18 @@ def run_protocol(
         )
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
-    state = {"sensor": sensor, "trials": trials, "evaluate": evaluate, "outside": outside}
+    recons = reconstruction_options(reconstructions, outside=outside)
+    for name in recons:
+        if RECONSTRUCTIONS[name].meta.get("guided") and guide is None:
+            raise ValueError(f"reconstruction {name!r} needs the guide image (guide=Guide(...))")
+    state = {
+        "sensor": sensor,
+        "trials": trials,
+        "evaluate": evaluate,
+        "outside": outside,
+        "reconstructions": recons,
+        "guide": guide,
+    }
     tasks = [(label, t) for label in trials.planners for t in range(int(trials.trials))]
     return _map_tasks(state, tasks, workers)
 
@@ -125,9 +255,24 @@ def _task_outcomes(state, label: str, trial: int) -> list[Outcome]:
         else:
             rc = None if planner is None else planner(k, plan_rng)
             acq = sensor.acquire(rc, rng=sensor_rng)
-        recon = reconstruct(acq.rc, acq.values, acq.shape, outside=state["outside"])
-        out.append(Outcome(label, trial, bi, k, acq, state["evaluate"](recon, acq), rounds))
+        scores, info = _reconstruct_all(state, acq)
+        first = next(iter(scores.values()))
+        out.append(Outcome(label, trial, bi, k, acq, first, rounds, scores, info))
     return out
+
+
+def _reconstruct_all(state, acq: Acquisition) -> tuple[dict, dict]:
+    """Every configured reconstruction of one acquisition, scored; and what each reported."""
+    guide = state["guide"]
+    scores, infos = {}, {}
+    for name, opts in state["reconstructions"].items():
+        rec = run_reconstruction(name, acq.rc, acq.values, acq.shape, guide=guide, options=opts)
+        scores[name] = state["evaluate"](rec.heights, acq)
+        info = dict(rec.info)
+        frames, exposures = guide_cost(name, guide, info)
+        info.pop("frames", None)
+        infos[name] = {**info, "guide_frames": frames, "exposures": exposures}
+    return scores, infos
 
 
 _STATE: dict = {}
@@ -144,9 +289,10 @@ def _init_worker(state):
 def _worker_task(task):
     # in a worker, only the scores travel back (the acquisition's arrays stay)
     return [
-        Outcome(o.label, o.trial, o.budget_index, o.k, _light(o.acquisition), o.scores, o.rounds)
+        Outcome(o.label, o.trial, o.budget_index, o.k, _light(o.acquisition), o.scores, o.rounds,
+                o.recon_scores, o.recon_info)
         for o in _task_outcomes(_STATE, *task)
-    ]
+    ]  # fmt: skip
 
 
 def _light(acq: Acquisition) -> Acquisition:

@@ -3,7 +3,8 @@
 The study protocol (:mod:`simlunar.study.protocol`) with the ideal Dirac sampler
 (:class:`~simlunar.sensors.ideal.IdealSampler`): for every strategy, density and trial, plan
 k = round(density * N) pixels from the guide image, read the true depth there (optionally with
-Gaussian range noise), reconstruct the full grid by Delaunay-linear interpolation and score the
+Gaussian range noise), reconstruct the full grid with every configured reconstruction
+(Delaunay-linear interpolation by default; a guided one reads the :class:`Guide`) and score each
 reconstruction against the true depth.
 """
 
@@ -30,9 +31,15 @@ from simlunar.planner import (
     plan_sequential,
     strategy_weights,
 )
+from simlunar.reconstruction import Guide
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.ideal import IdealOptions, IdealSampler
-from simlunar.study.protocol import Trials, run_protocol
+from simlunar.study.protocol import (
+    DEFAULT_RECONSTRUCTION,
+    Trials,
+    reconstruction_options,
+    run_protocol,
+)
 from simlunar.study.stats import bootstrap_scores, samples_saved
 
 __all__ = [
@@ -84,11 +91,12 @@ class SamplingStudyResult:
     Attributes
     ----------
     rows : list of dict
-        Tidy table, one row per (strategy, density, trial, metric): keys strategy, density, k,
-        trial, metric, value.
+        Tidy table, one row per (strategy, reconstruction, density, trial, metric): keys
+        strategy, reconstruction, density, k, trial, metric, value and, for a reconstruction
+        that read guide frames, guide_frames ("+"-joined names) and exposures (their count).
     scores : dict of str -> dict of str -> float
-        metric -> strategy -> score (eq. 4.3) against ``reference``; empty if the reference
-        strategy was not run.
+        metric -> strategy -> score (eq. 4.3) against ``reference``, of the first
+        reconstruction (``linear`` by default); empty if the reference strategy was not run.
     strategies, metrics : list of str
         ``metrics``: the scored names (``mse``, ``mse_interior``, ...; see ``score_region``).
     densities : list of float
@@ -96,6 +104,10 @@ class SamplingStudyResult:
     reference : str
     rounds : dict of str -> ndarray of int64, shape (densities, trials)
         Sensor rounds of each measuring (multi-round) label; a one-shot label takes 1.
+    reconstructions : list of str
+        The reconstructions run on every acquisition, in order.
+    info : dict reconstruction -> strategy -> key -> ndarray float64 (densities, trials)
+        The numeric diagnostics each reconstruction reported (e.g. ``shading_share``).
     """
 
     rows: list[dict]
@@ -107,45 +119,100 @@ class SamplingStudyResult:
     reference: str = "random"
     _errors: dict = field(default_factory=dict, repr=False)
     rounds: dict = field(default_factory=dict)
+    reconstructions: list = field(default_factory=lambda: [DEFAULT_RECONSTRUCTION])
+    info: dict = field(default_factory=dict)
 
-    def errors(self, metric: str) -> dict[str, np.ndarray]:
-        """strategy -> errors, float64 (densities, trials)."""
-        if metric not in self._errors:
+    def errors(
+        self, metric: str, reconstruction: str = DEFAULT_RECONSTRUCTION
+    ) -> dict[str, np.ndarray]:
+        """strategy -> errors of ``reconstruction``, float64 (densities, trials)."""
+        if metric not in self.metrics:
             raise ValueError(
                 f"metric {metric!r} not in this study; have: {', '.join(self.metrics)}"
             )
-        return self._errors[metric]
+        if reconstruction not in self.reconstructions:
+            raise ValueError(
+                f"reconstruction {reconstruction!r} not in this study; have: "
+                f"{', '.join(self.reconstructions)}"
+            )
+        return self._errors[reconstruction][metric]
 
-    def mean_errors(self) -> dict[str, dict[str, np.ndarray]]:
+    def mean_errors(
+        self, reconstruction: str = DEFAULT_RECONSTRUCTION
+    ) -> dict[str, dict[str, np.ndarray]]:
         """metric -> strategy -> mean error per density over trials, float64 (densities,).
 
         The summary for error-vs-density plots.
         """
-        return {m: {s: e.mean(axis=1) for s, e in by.items()} for m, by in self._errors.items()}
+        return {
+            m: {s: e.mean(axis=1) for s, e in self.errors(m, reconstruction).items()}
+            for m in self.metrics
+        }
 
-    def samples_for_equal_error(self, metric: str = "mse") -> dict[str, np.ndarray]:
+    def samples_for_equal_error(
+        self, metric: str = "mse", reconstruction: str = DEFAULT_RECONSTRUCTION
+    ) -> dict[str, np.ndarray]:
         """Relative samples each strategy needs for the reference's error (see metrics)."""
-        return _samples_for_equal_error(self.errors(metric), self.ks, reference=self.reference)
+        return _samples_for_equal_error(
+            self.errors(metric, reconstruction), self.ks, reference=self.reference
+        )
 
-    def score_intervals(self, metric: str = "mse", *, n_boot: int = 2000, rng=0):
+    def score_intervals(
+        self,
+        metric: str = "mse",
+        *,
+        n_boot: int = 2000,
+        rng=0,
+        reconstruction: str = DEFAULT_RECONSTRUCTION,
+    ):
         """Scores of ``metric`` with paired bootstrap 95 % intervals over the trials.
 
         One scene: the interval says how well the trials pin each score down on this terrain
         (see :func:`simlunar.study.stats.bootstrap_scores`).
         """
-        errs = self.errors(metric)
+        errs = self.errors(metric, reconstruction)
         return bootstrap_scores(
             errs, self.densities, reference=self.reference, n_boot=n_boot, rng=rng
         )
 
-    def samples_saved(self, metric: str = "mse", reference: str | None = None):
+    def samples_saved(
+        self,
+        metric: str = "mse",
+        reference: str | None = None,
+        reconstruction: str = DEFAULT_RECONSTRUCTION,
+    ):
         """Samples ``reference`` (default: the study's) needs for each strategy's mean error,
-        over the strategy's, per density (:func:`simlunar.study.stats.samples_saved`)."""
-        means = {s: e.mean(axis=1) for s, e in self.errors(metric).items()}
+        over the strategy's, per density (:func:`simlunar.study.stats.samples_saved`), both
+        reconstructed with ``reconstruction``."""
+        means = {s: e.mean(axis=1) for s, e in self.errors(metric, reconstruction).items()}
         n = round(self.ks[0] / self.densities[0])
         return samples_saved(
             means, self.ks, reference=reference or self.reference, n_pixels=float(n)
         )
+
+    def reconstruction_saved(
+        self, reconstruction: str, metric: str = "mse", baseline: str = DEFAULT_RECONSTRUCTION
+    ):
+        """Samples ``baseline`` (default ``linear``) needs for ``reconstruction``'s mean error,
+        over ``reconstruction``'s, per strategy (the same layouts: paired) and density.
+
+        Returns
+        -------
+        dict strategy -> SamplesSaved of the two reconstructions (labels ``baseline`` and
+        ``reconstruction``; :func:`simlunar.study.stats.samples_saved`).
+        """
+        n = round(self.ks[0] / self.densities[0])
+        base = self.errors(metric, baseline)
+        other = self.errors(metric, reconstruction)
+        return {
+            s: samples_saved(
+                {baseline: base[s].mean(axis=1), reconstruction: other[s].mean(axis=1)},
+                self.ks,
+                reference=baseline,
+                n_pixels=float(n),
+            )
+            for s in self.strategies
+        }
 
 
 def _check_grid(a, name: str) -> np.ndarray:
@@ -199,9 +266,12 @@ class SamplingStudyOptions:
         Score the full image, the interior (cells farther than the sparsest density's pitch
         from the border; metric names ``<metric>_interior``) or both.
     outside : {"nearest", "nan"}
-        Reconstruction policy outside the samples' convex hull (same for every strategy).
+        Policy of ``linear`` outside the samples' convex hull (same for every strategy).
     reference : str
         Strategy label the scores compare against (default ``"random"``).
+    reconstructions : mapping name -> options (object, mapping or None), or names
+        Reconstructions of :data:`simlunar.reconstruction.RECONSTRUCTIONS` run on every
+        acquisition (default: ``linear`` alone, the paper's); each gets its own rows.
     """
 
     strategies: Sequence[str] = PAPER_STRATEGIES
@@ -213,8 +283,11 @@ class SamplingStudyOptions:
     outside: str = "nearest"
     reference: str = "random"
     score_region: str = "full"
+    reconstructions: Mapping | Sequence = (DEFAULT_RECONSTRUCTION,)
 
     def __post_init__(self):
+        # names, stray option keys and bounds checked now, before any long loop
+        reconstruction_options(self.reconstructions, outside=self.outside)
         if self.score_region not in SCORE_REGIONS:
             raise ValueError(
                 f"unknown score_region {self.score_region!r}; valid: {', '.join(SCORE_REGIONS)}"
@@ -243,6 +316,7 @@ def run_sampling_study(
     rng,
     workers: int = 1,
     progress: Callable[[int, int], None] | None = None,
+    guide: Guide | None = None,
 ) -> SamplingStudyResult:
     """Run the paper's sampling protocol on one scene.
 
@@ -260,7 +334,12 @@ def run_sampling_study(
         Processes (fork) that run (strategy, trial) tasks in parallel; results do not depend on
         it (every task has its own seed).
     progress : callable(done, total), optional
-        Called with the number of reconstructions done after each (strategy, trial) task.
+        Called with the number of acquisitions done after each (strategy, trial) task.
+    guide : Guide, optional
+        What the camera saw, for the guided reconstructions (its frames, light directions,
+        co-located frame, spacing); default ``Guide(image)`` (one frame, light unknown, unit
+        spacing). Its grid must be the depth's. The reconstructions get the sensor's samples
+        as measured: depth (camera distance) falls where height rises.
 
     Returns
     -------
@@ -277,6 +356,11 @@ def run_sampling_study(
     if image.shape[:2] != depth.shape:
         raise ValueError(f"image {image.shape[:2]} and depth {depth.shape} must have the same grid")
     dens = check_densities(paper_densities() if o.densities is None else o.densities)
+    recons = reconstruction_options(o.reconstructions, outside=o.outside)
+    if guide is None:
+        guide = Guide(image)
+    if guide.shape != depth.shape:
+        raise ValueError(f"guide {guide.shape} and depth {depth.shape} must have the same grid")
     sensor = IdealSampler(depth, IdealOptions(range_noise_std=float(o.range_noise_std)))
     ks = [sample_count(d, depth.size) for d in dens]
     planners, maps_cache = _planners(o, image, depth, ks)
@@ -290,20 +374,41 @@ def run_sampling_study(
         error_sums(np.zeros(1), np.zeros(1), np.ones((evaluate.rows.shape[0], 1)))  # compile
     strategies = list(o.strategies)
     names = scored_metrics(o.metrics, o.score_region)
-    errors = {m: {s: np.empty((len(ks), o.trials)) for s in strategies} for m in names}
-    rounds = {s: np.ones((len(ks), o.trials), np.int64) for s in strategies}
+    shape = (len(ks), o.trials)
+    errors = {r: {m: {s: np.empty(shape) for s in strategies} for m in names} for r in recons}
+    rounds = {s: np.ones(shape, np.int64) for s in strategies}
+    info: dict = {r: {s: {} for s in strategies} for r in recons}
+    frames: dict = {}
     total, done = len(strategies) * o.trials * len(ks), 0
-    for outcomes in run_protocol(sensor, trials, evaluate, outside=o.outside, workers=workers):
+    for outcomes in run_protocol(
+        sensor, trials, evaluate, outside=o.outside, workers=workers,
+        reconstructions=recons, guide=guide,
+    ):  # fmt: skip
         for oc in outcomes:
-            for m, v in oc.scores.items():
-                errors[m][oc.label][oc.budget_index, oc.trial] = v
-            rounds[oc.label][oc.budget_index, oc.trial] = oc.rounds
+            cell = (oc.budget_index, oc.trial)
+            for r, scores in oc.recon_scores.items():
+                for m, v in scores.items():
+                    errors[r][m][oc.label][cell] = v
+                _record_info(info[r][oc.label], oc.recon_info[r], shape, cell)
+                frames[(r, oc.label, *cell)] = oc.recon_info[r]
+            rounds[oc.label][cell] = oc.rounds
         done += len(ks)
         if progress is not None:
             progress(done, total)
-    res = _result(o, strategies, dens, ks, errors, names)
+    res = _result(o, strategies, dens, ks, errors, names, list(recons), frames)
     res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], _Measuring)}
+    res.info = {r: by for r, by in info.items() if any(by.values())}
     return res
+
+
+def _record_info(acc: dict, info: dict, shape, cell) -> None:
+    """The numeric diagnostics of one reconstruction into ``acc`` (key -> (densities, trials))."""
+    for key, v in info.items():
+        if key in ("guide_frames", "exposures"):
+            continue
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.number)):
+            continue
+        acc.setdefault(key, np.full(shape, np.nan))[cell] = float(v)
 
 
 def _planners(o: SamplingStudyOptions, image, depth, ks) -> tuple[dict, dict]:
@@ -471,18 +576,28 @@ def _seeds(base: int, label: str, trial: int, density_index: int) -> tuple:
     )
 
 
-def _result(o, strategies, dens, ks, errors, names) -> SamplingStudyResult:
+def _cost(info: dict) -> dict:
+    """The guide-frame columns of a row: none for a reconstruction that read no frame."""
+    if not info.get("guide_frames"):
+        return {}
+    return {"guide_frames": "+".join(info["guide_frames"]), "exposures": int(info["exposures"])}
+
+
+def _result(o, strategies, dens, ks, errors, names, recons, frames) -> SamplingStudyResult:
     rows = [
-        {"strategy": label, "density": float(dens[di]), "k": k, "trial": trial,
-         "metric": m, "value": float(errors[m][label][di, trial])}
+        {"strategy": label, "reconstruction": r, **_cost(frames[(r, label, di, trial)]),
+         "density": float(dens[di]), "k": k, "trial": trial,
+         "metric": m, "value": float(errors[r][m][label][di, trial])}
         for label in strategies
+        for r in recons
         for trial in range(o.trials)
         for di, k in enumerate(ks)
         for m in names
     ]  # fmt: skip
+    first = errors[recons[0]]
     scores = {}
     if o.reference in strategies:
-        scores = {m: _score(errors[m], dens, reference=o.reference) for m in names}
+        scores = {m: _score(first[m], dens, reference=o.reference) for m in names}
     return SamplingStudyResult(
         rows=rows,
         scores=scores,
@@ -492,4 +607,5 @@ def _result(o, strategies, dens, ks, errors, names) -> SamplingStudyResult:
         metrics=names,
         reference=o.reference,
         _errors=errors,
+        reconstructions=list(recons),
     )

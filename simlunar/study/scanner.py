@@ -19,6 +19,7 @@ from simlunar.features import check_image, feature_map
 from simlunar.geometry import Rig
 from simlunar.metrics import metric
 from simlunar.planner import plan, strategy_weights
+from simlunar.reconstruction import Guide
 from simlunar.render.capture import (
     CaptureOptions,
     GuideView,
@@ -37,7 +38,13 @@ from simlunar.scanner.scans import (
     low_contrast_pixels,
 )
 from simlunar.sensors.structured_light import MODES, StructuredLight, StructuredLightOptions
-from simlunar.study.protocol import Trials, run_protocol
+from simlunar.study.protocol import (
+    DEFAULT_RECONSTRUCTION,
+    Trials,
+    reconstruction_options,
+    run_protocol,
+)
+from simlunar.study.sampling import _cost
 
 __all__ = [
     "ScannerScene",
@@ -192,6 +199,9 @@ class ScannerStudyOptions:
     gray, dots : GrayCodeOptions, DotOptions
     planner_opts : mapping planner name -> planner options (:func:`simlunar.planner.plan`),
         e.g. ``{"wavelet": {"feature_opts": {"levels": 1}}}``; planners not named get none
+    reconstructions : mapping name -> options, or names
+        Reconstructions of :data:`simlunar.reconstruction.RECONSTRUCTIONS` run on every scan
+        (default ``linear`` alone); a guided one reads the guide camera's image.
     """
 
     modes: tuple = ("gray_code", "ambiguity_enhancement")
@@ -204,8 +214,10 @@ class ScannerStudyOptions:
     gray: GrayCodeOptions = field(default_factory=GrayCodeOptions)
     dots: DotOptions = field(default_factory=DotOptions)
     planner_opts: Mapping = field(default_factory=dict)
+    reconstructions: Mapping | tuple = (DEFAULT_RECONSTRUCTION,)
 
     def __post_init__(self):
+        reconstruction_options(self.reconstructions)
         unknown = [m for m in self.modes if m not in MODES]
         if unknown:
             raise ValueError(f"unknown scan mode(s) {unknown}; valid: {sorted(MODES)}")
@@ -228,7 +240,8 @@ class ScannerStudyResult:
     Attributes
     ----------
     rows : list of dict
-        Keys: mode, planner, budget, trial, metric, value, renders. Metrics: the requested
+        Keys: mode, planner, reconstruction, budget, trial, metric, value, renders (and, for a
+        reconstruction that read guide frames, guide_frames and exposures). Metrics: the requested
         sampling-study metrics, ``valid_fraction`` (guide pixels measured directly, before
         hole filling) and, for ``gray_code``, ``ber_c<i>`` / ``ber_r<i>`` (bit error rate of
         column / row bit i, MSB first, over camera pixels lit by the projector).
@@ -249,6 +262,7 @@ def run_scanner_study(
     *,
     rng=None,
     progress=None,
+    reconstruction_guide: Guide | None = None,
 ) -> ScannerStudyResult:
     """Scan a terrain with a rig in several modes and score the guide-view depth.
 
@@ -258,6 +272,9 @@ def run_scanner_study(
     options : ScannerStudyOptions, optional
     rng : seed for the sensor noise and the planners (split with ``SeedSequence.spawn``)
     progress : callable(str) or None
+    reconstruction_guide : Guide, optional
+        What the guided reconstructions read; default the guide view's image (one frame named
+        after ``guide_light``, light unknown: the rig camera is not a nadir view).
 
     Returns
     -------
@@ -292,6 +309,10 @@ def run_scanner_study(
         say("gray-code scan")
         gray = gray_code_scan(capture, scene.rig, o.gray)
     evaluate = _ScanScores(guide, o.metrics, capture, gray)
+    recons = reconstruction_options(o.reconstructions)
+    rguide = reconstruction_guide
+    if rguide is None:
+        rguide = Guide(np.asarray(guide.image, float), frames=(o.guide_light,))
     seeds = _plan_seeds(o, plan_rng)
     rows: list[dict] = []
     scans: dict = {}
@@ -304,7 +325,9 @@ def run_scanner_study(
             gray=gray,
         )
         trials = _mode_trials(o, mode, sensor, guide, seeds)
-        for outcomes in run_protocol(sensor, trials, evaluate):
+        for outcomes in run_protocol(
+            sensor, trials, evaluate, reconstructions=recons, guide=rguide
+        ):
             for oc in outcomes:
                 planner = "" if mode == "gray_code" else oc.label
                 say(f"{mode} / {planner} / trial {oc.trial}" if planner else "")
@@ -396,13 +419,16 @@ def _rows(mode: str, planner: str, oc, budget: float) -> list[dict]:
         {
             "mode": mode,
             "planner": planner,
+            "reconstruction": r,
+            **_cost(oc.recon_info[r]),
             "budget": budget if planner else 0.0,
             "trial": oc.trial,
             "metric": name,
             "value": v,
             "renders": oc.acquisition.frames,
         }
-        for name, v in oc.scores.items()
+        for r, scores in oc.recon_scores.items()
+        for name, v in scores.items()
     ]
 
 

@@ -76,6 +76,30 @@ def test_cache_key_ignores_name_and_figure_formats_but_not_numbers():
     assert unit_key(a.config) == a.key
 
 
+def test_the_default_reconstructions_keep_the_cache_key_of_before():
+    a = expand(cfg(sweep={}))[0]
+    assert a.config["study"]["reconstructions"] == ["linear"]
+    before = {**a.config, "study": {k: v for k, v in a.config["study"].items()
+                                    if k != "reconstructions"}}  # fmt: skip
+    assert unit_key(before, a.inputs) == a.key
+    study = dict(cfg().study.model_dump(mode="json"))
+    other = expand(
+        cfg(sweep={}, study={**study, "reconstructions": [{"linear": {"outside": "nan"}}]})
+    )
+    assert other[0].key != a.key
+
+
+def test_cached_rows_without_a_reconstruction_are_linear_rows():
+    from simlunar.pipeline.runner import collect_rows
+
+    u = expand(cfg(sweep={}))[0]
+    rows = [{"strategy": "grid", "density": 0.5, "k": 2, "trial": 0, "metric": "mse", "value": 1.0}]
+    out, columns = collect_rows([u], {u.key: {"rows": rows}})
+    assert columns == ["unit", "strategy", "reconstruction", "density", "k", "trial", "metric",
+                       "value"]  # fmt: skip
+    assert out[0]["reconstruction"] == "linear"
+
+
 def _run(c, out, **kw):
     return run_experiment(c, out, compute=fake_unit, progress=False, figures=False, **kw)
 
@@ -96,7 +120,9 @@ def test_same_seed_twice_is_byte_identical_and_rerun_is_cached(tmp_path, monkeyp
     # 4 units x 3 strategies x 5 densities x 3 trials x 2 metrics, plus the header
     lines = a.decode().splitlines()
     assert len(lines) == 1 + 4 * 3 * 5 * 3 * 2
-    assert lines[0] == "unit,render.light.elevation_deg,strategy,density,k,trial,metric,value"
+    assert lines[0] == (
+        "unit,render.light.elevation_deg,strategy,reconstruction,density,k,trial,metric,value"
+    )
     prov = json.loads((tmp_path / "a" / "provenance.json").read_text())
     assert prov["units"] == {"total": 4, "cached": 4, "computed": 0}
     assert prov["seed"] == 7 and "numpy" in prov["versions"]

@@ -104,7 +104,7 @@ def test_results_keep_per_seed_rows_and_tables_pool_them(tmp_path):
     _run(cfg(1), tmp_path / "one")
     one = (tmp_path / "one" / "results.csv").read_text()
     assert one.splitlines()[0] == (
-        "unit,render.light.elevation_deg,strategy,density,k,trial,metric,value"
+        "unit,render.light.elevation_deg,strategy,reconstruction,density,k,trial,metric,value"
     )
     _run(cfg(3), tmp_path / "three")
     rows = list(csv.DictReader(io.StringIO((tmp_path / "three" / "results.csv").read_text())))
@@ -187,8 +187,8 @@ def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monke
     monkeypatch.setattr(F, "error_vs_density", spy)
     PF.write_figures(tmp_path / "r")
     assert drawn[:2] == [
-        ({"unit": [0, 1, 2]}, F.BAND_LABEL_SEEDS),
-        ({"unit": [3, 4, 5]}, F.BAND_LABEL_SEEDS),
+        ({"unit": [0, 1, 2], "reconstruction": "linear"}, F.BAND_LABEL_SEEDS),
+        ({"unit": [3, 4, 5], "reconstruction": "linear"}, F.BAND_LABEL_SEEDS),
     ]
     assert len(drawn) == 2 * 2  # two panels per metric, two metrics
     text = (tmp_path / "r" / "figures" / "captions.md").read_text()

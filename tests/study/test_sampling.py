@@ -76,7 +76,10 @@ def test_tidy_rows_and_scores(scene):
     depth, image = scene
     res = run_sampling_study(depth, image, densities=DENS, trials=2, rng=0)
     assert len(res.rows) == 5 * 3 * 2 * 3
-    assert set(res.rows[0]) == {"strategy", "density", "k", "trial", "metric", "value"}
+    assert set(res.rows[0]) == {
+        "strategy", "reconstruction", "density", "k", "trial", "metric", "value"
+    }  # fmt: skip
+    assert {r["reconstruction"] for r in res.rows} == {"linear"}
     assert res.ks == [768, 192, 48]
     assert set(res.scores) == {"mse", "grad", "sal"}
     for m in res.scores:
@@ -299,3 +302,107 @@ def test_tables_use_registry_labels_for_variants(scene):
     md = [line for line in md.splitlines() if line.startswith("|")]
     assert md[0] == "| Metric | Random | Wavelet, blue noise | My variant |"
     assert "_" not in tex.split("\\midrule")[0].replace("\\_", "")
+
+
+# --------------------------------------------------------------------------- reconstructions
+def _baseline_scene():
+    """The scene of tests/data/sampling_rows_linear_9e82372.json (rows of commit 9e82372,
+    before reconstructions were configurable: same code, same seeds)."""
+    rng = np.random.default_rng(7)
+    r, c = np.mgrid[0:48, 0:40]
+    depth = np.sin(r / 5.0) * np.cos(c / 7.0) + 0.02 * rng.standard_normal((48, 40))
+    image = 0.5 + 0.4 * np.cos(r / 5.0) * np.cos(c / 7.0)
+    o = SamplingStudyOptions(
+        strategies=("random", "grid", "wavelet"), densities=(1 / 8, 1 / 32), trials=2,
+        metrics=("mse", "grad", "sal"), score_region="both", range_noise_std=0.01,
+    )  # fmt: skip
+    return depth, image, o
+
+
+def test_linear_only_rows_are_the_rows_of_before():
+    import json
+    from pathlib import Path
+
+    depth, image, o = _baseline_scene()
+    res = sampling.run_sampling_study(depth, image, o, rng=3)
+    before = json.loads(
+        (Path(__file__).parents[1] / "data" / "sampling_rows_linear_9e82372.json").read_text()
+    )
+    assert [r.pop("reconstruction") for r in res.rows] == ["linear"] * len(res.rows)
+    assert res.rows == before["rows"]  # exact floats, same order
+    assert res.scores == before["scores"]
+
+
+def _register_offset():
+    from dataclasses import dataclass as _dc
+
+    from simlunar.reconstruction import RECONSTRUCTIONS, Reconstructed
+    from simlunar.registry import check_bounds, option
+
+    @_dc(frozen=True)
+    class OffsetOptions:
+        gain: float = option(0.0, doc="image gain", ge=0)
+
+        def __post_init__(self):
+            check_bounds(self)
+
+    def offset(points_rc, values, shape, *, guide=None, options=None):
+        base = reconstruct(points_rc, values, shape)
+        return Reconstructed(base + options.gain * guide.image, {"shading_share": 0.25})
+
+    RECONSTRUCTIONS.register("test_offset", offset, OffsetOptions, guided=True)
+
+
+@pytest.fixture
+def offset_recon():
+    from simlunar.reconstruction import RECONSTRUCTIONS
+
+    _register_offset()
+    yield "test_offset"
+    del RECONSTRUCTIONS._entries["test_offset"]
+
+
+def test_every_reconstruction_gets_rows_and_its_own_errors(offset_recon):
+    from simlunar.reconstruction import Guide
+
+    depth, image, o = _baseline_scene()
+    o2 = SamplingStudyOptions(
+        strategies=o.strategies, densities=o.densities, trials=2, metrics=("mse",),
+        reconstructions={"linear": None, offset_recon: {"gain": 0.0}},
+    )  # fmt: skip
+    guide = Guide(image, frames=("sun", "camera"), spacing=0.5)
+    res = sampling.run_sampling_study(depth, image, o2, rng=3, guide=guide)
+    assert res.reconstructions == ["linear", offset_recon]
+    lin = [r for r in res.rows if r["reconstruction"] == "linear"]
+    off = [r for r in res.rows if r["reconstruction"] == offset_recon]
+    assert len(lin) == len(off) == 3 * 2 * 2
+    assert all("guide_frames" not in r for r in lin)
+    assert {(r["guide_frames"], r["exposures"]) for r in off} == {("sun+camera", 2)}
+    # gain 0: the same grid from the same samples, so the same errors (paired acquisitions)
+    for a, b in zip(lin, off):
+        assert (a["strategy"], a["density"], a["trial"]) == (
+            b["strategy"],
+            b["density"],
+            b["trial"],
+        )
+        assert a["value"] == b["value"]
+    np.testing.assert_array_equal(
+        res.errors("mse")["grid"], res.errors("mse", offset_recon)["grid"]
+    )
+    saved = res.reconstruction_saved(offset_recon)
+    np.testing.assert_allclose(saved["wavelet"].summary[offset_recon], 1.0)
+    assert res.info[offset_recon]["grid"]["shading_share"].shape == (2, 2)
+    assert np.all(res.info[offset_recon]["grid"]["shading_share"] == 0.25)
+    assert "linear" not in res.info
+    with pytest.raises(ValueError, match="reconstruction 'smoothed' not in this study"):
+        res.errors("mse", "smoothed")
+
+
+def test_a_guide_of_another_grid_and_unknown_reconstructions_are_errors():
+    from simlunar.reconstruction import Guide
+
+    depth, image, o = _baseline_scene()
+    with pytest.raises(ValueError, match=r"guide \(4, 4\) and depth"):
+        sampling.run_sampling_study(depth, image, o, rng=0, guide=Guide(np.ones((4, 4))))
+    with pytest.raises(ValueError, match="unknown reconstruction 'shadng'; valid: linear"):
+        SamplingStudyOptions(reconstructions=("shadng",))

@@ -206,8 +206,9 @@ def test_run_scanner_study_rows_and_modes(rig):
         spp=2,
         max_depth=2,
     )
-    keys = {"mode", "planner", "budget", "trial", "metric", "value", "renders"}
+    keys = {"mode", "planner", "reconstruction", "budget", "trial", "metric", "value", "renders"}
     assert all(set(r) == keys for r in res.rows)
+    assert {r["reconstruction"] for r in res.rows} == {"linear"}
     by = {(r["mode"], r["metric"]): r for r in res.rows}
     assert by[("gray_code", "mse")]["renders"] == 14
     assert {"ber_c0", "ber_r5", "valid_fraction"} <= {m for (mo, m) in by if mo == "gray_code"}

@@ -1,0 +1,89 @@
+"""Pooling a sampling experiment per reconstruction, and each reconstruction against linear."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from simlunar.results import aggregate
+
+KS = [256, 128, 64, 32]  # densities 1/4 .. 1/32 of a 32 x 32 grid
+DENS = [k / 1024 for k in KS]
+
+
+def _records(n_seeds, recons=("linear", "smooth")):
+    study = {"strategies": ["grid", "wavelet"], "metrics": ["mse"],
+             "reconstructions": list(recons)}  # fmt: skip
+    return [
+        {"sweep": {}, "config": {"name": "t", "study": study, "terrain": {"seed_index": j}},
+         "meta": {"shape": [32, 32]}}
+        for j in range(n_seeds)
+    ]  # fmt: skip
+
+
+def _rows(gains):
+    """linear: e = 1 / k exactly; reconstruction 'smooth' on seed j: e = 1 / (gains[j] k), so
+    linear needs gains[j] times the samples for its error (a power law interpolates exactly)."""
+    rows = []
+    for j, g in enumerate(gains):
+        for s in ("grid", "wavelet"):
+            for d, k in zip(DENS, KS):
+                for t in range(2):
+                    for r, e in (("linear", 1.0 / k), ("smooth", 1.0 / (g * k))):
+                        rows.append({"unit": j, "strategy": s, "reconstruction": r, "density": d,
+                                     "k": k, "trial": t, "metric": "mse", "value": e})  # fmt: skip
+    return rows
+
+
+def test_points_are_per_reconstruction_and_read_their_own_rows():
+    recs = _records(2)
+    points = aggregate.group_points(recs)
+    assert [(p.reconstruction, p.label) for p in points] == [
+        ("linear", "reconstruction=linear"),
+        ("smooth", "reconstruction=smooth"),
+    ]
+    rows = _rows([2.0, 4.0])
+    _, ks, lin = aggregate.error_arrays(rows, points[0], "mse")
+    _, _, smo = aggregate.error_arrays(rows, points[1], "mse")
+    assert ks == KS
+    np.testing.assert_allclose(lin["grid"][0, :, 0], [1 / k for k in KS])
+    np.testing.assert_allclose(smo["grid"][1, :, 0], [1 / (4 * k) for k in KS])
+    # linear alone: one point per sweep point, rows without the column are linear's
+    (one,) = aggregate.group_points(_records(1, ("linear",)))
+    plain = [{k: v for k, v in r.items() if k != "reconstruction"} for r in _rows([2.0])
+             if r["reconstruction"] == "linear"]  # fmt: skip
+    _, _, e = aggregate.error_arrays(plain, one, "mse")
+    assert one.label == "t" and e["wavelet"].shape == (1, 4, 2)
+
+
+def test_reconstruction_vs_linear_is_paired_by_seed_with_a_t_interval():
+    recs = _records(2)
+    rows = _rows([2.0, 4.0])
+    points = aggregate.summarise(recs, rows, seed=0, n_boot=10)
+    (entry,) = aggregate.reconstruction_saved_entries(points, rows)
+    assert entry["reconstructions"] == ["smooth"] and entry["seeds"] == [0, 1]
+    # per seed: exactly the gain (the densest k is outside linear's range and left out)
+    np.testing.assert_allclose(entry["saved"]["smooth"]["grid"], [2.0, 4.0])
+    from simlunar.plotting.tables import reconstruction_saved_tables, seed_summary_numbers
+
+    m, lo, hi, n = seed_summary_numbers(entry["saved"]["smooth"]["grid"], log=True)
+    logs = np.log([2.0, 4.0])
+    half = stats.t.ppf(0.975, 1) * logs.std(ddof=1) / math.sqrt(2)
+    assert (m, n) == (pytest.approx(math.sqrt(8)), 2)
+    assert lo == pytest.approx(math.exp(logs.mean() - half))
+    assert hi == pytest.approx(math.exp(logs.mean() + half))
+    md, tex = reconstruction_saved_tables([entry], title="t")
+    assert f"| Grid | {m:.2f} [{lo:.2f}, {hi:.2f}] | 2.00–4.00 |" in md
+    assert "smooth vs linear" in md.lower() and "\\begin{table}" in tex
+
+
+def test_no_comparison_without_linear_or_without_another_reconstruction():
+    rows = _rows([2.0])
+    pts = aggregate.summarise(_records(1, ("linear",)), rows, seed=0, n_boot=10)
+    assert aggregate.reconstruction_saved_entries(pts, rows) == []
+    only = [r for r in rows if r["reconstruction"] == "smooth"]
+    pts = aggregate.summarise(_records(1, ("smooth",)), only, seed=0, n_boot=10)
+    assert aggregate.reconstruction_saved_entries(pts, only) == []
