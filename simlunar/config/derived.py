@@ -137,18 +137,28 @@ def reconstruction_specs(value) -> list:
             name, opts = next(iter(item.items()))
         else:
             name, opts = item, None
-        if not isinstance(name, str) or name not in RECONSTRUCTIONS:
+        if opts is not None and not isinstance(opts, Mapping):
+            raise ValueError(f"{name}: options must be a mapping, got {opts!r}")
+        # {label: {reconstruction: <name>, options}}: a registered reconstruction under a label
+        # of its own (the same one twice with other options, e.g. with and without a frame)
+        base = (opts or {}).get("reconstruction", name)
+        if not isinstance(name, str) or not name or (name != base and name in RECONSTRUCTIONS):
+            raise ValueError(f"label {name!r}: a new name, not another reconstruction's")
+        if not isinstance(base, str) or base not in RECONSTRUCTIONS:
             valid = ", ".join(RECONSTRUCTIONS.names())
             raise ValueError(
-                f"unknown reconstruction {name!r}; valid: {valid}"
-                f"{did_you_mean(str(name), RECONSTRUCTIONS.names())}"
+                f"unknown reconstruction {base!r}; valid: {valid}"
+                f"{did_you_mean(str(base), RECONSTRUCTIONS.names())}"
             )
         if name in seen:
             raise ValueError(f"reconstruction {name!r} is listed twice")
         seen.append(name)
-        if opts is not None and not isinstance(opts, Mapping):
-            raise ValueError(f"{name}: options must be a mapping, got {opts!r}")
-        plain = validate_options(RECONSTRUCTIONS[name].options, opts, name=f"reconstruction {name}")
+        values = {k: v for k, v in (opts or {}).items() if k != "reconstruction"}
+        plain = validate_options(
+            RECONSTRUCTIONS[base].options, values, name=f"reconstruction {name}"
+        )
+        if base != name:
+            plain = {"reconstruction": base, **plain}
         out.append({name: plain} if plain else name)
     return out
 

@@ -269,7 +269,10 @@ def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict):
     image and the extra frames of ``render.guide_frames``, :mod:`simlunar.pipeline.guide`)
     and the unit meta naming its frames; ``(None, {})`` when no configured reconstruction reads
     the image (no extra frame is rendered then: nothing would read it)."""
-    names = [r if isinstance(r, str) else next(iter(r)) for r in cfg.study.reconstructions]
+    names = [
+        r if isinstance(r, str) else next(iter(r.values())).get("reconstruction", next(iter(r)))
+        for r in cfg.study.reconstructions
+    ]  # a labelled item names its registered reconstruction
     if not any(RECONSTRUCTIONS[n].meta.get("guided") for n in names):
         return None, {}
 

@@ -41,6 +41,7 @@ __all__ = [
     "Planner",
     "Trials",
     "guide_cost",
+    "reconstruction_of",
     "reconstruction_options",
     "run_protocol",
 ]
@@ -156,10 +157,21 @@ def reconstruction_options(
         raise ValueError("the protocol needs at least one reconstruction")
     out = {}
     for name, opts in reconstructions.items():
-        entry = RECONSTRUCTIONS[name]  # unknown: a ValueError listing the valid names
+        base = name
+        if opts is not None and not isinstance(opts, Mapping):
+            base = reconstruction_of(opts)  # an options object names its reconstruction
+        elif isinstance(opts, Mapping) and "reconstruction" in opts:
+            # a label of its own: {label: {reconstruction: <registered name>, options...}}
+            opts = dict(opts)
+            base = opts.pop("reconstruction")
+            if name in RECONSTRUCTIONS and name != base:
+                raise ValueError(
+                    f"label {name!r} is the name of another reconstruction; choose another"
+                )
+        entry = RECONSTRUCTIONS[base]  # unknown: a ValueError listing the valid names
         if opts is None or isinstance(opts, Mapping):
             values = dict(opts or {})
-            if name == DEFAULT_RECONSTRUCTION:
+            if base == DEFAULT_RECONSTRUCTION:
                 values.setdefault("outside", outside)
             opts = entry.make_options(values)
         elif not isinstance(opts, entry.options):
@@ -168,6 +180,15 @@ def reconstruction_options(
             )
         out[str(name)] = opts
     return out
+
+
+def reconstruction_of(options) -> str:
+    """The registered reconstruction an options object belongs to (each entry has its own
+    options class, so a labelled reconstruction is run by its options' entry)."""
+    for name, entry in RECONSTRUCTIONS.items():
+        if type(options) is entry.options:
+            return name
+    raise TypeError(f"{type(options).__name__} is the options class of no reconstruction")
 
 
 def guide_cost(name: str, guide: Guide | None, info: Mapping | None = None) -> tuple:
@@ -227,8 +248,8 @@ def run_protocol(
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     recons = reconstruction_options(reconstructions, outside=outside)
-    for name in recons:
-        if RECONSTRUCTIONS[name].meta.get("guided") and guide is None:
+    for name, opts in recons.items():
+        if RECONSTRUCTIONS[reconstruction_of(opts)].meta.get("guided") and guide is None:
             raise ValueError(f"reconstruction {name!r} needs the guide image (guide=Guide(...))")
     state = {
         "sensor": sensor,
@@ -266,10 +287,11 @@ def _reconstruct_all(state, acq: Acquisition) -> tuple[dict, dict]:
     guide = state["guide"]
     scores, infos = {}, {}
     for name, opts in state["reconstructions"].items():
-        rec = run_reconstruction(name, acq.rc, acq.values, acq.shape, guide=guide, options=opts)
+        base = reconstruction_of(opts)
+        rec = run_reconstruction(base, acq.rc, acq.values, acq.shape, guide=guide, options=opts)
         scores[name] = state["evaluate"](rec.heights, acq)
         info = dict(rec.info)
-        frames, exposures = guide_cost(name, guide, info)
+        frames, exposures = guide_cost(base, guide, info)
         info.pop("frames", None)
         infos[name] = {**info, "guide_frames": frames, "exposures": exposures}
     return scores, infos

@@ -91,6 +91,25 @@ def test_study_reconstructions_default_names_and_options():
     assert reconstruction_specs([{"linear": {}}]) == ["linear"]
 
 
+def test_a_reconstruction_under_a_label_of_its_own():
+    c = SamplingStudyCfg(
+        densities=[0.1],
+        reconstructions=["linear", {"linear_nan": {"reconstruction": "linear", "outside": "nan"}}],
+    )
+    assert reconstruction_mapping(c.reconstructions) == {
+        "linear": {},
+        "linear_nan": {"reconstruction": "linear", "outside": "nan"},
+    }
+    with pytest.raises(ValidationError, match="label 'smoothed': a new name"):
+        SamplingStudyCfg(
+            densities=[0.1], reconstructions=[{"smoothed": {"reconstruction": "linear"}}]
+        )
+    with pytest.raises(ValidationError, match="unknown option 'outsid' of reconstruction x"):
+        SamplingStudyCfg(
+            densities=[0.1], reconstructions=[{"x": {"reconstruction": "linear", "outsid": 1}}]
+        )
+
+
 @pytest.mark.parametrize(
     "value, match",
     [

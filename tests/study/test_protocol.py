@@ -14,6 +14,7 @@ from simlunar.study.protocol import (
     Outcome,
     Trials,
     guide_cost,
+    reconstruction_of,
     reconstruction_options,
     run_protocol,
 )
@@ -156,3 +157,25 @@ def test_an_outcome_without_reconstructions_is_linear():
     o = Outcome("x", 0, 0, 3, acq, {"mse": 1.0})
     assert o.recon_scores == {"linear": {"mse": 1.0}}
     assert o.recon_info == {"linear": {"guide_frames": (), "exposures": 0}}
+
+
+def test_a_labelled_reconstruction_runs_its_entry_with_its_own_options(guided):
+    depth, image = _scene()
+    recons = {"bright": {"reconstruction": guided, "gain": 2.0}, guided: {"gain": 0.0}}
+    opts = reconstruction_options(recons)
+    assert list(opts) == ["bright", guided] and opts["bright"].gain == 2.0
+    assert reconstruction_of(opts["bright"]) == guided
+    out = next(
+        run_protocol(
+            _Truth(depth), _trials(ks=(40,), trials=1), _mse(depth),
+            reconstructions=recons, guide=Guide(image),
+        )
+    )[0]  # fmt: skip
+    assert set(out.recon_scores) == {"bright", guided}
+    # gain 0 is linear; gain 2 adds twice the image's detail: a different, worse score here
+    assert out.recon_scores[guided]["mse"] != out.recon_scores["bright"]["mse"]
+    assert out.recon_info["bright"]["shading_share"] == 2.0
+    with pytest.raises(ValueError, match="label 'linear' is the name of another"):
+        reconstruction_options({"linear": {"reconstruction": guided}})
+    with pytest.raises(ValueError, match="unknown reconstruction 'nope'"):
+        reconstruction_options({"x": {"reconstruction": "nope"}})
