@@ -42,9 +42,9 @@ def test_the_moonyard_rig_looks_at_its_target_from_70_degrees():
     assert np.degrees(np.arcsin(d[2] / 1.6)) == pytest.approx(70.0)
     assert d[0] == pytest.approx(0.0, abs=1e-12) and d[1] > 0  # azimuth 0: from +y
     # the target on the optical axis of the projector and (verged) of the camera
-    uv, z = rig.projector.project(target)
+    uv, _ = rig.projector.project(target)
     np.testing.assert_allclose(uv, [512, 384], atol=1e-9)
-    uv, z = rig.camera.project(target)
+    uv, _ = rig.camera.project(target)
     np.testing.assert_allclose(uv, [512, 384], atol=1e-9)
     assert np.linalg.norm(rig.camera.pose.position - eye) == pytest.approx(0.35)
 
