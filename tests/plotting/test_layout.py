@@ -39,10 +39,8 @@ def test_panel_grid_rows_of_three_and_its_free_cells():
     assert tuple(fig.get_size_inches()) == pytest.approx((3 * COLUMN_W, 2 * 2.6))
     assert fig._simlunar_free == [(1, 1), (1, 2)]
     fig, axes = panel_grid(2)
-    assert fig._simlunar_free == [] and tuple(fig.get_size_inches())[0] == pytest.approx(
-        2 * COLUMN_W
-    )
-    with pytest.raises(ValueError, match="^panel_grid needs at least one panel, got 0$"):
+    assert fig._simlunar_free == [] and fig.get_size_inches()[0] == pytest.approx(2 * COLUMN_W)
+    with pytest.raises(ValueError, match=r"^panel_grid needs at least one panel, got 0$"):
         panel_grid(0)
 
 
