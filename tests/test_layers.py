@@ -114,7 +114,6 @@ WITHOUT_OWN_TEST = [
     "results/lidar_figures.py",
     "results/sampling_figures.py",
     "results/scanner_figures.py",
-    "results/summaries.py",
     "scanner/scheduling.py",
     "scanner/subpixel.py",
     "sensors/structured_light.py",
