@@ -104,7 +104,6 @@ WITHOUT_OWN_TEST = [
     "plotting/images.py",
     "plotting/lidar.py",
     "plotting/scanner.py",
-    "plotting/scanner_tables.py",
     "render/beams.py",
     "render/capture.py",
     "render/plugins/hapke.py",
