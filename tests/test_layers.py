@@ -99,7 +99,6 @@ WITHOUT_OWN_TEST = [
     "pipeline/figure_inputs.py",
     "pipeline/inputs.py",
     "pipeline/scene.py",
-    "planner/learning.py",
     "plotting/density.py",
     "plotting/images.py",
     "plotting/lidar.py",
