@@ -92,9 +92,7 @@ TESTS = Path(__file__).resolve().parent
 WITHOUT_OWN_TEST = [
     "cli/schema.py",
     "cli/train.py",
-    "config/lidar.py",
     "config/registry.py",
-    "config/scanner.py",
     "config/translate.py",
     "pipeline/figure_inputs.py",
     "pipeline/inputs.py",
