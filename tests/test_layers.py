@@ -92,7 +92,6 @@ TESTS = Path(__file__).resolve().parent
 WITHOUT_OWN_TEST = [
     "cli/schema.py",
     "cli/train.py",
-    "config/registry.py",
     "config/translate.py",
     "pipeline/figure_inputs.py",
     "pipeline/inputs.py",
