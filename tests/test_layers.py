@@ -100,7 +100,6 @@ WITHOUT_OWN_TEST = [
     "render/plugins/oren_nayar.py",
     "render/reference.py",
     "results/figures.py",
-    "results/scanner_figures.py",
     "scanner/scheduling.py",
     "scanner/subpixel.py",
     "sensors/structured_light.py",
