@@ -99,7 +99,6 @@ WITHOUT_OWN_TEST = [
     "render/plugins/hapke.py",
     "render/plugins/oren_nayar.py",
     "render/reference.py",
-    "results/figures.py",
     "scanner/scheduling.py",
     "scanner/subpixel.py",
     "sensors/structured_light.py",
