@@ -100,7 +100,6 @@ WITHOUT_OWN_TEST = [
     "render/reference.py",
     "scanner/scheduling.py",
     "scanner/subpixel.py",
-    "sensors/structured_light.py",
 ]
 
 
