@@ -18,18 +18,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = [
-    "Camera",
-    "Intrinsics",
-    "OrthoCamera",
-    "Pose",
-    "Projector",
-    "Rig",
-    "grid_height_at",
-    "pixel_centers",
-    "rover_mast_camera",
-]
-
 
 def _ro(a, dtype=np.float64) -> np.ndarray:
     arr = np.array(a, dtype=dtype, copy=True)
@@ -450,3 +438,11 @@ def pixel_centers(rows: int, cols: int) -> np.ndarray:
     """(rows, cols, 2) array of (u, v) = (c + 0.5, r + 0.5)."""
     v, u = np.mgrid[0:rows, 0:cols].astype(float)
     return np.stack([u + 0.5, v + 0.5], axis=-1)
+
+
+# fmt: off
+__all__ = [
+    "Camera", "Intrinsics", "OrthoCamera", "Pose", "Projector",
+    "Rig", "grid_height_at", "pixel_centers", "rover_mast_camera",
+]
+# fmt: on

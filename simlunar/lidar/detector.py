@@ -23,16 +23,6 @@ import numpy as np
 
 from simlunar.lidar.waveform import SPEED_OF_LIGHT, TimeBins
 
-__all__ = [
-    "PLANCK",
-    "DetectorOptions",
-    "LinkBudget",
-    "coates_correction",
-    "expected_counts",
-    "photon_counts",
-    "photon_counts_dead_time",
-]
-
 
 @dataclass(frozen=True)
 class DetectorOptions:
@@ -258,3 +248,14 @@ class LinkBudget:
             background_photons_per_s=self.sun_band_w_m2 * collect,
             **fields,
         )
+
+
+__all__ = [
+    "PLANCK",
+    "DetectorOptions",
+    "LinkBudget",
+    "coates_correction",
+    "expected_counts",
+    "photon_counts",
+    "photon_counts_dead_time",
+]

@@ -17,15 +17,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = [
-    "ScanTiming",
-    "SteeringOptions",
-    "axis_move_time",
-    "move_time",
-    "pointing_angles",
-    "scan_timing",
-]
-
 
 @dataclass(frozen=True)
 class SteeringOptions:
@@ -149,3 +140,13 @@ def pointing_angles(directions: np.ndarray, boresight_pose) -> np.ndarray:
     az = np.arctan2(d[:, 0], d[:, 2])
     el = np.arctan2(-d[:, 1], np.hypot(d[:, 0], d[:, 2]))
     return np.stack([az, el], axis=1)
+
+
+__all__ = [
+    "ScanTiming",
+    "SteeringOptions",
+    "axis_move_time",
+    "move_time",
+    "pointing_angles",
+    "scan_timing",
+]

@@ -21,23 +21,6 @@ from dataclasses import dataclass
 
 from simlunar.metrics import METRIC_NAMES
 
-__all__ = [
-    "AXIS_NAMES",
-    "METRIC_UNITS",
-    "PLAIN_LABELS",
-    "REGISTRY",
-    "SPARE_COLOURS",
-    "SPARE_MARKERS",
-    "Style",
-    "axis_name",
-    "label",
-    "metric_axis",
-    "pair_label",
-    "point_title",
-    "style",
-    "styles",
-]
-
 
 @dataclass(frozen=True)
 class Style:
@@ -281,3 +264,21 @@ def point_title(sweep: dict) -> str:
             text = _with_unit(v, unit)
         parts.append(f"{name}: {text}")
     return "; ".join(parts)
+
+
+__all__ = [
+    "AXIS_NAMES",
+    "METRIC_UNITS",
+    "PLAIN_LABELS",
+    "REGISTRY",
+    "SPARE_COLOURS",
+    "SPARE_MARKERS",
+    "Style",
+    "axis_name",
+    "label",
+    "metric_axis",
+    "pair_label",
+    "point_title",
+    "style",
+    "styles",
+]

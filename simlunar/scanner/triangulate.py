@@ -12,23 +12,6 @@ import numpy as np
 
 from simlunar.geometry import Camera, Projector, Rig
 
-__all__ = [
-    "Correspondences",
-    "PointCloud",
-    "check_rig",
-    "column_planes",
-    "depth_at_proj_pixels",
-    "depth_in_view",
-    "epipolar_distance",
-    "fundamental_matrix",
-    "projector_visibility",
-    "skew",
-    "triangulate",
-    "triangulate_plane",
-    "triangulate_rays",
-    "true_correspondences",
-]
-
 
 def _ro(a, dtype=np.float64) -> np.ndarray:
     arr = np.array(a, dtype=dtype, copy=True)
@@ -394,3 +377,21 @@ def depth_at_proj_pixels(cloud: PointCloud, view: Camera, *, reduce: str = "mean
     else:
         raise ValueError(f"unknown reduce {reduce!r}; valid: 'mean', 'min'")
     return out.reshape(rows, cols)
+
+
+__all__ = [
+    "Correspondences",
+    "PointCloud",
+    "check_rig",
+    "column_planes",
+    "depth_at_proj_pixels",
+    "depth_in_view",
+    "epipolar_distance",
+    "fundamental_matrix",
+    "projector_visibility",
+    "skew",
+    "triangulate",
+    "triangulate_plane",
+    "triangulate_rays",
+    "true_correspondences",
+]

@@ -1,0 +1,81 @@
+"""The LIDAR sections of the schema: their defaults are the library's (through the SI
+translation), unit strings converted, the hazard window odd, bounds with their reasons."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+import pytest
+from pydantic import ValidationError
+
+from simlunar.config.lidar import (
+    DetectorCfg,
+    FlashCfg,
+    HazardCfg,
+    LidarOptionsCfg,
+    PulseCfg,
+    SteeredBeamCfg,
+    TransientCfg,
+)
+from simlunar.config.lidar_translate import lidar_sensor_options
+from simlunar.config.studies import LidarStudyCfg
+from simlunar.metrics.hazard import HazardOptions
+from simlunar.render.lidar_scan import FlashOptions, SteeredBeamOptions
+from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
+
+
+def test_steered_beam_defaults_are_the_librarys():
+    got = lidar_sensor_options(LidarStudyCfg(kind="lidar"))
+    want = SteeredBeamOptions()
+    for name in ("pulse", "detector", "ranging", "footprint", "steering", "order", "transient",
+                 "bin_range_m", "margin_m", "window_m", "batch"):  # fmt: skip
+        assert getattr(got, name) == getattr(want, name), name
+
+
+def test_flash_and_micromirror_defaults_are_the_librarys():
+    flash = lidar_sensor_options(LidarStudyCfg(kind="lidar", sensor="flash"))
+    want = FlashLidarOptions()
+    assert (flash.receiver_px, flash.revisits, flash.zoom) == (
+        want.receiver_px,
+        want.revisits,
+        want.zoom,
+    )
+    assert flash.flash.pulse_rate_hz == FlashOptions().pulse_rate_hz
+    mm = lidar_sensor_options(LidarStudyCfg(kind="lidar", sensor="micromirror_flash"))
+    assert mm.receiver_px == MicromirrorOptions().receiver_px
+
+
+def test_hazard_defaults_and_units():
+    assert HazardCfg().model_dump() == asdict(HazardOptions())
+    h = HazardCfg(relief_m="25 cm", slope_deg="0.25 rad")
+    assert h.relief_m == pytest.approx(0.25) and h.slope_deg == pytest.approx(14.32394487827058)
+    with pytest.raises(ValidationError, match=r"must be odd \(a centred window\), got 16"):
+        HazardCfg(window_px=16)
+    with pytest.raises(ValidationError, match="less than 90"):
+        HazardCfg(slope_deg=90)
+
+
+def test_lengths_take_units():
+    o = LidarOptionsCfg(bin_range_m="5 cm", margin_m="1 km", steered_beam={"window_m": "800 cm"})
+    assert o.bin_range_m == pytest.approx(0.05) and o.margin_m == 1000.0
+    assert o.steered_beam.window_m == pytest.approx(8.0)
+
+
+@pytest.mark.parametrize(
+    ("model", "kw", "message"),
+    [
+        (PulseCfg, {"fwhm_ns": 0}, "greater than 0"),
+        (PulseCfg, {"jitter_ns": -1}, "greater than or equal to 0"),
+        (DetectorCfg, {"pulses": 0}, "greater than 0"),
+        (TransientCfg, {"max_depth": 1}, "greater than or equal to 2"),
+        (SteeredBeamCfg, {"order": "spiral"}, "Input should be 'nn2opt', 'raster' or 'given'"),
+        (SteeredBeamCfg, {"profile": "tophat"}, "Input should be 'gaussian' or 'uniform'"),
+        (FlashCfg, {"zoom": 1}, "greater than or equal to 2"),
+        (FlashCfg, {"receiver_px": (64, 0)}, "greater than 0"),
+        (LidarOptionsCfg, {"bin_range_m": 0}, "greater than 0"),
+    ],
+)
+def test_bounds(model, kw, message):
+    with pytest.raises(ValidationError) as info:
+        model(**kw)
+    assert message in info.value.errors()[0]["msg"]
