@@ -9,6 +9,7 @@ reconstruction, :mod:`simlunar.registry`); every one has the signature of
 from simlunar.reconstruction.base import Guide, LinearOptions, Reconstructed, linear
 from simlunar.reconstruction.control import SmoothedOptions, smoothed
 from simlunar.reconstruction.delaunay import OUTSIDE_POLICIES, reconstruct, triangulate
+from simlunar.reconstruction.photoclinometry import PhotoclinometryOptions, photoclinometry
 from simlunar.reconstruction.shading import ShadingOptions, shading
 from simlunar.registry import Registry
 
@@ -19,6 +20,13 @@ RECONSTRUCTIONS.register(
 )
 RECONSTRUCTIONS.register(
     "shading", shading, ShadingOptions, summary="slope along the sun, anchored", guided=True
+)
+RECONSTRUCTIONS.register(
+    "photoclinometry",
+    photoclinometry,
+    PhotoclinometryOptions,
+    summary="linearised photoclinometry, sparse least squares",
+    guided=True,
 )
 RECONSTRUCTIONS.register(
     "smoothed", smoothed, SmoothedOptions, summary="image-free control", guided=False
@@ -63,10 +71,12 @@ __all__ = [
     "RECONSTRUCTIONS",
     "Guide",
     "LinearOptions",
+    "PhotoclinometryOptions",
     "Reconstructed",
     "ShadingOptions",
     "SmoothedOptions",
     "linear",
+    "photoclinometry",
     "reconstruct",
     "run_reconstruction",
     "shading",
