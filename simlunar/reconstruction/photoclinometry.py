@@ -11,7 +11,10 @@ with ``u = b / |b|``, ``t`` across it, ``r = p_s - u . grad z_lin`` the slope al
 that the image adds to the linear reconstruction's (``p_s = clip((I_smooth - a) / (g |b|))``
 as in :mod:`.shading`), ``grad`` central differences with mirrored edges. The ridge
 ``lam_r`` and the cross-sun term ``lam_t`` are what make it well posed: without them every sun
-line floats between the anchors (``shared/REFERENCES.md``: 3-8x worse than linear at 1/256).
+line floats between the anchors (``shared/REFERENCES.md``: 3-8x worse than linear at 1/256;
+here the exact re-anchoring below limits the damage, but CG then needs several times the
+iterations). The defaults (ridge 0.002, cross-sun 0.01, anchors 1, per-cell slope equations of
+weight 1) were chosen on the synthetic Lambert surfaces of the tests, not on renders.
 The normal equations (a 9-point scipy.sparse matrix) are solved by conjugate gradients,
 preconditioned by the operator's cosine-diagonal part (the mirror-averaged inverse of
 ``D^T (u u^T + lam_t t t^T) D + lam_r + w_a k / N``, two DCTs per iteration). The result is
@@ -53,7 +56,7 @@ class PhotoclinometryOptions:
         0.01, doc="lam_t: smoothness of the correction across the light", ge=0, le=100
     )
     anchor_weight: float = option(1.0, doc="w_a: weight of the samples", gt=0, le=1e6)
-    rtol: float = option(1e-3, doc="relative residual at which CG stops", gt=0, lt=1)
+    rtol: float = option(3e-3, doc="relative residual at which CG stops", gt=0, lt=1)
     max_iter: int = option(300, doc="most CG iterations", ge=1, le=100000)
     gain: float = option(1.0, doc="g: divides the calibrated |b| when reading slopes", gt=0, le=10)
     clip: float = option(4.0, doc="largest |slope| (dz/dx) read from the image", gt=0, le=100)

@@ -40,15 +40,19 @@ def test_better_than_linear_on_a_lambert_surface(seed):
     assert res.info["gamma"] == 1.0
 
 
-def test_needs_its_ridge_and_cross_sun_term():
-    # a vanishing ridge and no cross-sun term leave the sun lines floating between anchors
+def test_ridge_and_cross_sun_term_condition_the_solve():
+    # without them the sun lines are held only by the anchors: the normal matrix is nearly
+    # singular and CG needs several times the iterations (the exact re-anchoring afterwards
+    # keeps this synthetic case accurate all the same)
     t, pts, v = _case(elevation_deg=30.0, azimuth_deg=40.0, rng=1)
     good = run_reconstruction("photoclinometry", pts, v, SHAPE, guide=Guide(t.image))
     loose = run_reconstruction(
         "photoclinometry", pts, v, SHAPE, guide=Guide(t.image),
-        options={"ridge": 1e-9, "across_weight": 0.0, "max_iter": 2000},
+        options={"ridge": 1e-9, "across_weight": 0.0, "max_iter": 5000},
     )  # fmt: skip
-    assert _mse(good.heights, t.heights) < _mse(loose.heights, t.heights)
+    assert loose.info["cg_iterations"] > 3 * good.info["cg_iterations"]
+    lin = run_reconstruction("linear", pts, v, SHAPE).heights
+    assert _mse(loose.heights, t.heights) < _mse(lin, t.heights)
 
 
 def test_without_shading_it_is_linear():
