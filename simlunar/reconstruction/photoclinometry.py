@@ -15,9 +15,10 @@ line floats between the anchors (``shared/REFERENCES.md``: 3-8x worse than linea
 here the exact re-anchoring below limits the damage, but CG then needs several times the
 iterations). The defaults (ridge 0.002, cross-sun 0.01, anchors 1, per-cell slope equations of
 weight 1) were chosen on the synthetic Lambert surfaces of the tests, not on renders.
-The normal equations (a 9-point scipy.sparse matrix) are solved by conjugate gradients,
-preconditioned by the operator's cosine-diagonal part (the mirror-averaged inverse of
-``D^T (u u^T + lam_t t t^T) D + lam_r + w_a k / N``, two DCTs per iteration). The result is
+The normal equations (a 9-point scipy.sparse CSR matrix, assembled in one compiled pass) are
+solved by conjugate gradients, preconditioned by the operator's cosine-diagonal part (the
+mirror-averaged inverse of ``D^T (u u^T + lam_t t t^T) D + lam_r + w_a k / N``, two DCTs per
+iteration). The result is
 re-anchored exactly on the samples and blended as in :mod:`.shading`:
 ``z = z_lin + gamma * hull * (d - linear_interp(d at the samples))`` with the same fallback
 rule for ``gamma``.
@@ -32,6 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.fft as sfft
 from scipy import ndimage, sparse
@@ -44,7 +46,12 @@ from simlunar.reconstruction.integrate import central_gradient
 from simlunar.reconstruction.shading import ShadingOptions, fallback_gamma, shading_frames
 from simlunar.registry import check_bounds, option
 
-__all__ = ["PhotoclinometryOptions", "central_difference_matrices", "photoclinometry"]
+__all__ = [
+    "PhotoclinometryOptions",
+    "central_difference_matrices",
+    "normal_equations",
+    "photoclinometry",
+]
 
 
 @dataclass(frozen=True)
@@ -123,6 +130,123 @@ def central_difference_matrices(shape) -> tuple[sparse.csr_matrix, sparse.csr_ma
     return d_r, d_c
 
 
+_SLOTS = [(dr, dc) for dr in range(-2, 3) for dc in range(-2, 3) if abs(dr) + abs(dc) <= 2]
+_SLOT = np.full((5, 5), -1, dtype=np.int64)
+for _i, (_dr, _dc) in enumerate(_SLOTS):
+    _SLOT[_dr + 2, _dc + 2] = _i
+_SLOT_DR = np.array([d[0] for d in _SLOTS], dtype=np.int64)
+_SLOT_DC = np.array([d[1] for d in _SLOTS], dtype=np.int64)
+
+
+@numba.njit(cache=True, nogil=True)
+def _assemble(
+    rows, cols, u_r, u_c, t_r, t_c, lam_t, w, diag, resid, slot, sdr, sdc
+):  # pragma: no cover - compiled
+    """CSR arrays of ``D_u^T W D_u + lam_t D_t^T D_t + diag`` and ``D_u^T (w resid)``.
+
+    Each equation row (a cell) of ``a D_r + b D_c`` touches four cells (rows r +- 1 and
+    columns c +- 1, clamped: the mirrored central difference); its outer product adds to at
+    most 13 neighbours (|dr| + |dc| <= 2) of each of them.
+    """
+    n = rows * cols
+    vals = np.zeros((n, sdr.shape[0]))
+    rhs = np.zeros(n)
+    er = np.empty(4, np.int64)
+    ec = np.empty(4, np.int64)
+    ev = np.empty(4)
+    for pass_ in range(2):
+        a, b = (u_r, u_c) if pass_ == 0 else (t_r, t_c)
+        for r in range(rows):
+            for c in range(cols):
+                j = r * cols + c
+                wt = w[j] if pass_ == 0 else lam_t
+                if wt == 0.0:
+                    continue
+                m = 0
+                if rows > 1:
+                    er[m], ec[m], ev[m] = min(r + 1, rows - 1), c, 0.5 * a
+                    er[m + 1], ec[m + 1], ev[m + 1] = max(r - 1, 0), c, -0.5 * a
+                    m += 2
+                if cols > 1:
+                    er[m], ec[m], ev[m] = r, min(c + 1, cols - 1), 0.5 * b
+                    er[m + 1], ec[m + 1], ev[m + 1] = r, max(c - 1, 0), -0.5 * b
+                    m += 2
+                for p in range(m):
+                    ip = er[p] * cols + ec[p]
+                    if pass_ == 0:
+                        rhs[ip] += wt * ev[p] * resid[j]
+                    for q in range(m):
+                        k = slot[er[q] - er[p] + 2, ec[q] - ec[p] + 2]
+                        vals[ip, k] += wt * ev[p] * ev[q]
+    centre = slot[2, 2]
+    for i in range(n):
+        vals[i, centre] += diag[i]
+    # compress to CSR, columns sorted
+    indptr = np.zeros(n + 1, np.int32)
+    for i in range(n):
+        cnt = 0
+        for k in range(sdr.shape[0]):
+            if vals[i, k] != 0.0:
+                cnt += 1
+        indptr[i + 1] = indptr[i] + cnt
+    indices = np.empty(indptr[n], np.int32)
+    data = np.empty(indptr[n])
+    for i in range(n):
+        r, c = i // cols, i % cols
+        pos = indptr[i]
+        for k in range(sdr.shape[0]):
+            if vals[i, k] != 0.0:
+                col = (r + sdr[k]) * cols + (c + sdc[k])
+                q = pos
+                while q > indptr[i] and indices[q - 1] > col:  # insertion sort
+                    indices[q] = indices[q - 1]
+                    data[q] = data[q - 1]
+                    q -= 1
+                indices[q] = col
+                data[q] = vals[i, k]
+                pos += 1
+    return indptr, indices, data, rhs
+
+
+def normal_equations(shape, u, across_weight, w, diag, resid):
+    """The photoclinometry normal equations as a scipy.sparse CSR matrix and right-hand side.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        (rows, cols).
+    u : array_like, shape (2,)
+        Unit direction of the light's slope (row, col); ``t`` is across it.
+    across_weight : float
+        ``lam_t``.
+    w : ndarray, shape (rows * cols,)
+        Weight of each cell's slope equation (0: shadowed or saturated).
+    diag : ndarray, shape (rows * cols,)
+        Ridge plus anchor weight of each cell.
+    resid : ndarray, shape (rows * cols,)
+        The slope along ``u`` the image adds (per cell).
+
+    Returns
+    -------
+    a_mat : scipy.sparse.csr_matrix, shape (n, n)
+        ``D_u^T W D_u + lam_t D_t^T D_t + diag(diag)`` (at most 13 entries a row, 9 inside).
+    rhs : ndarray, shape (n,)
+        ``D_u^T W resid``.
+    """
+    rows, cols = (int(x) for x in shape)
+    u = np.asarray(u, dtype=np.float64)
+    w = np.ascontiguousarray(w, dtype=np.float64)
+    indptr, indices, data, rhs = _assemble(
+        rows, cols, u[0], u[1], -u[1], u[0], float(across_weight), w,
+        np.ascontiguousarray(diag, dtype=np.float64), np.ascontiguousarray(resid, np.float64),
+        _SLOT, _SLOT_DR, _SLOT_DC,
+    )  # fmt: skip
+    n = rows * cols
+    a_mat = sparse.csr_matrix((data, indices, indptr), shape=(n, n))
+    a_mat.has_sorted_indices = True
+    return a_mat, rhs
+
+
 def _preconditioner(shape, u, lam_t, shift):
     """M^-1 of the operator's mirror-averaged cosine-diagonal part (symmetric, positive)."""
     rows, cols = shape
@@ -197,30 +321,18 @@ def photoclinometry(
     rows, cols = lin.shape
     n = rows * cols
     u = cal.direction
-    t = np.array([-u[1], u[0]])
     # slopes per cell (value units per cell): the image's along u, the linear one's
     lr, lc = central_gradient(lin.heights)
     smooth = ndimage.gaussian_filter(image, o.image_sigma, truncate=3.0) if o.image_sigma else image
     p_s = np.clip((smooth - cal.a) / (o.gain * cal.gain), -o.clip, o.clip) * guide.spacing
     resid = np.where(valid, p_s - (u[0] * lr + u[1] * lc), 0.0).ravel()
-    d_r, d_c = central_difference_matrices(lin.shape)
-    d_u = (u[0] * d_r + u[1] * d_c).tocsr()
-    d_t = (t[0] * d_r + t[1] * d_c).tocsr()
     w_img = valid.ravel().astype(np.float64)
     diag = np.full(n, o.ridge)
     cells = np.rint(lin.points).astype(np.int64)
     inside = (cells[:, 0] >= 0) & (cells[:, 0] < rows) & (cells[:, 1] >= 0) & (cells[:, 1] < cols)
     diag[cells[inside, 0] * cols + cells[inside, 1]] += o.anchor_weight
     lam_t = o.across_weight
-    # the normal matrix D_u^T W D_u + lam_t D_t^T D_t + diag (9 points per row)
-    d_u_t = d_u.T.tocsr()
-    wd_u = d_u.copy()
-    wd_u.data *= np.repeat(w_img, np.diff(wd_u.indptr))
-    a_mat = d_u_t @ wd_u
-    if lam_t:
-        a_mat = a_mat + lam_t * (d_t.T.tocsr() @ d_t)
-    a_mat = (a_mat + sparse.diags(diag)).tocsr()
-    rhs = d_u_t @ (w_img * resid)
+    a_mat, rhs = normal_equations(lin.shape, u, lam_t, w_img, diag, resid)
     shift = o.ridge + o.anchor_weight * inside.sum() / n
     m_inv = _preconditioner(lin.shape, u, lam_t, shift)
     iterations = [0]

@@ -86,3 +86,23 @@ def test_options():
         PhotoclinometryOptions(share_lo=0.6, share_hi=0.5)
     with pytest.raises(ValueError, match="needs the guide"):
         run_reconstruction("photoclinometry", [[0, 0], [1, 1], [0, 1]], [0.0, 1, 2], (3, 3))
+
+
+@pytest.mark.parametrize("shape", [(6, 8), (3, 4), (1, 5), (9, 2)])
+def test_normal_equations_equal_the_sparse_products(rng, shape):
+    from scipy import sparse
+
+    from simlunar.reconstruction.photoclinometry import normal_equations
+
+    n = shape[0] * shape[1]
+    u = np.array([0.6, -0.8])
+    t = np.array([0.8, 0.6])
+    w = (rng.random(n) > 0.2).astype(float)
+    diag, resid = rng.random(n), rng.normal(size=n)
+    d_r, d_c = central_difference_matrices(shape)
+    d_u, d_t = u[0] * d_r + u[1] * d_c, t[0] * d_r + t[1] * d_c
+    ref = d_u.T @ sparse.diags(w) @ d_u + 0.3 * (d_t.T @ d_t) + sparse.diags(diag)
+    a_mat, rhs = normal_equations(shape, u, 0.3, w, diag, resid)
+    np.testing.assert_allclose(a_mat.toarray(), ref.toarray(), atol=1e-14)
+    np.testing.assert_allclose(rhs, d_u.T @ (w * resid), atol=1e-14)
+    assert (np.diff(a_mat.indptr) <= 13).all()
