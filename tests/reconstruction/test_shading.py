@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from simlunar.reconstruction import Guide, ShadingOptions, run_reconstruction
 from simlunar.reconstruction._anchor import linear_field
@@ -148,3 +149,15 @@ def test_two_suns_cancel_albedo_without_a_flat():
     )  # fmt: skip
     assert both.info["frames"] == "sun+sun2+camera"
     assert _mse(both.heights, t1.heights) * 3.0 < _mse(two.heights, t1.heights)
+
+
+def test_float_sample_positions():
+    # projected sensor points are not on cells: the re-anchoring interpolates bilinearly
+    t, pts, _ = _case(elevation_deg=30.0, rng=8)
+    fpts = np.clip(pts + np.random.default_rng(0).uniform(-0.4, 0.4, pts.shape), 0, None)
+    fpts = np.minimum(fpts, np.array(SHAPE) - 1.0)
+    v = ndimage.map_coordinates(t.heights, fpts.T, order=1)
+    lin = run_reconstruction("linear", fpts, v, SHAPE).heights
+    res = run_reconstruction("shading", fpts, v, SHAPE, guide=Guide(t.image))
+    assert np.isfinite(res.heights).all()
+    assert _mse(res.heights, t.heights) * 2.0 < _mse(lin, t.heights)
