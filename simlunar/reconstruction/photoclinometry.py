@@ -58,9 +58,15 @@ __all__ = [
 class PhotoclinometryOptions:
     """Options of the sparse least-squares photoclinometry (:func:`photoclinometry`)."""
 
-    ridge: float = option(0.002, doc="lam_r: pull of the correction towards 0", gt=0, le=100)
+    ridge: float = option(
+        1.0,
+        doc="pull of the correction towards 0, in units of 1 / pitch^2: lam_r = ridge / pitch^2 "
+        "(the correction decays over about a sample pitch)",
+        gt=0,
+        le=1e4,
+    )
     across_weight: float = option(
-        0.01, doc="lam_t: smoothness of the correction across the light", ge=0, le=100
+        0.05, doc="lam_t: smoothness of the correction across the light", ge=0, le=100
     )
     anchor_weight: float = option(1.0, doc="w_a: weight of the samples", gt=0, le=1e6)
     rtol: float = option(3e-3, doc="relative residual at which CG stops", gt=0, lt=1)
@@ -327,13 +333,14 @@ def photoclinometry(
     p_s = np.clip((smooth - cal.a) / (o.gain * cal.gain), -o.clip, o.clip) * guide.spacing
     resid = np.where(valid, p_s - (u[0] * lr + u[1] * lc), 0.0).ravel()
     w_img = valid.ravel().astype(np.float64)
-    diag = np.full(n, o.ridge)
+    lam_r = o.ridge / lin.pitch**2
+    diag = np.full(n, lam_r)
     cells = np.rint(lin.points).astype(np.int64)
     inside = (cells[:, 0] >= 0) & (cells[:, 0] < rows) & (cells[:, 1] >= 0) & (cells[:, 1] < cols)
     diag[cells[inside, 0] * cols + cells[inside, 1]] += o.anchor_weight
     lam_t = o.across_weight
     a_mat, rhs = normal_equations(lin.shape, u, lam_t, w_img, diag, resid)
-    shift = o.ridge + o.anchor_weight * inside.sum() / n
+    shift = lam_r + o.anchor_weight * inside.sum() / n
     m_inv = _preconditioner(lin.shape, u, lam_t, shift)
     iterations = [0]
 

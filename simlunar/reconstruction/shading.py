@@ -73,7 +73,7 @@ class ShadingOptions:
         unit="cell", ge=0, le=32,
     )  # fmt: skip
     across_weight: float = option(
-        0.05,
+        0.1,
         doc="weight of the linear reconstruction's slope across the light in the integration "
         "(1: isotropic Frankot-Chellappa)",
         gt=0,
