@@ -13,8 +13,11 @@ as in :mod:`.shading`), ``grad`` central differences with mirrored edges. The ri
 ``lam_r`` and the cross-sun term ``lam_t`` are what make it well posed: without them every sun
 line floats between the anchors (``shared/REFERENCES.md``: 3-8x worse than linear at 1/256;
 here the exact re-anchoring below limits the damage, but CG then needs several times the
-iterations). The defaults (ridge 0.002, cross-sun 0.01, anchors 1, per-cell slope equations of
-weight 1) were chosen on the synthetic Lambert surfaces of the tests, not on renders.
+iterations). The ridge scales with the sample pitch, ``lam_r = ridge / pitch^2`` (the
+correction decays over about a pitch); a fixed ``lam_r = 0.002`` made the result 0.45x of
+linear at 1/64 on a quarter-scale aerial_1 render. The defaults (ridge 1, cross-sun 0.05,
+anchors 1, slope equations of weight 1) were set on that render (Oren-Nayar, 12-bit sensor)
+and checked on an aerial_3 one (``docs/reconstruction.md``).
 The normal equations (a 9-point scipy.sparse CSR matrix, assembled in one compiled pass) are
 solved by conjugate gradients, preconditioned by the operator's cosine-diagonal part (the
 mirror-averaged inverse of ``D^T (u u^T + lam_t t t^T) D + lam_r + w_a k / N``, two DCTs per
