@@ -10,6 +10,7 @@ from simlunar.reconstruction.base import Guide, LinearOptions, Reconstructed, li
 from simlunar.reconstruction.control import SmoothedOptions, smoothed
 from simlunar.reconstruction.delaunay import OUTSIDE_POLICIES, reconstruct, triangulate
 from simlunar.reconstruction.learned import LearnedReconOptions, learned_reconstruction
+from simlunar.reconstruction.photoclinometry import PhotoclinometryOptions, photoclinometry
 from simlunar.reconstruction.shading import ShadingOptions, shading
 from simlunar.registry import Registry
 
@@ -20,6 +21,13 @@ RECONSTRUCTIONS.register(
 )
 RECONSTRUCTIONS.register(
     "shading", shading, ShadingOptions, summary="slope along the sun, anchored", guided=True
+)
+RECONSTRUCTIONS.register(
+    "photoclinometry",
+    photoclinometry,
+    PhotoclinometryOptions,
+    summary="linearised photoclinometry, sparse least squares",
+    guided=True,
 )
 RECONSTRUCTIONS.register(
     "smoothed", smoothed, SmoothedOptions, summary="image-free control", guided=False
@@ -73,11 +81,13 @@ __all__ = [
     "Guide",
     "LearnedReconOptions",
     "LinearOptions",
+    "PhotoclinometryOptions",
     "Reconstructed",
     "ShadingOptions",
     "SmoothedOptions",
     "learned_reconstruction",
     "linear",
+    "photoclinometry",
     "reconstruct",
     "run_reconstruction",
     "shading",

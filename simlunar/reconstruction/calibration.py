@@ -11,8 +11,9 @@ blur the image and ``z_lin`` with one Gaussian (sigma = ``sigma_pitch`` x pitch,
 density^-1/2 cells) and fit ``I_blur ~ a + b_r d_r z_blur + b_c d_c z_blur`` by least squares
 over valid pixels (neither shadowed nor saturated) *inside the samples' convex hull*, away from
 its edge by the blur's reach, and within about a pitch of a sample (long thin triangles along
-the grid's edges or wide gaps have poor slopes that dilute ``b``). The pitfall it avoids: unblurred gradients and nearest-filled
-cells outside the hull gave ``b`` 10-30x too small on sparse grid and random layouts.
+the grid's edges or wide gaps have poor slopes that dilute ``b``). The pitfall it avoids:
+unblurred gradients and nearest-filled cells outside the hull gave ``b`` 10-30x too small on
+sparse grid and random layouts.
 
 ``b`` is signed: its direction ``b / |b|`` is the image direction along which the values' slope
 brightens the image. For heights that is away from the sun (``-s_h``), for depths (whose

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 
+import numba
 import numpy as np
 import scipy.fft as sfft
 
@@ -111,6 +112,36 @@ def central_gradient(z) -> tuple[np.ndarray, np.ndarray]:
     return gr, gc
 
 
+@numba.njit(cache=True, nogil=True)
+def _mode(ak, bk, sr, sc, q_rr, q_cc, q_rc):  # pragma: no cover - compiled
+    """(F_+, F_-) of one mode (see :func:`_solve_quarter`)."""
+    even = q_rc * (ak * sc + bk * sr)
+    odd = q_rr * ak * sr + q_cc * bk * sc
+    base = q_rr * sr * sr + q_cc * sc * sc
+    cross = 2.0 * q_rc * sr * sc
+    dp, dm = base + cross, base - cross
+    fp = -(even + odd) / dp if dp > 1e-14 else 0.0
+    fm = -(even - odd) / dm if dm > 1e-14 else 0.0
+    return fp, fm
+
+
+@numba.njit(cache=True, nogil=True)
+def _quarter_modes(a, b, sr, sc, q_rr, q_cc, q_rc, cc, ss):  # pragma: no cover - compiled
+    """Fill the cosine (cc) and sine (ss) coefficients from the DST/DCT coefficients ``a``
+    (A at k = 1..R, l = 0..C-1) and ``b`` (B at k = 0..R-1, l = 1..C) in one pass."""
+    rows, cols = cc.shape
+    for k in range(rows + 1):
+        for m in range(cols + 1):
+            ak = a[k - 1, m] if (k >= 1 and m < cols) else 0.0
+            bk = b[k, m - 1] if (k < rows and m >= 1) else 0.0
+            fp, fm = _mode(ak, bk, sr[k], sc[m], q_rr, q_cc, q_rc)
+            if k < rows and m < cols:
+                cc[k, m] = 0.5 * (fp - fm)
+            if k >= 1 and m >= 1:
+                ss[k - 1, m - 1] = 0.5 * (fp + fm)
+    cc[0, 0] = 0.0
+
+
 def _solve_quarter(gr, gc, u, w):
     """The per-mode solution on the 2R x 2C mirror extension, computed on one quarter.
 
@@ -126,46 +157,25 @@ def _solve_quarter(gr, gc, u, w):
     (q_rr s_r^2 + q_cc s_c^2 + 2 p q_rc s_r s_c)`` for p = +1, -1, and the inverse DFT on the
     first quadrant is ``(DCT-III_2D((F_+ - F_-) / 2) - DST-III_2D((F_+ + F_-) / 2)) / (4RC)``
     (the terms odd in one axis cancel, the field being real). Four quarter-size real
-    transforms instead of three full-size FFTs of the extension.
+    transforms instead of three full-size FFTs of the extension, and one compiled pass over
+    the modes.
     """
     rows, cols = gr.shape
     t = np.array([-u[1], u[0]])
     q_rr = u[0] * u[0] + w * t[0] * t[0]
     q_cc = u[1] * u[1] + w * t[1] * t[1]
     q_rc = u[0] * u[1] + w * t[0] * t[1]
-    a = np.zeros((rows + 1, cols + 1))
-    b = np.zeros((rows + 1, cols + 1))
-    a[1:, :-1] = sfft.dst(sfft.dct(gr, type=2, axis=1, workers=_WORKERS), type=2, axis=0,
-                          workers=_WORKERS)  # fmt: skip
-    b[:-1, 1:] = sfft.dct(sfft.dst(gc, type=2, axis=1, workers=_WORKERS), type=2, axis=0,
-                          workers=_WORKERS)  # fmt: skip
-    sr = np.sin(np.pi * np.arange(rows + 1) / rows)[:, None]
-    sc = np.sin(np.pi * np.arange(cols + 1) / cols)[None, :]
+    a = sfft.dst(sfft.dct(gr, type=2, axis=1, workers=_WORKERS), type=2, axis=0,
+                 workers=_WORKERS)  # fmt: skip
+    b = sfft.dct(sfft.dst(gc, type=2, axis=1, workers=_WORKERS), type=2, axis=0,
+                 workers=_WORKERS)  # fmt: skip
+    sr = np.sin(np.pi * np.arange(rows + 1) / rows)
+    sc = np.sin(np.pi * np.arange(cols + 1) / cols)
     sr[-1] = 0.0  # sin(pi) exactly
-    sc[0, -1] = 0.0
-    # F_p = -(A (p q_rr s_r + q_rc s_c) + B (q_rc s_r + p q_cc s_c)) / (base + p cross)
-    ar, ac = a * sr, a * sc
-    br, bc = b * sr, b * sc
-    del a, b
-    even = q_rc * (ac + br)  # the terms that keep their sign
-    odd = q_rr * ar
-    odd += q_cc * bc
-    del ar, ac, br, bc
-    base = q_rr * sr * sr + q_cc * sc * sc
-    cross = (2.0 * q_rc) * sr * sc
-    fp = even + odd
-    fm = even
-    fm -= odd
-    del odd
-    for f, den in ((fp, base + cross), (fm, base - cross)):
-        zero = den <= 1e-14
-        den[zero] = 1.0
-        np.negative(den, out=den)
-        f /= den
-        f[zero] = 0.0
-    cc = 0.5 * (fp[:-1, :-1] - fm[:-1, :-1])
-    cc[0, 0] = 0.0
-    ss = 0.5 * (fp[1:, 1:] + fm[1:, 1:])
+    sc[-1] = 0.0
+    cc = np.empty((rows, cols))
+    ss = np.empty((rows, cols))
+    _quarter_modes(a, b, sr, sc, q_rr, q_cc, q_rc, cc, ss)
     z = sfft.dctn(cc, type=3, workers=_WORKERS)
     z -= sfft.dstn(ss, type=3, workers=_WORKERS)
     z /= 4.0 * rows * cols

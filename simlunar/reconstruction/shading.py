@@ -73,7 +73,7 @@ class ShadingOptions:
         unit="cell", ge=0, le=32,
     )  # fmt: skip
     across_weight: float = option(
-        0.05,
+        0.1,
         doc="weight of the linear reconstruction's slope across the light in the integration "
         "(1: isotropic Frankot-Chellappa)",
         gt=0,
@@ -138,7 +138,9 @@ def shading_frames(guide: Guide, options: ShadingOptions | None = None):
 
     With a co-located frame (and ``use_flat``) every sun frame is divided by it (pixels where
     the flat is under ``flat_guard`` of its median are invalid and divided by that floor).
-    Valid pixels are those neither shadowed nor saturated in the raw sun frame.
+    Without one, the raw sun frames and, for each other sun, the ratio ``sun / sun_j``
+    (albedo-free: ``(s1 . n) / (s2 . n)``, linear in the slope to first order, calibrated like
+    any frame). Valid pixels are those neither shadowed nor saturated in the raw sun frames.
     """
     o = options or ShadingOptions()
     copt = o.calibration()
@@ -154,8 +156,15 @@ def shading_frames(guide: Guide, options: ShadingOptions | None = None):
         for name, im in suns:
             out.append((name, im / den, valid_pixels(im, copt) & lit))
     else:
-        for name, im in suns:
-            out.append((name, im, valid_pixels(im, copt)))
+        valid = [valid_pixels(im, copt) for _, im in suns]
+        out = [(name, im, v) for (name, im), v in zip(suns, valid, strict=True)]
+        # no co-located frame: the ratio of two sun frames cancels albedo too (one slope
+        # component, along the difference of the two lights' s_h / s_up)
+        for (name, im), v in zip(suns[1:], valid[1:], strict=True):
+            med = float(np.median(im))
+            floor = o.flat_guard * med if med > 0 else o.flat_guard
+            ratio = suns[0][1] / np.maximum(im, floor)
+            out.append((f"sun/{name}", ratio, valid[0] & v & (im > floor)))
     return out
 
 

@@ -40,7 +40,8 @@ def test_recovers_a_planted_linear_shading_model():
 
 @pytest.mark.parametrize("azimuth", [40.0, 200.0])
 def test_lambert_render_gives_gain_and_sun_azimuth_for_heights_and_depths(azimuth):
-    # Lambert, constant albedo rho: I = rho (s_up - s_h . grad h) / |n| ~ rho s_up - rho s_h . grad h
+    # Lambert, constant albedo rho: I = rho (s_up - s_h . grad h) / |n|
+    #                                  ~ rho s_up - rho s_h . grad h
     t = lit_terrain(SHAPE, elevation_deg=30.0, azimuth_deg=azimuth, beta=4.5, slope_rms=0.15,
                     rng=2)  # fmt: skip
     rho = float(t.albedo.mean())
