@@ -317,7 +317,8 @@ def reconstruction_saved_entries(points: list[Point], rows: list[dict]) -> list[
     Returns
     -------
     list of dict
-        ``label`` (the sweep point's, empty for a single one), ``metric``, ``strategies``,
+        ``label`` (the sweep point's, empty for a single one), ``sweep`` (its sweep values,
+        terrain seed aside), ``metric``, ``strategies``,
         ``reconstructions`` (the compared ones, configured order), ``saved``
         (reconstruction -> strategy -> float64 (seeds,)), ``seeds``.
     """
@@ -350,7 +351,7 @@ def reconstruction_saved_entries(points: list[Point], rows: list[dict]) -> list[
             }  # fmt: skip
         label = _label(base.sweep, {}) if n_sweep > 1 else ""
         out.append(
-            {"label": label, "metric": m, "strategies": list(base.strategies),
+            {"label": label, "sweep": base.sweep, "metric": m, "strategies": list(base.strategies),
              "reconstructions": list(saved), "saved": saved, "seeds": list(base.seeds)}
         )  # fmt: skip
     return out
