@@ -25,9 +25,9 @@ from simlunar.plotting.layout import (
     panel_row,
     shared_legend,
 )
-from simlunar.plotting.style import label, styles
+from simlunar.plotting.style import _UNIT_SUFFIXES, _with_unit, label, styles
 
-__all__ = ["MAX_PANELS", "reconstruction_saved_vs_sweep"]
+__all__ = ["MAX_PANELS", "category_labels", "reconstruction_saved_vs_sweep"]
 
 #: most strategy panels of one figure (the first ones in the study's order)
 MAX_PANELS = 4
@@ -65,8 +65,9 @@ def reconstruction_saved_vs_sweep(
     numeric, pos = _sweep_positions(xs)
     st = styles(reconstructions)
     n = len(reconstructions)
-    fig, axes = panel_row(len(strategies), width=2.5 * len(strategies) + 1.2, height=2.5)
-    values: list[float] = []
+    w = 2.5 if numeric else 3.0  # room for category tick labels
+    fig, axes = panel_row(len(strategies), width=w * len(strategies) + 1.2, height=2.6)
+    values: list[float] = [0.8, 1.25]  # at least 0.8 .. 1.25 in view, 1 (linear) among it
     for ax, s in zip(axes, strategies):
         for i, r in enumerate(reconstructions):
             cells = np.array([_cell(sv.get(r, {}).get(s)) for _, sv in points], float)
@@ -98,6 +99,30 @@ def reconstruction_saved_vs_sweep(
         ratio_axis(ax, values)
     shared_legend(fig, axes)
     return fig, axes
+
+
+def category_labels(values: Sequence) -> list:
+    """Short tick labels of sweep values: a model (dict with ``kind``) by its kind and the
+    values of only the parameters that differ between the values (``"Sun 30°"``,
+    ``"Camera-centred light"``); anything else as it is."""
+    dicts = [v for v in values if isinstance(v, dict)]
+    varying = [
+        k
+        for k in dict.fromkeys(k for d in dicts for k in d)
+        if k != "kind" and len({repr(d.get(k)) for d in dicts if k in d}) > 1
+    ]
+    out = []
+    for v in values:
+        if not isinstance(v, dict):
+            out.append(v)
+            continue
+        parts = []
+        for k in varying:
+            if k in v and v[k] is not None and not isinstance(v[k], (dict, list)):
+                unit = next((u for suf, u in _UNIT_SUFFIXES.items() if k.endswith(suf)), "")
+                parts.append(_with_unit(v[k], unit))
+        out.append(" ".join([label(str(v.get("kind", ""))), *parts]))
+    return out
 
 
 def _cell(v) -> tuple[float, float, float]:

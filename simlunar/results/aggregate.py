@@ -126,6 +126,14 @@ def group_points(records: list[dict], *, per_reconstruction: bool = True) -> lis
     return list(points.values())
 
 
+def first_reconstruction_rows(res: dict) -> list[dict]:
+    """The rows of a result folder (``res``: ``config``, ``rows``) of its first configured
+    reconstruction (``linear`` by default; rows that name none are linear's): what a figure of
+    one reconstruction draws."""
+    first = reconstruction_names(res["config"].get("study") or {})[0]
+    return [r for r in res["rows"] if row_reconstruction(r) == first]
+
+
 def row_reconstruction(row: dict) -> str:
     """The reconstruction of a results row (``linear`` for rows that name none)."""
     return str(row.get("reconstruction") or BASELINE_RECONSTRUCTION)

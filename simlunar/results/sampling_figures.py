@@ -6,7 +6,7 @@ one-axis sweep, the score against the swept value."""
 from __future__ import annotations
 
 from simlunar.plotting import figures as F
-from simlunar.plotting.reconstructions import reconstruction_saved_vs_sweep
+from simlunar.plotting.reconstructions import category_labels, reconstruction_saved_vs_sweep
 from simlunar.plotting.style import axis_name, point_title
 from simlunar.plotting.tables import seed_summary_numbers
 from simlunar.results import aggregate
@@ -35,8 +35,12 @@ def sampling_figures(res: dict, emit, captions: dict[str, str]) -> None:
     for rec, arr in zip(shown, shown_arrays):
         _sparse_mesh_panels(rec, arr, emit, captions, titled=titled)
     points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
-    _samples_saved_figures(points, emit, captions)
-    _headroom_figure(points, emit, captions)
+    # the per-point figures draw the first reconstruction (linear's by default); the others
+    # are compared with linear in reconstruction_saved_vs_<axis> and the tables
+    first = aggregate.reconstruction_names(res["config"].get("study") or {})[0]
+    firsts = [p for p in points if p.reconstruction == first]
+    _samples_saved_figures(firsts, emit, captions)
+    _headroom_figure(firsts, emit, captions)
     _score_figures(res, emit, captions)
     _reconstruction_figure(res, points, emit, captions)
 
@@ -178,11 +182,12 @@ def _reconstruction_figure(res: dict, points: list, emit, captions: dict[str, st
         return
     (path,) = sweep
     recons = list(dict.fromkeys(r for e in entries for r in e["reconstructions"]))
+    xs = category_labels([e["sweep"][path] for e in entries])
     series = []
-    for e in entries:
+    for x, e in zip(xs, entries):
         saved = {r: {s: seed_summary_numbers(v, log=True)[:3] for s, v in by.items()}
                  for r, by in e["saved"].items()}  # fmt: skip
-        series.append((aggregate.sweep_value({"sweep": e["sweep"]}, path), saved))
+        series.append(("preset default" if x is None else x, saved))
     fig, _ = reconstruction_saved_vs_sweep(
         series,
         strategies=entries[0]["strategies"],

@@ -57,3 +57,12 @@ def test_categorical_axis_and_panel_cap():
         plt.close(fig)
     with pytest.raises(ValueError, match="needs points"):
         reconstruction_saved_vs_sweep([], strategies=["grid"], reconstructions=["shading"])
+
+
+def test_category_labels_name_only_what_differs():
+    from simlunar.plotting.reconstructions import category_labels
+
+    lights = [{"kind": "sun", "elevation_deg": 30.0, "azimuth_deg": 135.0},
+              {"kind": "sun", "elevation_deg": 60.0, "azimuth_deg": 135.0}, {"kind": "camera"}]  # fmt: skip
+    assert category_labels(lights) == ["Sun 30°", "Sun 60°", "Camera-centred light"]
+    assert category_labels([5, 30]) == [5, 30]
