@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Literal, Union
 
 from pydantic import (
     BeforeValidator,
@@ -49,9 +49,24 @@ __all__ = [
 #: ``study.reconstructions``: names of :data:`simlunar.reconstruction.RECONSTRUCTIONS` or
 #: ``{name: {options}}`` mappings, the options' schema derived from each entry's options class
 #: (:func:`simlunar.config.derived.reconstruction_specs`)
+def _reconstructions_input_type():
+    """The editor schema of ``study.reconstructions``: each registered name, or ``{name:
+    {options}}`` with that entry's derived options schema (names registered later are still
+    validated, by :func:`~simlunar.config.derived.reconstruction_specs`)."""
+    from simlunar.config.derived import options_model
+    from simlunar.reconstruction import RECONSTRUCTIONS
+
+    names = RECONSTRUCTIONS.names()
+    items = [Literal[names]]
+    for n in names:
+        model = options_model(RECONSTRUCTIONS[n].options, f"reconstruction {n}")
+        items.append(dict[Literal[n], model])
+    return list[Union[tuple(items)]]  # noqa: UP007 - built at run time
+
+
 Reconstructions = Annotated[
     list,
-    BeforeValidator(reconstruction_specs, json_schema_input_type=list[str | dict[str, dict]]),
+    BeforeValidator(reconstruction_specs, json_schema_input_type=_reconstructions_input_type()),
 ]
 
 

@@ -316,11 +316,19 @@ def _reconstruction_meta(study) -> dict:
         }
     if study.info:
         out["reconstruction_info"] = {
-            r: {s: {k: np.nanmean(v, axis=1).tolist() for k, v in keys.items()}
-                for s, keys in by.items()}
+            r: {s: {k: _trial_means(v) for k, v in keys.items()} for s, keys in by.items()}
             for r, by in study.info.items()
-        }  # fmt: skip
+        }
     return out
+
+
+def _trial_means(v: np.ndarray) -> list:
+    """Mean over trials (axis 1) of the finite values per density; None where there is none
+    (a reconstruction that reported the key on no trial of that density)."""
+    ok = np.isfinite(v)
+    n = ok.sum(axis=1)
+    sums = np.where(ok, v, 0.0).sum(axis=1)
+    return [float(s / c) if c else None for s, c in zip(sums, n)]
 
 
 def _figure_arrays(cfg, scene: RenderScene, image, depth, seeds, timings) -> dict:

@@ -144,6 +144,14 @@ def group_points(records: list[dict], *, per_reconstruction: bool = True) -> lis
     return list(points.values())
 
 
+def first_reconstruction_rows(res: dict) -> list[dict]:
+    """The rows of a result folder (``res``: ``config``, ``rows``) of its first configured
+    reconstruction (``linear`` by default; rows that name none are linear's): what a figure of
+    one reconstruction draws."""
+    first = reconstruction_names(res["config"].get("study") or {})[0]
+    return [r for r in res["rows"] if row_reconstruction(r) == first]
+
+
 def row_reconstruction(row: dict) -> str:
     """The reconstruction of a results row (``linear`` for rows that name none)."""
     return str(row.get("reconstruction") or BASELINE_RECONSTRUCTION)
@@ -335,7 +343,8 @@ def reconstruction_saved_entries(points: list[Point], rows: list[dict]) -> list[
     Returns
     -------
     list of dict
-        ``label`` (the sweep point's, empty for a single one), ``metric``, ``strategies``,
+        ``label`` (the sweep point's, empty for a single one), ``sweep`` (its sweep values,
+        terrain seed aside), ``metric``, ``strategies``,
         ``reconstructions`` (the compared ones, configured order), ``saved``
         (reconstruction -> strategy -> float64 (seeds,)), ``seeds``.
     """
@@ -368,7 +377,7 @@ def reconstruction_saved_entries(points: list[Point], rows: list[dict]) -> list[
             }  # fmt: skip
         label = _label(base.sweep, {}) if n_sweep > 1 else ""
         out.append(
-            {"label": label, "metric": m, "strategies": list(base.strategies),
+            {"label": label, "sweep": base.sweep, "metric": m, "strategies": list(base.strategies),
              "reconstructions": list(saved), "saved": saved, "seeds": list(base.seeds)}
         )  # fmt: skip
     return out

@@ -219,6 +219,22 @@ def samples_saved(metric: str, references: list[str], point: str) -> str:
     )
 
 
+def reconstruction_saved(metric: str, path: str, seeds: int, reconstructions: list[str]) -> str:
+    """Caption of ``reconstruction_saved_vs_<axis>``."""
+    n = f"{seeds} terrain seed{'s' * (seeds != 1)}"
+    interval = " [95 % Student t interval, in log space]" if seeds > 1 else ""
+    return (
+        f"Samples saved by each reconstruction ({', '.join(reconstructions)}) over "
+        f"Delaunay-linear on the same layout, against {path}: per terrain seed, the samples "
+        f"linear needs to reach the reconstruction's {_metric(metric)} (interpolated on "
+        f"linear's log-log error-vs-samples curve) over the reconstruction's own, as a "
+        f"geometric mean over the densities inside linear's measured range; then the "
+        f"geometric mean over the {n}{interval}. Above 1 (dotted) the reconstruction needs "
+        f"fewer samples than linear for the same error. One panel per layout (strategy); "
+        f"scores.md and reconstructions.csv hold the same numbers."
+    )
+
+
 def headroom(metric: str, seeds: int) -> str:
     """Caption of ``headroom``."""
     n = f"{seeds} terrain seed{'s' * (seeds != 1)}"

@@ -6,7 +6,7 @@ from __future__ import annotations
 from simlunar.plotting.layout import panel_grid
 from simlunar.plotting.lidar import error_vs_time
 from simlunar.results import captions as captions_text
-from simlunar.results.aggregate import density_panels
+from simlunar.results.aggregate import density_panels, first_reconstruction_rows
 
 __all__ = ["lidar_figures"]
 
@@ -18,7 +18,9 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
     """``lidar_error_vs_time_<metric>`` and ``lidar_error_vs_samples_<metric>``: one panel per
     sweep point (its terrain seeds pooled into the interval), or, when the one swept key is a
     sensor option that changes each acquisition's cost (a flash's revisits), one panel whose
-    curves run over its values."""
+    curves run over its values. The first configured reconstruction's rows (linear's by
+    default)."""
+    res = {**res, "rows": first_reconstruction_rows(res)}
     study = res["config"].get("study", {})
     sweep = list(res["config"].get("sweep") or {})
     by = sweep[0] if len(sweep) == 1 and sweep[0].startswith("study.options.") else None

@@ -6,7 +6,9 @@ one-axis sweep, the score against the swept value."""
 from __future__ import annotations
 
 from simlunar.plotting import figures as F
+from simlunar.plotting.reconstructions import category_labels, reconstruction_saved_vs_sweep
 from simlunar.plotting.style import axis_name, point_title
+from simlunar.plotting.tables import seed_summary_numbers
 from simlunar.results import aggregate
 from simlunar.results import captions as captions_text
 from simlunar.results.aggregate import SEED_AXIS, group_points
@@ -33,9 +35,14 @@ def sampling_figures(res: dict, emit, captions: dict[str, str]) -> None:
     for rec, arr in zip(shown, shown_arrays):
         _sparse_mesh_panels(rec, arr, emit, captions, titled=titled)
     points = aggregate.summarise(res["units"], res["rows"], seed=0, n_boot=10)
-    _samples_saved_figures(points, emit, captions)
-    _headroom_figure(points, emit, captions)
+    # the per-point figures draw the first reconstruction (linear's by default); the others
+    # are compared with linear in reconstruction_saved_vs_<axis> and the tables
+    first = aggregate.reconstruction_names(res["config"].get("study") or {})[0]
+    firsts = [p for p in points if p.reconstruction == first]
+    _samples_saved_figures(firsts, emit, captions)
+    _headroom_figure(firsts, emit, captions)
     _score_figures(res, emit, captions)
+    _reconstruction_figure(res, points, emit, captions)
 
 
 def _label(rec: dict) -> str:
@@ -161,6 +168,40 @@ def _samples_saved_figures(points: list, emit, captions: dict[str, str]) -> None
         stem = "samples_saved" if len(points) == 1 else f"samples_saved_point{i}"
         emit(fig, stem)
         captions[stem] = captions_text.samples_saved(p.saved_metric, list(p.saved), title)
+
+
+def _reconstruction_figure(res: dict, points: list, emit, captions: dict[str, str]) -> None:
+    """``reconstruction_saved_vs_<axis>`` of a one-axis sweep with reconstructions besides
+    linear: the samples each saves over linear on the same layout, against the swept value
+    (e.g. the sun elevation), one panel per strategy."""
+    sweep = {k: v for k, v in (res["config"].get("sweep") or {}).items() if k != SEED_AXIS}
+    if len(sweep) != 1:
+        return
+    entries = aggregate.reconstruction_saved_entries(points, res["rows"])
+    if len(entries) < 2:
+        return
+    (path,) = sweep
+    recons = list(dict.fromkeys(r for e in entries for r in e["reconstructions"]))
+    xs = category_labels([e["sweep"][path] for e in entries])
+    series = []
+    for x, e in zip(xs, entries):
+        saved = {r: {s: seed_summary_numbers(v, log=True)[:3] for s, v in by.items()}
+                 for r, by in e["saved"].items()}  # fmt: skip
+        series.append(("preset default" if x is None else x, saved))
+    fig, _ = reconstruction_saved_vs_sweep(
+        series,
+        strategies=entries[0]["strategies"],
+        reconstructions=recons,
+        metric=entries[0]["metric"],
+        axis_label=axis_name(path),
+    )
+    axis = path.rsplit(".", 1)[-1]
+    stem = f"reconstruction_saved_vs_{axis}"
+    emit(fig, stem)
+    seeds = max(len(e["seeds"]) for e in entries)
+    captions[stem] = captions_text.reconstruction_saved(
+        entries[0]["metric"], axis_name(path), seeds, recons
+    )
 
 
 def _headroom_figure(points: list, emit, captions: dict[str, str]) -> None:

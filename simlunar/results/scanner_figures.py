@@ -9,7 +9,7 @@ import numpy as np
 from simlunar.plotting import figures as F
 from simlunar.plotting.style import axis_name
 from simlunar.results import captions as captions_text
-from simlunar.results.aggregate import SEED_AXES, sweep_value
+from simlunar.results.aggregate import SEED_AXES, first_reconstruction_rows, sweep_value
 
 __all__ = ["scanner_figures"]
 
@@ -50,8 +50,10 @@ def _ambient_axis(rows: list[dict], units: list[dict], path: str):
 
 
 def scanner_figures(res: dict, emit, captions: dict) -> None:
-    """Draw the scanner figures through ``emit(fig, stem)``; captions into ``captions``."""
-    rows = res["rows"]
+    """Draw the scanner figures through ``emit(fig, stem)``; captions into ``captions`` (the
+    first configured reconstruction's rows: linear's by default)."""
+    rows = first_reconstruction_rows(res)
+    res = {**res, "rows": rows}
     cfg = res["config"]
     metrics = list(cfg["study"].get("metrics") or [])
     sweep = cfg.get("sweep") or {}

@@ -252,12 +252,17 @@ def _rows(oc, density: float) -> list[dict]:
     ]  # fmt: skip
 
 
-def time_table(rows: list[dict], metric: str = "mse") -> dict[str, dict[str, np.ndarray]]:
+def time_table(
+    rows: list[dict], metric: str = "mse", reconstruction: str = DEFAULT_RECONSTRUCTION
+) -> dict[str, dict[str, np.ndarray]]:
     """Per planner, arrays over densities (ascending k): ``k``, mean ``seconds`` and mean
-    ``value`` of ``metric`` over trials (and any other grouping the rows carry, pooled)."""
+    ``value`` of ``metric`` over trials (and any other grouping the rows carry, pooled), of
+    ``reconstruction``'s rows."""
     acc: dict = {}
     for r in rows:
         if r["metric"] != metric:
+            continue
+        if (r.get("reconstruction") or DEFAULT_RECONSTRUCTION) != reconstruction:
             continue
         acc.setdefault(str(r["planner"]), {}).setdefault(int(r["k"]), []).append(
             (float(r["seconds"]), float(r["value"]))
@@ -273,8 +278,11 @@ def time_table(rows: list[dict], metric: str = "mse") -> dict[str, dict[str, np.
     return out
 
 
-def equal_time_errors(rows: list[dict], times, *, metric: str = "mse") -> dict[str, np.ndarray]:
-    """Each planner's error at equal scan time, per unit (terrain seed).
+def equal_time_errors(
+    rows: list[dict], times, *, metric: str = "mse", reconstruction: str = DEFAULT_RECONSTRUCTION
+) -> dict[str, np.ndarray]:
+    """Each planner's error at equal scan time, per unit (terrain seed), of
+    ``reconstruction``'s rows.
 
     Per (unit, planner) the mean ``seconds`` and mean ``metric`` over trials at every k are
     interpolated linearly in log-log at ``times`` (s); NaN outside the scanned range.
@@ -286,6 +294,8 @@ def equal_time_errors(rows: list[dict], times, *, metric: str = "mse") -> dict[s
     acc: dict = {}
     for r in rows:
         if r["metric"] != metric:
+            continue
+        if (r.get("reconstruction") or DEFAULT_RECONSTRUCTION) != reconstruction:
             continue
         key = (str(r["planner"]), int(float(r.get("unit", 0) or 0)))
         acc.setdefault(key, {}).setdefault(int(float(r["k"])), []).append(

@@ -328,7 +328,7 @@ def _map_tasks(state, tasks, workers):
     methods = multiprocessing.get_all_start_methods()
     # fork shares the arrays with the workers without pickling them
     ctx = multiprocessing.get_context("fork" if "fork" in methods else None)
-    _warm_kernels(state["outside"])
+    _warm_kernels(state["outside"], state["reconstructions"], state["guide"])
     # concurrent.futures notices a dead worker (multiprocessing.Pool waits for it forever)
     pool = cf.ProcessPoolExecutor(
         min(workers, len(tasks)), mp_context=ctx, initializer=_init_worker, initargs=(state,)
@@ -359,9 +359,24 @@ def _stop(pool: cf.ProcessPoolExecutor) -> None:
     pool.shutdown(wait=False, cancel_futures=True)
 
 
-def _warm_kernels(outside: str) -> None:
-    """Call the compiled reconstruction once before forking: the children then never enter
+def _warm_kernels(outside: str, reconstructions: Mapping | None = None, guide=None) -> None:
+    """Call the compiled reconstructions once before forking: the children then never enter
     Numba's dispatcher lock, which another thread of this process (a concurrent unit of
-    LocalPoolExecutor) may hold at the moment of the fork."""
+    LocalPoolExecutor) may hold at the moment of the fork. Each configured reconstruction runs
+    once on a small corner of the guide (best effort: one that refuses so small a grid is
+    compiled in the children instead)."""
     pts = np.array([[0, 0], [0, 2], [2, 0], [2, 2]])
     reconstruct(pts, np.arange(4.0), (3, 3), outside=outside)
+    for name, opts in (reconstructions or {}).items():
+        if name == DEFAULT_RECONSTRUCTION:
+            continue
+        small = None
+        if guide is not None and min(guide.shape) >= 8:
+            small = Guide(guide.image[:8, :8], light=guide.light, spacing=guide.spacing,
+                          frames=guide.frames)  # fmt: skip
+        r, c = np.mgrid[0:8:3, 0:8:3]
+        rc = np.stack([r.ravel(), c.ravel()], axis=-1)
+        try:
+            run_reconstruction(name, rc, np.zeros(len(rc)), (8, 8), guide=small, options=opts)
+        except ValueError:
+            pass

@@ -502,11 +502,16 @@ def aim_rig_at_terrain(
     )
 
 
-def summarize(rows: list[dict], metric: str = "mse") -> dict[str, float]:
-    """Mean ``metric`` per (mode, planner) as ``{"gray_code": v, "ambiguity_enhancement/wavelet": v}``."""
+def summarize(
+    rows: list[dict], metric: str = "mse", reconstruction: str = DEFAULT_RECONSTRUCTION
+) -> dict[str, float]:
+    """Mean ``metric`` of ``reconstruction``'s rows per (mode, planner) as
+    ``{"gray_code": v, "ambiguity_enhancement/wavelet": v}``."""
     acc: dict[str, list[float]] = {}
     for r in rows:
         if r["metric"] != metric:
+            continue
+        if r.get("reconstruction", DEFAULT_RECONSTRUCTION) != reconstruction:
             continue
         key = r["mode"] if not r["planner"] else f"{r['mode']}/{r['planner']}"
         acc.setdefault(key, []).append(r["value"])

@@ -52,10 +52,14 @@ def run_cli(*args):
 def test_quickstart_variant_end_to_end(tmp_path):
     out = tmp_path / "qs"
     r = run_cli(QUICKSTART, "--out", str(out), *SMALL)
-    assert "| Metric | Random | Grid | Wavelet |" in r.output
+    # the quickstart reconstructs every plan twice: one score block per reconstruction
+    assert "| reconstruction=linear | Random | Grid | Wavelet |" in r.output
+    assert "| reconstruction=shading | Random | Grid | Wavelet |" in r.output
     assert f"figures: {out / 'figures'}" in r.output
     with (out / "results.csv").open() as f:
-        rows = list(csv.DictReader(f))
+        both = list(csv.DictReader(f))
+    assert len(both) == 3 * 3 * 2 * 2 * 2
+    rows = [row for row in both if row["reconstruction"] == "linear"]
     assert len(rows) == 3 * 3 * 2 * 2
     assert {row["strategy"] for row in rows} == {"random", "grid", "wavelet"}
     # k = round(density * N) of the 62 x 100 grid
@@ -88,6 +92,8 @@ def test_quickstart_variant_end_to_end(tmp_path):
         assert got[0] == 1.0
         assert abs(got[2] - got[0]) > 0.01  # wavelet is not random in disguise
     assert "samples saved vs Random at equal MSE" in scores
+    assert "samples saved vs linear at equal MSE, paired by seed" in scores
+    assert (out / "reconstructions.csv").is_file() and (out / "samples_saved.csv").is_file()
     assert "| Grid |" in scores.split("samples saved vs Random")[1]
     assert "\\begin{tabular}{lrrr}" in (out / "scores.tex").read_text()
     prov = json.loads((out / "provenance.json").read_text())
@@ -269,12 +275,13 @@ def test_real_sweep_on_dask_through_the_cli_matches_the_local_pool(tmp_path):
 @pytest.mark.slow
 def test_the_quickstart_itself_runs(tmp_path):
     """`make run` runs exactly this file: 1 unit, 9 strategies x 7 densities x 3 trials x 3
-    metrics; its samples-saved tables show the oracle, the Lloyd layouts and the recommended
+    metrics x 2 reconstructions (linear, shading); its samples-saved tables show the oracle, the Lloyd layouts and the recommended
     image-directed planner (wavelet + Lloyd) not losing to the grid."""
     out = tmp_path / "quickstart"
     r = run_cli(QUICKSTART, "--out", str(out), "--no-figures")
     header = (
-        "| Metric | Random | Grid | Gradient | Entropy | Wavelet | Uniform Lloyd | Wavelet, Lloyd |"
+        "| reconstruction=linear | Random | Grid | Gradient | Entropy | Wavelet | Uniform Lloyd |"
+        " Wavelet, Lloyd |"
         " Sequential, wavelet prior | Oracle greedy (true error) |"
     )
     assert header in r.output
@@ -288,7 +295,8 @@ def test_the_quickstart_itself_runs(tmp_path):
     geo_mean = float(row.split("|")[-2].split()[0])
     assert geo_mean >= 1.0  # measured 1.24 (seed 1)
     with (out / "results.csv").open() as f:
-        assert sum(1 for _ in f) == 1 + 9 * 7 * 3 * 3
+        assert sum(1 for _ in f) == 1 + 9 * 7 * 3 * 3 * 2
+    assert "samples saved vs linear at equal MSE, paired by seed" in r.output
 
 
 @pytest.mark.slow

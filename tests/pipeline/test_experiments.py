@@ -42,6 +42,26 @@ def test_experiment_validates(path, with_shipped_models):
     assert len({u.key for u in units}) == len(units)
 
 
+def test_fusion_experiments_protocol():
+    # the full-resolution study of the reconstructions: uniform and wavelet Lloyd layouts,
+    # 1/64 .. 1/2048 (6 densities), 1 trial, 5 terrain seeds held out from the tuning
+    # (REFERENCES 2026-11-28: tuned on terrain seeds 0-3 of the quarter-scale presets with the
+    # Table files' experiment seeds 1 and 2), all four reconstructions
+    fusion = [p for p in EXPERIMENTS if p.stem.startswith("fusion_table")]
+    assert {p.stem for p in fusion} >= {"fusion_table1_aerial", "fusion_table2_moonyard"}
+    for path in fusion:
+        cfg = load_experiment(path)
+        s = cfg.study
+        assert cfg.seed not in (1, 2)
+        assert s.densities == [2.0**-i for i in range(6, 12)]
+        assert s.trials == 1 and s.terrain_seeds == 5
+        assert {"lloyd_uniform", "wavelet_lloyd"} <= set(s.strategies)
+        assert s.reconstructions == ["linear", "smoothed", "shading", "photoclinometry"]
+        colocated = path.stem.endswith("_colocated")
+        assert (cfg.render.guide_frames == ["camera"]) == colocated
+        assert getattr(cfg.terrain, "scale", 1.0) in (None, 1.0)  # full resolution
+
+
 def test_paper_protocol_in_the_tables():
     # paper section 4.1: 11 densities 1/2 .. 1/2048, 20 trials, the five strategies, and
     # beside them the image-free uniform Lloyd reference and an oracle bound (issue 20)

@@ -82,6 +82,16 @@ def test_the_default_reconstructions_keep_the_cache_key_of_before():
     before = {**a.config, "study": {k: v for k, v in a.config["study"].items()
                                     if k != "reconstructions"}}  # fmt: skip
     assert unit_key(before, a.inputs) == a.key
+    # no extra guide frame (the render default) keeps the key of before too
+    from simlunar.config.render import RenderCfg
+    from simlunar.results.cache_keys import NEW_RENDER_DEFAULTS
+
+    assert {k: RenderCfg().model_dump()[k] for k in NEW_RENDER_DEFAULTS} == NEW_RENDER_DEFAULTS
+    assert a.config["render"]["guide_frames"] == []
+    old = {**before, "render": {k: v for k, v in a.config["render"].items() if k != "guide_frames"}}
+    assert unit_key(old, a.inputs) == a.key
+    framed = expand(cfg(sweep={}, render={"guide_frames": ["camera"]}))[0]
+    assert framed.key != a.key
     study = dict(cfg().study.model_dump(mode="json"))
     other = expand(
         cfg(sweep={}, study={**study, "reconstructions": [{"linear": {"outside": "nan"}}]})

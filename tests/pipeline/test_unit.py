@@ -111,3 +111,10 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
     np.testing.assert_array_equal(plain["sparse_mesh_render"], const)
     lam = sparse_mesh_render(scene(LambertBSDF()), image, rng=3, sigma_range=(lo, hi), **kw)
     assert set(lam) == {"sparse_mesh_render"}
+
+
+def test_trial_means_of_reconstruction_info_skip_missing_values():
+    from simlunar.pipeline.unit import _trial_means
+
+    v = np.array([[0.2, 0.4], [np.nan, 0.3], [np.nan, np.nan]])
+    assert _trial_means(v) == [pytest.approx(0.3), pytest.approx(0.3), None]

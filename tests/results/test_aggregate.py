@@ -87,3 +87,30 @@ def test_no_comparison_without_linear_or_without_another_reconstruction():
     only = [r for r in rows if r["reconstruction"] == "smooth"]
     pts = aggregate.summarise(_records(1, ("smooth",)), only, seed=0, n_boot=10)
     assert aggregate.reconstruction_saved_entries(pts, only) == []
+
+
+def test_the_sweep_figure_gets_one_point_per_sweep_value():
+    import matplotlib.pyplot as plt
+
+    from simlunar.results import sampling_figures
+
+    recs, rows = [], []
+    for i, (elev, gains) in enumerate(((15, [2.0, 4.0]), (60, [1.0, 1.0]))):
+        for j, rec in enumerate(_records(2)):
+            rec["sweep"] = {"render.light.elevation_deg": elev, "terrain.seed_index": j}
+            recs.append(rec)
+        for r in _rows(gains):
+            rows.append({**r, "unit": 2 * i + r["unit"]})
+    points = aggregate.summarise(recs, rows, seed=0, n_boot=10)
+    res = {"config": {"sweep": {"render.light.elevation_deg": [15, 60]}}, "rows": rows}
+    drawn, captions = [], {}
+    sampling_figures._reconstruction_figure(
+        res, points, lambda fig, stem: drawn.append((fig, stem)), captions
+    )
+    ((fig, stem),) = drawn
+    assert stem == "reconstruction_saved_vs_elevation_deg"
+    line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "Smooth")
+    np.testing.assert_allclose(line.get_xdata(), [15, 60], atol=1)  # dodged a little
+    np.testing.assert_allclose(line.get_ydata(), [math.sqrt(8), 1.0])
+    assert "2 terrain seeds [95 % Student t interval" in captions[stem]
+    plt.close(fig)

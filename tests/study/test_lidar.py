@@ -99,3 +99,17 @@ def test_equal_time_errors_interpolate_in_log_log():
     assert e.shape == (2, 2)
     assert e[:, 0] == pytest.approx([10**-2.5, 2 * 10**-2.5])
     assert np.isnan(e[:, 1]).all()  # beyond the longest scan
+
+
+def test_every_reconstruction_gets_rows_and_tables_read_one():
+    image, depth = _guide()
+    o = LidarStudyOptions(
+        planners=("grid",), densities=(1 / 16,), trials=1,
+        reconstructions={"linear": {"outside": "nearest"}},
+    )  # fmt: skip
+    res = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Timed(depth))
+    assert {r["reconstruction"] for r in res.rows} == {"linear"}
+    rows = res.rows + [{**r, "reconstruction": "other", "value": 1e9} for r in res.rows]
+    # the other reconstruction's rows are not pooled into linear's
+    assert time_table(rows)["grid"]["value"] == pytest.approx(time_table(res.rows)["grid"]["value"])
+    assert time_table(rows, reconstruction="other")["grid"]["value"] == pytest.approx([1e9])
