@@ -43,22 +43,30 @@ def test_experiment_validates(path, with_shipped_models):
 
 
 def test_fusion_experiments_protocol():
-    # the full-resolution study of the reconstructions: uniform and wavelet Lloyd layouts,
-    # 1/64 .. 1/2048 (6 densities), 1 trial, 5 terrain seeds held out from the tuning
-    # (REFERENCES 2026-11-28: tuned on terrain seeds 0-3 of the quarter-scale presets with the
-    # Table files' experiment seeds 1 and 2), all four reconstructions
-    fusion = [p for p in EXPERIMENTS if p.stem.startswith("fusion_table")]
-    assert {p.stem for p in fusion} >= {"fusion_table1_aerial", "fusion_table2_moonyard"}
+    # the full-resolution study of the reconstructions on the Tables' terrains (experiment
+    # seeds 1 and 2, five realisations: no tuning saw them, it ran on quarter-scale
+    # realisations, which are other terrains), 1/64 .. 1/2048 (6 densities), 1 trial, the
+    # uniform Lloyd layout, linear with the image-free control beside every image-guided
+    # reconstruction; under a sun, shading from the sun image alone and with the co-located frame
+    fusion = [p for p in EXPERIMENTS if p.stem.startswith(("fusion_table", "fusion_camera"))]
+    assert {p.stem for p in fusion} >= {
+        "fusion_table1_aerial",
+        "fusion_table1_aerial_sun60",
+        "fusion_table2_moonyard",
+        "fusion_camera_light",
+    }
     for path in fusion:
         cfg = load_experiment(path)
         s = cfg.study
-        assert cfg.seed not in (1, 2)
+        assert cfg.seed == (2 if "moonyard" in path.stem else 1)
         assert s.densities == [2.0**-i for i in range(6, 12)]
         assert s.trials == 1 and s.terrain_seeds == 5
-        assert {"lloyd_uniform", "wavelet_lloyd"} <= set(s.strategies)
-        assert s.reconstructions == ["linear", "smoothed", "shading", "photoclinometry"]
-        colocated = path.stem.endswith("_colocated")
-        assert (cfg.render.guide_frames == ["camera"]) == colocated
+        assert "lloyd_uniform" in s.strategies
+        names = [r if isinstance(r, str) else next(iter(r)) for r in s.reconstructions]
+        assert names[:2] == ["linear", "smoothed"] and "shading" in names
+        sun = cfg.render.light.kind == "sun"
+        assert (cfg.render.guide_frames == ["camera"]) == sun
+        assert ("shading_sun" in names) == sun
         assert getattr(cfg.terrain, "scale", 1.0) in (None, 1.0)  # full resolution
 
 
