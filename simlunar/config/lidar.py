@@ -61,6 +61,9 @@ class RangingCfg(_Model):
     which: Literal["strongest", "first", "last"] = "strongest"
     threshold_sigma: float = Field(5.0, gt=0, description="detection threshold (Gaussian sigmas)")
     min_photons: float = Field(3.0, ge=0, description="least signal photons of a return")
+    fit: Literal["ml", "parabola"] = Field(
+        "ml", description="sub-bin position: maximum-likelihood pulse fit or parabola vertex"
+    )
 
 
 class TransientCfg(_Model):
@@ -70,6 +73,9 @@ class TransientCfg(_Model):
     spp: PositiveInt = Field(64, description="samples per receiver pixel of a flash frame")
     max_depth: int = Field(2, ge=2, le=16, description="path depth (2 = direct only)")
     laser_intensity_w_sr: float = Field(1.0, gt=0, description="point laser intensity (W/sr)")
+    oversample: PositiveInt = Field(
+        2, le=16, description="rendered time bins per output bin (keeps sub-bin arrival times)"
+    )
 
 
 class SteeredBeamCfg(_Model):

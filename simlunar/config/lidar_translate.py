@@ -45,6 +45,7 @@ def _lidar_common(o: LidarOptionsCfg, seed: int) -> dict:
             max_depth=o.transient.max_depth,
             seed=seed,
             laser_intensity=o.transient.laser_intensity_w_sr,
+            oversample=o.transient.oversample,
         ),
         "bin_range_m": o.bin_range_m,
         "margin_m": o.margin_m,

@@ -5,7 +5,8 @@
 - :mod:`~simlunar.lidar.detector`: expected photon counts (laser return + sun background +
   dark counts), Poisson shot noise, SPAD dead time / pile-up, Coates correction
 - :mod:`~simlunar.lidar.ranging`: range extraction (peak / matched filter; first, last or
-  strongest return)
+  strongest return; maximum-likelihood sub-bin position)
+- :mod:`~simlunar.lidar.bounds`: the range's Cramer-Rao bound
 - :mod:`~simlunar.lidar.footprint`: the beam's angular profile and footprint geometry
 - :mod:`~simlunar.lidar.steering`: two-axis steering mechanics and scan time
 - :mod:`~simlunar.lidar.ordering`: raster reference and nearest neighbour + 2-opt ordering
@@ -13,6 +14,7 @@
 The rendering of the histograms lives in :mod:`simlunar.render.transient`.
 """
 
+from simlunar.lidar.bounds import range_crlb
 from simlunar.lidar.detector import (
     DetectorOptions,
     LinkBudget,
@@ -50,6 +52,7 @@ from simlunar.lidar.waveform import (
     TimeBins,
     pulse_kernel,
     shape_waveform,
+    splat_paths,
 )
 
 __all__ = [
@@ -78,9 +81,11 @@ __all__ = [
     "photon_counts_dead_time",
     "pointing_angles",
     "pulse_kernel",
+    "range_crlb",
     "raster_order",
     "scan_timing",
     "shape_waveform",
+    "splat_paths",
     "tilted_plane_spread",
     "two_opt",
 ]

@@ -202,8 +202,9 @@ def beam_capture(terrain, origin, *, options: SteeredBeamOptions, sun=None, bsdf
     )
 
 
-def _counts(hist, background, bins: TimeBins, pulse, detector: DetectorOptions, rng):
-    lam = expected_counts(shape_waveform(hist, bins, pulse), background, bins, detector)
+def _counts(hist, background, bins: TimeBins, pulse, detector: DetectorOptions, rng, oversample=1):
+    shaped = shape_waveform(hist, bins, pulse, oversample=oversample)
+    lam = expected_counts(shaped, background, bins, detector)
     if 0 < detector.dead_time_s < np.inf:
         return photon_counts_dead_time(lam, bins, options=detector, rng=rng)
     return photon_counts(lam, options=detector, rng=rng)
@@ -242,7 +243,7 @@ def steered_beam_scan(
     ret = capture_beams(capture, d, margin_m=options.margin_m, seed=options.transient.seed)
     bins = options.window
     bg = 0.0 if ret.sun is None else ret.sun
-    counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng)
+    counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
     res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging)
     valid = res.valid & np.isfinite(ret.start_opl)
     ranges = np.where(valid, res.range + ret.start_opl / 2.0, np.nan)
@@ -303,7 +304,9 @@ def range_window(terrain, camera: Camera, *, bin_range_m: float, margin_m: float
 
 def _read_frame(frame, options: FlashOptions, rng):
     bg = 0.0 if frame.sun is None else frame.sun
-    counts = _counts(frame.histograms, bg, frame.bins, options.pulse, options.detector, rng)
+    counts = _counts(
+        frame.histograms, bg, frame.bins, options.pulse, options.detector, rng, frame.oversample
+    )
     return extract_ranges(counts, frame.bins, pulse=options.pulse, options=options.ranging)
 
 
