@@ -10,13 +10,14 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, PositiveInt, field_validator
+from pydantic import Field, PositiveInt, field_validator, model_validator
 
 from simlunar.config.fields import Deg, Metres, _Model
 
 __all__ = [
     "DetectorCfg",
     "FlashCfg",
+    "HardwareCfg",
     "HazardCfg",
     "LidarOptionsCfg",
     "MicromirrorCfg",
@@ -34,16 +35,57 @@ class PulseCfg(_Model):
     jitter_ns: float = Field(0.0, ge=0, description="detector timing jitter, RMS (ns)")
 
 
-class DetectorCfg(_Model):
-    """Photon scales and detector (:class:`simlunar.lidar.DetectorOptions`)."""
+class HardwareCfg(_Model):
+    """The instrument's hardware (:class:`simlunar.lidar.hardware.LidarHardware`): every key
+    overrides the chosen ``instrument`` preset's value (unset keys keep it); photons per pulse
+    and the sun's background are derived from it (the lidar equation, docs/lidar.md)."""
 
-    signal_photons: float = Field(
-        100.0, gt=0, description="photons per unit rendered return radiance per pulse"
+    pulse_energy_uj: float | None = Field(None, gt=0, description="energy per pulse (uJ)")
+    wavelength_nm: float | None = Field(None, gt=0, description="laser wavelength (nm)")
+    pulse_fwhm_ns: float | None = Field(None, gt=0, description="pulse FWHM (ns)")
+    jitter_ns: float | None = Field(None, ge=0, description="timing jitter, RMS (ns)")
+    pulse_rate_hz: float | None = Field(None, gt=0, description="pulse repetition rate (1/s)")
+    aperture_diameter_mm: float | None = Field(
+        None, gt=0, description="receiver clear aperture (mm)"
     )
-    background_photons_per_s: float = Field(
-        1e9, ge=0, description="photons/s per unit rendered sun radiance"
+    optics_efficiency: float | None = Field(
+        None, gt=0, le=1, description="receiver optics transmission, filter included"
     )
-    dark_count_rate_hz: float = Field(0.0, ge=0, description="dark counts (1/s)")
+    detector_efficiency: float | None = Field(
+        None, gt=0, le=1, description="photon detection efficiency"
+    )
+    filter_bandwidth_nm: float | None = Field(None, gt=0, description="filter bandwidth (nm)")
+    divergence_urad: float | None = Field(
+        None, gt=0, description="full beam divergence of a steered beam (urad)"
+    )
+    field_urad: float | None = Field(
+        None, gt=0, description="full receiver field of view of a steered beam (urad)"
+    )
+    dark_count_rate_hz: float | None = Field(None, ge=0, description="dark counts (1/s)")
+    solar_irradiance_w_m2_nm: float | None = Field(
+        None, gt=0, description="solar spectral irradiance at the wavelength (W m^-2 nm^-1)"
+    )
+
+
+class DetectorCfg(_Model):
+    """Detector (:class:`simlunar.lidar.DetectorOptions`): pulses per reading, dead time and,
+    only without an instrument, the expert photon scales."""
+
+    expert_signal_photons: float | None = Field(
+        None,
+        gt=0,
+        description="EXPERT OVERRIDE of the instrument's link budget: photons per pulse per "
+        "unit rendered return radiance (then no instrument / hardware; micromirror: 100)",
+    )
+    expert_background_photons_per_s: float | None = Field(
+        None,
+        ge=0,
+        description="EXPERT OVERRIDE: photons/s per unit rendered sun radiance (default 1e9 "
+        "with expert_signal_photons)",
+    )
+    expert_dark_count_rate_hz: float | None = Field(
+        None, ge=0, description="EXPERT OVERRIDE: dark counts (1/s)"
+    )
     pulses: PositiveInt = Field(
         1, description="pulses per flash frame (a steered beam uses pulses_per_point)"
     )
@@ -122,6 +164,12 @@ class MicromirrorCfg(_Model):
 class LidarOptionsCfg(_Model):
     """Options shared by the LIDARs and the block of each sensor."""
 
+    instrument: Literal["lola_beam", "alhat_flash", "rover_mast_scanner"] | None = Field(
+        None,
+        description="instrument preset (docs/lidar.md, Instruments); none = generic hardware "
+        "with the pulse, rate and divergence keys; an instrument or hardware key sets them",
+    )
+    hardware: HardwareCfg = Field(default_factory=HardwareCfg)
     pulse: PulseCfg = Field(default_factory=PulseCfg)
     detector: DetectorCfg = Field(default_factory=DetectorCfg)
     ranging: RangingCfg = Field(default_factory=RangingCfg)
@@ -131,6 +179,49 @@ class LidarOptionsCfg(_Model):
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)
     flash: FlashCfg = Field(default_factory=FlashCfg)
     micromirror: MicromirrorCfg = Field(default_factory=MicromirrorCfg)
+
+    @model_validator(mode="after")
+    def _one_photon_model(self) -> LidarOptionsCfg:
+        d = self.detector
+        expert = [k for k in type(d).model_fields if k.startswith("expert_") and getattr(d, k)
+                  is not None]  # fmt: skip
+        hardware = self.instrument is not None or self.hardware != HardwareCfg()
+        if expert and hardware:
+            raise ValueError(
+                f"detector.{expert[0]}: an expert photon scale replaces the instrument's link "
+                "budget; remove it or the instrument / hardware keys"
+            )
+        if hardware:
+            # the instrument's hardware sets these: a second value would be silently ignored
+            # (compared with the defaults: a config written back keeps every key)
+            clash = [
+                f"{block}.{k}"
+                for block, keys in _HARDWARE_SET.items()
+                for k in keys
+                if getattr(getattr(self, block), k) != getattr(_DEFAULTS[block], k)
+            ]
+            if clash:
+                raise ValueError(
+                    f"{clash[0]}: set by the instrument's hardware (set hardware."
+                    f"{_HARDWARE_KEY[clash[0].split('.')[1]]} instead, or use the expert photon "
+                    "scales without an instrument)"
+                )
+        return self
+
+
+#: keys of the other blocks that an instrument's hardware sets
+_HARDWARE_SET = {
+    "pulse": ("fwhm_ns", "jitter_ns"),
+    "steered_beam": ("divergence_mrad", "pulse_rate_hz"),
+    "flash": ("pulse_rate_hz",),
+}
+_DEFAULTS = {"pulse": PulseCfg(), "steered_beam": SteeredBeamCfg(), "flash": FlashCfg()}
+_HARDWARE_KEY = {
+    "fwhm_ns": "pulse_fwhm_ns",
+    "jitter_ns": "jitter_ns",
+    "divergence_mrad": "divergence_urad",
+    "pulse_rate_hz": "pulse_rate_hz",
+}
 
 
 class HazardCfg(_Model):

@@ -39,6 +39,7 @@ from simlunar.lidar import (
     scan_timing,
     shape_waveform,
 )
+from simlunar.lidar.hardware import LidarHardware, pixel_solid_angles
 from simlunar.render.lights import ProjectorLight
 from simlunar.render.transient import (
     BeamCapture,
@@ -59,7 +60,9 @@ __all__ = [
     "range_window",
     "read_flash",
     "receiver_rc",
+    "receiver_solid_angles",
     "steered_beam_scan",
+    "with_hardware",
 ]
 
 
@@ -80,6 +83,12 @@ class _ReturnOptions:
         Range width of a time bin (m).
     margin_m : float
         Range margin (m) around the expected ranges.
+    hardware : LidarHardware or None
+        The instrument: when given, the photon scales and dark counts of ``detector`` are
+        derived from it (the lidar equation, :mod:`simlunar.lidar.hardware`) and the rendered
+        laser intensity and sun irradiance; ``detector``'s own ``signal_photons`` and
+        ``background_photons_per_s`` are then the expert override used only without it.
+        :func:`with_hardware` also sets the pulse, rates and divergence from it.
     """
 
     pulse: PulseOptions = field(default_factory=PulseOptions)
@@ -88,6 +97,33 @@ class _ReturnOptions:
     transient: TransientOptions = field(default_factory=TransientOptions)
     bin_range_m: float = 0.05
     margin_m: float = 2.0
+    hardware: LidarHardware | None = None
+
+    def photon_detector(
+        self, *, pulses=None, field_sr=None, lit_sr=None, sun_irradiance=1.0
+    ) -> DetectorOptions:
+        """The detector with the photon scales of :attr:`hardware` (or the expert override).
+
+        ``field_sr`` / ``lit_sr``: a flash pixel's solid angle and the lit field (sr); None for
+        a steered beam. ``pulses`` replaces the detector's pulses per reading.
+        """
+        det = self.detector
+        if pulses is not None:
+            det = dataclasses.replace(det, pulses=int(pulses))
+        if self.hardware is None:
+            return det
+        hw = self.hardware.detector(
+            field_sr=field_sr,
+            lit_sr=lit_sr,
+            laser_intensity=self.transient.laser_intensity,
+            sun_irradiance=max(sun_irradiance, 1e-30),
+        )
+        return dataclasses.replace(
+            det,
+            signal_photons=hw.signal_photons,
+            background_photons_per_s=hw.background_photons_per_s,
+            dark_count_rate_hz=hw.dark_count_rate_hz,
+        )
 
 
 @dataclass(frozen=True)
@@ -169,6 +205,20 @@ class LidarScan:
         return (self.points - camera.pose.position) @ camera.pose.forward
 
 
+def with_hardware(options, hardware: LidarHardware):
+    """``options`` (:class:`SteeredBeamOptions` or :class:`FlashOptions`) measuring with
+    ``hardware``: its pulse and jitter, photon scales (:meth:`_ReturnOptions.photon_detector`),
+    pulse rate and, for a steered beam, its divergence."""
+    out = dataclasses.replace(options, hardware=hardware, pulse=hardware.pulse)
+    if isinstance(out, SteeredBeamOptions):
+        return dataclasses.replace(
+            out,
+            footprint=dataclasses.replace(out.footprint, divergence_rad=hardware.divergence_rad),
+            steering=dataclasses.replace(out.steering, pulse_rate_hz=hardware.pulse_rate_hz),
+        )
+    return dataclasses.replace(out, pulse_rate_hz=hardware.pulse_rate_hz)
+
+
 def guide_directions(camera: Camera, rc: np.ndarray) -> np.ndarray:
     """Unit world directions (k, 3) through the centres of guide pixels ``rc`` (k, 2) (row, col)."""
     rc = np.asarray(rc, float).reshape(-1, 2)
@@ -239,7 +289,9 @@ def steered_beam_scan(
     rng = np.random.default_rng(rng)
     d = np.asarray(directions, float)
     d = d / np.linalg.norm(d, axis=1, keepdims=True)
-    det = dataclasses.replace(options.detector, pulses=options.steering.pulses_per_point)
+    det = options.photon_detector(
+        pulses=options.steering.pulses_per_point, sun_irradiance=capture.sun_irradiance
+    )
     ret = capture_beams(capture, d, margin_m=options.margin_m, seed=options.transient.seed)
     bins = options.window
     bg = 0.0 if ret.sun is None else ret.sun
@@ -302,11 +354,29 @@ def range_window(terrain, camera: Camera, *, bin_range_m: float, margin_m: float
     return TimeBins.for_ranges(near, float(r.max()) + margin_m, bin_range_m)
 
 
-def _read_frame(frame, options: FlashOptions, rng):
-    bg = 0.0 if frame.sun is None else frame.sun
-    counts = _counts(
-        frame.histograms, bg, frame.bins, options.pulse, options.detector, rng, frame.oversample
-    )
+def receiver_solid_angles(camera: Camera) -> np.ndarray:
+    """Exact solid angle (sr) of every pixel of a receiver ``camera``, (rows, cols)."""
+    k = camera.intrinsics
+    return pixel_solid_angles(k.fx, k.fy, k.cx, k.cy, k.width, k.height)
+
+
+def _read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=None):
+    """Photon counts and ranges of a rendered frame through ``camera`` (its receiver).
+
+    Every pixel collects in proportion to its own solid angle (``cos^3`` off axis): with
+    hardware, ``Omega_pix`` itself and the pulse spread over ``lit_sr`` (default: the whole
+    receiver field); with the expert override the photon scales are the boresight pixel's.
+    """
+    omega = receiver_solid_angles(camera)
+    if options.hardware is None:
+        weight, det = omega / omega.max(), options.detector
+    else:
+        lit = float(omega.sum()) if lit_sr is None else float(lit_sr)
+        det = options.photon_detector(field_sr=1.0, lit_sr=lit, sun_irradiance=frame.sun_irradiance)
+        weight = omega
+    bg = 0.0 if frame.sun is None else frame.sun * weight
+    hist = frame.histograms * weight[..., None].astype(np.float32)
+    counts = _counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
     return extract_ranges(counts, frame.bins, pulse=options.pulse, options=options.ranging)
 
 
@@ -339,7 +409,7 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
     """Read a rendered flash frame (:func:`~simlunar.render.transient.flash_frame` through
     ``camera``) with fresh photon noise: a frame rendered once serves many noisy reads."""
     rng = np.random.default_rng(rng)
-    res = _read_frame(frame, options, rng)
+    res = _read_frame(frame, camera, options, rng)
     _, d = camera.rays(camera.pixel_centers())
     return LidarScan(
         ranges=res.range,
@@ -408,6 +478,11 @@ def micromirror_flash(
     LidarScan
         Arrays over the k planned pixels; ``frames`` = flash frames fired.
     """
+    if options.hardware is not None:
+        raise ValueError(
+            "a micromirror flash has no hardware link budget yet (its projector's dots are not "
+            "a uniform flash): use the expert photon scales (detector.signal_photons)"
+        )
     rng = np.random.default_rng(rng)
     uv = np.asarray(pixels, float).reshape(-1, 2)
     h, w = camera.shape
@@ -438,7 +513,7 @@ def micromirror_flash(
             sun=sun,
             projector=light,
         )
-        res = _read_frame(fr, options, rng)
+        res = _read_frame(fr, receiver, options, rng)
         ranges[sel], photons[sel] = res.range[row[sel], col[sel]], res.photons[row[sel], col[sel]]
     _, d = camera.rays(uv)
     valid = np.isfinite(ranges)

@@ -95,6 +95,8 @@ class FlashFrame:
         The output bins.
     oversample : int
         Fine bins per output bin.
+    sun_irradiance : float
+        Irradiance of the rendered sun on a surface facing it (W/m^2; 1 without sun).
     """
 
     steady: np.ndarray
@@ -102,6 +104,7 @@ class FlashFrame:
     sun: np.ndarray | None
     bins: TimeBins
     oversample: int = 1
+    sun_irradiance: float = 1.0
 
     @property
     def binned(self) -> np.ndarray:
@@ -256,7 +259,12 @@ def flash_frame(
         )
         sun_img = luminance(ts.render())
     return FlashFrame(
-        steady=steady_l, histograms=hist, sun=sun_img, bins=bins, oversample=options.oversample
+        steady=steady_l,
+        histograms=hist,
+        sun=sun_img,
+        bins=bins,
+        oversample=options.oversample,
+        sun_irradiance=1.0 if sun is None else float(sun.irradiance),
     )
 
 
@@ -346,6 +354,7 @@ class BeamCapture:
         self._sensor = self._scene.sensors()[0]
         self._seed = int(options.seed)
         self._sun_scene = None
+        self.sun_irradiance = 1.0 if sun is None else float(sun.irradiance)
         if sun is not None:
             sun_scene = {
                 "type": "scene",

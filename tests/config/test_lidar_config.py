@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from simlunar.config import lidar_translate
@@ -36,9 +37,17 @@ def test_descent_translates_to_si_options():
     opts = lidar_translate.lidar_options(s, seed=7)
     so = opts.sensor_options
     assert isinstance(so, SteeredBeamOptions) and opts.sensor == "steered_beam"
-    assert so.pulse.fwhm_s == pytest.approx(1e-9) and so.pulse.jitter_s == pytest.approx(1e-10)
-    assert so.footprint.divergence_rad == pytest.approx(1e-3)
+    # the LOLA-class preset's receiver with the experiment's laser (10 uJ at 10 kHz)
+    hw = so.hardware
+    assert hw.pulse_energy_j == pytest.approx(10e-6) and hw.aperture_diameter_m == 0.14
+    assert so.pulse.fwhm_s == pytest.approx(5e-9) and so.pulse.jitter_s == pytest.approx(5e-10)
+    assert so.footprint.divergence_rad == pytest.approx(100e-6)
+    assert so.steering.pulse_rate_hz == pytest.approx(1e4)
     assert so.steering.settle_s == pytest.approx(1e-3)
+    # photons derived: E A eta / (h nu) per unit radiance of a 1 W/sr laser, by hand
+    hnu = 6.62607015e-34 * 299_792_458.0 / 1064e-9
+    det = so.photon_detector()
+    assert det.signal_photons == pytest.approx(10e-6 * np.pi * 0.07**2 * 0.5 * 0.4 / hnu)
     assert so.steering.pulses_per_point == 4 and so.transient.seed == 7
     assert opts.densities[0] == pytest.approx(1 / 16) and len(opts.densities) == 5
 
@@ -64,6 +73,8 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
             [
                 "study.sensor=micromirror_flash",
                 "study.options.steered_beam={}",
+                "study.options.instrument=null",
+                "study.options.hardware={}",
                 "study.options.micromirror={receiver_px: [16, 16]}",
             ]
         ),
@@ -84,6 +95,9 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
         (["study.options.steered_beam.order=spiral"], r"study\.options\.steered_beam\.order"),
         (["study.options.flash.revisits=2"], r"options\.flash: not an option of the steered_beam"),
         (["study.hazard={window_px: 4}"], r"study\.hazard\.window_px: .*odd"),
+        (["study.options.detector.expert_signal_photons=5"], r"expert_signal_photons: .*instrument"),
+        (["study.options.pulse.fwhm_ns=3"], r"pulse\.fwhm_ns: set by the instrument's hardware"),
+        (["study.options.instrument=laser_pointer"], r"study\.options\.instrument"),
         (["study.planner_opts={grid: {uniform_mix: 0.5}}"], r"planner_opts\.grid\.uniform_mix"),
         (["render.camera={kind: orthographic_nadir}"], r"render\.camera: a lidar study needs"),
         (

@@ -137,3 +137,29 @@ def test_micromirror_flash_lights_only_the_planned_pixels(mi):
     assert scan.seconds == pytest.approx(2 * 4 / 20.0)
     assert scan.valid.all()
     assert np.abs(scan.ranges - H / -d[:, 2]).max() < opts.bin_range_m
+
+
+def test_flash_photons_follow_the_lidar_equation_per_pixel(mi):
+    # a 16 x 16 flash over a 30 deg field lights a Lambertian plane (albedo 0.2) from 50 m:
+    # every pixel's expected signal photons = (E / h nu) (rho / pi) cos(theta) A / R^2 eta
+    # x Omega_pix / Omega_lit, with R = H / cos(theta) along the pixel's centre ray and
+    # Omega_pix its exact solid angle (corner pixels dimmer as cos^3)
+    from simlunar.lidar import TimeBins
+    from simlunar.lidar.hardware import LidarHardware
+    from simlunar.render.lidar_scan import FlashOptions, receiver_solid_angles, with_hardware
+    from simlunar.render.transient import TransientOptions, flash_frame
+
+    hw = LidarHardware(pulse_energy_j=1e-3)
+    opts = with_hardware(FlashOptions(transient=TransientOptions(spp=64)), hw)
+    cam = _camera(16, 30.0)
+    bins = TimeBins.for_ranges(45.0, 60.0, 0.05)
+    frame = flash_frame(_plane(), cam, bins=bins, options=opts.transient)
+    omega = receiver_solid_angles(cam)
+    det = opts.photon_detector(field_sr=1.0, lit_sr=omega.sum())
+    got = frame.steady * omega * det.signal_photons
+    d = cam.directions_device(cam.pixel_centers().reshape(-1, 2)).reshape(16, 16, 3)
+    cos = d[..., 2] / np.linalg.norm(d, axis=-1)
+    want = hw.lambert_signal_photons(H / cos, 0.2, np.arccos(cos), lit_sr=omega.sum(),
+                                     pixel_sr=omega)  # fmt: skip
+    assert got == pytest.approx(want, rel=0.02)
+    assert want[8, 8] / want[0, 0] > 1.3  # centre vs corner: cos^3 x cos x cos^2 (R^2)
