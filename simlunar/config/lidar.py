@@ -15,6 +15,7 @@ from pydantic import Field, PositiveInt, field_validator, model_validator
 from simlunar.config.fields import Deg, Metres, _Model
 
 __all__ = [
+    "ApdCfg",
     "DetectorCfg",
     "FlashCfg",
     "HardwareCfg",
@@ -67,6 +68,19 @@ class HardwareCfg(_Model):
     )
 
 
+class ApdCfg(_Model):
+    """A linear-mode avalanche photodiode (:class:`simlunar.lidar.apd.ApdOptions`)."""
+
+    gain: float = Field(100.0, ge=1, description="mean avalanche gain M")
+    ionisation_ratio: float = Field(
+        0.02, ge=0, le=1, description="k: Si about 0.02, InGaAs about 0.45 (excess noise)"
+    )
+    amplifier_noise_pe: float = Field(
+        0.5, ge=0, description="amplifier noise per bin and pulse, input-referred (photoelectrons)"
+    )
+    threshold_pe: float = Field(5.0, ge=0, description="discriminator threshold (photoelectrons)")
+
+
 class DetectorCfg(_Model):
     """Detector (:class:`simlunar.lidar.DetectorOptions`): pulses per reading, dead time and,
     only without an instrument, the expert photon scales."""
@@ -92,8 +106,18 @@ class DetectorCfg(_Model):
     dead_time_ns: float | None = Field(
         0.0,
         ge=0,
-        description="SPAD dead time (ns); 0 = linear mode, null = one detection per pulse",
+        description="Geiger-mode SPAD dead time (ns, continuous time); 0 = none, null = one "
+        "detection per pulse",
     )
+    apd: ApdCfg | None = Field(
+        None, description="a linear-mode APD receiver (gain, excess noise, threshold)"
+    )
+
+    @model_validator(mode="after")
+    def _one_regime(self) -> DetectorCfg:
+        if self.apd is not None and self.dead_time_ns != 0:
+            raise ValueError("apd: a linear-mode APD has no dead time (set dead_time_ns: 0)")
+        return self
 
 
 class RangingCfg(_Model):

@@ -19,6 +19,7 @@ from simlunar.lidar import (
     RangeOptions,
     SteeringOptions,
 )
+from simlunar.lidar.apd import ApdOptions
 from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
 from simlunar.metrics.hazard import HazardOptions
 from simlunar.render.lidar_scan import FlashOptions, SteeredBeamOptions, with_hardware
@@ -86,7 +87,12 @@ def _lidar_common(o: LidarOptionsCfg, seed: int) -> dict:
         expert["dark_count_rate_hz"] = d.expert_dark_count_rate_hz
     return {
         "pulse": PulseOptions(fwhm_s=o.pulse.fwhm_ns * 1e-9, jitter_s=o.pulse.jitter_ns * 1e-9),
-        "detector": DetectorOptions(pulses=d.pulses, dead_time_s=dead, **expert),
+        "detector": DetectorOptions(
+            pulses=d.pulses,
+            dead_time_s=dead,
+            apd=None if d.apd is None else ApdOptions(**d.apd.model_dump()),
+            **expert,
+        ),
         "ranging": RangeOptions(**o.ranging.model_dump()),
         "transient": TransientOptions(
             spp=o.transient.spp,

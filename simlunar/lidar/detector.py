@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.lidar.apd import ApdOptions, apd_waveform
 from simlunar.lidar.waveform import SPEED_OF_LIGHT, TimeBins
 
 
@@ -41,8 +42,12 @@ class DetectorOptions:
     pulses : int
         Shots accumulated into one histogram.
     dead_time_s : float
-        SPAD dead time (s): 0 = linear mode (no pile-up), ``inf`` = at most one detection
-        per pulse, finite = non-paralysable dead time.
+        SPAD dead time (s): 0 = no dead time (photon counts, or an APD), ``inf`` = at most one
+        detection per pulse, finite = a Geiger-mode SPAD with a non-paralysable dead time
+        simulated in continuous time (:mod:`simlunar.lidar.spad`).
+    apd : ApdOptions or None
+        A linear-mode APD (gain, excess noise, amplifier noise, threshold;
+        :mod:`simlunar.lidar.apd`): the waveform in photoelectrons instead of photon counts.
     """
 
     signal_photons: float = 100.0
@@ -50,6 +55,7 @@ class DetectorOptions:
     dark_count_rate_hz: float = 0.0
     pulses: int = 1
     dead_time_s: float = 0.0
+    apd: ApdOptions | None = None
 
     def __post_init__(self) -> None:
         for name in ("signal_photons", "background_photons_per_s", "dark_count_rate_hz"):
@@ -60,6 +66,17 @@ class DetectorOptions:
             raise ValueError(f"pulses must be >= 1, got {self.pulses}")
         if not self.dead_time_s >= 0:
             raise ValueError(f"dead_time_s must be >= 0 s, got {self.dead_time_s}")
+        if self.apd is not None and self.dead_time_s != 0:
+            raise ValueError("a linear-mode APD has no dead time: set dead_time_s = 0 or no apd")
+
+    @property
+    def regime(self) -> str:
+        """``"photon_counting"``, ``"linear_apd"``, ``"first_photon"`` or ``"spad"``."""
+        if self.apd is not None:
+            return "linear_apd"
+        if self.dead_time_s == 0:
+            return "photon_counting"
+        return "first_photon" if np.isinf(self.dead_time_s) else "spad"
 
 
 def expected_counts(
@@ -103,12 +120,14 @@ def photon_counts(expected: np.ndarray, *, options: DetectorOptions, rng=None) -
 
     Returns
     -------
-    (..., count) int64
+    (..., count) int64 (float64 photoelectrons for an APD)
         Detections per bin summed over the pulses.
     """
     rng = np.random.default_rng(rng)
     lam = np.asarray(expected, float)
     n = int(options.pulses)
+    if options.apd is not None:
+        return apd_waveform(lam, options=options.apd, pulses=n, rng=rng)
     if options.dead_time_s == 0:
         return rng.poisson(lam * n)
     if np.isinf(options.dead_time_s):
@@ -135,27 +154,21 @@ def _first_photon_counts(lam: np.ndarray, n: int, rng) -> np.ndarray:
 def photon_counts_dead_time(
     expected: np.ndarray, bins: TimeBins, *, options: DetectorOptions, rng=None
 ) -> np.ndarray:
-    """Detections with a non-paralysable dead time, simulated pulse by pulse.
+    """Detections with a non-paralysable dead time, simulated photon by photon.
 
-    The detector is armed at the start of every pulse's window; a detection in bin i blinds it
-    for ``ceil(dead_time_s / bin_s)`` bins. Shapes and units as :func:`photon_counts`. Cost:
-    pulses x beams x bins; use ``dead_time_s = inf`` (exact, vectorised) when the dead time
-    exceeds the window.
+    The detector is armed at the start of every pulse's window; each photon arrives at a
+    continuous time inside its bin and a detection blinds the detector for exactly
+    ``dead_time_s`` (:func:`simlunar.lidar.spad.spad_counts`; rounding the dead time to whole
+    bins undercounted by 11-18 % at 1.5 ns). Shapes and units as :func:`photon_counts`.
     """
-    rng = np.random.default_rng(rng)
     lam = np.asarray(expected, float)
     if options.dead_time_s == 0 or np.isinf(options.dead_time_s):
         return photon_counts(lam, options=options, rng=rng)
-    dead = int(np.ceil(options.dead_time_s / bins.bin_s))
-    flat = lam.reshape(-1, lam.shape[-1])
-    n = int(options.pulses)
-    counts = np.zeros(flat.shape, np.int64)
-    blind_until = np.zeros((n, flat.shape[0]), np.int64)
-    for i in range(flat.shape[1]):
-        hit = (rng.random((n, flat.shape[0])) < -np.expm1(-flat[:, i])) & (blind_until <= i)
-        counts[:, i] = hit.sum(axis=0)
-        blind_until[hit] = i + 1 + dead
-    return counts.reshape(lam.shape)
+    from simlunar.lidar.spad import spad_counts
+
+    return spad_counts(
+        lam, bins, dead_time_s=options.dead_time_s, pulses=int(options.pulses), rng=rng
+    )
 
 
 def coates_correction(counts: np.ndarray, pulses: int) -> np.ndarray:

@@ -96,6 +96,8 @@ def extract_ranges(
     *,
     pulse: PulseOptions,
     options: RangeOptions = RangeOptions(),
+    apd=None,
+    pulses: int = 1,
 ) -> RangeResult:
     """Detect returns in histograms and report one range per histogram.
 
@@ -108,6 +110,12 @@ def extract_ranges(
     pulse : PulseOptions
         Timing response used as the matched filter and for the return separation.
     options : RangeOptions
+    apd : ApdOptions or None
+        The counts are a linear-mode APD's waveform (photoelectrons): the detection test uses
+        its Gaussian noise (variance ``F x mean + amplifier noise^2`` per bin) instead of the
+        Poisson quantile, and its ``threshold_pe`` as the least signal.
+    pulses : int
+        Pulses accumulated in the counts (the APD's amplifier noise adds per pulse).
 
     Returns
     -------
@@ -133,12 +141,19 @@ def extract_ranges(
     # library (the LIDAR sensors are in the sensor registry that config reads)
     from scipy import stats
 
-    c_thr = stats.poisson.isf(stats.norm.sf(options.threshold_sigma), mu)
+    min_photons = options.min_photons
+    if apd is None:
+        c_thr = stats.poisson.isf(stats.norm.sf(options.threshold_sigma), mu)
+    else:
+        # Gaussian: each bin's variance is F x its mean + the amplifier's, per pulse
+        var = apd.excess_noise * mu + (2 * m + 1) * pulses * apd.amplifier_noise_pe**2
+        c_thr = mu + options.threshold_sigma * np.sqrt(var)
+        min_photons = max(min_photons, apd.threshold_pe)
     full = ndimage.uniform_filter1d(c, 2 * half + 1, axis=1, mode="constant") * (2 * half + 1)
     photons = full - bg * (2 * half + 1)
     left = np.concatenate([np.full((len(c), 1), -np.inf), score[:, :-1]], axis=1)
     peak = score == ndimage.maximum_filter1d(score, 2 * half + 1, axis=1, mode="nearest")
-    peak &= (score > left) & (win > c_thr) & (photons >= max(options.min_photons, 1e-12))
+    peak &= (score > left) & (win > c_thr) & (photons >= max(min_photons, 1e-12))
     n_ret = peak.sum(axis=1)
     valid = n_ret > 0
     if options.which == "first":

@@ -296,7 +296,9 @@ def steered_beam_scan(
     bins = options.window
     bg = 0.0 if ret.sun is None else ret.sun
     counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
-    res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging)
+    res = extract_ranges(
+        counts, bins, pulse=options.pulse, options=options.ranging, apd=det.apd, pulses=det.pulses
+    )
     valid = res.valid & np.isfinite(ret.start_opl)
     ranges = np.where(valid, res.range + ret.start_opl / 2.0, np.nan)
     if boresight is None:
@@ -377,7 +379,14 @@ def _read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=Non
     bg = 0.0 if frame.sun is None else frame.sun * weight
     hist = frame.histograms * weight[..., None].astype(np.float32)
     counts = _counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
-    return extract_ranges(counts, frame.bins, pulse=options.pulse, options=options.ranging)
+    return extract_ranges(
+        counts,
+        frame.bins,
+        pulse=options.pulse,
+        options=options.ranging,
+        apd=det.apd,
+        pulses=det.pulses,
+    )
 
 
 def flash_scan(

@@ -49,6 +49,7 @@ def test_descent_translates_to_si_options():
     det = so.photon_detector()
     assert det.signal_photons == pytest.approx(10e-6 * np.pi * 0.07**2 * 0.5 * 0.4 / hnu)
     assert so.steering.pulses_per_point == 4 and so.transient.seed == 7
+    assert so.detector.regime == "linear_apd" and so.detector.apd.excess_noise > 3.9
     assert opts.densities[0] == pytest.approx(1 / 16) and len(opts.densities) == 5
 
 
@@ -61,6 +62,7 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
                 "study.options.steered_beam={}",
                 "study.options.flash={receiver_px: [32, 32], revisits: 2, zoom: 4}",
                 "study.options.detector.dead_time_ns=null",
+                "study.options.detector.apd=null",
             ]
         ),
     )
@@ -98,6 +100,7 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
         (["study.options.detector.expert_signal_photons=5"], r"expert_signal_photons: .*instrument"),
         (["study.options.pulse.fwhm_ns=3"], r"pulse\.fwhm_ns: set by the instrument's hardware"),
         (["study.options.instrument=laser_pointer"], r"study\.options\.instrument"),
+        (["study.options.detector.dead_time_ns=2"], r"apd: a linear-mode APD has no dead time"),
         (["study.planner_opts={grid: {uniform_mix: 0.5}}"], r"planner_opts\.grid\.uniform_mix"),
         (["render.camera={kind: orthographic_nadir}"], r"render\.camera: a lidar study needs"),
         (
