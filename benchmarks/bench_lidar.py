@@ -81,7 +81,7 @@ def _plane_precision(trials: int) -> dict:
     cap = BeamCapture(
         terrain, [0.0, 0.0, h], footprint=FootprintOptions(1e-5, samples=4), window=window, batch=16
     )
-    ret = capture_beams(cap, d, margin_m=1.0)
+    ret = capture_beams(cap, d, truth.round(1), margin_m=1.0)
     pulse = PulseOptions(fwhm_s=1e-9, jitter_s=0.1e-9)
     lam = shape_waveform(ret.histograms, window, pulse, oversample=ret.oversample)
     lam = 100.0 * lam / lam.sum(-1, keepdims=True) + 0.01
@@ -116,7 +116,7 @@ def lidar(smoke: bool = False) -> dict:
         SteeredBeamOptions,
         beam_capture,
         flash_scan,
-        range_window,
+        flash_window,
         steered_beam_scan,
     )
     from simlunar.render.lights import SunLight
@@ -160,7 +160,7 @@ def lidar(smoke: bool = False) -> dict:
 
     flash_cam = Camera(Intrinsics.from_fov(flash_px, flash_px, fov), pose)
     fopts = FlashOptions(transient=TransientOptions(spp=64))
-    bins = range_window(t, flash_cam, bin_range_m=fopts.bin_range_m, margin_m=fopts.margin_m)
+    bins = flash_window(flash_cam, options=fopts)
     flash_scan(t, flash_cam, options=fopts, rng=0)  # warm-up
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     t0 = time.perf_counter()

@@ -18,6 +18,7 @@ __all__ = [
     "ApdCfg",
     "DetectorCfg",
     "FlashCfg",
+    "GateCfg",
     "HardwareCfg",
     "HazardCfg",
     "LidarOptionsCfg",
@@ -185,6 +186,18 @@ class MicromirrorCfg(_Model):
     pulse_rate_hz: float = Field(30.0, gt=0, description="pulse repetition rate (1/s)")
 
 
+class GateCfg(_Model):
+    """The range gate (:class:`simlunar.lidar.gate.GateOptions`): a reference plane from the
+    navigation datum or an altimeter reading; ``margin_m`` must cover the relief about it."""
+
+    datum_z_m: Metres = Field(0.0, description="height of the reference plane (world z, m)")
+    altimeter: bool = Field(
+        False, description="steered beam: measure the plane along the boresight first"
+    )
+    max_range_m: Metres = Field(2000.0, gt=0, description="the instrument's largest range (m)")
+    min_range_m: Metres = Field(0.1, ge=0, description="the instrument's smallest range (m)")
+
+
 class LidarOptionsCfg(_Model):
     """Options shared by the LIDARs and the block of each sensor."""
 
@@ -198,6 +211,7 @@ class LidarOptionsCfg(_Model):
     detector: DetectorCfg = Field(default_factory=DetectorCfg)
     ranging: RangingCfg = Field(default_factory=RangingCfg)
     transient: TransientCfg = Field(default_factory=TransientCfg)
+    gate: GateCfg = Field(default_factory=GateCfg)
     bin_range_m: Metres = Field(0.05, gt=0, description="range width of a time bin (m)")
     margin_m: Metres = Field(2.0, ge=0, description="range margin of the time window (m)")
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)

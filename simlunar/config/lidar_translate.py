@@ -20,6 +20,7 @@ from simlunar.lidar import (
     SteeringOptions,
 )
 from simlunar.lidar.apd import ApdOptions
+from simlunar.lidar.gate import GateOptions
 from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
 from simlunar.metrics.hazard import HazardOptions
 from simlunar.render.lidar_scan import FlashOptions, SteeredBeamOptions, with_hardware
@@ -103,6 +104,7 @@ def _lidar_common(o: LidarOptionsCfg, seed: int) -> dict:
         ),
         "bin_range_m": o.bin_range_m,
         "margin_m": o.margin_m,
+        "gate": GateOptions(**o.gate.model_dump()),
     }
 
 

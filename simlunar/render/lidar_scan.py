@@ -39,6 +39,7 @@ from simlunar.lidar import (
     scan_timing,
     shape_waveform,
 )
+from simlunar.lidar.gate import GateOptions, gate_bins, plane_ranges
 from simlunar.lidar.hardware import LidarHardware, pixel_solid_angles
 from simlunar.render.lights import ProjectorLight
 from simlunar.render.transient import (
@@ -52,12 +53,13 @@ __all__ = [
     "FlashOptions",
     "LidarScan",
     "SteeredBeamOptions",
+    "altimeter_datum",
     "beam_capture",
     "flash_scan",
+    "flash_window",
     "guide_directions",
     "micromirror_flash",
     "micromirror_frames",
-    "range_window",
     "read_flash",
     "receiver_rc",
     "receiver_solid_angles",
@@ -89,6 +91,10 @@ class _ReturnOptions:
         laser intensity and sun irradiance; ``detector``'s own ``signal_photons`` and
         ``background_photons_per_s`` are then the expert override used only without it.
         :func:`with_hardware` also sets the pulse, rates and divergence from it.
+    gate : GateOptions
+        The range gate: a reference plane (datum or altimeter reading) and the instrument's
+        range limits (:mod:`simlunar.lidar.gate`); ``margin_m`` must cover the terrain's
+        relief about the plane.
     """
 
     pulse: PulseOptions = field(default_factory=PulseOptions)
@@ -98,6 +104,7 @@ class _ReturnOptions:
     bin_range_m: float = 0.05
     margin_m: float = 2.0
     hardware: LidarHardware | None = None
+    gate: GateOptions = field(default_factory=GateOptions)
 
     def photon_detector(
         self, *, pulses=None, field_sr=None, lit_sr=None, sun_irradiance=1.0
@@ -260,6 +267,41 @@ def _counts(hist, background, bins: TimeBins, pulse, detector: DetectorOptions, 
     return photon_counts(lam, options=detector, rng=rng)
 
 
+def altimeter_datum(capture: BeamCapture, boresight, *, options: SteeredBeamOptions, rng=None):
+    """Range the boresight and return the plane it meets: ``(datum_z (m), window steps)``.
+
+    The beam's window (``options.window_m``) is stepped out from ``gate.min_range_m`` in
+    steps of ``window_m - 2 margin_m`` (overlapping by the margins) until a return is
+    detected, up to ``gate.max_range_m``; each step fires ``steering.pulses_per_point``
+    pulses. The plane is horizontal through the measured point (the IMU gives the vertical).
+
+    Raises
+    ------
+    NothingMeasured-like ValueError
+        No return within the instrument's range.
+    """
+    d = np.asarray(boresight, float).reshape(1, 3)
+    d = d / np.linalg.norm(d)
+    det = options.photon_detector(
+        pulses=options.steering.pulses_per_point, sun_irradiance=capture.sun_irradiance
+    )
+    bins, g = options.window, options.gate
+    step = options.window_m - 2.0 * options.margin_m
+    r0, k = g.min_range_m, 0
+    while r0 < g.max_range_m:
+        k += 1
+        hist, _ = capture.render_batch(d, 2.0 * r0, seed=options.transient.seed + 7919 * k)
+        bg = capture.render_sun(d) if capture.has_sun else 0.0
+        counts = _counts(hist, bg, bins, options.pulse, det, rng, capture.oversample)
+        res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging,
+                             apd=det.apd, pulses=det.pulses)  # fmt: skip
+        if res.valid[0]:
+            r = float(res.range[0]) + r0
+            return float(capture.origin[2] + r * d[0, 2]), k
+        r0 += step
+    raise ValueError(f"altimeter: no return along the boresight within {g.max_range_m} m")
+
+
 def steered_beam_scan(
     capture: BeamCapture,
     directions: np.ndarray,
@@ -292,7 +334,12 @@ def steered_beam_scan(
     det = options.photon_detector(
         pulses=options.steering.pulses_per_point, sun_irradiance=capture.sun_irradiance
     )
-    ret = capture_beams(capture, d, margin_m=options.margin_m, seed=options.transient.seed)
+    datum, steps = options.gate.datum_z_m, 0
+    if options.gate.altimeter:
+        bore = d.mean(axis=0) if boresight is None else boresight.forward
+        datum, steps = altimeter_datum(capture, bore, options=options, rng=rng)
+    pred = plane_ranges(capture.origin, d, datum_z=datum, options=options.gate)
+    ret = capture_beams(capture, d, pred, margin_m=options.margin_m, seed=options.transient.seed)
     bins = options.window
     bg = 0.0 if ret.sun is None else ret.sun
     counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
@@ -312,8 +359,9 @@ def steered_beam_scan(
         points=capture.origin + ranges[:, None] * d,
         photons=res.photons,
         order=order,
-        seconds=timing.total_s,
-        frames=len(d) * int(options.steering.pulses_per_point),
+        # the altimeter's window steps fire pulses_per_point pulses each before the scan
+        seconds=timing.total_s + steps * det.pulses / options.steering.pulse_rate_hz,
+        frames=(len(d) + steps) * int(options.steering.pulses_per_point),
         timing=timing,
     )
 
@@ -339,21 +387,17 @@ class FlashOptions(_ReturnOptions):
             raise ValueError("need bin_range_m > 0, margin_m >= 0 and pulse_rate_hz > 0")
 
 
-def range_window(terrain, camera: Camera, *, bin_range_m: float, margin_m: float) -> TimeBins:
-    """Bins covering every terrain cell in ``camera``'s view, with ``margin_m`` (m) each side."""
-    p = terrain.points().reshape(-1, 3)
-    p = p[np.isfinite(p).all(axis=1)]
-    stride = max(1, len(p) // 200_000)
-    p = p[::stride]
-    uv, z = camera.project(p)
-    u, v = uv[:, 0], uv[:, 1]
-    h, w = camera.shape
-    inside = (z > 0) & (u >= 0) & (u <= w) & (v >= 0) & (v <= h)
-    if not inside.any():
-        raise ValueError("camera: no terrain cell in view")
-    r = np.linalg.norm(p[inside] - camera.pose.position, axis=1)
-    near = max(float(r.min()) - margin_m, 0.0)
-    return TimeBins.for_ranges(near, float(r.max()) + margin_m, bin_range_m)
+def flash_window(camera: Camera, *, options: FlashOptions) -> TimeBins:
+    """The flash receiver's range gate: the ranges where its pixel rays meet the reference
+    plane (``options.gate``), with ``options.margin_m`` on both sides (never the terrain)."""
+    if options.gate.altimeter:
+        raise ValueError("gate.altimeter: a flash takes its reference plane from gate.datum_z_m")
+    _, d = camera.rays(camera.pixel_centers().reshape(-1, 2))
+    r = plane_ranges(camera.pose.position, d, datum_z=options.gate.datum_z_m, options=options.gate)
+    r = r[r < options.gate.max_range_m]  # pixels above the plane's horizon are not gated
+    if r.size == 0:
+        raise ValueError("gate: no receiver pixel meets the reference plane within max_range_m")
+    return gate_bins(r, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
 
 
 def receiver_solid_angles(camera: Camera) -> np.ndarray:
@@ -409,7 +453,7 @@ def flash_scan(
     LidarScan
         ``points`` along each pixel centre's ray; ``frames`` = 1.
     """
-    bins = range_window(terrain, camera, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
+    bins = flash_window(camera, options=options)
     frame = flash_frame(terrain, camera, bins=bins, options=options.transient, bsdf=bsdf, sun=sun)
     return read_flash(frame, camera, options=options, rng=rng)
 
@@ -500,7 +544,7 @@ def micromirror_flash(
     if receiver.shape != (rh, rw):
         raise ValueError(f"receiver_shape {receiver_shape} must keep the aspect of {(h, w)}")
     projector = Projector(camera.intrinsics, camera.pose)
-    bins = range_window(terrain, camera, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
+    bins = flash_window(camera, options=options)
     frame_of = micromirror_frames(uv, camera, (rh, rw))
     ranges, photons = np.full(len(uv), np.nan), np.zeros(len(uv))
     col = np.clip(np.floor(uv[:, 0] * rw / w).astype(int), 0, rw - 1)

@@ -10,8 +10,10 @@ emitter (mitransient puts a directional emitter's light at a bogus finite path l
 
 mitransient's transient output is (rows, cols, bins, channels) (not width-first as its
 docstring says); memory is rows x cols x bins x 4 channels x 4 bytes, so steered beams are
-rendered in batches of a fixed size (one kernel, reused) sorted by their predicted range,
-each batch with its own time window (the film's ``start_opl``, an opaque JIT value).
+rendered in batches of a fixed size (one kernel, reused) sorted by their predicted range (the
+range gate of :mod:`simlunar.lidar.gate`: from the instrument's pose and a reference plane,
+never the terrain), each batch with its own time window (the film's ``start_opl``, an opaque
+JIT value).
 
 The film is simlunar's ``simlunar_transient_film``: mitransient's ``transient_hdr_film`` whose
 paths are splatted linearly into the two nearest bins (:func:`simlunar.lidar.waveform.splat_paths`
@@ -286,7 +288,8 @@ class BeamReturns:
     sun : (n,) float32 or None
         Steady luminance of the sun alone in each beam's profile.
     predicted_range : (n,) float64
-        Range of the centre ray's hit (m; the ray cast used to gate the window), NaN = miss.
+        The gate's expected range of each beam (m; from the instrument's pose and reference
+        plane, :mod:`simlunar.lidar.gate`), NaN = not fired.
     """
 
     histograms: np.ndarray
@@ -371,7 +374,10 @@ class BeamCapture:
         return self._sun_scene is not None
 
     def cast(self, directions: np.ndarray) -> np.ndarray:
-        """Range (m) of the first hit of each beam's centre ray (n,); NaN = miss."""
+        """Range (m) of the first hit of each beam's centre ray (n,); NaN = miss.
+
+        The terrain's truth: for tests and benchmarks only, never used by a scan (its range
+        gate comes from :mod:`simlunar.lidar.gate`)."""
         import drjit as dr
 
         mi = self._mi
@@ -415,21 +421,28 @@ class BeamCapture:
 
 
 def capture_beams(
-    capture: BeamCapture, directions: np.ndarray, *, margin_m: float = 1.0, seed: int = 0
+    capture: BeamCapture,
+    directions: np.ndarray,
+    predicted_range: np.ndarray,
+    *,
+    margin_m: float = 1.0,
+    seed: int = 0,
 ) -> BeamReturns:
-    """Render the returns of many beams, batched and range-gated by a ray cast.
+    """Render the returns of many beams, batched and range-gated around predicted ranges.
 
-    The centre rays are cast first; beams are sorted by that predicted range and cut into
-    batches of at most ``capture.batch`` whose predicted ranges fit the window with
-    ``margin_m`` on each side; each batch's window starts ``margin_m`` before its nearest
-    predicted range. A return outside its window (a far mixed return at a depth edge more than
-    the window away) is lost, as with a real range gate.
+    The predicted ranges come from what the instrument knows (its pose and a reference plane,
+    :mod:`simlunar.lidar.gate`), never from the terrain. Beams are sorted by them and cut into
+    batches of at most ``capture.batch`` whose predictions fit the window with ``margin_m`` on
+    each side; each batch's window starts ``margin_m`` before its nearest prediction. A return
+    outside its window is lost, as with a real range gate.
 
     Parameters
     ----------
     capture : BeamCapture
     directions : (n, 3) float
         Unit world directions of the beams.
+    predicted_range : (n,) float
+        Expected range of each beam (m); NaN = not fired.
     margin_m : float
         Range margin (m) on both sides of the predicted ranges.
     seed : int
@@ -442,7 +455,9 @@ def capture_beams(
     d = np.asarray(directions, float)
     n, nb = len(d), capture.window.count
     nf = nb * capture.oversample
-    pred = capture.cast(d)
+    pred = np.asarray(predicted_range, float).reshape(-1)
+    if pred.shape != (n,):
+        raise ValueError(f"predicted_range must have shape ({n},), got {pred.shape}")
     hist = np.zeros((n, nf), np.float32)
     start = np.full(n, np.nan)
     steady = np.zeros(n, np.float32)

@@ -30,9 +30,9 @@ from simlunar.render.lidar_scan import (
     LidarScan,
     SteeredBeamOptions,
     beam_capture,
+    flash_window,
     guide_directions,
     micromirror_flash,
-    range_window,
     read_flash,
     steered_beam_scan,
 )
@@ -218,7 +218,7 @@ class FlashLidar:
         """A frame through ``camera``: rendered once per field (``key``), read with fresh noise."""
         s, f = self.scene, self.options.flash
         if key not in self._frames:
-            bins = range_window(s.terrain, camera, bin_range_m=f.bin_range_m, margin_m=f.margin_m)
+            bins = flash_window(camera, options=f)
             self._frames[key] = flash_frame(
                 s.terrain, camera, bins=bins, options=f.transient, bsdf=s.bsdf, sun=s.sun
             )

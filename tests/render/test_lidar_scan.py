@@ -163,3 +163,59 @@ def test_flash_photons_follow_the_lidar_equation_per_pixel(mi):
                                      pixel_sr=omega)  # fmt: skip
     assert got == pytest.approx(want, rel=0.02)
     assert want[8, 8] / want[0, 0] > 1.3  # centre vs corner: cos^3 x cos x cos^2 (R^2)
+
+
+def _truth_raises(monkeypatch):
+    """Every way to the terrain's truth after the scene is built raises."""
+    from simlunar.render.transient import BeamCapture
+
+    def boom(*args, **kwargs):
+        raise AssertionError("the range gate read the terrain's truth")
+
+    monkeypatch.setattr(BeamCapture, "cast", boom)
+    monkeypatch.setattr(Terrain, "points", boom)
+
+
+@pytest.mark.parametrize("altimeter", [False, True])
+def test_steered_gate_never_reads_the_truth(mi, monkeypatch, altimeter):
+    from simlunar.lidar.gate import GateOptions
+    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+
+    opts = SteeredBeamOptions(
+        footprint=FootprintOptions(5e-4, samples=4),
+        pulse=PulseOptions(fwhm_s=1e-9),
+        detector=DET,
+        window_m=4.0,
+        margin_m=1.0,
+        batch=16,
+        gate=GateOptions(altimeter=altimeter, max_range_m=200.0),
+    )
+    cam = _camera(32, 30.0)
+    cap = beam_capture(_plane(), cam.position, options=opts)
+    _truth_raises(monkeypatch)
+    rc = np.array([[4, 4], [16, 16], [28, 3], [10, 25]])
+    from simlunar.render.lidar_scan import guide_directions
+
+    d = guide_directions(cam, rc)
+    scan = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose)
+    assert scan.valid.all()
+    assert scan.points[:, 2] == pytest.approx(0.0, abs=0.025)  # 4.5 mm CRLB at 200 photons
+    if altimeter:  # 50 m in windows of 4 m stepped by 2 m from 0.1 m: found in step 24-26
+        p = opts.steering.pulses_per_point
+        assert (4 + 24) * p <= scan.frames <= (4 + 26) * p
+
+
+def test_a_return_outside_the_gate_is_lost(mi, monkeypatch):
+    from simlunar.lidar.gate import GateOptions
+    from simlunar.render.lidar_scan import FlashOptions, flash_scan
+    from simlunar.render.transient import TransientOptions
+
+    cam = _camera(8, 10.0)
+    base = FlashOptions(detector=DET, transient=TransientOptions(spp=8), margin_m=1.0)
+    monkeypatch.setattr(Terrain, "points", lambda *a, **k: pytest.fail("truth read"))
+    good = flash_scan(_plane(), cam, options=base, rng=0)
+    assert good.valid.all()
+    # the navigation datum 5 m above the ground: the window (45 - 1 ... 45.1 + 1 m) misses it
+    off = FlashOptions(detector=DET, transient=TransientOptions(spp=8), margin_m=1.0,
+                       gate=GateOptions(datum_z_m=5.0))  # fmt: skip
+    assert not flash_scan(_plane(), cam, options=off, rng=0).valid.any()

@@ -78,9 +78,11 @@ def test_steered_beams_plane_within_one_bin(mi):
         window=window,
         batch=16,
     )
-    ret = capture_beams(cap, d, margin_m=0.5)
     truth = H / -d[:, 2]
-    assert ret.predicted_range == pytest.approx(truth, rel=1e-5)
+    assert cap.cast(d) == pytest.approx(truth, rel=1e-5)
+    # gated around the plane z = 0.3 (a reference 0.3 m off the ground): margins cover it
+    pred = (H - 0.3) / -d[:, 2]
+    ret = capture_beams(cap, d, pred, margin_m=0.5)
     res = _read(ret.binned, window)
     got = res.range + ret.start_opl / 2.0
     assert res.valid.all()
@@ -103,7 +105,7 @@ def test_tilted_plane_return_broadens_as_the_footprint_predicts(mi, profile):
         options=TransientOptions(seed=3),
         batch=4,
     )
-    ret = capture_beams(cap, np.array([[0.0, 0.0, -1.0]] * 4), margin_m=1.0)
+    ret = capture_beams(cap, np.array([[0.0, 0.0, -1.0]] * 4), np.full(4, H), margin_m=1.0)
     h = ret.binned.sum(axis=0)
     r = ret.start_opl[0] / 2 + window.centres_range
     mean = np.sum(h * r) / h.sum()
@@ -266,7 +268,7 @@ def test_rendered_plane_keeps_the_sub_bin_range(mi):
         window=window,
         batch=16,
     )
-    ret = capture_beams(cap, d, margin_m=0.5)
+    ret = capture_beams(cap, d, truth.round(1), margin_m=0.5)
     pulse = PulseOptions(fwhm_s=1e-9, jitter_s=0.1e-9)
     lam = shape_waveform(ret.histograms, window, pulse, oversample=ret.oversample)
     lam = 1000 * lam / lam.sum(-1, keepdims=True) + 0.01
