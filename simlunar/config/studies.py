@@ -157,6 +157,12 @@ class LidarStudyCfg(_Model):
         default_factory=LidarOptionsCfg,
         description="pulse, detector, ranging, transient, and the sensor's own block",
     )
+    save_scans: bool = Field(
+        False,
+        description="write scans/unit<i>/ per unit: each planner's example point cloud (LAZ, "
+        "PLY; world frame, per-point time, photons, returns) and range images (EXR) "
+        "(docs/lidar.md)",
+    )
     terrain_seeds: int = Field(
         1,
         ge=1,

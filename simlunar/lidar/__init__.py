@@ -43,6 +43,7 @@ from simlunar.lidar.steering import (
     SteeringOptions,
     axis_move_time,
     move_time,
+    point_times,
     pointing_angles,
     scan_timing,
 )
@@ -79,6 +80,7 @@ __all__ = [
     "order_scan",
     "photon_counts",
     "photon_counts_dead_time",
+    "point_times",
     "pointing_angles",
     "pulse_kernel",
     "range_crlb",

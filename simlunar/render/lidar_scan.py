@@ -35,6 +35,7 @@ from simlunar.lidar import (
     order_scan,
     photon_counts,
     photon_counts_dead_time,
+    point_times,
     pointing_angles,
     scan_timing,
     shape_waveform,
@@ -195,6 +196,11 @@ class LidarScan:
         Pulses fired (steered beam) or flash frames.
     timing : ScanTiming or None
         Breakdown for steered beams.
+    times : (n,) float64 or None
+        When each sample was measured (s from the acquisition's start): a steered beam's
+        first pulse at that pointing, a flash frame's start.
+    returns : (n,) int64 or None
+        Returns detected in each sample's histogram (the reported one is ``which``).
     """
 
     ranges: np.ndarray
@@ -205,6 +211,8 @@ class LidarScan:
     seconds: float
     frames: int
     timing: ScanTiming | None = None
+    times: np.ndarray | None = None
+    returns: np.ndarray | None = None
 
     def depth(self, camera: Camera) -> np.ndarray:
         """z-depth (m) of :attr:`points` along ``camera``'s optical axis (the guide view's
@@ -353,6 +361,8 @@ def steered_beam_scan(
     angles = pointing_angles(d, boresight)
     order = order_scan(angles, steering=options.steering, options=options.order)
     timing = scan_timing(angles, order, options=options.steering)
+    lead = steps * det.pulses / options.steering.pulse_rate_hz  # the altimeter's steps first
+    times = lead + point_times(angles, order, options=options.steering)
     return LidarScan(
         ranges=ranges,
         valid=valid,
@@ -363,6 +373,8 @@ def steered_beam_scan(
         seconds=timing.total_s + steps * det.pulses / options.steering.pulse_rate_hz,
         frames=(len(d) + steps) * int(options.steering.pulses_per_point),
         timing=timing,
+        times=times,
+        returns=res.returns,
     )
 
 
@@ -472,6 +484,8 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
         order=np.arange(res.range.size).reshape(res.range.shape),
         seconds=options.detector.pulses / options.pulse_rate_hz,
         frames=1,
+        times=np.zeros(res.range.shape),
+        returns=res.returns,
     )
 
 
@@ -547,6 +561,8 @@ def micromirror_flash(
     bins = flash_window(camera, options=options)
     frame_of = micromirror_frames(uv, camera, (rh, rw))
     ranges, photons = np.full(len(uv), np.nan), np.zeros(len(uv))
+    returns, times = np.zeros(len(uv), np.int64), np.zeros(len(uv))
+    per_frame = options.detector.pulses / options.pulse_rate_hz
     col = np.clip(np.floor(uv[:, 0] * rw / w).astype(int), 0, rw - 1)
     row = np.clip(np.floor(uv[:, 1] * rh / h).astype(int), 0, rh - 1)
     n_frames = int(frame_of.max()) + 1 if len(uv) else 0
@@ -568,6 +584,7 @@ def micromirror_flash(
         )
         res = _read_frame(fr, receiver, options, rng)
         ranges[sel], photons[sel] = res.range[row[sel], col[sel]], res.photons[row[sel], col[sel]]
+        returns[sel], times[sel] = res.returns[row[sel], col[sel]], f * per_frame
     _, d = camera.rays(uv)
     valid = np.isfinite(ranges)
     return LidarScan(
@@ -578,4 +595,6 @@ def micromirror_flash(
         order=np.arange(len(uv)),
         seconds=n_frames * options.detector.pulses / options.pulse_rate_hz,
         frames=n_frames,
+        times=times,
+        returns=returns,
     )
