@@ -7,6 +7,11 @@
 - :mod:`~simlunar.lidar.ranging`: range extraction (peak / matched filter; first, last or
   strongest return; maximum-likelihood sub-bin position)
 - :mod:`~simlunar.lidar.bounds`: the range's Cramer-Rao bound
+- :mod:`~simlunar.lidar.hardware`: the instrument (link budget, sun background, presets)
+- :mod:`~simlunar.lidar.apd`, :mod:`~simlunar.lidar.spad`: linear-mode APD and Geiger-mode SPAD
+  receivers (excess noise; continuous-time dead time, pile-up and its correction)
+- :mod:`~simlunar.lidar.gate`: the range gate from the pose and a reference plane
+- :mod:`~simlunar.lidar.trajectory`: a moving platform (hover, descent)
 - :mod:`~simlunar.lidar.footprint`: the beam's angular profile and footprint geometry
 - :mod:`~simlunar.lidar.steering`: two-axis steering mechanics and scan time
 - :mod:`~simlunar.lidar.ordering`: raster reference and nearest neighbour + 2-opt ordering

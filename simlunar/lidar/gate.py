@@ -58,13 +58,14 @@ class GateOptions:
 def plane_ranges(origin, directions, *, datum_z: float, options: GateOptions) -> np.ndarray:
     """Predicted range (m) of each ray to the horizontal plane ``z = datum_z``, (n,).
 
-    Rays that meet the plane beyond ``max_range_m``, behind the sensor or never get
-    ``max_range_m``; nearer than ``min_range_m`` get ``min_range_m``.
+    ``origin`` is (3,) or one per ray (n, 3) (a moving platform). Rays that meet the plane
+    beyond ``max_range_m``, behind the sensor or never get ``max_range_m``; nearer than
+    ``min_range_m`` get ``min_range_m``.
     """
-    o = np.asarray(origin, float).reshape(3)
     d = np.asarray(directions, float).reshape(-1, 3)
     d = d / np.linalg.norm(d, axis=1, keepdims=True)
-    height = o[2] - datum_z
+    o = np.broadcast_to(np.asarray(origin, float), d.shape)
+    height = o[:, 2] - datum_z
     down = -d[:, 2]
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(down > 0, height / down, np.inf)

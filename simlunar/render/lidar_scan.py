@@ -317,6 +317,7 @@ def steered_beam_scan(
     options: SteeredBeamOptions,
     rng=None,
     boresight: Pose | None = None,
+    trajectory=None,
 ) -> LidarScan:
     """Scan planned directions with a steered beam.
 
@@ -331,6 +332,10 @@ def steered_beam_scan(
         Photon noise.
     boresight : Pose or None
         Gimbal zero (its forward axis); None = looking along the mean direction.
+    trajectory : Trajectory or None
+        The platform's motion (:mod:`simlunar.lidar.trajectory`): each beam leaves from its
+        position at the beam's firing time (the pose known exactly); None = at rest at the
+        capture's origin. The gimbal's attitude is held in the world frame.
 
     Returns
     -------
@@ -346,16 +351,6 @@ def steered_beam_scan(
     if options.gate.altimeter:
         bore = d.mean(axis=0) if boresight is None else boresight.forward
         datum, steps = altimeter_datum(capture, bore, options=options, rng=rng)
-    pred = plane_ranges(capture.origin, d, datum_z=datum, options=options.gate)
-    ret = capture_beams(capture, d, pred, margin_m=options.margin_m, seed=options.transient.seed)
-    bins = options.window
-    bg = 0.0 if ret.sun is None else ret.sun
-    counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
-    res = extract_ranges(
-        counts, bins, pulse=options.pulse, options=options.ranging, apd=det.apd, pulses=det.pulses
-    )
-    valid = res.valid & np.isfinite(ret.start_opl)
-    ranges = np.where(valid, res.range + ret.start_opl / 2.0, np.nan)
     if boresight is None:
         boresight = Pose.look_at(capture.origin, capture.origin + d.mean(axis=0))
     angles = pointing_angles(d, boresight)
@@ -363,19 +358,55 @@ def steered_beam_scan(
     timing = scan_timing(angles, order, options=options.steering)
     lead = steps * det.pulses / options.steering.pulse_rate_hz  # the altimeter's steps first
     times = lead + point_times(angles, order, options=options.steering)
+    origins = None if trajectory is None else trajectory.at(times)
+    pred = plane_ranges(
+        capture.origin if origins is None else origins, d, datum_z=datum, options=options.gate
+    )
+    if origins is not None:  # render in firing order: the platform moves between launches
+        fire = np.argsort(times, kind="stable")
+        inv = np.empty_like(fire)
+        inv[fire] = np.arange(len(fire))
+        ret = capture_beams(capture, d[fire], pred[fire], margin_m=options.margin_m,
+                            seed=options.transient.seed, origins=origins[fire])  # fmt: skip
+        ret = _reorder(ret, inv)
+    else:
+        ret = capture_beams(capture, d, pred, margin_m=options.margin_m,
+                            seed=options.transient.seed)  # fmt: skip
+    bins = options.window
+    bg = 0.0 if ret.sun is None else ret.sun
+    counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
+    res = extract_ranges(
+        counts, bins, pulse=options.pulse, options=options.ranging, apd=det.apd, pulses=det.pulses
+    )
+    valid = res.valid & np.isfinite(ret.start_opl)
+    ranges = res.range + ret.start_opl / 2.0
+    if ret.opl_offset is not None:
+        ranges = ranges - ret.opl_offset / 2.0  # the render's laser offset, not the sensor's
+    ranges = np.where(valid, ranges, np.nan)
+    o = capture.origin if origins is None else origins
     return LidarScan(
         ranges=ranges,
         valid=valid,
-        points=capture.origin + ranges[:, None] * d,
+        points=o + ranges[:, None] * d,
         photons=res.photons,
         order=order,
         # the altimeter's window steps fire pulses_per_point pulses each before the scan
-        seconds=timing.total_s + steps * det.pulses / options.steering.pulse_rate_hz,
+        seconds=timing.total_s + lead,
         frames=(len(d) + steps) * int(options.steering.pulses_per_point),
         timing=timing,
         times=times,
         returns=res.returns,
     )
+
+
+def _reorder(ret, inv):
+    """BeamReturns of beams rendered in another order, back in the input order."""
+    take = {
+        f.name: (getattr(ret, f.name)[inv] if isinstance(getattr(ret, f.name), np.ndarray)
+                 and getattr(ret, f.name).ndim >= 1 else getattr(ret, f.name))
+        for f in dataclasses.fields(ret)
+    }  # fmt: skip
+    return type(ret)(**take)
 
 
 @dataclass(frozen=True)

@@ -290,6 +290,10 @@ class BeamReturns:
     predicted_range : (n,) float64
         The gate's expected range of each beam (m; from the instrument's pose and reference
         plane, :mod:`simlunar.lidar.gate`), NaN = not fired.
+    opl_offset : (n,) float64 or None
+        A moving platform's render shortcut: the extra round-trip path ``d . delta`` (m) of a
+        beam whose laser sat ``delta`` from its origin (:func:`capture_beams`); subtract half
+        of it from the range.
     """
 
     histograms: np.ndarray
@@ -299,6 +303,7 @@ class BeamReturns:
     sun: np.ndarray | None
     predicted_range: np.ndarray
     oversample: int = 1
+    opl_offset: np.ndarray | None = None
 
     @property
     def binned(self) -> np.ndarray:
@@ -356,6 +361,7 @@ class BeamCapture:
         self._scene = mi.load_dict(scene)
         self._sensor = self._scene.sensors()[0]
         self._seed = int(options.seed)
+        self._params = None
         self._sun_scene = None
         self.sun_irradiance = 1.0 if sun is None else float(sun.irradiance)
         if sun is not None:
@@ -393,30 +399,42 @@ class BeamCapture:
         valid = np.broadcast_to(np.asarray(valid, bool).reshape(-1), len(d))
         return np.where(valid, np.asarray(t, float).reshape(-1), np.nan)
 
-    def _launch(self, scene, directions: np.ndarray, seed: int):
+    def _launch(self, scene, directions: np.ndarray, seed: int, origins=None):
         n = len(directions)
         pad = np.concatenate([directions, np.repeat(directions[-1:], self.batch - n, axis=0)])
+        o = self.origin if origins is None else np.asarray(origins, float).reshape(n, 3)
+        if origins is not None:
+            o = np.concatenate([o, np.repeat(o[-1:], self.batch - n, axis=0)])
         sensor = scene.sensors()[0]
-        _beams.set_beams(self._mi, sensor, self.origin, pad)
+        _beams.set_beams(self._mi, sensor, o, pad)
         return self._mi.render(scene, seed=seed)
 
-    def render_batch(self, directions: np.ndarray, start_opl: float, seed: int = 0):
+    def set_laser(self, position) -> None:
+        """Move the laser (a moving platform; no kernel recompilation)."""
+        if self._params is None:
+            self._params = self._mi.traverse(self._scene)
+        p = np.asarray(position, float).reshape(3)
+        self._params["laser.position"] = self._mi.Point3f(*(float(x) for x in p))
+        self._params.update()
+
+    def render_batch(self, directions: np.ndarray, start_opl: float, seed: int = 0, origins=None):
         """Histograms (n, bins * oversample) and steady luminance (n,) of n <= batch beams
-        (window start m)."""
+        (window start m); ``origins`` (n, 3): each beam's own origin (else the capture's),
+        the laser where :meth:`set_laser` put it."""
         import drjit as dr
 
         film = self._sensor.film()
         film.start_opl = dr.opaque(self._mi.Float, float(start_opl))  # no recompilation
-        steady, hist = self._launch(self._scene, directions, seed)
+        steady, hist = self._launch(self._scene, directions, seed, origins)
         n = len(directions)
         hist = np.asarray(hist, np.float32)[0, :n, :, :3] @ LUMINANCE
         return hist.astype(np.float32), luminance(np.asarray(steady, np.float32)[0, :n, :3])
 
-    def render_sun(self, directions: np.ndarray, seed: int = 0) -> np.ndarray:
+    def render_sun(self, directions: np.ndarray, seed: int = 0, origins=None) -> np.ndarray:
         """Steady sun luminance (n,) of n <= batch beams."""
         if self._sun_scene is None:
             raise ValueError("this BeamCapture was built without a sun")
-        img = self._launch(self._sun_scene, directions, seed)
+        img = self._launch(self._sun_scene, directions, seed, origins)
         return luminance(np.asarray(img, np.float32)[0, : len(directions), :3])
 
 
@@ -427,6 +445,8 @@ def capture_beams(
     *,
     margin_m: float = 1.0,
     seed: int = 0,
+    origins: np.ndarray | None = None,
+    max_shift_m: float = 0.1,
 ) -> BeamReturns:
     """Render the returns of many beams, batched and range-gated around predicted ranges.
 
@@ -447,6 +467,15 @@ def capture_beams(
         Range margin (m) on both sides of the predicted ranges.
     seed : int
         Sampler seed of the first batch (batch k uses seed + k).
+    origins : (n, 3) float or None
+        Each beam's origin (a moving platform, in firing order: beams whose origins are
+        within ``max_shift_m`` of the first of their group share a launch); None: the
+        capture's origin.
+    max_shift_m : float
+        Largest distance (m) between a beam's origin and its launch's laser, which sits at
+        the group's mean origin: the render is then bistatic by ``delta`` and its round-trip
+        path is ``2 R + d . delta`` to ``|delta|^2 / (2 R)``; :attr:`BeamReturns.opl_offset`
+        holds ``d . delta`` for the reader to remove.
 
     Returns
     -------
@@ -465,19 +494,40 @@ def capture_beams(
     span = capture.window.bin_range * nb - 2.0 * margin_m
     if span <= 0:
         raise ValueError(f"window of {capture.window.bin_range * nb} m is shorter than 2 margins")
-    order = np.argsort(pred)[: int(np.isfinite(pred).sum())]
-    i, k = 0, 0
-    while i < len(order):
-        r0 = pred[order[i]]
-        j = min(i + capture.batch, len(order))
-        j = i + int(np.searchsorted(pred[order[i:j]], r0 + span, side="right"))
-        idx = order[i:j]
-        s0 = 2.0 * max(r0 - margin_m, 0.0)
-        hist[idx], steady[idx] = capture.render_batch(d[idx], s0, seed + k)
-        start[idx] = s0
-        if sun is not None:
-            sun[idx] = capture.render_sun(d[idx], seed + k)
-        i, k = j, k + 1
+    offset = np.zeros(n)
+    fired = np.flatnonzero(np.isfinite(pred))
+    groups = [fired]
+    if origins is not None:
+        o = np.asarray(origins, float).reshape(n, 3)
+        groups, first = [], 0
+        for q in range(1, len(fired) + 1):  # consecutive beams (firing order) near the first
+            if q == len(fired) or np.linalg.norm(o[fired[q]] - o[fired[first]]) > max_shift_m:
+                groups.append(fired[first:q])
+                first = q
+    k = 0
+    for group in groups:
+        beam_o = None
+        if origins is not None:
+            beam_o = o[group]
+            laser = beam_o.mean(axis=0)
+            capture.set_laser(laser)
+            offset[group] = np.sum(d[group] * (beam_o - laser), axis=1)
+        order = group[np.argsort(pred[group])]
+        i = 0
+        while i < len(order):
+            r0 = pred[order[i]]
+            j = min(i + capture.batch, len(order))
+            j = i + int(np.searchsorted(pred[order[i:j]], r0 + span, side="right"))
+            idx = order[i:j]
+            bo = None if beam_o is None else o[idx]
+            s0 = 2.0 * max(r0 - margin_m, 0.0)
+            hist[idx], steady[idx] = capture.render_batch(d[idx], s0, seed + k, origins=bo)
+            start[idx] = s0
+            if sun is not None:
+                sun[idx] = capture.render_sun(d[idx], seed + k, origins=bo)
+            i, k = j, k + 1
+    if origins is not None:
+        capture.set_laser(capture.origin)
     return BeamReturns(
         histograms=hist,
         start_opl=start,
@@ -486,4 +536,5 @@ def capture_beams(
         sun=sun,
         predicted_range=pred,
         oversample=capture.oversample,
+        opl_offset=offset,
     )

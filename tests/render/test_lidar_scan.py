@@ -219,3 +219,50 @@ def test_a_return_outside_the_gate_is_lost(mi, monkeypatch):
     off = FlashOptions(detector=DET, transient=TransientOptions(spp=8), margin_m=1.0,
                        gate=GateOptions(datum_z_m=5.0))  # fmt: skip
     assert not flash_scan(_plane(), cam, options=off, rng=0).valid.any()
+
+
+def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
+    # a tilted plane (z = 0.3 x) scanned while descending at 4 m/s and drifting 1 m/s east: the
+    # scan takes about 2 s (slow gimbal), the platform falls about 8 m. With each beam leaving
+    # from the platform's position at its firing time (the pose known exactly) every point
+    # lies on the plane; the same ranges placed from the starting pose miss it by metres.
+    from simlunar.lidar.trajectory import Trajectory
+    from simlunar.render.lidar_scan import (
+        SteeredBeamOptions,
+        beam_capture,
+        guide_directions,
+        steered_beam_scan,
+    )
+
+    n = 80
+    x = -n / 2 + np.arange(n) + 0.5
+    plane = Terrain(
+        heights=np.broadcast_to(0.3 * x[None, :], (n, n)).copy(),
+        albedo=np.full((n, n), 0.2, np.float32),
+        spacing=1.0,
+        origin=(-n / 2, n / 2),
+    )
+    steer = SteeringOptions(max_rate_rad_s=0.5, max_accel_rad_s2=5.0, settle_s=0.05,
+                            pulse_rate_hz=1000.0, pulses_per_point=4)  # fmt: skip
+    opts = SteeredBeamOptions(
+        footprint=FootprintOptions(2e-4, samples=4),
+        pulse=PulseOptions(fwhm_s=1e-9),
+        detector=DET,
+        steering=steer,
+        window_m=8.0,
+        margin_m=3.0,  # the plane's relief about z = 0 within the field: +-5 m across, ~3 m
+        batch=16,
+    )
+    cam = _camera(32, 30.0)
+    traj = Trajectory.descent(cam.position, 4.0, horizontal_m_s=(1.0, 0.0))
+    cap = beam_capture(plane, cam.position, options=opts)
+    rc = np.random.default_rng(2).integers(4, 28, (24, 2))
+    d = guide_directions(cam, rc)
+    scan = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose, trajectory=traj)
+    assert scan.seconds > 1.5 and scan.times.max() > 1.5
+    assert scan.valid.mean() > 0.9
+    p = scan.points[scan.valid]
+    assert p[:, 2] == pytest.approx(0.3 * p[:, 0], abs=0.03)
+    # control: the same ranges from the starting pose
+    still = cam.position + scan.ranges[scan.valid, None] * d[scan.valid]
+    assert np.abs(still[:, 2] - 0.3 * still[:, 0]).max() > 1.0
