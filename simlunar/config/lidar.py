@@ -131,6 +131,9 @@ class RangingCfg(_Model):
     fit: Literal["ml", "parabola"] = Field(
         "ml", description="sub-bin position: maximum-likelihood pulse fit or parabola vertex"
     )
+    pileup_correction: bool = Field(
+        True, description="SPAD: refit each return through the dead time (no pile-up bias)"
+    )
 
 
 class TransientCfg(_Model):

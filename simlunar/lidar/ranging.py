@@ -49,6 +49,10 @@ class RangeOptions:
     fit : "ml" or "parabola"
         Sub-bin position: maximum-likelihood fit of the pulse (Poisson model) or the
         parabola's vertex alone (also used where the pulse is narrower than 0.3 bin).
+    pileup_correction : bool
+        With a Geiger-mode SPAD receiver, refit every detected return through the dead time's
+        exact expected histogram (:func:`simlunar.lidar.spad.spad_correct`): range and signal
+        without the pile-up bias (a fit per return; the LIDAR scans apply it).
     """
 
     method: str = "matched"
@@ -56,6 +60,7 @@ class RangeOptions:
     threshold_sigma: float = 5.0
     min_photons: float = 3.0
     fit: str = "ml"
+    pileup_correction: bool = True
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:

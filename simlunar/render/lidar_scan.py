@@ -267,6 +267,26 @@ def beam_capture(terrain, origin, *, options: SteeredBeamOptions, sun=None, bsdf
     )
 
 
+def _ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions, ranging):
+    """Ranges of the counts; a SPAD's detected returns refitted without pile-up."""
+    res = extract_ranges(counts, bins, pulse=pulse, options=ranging, apd=det.apd,
+                         pulses=det.pulses)  # fmt: skip
+    if det.regime != "spad" or not ranging.pileup_correction or not res.valid.any():
+        return res
+    from simlunar.lidar.spad import spad_correct
+
+    c = np.asarray(counts).reshape(-1, bins.count)
+    ok = res.valid.reshape(-1)
+    bg = np.broadcast_to(np.asarray(background, float), res.valid.shape).reshape(-1)
+    per_bin = (bg * det.background_photons_per_s + det.dark_count_rate_hz) * bins.bin_s
+    fit = spad_correct(c[ok], bins, pulses=det.pulses, dead_time_s=det.dead_time_s,
+                       sigma_bins=pulse.sigma_bins(bins), background=per_bin[ok])  # fmt: skip
+    rng_m, ph = res.range.reshape(-1).copy(), res.photons.reshape(-1).copy()
+    rng_m[ok], ph[ok] = fit.range, fit.photons * det.pulses
+    return dataclasses.replace(res, range=rng_m.reshape(res.range.shape),
+                               photons=ph.reshape(res.photons.shape))  # fmt: skip
+
+
 def _counts(hist, background, bins: TimeBins, pulse, detector: DetectorOptions, rng, oversample=1):
     shaped = shape_waveform(hist, bins, pulse, oversample=oversample)
     lam = expected_counts(shaped, background, bins, detector)
@@ -375,9 +395,7 @@ def steered_beam_scan(
     bins = options.window
     bg = 0.0 if ret.sun is None else ret.sun
     counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
-    res = extract_ranges(
-        counts, bins, pulse=options.pulse, options=options.ranging, apd=det.apd, pulses=det.pulses
-    )
+    res = _ranges(counts, bg, bins, options.pulse, det, options.ranging)
     valid = res.valid & np.isfinite(ret.start_opl)
     ranges = res.range + ret.start_opl / 2.0
     if ret.opl_offset is not None:
@@ -466,14 +484,7 @@ def _read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=Non
     bg = 0.0 if frame.sun is None else frame.sun * weight
     hist = frame.histograms * weight[..., None].astype(np.float32)
     counts = _counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
-    return extract_ranges(
-        counts,
-        frame.bins,
-        pulse=options.pulse,
-        options=options.ranging,
-        apd=det.apd,
-        pulses=det.pulses,
-    )
+    return _ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
 
 
 def flash_scan(

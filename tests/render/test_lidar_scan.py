@@ -266,3 +266,35 @@ def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
     # control: the same ranges from the starting pose
     still = cam.position + scan.ranges[scan.valid, None] * d[scan.valid]
     assert np.abs(still[:, 2] - 0.3 * still[:, 0]).max() > 1.0
+
+
+@pytest.mark.parametrize("correct", [True, False])
+def test_spad_scan_pile_up_and_its_correction(mi, correct):
+    # 30 signal photons per pulse on a SPAD with a 1.5 ns dead time: the raw reading is early
+    # (the first photon arrives on the pulse's leading edge); the scans' refit removes it
+    from simlunar.lidar import RangeOptions
+    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+
+    det = DetectorOptions(signal_photons=2e6 * 30 / 51, background_photons_per_s=0.0,
+                          dead_time_s=1.5e-9)  # fmt: skip
+    opts = SteeredBeamOptions(
+        footprint=FootprintOptions(1e-5, samples=4),
+        pulse=PulseOptions(fwhm_s=1e-9, jitter_s=0.1e-9),
+        detector=det,
+        ranging=RangeOptions(pileup_correction=correct),
+        steering=SteeringOptions(pulses_per_point=400),
+        window_m=4.0,
+        margin_m=1.0,
+        batch=8,
+    )
+    cap = beam_capture(_plane(), [0.0, 0.0, H], options=opts)
+    d = np.tile([[0.0, 0.0, -1.0]], (6, 1))
+    scan = steered_beam_scan(cap, d, options=opts, rng=3)
+    err = scan.ranges - H
+    assert scan.valid.all()
+    if correct:  # scatter about 3 mm: a piled-up pulse keeps 1-2 detections of its 30 photons
+        assert abs(err.mean()) < 0.003 and np.abs(err).max() < 0.01
+        # the signal per pulse, 30 (0.2 / (pi 50^2) x the scale), +-25 % per beam at 400 pulses
+        assert np.mean(scan.photons / 400) == pytest.approx(30.0, rel=0.1)
+    else:
+        assert err.mean() < -0.02
