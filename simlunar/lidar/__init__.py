@@ -22,7 +22,6 @@ The rendering of the histograms lives in :mod:`simlunar.render.transient`.
 from simlunar.lidar.bounds import range_crlb
 from simlunar.lidar.detector import (
     DetectorOptions,
-    LinkBudget,
     coates_correction,
     expected_counts,
     photon_counts,
@@ -65,7 +64,6 @@ __all__ = [
     "SPEED_OF_LIGHT",
     "DetectorOptions",
     "FootprintOptions",
-    "LinkBudget",
     "OrderOptions",
     "PulseOptions",
     "RangeOptions",

@@ -16,13 +16,12 @@ pulse; a finite dead time is simulated pulse by pulse.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from simlunar.lidar.apd import ApdOptions, apd_waveform
-from simlunar.lidar.waveform import SPEED_OF_LIGHT, TimeBins
+from simlunar.lidar.waveform import TimeBins
 
 
 @dataclass(frozen=True)
@@ -198,66 +197,3 @@ def coates_correction(counts: np.ndarray, pulses: int) -> np.ndarray:
 
 #: Planck constant (J s)
 PLANCK = 6.62607015e-34
-
-
-@dataclass(frozen=True)
-class LinkBudget:
-    """Photon scales of a LIDAR from its hardware (the lidar equation of an extended target).
-
-    The renderer's laser is an isotropic point of 1 W/sr (``TransientOptions.laser_intensity``)
-    and its sun delivers an irradiance of 1 on a surface facing it, so a rendered radiance
-    ``L`` becomes photons as follows. Laser: a pulse of energy ``E`` spread over the lit solid
-    angle ``lit_sr`` has intensity ``E / lit_sr``; a receiver pixel of aperture ``A`` and field
-    ``field_sr`` collects ``L E / lit_sr * A * field_sr * efficiency / (h nu)`` photons
-    (for a steered beam ``field_sr = lit_sr`` and this is ``L E A eta / (h nu)``, i.e.
-    ``E rho A eta / (pi R^2 h nu)`` on a Lambertian target). Sun: ``L * sun_band_w_m2 * A *
-    field_sr * efficiency / (h nu)`` photons per second.
-
-    Parameters
-    ----------
-    pulse_energy_j : float
-        Laser energy per pulse (J).
-    wavelength_m : float
-        Laser wavelength (m).
-    aperture_m2 : float
-        Receiver aperture area (m^2).
-    efficiency : float
-        Optics transmission times detection efficiency, in (0, 1].
-    field_sr : float
-        Solid angle seen by one receiver pixel / beam (sr).
-    lit_sr : float
-        Solid angle the pulse lights (sr): the beam's for a steered beam, the whole field of
-        view for a flash.
-    sun_band_w_m2 : float
-        Solar irradiance inside the receiver's filter band (W/m^2), e.g. 0.64 W/m^2/nm x 1 nm
-        at 1064 nm.
-    """
-
-    pulse_energy_j: float = 10e-6
-    wavelength_m: float = 1064e-9
-    aperture_m2: float = 2e-3
-    efficiency: float = 0.3
-    field_sr: float = 7.85e-7
-    lit_sr: float = 7.85e-7
-    sun_band_w_m2: float = 0.64
-
-    def __post_init__(self) -> None:
-        for name, value in dataclasses.asdict(self).items():
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be finite and > 0, got {value}")
-        if self.efficiency > 1:
-            raise ValueError(f"efficiency must be <= 1, got {self.efficiency}")
-
-    @property
-    def photon_energy_j(self) -> float:
-        """Energy of one laser photon, h c / lambda (J)."""
-        return PLANCK * SPEED_OF_LIGHT / self.wavelength_m
-
-    def detector(self, **fields) -> DetectorOptions:
-        """:class:`DetectorOptions` with this budget's photon scales (other fields passed on)."""
-        collect = self.aperture_m2 * self.field_sr * self.efficiency / self.photon_energy_j
-        return DetectorOptions(
-            signal_photons=self.pulse_energy_j / self.lit_sr * collect,
-            background_photons_per_s=self.sun_band_w_m2 * collect,
-            **fields,
-        )
