@@ -6,12 +6,16 @@ radiance seen by the same receiver (``background``, an ordinary render; the sun 
 transient emitter, whose light would land at a bogus path length). The sun is continuous, so
 its expected photons per bin are its radiance times the bin duration; the laser's are its
 binned return times the pulse's photon scale. Summed over ``pulses`` shots (a histogramming
-receiver), the counts are Poisson with that mean in linear mode.
+receiver), the counts are Poisson with that mean without dead time; a linear-mode APD
+(``DetectorOptions.apd``) adds its gain's excess noise and amplifier noise
+(:mod:`simlunar.lidar.apd`).
 
 A SPAD is blind for ``dead_time_s`` after each detection; with strong returns or sunlight
 that distorts the histogram towards early bins (pile-up). ``dead_time_s = inf`` is the
 classic one-detection-per-pulse (TCSPC) receiver, simulated exactly as a multinomial per
-pulse; a finite dead time is simulated pulse by pulse.
+pulse; a finite dead time is simulated photon by photon in continuous time
+(:mod:`simlunar.lidar.spad`, which also corrects the pile-up). The photon scales come from
+the instrument's hardware (:mod:`simlunar.lidar.hardware`).
 """
 
 from __future__ import annotations
