@@ -46,10 +46,16 @@ def main() -> None:
         sun=sun,
         batch=1,
     )
-    ret = capture_beams(cap, np.array([[0.0, 0.0, -1.0]]), margin_m=1.2)
+    # the gate: 50 m above the datum z = 0 straight down, +-1.2 m (the rock's 1 m inside it)
+    ret = capture_beams(cap, np.array([[0.0, 0.0, -1.0]]), np.array([50.0]), margin_m=1.2)
     pulse = PulseOptions(fwhm_s=1e-9, jitter_s=0.1e-9)
     det = DetectorOptions(signal_photons=6e6, background_photons_per_s=3e10, pulses=20)
-    lam = expected_counts(shape_waveform(ret.histograms, window, pulse), ret.sun, window, det)
+    lam = expected_counts(
+        shape_waveform(ret.histograms, window, pulse, oversample=ret.oversample),
+        ret.sun,
+        window,
+        det,
+    )
     counts = photon_counts(lam, options=det, rng=0)
     offset = ret.start_opl[0] / 2
     found = {

@@ -54,7 +54,7 @@ def run(
         "--pdf", "figures as PDF too (as figures.formats: [png, pdf]) [default: PNG only]"
     ),
     save_scans: bool = flag(
-        "--save-scans", "scanner studies: export each unit's scan to scans/unit<i>/"
+        "--save-scans", "scanner and lidar studies: export each unit's scan to scans/unit<i>/"
     ),
 ) -> None:
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""

@@ -10,13 +10,16 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, PositiveInt, field_validator
+from pydantic import Field, PositiveInt, field_validator, model_validator
 
 from simlunar.config.fields import Deg, Metres, _Model
 
 __all__ = [
+    "ApdCfg",
     "DetectorCfg",
     "FlashCfg",
+    "GateCfg",
+    "HardwareCfg",
     "HazardCfg",
     "LidarOptionsCfg",
     "MicromirrorCfg",
@@ -34,24 +37,88 @@ class PulseCfg(_Model):
     jitter_ns: float = Field(0.0, ge=0, description="detector timing jitter, RMS (ns)")
 
 
-class DetectorCfg(_Model):
-    """Photon scales and detector (:class:`simlunar.lidar.DetectorOptions`)."""
+class HardwareCfg(_Model):
+    """The instrument's hardware (:class:`simlunar.lidar.hardware.LidarHardware`): every key
+    overrides the chosen ``instrument`` preset's value (unset keys keep it); photons per pulse
+    and the sun's background are derived from it (the lidar equation, docs/lidar.md)."""
 
-    signal_photons: float = Field(
-        100.0, gt=0, description="photons per unit rendered return radiance per pulse"
+    pulse_energy_uj: float | None = Field(None, gt=0, description="energy per pulse (uJ)")
+    wavelength_nm: float | None = Field(None, gt=0, description="laser wavelength (nm)")
+    pulse_fwhm_ns: float | None = Field(None, gt=0, description="pulse FWHM (ns)")
+    jitter_ns: float | None = Field(None, ge=0, description="timing jitter, RMS (ns)")
+    pulse_rate_hz: float | None = Field(None, gt=0, description="pulse repetition rate (1/s)")
+    aperture_diameter_mm: float | None = Field(
+        None, gt=0, description="receiver clear aperture (mm)"
     )
-    background_photons_per_s: float = Field(
-        1e9, ge=0, description="photons/s per unit rendered sun radiance"
+    optics_efficiency: float | None = Field(
+        None, gt=0, le=1, description="receiver optics transmission, filter included"
     )
-    dark_count_rate_hz: float = Field(0.0, ge=0, description="dark counts (1/s)")
+    detector_efficiency: float | None = Field(
+        None, gt=0, le=1, description="photon detection efficiency"
+    )
+    filter_bandwidth_nm: float | None = Field(None, gt=0, description="filter bandwidth (nm)")
+    divergence_urad: float | None = Field(
+        None, gt=0, description="full beam divergence of a steered beam (urad)"
+    )
+    field_urad: float | None = Field(
+        None, gt=0, description="full receiver field of view of a steered beam (urad)"
+    )
+    dark_count_rate_hz: float | None = Field(None, ge=0, description="dark counts (1/s)")
+    solar_irradiance_w_m2_nm: float | None = Field(
+        None, gt=0, description="solar spectral irradiance at the wavelength (W m^-2 nm^-1)"
+    )
+
+
+class ApdCfg(_Model):
+    """A linear-mode avalanche photodiode (:class:`simlunar.lidar.apd.ApdOptions`)."""
+
+    gain: float = Field(100.0, ge=1, description="mean avalanche gain M")
+    ionisation_ratio: float = Field(
+        0.02, ge=0, le=1, description="k: Si about 0.02, InGaAs about 0.45 (excess noise)"
+    )
+    amplifier_noise_pe: float = Field(
+        0.5, ge=0, description="amplifier noise per bin and pulse, input-referred (photoelectrons)"
+    )
+    threshold_pe: float = Field(5.0, ge=0, description="discriminator threshold (photoelectrons)")
+
+
+class DetectorCfg(_Model):
+    """Detector (:class:`simlunar.lidar.DetectorOptions`): pulses per reading, dead time and,
+    only without an instrument, the expert photon scales."""
+
+    expert_signal_photons: float | None = Field(
+        None,
+        gt=0,
+        description="EXPERT OVERRIDE of the instrument's link budget: photons per pulse per "
+        "unit rendered return radiance (then no instrument / hardware; micromirror: 100)",
+    )
+    expert_background_photons_per_s: float | None = Field(
+        None,
+        ge=0,
+        description="EXPERT OVERRIDE: photons/s per unit rendered sun radiance (default 1e9 "
+        "with expert_signal_photons)",
+    )
+    expert_dark_count_rate_hz: float | None = Field(
+        None, ge=0, description="EXPERT OVERRIDE: dark counts (1/s)"
+    )
     pulses: PositiveInt = Field(
         1, description="pulses per flash frame (a steered beam uses pulses_per_point)"
     )
     dead_time_ns: float | None = Field(
         0.0,
         ge=0,
-        description="SPAD dead time (ns); 0 = linear mode, null = one detection per pulse",
+        description="Geiger-mode SPAD dead time (ns, continuous time); 0 = none, null = one "
+        "detection per pulse",
     )
+    apd: ApdCfg | None = Field(
+        None, description="a linear-mode APD receiver (gain, excess noise, threshold)"
+    )
+
+    @model_validator(mode="after")
+    def _one_regime(self) -> DetectorCfg:
+        if self.apd is not None and self.dead_time_ns != 0:
+            raise ValueError("apd: a linear-mode APD has no dead time (set dead_time_ns: 0)")
+        return self
 
 
 class RangingCfg(_Model):
@@ -61,6 +128,12 @@ class RangingCfg(_Model):
     which: Literal["strongest", "first", "last"] = "strongest"
     threshold_sigma: float = Field(5.0, gt=0, description="detection threshold (Gaussian sigmas)")
     min_photons: float = Field(3.0, ge=0, description="least signal photons of a return")
+    fit: Literal["ml", "parabola"] = Field(
+        "ml", description="sub-bin position: maximum-likelihood pulse fit or parabola vertex"
+    )
+    pileup_correction: bool = Field(
+        True, description="SPAD: refit each return through the dead time (no pile-up bias)"
+    )
 
 
 class TransientCfg(_Model):
@@ -70,6 +143,9 @@ class TransientCfg(_Model):
     spp: PositiveInt = Field(64, description="samples per receiver pixel of a flash frame")
     max_depth: int = Field(2, ge=2, le=16, description="path depth (2 = direct only)")
     laser_intensity_w_sr: float = Field(1.0, gt=0, description="point laser intensity (W/sr)")
+    oversample: PositiveInt = Field(
+        2, le=16, description="rendered time bins per output bin (keeps sub-bin arrival times)"
+    )
 
 
 class SteeredBeamCfg(_Model):
@@ -113,18 +189,80 @@ class MicromirrorCfg(_Model):
     pulse_rate_hz: float = Field(30.0, gt=0, description="pulse repetition rate (1/s)")
 
 
+class GateCfg(_Model):
+    """The range gate (:class:`simlunar.lidar.gate.GateOptions`): a reference plane from the
+    navigation datum or an altimeter reading; ``margin_m`` must cover the relief about it."""
+
+    datum_z_m: Metres = Field(0.0, description="height of the reference plane (world z, m)")
+    altimeter: bool = Field(
+        False, description="steered beam: measure the plane along the boresight first"
+    )
+    max_range_m: Metres = Field(2000.0, gt=0, description="the instrument's largest range (m)")
+    min_range_m: Metres = Field(0.1, ge=0, description="the instrument's smallest range (m)")
+
+
 class LidarOptionsCfg(_Model):
     """Options shared by the LIDARs and the block of each sensor."""
 
+    instrument: Literal["lola_beam", "alhat_flash", "rover_mast_scanner"] | None = Field(
+        None,
+        description="instrument preset (docs/lidar.md, Instruments); none = generic hardware "
+        "with the pulse, rate and divergence keys; an instrument or hardware key sets them",
+    )
+    hardware: HardwareCfg = Field(default_factory=HardwareCfg)
     pulse: PulseCfg = Field(default_factory=PulseCfg)
     detector: DetectorCfg = Field(default_factory=DetectorCfg)
     ranging: RangingCfg = Field(default_factory=RangingCfg)
     transient: TransientCfg = Field(default_factory=TransientCfg)
+    gate: GateCfg = Field(default_factory=GateCfg)
     bin_range_m: Metres = Field(0.05, gt=0, description="range width of a time bin (m)")
     margin_m: Metres = Field(2.0, ge=0, description="range margin of the time window (m)")
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)
     flash: FlashCfg = Field(default_factory=FlashCfg)
     micromirror: MicromirrorCfg = Field(default_factory=MicromirrorCfg)
+
+    @model_validator(mode="after")
+    def _one_photon_model(self) -> LidarOptionsCfg:
+        d = self.detector
+        expert = [k for k in type(d).model_fields if k.startswith("expert_") and getattr(d, k)
+                  is not None]  # fmt: skip
+        hardware = self.instrument is not None or self.hardware != HardwareCfg()
+        if expert and hardware:
+            raise ValueError(
+                f"detector.{expert[0]}: an expert photon scale replaces the instrument's link "
+                "budget; remove it or the instrument / hardware keys"
+            )
+        if hardware:
+            # the instrument's hardware sets these: a second value would be silently ignored
+            # (compared with the defaults: a config written back keeps every key)
+            clash = [
+                f"{block}.{k}"
+                for block, keys in _HARDWARE_SET.items()
+                for k in keys
+                if getattr(getattr(self, block), k) != getattr(_DEFAULTS[block], k)
+            ]
+            if clash:
+                raise ValueError(
+                    f"{clash[0]}: set by the instrument's hardware (set hardware."
+                    f"{_HARDWARE_KEY[clash[0].split('.')[1]]} instead, or use the expert photon "
+                    "scales without an instrument)"
+                )
+        return self
+
+
+#: keys of the other blocks that an instrument's hardware sets
+_HARDWARE_SET = {
+    "pulse": ("fwhm_ns", "jitter_ns"),
+    "steered_beam": ("divergence_mrad", "pulse_rate_hz"),
+    "flash": ("pulse_rate_hz",),
+}
+_DEFAULTS = {"pulse": PulseCfg(), "steered_beam": SteeredBeamCfg(), "flash": FlashCfg()}
+_HARDWARE_KEY = {
+    "fwhm_ns": "pulse_fwhm_ns",
+    "jitter_ns": "jitter_ns",
+    "divergence_mrad": "divergence_urad",
+    "pulse_rate_hz": "pulse_rate_hz",
+}
 
 
 class HazardCfg(_Model):

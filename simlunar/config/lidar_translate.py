@@ -4,6 +4,8 @@ study options."""
 
 from __future__ import annotations
 
+import dataclasses
+
 from simlunar.config.derived import reconstruction_mapping
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.studies import (
@@ -18,27 +20,80 @@ from simlunar.lidar import (
     RangeOptions,
     SteeringOptions,
 )
+from simlunar.lidar.apd import ApdOptions
+from simlunar.lidar.gate import GateOptions
+from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
 from simlunar.metrics.hazard import HazardOptions
-from simlunar.render.lidar_scan import FlashOptions, SteeredBeamOptions
+from simlunar.render.lidar_scan import FlashOptions, SteeredBeamOptions, with_hardware
 from simlunar.render.transient import TransientOptions
 from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
 from simlunar.study.lidar import LidarStudyOptions
 
-__all__ = ["hazard_options", "lidar_options", "lidar_sensor_options"]
+__all__ = ["hazard_options", "lidar_hardware", "lidar_options", "lidar_sensor_options"]
+
+
+#: YAML key of :class:`~simlunar.config.lidar.HardwareCfg` -> (LidarHardware field, SI factor)
+_HARDWARE_SI = {
+    "pulse_energy_uj": ("pulse_energy_j", 1e-6),
+    "wavelength_nm": ("wavelength_m", 1e-9),
+    "pulse_fwhm_ns": ("pulse_fwhm_s", 1e-9),
+    "jitter_ns": ("jitter_s", 1e-9),
+    "pulse_rate_hz": ("pulse_rate_hz", 1.0),
+    "aperture_diameter_mm": ("aperture_diameter_m", 1e-3),
+    "optics_efficiency": ("optics_efficiency", 1.0),
+    "detector_efficiency": ("detector_efficiency", 1.0),
+    "filter_bandwidth_nm": ("filter_bandwidth_m", 1e-9),
+    "divergence_urad": ("divergence_rad", 1e-6),
+    "field_urad": ("field_rad", 1e-6),
+    "dark_count_rate_hz": ("dark_count_rate_hz", 1.0),
+    "solar_irradiance_w_m2_nm": ("solar_irradiance_w_m2_nm", 1.0),
+}
+
+
+def lidar_hardware(o: LidarOptionsCfg, sensor: str) -> LidarHardware | None:
+    """The instrument of a config (preset + hardware overrides, SI) or None where the expert
+    photon scales are used (set, or a micromirror flash without an instrument)."""
+    d = o.detector
+    expert = any(getattr(d, k) is not None for k in type(d).model_fields if k.startswith("expert_"))
+    if expert or (sensor == "micromirror_flash" and o.instrument is None):
+        return None
+    if o.instrument is not None:
+        base = INSTRUMENTS[o.instrument]
+    else:  # generic hardware timed and steered by the pulse and sensor blocks
+        rate = o.flash.pulse_rate_hz if sensor == "flash" else o.steered_beam.pulse_rate_hz
+        base = LidarHardware(
+            pulse_fwhm_s=o.pulse.fwhm_ns * 1e-9,
+            jitter_s=o.pulse.jitter_ns * 1e-9,
+            pulse_rate_hz=rate,
+            divergence_rad=o.steered_beam.divergence_mrad * 1e-3,
+            field_rad=o.steered_beam.divergence_mrad * 1e-3,
+        )
+    over = {
+        _HARDWARE_SI[k][0]: v * _HARDWARE_SI[k][1]
+        for k, v in o.hardware.model_dump().items()
+        if v is not None
+    }
+    return dataclasses.replace(base, **over)
 
 
 def _lidar_common(o: LidarOptionsCfg, seed: int) -> dict:
     """Pulse, detector, ranging and transient options (SI) shared by the LIDARs."""
     d = o.detector
     dead = float("inf") if d.dead_time_ns is None else d.dead_time_ns * 1e-9
+    expert = {}
+    if d.expert_signal_photons is not None:
+        expert["signal_photons"] = d.expert_signal_photons
+    if d.expert_background_photons_per_s is not None:
+        expert["background_photons_per_s"] = d.expert_background_photons_per_s
+    if d.expert_dark_count_rate_hz is not None:
+        expert["dark_count_rate_hz"] = d.expert_dark_count_rate_hz
     return {
         "pulse": PulseOptions(fwhm_s=o.pulse.fwhm_ns * 1e-9, jitter_s=o.pulse.jitter_ns * 1e-9),
         "detector": DetectorOptions(
-            signal_photons=d.signal_photons,
-            background_photons_per_s=d.background_photons_per_s,
-            dark_count_rate_hz=d.dark_count_rate_hz,
             pulses=d.pulses,
             dead_time_s=dead,
+            apd=None if d.apd is None else ApdOptions(**d.apd.model_dump()),
+            **expert,
         ),
         "ranging": RangeOptions(**o.ranging.model_dump()),
         "transient": TransientOptions(
@@ -46,9 +101,11 @@ def _lidar_common(o: LidarOptionsCfg, seed: int) -> dict:
             max_depth=o.transient.max_depth,
             seed=seed,
             laser_intensity=o.transient.laser_intensity_w_sr,
+            oversample=o.transient.oversample,
         ),
         "bin_range_m": o.bin_range_m,
         "margin_m": o.margin_m,
+        "gate": GateOptions(**o.gate.model_dump()),
     }
 
 
@@ -57,9 +114,10 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
     ``seed``: the transient renderer's sampler seed (the unit's render seed)."""
     o = study.options
     common = _lidar_common(o, seed)
+    hardware = lidar_hardware(o, study.sensor)
     if study.sensor == "steered_beam":
         b = o.steered_beam
-        return SteeredBeamOptions(
+        beam = SteeredBeamOptions(
             footprint=FootprintOptions(b.divergence_mrad * 1e-3, b.profile, b.footprint_rays),
             steering=SteeringOptions(
                 max_rate_rad_s=b.max_rate_rad_s,
@@ -73,11 +131,18 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
             batch=b.batch,
             **common,
         )
+        return beam if hardware is None else with_hardware(beam, hardware)
     if study.sensor == "flash":
         f = o.flash
         flash = FlashOptions(pulse_rate_hz=f.pulse_rate_hz, **common)
+        flash = flash if hardware is None else with_hardware(flash, hardware)
         w, h = f.receiver_px
         return FlashLidarOptions(flash, receiver_px=(h, w), revisits=f.revisits, zoom=f.zoom)
+    if hardware is not None:
+        raise ValueError(
+            "options.instrument: a micromirror flash has no hardware link budget yet (its "
+            "projector's dots are no uniform flash); use detector.expert_signal_photons"
+        )
     m = o.micromirror
     w, h = m.receiver_px
     return MicromirrorOptions(FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common), (h, w))

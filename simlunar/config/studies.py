@@ -46,6 +46,7 @@ __all__ = [
     "check_planner_options",
 ]
 
+
 #: ``study.reconstructions``: names of :data:`simlunar.reconstruction.RECONSTRUCTIONS` or
 #: ``{name: {options}}`` mappings, the options' schema derived from each entry's options class
 #: (:func:`simlunar.config.derived.reconstruction_specs`)
@@ -202,6 +203,12 @@ class LidarStudyCfg(_Model):
     options: LidarOptionsCfg = Field(
         default_factory=LidarOptionsCfg,
         description="pulse, detector, ranging, transient, and the sensor's own block",
+    )
+    save_scans: bool = Field(
+        False,
+        description="write scans/unit<i>/ per unit: each planner's example point cloud (LAZ, "
+        "PLY; world frame, per-point time, photons, returns) and range images (EXR) "
+        "(docs/lidar.md)",
     )
     terrain_seeds: int = Field(
         1,

@@ -5,7 +5,13 @@
 - :mod:`~simlunar.lidar.detector`: expected photon counts (laser return + sun background +
   dark counts), Poisson shot noise, SPAD dead time / pile-up, Coates correction
 - :mod:`~simlunar.lidar.ranging`: range extraction (peak / matched filter; first, last or
-  strongest return)
+  strongest return; maximum-likelihood sub-bin position)
+- :mod:`~simlunar.lidar.bounds`: the range's Cramer-Rao bound
+- :mod:`~simlunar.lidar.hardware`: the instrument (link budget, sun background, presets)
+- :mod:`~simlunar.lidar.apd`, :mod:`~simlunar.lidar.spad`: linear-mode APD and Geiger-mode SPAD
+  receivers (excess noise; continuous-time dead time, pile-up and its correction)
+- :mod:`~simlunar.lidar.gate`: the range gate from the pose and a reference plane
+- :mod:`~simlunar.lidar.trajectory`: a moving platform (hover, descent)
 - :mod:`~simlunar.lidar.footprint`: the beam's angular profile and footprint geometry
 - :mod:`~simlunar.lidar.steering`: two-axis steering mechanics and scan time
 - :mod:`~simlunar.lidar.ordering`: raster reference and nearest neighbour + 2-opt ordering
@@ -13,9 +19,9 @@
 The rendering of the histograms lives in :mod:`simlunar.render.transient`.
 """
 
+from simlunar.lidar.bounds import range_crlb
 from simlunar.lidar.detector import (
     DetectorOptions,
-    LinkBudget,
     coates_correction,
     expected_counts,
     photon_counts,
@@ -41,6 +47,7 @@ from simlunar.lidar.steering import (
     SteeringOptions,
     axis_move_time,
     move_time,
+    point_times,
     pointing_angles,
     scan_timing,
 )
@@ -50,13 +57,13 @@ from simlunar.lidar.waveform import (
     TimeBins,
     pulse_kernel,
     shape_waveform,
+    splat_paths,
 )
 
 __all__ = [
     "SPEED_OF_LIGHT",
     "DetectorOptions",
     "FootprintOptions",
-    "LinkBudget",
     "OrderOptions",
     "PulseOptions",
     "RangeOptions",
@@ -76,11 +83,14 @@ __all__ = [
     "order_scan",
     "photon_counts",
     "photon_counts_dead_time",
+    "point_times",
     "pointing_angles",
     "pulse_kernel",
+    "range_crlb",
     "raster_order",
     "scan_timing",
     "shape_waveform",
+    "splat_paths",
     "tilted_plane_spread",
     "two_opt",
 ]

@@ -142,11 +142,50 @@ def pointing_angles(directions: np.ndarray, boresight_pose) -> np.ndarray:
     return np.stack([az, el], axis=1)
 
 
+def point_times(
+    angles: np.ndarray, order=None, *, options: SteeringOptions, start=None
+) -> np.ndarray:
+    """When each pointing's first pulse fires (s from the scan's start), in the input order.
+
+    The beam moves to the k-th pointing of ``order`` (move + settle, nothing for a zero move),
+    fires its ``pulses_per_point`` pulses (the dwell) and moves on; so the last point's time
+    plus one dwell is :func:`scan_timing`'s ``total_s``.
+
+    Parameters
+    ----------
+    angles : (n, 2) float
+        Gimbal angles (rad).
+    order : (n,) int or None
+        Visiting order (None: as given).
+    options : SteeringOptions
+    start : (2,) float or None
+        Pointing before the scan (None: the first point).
+
+    Returns
+    -------
+    (n,) float64
+    """
+    p = np.asarray(angles, float)
+    n = len(p)
+    idx = np.arange(n) if order is None else np.asarray(order)
+    if n == 0:
+        return np.zeros(0)
+    q = p[idx]
+    first = q[:1] if start is None else np.asarray(start, float).reshape(1, 2)
+    d = np.max(np.abs(np.diff(np.concatenate([first, q], axis=0), axis=0)), axis=1)
+    move = np.where(d > 0, axis_move_time(d, options) + options.settle_s, 0.0)
+    fire = np.cumsum(move) + np.arange(n) * options.dwell_s
+    out = np.empty(n)
+    out[idx] = fire
+    return out
+
+
 __all__ = [
     "ScanTiming",
     "SteeringOptions",
     "axis_move_time",
     "move_time",
+    "point_times",
     "pointing_angles",
     "scan_timing",
 ]

@@ -6,6 +6,18 @@ response, and the pulse shape and the detector's timing jitter are applied here 
 as one Gaussian along the time axis (both are close to Gaussian for the diode-pumped
 microchip lasers and SPAD / APD receivers flown on landers).
 
+**Keeping the sub-bin arrival time.** A box-binned impulse response places every path at its
+bin's centre: a plane's range then snaps to the bin grid (+25 ... -19 mm at 5 cm bins, RMS
+2.7-14x the Cramer-Rao bound; REFERENCES.md, "LIDAR physics, checked independently"). So the
+returns are rendered on ``oversample`` finer bins with a *linear* (tent) splat -- a path at
+fractional bin position ``x`` puts ``1 - f`` of its weight on the fine bin whose centre is just
+below ``x`` and ``f`` on the next (:func:`splat_paths`; simlunar's film in
+:mod:`simlunar.render.transient` does the same) -- which keeps every path's first moment
+exactly; the pulse and jitter are applied on the fine bins and the result is summed back to
+the output bins (:func:`shape_waveform`). The residual is the linear interpolation of the
+bin-integrated pulse between fine-bin centres: a second-order term, below 0.1 mm of bias for
+a 1 ns pulse on 5 cm bins at ``oversample`` = 4 (tests/lidar/test_waveform.py).
+
 Range is half the round-trip OPL of a co-located emitter and receiver: ``R = OPL / 2``.
 """
 
@@ -82,6 +94,13 @@ class TimeBins:
         """(count,) range of each bin centre (m)."""
         return (self.start_opl + (np.arange(self.count) + 0.5) * self.bin_opl) / 2.0
 
+    def refined(self, oversample: int) -> TimeBins:
+        """The same window cut into ``oversample`` times finer bins."""
+        k = int(oversample)
+        if k < 1:
+            raise ValueError(f"oversample must be >= 1, got {oversample}")
+        return TimeBins(self.start_opl, self.bin_opl / k, self.count * k)
+
     def range_of(self, index) -> np.ndarray:
         """Range (m) of fractional bin index ``index`` (bin i spans [i, i + 1))."""
         return (self.start_opl + np.asarray(index, float) * self.bin_opl) / 2.0
@@ -131,25 +150,71 @@ def pulse_kernel(bins: TimeBins, pulse: PulseOptions) -> np.ndarray:
     return k / k.sum()
 
 
-def shape_waveform(hist: np.ndarray, bins: TimeBins, pulse: PulseOptions) -> np.ndarray:
-    """Convolve rendered impulse-response histograms with the pulse and detector response.
+def splat_paths(opl: np.ndarray, weight: np.ndarray, bins: TimeBins) -> np.ndarray:
+    """Tent-splat paths into bins: the NumPy twin of simlunar's transient film.
+
+    A path of round-trip OPL ``opl`` sits at fractional bin position
+    ``x = (opl - start_opl) / bin_opl``; with ``i = floor(x - 1/2)`` and ``f = x - 1/2 - i``
+    it adds ``(1 - f) w`` to bin ``i`` and ``f w`` to bin ``i + 1`` (bins outside the window
+    get nothing). The histogram's first moment is then exactly ``sum w x`` (linear
+    interpolation between bin centres), where a box bin would round ``x`` to its bin centre.
 
     Parameters
     ----------
-    hist : (..., count) float
-        Rendered return per bin (any unit; the transient film's radiance).
+    opl : (..., n) float
+        Round-trip optical path length of each of n paths per histogram (m).
+    weight : (..., n) float or float
+        Each path's contribution (any unit).
     bins : TimeBins
-    pulse : PulseOptions
 
     Returns
     -------
     (..., count) float64
-        Same unit; the sum over bins is kept except for light pushed past either end.
+    """
+    x = (np.asarray(opl, float) - bins.start_opl) / bins.bin_opl - 0.5
+    w = np.broadcast_to(np.asarray(weight, float), x.shape)
+    i = np.floor(x).astype(np.int64)
+    f = x - i
+    flat_x = x.reshape(-1, x.shape[-1])
+    out = np.zeros((flat_x.shape[0], bins.count))
+    rows = np.repeat(np.arange(flat_x.shape[0]), flat_x.shape[-1])
+    for idx, wt in ((i, 1.0 - f), (i + 1, f)):
+        idx, wt = idx.reshape(-1), (wt * w).reshape(-1)
+        ok = (idx >= 0) & (idx < bins.count)
+        np.add.at(out, (rows[ok], idx[ok]), wt[ok])
+    return out.reshape(*x.shape[:-1], bins.count)
+
+
+def shape_waveform(
+    hist: np.ndarray, bins: TimeBins, pulse: PulseOptions, *, oversample: int = 1
+) -> np.ndarray:
+    """Convolve rendered impulse-response histograms with the pulse and detector response.
+
+    Parameters
+    ----------
+    hist : (..., count * oversample) float
+        Rendered return per fine bin (any unit; the transient film's radiance), the
+        ``oversample`` times finer bins of ``bins`` (tent-splatted, :func:`splat_paths`).
+    bins : TimeBins
+        The output bins.
+    pulse : PulseOptions
+    oversample : int
+        Fine bins per output bin.
+
+    Returns
+    -------
+    (..., count) float64
+        Same unit, on the output bins; the sum over bins is kept except for light pushed
+        past either end.
     """
     h = np.asarray(hist, float)
-    if h.shape[-1] != bins.count:
-        raise ValueError(f"hist has {h.shape[-1]} bins on its last axis, bins.count={bins.count}")
-    k = pulse_kernel(bins, pulse)
-    if k.size == 1:
-        return h.copy()
-    return ndimage.convolve1d(h, k, axis=-1, mode="constant", cval=0.0)
+    fine = bins.refined(oversample)
+    if h.shape[-1] != fine.count:
+        raise ValueError(
+            f"hist has {h.shape[-1]} bins on its last axis, bins.count x oversample = {fine.count}"
+        )
+    k = pulse_kernel(fine, pulse)
+    out = h.copy() if k.size == 1 else ndimage.convolve1d(h, k, axis=-1, mode="constant")
+    if oversample == 1:
+        return out
+    return out.reshape(*h.shape[:-1], bins.count, int(oversample)).sum(axis=-1)

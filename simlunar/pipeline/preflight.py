@@ -296,10 +296,11 @@ def check_time_bins(s: Any, facts: TerrainFacts) -> None:
         w, h = block.receiver_px
         pixels = w * h
         what = f"{w} x {h} receiver pixels"
+    ov = o.transient.oversample  # rendered on oversample finer bins (docs/lidar.md)
     check_size(
         "study.options.bin_range_m",
-        f"{what} x {bins} time bins x {TRANSIENT_CHANNELS} channels",
-        pixels * bins * TRANSIENT_CHANNELS,
+        f"{what} x {bins} time bins x {TRANSIENT_CHANNELS} channels x {ov} (oversampled)",
+        pixels * bins * TRANSIENT_CHANNELS * ov,
         "SIMLUNAR_MAX_FRAME_PIXELS",
     )
 

@@ -181,7 +181,7 @@ def compute_unit(
     dict
         :meth:`UnitRecord.to_dict`: ``rows`` (tidy dicts), ``scores`` ({metric: {strategy:
         score}}), ``arrays`` (name -> ndarray, for figures), ``timings`` (stage -> seconds),
-        ``meta`` and, for a scanner unit with ``save_scans``, ``scans``.
+        ``meta`` and, for a scanner or lidar unit with ``save_scans``, ``scans``.
     """
     cfg = ExperimentCfg.model_validate(payload["config"])
     seeds = stage_seeds(cfg.seed)
@@ -420,6 +420,11 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
     for label, acq in res.examples.items():
         # where the example acquisition measured, and what: (row, col, depth) per sample
         arrays[f"samples_{label}"] = np.c_[acq.rc, acq.values].astype(np.float64)
+    scans = None
+    if cfg.study.save_scans:  # written by the runner into scans/unit<i>/
+        from simlunar.results.lidar_exports import lidar_export_payload
+
+        scans = lidar_export_payload(res.examples, scene.camera, image.shape[:2])
     return UnitRecord(
         rows=[dict(row) for row in res.rows],
         scores={},
@@ -431,4 +436,5 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
             "variant": backend.info().variant,
             **guide_meta,
         },
+        scans=scans,
     )

@@ -39,8 +39,8 @@ def register(mi) -> None:
             self.divergence = float(props.get("divergence", 0.0))
             n = int(self.film().size().x)
             self.n_beams = n
-            self.origin = mi.Point3f(0.0)
             z = np.zeros(n, np.float32)
+            self.origins = mi.Point3f(z, z, z)
             self.dirs = mi.Vector3f(z, z, z + 1)
             self.t1 = mi.Vector3f(z + 1, z, z)
             self.t2 = mi.Vector3f(z, z + 1, z)
@@ -63,7 +63,8 @@ def register(mi) -> None:
             sr, cr = dr.sincos(r)
             sp, cp = dr.sincos(phi)
             direction = dr.normalize(cr * d + sr * (cp * t1 + sp * t2))
-            return mi.RayDifferential3f(mi.Ray3f(self.origin, direction, time, []))
+            origin = dr.gather(mi.Point3f, self.origins, idx)
+            return mi.RayDifferential3f(mi.Ray3f(origin, direction, time, []))
 
         def sample_ray(self, time, sample1, sample2, sample3, active=True):
             return self._ray(time, sample2), mi.Spectrum(1.0)
@@ -72,7 +73,7 @@ def register(mi) -> None:
             return self._ray(time, sample2), mi.Spectrum(1.0)
 
         def bbox(self):
-            return mi.BoundingBox3f(self.origin, self.origin)
+            return mi.BoundingBox3f()
 
         def to_string(self):
             return f"BeamArraySensor[n_beams={self.n_beams}]"
@@ -103,16 +104,17 @@ def tangent_frames(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
 
 
 def set_beams(mi, sensor, origin: np.ndarray, directions: np.ndarray) -> None:
-    """Point the beam array's ``N`` beams (directions (N, 3), origin (3,) m)."""
+    """Point the beam array's ``N`` beams (directions (N, 3); origin (3,) m shared, or (N, 3)
+    one per beam: a moving platform)."""
     n = sensor.n_beams
     if directions.shape != (n, 3):
         raise ValueError(f"directions must have shape ({n}, 3), got {directions.shape}")
     d, t1, t2 = tangent_frames(directions)
+    o = np.broadcast_to(np.asarray(origin, float), (n, 3))
 
-    def vec(a):
+    def vec(a, kind=mi.Vector3f):
         a = np.ascontiguousarray(a.T, dtype=np.float32)
-        return mi.Vector3f(a[0], a[1], a[2])
+        return kind(a[0], a[1], a[2])
 
     sensor.dirs, sensor.t1, sensor.t2 = vec(d), vec(t1), vec(t2)
-    o = np.asarray(origin, np.float32)
-    sensor.origin = mi.Point3f(float(o[0]), float(o[1]), float(o[2]))
+    sensor.origins = vec(o, mi.Point3f)

@@ -35,10 +35,13 @@ from simlunar.lidar import (
     order_scan,
     photon_counts,
     photon_counts_dead_time,
+    point_times,
     pointing_angles,
     scan_timing,
     shape_waveform,
 )
+from simlunar.lidar.gate import GateOptions, gate_bins, plane_ranges
+from simlunar.lidar.hardware import LidarHardware, pixel_solid_angles
 from simlunar.render.lights import ProjectorLight
 from simlunar.render.transient import (
     BeamCapture,
@@ -51,15 +54,18 @@ __all__ = [
     "FlashOptions",
     "LidarScan",
     "SteeredBeamOptions",
+    "altimeter_datum",
     "beam_capture",
     "flash_scan",
+    "flash_window",
     "guide_directions",
     "micromirror_flash",
     "micromirror_frames",
-    "range_window",
     "read_flash",
     "receiver_rc",
+    "receiver_solid_angles",
     "steered_beam_scan",
+    "with_hardware",
 ]
 
 
@@ -80,6 +86,16 @@ class _ReturnOptions:
         Range width of a time bin (m).
     margin_m : float
         Range margin (m) around the expected ranges.
+    hardware : LidarHardware or None
+        The instrument: when given, the photon scales and dark counts of ``detector`` are
+        derived from it (the lidar equation, :mod:`simlunar.lidar.hardware`) and the rendered
+        laser intensity and sun irradiance; ``detector``'s own ``signal_photons`` and
+        ``background_photons_per_s`` are then the expert override used only without it.
+        :func:`with_hardware` also sets the pulse, rates and divergence from it.
+    gate : GateOptions
+        The range gate: a reference plane (datum or altimeter reading) and the instrument's
+        range limits (:mod:`simlunar.lidar.gate`); ``margin_m`` must cover the terrain's
+        relief about the plane.
     """
 
     pulse: PulseOptions = field(default_factory=PulseOptions)
@@ -88,6 +104,34 @@ class _ReturnOptions:
     transient: TransientOptions = field(default_factory=TransientOptions)
     bin_range_m: float = 0.05
     margin_m: float = 2.0
+    hardware: LidarHardware | None = None
+    gate: GateOptions = field(default_factory=GateOptions)
+
+    def photon_detector(
+        self, *, pulses=None, field_sr=None, lit_sr=None, sun_irradiance=1.0
+    ) -> DetectorOptions:
+        """The detector with the photon scales of :attr:`hardware` (or the expert override).
+
+        ``field_sr`` / ``lit_sr``: a flash pixel's solid angle and the lit field (sr); None for
+        a steered beam. ``pulses`` replaces the detector's pulses per reading.
+        """
+        det = self.detector
+        if pulses is not None:
+            det = dataclasses.replace(det, pulses=int(pulses))
+        if self.hardware is None:
+            return det
+        hw = self.hardware.detector(
+            field_sr=field_sr,
+            lit_sr=lit_sr,
+            laser_intensity=self.transient.laser_intensity,
+            sun_irradiance=max(sun_irradiance, 1e-30),
+        )
+        return dataclasses.replace(
+            det,
+            signal_photons=hw.signal_photons,
+            background_photons_per_s=hw.background_photons_per_s,
+            dark_count_rate_hz=hw.dark_count_rate_hz,
+        )
 
 
 @dataclass(frozen=True)
@@ -152,6 +196,11 @@ class LidarScan:
         Pulses fired (steered beam) or flash frames.
     timing : ScanTiming or None
         Breakdown for steered beams.
+    times : (n,) float64 or None
+        When each sample was measured (s from the acquisition's start): a steered beam's
+        first pulse at that pointing, a flash frame's start.
+    returns : (n,) int64 or None
+        Returns detected in each sample's histogram (the reported one is ``which``).
     """
 
     ranges: np.ndarray
@@ -162,11 +211,27 @@ class LidarScan:
     seconds: float
     frames: int
     timing: ScanTiming | None = None
+    times: np.ndarray | None = None
+    returns: np.ndarray | None = None
 
     def depth(self, camera: Camera) -> np.ndarray:
         """z-depth (m) of :attr:`points` along ``camera``'s optical axis (the guide view's
         depth convention of :class:`~simlunar.geometry.types.GroundTruth`); NaN where invalid."""
         return (self.points - camera.pose.position) @ camera.pose.forward
+
+
+def with_hardware(options, hardware: LidarHardware):
+    """``options`` (:class:`SteeredBeamOptions` or :class:`FlashOptions`) measuring with
+    ``hardware``: its pulse and jitter, photon scales (:meth:`_ReturnOptions.photon_detector`),
+    pulse rate and, for a steered beam, its divergence."""
+    out = dataclasses.replace(options, hardware=hardware, pulse=hardware.pulse)
+    if isinstance(out, SteeredBeamOptions):
+        return dataclasses.replace(
+            out,
+            footprint=dataclasses.replace(out.footprint, divergence_rad=hardware.divergence_rad),
+            steering=dataclasses.replace(out.steering, pulse_rate_hz=hardware.pulse_rate_hz),
+        )
+    return dataclasses.replace(out, pulse_rate_hz=hardware.pulse_rate_hz)
 
 
 def guide_directions(camera: Camera, rc: np.ndarray) -> np.ndarray:
@@ -202,11 +267,67 @@ def beam_capture(terrain, origin, *, options: SteeredBeamOptions, sun=None, bsdf
     )
 
 
-def _counts(hist, background, bins: TimeBins, pulse, detector: DetectorOptions, rng):
-    lam = expected_counts(shape_waveform(hist, bins, pulse), background, bins, detector)
+def _ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions, ranging):
+    """Ranges of the counts; a SPAD's detected returns refitted without pile-up."""
+    res = extract_ranges(counts, bins, pulse=pulse, options=ranging, apd=det.apd,
+                         pulses=det.pulses)  # fmt: skip
+    if det.regime != "spad" or not ranging.pileup_correction or not res.valid.any():
+        return res
+    from simlunar.lidar.spad import spad_correct
+
+    c = np.asarray(counts).reshape(-1, bins.count)
+    ok = res.valid.reshape(-1)
+    bg = np.broadcast_to(np.asarray(background, float), res.valid.shape).reshape(-1)
+    per_bin = (bg * det.background_photons_per_s + det.dark_count_rate_hz) * bins.bin_s
+    fit = spad_correct(c[ok], bins, pulses=det.pulses, dead_time_s=det.dead_time_s,
+                       sigma_bins=pulse.sigma_bins(bins), background=per_bin[ok])  # fmt: skip
+    rng_m, ph = res.range.reshape(-1).copy(), res.photons.reshape(-1).copy()
+    rng_m[ok], ph[ok] = fit.range, fit.photons * det.pulses
+    return dataclasses.replace(res, range=rng_m.reshape(res.range.shape),
+                               photons=ph.reshape(res.photons.shape))  # fmt: skip
+
+
+def _counts(hist, background, bins: TimeBins, pulse, detector: DetectorOptions, rng, oversample=1):
+    shaped = shape_waveform(hist, bins, pulse, oversample=oversample)
+    lam = expected_counts(shaped, background, bins, detector)
     if 0 < detector.dead_time_s < np.inf:
         return photon_counts_dead_time(lam, bins, options=detector, rng=rng)
     return photon_counts(lam, options=detector, rng=rng)
+
+
+def altimeter_datum(capture: BeamCapture, boresight, *, options: SteeredBeamOptions, rng=None):
+    """Range the boresight and return the plane it meets: ``(datum_z (m), window steps)``.
+
+    The beam's window (``options.window_m``) is stepped out from ``gate.min_range_m`` in
+    steps of ``window_m - 2 margin_m`` (overlapping by the margins) until a return is
+    detected, up to ``gate.max_range_m``; each step fires ``steering.pulses_per_point``
+    pulses. The plane is horizontal through the measured point (the IMU gives the vertical).
+
+    Raises
+    ------
+    NothingMeasured-like ValueError
+        No return within the instrument's range.
+    """
+    d = np.asarray(boresight, float).reshape(1, 3)
+    d = d / np.linalg.norm(d)
+    det = options.photon_detector(
+        pulses=options.steering.pulses_per_point, sun_irradiance=capture.sun_irradiance
+    )
+    bins, g = options.window, options.gate
+    step = options.window_m - 2.0 * options.margin_m
+    r0, k = g.min_range_m, 0
+    while r0 < g.max_range_m:
+        k += 1
+        hist, _ = capture.render_batch(d, 2.0 * r0, seed=options.transient.seed + 7919 * k)
+        bg = capture.render_sun(d) if capture.has_sun else 0.0
+        counts = _counts(hist, bg, bins, options.pulse, det, rng, capture.oversample)
+        res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging,
+                             apd=det.apd, pulses=det.pulses)  # fmt: skip
+        if res.valid[0]:
+            r = float(res.range[0]) + r0
+            return float(capture.origin[2] + r * d[0, 2]), k
+        r0 += step
+    raise ValueError(f"altimeter: no return along the boresight within {g.max_range_m} m")
 
 
 def steered_beam_scan(
@@ -216,6 +337,7 @@ def steered_beam_scan(
     options: SteeredBeamOptions,
     rng=None,
     boresight: Pose | None = None,
+    trajectory=None,
 ) -> LidarScan:
     """Scan planned directions with a steered beam.
 
@@ -230,6 +352,10 @@ def steered_beam_scan(
         Photon noise.
     boresight : Pose or None
         Gimbal zero (its forward axis); None = looking along the mean direction.
+    trajectory : Trajectory or None
+        The platform's motion (:mod:`simlunar.lidar.trajectory`): each beam leaves from its
+        position at the beam's firing time (the pose known exactly); None = at rest at the
+        capture's origin. The gimbal's attitude is held in the world frame.
 
     Returns
     -------
@@ -238,29 +364,67 @@ def steered_beam_scan(
     rng = np.random.default_rng(rng)
     d = np.asarray(directions, float)
     d = d / np.linalg.norm(d, axis=1, keepdims=True)
-    det = dataclasses.replace(options.detector, pulses=options.steering.pulses_per_point)
-    ret = capture_beams(capture, d, margin_m=options.margin_m, seed=options.transient.seed)
-    bins = options.window
-    bg = 0.0 if ret.sun is None else ret.sun
-    counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng)
-    res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging)
-    valid = res.valid & np.isfinite(ret.start_opl)
-    ranges = np.where(valid, res.range + ret.start_opl / 2.0, np.nan)
+    det = options.photon_detector(
+        pulses=options.steering.pulses_per_point, sun_irradiance=capture.sun_irradiance
+    )
+    datum, steps = options.gate.datum_z_m, 0
+    if options.gate.altimeter:
+        bore = d.mean(axis=0) if boresight is None else boresight.forward
+        datum, steps = altimeter_datum(capture, bore, options=options, rng=rng)
     if boresight is None:
         boresight = Pose.look_at(capture.origin, capture.origin + d.mean(axis=0))
     angles = pointing_angles(d, boresight)
     order = order_scan(angles, steering=options.steering, options=options.order)
     timing = scan_timing(angles, order, options=options.steering)
+    lead = steps * det.pulses / options.steering.pulse_rate_hz  # the altimeter's steps first
+    times = lead + point_times(angles, order, options=options.steering)
+    origins = None if trajectory is None else trajectory.at(times)
+    pred = plane_ranges(
+        capture.origin if origins is None else origins, d, datum_z=datum, options=options.gate
+    )
+    if origins is not None:  # render in firing order: the platform moves between launches
+        fire = np.argsort(times, kind="stable")
+        inv = np.empty_like(fire)
+        inv[fire] = np.arange(len(fire))
+        ret = capture_beams(capture, d[fire], pred[fire], margin_m=options.margin_m,
+                            seed=options.transient.seed, origins=origins[fire])  # fmt: skip
+        ret = _reorder(ret, inv)
+    else:
+        ret = capture_beams(capture, d, pred, margin_m=options.margin_m,
+                            seed=options.transient.seed)  # fmt: skip
+    bins = options.window
+    bg = 0.0 if ret.sun is None else ret.sun
+    counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
+    res = _ranges(counts, bg, bins, options.pulse, det, options.ranging)
+    valid = res.valid & np.isfinite(ret.start_opl)
+    ranges = res.range + ret.start_opl / 2.0
+    if ret.opl_offset is not None:
+        ranges = ranges - ret.opl_offset / 2.0  # the render's laser offset, not the sensor's
+    ranges = np.where(valid, ranges, np.nan)
+    o = capture.origin if origins is None else origins
     return LidarScan(
         ranges=ranges,
         valid=valid,
-        points=capture.origin + ranges[:, None] * d,
+        points=o + ranges[:, None] * d,
         photons=res.photons,
         order=order,
-        seconds=timing.total_s,
-        frames=len(d) * int(options.steering.pulses_per_point),
+        # the altimeter's window steps fire pulses_per_point pulses each before the scan
+        seconds=timing.total_s + lead,
+        frames=(len(d) + steps) * int(options.steering.pulses_per_point),
         timing=timing,
+        times=times,
+        returns=res.returns,
     )
+
+
+def _reorder(ret, inv):
+    """BeamReturns of beams rendered in another order, back in the input order."""
+    take = {
+        f.name: (getattr(ret, f.name)[inv] if isinstance(getattr(ret, f.name), np.ndarray)
+                 and getattr(ret, f.name).ndim >= 1 else getattr(ret, f.name))
+        for f in dataclasses.fields(ret)
+    }  # fmt: skip
+    return type(ret)(**take)
 
 
 @dataclass(frozen=True)
@@ -284,27 +448,43 @@ class FlashOptions(_ReturnOptions):
             raise ValueError("need bin_range_m > 0, margin_m >= 0 and pulse_rate_hz > 0")
 
 
-def range_window(terrain, camera: Camera, *, bin_range_m: float, margin_m: float) -> TimeBins:
-    """Bins covering every terrain cell in ``camera``'s view, with ``margin_m`` (m) each side."""
-    p = terrain.points().reshape(-1, 3)
-    p = p[np.isfinite(p).all(axis=1)]
-    stride = max(1, len(p) // 200_000)
-    p = p[::stride]
-    uv, z = camera.project(p)
-    u, v = uv[:, 0], uv[:, 1]
-    h, w = camera.shape
-    inside = (z > 0) & (u >= 0) & (u <= w) & (v >= 0) & (v <= h)
-    if not inside.any():
-        raise ValueError("camera: no terrain cell in view")
-    r = np.linalg.norm(p[inside] - camera.pose.position, axis=1)
-    near = max(float(r.min()) - margin_m, 0.0)
-    return TimeBins.for_ranges(near, float(r.max()) + margin_m, bin_range_m)
+def flash_window(camera: Camera, *, options: FlashOptions) -> TimeBins:
+    """The flash receiver's range gate: the ranges where its pixel rays meet the reference
+    plane (``options.gate``), with ``options.margin_m`` on both sides (never the terrain)."""
+    if options.gate.altimeter:
+        raise ValueError("gate.altimeter: a flash takes its reference plane from gate.datum_z_m")
+    _, d = camera.rays(camera.pixel_centers().reshape(-1, 2))
+    r = plane_ranges(camera.pose.position, d, datum_z=options.gate.datum_z_m, options=options.gate)
+    r = r[r < options.gate.max_range_m]  # pixels above the plane's horizon are not gated
+    if r.size == 0:
+        raise ValueError("gate: no receiver pixel meets the reference plane within max_range_m")
+    return gate_bins(r, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
 
 
-def _read_frame(frame, options: FlashOptions, rng):
-    bg = 0.0 if frame.sun is None else frame.sun
-    counts = _counts(frame.histograms, bg, frame.bins, options.pulse, options.detector, rng)
-    return extract_ranges(counts, frame.bins, pulse=options.pulse, options=options.ranging)
+def receiver_solid_angles(camera: Camera) -> np.ndarray:
+    """Exact solid angle (sr) of every pixel of a receiver ``camera``, (rows, cols)."""
+    k = camera.intrinsics
+    return pixel_solid_angles(k.fx, k.fy, k.cx, k.cy, k.width, k.height)
+
+
+def _read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=None):
+    """Photon counts and ranges of a rendered frame through ``camera`` (its receiver).
+
+    Every pixel collects in proportion to its own solid angle (``cos^3`` off axis): with
+    hardware, ``Omega_pix`` itself and the pulse spread over ``lit_sr`` (default: the whole
+    receiver field); with the expert override the photon scales are the boresight pixel's.
+    """
+    omega = receiver_solid_angles(camera)
+    if options.hardware is None:
+        weight, det = omega / omega.max(), options.detector
+    else:
+        lit = float(omega.sum()) if lit_sr is None else float(lit_sr)
+        det = options.photon_detector(field_sr=1.0, lit_sr=lit, sun_irradiance=frame.sun_irradiance)
+        weight = omega
+    bg = 0.0 if frame.sun is None else frame.sun * weight
+    hist = frame.histograms * weight[..., None].astype(np.float32)
+    counts = _counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
+    return _ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
 
 
 def flash_scan(
@@ -327,7 +507,7 @@ def flash_scan(
     LidarScan
         ``points`` along each pixel centre's ray; ``frames`` = 1.
     """
-    bins = range_window(terrain, camera, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
+    bins = flash_window(camera, options=options)
     frame = flash_frame(terrain, camera, bins=bins, options=options.transient, bsdf=bsdf, sun=sun)
     return read_flash(frame, camera, options=options, rng=rng)
 
@@ -336,7 +516,7 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
     """Read a rendered flash frame (:func:`~simlunar.render.transient.flash_frame` through
     ``camera``) with fresh photon noise: a frame rendered once serves many noisy reads."""
     rng = np.random.default_rng(rng)
-    res = _read_frame(frame, options, rng)
+    res = _read_frame(frame, camera, options, rng)
     _, d = camera.rays(camera.pixel_centers())
     return LidarScan(
         ranges=res.range,
@@ -346,6 +526,8 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
         order=np.arange(res.range.size).reshape(res.range.shape),
         seconds=options.detector.pulses / options.pulse_rate_hz,
         frames=1,
+        times=np.zeros(res.range.shape),
+        returns=res.returns,
     )
 
 
@@ -405,6 +587,11 @@ def micromirror_flash(
     LidarScan
         Arrays over the k planned pixels; ``frames`` = flash frames fired.
     """
+    if options.hardware is not None:
+        raise ValueError(
+            "a micromirror flash has no hardware link budget yet (its projector's dots are not "
+            "a uniform flash): use the expert photon scales (detector.signal_photons)"
+        )
     rng = np.random.default_rng(rng)
     uv = np.asarray(pixels, float).reshape(-1, 2)
     h, w = camera.shape
@@ -413,9 +600,11 @@ def micromirror_flash(
     if receiver.shape != (rh, rw):
         raise ValueError(f"receiver_shape {receiver_shape} must keep the aspect of {(h, w)}")
     projector = Projector(camera.intrinsics, camera.pose)
-    bins = range_window(terrain, camera, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
+    bins = flash_window(camera, options=options)
     frame_of = micromirror_frames(uv, camera, (rh, rw))
     ranges, photons = np.full(len(uv), np.nan), np.zeros(len(uv))
+    returns, times = np.zeros(len(uv), np.int64), np.zeros(len(uv))
+    per_frame = options.detector.pulses / options.pulse_rate_hz
     col = np.clip(np.floor(uv[:, 0] * rw / w).astype(int), 0, rw - 1)
     row = np.clip(np.floor(uv[:, 1] * rh / h).astype(int), 0, rh - 1)
     n_frames = int(frame_of.max()) + 1 if len(uv) else 0
@@ -435,8 +624,9 @@ def micromirror_flash(
             sun=sun,
             projector=light,
         )
-        res = _read_frame(fr, options, rng)
+        res = _read_frame(fr, receiver, options, rng)
         ranges[sel], photons[sel] = res.range[row[sel], col[sel]], res.photons[row[sel], col[sel]]
+        returns[sel], times[sel] = res.returns[row[sel], col[sel]], f * per_frame
     _, d = camera.rays(uv)
     valid = np.isfinite(ranges)
     return LidarScan(
@@ -447,4 +637,6 @@ def micromirror_flash(
         order=np.arange(len(uv)),
         seconds=n_frames * options.detector.pulses / options.pulse_rate_hz,
         frames=n_frames,
+        times=times,
+        returns=returns,
     )

@@ -306,6 +306,10 @@ def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None =
         The cache key of the unit that made the scan, recorded in ``manifest.json`` (written
         last): the runner keeps a folder only while its unit is part of the result folder.
     """
+    if payload.get("kind") == "lidar":
+        from simlunar.results.lidar_exports import write_lidar_export
+
+        return write_lidar_export(folder, payload, unit_key=unit_key)
     from PIL import Image
 
     folder = Path(folder)
@@ -366,9 +370,14 @@ def export_complete(folder, unit_key: str) -> bool:
     if export_unit_key(folder) != unit_key:
         return False
     try:
-        frames = json.loads((folder / "manifest.json").read_text()).get("frames")
+        manifest = json.loads((folder / "manifest.json").read_text())
+        frames = manifest.get("frames")
     except (OSError, ValueError, AttributeError):
         return False
+    if manifest.get("kind") == "lidar":  # results/lidar_exports.py: the files it lists
+        files = manifest.get("files")
+        ok = isinstance(files, list) and all(isinstance(f, str) for f in files)
+        return ok and all((folder / f).is_file() for f in files)
     if not isinstance(frames, list) or not all(isinstance(f, str) for f in frames):
         return False
     wanted = [folder / name for name in EXPORT_FILES]
@@ -386,14 +395,17 @@ def check_save_scans(cfg) -> None:
     Raises
     ------
     ConfigError
-        The experiment's study is not a scanner study with a gray-code scan.
+        The experiment's study is neither a lidar study nor a scanner study with a
+        gray-code scan.
     """
 
     study = cfg.study
+    if getattr(study, "kind", None) == "lidar":
+        return  # point clouds and range images of every LIDAR (results/lidar_exports.py)
     if getattr(study, "kind", None) != "scanner":
         raise ConfigError(
             f"--save-scans: experiment {cfg.name!r} has a {study.kind} study; scans are "
-            "exported by scanner studies only"
+            "exported by scanner and lidar studies only"
         )
     if not {"gray_code", "ambiguity_enhancement"} & set(study.modes):
         raise ConfigError(

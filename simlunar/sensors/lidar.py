@@ -30,9 +30,9 @@ from simlunar.render.lidar_scan import (
     LidarScan,
     SteeredBeamOptions,
     beam_capture,
+    flash_window,
     guide_directions,
     micromirror_flash,
-    range_window,
     read_flash,
     steered_beam_scan,
 )
@@ -218,7 +218,7 @@ class FlashLidar:
         """A frame through ``camera``: rendered once per field (``key``), read with fresh noise."""
         s, f = self.scene, self.options.flash
         if key not in self._frames:
-            bins = range_window(s.terrain, camera, bin_range_m=f.bin_range_m, margin_m=f.margin_m)
+            bins = flash_window(camera, options=f)
             self._frames[key] = flash_frame(
                 s.terrain, camera, bins=bins, options=f.transient, bsdf=s.bsdf, sun=s.sun
             )
@@ -253,15 +253,22 @@ class FlashLidar:
         )
 
 
+def _or(a, n, fill=0):
+    return np.full(n, fill) if a is None else np.asarray(a).ravel()
+
+
 def _flat(s: LidarScan) -> LidarScan:
+    n = s.ranges.size
     return LidarScan(
         s.ranges.ravel(),
         s.valid.ravel(),
         s.points.reshape(-1, 3),
         s.photons.ravel(),
-        np.arange(s.ranges.size),
+        np.arange(n),
         s.seconds,
         s.frames,
+        times=_or(s.times, n, 0.0).astype(float),
+        returns=_or(s.returns, n).astype(np.int64),
     )
 
 
@@ -274,12 +281,16 @@ def _subset(s: LidarScan, keep: np.ndarray) -> LidarScan:
         np.arange(int(keep.sum())),
         s.seconds,
         s.frames,
+        times=s.times[keep],
+        returns=s.returns[keep],
     )
 
 
 def _concat(scans: list[LidarScan]) -> LidarScan:
+    """The frames one after the other: each one's times start where the previous ended."""
     cat = np.concatenate
     n = sum(s.ranges.size for s in scans)
+    start = np.cumsum([0.0] + [s.seconds for s in scans[:-1]])
     return LidarScan(
         cat([s.ranges for s in scans]),
         cat([s.valid for s in scans]),
@@ -288,6 +299,8 @@ def _concat(scans: list[LidarScan]) -> LidarScan:
         np.arange(n),
         float(sum(s.seconds for s in scans)),
         int(sum(s.frames for s in scans)),
+        times=cat([t0 + s.times for t0, s in zip(start, scans)]),
+        returns=cat([s.returns for s in scans]),
     )
 
 

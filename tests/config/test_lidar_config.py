@@ -40,6 +40,10 @@ def test_the_shipped_lidar_experiments_validate(name):
         (["study.options.steered_beam.order=spiral"], r"study\.options\.steered_beam\.order"),
         (["study.options.flash.revisits=2"], r"options\.flash: not an option of the steered_beam"),
         (["study.hazard={window_px: 4}"], r"study\.hazard\.window_px: .*odd"),
+        (["study.options.detector.expert_signal_photons=5"], r"expert_signal_photons: .*instrument"),
+        (["study.options.pulse.fwhm_ns=3"], r"pulse\.fwhm_ns: set by the instrument's hardware"),
+        (["study.options.instrument=laser_pointer"], r"study\.options\.instrument"),
+        (["study.options.detector.dead_time_ns=2"], r"apd: a linear-mode APD has no dead time"),
         (["study.planner_opts={grid: {uniform_mix: 0.5}}"], r"planner_opts\.grid\.uniform_mix"),
         (["render.camera={kind: orthographic_nadir}"], r"render\.camera: a lidar study needs"),
         (

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from simlunar.config import lidar_translate
@@ -25,10 +26,19 @@ def test_descent_translates_to_si_options():
     opts = lidar_translate.lidar_options(s, seed=7)
     so = opts.sensor_options
     assert isinstance(so, SteeredBeamOptions) and opts.sensor == "steered_beam"
-    assert so.pulse.fwhm_s == pytest.approx(1e-9) and so.pulse.jitter_s == pytest.approx(1e-10)
-    assert so.footprint.divergence_rad == pytest.approx(1e-3)
+    # the LOLA-class preset's receiver with the experiment's laser (10 uJ at 10 kHz)
+    hw = so.hardware
+    assert hw.pulse_energy_j == pytest.approx(10e-6) and hw.aperture_diameter_m == 0.14
+    assert so.pulse.fwhm_s == pytest.approx(5e-9) and so.pulse.jitter_s == pytest.approx(5e-10)
+    assert so.footprint.divergence_rad == pytest.approx(100e-6)
+    assert so.steering.pulse_rate_hz == pytest.approx(1e4)
     assert so.steering.settle_s == pytest.approx(1e-3)
+    # photons derived: E A eta / (h nu) per unit radiance of a 1 W/sr laser, by hand
+    hnu = 6.62607015e-34 * 299_792_458.0 / 1064e-9
+    det = so.photon_detector()
+    assert det.signal_photons == pytest.approx(10e-6 * np.pi * 0.07**2 * 0.5 * 0.4 / hnu)
     assert so.steering.pulses_per_point == 4 and so.transient.seed == 7
+    assert so.detector.regime == "linear_apd" and so.detector.apd.excess_noise > 3.9
     assert opts.densities[0] == pytest.approx(1 / 16) and len(opts.densities) == 5
 
 
@@ -41,6 +51,7 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
                 "study.options.steered_beam={}",
                 "study.options.flash={receiver_px: [32, 32], revisits: 2, zoom: 4}",
                 "study.options.detector.dead_time_ns=null",
+                "study.options.detector.apd=null",
             ]
         ),
     )
@@ -53,6 +64,8 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
             [
                 "study.sensor=micromirror_flash",
                 "study.options.steered_beam={}",
+                "study.options.instrument=null",
+                "study.options.hardware={}",
                 "study.options.micromirror={receiver_px: [16, 16]}",
             ]
         ),
@@ -71,7 +84,7 @@ def test_every_unit_of_a_hand_written_steered_beam_study():
         planner_opts={"wavelet": {"placement": "lloyd"}},
         options={
             "pulse": {"fwhm_ns": 4, "jitter_ns": 0.5},
-            "detector": {"dead_time_ns": 20, "dark_count_rate_hz": 100},
+            "detector": {"dead_time_ns": 20, "expert_dark_count_rate_hz": 100},
             "ranging": {"method": "peak", "which": "first"},
             "transient": {"spp": 8, "max_depth": 3, "laser_intensity_w_sr": 2},
             "bin_range_m": "10 cm",

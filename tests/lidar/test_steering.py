@@ -82,3 +82,20 @@ def test_bad_mechanics_are_rejected():
         SteeringOptions(max_rate_rad_s=0.0)
     with pytest.raises(ValueError, match="shape"):
         scan_timing(np.zeros((3, 3)), options=OPTS)
+
+
+def test_point_times_add_up_to_the_scan_time():
+    from simlunar.lidar import point_times
+
+    opts = SteeringOptions(max_rate_rad_s=1.0, max_accel_rad_s2=10.0, settle_s=1e-3,
+                           pulse_rate_hz=1000.0, pulses_per_point=4)  # fmt: skip
+    ang = np.array([[0.0, 0.0], [0.1, 0.0], [0.1, 0.05], [0.0, 0.0]])
+    order = np.array([0, 2, 1, 3])
+    t = point_times(ang, order, options=opts)
+    total = scan_timing(ang, order, options=opts).total_s
+    assert t[order[-1]] + opts.dwell_s == pytest.approx(total)
+    # by hand: point 0 at once; then 0.1 rad (move 2 sqrt(0.1 / 10) = 0.2 s) + settle, after
+    # one dwell of 4 ms
+    assert t[0] == 0.0
+    assert t[2] == pytest.approx(0.004 + 0.2 + 0.001)
+    assert np.all(np.diff(t[order]) > 0)

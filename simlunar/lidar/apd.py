@@ -1,0 +1,91 @@
+"""Linear-mode avalanche photodiode (APD) receivers: gain, excess noise, amplifier noise,
+threshold.
+
+A linear-mode APD (LOLA's Si APD, the InGaAs / HgCdTe arrays of flash LIDARs) turns each
+photoelectron into an avalanche of mean gain ``M`` whose size fluctuates: the output of ``n``
+photoelectrons has mean ``M n`` and variance ``F M^2 n`` with the excess noise factor (McIntyre
+1966) ``F = k M + (1 - k) (2 - 1 / M)``, ``k`` the ratio of the hole and electron ionisation
+coefficients (about 0.02 for Si, 0.4-0.5 for InGaAs). A transimpedance amplifier adds Gaussian
+noise. Here the waveform is read in photoelectrons (output / M): each bin's primary count is
+Poisson, each avalanche a Gamma variable of mean 1 and variance ``F - 1`` (so the sum of ``n``
+is Gamma of shape ``n / (F - 1)``: mean ``n``, variance ``(F - 1) n`` on top of the Poisson
+``n``, i.e. ``F n`` in all), plus the amplifier's noise. A return is detected where its
+photoelectrons exceed the discriminator's ``threshold_pe`` (:attr:`ApdOptions.threshold_pe`,
+used by the range extraction as its least signal) and the background's Gaussian noise
+quantile.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["ApdOptions", "apd_waveform"]
+
+
+@dataclass(frozen=True)
+class ApdOptions:
+    """A linear-mode APD receiver.
+
+    Parameters
+    ----------
+    gain : float
+        Mean avalanche gain ``M`` (>= 1).
+    ionisation_ratio : float
+        ``k`` in [0, 1] (Si about 0.02, InGaAs about 0.45).
+    amplifier_noise_pe : float
+        RMS amplifier noise per bin and pulse referred to the input (photoelectrons: the output
+        noise in electrons divided by ``M``).
+    threshold_pe : float
+        Discriminator threshold: the least signal (photoelectrons, summed over the pulses) of
+        a detected return.
+    """
+
+    gain: float = 100.0
+    ionisation_ratio: float = 0.02
+    amplifier_noise_pe: float = 0.5
+    threshold_pe: float = 5.0
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.gain) and self.gain >= 1):
+            raise ValueError(f"gain must be >= 1, got {self.gain}")
+        if not 0 <= self.ionisation_ratio <= 1:
+            raise ValueError(f"ionisation_ratio must be in [0, 1], got {self.ionisation_ratio}")
+        if not (self.amplifier_noise_pe >= 0 and self.threshold_pe >= 0):
+            raise ValueError("amplifier_noise_pe and threshold_pe must be >= 0")
+
+    @property
+    def excess_noise(self) -> float:
+        """McIntyre's excess noise factor ``F = k M + (1 - k) (2 - 1 / M)``."""
+        k, m = self.ionisation_ratio, self.gain
+        return k * m + (1.0 - k) * (2.0 - 1.0 / m)
+
+
+def apd_waveform(expected: np.ndarray, *, options: ApdOptions, pulses: int, rng=None):
+    """Draw an APD's waveform, in photoelectrons, accumulated over ``pulses`` pulses.
+
+    Parameters
+    ----------
+    expected : (..., count) float
+        Mean photoelectrons per bin and pulse.
+    options : ApdOptions
+    pulses : int
+    rng : seed or Generator
+
+    Returns
+    -------
+    (..., count) float64
+        Mean ``pulses x expected``, variance ``F x mean + pulses x amplifier_noise_pe^2``.
+    """
+    rng = np.random.default_rng(rng)
+    lam = np.asarray(expected, float) * int(pulses)
+    n = rng.poisson(lam)
+    f1 = options.excess_noise - 1.0
+    out = n.astype(float)
+    if f1 > 0:
+        pos = n > 0
+        out[pos] = rng.gamma(n[pos] / f1, f1)
+    if options.amplifier_noise_pe > 0:
+        out += rng.normal(0.0, options.amplifier_noise_pe * np.sqrt(pulses), out.shape)
+    return out

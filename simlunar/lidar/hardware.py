@@ -1,0 +1,276 @@
+"""A LIDAR's hardware and the photons it gets: the lidar equation and the sun's background.
+
+The renderer gives two radiances per receiver pixel / beam: the laser's return, for an
+isotropic point laser of 1 W/sr at the receiver (``TransientOptions.laser_intensity``), and the
+sun's, for a sun of irradiance 1 W/m^2 on a surface facing it (``SunLight.irradiance``). The
+hardware turns them into photons (REFERENCES.md, "LIDAR physics, checked independently"):
+
+- **Signal** per pulse. A pulse of energy ``E`` spread evenly over the lit solid angle
+  ``Omega_lit`` has intensity ``E / Omega_lit``; a receiver pixel of solid angle ``Omega_pix``
+  behind an aperture ``A`` collects ``L (E / Omega_lit) A Omega_pix eta / (h nu)`` photons from
+  a rendered radiance ``L``. A steered beam's receiver sees the whole spot
+  (``Omega_pix = Omega_lit``): ``N = L E A eta / (h nu)``, i.e. on a Lambertian target of albedo
+  ``rho`` at range ``R`` and incidence ``theta`` ``N = (E / h nu) (rho / pi) cos(theta) A / R^2
+  eta``. A flash lights its whole field (``Omega_lit`` = the sum of its pixels' solid angles)
+  and every pixel has its own ``Omega_pix`` (:func:`pixel_solid_angles`: the exact solid angle
+  of a rectangular pixel, falling about as cos^3 off axis).
+- **Sun** per second: ``L_sun S_band A Omega_rx eta / (h nu)`` with ``S_band`` the solar
+  spectral irradiance times the filter's bandwidth; per bin of duration ``dt``, on a
+  Lambertian target: ``n = S_band cos(theta_sun) (rho / pi) Omega_rx A eta dt / (h nu)``.
+  ``S`` = 0.64 W m^-2 nm^-1 at 1064 nm above the atmosphere (ASTM E490, the value of
+  REFERENCES.md); ``Omega_rx`` is the receiver pixel's solid angle (a beam's: its receiver
+  field of view, a disk of full angle ``field_rad``).
+
+:data:`INSTRUMENTS` holds three instrument presets; their sources and which numbers are
+assumptions are in docs/lidar.md ("Instruments").
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from simlunar.lidar.detector import PLANCK, DetectorOptions
+from simlunar.lidar.waveform import SPEED_OF_LIGHT, PulseOptions
+
+__all__ = [
+    "INSTRUMENTS",
+    "LidarHardware",
+    "instrument",
+    "pixel_solid_angles",
+]
+
+
+@dataclass(frozen=True)
+class LidarHardware:
+    """A LIDAR's transmitter, receiver and detector (SI units).
+
+    Parameters
+    ----------
+    pulse_energy_j : float
+        Laser energy per pulse leaving the instrument (J) (per beam of a multi-beam laser).
+    wavelength_m : float
+        Laser wavelength (m).
+    pulse_fwhm_s : float
+        Pulse full width at half maximum (s).
+    jitter_s : float
+        RMS timing jitter of detector and timing electronics (s).
+    pulse_rate_hz : float
+        Pulse repetition rate (1/s).
+    aperture_diameter_m : float
+        Receiver telescope / lens clear aperture (m).
+    optics_efficiency : float
+        Receiver optics transmission (filter included), in (0, 1].
+    detector_efficiency : float
+        Photon detection efficiency of the detector, in (0, 1].
+    filter_bandwidth_m : float
+        Receiver filter bandwidth (m), e.g. 1e-9 for 1 nm.
+    divergence_rad : float
+        Full beam divergence of a steered beam (rad; twice the 1/e^2 half-angle).
+    field_rad : float
+        Full-angle receiver field of view of a steered beam (rad; a disk); a flash's pixels
+        take theirs from the receiver's intrinsics.
+    dark_count_rate_hz : float
+        Dark (or noise-equivalent) counts per second.
+    solar_irradiance_w_m2_nm : float
+        Solar spectral irradiance at the wavelength above the atmosphere (W m^-2 nm^-1).
+    """
+
+    pulse_energy_j: float = 10e-6
+    wavelength_m: float = 1064e-9
+    pulse_fwhm_s: float = 1e-9
+    jitter_s: float = 0.1e-9
+    pulse_rate_hz: float = 10e3
+    aperture_diameter_m: float = 0.05
+    optics_efficiency: float = 0.6
+    detector_efficiency: float = 0.4
+    filter_bandwidth_m: float = 1e-9
+    divergence_rad: float = 1e-3
+    field_rad: float = 1e-3
+    dark_count_rate_hz: float = 0.0
+    solar_irradiance_w_m2_nm: float = 0.64
+
+    def __post_init__(self) -> None:
+        for name, value in dataclasses.asdict(self).items():
+            zero_ok = name in ("jitter_s", "dark_count_rate_hz")
+            if not (np.isfinite(value) and (value >= 0 if zero_ok else value > 0)):
+                bound = ">= 0" if zero_ok else "> 0"
+                raise ValueError(f"{name} must be finite and {bound}, got {value}")
+        for name in ("optics_efficiency", "detector_efficiency"):
+            if getattr(self, name) > 1:
+                raise ValueError(f"{name} must be <= 1, got {getattr(self, name)}")
+
+    @property
+    def photon_energy_j(self) -> float:
+        """h c / lambda (J)."""
+        return PLANCK * SPEED_OF_LIGHT / self.wavelength_m
+
+    @property
+    def aperture_m2(self) -> float:
+        """Receiver aperture area pi D^2 / 4 (m^2)."""
+        return np.pi * self.aperture_diameter_m**2 / 4.0
+
+    @property
+    def efficiency(self) -> float:
+        """Optics times detector efficiency."""
+        return self.optics_efficiency * self.detector_efficiency
+
+    @property
+    def sun_band_w_m2(self) -> float:
+        """Solar irradiance inside the filter band (W/m^2)."""
+        return self.solar_irradiance_w_m2_nm * self.filter_bandwidth_m * 1e9
+
+    @property
+    def beam_field_sr(self) -> float:
+        """Solid angle of a steered beam's receiver field, a disk of full angle ``field_rad``."""
+        return 2.0 * np.pi * (1.0 - np.cos(self.field_rad / 2.0))
+
+    @property
+    def pulse(self) -> PulseOptions:
+        """The pulse and jitter as :class:`PulseOptions`."""
+        return PulseOptions(fwhm_s=self.pulse_fwhm_s, jitter_s=self.jitter_s)
+
+    def lambert_signal_photons(self, range_m, albedo, incidence_rad=0.0, *, lit_sr=None,
+                               pixel_sr=None):  # fmt: skip
+        """Signal photons per pulse from a Lambertian target (the lidar equation).
+
+        ``N = (E / h nu) (rho / pi) cos(theta) A / R^2 eta``, times ``pixel_sr / lit_sr`` for
+        a flash pixel (None: a steered beam, whose receiver sees the whole spot).
+        """
+        n = (self.pulse_energy_j / self.photon_energy_j) * np.asarray(albedo) / np.pi
+        n = n * np.cos(incidence_rad) * self.aperture_m2 / np.asarray(range_m) ** 2
+        n = n * self.efficiency
+        if lit_sr is not None or pixel_sr is not None:
+            if lit_sr is None or pixel_sr is None:
+                raise ValueError("a flash pixel needs both lit_sr and pixel_sr")
+            n = n * np.asarray(pixel_sr) / lit_sr
+        return n
+
+    def lambert_sun_photons_per_bin(self, albedo, sun_incidence_rad, bin_s, *, field_sr=None):
+        """Solar background photons per bin from a Lambertian target:
+        ``S_band cos(theta_sun) (rho / pi) Omega_rx A eta dt / (h nu)`` (``field_sr`` None:
+        the beam's receiver field)."""
+        omega = self.beam_field_sr if field_sr is None else np.asarray(field_sr)
+        s = self.sun_band_w_m2 * np.cos(sun_incidence_rad) * np.asarray(albedo) / np.pi
+        return s * omega * self.aperture_m2 * self.efficiency * bin_s / self.photon_energy_j
+
+    def detector(
+        self,
+        *,
+        field_sr: float | None = None,
+        lit_sr: float | None = None,
+        laser_intensity: float = 1.0,
+        sun_irradiance: float = 1.0,
+        **fields,
+    ) -> DetectorOptions:
+        """:class:`DetectorOptions` whose photon scales turn rendered radiance into photons.
+
+        Parameters
+        ----------
+        field_sr, lit_sr : float or None
+            A flash pixel's solid angle (sr; the scales are for this pixel, others are scaled
+            by their own, :func:`pixel_solid_angles`) and the field the pulse lights (sr).
+            None, None: a steered beam (receiver field ``beam_field_sr``, spot fully seen).
+        laser_intensity : float
+            The rendered laser's intensity (W/sr) the histograms were made with.
+        sun_irradiance : float
+            The rendered sun's irradiance (W/m^2 on a surface facing it).
+        **fields
+            Other :class:`DetectorOptions` fields (pulses, dead time, mode ...).
+        """
+        per_photon = self.aperture_m2 * self.efficiency / self.photon_energy_j
+        if field_sr is None and lit_sr is None:
+            signal = self.pulse_energy_j * per_photon
+            field = self.beam_field_sr
+        elif field_sr is not None and lit_sr is not None:
+            signal = self.pulse_energy_j / lit_sr * field_sr * per_photon
+            field = field_sr
+        else:
+            raise ValueError("give both field_sr and lit_sr (a flash pixel) or neither (a beam)")
+        return DetectorOptions(
+            signal_photons=signal / laser_intensity,
+            background_photons_per_s=self.sun_band_w_m2 * field * per_photon / sun_irradiance,
+            dark_count_rate_hz=self.dark_count_rate_hz,
+            **fields,
+        )
+
+
+def pixel_solid_angles(fx: float, fy: float, cx: float, cy: float, width: int, height: int):
+    """Exact solid angle (sr) of every pixel of a pinhole receiver, (height, width) float64.
+
+    The pixel spanning image-plane offsets ``[x0, x1] x [y0, y1]`` (in focal lengths) subtends
+    ``F(x1, y1) - F(x0, y1) - F(x1, y0) + F(x0, y0)`` with ``F(x, y) = atan(x y / sqrt(1 + x^2
+    + y^2))``; for small pixels that is ``Omega_0 cos^3(theta)``, ``theta`` the angle off axis.
+    """
+    u = (np.arange(int(width) + 1) - cx) / fx
+    v = (np.arange(int(height) + 1) - cy) / fy
+    big = np.arctan(u[None, :] * v[:, None] / np.sqrt(1.0 + u[None, :] ** 2 + v[:, None] ** 2))
+    return big[1:, 1:] - big[1:, :-1] - big[:-1, 1:] + big[:-1, :-1]
+
+
+#: Instrument presets (docs/lidar.md, "Instruments": sources; ``*`` = an assumption).
+INSTRUMENTS: dict[str, LidarHardware] = {
+    # LOLA (Smith et al. 2010, Space Sci. Rev. 150; REFERENCES.md): 1064 nm, 2.7 mJ over 5
+    # beams, 28 Hz, 14 cm telescope, 100 urad beams, linear-mode Si APD. Receiver field
+    # 400 urad, 5 ns pulse: recalled from Smith et al. 2010*; efficiencies, filter, jitter*.
+    "lola_beam": LidarHardware(
+        pulse_energy_j=2.7e-3 / 5,
+        wavelength_m=1064e-9,
+        pulse_fwhm_s=5e-9,
+        jitter_s=0.5e-9,
+        pulse_rate_hz=28.0,
+        aperture_diameter_m=0.14,
+        optics_efficiency=0.5,
+        detector_efficiency=0.4,
+        filter_bandwidth_m=1e-9,
+        divergence_rad=100e-6,
+        field_rad=400e-6,
+        dark_count_rate_hz=0.0,
+        solar_irradiance_w_m2_nm=0.64,
+    ),
+    # ALHAT-class hazard-detection flash (REFERENCES.md: 128 x 128, about 1 km slant range,
+    # rocks > 30 cm, slopes > 5 deg, any lighting). Wavelength, energy, pulse, rate,
+    # aperture, efficiencies, filter: assumptions* sized to give ~200 photons per pixel from
+    # albedo 0.12 at 1 km over a 1 deg field.
+    "alhat_flash": LidarHardware(
+        pulse_energy_j=30e-3,
+        wavelength_m=1064e-9,
+        pulse_fwhm_s=6e-9,
+        jitter_s=0.5e-9,
+        pulse_rate_hz=30.0,
+        aperture_diameter_m=0.05,
+        optics_efficiency=0.6,
+        detector_efficiency=0.5,
+        filter_bandwidth_m=1e-9,
+        divergence_rad=np.radians(1.0),
+        field_rad=np.radians(1.0),
+        dark_count_rate_hz=0.0,
+        solar_irradiance_w_m2_nm=0.64,
+    ),
+    # Rover-mast scanner (pan-tilt, close range 0.3-5 m): every number an assumption*: a
+    # picosecond microchip laser (0.1 ns, 1 nJ at 10 kHz), 25 mm lens, 1 mrad beam and field.
+    "rover_mast_scanner": LidarHardware(
+        pulse_energy_j=1e-9,
+        wavelength_m=1064e-9,
+        pulse_fwhm_s=0.1e-9,
+        jitter_s=0.02e-9,
+        pulse_rate_hz=10e3,
+        aperture_diameter_m=0.025,
+        optics_efficiency=0.6,
+        detector_efficiency=0.3,
+        filter_bandwidth_m=1e-9,
+        divergence_rad=1e-3,
+        field_rad=1e-3,
+        dark_count_rate_hz=100.0,
+        solar_irradiance_w_m2_nm=0.64,
+    ),
+}
+
+
+def instrument(name: str, **overrides) -> LidarHardware:
+    """An instrument preset of :data:`INSTRUMENTS`, with fields replaced by ``overrides``."""
+    if name not in INSTRUMENTS:
+        raise ValueError(f"unknown instrument {name!r}; valid: {', '.join(INSTRUMENTS)}")
+    return dataclasses.replace(INSTRUMENTS[name], **overrides)

@@ -1,0 +1,179 @@
+"""LIDAR scan export: point clouds (LAS / LAZ, PLY) and range images (EXR) of a LIDAR study.
+
+``simlunar run --save-scans`` (``study.save_scans: true``) on a ``lidar`` study writes, per
+unit, ``scans/unit<i>/`` with one set of files per planner label of the unit's example
+acquisitions (trial 0 at the largest density; the label ``none`` for a flash without a plan)::
+
+    <label>.laz          the measured points, LAS 1.4 point format 6, LAZ-compressed (laspy)
+    <label>.ply          the same points, binary little-endian PLY
+    <label>_range.exr    guide-view images: slant range, z-depth, photons (NaN: not measured)
+    manifest.json        files, frame, units, the unit's key (written last)
+
+**Frame**: simlunar's world frame (right-handed, z up, metres; +x along the terrain's columns,
++y against its rows, ``Terrain.origin`` the top-left corner's (x, y); the terrain's ``crs``
+when it has one, else a local frame: no CRS is written). Per point: ``gps_time`` (LAS) /
+``time`` (PLY) = seconds from the acquisition's start (a steered beam's first pulse at that
+pointing, a flash frame's start; not GPS time), ``intensity`` = estimated signal photons of
+the reported return rounded and clipped to 0-65535 (exact in the extra dimension / PLY
+property ``photons``), ``return_number`` 1 and ``number_of_returns`` = returns detected in the
+histogram (clipped to 7; the reported one is ``RangeOptions.which``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from simlunar.atomic import atomic_write
+from simlunar.imaging.exr import write_exr
+
+__all__ = [
+    "lidar_export_payload",
+    "lidar_files",
+    "write_las",
+    "write_lidar_export",
+    "write_lidar_ply",
+]
+
+_PLY = (
+    ("x", "<f8", "double"),
+    ("y", "<f8", "double"),
+    ("z", "<f8", "double"),
+    ("time", "<f8", "double"),
+    ("photons", "<f4", "float"),
+    ("returns", "u1", "uchar"),
+)
+
+
+def write_las(path, points, *, times, photons, returns, scale: float = 1e-4) -> Path:
+    """Write points as LAS 1.4 (point format 6); LAZ-compressed when ``path`` ends in .laz.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        World points (m).
+    times : (n,) float
+        Seconds from the acquisition's start (``gps_time``).
+    photons : (n,) float
+        Signal photons (``intensity`` rounded and clipped; exact in the extra dimension).
+    returns : (n,) int
+        Returns detected (``number_of_returns``, clipped to 1-7).
+    scale : float
+        Coordinate resolution (m).
+    """
+    import laspy
+
+    p = np.asarray(points, float).reshape(-1, 3)
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    header.scales = np.array([scale] * 3)
+    header.offsets = np.floor(p.min(axis=0)) if len(p) else np.zeros(3)
+    header.add_extra_dim(laspy.ExtraBytesParams(name="photons", type=np.float64))
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = p[:, 0], p[:, 1], p[:, 2]
+    las.gps_time = np.asarray(times, float)
+    ph = np.asarray(photons, float)
+    las.intensity = np.clip(np.round(ph), 0, 65535).astype(np.uint16)
+    las.return_number = np.ones(len(p), np.uint8)
+    las.number_of_returns = np.clip(np.asarray(returns), 1, 7).astype(np.uint8)
+    las.photons = ph
+    path = Path(path)
+    return atomic_write(path, lambda tmp: las.write(str(tmp), do_compress=path.suffix == ".laz"))
+
+
+def write_lidar_ply(path, points, *, times, photons, returns) -> Path:
+    """Binary little-endian PLY: ``x y z time`` (double, m / s), ``photons`` (float),
+    ``returns`` (uchar)."""
+    p = np.asarray(points, float).reshape(-1, 3)
+    rec = np.empty(len(p), dtype=[(n, t) for n, t, _ in _PLY])
+    rec["x"], rec["y"], rec["z"] = p.T
+    rec["time"], rec["photons"] = times, photons
+    rec["returns"] = np.clip(np.asarray(returns), 0, 255)
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        "comment simlunar LIDAR scan: world frame (z up), metres; time s from the start\n"
+        f"element vertex {len(p)}\n"
+        + "".join(f"property {ply} {n}\n" for n, _, ply in _PLY)
+        + "end_header\n"
+    )
+    blob = header.encode("ascii") + rec.tobytes()
+    return atomic_write(path, lambda tmp: Path(tmp).write_bytes(blob))
+
+
+def lidar_export_payload(examples: dict, camera, shape) -> dict[str, Any]:
+    """What :func:`write_lidar_export` writes, from a LIDAR study's example acquisitions.
+
+    Parameters
+    ----------
+    examples : dict label -> Acquisition
+        Their ``detail`` is the :class:`~simlunar.render.lidar_scan.LidarScan`.
+    camera : geometry.Camera
+        The guide camera (the sensor's origin; the range images' grid).
+    shape : (rows, cols)
+        The guide view.
+    """
+    out = {}
+    for label, acq in examples.items():
+        scan = acq.detail
+        valid = np.asarray(scan.valid).ravel()
+        n = valid.size
+        pts = scan.points.reshape(-1, 3)[valid]
+        times = np.zeros(n) if scan.times is None else np.asarray(scan.times, float).ravel()
+        rets = np.ones(n, int) if scan.returns is None else np.asarray(scan.returns).ravel()
+        photons = np.asarray(scan.photons, float).ravel()
+        images = {k: np.full(shape, np.nan, np.float32) for k in ("range", "depth", "photons")}
+        rc = np.round(np.asarray(acq.rc, float)).astype(int)
+        inside = (rc[:, 0] >= 0) & (rc[:, 0] < shape[0]) & (rc[:, 1] >= 0) & (rc[:, 1] < shape[1])
+        rr, cc = rc[inside, 0], rc[inside, 1]
+        slant = np.linalg.norm(pts - camera.pose.position, axis=1)
+        images["range"][rr, cc] = slant[inside]
+        images["depth"][rr, cc] = np.asarray(acq.values, float)[inside]
+        images["photons"][rr, cc] = photons[valid][inside]
+        out[str(label)] = {
+            "points": pts,
+            "times": times[valid],
+            "photons": photons[valid],
+            "returns": rets[valid],
+            "images": images,
+            "seconds": float(acq.seconds),
+        }
+    return {"kind": "lidar", "labels": out}
+
+
+def lidar_files(labels) -> list[str]:
+    """The files an export of these planner labels holds (manifest.json last)."""
+    files = []
+    for label in labels:
+        files += [f"{label}.laz", f"{label}.ply", f"{label}_range.exr"]
+    return [*files, "manifest.json"]
+
+
+def write_lidar_export(folder, payload: dict, *, unit_key: str | None = None) -> Path:
+    """Write a LIDAR scan export (module docstring) into ``folder`` (created)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    labels = payload["labels"]
+    for label, d in labels.items():
+        kw = {"times": d["times"], "photons": d["photons"], "returns": d["returns"]}
+        write_las(folder / f"{label}.laz", d["points"], **kw)
+        write_lidar_ply(folder / f"{label}.ply", d["points"], **kw)
+        write_exr(
+            folder / f"{label}_range.exr",
+            d["images"],
+            attrs={"units": "range, depth: m; photons", "missing": "NaN"},
+        )
+    manifest = {
+        "kind": "lidar",
+        "files": lidar_files(labels),
+        "frame": "simlunar world frame: right-handed, z up, metres (local unless the terrain "
+        "has a crs)",
+        "time": "seconds from the acquisition's start",
+        "points": {label: len(d["points"]) for label, d in labels.items()},
+        "seconds": {label: d["seconds"] for label, d in labels.items()},
+        "unit_key": unit_key,
+    }
+    text = json.dumps(manifest, indent=2)
+    atomic_write(folder / "manifest.json", lambda tmp: Path(tmp).write_text(text))
+    return folder

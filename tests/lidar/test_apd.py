@@ -1,0 +1,75 @@
+"""Linear-mode APD: excess noise, amplifier noise, detection threshold, against an event-level
+simulation (one avalanche per photoelectron)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simlunar.lidar import PulseOptions, TimeBins, extract_ranges, shape_waveform, splat_paths
+from simlunar.lidar.apd import ApdOptions, apd_waveform
+
+
+def test_mcintyre_excess_noise_by_hand():
+    # Si, k = 0.02, M = 100: F = 0.02 x 100 + 0.98 x (2 - 0.01) = 3.9502
+    assert ApdOptions(gain=100, ionisation_ratio=0.02).excess_noise == pytest.approx(3.9502)
+    # k = 0: F -> 2 at high gain; k = 1: F = M
+    assert ApdOptions(gain=1e4, ionisation_ratio=0.0).excess_noise == pytest.approx(2.0, 1e-3)
+    assert ApdOptions(gain=50, ionisation_ratio=1.0).excess_noise == pytest.approx(50.0)
+
+
+def test_waveform_matches_an_event_level_simulation():
+    # event level: every photoelectron's avalanche drawn on its own (mean M, variance
+    # (F - 1) M^2, Gamma), summed, divided by M, plus amplifier noise per pulse
+    apd = ApdOptions(gain=100, ionisation_ratio=0.02, amplifier_noise_pe=0.7)
+    lam, pulses, n = 2.5, 4, 40_000
+    rng = np.random.default_rng(1)
+    f1 = apd.excess_noise - 1
+    events = np.empty(n)
+    for i in range(n):
+        pe = rng.poisson(lam * pulses)
+        events[i] = rng.gamma(1 / f1, f1 * apd.gain, pe).sum() / apd.gain
+    events += rng.normal(0, apd.amplifier_noise_pe, (n, pulses)).sum(1)
+    model = apd_waveform(np.full(n, lam), options=apd, pulses=pulses, rng=2)
+    want_var = apd.excess_noise * lam * pulses + pulses * 0.7**2
+    for x in (events, model):
+        assert x.mean() == pytest.approx(lam * pulses, rel=0.02)
+        assert x.var() == pytest.approx(want_var, rel=0.04)
+    # the same distribution: quantiles agree
+    q = [0.05, 0.25, 0.5, 0.75, 0.95]
+    assert np.quantile(model, q) == pytest.approx(np.quantile(events, q), abs=0.3)
+
+
+def test_threshold_sets_detection_and_ranges_stay_unbiased():
+    bins = TimeBins.for_ranges(45.0, 55.0, 0.05)
+    pulse = PulseOptions(fwhm_s=1e-9, jitter_s=0.1e-9)
+    shape = shape_waveform(splat_paths(np.array([[100.0246]]), 1.0, bins.refined(2)), bins,
+                           pulse, oversample=2)[0]  # fmt: skip
+    apd = ApdOptions(gain=100, ionisation_ratio=0.02, amplifier_noise_pe=0.3, threshold_pe=20)
+    rng = np.random.default_rng(3)
+    lam = np.broadcast_to(shape * 60.0 + 0.01, (500, bins.count))
+    strong = extract_ranges(apd_waveform(lam, options=apd, pulses=1, rng=rng), bins,
+                            pulse=pulse, apd=apd)  # fmt: skip
+    assert strong.valid.mean() > 0.98
+    assert np.nanmean(strong.range) == pytest.approx(50.0123, abs=0.003)
+    weak = np.broadcast_to(shape * 8.0 + 0.01, (500, bins.count))
+    res = extract_ranges(apd_waveform(weak, options=apd, pulses=1, rng=rng), bins,
+                         pulse=pulse, apd=apd)  # fmt: skip
+    assert res.valid.mean() < 0.1  # 8 photoelectrons < the 20 pe threshold
+    noise = np.full((500, bins.count), 0.01)
+    res = extract_ranges(apd_waveform(noise, options=apd, pulses=1, rng=rng), bins,
+                         pulse=pulse, apd=apd)  # fmt: skip
+    assert res.valid.mean() < 0.01
+
+
+def test_bad_options():
+    with pytest.raises(ValueError, match="gain"):
+        ApdOptions(gain=0.5)
+    with pytest.raises(ValueError, match="ionisation_ratio"):
+        ApdOptions(ionisation_ratio=2.0)
+    from simlunar.lidar import DetectorOptions
+
+    with pytest.raises(ValueError, match="no dead time"):
+        DetectorOptions(apd=ApdOptions(), dead_time_s=1e-9)
+    assert DetectorOptions(apd=ApdOptions()).regime == "linear_apd"
+    assert DetectorOptions(dead_time_s=1e-9).regime == "spad"

@@ -1,0 +1,79 @@
+"""The hardware link budget: the lidar equation, the sun's background, pixel solid angles."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware, instrument, pixel_solid_angles
+
+HNU_1064 = 6.62607015e-34 * 299_792_458.0 / 1064e-9  # 1.8670e-19 J
+
+
+def test_lidar_equation_by_hand():
+    # 10 uJ, 5 cm aperture (1.9635e-3 m^2), 0.6 x 0.4 efficiency, albedo 0.12 at 50 m, 30 deg:
+    # N = (1e-5 / 1.8670e-19) (0.12 / pi) cos 30 x 1.9635e-3 / 2500 x 0.24 = 3.3375e5
+    hw = LidarHardware()
+    assert hw.photon_energy_j == pytest.approx(1.8670e-19, rel=1e-4)
+    n = hw.lambert_signal_photons(50.0, 0.12, np.radians(30.0))
+    assert n == pytest.approx(3.3375e5, rel=1e-3)
+    # the renderer's radiance of that target under a 1 W/sr point laser is
+    # (rho / pi) cos(theta) / R^2; the detector's scale turns it into the same photons
+    radiance = 0.12 / np.pi * np.cos(np.radians(30.0)) / 50.0**2
+    assert radiance * hw.detector().signal_photons == pytest.approx(n, rel=1e-12)
+    # a laser rendered at 5 W/sr: the scale is per unit of that render
+    assert 5 * radiance * hw.detector(laser_intensity=5.0).signal_photons == pytest.approx(n)
+
+
+def test_solar_background_by_hand():
+    # S = 0.64 W m^-2 nm^-1 at 1064 nm through 1 nm; albedo 0.12, sun 60 deg from the normal,
+    # 1 mrad receiver field (7.854e-7 sr), 1 ns bin:
+    # n = 0.64 x 0.5 x 0.0382 x 7.854e-7 x 1.9635e-3 x 0.24 x 1e-9 / 1.867e-19 = 2.423e-2
+    hw = LidarHardware()
+    assert hw.sun_band_w_m2 == pytest.approx(0.64)
+    assert hw.beam_field_sr == pytest.approx(np.pi * 0.5e-3**2, rel=1e-6)
+    n = hw.lambert_sun_photons_per_bin(0.12, np.radians(60.0), 1e-9)
+    assert n == pytest.approx(2.423e-2, rel=2e-3)
+    # through the renderer: sun radiance (rho / pi) cos(theta_sun) x irradiance
+    det = hw.detector(sun_irradiance=2.0)
+    rendered = 2.0 * 0.12 / np.pi * 0.5
+    assert rendered * det.background_photons_per_s * 1e-9 == pytest.approx(n, rel=1e-12)
+
+
+def test_flash_pixel_shares_the_pulse_by_solid_angle():
+    hw = LidarHardware()
+    det = hw.detector(field_sr=1e-6, lit_sr=1e-2)
+    assert det.signal_photons == pytest.approx(hw.detector().signal_photons * 1e-4)
+    n = hw.lambert_signal_photons(50.0, 0.12, lit_sr=1e-2, pixel_sr=1e-6)
+    assert n == pytest.approx(hw.lambert_signal_photons(50.0, 0.12) * 1e-4)
+    with pytest.raises(ValueError, match="both"):
+        hw.detector(field_sr=1e-6)
+
+
+def test_pixel_solid_angles_are_exact_and_fall_as_cos3():
+    # a 40 deg square field of 128 x 128 pixels: the pixels tile the field's solid angle,
+    # 4 atan(t^2 / sqrt(1 + 2 t^2)) with t = tan 20 deg
+    f = 64 / np.tan(np.radians(20.0))
+    om = pixel_solid_angles(f, f, 64.0, 64.0, 128, 128)
+    t = np.tan(np.radians(20.0))
+    assert om.sum() == pytest.approx(4 * np.arctan(t**2 / np.sqrt(1 + 2 * t**2)), rel=1e-12)
+    # the corner pixel: cos^3 of its centre's angle off axis (about 27.3 deg), 1.4x dimmer
+    x = y = 63.5 / f
+    cos = 1 / np.sqrt(1 + x**2 + y**2)
+    assert om[0, 0] / om[63, 63] == pytest.approx(cos**3, rel=1e-3)
+    assert 1.38 < om[63, 63] / om[0, 0] < 1.45
+
+
+def test_presets_and_overrides():
+    assert set(INSTRUMENTS) == {"lola_beam", "alhat_flash", "rover_mast_scanner"}
+    lola = instrument("lola_beam", pulse_rate_hz=10e3)
+    assert lola.pulse_energy_j == pytest.approx(0.54e-3) and lola.pulse_rate_hz == 1e4
+    assert lola.aperture_m2 == pytest.approx(np.pi * 0.07**2)
+    with pytest.raises(ValueError, match="unknown instrument 'lola'; valid: lola_beam"):
+        instrument("lola")
+    with pytest.raises(ValueError, match="optics_efficiency must be <= 1"):
+        dataclasses.replace(lola, optics_efficiency=1.2)
+    with pytest.raises(ValueError, match="pulse_energy_j must be finite and > 0"):
+        LidarHardware(pulse_energy_j=0.0)
