@@ -28,7 +28,7 @@ from simlunar.config.render import (
     SensorCfg,
     SunLightCfg,
 )
-from simlunar.config.scanner import DotOptsCfg, GrayOptsCfg, RigCfg, ScannerStudyCfg
+from simlunar.config.scanner import CODING_OPTS, DotOptsCfg, RigCfg, ScannerStudyCfg
 from simlunar.config.studies import (
     FEATURE_OPTION_KEYS,
     FeatureOptsCfg,
@@ -48,7 +48,8 @@ from simlunar.planner import SequentialOptions
 from simlunar.render.capture import CaptureOptions
 from simlunar.render.lights import make_light
 from simlunar.render.materials import make_bsdf
-from simlunar.scanner.scans import DotOptions, GrayCodeOptions
+from simlunar.scanner.codings import CODINGS
+from simlunar.scanner.scans import DotOptions
 from simlunar.study.sampling import SamplingStudyOptions
 from simlunar.study.scanner import ScannerStudyOptions
 from simlunar.terrain import generate
@@ -343,9 +344,13 @@ def rig_kwargs(study: ScannerStudyCfg) -> dict[str, Any]:
     return kw
 
 
-def gray_options(opts: GrayOptsCfg, *, keep_frames: bool = False) -> GrayCodeOptions:
-    """:class:`~simlunar.scanner.scans.GrayCodeOptions` of a config."""
-    return GrayCodeOptions(**opts.model_dump(), keep_frames=keep_frames)
+def coding_options(opts) -> dict[str, Any]:
+    """Coding name -> its options object (:data:`simlunar.scanner.codings.CODINGS`) from the
+    coding blocks of a scanner study's ``options`` (``gray_opts``, ``phase_opts``, ...)."""
+    return {
+        name: CODINGS[name].options(**getattr(opts, key).model_dump())
+        for name, (key, _model) in CODING_OPTS.items()
+    }
 
 
 def dot_options(opts: DotOptsCfg) -> DotOptions:
@@ -371,7 +376,7 @@ def scanner_options(
     study: ScannerStudyCfg, render: RenderCfg, *, seed: int = 0
 ) -> ScannerStudyOptions:
     """:class:`~simlunar.study.scanner.ScannerStudyOptions` of a config (the rig is built by
-    :func:`rig_kwargs`); ``save_scans`` keeps the gray-code frames the export needs."""
+    :func:`rig_kwargs`); ``save_scans`` keeps the coded scan's frames the export needs."""
     o = study.options
     return ScannerStudyOptions(
         modes=tuple(study.modes),
@@ -381,7 +386,9 @@ def scanner_options(
         metrics=tuple(study.metrics),
         guide_light=study.guide_light,
         capture=capture_options(study, render, seed),
-        gray=gray_options(o.gray_opts, keep_frames=study.save_scans),
+        coding=study.coding,
+        codings=coding_options(o),
+        keep_frames=study.save_scans,
         dots=dot_options(o.dot_opts),
         planner_opts={name: planner_kwargs(name, p) for name, p in o.planner_opts.items()},
     )

@@ -5,7 +5,7 @@ over the units, paired against the random planner."""
 from __future__ import annotations
 
 from simlunar.metrics import METRIC_NAMES
-from simlunar.plotting.style import pair_label
+from simlunar.plotting.style import pair_label, reference_mode
 from simlunar.plotting.tables import _name, _tex_begin, _tex_end, t_interval, tex_escape
 
 __all__ = ["scanner_interval_table", "scanner_summary", "scanner_tables"]
@@ -57,7 +57,8 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
     and closing rows give the mean over units of each metric and of the per-unit ratio.
     """
     summary = scanner_summary(rows, metrics=[*metrics, "valid_fraction"])
-    base = {e["unit"]: e.get("mse") for e in summary if e["mode"] == "gray_code"}
+    ref = reference_mode(summary)  # the gray code in the paper
+    base = {e["unit"]: e.get("mse") for e in summary if e["mode"] == ref and not e["planner"]}
     for e in summary:
         e["base_label"] = e["label"]
         e["ratio"] = (
