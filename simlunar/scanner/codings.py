@@ -19,6 +19,8 @@ A coding class is built from its options object (``Coding(options)``) and has:
     Names and order of the exported frames (:mod:`simlunar.results.exports`).
 ``patterns(proj_shape) -> (frames, H, W) float32 in [0, 1]``
     The projected stack in export order.
+``decode(frames, proj_shape)``
+    The decode of a captured stack in that order (white and black last).
 ``scan(capture, rig, *, keep_frames=False) -> CodedScan``
     Capture, decode, triangulate (:class:`simlunar.scanner.scans.CodedScan`); the decode has
     ``valid``, ``lit``, ``contrast``, ``col``, ``row``, ``proj_shape``, ``proj_uv()`` and

@@ -518,6 +518,13 @@ class PhaseShiftCoding:
         wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
         return np.concatenate([encode((H, W), self.options), wb])
 
+    def decode(self, frames, proj_shape) -> PhaseDecode:
+        """Decode a whole stack in :meth:`patterns` order (white and black last)."""
+        frames = np.asarray(frames)
+        return decode(
+            frames[:-2], frames[-2], frames[-1], proj_shape=proj_shape, options=self.options
+        )
+
     def scan(self, capture, rig, *, keep_frames: bool = False):
         o = self.options
         if keep_frames and not o.keep_frames:

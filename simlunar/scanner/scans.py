@@ -318,6 +318,20 @@ class GrayCoding:
         white, black = gc.white_black(W, H)
         return np.concatenate([gc.encode(W, H), white[None], black[None]]).astype(np.float32) / 255
 
+    def decode(self, frames, proj_shape) -> gc.GrayDecode:
+        """Decode a whole stack in :meth:`patterns` order (white and black last)."""
+        frames = np.asarray(frames)
+        o = self.options
+        return gc.decode(
+            frames[:-2],
+            frames[-2],
+            frames[-1],
+            proj_shape=proj_shape,
+            black_threshold=o.black_threshold,
+            white_threshold=o.white_threshold,
+            require_reliable=o.require_reliable,
+        )
+
     def scan(self, capture, rig: Rig, *, keep_frames: bool = False) -> CodedScan:
         """:func:`gray_code_scan` with these options (``keep_frames`` or the options')."""
         o = self.options
