@@ -209,7 +209,7 @@ def test_opencv_sinusoidal_pattern_computes_the_exported_wrapped_phase(phase_sca
     # from the phase's wrap (where a smoothed wrapped phase is meaningless).
     from scipy import ndimage
 
-    _, ps_scan, folder = phase_scan
+    folder = phase_scan[2]
     paths, f8 = _frames(folder, "frames8")
     manifest = json.loads((folder / "manifest.json").read_text())
     period = manifest["periods_px"]["col"][-1]
@@ -218,7 +218,7 @@ def test_opencv_sinusoidal_pattern_computes_the_exported_wrapped_phase(phase_sca
     assert len(finest) == 3
     params = cv2.structured_light.SinusoidalPattern.Params()
     params.width, params.height = CAM
-    params.nbrOfPeriods = int(round(PROJ[0] / period))
+    params.nbrOfPeriods = round(PROJ[0] / period)
     params.methodId = cv2.structured_light.PSP
     params.setMarkers = False
     sp = cv2.structured_light.SinusoidalPattern.create(params)

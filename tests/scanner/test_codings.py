@@ -25,7 +25,7 @@ def test_registry_names_options_and_modes():
     assert DEFAULT_CODING == "gray_code"
     assert set(full_field_codings()) >= {"gray_code", "phase_shift"}
     assert MODES == (*full_field_codings(), *DOT_MODES)
-    for name, entry in CODINGS.items():
+    for entry in CODINGS.values():
         assert dataclasses.is_dataclass(entry.options) and entry.summary
         assert {"full_field", "yaml_key", "label", "style"} <= set(entry.meta)
     assert mode_coding("phase_shift") == "phase_shift"

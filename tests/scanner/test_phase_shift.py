@@ -178,7 +178,7 @@ def test_options_are_checked():
         PhaseShiftOptions(ratio=1.0)
     with pytest.raises(ValueError, match="axes must be one of"):
         PhaseShiftOptions(axes="rows")
-    with pytest.raises(ValueError, match="rays.*needs the row phase"):
+    with pytest.raises(ValueError, match=r"rays.*needs the row phase"):
         PhaseShiftOptions(axes="cols", method="rays")
     with pytest.raises(ValueError, match="whole number"):
         PhaseShiftOptions(steps=4.5)
