@@ -9,12 +9,9 @@ defaults, bounds, choices and docs; a new coding needs no edit here.
 
 from __future__ import annotations
 
-import dataclasses
-import typing
 from typing import Literal
 
 from pydantic import (
-    BaseModel,
     Field,
     PositiveInt,
     create_model,
@@ -29,12 +26,12 @@ from simlunar.config.fields import (
     Px,
     PxCount,
     _Model,
+    options_model,
     unique_names,
 )
 from simlunar.config.render import MAX_SPP
 from simlunar.config.studies import PlannerOptsCfg, check_planner_options
 from simlunar.planner import STRATEGIES
-from simlunar.registry import option_info
 from simlunar.scanner.codings import CODINGS, DEFAULT_CODING, full_field_codings
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.scanner.scheduling import check_spacings
@@ -47,7 +44,6 @@ __all__ = [
     "RigCfg",
     "ScannerOptionsCfg",
     "ScannerStudyCfg",
-    "options_model",
 ]
 
 
@@ -89,27 +85,6 @@ class RigCfg(_Model):
                 "set aperture_radius_m > 0 for a thin lens or leave focus_distance_m null"
             )
         return self
-
-
-def options_model(options_cls, name: str, doc: str = "") -> type[BaseModel]:
-    """A pydantic model of an options dataclass's fields declared with
-    :func:`simlunar.registry.option` (type, default, doc, bounds, choices as a ``Literal``).
-
-    Fields declared without ``option`` (set by the library, e.g. ``keep_frames``) are left
-    out. ``model_dump()`` of the model is the keyword set of ``options_cls``.
-    """
-    hints = typing.get_type_hints(options_cls)
-    fields = {}
-    for key, info in option_info(options_cls).items():
-        if info["doc"] is None or info["default"] is dataclasses.MISSING:
-            continue
-        kind = hints[key]
-        if info["choices"] is not None:
-            kind = Literal[tuple(info["choices"])]
-        bounds = {k: info[k] for k in ("ge", "gt", "le", "lt") if info[k] is not None}
-        desc = info["doc"] + (f" ({info['unit']})" if info["unit"] else "")
-        fields[key] = (kind, Field(info["default"], description=desc, **bounds))
-    return create_model(name, __base__=_Model, __doc__=doc or options_cls.__doc__, **fields)
 
 
 #: coding name -> (YAML key under study.options, its derived options model)

@@ -16,12 +16,10 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
+from simlunar.config.fields import library_values
 from simlunar.config.messages import format_validation_error
 from simlunar.config.render import (
     CameraLightCfg,
-    HapkeCfg,
-    LambertCfg,
-    OrenNayarCfg,
     OrthoNadirCfg,
     RenderCfg,
     RoverMastCfg,
@@ -199,18 +197,8 @@ def lights(light, ambient_radiance: float) -> list:
 
 
 def bsdf(cfg):
-    """BSDF spec of a BSDF config (angles in radians)."""
-
-    if isinstance(cfg, LambertCfg):
-        return make_bsdf("lambert")
-    if isinstance(cfg, OrenNayarCfg):
-        return make_bsdf("oren_nayar", sigma=cfg.sigma, model=cfg.model)
-    if isinstance(cfg, HapkeCfg):
-        kw = {k: getattr(cfg, k) for k in ("w", "b", "c", "B0", "h") if getattr(cfg, k) is not None}
-        if cfg.theta_bar_deg is not None:
-            kw["theta_bar"] = float(np.radians(cfg.theta_bar_deg))
-        return make_bsdf("hapke", **kw)
-    raise TypeError(f"unsupported BSDF {cfg!r}")  # pragma: no cover - closed union
+    """BSDF spec of a BSDF config (angles in radians; :data:`simlunar.render.materials.BSDFS`)."""
+    return make_bsdf(cfg.kind, **cfg.library_values())
 
 
 def sensor_model(cfg: SensorCfg, reference: np.ndarray | None = None):
@@ -348,7 +336,7 @@ def coding_options(opts) -> dict[str, Any]:
     """Coding name -> its options object (:data:`simlunar.scanner.codings.CODINGS`) from the
     coding blocks of a scanner study's ``options`` (``gray_opts``, ``phase_opts``, ...)."""
     return {
-        name: CODINGS[name].options(**getattr(opts, key).model_dump())
+        name: CODINGS[name].options(**library_values(getattr(opts, key)))
         for name, (key, _model) in CODING_OPTS.items()
     }
 

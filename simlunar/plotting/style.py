@@ -20,6 +20,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from simlunar.metrics import METRIC_NAMES
+from simlunar.render.materials import BSDFS
 from simlunar.scanner.codings import CODINGS
 
 
@@ -113,9 +114,7 @@ SPARE_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "h")
 
 #: display labels of other names shown on axes (sweep categories: BSDFs, lights)
 PLAIN_LABELS = {
-    "lambert": "Lambert",
-    "oren_nayar": "Oren-Nayar",
-    "hapke": "Hapke",
+    **{n: e.meta["label"] for n, e in BSDFS.items()},  # the BSDF registry's labels
     "sun": "Sun",
     "camera": "Camera-centred light",
 }

@@ -102,7 +102,7 @@ class PhaseShiftOptions:
     black_threshold: float = option(0.05, doc="lit: white - black (frame units)", ge=0, le=1)
     min_modulation: float = option(0.01, doc="smallest modulation B (frame units)", ge=0, le=1)
     unwrap_tolerance: float = option(
-        1.0, doc="largest unwrapping disagreement", unit="rad", gt=0, le=np.pi
+        1.0, doc="largest unwrapping disagreement (rad)", gt=0, le=np.pi
     )
     inverses: str = option(
         "linearity", doc="shifts n + N/2 by linearity of light or rendered", choices=_INVERSES
