@@ -53,5 +53,5 @@ def bsdf_dict(spec, reflectance: Any = 0.5) -> dict:
     tex = _texture(reflectance)
     if not any(isinstance(spec, e.target) for e in BSDFS.values()):
         specs = ", ".join(e.target.__name__ for e in BSDFS.values())
-        raise ValueError(f"bsdf must be a spec of {specs}, got {type(spec).__name__}")
+        raise ValueError(f"bsdf must be a {specs} spec, got {type(spec).__name__}")
     return spec.mitsuba_dict(tex)
