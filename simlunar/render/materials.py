@@ -41,7 +41,6 @@ __all__ = [
     "BSDFS",
     "HapkeBSDF",
     "LambertBSDF",
-    "LunarLambertBSDF",
     "OrenNayarBSDF",
     "check_sigma_map",
     "make_bsdf",
@@ -320,15 +319,13 @@ BSDFS.register(
     plugin="simlunar.render.plugins.lunar_lambert",
 )
 
-BSDFSpec = LambertBSDF | OrenNayarBSDF | HapkeBSDF | LunarLambertBSDF
 
-
-def make_bsdf(name: str, **kw: Any) -> BSDFSpec:
+def make_bsdf(name: str, **kw: Any):
     """Build a BSDF spec by registry name.
 
     Parameters
     ----------
-    name : a name of :data:`BSDFS` (lambert, oren_nayar, hapke, lunar_lambert, ...)
+    name : a name of :data:`BSDFS` (lambert, oren_nayar, hapke, ...)
     **kw
         Fields of the spec (e.g. ``sigma=0.3`` for Oren-Nayar).
 

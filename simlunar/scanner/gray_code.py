@@ -21,6 +21,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
+__all__ = [
+    "GrayDecode",
+    "GrayDecoder",
+    "bit_error_rates",
+    "bit_error_table",
+    "bit_errors",
+    "bit_planes",
+    "decode",
+    "encode",
+    "frame_names",
+    "gray",
+    "gray_to_binary",
+    "interleave",
+    "inverses_by_linearity",
+    "num_bits",
+    "positive_patterns",
+    "stable_bits",
+    "white_black",
+]
+
 
 def num_bits(n: int) -> int:
     """Bits OpenCV uses for ``n`` columns or rows: ``ceil(log2 n)``.
