@@ -39,6 +39,7 @@ Adding a coding: its module (patterns, decoder, options class, coding class), on
 from __future__ import annotations
 
 from simlunar.registry import Registry
+from simlunar.scanner.micro_phase_shift import MicroPhaseShiftCoding, MicroPhaseShiftOptions
 from simlunar.scanner.phase_shift import PhaseShiftCoding, PhaseShiftOptions
 from simlunar.scanner.scans import GrayCodeOptions, GrayCoding
 
@@ -71,6 +72,16 @@ CODINGS.register(
     yaml_key="phase_opts",
     label="Phase shift",
     style=("#3182bd", "p"),
+)
+CODINGS.register(
+    "micro_phase_shift",
+    MicroPhaseShiftCoding,
+    MicroPhaseShiftOptions,
+    summary="micro phase shifting: F frequencies in one narrow high band (Gupta & Nayar 2012)",
+    full_field=True,
+    yaml_key="micro_phase_opts",
+    label="Micro phase shift",
+    style=("#6baed6", "h"),
 )
 
 #: the full-field coding of a scanner whose options name none (the paper's)
