@@ -230,10 +230,15 @@ def test_opencv_sinusoidal_pattern_computes_the_exported_wrapped_phase(phase_sca
     keep = valid & away
     assert keep.sum() > 0.3 * CAM[0] * CAM[1]
     diff = np.abs(np.angle(np.exp(1j * (cv_phase[keep] - ours[keep]))))
-    # tolerance: 8-bit frames, sensor noise and OpenCV's smoothing (measured: median and
-    # 95th percentile printed on failure)
+    # tolerance: 8-bit frames, sensor noise and OpenCV's smoothing; measured on the CPU
+    # (llvm) variant: median 0.048 rad, 95th percentile 0.14, max 0.26 (0.1 rad is 1/60 of a
+    # fringe, 0.13 projector px at the 8 px period)
     med, p95 = np.median(diff), np.percentile(diff, 95)
-    assert med < 0.05 and p95 < 0.2, (med, p95)
+    assert med < 0.1 and p95 < 0.3, (med, p95)
+    # the check has teeth: simlunar's half-pixel convention forgotten (u without + 0.5) is
+    # 2 pi 0.5 / 8 = 0.39 rad off
+    wrong = np.mod(2 * np.pi * (maps["u"].astype(np.float64) + offset) / period, 2 * np.pi)
+    assert np.median(np.abs(np.angle(np.exp(1j * (cv_phase[keep] - wrong[keep]))))) > 0.2
 
 
 def test_calibration_yaml_keeps_full_precision(tmp_path):
