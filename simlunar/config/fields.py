@@ -6,7 +6,10 @@ number in that unit or a string with an explicit unit, converted once here.
 
 from __future__ import annotations
 
-from typing import Annotated, Optional, Union
+import dataclasses
+import math
+import typing
+from typing import Annotated, Literal, Optional, Union
 
 from pydantic import (
     BaseModel,
@@ -21,6 +24,7 @@ from pydantic import (
 )
 
 from simlunar.config.quantities import parse_fraction, parse_quantity
+from simlunar.registry import option_info
 
 __all__ = ["Deg", "Density", "Metres", "Px", "PxCount", "unique_names"]
 
@@ -118,3 +122,48 @@ def _tagged_union(default: str | None, *members: type[BaseModel]):
             custom_error_message=f"kind must be one of {', '.join(tags)}",
         ),
     ]
+
+
+def options_model(
+    options_cls, name: str, doc: str = "", *, base=None, extra=None
+) -> type[BaseModel]:
+    """A pydantic model of an options dataclass's fields declared with
+    :func:`simlunar.registry.option` (type, default, doc, bounds, choices as a ``Literal``).
+
+    Fields declared without ``option`` (set by the library, e.g. ``keep_frames``) are left
+    out. An angle (``unit="rad"``) becomes the key ``<name>_deg`` in degrees (default and
+    bounds converted; :func:`library_values` converts back). ``extra`` fields (e.g. a
+    ``kind`` tag) come first. ``model_dump()`` of the model, through :func:`library_values`,
+    is the keyword set of ``options_cls``.
+    """
+    hints = typing.get_type_hints(options_cls)
+    fields = dict(extra or {})
+    for key, info in option_info(options_cls).items():
+        if info["doc"] is None or info["default"] is dataclasses.MISSING:
+            continue
+        kind, default = hints[key], info["default"]
+        bounds = {k: info[k] for k in ("ge", "gt", "le", "lt") if info[k] is not None}
+        unit = info["unit"]
+        if info["choices"] is not None:
+            kind = Literal[tuple(info["choices"])]
+        if unit == "rad":
+            key, kind, unit = f"{key}_deg", Deg, "deg"
+            default = math.degrees(default)
+            bounds = {k: math.degrees(v) for k, v in bounds.items()}
+        desc = info["doc"] + (f" ({unit})" if unit else "")
+        fields[key] = (kind, Field(default, description=desc, **bounds))
+    base = base or _Model
+    return create_model(name, __base__=base, __doc__=doc or options_cls.__doc__, **fields)
+
+
+def library_values(model: BaseModel, *, drop=("kind",)) -> dict:
+    """The library keywords of a config model: keys ``<name>_deg`` converted to radians under
+    ``<name>``, None values (library default) and the ``drop`` keys left out."""
+    out = {}
+    for key, value in model.model_dump().items():
+        if key in drop or value is None:
+            continue
+        if key.endswith("_deg"):
+            key, value = key.removesuffix("_deg"), math.radians(value)
+        out[key] = value
+    return out

@@ -16,7 +16,10 @@ from simlunar.config.fields import (
     Metres,
     _Model,
     _tagged_union,
+    library_values,
+    options_model,
 )
+from simlunar.render.materials import BSDFS
 
 __all__ = [
     "MAX_SPP",
@@ -171,11 +174,19 @@ def _unique_frames(frames: list) -> list:
     return frames
 
 
-class LambertCfg(_Model):
+class _BsdfCfg(_Model):
+    """A BSDF block: ``kind`` names an entry of :data:`simlunar.render.materials.BSDFS`."""
+
+    def library_values(self) -> dict:
+        """Keywords of the BSDF's spec (angles in radians; unset keys: library defaults)."""
+        return library_values(self)
+
+
+class LambertCfg(_BsdfCfg):
     kind: Literal["lambert"]
 
 
-class OrenNayarCfg(_Model):
+class OrenNayarCfg(_BsdfCfg):
     """Oren-Nayar (1994); ``sigma_deg`` is the slope standard deviation."""
 
     kind: Literal["oren_nayar"]
@@ -187,7 +198,7 @@ class OrenNayarCfg(_Model):
         return math.radians(self.sigma_deg)
 
 
-class HapkeCfg(_Model):
+class HapkeCfg(_BsdfCfg):
     """Hapke; unset parameters take the render package's lunar defaults."""
 
     kind: Literal["hapke"]
@@ -199,7 +210,22 @@ class HapkeCfg(_Model):
     theta_bar_deg: Deg | None = Field(None, ge=0, le=60)
 
 
-BsdfCfg = _tagged_union(None, LambertCfg, OrenNayarCfg, HapkeCfg)
+#: BSDFs with a hand-written block (their YAML defaults differ from the specs' on purpose:
+#: Oren-Nayar 20 deg, Hapke's unset keys = the library's lunar values)
+_WRITTEN = {"lambert": LambertCfg, "oren_nayar": OrenNayarCfg, "hapke": HapkeCfg}
+#: every other registered BSDF: its block derived from its spec's fields
+_DERIVED = tuple(
+    options_model(
+        e.target,
+        "".join(w.capitalize() for w in n.split("_")) + "Cfg",
+        f"{e.meta.get('label', n)} (:data:`simlunar.render.materials.BSDFS`).",
+        base=_BsdfCfg,
+        extra={"kind": (Literal[n], ...)},
+    )
+    for n, e in BSDFS.items()
+    if n not in _WRITTEN
+)
+BsdfCfg = _tagged_union(None, *_WRITTEN.values(), *_DERIVED)
 
 
 class SensorCfg(_Model):

@@ -1,5 +1,11 @@
-"""Scanner study section of the schema: the rig, gray-code, dot and capture options and the
-structured-light study (paper section 5)."""
+"""Scanner study section of the schema: the rig, coding, dot and capture options and the
+structured-light study (paper section 5).
+
+The options block of each coding (``options.gray_opts``, ``options.phase_opts``, ...) is
+derived from the coding's registered options class (:data:`simlunar.scanner.codings.CODINGS`,
+the entry's ``yaml_key``): its fields declared with :func:`simlunar.registry.option`, their
+defaults, bounds, choices and docs; a new coding needs no edit here.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +14,7 @@ from typing import Literal
 from pydantic import (
     Field,
     PositiveInt,
+    create_model,
     field_validator,
     model_validator,
 )
@@ -19,6 +26,7 @@ from simlunar.config.fields import (
     Px,
     PxCount,
     _Model,
+    options_model,
     unique_names,
 )
 from simlunar.config.render import MAX_SPP
@@ -29,13 +37,15 @@ from simlunar.config.studies import (
     check_planner_options,
 )
 from simlunar.planner import STRATEGIES
+from simlunar.scanner.codings import CODINGS, DEFAULT_CODING, full_field_codings
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.scanner.scheduling import check_spacings
+from simlunar.sensors.structured_light import MODES, mode_coding
 
 __all__ = [
+    "CODING_OPTS",
     "CaptureOptsCfg",
     "DotOptsCfg",
-    "GrayOptsCfg",
     "RigCfg",
     "ScannerOptionsCfg",
     "ScannerStudyCfg",
@@ -82,15 +92,14 @@ class RigCfg(_Model):
         return self
 
 
-class GrayOptsCfg(_Model):
-    """Gray-code scan options (:func:`simlunar.scanner.scans.gray_code_scan`)."""
-
-    black_threshold: float = Field(0.05, ge=0, le=1, description="validity (frame units)")
-    white_threshold: float = Field(0.01, ge=0, le=1, description="bit reliability (frame units)")
-    inverses: Literal["linearity", "render"] = "linearity"
-    method: Literal["plane", "rays"] = "plane"
-    require_reliable: bool = True
-    subpixel: bool = Field(False, description="sub-pixel stripe-edge refinement")
+#: coding name -> (YAML key under study.options, its derived options model)
+CODING_OPTS = {
+    n: (
+        e.meta["yaml_key"],
+        options_model(e.options, f"{e.options.__name__}Cfg", f"{e.summary} options"),
+    )
+    for n, e in CODINGS.items()
+}
 
 
 class DotOptsCfg(_Model):
@@ -138,17 +147,23 @@ class CaptureOptsCfg(_Model):
     )
 
 
-class ScannerOptionsCfg(_Model):
-    """Scanner study options: rig adjustments, gray-code, dot scan and capture options,
-    planner options."""
-
-    rig: RigCfg = Field(default_factory=RigCfg)
-    gray_opts: GrayOptsCfg = Field(default_factory=GrayOptsCfg)
-    dot_opts: DotOptsCfg = Field(default_factory=DotOptsCfg)
-    capture_opts: CaptureOptsCfg = Field(default_factory=CaptureOptsCfg)
-    planner_opts: dict[str, PlannerOptsCfg] = Field(
-        default_factory=dict, description="planner name -> options (study.planners only)"
-    )
+ScannerOptionsCfg = create_model(
+    "ScannerOptionsCfg",
+    __base__=_Model,
+    __doc__="Scanner study options: rig adjustments, each coding's options, dot scan and "
+    "capture options, planner options.",
+    rig=(RigCfg, Field(default_factory=RigCfg)),
+    **{
+        key: (model, Field(default_factory=model, description=CODINGS[n].summary))
+        for n, (key, model) in CODING_OPTS.items()
+    },
+    dot_opts=(DotOptsCfg, Field(default_factory=DotOptsCfg)),
+    capture_opts=(CaptureOptsCfg, Field(default_factory=CaptureOptsCfg)),
+    planner_opts=(
+        dict[str, PlannerOptsCfg],
+        Field(default_factory=dict, description="planner name -> options (study.planners only)"),
+    ),
+)
 
 
 class ScannerStudyCfg(_Model):
@@ -157,9 +172,15 @@ class ScannerStudyCfg(_Model):
 
     kind: Literal["scanner"]
     modes: list[str] = Field(
-        default_factory=lambda: ["gray_code", "ambiguity_enhancement"],
+        default_factory=lambda: [DEFAULT_CODING, "ambiguity_enhancement"],
         min_length=1,
-        description="scan modes: gray_code, ambiguity_enhancement, data_reduction, ...",
+        description="scan modes: a full-field coding's name (a full scan with it: "
+        f"{', '.join(full_field_codings())}), ambiguity_enhancement (the coding of "
+        "study.coding, then dot rescans), data_reduction (dots only)",
+    )
+    coding: Literal[full_field_codings()] = Field(  # type: ignore[valid-type]
+        DEFAULT_CODING,
+        description="the full-field coding ambiguity enhancement rescans (and low_contrast ranks)",
     )
     planners: list[str] = Field(
         default_factory=lambda: ["wavelet", "random"],
@@ -192,23 +213,26 @@ class ScannerStudyCfg(_Model):
     )
     options: ScannerOptionsCfg = Field(
         default_factory=ScannerOptionsCfg,
-        description="rig adjustments (rig), gray_opts, dot_opts, planner_opts",
+        description="rig adjustments (rig), each coding's options "
+        f"({', '.join(k for k, _ in CODING_OPTS.values())}), dot_opts, planner_opts",
     )
     save_scans: bool = Field(
         False,
-        description="write scans/unit<i>/ per unit: gray-code frames (8/16-bit PNG, OpenCV "
-        "order), decoded maps (EXR), point cloud (PLY), OpenCV calibration (docs/scanner.md)",
+        description="write scans/unit<i>/ per unit: the coded scan's frames (8/16-bit PNG, "
+        "OpenCV order), decoded maps (EXR), point cloud (PLY), OpenCV calibration "
+        "(docs/scanner.md)",
     )
     reconstructions: Reconstructions = _reconstructions_field()
 
     _unique = field_validator("modes", "planners", "metrics")(unique_names)
 
     @model_validator(mode="after")
-    def _scans_need_gray_code(self):
-        if self.save_scans and not {"gray_code", "ambiguity_enhancement"} & set(self.modes):
+    def _scans_need_a_coded_scan(self):
+        coded = [m for m in self.modes if m in MODES and mode_coding(m, self.coding)]
+        if self.save_scans and not coded:
             raise ValueError(
-                "save_scans exports the gray-code scan: modes must include gray_code or "
-                "ambiguity_enhancement"
+                "save_scans exports the full-field coded scan: modes must include one of "
+                f"{', '.join(full_field_codings())} or ambiguity_enhancement"
             )
         return self
 
@@ -225,7 +249,8 @@ class ScannerStudyCfg(_Model):
         scan_planners = [p for p in self.planners if p in SCAN_PLANNERS]
         if scan_planners and "data_reduction" in self.modes:
             raise ValueError(
-                f"planners: {scan_planners[0]} ranks the pixels of the gray-code scan, which "
+                f"planners: {scan_planners[0]} ranks the pixels of the "
+                f"{self.coding.replace('_', '-')} scan, which "
                 "the data_reduction mode does not make (use it with ambiguity_enhancement)"
             )
         for name in scan_planners:

@@ -17,19 +17,17 @@ import numpy as np
 from pydantic import ValidationError
 
 from simlunar.config.derived import reconstruction_mapping
+from simlunar.config.fields import library_values
 from simlunar.config.messages import format_validation_error
 from simlunar.config.render import (
     CameraLightCfg,
-    HapkeCfg,
-    LambertCfg,
-    OrenNayarCfg,
     OrthoNadirCfg,
     RenderCfg,
     RoverMastCfg,
     SensorCfg,
     SunLightCfg,
 )
-from simlunar.config.scanner import DotOptsCfg, GrayOptsCfg, RigCfg, ScannerStudyCfg
+from simlunar.config.scanner import CODING_OPTS, DotOptsCfg, RigCfg, ScannerStudyCfg
 from simlunar.config.studies import (
     FEATURE_OPTION_KEYS,
     FeatureOptsCfg,
@@ -49,7 +47,8 @@ from simlunar.planner import SequentialOptions
 from simlunar.render.capture import CaptureOptions
 from simlunar.render.lights import make_light
 from simlunar.render.materials import make_bsdf
-from simlunar.scanner.scans import DotOptions, GrayCodeOptions
+from simlunar.scanner.codings import CODINGS
+from simlunar.scanner.scans import DotOptions
 from simlunar.study.sampling import SamplingStudyOptions
 from simlunar.study.scanner import ScannerStudyOptions
 from simlunar.terrain import generate
@@ -71,7 +70,7 @@ __all__ = [
     "capture_options",
     "dot_options",
     "feature_opts",
-    "gray_options",
+    "coding_options",
     "lights",
     "planner_kwargs",
     "preset_params",
@@ -218,18 +217,8 @@ def lights(light, ambient_radiance: float) -> list:
 
 
 def bsdf(cfg):
-    """BSDF spec of a BSDF config (angles in radians)."""
-
-    if isinstance(cfg, LambertCfg):
-        return make_bsdf("lambert")
-    if isinstance(cfg, OrenNayarCfg):
-        return make_bsdf("oren_nayar", sigma=cfg.sigma, model=cfg.model)
-    if isinstance(cfg, HapkeCfg):
-        kw = {k: getattr(cfg, k) for k in ("w", "b", "c", "B0", "h") if getattr(cfg, k) is not None}
-        if cfg.theta_bar_deg is not None:
-            kw["theta_bar"] = float(np.radians(cfg.theta_bar_deg))
-        return make_bsdf("hapke", **kw)
-    raise TypeError(f"unsupported BSDF {cfg!r}")  # pragma: no cover - closed union
+    """BSDF spec of a BSDF config (angles in radians; :data:`simlunar.render.materials.BSDFS`)."""
+    return make_bsdf(cfg.kind, **cfg.library_values())
 
 
 def sensor_model(cfg: SensorCfg, reference: np.ndarray | None = None):
@@ -363,9 +352,13 @@ def rig_kwargs(study: ScannerStudyCfg) -> dict[str, Any]:
     return kw
 
 
-def gray_options(opts: GrayOptsCfg, *, keep_frames: bool = False) -> GrayCodeOptions:
-    """:class:`~simlunar.scanner.scans.GrayCodeOptions` of a config."""
-    return GrayCodeOptions(**opts.model_dump(), keep_frames=keep_frames)
+def coding_options(opts) -> dict[str, Any]:
+    """Coding name -> its options object (:data:`simlunar.scanner.codings.CODINGS`) from the
+    coding blocks of a scanner study's ``options`` (``gray_opts``, ``phase_opts``, ...)."""
+    return {
+        name: CODINGS[name].options(**library_values(getattr(opts, key)))
+        for name, (key, _model) in CODING_OPTS.items()
+    }
 
 
 def dot_options(opts: DotOptsCfg) -> DotOptions:
@@ -391,7 +384,7 @@ def scanner_options(
     study: ScannerStudyCfg, render: RenderCfg, *, seed: int = 0
 ) -> ScannerStudyOptions:
     """:class:`~simlunar.study.scanner.ScannerStudyOptions` of a config (the rig is built by
-    :func:`rig_kwargs`); ``save_scans`` keeps the gray-code frames the export needs."""
+    :func:`rig_kwargs`); ``save_scans`` keeps the coded scan's frames the export needs."""
     o = study.options
     return ScannerStudyOptions(
         modes=tuple(study.modes),
@@ -401,7 +394,9 @@ def scanner_options(
         metrics=tuple(study.metrics),
         guide_light=study.guide_light,
         capture=capture_options(study, render, seed),
-        gray=gray_options(o.gray_opts, keep_frames=study.save_scans),
+        coding=study.coding,
+        codings=coding_options(o),
+        keep_frames=study.save_scans,
         dots=dot_options(o.dot_opts),
         planner_opts={name: planner_kwargs(name, p) for name, p in o.planner_opts.items()},
         reconstructions=reconstruction_mapping(study.reconstructions),

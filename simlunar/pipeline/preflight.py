@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from simlunar.config.schema import ExperimentCfg
-from simlunar.config.translate import rig_kwargs
+from simlunar.config.translate import coding_options, rig_kwargs
 from simlunar.errors import ConfigError, ResultFolderError
 from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.pipeline.inputs import (
@@ -43,8 +43,9 @@ from simlunar.pipeline.inputs import (
 from simlunar.planner import check_k
 from simlunar.render.backend import choose_variant
 from simlunar.results.records import unit_label
-from simlunar.scanner.gray_code import num_bits
+from simlunar.scanner.codings import coding_for
 from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.sensors.structured_light import DOT_MODES, mode_coding
 from simlunar.study.scanner import aim_rig_at_terrain
 
 __all__ = [
@@ -267,10 +268,6 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
     check_scanner_budget(s)
 
 
-#: scan modes that project planned dots (the rest project the gray code only)
-DOT_MODES = ("ambiguity_enhancement", "data_reduction")
-
-
 #: time-histogram channels the transient film keeps per pixel and bin (mitransient's RGBA)
 TRANSIENT_CHANNELS = 4
 
@@ -314,13 +311,17 @@ def check_scanner_budget(s: Any) -> None:
     check_size("study.projector_px", f"{pw} x {ph} pixels", pw * ph)
     check_size("study.camera_px", f"{cw} x {ch} pixels", cw * ch)
     per_frame = pw * ph + cw * ch
-    gray = 2 * (num_bits(pw) + num_bits(ph)) + 2  # the pattern stack (+ kept frames)
-    check_size(
-        "study.projector_px",
-        f"{gray} gray-code frames x {per_frame} projector + camera pixels",
-        gray * per_frame,
-        "SIMLUNAR_MAX_FRAME_PIXELS",
-    )
+    # the largest captured stack (+ kept frames) of the full-field codings the modes scan with
+    codings = coding_options(s.options)
+    scanned = dict.fromkeys(mode_coding(m, s.coding) for m in s.modes)
+    for name in [n for n in scanned if n is not None]:
+        n = coding_for(codings, name).frames((ph, pw))
+        check_size(
+            "study.projector_px",
+            f"{n} {name.replace('_', '-')} frames x {per_frame} projector + camera pixels",
+            n * per_frame,
+            "SIMLUNAR_MAX_FRAME_PIXELS",
+        )
     if not set(DOT_MODES) & set(s.modes):
         return
     batch = s.options.dot_opts.batch

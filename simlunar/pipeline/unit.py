@@ -386,7 +386,7 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
         "depth": np.where(guide.valid, guide.depth, np.nan).astype(np.float64),
     }
     # written by the runner into scans/unit<i>/ (results/exports.py)
-    scans = scan_export_payload(res.gray, rig, gray=options.gray) if s.save_scans else None
+    scans = scan_export_payload(res.exported, rig) if s.save_scans else None
     return UnitRecord(
         rows=[dict(row) for row in res.rows],
         scores={},

@@ -15,7 +15,14 @@ import numpy as np
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.density import _category_ticks, _sweep_positions
 from simlunar.plotting.layout import COLUMN_W, LABEL_PT, TICK_PT, TITLE_PT, legend_outside, new_axes
-from simlunar.plotting.style import METRIC_UNITS, metric_axis, pair_label, style
+from simlunar.plotting.style import (
+    METRIC_UNITS,
+    label,
+    metric_axis,
+    pair_label,
+    reference_mode,
+    style,
+)
 
 __all__ = [
     "REFERENCE_MODE",
@@ -31,8 +38,6 @@ _SCALES = {
     "m²": (("m²", 1.0), ("cm²", 1e4), ("mm²", 1e6), ("µm²", 1e12)),
     "m": (("m", 1.0), ("cm", 1e2), ("mm", 1e3), ("µm", 1e6)),
 }
-#: the scan every other scan mode is compared with
-REFERENCE_MODE = "gray_code"
 
 
 def error_scale(metric: str, values) -> tuple[float, str]:
@@ -52,8 +57,8 @@ def _entry_label(e: dict) -> str:
     return pair_label(e["mode"], e.get("planner")) if "mode" in e else e["label"]
 
 
-def _is_reference(e: dict) -> bool:
-    return e.get("mode") == REFERENCE_MODE and not e.get("planner")
+def _is_reference(e: dict, ref: str | None) -> bool:
+    return ref is not None and e.get("mode") == ref and not e.get("planner")
 
 
 def scanner_bars(summary: Sequence[dict], *, metric: str = "mse", ax=None):
@@ -92,11 +97,12 @@ def scanner_relative_bars(summary: Sequence[dict], *, metric: str = "mse", ax=No
     ambiguity enhancement lowered the MSE by 25 %), one bar per other (mode, planner), the
     change in per cent above it; dotted line at 1. Returns ``(fig, ax)`` or ``(fig, None)``
     when there is no gray-code entry to divide by."""
-    ref = next((e for e in summary if _is_reference(e)), None)
+    mode = reference_mode(summary)
+    ref = next((e for e in summary if _is_reference(e, mode)), None)
     if ref is None or not ref.get(metric):
         return None, None
     fig, ax = new_axes(ax, (COLUMN_W, 2.6))
-    others = [e for e in summary if not _is_reference(e)]
+    others = [e for e in summary if not _is_reference(e, mode)]
     ratio = [(e.get(metric) or math.nan) / ref[metric] for e in others]
     colors = [style(e.get("planner") or e.get("mode") or "").colour for e in others]
     ax.bar(range(len(others)), ratio, color=colors)
@@ -118,7 +124,7 @@ def scanner_relative_bars(summary: Sequence[dict], *, metric: str = "mse", ax=No
     ax.set_ylim(max(0.0, lo - 3 * pad) if lo > 0.5 else 0.0, hi + 2 * pad)
     _bar_ticks(ax, [_entry_label(e) for e in others], others)
     name = METRIC_NAMES.get(metric, metric)
-    ax.set_ylabel(f"{name} / gray code's {name} (×)", fontsize=LABEL_PT)
+    ax.set_ylabel(f"{name} / {label(mode).lower()}'s {name} (×)", fontsize=LABEL_PT)
     ax.tick_params(axis="y", labelsize=TICK_PT)
     ax.grid(True, axis="y", alpha=0.3)
     return fig, ax

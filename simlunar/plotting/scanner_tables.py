@@ -5,7 +5,7 @@ over the units, paired against the random planner."""
 from __future__ import annotations
 
 from simlunar.metrics import METRIC_NAMES
-from simlunar.plotting.style import pair_label
+from simlunar.plotting.style import label, pair_label, reference_mode
 from simlunar.plotting.tables import _name, _tex_begin, _tex_end, t_interval, tex_escape
 
 __all__ = ["scanner_interval_table", "scanner_summary", "scanner_tables"]
@@ -51,6 +51,11 @@ def scanner_summary(rows: list[dict], *, metrics: list[str]) -> list[dict]:
     return out
 
 
+def _reference_label(mode: str | None) -> str:
+    """How the ratio column names its reference scan (``gray code`` in the paper)."""
+    return label(mode).lower() if mode else "the full-field scan"
+
+
 def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> tuple[str, str]:
     """Scanner-study tables: one row per (sweep point, mode, planner), metric means over trials.
 
@@ -60,7 +65,8 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
     and closing rows give the mean over units of each metric and of the per-unit ratio.
     """
     summary = scanner_summary(rows, metrics=[*metrics, "valid_fraction"])
-    base = {e["unit"]: e.get("mse") for e in summary if e["mode"] == "gray_code"}
+    ref = reference_mode(summary)  # the gray code in the paper
+    base = {e["unit"]: e.get("mse") for e in summary if e["mode"] == ref and not e["planner"]}
     for e in summary:
         e["base_label"] = e["label"]
         e["ratio"] = (
@@ -92,7 +98,7 @@ def scanner_tables(rows: list[dict], *, metrics: list[str], title: str = "") -> 
         *[_name(METRIC_NAMES, m) for m in metrics],
         "valid fraction",
         "frames",
-        "MSE / gray code",
+        f"MSE / {_reference_label(ref)}",
     ]
 
     def cell(v, digits="{:.3g}"):
@@ -149,7 +155,8 @@ def scanner_interval_table(summary: list[dict], *, title: str = "") -> tuple[str
     by = {(e["mode"], e["planner"], e["unit"]): e for e in per}
     pairs = list(dict.fromkeys((e["mode"], e["planner"]) for e in per))
     has_random = any(p == "random" for _, p in pairs)
-    header = ["Mode / planner", "units", "MSE / gray code", "MSE / random's, paired",
+    ref = _reference_label(reference_mode(summary))
+    header = ["Mode / planner", "units", f"MSE / {ref}", "MSE / random's, paired",
               "units below random"]  # fmt: skip
     rows = []
     for mode, planner in pairs:

@@ -20,6 +20,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from simlunar.metrics import METRIC_NAMES
+from simlunar.render.materials import BSDFS
+from simlunar.scanner.codings import CODINGS
 
 
 @dataclass(frozen=True)
@@ -70,11 +72,23 @@ REGISTRY: dict[str, Style] = {
     "fitted_combination": Style("#bcbd22", "*", "Fitted combination"),
     # the scanner's scan-ranking rescan planner
     "low_contrast": Style("#252525", "*", "Low contrast"),
-    # scanner modes (section 5)
-    "gray_code": Style("#393b79", "o", "Gray code"),
+    # scanner modes (section 5); each full-field coding is a mode too (its style is its
+    # registry entry's, added below)
     "ambiguity_enhancement": Style("#637939", "s", "Ambiguity enhancement"),
     "data_reduction": Style("#843c39", "^", "Data reduction"),
 }
+
+REGISTRY.update(
+    {n: Style(*e.meta["style"], e.meta["label"]) for n, e in CODINGS.items() if "style" in e.meta}
+)
+
+
+def reference_mode(entries: Iterable[dict]) -> str | None:
+    """The scan every other scan of a scanner study is compared with: the mode of the first
+    entry without a planner (a full-field coding's own scan, the gray code in the paper), or
+    None."""
+    return next((e["mode"] for e in entries if e.get("mode") and not e.get("planner")), None)
+
 
 #: colours for names the registry does not know (none of them is registered)
 SPARE_COLOURS = (
@@ -100,9 +114,7 @@ SPARE_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "h")
 
 #: display labels of other names shown on axes (sweep categories: BSDFs, lights)
 PLAIN_LABELS = {
-    "lambert": "Lambert",
-    "oren_nayar": "Oren-Nayar",
-    "hapke": "Hapke",
+    **{n: e.meta["label"] for n, e in BSDFS.items()},  # the BSDF registry's labels
     "sun": "Sun",
     "camera": "Camera-centred light",
 }

@@ -29,7 +29,7 @@ from typing import Any
 
 from simlunar.interrupts import deferred, interrupted
 from simlunar.render import llvm as _llvm
-from simlunar.render.plugins import PLUGINS
+from simlunar.render.plugins import plugin_modules
 
 __all__ = [
     "JIT_VARIANTS",
@@ -281,7 +281,7 @@ def init(prefer: str | None = None) -> BackendInfo:
 
 def _register_plugins(mi) -> None:
     # the variant is set: now plugins that subclass mi.BSDF may be defined and registered
-    for module in PLUGINS.values():
+    for module in plugin_modules().values():
         module.register(mi)
     for hook in _PLUGIN_HOOKS:
         hook(mi)

@@ -1,10 +1,10 @@
 """Mitsuba ``load_dict`` entries for simlunar's BSDF specs.
 
-:func:`bsdf_dict` turns a spec of :mod:`simlunar.render.materials` into the dict of the
-built-in ``diffuse`` or of simlunar's plugins ``oren_nayar`` and ``hapke``. The plugins live in
-:mod:`simlunar.render.plugins` (one module each, with its parameter table) and are registered
-by :func:`simlunar.render.backend.init` once the variant is set. Importing this module never
-imports Mitsuba.
+:func:`bsdf_dict` turns a spec of :data:`simlunar.render.materials.BSDFS` into its
+``load_dict`` entry (the spec's own ``mitsuba_dict``: the built-in ``diffuse`` or one of
+simlunar's plugins). The plugins live in :mod:`simlunar.render.plugins` (one module each, with
+its parameter table) and are registered by :func:`simlunar.render.backend.init` once the
+variant is set. Importing this module never imports Mitsuba.
 """
 
 from __future__ import annotations
@@ -14,8 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from simlunar.render.materials import HapkeBSDF, LambertBSDF, OrenNayarBSDF
-from simlunar.render.mesh import grid_texture
+from simlunar.render.materials import BSDFS
 from simlunar.render.plugins.hapke import HAPKE_TABLE_SIZE
 
 __all__ = ["HAPKE_TABLE_SIZE", "bsdf_dict"]
@@ -30,12 +29,12 @@ def _texture(reflectance: Any) -> Any:
     return reflectance
 
 
-def bsdf_dict(spec: LambertBSDF | OrenNayarBSDF | HapkeBSDF, reflectance: Any = 0.5) -> dict:
+def bsdf_dict(spec, reflectance: Any = 0.5) -> dict:
     """Mitsuba ``load_dict`` entry for a BSDF spec.
 
     Parameters
     ----------
-    spec : LambertBSDF, OrenNayarBSDF or HapkeBSDF
+    spec : a spec of :data:`simlunar.render.materials.BSDFS`
         From :func:`simlunar.render.materials.make_bsdf`.
     reflectance : float, dict or mitsuba Texture
         The albedo: a constant in [0, 1], a Mitsuba texture dict (e.g. a ``bitmap`` of the
@@ -52,27 +51,7 @@ def bsdf_dict(spec: LambertBSDF | OrenNayarBSDF | HapkeBSDF, reflectance: Any = 
         :func:`simlunar.render.backend.init`.
     """
     tex = _texture(reflectance)
-    if isinstance(spec, LambertBSDF):
-        return {"type": "diffuse", "reflectance": tex}
-    if isinstance(spec, OrenNayarBSDF):
-        sigma: Any = spec.sigma
-        if spec.sigma_map is not None:
-            sigma = grid_texture(spec.sigma_map)
-        return {"type": "oren_nayar", "reflectance": tex, "sigma": sigma, "model": spec.model}
-    if isinstance(spec, HapkeBSDF):
-        d = {
-            "type": "hapke",
-            "b": spec.b,
-            "c": spec.c,
-            "B0": spec.B0,
-            "h": spec.h,
-            "theta_bar": spec.theta_bar,
-        }
-        if spec.w is None:
-            d.update(reflectance=tex, albedo_mode="normal")
-        else:
-            d.update(reflectance=spec.w, albedo_mode="w")
-        return d
-    raise ValueError(
-        f"bsdf must be a LambertBSDF, OrenNayarBSDF or HapkeBSDF spec, got {type(spec).__name__}"
-    )
+    if not any(isinstance(spec, e.target) for e in BSDFS.values()):
+        specs = ", ".join(e.target.__name__ for e in BSDFS.values())
+        raise ValueError(f"bsdf must be a {specs} spec, got {type(spec).__name__}")
+    return spec.mitsuba_dict(tex)

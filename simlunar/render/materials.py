@@ -1,4 +1,14 @@
-"""BSDF specifications (NumPy only, importable without Mitsuba).
+"""BSDF specifications and the BSDF registry (NumPy only, importable without Mitsuba).
+
+``BSDFS`` names every BSDF once: ``name -> Entry(spec class, spec class)`` (the frozen spec
+dataclass is its own options class), with ``meta["plugin"]`` the module of its Mitsuba plugin
+(registered by :func:`simlunar.render.backend.init`; None for Mitsuba's built-in ``diffuse``)
+and ``meta["label"]`` its display name. Every spec has ``mitsuba_dict(reflectance)``, its
+``load_dict`` entry (:func:`simlunar.render.bsdfs.bsdf_dict`); the YAML models of the specs
+without a hand-written one are derived from their fields (:mod:`simlunar.config.render`).
+A new BSDF is its module in :mod:`simlunar.render.plugins` (spec + plugin), its NumPy
+reference in :mod:`simlunar.render.reference` and one ``BSDFS.register`` line here
+(CONTRIBUTING.md, "Adding a BSDF").
 
 A spec says *which* reflectance model and with which angular parameters; it does not hold an
 albedo. The albedo comes from the terrain's albedo grid (``Terrain.albedo``, normal albedo per
@@ -22,6 +32,9 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.registry import Registry
+from simlunar.render.mesh import grid_texture
+from simlunar.render.plugins.lunar_lambert import LunarLambertBSDF
 from simlunar.render.reference import LUNAR_HAPKE
 
 __all__ = [
@@ -50,6 +63,9 @@ class LambertBSDF:
     """Lambertian reflectance ``albedo / pi`` (Mitsuba's built-in ``diffuse``)."""
 
     name = "lambert"
+
+    def mitsuba_dict(self, reflectance: Any) -> dict:
+        return {"type": "diffuse", "reflectance": reflectance}
 
 
 @dataclass(frozen=True)
@@ -99,6 +115,17 @@ class OrenNayarBSDF:
             a is not None and b is not None and a.shape == b.shape and np.array_equal(a, b)
         )
         return self.sigma == other.sigma and self.model == other.model and same_map
+
+    def mitsuba_dict(self, reflectance: Any) -> dict:
+        """``oren_nayar`` plugin entry; a ``sigma_map`` becomes a nearest ``bitmap`` texture
+        addressed as a grid albedo (:func:`simlunar.render.mesh.grid_texture`)."""
+        sigma: Any = self.sigma if self.sigma_map is None else grid_texture(self.sigma_map)
+        return {
+            "type": "oren_nayar",
+            "reflectance": reflectance,
+            "sigma": sigma,
+            "model": self.model,
+        }
 
 
 def check_sigma_map(sigma_map: Any, name: str = "sigma_map") -> np.ndarray:
@@ -262,23 +289,43 @@ class HapkeBSDF:
                 raise ValueError(f"{key} must be {ranges[key]}, got {getattr(self, key)!r}")
             object.__setattr__(self, key, v)
 
+    def mitsuba_dict(self, reflectance: Any) -> dict:
+        """``hapke`` plugin entry: ``reflectance`` is the normal albedo unless ``w`` is set."""
+        d = {"type": "hapke", "b": self.b, "c": self.c, "B0": self.B0, "h": self.h}
+        d["theta_bar"] = self.theta_bar
+        if self.w is None:
+            d.update(reflectance=reflectance, albedo_mode="normal")
+        else:
+            d.update(reflectance=self.w, albedo_mode="w")
+        return d
 
-BSDFSpec = LambertBSDF | OrenNayarBSDF | HapkeBSDF
 
-#: name -> spec class
-BSDFS: dict[str, type] = {
-    "lambert": LambertBSDF,
-    "oren_nayar": OrenNayarBSDF,
-    "hapke": HapkeBSDF,
-}
+#: BSDF name -> Entry(spec class, spec class); meta: plugin (module name or None), label
+BSDFS = Registry("BSDF")
+BSDFS.register("lambert", LambertBSDF, LambertBSDF, label="Lambert", plugin=None)
+BSDFS.register(
+    "oren_nayar",
+    OrenNayarBSDF,
+    OrenNayarBSDF,
+    label="Oren-Nayar",
+    plugin="simlunar.render.plugins.oren_nayar",
+)
+BSDFS.register("hapke", HapkeBSDF, HapkeBSDF, label="Hapke", plugin="simlunar.render.plugins.hapke")
+BSDFS.register(
+    "lunar_lambert",
+    LunarLambertBSDF,
+    LunarLambertBSDF,
+    label="Lunar-Lambert",
+    plugin="simlunar.render.plugins.lunar_lambert",
+)
 
 
-def make_bsdf(name: str, **kw: Any) -> LambertBSDF | OrenNayarBSDF | HapkeBSDF:
+def make_bsdf(name: str, **kw: Any):
     """Build a BSDF spec by registry name.
 
     Parameters
     ----------
-    name : {"lambert", "oren_nayar", "hapke"}
+    name : a name of :data:`BSDFS` (lambert, oren_nayar, hapke, ...)
     **kw
         Fields of the spec (e.g. ``sigma=0.3`` for Oren-Nayar).
 
@@ -288,10 +335,7 @@ def make_bsdf(name: str, **kw: Any) -> LambertBSDF | OrenNayarBSDF | HapkeBSDF:
         Unknown name (lists the valid ones), unknown keyword (lists the valid fields), or a
         parameter out of range (names the field).
     """
-    try:
-        cls = BSDFS[name]
-    except (KeyError, TypeError):
-        raise ValueError(f"unknown BSDF {name!r}; valid: {', '.join(BSDFS)}") from None
+    cls = BSDFS[name].target  # an unknown name lists the valid ones
     valid = [f.name for f in fields(cls)]
     bad = sorted(set(kw) - set(valid))
     if bad:

@@ -32,6 +32,7 @@ __all__ = [
     "hapke_w_from_normal_albedo",
     "lambert",
     "local_angles",
+    "lunar_lambert",
     "oren_nayar",
 ]
 
@@ -91,6 +92,37 @@ def lambert(wi, wo, n, albedo=1.0) -> np.ndarray:
     cos_i, cos_o, _ = local_angles(wi, wo, n)
     up = (cos_i > 0) & (cos_o > 0)
     return np.where(up, np.asarray(albedo, dtype=np.float64) / np.pi, 0.0)
+
+
+def lunar_lambert(wi, wo, n, albedo=1.0, L=0.5) -> np.ndarray:
+    """Lunar-Lambert BRDF (McEwen 1991, Icarus 92; McEwen 1996, LPSC 27: the photometric
+    function ``I/F = A [(1 - L) cos i + 2 L cos i / (cos i + cos e)]``) as a BRDF:
+
+    ``f = albedo / pi ((1 - L) + 2 L / (cos i + cos o))`` above the surface, 0 below.
+
+    ``L = 0`` is Lambert, ``L = 1`` Lommel-Seeliger normalised to ``albedo / pi`` at normal
+    incidence and emission (../shared/REFERENCES.md, "Extension cost"); every ``L`` gives
+    ``albedo / pi`` there, so ``albedo`` is the normal albedo for any ``L``.
+
+    Parameters
+    ----------
+    wi, wo, n : (..., 3) arrays
+        See the module conventions.
+    albedo : float or (...) array
+        Normal albedo in [0, 1].
+    L : float or (...) array
+        Limb-darkening weight in [0, 1].
+
+    Returns
+    -------
+    (...) float64 array, 1/sr.
+    """
+    cos_i, cos_o, _ = local_angles(wi, wo, n)
+    up = (cos_i > 0) & (cos_o > 0)
+    L = np.asarray(L, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = np.asarray(albedo, np.float64) / np.pi * ((1.0 - L) + 2.0 * L / (cos_i + cos_o))
+    return np.where(up, f, 0.0)
 
 
 def _oren_nayar_qualitative(rho, s2, cdp, alpha, tan_beta):

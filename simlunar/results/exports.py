@@ -1,18 +1,22 @@
-"""Scan export: what a gray-code scan captured, in formats OpenCV pipelines read.
+"""Scan export: what a full-field coded scan captured, in formats OpenCV pipelines read.
 
 ``study.save_scans: true`` (or ``simlunar run --save-scans``) writes, per unit, a folder
 ``scans/unit<i>/`` of the result folder::
 
-    frames8/NN_<name>.png    captured frames, 8-bit grey, OpenCV GrayCodePattern order
+    frames8/NN_<name>.png    captured frames, 8-bit grey, in the coding's order
     frames16/NN_<name>.png   the same frames, 16-bit grey
     decode.exr               decoded projector maps: col, row, u, v, valid, lit (float32)
     cloud.ply                triangulated points (binary PLY, metres, world frame)
     calibration.yml          rig calibration in OpenCV's conventions (cv2.FileStorage)
-    manifest.json            frame list, thresholds, conventions
+    manifest.json            coding, frame list and order, thresholds, conventions
 
-Frame order is that of ``cv2.structured_light.GrayCodePattern.generate()``: for each column
+The frames, their names and order and the manifest's description of the coding come from the
+scan's coding (:data:`simlunar.scanner.codings.CODINGS`). For the gray code the order is that
+of ``cv2.structured_light.GrayCodePattern.generate()``: for each column
 bit (most significant first) the pattern then its inverse, then the row bits the same way;
-then the white frame and the black frame (``getImagesForShadowMasks`` order). The frames are
+then the white frame and the black frame (``getImagesForShadowMasks`` order); for phase
+shifting, per axis and level the N shifted frames (:mod:`simlunar.scanner.phase_shift`), then
+white and black (OpenCV's ``SinusoidalPattern`` reads one level's frames). The frames are
 the sensor model's output (noise, ADC) as the decoder used them; when the scan obtained the
 inverse patterns by linearity of light transport (``bits + 2`` renders), the inverse frames are
 those synthesised images, each with its own sensor noise draw.
@@ -27,7 +31,6 @@ picklable for any executor) and :func:`write_scan_export` (in the runner's proce
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -37,7 +40,8 @@ import numpy as np
 from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
 from simlunar.imaging.exr import write_exr
-from simlunar.scanner.scans import GrayCodeOptions
+from simlunar.scanner.codings import CODINGS
+from simlunar.scanner.gray_code import frame_names
 from simlunar.scanner.triangulate import Correspondences, triangulate_plane, triangulate_rays
 
 __all__ = [
@@ -52,18 +56,6 @@ __all__ = [
     "write_cloud_ply",
     "write_scan_export",
 ]
-
-
-def frame_names(n_col_bits: int, n_row_bits: int) -> list[str]:
-    """Names of the exported frames in OpenCV ``GrayCodePattern`` order (white, black last).
-
-    ``col3_inv`` is the inverse pattern of column bit 3 (bit 0 is the most significant).
-    """
-    names = []
-    for axis, n in (("col", n_col_bits), ("row", n_row_bits)):
-        for i in range(n):
-            names += [f"{axis}{i}", f"{axis}{i}_inv"]
-    return [*names, "white", "black"]
 
 
 def quantize(frames: np.ndarray, bits: int) -> np.ndarray:
@@ -219,39 +211,37 @@ def read_cloud_ply(path) -> np.ndarray:
     return np.frombuffer(blob, dtype=dtype, count=n, offset=end + len(b"end_header\n"))
 
 
-def scan_export_payload(scan, rig, *, gray: GrayCodeOptions | None = None) -> dict[str, Any]:
-    """Everything :func:`write_scan_export` writes, from a gray-code scan and its rig.
+def scan_export_payload(scan, rig) -> dict[str, Any]:
+    """Everything :func:`write_scan_export` writes, from a coded scan and its rig.
 
     Parameters
     ----------
-    scan : :class:`simlunar.scanner.scans.GrayScan`
-        The scan (its captured frames, decode and cloud); scanned with ``keep_frames=True``
-        (the streaming decoder keeps no frame stack otherwise).
+    scan : :class:`simlunar.scanner.scans.CodedScan`
+        The scan (its captured frames, decode, cloud and coding); scanned with
+        ``keep_frames=True`` (the streaming decoders keep no frame stack otherwise).
     rig : Rig
         The rig that scanned.
-    gray : GrayCodeOptions, optional
-        The options the scan ran with (default: the defaults); their thresholds and
-        triangulation method are recorded.
 
     Returns
     -------
     dict of arrays and plain data (picklable; no file is written)
     """
-
-    opts = dataclasses.asdict(gray or GrayCodeOptions())
+    coding = scan.coding
+    if coding is None:
+        raise ValueError("the scan names no coding (CodedScan.coding): nothing says its frames")
     dec = scan.decode
     fr = scan.frames
     if "images" not in fr:
-        raise ValueError("the gray-code scan kept no frame stack: scan with keep_frames=True")
+        raise ValueError("the coded scan kept no frame stack: scan with keep_frames=True")
     frames = np.concatenate(
         [np.asarray(fr["images"]), np.asarray(fr["white"])[None], np.asarray(fr["black"])[None]]
     )
-    names = frame_names(dec.n_col_bits, dec.n_row_bits)
+    names = coding.frame_names(dec.proj_shape)
     if len(frames) != len(names):
-        raise ValueError(f"a gray-code scan has {len(names)} frames, got {len(frames)}")
+        raise ValueError(f"the coded scan has {len(names)} frames, got {len(frames)}")
     # per-pixel triangulation (the scan's cloud, with the camera pixel of every point)
     corr = Correspondences.from_gray(dec)
-    if opts["method"] == "plane":
+    if coding.method == "plane":
         pts = triangulate_plane(rig, corr.cam_uv, corr.proj_uv[:, 0])
     else:
         pts, _ = triangulate_rays(rig, corr.cam_uv, corr.proj_uv)
@@ -280,17 +270,15 @@ def scan_export_payload(scan, rig, *, gray: GrayCodeOptions | None = None) -> di
         "meta": {
             "projector_size": [int(dec.proj_shape[1]), int(dec.proj_shape[0])],
             "camera_size": [int(valid.shape[1]), int(valid.shape[0])],
-            "n_col_bits": int(dec.n_col_bits),
-            "n_row_bits": int(dec.n_row_bits),
-            "black_threshold": float(opts["black_threshold"]),
-            "white_threshold": float(opts["white_threshold"]),
-            "opencv_black_threshold_8bit": round(255 * float(opts["black_threshold"])),
-            "opencv_white_threshold_8bit": round(255 * float(opts["white_threshold"])),
-            "inverses": str(opts["inverses"]),
-            "subpixel": bool(opts["subpixel"]),
-            "triangulation": str(opts["method"]),
+            **coding.export_meta(dec),
         },
+        "coding": _coding_name(coding),
+        "frame_order": coding.frame_order,
     }
+
+
+def _coding_name(coding) -> str:
+    return next(n for n, e in CODINGS.items() if isinstance(coding, e.target))
 
 
 def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None = None) -> Path:
@@ -335,8 +323,9 @@ def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None =
     write_calibration_yaml(folder / "calibration.yml", payload["calibration"])
     manifest = {
         **meta,
+        "coding": payload.get("coding", ""),
         "frames": files,
-        "frame_order": "OpenCV GrayCodePattern.generate() order, then white, black",
+        "frame_order": payload.get("frame_order", ""),
         "frame_units": "round(full scale * (2**bits - 1)) in frames8 (8 bit) and frames16 (16 bit)",
         "pixel_convention": "OpenCV: pixel (col, row) has its centre at integer (col, row)",
         "cloud_points": len(cl["points"]),
@@ -407,8 +396,11 @@ def check_save_scans(cfg) -> None:
             f"--save-scans: experiment {cfg.name!r} has a {study.kind} study; scans are "
             "exported by scanner and lidar studies only"
         )
-    if not {"gray_code", "ambiguity_enhancement"} & set(study.modes):
+    from simlunar.sensors.structured_light import DOT_MODES, MODES
+
+    coded = [m for m in MODES if m not in DOT_MODES]  # the full-field codings' own modes
+    if not set(study.modes) & {*coded, "ambiguity_enhancement"}:
         raise ConfigError(
-            f"--save-scans: study.modes {list(study.modes)} has no gray-code scan to export "
-            "(add gray_code or ambiguity_enhancement)"
+            f"--save-scans: study.modes {list(study.modes)} has no full-field coded scan to "
+            f"export (add one of {', '.join(coded)} or ambiguity_enhancement)"
         )

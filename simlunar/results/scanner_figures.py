@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from simlunar.plotting import figures as F
-from simlunar.plotting.style import axis_name
+from simlunar.plotting.style import axis_name, reference_mode
 from simlunar.results import captions as captions_text
 from simlunar.results.aggregate import SEED_AXES, first_reconstruction_rows, sweep_value
 
@@ -88,9 +88,7 @@ def scanner_figures(res: dict, emit, captions: dict) -> None:
         )
     else:
         summary = _scanner_pooled(rows, metrics)
-        relative = any(e["mode"] == "gray_code" and not e["planner"] for e in summary) and (
-            len(summary) > 1
-        )
+        relative = reference_mode(summary) is not None and len(summary) > 1
         fig, axes = F.panel_grid(
             len(metrics) * (2 if relative else 1), ncols=len(metrics), height=2.7
         )

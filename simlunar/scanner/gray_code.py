@@ -25,10 +25,12 @@ __all__ = [
     "GrayDecode",
     "GrayDecoder",
     "bit_error_rates",
+    "bit_error_table",
     "bit_errors",
     "bit_planes",
     "decode",
     "encode",
+    "frame_names",
     "gray",
     "gray_to_binary",
     "interleave",
@@ -109,6 +111,18 @@ def encode(width: int, height: int) -> np.ndarray:
     out[2 * ncb :: 2] = (row_bits * 255)[:, :, None]
     out[1::2] = 255 - out[0::2]
     return out
+
+
+def frame_names(n_col_bits: int, n_row_bits: int) -> list[str]:
+    """Names of the frames in OpenCV ``GrayCodePattern`` order (white, black last).
+
+    ``col3_inv`` is the inverse pattern of column bit 3 (bit 0 is the most significant).
+    """
+    names = []
+    for axis, n in (("col", n_col_bits), ("row", n_row_bits)):
+        for i in range(n):
+            names += [f"{axis}{i}", f"{axis}{i}_inv"]
+    return [*names, "white", "black"]
 
 
 def white_black(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
@@ -497,6 +511,37 @@ def _box_bitwise(a: np.ndarray, margin: int, op) -> np.ndarray:
             op(acc, window(s), out=acc)
         out = acc
     return out
+
+
+def bit_error_table(
+    decode: GrayDecode, truth: dict, mask=None, *, edge_margin: int = 1
+) -> dict[str, float]:
+    """Per-bit error rates of a gray-code decode against camera ground truth.
+
+    ``truth`` has the true projector ``col``, ``row`` and ``lit`` per camera pixel
+    (:func:`simlunar.render.capture.camera_truth`). ``mask`` (camera (rows, cols) bool)
+    restricts the pixels; always only pixels lit by the projector in both the ground truth and
+    the decode count, and for each bit only pixels ``edge_margin`` pixels away from that bit's
+    true stripe edges (:func:`stable_bits`; 0 keeps every pixel).
+
+    Returns
+    -------
+    dict ``ber_c<i>`` / ``ber_r<i>`` -> rate of column / row bit i (MSB first; NaN if no pixel)
+    """
+    dec = decode
+    base = truth["lit"] & dec.lit & (truth["col"] >= 0)
+    m = base if mask is None else base & np.asarray(mask, bool)
+    err = bit_errors(dec, truth["col"], truth["row"], mask=m)
+    per_bit = np.broadcast_to(m, err.shape)
+    if edge_margin > 0:
+        per_bit = per_bit & stable_bits(
+            truth["col"], truth["row"], dec.n_col_bits, dec.n_row_bits, margin=edge_margin
+        )
+    rates = bit_error_rates(err, per_bit)
+    names = [f"ber_c{i}" for i in range(dec.n_col_bits)] + [
+        f"ber_r{i}" for i in range(dec.n_row_bits)
+    ]
+    return dict(zip(names, (float(r) for r in rates)))
 
 
 def bit_error_rates(errors: np.ndarray, mask: np.ndarray) -> np.ndarray:

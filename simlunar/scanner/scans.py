@@ -18,11 +18,13 @@ Inverse patterns come from linearity of light transport (``bits + 2`` renders in
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from simlunar.geometry import Rig
+from simlunar.registry import check_bounds, option
 from simlunar.scanner import dots as _dots
 from simlunar.scanner import gray_code as gc
 from simlunar.scanner.scheduling import schedule_dots
@@ -37,13 +39,16 @@ from simlunar.scanner.triangulate import (
 
 __all__ = [
     "SCAN_PLANNERS",
+    "CodedScan",
     "DotOptions",
     "DotScan",
     "GrayCodeOptions",
+    "GrayCoding",
     "GrayScan",
     "dot_scan",
     "gray_code_scan",
     "low_contrast_pixels",
+    "triangulated",
 ]
 
 #: how a gray-code scan obtains the inverse-pattern images, and how it triangulates
@@ -73,28 +78,21 @@ class GrayCodeOptions:
         (:func:`simlunar.scanner.subpixel.refine_subpixel`) instead of projector pixel centres.
     keep_frames : bool
         Keep the captured stack in ``GrayScan.frames["images"]`` (white and black are always
-        kept).
+        kept). Not a YAML option: the study sets it when scans are exported.
     """
 
-    black_threshold: float = 0.05
-    white_threshold: float = 0.01
-    inverses: str = "linearity"
-    method: str = "plane"
-    require_reliable: bool = True
-    subpixel: bool = False
+    black_threshold: float = option(0.05, doc="validity (frame units)", ge=0.0, le=1.0)
+    white_threshold: float = option(0.01, doc="bit reliability (frame units)", ge=0.0, le=1.0)
+    inverses: str = option(
+        "linearity", doc="inverse patterns by linearity of light or rendered", choices=_INVERSES
+    )
+    method: str = option("plane", doc="triangulation: column plane or rays", choices=_METHODS)
+    require_reliable: bool = option(True, doc="a pixel with an unreliable bit is invalid")
+    subpixel: bool = option(False, doc="sub-pixel stripe-edge refinement")
     keep_frames: bool = False
 
     def __post_init__(self):
-        for name in ("black_threshold", "white_threshold"):
-            v = getattr(self, name)
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"{name} must lie in [0, 1] (frame units), got {v}")
-        if self.inverses not in _INVERSES:
-            raise ValueError(
-                f"unknown inverses option {self.inverses!r}; valid: {_valid(_INVERSES)}"
-            )
-        if self.method not in _METHODS:
-            raise ValueError(f"unknown method {self.method!r}; valid: {_valid(_METHODS)}")
+        check_bounds(self)
 
 
 @dataclass(frozen=True)
@@ -138,24 +136,33 @@ class DotOptions:
 
 
 @dataclass(frozen=True, eq=False)
-class GrayScan:
-    """Result of a full gray-code scan.
+class CodedScan:
+    """Result of a full-field coded scan (gray code, phase shift, ...).
 
     Attributes
     ----------
-    decode : GrayDecode (camera view)
+    decode : the coding's decode (camera view): ``valid``, ``lit``, ``contrast``, ``col``,
+        ``row``, ``proj_shape``, ``proj_uv()``, ``decoded_index()``
+        (:class:`~simlunar.scanner.gray_code.GrayDecode`, ...)
     cloud : PointCloud of every valid camera pixel
     depth : (H, W) float64 z-depth in the guide (projector) view, NaN holes
     renders : int number of rendered frames
     frames : dict of the captured 'white' and 'black' frames and, with ``keep_frames``, the
-        'images' (OpenCV-ordered stack)
+        'images' (the coding's stack in export order, white and black excluded)
+    coding : the coding object that made the scan (:data:`simlunar.scanner.codings.CODINGS`;
+        its ``options`` are the scan's), or None
     """
 
-    decode: gc.GrayDecode
+    decode: object
     cloud: PointCloud
     depth: np.ndarray
     renders: int
     frames: dict = field(repr=False)
+    coding: object = None
+
+
+#: the gray-code scan's result (a :class:`CodedScan` whose decode is a ``GrayDecode``)
+GrayScan = CodedScan
 
 
 @dataclass(frozen=True, eq=False)
@@ -247,18 +254,109 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     result = dec.result(require_reliable=o.require_reliable)
     if o.subpixel:
         result = refine_subpixel_from_diff(result, dec.diff)
-    cloud = triangulate(rig, Correspondences.from_gray(result), method=o.method)
-    depth = depth_at_proj_pixels(cloud, rig.guide)
+    cloud, depth = triangulated(rig, result, o.method)
     frames = {"white": white, "black": black}
     if kept is not None:
         frames["images"] = np.concatenate(kept)
-    return GrayScan(
+    return CodedScan(
         decode=result,
         cloud=cloud,
         depth=depth,
         renders=renders,
         frames=frames,
+        coding=GrayCoding(o),
     )
+
+
+def triangulated(rig: Rig, decode, method: str) -> tuple[PointCloud, np.ndarray]:
+    """The point cloud of a full-field decode's valid pixels and its (H, W) depth in the
+    guide view (NaN holes): what every coded scan does after decoding.
+
+    Parameters
+    ----------
+    rig : Rig
+    decode : a decode with ``valid`` and ``proj_uv()`` (module :mod:`~simlunar.scanner.codings`)
+    method : "plane" or "rays" (:func:`simlunar.scanner.triangulate.triangulate`)
+    """
+    cloud = triangulate(rig, Correspondences.from_gray(decode), method=method)
+    return cloud, depth_at_proj_pixels(cloud, rig.guide)
+
+
+class GrayCoding:
+    """The gray code as a coding of :data:`simlunar.scanner.codings.CODINGS`.
+
+    Parameters
+    ----------
+    options : GrayCodeOptions, optional
+    """
+
+    full_field = True
+    frame_order = "OpenCV GrayCodePattern.generate() order, then white, black"
+
+    def __init__(self, options: GrayCodeOptions | None = None) -> None:
+        self.options = options or GrayCodeOptions()
+
+    @property
+    def method(self) -> str:
+        return self.options.method
+
+    @staticmethod
+    def _bits(proj_shape) -> tuple[int, int]:
+        H, W = (int(proj_shape[0]), int(proj_shape[1]))
+        return gc.num_bits(W), gc.num_bits(H)
+
+    def frames(self, proj_shape) -> int:
+        """Captured frames: (pattern, inverse) per bit, then white and black."""
+        return 2 * sum(self._bits(proj_shape)) + 2
+
+    def frame_names(self, proj_shape) -> list[str]:
+        return gc.frame_names(*self._bits(proj_shape))
+
+    def patterns(self, proj_shape) -> np.ndarray:
+        """(frames, H, W) float32: :func:`~simlunar.scanner.gray_code.encode`, white, black."""
+        H, W = (int(proj_shape[0]), int(proj_shape[1]))
+        white, black = gc.white_black(W, H)
+        return np.concatenate([gc.encode(W, H), white[None], black[None]]).astype(np.float32) / 255
+
+    def decode(self, frames, proj_shape) -> gc.GrayDecode:
+        """Decode a whole stack in :meth:`patterns` order (white and black last)."""
+        frames = np.asarray(frames)
+        o = self.options
+        return gc.decode(
+            frames[:-2],
+            frames[-2],
+            frames[-1],
+            proj_shape=proj_shape,
+            black_threshold=o.black_threshold,
+            white_threshold=o.white_threshold,
+            require_reliable=o.require_reliable,
+        )
+
+    def scan(self, capture, rig: Rig, *, keep_frames: bool = False) -> CodedScan:
+        """:func:`gray_code_scan` with these options (``keep_frames`` or the options')."""
+        o = self.options
+        if keep_frames and not o.keep_frames:
+            o = dataclasses.replace(o, keep_frames=True)
+        return gray_code_scan(capture, rig, o)
+
+    def export_meta(self, decode) -> dict:
+        o = self.options
+        return {
+            "n_col_bits": int(decode.n_col_bits),
+            "n_row_bits": int(decode.n_row_bits),
+            "black_threshold": float(o.black_threshold),
+            "white_threshold": float(o.white_threshold),
+            "opencv_black_threshold_8bit": round(255 * float(o.black_threshold)),
+            "opencv_white_threshold_8bit": round(255 * float(o.white_threshold)),
+            "inverses": str(o.inverses),
+            "subpixel": bool(o.subpixel),
+            "triangulation": str(o.method),
+        }
+
+    def truth_scores(self, scan: CodedScan, truth: dict, mask=None) -> dict[str, float]:
+        """Bit error rates ``ber_c<i>`` / ``ber_r<i>``
+        (:func:`simlunar.scanner.gray_code.bit_error_table`)."""
+        return gc.bit_error_table(scan.decode, truth, mask)
 
 
 def dot_scan(

@@ -2,8 +2,9 @@
 
 A projector-camera rig (:class:`~simlunar.geometry.Rig`) scans a terrain through a
 :class:`~simlunar.render.capture.RenderCapture` in each scan mode of
-:class:`~simlunar.sensors.structured_light.StructuredLight` (a full gray-code scan; ambiguity
-enhancement and data reduction rescan the pixels a planner chose with dots); the protocol
+:class:`~simlunar.sensors.structured_light.StructuredLight` (a full scan with any full-field
+coding of :data:`~simlunar.scanner.codings.CODINGS`; ambiguity enhancement and data reduction
+rescan the pixels a planner chose with dots); the protocol
 (:mod:`simlunar.study.protocol`) reconstructs every scan in the guide view and scores it
 against the guide view's ground truth.
 """
@@ -28,16 +29,24 @@ from simlunar.render.capture import (
     render_guide,
 )
 from simlunar.scanner import gray_code as gc
+from simlunar.scanner.codings import DEFAULT_CODING, coding_for
 from simlunar.scanner.rigs import RIG_PRESETS, rig_preset
 from simlunar.scanner.scans import (
     SCAN_PLANNERS,
+    CodedScan,
     DotOptions,
     GrayCodeOptions,
     GrayScan,
     gray_code_scan,
     low_contrast_pixels,
 )
-from simlunar.sensors.structured_light import MODES, StructuredLight, StructuredLightOptions
+from simlunar.sensors.structured_light import (
+    DOT_MODES,
+    MODES,
+    StructuredLight,
+    StructuredLightOptions,
+    mode_coding,
+)
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
@@ -140,20 +149,7 @@ def bit_error_table(
     ``edge_margin`` pixels away from that bit's true stripe edges
     (:func:`simlunar.scanner.gray_code.stable_bits`; 0 keeps every pixel).
     """
-    dec = gray.decode
-    base = truth["lit"] & dec.lit & (truth["col"] >= 0)
-    m = base if mask is None else base & np.asarray(mask, bool)
-    err = gc.bit_errors(dec, truth["col"], truth["row"], mask=m)
-    per_bit = np.broadcast_to(m, err.shape)
-    if edge_margin > 0:
-        per_bit = per_bit & gc.stable_bits(
-            truth["col"], truth["row"], dec.n_col_bits, dec.n_row_bits, margin=edge_margin
-        )
-    rates = gc.bit_error_rates(err, per_bit)
-    names = [f"ber_c{i}" for i in range(dec.n_col_bits)] + [
-        f"ber_r{i}" for i in range(dec.n_row_bits)
-    ]
-    return dict(zip(names, (float(r) for r in rates)))
+    return gc.bit_error_table(gray.decode, truth, mask, edge_margin=edge_margin)
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,13 +186,17 @@ class ScannerStudyOptions:
     modes : names from :data:`simlunar.sensors.structured_light.MODES`
     planners : planner strategy names (:func:`simlunar.planner.plan`) for the dot modes, or
         ``"low_contrast"`` (:func:`simlunar.scanner.scans.low_contrast_pixels`: the pixels the
-        gray-code scan saw least lit; ambiguity_enhancement only)
+        coded scan saw least lit; ambiguity_enhancement only)
     budget : fraction of guide pixels rescanned / sampled by dots (paper: 0.1)
     trials : planner draws per (mode, planner); the gray-code scan is shared
     metrics : sampling-study metric names
     guide_light : "projector" (all-white frame, camera-centred) or "sun"
     capture : CaptureOptions (path depth, samples, projector and lens optics)
-    gray, dots : GrayCodeOptions, DotOptions
+    coding : the full-field coding ambiguity enhancement rescans
+        (:data:`simlunar.scanner.codings.CODINGS`)
+    codings : mapping coding name -> its options object (codings not named: defaults)
+    dots : DotOptions
+    keep_frames : keep the coded scans' captured stacks (the scan export needs them)
     planner_opts : mapping planner name -> planner options (:func:`simlunar.planner.plan`),
         e.g. ``{"wavelet": {"feature_opts": {"levels": 1}}}``; planners not named get none
     reconstructions : mapping name -> options, or names
@@ -204,17 +204,19 @@ class ScannerStudyOptions:
         (default ``linear`` alone); a guided one reads the guide camera's image.
     """
 
-    modes: tuple = ("gray_code", "ambiguity_enhancement")
+    modes: tuple = (DEFAULT_CODING, "ambiguity_enhancement")
     planners: tuple = ("wavelet", "random")
     budget: float = 0.1
     trials: int = 1
     metrics: tuple = ("mse", "grad", "sal")
     guide_light: str = "projector"
     capture: CaptureOptions = field(default_factory=CaptureOptions)
-    gray: GrayCodeOptions = field(default_factory=GrayCodeOptions)
+    coding: str = DEFAULT_CODING
+    codings: Mapping = field(default_factory=dict)
     dots: DotOptions = field(default_factory=DotOptions)
     planner_opts: Mapping = field(default_factory=dict)
     reconstructions: Mapping | tuple = (DEFAULT_RECONSTRUCTION,)
+    keep_frames: bool = False
 
     def __post_init__(self):
         reconstruction_options(self.reconstructions)
@@ -231,6 +233,19 @@ class ScannerStudyOptions:
             raise ValueError(f"trials must be >= 1, got {self.trials}")
         if not 0 < self.budget <= 1:
             raise ValueError(f"budget must be a fraction in (0, 1], got {self.budget}")
+        # the coding and its options are checked as the sensor checks them
+        StructuredLightOptions(coding=self.coding, codings=self.codings)
+
+    def sensor_options(self, mode: str) -> StructuredLightOptions:
+        """The structured-light sensor's options for scan ``mode``."""
+        return StructuredLightOptions(
+            mode, self.coding, self.codings, self.dots, keep_frames=self.keep_frames
+        )
+
+    def scanned_codings(self) -> list[str]:
+        """The full-field codings the modes project, in the order they are scanned."""
+        names = (mode_coding(m, self.coding) for m in self.modes)
+        return list(dict.fromkeys(n for n in names if n is not None))
 
 
 @dataclass(frozen=True, eq=False)
@@ -243,17 +258,24 @@ class ScannerStudyResult:
         Keys: mode, planner, reconstruction, budget, trial, metric, value, renders (and, for a
         reconstruction that read guide frames, guide_frames and exposures). Metrics: the requested
         sampling-study metrics, ``valid_fraction`` (guide pixels measured directly, before
-        hole filling) and, for ``gray_code``, ``ber_c<i>`` / ``ber_r<i>`` (bit error rate of
-        column / row bit i, MSB first, over camera pixels lit by the projector).
+        hole filling) and, for a full-field coding's mode, its decode errors against the
+        truth (the coding's ``truth_scores``: the gray code's ``ber_c<i>`` / ``ber_r<i>``, bit
+        error rate of column / row bit i, MSB first, over camera pixels lit by the projector).
     guide : GuideView
-    gray : GrayScan or None
+    coded : dict coding name -> CodedScan
+        The full-field scans, in the order they were made (shared by the modes).
     scans : dict (mode, planner, trial) -> ScanResult
     """
 
     rows: list
     guide: GuideView
-    gray: GrayScan | None
+    coded: dict
     scans: dict
+
+    @property
+    def exported(self) -> CodedScan | None:
+        """The scan the scan export writes: the first full-field scan made (None if none)."""
+        return next(iter(self.coded.values()), None)
 
 
 def run_scanner_study(
@@ -304,11 +326,12 @@ def run_scanner_study(
         seed=c.seed,
     )
     depth_range = depth_range_from_terrain(scene.terrain, scene.rig)
-    gray = None
-    if "gray_code" in o.modes or "ambiguity_enhancement" in o.modes:
-        say("gray-code scan")
-        gray = gray_code_scan(capture, scene.rig, o.gray)
-    evaluate = _ScanScores(guide, o.metrics, capture, gray)
+    coded: dict[str, CodedScan] = {}
+    for name in o.scanned_codings():  # every full-field scan once, before the dots
+        say(f"{name} scan")
+        coding = coding_for(o.codings, name)
+        coded[name] = coding.scan(capture, scene.rig, keep_frames=o.keep_frames)
+    evaluate = _ScanScores(guide, o.metrics, capture)
     recons = reconstruction_options(o.reconstructions)
     rguide = reconstruction_guide
     if rguide is None:
@@ -316,24 +339,26 @@ def run_scanner_study(
     seeds = _plan_seeds(o, plan_rng)
     rows: list[dict] = []
     scans: dict = {}
-    for mode in sorted(o.modes, key=lambda m: m != "gray_code"):  # the gray code first
+    for mode in sorted(o.modes, key=lambda m: m in DOT_MODES):  # full-field scans first
+        options = o.sensor_options(mode)
+        name = options.scanned_coding
         sensor = StructuredLight(
             capture,
             scene.rig,
             depth_range=depth_range,
-            options=StructuredLightOptions(mode, o.gray, o.dots),
-            gray=gray,
+            options=options,
+            coded=None if name is None else coded[name],
         )
         trials = _mode_trials(o, mode, sensor, guide, seeds)
         for outcomes in run_protocol(
             sensor, trials, evaluate, reconstructions=recons, guide=rguide
         ):
             for oc in outcomes:
-                planner = "" if mode == "gray_code" else oc.label
+                planner = oc.label if sensor.needs_plan else ""
                 say(f"{mode} / {planner} / trial {oc.trial}" if planner else "")
                 rows += _rows(mode, planner, oc, o.budget)
                 scans[(mode, planner, oc.trial)] = oc.acquisition.detail
-    return ScannerStudyResult(rows=rows, guide=guide, gray=gray, scans=scans)
+    return ScannerStudyResult(rows=rows, guide=guide, coded=coded, scans=scans)
 
 
 def _plan_seeds(o: ScannerStudyOptions, plan_rng) -> dict:
@@ -342,15 +367,15 @@ def _plan_seeds(o: ScannerStudyOptions, plan_rng) -> dict:
     return {
         (mode, planner, t): next(it)
         for mode in o.modes
-        if mode != "gray_code"
+        if mode in DOT_MODES
         for planner in o.planners
         for t in range(int(o.trials))
     }
 
 
 def _mode_trials(o, mode: str, sensor: StructuredLight, guide: GuideView, seeds) -> Trials:
-    """The protocol's trials of one scan mode: no plan for the gray code."""
-    if mode == "gray_code":
+    """The protocol's trials of one scan mode: no plan for a full-field coding."""
+    if not sensor.needs_plan:
         return Trials({"": None}, [0], 1, lambda *_: (None, None))
     H, W = sensor.proj_shape
     k = max(1, round(o.budget * H * W))
@@ -369,18 +394,18 @@ def guided_weights(name: str, image: np.ndarray, opts: Mapping) -> tuple[np.ndar
 
 
 def _scan_planner(name: str, o, mode: str, guide: GuideView, sensor: StructuredLight):
-    """The planner of the guide pixels to rescan: from the guide image, or from the gray-code
+    """The planner of the guide pixels to rescan: from the guide image, or from the coded
     scan for a :data:`~simlunar.scanner.scans.SCAN_PLANNERS` planner."""
     opts = o.planner_opts.get(name, {})
     if name in SCAN_PLANNERS:
         if mode != "ambiguity_enhancement":
             raise ValueError(
-                f"planner {name!r} ranks the pixels of a gray-code scan: use it with the "
+                f"planner {name!r} ranks the pixels of a coded scan: use it with the "
                 "ambiguity_enhancement mode"
             )
         if opts:
             raise ValueError(f"planner {name!r} takes no options, got {sorted(opts)}")
-        return lambda k, rng: low_contrast_pixels(sensor.gray_scan(), k, rng=rng)
+        return lambda k, rng: low_contrast_pixels(sensor.coded_scan(), k, rng=rng)
     image = check_image(np.asarray(guide.image, float))
     weights, opts = guided_weights(name, image, opts)
 
@@ -392,23 +417,25 @@ def _scan_planner(name: str, o, mode: str, guide: GuideView, sensor: StructuredL
 
 
 class _ScanScores:
-    """Scores of a reconstructed scan in the guide view, its valid fraction and, for the
-    gray code, its bit error rates (and the sun-to-projector ratio of a daylight scan)."""
+    """Scores of a reconstructed scan in the guide view, its valid fraction and, for a
+    full-field coding's mode, the coding's decode errors against the truth (and the
+    sun-to-projector ratio of a daylight scan)."""
 
-    def __init__(self, guide: GuideView, metrics, capture: RenderCapture, gray):
+    def __init__(self, guide: GuideView, metrics, capture: RenderCapture):
         self.guide = guide
         self.truth = np.where(guide.valid, guide.depth, np.nan)
         self.metrics = tuple(metrics)
         self.capture = capture
-        self.gray = gray
 
     def __call__(self, recon: np.ndarray, acquisition) -> dict:
         g = self.guide
         vals = score_depth(recon, self.truth, metrics=self.metrics, image=g.image)
         measured = np.isfinite(acquisition.detail.measured) & g.valid
         vals["valid_fraction"] = float(measured.sum() / max(g.valid.sum(), 1))
-        if acquisition.detail.mode == "gray_code":
-            vals.update(bit_error_table(self.gray, camera_truth(self.capture, g)))
+        detail = acquisition.detail
+        if detail.mode not in DOT_MODES:  # a full-field coding's own mode
+            coded = detail.coded
+            vals.update(coded.coding.truth_scores(coded, camera_truth(self.capture, g)))
             if self.capture.ambient is not None:  # a daylight scan: how bright the sun was
                 vals["ambient_ratio"] = self.capture.ambient_ratio
         return vals

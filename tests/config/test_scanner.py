@@ -23,7 +23,7 @@ def test_scanner_experiment_uses_the_documented_scanner_conditions():
     from simlunar.config import translate
 
     opts = translate.scanner_options(s, cfg.render)
-    assert opts.gray.subpixel is True
+    assert opts.codings["gray_code"].subpixel is True and opts.coding == "gray_code"
     assert opts.capture.camera_blur == 1.0 and opts.capture.spp == cfg.render.spp
     assert opts.planner_opts["wavelet"]["feature_opts"]["levels"] == 1
     assert translate.rig_kwargs(s)["cam_fov_x"] == pytest.approx(1.0472, abs=1e-4)

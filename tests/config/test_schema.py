@@ -157,7 +157,12 @@ def test_option_defaults_are_the_library_defaults():
     from simlunar.study.scanner import aim_rig_at_terrain
 
     # the config's defaults are the library's options dataclasses' defaults
-    assert translate.gray_options(scanner_cfg.GrayOptsCfg()) == GrayCodeOptions()
+    # every coding's options block (derived from its registered options class)
+    codings = translate.coding_options(scanner_cfg.ScannerOptionsCfg())
+    assert codings["gray_code"] == GrayCodeOptions()
+    from simlunar.scanner.codings import CODINGS
+
+    assert codings == {n: e.options() for n, e in CODINGS.items()}
     assert translate.dot_options(scanner_cfg.DotOptsCfg()) == DotOptions()
     sparse = {k: v for k, v in vars(CaptureOptions()).items() if k.startswith("sparse_")}
     assert scanner_cfg.CaptureOptsCfg().model_dump() == sparse

@@ -137,3 +137,26 @@ def test_a_learned_model_and_its_record_are_inputs_of_the_unit(tmp_path):
     before = unit_key(config, inputs)
     model.write_bytes(b"model two")
     assert unit_key(config, input_hashes(config)) != before
+
+
+def test_scanner_frame_budget_asks_each_scanned_coding_for_its_frames(monkeypatch):
+    # 256 x 192 projector and camera: 98 304 pixels per frame. The gray code captures
+    # 2 (8 + 8) + 2 = 34 frames; an 8-step phase shift 2 axes x 3 levels x 8 + 2 = 50
+    # (coding.frames). A limit of 40 frames' pixels passes the one and stops the other.
+    from simlunar.config.scanner import ScannerStudyCfg
+    from simlunar.pipeline.preflight import check_scanner_budget
+
+    monkeypatch.setenv("SIMLUNAR_MAX_FRAME_PIXELS", str(40 * 98_304))
+    base = {"kind": "scanner", "projector_px": [256, 192], "camera_px": [256, 192]}
+    phase = {"phase_opts": {"steps": 8}}
+    check_scanner_budget(ScannerStudyCfg(**base, modes=["gray_code"]))
+    check_scanner_budget(ScannerStudyCfg(**base, modes=["data_reduction"], options=phase))
+    with pytest.raises(ConfigError, match=r"study\.projector_px: 50 phase-shift frames x 98304"):
+        check_scanner_budget(ScannerStudyCfg(**base, modes=["phase_shift"], options=phase))
+    # ambiguity enhancement scans with study.coding
+    with pytest.raises(ConfigError, match="50 phase-shift frames"):
+        check_scanner_budget(
+            ScannerStudyCfg(
+                **base, modes=["ambiguity_enhancement"], coding="phase_shift", options=phase
+            )
+        )

@@ -344,7 +344,7 @@ def test_bsdf_dict_shapes_and_errors():
     assert hw["albedo_mode"] == "w" and hw["reflectance"] == 0.4
     with pytest.raises(ValueError, match="reflectance"):
         bsdf_dict(make_bsdf("lambert"), 1.5)
-    with pytest.raises(ValueError, match="LambertBSDF, OrenNayarBSDF or HapkeBSDF"):
+    with pytest.raises(ValueError, match="LambertBSDF, OrenNayarBSDF, HapkeBSDF, LunarLambert"):
         bsdf_dict("diffuse", 0.5)  # type: ignore[arg-type]
 
 

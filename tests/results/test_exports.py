@@ -21,6 +21,7 @@ from simlunar.imaging.sensor import SensorModel
 from simlunar.render.capture import CaptureOptions, RenderCapture
 from simlunar.results import exports
 from simlunar.scanner import rigs, scans
+from simlunar.scanner.codings import make_coding
 from simlunar.scanner.scans import GrayCodeOptions
 from simlunar.terrain.types import Terrain
 
@@ -32,8 +33,7 @@ ROOT = Path(__file__).resolve().parents[2]
 QUICKSTART = str(ROOT / "experiments" / "quickstart.yaml")
 
 
-@pytest.fixture(scope="module")
-def scan(tmp_path_factory):
+def _capture():
     x = ORIGIN[0] + SPACING * (np.arange(N) + 0.5)
     xx, yy = np.meshgrid(x, ORIGIN[1] - SPACING * (np.arange(N) + 0.5))
     heights = 0.1 * np.exp(-(xx**2 + yy**2) / 0.1) + 0.05 * np.sin(3 * xx)
@@ -44,6 +44,12 @@ def scan(tmp_path_factory):
     cap = RenderCapture(
         terr, rig, CaptureOptions(spp=4, seed=1, camera_blur=0.7), sensor=sensor, rng=3
     )
+    return rig, cap
+
+
+@pytest.fixture(scope="module")
+def scan(tmp_path_factory):
+    rig, cap = _capture()
     gray = scans.gray_code_scan(cap, rig, GrayCodeOptions(keep_frames=True))
     folder = tmp_path_factory.mktemp("export") / "unit0"
     exports.write_scan_export(folder, exports.scan_export_payload(gray, rig))
@@ -161,6 +167,78 @@ def test_a_wrong_calibration_would_fail_the_reprojection_check(scan):
     uv, _ = cv2.projectPoints(pts, cv2.Rodrigues(Rc)[0], tc, rig.camera.intrinsics.K, None)
     cam = np.stack([cloud["cam_col"], cloud["cam_row"]], axis=-1)
     assert np.abs(uv[:, 0] - cam).min() > 0.49
+
+
+@pytest.fixture(scope="module")
+def phase_scan(tmp_path_factory):
+    """The same patch scanned by 3-step phase shifting (OpenCV's PSP takes 3 frames)."""
+    rig, cap = _capture()
+    coding = make_coding("phase_shift", {"steps": 3, "period_px": 8.0, "ratio": 8.0})
+    ps_scan = coding.scan(cap, rig, keep_frames=True)
+    folder = tmp_path_factory.mktemp("export_ps") / "unit0"
+    exports.write_scan_export(folder, exports.scan_export_payload(ps_scan, rig))
+    return rig, ps_scan, folder
+
+
+def test_phase_shift_export_layout_and_manifest(phase_scan):
+    _, ps_scan, folder = phase_scan
+    paths, f8 = _frames(folder, "frames8")
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["coding"] == "phase_shift" and manifest["steps"] == 3
+    # columns: periods 512, 64, 8 px (64 px wide); rows: 64, 8 (48 px high); 3 shifts each
+    assert manifest["periods_px"] == {"col": [512.0, 64.0, 8.0], "row": [64.0, 8.0]}
+    assert [p.name for p in paths[:4]] == ["00_col0_s0.png", "01_col0_s1.png", "02_col0_s2.png",
+                                           "03_col1_s0.png"]  # fmt: skip
+    assert [p.name for p in paths[-2:]] == ["15_white.png", "16_black.png"]
+    assert manifest["frames"] == [p.name for p in paths] and len(f8) == 5 * 3 + 2
+    used = np.concatenate(
+        [ps_scan.frames["images"], ps_scan.frames["white"][None], ps_scan.frames["black"][None]]
+    ).astype(np.float64)
+    assert np.array_equal(np.stack(f8), np.rint(np.clip(used, 0, 1) * 255).astype(np.uint8))
+    maps = read_exr(folder / "decode.exr")
+    dec = ps_scan.decode
+    assert np.array_equal(maps["valid"] > 0, dec.valid) and dec.valid.mean() > 0.5
+    assert np.allclose(maps["u"][dec.valid], dec.u[dec.valid] - 0.5, atol=1e-4)  # float32
+
+
+def test_opencv_sinusoidal_pattern_computes_the_exported_wrapped_phase(phase_scan):
+    # OpenCV's PSP (3 frames shifted by 2 pi / 3) on the exported 8-bit frames of the finest
+    # column level gives the wrapped phase that simlunar's decoded u names: 2 pi (u + offset)
+    # / period, u in simlunar's convention (exported u + 0.5). OpenCV smooths its phase map
+    # spatially, so the comparison keeps valid pixels away from the lit region's edges and
+    # from the phase's wrap (where a smoothed wrapped phase is meaningless).
+    from scipy import ndimage
+
+    folder = phase_scan[2]
+    paths, f8 = _frames(folder, "frames8")
+    manifest = json.loads((folder / "manifest.json").read_text())
+    period = manifest["periods_px"]["col"][-1]
+    offset = manifest["phase_offsets_px"]["col"]
+    finest = [f8[i] for i, p in enumerate(paths) if p.stem.split("_", 1)[1].startswith("col2_")]
+    assert len(finest) == 3
+    params = cv2.structured_light.SinusoidalPattern.Params()
+    params.width, params.height = CAM
+    params.nbrOfPeriods = round(PROJ[0] / period)
+    params.methodId = cv2.structured_light.PSP
+    params.setMarkers = False
+    sp = cv2.structured_light.SinusoidalPattern.create(params)
+    cv_phase, _ = sp.computePhaseMap(finest)
+    maps = read_exr(folder / "decode.exr")
+    ours = np.mod(2 * np.pi * (maps["u"].astype(np.float64) + 0.5 + offset) / period, 2 * np.pi)
+    valid = ndimage.binary_erosion(maps["valid"] > 0, iterations=3)
+    away = (ours > 0.6) & (ours < 2 * np.pi - 0.6)
+    keep = valid & away
+    assert keep.sum() > 0.3 * CAM[0] * CAM[1]
+    diff = np.abs(np.angle(np.exp(1j * (cv_phase[keep] - ours[keep]))))
+    # tolerance: 8-bit frames, sensor noise and OpenCV's smoothing; measured on the CPU
+    # (llvm) variant: median 0.048 rad, 95th percentile 0.14, max 0.26 (0.1 rad is 1/60 of a
+    # fringe, 0.13 projector px at the 8 px period)
+    med, p95 = np.median(diff), np.percentile(diff, 95)
+    assert med < 0.1 and p95 < 0.3, (med, p95)
+    # the check has teeth: simlunar's half-pixel convention forgotten (u without + 0.5) is
+    # 2 pi 0.5 / 8 = 0.39 rad off
+    wrong = np.mod(2 * np.pi * (maps["u"].astype(np.float64) + offset) / period, 2 * np.pi)
+    assert np.median(np.abs(np.angle(np.exp(1j * (cv_phase[keep] - wrong[keep]))))) > 0.2
 
 
 def test_calibration_yaml_keeps_full_precision(tmp_path):

@@ -74,7 +74,7 @@ def test_empty_dot_set_and_bad_options_are_rejected(rig):
         modes.dot_scan(cap, rig, np.empty((0, 2)), depth_range=(1.0, 2.0))
     with pytest.raises(ValueError, match=r"valid: \['ambiguity_enhancement', 'data_reduction'"):
         StructuredLightOptions(mode="laser")
-    with pytest.raises(ValueError, match="unknown inverses"):
+    with pytest.raises(ValueError, match="inverses must be one of 'linearity', 'render'"):
         GrayCodeOptions(inverses="both")
     with pytest.raises(ValueError, match="batch must be >= 1"):
         DotOptions(batch=0)
@@ -84,7 +84,9 @@ def test_empty_dot_set_and_bad_options_are_rejected(rig):
 
 def test_gray_code_mode_measures_the_decoded_pixels(rig):
     cap = PlaneCapture(rig, (0, 0, 1.0), 0.0)
-    gray = StructuredLightOptions("gray_code", gray=GrayCodeOptions(black_threshold=0.2))
+    gray = StructuredLightOptions(
+        "gray_code", codings={"gray_code": GrayCodeOptions(black_threshold=0.2)}
+    )
     sensor = StructuredLight(cap, rig, depth_range=(1.0, 3.0), options=gray)
     assert not sensor.needs_plan
     acq = sensor.acquire(None)
@@ -98,7 +100,7 @@ def test_gray_code_mode_measures_the_decoded_pixels(rig):
 def test_ambiguity_enhancement_shares_the_gray_code_and_fuses_dots(rig):
     cap = PlaneCapture(rig, (0.1, 0.0, 1.0), 0.0, noise=0.0)
     opts = StructuredLightOptions(
-        "ambiguity_enhancement", gray=GrayCodeOptions(black_threshold=0.2)
+        "ambiguity_enhancement", codings={"gray_code": GrayCodeOptions(black_threshold=0.2)}
     )
     sensor = StructuredLight(cap, rig, depth_range=(1.0, 3.0), options=opts)
     rc = np.array([[10, 10], [20, 30], [40, 50]])
@@ -108,7 +110,7 @@ def test_ambiguity_enhancement_shares_the_gray_code_and_fuses_dots(rig):
     assert hit.any()
     np.testing.assert_array_equal(res.measured[hit], res.dots.depth[hit])
     assert acq.frames == res.dots.renders  # the shared gray code is not counted again
-    assert sensor.acquire(rc).detail.gray is res.gray  # scanned once
+    assert sensor.acquire(rc).detail.coded is res.coded  # scanned once
     with pytest.raises(ValueError, match="rc is required"):
         sensor.acquire(None)
 

@@ -6,19 +6,38 @@ and registers it under its Mitsuba name; :func:`simlunar.render.backend.init` ru
 ``register`` of :data:`PLUGINS` right after ``mi.set_variant``. Importing this package never
 imports Mitsuba.
 
-=============  =========================================  ==================================
-name           module                                     model
-=============  =========================================  ==================================
-``oren_nayar``  :mod:`simlunar.render.plugins.oren_nayar`  Oren-Nayar (1994) rough diffuse
-``hapke``       :mod:`simlunar.render.plugins.hapke`       Hapke regolith BRDF
-=============  =========================================  ==================================
+:data:`PLUGINS` is derived from the BSDF registry (:data:`simlunar.render.materials.BSDFS`,
+each entry's ``meta["plugin"]``): a new BSDF's plugin is registered without an edit here.
+
+================  =============================================  ==================================
+name              module                                         model
+================  =============================================  ==================================
+``oren_nayar``    :mod:`simlunar.render.plugins.oren_nayar`      Oren-Nayar (1994) rough diffuse
+``hapke``         :mod:`simlunar.render.plugins.hapke`           Hapke regolith BRDF
+``lunar_lambert`` :mod:`simlunar.render.plugins.lunar_lambert`   McEwen's lunar-Lambert
+================  =============================================  ==================================
 """
 
 from __future__ import annotations
 
-from simlunar.render.plugins import hapke, oren_nayar
+import importlib
 
-__all__ = ["PLUGINS"]
+__all__ = ["PLUGINS", "plugin_modules"]
 
-#: plugin name -> module (each with ``register(mi)``)
-PLUGINS = {"oren_nayar": oren_nayar, "hapke": hapke}
+
+def plugin_modules() -> dict:
+    """Plugin name -> module (each with ``register(mi)``), from the BSDF registry."""
+    from simlunar.render.materials import BSDFS
+
+    return {
+        n: importlib.import_module(e.meta["plugin"])
+        for n, e in BSDFS.items()
+        if e.meta.get("plugin")
+    }
+
+
+def __getattr__(name: str):
+    # PLUGINS is computed on first use: the registry imports plugin modules (their specs)
+    if name == "PLUGINS":
+        return plugin_modules()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

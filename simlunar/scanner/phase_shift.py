@@ -1,0 +1,571 @@
+"""N-step phase shifting with multi-frequency temporal (hierarchical) unwrapping (NumPy only).
+
+Patterns (one set per axis, columns then rows; per axis one level per fringe period, coarsest
+first; per level ``N`` shifts)::
+
+    P_{l,n}(u) = 1/2 + 1/2 cos(Phi_l(u) + 2 pi n / N),   Phi_l(u) = 2 pi (u + o) / p_l
+
+with ``u`` the projector coordinate (pixel centres at ``col + 0.5``), ``p_l`` the fringe period
+of level ``l`` in projector pixels (:func:`fringe_periods`: the finest ``period_px``, each
+coarser one ``ratio`` times longer, the coarsest longer than the axis) and ``o = (p_0 - n) / 2``
+the offset that centres the ``n`` pixels of the axis in the coarsest period (so its phase is
+unambiguous and never wraps at the axis' ends).
+
+Decoder (../shared/REFERENCES.md, "Phase shift"), per camera pixel and level, from the captured
+``I_n = A + B cos(phi + 2 pi n / N)``:
+
+* wrapped phase ``phi = atan2(-sum I_n sin(2 pi n / N), sum I_n cos(2 pi n / N))`` (unbiased
+  for any ``N >= 3``: the sums project the samples on the first harmonic);
+* modulation ``B = (2 / N) |sum I_n exp(-i 2 pi n / N)|``; phase noise of white frame noise
+  ``sigma_I``: ``sigma_phi = sqrt(2 / N) sigma_I / B`` (:func:`phase_noise_std`);
+* temporal unwrapping from the coarsest level up: ``Phi_0 = phi_0``,
+  ``k_l = round((p_{l-1} / p_l Phi_{l-1} - phi_l) / (2 pi))``, ``Phi_l = phi_l + 2 pi k_l``;
+  the position is ``u = p_L Phi_L / (2 pi) - o`` from the finest level, whose noise
+  ``sigma_u = p_L sigma_phi / (2 pi)`` is the coding's positional uncertainty.
+
+A pixel is valid if the projector lights it (``white - black > black_threshold``, as the gray
+code's rule), its modulation reaches ``min_modulation`` at every level, every unwrapping step
+is consistent (``|p_{l-1} / p_l Phi_{l-1} - Phi_l| <= unwrap_tolerance``) and the decoded
+coordinates lie inside the projector.
+
+With an even ``N`` the shifts ``n + N / 2`` are the inverses of the shifts ``n`` (the patterns
+sum to the white frame), so by linearity of light transport they need no render:
+``I(inverse) = I(white) + I(black) - I(pattern)`` (``inverses="linearity"``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.registry import check_bounds, option
+from simlunar.scanner.scans import CodedScan, triangulated
+from simlunar.scanner.triangulate import check_rig
+
+__all__ = [
+    "PhaseDecode",
+    "PhaseDecoder",
+    "PhaseShiftCoding",
+    "PhaseShiftOptions",
+    "decode",
+    "encode",
+    "frame_names",
+    "fringe_periods",
+    "phase_noise_std",
+    "phase_shift_scan",
+    "unwrap",
+    "wrapped_phase",
+]
+
+_AXES = ("both", "cols")
+_INVERSES = ("linearity", "render")
+_METHODS = ("plane", "rays")
+#: the coarsest period is at least this many times the axis length (a margin of 5 % of the
+#: period on each side, so noise cannot wrap the phase of the first or last pixel)
+_COARSE_MARGIN = 1.1
+
+
+@dataclass(frozen=True)
+class PhaseShiftOptions:
+    """Options of the phase-shift coding (module docstring).
+
+    Attributes
+    ----------
+    steps : int >= 3
+        Phase shifts ``N`` per level.
+    period_px : float
+        Finest fringe period (projector pixels).
+    ratio : float > 1
+        Period ratio between successive levels (temporal unwrapping needs the coarser level's
+        phase error below ``pi / ratio``).
+    axes : "both" (columns and rows) or "cols" (columns only; triangulation by planes)
+    black_threshold : float
+        Lit if ``white - black`` exceeds it (frame units).
+    min_modulation : float
+        Smallest modulation ``B`` accepted at every level (frame units).
+    unwrap_tolerance : float
+        Largest disagreement between a level's unwrapped phase and the coarser level's scaled
+        phase (rad).
+    inverses : "linearity" or "render"
+        With an even ``steps``, obtain the shifts ``n + N / 2`` by linearity (no render).
+    method : "plane" or "rays" (rays need ``axes="both"``)
+    keep_frames : bool
+        Keep the captured stack in ``CodedScan.frames["images"]`` (not a YAML option).
+    """
+
+    steps: int = option(4, doc="phase shifts per fringe period", ge=3, le=64)
+    period_px: float = option(8.0, doc="finest fringe period", unit="px", ge=2.0)
+    ratio: float = option(8.0, doc="period ratio between unwrapping levels", gt=1.0, le=64.0)
+    axes: str = option("both", doc="fringes along both axes or columns only", choices=_AXES)
+    black_threshold: float = option(0.05, doc="lit: white - black (frame units)", ge=0, le=1)
+    min_modulation: float = option(0.01, doc="smallest modulation B (frame units)", ge=0, le=1)
+    unwrap_tolerance: float = option(
+        1.0, doc="largest unwrapping disagreement (rad)", gt=0, le=np.pi
+    )
+    inverses: str = option(
+        "linearity", doc="shifts n + N/2 by linearity of light or rendered", choices=_INVERSES
+    )
+    method: str = option("plane", doc="triangulation: column plane or rays", choices=_METHODS)
+    keep_frames: bool = False
+
+    def __post_init__(self):
+        check_bounds(self)
+        if int(self.steps) != self.steps:
+            raise ValueError(f"steps must be a whole number, got {self.steps!r}")
+        if self.method == "rays" and self.axes != "both":
+            raise ValueError("method 'rays' needs the row phase: use axes 'both'")
+
+
+def fringe_periods(n: int, period_px: float, ratio: float) -> tuple[float, ...]:
+    """Fringe periods (projector px) of the unwrapping levels of an ``n``-pixel axis,
+    coarsest first: ``period_px * ratio**j``, ``j = L-1 ... 0``, with the fewest levels whose
+    coarsest period is at least 1.1 ``n`` (one unambiguous fringe over the axis)."""
+    if n < 2:
+        raise ValueError(f"a phase-shift axis needs at least 2 pixels, got {n}")
+    if not period_px > 0 or not ratio > 1:
+        raise ValueError(f"period_px must be > 0 and ratio > 1, got {period_px}, {ratio}")
+    periods = [float(period_px)]
+    while periods[-1] < _COARSE_MARGIN * n:
+        periods.append(periods[-1] * ratio)
+    return tuple(reversed(periods))
+
+
+def _axes(options: PhaseShiftOptions, proj_shape) -> list[tuple[str, int, tuple[float, ...]]]:
+    """(axis name, axis length, periods) of each coded axis: columns (width), rows (height)."""
+    H, W = (int(proj_shape[0]), int(proj_shape[1]))
+    names = [("col", W), ("row", H)] if options.axes == "both" else [("col", W)]
+    return [(a, n, fringe_periods(n, options.period_px, options.ratio)) for a, n in names]
+
+
+def _offset(n: int, periods) -> float:
+    return (periods[0] - n) / 2.0
+
+
+def frame_names(options: PhaseShiftOptions, proj_shape) -> list[str]:
+    """Frame names in stack order: ``col<l>_s<n>`` (column level l, coarsest 0, shift n),
+    then ``row<l>_s<n>``, then ``white``, ``black``."""
+    names = []
+    for axis, _n, periods in _axes(options, proj_shape):
+        for level in range(len(periods)):
+            names += [f"{axis}{level}_s{s}" for s in range(int(options.steps))]
+    return [*names, "white", "black"]
+
+
+def _level_patterns(n: int, periods, level: int, steps: int) -> np.ndarray:
+    """(steps, n) float64 pattern values at the axis' pixel centres for one level."""
+    u = np.arange(n) + 0.5
+    phase = 2 * np.pi * (u + _offset(n, periods)) / periods[level]
+    shifts = 2 * np.pi * np.arange(steps) / steps
+    return 0.5 + 0.5 * np.cos(phase[None, :] + shifts[:, None])
+
+
+def encode(proj_shape, options: PhaseShiftOptions | None = None) -> np.ndarray:
+    """The phase-shift pattern stack (white and black excluded) in :func:`frame_names` order.
+
+    Parameters
+    ----------
+    proj_shape : (H, W)
+    options : PhaseShiftOptions, optional
+
+    Returns
+    -------
+    (axes x levels x steps, H, W) float32 in [0, 1]
+    """
+    o = options or PhaseShiftOptions()
+    H, W = (int(proj_shape[0]), int(proj_shape[1]))
+    out = []
+    for axis, n, periods in _axes(o, (H, W)):
+        for level in range(len(periods)):
+            p = _level_patterns(n, periods, level, int(o.steps)).astype(np.float32)
+            if axis == "col":
+                out.append(np.broadcast_to(p[:, None, :], (len(p), H, W)))
+            else:
+                out.append(np.broadcast_to(p[:, :, None], (len(p), H, W)))
+    return np.ascontiguousarray(np.concatenate(out))
+
+
+def wrapped_phase(frames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Wrapped phase, modulation and mean of ``N`` phase-shifted frames.
+
+    Parameters
+    ----------
+    frames : (N, ...) array, N >= 3
+        ``I_n = A + B cos(phi + 2 pi n / N)``.
+
+    Returns
+    -------
+    phi : (...) float64 in [0, 2 pi)
+        ``atan2(-sum I_n sin(2 pi n / N), sum I_n cos(2 pi n / N))``.
+    modulation : (...) float64
+        ``B = (2 / N) |sum I_n exp(-i 2 pi n / N)|``.
+    mean : (...) float64
+        ``A = sum I_n / N``.
+    """
+    frames = np.asarray(frames)
+    N = frames.shape[0]
+    if N < 3:
+        raise ValueError(f"phase shifting needs at least 3 frames, got {N}")
+    d = 2 * np.pi * np.arange(N) / N
+    s = np.zeros(frames.shape[1:])
+    c = np.zeros(frames.shape[1:])
+    a = np.zeros(frames.shape[1:])
+    for n in range(N):
+        f = np.asarray(frames[n], np.float64)
+        s += np.sin(d[n]) * f
+        c += np.cos(d[n]) * f
+        a += f
+    phi = np.mod(np.arctan2(-s, c), 2 * np.pi)
+    return phi, (2.0 / N) * np.hypot(s, c), a / N
+
+
+def phase_noise_std(steps: int, sigma_i, modulation) -> np.ndarray:
+    """Standard deviation of the wrapped phase for white frame noise (rad):
+    ``sigma_phi = sqrt(2 / N) sigma_I / B`` (small-noise limit)."""
+    return np.sqrt(2.0 / int(steps)) * np.asarray(sigma_i, float) / np.asarray(modulation, float)
+
+
+def unwrap(phases, periods) -> tuple[np.ndarray, np.ndarray]:
+    """Temporal (hierarchical) unwrapping, coarsest level first.
+
+    Parameters
+    ----------
+    phases : sequence of (...) wrapped phases in [0, 2 pi), one per level
+    periods : sequence of fringe periods (any unit), coarsest first; the coarsest phase is
+        taken as unambiguous.
+
+    Returns
+    -------
+    Phi : (...) float64
+        Unwrapped phase of the finest level.
+    disagreement : (...) float64
+        Largest ``|p_{l-1} / p_l Phi_{l-1} - Phi_l|`` over the steps (rad; 0 for one level).
+    """
+    if len(phases) != len(periods) or not len(phases):
+        raise ValueError(f"one phase per period needed, got {len(phases)} and {len(periods)}")
+    big = np.asarray(phases[0], np.float64)
+    worst = np.zeros_like(big)
+    for lvl in range(1, len(phases)):
+        phi = np.asarray(phases[lvl], np.float64)
+        scaled = big * (periods[lvl - 1] / periods[lvl])
+        k = np.round((scaled - phi) / (2 * np.pi))
+        big = phi + 2 * np.pi * k
+        worst = np.maximum(worst, np.abs(scaled - big))
+    return big, worst
+
+
+@dataclass(frozen=True, eq=False)
+class PhaseDecode:
+    """Dense result of decoding a phase-shift stack seen by a camera (arrays (rows, cols)).
+
+    Attributes
+    ----------
+    u, v : float64
+        Decoded projector coordinates (pixel centres at ``col + 0.5``), whether valid or not
+        (NaN where unlit); ``v`` NaN everywhere for a columns-only coding.
+    valid : bool
+        Lit, modulated at every level, consistently unwrapped and inside the projector.
+    lit : bool
+        ``white - black > black_threshold``.
+    modulation : float64
+        Smallest modulation ``B`` over the levels and axes (frame units).
+    disagreement : float64
+        Largest unwrapping disagreement (rad).
+    contrast : float32
+        ``white - black``.
+    proj_shape : (H, W)
+    """
+
+    u: np.ndarray
+    v: np.ndarray
+    valid: np.ndarray
+    lit: np.ndarray
+    modulation: np.ndarray
+    disagreement: np.ndarray
+    contrast: np.ndarray
+    proj_shape: tuple[int, int]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.valid.shape  # type: ignore[return-value]
+
+    def decoded_index(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(col, row)`` int64 projector pixel each camera pixel's phase names, valid or not
+        (-1 where it names none: unlit, or no row phase)."""
+        return _index(self.u), _index(self.v)
+
+    @property
+    def col(self) -> np.ndarray:
+        """Decoded projector column, -1 where invalid."""
+        return np.where(self.valid, _index(self.u), -1)
+
+    @property
+    def row(self) -> np.ndarray:
+        """Decoded projector row, -1 where invalid or not coded."""
+        return np.where(self.valid, _index(self.v), -1)
+
+    def proj_uv(self) -> np.ndarray:
+        """(rows, cols, 2) projector coordinates (u, v); NaN where invalid."""
+        uv = np.stack([self.u, self.v], axis=-1)
+        uv[~self.valid] = np.nan
+        return uv
+
+
+def _index(x: np.ndarray) -> np.ndarray:
+    ok = np.isfinite(x)
+    return np.where(ok, np.floor(np.where(ok, x, -1.0)), -1).astype(np.int64)
+
+
+class PhaseDecoder:
+    """Streaming phase-shift decoder: each level's frames are added as they are captured.
+
+    Holds per camera pixel only each level's wrapped phase and the running minimum of the
+    modulation, never the frame stack. :func:`decode` is this class fed a whole stack.
+
+    Parameters
+    ----------
+    proj_shape : (H, W)
+    cam_shape : (rows, cols)
+    options : PhaseShiftOptions, optional
+    """
+
+    def __init__(self, proj_shape, cam_shape, options: PhaseShiftOptions | None = None):
+        self.options = options or PhaseShiftOptions()
+        self.proj_shape = (int(proj_shape[0]), int(proj_shape[1]))
+        self.cam_shape = (int(cam_shape[0]), int(cam_shape[1]))
+        self.axes = _axes(self.options, self.proj_shape)
+        self._phases: dict[tuple[str, int], np.ndarray] = {}
+        self.modulation = np.full(self.cam_shape, np.inf)
+        self.lit: np.ndarray | None = None
+        self.contrast: np.ndarray | None = None
+
+    def levels(self) -> list[tuple[str, int]]:
+        """(axis, level) of every frame set in stack order."""
+        return [(a, lvl) for a, _n, periods in self.axes for lvl in range(len(periods))]
+
+    def add_level(self, axis: str, level: int, frames) -> None:
+        """Add the ``steps`` captured frames of one level of ``axis`` ("col" or "row")."""
+        if (axis, level) not in self.levels():
+            raise ValueError(f"no level {level} of axis {axis!r}; the stack has {self.levels()}")
+        frames = np.asarray(frames)
+        want = (int(self.options.steps), *self.cam_shape)
+        if frames.shape != want:
+            raise ValueError(f"level frames {frames.shape} must be {want} (steps, rows, cols)")
+        phi, b, _ = wrapped_phase(frames)
+        self._phases[(axis, level)] = phi
+        np.minimum(self.modulation, b, out=self.modulation)
+
+    def add_white_black(self, white, black) -> None:
+        """Add the captured all-white and all-black frames."""
+        w, b = np.asarray(white), np.asarray(black)
+        if w.shape != self.cam_shape or b.shape != self.cam_shape:
+            raise ValueError(
+                f"white {w.shape} and black {b.shape} must match the camera {self.cam_shape}"
+            )
+        contrast = np.subtract(w, b, dtype=np.float64)
+        self.lit = contrast > self.options.black_threshold
+        self.contrast = contrast.astype(np.float32)
+
+    def result(self) -> PhaseDecode:
+        """The decode of the frames added so far (every level and white/black are needed)."""
+        missing = [f"{a}{lvl}" for a, lvl in self.levels() if (a, lvl) not in self._phases]
+        if missing or self.lit is None:
+            what = missing + (["white/black"] if self.lit is None else [])
+            raise ValueError(f"phase-shift decode is missing frames: {', '.join(what)}")
+        o = self.options
+        coords = {"col": np.full(self.cam_shape, np.nan), "row": np.full(self.cam_shape, np.nan)}
+        worst = np.zeros(self.cam_shape)
+        inside = np.ones(self.cam_shape, bool)
+        for axis, n, periods in self.axes:
+            phases = [self._phases[(axis, lvl)] for lvl in range(len(periods))]
+            big, dis = unwrap(phases, periods)
+            x = big * periods[-1] / (2 * np.pi) - _offset(n, periods)
+            coords[axis] = np.where(self.lit, x, np.nan)
+            worst = np.maximum(worst, dis)
+            inside &= (x >= 0) & (x < n)
+        valid = (
+            self.lit
+            & inside
+            & (self.modulation >= o.min_modulation)
+            & (worst <= o.unwrap_tolerance)
+        )
+        return PhaseDecode(
+            u=coords["col"],
+            v=coords["row"],
+            valid=valid,
+            lit=self.lit,
+            modulation=self.modulation.copy(),
+            disagreement=worst,
+            contrast=self.contrast,
+            proj_shape=self.proj_shape,
+        )
+
+
+def decode(images, white, black, *, proj_shape, options: PhaseShiftOptions | None = None):
+    """Decode a whole phase-shift stack (:func:`encode` order) into projector coordinates.
+
+    Parameters
+    ----------
+    images : (axes x levels x steps, rows, cols) array
+    white, black : (rows, cols) array
+    proj_shape : (H, W)
+    options : PhaseShiftOptions, optional
+
+    Returns
+    -------
+    PhaseDecode
+    """
+    o = options or PhaseShiftOptions()
+    images = np.asarray(images)
+    want = len(frame_names(o, proj_shape)) - 2
+    if images.ndim != 3 or images.shape[0] != want:
+        raise ValueError(
+            f"images must be a ({want}, rows, cols) phase-shift stack for a "
+            f"{proj_shape[1]}x{proj_shape[0]} projector, got shape {images.shape}"
+        )
+    dec = PhaseDecoder(proj_shape, images.shape[1:], o)
+    N = int(o.steps)
+    for i, (axis, level) in enumerate(dec.levels()):
+        dec.add_level(axis, level, images[i * N : (i + 1) * N])
+    dec.add_white_black(white, black)
+    return dec.result()
+
+
+def _render(capture, patterns: np.ndarray) -> np.ndarray:
+    imgs = np.asarray(capture.render(patterns))
+    if imgs.ndim != 3 or imgs.shape[0] != len(patterns):
+        raise ValueError(f"capture.render returned shape {imgs.shape} for {len(patterns)} patterns")
+    if imgs.dtype not in (np.float32, np.float64):
+        imgs = imgs.astype(np.float64)
+    return imgs
+
+
+def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
+    """A full phase-shift scan, decoded and triangulated.
+
+    White and black are rendered first; then every level's shifts (with an even ``steps`` and
+    ``inverses="linearity"`` only the first half: the rest are ``white + black - image``),
+    each level sensed and decoded before the next. The capture protocol is that of
+    :mod:`simlunar.scanner.scans`.
+
+    Returns
+    -------
+    CodedScan
+    """
+    check_rig(rig)
+    o = options or PhaseShiftOptions()
+    H, W = rig.projector.intrinsics.shape
+    stack = encode((H, W), o)
+    N = int(o.steps)
+    wb_r = _render(capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)]))
+    renders = 2
+    dec = PhaseDecoder((H, W), wb_r.shape[1:], o)
+    by_linearity = o.inverses == "linearity" and N % 2 == 0
+    kept = [] if o.keep_frames else None
+    for i, (axis, level) in enumerate(dec.levels()):
+        pats = stack[i * N : (i + 1) * N]
+        if by_linearity:
+            half = _render(capture, pats[: N // 2])
+            imgs = np.concatenate([half, wb_r[0][None] + wb_r[1][None] - half])
+            renders += N // 2
+        else:
+            imgs = _render(capture, pats)
+            renders += N
+        frames = np.asarray(capture.sense(imgs))
+        dec.add_level(axis, level, frames)
+        if kept is not None:
+            kept.append(frames)
+    white, black = np.asarray(capture.sense(wb_r))
+    dec.add_white_black(white, black)
+    result = dec.result()
+    cloud, depth = triangulated(rig, result, o.method)
+    frames = {"white": white, "black": black}
+    if kept is not None:
+        frames["images"] = np.concatenate(kept)
+    return CodedScan(
+        decode=result,
+        cloud=cloud,
+        depth=depth,
+        renders=renders,
+        frames=frames,
+        coding=PhaseShiftCoding(o),
+    )
+
+
+@dataclass
+class PhaseShiftCoding:
+    """Phase shifting as a coding of :data:`simlunar.scanner.codings.CODINGS`."""
+
+    options: PhaseShiftOptions = field(default_factory=PhaseShiftOptions)
+    full_field = True
+    frame_order = (
+        "per axis (columns, then rows), per level (coarsest first), the N shifts; then white, black"
+    )
+
+    @property
+    def method(self) -> str:
+        return self.options.method
+
+    def frames(self, proj_shape) -> int:
+        return len(frame_names(self.options, proj_shape))
+
+    def frame_names(self, proj_shape) -> list[str]:
+        return frame_names(self.options, proj_shape)
+
+    def patterns(self, proj_shape) -> np.ndarray:
+        H, W = (int(proj_shape[0]), int(proj_shape[1]))
+        wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
+        return np.concatenate([encode((H, W), self.options), wb])
+
+    def decode(self, frames, proj_shape) -> PhaseDecode:
+        """Decode a whole stack in :meth:`patterns` order (white and black last)."""
+        frames = np.asarray(frames)
+        return decode(
+            frames[:-2], frames[-2], frames[-1], proj_shape=proj_shape, options=self.options
+        )
+
+    def scan(self, capture, rig, *, keep_frames: bool = False):
+        o = self.options
+        if keep_frames and not o.keep_frames:
+            o = dataclasses.replace(o, keep_frames=True)
+        return phase_shift_scan(capture, rig, o)
+
+    def export_meta(self, decode: PhaseDecode) -> dict:
+        o = self.options
+        return {
+            "steps": int(o.steps),
+            "periods_px": {
+                axis: list(periods) for axis, _n, periods in _axes(o, decode.proj_shape)
+            },
+            "phase_offsets_px": {
+                axis: _offset(n, periods) for axis, n, periods in _axes(o, decode.proj_shape)
+            },
+            "pattern": "1/2 + 1/2 cos(2 pi (u + offset) / period + 2 pi n / steps), "
+            "u = col + 0.5 (simlunar pixel centres)",
+            "black_threshold": float(o.black_threshold),
+            "min_modulation": float(o.min_modulation),
+            "unwrap_tolerance_rad": float(o.unwrap_tolerance),
+            "inverses": str(o.inverses),
+            "triangulation": str(o.method),
+        }
+
+    def truth_scores(self, scan, truth: dict, mask=None) -> dict[str, float]:
+        """``coord_err_rate``: fraction of valid camera pixels whose decoded projector column
+        (or row) is more than one pixel off the true one (an unwrapping error), and
+        ``coord_rmse_px``: RMS of the decoded minus the true column over the rest (px).
+        Only pixels lit in the truth and the decode count."""
+        dec = scan.decode
+        m = truth["lit"] & dec.valid & (truth["col"] >= 0)
+        if mask is not None:
+            m &= np.asarray(mask, bool)
+        du = np.abs(dec.u - (truth["col"] + 0.5))
+        bad = du > 1.0
+        if self.options.axes == "both":
+            bad |= np.abs(dec.v - (truth["row"] + 0.5)) > 1.0
+        n = int(m.sum())
+        if n == 0:
+            return {"coord_err_rate": float("nan"), "coord_rmse_px": float("nan")}
+        good = m & ~bad
+        rmse = float(np.sqrt(np.mean(du[good] ** 2))) if good.any() else float("nan")
+        return {"coord_err_rate": float((bad & m).sum() / n), "coord_rmse_px": rmse}
