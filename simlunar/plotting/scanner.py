@@ -25,7 +25,6 @@ from simlunar.plotting.style import (
 )
 
 __all__ = [
-    "REFERENCE_MODE",
     "bit_error_rates",
     "error_scale",
     "scanner_bars",
