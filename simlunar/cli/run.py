@@ -59,6 +59,7 @@ def run(
     from simlunar.config.loading import load_experiment
     from simlunar.pipeline.runner import run_experiment
     from simlunar.results.exports import check_save_scans
+    from simlunar.results.report import write_report
 
     with user_input():
         overrides = parse_set(set_ or [])
@@ -85,6 +86,7 @@ def run(
     typer.echo(f"results: {out_dir}")
     if summary.figures:
         typer.echo(f"figures: {summary.figures_dir}")
+    typer.echo(f"report: {write_report(out_dir)}")
 
 
 def figures(
