@@ -28,7 +28,6 @@ version = release = simlunar.__version__
 extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
-    "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
     "sphinx.ext.viewcode",
     "numpydoc",
@@ -44,9 +43,8 @@ templates_path = ["_templates"]
 myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 
-# API reference: one page per module, members documented from their numpydoc docstrings
-autosummary_generate = True
-autosummary_imported_members = False
+# API reference: one page per module (written by simlunar_docs), members documented from
+# their numpydoc docstrings
 autodoc_default_options = {"members": True, "member-order": "bysource"}
 autodoc_typehints = "none"  # the numpydoc Parameters sections carry the types and units
 autodoc_mock_imports: list[str] = []

@@ -10,8 +10,8 @@
     ``build/docs-runs/<name>/`` (the small quickstart run ``make docs`` makes when a fresh
     clone has no results: figures are results, never committed); an experiment with no
     folder is listed with the command that makes its figures.
-``_generated/api.rst``
-    the API reference: one autosummary entry per package of ``simlunar``.
+``_generated/api.rst`` (+ ``_generated/api/<module>.rst``)
+    the API reference: one autodoc page per module of ``simlunar``.
 
 The configuration reference is not generated here: it lives in ``experiments.md`` between
 markers that ``make docs`` refreshes (``simlunar.config.docs.update_docs``).
@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import html
 import pkgutil
+import re
 import shutil
 from pathlib import Path
 
@@ -129,25 +130,54 @@ def _gallery(exps, out: Path) -> str:
     return "\n".join(lines)
 
 
-def _api() -> str:
-    packages = sorted(
-        m.name
-        for m in pkgutil.iter_modules(simlunar.__path__, "simlunar.")
-        if m.ispkg or m.name in ("simlunar.registry", "simlunar.errors", "simlunar.atomic")
-    )
+def _modules() -> list[str]:
+    """Every module of ``simlunar`` (packages first within each package), ``__main__`` left out:
+    importing it would run the command line."""
+    names = ["simlunar"]
+    for m in pkgutil.walk_packages(simlunar.__path__, "simlunar."):
+        if m.name.rsplit(".", 1)[-1] != "__main__":
+            names.append(m.name)
+    return sorted(names)
+
+
+def _api(out: Path) -> str:
+    """The API index (``api.rst``) and one page per module (``api/<module>.rst``): each page is
+    the module's docstring and its own members (``:ignore-module-all:``: a package's
+    re-exports are documented once, where they are defined)."""
+    folder = out / "api"
+    folder.mkdir(exist_ok=True)
+    modules = _modules()
+    for name in modules:
+        title = f"``{name}``"
+        _write_if_changed(
+            folder / f"{name}.rst",
+            f"{title}\n{'=' * len(title)}\n\n.. automodule:: {name}\n   :members:\n"
+            "   :ignore-module-all:\n",
+        )
+    for stale in folder.glob("*.rst"):
+        if stale.stem not in modules:
+            stale.unlink()
     lines = [
         "API reference",
         "=============",
         "",
-        "Generated from the numpydoc docstrings of every package of ``simlunar``.",
+        "Generated from the numpydoc docstrings of every module of ``simlunar`` each time the",
+        "site is built. The package contracts are in CONTRIBUTING.md.",
         "",
-        ".. autosummary::",
-        "   :toctree: api",
-        "   :recursive:",
+        ".. toctree::",
+        "   :maxdepth: 1",
+        "",
+        "   api/simlunar",
         "",
     ]
-    lines += [f"   {p}" for p in packages]
-    return "\n".join(lines) + "\n"
+    top = sorted({".".join(n.split(".")[:2]) for n in modules if n != "simlunar"})
+    for pkg in top:
+        heading = f"``{pkg}``"
+        members = [n for n in modules if n == pkg or n.startswith(pkg + ".")]
+        lines += [heading, "-" * len(heading), "", ".. toctree::", "   :maxdepth: 1", ""]
+        lines += [f"   api/{n}" for n in members]
+        lines.append("")
+    return "\n".join(lines)
 
 
 def _write_if_changed(path: Path, text: str) -> None:
@@ -163,14 +193,59 @@ def write_generated(srcdir: str | Path) -> Path:
     exps = _experiments()
     _write_if_changed(out / "experiments.md", _experiment_table(exps))
     _write_if_changed(out / "gallery.md", _gallery(exps, out))
-    _write_if_changed(out / "api.rst", _api())
+    _write_if_changed(out / "api.rst", _api(out))
     return out
 
 
-def _on_init(app) -> None:
+_LITERAL = re.compile(r"(``.+?``|`[^`]*`)")
+
+
+def _escape_bars(lines: list[str]) -> None:
+    """Escape ``|`` in docstring prose, in place: the docstrings write absolute values and
+    norms as ``|x|`` in plain text, which reStructuredText reads as a substitution reference.
+    Inline literals, roles, doctests, tables, line blocks and literal blocks are left alone."""
+    literal_indent = None
+    for i, line in enumerate(lines):
+        stripped = line.lstrip()
+        indent = len(line) - len(stripped)
+        if literal_indent is not None:
+            if stripped and indent <= literal_indent:
+                literal_indent = None
+            else:
+                continue
+        table = stripped.startswith("+") or (
+            stripped.startswith("|") and stripped.rstrip().endswith("|")
+        )
+        if table or stripped.startswith((">>>", "...")) or "|" not in line:
+            if line.rstrip().endswith("::"):
+                literal_indent = indent
+            continue
+        parts = _LITERAL.split(line)
+        lines[i] = "".join(
+            p if j % 2 else re.sub(r"(?<!\\)\|", r"\\|", p) for j, p in enumerate(parts)
+        )
+        if line.rstrip().endswith("::"):
+            literal_indent = indent
+
+
+def _on_docstring(app, what, name, obj, options, lines) -> None:
+    _escape_bars(lines)
+
+
+def _on_skip(app, what, name, obj, skip, options):
+    # a module's imports (scipy's cKDTree, say) are not its API
+    module = getattr(obj, "__module__", None)
+    if what == "module" and isinstance(module, str) and not module.startswith("simlunar"):
+        return True
+    return None
+
+
+def _on_init(app, config) -> None:
     write_generated(app.srcdir)
 
 
 def setup(app):
-    app.connect("builder-inited", _on_init)
+    app.connect("config-inited", _on_init)
+    app.connect("autodoc-process-docstring", _on_docstring, priority=100)  # before numpydoc
+    app.connect("autodoc-skip-member", _on_skip)
     return {"parallel_read_safe": True, "parallel_write_safe": True, "version": "1"}

@@ -6,12 +6,12 @@ and registers it under its Mitsuba name; :func:`simlunar.render.backend.init` ru
 ``register`` of :data:`PLUGINS` right after ``mi.set_variant``. Importing this package never
 imports Mitsuba.
 
-=============  =========================================  ==================================
-name           module                                     model
-=============  =========================================  ==================================
+==============  =========================================  ==================================
+name            module                                     model
+==============  =========================================  ==================================
 ``oren_nayar``  :mod:`simlunar.render.plugins.oren_nayar`  Oren-Nayar (1994) rough diffuse
 ``hapke``       :mod:`simlunar.render.plugins.hapke`       Hapke regolith BRDF
-=============  =========================================  ==================================
+==============  =========================================  ==================================
 """
 
 from __future__ import annotations
