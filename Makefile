@@ -44,19 +44,16 @@ format: setup
 
 # the documentation site: build/docs/html/index.html (Sphinx, warnings are errors). The
 # configuration reference in docs/experiments.md is refreshed from the schema first; the
-# gallery shows results/<experiment>/figures, or a small quickstart run made here when there
-# is none (build/docs-runs/quickstart, about 1-2 min once; figures are never committed)
-DOCS_RUN := build/docs-runs/quickstart
+# gallery shows results/<experiment>/figures, or, when the quickstart has none, a small
+# quickstart run made here once (build/docs-runs/quickstart, about 30 s of CPU; figures are
+# results and never committed)
 docs: setup docs-gallery
 	$(VPY) -c "from simlunar.config.docs import update_docs; update_docs('docs/experiments.md')"
-	$(VPY) -m sphinx -b html -W --keep-going -q -j auto docs build/docs/html
+	$(VPY) -m sphinx -b html -W --keep-going -q docs build/docs/html
 	@echo "docs: build/docs/html/index.html"
 
 docs-gallery: setup
-	@if [ ! -f results/quickstart/figures/captions.md ] && [ ! -f $(DOCS_RUN)/figures/captions.md ]; then \
-	  $(VPY) -m simlunar.cli run experiments/quickstart.yaml --out $(DOCS_RUN) --no-progress \
-	    --set terrain.scale=0.0625 --set render.spp=2 --set study.trials=2 \
-	    --set 'study.densities=["1/4","1/16"]' > /dev/null; fi
+	$(VPY) docs/_ext/simlunar_docs.py
 
 # headless Chromium for the browser tests of the site and the reports (Debian's package;
 # as root, as in CI; elsewhere install it yourself or the tests skip, saying so)

@@ -20,20 +20,38 @@ markers that ``make docs`` refreshes (``simlunar.config.docs.update_docs``).
 from __future__ import annotations
 
 import html
-import pkgutil
 import re
 import shutil
+import subprocess
+import sys
+import typing
 from pathlib import Path
 
 import simlunar
 from simlunar.config.yamlio import load_yaml
 from simlunar.results.report import read_captions, run_overrides
 
-__all__ = ["RESULT_ROOTS", "setup", "write_generated"]
+__all__ = [
+    "GALLERY_RUN",
+    "RESULT_ROOTS",
+    "SMALL_RUN_SETS",
+    "gallery_run",
+    "setup",
+    "write_generated",
+]
 
 ROOT = Path(__file__).resolve().parents[2]
 #: where result folders are looked for, in order (relative to the repository root)
 RESULT_ROOTS = ("results", "build/docs-runs")
+#: the small quickstart run of a checkout with no results: its folder and ``--set`` overrides
+#: (1/16 scale, 2 samples per pixel, 2 trials, 2 densities: about 30 s of CPU time)
+GALLERY_RUN = "build/docs-runs/quickstart"
+SMALL_RUN_SETS = (
+    "terrain.scale=0.0625",
+    "render.spp=2",
+    "study.trials=2",
+    'study.densities=["1/4","1/16"]',
+)
 
 
 def _experiments() -> list[tuple[str, dict]]:
@@ -131,12 +149,20 @@ def _gallery(exps, out: Path) -> str:
 
 
 def _modules() -> list[str]:
-    """Every module of ``simlunar`` (packages first within each package), ``__main__`` left out:
-    importing it would run the command line."""
-    names = ["simlunar"]
-    for m in pkgutil.walk_packages(simlunar.__path__, "simlunar."):
-        if m.name.rsplit(".", 1)[-1] != "__main__":
-            names.append(m.name)
+    """Every module of ``simlunar``, found in its files (``config/`` and ``results/`` are
+    namespace packages, which ``pkgutil.walk_packages`` does not enter); ``__main__`` is left
+    out: importing it would run the command line."""
+    pkg = Path(simlunar.__file__).parent
+    names = set()
+    for f in pkg.rglob("*.py"):
+        parts = f.relative_to(pkg.parent).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        if parts[-1] != "__main__" and "__pycache__" not in parts:
+            names.add(".".join(parts))
+    for d in pkg.rglob("*"):
+        if d.is_dir() and d.name != "__pycache__" and any(d.glob("*.py")):
+            names.add(".".join(d.relative_to(pkg.parent).parts))
     return sorted(names)
 
 
@@ -232,8 +258,28 @@ def _on_docstring(app, what, name, obj, options, lines) -> None:
     _escape_bars(lines)
 
 
+def gallery_run(root: str | Path = ROOT) -> Path | None:
+    """Make the small quickstart run (:data:`SMALL_RUN_SETS`) into :data:`GALLERY_RUN` unless
+    ``results/quickstart`` or that folder already has figures; returns the folder made, or
+    None when nothing had to be run. Raises ``RuntimeError`` with the run's output if it fails.
+    """
+    root = Path(root)
+    if any((root / base / "quickstart/figures/captions.md").is_file() for base in RESULT_ROOTS):
+        return None
+    argv = [sys.executable, "-m", "simlunar.cli", "run", "experiments/quickstart.yaml"]
+    argv += ["--out", GALLERY_RUN, "--no-progress"]
+    for item in SMALL_RUN_SETS:
+        argv += ["--set", item]
+    r = subprocess.run(argv, cwd=root, capture_output=True, text=True, check=False)
+    if r.returncode != 0:
+        raise RuntimeError(f"the gallery's quickstart run failed:\n{r.stdout}\n{r.stderr}")
+    return root / GALLERY_RUN
+
+
 def _on_skip(app, what, name, obj, skip, options):
     # a module's imports (scipy's cKDTree, say) are not its API
+    if isinstance(obj, typing.TypeVar):  # a generic's type variable is not API (numpydoc fails)
+        return True
     module = getattr(obj, "__module__", None)
     if what == "module" and isinstance(module, str) and not module.startswith("simlunar"):
         return True
@@ -249,3 +295,8 @@ def setup(app):
     app.connect("autodoc-process-docstring", _on_docstring, priority=100)  # before numpydoc
     app.connect("autodoc-skip-member", _on_skip)
     return {"parallel_read_safe": True, "parallel_write_safe": True, "version": "1"}
+
+
+if __name__ == "__main__":  # `make docs-gallery`
+    made = gallery_run()
+    print(f"gallery: {made}" if made else "gallery: result folders present, nothing to run")
