@@ -44,7 +44,9 @@ def chromium() -> str:
     if soft != resource.RLIM_INFINITY and not ci:
         # Chromium reserves far more address space than it uses and does not start under
         # `ulimit -v`; outside CI such a shell skips, in CI the run shows the failure
-        pytest.skip(f"an address-space limit is set (ulimit -v {soft // 1024}): Chromium needs none")
+        pytest.skip(
+            f"an address-space limit is set (ulimit -v {soft // 1024}): Chromium needs none"
+        )
     return exe
 
 

@@ -109,7 +109,7 @@ def test_report_holds_tables_figures_provenance_and_timings(folder):
 
 
 def test_report_of_a_folder_without_provenance(tmp_path):
-    with pytest.raises(ResultFolderError, match="no readable provenance.json"):
+    with pytest.raises(ResultFolderError, match=r"no readable provenance\.json"):
         build_report(tmp_path)
 
 
