@@ -104,7 +104,12 @@ def _shrink(cfg: dict) -> dict:
     study["trials"] = 1
     if study.get("kind", "sampling") == "sampling":
         study["trials"] = 2
-        study["densities"] = ["1/4", "1/16"]
+        # the same two densities, written as the file wrote them (a --set of one key of a
+        # {from, to, count} mapping must still find a mapping)
+        mapping = isinstance(study.get("densities"), dict)
+        study["densities"] = (
+            {"from": "1/4", "to": "1/16", "count": 2} if mapping else ["1/4", "1/16"]
+        )
     else:
         cfg["terrain"]["scale"] = 0.1
         study["projector_px"], study["camera_px"] = [32, 24], [64, 48]

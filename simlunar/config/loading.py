@@ -81,6 +81,13 @@ def check_key_path(path: str, data: dict) -> None:
         model = model_at(parent, data, ExperimentCfg)
     except ConfigError:
         keys, model = [], None
+    held = get_path(data, parent) if parent else data
+    if model is None and parent and held is not None and not isinstance(held, dict):
+        # the key exists but holds a value, not a mapping: one key of it cannot be set
+        raise ConfigError(
+            f"sweep.{path}: {parent} is a {type(held).__name__} in this file, not a mapping of "
+            f"keys; set it whole (--set {parent}=...)"
+        )
     if model is None or parts[-1] not in keys:
         # name the keys of the deepest section of the path that exists
         hint = ""

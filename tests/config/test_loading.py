@@ -316,3 +316,11 @@ def test_set_changes_one_key_of_a_mapping(tmp_path):
         load_experiment(p, {"study.densities.form": "1/4"})
     with pytest.raises(ConfigError, match=r"^--set study.densities.from: a density must lie"):
         load_experiment(p, {"study.densities.from": 2})
+
+
+def test_set_of_a_key_inside_a_value_that_is_no_mapping(tmp_path):
+    p = tmp_path / "e.yaml"
+    p.write_text(yaml.safe_dump(base()))  # densities: a list
+    with pytest.raises(ConfigError, match=r"^--set study.densities.from: study.densities is a "
+                       r"list in this file, not a mapping of keys; set it whole"):  # fmt: skip
+        load_experiment(p, {"study.densities.from": "1/4"})
