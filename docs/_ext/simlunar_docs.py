@@ -27,9 +27,13 @@ import sys
 import typing
 from pathlib import Path
 
-import simlunar
-from simlunar.config.yamlio import load_yaml
-from simlunar.results.report import read_captions, run_overrides
+ROOT = Path(__file__).resolve().parents[2]
+if str(ROOT) not in sys.path:  # run as a script (make docs-gallery): this checkout's simlunar
+    sys.path.insert(0, str(ROOT))
+
+import simlunar  # noqa: E402
+from simlunar.config.yamlio import load_yaml  # noqa: E402
+from simlunar.results.report import read_captions, run_overrides  # noqa: E402
 
 __all__ = [
     "GALLERY_RUN",
@@ -40,7 +44,6 @@ __all__ = [
     "write_generated",
 ]
 
-ROOT = Path(__file__).resolve().parents[2]
 #: where result folders are looked for, in order (relative to the repository root)
 RESULT_ROOTS = ("results", "build/docs-runs")
 #: the small quickstart run of a checkout with no results: its folder and ``--set`` overrides
