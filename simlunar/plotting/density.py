@@ -68,15 +68,15 @@ def mean_error_by_density(
 
 
 def density_label(d: float) -> str:
-    """``0.25`` -> ``"1/4"``; a density that is no unit fraction as ``1/x`` with x to two
-    significant digits (``0.15`` -> ``"1/6.7"``), as the tables write densities."""
+    """``0.25`` -> ``"1/4"``; a density that is no unit fraction as ``1/n`` with n = 1/d
+    rounded (``0.15`` -> ``"1/7"``): the column headings of the score and samples-saved
+    tables (:mod:`simlunar.plotting.tables`), so a tick reads as the table it belongs to."""
     f = Fraction(float(d)).limit_denominator(1 << 16)
     if f.numerator == 1 and abs(float(f) - d) <= 1e-9 * d:
         return f"1/{f.denominator}"
     if not 0 < d < 1:
         return f"{d:g}"
-    n = 1 / d
-    return f"1/{n:.0f}" if n >= 10 else f"1/{n:.2g}"
+    return f"1/{round(1 / d)}"
 
 
 def density_axis(ax, densities: Sequence[float]) -> None:

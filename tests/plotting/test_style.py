@@ -129,6 +129,12 @@ def test_density_labels_are_fractions():
     assert [density_label(d) for d in (0.5, 1 / 128, 0.15, 1 / 280)] == [
         "1/2",
         "1/128",
-        "1/6.7",
+        "1/7",  # 1 / 0.15 = 6.67: the tables' heading, not "1/6.7"
         "1/280",
     ]
+    # the ten log-spaced densities of the ablations (1/2 ... 1/512) read as their table columns
+    from simlunar.config.quantities import log_spaced
+
+    dens = log_spaced(0.5, 1 / 512, 10)
+    assert [density_label(d) for d in dens] == [f"1/{round(1 / d)}" for d in dens]
+    assert [density_label(d) for d in dens][:4] == ["1/2", "1/4", "1/7", "1/13"]
