@@ -159,7 +159,7 @@ def error_vs_density(
             marker=st[s].marker,
             ms=3,
             lw=1.5 if ref else 1.1,
-            ls="--" if ref else "-",
+            ls="--" if ref else st[s].linestyle,
             color=c,
             label=st[s].label,
             zorder=4 if ref else 2,
@@ -320,10 +320,11 @@ def samples_saved_plot(
         allv += y.tolist()
         extra = np.asarray(flag[s]) != 0
         c, mk = look[s].colour, look[s].marker
-        ax.plot(d, y, lw=1.1, color=c, label=look[s].label)
+        ls = look[s].linestyle
+        ax.plot(d, y, lw=1.1, color=c, ls=ls, label=look[s].label)
         ax.plot(d[~extra], y[~extra], mk, ms=3.2, color=c)
         ax.plot(d[extra], y[extra], mk, ms=3.6, mfc="none", mec=c, mew=0.8)
-        handles.append(Line2D([], [], color=c, marker=mk, ms=3.5, lw=1.1))
+        handles.append(Line2D([], [], color=c, marker=mk, ms=3.5, lw=1.1, ls=ls))
         labels.append(look[s].label)
     if any(np.any(np.asarray(flag[s]) != 0) for s in names):
         handles.append(Line2D([], [], color="0.3", marker="o", ms=3.6, mfc="none", lw=0))
