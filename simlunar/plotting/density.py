@@ -79,6 +79,27 @@ def density_label(d: float) -> str:
     return f"1/{round(1 / d)}"
 
 
+def log_axis_labels(ax) -> None:
+    """Label a log y axis across its whole range: with fewer than three labelled powers of
+    ten inside the limits (data spanning two decades or less), ticks at 1, 2 and 5 times each
+    power, every one labelled, so no stretch of the data reads off an unlabelled axis."""
+    from matplotlib.ticker import LogFormatterSciNotation, LogLocator
+
+    lo, hi = ax.get_ylim()
+    if not (lo > 0 and hi > lo):
+        return
+    powers = [p for p in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
+              if lo <= 10.0**p <= hi]  # fmt: skip
+    if len(powers) >= 3:
+        return
+    ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_formatter(
+        LogFormatterSciNotation(base=10, labelOnlyBase=False, minor_thresholds=(math.inf, math.inf))
+    )
+    ax.yaxis.set_minor_locator(LogLocator(base=10, subs=tuple(range(2, 10))))
+    ax.yaxis.set_minor_formatter(NullFormatter())
+
+
 def density_axis(ax, densities: Sequence[float]) -> None:
     """Log2 x axis of sampling densities, falling to the right (as the paper's Fig. 3), a tick
     and a ``1/n`` label at every density (every other one when there are more than 8)."""
@@ -173,6 +194,7 @@ def error_vs_density(
         for line in ax.get_lines()
     ):
         ax.set_yscale("log")
+        log_axis_labels(ax)
     density_axis(ax, all_d)
     ax.set_ylabel(metric_axis(metric), fontsize=LABEL_PT)
     ax.tick_params(axis="y", labelsize=TICK_PT)
