@@ -10,14 +10,14 @@ ONLY ?=
 EXPERIMENT ?= experiments/quickstart.yaml
 PYTEST_ARGS ?=
 
-.PHONY: setup run test bench lint format clean doctor
+.PHONY: setup run test bench lint format clean doctor docs docs-gallery browser
 
 setup: $(STAMP)
 
 $(STAMP): pyproject.toml scripts/ensure_llvm.sh
 	@test -x $(VPY) || $(PY) -m venv $(VENV)
 	$(VPY) -m pip install -q --upgrade pip
-	$(VPY) -m pip install -q -e '.[dev]'
+	$(VPY) -m pip install -q -e '.[dev,docs]'
 	bash scripts/ensure_llvm.sh $(VPY)
 	@mkdir -p build/drjit-cache
 	$(VPY) -m simlunar.cli doctor --short
@@ -28,7 +28,7 @@ run: setup
 	$(VPY) -m simlunar.cli render scenes/quickstart_scene.yaml --out results/quickstart_render
 	$(VPY) -m simlunar.cli run $(EXPERIMENT)
 
-test: setup
+test: setup browser
 	$(VPY) -m pytest $(PYTEST_ARGS)
 
 bench: setup
@@ -41,6 +41,26 @@ lint: setup
 format: setup
 	$(VENV)/bin/ruff check --fix .
 	$(VENV)/bin/ruff format simlunar tests benchmarks
+
+# the documentation site: build/docs/html/index.html (Sphinx, warnings are errors). The
+# configuration reference in docs/experiments.md is refreshed from the schema first; the
+# gallery shows results/<experiment>/figures, or, when the quickstart has none, a small
+# quickstart run made here once (build/docs-runs/quickstart, about 30 s of CPU; figures are
+# results and never committed)
+docs: setup docs-gallery
+	$(VPY) -c "from simlunar.config.docs import update_docs; update_docs('docs/experiments.md')"
+	$(VPY) -m sphinx -b html -W --keep-going -q docs build/docs/html
+	@echo "docs: build/docs/html/index.html"
+
+docs-gallery: setup
+	$(VPY) docs/_ext/simlunar_docs.py
+
+# headless Chromium for the browser tests of the site and the reports (Debian's package;
+# as root, as in CI; elsewhere install it yourself or the tests skip, saying so)
+browser:
+	@command -v chromium >/dev/null || { [ "$$(id -u)" = 0 ] && apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium > /dev/null; } || \
+	  echo "browser: chromium not installed (not root); the browser tests will skip"
 
 doctor: setup
 	$(VPY) -m simlunar.cli doctor

@@ -17,6 +17,7 @@ import difflib
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 __all__ = [
@@ -26,15 +27,48 @@ __all__ = [
     "build_options",
     "check_bounds",
     "did_you_mean",
+    "did_you_mean_file",
     "option",
     "option_info",
 ]
 
 
+def _closest(name: str, valid) -> list[str]:
+    """The valid names closest to ``name`` (all of those equally close), by difflib's ratio
+    (at least 0.6); empty when none is close."""
+    valid = list(dict.fromkeys(str(v) for v in valid))
+    ratio = {v: difflib.SequenceMatcher(None, str(name), v).ratio() for v in valid}
+    best = max(ratio.values(), default=0.0)
+    return [v for v in valid if ratio[v] == best] if best >= 0.6 else []
+
+
+def _hint(close: list[str]) -> str:
+    if not close:
+        return ""
+    shown = [repr(c) for c in close]
+    text = shown[0] if len(shown) == 1 else f"{', '.join(shown[:-1])} or {shown[-1]}"
+    return f" (did you mean {text}?)"
+
+
 def did_you_mean(name: str, valid) -> str:
-    """`` (did you mean 'x'?)`` for the closest valid name, or an empty string."""
-    close = difflib.get_close_matches(str(name), [str(v) for v in valid], n=1, cutoff=0.6)
-    return f" (did you mean {close[0]!r}?)" if close else ""
+    """`` (did you mean 'x'?)`` for the closest valid name, or an empty string.
+
+    Names equally close are all given (``'aerial_l'`` is as close to ``aerial_1`` as to
+    ``aerial_2``: `` (did you mean 'aerial_1', 'aerial_2' or 'aerial_3'?)``), never one of
+    them picked by its spelling. Closeness is difflib's ratio, at least 0.6.
+    """
+    return _hint(_closest(name, valid))
+
+
+def did_you_mean_file(path) -> str:
+    """`` (did you mean 'dir/x.yaml'?)`` for the closest existing files (by name) of the
+    folder of a missing ``path`` with the same suffix, or an empty string."""
+    p = Path(path)
+    try:
+        siblings = sorted(q.name for q in p.parent.glob(f"*{p.suffix}") if q.is_file())
+    except OSError:
+        return ""
+    return _hint([str(p.parent / c) for c in _closest(p.name, siblings)])
 
 
 class UnknownNameError(ValueError, KeyError):

@@ -13,7 +13,9 @@ import pytest
 _FAKES = str(Path(__file__).resolve().parent / "pipeline")
 # the slow reference implementations the fast paths are checked (and benchmarked) against
 _REFERENCES = str(Path(__file__).resolve().parents[1] / "benchmarks")
-for _path in (_FAKES, _REFERENCES):
+# helpers shared by test folders (browser.py: headless Chromium)
+_HELPERS = str(Path(__file__).resolve().parent)
+for _path in (_FAKES, _REFERENCES, _HELPERS):
     if _path not in sys.path:
         sys.path.insert(0, _path)
 

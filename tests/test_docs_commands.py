@@ -10,9 +10,11 @@ The code blocks are read at test time, so whatever the docs say now is what is t
   ``make TARGET`` is dry-run (``make -n``), since the targets build a virtual environment. A
   line whose comment says ``long run`` (``# long run``, ``# a cluster; long run``) is only checked: the subcommand's ``--help`` works
   and the files it names exist.
-* ``python`` blocks run in a subprocess in such a folder. Blocks that continue an earlier
-  context (``terrain``, ``camera``, ``depth``, ...) get a small one from :data:`PRELUDES`. A
-  block whose first line is ``# long run`` is only compiled.
+* ``python`` blocks run in a subprocess in such a folder. A block marked ``runnable`` in its
+  fence (```` ```python runnable ````) is self-contained: it runs exactly as written, nothing
+  prepended, so a reader can paste it. Other blocks continue an earlier context (``terrain``,
+  ``depth``, ...) and get a small one from :data:`PRELUDES`. A block whose first line is
+  ``# long run`` is only compiled.
 * ``yaml`` blocks must parse.
 """
 
@@ -30,23 +32,12 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
-FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```", re.S | re.M)
+FENCE = re.compile(r"^```(\w*)([^\n]*)\n(.*?)^```", re.S | re.M)
+RUNNABLE = "runnable"
 LONG = "# long run"
 TIMEOUT_S = 600
 
 PRELUDES = {
-    "rendering.md": """
-import numpy as np
-from simlunar.geometry import Camera, Intrinsics, Pose, Projector
-from simlunar.terrain.types import Terrain
-terrain = Terrain(np.zeros((32, 32)), np.full((32, 32), 0.3, np.float32), 0.1, (-1.6, 1.6))
-camera = Camera(Intrinsics(30.0, 30.0, 12.0, 12.0, 24, 24),
-                Pose.look_at([0.2, 0.1, 3.0], [0.0, 0.0, 0.0]))
-projector = Projector(Intrinsics.from_fov(16, 12, 45.0),
-                      Pose.look_at([-0.4, 0.0, 3.0], [0.0, 0.0, 0.0]))
-pattern = np.ones((12, 16), np.float32)
-patterns = np.stack([pattern, 1.0 - pattern, pattern])
-""",
     "sampling-study.md": """
 import numpy as np
 from scipy.ndimage import gaussian_filter
@@ -80,8 +71,17 @@ def _blocks():
         text = doc.read_text()
         for i, m in enumerate(FENCE.finditer(text)):
             lang = m.group(1).lower()
+            runnable = RUNNABLE in m.group(2).split()
             line = text.count("\n", 0, m.start()) + 1
-            out.append(pytest.param(doc, lang, m.group(2), id=f"{doc.name}:{line}:{lang or i}"))
+            out.append(
+                pytest.param(
+                    doc,
+                    lang,
+                    m.group(3),
+                    runnable,
+                    id=f"{doc.name}:{line}:{lang or i}{'-runnable' if runnable else ''}",
+                )
+            )
     return out
 
 
@@ -104,7 +104,12 @@ def _shrink(cfg: dict) -> dict:
     study["trials"] = 1
     if study.get("kind", "sampling") == "sampling":
         study["trials"] = 2
-        study["densities"] = ["1/4", "1/16"]
+        # the same two densities, written as the file wrote them (a --set of one key of a
+        # {from, to, count} mapping must still find a mapping)
+        mapping = isinstance(study.get("densities"), dict)
+        study["densities"] = (
+            {"from": "1/4", "to": "1/16", "count": 2} if mapping else ["1/4", "1/16"]
+        )
     else:
         cfg["terrain"]["scale"] = 0.1
         study["projector_px"], study["camera_px"] = [32, 24], [64, 48]
@@ -160,8 +165,8 @@ def _check_long(args: list[str], line: str, cwd: Path) -> None:
         _run([sys.executable, "-m", args[2], "--help"], cwd, line)
 
 
-@pytest.mark.parametrize(("doc", "lang", "text"), BLOCKS)
-def test_doc_block_runs(doc, lang, text, tmp_path):
+@pytest.mark.parametrize(("doc", "lang", "text", "runnable"), BLOCKS)
+def test_doc_block_runs(doc, lang, text, runnable, tmp_path):
     cwd = _scratch(tmp_path)
     if lang in ("bash", "sh", "shell", "console"):
         for line in _commands(text):
@@ -182,6 +187,10 @@ def test_doc_block_runs(doc, lang, text, tmp_path):
         if first.startswith("#") and LONG[2:] in first:
             compile(text, str(doc), "exec")
             return
+        if runnable:  # as a reader pastes it: nothing prepended
+            (cwd / "block.py").write_text(text)
+            _run([sys.executable, "block.py"], cwd, f"{doc.name} runnable python block:\n{text}")
+            return
         script = PRELUDES.get(doc.name, "") + _geotiff_prelude(text) + "\n" + text
         (cwd / "block.py").write_text(script)
         _run([sys.executable, "block.py"], cwd, f"{doc.name} python block:\n{text}")
@@ -194,6 +203,15 @@ def test_blocks_are_found():
     langs = {p.values[1] for p in BLOCKS}
     assert {"bash", "python"} <= langs
     assert any(p.values[0].name == "README.md" for p in BLOCKS)
+
+
+def test_runnable_blocks_are_marked_where_a_reader_starts():
+    # the README's example and rendering.md's "From Python" are self-contained and marked so;
+    # a runnable block names everything it uses (a prelude would hide a missing import)
+    marked = {(p.values[0].name, p.values[1]) for p in BLOCKS if p.values[3]}
+    assert {("README.md", "python"), ("rendering.md", "python")} <= marked
+    assert all(p.values[1] == "python" for p in BLOCKS if p.values[3])
+    assert "rendering.md" not in PRELUDES
 
 
 def test_long_run_marker_is_only_a_check(tmp_path):

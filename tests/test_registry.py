@@ -84,3 +84,27 @@ def test_option_info_carries_doc_unit_bounds_and_default():
 
 def test_did_you_mean_is_empty_when_nothing_is_close():
     assert did_you_mean("zzzz", ["linear", "shading"]) == ""
+
+
+def test_did_you_mean_gives_every_equally_close_name():
+    from simlunar.registry import did_you_mean
+
+    assert did_you_mean("wavlet", ["random", "wavelet", "grid"]) == " (did you mean 'wavelet'?)"
+    # 'aerial_l' is one edit from each: none is picked by its spelling
+    assert did_you_mean("aerial_l", ["aerial_1", "aerial_2", "moonyard"]) == (
+        " (did you mean 'aerial_1' or 'aerial_2'?)"
+    )
+    assert did_you_mean("zzz", ["random", "grid"]) == ""
+    assert did_you_mean("x", []) == ""
+
+
+def test_did_you_mean_file_names_the_closest_sibling(tmp_path):
+    from simlunar.registry import did_you_mean_file
+
+    (tmp_path / "quickstart.yaml").write_text("")
+    (tmp_path / "table1_aerial.yaml").write_text("")
+    (tmp_path / "quickstrt.txt").write_text("")  # another suffix: never suggested
+    hint = did_you_mean_file(tmp_path / "quickstrt.yaml")
+    assert hint == f" (did you mean {str(tmp_path / 'quickstart.yaml')!r}?)"
+    assert did_you_mean_file(tmp_path / "nothing_alike.yaml") == ""
+    assert did_you_mean_file(tmp_path / "no_dir" / "x.yaml") == ""

@@ -57,6 +57,10 @@ COMMANDS = {
         "Draw the figures of a result folder without recomputing (only those whose inputs "
         "changed).",
     ),
+    "report": (
+        "report",
+        "Write report.html of a result folder: config, versions, tables, figures, timings.",
+    ),
     "schema": (
         "schema",
         "JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server).",

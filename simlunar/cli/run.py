@@ -56,11 +56,17 @@ def run(
     save_scans: bool = flag(
         "--save-scans", "scanner and lidar studies: export each unit's scan to scans/unit<i>/"
     ),
+    dry_run: bool = flag(
+        "--dry-run",
+        "check everything, list the units, estimate time and memory; write nothing",
+    ),
 ) -> None:
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
+    from simlunar.config.advice import config_warnings
     from simlunar.config.loading import load_experiment
     from simlunar.pipeline.runner import run_experiment
     from simlunar.results.exports import check_save_scans
+    from simlunar.results.report import write_report
 
     with user_input():
         overrides = parse_set(set_ or [])
@@ -71,11 +77,22 @@ def run(
             check_save_scans(cfg)
             # an override before validation, so every sweep point is checked with it
             cfg = load_experiment(experiment, {**overrides, "study.save_scans": True})
+        for line in config_warnings(cfg):
+            typer.echo(line, err=True)
+        out_dir = Path(out) if out else Path("results") / cfg.name
+        if dry_run:
+            from simlunar.pipeline.estimate import estimate_run
+            from simlunar.pipeline.preflight import check_out_dir
+
+            check_out_dir(out_dir)
+            est = estimate_run(cfg, out_dir, workers=workers or 1, figures=figures)
+            for line in est.lines(out_dir):
+                typer.echo(line)
+            return
         executor = make_executor(workers=workers, scheduler=scheduler)
     if scheduler:
         # a lost scheduler or worker is reported in one line; Dask's own log would add pages
         logging.getLogger("distributed").setLevel(logging.CRITICAL)
-    out_dir = Path(out) if out else Path("results") / cfg.name
     summary = run_experiment(cfg, out_dir, executor=executor, progress=progress, figures=figures)
     typer.echo(summary.scores_markdown)
     for note in summary.notes:
@@ -87,6 +104,7 @@ def run(
     typer.echo(f"results: {out_dir}")
     if summary.figures:
         typer.echo(f"figures: {summary.figures_dir}")
+    typer.echo(f"report: {write_report(out_dir)}")
 
 
 def figures(
@@ -102,9 +120,25 @@ def figures(
     check_out_dir(results_dir, option="figures")
     if not Path(results_dir).is_dir():
         raise SimlunarError(f"{results_dir}: no such folder")
+    fig_dir = Path(results_dir) / "figures"
+    before = {p: p.stat().st_mtime_ns for p in fig_dir.glob("*")} if fig_dir.is_dir() else {}
     with FolderLock(results_dir):  # not while a run writes into the folder
         paths = write_figures_pruned(
             results_dir, formats=("png", "pdf") if pdf else None, force=force
         )
-    for p in paths:
-        typer.echo(str(p))
+    # a figure is redrawn when its file is new or rewritten; the others were up to date
+    redrawn = [p for p in paths if before.get(p) != p.stat().st_mtime_ns]
+    removed = sorted(set(before) - set(paths) - {fig_dir / "captions.md"})
+    kept = [p for p in paths if p not in redrawn]
+    if redrawn:
+        typer.echo(f"redrew {len(redrawn)} file(s) in {fig_dir}:")
+        for p in redrawn:
+            typer.echo(f"  {p.name}")
+    if kept:
+        how = "use --force to redraw them" if not redrawn else "their inputs did not change"
+        typer.echo(f"up to date, not redrawn: {len(kept)} file(s) ({how})")
+    for p in removed:
+        if not p.exists():
+            typer.echo(f"removed {p.name} (no longer produced)")
+    if not paths:
+        typer.echo(f"no figures for {results_dir} (its study draws none)")

@@ -25,6 +25,7 @@ from simlunar.config.schema import ExperimentCfg
 from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
+from simlunar.registry import did_you_mean, did_you_mean_file
 
 __all__ = [
     "apply_sweep_value",
@@ -91,6 +92,13 @@ def check_key_path(path: str, data: dict) -> None:
         model = model_at(parent, data, ExperimentCfg)
     except ConfigError:
         keys, model = [], None
+    held = get_path(data, parent) if parent else data
+    if model is None and parent and held is not None and not isinstance(held, dict):
+        # the key exists but holds a value, not a mapping: one key of it cannot be set
+        raise ConfigError(
+            f"sweep.{path}: {parent} is a {type(held).__name__} in this file, not a mapping of "
+            f"keys; set it whole (--set {parent}=...)"
+        )
     if model is None or parts[-1] not in keys:
         # name the keys of the deepest section of the path that exists
         hint = ""
@@ -105,7 +113,8 @@ def check_key_path(path: str, data: dict) -> None:
             except ConfigError:
                 continue
             if keys:
-                hint = f" (valid keys under {prefix or 'the root'}: {', '.join(keys)})"
+                close = did_you_mean(parts[n], keys) if n < len(parts) else ""
+                hint = f" (valid keys under {prefix or 'the root'}: {', '.join(keys)}){close}"
                 break
         raise ConfigError(f"sweep.{path}: no such key in the experiment schema{hint}")
     if parts[0] in ("sweep", "name"):
@@ -214,7 +223,7 @@ def resolve_terrain_files(cfg, base_dir: Path | None):
             continue
         full = (base_dir / p) if (base_dir is not None and not p.is_absolute()) else p
         if not full.is_file():
-            raise ConfigError(f"terrain.{key}: file not found: {full}")
+            raise ConfigError(f"terrain.{key}: file not found: {full}{did_you_mean_file(full)}")
         updates[key] = full.resolve()
     if updates:
         cfg = cfg.model_copy(update={"terrain": t.model_copy(update=updates)})
@@ -240,12 +249,30 @@ def load_experiment(path: str | Path, overrides: dict[str, Any] | None = None) -
             try:
                 check_key_path(key, data)
             except ConfigError as exc:
-                raise ConfigError(f"{path}: --set " + str(exc).removeprefix("sweep.")) from None
+                # the mistake is on the command line, not in the file
+                raise ConfigError("--set " + str(exc).removeprefix("sweep.")) from None
         data = apply_sweep_value(data, key, value)
     try:
         return validate_data(data, base_dir=path.parent)
     except ConfigError as exc:
-        raise ConfigError(f"{path}: {exc}") from None
+        key = _override_at(str(exc), overrides or {})
+        if key is None:
+            raise ConfigError(f"{path}: {exc}") from None
+        where, _, problem = str(exc).partition(": ")
+        # a value given by --set is reported as the --set's, not as a line of the file
+        raise ConfigError(
+            f"--set {key}: {problem}" if where == key else f"--set {key}: {exc}"
+        ) from None
+
+
+def _override_at(message: str, overrides: dict[str, Any]) -> str | None:
+    """The ``--set`` key whose value a ``<key.path>: <problem>`` message is about (the key
+    itself or a key inside it), or None when the problem is in the file."""
+    where = message.partition(": ")[0]
+    for key in sorted(overrides, key=len, reverse=True):
+        if where == key or where.startswith((f"{key}.", f"{key}[")):
+            return key
+    return None
 
 
 def to_plain(cfg: ExperimentCfg) -> dict:

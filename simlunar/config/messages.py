@@ -14,6 +14,7 @@ from pydantic import BaseModel, ValidationError
 
 from simlunar.config.fields import _Model
 from simlunar.errors import ConfigError
+from simlunar.registry import did_you_mean
 
 #: a pydantic model class
 M = TypeVar("M", bound=BaseModel)
@@ -77,12 +78,12 @@ def _message(err: dict) -> str:
 
 def _unknown_key_hint(path: str, data: dict, root: type[BaseModel]) -> str:
     """Suggest the valid keys where an unknown key was found."""
-    parent = path.rsplit(".", 1)[0] if "." in path else ""
+    parent, _, key = path.rpartition(".")
     try:
         keys = valid_keys(parent, data, root)
     except ConfigError:
         return ""
-    return f" (valid keys: {', '.join(keys)})" if keys else ""
+    return f" (valid keys: {', '.join(keys)}){did_you_mean(key, keys)}" if keys else ""
 
 
 def _nested_key(loc: tuple, data: Any, msg: str) -> tuple[str, str] | None:
@@ -143,11 +144,16 @@ def model_at(path: str, data: dict, root: type[BaseModel]) -> type[BaseModel] | 
         part = parts[i]
         if part not in model.model_fields:
             raise ConfigError(f"{path}: no such key {part!r}")
-        ann = model.model_fields[part].annotation
+        field = model.model_fields[part]
+        ann = field.annotation
         cur = cur.get(part) if isinstance(cur, dict) else None
         value_ann = _mapping_value(ann)
         if value_ann is None:
             model = _resolve_model(ann, cur, part)
+            if model is None and isinstance(cur, dict):
+                # a mapping the YAML wrote where the field turns it into something else
+                # (study.densities: {from, to, count} -> a list): its input model holds the keys
+                model = _input_model(field, cur, part)
             i += 1
         elif i + 1 == len(parts):
             return None  # a mapping with free labels (study.strategy_options) has no fixed keys
@@ -157,6 +163,18 @@ def model_at(path: str, data: dict, root: type[BaseModel]) -> type[BaseModel] | 
             model = _resolve_model(value_ann, cur, label)
             i += 2
     return model
+
+
+def _input_model(field, value: Any, name: str) -> type[BaseModel] | None:
+    """The model among a field's declared input types (``BeforeValidator(...,
+    json_schema_input_type=list[X] | Model)``), chosen for ``value``."""
+    for meta in getattr(field, "metadata", ()) or ():
+        input_type = getattr(meta, "json_schema_input_type", None)
+        if input_type is not None:
+            model = _resolve_model(input_type, value, name)
+            if model is not None:
+                return model
+    return None
 
 
 def _mapping_value(ann: Any) -> Any:

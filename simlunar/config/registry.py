@@ -14,6 +14,7 @@ from simlunar.config.terrain import preset_names as names
 from simlunar.errors import ConfigError
 from simlunar.metrics import METRICS
 from simlunar.planner import MEASURING, ORACLES, STRATEGIES
+from simlunar.registry import did_you_mean, did_you_mean_file
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.sensors.structured_light import MODES
 
@@ -32,7 +33,10 @@ __all__ = [
 def _check(name: str, valid: Iterable[str], path: str, what: str) -> None:
     valid = sorted(set(valid))
     if name not in valid:
-        raise ConfigError(f"{path}: unknown {what} {name!r} (valid: {', '.join(valid)})")
+        raise ConfigError(
+            f"{path}: unknown {what} {name!r} (valid: {', '.join(valid)})"
+            f"{did_you_mean(name, valid)}"
+        )
 
 
 def preset_names() -> list[str]:
@@ -44,7 +48,7 @@ def preset_names() -> list[str]:
 def check_preset(name: str, path: str) -> None:
     if Path(name).suffix in (".yaml", ".yml"):
         if not Path(name).is_file():
-            raise ConfigError(f"{path}: preset file not found: {name}")
+            raise ConfigError(f"{path}: preset file not found: {name}{did_you_mean_file(name)}")
         return
     _check(name, preset_names(), path, "terrain preset")
 

@@ -13,6 +13,7 @@ from simlunar.config.fields import Metres, _Model, _partial, _SetKeysModel
 from simlunar.config.messages import format_validation_error
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
+from simlunar.registry import did_you_mean, did_you_mean_file
 from simlunar.terrain.sfd import get_law
 
 __all__ = [
@@ -260,9 +261,14 @@ def preset_path(name: str | Path) -> Path:
     path = Path(name) if looks_like_path else SCENES / f"{name}.yaml"
     if not path.is_file():
         if looks_like_path:
-            raise PresetError(None, f"terrain preset file not found: {path}")
+            raise PresetError(
+                None, f"terrain preset file not found: {path}{did_you_mean_file(path)}"
+            )
+        valid = preset_names()
         raise PresetError(
-            None, f"unknown terrain preset {name!r} (valid: {', '.join(preset_names())})"
+            None,
+            f"unknown terrain preset {name!r} (valid: {', '.join(valid)})"
+            f"{did_you_mean(name, valid)}",
         )
     return path
 

@@ -128,7 +128,8 @@ class TrainCfg(_Model):
 
 
 def load_training(path: str | Path):
-    """``(TrainCfg, [ExperimentCfg, ...])`` of a training YAML; one-line ``ConfigError``s."""
+    """The training config and its experiments, ``(TrainCfg, list of ExperimentCfg)``, of a
+    training YAML (a one-line ``ConfigError`` for each problem)."""
     path = Path(path)
     data = load_yaml(path)
     if not isinstance(data, dict):

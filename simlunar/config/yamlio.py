@@ -119,7 +119,10 @@ def safe_load_bounded(text: str):
 def load_yaml(path: str | Path) -> dict:
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"experiment file not found: {path}")
+        # imported here: `simlunar run --help` imports this module and nothing of simlunar else
+        from simlunar.registry import did_you_mean_file
+
+        raise FileNotFoundError(f"experiment file not found: {path}{did_you_mean_file(path)}")
     try:
         data = safe_load_bounded(path.read_text())
     except UnicodeDecodeError:

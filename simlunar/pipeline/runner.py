@@ -52,6 +52,7 @@ from simlunar.results.folder import (
     prune_scans,
     scan_folders,
 )
+from simlunar.results.md_tables import write_table_csvs
 from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
     FolderLock,
@@ -382,6 +383,7 @@ def _run_locked(run: _Run) -> RunSummary:
     md, tex = _tables(run.cfg, units, records, rows, out)
     atomic_write_text(out / "scores.md", md)
     atomic_write_text(out / "scores.tex", tex)
+    write_table_csvs(out, md)
 
     elapsed = time.perf_counter() - run.t_start
     timings = {"run_s": round(elapsed, 3)}
@@ -478,6 +480,7 @@ def _rerun(run: _Run, previous: dict, records: dict) -> RunSummary:
     """A rerun with nothing to compute: the tables stand, provenance records the rerun's
     time beside the original run's, the figures are redrawn only if their inputs changed."""
     md = (run.out / "scores.md").read_text()
+    write_table_csvs(run.out, md)  # a folder written before tables/ existed gets them
     prov = dict(previous)
     timings = dict(prov.get("timings") or {})
     timings["rerun_s"] = round(time.perf_counter() - run.t_start, 3)

@@ -64,10 +64,9 @@ __all__ = [
 #: stage name -> spawn index; append only (reordering would change every result)
 STAGES = ("terrain", "render", "sensor", "study", "panels", "guide")
 
-#: bump when a change makes cached unit results invalid
-#: 2: figure arrays use index coordinates (no half-cell offset)
-#: 3: scanner auto-exposure from the white frame's 99.5th percentile (was 99th), exposure
-#:    without a sensor model, GRAD weights around holes
+#: bump when a change makes cached unit results invalid. 2: figure arrays use index
+#: coordinates (no half-cell offset). 3: scanner auto-exposure from the white frame's 99.5th
+#: percentile (was 99th), exposure without a sensor model, GRAD weights around holes.
 CACHE_VERSION = 3
 
 

@@ -33,7 +33,8 @@ Options of the weighted strategies (keyword arguments of :func:`plan`):
     ``uniform_mix``. ``density_cap`` and ``blue_noise`` apply to ``"random"`` only.
 ``density_power`` (float > 0, default 1 for ``"random"``, 0.5 for ``"lloyd"``)
     Exponent applied to the map before normalising.
-``uniform_mix`` default for ``"lloyd"``: 0.25 (0 for ``"random"``).
+``uniform_mix`` (float in [0, 1])
+    Default for ``"lloyd"``: 0.25 (0 for ``"random"``).
 ``lloyd_iterations`` (int >= 0, default 20), ``border_pitch`` (float >= 0 or None, default 0.75)
     Lloyd iterations and border snap distance in local pitches (``"lloyd"`` placement,
     ``lloyd_uniform`` and ``oracle_hessian``).

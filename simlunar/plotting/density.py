@@ -83,15 +83,36 @@ def mean_error_by_density(
 
 
 def density_label(d: float) -> str:
-    """``0.25`` -> ``"1/4"``; a density that is no unit fraction as ``1/x`` with x to two
-    significant digits (``0.15`` -> ``"1/6.7"``), as the tables write densities."""
+    """``0.25`` -> ``"1/4"``; a density that is no unit fraction as ``1/n`` with n = 1/d
+    rounded (``0.15`` -> ``"1/7"``): the column headings of the score and samples-saved
+    tables (:mod:`simlunar.plotting.tables`), so a tick reads as the table it belongs to."""
     f = Fraction(float(d)).limit_denominator(1 << 16)
     if f.numerator == 1 and abs(float(f) - d) <= 1e-9 * d:
         return f"1/{f.denominator}"
     if not 0 < d < 1:
         return f"{d:g}"
-    n = 1 / d
-    return f"1/{n:.0f}" if n >= 10 else f"1/{n:.2g}"
+    return f"1/{round(1 / d)}"
+
+
+def log_axis_labels(ax) -> None:
+    """Label a log y axis across its whole range: with fewer than three labelled powers of
+    ten inside the limits (data spanning two decades or less), ticks at 1, 2 and 5 times each
+    power, every one labelled, so no stretch of the data reads off an unlabelled axis."""
+    from matplotlib.ticker import LogFormatterSciNotation, LogLocator
+
+    lo, hi = ax.get_ylim()
+    if not (lo > 0 and hi > lo):
+        return
+    powers = [p for p in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)
+              if lo <= 10.0**p <= hi]  # fmt: skip
+    if len(powers) >= 3:
+        return
+    ax.yaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_formatter(
+        LogFormatterSciNotation(base=10, labelOnlyBase=False, minor_thresholds=(math.inf, math.inf))
+    )
+    ax.yaxis.set_minor_locator(LogLocator(base=10, subs=tuple(range(2, 10))))
+    ax.yaxis.set_minor_formatter(NullFormatter())
 
 
 def density_axis(ax, densities: Sequence[float]) -> None:
@@ -174,7 +195,7 @@ def error_vs_density(
             marker=st[s].marker,
             ms=3,
             lw=1.5 if ref else 1.1,
-            ls="--" if ref else "-",
+            ls="--" if ref else st[s].linestyle,
             color=c,
             label=st[s].label,
             zorder=4 if ref else 2,
@@ -188,6 +209,7 @@ def error_vs_density(
         for line in ax.get_lines()
     ):
         ax.set_yscale("log")
+        log_axis_labels(ax)
     density_axis(ax, all_d)
     ax.set_ylabel(metric_axis(metric), fontsize=LABEL_PT)
     ax.tick_params(axis="y", labelsize=TICK_PT)
@@ -335,10 +357,11 @@ def samples_saved_plot(
         allv += y.tolist()
         extra = np.asarray(flag[s]) != 0
         c, mk = look[s].colour, look[s].marker
-        ax.plot(d, y, lw=1.1, color=c, label=look[s].label)
+        ls = look[s].linestyle
+        ax.plot(d, y, lw=1.1, color=c, ls=ls, label=look[s].label)
         ax.plot(d[~extra], y[~extra], mk, ms=3.2, color=c)
         ax.plot(d[extra], y[extra], mk, ms=3.6, mfc="none", mec=c, mew=0.8)
-        handles.append(Line2D([], [], color=c, marker=mk, ms=3.5, lw=1.1))
+        handles.append(Line2D([], [], color=c, marker=mk, ms=3.5, lw=1.1, ls=ls))
         labels.append(look[s].label)
     if any(np.any(np.asarray(flag[s]) != 0) for s in names):
         handles.append(Line2D([], [], color="0.3", marker="o", ms=3.6, mfc="none", lw=0))

@@ -36,11 +36,29 @@ class Style:
         Matplotlib marker.
     label : str
         Display label for legends, axis ticks and table headers.
+    linestyle : str or tuple
+        Matplotlib line style, by how the planner places its samples (:data:`PLACEMENT_LINES`):
+        hue names the map (reds: wavelet, purples: learned, greens: multi-round), line style
+        and marker tell the placement apart, so curves stay distinct in greyscale and for
+        colour-blind readers.
     """
 
     colour: str
     marker: str
     label: str
+    linestyle: str | tuple = "-"
+
+
+#: line style per placement: the paper's weighted random draw (and the grid) solid, the
+#: halftone + Lloyd layouts dash-dotted, multi-round sampling dash-dot-dotted, the
+#: truth-reading oracles dotted. Random, the reference of every score, is drawn dashed by the
+#: error figure itself.
+PLACEMENT_LINES = {
+    "draw": "-",
+    "lloyd": "-.",
+    "sequential": (0, (3, 1, 1, 1, 1, 1)),
+    "oracle": ":",
+}
 
 
 #: registered styles (strategies of the paper first, then simlunar's, variants, scan modes)
@@ -56,15 +74,22 @@ REGISTRY: dict[str, Style] = {
     "combination": Style("#8c564b", "X", "Combination"),
     # image-free and image-directed layouts with halftone + Lloyd placement, multi-round
     # planning and the truth-reading bounds (oracle labels start "Oracle")
-    "lloyd_uniform": Style("#000000", "s", "Uniform Lloyd"),
-    "wavelet_lloyd": Style("#b2182b", "D", "Wavelet, Lloyd"),
+    # (the same map keeps its hue; the Lloyd placement gets its own marker and line style)
+    "lloyd_uniform": Style("#000000", "8", "Uniform Lloyd", PLACEMENT_LINES["lloyd"]),
+    "wavelet_lloyd": Style("#b2182b", "h", "Wavelet, Lloyd", PLACEMENT_LINES["lloyd"]),
     "learned": Style("#542788", "P", "Learned"),
-    "learned_lloyd": Style("#8073ac", "P", "Learned, Lloyd"),
-    "sequential": Style("#1b7837", ">", "Sequential"),
-    "sequential_wavelet": Style("#5aae61", ">", "Sequential, wavelet prior"),
-    "sequential_learned": Style("#a6dba0", ">", "Sequential, learned prior"),
-    "oracle_greedy": Style("#fdb863", "*", "Oracle greedy (true error)"),
-    "oracle_hessian": Style("#e08214", "*", "Oracle Hessian (true depth)"),
+    "learned_lloyd": Style("#8073ac", "p", "Learned, Lloyd", PLACEMENT_LINES["lloyd"]),
+    "sequential": Style("#1b7837", ">", "Sequential", PLACEMENT_LINES["sequential"]),
+    "sequential_wavelet": Style(
+        "#5aae61", ">", "Sequential, wavelet prior", PLACEMENT_LINES["sequential"]
+    ),
+    "sequential_learned": Style(
+        "#a6dba0", "<", "Sequential, learned prior", PLACEMENT_LINES["sequential"]
+    ),
+    "oracle_greedy": Style("#fdb863", "*", "Oracle greedy (true error)", PLACEMENT_LINES["oracle"]),
+    "oracle_hessian": Style(
+        "#e08214", "*", "Oracle Hessian (true depth)", PLACEMENT_LINES["oracle"]
+    ),
     # labelled variants of the shipped experiments
     # a hue far from Wavelet's red (pink read as a second red beside it)
     "wavelet_bn": Style("#6a3d9a", "d", "Wavelet, blue noise"),
@@ -166,7 +191,7 @@ def styles(names: Iterable[str]) -> dict[str, Style]:
         for step in range(len(SPARE_COLOURS)):
             c = SPARE_COLOURS[(i + step) % len(SPARE_COLOURS)]
             if c not in used:
-                s = Style(c, s.marker, s.label)
+                s = Style(c, s.marker, s.label, s.linestyle)
                 break
         used.add(s.colour)
         out[n] = s

@@ -250,6 +250,29 @@ def headroom(metric: str, seeds: int) -> str:
     )
 
 
+def saved_forest(metric: str, seeds: int) -> str:
+    """Caption of ``samples_saved_forest``."""
+    if seeds > 1:
+        how = (
+            f"Marker: the geometric mean over the {seeds} terrain seeds of each seed's samples "
+            f"saved (itself the geometric mean over the densities inside the reference's "
+            f"measured range); bar: its two-sided 95 % Student t interval in log space; grey "
+            f"dots: each seed."
+        )
+    else:
+        how = (
+            "Marker: the samples saved on the one terrain seed (the geometric mean over the "
+            "densities inside the reference's measured range); one seed gives no interval."
+        )
+    return (
+        f"Samples saved at equal {_metric(metric)} against the image-free Uniform Lloyd layout "
+        f"(dotted line at 1; right of it a planner needs fewer samples for the same error; log "
+        f"axis). {how} Planners keep the style of every other figure (colour and marker per "
+        f"planner); scores.md holds the same numbers in its headroom or paired samples-saved "
+        f"table."
+    )
+
+
 def lidar_error(
     metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1, by: str | None = None
 ) -> str:

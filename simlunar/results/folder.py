@@ -15,6 +15,7 @@ from simlunar.config.yamlio import YAMLError, safe_load_text
 from simlunar.errors import ResultFolderError
 from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
 from simlunar.results.exports import export_complete
+from simlunar.results.md_tables import TABLES_DIR
 from simlunar.results.records import WorkUnit
 from simlunar.results.store import (
     atomic_write_text,
@@ -148,6 +149,7 @@ def folder_complete(out: Path, keys: list[str]) -> bool:
 def _invalidate(out: Path) -> None:
     for name in RESULT_FILES:
         (out / name).unlink(missing_ok=True)
+    shutil.rmtree(out / TABLES_DIR, ignore_errors=True)  # the CSV copies of scores.md's tables
     prune_figures(out, keep=())
 
 

@@ -41,6 +41,7 @@ def sampling_figures(res: dict, emit, captions: dict[str, str]) -> None:
     firsts = [p for p in points if p.reconstruction == first]
     _samples_saved_figures(firsts, emit, captions)
     _headroom_figure(firsts, emit, captions)
+    _forest_figure(firsts, emit, captions)
     _score_figures(res, emit, captions)
     _reconstruction_figure(res, points, emit, captions)
 
@@ -212,6 +213,29 @@ def _headroom_figure(points: list, emit, captions: dict[str, str]) -> None:
         return
     emit(F.headroom_plot(entries), "headroom")
     captions["headroom"] = captions_text.headroom(entries[0]["metric"], len(entries[0]["seeds"]))
+
+
+def _forest_figure(points: list, emit, captions: dict[str, str]) -> None:
+    """``samples_saved_forest``: each planner's samples saved vs uniform Lloyd with its 95 %
+    interval over terrain seeds, one panel per sweep point; drawn when the study has the
+    uniform layout (the figure of the headroom and paired samples-saved tables)."""
+    from simlunar.plotting.forest import saved_forest_plot
+
+    entries = [
+        {"label": p.label if len(points) > 1 else "", "metric": p.saved_metric,
+         "strategies": [s for s in p.strategies if s != aggregate.HEADROOM_REFERENCE],
+         "saved": p.saved_per_seed, "seeds": p.seeds}
+        for p in points
+        if p.saved_per_seed
+    ][:MAX_UNIT_PANELS]  # fmt: skip
+    try:
+        fig = saved_forest_plot(entries)
+    except ValueError:  # no planner with a finite saving (or no uniform layout)
+        return
+    emit(fig, "samples_saved_forest")
+    captions["samples_saved_forest"] = captions_text.saved_forest(
+        entries[0]["metric"], len(entries[0]["seeds"])
+    )
 
 
 def _score_figures(res: dict, emit, captions: dict[str, str]) -> None:

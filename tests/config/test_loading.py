@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 import yaml
@@ -187,7 +188,7 @@ def test_load_experiment_prefixes_the_file_and_applies_overrides(tmp_path):
     p.write_text(yaml.safe_dump(base()))
     cfg = load_experiment(p, {"render.spp": 4, "render.light.kind": "camera"})
     assert cfg.render.spp == 4 and cfg.render.light.kind == "camera"
-    with pytest.raises(ConfigError, match=rf"^{p}: --set render.spq: no such key"):
+    with pytest.raises(ConfigError, match=r"^--set render.spq: no such key"):
         load_experiment(p, {"render.spq": 4})
     p.write_text("name: [unclosed\n")
     with pytest.raises(ConfigError, match="not valid YAML at line"):
@@ -255,3 +256,71 @@ def test_fig4_roughness_options_defaults_units_and_errors():
             FiguresCfg(sparse_mesh_sigma_deg=bad)
     with pytest.raises(ValueError, match="sparse_mesh_roughness_threshold"):
         FiguresCfg(sparse_mesh_roughness_threshold=1.5)
+
+
+def test_misspellings_get_did_you_mean(tmp_path):
+    d = base()
+    d["study"]["metricz"] = ["mse"]
+    with pytest.raises(ConfigError, match=r"study.metricz: unknown key \(valid keys: .*\) "
+                       r"\(did you mean 'metrics'\?\)$"):  # fmt: skip
+        validate_data(d)
+    d = base()
+    d["study"]["strategies"] = ["random", "wavlet"]
+    with pytest.raises(ConfigError, match=r"study.strategies\[1\]: unknown strategy 'wavlet' "
+                       r"\(valid: .*\) \(did you mean 'wavelet'\?\)$"):  # fmt: skip
+        validate_data(d)
+    d = base()
+    d["terrain"]["preset"] = "moonyrd"
+    with pytest.raises(ConfigError, match=r"\(did you mean 'moonyard'\?\)$"):
+        validate_data(d)
+    (tmp_path / "my_experiment.yaml").write_text(yaml.safe_dump(base()))
+    with pytest.raises(FileNotFoundError, match=r"did you mean .*my_experiment\.yaml'\?\)$"):
+        load_experiment(tmp_path / "my_experimnt.yaml")
+    d = base()
+    d["terrain"] = {"file": "dem_01.npy", "spacing_m": 0.2}
+    (tmp_path / "dem_10.npy").write_bytes(b"")
+    with pytest.raises(ConfigError, match=r"file not found: .*dem_01\.npy \(did you mean "):
+        validate_data(d, base_dir=tmp_path)
+
+
+def test_set_errors_name_the_set_not_the_file(tmp_path):
+    p = tmp_path / "e.yaml"
+    p.write_text(yaml.safe_dump(base()))
+    with pytest.raises(ConfigError, match=r"^--set render.spp: Input should be greater"):
+        load_experiment(p, {"render.spp": -1})
+    with pytest.raises(ConfigError, match=r"^--set study.strategies: study.strategies\[0\]: "
+                       r"unknown strategy 'wavlet'"):  # fmt: skip
+        load_experiment(p, {"study.strategies": ["wavlet"]})
+    with pytest.raises(ConfigError, match=r"^--set rendr.spp: no such key .* \(did you mean "
+                       r"'render'\?\)$"):  # fmt: skip
+        load_experiment(p, {"rendr.spp": 3})
+    # a problem in the file itself still names the file, even with an unrelated --set
+    d = base(render={"spp": 0})
+    p.write_text(yaml.safe_dump(d))
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: render.spp: "):
+        load_experiment(p, {"study.trials": 2})
+
+
+def test_set_changes_one_key_of_a_mapping(tmp_path):
+    # study.densities written as {from, to, count}: --set of one of them keeps the others
+    d = base()
+    d["study"]["densities"] = {"from": "1/2", "to": "1/8", "count": 3}
+    p = tmp_path / "e.yaml"
+    p.write_text(yaml.safe_dump(d))
+    assert load_experiment(p).study.densities == pytest.approx([0.5, 0.25, 0.125])
+    cfg = load_experiment(p, {"study.densities.from": "1/32", "study.densities.to": "1/2"})
+    assert cfg.study.densities == pytest.approx([1 / 32, 1 / 8, 1 / 2])
+    with pytest.raises(ConfigError, match=r"^--set study.densities.form: no such key .*"
+                       r"\(valid keys under study.densities: from, to, count\) "
+                       r"\(did you mean 'from'\?\)$"):  # fmt: skip
+        load_experiment(p, {"study.densities.form": "1/4"})
+    with pytest.raises(ConfigError, match=r"^--set study.densities.from: a density must lie"):
+        load_experiment(p, {"study.densities.from": 2})
+
+
+def test_set_of_a_key_inside_a_value_that_is_no_mapping(tmp_path):
+    p = tmp_path / "e.yaml"
+    p.write_text(yaml.safe_dump(base()))  # densities: a list
+    with pytest.raises(ConfigError, match=r"^--set study.densities.from: study.densities is a "
+                       r"list in this file, not a mapping of keys; set it whole"):  # fmt: skip
+        load_experiment(p, {"study.densities.from": "1/4"})

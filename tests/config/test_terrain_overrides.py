@@ -56,7 +56,7 @@ ERRORS = [
     (
         {"fractal": {"rms_mm": 2.0}},
         "terrain.overrides.fractal.rms_mm: unknown key (valid keys: hurst, rms_m, periodic, "
-        "rolloff_m)",
+        "rolloff_m) (did you mean 'rms_m'?)",
     ),
     (
         {"fractal": {"rms_m": -0.05}},
@@ -70,7 +70,7 @@ ERRORS = [
     (
         {"fractl": {"rms_m": 0.1}},
         "terrain.overrides.fractl: unknown key (valid keys: grid, fractal, bed, craters, rocks, "
-        "albedo)",
+        "albedo) (did you mean 'fractal'?)",
     ),
     (
         {"rocks": {"d_max_m": 0.1}},  # below the preset's d_min_m = 0.4: a cross-field error

@@ -129,6 +129,49 @@ def test_density_labels_are_fractions():
     assert [density_label(d) for d in (0.5, 1 / 128, 0.15, 1 / 280)] == [
         "1/2",
         "1/128",
-        "1/6.7",
+        "1/7",  # 1 / 0.15 = 6.67: the tables' heading, not "1/6.7"
         "1/280",
     ]
+    # the ten log-spaced densities of the ablations (1/2 ... 1/512) read as their table columns
+    from simlunar.config.quantities import log_spaced
+
+    dens = log_spaced(0.5, 1 / 512, 10)
+    assert [density_label(d) for d in dens] == [f"1/{round(1 / d)}" for d in dens]
+    assert [density_label(d) for d in dens][:4] == ["1/2", "1/4", "1/7", "1/13"]
+
+
+def test_placements_have_their_own_line_style_and_marker():
+    from simlunar.plotting.style import PLACEMENT_LINES, REGISTRY
+
+    # the same map keeps its hue family but the Lloyd layout differs in line and marker
+    w, wl = REGISTRY["wavelet"], REGISTRY["wavelet_lloyd"]
+    assert w.linestyle == PLACEMENT_LINES["draw"] and wl.linestyle == PLACEMENT_LINES["lloyd"]
+    assert w.marker != wl.marker
+    assert REGISTRY["lloyd_uniform"].marker != REGISTRY["grid"].marker
+    assert REGISTRY["oracle_greedy"].linestyle == PLACEMENT_LINES["oracle"]
+    assert REGISTRY["sequential_wavelet"].linestyle == PLACEMENT_LINES["sequential"]
+    # the four placements are four distinct line styles, none the reference's dashes
+    assert len({str(v) for v in PLACEMENT_LINES.values()}) == 4
+    assert "--" not in PLACEMENT_LINES.values()
+
+
+def test_a_narrow_log_axis_is_labelled_across_its_data():
+    import matplotlib.pyplot as plt
+
+    from simlunar.plotting.density import error_vs_density
+
+    rows = [
+        {"strategy": s, "density": d, "metric": "mse", "value": base * f}
+        for d, base in ((0.5, 8e-5), (0.25, 1.6e-4), (0.125, 3.5e-4))
+        for s, f in (("random", 1.0), ("grid", 0.7))
+    ]
+    fig, ax = error_vs_density(rows)
+    lo, hi = ax.get_ylim()
+    shown = [t for t, lab in zip(ax.get_yticks(), ax.get_yticklabels()) if lo <= t <= hi]
+    labels = [
+        lab.get_text() for t, lab in zip(ax.get_yticks(), ax.get_yticklabels()) if lo <= t <= hi
+    ]
+    # one power of ten inside the data (1e-4): 2e-4 is labelled too
+    assert len(shown) >= 2 and all(labels)
+    assert any(abs(t - 2e-4) < 1e-12 for t in shown)
+    plt.close(fig)

@@ -9,14 +9,7 @@ imports Mitsuba.
 :data:`PLUGINS` is derived from the BSDF registry (:data:`simlunar.render.materials.BSDFS`,
 each entry's ``meta["plugin"]``): a new BSDF's plugin is registered without an edit here.
 
-================  =============================================  ==================================
-name              module                                         model
-================  =============================================  ==================================
-``oren_nayar``    :mod:`simlunar.render.plugins.oren_nayar`      Oren-Nayar (1994) rough diffuse
-``hapke``         :mod:`simlunar.render.plugins.hapke`           Hapke regolith BRDF
-``lunar_lambert`` :mod:`simlunar.render.plugins.lunar_lambert`   McEwen's lunar-Lambert
-================  =============================================  ==================================
-"""
+================  =============================================  ==========================="""
 
 from __future__ import annotations
 

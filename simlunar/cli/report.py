@@ -1,0 +1,23 @@
+"""``simlunar report``: a result folder as one self-contained HTML page."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from simlunar.errors import SimlunarError
+
+
+def report(
+    results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`"),
+) -> None:
+    """Write report.html of a result folder: config, versions, tables, figures, timings."""
+    from simlunar.results.report import write_report
+    from simlunar.results.store import FolderLock
+
+    if not Path(results_dir).is_dir():
+        raise SimlunarError(f"{results_dir}: no such folder")
+    with FolderLock(results_dir):  # not while a run writes into the folder
+        path = write_report(results_dir)
+    typer.echo(str(path))
