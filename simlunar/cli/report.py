@@ -8,6 +8,8 @@ import typer
 
 from simlunar.errors import SimlunarError
 
+__all__ = ["report"]
+
 
 def report(
     results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`"),

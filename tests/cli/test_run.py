@@ -32,6 +32,8 @@ def recorded(monkeypatch, tmp_path):
         )  # fmt: skip
 
     monkeypatch.setattr("simlunar.pipeline.runner.run_experiment", fake_run)
+    # the report of the (absent) folder: its own tests write real ones
+    monkeypatch.setattr("simlunar.results.report.write_report", lambda d: Path(d) / "report.html")
     monkeypatch.chdir(tmp_path)
     return calls
 
@@ -53,6 +55,7 @@ def test_run_hands_the_pipeline_the_experiment_and_prints_the_summary(recorded):
         "work units: 3 (1 cached, 2 computed) in 1.2 s",
         "results: results/quickstart",
         "figures: results/quickstart/figures",
+        "report: results/quickstart/report.html",
     ]
 
 
@@ -69,12 +72,12 @@ def test_pdf_adds_pdf_figures_and_no_figures_draws_none(recorded, tmp_path):
     ("args", "line"),
     [
         (("--save-scans",), "error: --save-scans: experiment 'quickstart' has a sampling "
-                            "study; scans are exported by scanner studies only"),
+                            "study; scans are exported by scanner and lidar studies only"),
         (("--workers", "2", "--scheduler", "tcp://127.0.0.1:1"),
          "error: give either --workers or --scheduler, not both"),
         (("--set", "study.trials"), "error: --set study.trials: expected key.path=value"),
         (("--set", "study.trials=0"),
-         "error: " + QUICKSTART + ": study.trials: Input should be greater than or equal to 1"),
+         "error: --set study.trials: Input should be greater than or equal to 1"),
     ],
 )  # fmt: skip
 def test_run_refusals_are_one_line_before_the_pipeline(args, line, recorded):
@@ -90,7 +93,10 @@ def drawn(monkeypatch):
 
     def fake_write(results_dir, *, formats, force):
         calls.append((results_dir, formats, force))
-        return [Path(results_dir) / "figures" / "a.png"]
+        out = Path(results_dir) / "figures" / "a.png"
+        out.parent.mkdir(exist_ok=True)
+        out.write_bytes(str(len(calls)).encode())  # drawn (written) on every call
+        return [out]
 
     monkeypatch.setattr("simlunar.results.figures.write_figures_pruned", fake_write)
     return calls
@@ -99,7 +105,7 @@ def drawn(monkeypatch):
 def test_figures_redraws_with_the_folders_formats_or_pdf(tmp_path, drawn):
     r = _invoke("figures", str(tmp_path))
     assert r.exit_code == 0, r.output
-    assert r.stdout == f"{tmp_path / 'figures' / 'a.png'}\n"
+    assert r.stdout == f"redrew 1 file(s) in {tmp_path / 'figures'}:\n  a.png\n"
     r = _invoke("figures", str(tmp_path), "--pdf", "--force")
     assert drawn == [(str(tmp_path), None, False), (str(tmp_path), ("png", "pdf"), True)]
     assert not (tmp_path / ".lock").exists()  # the lock is released
