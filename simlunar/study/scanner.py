@@ -28,7 +28,7 @@ from simlunar.render.capture import (
     camera_truth,
     render_guide,
 )
-from simlunar.scanner import gray_code as gc
+from simlunar.scanner import gray_errors
 from simlunar.scanner.codings import DEFAULT_CODING, coding_for
 from simlunar.scanner.rigs import RIG_PRESETS, rig_preset
 from simlunar.scanner.scans import (
@@ -147,9 +147,9 @@ def bit_error_table(
     ``mask`` (camera (rows, cols) bool) restricts the pixels; always only pixels lit by the
     projector in both the ground truth and the decode count, and for each bit only pixels
     ``edge_margin`` pixels away from that bit's true stripe edges
-    (:func:`simlunar.scanner.gray_code.stable_bits`; 0 keeps every pixel).
+    (:func:`simlunar.scanner.gray_errors.stable_bits`; 0 keeps every pixel).
     """
-    return gc.bit_error_table(gray.decode, truth, mask, edge_margin=edge_margin)
+    return gray_errors.bit_error_table(gray.decode, truth, mask, edge_margin=edge_margin)
 
 
 @dataclass(frozen=True, eq=False)
