@@ -63,7 +63,7 @@ def _plane_precision(trials: int) -> dict:
         range_crlb,
         shape_waveform,
     )
-    from simlunar.render.transient import BeamCapture, capture_beams
+    from simlunar.render.beam_capture import BeamCapture, capture_beams
     from simlunar.terrain import Terrain
 
     h, n = 50.0, 64

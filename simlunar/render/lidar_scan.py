@@ -42,13 +42,9 @@ from simlunar.lidar import (
 )
 from simlunar.lidar.gate import GateOptions, gate_bins, plane_ranges
 from simlunar.lidar.hardware import LidarHardware, pixel_solid_angles
+from simlunar.render.beam_capture import BeamCapture, capture_beams
 from simlunar.render.lights import ProjectorLight
-from simlunar.render.transient import (
-    BeamCapture,
-    TransientOptions,
-    capture_beams,
-    flash_frame,
-)
+from simlunar.render.transient import TransientOptions, flash_frame
 
 __all__ = [
     "FlashOptions",

@@ -167,7 +167,7 @@ def test_flash_photons_follow_the_lidar_equation_per_pixel(mi):
 
 def _truth_raises(monkeypatch):
     """Every way to the terrain's truth after the scene is built raises."""
-    from simlunar.render.transient import BeamCapture
+    from simlunar.render.beam_capture import BeamCapture
 
     def boom(*args, **kwargs):
         raise AssertionError("the range gate read the terrain's truth")
