@@ -111,14 +111,8 @@ def lidar(smoke: bool = False) -> dict:
         scan_timing,
     )
     from simlunar.render import backend
-    from simlunar.render.lidar_scan import (
-        FlashOptions,
-        SteeredBeamOptions,
-        beam_capture,
-        flash_scan,
-        flash_window,
-        steered_beam_scan,
-    )
+    from simlunar.render.flash_lidar import FlashOptions, flash_scan, flash_window
+    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
     from simlunar.render.lights import SunLight
     from simlunar.render.transient import TransientOptions
 

@@ -1,12 +1,12 @@
 """Multi-frequency fringe phase (NumPy only): fringe periods, N-step wrapped phase and its noise,
 temporal (hierarchical) unwrapping.
 
-Formulas (../shared/REFERENCES.md, "Phase shift"): from I_n = A + B cos(phi + 2 pi n / N) the
-wrapped phase is phi = atan2(-sum I_n sin(2 pi n / N), sum I_n cos(2 pi n / N)), the modulation
-B = (2 / N) |sum I_n exp(-i 2 pi n / N)| and the phase noise of white frame noise sigma_I
-sigma_phi = sqrt(2 / N) sigma_I / B; unwrapping goes from the coarsest level up with
-k_l = round((p_{l-1} / p_l Phi_{l-1} - phi_l) / (2 pi)), Phi_l = phi_l + 2 pi k_l. The
-patterns and the decoder that use them: :mod:`simlunar.scanner.phase_shift`.
+Formulas (../shared/REFERENCES.md, "Phase shift"): from ``I_n = A + B cos(phi + 2 pi n / N)`` the
+wrapped phase is ``phi = atan2(-sum I_n sin(2 pi n / N), sum I_n cos(2 pi n / N))``, the
+modulation ``B = (2 / N) |sum I_n exp(-i 2 pi n / N)|`` and the phase noise of white frame noise
+``sigma_I`` is ``sigma_phi = sqrt(2 / N) sigma_I / B``; unwrapping goes from the coarsest level up
+with ``k_l = round((p_{l-1} / p_l Phi_{l-1} - phi_l) / (2 pi))``, ``Phi_l = phi_l + 2 pi k_l``.
+The patterns and the decoder that use them: :mod:`simlunar.scanner.phase_shift`.
 """
 
 from __future__ import annotations
