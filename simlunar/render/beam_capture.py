@@ -247,31 +247,24 @@ def capture_beams(
     """
     d = np.asarray(directions, float)
     n, nb = len(d), capture.window.count
-    nf = nb * capture.oversample
     pred = np.asarray(predicted_range, float).reshape(-1)
     if pred.shape != (n,):
         raise ValueError(f"predicted_range must have shape ({n},), got {pred.shape}")
-    hist = np.zeros((n, nf), np.float32)
-    start = np.full(n, np.nan)
-    steady = np.zeros(n, np.float32)
-    sun = np.zeros(n, np.float32) if capture.has_sun else None
+    hist, start = np.zeros((n, nb * capture.oversample), np.float32), np.full(n, np.nan)
+    steady, sun = np.zeros(n, np.float32), (np.zeros(n, np.float32) if capture.has_sun else None)
     span = capture.window.bin_range * nb - 2.0 * margin_m
     if span <= 0:
         raise ValueError(f"window of {capture.window.bin_range * nb} m is shorter than 2 margins")
-    offset = np.zeros(n)
-    fired = np.flatnonzero(np.isfinite(pred))
+    offset, fired = np.zeros(n), np.flatnonzero(np.isfinite(pred))
     o = None if origins is None else np.asarray(origins, float).reshape(n, 3)
     groups = [fired] if o is None else _origin_groups(fired, o, max_shift_m)
     k = 0
     for group in groups:
         if o is not None:
-            laser = o[group].mean(axis=0)
-            capture.set_laser(laser)
-            offset[group] = np.sum(d[group] * (o[group] - laser), axis=1)
+            offset[group] = _place_laser(capture, d[group], o[group])
         order = group[np.argsort(pred[group])]
-        for idx in _gated_batches(order, pred, capture.batch, span):
+        for idx, s0 in _gated_batches(order, pred, capture.batch, span, margin_m):
             bo = None if o is None else o[idx]
-            s0 = 2.0 * max(pred[idx[0]] - margin_m, 0.0)
             hist[idx], steady[idx] = capture.render_batch(d[idx], s0, seed + k, origins=bo)
             start[idx] = s0
             if sun is not None:
@@ -305,12 +298,22 @@ def _origin_groups(fired: np.ndarray, origins: np.ndarray, max_shift_m: float) -
     return groups
 
 
-def _gated_batches(order: np.ndarray, pred: np.ndarray, batch: int, span: float):
+def _place_laser(capture: BeamCapture, d: np.ndarray, origins: np.ndarray) -> np.ndarray:
+    """Put the laser at the mean of a launch group's beam origins (n, 3) m; return each beam's
+    extra round-trip path ``d . delta`` (m) from its origin's offset ``delta``."""
+    laser = origins.mean(axis=0)
+    capture.set_laser(laser)
+    return np.sum(d * (origins - laser), axis=1)
+
+
+def _gated_batches(order: np.ndarray, pred: np.ndarray, batch: int, span: float, margin_m: float):
     """Consecutive slices of ``order`` (beams sorted by predicted range) of at most ``batch``
-    beams whose predictions lie within ``span`` (m) of the slice's first."""
+    beams whose predictions lie within ``span`` (m) of the slice's first, each with its
+    window's start (round-trip OPL, m): ``margin_m`` before the first prediction."""
     i = 0
     while i < len(order):
+        r0 = pred[order[i]]
         j = min(i + batch, len(order))
-        j = i + int(np.searchsorted(pred[order[i:j]], pred[order[i]] + span, side="right"))
-        yield order[i:j]
+        j = i + int(np.searchsorted(pred[order[i:j]], r0 + span, side="right"))
+        yield order[i:j], 2.0 * max(r0 - margin_m, 0.0)
         i = j
