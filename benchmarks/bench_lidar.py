@@ -63,7 +63,7 @@ def _plane_precision(trials: int) -> dict:
         range_crlb,
         shape_waveform,
     )
-    from simlunar.render.transient import BeamCapture, capture_beams
+    from simlunar.render.beam_capture import BeamCapture, capture_beams
     from simlunar.terrain import Terrain
 
     h, n = 50.0, 64
@@ -111,14 +111,8 @@ def lidar(smoke: bool = False) -> dict:
         scan_timing,
     )
     from simlunar.render import backend
-    from simlunar.render.lidar_scan import (
-        FlashOptions,
-        SteeredBeamOptions,
-        beam_capture,
-        flash_scan,
-        flash_window,
-        steered_beam_scan,
-    )
+    from simlunar.render.flash_lidar import FlashOptions, flash_scan, flash_window
+    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
     from simlunar.render.lights import SunLight
     from simlunar.render.transient import TransientOptions
 

@@ -2,7 +2,7 @@
 
 Keys carry their unit (``_ns``, ``_mrad``, ``_deg_s``); :mod:`simlunar.config.translate`
 turns them into the library's SI options (:class:`~simlunar.render.lidar_scan.SteeredBeamOptions`,
-:class:`~simlunar.render.lidar_scan.FlashOptions`, ...). Only the block of the study's sensor
+:class:`~simlunar.render.flash_lidar.FlashOptions`, ...). Only the block of the study's sensor
 may differ from its defaults (``steered_beam``, ``flash`` or ``micromirror``).
 """
 

@@ -24,7 +24,8 @@ from simlunar.lidar.apd import ApdOptions
 from simlunar.lidar.gate import GateOptions
 from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
 from simlunar.metrics.hazard import HazardOptions
-from simlunar.render.lidar_scan import FlashOptions, SteeredBeamOptions, with_hardware
+from simlunar.render.flash_lidar import FlashOptions
+from simlunar.render.lidar_scan import SteeredBeamOptions, with_hardware
 from simlunar.render.transient import TransientOptions
 from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
 from simlunar.study.lidar import LidarStudyOptions

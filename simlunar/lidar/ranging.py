@@ -97,6 +97,35 @@ class RangeResult:
     returns: np.ndarray
 
 
+def _detection_threshold(mu, width: int, options: RangeOptions, apd, pulses: int):
+    """Counts a window of ``width`` bins must exceed over its expected background ``mu``
+    (Poisson quantile at ``threshold_sigma``, or the APD's Gaussian noise), and the least
+    signal photons of a return."""
+    # scipy.stats is imported where a threshold is set: it adds 0.45 s to every import of the
+    # library (the LIDAR sensors are in the sensor registry that config reads)
+    from scipy import stats
+
+    min_photons = options.min_photons
+    if apd is None:
+        c_thr = stats.poisson.isf(stats.norm.sf(options.threshold_sigma), mu)
+    else:
+        # Gaussian: each bin's variance is F x its mean + the amplifier's, per pulse
+        var = apd.excess_noise * mu + width * pulses * apd.amplifier_noise_pe**2
+        c_thr = mu + options.threshold_sigma * np.sqrt(var)
+        min_photons = max(min_photons, apd.threshold_pe)
+    return c_thr, min_photons
+
+
+def _reported_return(peak: np.ndarray, score: np.ndarray, which: str) -> np.ndarray:
+    """Bin index of the reported return of each histogram (rows of ``peak``): the first, the
+    last or the strongest detected peak."""
+    if which == "first":
+        return np.argmax(peak, axis=1)
+    if which == "last":
+        return peak.shape[1] - 1 - np.argmax(peak[:, ::-1], axis=1)
+    return np.argmax(np.where(peak, score, -np.inf), axis=1)
+
+
 def extract_ranges(
     counts: np.ndarray,
     bins: TimeBins,
@@ -144,18 +173,7 @@ def extract_ranges(
     m = max(1, int(np.ceil(1.5 * pulse.sigma_bins(bins))))
     win = ndimage.uniform_filter1d(c, 2 * m + 1, axis=1, mode="constant") * (2 * m + 1)
     mu = np.maximum(bg * (2 * m + 1), 1e-9)
-    # scipy.stats is imported where a threshold is set: it adds 0.45 s to every import of the
-    # library (the LIDAR sensors are in the sensor registry that config reads)
-    from scipy import stats
-
-    min_photons = options.min_photons
-    if apd is None:
-        c_thr = stats.poisson.isf(stats.norm.sf(options.threshold_sigma), mu)
-    else:
-        # Gaussian: each bin's variance is F x its mean + the amplifier's, per pulse
-        var = apd.excess_noise * mu + (2 * m + 1) * pulses * apd.amplifier_noise_pe**2
-        c_thr = mu + options.threshold_sigma * np.sqrt(var)
-        min_photons = max(min_photons, apd.threshold_pe)
+    c_thr, min_photons = _detection_threshold(mu, 2 * m + 1, options, apd, pulses)
     full = ndimage.uniform_filter1d(c, 2 * half + 1, axis=1, mode="constant") * (2 * half + 1)
     photons = full - bg * (2 * half + 1)
     left = np.concatenate([np.full((len(c), 1), -np.inf), score[:, :-1]], axis=1)
@@ -163,12 +181,7 @@ def extract_ranges(
     peak &= (score > left) & (win > c_thr) & (photons >= max(min_photons, 1e-12))
     n_ret = peak.sum(axis=1)
     valid = n_ret > 0
-    if options.which == "first":
-        idx = np.argmax(peak, axis=1)
-    elif options.which == "last":
-        idx = bins.count - 1 - np.argmax(peak[:, ::-1], axis=1)
-    else:
-        idx = np.argmax(np.where(peak, score, -np.inf), axis=1)
+    idx = _reported_return(peak, score, options.which)
     pos = idx + 0.5 + _parabola_offset(score, idx)
     sig = pulse.sigma_bins(bins)
     if options.fit == "ml" and sig >= 0.3 and valid.any():

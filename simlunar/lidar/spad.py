@@ -168,6 +168,54 @@ def _pulse_bins(amp, tau, sigma, count):
     return amp[:, None] * np.diff(0.5 * erf(z), axis=1)
 
 
+def _grid_start(h: np.ndarray, model, loglik) -> tuple[np.ndarray, np.ndarray]:
+    """Start of the fit: (log amplitude, position (bins)) of each histogram, the best of a grid
+    of positions around the histogram's peak and amplitudes."""
+    n = len(h)
+    peak = np.argmax(ndimage.uniform_filter1d(h, 3, axis=1), axis=1) + 0.5
+    best_ll = np.full(n, -np.inf)
+    la, start = np.zeros(n), peak.copy()
+    for dt in np.arange(-2.0, 6.01, 0.5):
+        for a in np.geomspace(0.05, 300.0, 19):
+            cand = loglik(model(np.full(n, a), peak + dt))
+            better = cand > best_ll
+            best_ll = np.where(better, cand, best_ll)
+            la = np.where(better, np.log(a), la)
+            start = np.where(better, peak + dt, start)
+    return la, start
+
+
+def _gauss_newton_step(h, la, tau, mu, ll, model, loglik):
+    """One Gauss-Newton step of (log amplitude, position) on the Poisson likelihood, with
+    finite-difference derivatives; the step of a histogram whose likelihood fell is halved
+    (up to 6 times). Returns the new ``(la, tau, mu, ll)``."""
+    n = len(h)
+    e1, e2 = 1e-4, 1e-3
+    d_la = (model(np.exp(la + e1), tau) - mu) / e1
+    d_t = (model(np.exp(la), tau + e2) - mu) / e2
+    r = (h - mu) / mu
+    q = 1.0 / mu
+    f11, f12, f22 = (q * d_la**2).sum(1), (q * d_la * d_t).sum(1), (q * d_t**2).sum(1)
+    g1, g2 = (r * d_la).sum(1), (r * d_t).sum(1)
+    det = f11 * f22 - f12**2 + 1e-300
+    s1 = np.clip((f22 * g1 - f12 * g2) / det, -1.0, 1.0)
+    s2 = np.clip((f11 * g2 - f12 * g1) / det, -2.0, 2.0)
+    step = np.ones(n)
+    for _ in range(6):  # halve the step of the histograms whose likelihood fell
+        cand_la, cand_t = la + step * s1, tau + step * s2
+        cand_mu = model(np.exp(cand_la), cand_t)
+        cand_ll = loglik(cand_mu)
+        ok = cand_ll >= ll - 1e-9
+        if ok.all():
+            break
+        step = np.where(ok, step, step / 2)
+    la = np.where(ok, cand_la, la)
+    tau = np.where(ok, cand_t, tau)
+    mu = np.where(ok[:, None], cand_mu, mu)
+    ll = np.where(ok, cand_ll, ll)
+    return la, tau, mu, ll
+
+
 def spad_correct(
     counts: np.ndarray,
     bins: TimeBins,
@@ -208,7 +256,7 @@ def spad_correct(
     h = np.asarray(counts, float)
     lead = h.shape[:-1]
     h = h.reshape(-1, bins.count)
-    n, m = h.shape
+    m = h.shape[1]
     b = np.broadcast_to(np.asarray(background, float), lead).reshape(-1)[:, None]
 
     def model(a, t):
@@ -218,44 +266,11 @@ def spad_correct(
     def loglik(mu):
         return (h * np.log(mu) - mu).sum(axis=1)
 
-    # start: the best of a grid of positions around the histogram's peak and amplitudes
-    peak = np.argmax(ndimage.uniform_filter1d(h, 3, axis=1), axis=1) + 0.5
-    best_ll = np.full(n, -np.inf)
-    la, start = np.zeros(n), peak.copy()
-    for dt in np.arange(-2.0, 6.01, 0.5):
-        for a in np.geomspace(0.05, 300.0, 19):
-            cand = loglik(model(np.full(n, a), peak + dt))
-            better = cand > best_ll
-            best_ll = np.where(better, cand, best_ll)
-            la = np.where(better, np.log(a), la)
-            start = np.where(better, peak + dt, start)
-    tau = start
+    la, tau = _grid_start(h, model, loglik)
     mu = model(np.exp(la), tau)
     ll = loglik(mu)
     for _ in range(iterations):
-        e1, e2 = 1e-4, 1e-3
-        d_la = (model(np.exp(la + e1), tau) - mu) / e1
-        d_t = (model(np.exp(la), tau + e2) - mu) / e2
-        r = (h - mu) / mu
-        q = 1.0 / mu
-        f11, f12, f22 = (q * d_la**2).sum(1), (q * d_la * d_t).sum(1), (q * d_t**2).sum(1)
-        g1, g2 = (r * d_la).sum(1), (r * d_t).sum(1)
-        det = f11 * f22 - f12**2 + 1e-300
-        s1 = np.clip((f22 * g1 - f12 * g2) / det, -1.0, 1.0)
-        s2 = np.clip((f11 * g2 - f12 * g1) / det, -2.0, 2.0)
-        step = np.ones(n)
-        for _ in range(6):  # halve the step of the histograms whose likelihood fell
-            cand_la, cand_t = la + step * s1, tau + step * s2
-            cand_mu = model(np.exp(cand_la), cand_t)
-            cand_ll = loglik(cand_mu)
-            ok = cand_ll >= ll - 1e-9
-            if ok.all():
-                break
-            step = np.where(ok, step, step / 2)
-        la = np.where(ok, cand_la, la)
-        tau = np.where(ok, cand_t, tau)
-        mu = np.where(ok[:, None], cand_mu, mu)
-        ll = np.where(ok, cand_ll, ll)
+        la, tau, mu, ll = _gauss_newton_step(h, la, tau, mu, ll, model, loglik)
     amp = np.exp(la)
     return SpadFit(
         photons=amp.reshape(lead),

@@ -173,6 +173,43 @@ def _r2(theta, stats, level):
     return float(1.0 - max(ss_res, 0.0) / ss_tot)
 
 
+def _blurred_fields(
+    img, lin: LinearField, ok, *, spacing: float, sigma: float, o: CalibrationOptions
+):
+    """The image and the heights' slopes (1/m) blurred on a grid coarser by ``f``, and the
+    coarse cells fit to use (valid, inside the hull, near samples).
+
+    Block means, then the Gaussian of ``sigma / f`` coarse cells: together a kernel of variance
+    ``sigma^2 + f^2 / 12``, ``f <= sigma / 2``. The heights are blurred before their slopes are
+    taken (mirrored at the grid's edges, which damps the slopes of the long edge triangles
+    there).
+
+    Returns
+    -------
+    f, image, slope_rows, slope_cols, inner
+    """
+    f = max(1, int(sigma // 2))
+    ib = gaussian_smooth(_blocks(img, f), sigma / f)
+    zb = gaussian_smooth(_blocks(lin.heights, f), sigma / f)
+    gr_b, gc_b = np.gradient(zb)
+    gr_b /= f * spacing
+    gc_b /= f * spacing
+    mask = _blocks((ok & lin.hull).astype(np.float64), f)
+    inner = (gaussian_smooth(mask, sigma / f) >= o.interior) & (mask == 1.0)
+    inner &= _near_samples(lin.points, inner.shape, f) <= o.reach * lin.pitch
+    return f, ib, gr_b, gc_b, inner
+
+
+def _heldout_share(halves, scale: float, level: float) -> float:
+    """Mean explained share of each checkerboard colour by the fit on the other (NaN when a
+    colour has fewer than 10 cells)."""
+    held = []
+    if min(halves[0][4], halves[1][4]) >= 10:
+        for fit, out in (halves, halves[::-1]):
+            held.append(_r2(_solve(fit[0], fit[1], scale), out, abs(level)))
+    return float(np.mean(held)) if held else math.nan
+
+
 def calibrate(
     image,
     points_rc,
@@ -219,19 +256,7 @@ def calibrate(
         raise ValueError(f"valid has shape {ok.shape}, the image {img.shape}")
     sigma = o.sigma_pitch * lin.pitch
     empty = Calibration(0.0, np.zeros(2), np.zeros(2), math.nan, 0.0, math.nan, 0, sigma)
-    # Blurred fields on a grid coarser by f (block means, then the Gaussian of sigma / f
-    # coarse cells: together a kernel of variance sigma^2 + f^2 / 12, f <= sigma / 2). The
-    # heights are blurred before their slopes are taken (mirrored at the grid's edges, which
-    # damps the slopes of the long edge triangles there).
-    f = max(1, int(sigma // 2))
-    ib = gaussian_smooth(_blocks(img, f), sigma / f)
-    zb = gaussian_smooth(_blocks(lin.heights, f), sigma / f)
-    gr_b, gc_b = np.gradient(zb)
-    gr_b /= f * spacing
-    gc_b /= f * spacing
-    mask = _blocks((ok & lin.hull).astype(np.float64), f)
-    inner = (gaussian_smooth(mask, sigma / f) >= o.interior) & (mask == 1.0)
-    inner &= _near_samples(lin.points, inner.shape, f) <= o.reach * lin.pitch
+    f, ib, gr_b, gc_b, inner = _blurred_fields(img, lin, ok, spacing=spacing, sigma=sigma, o=o)
     if inner.sum() < 10:
         return empty
     idx = np.flatnonzero(inner)
@@ -250,11 +275,7 @@ def calibrate(
     theta = _solve(full[0], full[1], scale)
     share = max(_r2(theta, full, abs(level)), 0.0)
     theta[0] += level
-    held = []
-    if min(halves[0][4], halves[1][4]) >= 10:
-        for fit, out in (halves, halves[::-1]):
-            held.append(_r2(_solve(fit[0], fit[1], scale), out, abs(level)))
-    heldout = float(np.mean(held)) if held else math.nan
+    heldout = _heldout_share(halves, scale, level)
     b = theta[1:].copy()
     gain = float(np.hypot(*b))
     if share == 0.0 or gain == 0.0:

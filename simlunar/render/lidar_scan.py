@@ -6,8 +6,8 @@ and its shot noise, dead time, range extraction) and prices the acquisition in s
 
 - :func:`steered_beam_scan`: a gimbal / galvanometer beam visits planned directions in the
   order of :func:`simlunar.lidar.order_scan`; time from the steering mechanics.
-- :func:`flash_scan`: a receiver array lit by whole-field pulses; time = pulses / rate.
-- :func:`micromirror_flash`: a micromirror projector co-located with the receiver lights only
+- :func:`~simlunar.render.flash_lidar.flash_scan`: a receiver array lit by whole-field pulses; time = pulses / rate.
+- :func:`~simlunar.render.flash_lidar.micromirror_flash`: a micromirror projector co-located with the receiver lights only
   planned directions; dots that share a receiver pixel go to different frames.
 
 Ranges are slant ranges from the sensor's origin along the beam / pixel ray (m).
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.geometry import Camera, Pose, Projector
+from simlunar.geometry import Camera, Pose
 from simlunar.lidar import (
     DetectorOptions,
     FootprintOptions,
@@ -40,30 +40,18 @@ from simlunar.lidar import (
     scan_timing,
     shape_waveform,
 )
-from simlunar.lidar.gate import GateOptions, gate_bins, plane_ranges
-from simlunar.lidar.hardware import LidarHardware, pixel_solid_angles
-from simlunar.render.lights import ProjectorLight
-from simlunar.render.transient import (
-    BeamCapture,
-    TransientOptions,
-    capture_beams,
-    flash_frame,
-)
+from simlunar.lidar.gate import GateOptions, plane_ranges
+from simlunar.lidar.hardware import LidarHardware
+from simlunar.render.beam_capture import BeamCapture, capture_beams
+from simlunar.render.transient import TransientOptions
 
 __all__ = [
-    "FlashOptions",
     "LidarScan",
     "SteeredBeamOptions",
     "altimeter_datum",
     "beam_capture",
-    "flash_scan",
-    "flash_window",
     "guide_directions",
-    "micromirror_flash",
-    "micromirror_frames",
-    "read_flash",
     "receiver_rc",
-    "receiver_solid_angles",
     "steered_beam_scan",
     "with_hardware",
 ]
@@ -221,7 +209,7 @@ class LidarScan:
 
 
 def with_hardware(options, hardware: LidarHardware):
-    """``options`` (:class:`SteeredBeamOptions` or :class:`FlashOptions`) measuring with
+    """``options`` (:class:`SteeredBeamOptions` or :class:`~simlunar.render.flash_lidar.FlashOptions`) measuring with
     ``hardware``: its pulse and jitter, photon scales (:meth:`_ReturnOptions.photon_detector`),
     pulse rate and, for a steered beam, its divergence."""
     out = dataclasses.replace(options, hardware=hardware, pulse=hardware.pulse)
@@ -382,16 +370,7 @@ def steered_beam_scan(
     pred = plane_ranges(
         capture.origin if origins is None else origins, d, datum_z=datum, options=options.gate
     )
-    if origins is not None:  # render in firing order: the platform moves between launches
-        fire = np.argsort(times, kind="stable")
-        inv = np.empty_like(fire)
-        inv[fire] = np.arange(len(fire))
-        ret = capture_beams(capture, d[fire], pred[fire], margin_m=options.margin_m,
-                            seed=options.transient.seed, origins=origins[fire])  # fmt: skip
-        ret = _reorder(ret, inv)
-    else:
-        ret = capture_beams(capture, d, pred, margin_m=options.margin_m,
-                            seed=options.transient.seed)  # fmt: skip
+    ret = _render_returns(capture, d, pred, times, origins, options)
     bins = options.window
     bg = 0.0 if ret.sun is None else ret.sun
     counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
@@ -417,6 +396,20 @@ def steered_beam_scan(
     )
 
 
+def _render_returns(capture: BeamCapture, d, pred, times, origins, options: SteeredBeamOptions):
+    """The beams' returns (input order), rendered in firing order when the platform moves
+    between launches (``origins`` (n, 3) m at the firing ``times``; None: at rest)."""
+    if origins is None:
+        return capture_beams(capture, d, pred, margin_m=options.margin_m,
+                             seed=options.transient.seed)  # fmt: skip
+    fire = np.argsort(times, kind="stable")
+    inv = np.empty_like(fire)
+    inv[fire] = np.arange(len(fire))
+    ret = capture_beams(capture, d[fire], pred[fire], margin_m=options.margin_m,
+                        seed=options.transient.seed, origins=origins[fire])  # fmt: skip
+    return _reorder(ret, inv)
+
+
 def _reorder(ret, inv):
     """BeamReturns of beams rendered in another order, back in the input order."""
     take = {
@@ -425,218 +418,3 @@ def _reorder(ret, inv):
         for f in dataclasses.fields(ret)
     }  # fmt: skip
     return type(ret)(**take)
-
-
-@dataclass(frozen=True)
-class FlashOptions(_ReturnOptions):
-    """A flash LIDAR: a receiver array lit by whole-field pulses.
-
-    Parameters
-    ----------
-    pulse, detector, ranging, transient, bin_range_m
-        As for every LIDAR here (:class:`_ReturnOptions`); ``detector.pulses`` pulses per frame.
-    margin_m : float
-        Range margin (m) around the terrain's nearest and farthest point in view.
-    pulse_rate_hz : float
-        Pulse repetition rate (1/s): a frame takes ``detector.pulses / pulse_rate_hz``.
-    """
-
-    pulse_rate_hz: float = 30.0
-
-    def __post_init__(self) -> None:
-        if not (self.bin_range_m > 0 and self.margin_m >= 0 and self.pulse_rate_hz > 0):
-            raise ValueError("need bin_range_m > 0, margin_m >= 0 and pulse_rate_hz > 0")
-
-
-def flash_window(camera: Camera, *, options: FlashOptions) -> TimeBins:
-    """The flash receiver's range gate: the ranges where its pixel rays meet the reference
-    plane (``options.gate``), with ``options.margin_m`` on both sides (never the terrain)."""
-    if options.gate.altimeter:
-        raise ValueError("gate.altimeter: a flash takes its reference plane from gate.datum_z_m")
-    _, d = camera.rays(camera.pixel_centers().reshape(-1, 2))
-    r = plane_ranges(camera.pose.position, d, datum_z=options.gate.datum_z_m, options=options.gate)
-    r = r[r < options.gate.max_range_m]  # pixels above the plane's horizon are not gated
-    if r.size == 0:
-        raise ValueError("gate: no receiver pixel meets the reference plane within max_range_m")
-    return gate_bins(r, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
-
-
-def receiver_solid_angles(camera: Camera) -> np.ndarray:
-    """Exact solid angle (sr) of every pixel of a receiver ``camera``, (rows, cols)."""
-    k = camera.intrinsics
-    return pixel_solid_angles(k.fx, k.fy, k.cx, k.cy, k.width, k.height)
-
-
-def _read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=None):
-    """Photon counts and ranges of a rendered frame through ``camera`` (its receiver).
-
-    Every pixel collects in proportion to its own solid angle (``cos^3`` off axis): with
-    hardware, ``Omega_pix`` itself and the pulse spread over ``lit_sr`` (default: the whole
-    receiver field); with the expert override the photon scales are the boresight pixel's.
-    """
-    omega = receiver_solid_angles(camera)
-    if options.hardware is None:
-        weight, det = omega / omega.max(), options.detector
-    else:
-        lit = float(omega.sum()) if lit_sr is None else float(lit_sr)
-        det = options.photon_detector(field_sr=1.0, lit_sr=lit, sun_irradiance=frame.sun_irradiance)
-        weight = omega
-    bg = 0.0 if frame.sun is None else frame.sun * weight
-    hist = frame.histograms * weight[..., None].astype(np.float32)
-    counts = _counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
-    return _ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
-
-
-def flash_scan(
-    terrain, camera: Camera, *, options: FlashOptions, rng=None, sun=None, bsdf=None
-) -> LidarScan:
-    """One flash frame read by every receiver pixel (arrays (rows, cols) of ``camera``).
-
-    Parameters
-    ----------
-    terrain : Terrain
-    camera : geometry.Camera
-        The receiver array (e.g. 128 x 128), co-boresighted with the guide camera.
-    options : FlashOptions
-    rng : seed or Generator
-    sun : SunLight or None
-    bsdf : BSDF spec or None
-
-    Returns
-    -------
-    LidarScan
-        ``points`` along each pixel centre's ray; ``frames`` = 1.
-    """
-    bins = flash_window(camera, options=options)
-    frame = flash_frame(terrain, camera, bins=bins, options=options.transient, bsdf=bsdf, sun=sun)
-    return read_flash(frame, camera, options=options, rng=rng)
-
-
-def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> LidarScan:
-    """Read a rendered flash frame (:func:`~simlunar.render.transient.flash_frame` through
-    ``camera``) with fresh photon noise: a frame rendered once serves many noisy reads."""
-    rng = np.random.default_rng(rng)
-    res = _read_frame(frame, camera, options, rng)
-    _, d = camera.rays(camera.pixel_centers())
-    return LidarScan(
-        ranges=res.range,
-        valid=res.valid,
-        points=camera.pose.position + res.range[..., None] * d,
-        photons=res.photons,
-        order=np.arange(res.range.size).reshape(res.range.shape),
-        seconds=options.detector.pulses / options.pulse_rate_hz,
-        frames=1,
-        times=np.zeros(res.range.shape),
-        returns=res.returns,
-    )
-
-
-def micromirror_frames(pixels: np.ndarray, camera: Camera, receiver_shape) -> np.ndarray:
-    """Frame index (k,) of each planned pixel: dots sharing a receiver pixel never share a frame.
-
-    ``pixels`` (k, 2) are (u, v) in ``camera``; the receiver (rows, cols) sees the same field
-    of view, so receiver pixel = floor of the scaled (u, v), at any depth (co-located).
-    """
-    rh, rw = receiver_shape
-    h, w = camera.shape
-    uv = np.asarray(pixels, float)
-    cell = np.floor(uv[:, 1] * rh / h).astype(np.int64) * rw + np.floor(uv[:, 0] * rw / w)
-    cell = cell.astype(np.int64)
-    order = np.argsort(cell, kind="stable")
-    sc = cell[order]
-    first = np.searchsorted(sc, sc, side="left")
-    frames = np.empty(len(uv), np.int64)
-    frames[order] = np.arange(len(uv)) - first
-    return frames
-
-
-def micromirror_flash(
-    terrain,
-    camera: Camera,
-    pixels: np.ndarray,
-    *,
-    options: FlashOptions,
-    receiver_shape: tuple[int, int] = (64, 64),
-    rng=None,
-    sun=None,
-    bsdf=None,
-) -> LidarScan:
-    """Micromirror-steered flash: light only the planned pixels, time them on a small receiver.
-
-    A micromirror projector with ``camera``'s pose and intrinsics lights the planned pixels
-    (one projector pixel each); a co-located receiver of ``receiver_shape`` with the same
-    field of view times the returns. Dots in the same receiver pixel go to different frames
-    (:func:`micromirror_frames`). Every receiver pixel ray only gets light where it meets a
-    lit dot, so the render needs ``options.transient.spp`` of about
-    ``(camera pixels / receiver pixels) x 16`` for a clean return.
-
-    Parameters
-    ----------
-    terrain : Terrain
-    camera : geometry.Camera
-        The guide camera (centred principal point, square pixels).
-    pixels : (k, 2) float
-        Planned (u, v) pixel coordinates in ``camera``.
-    options : FlashOptions
-    receiver_shape : (rows, cols)
-    rng, sun, bsdf
-        As for :func:`flash_scan`.
-
-    Returns
-    -------
-    LidarScan
-        Arrays over the k planned pixels; ``frames`` = flash frames fired.
-    """
-    if options.hardware is not None:
-        raise ValueError(
-            "a micromirror flash has no hardware link budget yet (its projector's dots are not "
-            "a uniform flash): use the expert photon scales (detector.signal_photons)"
-        )
-    rng = np.random.default_rng(rng)
-    uv = np.asarray(pixels, float).reshape(-1, 2)
-    h, w = camera.shape
-    rh, rw = (int(x) for x in receiver_shape)
-    receiver = Camera(camera.intrinsics.scaled(rw / w), camera.pose)
-    if receiver.shape != (rh, rw):
-        raise ValueError(f"receiver_shape {receiver_shape} must keep the aspect of {(h, w)}")
-    projector = Projector(camera.intrinsics, camera.pose)
-    bins = flash_window(camera, options=options)
-    frame_of = micromirror_frames(uv, camera, (rh, rw))
-    ranges, photons = np.full(len(uv), np.nan), np.zeros(len(uv))
-    returns, times = np.zeros(len(uv), np.int64), np.zeros(len(uv))
-    per_frame = options.detector.pulses / options.pulse_rate_hz
-    col = np.clip(np.floor(uv[:, 0] * rw / w).astype(int), 0, rw - 1)
-    row = np.clip(np.floor(uv[:, 1] * rh / h).astype(int), 0, rh - 1)
-    n_frames = int(frame_of.max()) + 1 if len(uv) else 0
-    for f in range(n_frames):
-        sel = np.flatnonzero(frame_of == f)
-        pattern = np.zeros((h, w), np.float32)
-        pattern[
-            np.clip(uv[sel, 1].astype(int), 0, h - 1), np.clip(uv[sel, 0].astype(int), 0, w - 1)
-        ] = 1.0
-        light = ProjectorLight(projector, pattern, scale=options.transient.laser_intensity)
-        fr = flash_frame(
-            terrain,
-            receiver,
-            bins=bins,
-            options=options.transient,
-            bsdf=bsdf,
-            sun=sun,
-            projector=light,
-        )
-        res = _read_frame(fr, receiver, options, rng)
-        ranges[sel], photons[sel] = res.range[row[sel], col[sel]], res.photons[row[sel], col[sel]]
-        returns[sel], times[sel] = res.returns[row[sel], col[sel]], f * per_frame
-    _, d = camera.rays(uv)
-    valid = np.isfinite(ranges)
-    return LidarScan(
-        ranges=ranges,
-        valid=valid,
-        points=camera.pose.position + ranges[:, None] * d,
-        photons=photons,
-        order=np.arange(len(uv)),
-        seconds=n_frames * options.detector.pulses / options.pulse_rate_hz,
-        frames=n_frames,
-        times=times,
-        returns=returns,
-    )

@@ -19,7 +19,7 @@ import numpy as np
 
 from simlunar.plotting.style import point_title
 from simlunar.results.records import WorkUnit, unit_label
-from simlunar.study.sampling import INTERIOR_SUFFIX, scored_metrics
+from simlunar.study.sampling_scores import INTERIOR_SUFFIX, scored_metrics
 from simlunar.study.stats import (
     SamplesSaved,
     ScoreIntervals,

@@ -36,7 +36,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.registry import check_bounds, option
-from simlunar.scanner.phase_shift import PhaseDecode, wrapped_phase
+from simlunar.scanner.fringes import wrapped_phase
+from simlunar.scanner.phase_shift import PhaseDecode
 from simlunar.scanner.scans import CodedScan, triangulated
 from simlunar.scanner.triangulate import check_rig
 

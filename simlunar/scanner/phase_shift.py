@@ -6,7 +6,7 @@ first; per level ``N`` shifts)::
     P_{l,n}(u) = 1/2 + 1/2 cos(Phi_l(u) + 2 pi n / N),   Phi_l(u) = 2 pi (u + o) / p_l
 
 with ``u`` the projector coordinate (pixel centres at ``col + 0.5``), ``p_l`` the fringe period
-of level ``l`` in projector pixels (:func:`fringe_periods`: the finest ``period_px``, each
+of level ``l`` in projector pixels (:func:`~simlunar.scanner.fringes.fringe_periods`: the finest ``period_px``, each
 coarser one ``ratio`` times longer, the coarsest longer than the axis) and ``o = (p_0 - n) / 2``
 the offset that centres the ``n`` pixels of the axis in the coarsest period (so its phase is
 unambiguous and never wraps at the axis' ends).
@@ -17,7 +17,7 @@ Decoder (../shared/REFERENCES.md, "Phase shift"), per camera pixel and level, fr
 * wrapped phase ``phi = atan2(-sum I_n sin(2 pi n / N), sum I_n cos(2 pi n / N))`` (unbiased
   for any ``N >= 3``: the sums project the samples on the first harmonic);
 * modulation ``B = (2 / N) |sum I_n exp(-i 2 pi n / N)|``; phase noise of white frame noise
-  ``sigma_I``: ``sigma_phi = sqrt(2 / N) sigma_I / B`` (:func:`phase_noise_std`);
+  ``sigma_I``: ``sigma_phi = sqrt(2 / N) sigma_I / B`` (:func:`~simlunar.scanner.fringes.phase_noise_std`);
 * temporal unwrapping from the coarsest level up: ``Phi_0 = phi_0``,
   ``k_l = round((p_{l-1} / p_l Phi_{l-1} - phi_l) / (2 pi))``, ``Phi_l = phi_l + 2 pi k_l``;
   the position is ``u = p_L Phi_L / (2 pi) - o`` from the finest level, whose noise
@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.registry import check_bounds, option
+from simlunar.scanner.fringes import fringe_periods, unwrap, wrapped_phase
 from simlunar.scanner.scans import CodedScan, triangulated
 from simlunar.scanner.triangulate import check_rig
 
@@ -52,19 +53,12 @@ __all__ = [
     "decode",
     "encode",
     "frame_names",
-    "fringe_periods",
-    "phase_noise_std",
     "phase_shift_scan",
-    "unwrap",
-    "wrapped_phase",
 ]
 
 _AXES = ("both", "cols")
 _INVERSES = ("linearity", "render")
 _METHODS = ("plane", "rays")
-#: the coarsest period is at least this many times the axis length (a margin of 5 % of the
-#: period on each side, so noise cannot wrap the phase of the first or last pixel)
-_COARSE_MARGIN = 1.1
 
 
 @dataclass(frozen=True)
@@ -116,20 +110,6 @@ class PhaseShiftOptions:
             raise ValueError(f"steps must be a whole number, got {self.steps!r}")
         if self.method == "rays" and self.axes != "both":
             raise ValueError("method 'rays' needs the row phase: use axes 'both'")
-
-
-def fringe_periods(n: int, period_px: float, ratio: float) -> tuple[float, ...]:
-    """Fringe periods (projector px) of the unwrapping levels of an ``n``-pixel axis,
-    coarsest first: ``period_px * ratio**j``, ``j = L-1 ... 0``, with the fewest levels whose
-    coarsest period is at least 1.1 ``n`` (one unambiguous fringe over the axis)."""
-    if n < 2:
-        raise ValueError(f"a phase-shift axis needs at least 2 pixels, got {n}")
-    if not period_px > 0 or not ratio > 1:
-        raise ValueError(f"period_px must be > 0 and ratio > 1, got {period_px}, {ratio}")
-    periods = [float(period_px)]
-    while periods[-1] < _COARSE_MARGIN * n:
-        periods.append(periods[-1] * ratio)
-    return tuple(reversed(periods))
 
 
 def _axes(options: PhaseShiftOptions, proj_shape) -> list[tuple[str, int, tuple[float, ...]]]:
@@ -184,75 +164,6 @@ def encode(proj_shape, options: PhaseShiftOptions | None = None) -> np.ndarray:
             else:
                 out.append(np.broadcast_to(p[:, :, None], (len(p), H, W)))
     return np.ascontiguousarray(np.concatenate(out))
-
-
-def wrapped_phase(frames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Wrapped phase, modulation and mean of ``N`` phase-shifted frames.
-
-    Parameters
-    ----------
-    frames : (N, ...) array, N >= 3
-        ``I_n = A + B cos(phi + 2 pi n / N)``.
-
-    Returns
-    -------
-    phi : (...) float64 in [0, 2 pi)
-        ``atan2(-sum I_n sin(2 pi n / N), sum I_n cos(2 pi n / N))``.
-    modulation : (...) float64
-        ``B = (2 / N) |sum I_n exp(-i 2 pi n / N)|``.
-    mean : (...) float64
-        ``A = sum I_n / N``.
-    """
-    frames = np.asarray(frames)
-    N = frames.shape[0]
-    if N < 3:
-        raise ValueError(f"phase shifting needs at least 3 frames, got {N}")
-    d = 2 * np.pi * np.arange(N) / N
-    s = np.zeros(frames.shape[1:])
-    c = np.zeros(frames.shape[1:])
-    a = np.zeros(frames.shape[1:])
-    for n in range(N):
-        f = np.asarray(frames[n], np.float64)
-        s += np.sin(d[n]) * f
-        c += np.cos(d[n]) * f
-        a += f
-    phi = np.mod(np.arctan2(-s, c), 2 * np.pi)
-    return phi, (2.0 / N) * np.hypot(s, c), a / N
-
-
-def phase_noise_std(steps: int, sigma_i, modulation) -> np.ndarray:
-    """Standard deviation of the wrapped phase for white frame noise (rad):
-    ``sigma_phi = sqrt(2 / N) sigma_I / B`` (small-noise limit)."""
-    return np.sqrt(2.0 / int(steps)) * np.asarray(sigma_i, float) / np.asarray(modulation, float)
-
-
-def unwrap(phases, periods) -> tuple[np.ndarray, np.ndarray]:
-    """Temporal (hierarchical) unwrapping, coarsest level first.
-
-    Parameters
-    ----------
-    phases : sequence of (...) wrapped phases in [0, 2 pi), one per level
-    periods : sequence of fringe periods (any unit), coarsest first; the coarsest phase is
-        taken as unambiguous.
-
-    Returns
-    -------
-    Phi : (...) float64
-        Unwrapped phase of the finest level.
-    disagreement : (...) float64
-        Largest ``|p_{l-1} / p_l Phi_{l-1} - Phi_l|`` over the steps (rad; 0 for one level).
-    """
-    if len(phases) != len(periods) or not len(phases):
-        raise ValueError(f"one phase per period needed, got {len(phases)} and {len(periods)}")
-    big = np.asarray(phases[0], np.float64)
-    worst = np.zeros_like(big)
-    for lvl in range(1, len(phases)):
-        phi = np.asarray(phases[lvl], np.float64)
-        scaled = big * (periods[lvl - 1] / periods[lvl])
-        k = np.round((scaled - phi) / (2 * np.pi))
-        big = phi + 2 * np.pi * k
-        worst = np.maximum(worst, np.abs(scaled - big))
-    return big, worst
 
 
 @dataclass(frozen=True, eq=False)

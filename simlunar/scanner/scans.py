@@ -27,6 +27,7 @@ from simlunar.geometry import Rig
 from simlunar.registry import check_bounds, option
 from simlunar.scanner import dots as _dots
 from simlunar.scanner import gray_code as gc
+from simlunar.scanner.gray_errors import bit_error_table
 from simlunar.scanner.scheduling import schedule_dots
 from simlunar.scanner.subpixel import refine_subpixel_from_diff
 from simlunar.scanner.triangulate import (
@@ -355,8 +356,8 @@ class GrayCoding:
 
     def truth_scores(self, scan: CodedScan, truth: dict, mask=None) -> dict[str, float]:
         """Bit error rates ``ber_c<i>`` / ``ber_r<i>``
-        (:func:`simlunar.scanner.gray_code.bit_error_table`)."""
-        return gc.bit_error_table(scan.decode, truth, mask)
+        (:func:`simlunar.scanner.gray_errors.bit_error_table`)."""
+        return bit_error_table(scan.decode, truth, mask)
 
 
 def dot_scan(

@@ -25,15 +25,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.geometry import Camera, Intrinsics
+from simlunar.render.flash_lidar import FlashOptions, flash_window, micromirror_flash, read_flash
 from simlunar.render.lidar_scan import (
-    FlashOptions,
     LidarScan,
     SteeredBeamOptions,
     beam_capture,
-    flash_window,
     guide_directions,
-    micromirror_flash,
-    read_flash,
     steered_beam_scan,
 )
 from simlunar.render.transient import flash_frame

@@ -25,6 +25,7 @@ from simlunar.reconstruction import Guide
 from simlunar.sensors import SENSORS
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import LidarScene
+from simlunar.study.depth_scores import score_depth
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
@@ -32,7 +33,7 @@ from simlunar.study.protocol import (
     run_protocol,
 )
 from simlunar.study.sampling import _cost, _seed, sample_count
-from simlunar.study.scanner import guided_weights, score_depth
+from simlunar.study.scanner import guided_weights
 
 __all__ = [
     "LIDARS",

@@ -16,23 +16,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.features import check_image, feature_map
-from simlunar.metrics import METRICS, check_densities, depth_gradient_weights
+from simlunar.features import check_image
+from simlunar.metrics import METRICS, check_densities
 from simlunar.metrics import samples_for_equal_error as _samples_for_equal_error
 from simlunar.metrics import score as _score
 from simlunar.metrics._fast import error_sums
 from simlunar.metrics.interior import interior_mask, sparsest_pitch
 from simlunar.planner import (
-    MEASURING,
-    ORACLES,
-    STRATEGIES,
     check_k,
-    plan,
-    plan_sequential,
-    strategy_weights,
 )
 from simlunar.reconstruction import Guide
-from simlunar.sensors.base import Acquisition
 from simlunar.sensors.ideal import IdealOptions, IdealSampler
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
@@ -40,33 +33,24 @@ from simlunar.study.protocol import (
     reconstruction_options,
     run_protocol,
 )
+from simlunar.study.sampling_planners import MeasuringPlanner, study_planners
+from simlunar.study.sampling_scores import (
+    SCORE_REGIONS,
+    SamplingEvaluator,
+    scored_metrics,
+)
 from simlunar.study.stats import bootstrap_scores, samples_saved
 
 __all__ = [
-    "INTERIOR_SUFFIX",
     "PAPER_STRATEGIES",
-    "SCORE_REGIONS",
     "SamplingStudyOptions",
     "SamplingStudyResult",
     "paper_densities",
     "run_sampling_study",
     "sample_count",
-    "scored_metrics",
 ]
 
 PAPER_STRATEGIES = ("grid", "random", "gradient", "entropy", "wavelet")
-#: where a reconstruction is scored: the full image, the interior (cells farther than the
-#: sparsest density's pitch from the border, :mod:`simlunar.metrics.interior`) or both
-SCORE_REGIONS = ("full", "interior", "both")
-#: metric name suffix of interior-only scores (``mse_interior``)
-INTERIOR_SUFFIX = "_interior"
-
-
-def scored_metrics(metrics: Sequence[str], region: str) -> list[str]:
-    """Names of the scores a study reports: ``m`` (full image) and / or ``m_interior``."""
-    full = list(metrics) if region in ("full", "both") else []
-    inner = [m + INTERIOR_SUFFIX for m in metrics] if region in ("interior", "both") else []
-    return full + inner
 
 
 def paper_densities() -> list[float]:
@@ -351,23 +335,14 @@ def run_sampling_study(
     and trials. Scores average each strategy's errors over trials before eq. 4.3.
     """
     o = options or SamplingStudyOptions()
-    depth = _check_grid(depth, "depth")
-    image = check_image(image)
-    if image.shape[:2] != depth.shape:
-        raise ValueError(f"image {image.shape[:2]} and depth {depth.shape} must have the same grid")
-    dens = check_densities(paper_densities() if o.densities is None else o.densities)
-    recons = reconstruction_options(o.reconstructions, outside=o.outside)
-    if guide is None:
-        guide = Guide(image)
-    if guide.shape != depth.shape:
-        raise ValueError(f"guide {guide.shape} and depth {depth.shape} must have the same grid")
+    depth, image, guide, dens, recons = _check_inputs(o, depth, image, guide)
     sensor = IdealSampler(depth, IdealOptions(range_noise_std=float(o.range_noise_std)))
     ks = [sample_count(d, depth.size) for d in dens]
-    planners, maps_cache = _planners(o, image, depth, ks)
+    planners, maps_cache = study_planners(o, image, depth, ks)
     inner = None
     if o.score_region != "full":
         inner = interior_mask(depth.shape, sparsest_pitch(depth.shape, dens))
-    evaluate = _Evaluator(depth, image, list(o.metrics), maps_cache, inner, o.score_region)
+    evaluate = SamplingEvaluator(depth, image, list(o.metrics), maps_cache, inner, o.score_region)
     base_seed = int(np.random.default_rng(rng).integers(0, 2**63))
     trials = Trials(planners, ks, int(o.trials), lambda lb, t, di: _seeds(base_seed, lb, t, di))
     if workers > 1:
@@ -385,20 +360,42 @@ def run_sampling_study(
         reconstructions=recons, guide=guide,
     ):  # fmt: skip
         for oc in outcomes:
-            cell = (oc.budget_index, oc.trial)
-            for r, scores in oc.recon_scores.items():
-                for m, v in scores.items():
-                    errors[r][m][oc.label][cell] = v
-                _record_info(info[r][oc.label], oc.recon_info[r], shape, cell)
-                frames[(r, oc.label, *cell)] = oc.recon_info[r]
-            rounds[oc.label][cell] = oc.rounds
+            _record_outcome(oc, errors, info, frames, rounds, shape)
         done += len(ks)
         if progress is not None:
             progress(done, total)
     res = _result(o, strategies, dens, ks, errors, names, list(recons), frames)
-    res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], _Measuring)}
+    res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], MeasuringPlanner)}
     res.info = {r: by for r, by in info.items() if any(by.values())}
     return res
+
+
+def _check_inputs(o: SamplingStudyOptions, depth, image, guide: Guide | None):
+    """The checked depth grid, guide image, :class:`Guide` (default ``Guide(image)``; all of
+    one grid), densities and reconstructions of a study."""
+    depth = _check_grid(depth, "depth")
+    image = check_image(image)
+    if image.shape[:2] != depth.shape:
+        raise ValueError(f"image {image.shape[:2]} and depth {depth.shape} must have the same grid")
+    dens = check_densities(paper_densities() if o.densities is None else o.densities)
+    recons = reconstruction_options(o.reconstructions, outside=o.outside)
+    if guide is None:
+        guide = Guide(image)
+    if guide.shape != depth.shape:
+        raise ValueError(f"guide {guide.shape} and depth {depth.shape} must have the same grid")
+    return depth, image, guide, dens, recons
+
+
+def _record_outcome(oc, errors: dict, info: dict, frames: dict, rounds: dict, shape) -> None:
+    """One acquisition's scores, diagnostics, guide frames and rounds into the study's tables
+    (cell = (density index, trial))."""
+    cell = (oc.budget_index, oc.trial)
+    for r, scores in oc.recon_scores.items():
+        for m, v in scores.items():
+            errors[r][m][oc.label][cell] = v
+        _record_info(info[r][oc.label], oc.recon_info[r], shape, cell)
+        frames[(r, oc.label, *cell)] = oc.recon_info[r]
+    rounds[oc.label][cell] = oc.rounds
 
 
 def _record_info(acc: dict, info: dict, shape, cell) -> None:
@@ -409,163 +406,6 @@ def _record_info(acc: dict, info: dict, shape, cell) -> None:
         if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.number)):
             continue
         acc.setdefault(key, np.full(shape, np.nan))[cell] = float(v)
-
-
-def _planners(o: SamplingStudyOptions, image, depth, ks) -> tuple[dict, dict]:
-    """Label -> protocol planner; each distinct importance map computed once.
-
-    Only the ``oracle_*`` labels get the true depth; ``sequential`` gets the sensor (through
-    the protocol), never the depth.
-    """
-    planners, maps_cache = {}, {}
-    for label in o.strategies:
-        opts = dict(o.strategy_options.get(label, {}))
-        base = opts.pop("strategy", label)
-        if base not in STRATEGIES and base not in MEASURING:
-            valid = ", ".join([*STRATEGIES, *MEASURING])
-            raise ValueError(f"unknown strategy {base!r}; valid: {valid}")
-        if base in MEASURING:
-            planners[label] = _measuring(opts, image, depth.shape, ks, maps_cache)
-            continue
-        weights = _maps(base, opts, image, ks, maps_cache)
-        plan_opts = {k: v for k, v in opts.items() if k not in ("feature_opts", "coefficients")}
-        truth = depth if base in ORACLES else None  # the oracles, and nothing else, read it
-        # validate options once, before any long loop
-        plan(base, 4, weights=weights[ks[0]], shape=depth.shape, truth=truth, rng=0, **plan_opts)
-        planners[label] = _Planner(base, weights, depth.shape, plan_opts, truth)
-    return planners, maps_cache
-
-
-def _maps(base: str, opts: dict, image, ks, cache: dict) -> dict:
-    """k -> the strategy's importance map (one map for every k but the learned one's, which
-    is per density)."""
-    fo = opts.get("feature_opts")
-    n = image.shape[0] * image.shape[1]
-    out = {}
-    for k in ks:
-        if base == "learned":
-            fo = {**(opts.get("feature_opts") or {}), "density": k / n}
-        key = (base, repr(fo), repr(opts.get("coefficients")))
-        if key not in cache:
-            cache[key] = strategy_weights(
-                base, image, feature_opts=fo, coefficients=opts.get("coefficients")
-            )
-        out[k] = cache[key]
-    return out
-
-
-def _measuring(opts: dict, image, shape, ks, cache: dict) -> _Measuring:
-    prior = opts.get("prior")
-    maps = None
-    if prior is not None:
-        maps = _maps(prior, {"feature_opts": opts.get("feature_opts")}, image, ks, cache)
-    return _Measuring(opts.get("sequential"), maps, tuple(shape))
-
-
-@dataclass(frozen=True, eq=False)
-class _Planner:
-    """A strategy of :func:`simlunar.planner.plan` with its map(s): ``(k, rng) -> (k, 2) rc``.
-
-    ``truth`` is the true depth for an oracle strategy and None for every other.
-    """
-
-    base: str
-    weights: dict
-    shape: tuple
-    opts: dict
-    truth: np.ndarray | None = None
-
-    def __call__(self, k: int, rng) -> np.ndarray:
-        return plan(
-            self.base, k, weights=self.weights[k], shape=self.shape, truth=self.truth, rng=rng,
-            **self.opts,
-        ).rc  # fmt: skip
-
-
-@dataclass(frozen=True, eq=False)
-class _Measuring:
-    """Region-based iterative enhancement (:func:`simlunar.planner.plan_sequential`): the
-    sensor's ``acquire`` is its ``measure``, so it reads the scene at the cells it samples
-    only, round by round."""
-
-    options: object
-    priors: dict | None
-    shape: tuple
-    measures = True
-
-    def acquire(self, k: int, sensor, plan_rng, sensor_rng) -> tuple[Acquisition, int]:
-        gen = np.random.default_rng(sensor_rng)
-        cost = [0, 0.0]
-
-        def measure(rc):
-            acq = sensor.acquire(rc, rng=gen)
-            if len(acq.values) != len(rc):
-                raise ValueError(f"sensor {sensor.name!r} lost cells: multi-round needs all")
-            cost[0] += acq.frames
-            cost[1] += acq.seconds
-            return acq.values
-
-        prior = None if self.priors is None else self.priors[k]
-        sp = plan_sequential(
-            k, shape=self.shape, measure=measure, prior=prior, options=self.options, rng=plan_rng
-        )
-        acq = Acquisition(sp.plan.rc, np.asarray(sp.values), self.shape, cost[0], cost[1])
-        return acq, sp.rounds
-
-
-class _Evaluator:
-    """All metrics of one reconstruction in one pass (same definitions as ``metric``); metric
-    weights computed once per study. With an interior mask, the same metrics on the interior
-    cells (``<metric>_interior``) too or instead (``region``)."""
-
-    def __init__(self, depth, image, metrics: list[str], maps_cache: dict, inner=None,
-                 region: str = "full"):  # fmt: skip
-        n = depth.size
-        metric_w = {}
-        if "grad" in metrics:
-            metric_w["grad"] = depth_gradient_weights(depth).ravel()
-        if "sal" in metrics:
-            sal = maps_cache.get(("saliency", repr(None), repr(None)))
-            metric_w["sal"] = (sal if sal is not None else feature_map("saliency", image)).ravel()
-        for m, w in metric_w.items():
-            if float(w.sum()) <= 0:
-                raise ValueError(f"metric {m!r} weights are zero everywhere on this scene")
-        self.truth = depth.ravel()
-        self.metrics = metrics
-        self.names = list(metric_w)
-        self.rows = np.stack([metric_w[m] for m in self.names]) if self.names else np.zeros((0, n))
-        self.region = region
-        self.inner = None if inner is None else np.flatnonzero(np.asarray(inner).ravel())
-
-    def __call__(self, recon: np.ndarray, acquisition) -> dict[str, float]:
-        flat = recon.ravel()
-        out = {}
-        if self.region in ("full", "both"):
-            out.update(self._scores(flat, self.truth, self.rows, ""))
-        if self.inner is not None:
-            i = self.inner
-            out.update(self._scores(flat[i], self.truth[i], self.rows[:, i], INTERIOR_SUFFIX))
-        return out
-
-    def _scores(self, recon, truth, rows, suffix: str) -> dict[str, float]:
-        count, sse, sae, wse, wsum = error_sums(recon, truth, np.ascontiguousarray(rows))
-        if count == 0:
-            raise ValueError("reconstruction has no finite cell to evaluate")
-        out = {}
-        for m in self.metrics:
-            if m == "mse":
-                v = sse / count
-            elif m == "rmse":
-                v = float(np.sqrt(sse / count))
-            elif m == "mae":
-                v = sae / count
-            else:
-                j = self.names.index(m)
-                if wsum[j] <= 0:
-                    raise ValueError(f"metric {m!r} weights sum to zero over the evaluated cells")
-                v = float(wse[j] / wsum[j])
-            out[m + suffix] = v
-        return out
 
 
 def _seeds(base: int, label: str, trial: int, density_index: int) -> tuple:

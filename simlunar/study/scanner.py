@@ -16,9 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.features import check_image, feature_map
+from simlunar.features import check_image
 from simlunar.geometry import Rig
-from simlunar.metrics import metric
 from simlunar.planner import plan, strategy_weights
 from simlunar.reconstruction import Guide
 from simlunar.render.capture import (
@@ -28,7 +27,7 @@ from simlunar.render.capture import (
     camera_truth,
     render_guide,
 )
-from simlunar.scanner import gray_code as gc
+from simlunar.scanner import gray_errors
 from simlunar.scanner.codings import DEFAULT_CODING, coding_for
 from simlunar.scanner.rigs import RIG_PRESETS, rig_preset
 from simlunar.scanner.scans import (
@@ -47,6 +46,7 @@ from simlunar.sensors.structured_light import (
     StructuredLightOptions,
     mode_coding,
 )
+from simlunar.study.depth_scores import score_depth
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
@@ -65,7 +65,6 @@ __all__ = [
     "guided_weights",
     "interreflection_comparison",
     "run_scanner_study",
-    "score_depth",
     "summarize",
 ]
 
@@ -83,62 +82,6 @@ def depth_range_from_terrain(terrain, rig: Rig, *, margin: float = 0.05) -> tupl
     return (float(z.min() * (1 - margin)), float(z.max() * (1 + margin)))
 
 
-def _gradient_weights_with_holes(truth: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    """GRAD weights |grad truth| with the holes of ``truth`` (``~valid``) left out.
-
-    As ``numpy.gradient``: central differences, one-sided at the border and, here, next to a
-    hole; 0 in the holes and where a cell has no valid neighbour along an axis.
-    """
-    t = np.where(valid, truth, 0.0)
-    grads = []
-    for axis in (0, 1):
-        d = np.diff(t, axis=axis)
-        ok = np.diff(valid.astype(np.int8), axis=axis) == 0
-        ok &= np.delete(valid, 0, axis=axis)  # both ends of each difference valid
-        d = np.where(ok, d, 0.0)
-        pad = [(0, 0), (0, 0)]
-        pad[axis] = (1, 0)
-        minus, ok_m = np.pad(d, pad), np.pad(ok, pad)  # difference to the previous cell
-        pad[axis] = (0, 1)
-        plus, ok_p = np.pad(d, pad), np.pad(ok, pad)  # difference to the next cell
-        n = ok_m.astype(float) + ok_p
-        grads.append(np.where(n > 0, (minus + plus) / np.maximum(n, 1), 0.0))
-    return np.where(valid, np.hypot(*grads), 0.0)
-
-
-def score_depth(
-    depth: np.ndarray, truth: np.ndarray, *, metrics, image=None, mask=None
-) -> dict[str, float]:
-    """Sampling-study metrics of a reconstructed guide-view depth against ground truth.
-
-    Parameters
-    ----------
-    depth, truth : (H, W) float64 z-depth (m); NaN in ``truth`` is excluded (also from the
-        ``grad`` weights, which use differences between finite truth cells only)
-    metrics : names from :data:`simlunar.metrics.METRICS` (``sal`` uses the saliency map of
-        ``image`` as weights)
-    image : (H, W) guide image (needed for ``sal``)
-    mask : (H, W) bool, optional extra evaluation mask
-    """
-    valid = np.isfinite(truth)
-    if mask is not None:
-        valid &= np.asarray(mask, bool)
-    t = np.where(valid, truth, 0.0)
-    out = {}
-    for name in metrics:
-        weights = None
-        if name == "grad":
-            # |grad truth| from differences between valid cells only: the 0 put into the
-            # holes must not make the cells next to them the steepest of the image
-            weights = _gradient_weights_with_holes(truth, np.isfinite(truth))
-        if name == "sal":
-            if image is None:
-                raise ValueError("metric 'sal' needs the guide image for its saliency weights")
-            weights = feature_map("saliency", image)
-        out[name] = float(metric(name, depth, t, weights=weights, mask=valid))
-    return out
-
-
 def bit_error_table(
     gray: GrayScan, truth: dict, mask=None, *, edge_margin: int = 1
 ) -> dict[str, float]:
@@ -147,9 +90,9 @@ def bit_error_table(
     ``mask`` (camera (rows, cols) bool) restricts the pixels; always only pixels lit by the
     projector in both the ground truth and the decode count, and for each bit only pixels
     ``edge_margin`` pixels away from that bit's true stripe edges
-    (:func:`simlunar.scanner.gray_code.stable_bits`; 0 keeps every pixel).
+    (:func:`simlunar.scanner.gray_errors.stable_bits`; 0 keeps every pixel).
     """
-    return gc.bit_error_table(gray.decode, truth, mask, edge_margin=edge_margin)
+    return gray_errors.bit_error_table(gray.decode, truth, mask, edge_margin=edge_margin)
 
 
 @dataclass(frozen=True, eq=False)
@@ -305,26 +248,7 @@ def run_scanner_study(
     o = options or ScannerStudyOptions()
     say = progress or (lambda _msg: None)
     noise_rng, plan_rng = np.random.default_rng(rng).spawn(2)
-    c = o.capture
-    capture = RenderCapture(
-        scene.terrain,
-        scene.rig,
-        c,
-        bsdf=scene.bsdf,
-        sensor=scene.camera_model,
-        rng=noise_rng,
-        extra_lights=scene.extra_lights,
-    )
-    guide = render_guide(
-        scene.terrain,
-        scene.rig,
-        light=o.guide_light,
-        sun=scene.sun,
-        bsdf=scene.bsdf,
-        max_depth=c.max_depth,
-        spp=c.spp,
-        seed=c.seed,
-    )
+    capture, guide = _capture_and_guide(scene, o, noise_rng)
     depth_range = depth_range_from_terrain(scene.terrain, scene.rig)
     coded: dict[str, CodedScan] = {}
     for name in o.scanned_codings():  # every full-field scan once, before the dots
@@ -359,6 +283,31 @@ def run_scanner_study(
                 rows += _rows(mode, planner, oc, o.budget)
                 scans[(mode, planner, oc.trial)] = oc.acquisition.detail
     return ScannerStudyResult(rows=rows, guide=guide, coded=coded, scans=scans)
+
+
+def _capture_and_guide(scene: ScannerScene, o: ScannerStudyOptions, noise_rng):
+    """The scene's render capture (sensor noise from ``noise_rng``) and its guide view."""
+    c = o.capture
+    capture = RenderCapture(
+        scene.terrain,
+        scene.rig,
+        c,
+        bsdf=scene.bsdf,
+        sensor=scene.camera_model,
+        rng=noise_rng,
+        extra_lights=scene.extra_lights,
+    )
+    guide = render_guide(
+        scene.terrain,
+        scene.rig,
+        light=o.guide_light,
+        sun=scene.sun,
+        bsdf=scene.bsdf,
+        max_depth=c.max_depth,
+        spp=c.spp,
+        seed=c.seed,
+    )
+    return capture, guide
 
 
 def _plan_seeds(o: ScannerStudyOptions, plan_rng) -> dict:

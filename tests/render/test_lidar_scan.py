@@ -1,11 +1,11 @@
-"""LIDAR acquisitions end to end on a plane: steered beam, flash, micromirror flash."""
+"""Steered-beam LIDAR end to end on a plane: ranges, ordering and timing, a gate that never reads
+the truth, a moving platform, SPAD pile-up; flash LIDARs: test_flash_lidar.py."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.lidar import (
     DetectorOptions,
     FootprintOptions,
@@ -15,27 +15,9 @@ from simlunar.lidar import (
     scan_timing,
 )
 from simlunar.terrain import Terrain
+from tests.render._lidar_planes import DET, H, _camera, _plane
 
 pytestmark = pytest.mark.render
-
-H = 50.0
-# about 50 signal photons per pulse from the plane at 50 m (rendered L = 0.2 / (pi R^2))
-DET = DetectorOptions(signal_photons=2e6, background_photons_per_s=0.0, pulses=4)
-
-
-def _plane(size: float = 80.0) -> Terrain:
-    n = int(size)
-    return Terrain(
-        heights=np.zeros((n, n)),
-        albedo=np.full((n, n), 0.2, np.float32),
-        spacing=1.0,
-        origin=(-size / 2, size / 2),
-    )
-
-
-def _camera(px: int, fov_deg: float) -> Camera:
-    pose = Pose.look_at([0.0, 0.0, H], [0.0, 0.0, 0.0], up=(0.0, 1.0, 0.0))
-    return Camera(Intrinsics.from_fov(px, px, fov_deg), pose)
 
 
 def test_steered_beam_scan_on_a_plane(mi):
@@ -92,82 +74,9 @@ def test_steered_beam_scan_on_a_plane(mi):
     assert scan.seconds < raster.seconds
 
 
-def test_flash_scan_on_a_plane(mi):
-    from simlunar.render.lidar_scan import FlashOptions, flash_scan
-    from simlunar.render.transient import TransientOptions
-
-    cam = _camera(16, 4.0)
-    opts = FlashOptions(
-        detector=DET,
-        pulse=PulseOptions(fwhm_s=1e-9),
-        transient=TransientOptions(spp=8),
-        pulse_rate_hz=20.0,
-    )
-    scan = flash_scan(_plane(), cam, options=opts, rng=0)
-    assert scan.ranges.shape == (16, 16)
-    d = cam.rays(cam.pixel_centers())[1]
-    assert scan.valid.all()
-    assert np.abs(scan.ranges - H / -d[..., 2]).max() < opts.bin_range_m
-    assert scan.seconds == pytest.approx(4 / 20.0)
-    from simlunar.render.lidar_scan import receiver_rc
-
-    # a 16 x 16 receiver on a 64 x 64 guide: receiver pixel (0, 0) centre = guide (2, 2) - 1/2
-    rc = receiver_rc((16, 16), (64, 64))
-    assert rc[0] == pytest.approx([1.5, 1.5]) and rc[17] == pytest.approx([5.5, 5.5])
-
-
-def test_micromirror_flash_lights_only_the_planned_pixels(mi):
-    from simlunar.render.lidar_scan import FlashOptions, micromirror_flash, micromirror_frames
-    from simlunar.render.transient import TransientOptions
-
-    cam = _camera(32, 6.0)
-    uv = np.array([[3.5, 3.5], [2.5, 2.5], [20.5, 9.5], [30.5, 30.5], [12.5, 27.5]])
-    # receiver 8 x 8: the first two dots share receiver pixel (0, 0)
-    assert list(micromirror_frames(uv, cam, (8, 8))) == [0, 1, 0, 0, 0]
-    det = DetectorOptions(signal_photons=2e6 * 16, background_photons_per_s=0.0, pulses=4)
-    opts = FlashOptions(
-        detector=det,
-        pulse=PulseOptions(fwhm_s=1e-9),
-        transient=TransientOptions(spp=256),
-        pulse_rate_hz=20.0,
-    )
-    scan = micromirror_flash(_plane(), cam, uv, options=opts, receiver_shape=(8, 8), rng=0)
-    d = cam.rays(uv)[1]
-    assert scan.frames == 2
-    assert scan.seconds == pytest.approx(2 * 4 / 20.0)
-    assert scan.valid.all()
-    assert np.abs(scan.ranges - H / -d[:, 2]).max() < opts.bin_range_m
-
-
-def test_flash_photons_follow_the_lidar_equation_per_pixel(mi):
-    # a 16 x 16 flash over a 30 deg field lights a Lambertian plane (albedo 0.2) from 50 m:
-    # every pixel's expected signal photons = (E / h nu) (rho / pi) cos(theta) A / R^2 eta
-    # x Omega_pix / Omega_lit, with R = H / cos(theta) along the pixel's centre ray and
-    # Omega_pix its exact solid angle (corner pixels dimmer as cos^3)
-    from simlunar.lidar import TimeBins
-    from simlunar.lidar.hardware import LidarHardware
-    from simlunar.render.lidar_scan import FlashOptions, receiver_solid_angles, with_hardware
-    from simlunar.render.transient import TransientOptions, flash_frame
-
-    hw = LidarHardware(pulse_energy_j=1e-3)
-    opts = with_hardware(FlashOptions(transient=TransientOptions(spp=64)), hw)
-    cam = _camera(16, 30.0)
-    bins = TimeBins.for_ranges(45.0, 60.0, 0.05)
-    frame = flash_frame(_plane(), cam, bins=bins, options=opts.transient)
-    omega = receiver_solid_angles(cam)
-    det = opts.photon_detector(field_sr=1.0, lit_sr=omega.sum())
-    got = frame.steady * omega * det.signal_photons
-    d = cam.directions_device(cam.pixel_centers().reshape(-1, 2)).reshape(16, 16, 3)
-    cos = d[..., 2] / np.linalg.norm(d, axis=-1)
-    want = hw.lambert_signal_photons(H / cos, 0.2, np.arccos(cos), lit_sr=omega.sum(),
-                                     pixel_sr=omega)  # fmt: skip
-    assert got == pytest.approx(want, rel=0.02)
-    assert want[8, 8] / want[0, 0] > 1.3  # centre vs corner: cos^3 x cos x cos^2 (R^2)
-
-
 def _truth_raises(monkeypatch):
     """Every way to the terrain's truth after the scene is built raises."""
-    from simlunar.render.transient import BeamCapture
+    from simlunar.render.beam_capture import BeamCapture
 
     def boom(*args, **kwargs):
         raise AssertionError("the range gate read the terrain's truth")
@@ -203,22 +112,6 @@ def test_steered_gate_never_reads_the_truth(mi, monkeypatch, altimeter):
     if altimeter:  # 50 m in windows of 4 m stepped by 2 m from 0.1 m: found in step 24-26
         p = opts.steering.pulses_per_point
         assert (4 + 24) * p <= scan.frames <= (4 + 26) * p
-
-
-def test_a_return_outside_the_gate_is_lost(mi, monkeypatch):
-    from simlunar.lidar.gate import GateOptions
-    from simlunar.render.lidar_scan import FlashOptions, flash_scan
-    from simlunar.render.transient import TransientOptions
-
-    cam = _camera(8, 10.0)
-    base = FlashOptions(detector=DET, transient=TransientOptions(spp=8), margin_m=1.0)
-    monkeypatch.setattr(Terrain, "points", lambda *a, **k: pytest.fail("truth read"))
-    good = flash_scan(_plane(), cam, options=base, rng=0)
-    assert good.valid.all()
-    # the navigation datum 5 m above the ground: the window (45 - 1 ... 45.1 + 1 m) misses it
-    off = FlashOptions(detector=DET, transient=TransientOptions(spp=8), margin_m=1.0,
-                       gate=GateOptions(datum_z_m=5.0))  # fmt: skip
-    assert not flash_scan(_plane(), cam, options=off, rng=0).valid.any()
 
 
 def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):

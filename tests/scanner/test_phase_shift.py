@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from simlunar.scanner import fringes, rigs
 from simlunar.scanner import phase_shift as ps
-from simlunar.scanner import rigs
 from simlunar.scanner.phase_shift import PhaseShiftOptions
 from simlunar.sensors import StructuredLight, StructuredLightOptions
 from tests.scanner._synthetic import PlaneCapture
@@ -18,7 +18,7 @@ def _frames_at(u, n_axis, o: PhaseShiftOptions, *, a=0.1, c=0.8):
     """Frames of one axis seen by camera pixels at continuous projector coordinates ``u``,
     written from the documented pattern (module docstring), independently of ``encode``:
     ``black + c (1/2 + 1/2 cos(2 pi (u + off) / p + 2 pi n / N))``."""
-    periods = ps.fringe_periods(n_axis, o.period_px, o.ratio)
+    periods = fringes.fringe_periods(n_axis, o.period_px, o.ratio)
     off = (periods[0] - n_axis) / 2
     out = []
     for p in periods:
@@ -27,28 +27,6 @@ def _frames_at(u, n_axis, o: PhaseShiftOptions, *, a=0.1, c=0.8):
                 a + c * (0.5 + 0.5 * np.cos(2 * np.pi * (u + off) / p + 2 * np.pi * n / o.steps))
             )
     return np.stack(out), periods  # fmt: skip
-
-
-def test_fringe_periods_hand_cases():
-    assert ps.fringe_periods(128, 8, 8) == (512.0, 64.0, 8.0)
-    assert ps.fringe_periods(50, 8, 8) == (64.0, 8.0)  # 64 >= 1.1 * 50
-    assert ps.fringe_periods(60, 8, 8) == (512.0, 64.0, 8.0)  # 64 < 66: one more level
-    assert ps.fringe_periods(10, 16, 4) == (16.0,)  # one fringe holds the axis
-    with pytest.raises(ValueError, match="ratio > 1"):
-        ps.fringe_periods(100, 8, 1.0)
-
-
-def test_wrapped_phase_and_modulation_of_a_hand_case():
-    # N = 4: I_n = A + B cos(phi + n pi / 2) -> S = sum I_n sin = -2 B sin phi, C = 2 B cos phi
-    A, B, phi = 0.3, 0.2, 1.0
-    frames = np.array([A + B * np.cos(phi + n * np.pi / 2) for n in range(4)])
-    got_phi, got_b, got_a = ps.wrapped_phase(frames)
-    assert got_phi == pytest.approx(phi) and got_b == pytest.approx(B) and got_a == pytest.approx(A)
-    # a wrapped phase is in [0, 2 pi)
-    neg = np.array([A + B * np.cos(-1.0 + n * np.pi / 2) for n in range(4)])
-    assert ps.wrapped_phase(neg)[0] == pytest.approx(2 * np.pi - 1.0)
-    with pytest.raises(ValueError, match="at least 3 frames"):
-        ps.wrapped_phase(frames[:2])
 
 
 @pytest.mark.parametrize("shape", [(48, 64), (37, 203)])
@@ -87,24 +65,6 @@ def test_unwrapping_is_right_at_sub_pixel_positions_over_the_whole_width():
     assert np.isnan(dec.v).all() and (dec.row == -1).all()
 
 
-@pytest.mark.parametrize("steps", [3, 4, 7])
-def test_phase_noise_matches_the_closed_form(steps):
-    # sigma_phi = sqrt(2 / N) sigma_I / B (REFERENCES, phase shift); 40 000 pixels: the sample
-    # standard deviation has a relative standard error of 1 / sqrt(2 n) = 0.35 %
-    rng = np.random.default_rng(steps)
-    n, A, B, sigma = 40_000, 0.4, 0.25, 0.004
-    phi = rng.uniform(0, 2 * np.pi, n)
-    d = 2 * np.pi * np.arange(steps) / steps
-    clean = A + B * np.cos(phi[None] + d[:, None])
-    got, mod, _ = ps.wrapped_phase(clean + rng.normal(0, sigma, clean.shape))
-    err = np.angle(np.exp(1j * (got - phi)))
-    want = ps.phase_noise_std(steps, sigma, B)
-    assert want == pytest.approx(np.sqrt(2 / steps) * sigma / B)
-    assert np.std(err) == pytest.approx(want, rel=0.02)
-    assert abs(np.mean(err)) < 4 * want / np.sqrt(n)  # unbiased
-    assert np.mean(mod) == pytest.approx(B, rel=0.01)
-
-
 def test_positional_uncertainty_of_noisy_frames_is_the_finest_period_times_the_phase_noise():
     # the decoded column's noise is p_L sigma_phi / (2 pi) and no pixel is unwrapped wrongly
     o = PhaseShiftOptions(steps=4, period_px=8.0, ratio=8.0, axes="cols")
@@ -118,21 +78,8 @@ def test_positional_uncertainty_of_noisy_frames_is_the_finest_period_times_the_p
     )
     err = dec.u - u
     assert np.all(np.abs(err) < 1.0) and dec.valid.mean() > 0.999
-    want = periods[-1] * ps.phase_noise_std(o.steps, sigma, 0.4) / (2 * np.pi)
+    want = periods[-1] * fringes.phase_noise_std(o.steps, sigma, 0.4) / (2 * np.pi)
     assert np.std(err[dec.valid]) == pytest.approx(want, rel=0.03)
-
-
-def test_unwrap_hand_case_and_disagreement():
-    # periods 40 and 10: true fine phase 2 pi * 2.3 -> wrapped 0.3 * 2 pi, coarse 2 pi 2.3 / 4
-    coarse, fine = 2 * np.pi * 2.3 / 4, 2 * np.pi * 0.3
-    big, dis = ps.unwrap([coarse, fine], [40.0, 10.0])
-    assert big == pytest.approx(2 * np.pi * 2.3) and dis == pytest.approx(0.0, abs=1e-12)
-    # a coarse phase off by 0.35 rad (1.4 rad once scaled by 4): same fringe order, large
-    # disagreement
-    big, dis = ps.unwrap([coarse + 0.35, fine], [40.0, 10.0])
-    assert big == pytest.approx(2 * np.pi * 2.3) and dis == pytest.approx(1.4)
-    with pytest.raises(ValueError, match="one phase per period"):
-        ps.unwrap([coarse], [40.0, 10.0])
 
 
 def test_validity_from_light_modulation_and_unwrapping():
@@ -209,7 +156,7 @@ def test_phase_shift_scan_of_a_plane_matches_truth(rig, inverses):
     cap = PlaneCapture(rig, (0.3, -0.2, 1.0), 0.0, noise=0.002)
     o = PhaseShiftOptions(steps=4, period_px=8.0, ratio=8.0, inverses=inverses)
     g = ps.phase_shift_scan(cap, rig, o)
-    levels = sum(len(ps.fringe_periods(n, 8.0, 8.0)) for n in (64, 48))
+    levels = sum(len(fringes.fringe_periods(n, 8.0, 8.0)) for n in (64, 48))
     per_level = 2 if inverses == "linearity" else 4  # even N: half the shifts by linearity
     assert g.renders == cap.renders == 2 + levels * per_level
     truth = cap.true_depth(rig.guide)

@@ -129,7 +129,7 @@ def test_steered_beam_ranges_the_planned_pixels(mi):
 
 @pytest.mark.render
 def test_flash_lidar_with_and_without_revisits(mi):
-    from simlunar.render.lidar_scan import FlashOptions
+    from simlunar.render.flash_lidar import FlashOptions
     from simlunar.render.transient import TransientOptions
     from simlunar.sensors import FlashLidar, FlashLidarOptions, LidarScene
 
@@ -163,7 +163,7 @@ def test_flash_lidar_with_and_without_revisits(mi):
 
 @pytest.mark.render
 def test_micromirror_flash_ranges_the_planned_pixels(mi):
-    from simlunar.render.lidar_scan import FlashOptions
+    from simlunar.render.flash_lidar import FlashOptions
     from simlunar.render.transient import TransientOptions
     from simlunar.sensors import LidarScene, MicromirrorFlash, MicromirrorOptions
 

@@ -10,7 +10,7 @@ from simlunar.metrics.interior import interior_mask, sparsest_pitch
 from simlunar.planner import SequentialOptions
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.ideal import IdealSampler
-from simlunar.study import sampling
+from simlunar.study import sampling_planners
 from simlunar.study.sampling import SamplingStudyOptions, run_sampling_study
 
 
@@ -29,7 +29,7 @@ def test_only_oracle_labels_are_given_the_truth():
                           "oracle_h": {"strategy": "oracle_hessian"}},
         densities=[1 / 16], trials=1,
     )  # fmt: skip
-    planners, _ = sampling._planners(o, image, depth, [192])
+    planners, _ = sampling_planners.study_planners(o, image, depth, [192])
     assert planners["oracle_greedy"].truth is depth and planners["oracle_h"].truth is depth
     for label in ("random", "wavelet", "lloyd_uniform", "wl"):
         assert planners[label].truth is None
@@ -53,7 +53,7 @@ class _Recorder:
 
 def test_multi_round_reads_the_scene_only_at_the_cells_it_samples():
     depth, image = _scene()
-    planner = sampling._measuring(
+    planner = sampling_planners.measuring_planner(
         {"sequential": SequentialOptions(max_rounds=5), "prior": "wavelet", "feature_opts": {}},
         image, depth.shape, [150], {},
     )  # fmt: skip

@@ -252,25 +252,6 @@ def test_scanner_study_is_seeded_and_summarised(rig):
     assert st.summarize(run_study(terrain(h), rig, **kw).rows, "mse") == mse
 
 
-def test_grad_score_ignores_the_holes_of_the_truth(rng):
-    from simlunar.study.scanner import score_depth
-
-    # a tilted plane (m): every GRAD weight is the same |slope|, so GRAD is the plain MSE of
-    # the evaluated cells, whatever the errors
-    r, c = np.mgrid[0:40, 0:50]
-    truth = 1.5 + 0.01 * c + 0.004 * r
-    hole = np.zeros(truth.shape, bool)
-    hole[12:20, 15:30] = True
-    err = rng.normal(0.0, 1e-3, truth.shape)
-    err[ndimage.binary_dilation(hole, iterations=2) & ~hole] *= 20  # errors around the hole
-    depth = truth + err
-    with_hole = score_depth(depth, np.where(hole, np.nan, truth), metrics=("grad", "mse"))
-    reference = score_depth(depth, truth, metrics=("grad", "mse"), mask=~hole)
-    assert reference["grad"] == pytest.approx(reference["mse"], rel=1e-12)
-    assert with_hole["grad"] == pytest.approx(reference["grad"], rel=1e-9)
-    assert with_hole["mse"] == pytest.approx(reference["mse"], rel=1e-12)
-
-
 def test_light_traced_dot_frames_equal_path_traced_ones():
     # a bumpy bed, 12 dots: the light tracer (sparse_integrator="ptracer") and the path tracer
     # estimate the same image, so the dots' flux and centroids agree

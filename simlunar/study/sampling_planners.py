@@ -1,0 +1,134 @@
+"""The sampling study's planners: each strategy label of a study as the protocol's planner.
+
+A label names a strategy of :func:`simlunar.planner.plan` (with its options) or a measuring one
+(:func:`simlunar.planner.plan_sequential`). Every distinct importance map is computed once per
+study and shared across densities and trials; only the ``oracle_*`` labels get the true depth,
+and the multi-round planner reads the scene through the sensor only, round by round.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from simlunar.planner import (
+    MEASURING,
+    ORACLES,
+    STRATEGIES,
+    plan,
+    plan_sequential,
+    strategy_weights,
+)
+from simlunar.sensors.base import Acquisition
+
+__all__ = [
+    "MapPlanner",
+    "MeasuringPlanner",
+    "importance_maps",
+    "measuring_planner",
+    "study_planners",
+]
+
+
+def study_planners(o, image, depth, ks) -> tuple[dict, dict]:
+    """Label -> protocol planner of a :class:`~simlunar.study.sampling.SamplingStudyOptions`
+    ``o`` (and the importance-map cache); each distinct importance map computed once.
+
+    Only the ``oracle_*`` labels get the true depth; ``sequential`` gets the sensor (through
+    the protocol), never the depth.
+    """
+    planners, maps_cache = {}, {}
+    for label in o.strategies:
+        opts = dict(o.strategy_options.get(label, {}))
+        base = opts.pop("strategy", label)
+        if base not in STRATEGIES and base not in MEASURING:
+            valid = ", ".join([*STRATEGIES, *MEASURING])
+            raise ValueError(f"unknown strategy {base!r}; valid: {valid}")
+        if base in MEASURING:
+            planners[label] = measuring_planner(opts, image, depth.shape, ks, maps_cache)
+            continue
+        weights = importance_maps(base, opts, image, ks, maps_cache)
+        plan_opts = {k: v for k, v in opts.items() if k not in ("feature_opts", "coefficients")}
+        truth = depth if base in ORACLES else None  # the oracles, and nothing else, read it
+        # validate options once, before any long loop
+        plan(base, 4, weights=weights[ks[0]], shape=depth.shape, truth=truth, rng=0, **plan_opts)
+        planners[label] = MapPlanner(base, weights, depth.shape, plan_opts, truth)
+    return planners, maps_cache
+
+
+def importance_maps(base: str, opts: dict, image, ks, cache: dict) -> dict:
+    """k -> the strategy's importance map (one map for every k but the learned one's, which
+    is per density)."""
+    fo = opts.get("feature_opts")
+    n = image.shape[0] * image.shape[1]
+    out = {}
+    for k in ks:
+        if base == "learned":
+            fo = {**(opts.get("feature_opts") or {}), "density": k / n}
+        key = (base, repr(fo), repr(opts.get("coefficients")))
+        if key not in cache:
+            cache[key] = strategy_weights(
+                base, image, feature_opts=fo, coefficients=opts.get("coefficients")
+            )
+        out[k] = cache[key]
+    return out
+
+
+def measuring_planner(opts: dict, image, shape, ks, cache: dict) -> MeasuringPlanner:
+    prior = opts.get("prior")
+    maps = None
+    if prior is not None:
+        maps = importance_maps(prior, {"feature_opts": opts.get("feature_opts")}, image, ks, cache)
+    return MeasuringPlanner(opts.get("sequential"), maps, tuple(shape))
+
+
+@dataclass(frozen=True, eq=False)
+class MapPlanner:
+    """A strategy of :func:`simlunar.planner.plan` with its map(s): ``(k, rng) -> (k, 2) rc``.
+
+    ``truth`` is the true depth for an oracle strategy and None for every other.
+    """
+
+    base: str
+    weights: dict
+    shape: tuple
+    opts: dict
+    truth: np.ndarray | None = None
+
+    def __call__(self, k: int, rng) -> np.ndarray:
+        return plan(
+            self.base, k, weights=self.weights[k], shape=self.shape, truth=self.truth, rng=rng,
+            **self.opts,
+        ).rc  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class MeasuringPlanner:
+    """Region-based iterative enhancement (:func:`simlunar.planner.plan_sequential`): the
+    sensor's ``acquire`` is its ``measure``, so it reads the scene at the cells it samples
+    only, round by round."""
+
+    options: object
+    priors: dict | None
+    shape: tuple
+    measures = True
+
+    def acquire(self, k: int, sensor, plan_rng, sensor_rng) -> tuple[Acquisition, int]:
+        gen = np.random.default_rng(sensor_rng)
+        cost = [0, 0.0]
+
+        def measure(rc):
+            acq = sensor.acquire(rc, rng=gen)
+            if len(acq.values) != len(rc):
+                raise ValueError(f"sensor {sensor.name!r} lost cells: multi-round needs all")
+            cost[0] += acq.frames
+            cost[1] += acq.seconds
+            return acq.values
+
+        prior = None if self.priors is None else self.priors[k]
+        sp = plan_sequential(
+            k, shape=self.shape, measure=measure, prior=prior, options=self.options, rng=plan_rng
+        )
+        acq = Acquisition(sp.plan.rc, np.asarray(sp.values), self.shape, cost[0], cost[1])
+        return acq, sp.rounds
