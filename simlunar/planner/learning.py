@@ -86,6 +86,40 @@ def _check_examples(examples) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
+def _checked_densities(densities) -> list[float]:
+    """The sorted densities; ValueError when empty, repeated or any has no sample pitch."""
+    dens = sorted({float(d) for d in densities})
+    if not dens or len(dens) != len(list(densities)):
+        raise ValueError(f"densities must be distinct and non-empty, got {list(densities)}")
+    for d in dens:
+        pitch_of(d)
+    return dens
+
+
+def _fit_boosted(x, y, opt, rng) -> HistGradientBoostingRegressor:
+    """A histogram gradient-boosting regressor with ``opt``'s settings fitted to ``(x, y)``.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, features)
+    y : ndarray, shape (n,)
+    opt : LearnedOptions
+    rng : Generator
+        Draws the boosting's seed (one integer).
+    """
+    model = HistGradientBoostingRegressor(
+        max_iter=opt.max_iter,
+        learning_rate=opt.learning_rate,
+        max_leaf_nodes=opt.max_leaf_nodes,
+        min_samples_leaf=opt.min_samples_leaf,
+        l2_regularization=opt.l2_regularization,
+        early_stopping=False,
+        random_state=int(rng.integers(2**31 - 1)),
+    )
+    with threadpool_limits(opt.threads):
+        return model.fit(x, y)
+
+
 def _training_set(examples, density, options, rng):
     """Features and centred targets of ``options.pixels_per_example`` pixels per example."""
     xs, ys = [], []
@@ -130,26 +164,12 @@ def train_learned_map(
     opt = options or LearnedOptions()
     rng = np.random.default_rng(rng)
     ex = _check_examples(examples)
-    dens = sorted({float(d) for d in densities})
-    if not dens or len(dens) != len(list(densities)):
-        raise ValueError(f"densities must be distinct and non-empty, got {list(densities)}")
-    for d in dens:
-        pitch_of(d)
+    dens = _checked_densities(densities)
     t0 = time.perf_counter()
     models = {}
     for d in dens:
         x, y = _training_set(ex, d, opt, rng)
-        model = HistGradientBoostingRegressor(
-            max_iter=opt.max_iter,
-            learning_rate=opt.learning_rate,
-            max_leaf_nodes=opt.max_leaf_nodes,
-            min_samples_leaf=opt.min_samples_leaf,
-            l2_regularization=opt.l2_regularization,
-            early_stopping=False,
-            random_state=int(rng.integers(2**31 - 1)),
-        )
-        with threadpool_limits(opt.threads):
-            models[d] = model.fit(x, y)
+        models[d] = _fit_boosted(x, y, opt, rng)
     meta = {
         "format": FORMAT,
         "feature_set_version": FEATURE_SET_VERSION,
@@ -257,11 +277,7 @@ def train_learned_reconstruction(
     opt = options or LearnedOptions()
     rng = np.random.default_rng(rng)
     ex = _check_examples(examples)
-    dens = sorted({float(d) for d in densities})
-    if not dens or len(dens) != len(list(densities)):
-        raise ValueError(f"densities must be distinct and non-empty, got {list(densities)}")
-    for d in dens:
-        pitch_of(d)
+    dens = _checked_densities(densities)
     if shading_options and not with_shading:
         raise ValueError("shading_options given without with_shading=True")
     if with_shading:
@@ -275,17 +291,7 @@ def train_learned_reconstruction(
         RECONSTRUCTIONS["shading"].make_options(shading_options)  # bad keys fail before work
     t0 = time.perf_counter()
     x, y = _recon_training_set(ex, dens, opt, with_shading, shading_options, rng)
-    model = HistGradientBoostingRegressor(
-        max_iter=opt.max_iter,
-        learning_rate=opt.learning_rate,
-        max_leaf_nodes=opt.max_leaf_nodes,
-        min_samples_leaf=opt.min_samples_leaf,
-        l2_regularization=opt.l2_regularization,
-        early_stopping=False,
-        random_state=int(rng.integers(2**31 - 1)),
-    )
-    with threadpool_limits(opt.threads):
-        model.fit(x, y)
+    model = _fit_boosted(x, y, opt, rng)
     meta = {
         "format": RECON_FORMAT,
         "recon_feature_version": RECON_FEATURE_VERSION,
