@@ -195,6 +195,21 @@ class Registry(Mapping):
         self._entries[name] = entry
         return entry
 
+    def resolve(self, name: str, options=None) -> tuple[Entry, Any]:
+        """The entry ``name`` and its options object from an instance, a mapping or None.
+
+        A mapping (or None: the defaults) is built with :meth:`Entry.make_options`; an instance
+        of another class is a ``TypeError`` naming both classes.
+        """
+        entry = self[name]
+        if options is None or isinstance(options, dict):
+            options = entry.make_options(options)
+        elif not isinstance(options, entry.options):
+            raise TypeError(
+                f"{self.kind} {name!r} takes {entry.options.__name__}, got {type(options).__name__}"
+            )
+        return entry, options
+
     def __getitem__(self, name: str) -> Entry:
         try:
             return self._entries[name]

@@ -49,6 +49,22 @@ def test_a_name_is_registered_once_and_options_must_be_a_dataclass():
         reg.register("b", print, dict)
 
 
+def test_resolve_builds_or_checks_the_options_object():
+    reg = Registry("widget")
+    reg.register("a", print, _Opts)
+    entry, opts = reg.resolve("a")
+    assert entry.name == "a" and opts == _Opts()
+    assert reg.resolve("a", {"gain": 3.0})[1] == _Opts(gain=3.0)
+    given = _Opts(sigma=5.0)
+    assert reg.resolve("a", given)[1] is given
+    with pytest.raises(TypeError, match="widget 'a' takes _Opts, got str"):
+        reg.resolve("a", "gain=3")
+    with pytest.raises(ValueError, match="gain must be <= 4"):
+        reg.resolve("a", {"gain": 9.0})
+    with pytest.raises(UnknownNameError, match="unknown widget 'b'"):
+        reg.resolve("b")
+
+
 def test_stray_option_key_is_refused_with_a_suggestion():
     with pytest.raises(
         UnknownNameError,
