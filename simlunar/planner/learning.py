@@ -120,6 +120,25 @@ def _fit_boosted(x, y, opt, rng) -> HistGradientBoostingRegressor:
         return model.fit(x, y)
 
 
+def _training_meta(head, dens, opt, ex, t0, provenance, **counts) -> dict:
+    """The JSON record of a training: ``head`` (format and features), then the densities,
+    options, example count, ``counts``, input hashes, seconds since ``t0``, library versions
+    and ``provenance``. A record JSON cannot hold fails here (``TypeError``), not at save time."""
+    meta = {
+        **head,
+        "densities": dens,
+        "options": asdict(opt),
+        "examples": len(ex),
+        **counts,
+        "input_sha256": [[_sha256_array(i), _sha256_array(t)] for i, t in ex],
+        "train_seconds": round(time.perf_counter() - t0, 3),
+        "versions": _versions(),
+        "provenance": provenance or {},
+    }
+    json.dumps(meta)  # fail here, not at save time, on a provenance JSON cannot hold
+    return meta
+
+
 def _training_set(examples, density, options, rng):
     """Features and centred targets of ``options.pixels_per_example`` pixels per example."""
     xs, ys = [], []
@@ -170,20 +189,12 @@ def train_learned_map(
     for d in dens:
         x, y = _training_set(ex, d, opt, rng)
         models[d] = _fit_boosted(x, y, opt, rng)
-    meta = {
+    head = {
         "format": FORMAT,
         "feature_set_version": FEATURE_SET_VERSION,
         "feature_names": list(FEATURE_NAMES),
-        "densities": dens,
-        "options": asdict(opt),
-        "examples": len(ex),
-        "input_sha256": [[_sha256_array(i), _sha256_array(t)] for i, t in ex],
-        "train_seconds": round(time.perf_counter() - t0, 3),
-        "versions": _versions(),
-        "provenance": provenance or {},
     }
-    json.dumps(meta)  # fail here, not at save time, on a provenance JSON cannot hold
-    return LearnedMap(models, meta)
+    return LearnedMap(models, _training_meta(head, dens, opt, ex, t0, provenance))
 
 
 def _recon_training_set(examples, densities, options, with_shading, shading_options, rng):
@@ -292,21 +303,13 @@ def train_learned_reconstruction(
     t0 = time.perf_counter()
     x, y = _recon_training_set(ex, dens, opt, with_shading, shading_options, rng)
     model = _fit_boosted(x, y, opt, rng)
-    meta = {
+    head = {
         "format": RECON_FORMAT,
         "recon_feature_version": RECON_FEATURE_VERSION,
         "feature_set_version": FEATURE_SET_VERSION,
         "feature_names": list(feature_names(with_shading)),
         "with_shading": bool(with_shading),
         "shading_options": dict(shading_options or {}),
-        "densities": dens,
-        "options": asdict(opt),
-        "examples": len(ex),
-        "training_pixels": len(y),
-        "input_sha256": [[_sha256_array(i), _sha256_array(t)] for i, t in ex],
-        "train_seconds": round(time.perf_counter() - t0, 3),
-        "versions": _versions(),
-        "provenance": provenance or {},
     }
-    json.dumps(meta)  # fail here, not at save time, on a provenance JSON cannot hold
+    meta = _training_meta(head, dens, opt, ex, t0, provenance, training_pixels=len(y))
     return LearnedReconstruction(model, meta)

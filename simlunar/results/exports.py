@@ -40,7 +40,7 @@ import numpy as np
 from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
 from simlunar.imaging.exr import write_exr
-from simlunar.results.ply import ply_records, write_ply
+from simlunar.results.ply import XYZ_FIELDS, ply_records, write_ply
 from simlunar.scanner.codings import CODINGS
 from simlunar.scanner.gray_code import frame_names
 from simlunar.scanner.triangulate import Correspondences, triangulate_plane, triangulate_rays
@@ -158,9 +158,7 @@ def write_calibration_yaml(path, calib: dict[str, Any]) -> Path:
 
 
 _PLY_FIELDS = [
-    ("x", "<f8", "double"),
-    ("y", "<f8", "double"),
-    ("z", "<f8", "double"),
+    *XYZ_FIELDS,
     ("cam_col", "<i4", "int"),
     ("cam_row", "<i4", "int"),
     ("proj_u", "<f8", "double"),

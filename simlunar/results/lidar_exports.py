@@ -29,7 +29,7 @@ import numpy as np
 
 from simlunar.atomic import atomic_write
 from simlunar.imaging.exr import write_exr
-from simlunar.results.ply import ply_records, write_ply
+from simlunar.results.ply import XYZ_FIELDS, ply_records, write_ply
 
 __all__ = [
     "lidar_export_payload",
@@ -40,9 +40,7 @@ __all__ = [
 ]
 
 _PLY = (
-    ("x", "<f8", "double"),
-    ("y", "<f8", "double"),
-    ("z", "<f8", "double"),
+    *XYZ_FIELDS,
     ("time", "<f8", "double"),
     ("photons", "<f4", "float"),
     ("returns", "u1", "uchar"),

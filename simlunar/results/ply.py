@@ -13,7 +13,10 @@ import numpy as np
 
 from simlunar.atomic import atomic_write
 
-__all__ = ["ply_records", "write_ply"]
+__all__ = ["XYZ_FIELDS", "ply_records", "write_ply"]
+
+XYZ_FIELDS = (("x", "<f8", "double"), ("y", "<f8", "double"), ("z", "<f8", "double"))
+"""The position fields every cloud starts with: world ``x y z`` in metres, doubles."""
 
 
 def ply_records(n: int, fields) -> np.ndarray:
