@@ -30,14 +30,13 @@ coordinate lies inside the projector.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from simlunar.registry import check_bounds, option
 from simlunar.scanner.phase_shift import PhaseDecode, wrapped_phase
-from simlunar.scanner.scans import CodedScan, triangulated
+from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan
 from simlunar.scanner.triangulate import check_rig
 
 __all__ = [
@@ -254,47 +253,23 @@ def micro_phase_shift_scan(capture, rig, options: MicroPhaseShiftOptions | None 
         raise ValueError(f"capture.render returned shape {imgs.shape} for {len(stack) + 2}")
     frames = np.asarray(capture.sense(imgs))
     result = decode(frames[:-2], frames[-2], frames[-1], proj_shape=(H, W), options=o)
-    cloud, depth = triangulated(rig, result, o.method)
-    kept = {"white": frames[-2], "black": frames[-1]}
-    if o.keep_frames:
-        kept["images"] = frames[:-2]
-    return CodedScan(result, cloud, depth, len(stack) + 2, kept, MicroPhaseShiftCoding(o))
+    images = frames[:-2] if o.keep_frames else None
+    coding = MicroPhaseShiftCoding(o)
+    return coded_scan(
+        rig, result, frames[-2], frames[-1], images, renders=len(stack) + 2, coding=coding
+    )
 
 
 @dataclass
-class MicroPhaseShiftCoding:
+class MicroPhaseShiftCoding(WhiteBlackLastCoding):
     """Micro phase shifting as a coding of :data:`simlunar.scanner.codings.CODINGS`."""
 
     options: MicroPhaseShiftOptions = field(default_factory=MicroPhaseShiftOptions)
-    full_field = True
     frame_order = "per axis (columns, then rows): f0 at 3 shifts, f1 ... f(F-1); white, black"
-
-    @property
-    def method(self) -> str:
-        return self.options.method
-
-    def frames(self, proj_shape) -> int:
-        return len(frame_names(self.options, proj_shape))
-
-    def frame_names(self, proj_shape) -> list[str]:
-        return frame_names(self.options, proj_shape)
-
-    def patterns(self, proj_shape) -> np.ndarray:
-        H, W = (int(proj_shape[0]), int(proj_shape[1]))
-        wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
-        return np.concatenate([encode((H, W), self.options), wb])
-
-    def decode(self, frames, proj_shape) -> PhaseDecode:
-        frames = np.asarray(frames)
-        return decode(
-            frames[:-2], frames[-2], frames[-1], proj_shape=proj_shape, options=self.options
-        )
-
-    def scan(self, capture, rig, *, keep_frames: bool = False) -> CodedScan:
-        o = self.options
-        if keep_frames and not o.keep_frames:
-            o = dataclasses.replace(o, keep_frames=True)
-        return micro_phase_shift_scan(capture, rig, o)
+    _names = staticmethod(frame_names)
+    _encode = staticmethod(encode)
+    _decode = staticmethod(decode)
+    _scan = staticmethod(micro_phase_shift_scan)
 
     def export_meta(self, decode: PhaseDecode) -> dict:
         o = self.options

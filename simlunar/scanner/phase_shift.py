@@ -35,13 +35,12 @@ sum to the white frame), so by linearity of light transport they need no render:
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from simlunar.registry import check_bounds, option
-from simlunar.scanner.scans import CodedScan, triangulated
+from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan
 from simlunar.scanner.triangulate import check_rig
 
 __all__ = [
@@ -479,57 +478,24 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     white, black = np.asarray(capture.sense(wb_r))
     dec.add_white_black(white, black)
     result = dec.result()
-    cloud, depth = triangulated(rig, result, o.method)
-    frames = {"white": white, "black": black}
-    if kept is not None:
-        frames["images"] = np.concatenate(kept)
-    return CodedScan(
-        decode=result,
-        cloud=cloud,
-        depth=depth,
-        renders=renders,
-        frames=frames,
-        coding=PhaseShiftCoding(o),
+    images = None if kept is None else np.concatenate(kept)
+    return coded_scan(
+        rig, result, white, black, images, renders=renders, coding=PhaseShiftCoding(o)
     )
 
 
 @dataclass
-class PhaseShiftCoding:
+class PhaseShiftCoding(WhiteBlackLastCoding):
     """Phase shifting as a coding of :data:`simlunar.scanner.codings.CODINGS`."""
 
     options: PhaseShiftOptions = field(default_factory=PhaseShiftOptions)
-    full_field = True
     frame_order = (
         "per axis (columns, then rows), per level (coarsest first), the N shifts; then white, black"
     )
-
-    @property
-    def method(self) -> str:
-        return self.options.method
-
-    def frames(self, proj_shape) -> int:
-        return len(frame_names(self.options, proj_shape))
-
-    def frame_names(self, proj_shape) -> list[str]:
-        return frame_names(self.options, proj_shape)
-
-    def patterns(self, proj_shape) -> np.ndarray:
-        H, W = (int(proj_shape[0]), int(proj_shape[1]))
-        wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
-        return np.concatenate([encode((H, W), self.options), wb])
-
-    def decode(self, frames, proj_shape) -> PhaseDecode:
-        """Decode a whole stack in :meth:`patterns` order (white and black last)."""
-        frames = np.asarray(frames)
-        return decode(
-            frames[:-2], frames[-2], frames[-1], proj_shape=proj_shape, options=self.options
-        )
-
-    def scan(self, capture, rig, *, keep_frames: bool = False):
-        o = self.options
-        if keep_frames and not o.keep_frames:
-            o = dataclasses.replace(o, keep_frames=True)
-        return phase_shift_scan(capture, rig, o)
+    _names = staticmethod(frame_names)
+    _encode = staticmethod(encode)
+    _decode = staticmethod(decode)
+    _scan = staticmethod(phase_shift_scan)
 
     def export_meta(self, decode: PhaseDecode) -> dict:
         o = self.options

@@ -42,9 +42,12 @@ __all__ = [
     "CodedScan",
     "DotOptions",
     "DotScan",
+    "FullFieldCoding",
     "GrayCodeOptions",
     "GrayCoding",
     "GrayScan",
+    "WhiteBlackLastCoding",
+    "coded_scan",
     "dot_scan",
     "gray_code_scan",
     "low_contrast_pixels",
@@ -254,18 +257,8 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     result = dec.result(require_reliable=o.require_reliable)
     if o.subpixel:
         result = refine_subpixel_from_diff(result, dec.diff)
-    cloud, depth = triangulated(rig, result, o.method)
-    frames = {"white": white, "black": black}
-    if kept is not None:
-        frames["images"] = np.concatenate(kept)
-    return CodedScan(
-        decode=result,
-        cloud=cloud,
-        depth=depth,
-        renders=renders,
-        frames=frames,
-        coding=GrayCoding(o),
-    )
+    images = None if kept is None else np.concatenate(kept)
+    return coded_scan(rig, result, white, black, images, renders=renders, coding=GrayCoding(o))
 
 
 def triangulated(rig: Rig, decode, method: str) -> tuple[PointCloud, np.ndarray]:
@@ -282,7 +275,75 @@ def triangulated(rig: Rig, decode, method: str) -> tuple[PointCloud, np.ndarray]
     return cloud, depth_at_proj_pixels(cloud, rig.guide)
 
 
-class GrayCoding:
+def coded_scan(rig: Rig, decode, white, black, images, *, renders: int, coding) -> CodedScan:
+    """Triangulate a full-field ``decode`` (:func:`triangulated`, with ``coding.method``) and
+    bundle it with the sensed frames: how every coded scan ends.
+
+    Parameters
+    ----------
+    rig : Rig
+    decode : a decode with ``valid`` and ``proj_uv()``
+    white, black : ndarray, shape (H, W)
+        The sensed all-on and all-off frames.
+    images : ndarray, shape (n, H, W), or None
+        The sensed pattern frames, kept when the options ask (None: not kept).
+    renders : int
+        Patterns rendered.
+    coding : the coding that scanned (its ``options.method`` triangulates)
+    """
+    cloud, depth = triangulated(rig, decode, coding.method)
+    frames = {"white": white, "black": black}
+    if images is not None:
+        frames["images"] = images
+    return CodedScan(
+        decode=decode, cloud=cloud, depth=depth, renders=renders, frames=frames, coding=coding
+    )
+
+
+class FullFieldCoding:
+    """What the full-field codings share: ``options`` (with ``method`` and ``keep_frames``) and
+    a scan function, the class attribute ``_scan(capture, rig, options) -> CodedScan``."""
+
+    full_field = True
+
+    @property
+    def method(self) -> str:
+        return self.options.method
+
+    def scan(self, capture, rig: Rig, *, keep_frames: bool = False) -> CodedScan:
+        """The scan function with these options (``keep_frames`` or the options')."""
+        o = self.options
+        if keep_frames and not o.keep_frames:
+            o = dataclasses.replace(o, keep_frames=True)
+        return self._scan(capture, rig, o)
+
+
+class WhiteBlackLastCoding(FullFieldCoding):
+    """A full-field coding whose stack is its own patterns then white and black, given as the
+    class attributes ``_names(options, proj_shape)``, ``_encode((H, W), options)`` (float32 in
+    [0, 1]) and ``_decode(images, white, black, *, proj_shape, options)``."""
+
+    def frames(self, proj_shape) -> int:
+        return len(self.frame_names(proj_shape))
+
+    def frame_names(self, proj_shape) -> list[str]:
+        return self._names(self.options, proj_shape)
+
+    def patterns(self, proj_shape) -> np.ndarray:
+        """(frames, H, W) float32: the coding's patterns, then white (ones) and black (zeros)."""
+        H, W = (int(proj_shape[0]), int(proj_shape[1]))
+        wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
+        return np.concatenate([self._encode((H, W), self.options), wb])
+
+    def decode(self, frames, proj_shape):
+        """Decode a whole stack in :meth:`patterns` order (white and black last)."""
+        frames = np.asarray(frames)
+        return self._decode(
+            frames[:-2], frames[-2], frames[-1], proj_shape=proj_shape, options=self.options
+        )
+
+
+class GrayCoding(FullFieldCoding):
     """The gray code as a coding of :data:`simlunar.scanner.codings.CODINGS`.
 
     Parameters
@@ -290,15 +351,11 @@ class GrayCoding:
     options : GrayCodeOptions, optional
     """
 
-    full_field = True
     frame_order = "OpenCV GrayCodePattern.generate() order, then white, black"
+    _scan = staticmethod(gray_code_scan)
 
     def __init__(self, options: GrayCodeOptions | None = None) -> None:
         self.options = options or GrayCodeOptions()
-
-    @property
-    def method(self) -> str:
-        return self.options.method
 
     @staticmethod
     def _bits(proj_shape) -> tuple[int, int]:
@@ -331,13 +388,6 @@ class GrayCoding:
             white_threshold=o.white_threshold,
             require_reliable=o.require_reliable,
         )
-
-    def scan(self, capture, rig: Rig, *, keep_frames: bool = False) -> CodedScan:
-        """:func:`gray_code_scan` with these options (``keep_frames`` or the options')."""
-        o = self.options
-        if keep_frames and not o.keep_frames:
-            o = dataclasses.replace(o, keep_frames=True)
-        return gray_code_scan(capture, rig, o)
 
     def export_meta(self, decode) -> dict:
         o = self.options
