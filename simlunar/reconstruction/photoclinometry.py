@@ -43,6 +43,7 @@ from scipy import ndimage, sparse
 from scipy.sparse import linalg as splinalg
 
 from simlunar.reconstruction._anchor import linear_field, reanchored_detail
+from simlunar.reconstruction._reading import check_share_band, reading_option
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import calibrate
 from simlunar.reconstruction.integrate import central_gradient
@@ -74,39 +75,23 @@ class PhotoclinometryOptions:
     anchor_weight: float = option(1.0, doc="w_a: weight of the samples", gt=0, le=1e6)
     rtol: float = option(3e-3, doc="relative residual at which CG stops", gt=0, lt=1)
     max_iter: int = option(300, doc="most CG iterations", ge=1, le=100000)
-    gain: float = option(1.0, doc="g: divides the calibrated |b| when reading slopes", gt=0, le=10)
-    clip: float = option(4.0, doc="largest |slope| (dz/dx) read from the image", gt=0, le=100)
-    image_sigma: float = option(
-        1.0, doc="Gaussian sigma smoothing the image before slopes are read (0: none)",
-        unit="cell", ge=0, le=32,
-    )  # fmt: skip
+    gain: float = reading_option("gain")
+    clip: float = reading_option("clip")
+    image_sigma: float = reading_option("image_sigma")
     gamma_max: float = option(1.0, doc="weight of the correction at full share", ge=0, le=1)
-    share_lo: float = option(
-        0.1, doc="explained-variance share at and below which the result is linear", ge=0, lt=1
-    )
-    share_hi: float = option(
-        0.5, doc="explained-variance share from which gamma = gamma_max", gt=0, le=1
-    )
-    use_flat: bool = option(
-        True, doc="divide by the co-located frame when the guide has one", choices=(True, False)
-    )
+    share_lo: float = reading_option("share_lo")
+    share_hi: float = reading_option("share_hi")
+    use_flat: bool = reading_option("use_flat")
     flat_guard: float = option(
         0.05, doc="flat pixels under this fraction of its median are left out", gt=0, lt=1
     )
-    sigma_pitch: float = option(
-        0.5, doc="calibration blur sigma as a fraction of the sample pitch", gt=0, le=4
-    )
-    shadow: float = option(
-        0.02, doc="shadowed: at or below this fraction of the 99th percentile", ge=0, lt=1
-    )
-    saturation: float = option(1.0, doc="saturated: image level at or above this", gt=0)
+    sigma_pitch: float = reading_option("sigma_pitch")
+    shadow: float = reading_option("shadow")
+    saturation: float = reading_option("saturation")
 
     def __post_init__(self):
         check_bounds(self)
-        if self.share_hi <= self.share_lo:
-            raise ValueError(
-                f"share_hi must be > share_lo, got {self.share_hi!r} <= {self.share_lo!r}"
-            )
+        check_share_band(self)
 
     def shading(self) -> ShadingOptions:
         """The shared reading of the image (frames, calibration, slopes, fallback)."""
