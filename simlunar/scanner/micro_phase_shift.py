@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.registry import check_bounds, option
+from simlunar.scanner._fringe import check_rays_axes, fringe_option
 from simlunar.scanner.phase_shift import PhaseDecode, wrapped_phase
 from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan
 from simlunar.scanner.triangulate import check_rig
@@ -50,8 +51,6 @@ __all__ = [
     "unambiguous_px",
 ]
 
-_AXES = ("both", "cols")
-_METHODS = ("plane", "rays")
 #: camera pixels searched at once (bounds the (pixels, periods) mismatch array)
 _CHUNK = 4096
 
@@ -81,19 +80,18 @@ class MicroPhaseShiftOptions:
     period_px: float = option(16.0, doc="mean fringe period", unit="px", ge=2.0)
     band: float = option(0.1, doc="relative width of the frequency band", gt=0.0, le=0.5)
     frequencies: int = option(5, doc="number of fringe frequencies F", ge=2, le=32)
-    axes: str = option("both", doc="fringes along both axes or columns only", choices=_AXES)
-    black_threshold: float = option(0.05, doc="lit: white - black (frame units)", ge=0, le=1)
+    axes: str = fringe_option("axes")
+    black_threshold: float = fringe_option("black_threshold")
     min_modulation: float = option(0.01, doc="smallest amplitude A (frame units)", ge=0, le=1)
     max_mismatch: float = option(0.1, doc="largest RMS phase-vector mismatch", gt=0, le=2)
-    method: str = option("plane", doc="triangulation: column plane or rays", choices=_METHODS)
+    method: str = fringe_option("method")
     keep_frames: bool = False
 
     def __post_init__(self):
         check_bounds(self)
         if int(self.frequencies) != self.frequencies:
             raise ValueError(f"frequencies must be a whole number, got {self.frequencies!r}")
-        if self.method == "rays" and self.axes != "both":
-            raise ValueError("method 'rays' needs the row phase: use axes 'both'")
+        check_rays_axes(self)
 
 
 def frequencies(options: MicroPhaseShiftOptions) -> np.ndarray:

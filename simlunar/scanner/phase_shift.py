@@ -40,7 +40,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.registry import check_bounds, option
-from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan
+from simlunar.scanner._fringe import check_rays_axes, fringe_option
+from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan, render_checked
 from simlunar.scanner.triangulate import check_rig
 
 __all__ = [
@@ -58,9 +59,7 @@ __all__ = [
     "wrapped_phase",
 ]
 
-_AXES = ("both", "cols")
 _INVERSES = ("linearity", "render")
-_METHODS = ("plane", "rays")
 #: the coarsest period is at least this many times the axis length (a margin of 5 % of the
 #: period on each side, so noise cannot wrap the phase of the first or last pixel)
 _COARSE_MARGIN = 1.1
@@ -97,8 +96,8 @@ class PhaseShiftOptions:
     steps: int = option(4, doc="phase shifts per fringe period", ge=3, le=64)
     period_px: float = option(8.0, doc="finest fringe period", unit="px", ge=2.0)
     ratio: float = option(8.0, doc="period ratio between unwrapping levels", gt=1.0, le=64.0)
-    axes: str = option("both", doc="fringes along both axes or columns only", choices=_AXES)
-    black_threshold: float = option(0.05, doc="lit: white - black (frame units)", ge=0, le=1)
+    axes: str = fringe_option("axes")
+    black_threshold: float = fringe_option("black_threshold")
     min_modulation: float = option(0.01, doc="smallest modulation B (frame units)", ge=0, le=1)
     unwrap_tolerance: float = option(
         1.0, doc="largest unwrapping disagreement (rad)", gt=0, le=np.pi
@@ -106,15 +105,14 @@ class PhaseShiftOptions:
     inverses: str = option(
         "linearity", doc="shifts n + N/2 by linearity of light or rendered", choices=_INVERSES
     )
-    method: str = option("plane", doc="triangulation: column plane or rays", choices=_METHODS)
+    method: str = fringe_option("method")
     keep_frames: bool = False
 
     def __post_init__(self):
         check_bounds(self)
         if int(self.steps) != self.steps:
             raise ValueError(f"steps must be a whole number, got {self.steps!r}")
-        if self.method == "rays" and self.axes != "both":
-            raise ValueError("method 'rays' needs the row phase: use axes 'both'")
+        check_rays_axes(self)
 
 
 def fringe_periods(n: int, period_px: float, ratio: float) -> tuple[float, ...]:
@@ -431,15 +429,6 @@ def decode(images, white, black, *, proj_shape, options: PhaseShiftOptions | Non
     return dec.result()
 
 
-def _render(capture, patterns: np.ndarray) -> np.ndarray:
-    imgs = np.asarray(capture.render(patterns))
-    if imgs.ndim != 3 or imgs.shape[0] != len(patterns):
-        raise ValueError(f"capture.render returned shape {imgs.shape} for {len(patterns)} patterns")
-    if imgs.dtype not in (np.float32, np.float64):
-        imgs = imgs.astype(np.float64)
-    return imgs
-
-
 def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     """A full phase-shift scan, decoded and triangulated.
 
@@ -457,7 +446,9 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     H, W = rig.projector.intrinsics.shape
     stack = encode((H, W), o)
     N = int(o.steps)
-    wb_r = _render(capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)]))
+    wb_r = render_checked(
+        capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
+    )
     renders = 2
     dec = PhaseDecoder((H, W), wb_r.shape[1:], o)
     by_linearity = o.inverses == "linearity" and N % 2 == 0
@@ -465,11 +456,11 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     for i, (axis, level) in enumerate(dec.levels()):
         pats = stack[i * N : (i + 1) * N]
         if by_linearity:
-            half = _render(capture, pats[: N // 2])
+            half = render_checked(capture, pats[: N // 2])
             imgs = np.concatenate([half, wb_r[0][None] + wb_r[1][None] - half])
             renders += N // 2
         else:
-            imgs = _render(capture, pats)
+            imgs = render_checked(capture, pats)
             renders += N
         frames = np.asarray(capture.sense(imgs))
         dec.add_level(axis, level, frames)

@@ -51,6 +51,7 @@ __all__ = [
     "dot_scan",
     "gray_code_scan",
     "low_contrast_pixels",
+    "render_checked",
     "triangulated",
 ]
 
@@ -194,7 +195,14 @@ class DotScan:
     n_ghosts: int
 
 
-def _check_patterns(capture, patterns: np.ndarray) -> np.ndarray:
+def render_checked(capture, patterns: np.ndarray) -> np.ndarray:
+    """``capture.render(patterns)`` as (n, H, W) float32 / float64, one image per pattern.
+
+    Raises
+    ------
+    ValueError
+        The capture returned another number of images or not a stack.
+    """
     imgs = np.asarray(capture.render(patterns))
     if imgs.ndim != 3 or imgs.shape[0] != len(patterns):
         raise ValueError(f"capture.render returned shape {imgs.shape} for {len(patterns)} patterns")
@@ -228,7 +236,7 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     H, W = rig.projector.intrinsics.shape
     stack = gc.encode(W, H)
     n_bits = len(stack) // 2
-    wb_r = _check_patterns(
+    wb_r = render_checked(
         capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
     )
     renders = 2
@@ -242,11 +250,11 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     kept = [] if o.keep_frames else None
     for k in range(n_bits):
         if o.inverses == "linearity":
-            pat_r = _check_patterns(capture, stack[2 * k : 2 * k + 1].astype(np.float32) / 255.0)
+            pat_r = render_checked(capture, stack[2 * k : 2 * k + 1].astype(np.float32) / 255.0)
             pair_r = np.concatenate([pat_r, gc.inverses_by_linearity(pat_r, wb_r[0], wb_r[1])])
             renders += 1
         else:
-            pair_r = _check_patterns(capture, stack[2 * k : 2 * k + 2].astype(np.float32) / 255.0)
+            pair_r = render_checked(capture, stack[2 * k : 2 * k + 2].astype(np.float32) / 255.0)
             renders += 2
         pair = np.asarray(capture.sense(pair_r))
         dec.add_pair(k, pair[0], pair[1])
@@ -450,14 +458,14 @@ def dot_scan(
         min_cam_spacing=o.min_cam_spacing,
         exact=o.exact,
     )
-    black = np.asarray(capture.sense(_check_patterns(capture, np.zeros((1, H, W), np.float32))))[0]
+    black = np.asarray(capture.sense(render_checked(capture, np.zeros((1, H, W), np.float32))))[0]
     segments = _dots.epipolar_segments(rig, proj_uv, depth_range)
     cam_uv = np.full((len(proj_uv), 2), np.nan)
     n_ghosts = 0
     for start in range(0, len(schedule), o.batch):
         group = schedule[start : start + o.batch]
         pats = np.stack([_dots.dot_pattern((H, W), proj_uv[f], radius=o.radius) for f in group])
-        frames = np.asarray(capture.sense(_check_patterns(capture, pats)))
+        frames = np.asarray(capture.sense(render_checked(capture, pats)))
         for f, frame in zip(group, frames):
             det = _dots.detect_dots(
                 frame,

@@ -1,0 +1,40 @@
+"""Options the fringe codings share (phase shift, micro phase shift), declared once.
+
+Both read a camera pixel as lit when white - black exceeds ``black_threshold``, project fringes
+along both axes or the columns only, and triangulate by the column plane or by rays (which
+need the row phase, hence ``axes="both"``).
+"""
+
+from __future__ import annotations
+
+from simlunar.registry import option
+
+__all__ = ["FRINGE_AXES", "FRINGE_OPTIONS", "TRIANGULATIONS", "check_rays_axes", "fringe_option"]
+
+FRINGE_AXES = ("both", "cols")
+TRIANGULATIONS = ("plane", "rays")
+
+FRINGE_OPTIONS: dict[str, dict] = {
+    "axes": dict(default="both", doc="fringes along both axes or columns only", choices=FRINGE_AXES),
+    "black_threshold": dict(default=0.05, doc="lit: white - black (frame units)", ge=0, le=1),
+    "method": dict(default="plane", doc="triangulation: column plane or rays", choices=TRIANGULATIONS),
+}  # fmt: skip
+"""name -> keywords of :func:`simlunar.registry.option` (``default`` its first argument)."""
+
+
+def fringe_option(name: str):
+    """A fresh dataclass field for the shared option ``name`` of :data:`FRINGE_OPTIONS`.
+
+    Raises
+    ------
+    KeyError
+        ``name`` is not a shared option.
+    """
+    spec = dict(FRINGE_OPTIONS[name])
+    return option(spec.pop("default"), **spec)
+
+
+def check_rays_axes(options) -> None:
+    """``ValueError`` when ``options.method`` is "rays" without ``axes="both"``."""
+    if options.method == "rays" and options.axes != "both":
+        raise ValueError("method 'rays' needs the row phase: use axes 'both'")

@@ -1,0 +1,35 @@
+"""The options phase shift and micro phase shift share: one declaration, same checks."""
+
+import pytest
+
+from simlunar.registry import option_info
+from simlunar.scanner._fringe import FRINGE_OPTIONS, check_rays_axes, fringe_option
+from simlunar.scanner.micro_phase_shift import MicroPhaseShiftOptions
+from simlunar.scanner.phase_shift import PhaseShiftOptions
+
+
+def test_both_codings_carry_the_shared_declarations():
+    phase, micro = option_info(PhaseShiftOptions), option_info(MicroPhaseShiftOptions)
+    for name, spec in FRINGE_OPTIONS.items():
+        assert phase[name] == micro[name], name
+        assert phase[name]["default"] == spec["default"]
+    assert phase["method"]["choices"] == ("plane", "rays")
+
+
+def test_fringe_option_is_a_fresh_field_each_time():
+    assert fringe_option("axes") is not fringe_option("axes")
+    with pytest.raises(KeyError):
+        fringe_option("steps")
+
+
+@pytest.mark.parametrize("cls", [PhaseShiftOptions, MicroPhaseShiftOptions])
+def test_rays_need_both_axes_and_choices_are_checked(cls):
+    with pytest.raises(ValueError, match="method 'rays' needs the row phase"):
+        cls(method="rays", axes="cols")
+    assert cls(method="rays", axes="both").method == "rays"
+    with pytest.raises(ValueError, match="axes"):
+        cls(axes="rows")
+
+
+def test_check_rays_axes_accepts_the_plane_with_columns_only():
+    check_rays_axes(PhaseShiftOptions(axes="cols"))
