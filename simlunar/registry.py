@@ -30,6 +30,7 @@ __all__ = [
     "did_you_mean_file",
     "option",
     "option_info",
+    "shared_option",
 ]
 
 
@@ -101,6 +102,20 @@ def option(
     if default_factory is not dataclasses.MISSING:
         return field(default_factory=default_factory, metadata=meta)
     return field(default=default, metadata=meta)
+
+
+def shared_option(table: Mapping[str, Mapping[str, Any]], name: str):
+    """A fresh :func:`option` field from ``table[name]``: the keywords of :func:`option`, with
+    ``default`` its first argument. For an option that several options classes declare alike
+    (one table entry; each class gets its own field).
+
+    Raises
+    ------
+    KeyError
+        ``name`` is not in ``table``.
+    """
+    spec = dict(table[name])
+    return option(spec.pop("default"), **spec)
 
 
 def option_info(options_cls) -> dict[str, dict]:

@@ -12,6 +12,7 @@ from simlunar.registry import (
     did_you_mean,
     option,
     option_info,
+    shared_option,
 )
 
 
@@ -124,3 +125,27 @@ def test_did_you_mean_file_names_the_closest_sibling(tmp_path):
     assert hint == f" (did you mean {str(tmp_path / 'quickstart.yaml')!r}?)"
     assert did_you_mean_file(tmp_path / "nothing_alike.yaml") == ""
     assert did_you_mean_file(tmp_path / "no_dir" / "x.yaml") == ""
+
+
+def test_shared_option_gives_each_class_its_own_equal_field():
+    table = {"gain": {"default": 1.0, "doc": "a gain", "ge": 0.0, "le": 4.0}}
+
+    @dataclass(frozen=True)
+    class A:
+        gain: float = shared_option(table, "gain")
+
+        def __post_init__(self):
+            check_bounds(self)
+
+    @dataclass(frozen=True)
+    class B:
+        other: int = 3
+        gain: float = shared_option(table, "gain")
+
+    assert option_info(A)["gain"] == option_info(B)["gain"]
+    assert option_info(A)["gain"]["default"] == 1.0 and option_info(A)["gain"]["le"] == 4.0
+    assert table["gain"]["default"] == 1.0  # the table is not consumed
+    with pytest.raises(ValueError, match="gain must be <= 4"):
+        A(gain=5.0)
+    with pytest.raises(KeyError):
+        shared_option(table, "gian")

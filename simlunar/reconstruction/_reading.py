@@ -9,9 +9,7 @@ drift between them.
 
 from __future__ import annotations
 
-from simlunar.registry import option
-
-__all__ = ["READING_OPTIONS", "check_share_band", "reading_option"]
+__all__ = ["READING_OPTIONS", "check_share_band"]
 
 READING_OPTIONS: dict[str, dict] = {
     "gain": dict(default=1.0, doc="g: divides the calibrated |b| when reading slopes", gt=0, le=10),
@@ -40,19 +38,8 @@ READING_OPTIONS: dict[str, dict] = {
     ),
     "saturation": dict(default=1.0, doc="saturated: image level at or above this", gt=0),
 }  # fmt: skip
-"""name -> keywords of :func:`simlunar.registry.option` (``default`` its first argument)."""
-
-
-def reading_option(name: str):
-    """A fresh dataclass field for the shared option ``name`` of :data:`READING_OPTIONS`.
-
-    Raises
-    ------
-    KeyError
-        ``name`` is not a shared option.
-    """
-    spec = dict(READING_OPTIONS[name])
-    return option(spec.pop("default"), **spec)
+"""name -> keywords of :func:`simlunar.registry.option` (``default`` its first argument), for
+:func:`simlunar.registry.shared_option`."""
 
 
 def check_share_band(options) -> None:

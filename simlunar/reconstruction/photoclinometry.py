@@ -43,12 +43,12 @@ from scipy import ndimage, sparse
 from scipy.sparse import linalg as splinalg
 
 from simlunar.reconstruction._anchor import linear_field, reanchored_detail
-from simlunar.reconstruction._reading import check_share_band, reading_option
+from simlunar.reconstruction._reading import READING_OPTIONS, check_share_band
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import calibrate
 from simlunar.reconstruction.integrate import central_gradient
 from simlunar.reconstruction.shading import ShadingOptions, fallback_gamma, shading_frames
-from simlunar.registry import check_bounds, option
+from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = [
     "PhotoclinometryOptions",
@@ -75,19 +75,19 @@ class PhotoclinometryOptions:
     anchor_weight: float = option(1.0, doc="w_a: weight of the samples", gt=0, le=1e6)
     rtol: float = option(3e-3, doc="relative residual at which CG stops", gt=0, lt=1)
     max_iter: int = option(300, doc="most CG iterations", ge=1, le=100000)
-    gain: float = reading_option("gain")
-    clip: float = reading_option("clip")
-    image_sigma: float = reading_option("image_sigma")
+    gain: float = shared_option(READING_OPTIONS, "gain")
+    clip: float = shared_option(READING_OPTIONS, "clip")
+    image_sigma: float = shared_option(READING_OPTIONS, "image_sigma")
     gamma_max: float = option(1.0, doc="weight of the correction at full share", ge=0, le=1)
-    share_lo: float = reading_option("share_lo")
-    share_hi: float = reading_option("share_hi")
-    use_flat: bool = reading_option("use_flat")
+    share_lo: float = shared_option(READING_OPTIONS, "share_lo")
+    share_hi: float = shared_option(READING_OPTIONS, "share_hi")
+    use_flat: bool = shared_option(READING_OPTIONS, "use_flat")
     flat_guard: float = option(
         0.05, doc="flat pixels under this fraction of its median are left out", gt=0, lt=1
     )
-    sigma_pitch: float = reading_option("sigma_pitch")
-    shadow: float = reading_option("shadow")
-    saturation: float = reading_option("saturation")
+    sigma_pitch: float = shared_option(READING_OPTIONS, "sigma_pitch")
+    shadow: float = shared_option(READING_OPTIONS, "shadow")
+    saturation: float = shared_option(READING_OPTIONS, "saturation")
 
     def __post_init__(self):
         check_bounds(self)

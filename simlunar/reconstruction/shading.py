@@ -60,7 +60,7 @@ from simlunar.reconstruction._anchor import (
     linear_field,
     reanchored_detail,
 )
-from simlunar.reconstruction._reading import check_share_band, reading_option
+from simlunar.reconstruction._reading import READING_OPTIONS, check_share_band
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import (
     Calibration,
@@ -69,7 +69,7 @@ from simlunar.reconstruction.calibration import (
     valid_pixels,
 )
 from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
-from simlunar.registry import check_bounds, option
+from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = [
     "ShadingOptions",
@@ -85,9 +85,9 @@ __all__ = [
 class ShadingOptions:
     """Options of the image-anchored reconstruction (:func:`shading`)."""
 
-    gain: float = reading_option("gain")
-    clip: float = reading_option("clip")
-    image_sigma: float = reading_option("image_sigma")
+    gain: float = shared_option(READING_OPTIONS, "gain")
+    clip: float = shared_option(READING_OPTIONS, "clip")
+    image_sigma: float = shared_option(READING_OPTIONS, "image_sigma")
     across_weight: float = option(
         0.1,
         doc="weight of the linear reconstruction's slope across the light in the integration "
@@ -96,9 +96,9 @@ class ShadingOptions:
         le=1,
     )
     gamma_max: float = option(1.0, doc="weight of the image's detail at full share", ge=0, le=1)
-    share_lo: float = reading_option("share_lo")
-    share_hi: float = reading_option("share_hi")
-    use_flat: bool = reading_option("use_flat")
+    share_lo: float = shared_option(READING_OPTIONS, "share_lo")
+    share_hi: float = shared_option(READING_OPTIONS, "share_hi")
+    use_flat: bool = shared_option(READING_OPTIONS, "use_flat")
     use_others: bool = option(
         True, doc="photometric stereo with the guide's other-sun frames", choices=(True, False)
     )
@@ -114,9 +114,9 @@ class ShadingOptions:
         gt=0,
         le=1,
     )
-    sigma_pitch: float = reading_option("sigma_pitch")
-    shadow: float = reading_option("shadow")
-    saturation: float = reading_option("saturation")
+    sigma_pitch: float = shared_option(READING_OPTIONS, "sigma_pitch")
+    shadow: float = shared_option(READING_OPTIONS, "shadow")
+    saturation: float = shared_option(READING_OPTIONS, "saturation")
     heldout_check: bool = option(
         True,
         doc="cap gamma by a check on held-out samples: every fifth sample is left out, and the "

@@ -7,9 +7,7 @@ need the row phase, hence ``axes="both"``).
 
 from __future__ import annotations
 
-from simlunar.registry import option
-
-__all__ = ["FRINGE_AXES", "FRINGE_OPTIONS", "TRIANGULATIONS", "check_rays_axes", "fringe_option"]
+__all__ = ["FRINGE_AXES", "FRINGE_OPTIONS", "TRIANGULATIONS", "check_rays_axes"]
 
 FRINGE_AXES = ("both", "cols")
 TRIANGULATIONS = ("plane", "rays")
@@ -19,19 +17,8 @@ FRINGE_OPTIONS: dict[str, dict] = {
     "black_threshold": dict(default=0.05, doc="lit: white - black (frame units)", ge=0, le=1),
     "method": dict(default="plane", doc="triangulation: column plane or rays", choices=TRIANGULATIONS),
 }  # fmt: skip
-"""name -> keywords of :func:`simlunar.registry.option` (``default`` its first argument)."""
-
-
-def fringe_option(name: str):
-    """A fresh dataclass field for the shared option ``name`` of :data:`FRINGE_OPTIONS`.
-
-    Raises
-    ------
-    KeyError
-        ``name`` is not a shared option.
-    """
-    spec = dict(FRINGE_OPTIONS[name])
-    return option(spec.pop("default"), **spec)
+"""name -> keywords of :func:`simlunar.registry.option` (``default`` its first argument), for
+:func:`simlunar.registry.shared_option`."""
 
 
 def check_rays_axes(options) -> None:

@@ -34,8 +34,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
-from simlunar.scanner._fringe import check_rays_axes, fringe_option
+from simlunar.registry import check_bounds, option, shared_option
+from simlunar.scanner._fringe import FRINGE_OPTIONS, check_rays_axes
 from simlunar.scanner.phase_shift import PhaseDecode, wrapped_phase
 from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan
 from simlunar.scanner.triangulate import check_rig
@@ -80,11 +80,11 @@ class MicroPhaseShiftOptions:
     period_px: float = option(16.0, doc="mean fringe period", unit="px", ge=2.0)
     band: float = option(0.1, doc="relative width of the frequency band", gt=0.0, le=0.5)
     frequencies: int = option(5, doc="number of fringe frequencies F", ge=2, le=32)
-    axes: str = fringe_option("axes")
-    black_threshold: float = fringe_option("black_threshold")
+    axes: str = shared_option(FRINGE_OPTIONS, "axes")
+    black_threshold: float = shared_option(FRINGE_OPTIONS, "black_threshold")
     min_modulation: float = option(0.01, doc="smallest amplitude A (frame units)", ge=0, le=1)
     max_mismatch: float = option(0.1, doc="largest RMS phase-vector mismatch", gt=0, le=2)
-    method: str = fringe_option("method")
+    method: str = shared_option(FRINGE_OPTIONS, "method")
     keep_frames: bool = False
 
     def __post_init__(self):

@@ -39,8 +39,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
-from simlunar.scanner._fringe import check_rays_axes, fringe_option
+from simlunar.registry import check_bounds, option, shared_option
+from simlunar.scanner._fringe import FRINGE_OPTIONS, check_rays_axes
 from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan, render_checked
 from simlunar.scanner.triangulate import check_rig
 
@@ -96,8 +96,8 @@ class PhaseShiftOptions:
     steps: int = option(4, doc="phase shifts per fringe period", ge=3, le=64)
     period_px: float = option(8.0, doc="finest fringe period", unit="px", ge=2.0)
     ratio: float = option(8.0, doc="period ratio between unwrapping levels", gt=1.0, le=64.0)
-    axes: str = fringe_option("axes")
-    black_threshold: float = fringe_option("black_threshold")
+    axes: str = shared_option(FRINGE_OPTIONS, "axes")
+    black_threshold: float = shared_option(FRINGE_OPTIONS, "black_threshold")
     min_modulation: float = option(0.01, doc="smallest modulation B (frame units)", ge=0, le=1)
     unwrap_tolerance: float = option(
         1.0, doc="largest unwrapping disagreement (rad)", gt=0, le=np.pi
@@ -105,7 +105,7 @@ class PhaseShiftOptions:
     inverses: str = option(
         "linearity", doc="shifts n + N/2 by linearity of light or rendered", choices=_INVERSES
     )
-    method: str = fringe_option("method")
+    method: str = shared_option(FRINGE_OPTIONS, "method")
     keep_frames: bool = False
 
     def __post_init__(self):

@@ -4,7 +4,7 @@ import dataclasses
 
 import pytest
 
-from simlunar.reconstruction._reading import READING_OPTIONS, check_share_band, reading_option
+from simlunar.reconstruction._reading import READING_OPTIONS, check_share_band
 from simlunar.reconstruction.photoclinometry import PhotoclinometryOptions
 from simlunar.reconstruction.shading import ShadingOptions
 from simlunar.registry import option_info
@@ -16,13 +16,6 @@ def test_both_option_classes_carry_the_shared_declarations():
         assert shading[name] == photo[name], name
         assert shading[name]["default"] == spec["default"]
         assert shading[name]["doc"] == spec["doc"]
-
-
-def test_reading_option_is_a_fresh_field_each_time():
-    a, b = reading_option("gain"), reading_option("gain")
-    assert a is not b and a.default == 1.0 and a.metadata["le"] == 10
-    with pytest.raises(KeyError):
-        reading_option("nonsense")
 
 
 @pytest.mark.parametrize("cls", [ShadingOptions, PhotoclinometryOptions])

@@ -3,7 +3,7 @@
 import pytest
 
 from simlunar.registry import option_info
-from simlunar.scanner._fringe import FRINGE_OPTIONS, check_rays_axes, fringe_option
+from simlunar.scanner._fringe import FRINGE_OPTIONS, check_rays_axes
 from simlunar.scanner.micro_phase_shift import MicroPhaseShiftOptions
 from simlunar.scanner.phase_shift import PhaseShiftOptions
 
@@ -14,12 +14,6 @@ def test_both_codings_carry_the_shared_declarations():
         assert phase[name] == micro[name], name
         assert phase[name]["default"] == spec["default"]
     assert phase["method"]["choices"] == ("plane", "rays")
-
-
-def test_fringe_option_is_a_fresh_field_each_time():
-    assert fringe_option("axes") is not fringe_option("axes")
-    with pytest.raises(KeyError):
-        fringe_option("steps")
 
 
 @pytest.mark.parametrize("cls", [PhaseShiftOptions, MicroPhaseShiftOptions])
