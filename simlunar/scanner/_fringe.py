@@ -7,7 +7,15 @@ need the row phase, hence ``axes="both"``).
 
 from __future__ import annotations
 
-__all__ = ["FRINGE_AXES", "FRINGE_OPTIONS", "TRIANGULATIONS", "check_rays_axes"]
+from simlunar.registry import check_bounds
+
+__all__ = [
+    "FRINGE_AXES",
+    "FRINGE_OPTIONS",
+    "TRIANGULATIONS",
+    "check_fringe_options",
+    "check_rays_axes",
+]
 
 FRINGE_AXES = ("both", "cols")
 TRIANGULATIONS = ("plane", "rays")
@@ -19,6 +27,17 @@ FRINGE_OPTIONS: dict[str, dict] = {
 }  # fmt: skip
 """name -> keywords of :func:`simlunar.registry.option` (``default`` its first argument), for
 :func:`simlunar.registry.shared_option`."""
+
+
+def check_fringe_options(options, *, whole: str) -> None:
+    """All the checks of a fringe coding's options: the declared bounds
+    (:func:`~simlunar.registry.check_bounds`), the count option ``whole`` a whole number, and
+    :func:`check_rays_axes`. ``ValueError`` naming the first one that fails."""
+    check_bounds(options)
+    n = getattr(options, whole)
+    if int(n) != n:
+        raise ValueError(f"{whole} must be a whole number, got {n!r}")
+    check_rays_axes(options)
 
 
 def check_rays_axes(options) -> None:

@@ -34,11 +34,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option, shared_option
-from simlunar.scanner._fringe import FRINGE_OPTIONS, check_rays_axes
+from simlunar.registry import option, shared_option
+from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
 from simlunar.scanner.phase_shift import PhaseDecode, wrapped_phase
-from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan
-from simlunar.scanner.triangulate import check_rig
+from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan, scan_inputs
 
 __all__ = [
     "MicroPhaseShiftCoding",
@@ -88,10 +87,7 @@ class MicroPhaseShiftOptions:
     keep_frames: bool = False
 
     def __post_init__(self):
-        check_bounds(self)
-        if int(self.frequencies) != self.frequencies:
-            raise ValueError(f"frequencies must be a whole number, got {self.frequencies!r}")
-        check_rays_axes(self)
+        check_fringe_options(self, whole="frequencies")
 
 
 def frequencies(options: MicroPhaseShiftOptions) -> np.ndarray:
@@ -241,9 +237,7 @@ def micro_phase_shift_scan(capture, rig, options: MicroPhaseShiftOptions | None 
     -------
     CodedScan
     """
-    check_rig(rig)
-    o = options or MicroPhaseShiftOptions()
-    H, W = rig.projector.intrinsics.shape
+    o, (H, W) = scan_inputs(rig, options, MicroPhaseShiftOptions)
     stack = encode((H, W), o)
     wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
     imgs = np.asarray(capture.render(np.concatenate([stack, wb])))

@@ -39,10 +39,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option, shared_option
-from simlunar.scanner._fringe import FRINGE_OPTIONS, check_rays_axes
-from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan, render_checked
-from simlunar.scanner.triangulate import check_rig
+from simlunar.registry import option, shared_option
+from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
+from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan, render_checked, scan_inputs
 
 __all__ = [
     "PhaseDecode",
@@ -109,10 +108,7 @@ class PhaseShiftOptions:
     keep_frames: bool = False
 
     def __post_init__(self):
-        check_bounds(self)
-        if int(self.steps) != self.steps:
-            raise ValueError(f"steps must be a whole number, got {self.steps!r}")
-        check_rays_axes(self)
+        check_fringe_options(self, whole="steps")
 
 
 def fringe_periods(n: int, period_px: float, ratio: float) -> tuple[float, ...]:
@@ -441,9 +437,7 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     -------
     CodedScan
     """
-    check_rig(rig)
-    o = options or PhaseShiftOptions()
-    H, W = rig.projector.intrinsics.shape
+    o, (H, W) = scan_inputs(rig, options, PhaseShiftOptions)
     stack = encode((H, W), o)
     N = int(o.steps)
     wb_r = render_checked(

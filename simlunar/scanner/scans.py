@@ -52,6 +52,7 @@ __all__ = [
     "gray_code_scan",
     "low_contrast_pixels",
     "render_checked",
+    "scan_inputs",
     "triangulated",
 ]
 
@@ -195,6 +196,13 @@ class DotScan:
     n_ghosts: int
 
 
+def scan_inputs(rig: Rig, options, options_cls) -> tuple[object, tuple[int, int]]:
+    """Check ``rig`` (:func:`~simlunar.scanner.triangulate.check_rig`) and return the scan's
+    options (``options``, or ``options_cls()`` when None) and the projector's (H, W)."""
+    check_rig(rig)
+    return options or options_cls(), rig.projector.intrinsics.shape
+
+
 def render_checked(capture, patterns: np.ndarray) -> np.ndarray:
     """``capture.render(patterns)`` as (n, H, W) float32 / float64, one image per pattern.
 
@@ -231,9 +239,7 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     -------
     GrayScan
     """
-    check_rig(rig)
-    o = options or GrayCodeOptions()
-    H, W = rig.projector.intrinsics.shape
+    o, (H, W) = scan_inputs(rig, options, GrayCodeOptions)
     stack = gc.encode(W, H)
     n_bits = len(stack) // 2
     wb_r = render_checked(

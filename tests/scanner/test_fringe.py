@@ -27,3 +27,11 @@ def test_rays_need_both_axes_and_choices_are_checked(cls):
 
 def test_check_rays_axes_accepts_the_plane_with_columns_only():
     check_rays_axes(PhaseShiftOptions(axes="cols"))
+
+
+@pytest.mark.parametrize(("cls", "whole"), [(PhaseShiftOptions, "steps"),
+                                            (MicroPhaseShiftOptions, "frequencies")])  # fmt: skip
+def test_the_count_option_must_be_whole(cls, whole):
+    with pytest.raises(ValueError, match=f"{whole} must be a whole number, got 4.5"):
+        cls(**{whole: 4.5})
+    assert getattr(cls(**{whole: 4.0}), whole) == 4
