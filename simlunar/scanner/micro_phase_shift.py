@@ -37,7 +37,7 @@ import numpy as np
 from simlunar.registry import option, shared_option
 from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
 from simlunar.scanner.phase_shift import PhaseDecode, wrapped_phase
-from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan, scan_inputs
+from simlunar.scanner.scans import StackFunctions, WhiteBlackLastCoding, coded_scan, scan_inputs
 
 __all__ = [
     "MicroPhaseShiftCoding",
@@ -258,10 +258,7 @@ class MicroPhaseShiftCoding(WhiteBlackLastCoding):
 
     options: MicroPhaseShiftOptions = field(default_factory=MicroPhaseShiftOptions)
     frame_order = "per axis (columns, then rows): f0 at 3 shifts, f1 ... f(F-1); white, black"
-    _names = staticmethod(frame_names)
-    _encode = staticmethod(encode)
-    _decode = staticmethod(decode)
-    _scan = staticmethod(micro_phase_shift_scan)
+    _fns = StackFunctions(frame_names, encode, decode, micro_phase_shift_scan)
 
     def export_meta(self, decode: PhaseDecode) -> dict:
         o = self.options

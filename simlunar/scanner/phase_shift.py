@@ -41,7 +41,13 @@ import numpy as np
 
 from simlunar.registry import option, shared_option
 from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
-from simlunar.scanner.scans import WhiteBlackLastCoding, coded_scan, render_checked, scan_inputs
+from simlunar.scanner.scans import (
+    StackFunctions,
+    WhiteBlackLastCoding,
+    coded_scan,
+    render_checked,
+    scan_inputs,
+)
 
 __all__ = [
     "PhaseDecode",
@@ -477,10 +483,7 @@ class PhaseShiftCoding(WhiteBlackLastCoding):
     frame_order = (
         "per axis (columns, then rows), per level (coarsest first), the N shifts; then white, black"
     )
-    _names = staticmethod(frame_names)
-    _encode = staticmethod(encode)
-    _decode = staticmethod(decode)
-    _scan = staticmethod(phase_shift_scan)
+    _fns = StackFunctions(frame_names, encode, decode, phase_shift_scan)
 
     def export_meta(self, decode: PhaseDecode) -> dict:
         o = self.options

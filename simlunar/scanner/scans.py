@@ -19,7 +19,9 @@ Inverse patterns come from linearity of light transport (``bits + 2`` renders in
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
@@ -46,6 +48,7 @@ __all__ = [
     "GrayCodeOptions",
     "GrayCoding",
     "GrayScan",
+    "StackFunctions",
     "WhiteBlackLastCoding",
     "coded_scan",
     "dot_scan",
@@ -332,27 +335,40 @@ class FullFieldCoding:
         return self._scan(capture, rig, o)
 
 
+class StackFunctions(NamedTuple):
+    """The module functions of a coding whose stack is its patterns then white and black."""
+
+    names: Callable  # (options, proj_shape) -> list of frame names
+    encode: Callable  # ((H, W), options) -> (n, H, W) float32 in [0, 1]
+    decode: Callable  # (images, white, black, *, proj_shape, options) -> decode
+    scan: Callable  # (capture, rig, options) -> CodedScan
+
+
 class WhiteBlackLastCoding(FullFieldCoding):
-    """A full-field coding whose stack is its own patterns then white and black, given as the
-    class attributes ``_names(options, proj_shape)``, ``_encode((H, W), options)`` (float32 in
-    [0, 1]) and ``_decode(images, white, black, *, proj_shape, options)``."""
+    """A full-field coding whose stack is its own patterns then white and black; the class
+    attribute ``_fns`` (:class:`StackFunctions`) names its module's functions."""
+
+    _fns: ClassVar[StackFunctions]
+
+    def _scan(self, capture, rig, options) -> CodedScan:
+        return self._fns.scan(capture, rig, options)
 
     def frames(self, proj_shape) -> int:
         return len(self.frame_names(proj_shape))
 
     def frame_names(self, proj_shape) -> list[str]:
-        return self._names(self.options, proj_shape)
+        return self._fns.names(self.options, proj_shape)
 
     def patterns(self, proj_shape) -> np.ndarray:
         """(frames, H, W) float32: the coding's patterns, then white (ones) and black (zeros)."""
         H, W = (int(proj_shape[0]), int(proj_shape[1]))
         wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
-        return np.concatenate([self._encode((H, W), self.options), wb])
+        return np.concatenate([self._fns.encode((H, W), self.options), wb])
 
     def decode(self, frames, proj_shape):
         """Decode a whole stack in :meth:`patterns` order (white and black last)."""
         frames = np.asarray(frames)
-        return self._decode(
+        return self._fns.decode(
             frames[:-2], frames[-2], frames[-1], proj_shape=proj_shape, options=self.options
         )
 
