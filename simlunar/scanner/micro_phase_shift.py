@@ -36,8 +36,9 @@ import numpy as np
 
 from simlunar.registry import option, shared_option
 from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
+from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, scan_inputs
 from simlunar.scanner.phase_shift import PhaseDecode, wrapped_phase
-from simlunar.scanner.scans import StackFunctions, WhiteBlackLastCoding, coded_scan, scan_inputs
+from simlunar.scanner.scans import coded_scan
 
 __all__ = [
     "MicroPhaseShiftCoding",

@@ -41,13 +41,8 @@ import numpy as np
 
 from simlunar.registry import option, shared_option
 from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
-from simlunar.scanner.scans import (
-    StackFunctions,
-    WhiteBlackLastCoding,
-    coded_scan,
-    render_checked,
-    scan_inputs,
-)
+from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, render_checked, scan_inputs
+from simlunar.scanner.scans import coded_scan
 
 __all__ = [
     "PhaseDecode",

@@ -3,8 +3,6 @@ capture, no Mitsuba)."""
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 
@@ -165,29 +163,3 @@ def test_low_contrast_planner_takes_the_dimmest_camera_pixel_of_a_projector_pixe
     g = modes.GrayScan(decode=dec, cloud=None, depth=np.zeros((H, W)), renders=0, frames={})
     # row 0 by the lower contrast of its two camera pixels: 0.15, 0.3, 0.5, 0.8
     assert modes.low_contrast_pixels(g, 4, rng=0).tolist() == [[0, 1], [0, 3], [0, 2], [0, 0]]
-
-
-def test_scan_inputs_defaults_the_options_and_checks_the_rig(rig):
-    o, (H, W) = modes.scan_inputs(rig, None, GrayCodeOptions)
-    assert o == GrayCodeOptions() and (H, W) == rig.projector.intrinsics.shape
-    given = GrayCodeOptions(subpixel=True)
-    assert modes.scan_inputs(rig, given, GrayCodeOptions)[0] is given
-    not_a_projector = SimpleNamespace(camera=rig.camera, projector=rig.camera)
-    with pytest.raises(ValueError, match=r"must be a geometry\.Projector"):
-        modes.scan_inputs(not_a_projector, None, GrayCodeOptions)
-
-
-def test_render_checked_refuses_a_wrong_stack():
-    class Bad:
-        def render(self, patterns):
-            return np.zeros((len(patterns) - 1, 2, 2), np.uint8)
-
-    with pytest.raises(ValueError, match=r"returned shape \(1, 2, 2\) for 2 patterns"):
-        modes.render_checked(Bad(), np.zeros((2, 2, 2), np.float32))
-
-    class Good:
-        def render(self, patterns):
-            return np.ones((len(patterns), 2, 2), np.uint8)
-
-    out = modes.render_checked(Good(), np.zeros((3, 2, 2), np.float32))
-    assert out.dtype == np.float64 and out.shape == (3, 2, 2)
