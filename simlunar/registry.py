@@ -30,6 +30,7 @@ __all__ = [
     "did_you_mean_file",
     "option",
     "option_info",
+    "shared_option",
 ]
 
 
@@ -101,6 +102,20 @@ def option(
     if default_factory is not dataclasses.MISSING:
         return field(default_factory=default_factory, metadata=meta)
     return field(default=default, metadata=meta)
+
+
+def shared_option(table: Mapping[str, Mapping[str, Any]], name: str):
+    """A fresh :func:`option` field from ``table[name]``: the keywords of :func:`option`, with
+    ``default`` its first argument. For an option that several options classes declare alike
+    (one table entry; each class gets its own field).
+
+    Raises
+    ------
+    KeyError
+        ``name`` is not in ``table``.
+    """
+    spec = dict(table[name])
+    return option(spec.pop("default"), **spec)
 
 
 def option_info(options_cls) -> dict[str, dict]:
@@ -194,6 +209,21 @@ class Registry(Mapping):
         entry = Entry(name, target, options, summary, dict(meta))
         self._entries[name] = entry
         return entry
+
+    def resolve(self, name: str, options=None) -> tuple[Entry, Any]:
+        """The entry ``name`` and its options object from an instance, a mapping or None.
+
+        A mapping (or None: the defaults) is built with :meth:`Entry.make_options`; an instance
+        of another class is a ``TypeError`` naming both classes.
+        """
+        entry = self[name]
+        if options is None or isinstance(options, dict):
+            options = entry.make_options(options)
+        elif not isinstance(options, entry.options):
+            raise TypeError(
+                f"{self.kind} {name!r} takes {entry.options.__name__}, got {type(options).__name__}"
+            )
+        return entry, options
 
     def __getitem__(self, name: str) -> Entry:
         try:

@@ -12,6 +12,7 @@ from simlunar.registry import (
     did_you_mean,
     option,
     option_info,
+    shared_option,
 )
 
 
@@ -47,6 +48,22 @@ def test_a_name_is_registered_once_and_options_must_be_a_dataclass():
         reg.register("a", print, _Opts)
     with pytest.raises(TypeError, match="must be a dataclass"):
         reg.register("b", print, dict)
+
+
+def test_resolve_builds_or_checks_the_options_object():
+    reg = Registry("widget")
+    reg.register("a", print, _Opts)
+    entry, opts = reg.resolve("a")
+    assert entry.name == "a" and opts == _Opts()
+    assert reg.resolve("a", {"gain": 3.0})[1] == _Opts(gain=3.0)
+    given = _Opts(sigma=5.0)
+    assert reg.resolve("a", given)[1] is given
+    with pytest.raises(TypeError, match="widget 'a' takes _Opts, got str"):
+        reg.resolve("a", "gain=3")
+    with pytest.raises(ValueError, match="gain must be <= 4"):
+        reg.resolve("a", {"gain": 9.0})
+    with pytest.raises(UnknownNameError, match="unknown widget 'b'"):
+        reg.resolve("b")
 
 
 def test_stray_option_key_is_refused_with_a_suggestion():
@@ -108,3 +125,27 @@ def test_did_you_mean_file_names_the_closest_sibling(tmp_path):
     assert hint == f" (did you mean {str(tmp_path / 'quickstart.yaml')!r}?)"
     assert did_you_mean_file(tmp_path / "nothing_alike.yaml") == ""
     assert did_you_mean_file(tmp_path / "no_dir" / "x.yaml") == ""
+
+
+def test_shared_option_gives_each_class_its_own_equal_field():
+    table = {"gain": {"default": 1.0, "doc": "a gain", "ge": 0.0, "le": 4.0}}
+
+    @dataclass(frozen=True)
+    class A:
+        gain: float = shared_option(table, "gain")
+
+        def __post_init__(self):
+            check_bounds(self)
+
+    @dataclass(frozen=True)
+    class B:
+        other: int = 3
+        gain: float = shared_option(table, "gain")
+
+    assert option_info(A)["gain"] == option_info(B)["gain"]
+    assert option_info(A)["gain"]["default"] == 1.0 and option_info(A)["gain"]["le"] == 4.0
+    assert table["gain"]["default"] == 1.0  # the table is not consumed
+    with pytest.raises(ValueError, match="gain must be <= 4"):
+        A(gain=5.0)
+    with pytest.raises(KeyError):
+        shared_option(table, "gian")

@@ -76,13 +76,19 @@ def _message(err: dict) -> str:
     return msg
 
 
+def _at_parent(lookup, path: str, data: dict, root: type[BaseModel]) -> tuple[Any, str]:
+    """``(lookup(parent, data, root), last)`` of a dotted ``path``; the lookup is None where
+    the parent is not in the config (a ``ConfigError``)."""
+    parent, _, last = path.rpartition(".")
+    try:
+        return lookup(parent, data, root), last
+    except ConfigError:
+        return None, last
+
+
 def _unknown_key_hint(path: str, data: dict, root: type[BaseModel]) -> str:
     """Suggest the valid keys where an unknown key was found."""
-    parent, _, key = path.rpartition(".")
-    try:
-        keys = valid_keys(parent, data, root)
-    except ConfigError:
-        return ""
+    keys, key = _at_parent(valid_keys, path, data, root)
     return f" (valid keys: {', '.join(keys)}){did_you_mean(key, keys)}" if keys else ""
 
 
@@ -187,11 +193,7 @@ def _mapping_value(ann: Any) -> Any:
 
 def is_label_mapping(path: str, data: dict, root: type[BaseModel]) -> bool:
     """Whether ``path`` names a mapping whose keys are free labels (``study.strategy_options``)."""
-    parent, _, last = path.rpartition(".")
-    try:
-        model = model_at(parent, data, root)
-    except ConfigError:
-        return False
+    model, last = _at_parent(model_at, path, data, root)
     field = model.model_fields.get(last) if model is not None else None
     return field is not None and _mapping_value(field.annotation) is not None
 

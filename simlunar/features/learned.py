@@ -52,6 +52,7 @@ __all__ = [
     "LearnedOptions",
     "learned",
     "pitch_of",
+    "save_with_record",
 ]
 
 #: identifies the JSON sidecar of a model file
@@ -205,14 +206,8 @@ class LearnedMap:
         (Path, Path)
             The joblib file and the JSON sidecar.
         """
-        path = _model_path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         payload = {"format": FORMAT, "models": {repr(d): m for d, m in self.models.items()}}
-        joblib.dump(payload, path)
-        meta = {**self.meta, "model_file": path.name, "model_sha256": _sha256_file(path)}
-        sidecar = path.with_suffix(".json")
-        sidecar.write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
-        return path, sidecar
+        return save_with_record(path, payload, self.meta)
 
     @classmethod
     def load(cls, path) -> LearnedMap:
@@ -234,6 +229,33 @@ class LearnedMap:
         if sorted(models) != sorted(meta["densities"]):
             raise ValueError(f"learned model {path}: densities differ from its record")
         return cls(models, {k: v for k, v in meta.items() if k not in ("model_file",)})
+
+
+def save_with_record(path, payload, meta: dict) -> tuple[Path, Path]:
+    """Write ``payload`` with joblib to ``path`` and ``meta`` beside it as JSON (``.json``),
+    with the model file's name and SHA-256 added: the record a load checks before unpickling.
+
+    Parameters
+    ----------
+    path : str or Path
+        Ends in ``.joblib``; parent folders are created.
+    payload : object
+        What joblib pickles.
+    meta : dict
+        The JSON record (not changed).
+
+    Returns
+    -------
+    (Path, Path)
+        The joblib file and its record.
+    """
+    path = _model_path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    joblib.dump(payload, path)
+    meta = {**meta, "model_file": path.name, "model_sha256": _sha256_file(path)}
+    sidecar = path.with_suffix(".json")
+    sidecar.write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+    return path, sidecar
 
 
 def _model_path(path) -> Path:

@@ -86,6 +86,59 @@ def _check_examples(examples) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
+def _checked_densities(densities) -> list[float]:
+    """The sorted densities; ValueError when empty, repeated or any has no sample pitch."""
+    dens = sorted({float(d) for d in densities})
+    if not dens or len(dens) != len(list(densities)):
+        raise ValueError(f"densities must be distinct and non-empty, got {list(densities)}")
+    for d in dens:
+        pitch_of(d)
+    return dens
+
+
+def _fit_boosted(x, y, opt, rng) -> HistGradientBoostingRegressor:
+    """A histogram gradient-boosting regressor with ``opt``'s settings fitted to ``(x, y)``.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, features)
+    y : ndarray, shape (n,)
+    opt : LearnedOptions
+    rng : Generator
+        Draws the boosting's seed (one integer).
+    """
+    model = HistGradientBoostingRegressor(
+        max_iter=opt.max_iter,
+        learning_rate=opt.learning_rate,
+        max_leaf_nodes=opt.max_leaf_nodes,
+        min_samples_leaf=opt.min_samples_leaf,
+        l2_regularization=opt.l2_regularization,
+        early_stopping=False,
+        random_state=int(rng.integers(2**31 - 1)),
+    )
+    with threadpool_limits(opt.threads):
+        return model.fit(x, y)
+
+
+def _training_meta(head, dens, opt, ex, t0, provenance, **counts) -> dict:
+    """The JSON record of a training: ``head`` (format and features), then the densities,
+    options, example count, ``counts``, input hashes, seconds since ``t0``, library versions
+    and ``provenance``. A record JSON cannot hold fails here (``TypeError``), not at save time."""
+    meta = {
+        **head,
+        "densities": dens,
+        "options": asdict(opt),
+        "examples": len(ex),
+        **counts,
+        "input_sha256": [[_sha256_array(i), _sha256_array(t)] for i, t in ex],
+        "train_seconds": round(time.perf_counter() - t0, 3),
+        "versions": _versions(),
+        "provenance": provenance or {},
+    }
+    json.dumps(meta)  # fail here, not at save time, on a provenance JSON cannot hold
+    return meta
+
+
 def _training_set(examples, density, options, rng):
     """Features and centred targets of ``options.pixels_per_example`` pixels per example."""
     xs, ys = [], []
@@ -130,40 +183,18 @@ def train_learned_map(
     opt = options or LearnedOptions()
     rng = np.random.default_rng(rng)
     ex = _check_examples(examples)
-    dens = sorted({float(d) for d in densities})
-    if not dens or len(dens) != len(list(densities)):
-        raise ValueError(f"densities must be distinct and non-empty, got {list(densities)}")
-    for d in dens:
-        pitch_of(d)
+    dens = _checked_densities(densities)
     t0 = time.perf_counter()
     models = {}
     for d in dens:
         x, y = _training_set(ex, d, opt, rng)
-        model = HistGradientBoostingRegressor(
-            max_iter=opt.max_iter,
-            learning_rate=opt.learning_rate,
-            max_leaf_nodes=opt.max_leaf_nodes,
-            min_samples_leaf=opt.min_samples_leaf,
-            l2_regularization=opt.l2_regularization,
-            early_stopping=False,
-            random_state=int(rng.integers(2**31 - 1)),
-        )
-        with threadpool_limits(opt.threads):
-            models[d] = model.fit(x, y)
-    meta = {
+        models[d] = _fit_boosted(x, y, opt, rng)
+    head = {
         "format": FORMAT,
         "feature_set_version": FEATURE_SET_VERSION,
         "feature_names": list(FEATURE_NAMES),
-        "densities": dens,
-        "options": asdict(opt),
-        "examples": len(ex),
-        "input_sha256": [[_sha256_array(i), _sha256_array(t)] for i, t in ex],
-        "train_seconds": round(time.perf_counter() - t0, 3),
-        "versions": _versions(),
-        "provenance": provenance or {},
     }
-    json.dumps(meta)  # fail here, not at save time, on a provenance JSON cannot hold
-    return LearnedMap(models, meta)
+    return LearnedMap(models, _training_meta(head, dens, opt, ex, t0, provenance))
 
 
 def _recon_training_set(examples, densities, options, with_shading, shading_options, rng):
@@ -257,11 +288,7 @@ def train_learned_reconstruction(
     opt = options or LearnedOptions()
     rng = np.random.default_rng(rng)
     ex = _check_examples(examples)
-    dens = sorted({float(d) for d in densities})
-    if not dens or len(dens) != len(list(densities)):
-        raise ValueError(f"densities must be distinct and non-empty, got {list(densities)}")
-    for d in dens:
-        pitch_of(d)
+    dens = _checked_densities(densities)
     if shading_options and not with_shading:
         raise ValueError("shading_options given without with_shading=True")
     if with_shading:
@@ -275,32 +302,14 @@ def train_learned_reconstruction(
         RECONSTRUCTIONS["shading"].make_options(shading_options)  # bad keys fail before work
     t0 = time.perf_counter()
     x, y = _recon_training_set(ex, dens, opt, with_shading, shading_options, rng)
-    model = HistGradientBoostingRegressor(
-        max_iter=opt.max_iter,
-        learning_rate=opt.learning_rate,
-        max_leaf_nodes=opt.max_leaf_nodes,
-        min_samples_leaf=opt.min_samples_leaf,
-        l2_regularization=opt.l2_regularization,
-        early_stopping=False,
-        random_state=int(rng.integers(2**31 - 1)),
-    )
-    with threadpool_limits(opt.threads):
-        model.fit(x, y)
-    meta = {
+    model = _fit_boosted(x, y, opt, rng)
+    head = {
         "format": RECON_FORMAT,
         "recon_feature_version": RECON_FEATURE_VERSION,
         "feature_set_version": FEATURE_SET_VERSION,
         "feature_names": list(feature_names(with_shading)),
         "with_shading": bool(with_shading),
         "shading_options": dict(shading_options or {}),
-        "densities": dens,
-        "options": asdict(opt),
-        "examples": len(ex),
-        "training_pixels": len(y),
-        "input_sha256": [[_sha256_array(i), _sha256_array(t)] for i, t in ex],
-        "train_seconds": round(time.perf_counter() - t0, 3),
-        "versions": _versions(),
-        "provenance": provenance or {},
     }
-    json.dumps(meta)  # fail here, not at save time, on a provenance JSON cannot hold
+    meta = _training_meta(head, dens, opt, ex, t0, provenance, training_pixels=len(y))
     return LearnedReconstruction(model, meta)

@@ -30,6 +30,7 @@ __all__ = [
     "error_vs_density",
     "mean_error_by_density",
     "ratio_axis",
+    "ratio_ticks",
     "samples_saved_plot",
     "score_vs_sweep",
 ]
@@ -147,14 +148,35 @@ def ratio_axis(ax, values: Iterable[float]) -> None:
     lo, hi = lo / pad, hi * pad
     ax.set_yscale("log", base=2)
     ax.set_ylim(lo, hi)
+    ratio_ticks(ax.yaxis, lo, hi)
+
+
+def ratio_ticks(axis, lo: float, hi: float) -> list[float]:
+    """Put plain-number ticks at the :data:`NICE_RATIOS` in ``[lo, hi]`` on a log ``axis``.
+
+    More than 7 are thinned to every other one, 1 kept; no minor ticks.
+
+    Parameters
+    ----------
+    axis : matplotlib.axis.Axis
+        ``ax.xaxis`` or ``ax.yaxis``.
+    lo, hi : float
+        The axis range (ratios, > 0).
+
+    Returns
+    -------
+    list of float
+        The ticks set.
+    """
     ticks = [t for t in NICE_RATIOS if lo <= t <= hi]
     if len(ticks) > 7:  # keep every other one, 1 included
         i1 = ticks.index(1)
         ticks = [t for i, t in enumerate(ticks) if (i - i1) % 2 == 0]
-    ax.yaxis.set_major_locator(FixedLocator(ticks))
-    ax.yaxis.set_major_formatter(FuncFormatter(lambda t, _: f"{t:g}"))
-    ax.yaxis.set_minor_locator(NullLocator())
-    ax.yaxis.set_minor_formatter(NullFormatter())
+    axis.set_major_locator(FixedLocator(ticks))
+    axis.set_major_formatter(FuncFormatter(lambda t, _: f"{t:g}"))
+    axis.set_minor_locator(NullLocator())
+    axis.set_minor_formatter(NullFormatter())
+    return ticks
 
 
 def error_vs_density(

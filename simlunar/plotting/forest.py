@@ -15,10 +15,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter, NullLocator
 
 from simlunar.metrics import METRIC_NAMES
-from simlunar.plotting.density import NICE_RATIOS
+from simlunar.plotting.density import ratio_ticks
 from simlunar.plotting.layout import COLUMN_W, LABEL_PT, TICK_PT, TITLE_PT, panel_grid
 from simlunar.plotting.style import styles
 from simlunar.plotting.tables import t_interval
@@ -120,12 +119,5 @@ def _ratio_x_axis(ax, values) -> None:
     lo, hi = lo / pad, hi * pad
     ax.set_xscale("log", base=2)
     ax.set_xlim(lo, hi)
-    ticks = [t for t in NICE_RATIOS if lo <= t <= hi]
-    if len(ticks) > 7:
-        i1 = ticks.index(1)
-        ticks = [t for i, t in enumerate(ticks) if (i - i1) % 2 == 0]
-    ax.xaxis.set_major_locator(FixedLocator(ticks))
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda t, _: f"{t:g}"))
-    ax.xaxis.set_minor_locator(NullLocator())
-    ax.xaxis.set_minor_formatter(NullFormatter())
+    ratio_ticks(ax.xaxis, lo, hi)
     ax.tick_params(axis="x", labelsize=TICK_PT)

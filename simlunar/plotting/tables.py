@@ -323,8 +323,8 @@ def headroom_tables(entries: list[dict], *, title: str = "") -> tuple[str, str]:
         "log space]; headroom captured: mean over seeds [95 % t interval]; the per-seed range "
         "beside each."
     )
-    md, tex = [expl + "\n"], ["% " + expl + "\n"]
-    for e in entries:
+
+    def table(e):
         metric = _name(METRIC_NAMES, e["metric"])
         header = ["Strategy", "saved vs Uniform Lloyd", "seeds: range", "headroom captured",
                   "seeds: range"]  # fmt: skip
@@ -335,7 +335,18 @@ def headroom_tables(entries: list[dict], *, title: str = "") -> tuple[str, str]:
             cap = np.asarray(e["captured"][s], dtype=float)
             rows.append((display_label(s), [*_seed_summary(np.asarray(e["saved"][s]), log=True),
                                             *_seed_summary(cap, log=False)]))  # fmt: skip
-        what = f"headroom captured vs {display_label(e['oracle'])} at equal {metric}"
+        return f"headroom captured vs {display_label(e['oracle'])} at equal {metric}", header, rows
+
+    return _seed_tables(entries, expl, title, table)
+
+
+def _seed_tables(entries: list[dict], expl: str, title: str, table) -> tuple[str, str]:
+    """Markdown and LaTeX of per-seed tables: ``expl`` first (a LaTeX comment there), then one
+    table per entry from ``table(entry) -> (what, header, rows)`` (see :func:`_seed_caption`,
+    :func:`_append_seed_table`)."""
+    md, tex = [expl + "\n"], ["% " + expl + "\n"]
+    for e in entries:
+        what, header, rows = table(e)
         _append_seed_table(md, tex, _seed_caption(title, e, what), header, rows)
     return "\n".join(md), "\n".join(tex)
 
@@ -380,15 +391,16 @@ def paired_saved_tables(entries: list[dict], *, title: str = "") -> tuple[str, s
         "over the interpolated densities): geometric mean over seeds [95 % Student t "
         "interval, in log space], and the per-seed range."
     )
-    md, tex = [expl + "\n"], ["% " + expl + "\n"]
     header = ["Strategy", "saved vs Uniform Lloyd", "seeds: range"]
-    for e in entries:
+
+    def table(e):
         rows = [(display_label(s), list(_seed_summary(np.asarray(e["saved"][s]), log=True)))
                 for s in e["strategies"] if s in e["saved"]]  # fmt: skip
         what = (f"samples saved vs Uniform Lloyd at equal {_name(METRIC_NAMES, e['metric'])}, "
                 "paired by seed")  # fmt: skip
-        _append_seed_table(md, tex, _seed_caption(title, e, what), header, rows)
-    return "\n".join(md), "\n".join(tex)
+        return what, header, rows
+
+    return _seed_tables(entries, expl, title, table)
 
 
 def _seed_summary(v: np.ndarray, *, log: bool, digits: int = 2) -> tuple[str, str]:
@@ -443,8 +455,8 @@ def reconstruction_saved_tables(entries: list[dict], *, title: str = "") -> tupl
         "the interpolated densities); geometric mean over seeds [95 % Student t interval, in "
         "log space], and the per-seed range. > 1: the reconstruction needs fewer samples."
     )
-    md, tex = [expl + "\n"], ["% " + expl + "\n"]
-    for e in entries:
+
+    def table(e):
         header = ["Strategy"]
         for r in e["reconstructions"]:
             header += [f"{display_label(r)} vs linear", "seeds: range"]
@@ -457,8 +469,9 @@ def reconstruction_saved_tables(entries: list[dict], *, title: str = "") -> tupl
         what = (
             f"samples saved vs linear at equal {_name(METRIC_NAMES, e['metric'])}, paired by seed"
         )
-        _append_seed_table(md, tex, _seed_caption(title, e, what), header, rows)
-    return "\n".join(md), "\n".join(tex)
+        return what, header, rows
+
+    return _seed_tables(entries, expl, title, table)
 
 
 def seed_summary_numbers(values, *, log: bool) -> tuple[float, float, float, int]:

@@ -63,13 +63,7 @@ def run_reconstruction(name, points_rc, values, shape, *, guide=None, options=No
     -------
     Reconstructed
     """
-    entry = RECONSTRUCTIONS[name]
-    if options is None or isinstance(options, dict):
-        options = entry.make_options(options)
-    elif not isinstance(options, entry.options):
-        raise TypeError(
-            f"reconstruction {name!r} takes {entry.options.__name__}, got {type(options).__name__}"
-        )
+    entry, options = RECONSTRUCTIONS.resolve(name, options)
     if entry.meta.get("guided") and guide is None:
         raise ValueError(f"reconstruction {name!r} needs the guide image (guide=Guide(...))")
     return entry.target(points_rc, values, shape, guide=guide, options=options)

@@ -361,17 +361,9 @@ class LearnedReconstruction:
         (Path, Path)
             The joblib file and its record.
         """
-        import joblib
+        from simlunar.features.learned import save_with_record
 
-        from simlunar.features.learned import _model_path, _sha256_file
-
-        path = _model_path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        joblib.dump({"format": FORMAT, "model": self.model}, path)
-        meta = {**self.meta, "model_file": path.name, "model_sha256": _sha256_file(path)}
-        sidecar = path.with_suffix(".json")
-        sidecar.write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
-        return path, sidecar
+        return save_with_record(path, {"format": FORMAT, "model": self.model}, self.meta)
 
     @classmethod
     def load(cls, path) -> LearnedReconstruction:

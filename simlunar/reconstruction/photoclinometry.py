@@ -43,11 +43,12 @@ from scipy import ndimage, sparse
 from scipy.sparse import linalg as splinalg
 
 from simlunar.reconstruction._anchor import linear_field, reanchored_detail
+from simlunar.reconstruction._reading import READING_OPTIONS, check_share_band
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import calibrate
 from simlunar.reconstruction.integrate import central_gradient
 from simlunar.reconstruction.shading import ShadingOptions, fallback_gamma, shading_frames
-from simlunar.registry import check_bounds, option
+from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = [
     "PhotoclinometryOptions",
@@ -74,39 +75,23 @@ class PhotoclinometryOptions:
     anchor_weight: float = option(1.0, doc="w_a: weight of the samples", gt=0, le=1e6)
     rtol: float = option(3e-3, doc="relative residual at which CG stops", gt=0, lt=1)
     max_iter: int = option(300, doc="most CG iterations", ge=1, le=100000)
-    gain: float = option(1.0, doc="g: divides the calibrated |b| when reading slopes", gt=0, le=10)
-    clip: float = option(4.0, doc="largest |slope| (dz/dx) read from the image", gt=0, le=100)
-    image_sigma: float = option(
-        1.0, doc="Gaussian sigma smoothing the image before slopes are read (0: none)",
-        unit="cell", ge=0, le=32,
-    )  # fmt: skip
+    gain: float = shared_option(READING_OPTIONS, "gain")
+    clip: float = shared_option(READING_OPTIONS, "clip")
+    image_sigma: float = shared_option(READING_OPTIONS, "image_sigma")
     gamma_max: float = option(1.0, doc="weight of the correction at full share", ge=0, le=1)
-    share_lo: float = option(
-        0.1, doc="explained-variance share at and below which the result is linear", ge=0, lt=1
-    )
-    share_hi: float = option(
-        0.5, doc="explained-variance share from which gamma = gamma_max", gt=0, le=1
-    )
-    use_flat: bool = option(
-        True, doc="divide by the co-located frame when the guide has one", choices=(True, False)
-    )
+    share_lo: float = shared_option(READING_OPTIONS, "share_lo")
+    share_hi: float = shared_option(READING_OPTIONS, "share_hi")
+    use_flat: bool = shared_option(READING_OPTIONS, "use_flat")
     flat_guard: float = option(
         0.05, doc="flat pixels under this fraction of its median are left out", gt=0, lt=1
     )
-    sigma_pitch: float = option(
-        0.5, doc="calibration blur sigma as a fraction of the sample pitch", gt=0, le=4
-    )
-    shadow: float = option(
-        0.02, doc="shadowed: at or below this fraction of the 99th percentile", ge=0, lt=1
-    )
-    saturation: float = option(1.0, doc="saturated: image level at or above this", gt=0)
+    sigma_pitch: float = shared_option(READING_OPTIONS, "sigma_pitch")
+    shadow: float = shared_option(READING_OPTIONS, "shadow")
+    saturation: float = shared_option(READING_OPTIONS, "saturation")
 
     def __post_init__(self):
         check_bounds(self)
-        if self.share_hi <= self.share_lo:
-            raise ValueError(
-                f"share_hi must be > share_lo, got {self.share_hi!r} <= {self.share_lo!r}"
-            )
+        check_share_band(self)
 
     def shading(self) -> ShadingOptions:
         """The shared reading of the image (frames, calibration, slopes, fallback)."""

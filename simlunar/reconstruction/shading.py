@@ -60,6 +60,7 @@ from simlunar.reconstruction._anchor import (
     linear_field,
     reanchored_detail,
 )
+from simlunar.reconstruction._reading import READING_OPTIONS, check_share_band
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import (
     Calibration,
@@ -68,7 +69,7 @@ from simlunar.reconstruction.calibration import (
     valid_pixels,
 )
 from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
-from simlunar.registry import check_bounds, option
+from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = [
     "ShadingOptions",
@@ -84,12 +85,9 @@ __all__ = [
 class ShadingOptions:
     """Options of the image-anchored reconstruction (:func:`shading`)."""
 
-    gain: float = option(1.0, doc="g: divides the calibrated |b| when reading slopes", gt=0, le=10)
-    clip: float = option(4.0, doc="largest |slope| (dz/dx) read from the image", gt=0, le=100)
-    image_sigma: float = option(
-        1.0, doc="Gaussian sigma smoothing the image before slopes are read (0: none)",
-        unit="cell", ge=0, le=32,
-    )  # fmt: skip
+    gain: float = shared_option(READING_OPTIONS, "gain")
+    clip: float = shared_option(READING_OPTIONS, "clip")
+    image_sigma: float = shared_option(READING_OPTIONS, "image_sigma")
     across_weight: float = option(
         0.1,
         doc="weight of the linear reconstruction's slope across the light in the integration "
@@ -98,15 +96,9 @@ class ShadingOptions:
         le=1,
     )
     gamma_max: float = option(1.0, doc="weight of the image's detail at full share", ge=0, le=1)
-    share_lo: float = option(
-        0.1, doc="explained-variance share at and below which the result is linear", ge=0, lt=1
-    )
-    share_hi: float = option(
-        0.5, doc="explained-variance share from which gamma = gamma_max", gt=0, le=1
-    )
-    use_flat: bool = option(
-        True, doc="divide by the co-located frame when the guide has one", choices=(True, False)
-    )
+    share_lo: float = shared_option(READING_OPTIONS, "share_lo")
+    share_hi: float = shared_option(READING_OPTIONS, "share_hi")
+    use_flat: bool = shared_option(READING_OPTIONS, "use_flat")
     use_others: bool = option(
         True, doc="photometric stereo with the guide's other-sun frames", choices=(True, False)
     )
@@ -122,13 +114,9 @@ class ShadingOptions:
         gt=0,
         le=1,
     )
-    sigma_pitch: float = option(
-        0.5, doc="calibration blur sigma as a fraction of the sample pitch", gt=0, le=4
-    )
-    shadow: float = option(
-        0.02, doc="shadowed: at or below this fraction of the 99th percentile", ge=0, lt=1
-    )
-    saturation: float = option(1.0, doc="saturated: image level at or above this", gt=0)
+    sigma_pitch: float = shared_option(READING_OPTIONS, "sigma_pitch")
+    shadow: float = shared_option(READING_OPTIONS, "shadow")
+    saturation: float = shared_option(READING_OPTIONS, "saturation")
     heldout_check: bool = option(
         True,
         doc="cap gamma by a check on held-out samples: every fifth sample is left out, and the "
@@ -138,10 +126,7 @@ class ShadingOptions:
 
     def __post_init__(self):
         check_bounds(self)
-        if self.share_hi <= self.share_lo:
-            raise ValueError(
-                f"share_hi must be > share_lo, got {self.share_hi!r} <= {self.share_lo!r}"
-            )
+        check_share_band(self)
 
     def calibration(self) -> CalibrationOptions:
         return CalibrationOptions(

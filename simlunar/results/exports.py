@@ -40,6 +40,7 @@ import numpy as np
 from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
 from simlunar.imaging.exr import write_exr
+from simlunar.results.ply import XYZ_FIELDS, ply_records, write_ply
 from simlunar.scanner.codings import CODINGS
 from simlunar.scanner.gray_code import frame_names
 from simlunar.scanner.triangulate import Correspondences, triangulate_plane, triangulate_rays
@@ -157,9 +158,7 @@ def write_calibration_yaml(path, calib: dict[str, Any]) -> Path:
 
 
 _PLY_FIELDS = [
-    ("x", "<f8", "double"),
-    ("y", "<f8", "double"),
-    ("z", "<f8", "double"),
+    *XYZ_FIELDS,
     ("cam_col", "<i4", "int"),
     ("cam_row", "<i4", "int"),
     ("proj_u", "<f8", "double"),
@@ -184,19 +183,12 @@ def write_cloud_ply(path, points, cam_rc, proj_uv) -> Path:
     proj_uv = np.asarray(proj_uv, np.float64).reshape(-1, 2)
     if not len(points) == len(cam_rc) == len(proj_uv):
         raise ValueError("points, cam_rc and proj_uv must have the same length")
-    rec = np.empty(len(points), dtype=[(n, t) for n, t, _ in _PLY_FIELDS])
+    rec = ply_records(len(points), _PLY_FIELDS)
     rec["x"], rec["y"], rec["z"] = points.T
     rec["cam_row"], rec["cam_col"] = cam_rc.T
     rec["proj_u"], rec["proj_v"] = proj_uv.T
-    header = (
-        "ply\nformat binary_little_endian 1.0\n"
-        "comment simlunar gray-code scan: world frame, metres; pixel centres at integers\n"
-        f"element vertex {len(points)}\n"
-        + "".join(f"property {p} {n}\n" for n, _, p in _PLY_FIELDS)
-        + "end_header\n"
-    )
-    blob = header.encode("ascii") + rec.tobytes()
-    return atomic_write(path, lambda tmp: Path(tmp).write_bytes(blob))
+    comment = "simlunar gray-code scan: world frame, metres; pixel centres at integers"
+    return write_ply(path, rec, fields=_PLY_FIELDS, comment=comment)
 
 
 def read_cloud_ply(path) -> np.ndarray:

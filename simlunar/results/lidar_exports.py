@@ -29,6 +29,7 @@ import numpy as np
 
 from simlunar.atomic import atomic_write
 from simlunar.imaging.exr import write_exr
+from simlunar.results.ply import XYZ_FIELDS, ply_records, write_ply
 
 __all__ = [
     "lidar_export_payload",
@@ -39,9 +40,7 @@ __all__ = [
 ]
 
 _PLY = (
-    ("x", "<f8", "double"),
-    ("y", "<f8", "double"),
-    ("z", "<f8", "double"),
+    *XYZ_FIELDS,
     ("time", "<f8", "double"),
     ("photons", "<f4", "float"),
     ("returns", "u1", "uchar"),
@@ -87,19 +86,12 @@ def write_lidar_ply(path, points, *, times, photons, returns) -> Path:
     """Binary little-endian PLY: ``x y z time`` (double, m / s), ``photons`` (float),
     ``returns`` (uchar)."""
     p = np.asarray(points, float).reshape(-1, 3)
-    rec = np.empty(len(p), dtype=[(n, t) for n, t, _ in _PLY])
+    rec = ply_records(len(p), _PLY)
     rec["x"], rec["y"], rec["z"] = p.T
     rec["time"], rec["photons"] = times, photons
     rec["returns"] = np.clip(np.asarray(returns), 0, 255)
-    header = (
-        "ply\nformat binary_little_endian 1.0\n"
-        "comment simlunar LIDAR scan: world frame (z up), metres; time s from the start\n"
-        f"element vertex {len(p)}\n"
-        + "".join(f"property {ply} {n}\n" for n, _, ply in _PLY)
-        + "end_header\n"
-    )
-    blob = header.encode("ascii") + rec.tobytes()
-    return atomic_write(path, lambda tmp: Path(tmp).write_bytes(blob))
+    comment = "simlunar LIDAR scan: world frame (z up), metres; time s from the start"
+    return write_ply(path, rec, fields=_PLY, comment=comment)
 
 
 def lidar_export_payload(examples: dict, camera, shape) -> dict[str, Any]:

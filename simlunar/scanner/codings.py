@@ -101,13 +101,7 @@ def make_coding(name: str, options=None):
     ValueError
         Unknown coding or option name (listing the valid ones), wrong options type.
     """
-    entry = CODINGS[name]
-    if options is None or isinstance(options, dict):
-        options = entry.make_options(options)
-    elif not isinstance(options, entry.options):
-        raise TypeError(
-            f"coding {name!r} takes {entry.options.__name__}, got {type(options).__name__}"
-        )
+    entry, options = CODINGS.resolve(name, options)
     return entry.target(options)
 
 

@@ -30,16 +30,16 @@ coordinate lies inside the projector.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
+from simlunar.registry import option, shared_option
+from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
+from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, scan_inputs
 from simlunar.scanner.fringes import wrapped_phase
 from simlunar.scanner.phase_shift import PhaseDecode
-from simlunar.scanner.scans import CodedScan, triangulated
-from simlunar.scanner.triangulate import check_rig
+from simlunar.scanner.scans import coded_scan
 
 __all__ = [
     "MicroPhaseShiftCoding",
@@ -52,8 +52,6 @@ __all__ = [
     "unambiguous_px",
 ]
 
-_AXES = ("both", "cols")
-_METHODS = ("plane", "rays")
 #: camera pixels searched at once (bounds the (pixels, periods) mismatch array)
 _CHUNK = 4096
 
@@ -83,19 +81,15 @@ class MicroPhaseShiftOptions:
     period_px: float = option(16.0, doc="mean fringe period", unit="px", ge=2.0)
     band: float = option(0.1, doc="relative width of the frequency band", gt=0.0, le=0.5)
     frequencies: int = option(5, doc="number of fringe frequencies F", ge=2, le=32)
-    axes: str = option("both", doc="fringes along both axes or columns only", choices=_AXES)
-    black_threshold: float = option(0.05, doc="lit: white - black (frame units)", ge=0, le=1)
+    axes: str = shared_option(FRINGE_OPTIONS, "axes")
+    black_threshold: float = shared_option(FRINGE_OPTIONS, "black_threshold")
     min_modulation: float = option(0.01, doc="smallest amplitude A (frame units)", ge=0, le=1)
     max_mismatch: float = option(0.1, doc="largest RMS phase-vector mismatch", gt=0, le=2)
-    method: str = option("plane", doc="triangulation: column plane or rays", choices=_METHODS)
+    method: str = shared_option(FRINGE_OPTIONS, "method")
     keep_frames: bool = False
 
     def __post_init__(self):
-        check_bounds(self)
-        if int(self.frequencies) != self.frequencies:
-            raise ValueError(f"frequencies must be a whole number, got {self.frequencies!r}")
-        if self.method == "rays" and self.axes != "both":
-            raise ValueError("method 'rays' needs the row phase: use axes 'both'")
+        check_fringe_options(self, whole="frequencies")
 
 
 def frequencies(options: MicroPhaseShiftOptions) -> np.ndarray:
@@ -245,9 +239,7 @@ def micro_phase_shift_scan(capture, rig, options: MicroPhaseShiftOptions | None 
     -------
     CodedScan
     """
-    check_rig(rig)
-    o = options or MicroPhaseShiftOptions()
-    H, W = rig.projector.intrinsics.shape
+    o, (H, W) = scan_inputs(rig, options, MicroPhaseShiftOptions)
     stack = encode((H, W), o)
     wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
     imgs = np.asarray(capture.render(np.concatenate([stack, wb])))
@@ -255,47 +247,20 @@ def micro_phase_shift_scan(capture, rig, options: MicroPhaseShiftOptions | None 
         raise ValueError(f"capture.render returned shape {imgs.shape} for {len(stack) + 2}")
     frames = np.asarray(capture.sense(imgs))
     result = decode(frames[:-2], frames[-2], frames[-1], proj_shape=(H, W), options=o)
-    cloud, depth = triangulated(rig, result, o.method)
-    kept = {"white": frames[-2], "black": frames[-1]}
-    if o.keep_frames:
-        kept["images"] = frames[:-2]
-    return CodedScan(result, cloud, depth, len(stack) + 2, kept, MicroPhaseShiftCoding(o))
+    images = frames[:-2] if o.keep_frames else None
+    coding = MicroPhaseShiftCoding(o)
+    return coded_scan(
+        rig, result, frames[-2], frames[-1], images, renders=len(stack) + 2, coding=coding
+    )
 
 
 @dataclass
-class MicroPhaseShiftCoding:
+class MicroPhaseShiftCoding(WhiteBlackLastCoding):
     """Micro phase shifting as a coding of :data:`simlunar.scanner.codings.CODINGS`."""
 
     options: MicroPhaseShiftOptions = field(default_factory=MicroPhaseShiftOptions)
-    full_field = True
     frame_order = "per axis (columns, then rows): f0 at 3 shifts, f1 ... f(F-1); white, black"
-
-    @property
-    def method(self) -> str:
-        return self.options.method
-
-    def frames(self, proj_shape) -> int:
-        return len(frame_names(self.options, proj_shape))
-
-    def frame_names(self, proj_shape) -> list[str]:
-        return frame_names(self.options, proj_shape)
-
-    def patterns(self, proj_shape) -> np.ndarray:
-        H, W = (int(proj_shape[0]), int(proj_shape[1]))
-        wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
-        return np.concatenate([encode((H, W), self.options), wb])
-
-    def decode(self, frames, proj_shape) -> PhaseDecode:
-        frames = np.asarray(frames)
-        return decode(
-            frames[:-2], frames[-2], frames[-1], proj_shape=proj_shape, options=self.options
-        )
-
-    def scan(self, capture, rig, *, keep_frames: bool = False) -> CodedScan:
-        o = self.options
-        if keep_frames and not o.keep_frames:
-            o = dataclasses.replace(o, keep_frames=True)
-        return micro_phase_shift_scan(capture, rig, o)
+    _fns = StackFunctions(frame_names, encode, decode, micro_phase_shift_scan)
 
     def export_meta(self, decode: PhaseDecode) -> dict:
         o = self.options

@@ -35,15 +35,15 @@ sum to the white frame), so by linearity of light transport they need no render:
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
+from simlunar.registry import option, shared_option
+from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
+from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, render_checked, scan_inputs
 from simlunar.scanner.fringes import fringe_periods, unwrap, wrapped_phase
-from simlunar.scanner.scans import CodedScan, triangulated
-from simlunar.scanner.triangulate import check_rig
+from simlunar.scanner.scans import coded_scan
 
 __all__ = [
     "PhaseDecode",
@@ -56,9 +56,7 @@ __all__ = [
     "phase_shift_scan",
 ]
 
-_AXES = ("both", "cols")
 _INVERSES = ("linearity", "render")
-_METHODS = ("plane", "rays")
 
 
 @dataclass(frozen=True)
@@ -92,8 +90,8 @@ class PhaseShiftOptions:
     steps: int = option(4, doc="phase shifts per fringe period", ge=3, le=64)
     period_px: float = option(8.0, doc="finest fringe period", unit="px", ge=2.0)
     ratio: float = option(8.0, doc="period ratio between unwrapping levels", gt=1.0, le=64.0)
-    axes: str = option("both", doc="fringes along both axes or columns only", choices=_AXES)
-    black_threshold: float = option(0.05, doc="lit: white - black (frame units)", ge=0, le=1)
+    axes: str = shared_option(FRINGE_OPTIONS, "axes")
+    black_threshold: float = shared_option(FRINGE_OPTIONS, "black_threshold")
     min_modulation: float = option(0.01, doc="smallest modulation B (frame units)", ge=0, le=1)
     unwrap_tolerance: float = option(
         1.0, doc="largest unwrapping disagreement (rad)", gt=0, le=np.pi
@@ -101,15 +99,11 @@ class PhaseShiftOptions:
     inverses: str = option(
         "linearity", doc="shifts n + N/2 by linearity of light or rendered", choices=_INVERSES
     )
-    method: str = option("plane", doc="triangulation: column plane or rays", choices=_METHODS)
+    method: str = shared_option(FRINGE_OPTIONS, "method")
     keep_frames: bool = False
 
     def __post_init__(self):
-        check_bounds(self)
-        if int(self.steps) != self.steps:
-            raise ValueError(f"steps must be a whole number, got {self.steps!r}")
-        if self.method == "rays" and self.axes != "both":
-            raise ValueError("method 'rays' needs the row phase: use axes 'both'")
+        check_fringe_options(self, whole="steps")
 
 
 def _axes(options: PhaseShiftOptions, proj_shape) -> list[tuple[str, int, tuple[float, ...]]]:
@@ -343,15 +337,6 @@ def decode(images, white, black, *, proj_shape, options: PhaseShiftOptions | Non
     return dec.result()
 
 
-def _render(capture, patterns: np.ndarray) -> np.ndarray:
-    imgs = np.asarray(capture.render(patterns))
-    if imgs.ndim != 3 or imgs.shape[0] != len(patterns):
-        raise ValueError(f"capture.render returned shape {imgs.shape} for {len(patterns)} patterns")
-    if imgs.dtype not in (np.float32, np.float64):
-        imgs = imgs.astype(np.float64)
-    return imgs
-
-
 def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     """A full phase-shift scan, decoded and triangulated.
 
@@ -364,12 +349,12 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     -------
     CodedScan
     """
-    check_rig(rig)
-    o = options or PhaseShiftOptions()
-    H, W = rig.projector.intrinsics.shape
+    o, (H, W) = scan_inputs(rig, options, PhaseShiftOptions)
     stack = encode((H, W), o)
     N = int(o.steps)
-    wb_r = _render(capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)]))
+    wb_r = render_checked(
+        capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
+    )
     renders = 2
     dec = PhaseDecoder((H, W), wb_r.shape[1:], o)
     by_linearity = o.inverses == "linearity" and N % 2 == 0
@@ -377,11 +362,11 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     for i, (axis, level) in enumerate(dec.levels()):
         pats = stack[i * N : (i + 1) * N]
         if by_linearity:
-            half = _render(capture, pats[: N // 2])
+            half = render_checked(capture, pats[: N // 2])
             imgs = np.concatenate([half, wb_r[0][None] + wb_r[1][None] - half])
             renders += N // 2
         else:
-            imgs = _render(capture, pats)
+            imgs = render_checked(capture, pats)
             renders += N
         frames = np.asarray(capture.sense(imgs))
         dec.add_level(axis, level, frames)
@@ -390,57 +375,21 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     white, black = np.asarray(capture.sense(wb_r))
     dec.add_white_black(white, black)
     result = dec.result()
-    cloud, depth = triangulated(rig, result, o.method)
-    frames = {"white": white, "black": black}
-    if kept is not None:
-        frames["images"] = np.concatenate(kept)
-    return CodedScan(
-        decode=result,
-        cloud=cloud,
-        depth=depth,
-        renders=renders,
-        frames=frames,
-        coding=PhaseShiftCoding(o),
+    images = None if kept is None else np.concatenate(kept)
+    return coded_scan(
+        rig, result, white, black, images, renders=renders, coding=PhaseShiftCoding(o)
     )
 
 
 @dataclass
-class PhaseShiftCoding:
+class PhaseShiftCoding(WhiteBlackLastCoding):
     """Phase shifting as a coding of :data:`simlunar.scanner.codings.CODINGS`."""
 
     options: PhaseShiftOptions = field(default_factory=PhaseShiftOptions)
-    full_field = True
     frame_order = (
         "per axis (columns, then rows), per level (coarsest first), the N shifts; then white, black"
     )
-
-    @property
-    def method(self) -> str:
-        return self.options.method
-
-    def frames(self, proj_shape) -> int:
-        return len(frame_names(self.options, proj_shape))
-
-    def frame_names(self, proj_shape) -> list[str]:
-        return frame_names(self.options, proj_shape)
-
-    def patterns(self, proj_shape) -> np.ndarray:
-        H, W = (int(proj_shape[0]), int(proj_shape[1]))
-        wb = np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
-        return np.concatenate([encode((H, W), self.options), wb])
-
-    def decode(self, frames, proj_shape) -> PhaseDecode:
-        """Decode a whole stack in :meth:`patterns` order (white and black last)."""
-        frames = np.asarray(frames)
-        return decode(
-            frames[:-2], frames[-2], frames[-1], proj_shape=proj_shape, options=self.options
-        )
-
-    def scan(self, capture, rig, *, keep_frames: bool = False):
-        o = self.options
-        if keep_frames and not o.keep_frames:
-            o = dataclasses.replace(o, keep_frames=True)
-        return phase_shift_scan(capture, rig, o)
+    _fns = StackFunctions(frame_names, encode, decode, phase_shift_scan)
 
     def export_meta(self, decode: PhaseDecode) -> dict:
         o = self.options

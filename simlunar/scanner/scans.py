@@ -18,7 +18,6 @@ Inverse patterns come from linearity of light transport (``bits + 2`` renders in
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,6 +26,7 @@ from simlunar.geometry import Rig
 from simlunar.registry import check_bounds, option
 from simlunar.scanner import dots as _dots
 from simlunar.scanner import gray_code as gc
+from simlunar.scanner.coded import FullFieldCoding, render_checked, scan_inputs
 from simlunar.scanner.gray_errors import bit_error_table
 from simlunar.scanner.scheduling import schedule_dots
 from simlunar.scanner.subpixel import refine_subpixel_from_diff
@@ -46,6 +46,7 @@ __all__ = [
     "GrayCodeOptions",
     "GrayCoding",
     "GrayScan",
+    "coded_scan",
     "dot_scan",
     "gray_code_scan",
     "low_contrast_pixels",
@@ -192,15 +193,6 @@ class DotScan:
     n_ghosts: int
 
 
-def _check_patterns(capture, patterns: np.ndarray) -> np.ndarray:
-    imgs = np.asarray(capture.render(patterns))
-    if imgs.ndim != 3 or imgs.shape[0] != len(patterns):
-        raise ValueError(f"capture.render returned shape {imgs.shape} for {len(patterns)} patterns")
-    if imgs.dtype not in (np.float32, np.float64):
-        imgs = imgs.astype(np.float64)
-    return imgs
-
-
 def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) -> GrayScan:
     """Full gray-code scan (columns and rows) decoded and triangulated.
 
@@ -221,12 +213,10 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     -------
     GrayScan
     """
-    check_rig(rig)
-    o = options or GrayCodeOptions()
-    H, W = rig.projector.intrinsics.shape
+    o, (H, W) = scan_inputs(rig, options, GrayCodeOptions)
     stack = gc.encode(W, H)
     n_bits = len(stack) // 2
-    wb_r = _check_patterns(
+    wb_r = render_checked(
         capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
     )
     renders = 2
@@ -240,11 +230,11 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     kept = [] if o.keep_frames else None
     for k in range(n_bits):
         if o.inverses == "linearity":
-            pat_r = _check_patterns(capture, stack[2 * k : 2 * k + 1].astype(np.float32) / 255.0)
+            pat_r = render_checked(capture, stack[2 * k : 2 * k + 1].astype(np.float32) / 255.0)
             pair_r = np.concatenate([pat_r, gc.inverses_by_linearity(pat_r, wb_r[0], wb_r[1])])
             renders += 1
         else:
-            pair_r = _check_patterns(capture, stack[2 * k : 2 * k + 2].astype(np.float32) / 255.0)
+            pair_r = render_checked(capture, stack[2 * k : 2 * k + 2].astype(np.float32) / 255.0)
             renders += 2
         pair = np.asarray(capture.sense(pair_r))
         dec.add_pair(k, pair[0], pair[1])
@@ -255,18 +245,8 @@ def gray_code_scan(capture, rig: Rig, options: GrayCodeOptions | None = None) ->
     result = dec.result(require_reliable=o.require_reliable)
     if o.subpixel:
         result = refine_subpixel_from_diff(result, dec.diff)
-    cloud, depth = triangulated(rig, result, o.method)
-    frames = {"white": white, "black": black}
-    if kept is not None:
-        frames["images"] = np.concatenate(kept)
-    return CodedScan(
-        decode=result,
-        cloud=cloud,
-        depth=depth,
-        renders=renders,
-        frames=frames,
-        coding=GrayCoding(o),
-    )
+    images = None if kept is None else np.concatenate(kept)
+    return coded_scan(rig, result, white, black, images, renders=renders, coding=GrayCoding(o))
 
 
 def triangulated(rig: Rig, decode, method: str) -> tuple[PointCloud, np.ndarray]:
@@ -283,7 +263,32 @@ def triangulated(rig: Rig, decode, method: str) -> tuple[PointCloud, np.ndarray]
     return cloud, depth_at_proj_pixels(cloud, rig.guide)
 
 
-class GrayCoding:
+def coded_scan(rig: Rig, decode, white, black, images, *, renders: int, coding) -> CodedScan:
+    """Triangulate a full-field ``decode`` (:func:`triangulated`, with ``coding.method``) and
+    bundle it with the sensed frames: how every coded scan ends.
+
+    Parameters
+    ----------
+    rig : Rig
+    decode : a decode with ``valid`` and ``proj_uv()``
+    white, black : ndarray, shape (H, W)
+        The sensed all-on and all-off frames.
+    images : ndarray, shape (n, H, W), or None
+        The sensed pattern frames, kept when the options ask (None: not kept).
+    renders : int
+        Patterns rendered.
+    coding : the coding that scanned (its ``options.method`` triangulates)
+    """
+    cloud, depth = triangulated(rig, decode, coding.method)
+    frames = {"white": white, "black": black}
+    if images is not None:
+        frames["images"] = images
+    return CodedScan(
+        decode=decode, cloud=cloud, depth=depth, renders=renders, frames=frames, coding=coding
+    )
+
+
+class GrayCoding(FullFieldCoding):
     """The gray code as a coding of :data:`simlunar.scanner.codings.CODINGS`.
 
     Parameters
@@ -291,15 +296,11 @@ class GrayCoding:
     options : GrayCodeOptions, optional
     """
 
-    full_field = True
     frame_order = "OpenCV GrayCodePattern.generate() order, then white, black"
+    _scan = staticmethod(gray_code_scan)
 
     def __init__(self, options: GrayCodeOptions | None = None) -> None:
         self.options = options or GrayCodeOptions()
-
-    @property
-    def method(self) -> str:
-        return self.options.method
 
     @staticmethod
     def _bits(proj_shape) -> tuple[int, int]:
@@ -332,13 +333,6 @@ class GrayCoding:
             white_threshold=o.white_threshold,
             require_reliable=o.require_reliable,
         )
-
-    def scan(self, capture, rig: Rig, *, keep_frames: bool = False) -> CodedScan:
-        """:func:`gray_code_scan` with these options (``keep_frames`` or the options')."""
-        o = self.options
-        if keep_frames and not o.keep_frames:
-            o = dataclasses.replace(o, keep_frames=True)
-        return gray_code_scan(capture, rig, o)
 
     def export_meta(self, decode) -> dict:
         o = self.options
@@ -401,14 +395,14 @@ def dot_scan(
         min_cam_spacing=o.min_cam_spacing,
         exact=o.exact,
     )
-    black = np.asarray(capture.sense(_check_patterns(capture, np.zeros((1, H, W), np.float32))))[0]
+    black = np.asarray(capture.sense(render_checked(capture, np.zeros((1, H, W), np.float32))))[0]
     segments = _dots.epipolar_segments(rig, proj_uv, depth_range)
     cam_uv = np.full((len(proj_uv), 2), np.nan)
     n_ghosts = 0
     for start in range(0, len(schedule), o.batch):
         group = schedule[start : start + o.batch]
         pats = np.stack([_dots.dot_pattern((H, W), proj_uv[f], radius=o.radius) for f in group])
-        frames = np.asarray(capture.sense(_check_patterns(capture, pats)))
+        frames = np.asarray(capture.sense(render_checked(capture, pats)))
         for f, frame in zip(group, frames):
             det = _dots.detect_dots(
                 frame,

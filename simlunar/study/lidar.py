@@ -253,6 +253,15 @@ def _rows(oc, density: float) -> list[dict]:
     ]  # fmt: skip
 
 
+def _rows_of(rows: list[dict], metric: str, reconstruction: str):
+    """The rows of ``metric`` and ``reconstruction`` (a row without one: the default)."""
+    for r in rows:
+        if r["metric"] == metric and (
+            (r.get("reconstruction") or DEFAULT_RECONSTRUCTION) == reconstruction
+        ):
+            yield r
+
+
 def time_table(
     rows: list[dict], metric: str = "mse", reconstruction: str = DEFAULT_RECONSTRUCTION
 ) -> dict[str, dict[str, np.ndarray]]:
@@ -260,11 +269,7 @@ def time_table(
     ``value`` of ``metric`` over trials (and any other grouping the rows carry, pooled), of
     ``reconstruction``'s rows."""
     acc: dict = {}
-    for r in rows:
-        if r["metric"] != metric:
-            continue
-        if (r.get("reconstruction") or DEFAULT_RECONSTRUCTION) != reconstruction:
-            continue
+    for r in _rows_of(rows, metric, reconstruction):
         acc.setdefault(str(r["planner"]), {}).setdefault(int(r["k"]), []).append(
             (float(r["seconds"]), float(r["value"]))
         )
@@ -293,11 +298,7 @@ def equal_time_errors(
     dict planner -> float64 (units, len(times)), units in ascending order of ``unit``.
     """
     acc: dict = {}
-    for r in rows:
-        if r["metric"] != metric:
-            continue
-        if (r.get("reconstruction") or DEFAULT_RECONSTRUCTION) != reconstruction:
-            continue
+    for r in _rows_of(rows, metric, reconstruction):
         key = (str(r["planner"]), int(float(r.get("unit", 0) or 0)))
         acc.setdefault(key, {}).setdefault(int(float(r["k"])), []).append(
             (float(r["seconds"]), float(r["value"]))

@@ -129,3 +129,17 @@ def test_where_with_a_list_pools_units():
         both, metric="mse", strategy="wavelet", where={"unit": (1,)}
     )
     np.testing.assert_allclose(m1, [6.0, 12.0, 24.0])
+
+
+def test_ratio_ticks_thin_to_every_other_keeping_one():
+    fig, ax = plt.subplots()
+    ax.set_xscale("log", base=2)
+    # 0.5 .. 2: 0.5, 0.67, 0.8, 1, 1.25, 1.5, 2 -> 7 ticks, all kept
+    assert density.ratio_ticks(ax.xaxis, 0.5, 2.0) == [0.5, 0.67, 0.8, 1, 1.25, 1.5, 2]
+    # 0.25 .. 4: 11 nice ratios -> every other one counted from 1
+    ticks = density.ratio_ticks(ax.yaxis, 0.25, 4.0)
+    assert ticks == [0.25, 0.4, 0.67, 1, 1.5, 3]
+    assert ax.yaxis.get_major_formatter()(0.67, 0) == "0.67"  # plain numbers, not 2^x
+    assert list(ax.yaxis.get_majorticklocs()) == ticks
+    assert ax.yaxis.get_minor_locator().tick_values(0.25, 4.0) == []
+    plt.close(fig)
