@@ -42,6 +42,7 @@ from simlunar.lidar import (
 )
 from simlunar.lidar.gate import GateOptions, gate_bins, plane_ranges
 from simlunar.lidar.hardware import LidarHardware, pixel_solid_angles
+from simlunar.lidar.spad import spad_correct
 from simlunar.render.lights import ProjectorLight
 from simlunar.render.transient import (
     BeamCapture,
@@ -273,8 +274,6 @@ def _ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions, ran
                          pulses=det.pulses)  # fmt: skip
     if det.regime != "spad" or not ranging.pileup_correction or not res.valid.any():
         return res
-    from simlunar.lidar.spad import spad_correct
-
     c = np.asarray(counts).reshape(-1, bins.count)
     ok = res.valid.reshape(-1)
     bg = np.broadcast_to(np.asarray(background, float), res.valid.shape).reshape(-1)

@@ -36,7 +36,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.registry import check_bounds, option
-from simlunar.scanner.phase_shift import PhaseDecode, wrapped_phase
+from simlunar.scanner.phase_shift import (
+    PhaseDecode,
+    PhaseShiftCoding,
+    PhaseShiftOptions,
+    wrapped_phase,
+)
 from simlunar.scanner.scans import CodedScan, triangulated
 from simlunar.scanner.triangulate import check_rig
 
@@ -310,7 +315,5 @@ class MicroPhaseShiftCoding:
 
     def truth_scores(self, scan, truth: dict, mask=None) -> dict[str, float]:
         """As the phase shift's: ``coord_err_rate`` and ``coord_rmse_px``."""
-        from simlunar.scanner.phase_shift import PhaseShiftCoding, PhaseShiftOptions
-
         axes = self.options.axes
         return PhaseShiftCoding(PhaseShiftOptions(axes=axes)).truth_scores(scan, truth, mask)
