@@ -18,6 +18,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
 
+from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.registry import did_you_mean, option_info
 
 __all__ = [
@@ -118,8 +119,6 @@ def reconstruction_specs(value) -> list:
     Returns the plain list with each item as given, a mapping with no option left as its name
     (``{linear: {}}`` is ``linear``), so the default ``[linear]`` is one value.
     """
-    from simlunar.reconstruction import RECONSTRUCTIONS
-
     if isinstance(value, (str, Mapping)):
         value = [value]
     if not isinstance(value, (list, tuple)) or not value:

@@ -13,7 +13,7 @@ from pydantic import (
     model_validator,
 )
 
-from simlunar.config.derived import reconstruction_specs
+from simlunar.config.derived import options_model, reconstruction_specs
 from simlunar.config.fields import (
     Density,
     Metres,
@@ -33,6 +33,7 @@ from simlunar.config.planners import (  # noqa: F401 - the schema's planner mode
 )
 from simlunar.config.quantities import log_spaced
 from simlunar.planner import MEASURING, ORACLES, STRATEGIES
+from simlunar.reconstruction import RECONSTRUCTIONS
 
 __all__ = [
     "FEATURE_OPTION_KEYS",
@@ -54,9 +55,6 @@ def _reconstructions_input_type():
     """The editor schema of ``study.reconstructions``: each registered name, or ``{name:
     {options}}`` with that entry's derived options schema (names registered later are still
     validated, by :func:`~simlunar.config.derived.reconstruction_specs`)."""
-    from simlunar.config.derived import options_model
-    from simlunar.reconstruction import RECONSTRUCTIONS
-
     names = RECONSTRUCTIONS.names()
     items = [Literal[names]]
     for n in names:

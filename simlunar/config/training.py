@@ -23,6 +23,7 @@ from simlunar.config.loading import load_experiment
 from simlunar.config.messages import validate_file_data
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
+from simlunar.reconstruction import RECONSTRUCTIONS
 
 __all__ = ["LearnedOptsCfg", "LearnedReconCfg", "TrainCfg", "load_training"]
 
@@ -62,8 +63,6 @@ class LearnedReconCfg(_Model):
         if self.shading_options and not self.with_shading:
             raise ValueError("shading_options: only with with_shading: true")
         if self.with_shading:
-            from simlunar.reconstruction import RECONSTRUCTIONS
-
             if "shading" not in RECONSTRUCTIONS:
                 raise ValueError(
                     "with_shading: needs the reconstruction 'shading', which this simlunar "

@@ -8,6 +8,9 @@ trained on one :data:`FEATURE_SET_VERSION` refuses images featurised by another.
 
 from __future__ import annotations
 
+import hashlib
+from pathlib import Path
+
 import numpy as np
 import pywt
 from scipy import ndimage
@@ -136,3 +139,19 @@ def image_features(image, *, pitch: float) -> np.ndarray:
     for i, n in enumerate(FEATURE_NAMES):
         out[..., i] = feats[n]
     return out
+
+
+# ---- the model files of the learned map and the learned reconstruction (both read this stack) ----
+def _model_path(path) -> Path:
+    path = Path(path)
+    if path.suffix != ".joblib":
+        raise ValueError(f"a learned model file ends in .joblib, got {str(path)!r}")
+    return path
+
+
+def _sha256_file(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()

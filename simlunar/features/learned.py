@@ -43,7 +43,13 @@ import sklearn
 from threadpoolctl import threadpool_limits
 
 from simlunar import __version__ as simlunar_version
-from simlunar.features._stack import FEATURE_NAMES, FEATURE_SET_VERSION, image_features
+from simlunar.features._stack import (
+    FEATURE_NAMES,
+    FEATURE_SET_VERSION,
+    _model_path,
+    _sha256_file,
+    image_features,
+)
 from simlunar.features.maps import check_image
 
 __all__ = [
@@ -118,14 +124,6 @@ def _sha256_array(a: np.ndarray) -> str:
     a = np.ascontiguousarray(a)
     h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
     h.update(a.tobytes())
-    return h.hexdigest()
-
-
-def _sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
     return h.hexdigest()
 
 
@@ -256,13 +254,6 @@ def save_with_record(path, payload, meta: dict) -> tuple[Path, Path]:
     sidecar = path.with_suffix(".json")
     sidecar.write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
     return path, sidecar
-
-
-def _model_path(path) -> Path:
-    path = Path(path)
-    if path.suffix != ".joblib":
-        raise ValueError(f"a learned model file ends in .joblib, got {str(path)!r}")
-    return path
 
 
 def _check_meta(meta: dict, path: Path) -> None:

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.lidar.apd import ApdOptions, apd_waveform
+from simlunar.lidar.spad import spad_counts
 from simlunar.lidar.waveform import TimeBins
 
 
@@ -167,8 +168,6 @@ def photon_counts_dead_time(
     lam = np.asarray(expected, float)
     if options.dead_time_s == 0 or np.isinf(options.dead_time_s):
         return photon_counts(lam, options=options, rng=rng)
-    from simlunar.lidar.spad import spad_counts
-
     return spad_counts(
         lam, bins, dead_time_s=options.dead_time_s, pulses=int(options.pulses), rng=rng
     )

@@ -37,6 +37,7 @@ from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_key
 from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
+from simlunar.plotting.lidar_tables import lidar_tables
 from simlunar.plotting.scanner_tables import scanner_tables
 from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
 from simlunar.results.exports import write_scan_export
@@ -467,10 +468,6 @@ def _sensor_tables(cfg: ExperimentCfg, units, rows: list[dict], title: str):
     """The scanner or LIDAR tables of rows of one reconstruction."""
     if cfg.study.kind == "scanner":
         return scanner_tables(rows, metrics=_names(units, "metrics"), title=title)
-    # lazy: simlunar.plotting.lidar imports matplotlib, which a run without LIDAR tables
-    # (and without figures) never loads
-    from simlunar.plotting.lidar import lidar_tables
-
     # one table block per sweep point; terrain seeds pooled (their interval in the figures)
     by = next(iter(cfg.sweep)) if len(cfg.sweep) == 1 else ("unit" if cfg.sweep else None)
     return lidar_tables(rows, metrics=_names(units, "metrics"), title=title, by=by)

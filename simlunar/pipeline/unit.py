@@ -41,6 +41,7 @@ from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
 from simlunar.render.scene import luminance
 from simlunar.results.exports import scan_export_payload
+from simlunar.results.lidar_exports import lidar_export_payload
 from simlunar.results.records import UnitRecord
 from simlunar.sensors.lidar import LidarScene
 from simlunar.study.lidar import run_lidar_study
@@ -421,8 +422,6 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
         arrays[f"samples_{label}"] = np.c_[acq.rc, acq.values].astype(np.float64)
     scans = None
     if cfg.study.save_scans:  # written by the runner into scans/unit<i>/
-        from simlunar.results.lidar_exports import lidar_export_payload
-
         scans = lidar_export_payload(res.examples, scene.camera, image.shape[:2])
     return UnitRecord(
         rows=[dict(row) for row in res.rows],

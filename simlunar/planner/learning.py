@@ -31,7 +31,15 @@ from simlunar.features.learned import (
 )
 from simlunar.features.maps import check_image
 from simlunar.planner.sequential import uniform_layout
-from simlunar.reconstruction import reconstruct
+from simlunar.reconstruction import RECONSTRUCTIONS, Guide, reconstruct
+from simlunar.reconstruction.learned import FORMAT as RECON_FORMAT
+from simlunar.reconstruction.learned import (
+    RECON_FEATURE_VERSION,
+    LearnedReconstruction,
+    feature_names,
+    residual_features,
+    shading_heights,
+)
 
 __all__ = ["error_target", "train_learned_map", "train_learned_reconstruction"]
 
@@ -200,9 +208,6 @@ def train_learned_map(
 def _recon_training_set(examples, densities, options, with_shading, shading_options, rng):
     """Features and residual / h targets: ``options.pixels_per_example`` pixels per example and
     density, spread over ``options.layouts`` uniform Lloyd layouts."""
-    from simlunar.reconstruction.base import Guide
-    from simlunar.reconstruction.learned import residual_features, shading_heights
-
     xs, ys = [], []
     for image, truth in examples:
         guide = Guide(image) if with_shading else None
@@ -276,15 +281,6 @@ def train_learned_reconstruction(
     -------
     simlunar.reconstruction.learned.LearnedReconstruction
     """
-    from simlunar.reconstruction.learned import (
-        FORMAT as RECON_FORMAT,
-    )
-    from simlunar.reconstruction.learned import (
-        RECON_FEATURE_VERSION,
-        LearnedReconstruction,
-        feature_names,
-    )
-
     opt = options or LearnedOptions()
     rng = np.random.default_rng(rng)
     ex = _check_examples(examples)
@@ -292,8 +288,6 @@ def train_learned_reconstruction(
     if shading_options and not with_shading:
         raise ValueError("shading_options given without with_shading=True")
     if with_shading:
-        from simlunar.reconstruction import RECONSTRUCTIONS
-
         if "shading" not in RECONSTRUCTIONS:
             raise ValueError(
                 "with_shading needs the reconstruction 'shading', which is not registered "

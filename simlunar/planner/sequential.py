@@ -29,7 +29,8 @@ from scipy import ndimage
 from simlunar.planner.placement import density_from_map, place
 from simlunar.planner.strategies import check_k
 from simlunar.planner.types import SamplePlan
-from simlunar.reconstruction import reconstruct, triangulate
+from simlunar.reconstruction import reconstruct
+from simlunar.reconstruction.delaunay import loo_residuals
 
 __all__ = [
     "FIRST_ROUND_MIX",
@@ -154,55 +155,6 @@ def uniform_layout(shape, k: int, *, rng=None) -> np.ndarray:
     shape = tuple(int(s) for s in shape)
     k = check_k(k, shape[0] * shape[1])
     return place(np.ones(shape), k, rng=rng)
-
-
-def loo_residuals(points_rc, values) -> np.ndarray:
-    """Leave-one-out residual of each sample against the plane through its Delaunay neighbours.
-
-    Parameters
-    ----------
-    points_rc : ndarray, shape (n, 2)
-        Distinct sample positions (row, col).
-    values : ndarray, shape (n,)
-        Measured values.
-
-    Returns
-    -------
-    ndarray of float64, shape (n,)
-        value_i - plane_i(position_i), the plane the least-squares fit to the neighbours of i
-        in the Delaunay triangulation of all samples; 0 where the fit is degenerate (fewer than
-        three neighbours, or all collinear).
-    """
-    pts = np.asarray(points_rc, dtype=np.float64)
-    z = np.asarray(values, dtype=np.float64)
-    tris = triangulate(pts)
-    out = np.zeros(len(pts))
-    if len(tris) == 0:
-        return out
-    e = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]).astype(np.int64)
-    e = np.unique(np.sort(e, axis=1), axis=0)
-    i, j = np.concatenate((e[:, 0], e[:, 1])), np.concatenate((e[:, 1], e[:, 0]))
-    dr, dc, dz = pts[j, 0] - pts[i, 0], pts[j, 1] - pts[i, 1], z[j] - z[i]
-    n = len(pts)
-
-    def total(x):
-        return np.bincount(i, weights=x, minlength=n)
-
-    cnt = np.bincount(i, minlength=n).astype(np.float64)
-    srr, scc, src = total(dr * dr), total(dc * dc), total(dr * dc)
-    sr, sc = total(dr), total(dc)
-    m = np.stack(
-        [np.stack([cnt, sr, sc], -1), np.stack([sr, srr, src], -1), np.stack([sc, src, scc], -1)],
-        axis=1,
-    )
-    rhs = np.stack([total(dz), total(dz * dr), total(dz * dc)], -1)
-    det = np.linalg.det(m)
-    scale = np.maximum(cnt * srr * scc, 1e-300)
-    ok = (cnt >= 3) & (np.abs(det) > 1e-9 * scale)
-    # the fit is dz ~ a + b dr + c dc about sample i, so the plane predicts a at i
-    a = np.linalg.solve(m[ok], rhs[ok][..., None])[:, 0, 0]
-    out[ok] = -a
-    return out
 
 
 def _mean_one(m: np.ndarray) -> np.ndarray:

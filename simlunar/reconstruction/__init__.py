@@ -6,16 +6,21 @@ reconstruction, :mod:`simlunar.registry`); every one has the signature of
 ``reconstruct`` is the Delaunay-linear interpolation of the paper (section 4.1).
 """
 
-from simlunar.reconstruction.base import Guide, LinearOptions, Reconstructed, linear
+from simlunar.reconstruction.base import (
+    RECONSTRUCTIONS,
+    Guide,
+    LinearOptions,
+    Reconstructed,
+    linear,
+    run_reconstruction,
+)
 from simlunar.reconstruction.control import SmoothedOptions, smoothed
 from simlunar.reconstruction.delaunay import OUTSIDE_POLICIES, reconstruct, triangulate
 from simlunar.reconstruction.learned import LearnedReconOptions, learned_reconstruction
 from simlunar.reconstruction.photoclinometry import PhotoclinometryOptions, photoclinometry
 from simlunar.reconstruction.shading import ShadingOptions, shading
-from simlunar.registry import Registry
 
-#: reconstruction name -> Entry(function, options class); ``meta["guided"]``: reads the guide
-RECONSTRUCTIONS = Registry("reconstruction")
+# the registry lives in .base (the learned reconstruction reads it); its entries are added here
 RECONSTRUCTIONS.register(
     "linear", linear, LinearOptions, summary="Delaunay-linear (the paper's)", guided=False
 )
@@ -40,33 +45,6 @@ RECONSTRUCTIONS.register(
     guided=True,
     needs_model=True,
 )
-
-
-def run_reconstruction(name, points_rc, values, shape, *, guide=None, options=None):
-    """Run reconstruction ``name`` on the samples.
-
-    Parameters
-    ----------
-    name : str
-        A name of :data:`RECONSTRUCTIONS` (an unknown one is a ``ValueError`` listing them).
-    points_rc : array_like, shape (k, 2)
-        Measured cells (row, col).
-    values : array_like, shape (k,)
-        Measured heights or depths there.
-    shape : tuple of int
-        Output grid (rows, cols).
-    guide : Guide, optional
-        What the camera saw; a guided reconstruction without one is a ``ValueError``.
-    options : the entry's options object, a mapping of its fields, or None (defaults)
-
-    Returns
-    -------
-    Reconstructed
-    """
-    entry, options = RECONSTRUCTIONS.resolve(name, options)
-    if entry.meta.get("guided") and guide is None:
-        raise ValueError(f"reconstruction {name!r} needs the guide image (guide=Guide(...))")
-    return entry.target(points_rc, values, shape, guide=guide, options=options)
 
 
 __all__ = [

@@ -16,9 +16,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
+from simlunar.reconstruction.delaunay import reconstruct
+from simlunar.registry import Registry, check_bounds, option
 
-__all__ = ["Guide", "LinearOptions", "Reconstructed", "linear"]
+__all__ = [
+    "RECONSTRUCTIONS",
+    "Guide",
+    "LinearOptions",
+    "Reconstructed",
+    "linear",
+    "run_reconstruction",
+]
+
+#: reconstruction name -> Entry(function, options class); ``meta["guided"]``: reads the guide
+#: (the entries are registered by :mod:`simlunar.reconstruction`, which imports each module)
+RECONSTRUCTIONS = Registry("reconstruction")
 
 
 def _grid(a, name: str, shape=None) -> np.ndarray:
@@ -132,7 +144,32 @@ class LinearOptions:
 def linear(points_rc, values, shape, *, guide=None, options: LinearOptions | None = None):
     """Delaunay-linear interpolation of the samples (:func:`.delaunay.reconstruct`); the
     guide is not used."""
-    from simlunar.reconstruction.delaunay import reconstruct
-
     o = options or LinearOptions()
     return Reconstructed(reconstruct(points_rc, values, shape, outside=o.outside))
+
+
+def run_reconstruction(name, points_rc, values, shape, *, guide=None, options=None):
+    """Run reconstruction ``name`` on the samples.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`RECONSTRUCTIONS` (an unknown one is a ``ValueError`` listing them).
+    points_rc : array_like, shape (k, 2)
+        Measured cells (row, col).
+    values : array_like, shape (k,)
+        Measured heights or depths there.
+    shape : tuple of int
+        Output grid (rows, cols).
+    guide : Guide, optional
+        What the camera saw; a guided reconstruction without one is a ``ValueError``.
+    options : the entry's options object, a mapping of its fields, or None (defaults)
+
+    Returns
+    -------
+    Reconstructed
+    """
+    entry, options = RECONSTRUCTIONS.resolve(name, options)
+    if entry.meta.get("guided") and guide is None:
+        raise ValueError(f"reconstruction {name!r} needs the guide image (guide=Guide(...))")
+    return entry.target(points_rc, values, shape, guide=guide, options=options)

@@ -53,10 +53,16 @@ from pathlib import Path
 import numpy as np
 from scipy import ndimage
 
-from simlunar.features._stack import FEATURE_NAMES, FEATURE_SET_VERSION, image_features
+from simlunar.features._stack import (
+    FEATURE_NAMES,
+    FEATURE_SET_VERSION,
+    _model_path,
+    _sha256_file,
+    image_features,
+)
 from simlunar.features.maps import to_gray
-from simlunar.reconstruction.base import Reconstructed
-from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
+from simlunar.reconstruction.base import RECONSTRUCTIONS, Reconstructed, run_reconstruction
+from simlunar.reconstruction.delaunay import _check_inputs, loo_residuals, reconstruct
 from simlunar.registry import check_bounds, option
 
 __all__ = [
@@ -152,10 +158,6 @@ def sample_scale(points_rc, values) -> tuple[float, np.ndarray]:
         1e-9 of the largest |value|, or there are fewer than 4 distinct samples), and each distinct sample's residual, shape (k',),
         with the distinct positions as computed by ``np.unique(points_rc, axis=0)``.
     """
-    # loo_residuals lives with the planner that uses it first; imported here because the
-    # planner imports this package
-    from simlunar.planner.sequential import loo_residuals
-
     pts, vals = _distinct(np.asarray(points_rc, float), np.asarray(values, float))
     loo = loo_residuals(pts, vals) if len(pts) >= 4 else np.zeros(len(pts))
     h = float(np.sqrt(np.mean(loo**2))) if len(loo) else 0.0
@@ -258,8 +260,6 @@ def shading_heights(points_rc, values, shape, *, guide, options: dict | None) ->
 
     A ``ValueError`` when no reconstruction ``shading`` is registered.
     """
-    from simlunar.reconstruction import RECONSTRUCTIONS, run_reconstruction
-
     if "shading" not in RECONSTRUCTIONS:
         raise ValueError(
             "the learned reconstruction's shading feature needs the reconstruction 'shading', "
@@ -404,8 +404,6 @@ def check_model_file(path) -> tuple[Path, dict]:
     """
     import sklearn
 
-    from simlunar.features.learned import _model_path, _sha256_file
-
     path = _model_path(path)
     sidecar = path.with_suffix(".json")
     if not path.is_file() or not sidecar.is_file():
@@ -445,8 +443,6 @@ _CACHE: dict[tuple[str, str], LearnedReconstruction] = {}
 
 def _cached(model) -> LearnedReconstruction:
     """The model file ``model``, loaded once per (resolved path, SHA-256 of the file)."""
-    from simlunar.features.learned import _model_path, _sha256_file
-
     path = _model_path(model).resolve()
     if not path.is_file():
         raise ValueError(f"learned reconstruction model file not found: {model}")

@@ -42,6 +42,7 @@ from simlunar.lidar import (
 )
 from simlunar.lidar.gate import GateOptions, plane_ranges
 from simlunar.lidar.hardware import LidarHardware
+from simlunar.lidar.spad import spad_correct
 from simlunar.render.beam_capture import BeamCapture, capture_beams
 from simlunar.render.transient import TransientOptions
 
@@ -261,8 +262,6 @@ def _ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions, ran
                          pulses=det.pulses)  # fmt: skip
     if det.regime != "spad" or not ranging.pileup_correction or not res.valid.any():
         return res
-    from simlunar.lidar.spad import spad_correct
-
     c = np.asarray(counts).reshape(-1, bins.count)
     ok = res.valid.reshape(-1)
     bg = np.broadcast_to(np.asarray(background, float), res.valid.shape).reshape(-1)

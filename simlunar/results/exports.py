@@ -40,10 +40,12 @@ import numpy as np
 from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
 from simlunar.imaging.exr import write_exr
+from simlunar.results.lidar_exports import write_lidar_export
 from simlunar.results.ply import XYZ_FIELDS, ply_records, write_ply
 from simlunar.scanner.codings import CODINGS
 from simlunar.scanner.gray_code import frame_names
 from simlunar.scanner.triangulate import Correspondences, triangulate_plane, triangulate_rays
+from simlunar.sensors.structured_light import DOT_MODES, MODES
 
 __all__ = [
     "calibration_opencv",
@@ -287,8 +289,6 @@ def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None =
         last): the runner keeps a folder only while its unit is part of the result folder.
     """
     if payload.get("kind") == "lidar":
-        from simlunar.results.lidar_exports import write_lidar_export
-
         return write_lidar_export(folder, payload, unit_key=unit_key)
     from PIL import Image
 
@@ -388,8 +388,6 @@ def check_save_scans(cfg) -> None:
             f"--save-scans: experiment {cfg.name!r} has a {study.kind} study; scans are "
             "exported by scanner and lidar studies only"
         )
-    from simlunar.sensors.structured_light import DOT_MODES, MODES
-
     coded = [m for m in MODES if m not in DOT_MODES]  # the full-field codings' own modes
     if not set(study.modes) & {*coded, "ambiguity_enhancement"}:
         raise ConfigError(

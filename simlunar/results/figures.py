@@ -221,27 +221,10 @@ def _draw(res: dict, formats: list[str]) -> list[Path]:
     returns the files written."""
     # the drawing modules import matplotlib: imported when a figure is drawn, not by every
     # importer of this module (the runner, even with --no-figures; the fit; notebooks)
-    from simlunar.plotting.figures import close, save
-    from simlunar.results import lidar_figures, sampling_figures, scanner_figures
+    from simlunar.results._drawing import draw
 
-    fig_dir = res["dir"] / "figures"
-    written: list[Path] = []
-
-    def emit(fig, stem):
-        for suffix, data in save(fig, stem, formats):
-            path = fig_dir / f"{stem}.{suffix}"
-            atomic_write_bytes(path, data)
-            written.append(path)
-        close(fig)
-
-    draw = {
-        "sampling": sampling_figures.sampling_figures,
-        "scanner": scanner_figures.scanner_figures,
-        "lidar": lidar_figures.lidar_figures,
-    }[res["config"].get("study", {}).get("kind", "sampling")]
-    captions: dict[str, str] = {}
-    draw(res, emit, captions)
-    write_captions(fig_dir, captions, written)
+    written, captions = draw(res, formats)
+    write_captions(res["dir"] / "figures", captions, written)
     return written
 
 

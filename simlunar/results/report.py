@@ -16,7 +16,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from simlunar.errors import ResultFolderError
+from simlunar.errors import ResultFolderError, SimlunarError
 from simlunar.results.folder import read_folder_config
 from simlunar.results.md_tables import parse_markdown
 from simlunar.results.store import atomic_write_text
@@ -92,7 +92,6 @@ def run_overrides(folder: str | Path, shipped: str | Path | None = None) -> dict
     (a learned map's model file absent, say): then nothing is claimed.
     """
     from simlunar.config.loading import load_experiment, to_plain
-    from simlunar.errors import SimlunarError
 
     folder = Path(folder)
     cfg = read_folder_config(folder / "config.yaml")

@@ -6,6 +6,7 @@ one-axis sweep, the score against the swept value."""
 from __future__ import annotations
 
 from simlunar.plotting import figures as F
+from simlunar.plotting.forest import saved_forest_plot
 from simlunar.plotting.reconstructions import category_labels, reconstruction_saved_vs_sweep
 from simlunar.plotting.style import axis_name, point_title
 from simlunar.plotting.tables import seed_summary_numbers
@@ -219,8 +220,6 @@ def _forest_figure(points: list, emit, captions: dict[str, str]) -> None:
     """``samples_saved_forest``: each planner's samples saved vs uniform Lloyd with its 95 %
     interval over terrain seeds, one panel per sweep point; drawn when the study has the
     uniform layout (the figure of the headroom and paired samples-saved tables)."""
-    from simlunar.plotting.forest import saved_forest_plot
-
     entries = [
         {"label": p.label if len(points) > 1 else "", "metric": p.saved_metric,
          "strategies": [s for s in p.strategies if s != aggregate.HEADROOM_REFERENCE],

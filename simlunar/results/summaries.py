@@ -78,7 +78,7 @@ def _git_commit() -> dict[str, Any]:
 #: modules that write the tables: a change of any of them rewrites the tables of a rerun
 _TABLE_MODULES = (
     "simlunar.pipeline.runner",
-    "simlunar.plotting.lidar",  # lidar_summary and lidar_tables write the LIDAR study's tables
+    "simlunar.plotting.lidar_tables",  # the LIDAR study's tables
     "simlunar.results.summaries",
     "simlunar.plotting.tables",
     "simlunar.plotting.scanner_tables",

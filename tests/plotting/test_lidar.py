@@ -43,20 +43,6 @@ def _rows():
     return rows
 
 
-def test_lidar_summary_means_times_and_a_band_over_units():
-    from simlunar.plotting.lidar import lidar_summary
-
-    s = lidar_summary(_rows(), metric="mse")
-    g = s["grid"]
-    assert list(g["k"]) == [64, 256] and list(g["seconds"]) == [4.0, 12.0]
-    # mean over units (1x and 2x) and trials (1.0x and 1.1x)
-    assert g["value"][0] == np.mean([1 / 64 * u * t for u in (1, 2) for t in (1.0, 1.1)])
-    assert (g["lo"] <= g["value"]).all() and (g["value"] <= g["hi"]).all()
-    assert list(g["units"]) == [2, 2]
-    one = lidar_summary(_rows(), metric="mse", where={"unit": "0"})["grid"]
-    assert list(one["units"]) == [1, 1]
-
-
 def test_error_vs_time_draws_a_curve_per_planner(tmp_path):
     from simlunar.plotting.lidar import error_vs_time
 
@@ -68,26 +54,3 @@ def test_error_vs_time_draws_a_curve_per_planner(tmp_path):
     assert ax.get_xlabel() == "range samples measured"
     assert ax.containers[0].lines[0].get_xdata().tolist() == [64, 256]
     fig.savefig(tmp_path / "t.png")
-
-
-def test_lidar_tables_list_time_and_metrics():
-    from simlunar.plotting.lidar import lidar_tables
-
-    md, tex = lidar_tables(_rows(), metrics=["mse"], title="t")
-    assert "| Planner | k | scan time (s) | MSE |" in md
-    assert "| grid | 64 | 4 |" in md and "| wavelet | 256 | 24 |" in md
-    assert "\\begin{tabular}{lrrr}" in tex
-
-
-def test_a_swept_option_makes_separate_points_of_one_curve():
-    from simlunar.plotting.lidar import lidar_summary
-
-    rows = [
-        {"planner": "wavelet", "k": "256", "metric": "mse", "value": str(v), "seconds": str(s),
-         "revisits": str(n), "unit": str(u)}
-        for u, n, s, v in ((0, 2, 0.4, 2.0), (1, 2, 0.4, 4.0), (2, 4, 0.67, 1.0))
-    ]  # fmt: skip
-    d = lidar_summary(rows, metric="mse", by="revisits")["wavelet"]
-    assert d["seconds"].tolist() == [0.4, 0.67] and d["value"].tolist() == [3.0, 1.0]
-    assert d["units"].tolist() == [2, 1]
-    assert lidar_summary(rows, metric="mse")["wavelet"]["units"].tolist() == [3]

@@ -85,6 +85,15 @@ def test_documented_parameters_are_the_plugins_and_defaults_are_true(mi, name):
             assert rel.max() > 10 * 2e-5, p
 
 
+def test_the_plugins_are_those_the_bsdf_registry_names():
+    # PLUGINS comes from the package's modules; the BSDF registry names its plugin modules
+    # apart: the two lists must agree (a BSDF whose plugin lives elsewhere would be missed)
+    from simlunar.render.materials import BSDFS
+
+    named = {n: e.meta["plugin"] for n, e in BSDFS.items() if e.meta.get("plugin")}
+    assert named == {n: m.__name__ for n, m in PLUGINS.items()}
+
+
 def test_importing_the_plugins_does_not_import_mitsuba():
     code = (
         "import sys, simlunar.render.plugins, simlunar.render.bsdfs; "
