@@ -29,13 +29,16 @@ BATCH = 8192
 FOOTPRINT_SAMPLES = 16
 SCALE = 0.25
 HEIGHT_M = 50.0
+#: ``smoke=True`` sizes: beams, batch, footprint rays, terrain scale, pointings ordered, flash
+SMOKE = {"beams": 64, "batch": 32, "footprint": 2, "scale": 0.05, "order": 500, "flash": 16}
 
 
-def _setup():
+def _setup(scale=SCALE):
+    from simlunar.config.translate import preset_params
     from simlunar.geometry import Camera, Pose
     from simlunar.terrain import generate
 
-    t = generate("aerial_1", rng=0, scale=SCALE).terrain
+    t = generate(preset_params("aerial_1"), rng=0, scale=scale).terrain
     xmin, xmax, ymin, ymax = t.extent
     c = np.array([(xmin + xmax) / 2, (ymin + ymax) / 2, float(np.nanmean(t.heights))])
     pose = Pose.look_at(c + np.array([0.0, 0.0, HEIGHT_M]), c, up=(0.0, 1.0, 0.0))
@@ -43,7 +46,8 @@ def _setup():
     return t, pose, fov, Camera
 
 
-def lidar() -> dict:
+def lidar(*, smoke: bool = False) -> dict:
+    """The scan, ordering and flash figures of the module docstring (``smoke``: tiny sizes)."""
     from simlunar.geometry import Intrinsics
     from simlunar.lidar import (
         DetectorOptions,
@@ -66,21 +70,26 @@ def lidar() -> dict:
     from simlunar.render.lights import SunLight
     from simlunar.render.transient import TransientOptions
 
+    n_beams, batch, samples = N_BEAMS, BATCH, FOOTPRINT_SAMPLES
+    scale, n_order, flash_px = SCALE, 100_000, 128
+    if smoke:
+        n_beams, batch, samples = SMOKE["beams"], SMOKE["batch"], SMOKE["footprint"]
+        scale, n_order, flash_px = SMOKE["scale"], SMOKE["order"], SMOKE["flash"]
     backend.init()
-    t, pose, fov, Camera = _setup()
+    t, pose, fov, Camera = _setup(scale)
     guide = Camera(Intrinsics.from_fov(512, 512, fov), pose)
     rng = np.random.default_rng(0)
-    _, d = guide.rays(rng.uniform(0, 512, (N_BEAMS, 2)))
+    _, d = guide.rays(rng.uniform(0, 512, (n_beams, 2)))
     sun = SunLight(elevation=np.radians(20.0), azimuth=np.radians(90.0))
     opts = SteeredBeamOptions(
-        footprint=FootprintOptions(1e-3, samples=FOOTPRINT_SAMPLES),
+        footprint=FootprintOptions(1e-3, samples=samples),
         detector=DetectorOptions(signal_photons=2e6, background_photons_per_s=1e9),
         steering=SteeringOptions(),
         order=OrderOptions(method="given"),  # ordering is timed at full size below
-        batch=BATCH,
+        batch=batch,
     )
     cap = beam_capture(t, pose.position, options=opts, sun=sun)
-    steered_beam_scan(cap, d[:BATCH], options=opts, rng=0)  # warm-up: kernels compiled
+    steered_beam_scan(cap, d[:batch], options=opts, rng=0)  # warm-up: kernels compiled
     t0 = time.perf_counter()
     scan = steered_beam_scan(cap, d, options=opts, rng=1)
     ours_s = time.perf_counter() - t0
@@ -90,17 +99,19 @@ def lidar() -> dict:
     reference_s = time.perf_counter() - t0
     err = np.abs(scan.ranges - truth)[scan.valid]
 
-    big = pose.rotation @ np.vstack([rng.uniform(-0.4, 0.4, (2, 100_000)), np.ones(100_000)])
+    big = pose.rotation @ np.vstack([rng.uniform(-0.4, 0.4, (2, n_order)), np.ones(n_order)])
     ang = pointing_angles((big / np.linalg.norm(big, axis=0)).T, pose)
-    order_scan(ang[:1000], steering=opts.steering)  # warm-up: numba kernels loaded
+    order_scan(
+        ang[: min(1000, n_order // 2)], steering=opts.steering
+    )  # warm-up: numba kernels loaded
     t0 = time.perf_counter()
     order = order_scan(ang, steering=opts.steering)
     order_100k_s = time.perf_counter() - t0
     planner_100k = scan_timing(ang, options=opts.steering).total_s
     ordered_100k = scan_timing(ang, order, options=opts.steering).total_s
 
-    flash_cam = Camera(Intrinsics.from_fov(128, 128, fov), pose)
-    fopts = FlashOptions(transient=TransientOptions(spp=64))
+    flash_cam = Camera(Intrinsics.from_fov(flash_px, flash_px, fov), pose)
+    fopts = FlashOptions(transient=TransientOptions(spp=4 if smoke else 64))
     bins = range_window(t, flash_cam, bin_range_m=fopts.bin_range_m, margin_m=fopts.margin_m)
     flash_scan(t, flash_cam, options=fopts, rng=0)  # warm-up
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -108,15 +119,17 @@ def lidar() -> dict:
     flash_scan(t, flash_cam, options=fopts, rng=0)
     flash_s = time.perf_counter() - t0
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    beams_per_s = N_BEAMS / ours_s
+    beams_per_s = n_beams / ours_s
     return {
         "reference_s": round(reference_s, 4),
         "ours_s": round(ours_s, 3),
-        "beams": N_BEAMS,
-        "batch": BATCH,
-        "footprint_samples": FOOTPRINT_SAMPLES,
-        "terrain": f"aerial_1 x{SCALE} ({t.shape[0]}x{t.shape[1]} cells)",
+        "smoke": smoke,
+        "beams": n_beams,
+        "batch": batch,
+        "footprint_samples": samples,
+        "terrain": f"aerial_1 x{scale} ({t.shape[0]}x{t.shape[1]} cells)",
         "beams_per_s": round(beams_per_s, 1),
+        "ordered_pointings": n_order,
         "order_100k_s": round(order_100k_s, 2),
         "scan_100k_s": round(1e5 / beams_per_s + order_100k_s, 2),
         "valid_fraction": round(float(scan.valid.mean()), 4),
@@ -126,7 +139,8 @@ def lidar() -> dict:
         "scan_100k_simulated_s_ordered": round(ordered_100k, 1),
         "flash_128_s": round(flash_s, 3),
         "flash_bins": bins.count,
-        "flash_128_mb": round(128 * 128 * bins.count * 4 * 4 / 2**20, 1),
+        "flash_px": flash_px,
+        "flash_128_mb": round(flash_px * flash_px * bins.count * 4 * 4 / 2**20, 1),
         "flash_rss_mb": round((rss1 - rss0) / 1024, 1),
         "variant": backend.info().variant,
     }
