@@ -16,7 +16,7 @@ import numpy as np
 
 from simlunar.config.terrain import PresetError, merged_preset, preset_path
 from simlunar.config.translate import terrain_params
-from simlunar.errors import ConfigError
+from simlunar.errors import ConfigError, InputChangedError
 from simlunar.results.store import file_sha256
 from simlunar.terrain.io import GDAL_FORMATS, load_albedo, load_dem
 
@@ -42,8 +42,10 @@ __all__ = [
     "input_files",
     "input_hashes",
     "model_files",
+    "read_unit_models",
     "size_limit",
     "terrain_facts",
+    "verify_inputs",
 ]
 
 
@@ -145,6 +147,80 @@ def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
             raise ConfigError(f"{key}: cannot read {p} ({exc.strerror or exc}){hint}") from None
         out[key] = {"path": str(p), "sha256": digest}
     return out
+
+
+def _changed(key: str, path, digest: str, expected: str) -> InputChangedError:
+    return InputChangedError(
+        f"{key}: {path} changed during the run (sha256 {digest[:12]}, the run hashed "
+        f"{expected[:12]} into the unit's cache key); nothing of this unit is stored"
+    )
+
+
+def _bytes_sha256(path: Path, key: str) -> tuple[bytes, str]:
+    import hashlib
+
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise InputChangedError(
+            f"{key}: cannot read {path} during the run ({exc.strerror or exc})"
+        ) from None
+    return data, hashlib.sha256(data).hexdigest()
+
+
+def read_unit_models(inputs: dict[str, dict[str, str]]) -> dict[str, tuple[str, Any]]:
+    """The learned models a unit reads, each loaded from the bytes whose SHA-256 its cache key
+    holds (``inputs``: :func:`input_hashes` of the unit, as the run computed them).
+
+    Each model file and its record are read once; their hashes must equal the run's, so the
+    model a unit uses is the content its key names, whatever happens to the files later
+    (:func:`simlunar.features.learned.pinned_models` then keeps the unit from reading them
+    again).
+
+    Returns
+    -------
+    dict
+        model path -> (SHA-256 hex of the model bytes, LearnedMap)
+
+    Raises
+    ------
+    InputChangedError
+        A model file or its record differs from the run's hash of it (one line naming it).
+    ConfigError
+        A model the loader refuses (one line naming the file).
+    """
+    from simlunar.features.learned import LearnedMap
+
+    out: dict[str, tuple[str, Any]] = {}
+    for key, v in inputs.items():
+        if not key.endswith(".feature_opts.model"):
+            continue
+        path = Path(v["path"])
+        data, digest = _bytes_sha256(path, key)
+        if digest != v["sha256"]:
+            raise _changed(key, path, digest, v["sha256"])
+        rec = inputs.get(f"{key}.json")
+        record, rdigest = _bytes_sha256(path.with_suffix(".json"), f"{key}.json")
+        if rec is not None and rdigest != rec["sha256"]:
+            raise _changed(f"{key}.json", path.with_suffix(".json"), rdigest, rec["sha256"])
+        try:
+            model = LearnedMap.from_bytes(data, record, path=path)
+        except ValueError as exc:
+            raise ConfigError(f"{key}: {exc}") from None
+        out[str(path)] = (digest, model)
+    return out
+
+
+def verify_inputs(inputs: dict[str, dict[str, str]], *, skip=()) -> None:
+    """Refuse, in one line, an input file whose bytes are no longer those the run hashed
+    into the unit's cache key (``inputs``: :func:`input_hashes`); ``skip``: key paths not
+    checked (the models a unit loaded from verified bytes)."""
+    for key, v in inputs.items():
+        if key in skip:
+            continue
+        _, digest = _bytes_sha256(Path(v["path"]), key)
+        if digest != v["sha256"]:
+            raise _changed(key, v["path"], digest, v["sha256"])
 
 
 # --------------------------------------------------------------------------- size budget

@@ -29,7 +29,12 @@ import simlunar
 from simlunar.config.loading import apply_sweep_value, to_plain
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.yamlio import dump_yaml
-from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
+from simlunar.errors import (
+    InfrastructureError,
+    InputChangedError,
+    ResultFolderError,
+    RunInterrupted,
+)
 from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
@@ -396,7 +401,8 @@ def _compute_missing(run: _Run, cache: UnitCache, todo, records: dict, n_cached:
     bar = _progress(run.progress, total, n_cached, run.cfg.name)
     n_new = 0
     try:
-        payloads = [{"config": u.config} for u in todo]
+        # with the input hashes of each unit's key: the unit checks the files it reads
+        payloads = [{"config": u.config, "inputs": u.inputs} for u in todo]
         hook = bar.stage if bar is not None and accepts_keyword(run.compute, "progress") else None
         # executors written against the older two-argument run() still work without a hook
         kw = {"progress": hook} if hook is not None else {}
@@ -419,6 +425,8 @@ def _compute_missing(run: _Run, cache: UnitCache, todo, records: dict, n_cached:
             raise RunInterrupted(_kept(out, n_cached + n_new, total, "interrupted")) from None
         if isinstance(exc, InfrastructureError):
             raise InfrastructureError(f"{exc}; {_kept(out, n_cached + n_new, total)}") from None
+        if isinstance(exc, InputChangedError):
+            raise InputChangedError(f"{exc}; {_kept(out, n_cached + n_new, total)}") from None
         raise
     finally:
         if bar is not None:
