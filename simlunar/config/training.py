@@ -11,6 +11,7 @@ fits :func:`simlunar.features.learned.train_learned_map`. Presets listed in
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
 from pydantic import Field, field_validator, model_validator
 
@@ -60,8 +61,13 @@ class TrainCfg(_Model):
         default_factory=list, description="presets of the experiments never trained on"
     )
     terrain_seeds: int = Field(2, ge=1, le=100, description="realisations per preset")
-    sun_elevations_deg: list[Deg] | None = Field(
-        None, description="sun elevations rendered per terrain; null = each experiment's own"
+    sun_elevations_deg: (
+        list[Annotated[Deg, Field(gt=0, le=90, description="above the horizon (0 < e <= 90)")]]
+        | None
+    ) = Field(
+        None,
+        description="sun elevations rendered per terrain (each 0 < e <= 90: a sun at or below "
+        "the horizon lights nothing); null = each experiment's own",
     )
     densities: list[Density] = Field(min_length=1, description="one model per density k / N")
     options: LearnedOptsCfg = Field(default_factory=LearnedOptsCfg)

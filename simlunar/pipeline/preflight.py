@@ -38,6 +38,7 @@ from simlunar.pipeline.inputs import (
     MAX_NAN_FRACTION,
     TerrainFacts,
     check_size,
+    read_unit_models,
     terrain_facts,
 )
 from simlunar.planner import check_k
@@ -385,6 +386,26 @@ class Preflight:
         return list(seen.values())
 
 
+def check_models(inputs: dict[str, dict[str, str]], seen: set | None = None) -> None:
+    """Load every learned model a unit names, as the unit will (its record checked and its
+    bytes' hash compared with the record's before unpickling), so a truncated, foreign,
+    renamed or mismatched model file is one line naming it before any render.
+
+    ``inputs``: the unit's :func:`~simlunar.pipeline.inputs.input_hashes`; ``seen``: the
+    (path, hash) pairs already loaded (a sweep loads each model once).
+    """
+    seen = set() if seen is None else seen
+    for key, v in inputs.items():
+        if not key.endswith(".feature_opts.model"):
+            continue
+        rec = inputs.get(f"{key}.json", {})
+        memo = (v["path"], v["sha256"], rec.get("sha256"))
+        if memo in seen:
+            continue
+        read_unit_models({key: v, **({f"{key}.json": rec} if rec else {})})
+        seen.add(memo)
+
+
 def check_units(units: list[Any]) -> Preflight:
     """Check every unit (sweep point) before any of them runs.
 
@@ -393,9 +414,11 @@ def check_units(units: list[Any]) -> Preflight:
     """
 
     facts = []
+    checked_models: set[tuple] = set()
     for u in units:
         cfg = ExperimentCfg.model_validate(u.config)
         try:
+            check_models(getattr(u, "inputs", None) or {}, checked_models)
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))

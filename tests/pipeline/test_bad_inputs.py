@@ -10,6 +10,7 @@ runs in seconds.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 from collections.abc import Callable
@@ -606,3 +607,179 @@ def test_enormous_sizes_are_refused_under_a_memory_limit(name, tmp_path):
     lines = r.stderr.splitlines()
     assert len(lines) == 1 and expect in lines[0], r.stderr
     assert not (tmp_path / "o").exists()
+
+
+# --------------------------------------------------------------------------- faults and inputs
+# Each class of bad input found by the fault audit: learned model files, training outputs,
+# LIDAR options, structured-light rigs, sizes, YAML bombs, the environment. Every case: one
+# stderr line, its exit code, and the case folder unchanged.
+MODEL = "models/m.joblib"
+LEARNED = with_(
+    "study.strategy_options",
+    {"l": {"strategy": "learned", "placement": "lloyd", "feature_opts": {"model": MODEL}}},
+    with_("study.strategies", ["random", "l"]),
+)
+
+
+@functools.lru_cache(maxsize=1)
+def _model_bytes() -> tuple[bytes, dict]:
+    """A real tiny model (trained in about a second): its joblib bytes and its record."""
+    import json
+    import tempfile
+
+    from scipy import ndimage
+
+    from simlunar.features.learned import LearnedOptions
+    from simlunar.planner.learning import train_learned_map
+
+    gen = np.random.default_rng(7)
+    pairs = []
+    for _ in range(2):
+        z = ndimage.gaussian_filter(gen.standard_normal((48, 64)), 3) * 5
+        img = np.clip(0.5 + ndimage.gaussian_filter(gen.standard_normal((48, 64)), 1), 0.01, 1)
+        pairs.append((img, z))
+    model = train_learned_map(
+        pairs, densities=[1 / 16], options=LearnedOptions(pixels_per_example=500, max_iter=5), rng=0
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        path, record = model.save(Path(tmp) / "m.joblib")
+        return path.read_bytes(), json.loads(record.read_text())
+
+
+class _Boom:
+    """Unpickling this writes a file: a case whose folder stays unchanged was never unpickled."""
+
+    def __reduce__(self):
+        return (open, ("UNPICKLED", "w"))
+
+
+def model_files(data=None, record=None, *, edit=None, rehash=False, raw_record=None):
+    """A setup writing ``models/m.joblib`` (``data``: bytes or a callable of the good bytes)
+    and ``models/m.json`` (the good record, ``edit``-ed, or ``raw_record`` text); ``rehash``:
+    the record's hash made to match the written bytes (a forged but consistent record)."""
+    import hashlib
+    import json
+
+    def setup(d: Path) -> None:
+        good, meta = _model_bytes()
+        body = good if data is None else (data(good) if callable(data) else data)
+        meta = dict(meta if record in (None, "missing") else record)
+        if edit is not None:
+            edit(meta)
+        if rehash:
+            meta["model_sha256"] = hashlib.sha256(body).hexdigest()
+        (d / "models").mkdir(exist_ok=True)
+        (d / MODEL).write_bytes(body)
+        rec = d / "models" / "m.json"
+        if raw_record is not None:
+            rec.write_bytes(raw_record if isinstance(raw_record, bytes) else raw_record.encode())
+        elif record != "missing":
+            rec.write_text(json.dumps(meta))
+
+    return setup
+
+
+def _set(key, value):
+    def edit(meta):
+        cur = meta
+        *head, last = key.split(".")
+        for k in head:
+            cur[k] = dict(cur[k])
+            cur = cur[k]
+        cur[last] = value
+
+    return edit
+
+
+MODEL_KEY = "study.strategy_options.l.feature_opts.model: "
+FAULT_CASES = [
+    # learned model files: refused in one line before any render, never unpickled unverified
+    Case("model truncated", LEARNED, MODEL_KEY + "models/m.joblib: SHA-256 does not match its record", setup=model_files(lambda b: b[: len(b) // 2])),
+    Case("model empty", LEARNED, "models/m.joblib: SHA-256 does not match its record", setup=model_files(b"")),
+    Case("model a random pickle", LEARNED, "models/m.joblib: SHA-256 does not match its record", setup=model_files(lambda b: __import__("pickle").dumps(_Boom()))),
+    Case("model a renamed text file", LEARNED, "models/m.joblib: SHA-256 does not match its record", setup=model_files(b"name: not a model\n")),
+    Case("model forged record for a hostile pickle", LEARNED, "models/m.joblib: SHA-256 does not match", setup=model_files(lambda b: __import__("pickle").dumps(_Boom()), edit=_set("model_sha256", "0" * 64))),
+    Case("model consistent record, foreign payload", LEARNED, "models/m.joblib: not a simlunar-learned-map/1 model file", setup=model_files(lambda b: __import__("pickle").dumps({"models": [1, 2]}), rehash=True)),
+    Case("model consistent record, payload not regressors", LEARNED, "is not a regressor of the", setup=model_files(lambda b: __import__("pickle").dumps({"format": "simlunar-learned-map/1", "models": {"0.0625": "x"}}), rehash=True)),
+    Case("model other feature set", LEARNED, "trained on feature set version 0, this simlunar computes", setup=model_files(edit=_set("feature_set_version", 0))),
+    Case("model other feature names", LEARNED, "retrain the model", setup=model_files(edit=_set("feature_names", ["a", "b"]))),
+    Case("model other scikit-learn", LEARNED, "saved with scikit-learn 0.1, installed", setup=model_files(edit=_set("versions.scikit-learn", "0.1"))),
+    Case("model other format", LEARNED, "not a simlunar-learned-map/1 model (format 'x/9')", setup=model_files(edit=_set("format", "x/9"))),
+    Case("model record not JSON", LEARNED, "models/m.json: not a JSON model record", setup=model_files(raw_record="{densities: [")),
+    Case("model record a JSON list", LEARNED, "models/m.json: not a model record (a JSON list)", setup=model_files(raw_record="[1, 2]")),
+    Case("model record binary", LEARNED, "models/m.json: not a JSON model record", setup=model_files(raw_record=b"\xff\xfe{\x00")),
+    Case("model record other densities", LEARNED, "models/m.joblib: densities [0.0625] differ from its record's [0.5]", setup=model_files(edit=_set("densities", [0.5]))),
+    Case("model record densities not numbers", LEARNED, "'densities' must list distinct sample fractions in (0, 1], got 'all'", setup=model_files(edit=_set("densities", "all"))),
+    Case("model record density above 1", LEARNED, "'densities' must list distinct sample fractions", setup=model_files(edit=_set("densities", [2.0]))),
+    Case("model record densities repeated", LEARNED, "'densities' must list distinct", setup=model_files(edit=_set("densities", [0.0625, 0.0625]))),
+    Case("model record missing", LEARNED, "cannot read models/m.json", setup=model_files(record="missing")),
+    Case("model record empty", LEARNED, "models/m.json: not a JSON model record", setup=model_files(raw_record="")),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", FAULT_CASES, ids=[c.name for c in FAULT_CASES])
+def test_fault_case_exits_2_with_one_line_and_writes_nothing(case, tmp_path, monkeypatch):
+    _run_case(case, tmp_path, monkeypatch)
+    assert not (tmp_path / "case" / "UNPICKLED").exists()
+
+
+def test_the_good_model_passes_the_checks(tmp_path, monkeypatch):
+    """The model cases differ from a model that loads (each fails for its own reason)."""
+    from simlunar.config.loading import validate_data
+    from simlunar.pipeline.preflight import check_units
+    from simlunar.pipeline.runner import expand
+
+    model_files()(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    check_units(expand(validate_data(LEARNED, base_dir=tmp_path)))
+
+
+def training(**over):
+    """A setup writing a valid training YAML (``train.yaml``) over the good experiment."""
+    data = {
+        "name": "t",
+        "seed": 100,
+        "experiments": ["exp.yaml"],
+        "scale": 0.25,
+        "terrain_seeds": 1,
+        "sun_elevations_deg": [30],
+        "densities": ["1/16"],
+        "options": {"layouts": 1, "pixels_per_example": 500, "max_iter": 5},
+        "model": "models/t.joblib",
+        **over,
+    }
+    return both(yaml_file("exp.yaml", GOOD), yaml_file("train.yaml", data))
+
+
+ROOT_IGNORES_PERMISSIONS = pytest.mark.skipif(
+    os.geteuid() == 0, reason="root writes into read-only folders"
+)
+
+
+def read_only_dir(name):
+    def setup(d: Path) -> None:
+        (d / name).mkdir()
+        (d / name).chmod(0o555)
+
+    return setup
+
+
+FAULT_CMDS = [
+    # simlunar train: the output checked before minutes of rendering; suns above the horizon
+    Cmd("train --out a folder", ("train", "train.yaml", "--out", "m.joblib"), "--out m.joblib: is a folder, not a file", setup=both(training(), lambda d: (d / "m.joblib").mkdir())),
+    Cmd("train --out below a file", ("train", "train.yaml", "--out", "f/m.joblib"), "--out f/m.joblib: f: is a file, not a folder", setup=both(training(), lambda d: (d / "f").write_text("x"))),
+    Cmd("train --out in a read-only folder", ("train", "train.yaml", "--out", "ro/m.joblib"), "ro is not writable (permission denied)", setup=both(training(), read_only_dir("ro")), marks=[ROOT_IGNORES_PERMISSIONS]),
+    Cmd("train --out record is a folder", ("train", "train.yaml", "--out", "m.joblib"), "--out m.json: is a folder, not a file", setup=both(training(), lambda d: (d / "m.json").mkdir())),
+    Cmd("train model below a file", ("train", "train.yaml"), "model models/t.joblib: models: is a file, not a folder", setup=both(training(), lambda d: (d / "models").write_text("x"))),
+    Cmd("train --out not joblib", ("train", "train.yaml", "--out", "m.pkl"), "--out m.pkl: a learned model file ends in .joblib", setup=training()),
+    Cmd("train sun at 0 deg", ("train", "train.yaml"), "sun_elevations_deg[0]: Input should be greater than 0", setup=training(sun_elevations_deg=[0])),
+    Cmd("train sun at -45 deg", ("train", "train.yaml"), "sun_elevations_deg[1]: Input should be greater than 0", setup=training(sun_elevations_deg=[30, -45])),
+    Cmd("train sun above the zenith", ("train", "train.yaml"), "Input should be less than or equal to 90", setup=training(sun_elevations_deg=[120])),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "case", [pytest.param(c, marks=c.marks) for c in FAULT_CMDS], ids=[c.name for c in FAULT_CMDS]
+)
+def test_fault_command_keeps_the_promise(case, tmp_path, monkeypatch, capsys):
+    test_every_subcommand_keeps_the_promise(case, tmp_path, monkeypatch, capsys)
