@@ -34,6 +34,7 @@ __all__ = [
     "LIMIT_SETTINGS",
     "MAX_CELLS",
     "MAX_FRAME_PIXELS",
+    "MAX_UNITS",
     "TerrainFacts",
     "check_dem_file",
     "check_size",
@@ -236,8 +237,18 @@ MAX_CELLS = 25_000_000
 MAX_FRAME_PIXELS = 500_000_000
 
 
+#: most work units of one experiment (the product of its sweep axes' lengths times its
+#: terrain seeds): every unit is rendered and stored, and the sweep is expanded (and every
+#: point checked) before anything runs. ``SIMLUNAR_MAX_UNITS`` raises it.
+MAX_UNITS = 10_000
+
+
 #: environment settings that override the limits above
-LIMIT_SETTINGS = {"SIMLUNAR_MAX_CELLS": MAX_CELLS, "SIMLUNAR_MAX_FRAME_PIXELS": MAX_FRAME_PIXELS}
+LIMIT_SETTINGS = {
+    "SIMLUNAR_MAX_CELLS": MAX_CELLS,
+    "SIMLUNAR_MAX_FRAME_PIXELS": MAX_FRAME_PIXELS,
+    "SIMLUNAR_MAX_UNITS": MAX_UNITS,
+}
 
 
 def size_limit(setting: str) -> int:

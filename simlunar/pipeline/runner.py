@@ -18,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
 import time
 from collections.abc import Callable
 from contextlib import contextmanager
@@ -38,7 +39,7 @@ from simlunar.errors import (
 from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
-from simlunar.pipeline.inputs import input_hashes
+from simlunar.pipeline.inputs import check_size, input_hashes
 from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.plotting.scanner_tables import scanner_tables
@@ -131,6 +132,18 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
     """The work units of an experiment (cartesian product of its sweep axes, in order)."""
     base = {k: v for k, v in to_plain(cfg).items() if k != "sweep"}
     axes = list(cfg.sweep.items())
+    n_units = math.prod(len(vals) for _, vals in axes) * int(
+        getattr(cfg.study, "terrain_seeds", 1) or 1
+    )
+    sizes = " x ".join(str(len(vals)) for _, vals in axes) or "1"
+    # before expanding: a sweep product of millions is refused, not built point by point
+    check_size(
+        "sweep",
+        f"{sizes} sweep points x {getattr(cfg.study, 'terrain_seeds', 1) or 1} terrain seeds "
+        "= units",
+        n_units,
+        "SIMLUNAR_MAX_UNITS",
+    )
     units = []
     for combo in itertools.product(*[vals for _, vals in axes]):
         point = base

@@ -783,3 +783,60 @@ FAULT_CMDS = [
 )
 def test_fault_command_keeps_the_promise(case, tmp_path, monkeypatch, capsys):
     test_every_subcommand_keeps_the_promise(case, tmp_path, monkeypatch, capsys)
+
+
+# LIDAR options: the library's rules and every size bounded, in the schema
+LIDAR = {"kind": "lidar", "planners": ["random"], "densities": ["1/64"], "trials": 1}
+LIDAR_GOOD = with_("study", LIDAR, with_("render.camera", PERSPECTIVE))
+
+
+def lidar(key: str, value) -> dict:
+    return with_(f"study.{key}", value, LIDAR_GOOD)
+
+
+LIDAR_CASES = [
+    Case("lidar margin 5 m in the default 8 m window", lidar("options.margin_m", 5), "study.options.margin_m: 5 m leaves no range in the 8 m window of a rendered batch (steered_beam.window_m must exceed 2 x margin_m = 10 m)"),
+    Case("lidar margin equal to half the window", lidar("options.steered_beam.window_m", 4), "steered_beam.window_m must exceed 2 x margin_m = 4 m"),
+    Case("lidar divergence above pi/2", lidar("options.steered_beam.divergence_mrad", 2000), "study.options.steered_beam.divergence_mrad: Input should be less than or equal to 1570.79"),
+    Case("lidar signal photons 1e30", lidar("options.detector.signal_photons", 1e30), "study.options.detector.signal_photons: Input should be less than or equal to 1000000000000"),
+    Case("lidar background 1e30 photons/s", lidar("options.detector.background_photons_per_s", 1e30), "study.options.detector.background_photons_per_s: Input should be less than or equal to"),
+    Case("lidar dark counts 1e20", lidar("options.detector.dark_count_rate_hz", 1e20), "study.options.detector.dark_count_rate_hz: Input should be less than or equal to"),
+    Case("lidar oracle planner", lidar("planners", ["random", "oracle_greedy"]), "study.planners[1]: 'oracle_greedy' is not a planner of a lidar study: reads the true depth"),
+    Case("lidar hessian oracle planner", lidar("planners", ["oracle_hessian"]), "study.planners[0]: 'oracle_hessian' is not a planner of a lidar study"),
+    Case("lidar sequential planner", lidar("planners", ["sequential"]), "study.planners[0]: 'sequential' is not a planner of a lidar study: asks a sensor back"),
+    Case("lidar learned planner", lidar("planners", ["learned"]), "study.planners[0]: 'learned' is not a planner of a lidar study: predicts its map for one sample density"),
+    Case("lidar zero slew rate", lidar("options.steered_beam.max_rate_rad_s", 1e-300), "study.options.steered_beam.max_rate_rad_s: Input should be greater than or equal to 0.000001"),
+    Case("lidar zero acceleration", lidar("options.steered_beam.max_accel_rad_s2", 1e-300), "study.options.steered_beam.max_accel_rad_s2: Input should be greater than or equal to"),
+    Case("lidar pulse rate 1e-300", lidar("options.steered_beam.pulse_rate_hz", 1e-300), "study.options.steered_beam.pulse_rate_hz: Input should be greater than or equal to 0.001"),
+    Case("lidar settle 1e300 ms", lidar("options.steered_beam.settle_ms", 1e300), "study.options.steered_beam.settle_ms: Input should be less than or equal to"),
+    Case("lidar footprint rays 1e6", lidar("options.steered_beam.footprint_rays", 1_000_000), "study.options.steered_beam.footprint_rays: Input should be less than or equal to 4096"),
+    Case("lidar transient spp 1e7", lidar("options.transient.spp", 10_000_000), "study.options.transient.spp: Input should be less than or equal to 65536"),
+    Case("lidar pulses per point 1e9", lidar("options.steered_beam.pulses_per_point", 10**9), "study.options.steered_beam.pulses_per_point: Input should be less than or equal to 1000000"),
+    Case("lidar detector pulses 1e9", lidar("options.detector.pulses", 10**9), "study.options.detector.pulses: Input should be less than or equal to 1000000"),
+    Case("lidar fwhm 1 s", lidar("options.pulse.fwhm_ns", 1e9), "study.options.pulse.fwhm_ns: Input should be less than or equal to 10000"),
+    Case("lidar jitter 1 s", lidar("options.pulse.jitter_ns", 1e9), "study.options.pulse.jitter_ns: Input should be less than or equal to 10000"),
+    Case("lidar bins of a micrometre", lidar("options.bin_range_m", 1e-6), "study.options.bin_range_m: 1e-06 m makes 8e+06 time bins of the 8 m window (at most 100000)"),
+    Case("lidar pulse wider than the bins allow", lidar("options", {"bin_range_m": 1e-3, "margin_m": 0.001, "steered_beam": {"window_m": 0.01}, "pulse": {"fwhm_ns": 9000}}), "study.options.pulse.fwhm_ns: a 9000 ns pulse spans 1.35e+06 time bins of 0.001 m (at most 100000)"),
+    Case("lidar batch 1e9 beams", lidar("options.steered_beam.batch", 10**9), "study.options.steered_beam.batch: Input should be less than or equal to 1000000"),
+    Case("lidar flash receiver 1e5 px", lidar("options", {"flash": {"receiver_px": [100000, 64]}}), "Input should be less than or equal to 8192", ),
+    Case("lidar micromirror receiver 0 px", lidar("options", {"micromirror": {"receiver_px": [64, 0]}}), "Input should be greater than or equal to 1"),
+    Case("lidar flash pulse rate 0", with_("study.sensor", "flash", lidar("options.flash.pulse_rate_hz", 0)), "study.options.flash.pulse_rate_hz: Input should be greater than or equal to 0.001"),
+    Case("sweep product above the unit limit", {**GOOD, "sweep": {"render.spp": list(range(1, 101)), "study.trials": list(range(1, 101))}}, "sweep: 100 x 100 sweep points x 1 terrain seeds = units = 1e+04, more than the limit of 5e+03 (set SIMLUNAR_MAX_UNITS", env={"SIMLUNAR_MAX_UNITS": "5000"}),
+    Case("sweep product of a million", {**GOOD, "sweep": {"render.spp": list(range(1, 101)), "study.trials": list(range(1, 101)), "seed": list(range(100))}}, "sweep: 100 x 100 x 100 sweep points x 1 terrain seeds = units = 1e+06, more than the limit of 1e+04"),
+    Case("SIMLUNAR_MAX_UNITS not a number", GOOD, "SIMLUNAR_MAX_UNITS=lots: expected a positive count", env={"SIMLUNAR_MAX_UNITS": "lots"}),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", LIDAR_CASES, ids=[c.name for c in LIDAR_CASES])
+def test_lidar_and_size_case_exits_2_with_one_line(case, tmp_path, monkeypatch):
+    _run_case(case, tmp_path, monkeypatch)
+
+
+def test_the_good_lidar_config_passes_the_checks(tmp_path):
+    from simlunar.config.loading import validate_data
+    from simlunar.pipeline.preflight import check_units
+    from simlunar.pipeline.runner import expand
+
+    flash = with_("study.options", {"flash": {"receiver_px": [64, 48]}}, LIDAR_GOOD)
+    for data in (LIDAR_GOOD, with_("study.sensor", "flash", flash)):
+        check_units(expand(validate_data(data, base_dir=tmp_path)))
