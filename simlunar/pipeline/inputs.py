@@ -25,6 +25,10 @@ from simlunar.terrain.io import GDAL_FORMATS, load_albedo, load_dem
 #: truth, so beyond a few per cent the ground truth is mostly invented and the run stops.
 MAX_NAN_FRACTION = 0.05
 
+#: Smallest grid spacing (m per cell) of a DEM: a micrometre. Below it (a sidecar's 1e-300)
+#: every slope and roughness statistic divides by a number that is no length at all.
+MIN_SPACING_M = 1e-6
+
 #: Largest |coordinate| (heights, terrain extent, camera position) in metres: the renderer
 #: works in float32, so a scene larger than this (1000 km) cannot resolve terrain relief.
 MAX_ABS_COORD_M = 1e6
@@ -35,6 +39,7 @@ __all__ = [
     "MAX_CELLS",
     "MAX_FRAME_PIXELS",
     "MAX_UNITS",
+    "MIN_SPACING_M",
     "TerrainFacts",
     "check_dem_file",
     "check_size",
@@ -521,6 +526,11 @@ def _dem_facts(
     if not path.is_file():
         raise ConfigError(f"{key}: file not found: {path}")
     terrain = _read_grid(path, key, spacing=spacing)
+    if not terrain.spacing >= MIN_SPACING_M:
+        raise ConfigError(
+            f"{key}: {path}: a spacing of {terrain.spacing:.3g} m per cell is below "
+            f"{MIN_SPACING_M:g} m (check the spacing's units: metres)"
+        )
     h = np.asarray(terrain.heights)
     rows, cols = h.shape
     if rows < 2 or cols < 2:

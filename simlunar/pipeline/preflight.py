@@ -31,7 +31,7 @@ import numpy as np
 
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.translate import rig_kwargs
-from simlunar.errors import ConfigError, ResultFolderError
+from simlunar.errors import ConfigError, InfrastructureError, ResultFolderError
 from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.pipeline.inputs import (
     MAX_ABS_COORD_M,
@@ -44,6 +44,7 @@ from simlunar.pipeline.inputs import (
 from simlunar.planner import check_k
 from simlunar.render.backend import choose_variant
 from simlunar.results.records import unit_label
+from simlunar.results.store import LOCK_NAME
 from simlunar.scanner.gray_code import num_bits
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.study.scanner import aim_rig_at_terrain
@@ -81,9 +82,9 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
     if not os.access(anc, os.W_OK | os.X_OK):
         raise ResultFolderError(f"{option} {p}: {anc} is not writable (permission denied)")
     if p.is_dir():
-        for sub in ("units", "figures", "scans", "config.yaml"):
+        for sub in ("units", "figures", "scans", "config.yaml", LOCK_NAME):
             q = p / sub
-            want_dir = sub != "config.yaml"
+            want_dir = sub not in ("config.yaml", LOCK_NAME)
             if q.exists() and q.is_dir() != want_dir:
                 kind = "a folder" if want_dir else "a file"
                 raise ResultFolderError(f"{option} {p}: {q} is not {kind}")
@@ -103,8 +104,12 @@ def check_renderer() -> None:
 
     try:
         choose_variant()
-    except (ValueError, RuntimeError) as exc:
+    except ValueError as exc:  # a name that is no variant: the user's input
         raise ConfigError(f"SIMLUNAR_VARIANT={wanted}: {exc}") from None
+    except RuntimeError as exc:
+        # a known variant this machine cannot run (no GPU, no libLLVM): the environment
+        # failed, not the input (exit 3)
+        raise InfrastructureError(f"SIMLUNAR_VARIANT={wanted}: {exc}") from None
 
 
 def check_out_file(out: str | Path, *, option: str = "--out") -> Path:
@@ -361,6 +366,38 @@ def check_rig(cfg: Any, facts: TerrainFacts, *, key: str = "study.options.rig") 
         raise ConfigError(
             f"{key}: the camera at {np.round(rig.camera.position, 3).tolist()} does not see "
             "the projected pattern on the terrain (check baseline_m, cam_fov_x_deg, verge)"
+        )
+    _check_rig_geometry(rig, facts, key)
+
+
+#: least height of a scanner's projector above the terrain's median height, in terrain cells:
+#: closer, it sits inside the relief of the bed it is meant to scan
+MIN_PROJECTOR_CELLS = 10
+#: most camera-projector baseline, in projector standoffs: beyond it the camera sees the
+#: pattern at a grazing angle (a verged camera more than ~80 deg off the projector's axis)
+MAX_BASELINE_STANDOFFS = 5.0
+
+
+def _check_rig_geometry(rig: Any, facts: TerrainFacts, key: str) -> None:
+    """A projector above the terrain's relief and a baseline a triangulation can use."""
+    x0, x1, y0, y1 = facts.extent
+    target = np.array([(x0 + x1) / 2, (y0 + y1) / 2, facts.zmid])
+    proj = np.asarray(rig.projector.position, float)
+    least = MIN_PROJECTOR_CELLS * facts.spacing
+    height = float(proj[2] - facts.zmid)
+    if not height >= least:
+        raise ConfigError(
+            f"{key}: the projector is {height:.3g} m above the terrain's median height, inside "
+            f"its relief (at least {MIN_PROJECTOR_CELLS} cells = {least:g} m; raise "
+            "distance_m / altitude_m or fill)"
+        )
+    standoff = float(np.linalg.norm(proj - target))
+    baseline = float(np.linalg.norm(np.asarray(rig.camera.position, float) - proj))
+    if baseline > MAX_BASELINE_STANDOFFS * standoff:
+        raise ConfigError(
+            f"{key}: a baseline of {baseline:.3g} m is more than {MAX_BASELINE_STANDOFFS:g} x "
+            f"the projector's {standoff:.3g} m standoff: the camera would see the pattern at a "
+            "grazing angle (lower baseline_m)"
         )
 
 

@@ -321,7 +321,6 @@ CASES = [
     Case("merge key of a scalar", "name: x\nterrain: {<<: 3}\n", "exp.yaml"),
     # the renderer asked for by the environment
     Case("unknown SIMLUNAR_VARIANT", GOOD, "SIMLUNAR_VARIANT=rgb_fast: unknown variant 'rgb_fast'", env={"SIMLUNAR_VARIANT": "rgb_fast"}),
-    Case("CUDA variant without a GPU", GOOD, "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
     # a finished folder whose scans is a file: refused before anything is deleted
     Case("--save-scans with scans a file", with_("study", SCANNER), "scans is not a folder", args=("--save-scans",), setup=lambda d: ((d / "results").mkdir(), (d / "results" / "config.yaml").write_text("x: 1\n"), (d / "results" / "results.csv").write_text("unit\n"), (d / "results" / "scans").write_text("a file"))),
     # a learned map whose model file was never trained: once found only after the render, as
@@ -509,7 +508,7 @@ CMDS = [
     Cmd("render merge-key duplicate", ("render", "scene.yaml", "--out", "r"), "duplicate key 'scale'", setup=yaml_file("scene.yaml", "b: &b {preset: aerial_1}\nname: s\nterrain: {<<: *b, scale: 0.1, scale: 0.2}\n")),
     # doctor
     Cmd("doctor unknown SIMLUNAR_VARIANT", ("doctor", "--short"), "SIMLUNAR_VARIANT=rgb_fast: unknown variant", env={"SIMLUNAR_VARIANT": "rgb_fast"}),
-    Cmd("doctor CUDA without a GPU", ("doctor",), "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
+    Cmd("doctor CUDA without a GPU", ("doctor",), "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", code=3, env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
     # fit (python -m simlunar.pipeline.fit)
     Cmd("fit --maxiter -5", ("fit", "res", "--train-seeds", "1", "--test-seeds", "2", "--maxiter", "-5"), "--maxiter must be an integer >= 1, got -5"),
     Cmd("fit --trials 0", ("fit", "res", "--train-seeds", "1", "--test-seeds", "2", "--trials", "0"), "--trials must be an integer >= 1, got 0"),
@@ -518,6 +517,10 @@ CMDS = [
     Cmd("fit without seeds", ("fit", "res"), "the following arguments are required"),
     Cmd("fit of a missing folder", ("fit", "nope", "--train-seeds", "1", "--test-seeds", "2"), "nope"),
 ]  # fmt: skip
+
+
+def _raise_exit(code: int):
+    raise SystemExit(code)
 
 
 def _main(argv, monkeypatch) -> int:
@@ -549,6 +552,8 @@ def _main(argv, monkeypatch) -> int:
     "case", [pytest.param(c, marks=c.marks) for c in CMDS], ids=[c.name for c in CMDS]
 )
 def test_every_subcommand_keeps_the_promise(case, tmp_path, monkeypatch, capsys):
+    # an environment failure (exit 3) leaves through os._exit, which would end pytest
+    monkeypatch.setattr(os, "_exit", _raise_exit)
     d = tmp_path / "case"
     d.mkdir()
     if case.setup is not None:
@@ -840,3 +845,75 @@ def test_the_good_lidar_config_passes_the_checks(tmp_path):
     flash = with_("study.options", {"flash": {"receiver_px": [64, 48]}}, LIDAR_GOOD)
     for data in (LIDAR_GOOD, with_("study.sensor", "flash", flash)):
         check_units(expand(validate_data(data, base_dir=tmp_path)))
+
+
+# structured-light rigs that cannot work, refused before config.yaml is written
+SCAN_GOOD = with_("study", SCANNER)
+NO_GPU = pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")
+
+
+def scan(key: str, value, base=None) -> dict:
+    return with_(f"study.{key}", value, base or SCAN_GOOD)
+
+
+def lock_folder(d: Path) -> None:
+    (d / "results").mkdir()
+    (d / "results" / ".lock").mkdir()
+
+
+SCAN_CASES = [
+    Case("rig projector inside the bed (aerial)", scan("options.rig.altitude_m", 0.01, scan("rig", "aerial")), "study.options.rig: the projector is 0.01 m above the terrain's median height, inside its relief (at least 10 cells = 2 m"),
+    Case("rig projector inside the bed (moonyard)", scan("options.rig.distance_m", 0.001, with_("terrain.preset", "moonyard", SCAN_GOOD)), "the projector is 0.00094 m above the terrain's median height, inside its relief"),
+    Case("rig fill 1e-6", scan("options.rig.fill", 1e-6), "study.options.rig.fill: Input should be greater than or equal to 0.01"),
+    Case("rig fill 0.01 puts the projector in the bed", scan("options.rig.fill", 0.01), "study.options.rig: the projector is 0.336 m above the terrain's median height"),
+    Case("rig projector fov 179 deg", scan("options.rig.fov_x_deg", 179), "study.options.rig.fov_x_deg: Input should be less than or equal to 120"),
+    Case("rig camera fov 179 deg", scan("options.rig.cam_fov_x_deg", 179), "study.options.rig.cam_fov_x_deg: Input should be less than or equal to 120"),
+    Case("rig baseline 1000 km", scan("options.rig.baseline_m", 1e6), "study.options.rig: a baseline of 1e+06 m is more than 5 x the projector's 32.2 m standoff"),
+    Case("gray black threshold 1.0", scan("options.gray_opts.black_threshold", 1.0), "study.options.gray_opts.black_threshold: Input should be less than 0.8"),
+    Case("gray white threshold 0.9", scan("options.gray_opts.white_threshold", 0.9), "study.options.gray_opts.white_threshold: Input should be less than 0.8"),
+    Case("sun 1e30 x the projector", scan("scan_light", "sun", with_("render.light", {"kind": "sun", "elevation_deg": 40, "irradiance": 1e30}, SCAN_GOOD)), "render.light.irradiance: Input should be less than or equal to 1000000"),
+    Case("projector blur 1000 px", scan("projector_blur_px", 1000), "study.projector_blur_px: 1000 px blurs the pattern over the whole 256 x 192 image (at most 48 px"),
+    Case("projector blur '1000 px'", scan("projector_blur_px", "1000 px"), "study.projector_blur_px: 1000 px blurs the pattern"),
+    Case("camera blur 500 px", scan("camera_blur_px", 500), "study.camera_blur_px: 500 px blurs the pattern over the whole 256 x 192 image"),
+    Case("camera blur '1 m'", scan("camera_blur_px", "1 m"), "study.camera_blur_px:"),
+    Case("camera blur negative", scan("camera_blur_px", -1), "study.camera_blur_px: Input should be greater than or equal to 0"),
+    Case("projector gamma 1e9", scan("projector_gamma", 1e9), "study.projector_gamma: Input should be less than or equal to 10"),
+    Case("SIMLUNAR_VARIANT unknown", GOOD, "SIMLUNAR_VARIANT=rgb_fast: unknown variant", env={"SIMLUNAR_VARIANT": "rgb_fast"}),
+    Case("lock file is a folder", GOOD, "results/.lock is not a file", setup=lock_folder),
+    Case("terrain spacing 1e-300", dem_cfg(spacing_m=1e-300), "dem.npy: a spacing of 1e-300 m per cell is below 1e-06 m", setup=files(dem__npy=good_dem)),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", SCAN_CASES, ids=[c.name for c in SCAN_CASES])
+def test_rig_and_environment_case_exits_2_with_one_line(case, tmp_path, monkeypatch):
+    _run_case(case, tmp_path, monkeypatch)
+
+
+def test_camera_blur_with_its_unit_is_accepted_as_documented(tmp_path):
+    from simlunar.config.loading import validate_data
+
+    cfg = validate_data(scan("camera_blur_px", "1 px", scan("projector_blur_px", "0.5 px")))
+    assert (cfg.study.camera_blur_px, cfg.study.projector_blur_px) == (1.0, 0.5)
+
+
+SCAN_CMDS = [
+    Cmd("run CUDA without a GPU exits 3", ("run", "exp.yaml", "--out", "o"), "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", code=3, setup=yaml_file("exp.yaml", GOOD), env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[NO_GPU]),
+    Cmd("render CUDA without a GPU exits 3", ("render", "scene.yaml", "--out", "r"), "cuda_ad_rgb requested but unusable", code=3, setup=yaml_file("scene.yaml", SCENE), env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[NO_GPU]),
+    Cmd("terrain preset grid 2e7 x 2e7", ("terrain", "big.yaml", "--out", "t"), "big.yaml: grid: 20000000 x 20000000 cells = 4e+14, more than the limit", setup=yaml_file("big.yaml", {"grid": {"rows": 20000000, "cols": 20000000}})),
+    Cmd("terrain preset grid above a lowered limit", ("terrain", "big.yaml", "--out", "t"), "more than the limit of 1e+03", setup=yaml_file("big.yaml", {"grid": {"rows": 64, "cols": 64}}), env={"SIMLUNAR_MAX_CELLS": "1000"}),
+    Cmd("terrain --stats sidecar spacing 1e-300", ("terrain", "dem.npy", "--stats"), "--stats: dem.npy: a spacing of 1e-300 m per cell is below 1e-06 m", setup=side_json("1e-300")),
+    Cmd("terrain --stats sidecar spacing 1e-9", ("terrain", "dem.npy", "--stats"), "a spacing of 1e-09 m per cell is below", setup=side_json("1e-9")),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "case", [pytest.param(c, marks=c.marks) for c in SCAN_CMDS], ids=[c.name for c in SCAN_CMDS]
+)
+def test_rig_and_environment_command_keeps_the_promise(case, tmp_path, monkeypatch, capsys):
+    test_every_subcommand_keeps_the_promise(case, tmp_path, monkeypatch, capsys)
+
+
+def test_there_are_at_least_60_fault_cases():
+    fault = FAULT_CASES + FAULT_CMDS + LIDAR_CASES + SCAN_CASES + SCAN_CMDS
+    assert len(fault) >= 60
+    assert len({c.name for c in fault}) == len(fault)
