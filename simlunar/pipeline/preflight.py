@@ -423,6 +423,24 @@ class Preflight:
         return list(seen.values())
 
 
+def check_score_region(cfg: Any, shape: tuple[int, int]) -> None:
+    """A sampling study scored on the interior must have one: the border band of the
+    sparsest density's pitch (:func:`simlunar.metrics.interior_mask`) leaves some cell."""
+    s = cfg.study
+    if getattr(s, "kind", None) != "sampling" or getattr(s, "score_region", "full") == "full":
+        return
+    from simlunar.metrics.interior import interior_mask, sparsest_pitch
+
+    try:
+        interior_mask(shape, sparsest_pitch(shape, s.densities))
+    except ValueError as exc:
+        raise ConfigError(
+            f"study.score_region: {s.score_region}: {exc} (a {shape[0]} x {shape[1]} image at "
+            f"density {min(s.densities):g}; use score_region: full, a larger image or denser "
+            "sampling)"
+        ) from None
+
+
 def check_models(inputs: dict[str, dict[str, str]], seen: set | None = None) -> None:
     """Load every learned model a unit names, as the unit will (its record checked and its
     bytes' hash compared with the record's before unpickling), so a truncated, foreign,
@@ -459,6 +477,7 @@ def check_units(units: list[Any]) -> Preflight:
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))
+            check_score_region(cfg, image_shape(cfg.render, f))
             if getattr(cfg.study, "kind", None) == "lidar":
                 check_time_bins(cfg.study, f)
             if getattr(cfg.study, "kind", None) == "scanner":

@@ -231,7 +231,10 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
             rows.append({"unit": u.index, **{c: point[c] for c in sweep_cols}, **r})
     present = {c for r in rows for c in r}
     known = [c for c in ROW_COLUMNS if c != "value" and c in present]
-    return rows, ["unit", *sweep_cols, *known, *extra, "value"]
+    # the study's own columns by name: a cached record's rows come back from JSON with their
+    # keys sorted, a fresh one's in the order the study made them, so a resumed run would
+    # otherwise write another column order than a clean one
+    return rows, ["unit", *sweep_cols, *known, *sorted(extra), "value"]
 
 
 def run_experiment(

@@ -914,6 +914,23 @@ def test_rig_and_environment_command_keeps_the_promise(case, tmp_path, monkeypat
 
 
 def test_there_are_at_least_60_fault_cases():
-    fault = FAULT_CASES + FAULT_CMDS + LIDAR_CASES + SCAN_CASES + SCAN_CMDS
+    fault = FAULT_CASES + FAULT_CMDS + LIDAR_CASES + SCAN_CASES + SCAN_CMDS + OTHER_CASES
     assert len(fault) >= 60
     assert len({c.name for c in fault}) == len(fault)
+
+
+# bounded YAML, resumable tables, an empty interior region
+SMALL_VIEW = {**PERSPECTIVE, "width": 20, "height": 16}
+OTHER_CASES = [
+    Case("yaml 5000 nested brackets", "name: x\nterrain: " + "[" * 5000 + "]" * 5000 + "\n", "exp.yaml: line 2: collections nested more than 100 deep"),
+    Case("yaml 5000 nested flow mappings", "name: x\nterrain: " + "{a: " * 5000 + "1" + "}" * 5000 + "\n", "collections nested more than 100 deep"),
+    Case("yaml 3000 nested block mappings", "name: x\nterrain:\n" + "".join("  " * i + f"k{i}:\n" for i in range(1, 3000)) + "  " * 3000 + "v: 1\n", "exp.yaml: line 102: collections nested more than 100 deep"),
+    Case("yaml 11 MB document", "name: x\n#" + "a" * 11_000_000 + "\n", "exp.yaml: the document has 1.1e+07 characters, more than 1e+07"),
+    Case("interior region empty", with_("study.score_region", "interior", with_("study.densities", ["1/64"], with_("render.camera", SMALL_VIEW))), "study.score_region: interior: a border band of 8.0 px leaves no interior cell in a 16 x 20 grid"),
+    Case("interior region empty (both)", with_("study.score_region", "both", with_("study.densities", ["1/64"], with_("render.camera", SMALL_VIEW))), "study.score_region: both: a border band of 8.0 px leaves no interior cell"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", OTHER_CASES, ids=[c.name for c in OTHER_CASES])
+def test_bounded_input_case_exits_2_with_one_line(case, tmp_path, monkeypatch):
+    _run_case(case, tmp_path, monkeypatch)
