@@ -95,3 +95,17 @@ def test_link_budget_is_the_lidar_equation():
     assert flash.detector().signal_photons == pytest.approx(lb.detector().signal_photons * 1e-4)
     with pytest.raises(ValueError, match="efficiency"):
         LinkBudget(efficiency=1.5)
+
+
+def test_coates_correction_of_a_saturated_histogram_by_hand():
+    """10 pulses: bin 0 fires 2 times (2 of 10 armed: -ln 0.8), bin 1 fires on all 8 pulses
+    still armed (saturated: inf), bin 2 has no armed pulse left (0, not NaN)."""
+    est = coates_correction(np.array([2, 8, 0]), 10)
+    np.testing.assert_allclose(est[0], -np.log(0.8), rtol=1e-12)
+    assert est[1] == np.inf and est[2] == 0.0
+    # an unsaturated histogram: bin 1 has 8 armed pulses and fires on 4 of them
+    np.testing.assert_allclose(
+        coates_correction(np.array([[2, 4, 1]]), 10)[0],
+        [-np.log(1 - 2 / 10), -np.log(1 - 4 / 8), -np.log(1 - 1 / 4)],
+        rtol=1e-12,
+    )

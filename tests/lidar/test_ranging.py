@@ -77,3 +77,18 @@ def test_background_alone_gives_no_return():
 def test_unknown_method_lists_the_valid_ones():
     with pytest.raises(ValueError, match="matched, peak"):
         RangeOptions(method="cfd")
+
+
+@pytest.mark.parametrize(
+    "kw", [{"threshold_sigma": -1.0}, {"min_photons": -0.5}, {"threshold_sigma": float("nan")}]
+)
+def test_range_options_refuse_negative_or_nan_thresholds(kw):
+    with pytest.raises(ValueError, match="threshold_sigma and min_photons must be >= 0"):
+        RangeOptions(**kw)
+
+
+def test_range_options_accept_zero_thresholds_and_name_bad_choices():
+    o = RangeOptions(threshold_sigma=0.0, min_photons=0.0)
+    assert (o.threshold_sigma, o.min_photons) == (0.0, 0.0)
+    with pytest.raises(ValueError, match=r"unknown return 'middle'; valid: "):
+        RangeOptions(which="middle")

@@ -237,3 +237,15 @@ def test_a_sliver_inside_the_hull_leaves_no_hole():
     assert np.isfinite(out).all()  # the hull holds the whole grid
     assert out[3, 2] == pytest.approx(2.0 + (2.0 - 0.5) / 3.5, abs=1e-9)  # along 2 -> 3
     assert out.min() >= vals.min() - 1e-9 and out.max() <= vals.max() + 1e-9
+
+
+def test_unsorted_duplicate_points_are_averaged():
+    """Three samples at (2, 2), not next to each other in the input, become one of their mean
+    (1 + 3 + 8) / 3 = 4; the corners are 0, so the centre cell reads 4 and the midpoint
+    (1, 1) of the corner-centre edge reads 2 (linear)."""
+    pts = np.array([[2.0, 2.0], [0, 0], [0, 4], [2, 2], [4, 0], [4, 4], [2, 2]])
+    vals = np.array([1.0, 0, 0, 3, 0, 0, 8])
+    out = reconstruct(pts, vals, (5, 5))
+    assert out[2, 2] == pytest.approx(4.0, abs=1e-12)
+    assert out[1, 1] == pytest.approx(2.0, abs=1e-12)
+    assert out[0, 0] == 0.0 and out[4, 4] == 0.0
