@@ -249,3 +249,19 @@ def test_unsorted_duplicate_points_are_averaged():
     assert out[2, 2] == pytest.approx(4.0, abs=1e-12)
     assert out[1, 1] == pytest.approx(2.0, abs=1e-12)
     assert out[0, 0] == 0.0 and out[4, 4] == 0.0
+
+
+def test_a_sliver_fills_its_cells_along_its_longest_edge_by_hand():
+    """a = (0, 0) value 0, b = (4, 4) value 8, m = (2, 2 + 1e-10) value 2: a triangle of
+    height ~1e-10 (a sliver: |det| < 1e-9 x its longest edge) whose plane cannot be read.
+    Its cells take the value along a-b interpolated through m projected onto it (t_m = 1/2):
+    (1, 1) at t = 1/4 -> 0 + (2 - 0) (1/4) / (1/2) = 1, (3, 3) at t = 3/4 -> 2 + (8 - 2)
+    (1/4) / (1/2) = 5; the cells off the sliver stay NaN (outside the hull)."""
+    pts = np.array([[0.0, 0.0], [4.0, 4.0], [2.0, 2.0 + 1e-10]])
+    out = reconstruct(pts, np.array([0.0, 8.0, 2.0]), (5, 5), outside="nan")
+    np.testing.assert_allclose(np.diag(out), [0.0, 1.0, 2.0, 5.0, 8.0], atol=1e-6)
+    off = ~np.eye(5, dtype=bool)
+    assert np.isnan(out[off]).all()
+    # the same sliver listed in another vertex order: the same cells and values
+    again = reconstruct(pts[[2, 0, 1]], np.array([2.0, 0.0, 8.0]), (5, 5), outside="nan")
+    np.testing.assert_allclose(again, out, atol=1e-6)
