@@ -34,8 +34,10 @@ import hashlib
 import io
 import json
 import math
+import os
 import pickle
 import platform
+import tempfile
 import threading
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
@@ -49,7 +51,6 @@ import sklearn
 from threadpoolctl import threadpool_limits
 
 from simlunar import __version__ as simlunar_version
-from simlunar.atomic import atomic_write_bytes
 from simlunar.features._stack import FEATURE_NAMES, FEATURE_SET_VERSION, image_features
 from simlunar.features.maps import check_image
 
@@ -251,11 +252,7 @@ class LearnedMap:
         meta = {**self.meta, "model_file": path.name, "model_sha256": digest}
         record = (json.dumps(meta, indent=2, sort_keys=True) + "\n").encode()
         sidecar = path.with_suffix(".json")
-        # each file written beside its target, fsynced and renamed over it: a failed save
-        # leaves the old files as they were. The model first: a reader that finds the new
-        # model beside the old record refuses it (hash) rather than use a mismatched pair.
-        atomic_write_bytes(path, data)
-        atomic_write_bytes(sidecar, record)
+        _write_pair(((path, data), (sidecar, record)))
         return path, sidecar
 
     @classmethod
@@ -317,6 +314,36 @@ class LearnedMap:
                 f"{sorted(meta['densities'])}"
             )
         return cls(models, {k: v for k, v in meta.items() if k not in ("model_file",)})
+
+
+def _write_pair(files) -> None:
+    """Write each ``(path, bytes)`` beside its target and fsync it; only when every one is
+    written are they renamed over their targets, so a failed save (a full disk, a read-only
+    folder) leaves the old model and record untouched. ``OSError`` names the target file."""
+    done: list[tuple[str, Path]] = []
+    try:
+        for target, data in files:
+            try:
+                fd, tmp = tempfile.mkstemp(
+                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
+                )
+                done.append((tmp, target))
+                with os.fdopen(fd, "wb") as f:
+                    f.write(data)
+                    f.flush()
+                    os.fsync(f.fileno())
+                os.chmod(tmp, 0o644)
+            except OSError as exc:
+                raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from None
+        # the model before its record: a reader between the two renames finds the new model
+        # beside the old record and refuses it (hash), never a mismatched pair in use
+        for tmp, target in done:
+            os.replace(tmp, target)
+        done.clear()
+    finally:
+        for tmp, _ in done:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
 
 
 def _model_path(path) -> Path:

@@ -206,3 +206,32 @@ def test_training_inputs_are_validated():
         pitch_of(0.0)
     with pytest.raises(ValueError, match="at least one"):
         train_learned_map([], densities=[0.1], rng=0)
+
+
+def test_a_failed_save_leaves_the_old_model_and_record_untouched(model, tmp_path, monkeypatch):
+    """The disk fills while the record is written: neither file changes, no temporary file
+    is left, and the error names the record."""
+    import errno
+    import os
+
+    path, record = model.save(tmp_path / "m.joblib")
+    before = (path.read_bytes(), record.read_bytes())
+    other = LearnedMap(model.models, {**model.meta, "note": "a newer model"})
+    real = os.fsync
+    calls = []
+
+    def fsync(fd):
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    with pytest.raises(OSError, match="No space left on device") as err:
+        other.save(path)
+    assert err.value.filename == str(record)
+    assert (path.read_bytes(), record.read_bytes()) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.joblib", "m.json"]
+    monkeypatch.setattr(os, "fsync", real)
+    other.save(path)  # and a save that works replaces both
+    assert LearnedMap.load(path).meta["note"] == "a newer model"
