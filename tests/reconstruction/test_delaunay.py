@@ -265,3 +265,19 @@ def test_a_sliver_fills_its_cells_along_its_longest_edge_by_hand():
     # the same sliver listed in another vertex order: the same cells and values
     again = reconstruct(pts[[2, 0, 1]], np.array([2.0, 0.0, 8.0]), (5, 5), outside="nan")
     np.testing.assert_allclose(again, out, atol=1e-6)
+
+
+@pytest.mark.parametrize("order", [(0, 1, 2), (2, 0, 1), (1, 2, 0), (2, 1, 0)])
+@pytest.mark.parametrize("offset", [(3.0, 5.0), (6.0, 1.0)])
+def test_a_sliver_away_from_the_origin_in_any_vertex_order(order, offset):
+    """The sliver of the test above moved off the origin and listed in every rotation and a
+    reflection of its vertices: the same cells and values (1 and 5 between the samples)."""
+    dr, dc = offset
+    pts = np.array([[0.0, 0.0], [4.0, 4.0], [2.0, 2.0 + 1e-10]]) + np.array([dr, dc])
+    vals = np.array([0.0, 8.0, 2.0])
+    idx = list(order)
+    out = reconstruct(pts[idx], vals[idx], (12, 12), outside="nan")
+    r0, c0 = int(dr), int(dc)
+    diag = [out[r0 + i, c0 + i] for i in range(5)]
+    np.testing.assert_allclose(diag, [0.0, 1.0, 2.0, 5.0, 8.0], atol=1e-6)
+    assert np.isfinite(out).sum() == 5
