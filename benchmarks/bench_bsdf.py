@@ -42,7 +42,7 @@ def fractal_heights(n: int, *, rng, beta: float = 3.2, relief: float = 12.0) -> 
     return z * (relief / (z.max() - z.min()))
 
 
-def _scene(mi, terrain, bsdf_spec):
+def _scene(mi, terrain, bsdf_spec, res=RES, spp=SPP):
     from simlunar.render.bsdfs import bsdf_dict
     from simlunar.render.mesh import albedo_texture, terrain_mesh
 
@@ -66,37 +66,42 @@ def _scene(mi, terrain, bsdf_spec):
                 ),
                 "film": {
                     "type": "hdrfilm",
-                    "width": RES,
-                    "height": RES,
+                    "width": res,
+                    "height": res,
                     "rfilter": {"type": "box"},
                 },
-                "sampler": {"type": "independent", "sample_count": SPP},
+                "sampler": {"type": "independent", "sample_count": spp},
             },
         }
     )
 
 
-def render_oren_nayar() -> dict:
+def render_oren_nayar(*, smoke: bool = False) -> dict:
+    """Built-in diffuse vs oren_nayar and hapke (``smoke``: 48^2 cells at 32^2 px, 2 spp)."""
     from simlunar.render import backend
     from simlunar.render.materials import make_bsdf
     from simlunar.terrain.types import Terrain
 
+    cells, res, spp, repeats = (48, 32, 2, 1) if smoke else (CELLS, RES, SPP, REPEATS)
     mi = backend.mitsuba()
     rng = np.random.default_rng(20240601)
-    heights = fractal_heights(CELLS, rng=rng)
-    albedo = (0.12 + 0.03 * rng.standard_normal((CELLS, CELLS))).clip(0.02, 0.4)
+    heights = fractal_heights(cells, rng=rng)
+    albedo = (0.12 + 0.03 * rng.standard_normal((cells, cells))).clip(0.02, 0.4)
     terrain = Terrain(
-        heights=heights, albedo=albedo.astype(np.float32), spacing=0.1, origin=(0.0, 0.0)
+        heights=heights,
+        albedo=albedo.astype(np.float32),
+        spacing=0.1 * CELLS / cells,
+        origin=(0.0, 0.0),
     )
     scenes = {
-        "diffuse": _scene(mi, terrain, make_bsdf("lambert")),
-        "oren_nayar": _scene(mi, terrain, make_bsdf("oren_nayar", sigma=0.4)),
-        "hapke": _scene(mi, terrain, make_bsdf("hapke")),
+        "diffuse": _scene(mi, terrain, make_bsdf("lambert"), res, spp),
+        "oren_nayar": _scene(mi, terrain, make_bsdf("oren_nayar", sigma=0.4), res, spp),
+        "hapke": _scene(mi, terrain, make_bsdf("hapke"), res, spp),
     }
     n_tri = int(mi.traverse(scenes["diffuse"])["terrain.faces"].shape[0] // 3)
 
     def render(name, seed):
-        img = mi.render(scenes[name], spp=SPP, seed=seed)
+        img = mi.render(scenes[name], spp=spp, seed=seed)
         return np.asarray(img)  # forces evaluation
 
     means = {}
@@ -104,16 +109,17 @@ def render_oren_nayar() -> dict:
         means[name] = float(render(name, 0).mean())
     cpu = {name: float("inf") for name in scenes}
     wall = {name: float("inf") for name in scenes}
-    for rep in range(REPEATS):
+    for rep in range(repeats):
         for name in scenes:
             c0, t0 = time.process_time(), time.perf_counter()
             render(name, rep + 1)
             cpu[name] = min(cpu[name], time.process_time() - c0)
             wall[name] = min(wall[name], time.perf_counter() - t0)
     common = {
+        "smoke": smoke,
         "triangles": n_tri,
-        "resolution": RES,
-        "spp": SPP,
+        "resolution": res,
+        "spp": spp,
         "max_depth": MAX_DEPTH,
         "variant": backend.info().variant,
         "timer": "process_cpu_s",

@@ -33,6 +33,14 @@ ROOT = Path(__file__).resolve().parents[1]
 EXPERIMENT = ROOT / "experiments" / "ablation_sun_elevation.yaml"
 SWEEP = {"sweep": {"render.light.elevation_deg": [10, 30, 50, 70]}}
 WARMUP = {"sweep": {"render.light.elevation_deg": [20]}, "terrain.scale": 0.0625}
+#: ``smoke=True``: two units of a 1/32-scale scene, 1 spp, 3 densities, 2 strategies
+SMOKE = {
+    "sweep": {"render.light.elevation_deg": [30, 60]},
+    "terrain.scale": 0.03,
+    "render.spp": 1,
+    "study.strategies": ["random", "grid"],
+    "study.densities": {"from": "1/2", "to": "1/8", "count": 3},
+}
 
 
 def _cpu_s() -> float:
@@ -50,13 +58,17 @@ def _run(workers: int, overrides: dict, out: Path) -> tuple[float, float]:
     return elapsed, cpu
 
 
-def _sweep(trials: int | None) -> dict:
+def _sweep(trials: int | None, smoke: bool = False) -> dict:
     extra = {} if trials is None else {"study.trials": trials}
+    sweep = SMOKE if smoke else SWEEP
+    if smoke:
+        extra = {"study.trials": 1 if trials is None else 2}
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        _run(1, WARMUP, tmp / "warmup")
-        one, cpu_one = _run(1, {**SWEEP, **extra}, tmp / "one")
-        two, cpu_two = _run(2, {**SWEEP, **extra}, tmp / "two")
+        if not smoke:
+            _run(1, WARMUP, tmp / "warmup")
+        one, cpu_one = _run(1, {**sweep, **extra}, tmp / "one")
+        two, cpu_two = _run(2, {**sweep, **extra}, tmp / "two")
         same = (tmp / "one" / "results.csv").read_bytes() == (
             tmp / "two" / "results.csv"
         ).read_bytes()
@@ -65,7 +77,8 @@ def _sweep(trials: int | None) -> dict:
     return {
         "reference_s": one,
         "ours_s": two,
-        "units": 4,
+        "smoke": smoke,
+        "units": len(next(iter(sweep["sweep"].values()))),
         "workers": 2,
         "identical_results": same,
         "render_share": round(render / one, 3),
@@ -76,12 +89,14 @@ def _sweep(trials: int | None) -> dict:
     }
 
 
-def sweep_workers() -> dict:
-    return _sweep(None)
+def sweep_workers(*, smoke: bool = False) -> dict:
+    """The ablation as shipped (``smoke``: two tiny units, one trial)."""
+    return _sweep(None, smoke)
 
 
-def sweep_workers_20trials() -> dict:
-    return _sweep(20)
+def sweep_workers_20trials(*, smoke: bool = False) -> dict:
+    """The ablation with 20 trials (``smoke``: two tiny units, two trials)."""
+    return _sweep(20, smoke)
 
 
 BENCHMARKS = {"sweep_workers": sweep_workers, "sweep_workers_20trials": sweep_workers_20trials}

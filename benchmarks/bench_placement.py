@@ -23,14 +23,16 @@ import numpy as np
 K = 50_000
 
 
-def _lunar_scene():
+def _lunar_scene(shape=None):
     # the scene generator of the sampling benchmarks (benchmarks/ is not a package)
     path = Path(__file__).with_name("bench_sampling.py")
     spec = importlib.util.spec_from_file_location("_bench_sampling", path)
     mod = importlib.util.module_from_spec(spec)
     assert spec.loader is not None
     spec.loader.exec_module(mod)
-    return mod.lunar_scene()
+    if shape is None:
+        return mod.lunar_scene()
+    return mod.lunar_scene(shape, n_craters=10, n_rocks=10)
 
 
 def _best(fn, runs=3):
@@ -44,22 +46,26 @@ def _best(fn, runs=3):
     return min(wall), min(cpu), out
 
 
-def placement() -> dict:
+def placement(*, smoke: bool = False) -> dict:
+    """Placement vs the weighted random draw (``smoke``: k = 500 on a 100 x 160 map, 1 run)."""
     from simlunar.features import feature_map
     from simlunar.planner import cvt_energy, density_from_map, halftone, place, plan
 
-    _, image = _lunar_scene()
+    k, runs = (500, 1) if smoke else (K, 3)
+    _, image = _lunar_scene((100, 160) if smoke else None)
+    rows, cols = image.shape
     weights = feature_map("wavelet", image)
     density = density_from_map(weights, power=0.5, mix=0.25)
     place(density[:64, :96], 300, rng=0)  # compile the kernels
-    ref_s, ref_cpu, ref = _best(lambda: plan("wavelet", K, weights=weights, rng=1).flat)
-    half_s, _, _ = _best(lambda: halftone(density, K, rng=1))
-    ours_s, ours_cpu, ours = _best(lambda: place(density, K, rng=1))
-    assert ours.size == K and np.unique(ours).size == K
+    ref_s, ref_cpu, ref = _best(lambda: plan("wavelet", k, weights=weights, rng=1).flat, runs)
+    half_s, _, _ = _best(lambda: halftone(density, k, rng=1), runs)
+    ours_s, ours_cpu, ours = _best(lambda: place(density, k, rng=1), runs)
+    assert ours.size == k and np.unique(ours).size == k
     # quantisation energy of the quarter image's layout (lower = more even for the density)
-    q = density[:500, :800]
-    inside = lambda f: f[(f // 1600 < 500) & (f % 1600 < 800)]  # noqa: E731
-    to_q = lambda f: (f // 1600) * 800 + f % 1600  # noqa: E731
+    qr, qc = rows // 2, cols // 2
+    q = density[:qr, :qc]
+    inside = lambda f: f[(f // cols < qr) & (f % cols < qc)]  # noqa: E731
+    to_q = lambda f: (f // cols) * qc + f % cols  # noqa: E731
     return {
         "reference_s": round(ref_s, 3),
         "ours_s": round(ours_s, 3),
@@ -67,7 +73,8 @@ def placement() -> dict:
         # process CPU seconds (one thread): the wall time of an idle core, whatever the load
         "ours_cpu_s": round(ours_cpu, 3),
         "reference_cpu_s": round(ref_cpu, 3),
-        "k": K,
+        "smoke": smoke,
+        "k": k,
         "cells": int(density.size),
         "energy_ratio_vs_reference": round(
             cvt_energy(q, to_q(inside(ours))) / cvt_energy(q, to_q(inside(ref))), 3

@@ -19,36 +19,36 @@ PROJ = (192, 256)  # projector pattern (rows, cols)
 SPP = 4
 
 
-def _setup():
+def _setup(shape=SHAPE, proj_shape=PROJ, n_patterns=N_PATTERNS):
     from scipy.ndimage import gaussian_filter
 
     from simlunar.geometry import Camera, Intrinsics, Pose, Projector
     from simlunar.terrain.types import Terrain
 
     rng = np.random.default_rng(2024)
-    h = gaussian_filter(rng.normal(size=SHAPE), 6.0)
+    h = gaussian_filter(rng.normal(size=shape), 6.0)
     h *= 1.5 / np.abs(h).max()
-    spacing = 0.05
+    spacing = 0.05 * SHAPE[0] / shape[0]  # the same 12.8 m square at any grid size
     t = Terrain(
         h,
-        np.full(SHAPE, 0.15, np.float32),
+        np.full(shape, 0.15, np.float32),
         spacing,
-        origin=(-SHAPE[1] * spacing / 2, SHAPE[0] * spacing / 2),
+        origin=(-shape[1] * spacing / 2, shape[0] * spacing / 2),
     )
     cam = Camera(
-        Intrinsics.from_fov(SHAPE[1], SHAPE[0], 45.0),
+        Intrinsics.from_fov(shape[1], shape[0], 45.0),
         Pose.look_at([0.6, 0.0, 12.0], [0.0, 0.0, 0.0]),
     )
     proj = Projector(
-        Intrinsics.from_fov(PROJ[1], PROJ[0], 45.0),
+        Intrinsics.from_fov(proj_shape[1], proj_shape[0], 45.0),
         Pose.look_at([-0.6, 0.0, 12.0], [0.0, 0.0, 0.0]),
     )
     # gray-code-like stripes of decreasing period
-    cols = np.arange(PROJ[1])
+    cols = np.arange(proj_shape[1])
     pats = np.stack(
         [
-            np.broadcast_to(((cols >> (k % 8)) & 1).astype(np.float32), PROJ)
-            for k in range(N_PATTERNS)
+            np.broadcast_to(((cols >> (k % 8)) & 1).astype(np.float32), proj_shape)
+            for k in range(n_patterns)
         ]
     )
     return t, cam, proj, pats
@@ -62,7 +62,8 @@ def _jit_compiles(history) -> int:
     )
 
 
-def pattern_swap() -> dict:
+def pattern_swap(*, smoke: bool = False) -> dict:
+    """Rebuild vs texture swap (``smoke``: 4 patterns, a 32 x 32 view, 1 spp)."""
     from simlunar.render import backend
     from simlunar.render.lights import ProjectorLight
     from simlunar.render.scene import TerrainScene, luminance
@@ -70,10 +71,14 @@ def pattern_swap() -> dict:
     backend.init()
     import drjit as dr
 
-    t, cam, proj, pats = _setup()
+    if smoke:
+        shape, proj_shape, n_patterns, spp = (32, 32), (24, 32), 4, 1
+    else:
+        shape, proj_shape, n_patterns, spp = SHAPE, PROJ, N_PATTERNS, SPP
+    t, cam, proj, pats = _setup(shape, proj_shape, n_patterns)
 
     def build(p):
-        return TerrainScene(t, cam, lights=[ProjectorLight(proj, p)], max_depth=2, spp=SPP)
+        return TerrainScene(t, cam, lights=[ProjectorLight(proj, p)], max_depth=2, spp=spp)
 
     # warm-up (kernel cache, allocator) so neither path pays the first compile
     build(pats[0]).render()
@@ -101,9 +106,10 @@ def pattern_swap() -> dict:
     return {
         "reference_s": round(reference_s, 4),
         "ours_s": round(ours_s, 4),
-        "patterns": N_PATTERNS,
-        "resolution": f"{SHAPE[1]}x{SHAPE[0]}",
-        "spp": SPP,
+        "smoke": smoke,
+        "patterns": n_patterns,
+        "resolution": f"{shape[1]}x{shape[0]}",
+        "spp": spp,
         "kernel_compiles": _jit_compiles(later),
         "kernel_compiles_first_pattern": _jit_compiles(first_hist),
         "kernel_launches_after_first": n_jit,

@@ -21,6 +21,16 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 QUICKSTART = ROOT / "experiments" / "quickstart.yaml"
 GOAL_S = 3.0
+#: ``smoke=True``: the quickstart shrunk (same commands): a 1/32-scale scene, two strategies,
+#: three densities, one trial, and one rerun instead of three
+SMOKE_SET = (
+    "terrain.scale=0.03",
+    "render.spp=1",
+    "study.strategies=[random, grid]",
+    "study.strategy_options={}",
+    "study.densities={from: 1/2, to: 1/8, count: 3}",
+    "study.trials=1",
+)
 
 
 def _children_cpu_s() -> float:
@@ -28,8 +38,10 @@ def _children_cpu_s() -> float:
     return ru.ru_utime + ru.ru_stime
 
 
-def _cli(out: Path) -> tuple[float, float, str]:
+def _cli(out: Path, sets=()) -> tuple[float, float, str]:
     cmd = [sys.executable, "-m", "simlunar.cli", "run", str(QUICKSTART), "--out", str(out)]
+    for s in sets:
+        cmd += ["--set", s]
     c0, t0 = _children_cpu_s(), time.perf_counter()
     r = subprocess.run(
         [*cmd, "--no-progress"], cwd=ROOT, capture_output=True, text=True, check=False
@@ -40,15 +52,17 @@ def _cli(out: Path) -> tuple[float, float, str]:
     return wall, cpu, r.stdout
 
 
-def rerun() -> dict:
+def rerun(*, smoke: bool = False) -> dict:
+    """First run and reruns of the quickstart (``smoke``: a shrunk quickstart, one rerun)."""
+    sets = SMOKE_SET if smoke else ()
     with tempfile.TemporaryDirectory(prefix="simlunar-rerun-") as tmp:
         out = Path(tmp) / "quickstart"
-        first_s, _, _ = _cli(out)
+        first_s, _, _ = _cli(out, sets)
         figures = sorted((out / "figures").iterdir())
         drawn = {p.name: p.stat().st_mtime_ns for p in figures}
         times, cpus = [], []
-        for _ in range(3):
-            wall, cpu, stdout = _cli(out)
+        for _ in range(1 if smoke else 3):
+            wall, cpu, stdout = _cli(out, sets)
             if "(1 cached, 0 computed)" not in stdout:
                 raise RuntimeError("the rerun computed a unit")
             times.append(wall)
@@ -58,6 +72,7 @@ def rerun() -> dict:
     return {
         "reference_s": None,
         "ours_s": round(ours, 3),
+        "smoke": smoke,
         "first_run_s": round(first_s, 3),
         "reruns_s": [round(t, 3) for t in times],
         # CPU seconds of a rerun: its wall time on an idle machine, whatever the load now

@@ -19,13 +19,13 @@ PUBLISHED = {
 }
 
 
-def _one(name: str) -> dict:
+def _one(name: str, scale: float = 1.0) -> dict:
     from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
     from simlunar.terrain.stats import roughness
 
     t0 = time.perf_counter()
-    t = generate(preset_params(name), rng=0).terrain
+    t = generate(preset_params(name), rng=0, scale=scale).terrain
     gen = time.perf_counter() - t0
     t0 = time.perf_counter()
     r = roughness(t.heights, t.spacing)
@@ -42,12 +42,15 @@ def _one(name: str) -> dict:
     return fig
 
 
-def bench_roughness() -> dict:
+def bench_roughness(*, smoke: bool = False) -> dict:
+    """One figure dict per preset (``smoke``: each preset at 1/10 of its rows and columns)."""
     from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    generate(preset_params("aerial_1"), rng=0, scale=0.1)  # warm-up: imports and the crater table
-    return {f"roughness_{n}": _one(n) for n in ("aerial_1", "aerial_2", "aerial_3", "moonyard")}
+    scale = 0.1 if smoke else 1.0
+    generate(preset_params("aerial_1"), rng=0, scale=0.1 * scale)  # warm-up: the crater table
+    names = ("aerial_1", "aerial_2", "aerial_3", "moonyard")
+    return {f"roughness_{n}": {**_one(n, scale), "smoke": smoke} for n in names}
 
 
 BENCHMARKS = {"roughness": bench_roughness}

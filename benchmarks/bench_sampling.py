@@ -28,6 +28,8 @@ import time
 import numpy as np
 
 SHAPE = (1000, 1600)
+#: ``smoke=True``: the grid of every sampling benchmark (same code, tiny size)
+SMOKE_SHAPE = (60, 96)
 PROTOCOL_TRIALS = int(os.environ.get("SIMLUNAR_BENCH_PROTOCOL_TRIALS", "1"))
 
 
@@ -73,29 +75,34 @@ def _cells(shape):
     return np.column_stack((rr.ravel(), cc.ravel())).astype(np.float64)
 
 
-def _reconstruct_bench(k: int) -> dict:
+def _reconstruct_bench(k: int, *, smoke: bool = False) -> dict:
     from scipy.interpolate import LinearNDInterpolator
 
     from simlunar.planner import plan
     from simlunar.reconstruction import reconstruct
 
-    h, _ = lunar_scene()
-    p = plan("random", k, shape=SHAPE, rng=k)
+    shape = SMOKE_SHAPE if smoke else SHAPE
+    if smoke:  # the same fraction of the cells
+        k = max(8, round(k * shape[0] * shape[1] / (SHAPE[0] * SHAPE[1])))
+        h, _ = lunar_scene(shape, n_craters=5, n_rocks=5)
+    else:
+        h, _ = lunar_scene()
+    p = plan("random", k, shape=shape, rng=k)
     pts, vals = p.rc.astype(np.float64), h[p.rows, p.cols]
     # load / compile both paths outside the timing
     warm = np.array([[0.0, 0.0], [0.0, 19.0], [19.0, 0.0], [19.0, 19.0], [7.0, 11.0]])
     reconstruct(warm, warm[:, 0], (20, 20))
     LinearNDInterpolator(warm, warm[:, 0])(_cells((20, 20)))
     t0 = time.perf_counter()
-    ref = LinearNDInterpolator(pts, vals)(_cells(SHAPE)).reshape(SHAPE)
+    ref = LinearNDInterpolator(pts, vals)(_cells(shape)).reshape(shape)
     ref_s = time.perf_counter() - t0
     ours_t, near_t = [], []
-    for _ in range(3):
+    for _ in range(1 if smoke else 3):
         t0 = time.perf_counter()
-        ours = reconstruct(pts, vals, SHAPE, outside="nan")
+        ours = reconstruct(pts, vals, shape, outside="nan")
         ours_t.append(time.perf_counter() - t0)
         t0 = time.perf_counter()
-        reconstruct(pts, vals, SHAPE)
+        reconstruct(pts, vals, shape)
         near_t.append(time.perf_counter() - t0)
     inside = np.isfinite(ref)
     agree = np.abs(ours[inside] - ref[inside]) <= 1e-9
@@ -103,6 +110,7 @@ def _reconstruct_bench(k: int) -> dict:
         "reference_s": round(ref_s, 4),
         "ours_s": round(float(np.median(ours_t)), 4),
         "ours_nearest_s": round(float(np.median(near_t)), 4),
+        "smoke": smoke,
         "k": k,
         "agree_frac": round(float(agree.mean()), 5),
         "hull_nan_match": bool(np.array_equal(np.isnan(ours), ~inside)),
@@ -154,57 +162,79 @@ def _reference_protocol(depth, image, densities, trials, seed):
     return errors
 
 
-def sampling_protocol() -> dict:
+def sampling_protocol(*, smoke: bool = False) -> dict:
+    """The protocol vs the reference path (``smoke``: a 60 x 96 scene, densities 1/2 .. 1/32)."""
     from simlunar.study.sampling import SamplingStudyOptions, paper_densities, run_sampling_study
 
-    depth, image = lunar_scene()
-    dens = paper_densities()
+    if smoke:
+        depth, image = lunar_scene(SMOKE_SHAPE, n_craters=5, n_rocks=5)
+        dens = paper_densities()[:5]
+    else:
+        depth, image = lunar_scene()
+        dens = paper_densities()
+    trials = 1 if smoke else PROTOCOL_TRIALS
     small = lunar_scene((64, 96), 1, n_craters=5, n_rocks=5)
     run_sampling_study(
         *small, SamplingStudyOptions(densities=dens[:5], trials=1), rng=0
     )  # warm the kernels
     t0 = time.perf_counter()
-    _reference_protocol(depth, image, dens, PROTOCOL_TRIALS, 0)
+    _reference_protocol(depth, image, dens, trials, 0)
     ref_s = time.perf_counter() - t0
     t0 = time.perf_counter()
-    opts = SamplingStudyOptions(densities=dens, trials=PROTOCOL_TRIALS)
+    opts = SamplingStudyOptions(densities=dens, trials=trials)
     res = run_sampling_study(depth, image, opts, rng=0)
     ours_s = time.perf_counter() - t0
     return {
         "reference_s": round(ref_s, 2),
         "ours_s": round(ours_s, 2),
-        "trials": PROTOCOL_TRIALS,
-        "reconstructions": 5 * 11 * PROTOCOL_TRIALS,
+        "smoke": smoke,
+        "trials": trials,
+        "reconstructions": 5 * len(dens) * trials,
         "wavelet_mse_score": round(res.scores["mse"]["wavelet"], 3),
     }
 
 
-def sampling_protocol_20trials() -> dict:
+def sampling_protocol_20trials(*, smoke: bool = False) -> dict:
+    """The 20-trial protocol on 2 workers (``smoke``: 2 trials, 5 densities, a 60 x 96 scene)."""
     from simlunar.study.sampling import SamplingStudyOptions, paper_densities, run_sampling_study
 
-    depth, image = lunar_scene()
     small = lunar_scene((64, 96), 1, n_craters=5, n_rocks=5)
     run_sampling_study(
         *small, SamplingStudyOptions(densities=paper_densities()[:5], trials=1), rng=0
     )
+    if smoke:
+        depth, image = lunar_scene(SMOKE_SHAPE, n_craters=5, n_rocks=5)
+        opts = SamplingStudyOptions(densities=paper_densities()[:5], trials=2)
+    else:
+        depth, image = lunar_scene()
+        opts = SamplingStudyOptions(trials=20)
     t0 = time.perf_counter()
-    res = run_sampling_study(depth, image, SamplingStudyOptions(trials=20), rng=0, workers=2)
+    res = run_sampling_study(depth, image, opts, rng=0, workers=2)
     ours_s = time.perf_counter() - t0
     scores = res.scores["mse"]
     return {
         "reference_s": None,
         "ours_s": round(ours_s, 2),
         "workers": 2,
-        "reconstructions": 5 * 11 * 20,
+        "smoke": smoke,
+        "reconstructions": 5 * len(opts.densities) * opts.trials,
         **{f"mse_score_{s}": round(v, 3) for s, v in scores.items()},
     }
 
 
+def _reconstruct_k(k: int):
+    def bench(*, smoke: bool = False) -> dict:
+        return _reconstruct_bench(k, smoke=smoke)
+
+    bench.__name__ = f"reconstruct_k{k}"
+    return bench
+
+
 BENCHMARKS = {
-    "reconstruct_k800": lambda: _reconstruct_bench(800),
-    "reconstruct_k6000": lambda: _reconstruct_bench(6000),
-    "reconstruct_k50000": lambda: _reconstruct_bench(50_000),
-    "reconstruct_k400000": lambda: _reconstruct_bench(400_000),
+    "reconstruct_k800": _reconstruct_k(800),
+    "reconstruct_k6000": _reconstruct_k(6000),
+    "reconstruct_k50000": _reconstruct_k(50_000),
+    "reconstruct_k400000": _reconstruct_k(400_000),
     "sampling_protocol": sampling_protocol,
     "sampling_protocol_20trials": sampling_protocol_20trials,
 }

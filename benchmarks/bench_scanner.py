@@ -43,29 +43,35 @@ SPP = int(os.environ.get("SIMLUNAR_BENCH_SCANNER_SPP", "2"))
 #: projector lights a quarter of a 512-column camera pixel, so dark soil gives ~0.02
 ABS_THRESHOLD = 0.01
 DOT_SPP = int(os.environ.get("SIMLUNAR_BENCH_SCANNER_DOT_SPP", "16"))
+#: ``smoke=True``: projector and camera (width, height), moonyard scale (same code paths)
+SMOKE_PROJ, SMOKE_CAM, SMOKE_SCALE = (64, 48), (48, 48), 0.08
 
 
-def _setup(cam_size, *, max_depth=3, seed=0, spp=SPP):
+def _setup(cam_size, *, max_depth=3, seed=0, spp=SPP, proj_size=(1024, 768), scale=0.35):
     from simlunar.config.translate import preset_params
     from simlunar.imaging.sensor import SensorModel
     from simlunar.render.capture import CaptureOptions, RenderCapture
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
-    terr = generate(preset_params("moonyard"), rng=seed, scale=0.35).terrain
-    rig = st.aim_rig_at_terrain(terr, proj_size=(1024, 768), cam_size=cam_size)
+    terr = generate(preset_params("moonyard"), rng=seed, scale=scale).terrain
+    rig = st.aim_rig_at_terrain(terr, proj_size=proj_size, cam_size=cam_size)
     opts = CaptureOptions(max_depth=max_depth, spp=spp, seed=seed)
     cap = RenderCapture(terr, rig, opts, sensor=SensorModel(), rng=seed)
     return terr, rig, cap
 
 
-def bench_gray_code_scan() -> dict:
+def bench_gray_code_scan(*, smoke: bool = False) -> dict:
     from simlunar.scanner import gray_code as gc
     from simlunar.scanner import scans as modes
     from simlunar.scanner.scans import GrayCodeOptions
 
-    _, rig, cap = _setup((512, 512))
-    cap.render(np.ones((1, 768, 1024), np.float32))  # warm up: kernels compiled once
+    proj = SMOKE_PROJ if smoke else (1024, 768)
+    if smoke:
+        _, rig, cap = _setup(SMOKE_CAM, proj_size=proj, scale=SMOKE_SCALE, spp=1)
+    else:
+        _, rig, cap = _setup((512, 512))
+    cap.render(np.ones((1, proj[1], proj[0]), np.float32))  # warm up: kernels compiled once
     r0 = cap.renders
     t0 = time.perf_counter()
     ref = modes.gray_code_scan(cap, rig, GrayCodeOptions(inverses="render"))
@@ -76,8 +82,9 @@ def bench_gray_code_scan() -> dict:
     t_ours = time.perf_counter() - t0
     r_ours = cap.renders - r0 - r_ref
     both = ref.decode.valid & ours.decode.valid
-    bits = gc.num_bits(1024) + gc.num_bits(768)
+    bits = gc.num_bits(proj[0]) + gc.num_bits(proj[1])
     return {
+        "smoke": smoke,
         "reference_s": round(t_ref, 3),
         "ours_s": round(t_ours, 3),
         "renders": r_ours,
@@ -89,7 +96,9 @@ def bench_gray_code_scan() -> dict:
     }
 
 
-def bench_multiplexed_dots(n_dots: int = 3000, exact_subset: int = 100) -> dict:
+def bench_multiplexed_dots(
+    n_dots: int = 3000, exact_subset: int = 100, *, smoke: bool = False
+) -> dict:
     from simlunar.scanner import rigs
     from simlunar.scanner import scans as modes
     from simlunar.scanner.scans import DotOptions
@@ -97,13 +106,21 @@ def bench_multiplexed_dots(n_dots: int = 3000, exact_subset: int = 100) -> dict:
 
     # a one-pixel dot covers a quarter of a camera pixel: with few samples per pixel the
     # Monte Carlo render misses it altogether, so dots get DOT_SPP samples
-    terr, rig, cap = _setup((512, 384), max_depth=2, spp=DOT_SPP)
+    W, H = SMOKE_PROJ if smoke else (1024, 768)
+    if smoke:
+        n_dots, exact_subset = 12, 4
+        terr, rig, cap = _setup(SMOKE_CAM, max_depth=2, spp=4, proj_size=(W, H), scale=SMOKE_SCALE)
+    else:
+        terr, rig, cap = _setup((512, 384), max_depth=2, spp=DOT_SPP)
     rng = np.random.default_rng(1)
-    flat = rng.choice(1024 * 768, size=n_dots, replace=False)
-    rc = np.stack([flat // 1024, flat % 1024], axis=-1)
+    flat = rng.choice(W * H, size=n_dots, replace=False)
+    rc = np.stack([flat // W, flat % W], axis=-1)
     uv = np.c_[rc[:, 1] + 0.5, rc[:, 0] + 0.5]
     depth_range = st.depth_range_from_terrain(terr, rig)
-    cap.render(np.zeros((1, 768, 1024), np.float32))  # warm up
+    # warm up with one lit dot (an all-dark pattern is skipped by the capture, compiling nothing)
+    warm = np.zeros((1, H, W), np.float32)
+    warm[0, H // 2, W // 2] = 1.0
+    cap.render(warm)
     t0 = time.perf_counter()
     multi = modes.dot_scan(
         cap, rig, uv, depth_range=depth_range, options=DotOptions(abs_threshold=ABS_THRESHOLD)
@@ -122,10 +139,11 @@ def bench_multiplexed_dots(n_dots: int = 3000, exact_subset: int = 100) -> dict:
     d_m = multi.depth[rc[sub, 0], rc[sub, 1]]
     d_e = exact.depth[rc[sub, 0], rc[sub, 1]]
     ok = np.isfinite(d_m) & np.isfinite(d_e)
-    diff = float(np.median(np.abs(d_m[ok] - d_e[ok])))
-    fp = rigs.footprint(rig, float(np.median(d_e[ok])))
-    frames = multi.renders - 1  # minus the black frame
+    diff = float(np.median(np.abs(d_m[ok] - d_e[ok]))) if ok.any() else float("nan")
+    fp = rigs.footprint(rig, float(np.median(d_e[ok]))) if ok.any() else float("nan")
+    frames = max(multi.renders - 1, 1)  # minus the black frame
     return {
+        "smoke": smoke,
         "reference_s": round(t_exact / exact_subset * n_dots, 3),
         "ours_s": round(t_multi, 3),
         "dots": n_dots,
@@ -183,25 +201,28 @@ def _reference_schedule(rig, proj_uv, *, depth_range, min_proj_spacing=8.0, min_
     return [np.flatnonzero(colour == c) for c in range(int(colour.max()) + 1)]
 
 
-def bench_dot_schedule(fraction: float = 0.1) -> dict:
+def bench_dot_schedule(fraction: float = 0.1, *, smoke: bool = False) -> dict:
     from simlunar.config.translate import preset_params
     from simlunar.scanner import scheduling
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
     proj, cam = (1024, 768), (2048, 1536)
-    terr = generate(preset_params("moonyard"), rng=0).terrain
+    subset = REFERENCE_SUBSET
+    if smoke:
+        proj, cam, subset = SMOKE_PROJ, SMOKE_CAM, 60
+    terr = generate(preset_params("moonyard"), rng=0, scale=SMOKE_SCALE if smoke else 1.0).terrain
     rig = st.aim_rig_at_terrain(terr, proj_size=proj, cam_size=cam)
     depth_range = st.depth_range_from_terrain(terr, rig)
     rng = np.random.default_rng(0)
     n = round(fraction * proj[0] * proj[1])
     flat = rng.choice(proj[0] * proj[1], size=n, replace=False)
     uv = np.c_[flat % proj[0] + 0.5, flat // proj[0] + 0.5]
-    scheduling.dot_schedule(rig, uv[:500], depth_range=depth_range)  # load the compiled kernels
+    scheduling.dot_schedule(rig, uv[: min(500, n)], depth_range=depth_range)  # load the kernels
     t0, c0 = time.perf_counter(), time.process_time()
     sch = scheduling.dot_schedule(rig, uv, depth_range=depth_range)
     t_full, c_full = time.perf_counter() - t0, time.process_time() - c0
-    sub = uv[:REFERENCE_SUBSET]
+    sub = uv[:subset]
     t0 = time.perf_counter()
     ref = _reference_schedule(rig, sub, depth_range=depth_range)
     t_ref = time.perf_counter() - t0
@@ -211,7 +232,8 @@ def bench_dot_schedule(fraction: float = 0.1) -> dict:
     return {
         "reference_s": round(t_ref, 3),
         "ours_s": round(t_ours, 4),
-        "subset": REFERENCE_SUBSET,
+        "smoke": smoke,
+        "subset": subset,
         "reference_frames": len(ref),
         "subset_frames": len(ours_sub.frames),
         "subset_lower_bound": ours_sub.lower_bound,
@@ -230,23 +252,26 @@ DLP_PROJ, DLP_CAM = (1024, 768), (2048, 1536)
 DLP_SPP = 8
 
 
-def _dlp_setup():
+def _dlp_setup(smoke: bool = False):
     from simlunar.config.translate import preset_params
     from simlunar.imaging.sensor import SensorModel
     from simlunar.render.capture import CaptureOptions, RenderCapture
     from simlunar.study import scanner as st
     from simlunar.terrain import generate
 
-    terr = generate(
-        preset_params("moonyard"), rng=0, scale=1.0
-    ).terrain  # the full 971 x 1674 moonyard
-    rig = st.aim_rig_at_terrain(
-        terr, proj_size=DLP_PROJ, cam_size=DLP_CAM, cam_fov_x=np.radians(60.0)
-    )
+    proj, cam = _dlp_sizes(smoke)
+    # the full 971 x 1674 moonyard (smoke: a small part of it)
+    terr = generate(preset_params("moonyard"), rng=0, scale=SMOKE_SCALE if smoke else 1.0).terrain
+    rig = st.aim_rig_at_terrain(terr, proj_size=proj, cam_size=cam, cam_fov_x=np.radians(60.0))
     sensor = SensorModel(full_well_e=20000.0, read_noise_e=5.0, bits=10)
-    opts = CaptureOptions(max_depth=3, spp=DLP_SPP, seed=0, camera_blur=1.0)
+    opts = CaptureOptions(max_depth=3, spp=1 if smoke else DLP_SPP, seed=0, camera_blur=1.0)
     cap = RenderCapture(terr, rig, opts, sensor=sensor, rng=0)
     return terr, rig, cap
+
+
+def _dlp_sizes(smoke: bool):
+    """Projector and camera (width, height) of the DLP benchmark (``smoke``: tiny ones)."""
+    return (SMOKE_PROJ, SMOKE_CAM) if smoke else (DLP_PROJ, DLP_CAM)
 
 
 def _warm_up_compiled():
@@ -263,7 +288,7 @@ def _warm_up_compiled():
     refine_subpixel(d, st)
 
 
-def _dlp_worker(mode: str, frames_path: str) -> dict:
+def _dlp_worker(mode: str, frames_path: str, smoke: bool = False) -> dict:
     """One DLP gray-code scan in this process; ``mode`` "ours" or "reference".
 
     ``ours`` renders and times the scan (render vs the rest) and saves the noise-free
@@ -272,12 +297,14 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
     """
     import resource
 
+    from simlunar.scanner import gray_code as gc
     from simlunar.scanner import scans as modes
     from simlunar.scanner.scans import GrayCodeOptions
     from simlunar.scanner.triangulate import Correspondences, depth_at_proj_pixels, triangulate
 
     _warm_up_compiled()
-    _terrain, rig, cap = _dlp_setup()
+    _terrain, rig, cap = _dlp_setup(smoke)
+    proj, _ = _dlp_sizes(smoke)
     if mode == "ours":
         render_s = save_s = 0.0
         saved = []
@@ -300,8 +327,16 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
         g = modes.gray_code_scan(cap, rig, GrayCodeOptions(subpixel=True))
         total = time.perf_counter() - t0 - save_s
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
-        # raw frames in render order (white, black, then the bit patterns) for the reference
-        np.save(frames_path, np.concatenate([np.load(f) for f in saved]))
+        # raw frames in render order (white, black, then the bit patterns) for the reference;
+        # the capture skips the all-dark black pattern (its render is exactly zero: the
+        # projector is the only emitter), so its zero frame is put back in its place
+        raw = np.concatenate([np.load(f) for f in saved])
+        n_bits = gc.num_bits(proj[0]) + gc.num_bits(proj[1])
+        if len(raw) == n_bits + 1:
+            raw = np.insert(raw, 1, np.zeros_like(raw[0]), axis=0)
+        if len(raw) != n_bits + 2:
+            raise RuntimeError(f"expected {n_bits + 2} rendered frames, saved {len(raw)}")
+        np.save(frames_path, raw)
         for f in saved:
             os.remove(f)
         dec = g.decode
@@ -309,11 +344,9 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
     else:
         import reference_scanner as ref
 
-        from simlunar.scanner import gray_code as gc
-
         raw = np.load(frames_path)  # white, black, patterns: the radiance the scan rendered
         t0 = time.perf_counter()
-        H, W = DLP_PROJ[1], DLP_PROJ[0]
+        H, W = proj[1], proj[0]
         rad = ref.lens_reference(raw, cap.camera_blur)
         white_r, black_r, pats = rad[0], rad[1], rad[2:]
         inv = gc.inverses_by_linearity(pats, white_r, black_r)
@@ -336,7 +369,7 @@ def _dlp_worker(mode: str, frames_path: str) -> dict:
     return out
 
 
-def bench_scanner_dlp() -> dict:
+def bench_scanner_dlp(*, smoke: bool = False) -> dict:
     """One gray-code scan at DLP size (spp 8) in a fresh process; the float64 path on its frames.
 
     ``render_s``: Mitsuba (scene.render_patterns, 22 frames); ``rest_s``: everything else of
@@ -345,14 +378,14 @@ def bench_scanner_dlp() -> dict:
     pre-streaming float64 path on the same rendered frames, in a second process.
     """
     root = Path(__file__).resolve().parent.parent
-    tmp = root / "build" / "bench_scanner_dlp"
+    tmp = root / "build" / ("bench_scanner_dlp_smoke" if smoke else "bench_scanner_dlp")
     tmp.mkdir(parents=True, exist_ok=True)
     frames = str(tmp / "radiance.npy")
     env = {**os.environ, "PYTHONPATH": str(root)}
     res = {}
     for mode in ("ours", "reference"):
         p = subprocess.run(
-            [sys.executable, str(Path(__file__).resolve()), "dlp", mode, frames],
+            [sys.executable, str(Path(__file__).resolve()), "dlp", mode, frames, str(int(smoke))],
             capture_output=True,
             text=True,
             env=env,
@@ -362,13 +395,15 @@ def bench_scanner_dlp() -> dict:
             raise RuntimeError(f"scanner_dlp {mode} worker failed:\n{p.stderr[-2000:]}")
         res[mode] = json.loads(p.stdout.strip().splitlines()[-1])
     ours, ref = res["ours"], res["reference"]
-    a = np.load(frames + ".ours.npz")
-    b = np.load(frames + ".reference.npz")
+    a = dict(np.load(frames + ".ours.npz"))
+    b = dict(np.load(frames + ".reference.npz"))
     both = a["valid"] & b["valid"]
     du = a["sub"][..., 0][both] - b["sub"][..., 0][both]
     du = du[np.isfinite(du)]
-    os.remove(frames)
+    for f in (frames, frames + ".ours.npz", frames + ".reference.npz"):
+        os.remove(f)
     return {
+        "smoke": smoke,
         "reference_s": round(ref["rest_s"], 3),
         "ours_s": round(ours["rest_s"], 3),
         "render_s": round(ours["render_s"], 3),
@@ -377,7 +412,7 @@ def bench_scanner_dlp() -> dict:
         "peak_rss_gb": round(ours["peak_rss_gb"], 3),
         "reference_peak_rss_gb": round(ref["peak_rss_gb"], 3),
         "renders": ours["renders"],
-        "spp": DLP_SPP,
+        "spp": 1 if smoke else DLP_SPP,
         "valid_fraction": round(ours["valid_fraction"], 4),
         "reference_valid_fraction": round(ref["valid_fraction"], 4),
         "same_column": round(float(np.mean(a["col"][both] == b["col"][both])), 4),
@@ -394,5 +429,5 @@ BENCHMARKS = {
 }
 
 
-if __name__ == "__main__" and len(sys.argv) == 4 and sys.argv[1] == "dlp":
-    print(json.dumps(_dlp_worker(sys.argv[2], sys.argv[3])))
+if __name__ == "__main__" and len(sys.argv) == 5 and sys.argv[1] == "dlp":
+    print(json.dumps(_dlp_worker(sys.argv[2], sys.argv[3], smoke=sys.argv[4] == "1")))

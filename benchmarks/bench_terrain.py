@@ -27,17 +27,23 @@ def _time_generate(name: str, scale: float, seeds) -> float:
     return statistics.median(times)
 
 
-def bench_terrain_aerial() -> dict:
+#: ``smoke=True``: the grid scale of the "full" size (the same code at a tiny size)
+SMOKE_SCALE = 0.05
+
+
+def bench_terrain_aerial(*, smoke: bool = False) -> dict:
     from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    generate(preset_params("aerial_1"), rng=0, scale=0.1)  # warm-up: imports and the crater table
-    res = generate(preset_params("aerial_1"), rng=1)
-    ours = _time_generate("aerial_1", 1.0, seeds=(1, 2, 3))
+    scale = SMOKE_SCALE if smoke else 1.0
+    generate(preset_params("aerial_1"), rng=0, scale=0.1 * scale)  # warm-up: the crater table
+    res = generate(preset_params("aerial_1"), rng=1, scale=scale)
+    ours = _time_generate("aerial_1", scale, seeds=(1,) if smoke else (1, 2, 3))
     rows, cols = res.terrain.shape
     return {
         "reference_s": None,
         "ours_s": round(ours, 3),
+        "smoke": smoke,
         "cells": rows * cols,
         "craters": len(res.craters),
         "rocks": len(res.rocks),
@@ -45,16 +51,18 @@ def bench_terrain_aerial() -> dict:
     }
 
 
-def bench_scaling() -> dict:
+def bench_scaling(*, smoke: bool = False) -> dict:
     from simlunar.config.translate import preset_params
     from simlunar.terrain import generate
 
-    generate(preset_params("aerial_1"), rng=0, scale=0.1)
-    full = _time_generate("aerial_1", 1.0, seeds=(1, 2, 3))
-    quarter = _time_generate("aerial_1", 0.5, seeds=(1, 2, 3))
+    scale, seeds = (SMOKE_SCALE, (1,)) if smoke else (1.0, (1, 2, 3))
+    generate(preset_params("aerial_1"), rng=0, scale=0.1 * scale)
+    full = _time_generate("aerial_1", scale, seeds=seeds)
+    quarter = _time_generate("aerial_1", 0.5 * scale, seeds=seeds)
     return {
         "reference_s": None,
         "ours_s": round(full, 3),
+        "smoke": smoke,
         "quarter_s": round(quarter, 3),
         "time_ratio_full_over_quarter": round(full / quarter, 2),
         "cells_ratio": 4.0,

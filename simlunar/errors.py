@@ -31,6 +31,12 @@ class NothingMeasuredError(SimlunarError, ValueError):
     doing, reported in one line (exit 2) during the run; finished units are kept."""
 
 
+class InputChangedError(SimlunarError):
+    """A file a unit reads changed during the run (after the run hashed it into the unit's
+    cache key): the unit is not stored under a key that names other content; the run stops
+    in one line, finished units are kept, a rerun computes with the file as it is then."""
+
+
 class InfrastructureError(Exception):
     """The environment failed during a run (Dask scheduler or workers lost, a write refused
     by the filesystem): not the user's input, not a bug. Finished units are kept."""

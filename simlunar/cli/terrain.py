@@ -38,6 +38,7 @@ def terrain(
     """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""
     from simlunar.config.terrain import merged_preset
     from simlunar.config.translate import terrain_params
+    from simlunar.pipeline.inputs import check_size
     from simlunar.pipeline.preflight import check_out_dir
     from simlunar.terrain import generate, io, stats
 
@@ -59,6 +60,10 @@ def terrain(
     with user_input():
         # the preset file through the schema's models (the same path as an experiment's terrain)
         params = terrain_params(merged_preset(preset), scale=scale)
+        # the grid before anything is allocated (a preset of 2e7 x 2e7 cells)
+        check_size(
+            f"{preset}: grid", f"{params.rows} x {params.cols} cells", params.rows * params.cols
+        )
     if out is not None:
         check_out_dir(out)
     t0 = time.perf_counter()

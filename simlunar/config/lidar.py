@@ -8,13 +8,16 @@ may differ from its defaults (``steered_beam``, ``flash`` or ``micromirror``).
 
 from __future__ import annotations
 
-from typing import Literal
+import math
+from typing import Annotated, Literal
 
 from pydantic import Field, PositiveInt, field_validator, model_validator
 
 from simlunar.config.fields import Deg, Metres, _Model
 
 __all__ = [
+    "MAX_BINS",
+    "MAX_PHOTONS",
     "ApdCfg",
     "DetectorCfg",
     "FlashCfg",
@@ -27,14 +30,28 @@ __all__ = [
     "RangingCfg",
     "SteeredBeamCfg",
     "TransientCfg",
+    "check_lidar_study",
 ]
+
+
+#: most photons per pulse and unit radiance (and per second of background / dark counts) a
+#: detector may be given: the photon counts are Poisson draws, whose sampler (NumPy) refuses a
+#: mean above ~1e18, and a pulse of 1e12 photons saturates any real detector many times over
+MAX_PHOTONS = 1e12
+#: most time bins of one histogram (a rendered batch's window over ``bin_range_m``): each bin
+#: is a film channel per beam or receiver pixel, so 1e5 bins x 4096 beams is already 6.5 GB
+MAX_BINS = 100_000
 
 
 class PulseCfg(_Model):
     """Laser pulse and detector timing (:class:`simlunar.lidar.PulseOptions`)."""
 
-    fwhm_ns: float = Field(2.0, gt=0, description="pulse full width at half maximum (ns)")
-    jitter_ns: float = Field(0.0, ge=0, description="detector timing jitter, RMS (ns)")
+    fwhm_ns: float = Field(
+        2.0, gt=0, le=10_000, description="pulse full width at half maximum (ns, at most 10 us)"
+    )
+    jitter_ns: float = Field(
+        0.0, ge=0, le=10_000, description="detector timing jitter, RMS (ns, at most 10 us)"
+    )
 
 
 class HardwareCfg(_Model):
@@ -89,20 +106,24 @@ class DetectorCfg(_Model):
     expert_signal_photons: float | None = Field(
         None,
         gt=0,
+        le=MAX_PHOTONS,
         description="EXPERT OVERRIDE of the instrument's link budget: photons per pulse per "
         "unit rendered return radiance (then no instrument / hardware; micromirror: 100)",
     )
     expert_background_photons_per_s: float | None = Field(
         None,
         ge=0,
+        le=MAX_PHOTONS * 1e6,
         description="EXPERT OVERRIDE: photons/s per unit rendered sun radiance (default 1e9 "
         "with expert_signal_photons)",
     )
     expert_dark_count_rate_hz: float | None = Field(
-        None, ge=0, description="EXPERT OVERRIDE: dark counts (1/s)"
+        None, ge=0, le=MAX_PHOTONS, description="EXPERT OVERRIDE: dark counts (1/s)"
     )
     pulses: PositiveInt = Field(
-        1, description="pulses per flash frame (a steered beam uses pulses_per_point)"
+        1,
+        le=1_000_000,
+        description="pulses per flash frame (a steered beam uses pulses_per_point; at most 1e6)",
     )
     dead_time_ns: float | None = Field(
         0.0,
@@ -140,7 +161,9 @@ class TransientCfg(_Model):
     """Transient rendering of the returns (:class:`simlunar.render.transient.TransientOptions`);
     its sampler seed is the unit's render seed."""
 
-    spp: PositiveInt = Field(64, description="samples per receiver pixel of a flash frame")
+    spp: PositiveInt = Field(
+        64, le=65_536, description="samples per receiver pixel of a flash frame (at most 65536)"
+    )
     max_depth: int = Field(2, ge=2, le=16, description="path depth (2 = direct only)")
     laser_intensity_w_sr: float = Field(1.0, gt=0, description="point laser intensity (W/sr)")
     oversample: PositiveInt = Field(
@@ -152,28 +175,56 @@ class SteeredBeamCfg(_Model):
     """A gimbaled altimeter / galvanometer scanner at the guide camera
     (:class:`simlunar.render.lidar_scan.SteeredBeamOptions`)."""
 
-    divergence_mrad: float = Field(1.0, gt=0, description="full beam divergence (mrad)")
+    divergence_mrad: float = Field(
+        1.0,
+        gt=0,
+        le=1000 * math.pi / 2,
+        description="full beam divergence (mrad; at most pi/2 rad, a cone within a hemisphere)",
+    )
     profile: Literal["gaussian", "uniform"] = "gaussian"
-    footprint_rays: PositiveInt = Field(16, description="rays traced per beam")
-    max_rate_rad_s: float = Field(2.0, gt=0, description="slew rate limit per axis (rad/s)")
-    max_accel_rad_s2: float = Field(50.0, gt=0, description="acceleration per axis (rad/s^2)")
-    settle_ms: float = Field(1.0, ge=0, description="settle time after every move (ms)")
-    pulse_rate_hz: float = Field(10_000.0, gt=0, description="pulse repetition rate (1/s)")
-    pulses_per_point: PositiveInt = Field(1, description="pulses fired at each pointing")
+    footprint_rays: PositiveInt = Field(
+        16, le=4096, description="rays traced per beam (at most 4096)"
+    )
+    # lower bounds keep every modelled scan time finite (a rate of 1e-300 made it infinite)
+    max_rate_rad_s: float = Field(
+        2.0, ge=1e-6, description="slew rate limit per axis (rad/s, at least 1e-6)"
+    )
+    max_accel_rad_s2: float = Field(
+        50.0, ge=1e-6, description="acceleration per axis (rad/s^2, at least 1e-6)"
+    )
+    settle_ms: float = Field(
+        1.0, ge=0, le=1e6, description="settle time after every move (ms, at most 1000 s)"
+    )
+    pulse_rate_hz: float = Field(
+        10_000.0, ge=1e-3, le=1e9, description="pulse repetition rate (1/s, 1e-3 .. 1e9)"
+    )
+    pulses_per_point: PositiveInt = Field(
+        1, le=1_000_000, description="pulses fired at each pointing (at most 1e6)"
+    )
     order: Literal["nn2opt", "raster", "given"] = Field(
         "nn2opt", description="visiting order: nearest neighbour + 2-opt, raster, the planner's"
     )
-    window_m: Metres = Field(8.0, gt=0, description="range window of a rendered batch (m)")
-    batch: PositiveInt = Field(4096, description="beams per render launch (memory only)")
+    window_m: Metres = Field(
+        8.0,
+        gt=0,
+        description="range window of a rendered batch (m); must exceed 2 x options.margin_m",
+    )
+    batch: PositiveInt = Field(
+        4096, le=1_000_000, description="beams per render launch (memory only; at most 1e6)"
+    )
 
 
 class FlashCfg(_Model):
     """A flash LIDAR co-boresighted with the guide camera (:class:`simlunar.sensors.FlashLidar`)."""
 
-    receiver_px: tuple[PositiveInt, PositiveInt] = Field(
-        (64, 64), description="receiver (width, height); the guide camera's aspect"
+    receiver_px: tuple[
+        Annotated[int, Field(ge=1, le=8192)], Annotated[int, Field(ge=1, le=8192)]
+    ] = Field(
+        (64, 64), description="receiver (width, height), each 1 .. 8192; the guide camera's aspect"
     )
-    pulse_rate_hz: float = Field(30.0, gt=0, description="pulse repetition rate (1/s)")
+    pulse_rate_hz: float = Field(
+        30.0, ge=1e-3, le=1e9, description="pulse repetition rate (1/s, 1e-3 .. 1e9)"
+    )
     revisits: int = Field(
         0, ge=0, le=64, description="plan-directed zoomed frames after the full frame"
     )
@@ -183,10 +234,14 @@ class FlashCfg(_Model):
 class MicromirrorCfg(_Model):
     """A micromirror-steered flash (:class:`simlunar.sensors.MicromirrorFlash`)."""
 
-    receiver_px: tuple[PositiveInt, PositiveInt] = Field(
-        (64, 64), description="receiver (width, height); the guide camera's aspect"
+    receiver_px: tuple[
+        Annotated[int, Field(ge=1, le=8192)], Annotated[int, Field(ge=1, le=8192)]
+    ] = Field(
+        (64, 64), description="receiver (width, height), each 1 .. 8192; the guide camera's aspect"
     )
-    pulse_rate_hz: float = Field(30.0, gt=0, description="pulse repetition rate (1/s)")
+    pulse_rate_hz: float = Field(
+        30.0, ge=1e-3, le=1e9, description="pulse repetition rate (1/s, 1e-3 .. 1e9)"
+    )
 
 
 class GateCfg(_Model):
@@ -216,7 +271,12 @@ class LidarOptionsCfg(_Model):
     transient: TransientCfg = Field(default_factory=TransientCfg)
     gate: GateCfg = Field(default_factory=GateCfg)
     bin_range_m: Metres = Field(0.05, gt=0, description="range width of a time bin (m)")
-    margin_m: Metres = Field(2.0, ge=0, description="range margin of the time window (m)")
+    margin_m: Metres = Field(
+        2.0,
+        ge=0,
+        description="range margin of the time window (m); a steered beam needs "
+        "steered_beam.window_m > 2 x margin_m",
+    )
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)
     flash: FlashCfg = Field(default_factory=FlashCfg)
     micromirror: MicromirrorCfg = Field(default_factory=MicromirrorCfg)
@@ -280,3 +340,57 @@ class HazardCfg(_Model):
         if v % 2 == 0:
             raise ValueError(f"must be odd (a centred window), got {v}")
         return v
+
+
+#: planners a LIDAR study cannot run: the oracles read the true depth and ``sequential`` asks
+#: a sensor back (the LIDAR study gives a planner neither); ``learned`` predicts a map per
+#: sample density, which the LIDAR study's planners are not given
+LIDAR_UNAVAILABLE_PLANNERS = {
+    "oracle_greedy": "reads the true depth (a bound of the sampling study only)",
+    "oracle_hessian": "reads the true depth (a bound of the sampling study only)",
+    "sequential": "asks a sensor back between rounds (the sampling study only)",
+    "learned": "predicts its map for one sample density, which the lidar study's planners "
+    "are not given (use it in a sampling study)",
+}
+
+
+def check_lidar_study(study) -> None:
+    """The rules the LIDAR library applies to its options, checked on the schema's values so
+    a bad combination is one line naming its key before anything runs.
+
+    ``study`` is a :class:`~simlunar.config.studies.LidarStudyCfg`.
+
+    Raises
+    ------
+    ValueError
+        ``study.<key>: ...`` naming the first offending key.
+    """
+    for i, name in enumerate(study.planners):
+        why = LIDAR_UNAVAILABLE_PLANNERS.get(name)
+        if why is not None:
+            raise ValueError(
+                f"study.planners[{i}]: {name!r} is not a planner of a lidar study: {why}"
+            )
+    o = study.options
+    if study.sensor == "steered_beam":
+        sb = o.steered_beam
+        # simlunar.render.lidar_scan.SteeredBeamOptions: window_m > 2 margin_m >= 0 (each
+        # batch's window holds the ray-cast ranges with the margin on both sides)
+        if not sb.window_m > 2 * o.margin_m:
+            raise ValueError(
+                f"study.options.margin_m: {o.margin_m:g} m leaves no range in the "
+                f"{sb.window_m:g} m window of a rendered batch (steered_beam.window_m must "
+                f"exceed 2 x margin_m = {2 * o.margin_m:g} m)"
+            )
+        bins = math.ceil(sb.window_m / o.bin_range_m)
+        if bins > MAX_BINS:
+            raise ValueError(
+                f"study.options.bin_range_m: {o.bin_range_m:g} m makes {bins:.3g} time bins "
+                f"of the {sb.window_m:g} m window (at most {MAX_BINS})"
+            )
+    fwhm_m = o.pulse.fwhm_ns * 1e-9 * 299_792_458.0 / 2  # the pulse's width in range
+    if fwhm_m / o.bin_range_m > MAX_BINS:
+        raise ValueError(
+            f"study.options.pulse.fwhm_ns: a {o.pulse.fwhm_ns:g} ns pulse spans "
+            f"{fwhm_m / o.bin_range_m:.3g} time bins of {o.bin_range_m:g} m (at most {MAX_BINS})"
+        )

@@ -14,6 +14,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from simlunar.config import registry
+from simlunar.config.lidar import check_lidar_study
 from simlunar.config.messages import (
     format_validation_error,
     is_label_mapping,
@@ -204,6 +205,10 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
         if isinstance(study, LidarStudyCfg):
             _check_names(study, "planners", registry.check_strategy)
             _check_names(study, "metrics", registry.check_metric)
+            try:
+                check_lidar_study(study)
+            except ValueError as exc:
+                raise ConfigError(str(exc)) from None
 
 
 def _check_names(study, key: str, check, *args) -> None:

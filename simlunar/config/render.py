@@ -121,7 +121,13 @@ class SunLightCfg(_Model):
     kind: Literal["sun"] = "sun"
     elevation_deg: Deg = Field(30.0, gt=0, le=90, description="above the horizon (0 < e <= 90)")
     azimuth_deg: Deg = Field(135.0, ge=-360, le=360)
-    irradiance: float = Field(1.0, gt=0, description="W/m^2 at normal incidence (relative)")
+    irradiance: float = Field(
+        1.0,
+        gt=0,
+        le=1e6,
+        description="W/m^2 at normal incidence (relative; at most 1e6, a sun that drowns any "
+        "projector pattern and overflows the sensor model's photon counts)",
+    )
     angular_diameter_deg: Deg = Field(
         0.0, ge=0, lt=90, description="solar disk; 0.53 = the real sun (soft shadow edges)"
     )

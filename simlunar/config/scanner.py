@@ -55,15 +55,25 @@ __all__ = [
 class RigCfg(_Model):
     """Adjustments of the rig preset (:mod:`simlunar.scanner.rigs`); null = the preset's."""
 
-    fill: float = Field(0.9, gt=0, le=1, description="projection footprint / terrain side")
+    fill: float = Field(
+        0.9,
+        ge=0.01,
+        le=1,
+        description="projection footprint / terrain side (0.01 .. 1: a smaller footprint puts "
+        "the projector inside the terrain's relief)",
+    )
     fov_x_deg: Deg | None = Field(
         None,
         gt=0,
-        lt=180,
-        description="projector horizontal field of view (50 moonyard, 30 aerial)",
+        le=120,
+        description="projector horizontal field of view (50 moonyard, 30 aerial; at most 120: "
+        "a pinhole wider than that spreads its pixels over a grazing, useless rim)",
     )
     cam_fov_x_deg: Deg | None = Field(
-        None, gt=0, lt=180, description="triangulation camera field of view; null = projector's"
+        None,
+        gt=0,
+        le=120,
+        description="triangulation camera field of view (at most 120); null = projector's",
     )
     distance_m: Metres | None = Field(
         None, gt=0, description="moonyard: projector standoff; null = fit the terrain"
@@ -206,10 +216,16 @@ class ScannerStudyCfg(_Model):
         "the paper's lab) or sun (render.light, which must be a sun, and "
         "render.ambient_radiance stay on: a daylight scan; docs/scanner.md)",
     )
-    projector_gamma: float = Field(1.0, gt=0)
-    projector_blur_px: float = Field(0.0, ge=0, description="projector defocus sigma (px)")
-    camera_blur_px: float = Field(
-        0.0, ge=0, description="camera lens point-spread function, Gaussian sigma (camera px)"
+    projector_gamma: float = Field(1.0, gt=0, le=10, description="projector response exponent")
+    projector_blur_px: Px = Field(
+        0.0,
+        description="projector defocus sigma (px; '1 px' or 1; at most a quarter of the "
+        "projector's smaller side)",
+    )
+    camera_blur_px: Px = Field(
+        0.0,
+        description="camera lens point-spread function, Gaussian sigma (camera px; '1 px' or "
+        "1; at most a quarter of the camera's smaller side)",
     )
     options: ScannerOptionsCfg = Field(
         default_factory=ScannerOptionsCfg,
@@ -234,6 +250,21 @@ class ScannerStudyCfg(_Model):
                 "save_scans exports the full-field coded scan: modes must include one of "
                 f"{', '.join(full_field_codings())} or ambiguity_enhancement"
             )
+        return self
+
+    @model_validator(mode="after")
+    def _blur_fits(self):
+        # a blur of a quarter of the image smears every stripe and dot over the whole frame
+        for key, px in (
+            ("projector_blur_px", self.projector_px),
+            ("camera_blur_px", self.camera_px),
+        ):
+            sigma, most = getattr(self, key), min(px) / 4
+            if sigma > most:
+                raise ValueError(
+                    f"{key}: {sigma:g} px blurs the pattern over the whole "
+                    f"{px[0]} x {px[1]} image (at most {most:g} px, a quarter of its smaller side)"
+                )
         return self
 
     @model_validator(mode="after")

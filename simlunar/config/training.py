@@ -14,7 +14,7 @@ options of its features in the section ``reconstruction``). Presets listed in
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
@@ -96,8 +96,13 @@ class TrainCfg(_Model):
         default_factory=list, description="presets of the experiments never trained on"
     )
     terrain_seeds: int = Field(2, ge=1, le=100, description="realisations per preset")
-    sun_elevations_deg: list[Deg] | None = Field(
-        None, description="sun elevations rendered per terrain; null = each experiment's own"
+    sun_elevations_deg: (
+        list[Annotated[Deg, Field(gt=0, le=90, description="above the horizon (0 < e <= 90)")]]
+        | None
+    ) = Field(
+        None,
+        description="sun elevations rendered per terrain (each 0 < e <= 90: a sun at or below "
+        "the horizon lights nothing); null = each experiment's own",
     )
     densities: list[Density] = Field(
         min_length=1,

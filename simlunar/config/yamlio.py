@@ -102,9 +102,45 @@ def _expanded_size(root) -> int:
     return size(root)
 
 
+#: most characters of a YAML document (an experiment is a few kB; a preset or training file too)
+MAX_YAML_CHARS = 10_000_000
+#: deepest nesting of collections in a YAML document: PyYAML composes nested collections
+#: recursively, so 5000 nested brackets would exhaust Python's stack (an experiment nests < 10)
+MAX_YAML_DEPTH = 100
+
+_OPENS = (
+    yaml.BlockMappingStartToken,
+    yaml.BlockSequenceStartToken,
+    yaml.FlowMappingStartToken,
+    yaml.FlowSequenceStartToken,
+)
+_CLOSES = (yaml.BlockEndToken, yaml.FlowMappingEndToken, yaml.FlowSequenceEndToken)
+
+
+def _check_bounds(text: str) -> None:
+    """Refuse (``ValueError``) a document above :data:`MAX_YAML_CHARS` or nested deeper than
+    :data:`MAX_YAML_DEPTH`, from the token stream (the scanner is iterative), before the
+    recursive composer sees it."""
+    if len(text) > MAX_YAML_CHARS:
+        raise ValueError(
+            f"the document has {len(text):.3g} characters, more than {MAX_YAML_CHARS:.0e}"
+        )
+    depth = 0
+    for tok in yaml.scan(text, Loader=yaml.SafeLoader):
+        if isinstance(tok, _OPENS):
+            depth += 1
+            if depth > MAX_YAML_DEPTH:
+                line = tok.start_mark.line + 1
+                raise ValueError(f"line {line}: collections nested more than {MAX_YAML_DEPTH} deep")
+        elif isinstance(tok, _CLOSES):
+            depth -= 1
+
+
 def safe_load_bounded(text: str):
-    """``yaml.load`` with :class:`UniqueKeyLoader`, refusing documents whose aliases expand
+    """``yaml.load`` with :class:`UniqueKeyLoader`, refusing documents larger than
+    :data:`MAX_YAML_CHARS`, nested deeper than :data:`MAX_YAML_DEPTH` or whose aliases expand
     beyond :data:`MAX_YAML_NODES` (``ValueError``); YAML errors as ``yaml.YAMLError``."""
+    _check_bounds(text)
     loader = UniqueKeyLoader(text)
     try:
         node = loader.get_single_node()

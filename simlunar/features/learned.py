@@ -29,9 +29,17 @@ version and library versions and the joblib file's hash *before* unpickling.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import io
 import json
+import math
+import os
+import pickle
 import platform
+import tempfile
+import threading
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -47,7 +55,6 @@ from simlunar.features._stack import (
     FEATURE_NAMES,
     FEATURE_SET_VERSION,
     _model_path,
-    _sha256_file,
     image_features,
 )
 from simlunar.features.maps import check_image
@@ -57,7 +64,9 @@ __all__ = [
     "LearnedMap",
     "LearnedOptions",
     "learned",
+    "pinned_models",
     "pitch_of",
+    "read_model_bytes",
     "save_with_record",
 ]
 
@@ -125,6 +134,33 @@ def _sha256_array(a: np.ndarray) -> str:
     h = hashlib.sha256(f"{a.dtype.str}{a.shape}".encode())
     h.update(a.tobytes())
     return h.hexdigest()
+
+
+def read_model_bytes(path) -> tuple[bytes, bytes]:
+    """The bytes of a model file and of its JSON record, each read once.
+
+    A caller that hashes these bytes and loads the model from them
+    (:meth:`LearnedMap.from_bytes`) uses exactly the content it hashed, even if the files
+    are replaced meanwhile.
+
+    Raises
+    ------
+    ValueError
+        A name not ending in ``.joblib``, a missing or unreadable file (the message names it).
+    """
+    path = _model_path(path)
+    sidecar = path.with_suffix(".json")
+    out = []
+    for p in (path, sidecar):
+        try:
+            out.append(p.read_bytes())
+        except FileNotFoundError:
+            raise ValueError(
+                f"learned model {path} needs both {path.name} and {sidecar.name}; {p} is missing"
+            ) from None
+        except OSError as exc:
+            raise ValueError(f"cannot read {p} ({exc.strerror or exc})") from None
+    return out[0], out[1]
 
 
 def _versions() -> dict[str, str]:
@@ -214,24 +250,67 @@ class LearnedMap:
         Refuses (``ValueError``) a missing sidecar, another format or feature-set version,
         another scikit-learn version (pickles do not carry across versions) and a joblib file
         whose SHA-256 differs from the sidecar's, all before unpickling. Unpickling runs code:
-        load only your own results.
+        load only your own results. Each file is read once (:meth:`from_bytes`).
         """
         path = _model_path(path)
+        data, record = read_model_bytes(path)
+        return cls.from_bytes(data, record, path=path)
+
+    @classmethod
+    def from_bytes(cls, data: bytes, record: bytes, *, path) -> LearnedMap:
+        """A model from the bytes of its joblib file and of its JSON record.
+
+        The record is checked first (JSON, format, feature set, scikit-learn version, the
+        densities it lists) and the SHA-256 of ``data`` must equal the record's
+        ``model_sha256``: only then are the bytes unpickled, and the unpickled payload must
+        hold one regressor of the feature set per density the record lists.
+
+        Parameters
+        ----------
+        data, record : bytes
+            The ``.joblib`` file's and the ``.json`` record's contents.
+        path : str or Path
+            The model file's name, for messages.
+
+        Raises
+        ------
+        ValueError
+            One line naming the file and what is wrong with it.
+        """
+        path = Path(path)
         sidecar = path.with_suffix(".json")
-        if not path.is_file() or not sidecar.is_file():
-            raise ValueError(f"learned model {path} needs both {path.name} and {sidecar.name}")
-        meta = json.loads(sidecar.read_text())
-        _check_meta(meta, path)
-        payload = joblib.load(path)
-        models = {float(d): m for d, m in payload["models"].items()}
-        if sorted(models) != sorted(meta["densities"]):
-            raise ValueError(f"learned model {path}: densities differ from its record")
+        meta = _parse_record(record, sidecar)
+        _check_meta(meta, path, hashlib.sha256(data).hexdigest())
+        try:
+            payload = joblib.load(io.BytesIO(data))
+        except (
+            pickle.UnpicklingError,
+            EOFError,
+            ValueError,
+            TypeError,
+            KeyError,
+            AttributeError,
+            ImportError,
+        ) as exc:
+            raise ValueError(
+                f"{path}: cannot unpickle the model ({' '.join(str(exc).split()) or type(exc).__name__})"
+            ) from None
+        models = _payload_models(payload, path)
+        if sorted(models) != sorted(float(d) for d in meta["densities"]):
+            raise ValueError(
+                f"{path}: densities {sorted(models)} differ from its record's "
+                f"{sorted(meta['densities'])}"
+            )
         return cls(models, {k: v for k, v in meta.items() if k not in ("model_file",)})
 
 
 def save_with_record(path, payload, meta: dict) -> tuple[Path, Path]:
     """Write ``payload`` with joblib to ``path`` and ``meta`` beside it as JSON (``.json``),
     with the model file's name and SHA-256 added: the record a load checks before unpickling.
+
+    Atomic: both files are written beside their targets and fsynced before either is renamed
+    (:func:`_write_pair`), so a failed save leaves the old model and record untouched and its
+    error names the file.
 
     Parameters
     ----------
@@ -249,15 +328,93 @@ def save_with_record(path, payload, meta: dict) -> tuple[Path, Path]:
     """
     path = _model_path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    joblib.dump(payload, path)
-    meta = {**meta, "model_file": path.name, "model_sha256": _sha256_file(path)}
+    buf = io.BytesIO()
+    joblib.dump(payload, buf)
+    data = buf.getvalue()
+    meta = {**meta, "model_file": path.name, "model_sha256": hashlib.sha256(data).hexdigest()}
+    record = (json.dumps(meta, indent=2, sort_keys=True) + "\n").encode()
     sidecar = path.with_suffix(".json")
-    sidecar.write_text(json.dumps(meta, indent=2, sort_keys=True) + "\n")
+    _write_pair(((path, data), (sidecar, record)))
     return path, sidecar
 
 
-def _check_meta(meta: dict, path: Path) -> None:
-    """Refuse a record of another format, feature set or library version, or another file."""
+def _write_pair(files) -> None:
+    """Write each ``(path, bytes)`` beside its target and fsync it; only when every one is
+    written are they renamed over their targets, so a failed save (a full disk, a read-only
+    folder) leaves the old model and record untouched. ``OSError`` names the target file."""
+    done: list[tuple[str, Path]] = []
+    try:
+        for target, data in files:
+            try:
+                fd, tmp = tempfile.mkstemp(
+                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
+                )
+                done.append((tmp, target))
+                with os.fdopen(fd, "wb") as f:
+                    f.write(data)
+                    f.flush()
+                    os.fsync(f.fileno())
+                os.chmod(tmp, 0o644)
+            except OSError as exc:
+                raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from None
+        # the model before its record: a reader between the two renames finds the new model
+        # beside the old record and refuses it (hash), never a mismatched pair in use
+        for tmp, target in done:
+            os.replace(tmp, target)
+        done.clear()
+    finally:
+        for tmp, _ in done:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def _parse_record(record: bytes, sidecar: Path) -> dict:
+    """The JSON record of a model as a dict whose ``densities`` are distinct numbers in (0, 1]."""
+    try:
+        meta = json.loads(record.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise ValueError(
+            f"{sidecar}: not a JSON model record ({' '.join(str(exc).split())})"
+        ) from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"{sidecar}: not a model record (a JSON {type(meta).__name__})")
+    dens = meta.get("densities")
+    ok = isinstance(dens, list) and len(dens) > 0
+    ok = ok and all(
+        isinstance(d, (int, float)) and not isinstance(d, bool) and math.isfinite(d) and 0 < d <= 1
+        for d in dens
+    )
+    if not ok or len(set(dens)) != len(dens):
+        raise ValueError(
+            f"{sidecar}: 'densities' must list distinct sample fractions in (0, 1], got {dens!r}"
+        )
+    return meta
+
+
+def _payload_models(payload, path: Path) -> dict:
+    """density -> regressor of an unpickled payload, each predicting from the feature set."""
+    models = payload.get("models") if isinstance(payload, dict) else None
+    if not isinstance(models, dict) or payload.get("format") != FORMAT or not models:
+        raise ValueError(f"{path}: not a {FORMAT} model file (unexpected content)")
+    out = {}
+    for d, m in models.items():
+        try:
+            dens = float(d)
+        except (TypeError, ValueError):
+            raise ValueError(f"{path}: density key {d!r} is not a number") from None
+        n_in = getattr(m, "n_features_in_", None)
+        if not callable(getattr(m, "predict", None)) or n_in != len(FEATURE_NAMES):
+            raise ValueError(
+                f"{path}: the model for density {d} is not a regressor of the "
+                f"{len(FEATURE_NAMES)} features of this feature set"
+            )
+        out[dens] = m
+    return out
+
+
+def _check_meta(meta: dict, path: Path, digest: str) -> None:
+    """Refuse a record of another format, feature set or library version, or another file
+    (``digest``: the SHA-256 of the model bytes about to be unpickled)."""
     if meta.get("format") != FORMAT:
         raise ValueError(f"{path}: not a {FORMAT} model (format {meta.get('format')!r})")
     if meta.get("feature_set_version") != FEATURE_SET_VERSION or meta.get("feature_names") != list(
@@ -272,17 +429,63 @@ def _check_meta(meta: dict, path: Path) -> None:
         raise ValueError(
             f"{path}: saved with scikit-learn {saved}, installed {sklearn.__version__}: retrain"
         )
-    if _sha256_file(path) != meta.get("model_sha256"):
+    if digest != meta.get("model_sha256"):
         raise ValueError(f"{path}: SHA-256 does not match its record (modified or replaced)")
 
 
 _CACHE: dict[tuple, LearnedMap] = {}
+#: resolved model path -> (SHA-256 of its bytes, model, holders): models a work unit read,
+#: verified and pinned for its duration (:func:`pinned_models`); module-level so that forked
+#: workers of the unit see them too
+_PINNED: dict[str, tuple[str, LearnedMap, int]] = {}
+_PIN_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def pinned_models(models: Mapping[str | Path, tuple[str, LearnedMap]]) -> Iterator[None]:
+    """While inside, :func:`learned` uses these models for these paths and never reads the
+    files again: a file replaced during a run cannot reach a unit that hashed the old one.
+
+    Parameters
+    ----------
+    models : mapping of path -> (sha256 hex, LearnedMap)
+        Each model as loaded from the bytes whose hash is given.
+
+    Raises
+    ------
+    ValueError
+        A path already pinned (by a concurrent unit) with other content.
+    """
+    keys = []
+    try:
+        with _PIN_LOCK:
+            for p, (digest, m) in models.items():
+                key = str(Path(p).resolve())
+                held = _PINNED.get(key)
+                if held is not None and held[0] != digest:
+                    raise ValueError(
+                        f"{p}: another unit of this run read other content for this model file "
+                        "(the file changed during the run)"
+                    )
+                _PINNED[key] = (digest, m if held is None else held[1], (held or (0, 0, 0))[2] + 1)
+                keys.append(key)
+        yield
+    finally:
+        with _PIN_LOCK:
+            for key in keys:
+                digest, m, n = _PINNED[key]
+                if n <= 1:
+                    del _PINNED[key]
+                else:
+                    _PINNED[key] = (digest, m, n - 1)
 
 
 def learned(image, *, model, density: float) -> np.ndarray:
     """The ``learned`` feature map: :meth:`LearnedMap.predict` of the model file ``model``.
 
-    Loaded models are cached by (resolved path, size, modification time).
+    A model pinned by :func:`pinned_models` (a work unit's, hashed into its cache key) is
+    used as pinned; others are loaded (each file read once) and cached by (resolved path,
+    size, modification time).
 
     Parameters
     ----------
@@ -297,6 +500,9 @@ def learned(image, *, model, density: float) -> np.ndarray:
     ndarray of float64, shape (rows, cols), in (0, 1]
     """
     path = _model_path(model).resolve()
+    pinned = _PINNED.get(str(path))
+    if pinned is not None:
+        return pinned[1].predict(image, density=density)
     try:
         st = path.stat()
     except OSError:

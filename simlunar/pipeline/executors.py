@@ -156,6 +156,21 @@ def parse_scheduler_address(address: str) -> tuple[str, str, int | None]:
     return m.group("scheme") or "tcp", m.group("host").strip("[]"), port
 
 
+#: largest first message (bytes) a Dask scheduler's TCP handshake may announce
+MAX_HANDSHAKE_BYTES = 1 << 24
+
+
+def _recv_exactly(sock, n: int) -> bytes:
+    """Up to ``n`` bytes from ``sock`` (fewer only if the peer closes first)."""
+    buf = b""
+    while len(buf) < n:
+        chunk = sock.recv(n - len(buf))
+        if not chunk:
+            break
+        buf += chunk
+    return buf
+
+
 class DaskExecutor(Executor):
     """Units as tasks on a Dask distributed scheduler (``tcp://host:8786``).
 
@@ -201,12 +216,22 @@ class DaskExecutor(Executor):
                     # server (HTTP, ...) waits for the client, and Dask's Client would wait
                     # for it forever
                     try:
-                        s.recv(1)
+                        head = _recv_exactly(s, 8)
                     except TimeoutError:
                         raise ConfigError(
                             f"--scheduler {self.address}: something listens there but it "
                             f"does not answer like a Dask scheduler within {self.timeout_s:g} s"
                         ) from None
+                    # Dask's TCP comm frames every message with its length as a little-endian
+                    # uint64 first; a handshake is a few hundred bytes. Other servers (HTTP
+                    # banners, garbage) give a length no handshake has, and Dask's Client
+                    # would wait on them until its own timeout, then fail with a traceback
+                    size = int.from_bytes(head, "little") if len(head) == 8 else 0
+                    if not 0 < size <= MAX_HANDSHAKE_BYTES:
+                        raise ConfigError(
+                            f"--scheduler {self.address}: something listens there but it "
+                            "does not speak Dask's protocol (not a Dask scheduler)"
+                        )
         except OSError as exc:
             why = (
                 f"no answer within {self.timeout_s:g} s"

@@ -16,7 +16,7 @@ import numpy as np
 
 from simlunar.config.terrain import PresetError, merged_preset, preset_path
 from simlunar.config.translate import terrain_params
-from simlunar.errors import ConfigError
+from simlunar.errors import ConfigError, InputChangedError
 from simlunar.results.store import file_sha256
 from simlunar.terrain.io import GDAL_FORMATS, load_albedo, load_dem
 
@@ -24,6 +24,10 @@ from simlunar.terrain.io import GDAL_FORMATS, load_albedo, load_dem
 #: it take the depth of their nearest valid pixel (``pipeline.unit.fill_invalid``) and are scored as
 #: truth, so beyond a few per cent the ground truth is mostly invented and the run stops.
 MAX_NAN_FRACTION = 0.05
+
+#: Smallest grid spacing (m per cell) of a DEM: a micrometre. Below it (a sidecar's 1e-300)
+#: every slope and roughness statistic divides by a number that is no length at all.
+MIN_SPACING_M = 1e-6
 
 #: Largest |coordinate| (heights, terrain extent, camera position) in metres: the renderer
 #: works in float32, so a scene larger than this (1000 km) cannot resolve terrain relief.
@@ -34,6 +38,8 @@ __all__ = [
     "LIMIT_SETTINGS",
     "MAX_CELLS",
     "MAX_FRAME_PIXELS",
+    "MAX_UNITS",
+    "MIN_SPACING_M",
     "TerrainFacts",
     "check_dem_file",
     "check_size",
@@ -42,8 +48,10 @@ __all__ = [
     "input_files",
     "input_hashes",
     "model_files",
+    "read_unit_models",
     "size_limit",
     "terrain_facts",
+    "verify_inputs",
 ]
 
 
@@ -147,6 +155,80 @@ def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
     return out
 
 
+def _changed(key: str, path, digest: str, expected: str) -> InputChangedError:
+    return InputChangedError(
+        f"{key}: {path} changed during the run (sha256 {digest[:12]}, the run hashed "
+        f"{expected[:12]} into the unit's cache key); nothing of this unit is stored"
+    )
+
+
+def _bytes_sha256(path: Path, key: str) -> tuple[bytes, str]:
+    import hashlib
+
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise InputChangedError(
+            f"{key}: cannot read {path} during the run ({exc.strerror or exc})"
+        ) from None
+    return data, hashlib.sha256(data).hexdigest()
+
+
+def read_unit_models(inputs: dict[str, dict[str, str]]) -> dict[str, tuple[str, Any]]:
+    """The learned models a unit reads, each loaded from the bytes whose SHA-256 its cache key
+    holds (``inputs``: :func:`input_hashes` of the unit, as the run computed them).
+
+    Each model file and its record are read once; their hashes must equal the run's, so the
+    model a unit uses is the content its key names, whatever happens to the files later
+    (:func:`simlunar.features.learned.pinned_models` then keeps the unit from reading them
+    again).
+
+    Returns
+    -------
+    dict
+        model path -> (SHA-256 hex of the model bytes, LearnedMap)
+
+    Raises
+    ------
+    InputChangedError
+        A model file or its record differs from the run's hash of it (one line naming it).
+    ConfigError
+        A model the loader refuses (one line naming the file).
+    """
+    from simlunar.features.learned import LearnedMap
+
+    out: dict[str, tuple[str, Any]] = {}
+    for key, v in inputs.items():
+        if not key.endswith(".feature_opts.model"):
+            continue
+        path = Path(v["path"])
+        data, digest = _bytes_sha256(path, key)
+        if digest != v["sha256"]:
+            raise _changed(key, path, digest, v["sha256"])
+        rec = inputs.get(f"{key}.json")
+        record, rdigest = _bytes_sha256(path.with_suffix(".json"), f"{key}.json")
+        if rec is not None and rdigest != rec["sha256"]:
+            raise _changed(f"{key}.json", path.with_suffix(".json"), rdigest, rec["sha256"])
+        try:
+            model = LearnedMap.from_bytes(data, record, path=path)
+        except ValueError as exc:
+            raise ConfigError(f"{key}: {exc}") from None
+        out[str(path)] = (digest, model)
+    return out
+
+
+def verify_inputs(inputs: dict[str, dict[str, str]], *, skip=()) -> None:
+    """Refuse, in one line, an input file whose bytes are no longer those the run hashed
+    into the unit's cache key (``inputs``: :func:`input_hashes`); ``skip``: key paths not
+    checked (the models a unit loaded from verified bytes)."""
+    for key, v in inputs.items():
+        if key in skip:
+            continue
+        _, digest = _bytes_sha256(Path(v["path"]), key)
+        if digest != v["sha256"]:
+            raise _changed(key, v["path"], digest, v["sha256"])
+
+
 # --------------------------------------------------------------------------- size budget
 #: most cells of one grid a run may allocate: terrain cells (a DEM, a preset with its grid
 #: overrides), image, projector and camera pixels. A render costs some hundred bytes per
@@ -160,8 +242,18 @@ MAX_CELLS = 25_000_000
 MAX_FRAME_PIXELS = 500_000_000
 
 
+#: most work units of one experiment (the product of its sweep axes' lengths times its
+#: terrain seeds): every unit is rendered and stored, and the sweep is expanded (and every
+#: point checked) before anything runs. ``SIMLUNAR_MAX_UNITS`` raises it.
+MAX_UNITS = 10_000
+
+
 #: environment settings that override the limits above
-LIMIT_SETTINGS = {"SIMLUNAR_MAX_CELLS": MAX_CELLS, "SIMLUNAR_MAX_FRAME_PIXELS": MAX_FRAME_PIXELS}
+LIMIT_SETTINGS = {
+    "SIMLUNAR_MAX_CELLS": MAX_CELLS,
+    "SIMLUNAR_MAX_FRAME_PIXELS": MAX_FRAME_PIXELS,
+    "SIMLUNAR_MAX_UNITS": MAX_UNITS,
+}
 
 
 def size_limit(setting: str) -> int:
@@ -434,6 +526,11 @@ def _dem_facts(
     if not path.is_file():
         raise ConfigError(f"{key}: file not found: {path}")
     terrain = _read_grid(path, key, spacing=spacing)
+    if not terrain.spacing >= MIN_SPACING_M:
+        raise ConfigError(
+            f"{key}: {path}: a spacing of {terrain.spacing:.3g} m per cell is below "
+            f"{MIN_SPACING_M:g} m (check the spacing's units: metres)"
+        )
     h = np.asarray(terrain.heights)
     rows, cols = h.shape
     if rows < 2 or cols < 2:

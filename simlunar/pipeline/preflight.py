@@ -31,18 +31,20 @@ import numpy as np
 
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.translate import coding_options, rig_kwargs
-from simlunar.errors import ConfigError, ResultFolderError
+from simlunar.errors import ConfigError, InfrastructureError, ResultFolderError
 from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.pipeline.inputs import (
     MAX_ABS_COORD_M,
     MAX_NAN_FRACTION,
     TerrainFacts,
     check_size,
+    read_unit_models,
     terrain_facts,
 )
 from simlunar.planner import check_k
 from simlunar.render.backend import choose_variant
 from simlunar.results.records import unit_label
+from simlunar.results.store import LOCK_NAME
 from simlunar.scanner.codings import coding_for
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.sensors.structured_light import DOT_MODES, mode_coding
@@ -100,9 +102,9 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
     if not os.access(anc, os.W_OK | os.X_OK):
         raise ResultFolderError(f"{option} {p}: {anc} is not writable (permission denied)")
     if p.is_dir():
-        for sub in ("units", "figures", "scans", "config.yaml"):
+        for sub in ("units", "figures", "scans", "config.yaml", LOCK_NAME):
             q = p / sub
-            want_dir = sub != "config.yaml"
+            want_dir = sub not in ("config.yaml", LOCK_NAME)
             if q.exists() and q.is_dir() != want_dir:
                 kind = "a folder" if want_dir else "a file"
                 raise ResultFolderError(f"{option} {p}: {q} is not {kind}")
@@ -122,8 +124,12 @@ def check_renderer() -> None:
 
     try:
         choose_variant()
-    except (ValueError, RuntimeError) as exc:
+    except ValueError as exc:  # a name that is no variant: the user's input
         raise ConfigError(f"SIMLUNAR_VARIANT={wanted}: {exc}") from None
+    except RuntimeError as exc:
+        # a known variant this machine cannot run (no GPU, no libLLVM): the environment
+        # failed, not the input (exit 3)
+        raise InfrastructureError(f"SIMLUNAR_VARIANT={wanted}: {exc}") from None
 
 
 def check_out_file(out: str | Path, *, option: str = "--out") -> Path:
@@ -382,6 +388,38 @@ def check_rig(cfg: Any, facts: TerrainFacts, *, key: str = "study.options.rig") 
             f"{key}: the camera at {np.round(rig.camera.position, 3).tolist()} does not see "
             "the projected pattern on the terrain (check baseline_m, cam_fov_x_deg, verge)"
         )
+    _check_rig_geometry(rig, facts, key)
+
+
+#: least height of a scanner's projector above the terrain's median height, in terrain cells:
+#: closer, it sits inside the relief of the bed it is meant to scan
+MIN_PROJECTOR_CELLS = 10
+#: most camera-projector baseline, in projector standoffs: beyond it the camera sees the
+#: pattern at a grazing angle (a verged camera more than ~80 deg off the projector's axis)
+MAX_BASELINE_STANDOFFS = 5.0
+
+
+def _check_rig_geometry(rig: Any, facts: TerrainFacts, key: str) -> None:
+    """A projector above the terrain's relief and a baseline a triangulation can use."""
+    x0, x1, y0, y1 = facts.extent
+    target = np.array([(x0 + x1) / 2, (y0 + y1) / 2, facts.zmid])
+    proj = np.asarray(rig.projector.position, float)
+    least = MIN_PROJECTOR_CELLS * facts.spacing
+    height = float(proj[2] - facts.zmid)
+    if not height >= least:
+        raise ConfigError(
+            f"{key}: the projector is {height:.3g} m above the terrain's median height, inside "
+            f"its relief (at least {MIN_PROJECTOR_CELLS} cells = {least:g} m; raise "
+            "distance_m / altitude_m or fill)"
+        )
+    standoff = float(np.linalg.norm(proj - target))
+    baseline = float(np.linalg.norm(np.asarray(rig.camera.position, float) - proj))
+    if baseline > MAX_BASELINE_STANDOFFS * standoff:
+        raise ConfigError(
+            f"{key}: a baseline of {baseline:.3g} m is more than {MAX_BASELINE_STANDOFFS:g} x "
+            f"the projector's {standoff:.3g} m standoff: the camera would see the pattern at a "
+            "grazing angle (lower baseline_m)"
+        )
 
 
 # --------------------------------------------------------------------------- all units
@@ -406,6 +444,44 @@ class Preflight:
         return list(seen.values())
 
 
+def check_score_region(cfg: Any, shape: tuple[int, int]) -> None:
+    """A sampling study scored on the interior must have one: the border band of the
+    sparsest density's pitch (:func:`simlunar.metrics.interior_mask`) leaves some cell."""
+    s = cfg.study
+    if getattr(s, "kind", None) != "sampling" or getattr(s, "score_region", "full") == "full":
+        return
+    from simlunar.metrics.interior import interior_mask, sparsest_pitch
+
+    try:
+        interior_mask(shape, sparsest_pitch(shape, s.densities))
+    except ValueError as exc:
+        raise ConfigError(
+            f"study.score_region: {s.score_region}: {exc} (a {shape[0]} x {shape[1]} image at "
+            f"density {min(s.densities):g}; use score_region: full, a larger image or denser "
+            "sampling)"
+        ) from None
+
+
+def check_models(inputs: dict[str, dict[str, str]], seen: set | None = None) -> None:
+    """Load every learned model a unit names, as the unit will (its record checked and its
+    bytes' hash compared with the record's before unpickling), so a truncated, foreign,
+    renamed or mismatched model file is one line naming it before any render.
+
+    ``inputs``: the unit's :func:`~simlunar.pipeline.inputs.input_hashes`; ``seen``: the
+    (path, hash) pairs already loaded (a sweep loads each model once).
+    """
+    seen = set() if seen is None else seen
+    for key, v in inputs.items():
+        if not key.endswith(".feature_opts.model"):
+            continue
+        rec = inputs.get(f"{key}.json", {})
+        memo = (v["path"], v["sha256"], rec.get("sha256"))
+        if memo in seen:
+            continue
+        read_unit_models({key: v, **({f"{key}.json": rec} if rec else {})})
+        seen.add(memo)
+
+
 def check_units(units: list[Any]) -> Preflight:
     """Check every unit (sweep point) before any of them runs.
 
@@ -414,12 +490,15 @@ def check_units(units: list[Any]) -> Preflight:
     """
 
     facts = []
+    checked_models: set[tuple] = set()
     for u in units:
         cfg = ExperimentCfg.model_validate(u.config)
         try:
+            check_models(getattr(u, "inputs", None) or {}, checked_models)
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))
+            check_score_region(cfg, image_shape(cfg.render, f))
             if getattr(cfg.study, "kind", None) == "lidar":
                 check_time_bins(cfg.study, f)
             if getattr(cfg.study, "kind", None) == "scanner":

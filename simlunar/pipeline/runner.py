@@ -19,6 +19,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
 import time
 from collections.abc import Callable
 from contextlib import contextmanager
@@ -30,11 +31,16 @@ import simlunar
 from simlunar.config.loading import apply_sweep_value, to_plain
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.yamlio import dump_yaml
-from simlunar.errors import InfrastructureError, ResultFolderError, RunInterrupted
+from simlunar.errors import (
+    InfrastructureError,
+    InputChangedError,
+    ResultFolderError,
+    RunInterrupted,
+)
 from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
 from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
-from simlunar.pipeline.inputs import input_hashes
+from simlunar.pipeline.inputs import check_size, input_hashes
 from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.plotting.lidar_tables import lidar_tables
@@ -140,6 +146,18 @@ def expand(cfg: ExperimentCfg) -> list[WorkUnit]:
     """The work units of an experiment (cartesian product of its sweep axes, in order)."""
     base = {k: v for k, v in to_plain(cfg).items() if k != "sweep"}
     axes = list(cfg.sweep.items())
+    n_units = math.prod(len(vals) for _, vals in axes) * int(
+        getattr(cfg.study, "terrain_seeds", 1) or 1
+    )
+    sizes = " x ".join(str(len(vals)) for _, vals in axes) or "1"
+    # before expanding: a sweep product of millions is refused, not built point by point
+    check_size(
+        "sweep",
+        f"{sizes} sweep points x {getattr(cfg.study, 'terrain_seeds', 1) or 1} terrain seeds "
+        "= units",
+        n_units,
+        "SIMLUNAR_MAX_UNITS",
+    )
     units = []
     for combo in itertools.product(*[vals for _, vals in axes]):
         point = base
@@ -234,7 +252,10 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
             rows.append({"unit": u.index, **{c: point[c] for c in sweep_cols}, **r})
     present = {c for r in rows for c in r}
     known = [c for c in ROW_COLUMNS if c != "value" and c in present]
-    return rows, ["unit", *sweep_cols, *known, *extra, "value"]
+    # the study's own columns by name: a cached record's rows come back from JSON with their
+    # keys sorted, a fresh one's in the order the study made them, so a resumed run would
+    # otherwise write another column order than a clean one
+    return rows, ["unit", *sweep_cols, *known, *sorted(extra), "value"]
 
 
 def run_experiment(
@@ -418,7 +439,8 @@ def _compute_missing(run: _Run, cache: UnitCache, todo, records: dict, n_cached:
     bar = _progress(run.progress, total, n_cached, run.cfg.name)
     n_new = 0
     try:
-        payloads = [{"config": u.config} for u in todo]
+        # with the input hashes of each unit's key: the unit checks the files it reads
+        payloads = [{"config": u.config, "inputs": u.inputs} for u in todo]
         hook = bar.stage if bar is not None and accepts_keyword(run.compute, "progress") else None
         # executors written against the older two-argument run() still work without a hook
         kw = {"progress": hook} if hook is not None else {}
@@ -441,6 +463,8 @@ def _compute_missing(run: _Run, cache: UnitCache, todo, records: dict, n_cached:
             raise RunInterrupted(_kept(out, n_cached + n_new, total, "interrupted")) from None
         if isinstance(exc, InfrastructureError):
             raise InfrastructureError(f"{exc}; {_kept(out, n_cached + n_new, total)}") from None
+        if isinstance(exc, InputChangedError):
+            raise InputChangedError(f"{exc}; {_kept(out, n_cached + n_new, total)}") from None
         raise
     finally:
         if bar is not None:

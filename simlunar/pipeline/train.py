@@ -21,6 +21,7 @@ from simlunar.config.training import LearnedReconCfg, TrainCfg, _preset, _sweep_
 from simlunar.config.yamlio import dump_yaml
 from simlunar.features.learned import LearnedOptions
 from simlunar.pipeline.figure_inputs import RENDER_LOCK
+from simlunar.pipeline.preflight import check_out_file
 from simlunar.pipeline.unit import fill_invalid, int_seed, scene_inputs, sensor_image, stage_seeds
 from simlunar.planner.learning import train_learned_map, train_learned_reconstruction
 from simlunar.render import render
@@ -77,6 +78,11 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
     (Path, Path)
         The ``.joblib`` model and its ``.json`` record.
     """
+    path = Path(out) if out is not None else Path(cfg.model)
+    # the model and its record must be writable before minutes of rendering and training
+    option = "--out" if out is not None else "model"
+    check_out_file(path, option=option)
+    check_out_file(path.with_suffix(".json"), option=option)
     t0 = time.perf_counter()
     examples, described = [], []
     for what, exp in _scenes(cfg, experiments):

@@ -27,6 +27,7 @@ from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.features import feature_map
+from simlunar.features.learned import pinned_models
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
 from simlunar.metrics import score as eq43_score
@@ -37,6 +38,7 @@ from simlunar.pipeline.figure_inputs import (
     sparse_mesh_render,
 )
 from simlunar.pipeline.guide import build_guide
+from simlunar.pipeline.inputs import read_unit_models, verify_inputs
 from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
 from simlunar.render.scene import luminance
@@ -169,7 +171,9 @@ def compute_unit(
     Parameters
     ----------
     payload : dict
-        ``{"config": <plain resolved experiment dict without sweep>}``.
+        ``{"config": <plain resolved experiment dict without sweep>, "inputs": <its input
+        files' hashes, as in its cache key>}`` (:func:`simlunar.pipeline.inputs.input_hashes`;
+        without ``inputs`` nothing is verified).
     progress : callable(stage, done, total), optional
         Within-unit progress of the sampling study (in-process executors pass it).
     study_workers : int
@@ -184,6 +188,23 @@ def compute_unit(
         ``meta`` and, for a scanner or lidar unit with ``save_scans``, ``scans``.
     """
     cfg = ExperimentCfg.model_validate(payload["config"])
+    inputs = payload.get("inputs")
+    if not inputs:
+        return _compute_unit(cfg, progress, study_workers)
+    # the files the run hashed into this unit's cache key must be the ones it reads: models
+    # are loaded from the verified bytes (and pinned, never read again); the other files
+    # (preset, DEM, albedo) are checked before and after the unit
+    models = read_unit_models(inputs)
+    loaded = {k for k in inputs if k.endswith(".feature_opts.model")}
+    loaded |= {f"{k}.json" for k in loaded}
+    verify_inputs(inputs, skip=loaded)
+    with pinned_models(models):
+        record = _compute_unit(cfg, progress, study_workers)
+    verify_inputs(inputs, skip=loaded)
+    return record
+
+
+def _compute_unit(cfg, progress, study_workers: int) -> dict[str, Any]:
     seeds = stage_seeds(cfg.seed)
     timings: dict[str, float] = {}
     t = time.perf_counter()

@@ -231,7 +231,12 @@ class FolderLock:
     def acquire(self) -> FolderLock:
         """Take the lock or raise :class:`ResultFolderError` naming the owner's pid."""
         for _ in range(100):
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            except IsADirectoryError:
+                raise ResultFolderError(
+                    f"{self.path}: is a folder, not the run's lock file (remove it)"
+                ) from None
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError as exc:

@@ -13,7 +13,7 @@ from scipy.stats import rankdata
 
 from simlunar.features import feature_map
 from simlunar.features._stack import FEATURE_NAMES, image_features
-from simlunar.features.learned import LearnedMap, LearnedOptions, save_with_record
+from simlunar.features.learned import LearnedMap, LearnedOptions, pitch_of, save_with_record
 from simlunar.planner import plan
 from simlunar.planner.learning import error_target, train_learned_map
 
@@ -199,3 +199,44 @@ def test_save_with_record_writes_the_hash_and_leaves_meta_alone(tmp_path):
     assert record["model_file"] == "m.joblib"
     assert record["model_sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
     assert joblib.load(path) == {"a": [1, 2]}
+
+
+def test_training_inputs_are_validated():
+    img, z = planted_pair(0, shape=(24, 24))
+    with pytest.raises(ValueError, match="truth"):
+        train_learned_map([(img, z[:, :10])], densities=[0.1], rng=0)
+    with pytest.raises(ValueError, match="distinct"):
+        train_learned_map([(img, z)], densities=[0.1, 0.1], rng=0)
+    with pytest.raises(ValueError, match="density"):
+        pitch_of(0.0)
+    with pytest.raises(ValueError, match="at least one"):
+        train_learned_map([], densities=[0.1], rng=0)
+
+
+def test_a_failed_save_leaves_the_old_model_and_record_untouched(model, tmp_path, monkeypatch):
+    """The disk fills while the record is written: neither file changes, no temporary file
+    is left, and the error names the record."""
+    import errno
+    import os
+
+    path, record = model.save(tmp_path / "m.joblib")
+    before = (path.read_bytes(), record.read_bytes())
+    other = LearnedMap(model.models, {**model.meta, "note": "a newer model"})
+    real = os.fsync
+    calls = []
+
+    def fsync(fd):
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    with pytest.raises(OSError, match="No space left on device") as err:
+        other.save(path)
+    assert err.value.filename == str(record)
+    assert (path.read_bytes(), record.read_bytes()) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.joblib", "m.json"]
+    monkeypatch.setattr(os, "fsync", real)
+    other.save(path)  # and a save that works replaces both
+    assert LearnedMap.load(path).meta["note"] == "a newer model"

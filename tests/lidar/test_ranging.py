@@ -137,3 +137,52 @@ def test_box_binned_returns_show_the_staircase():
     box[np.arange(10), np.floor((2 * truth - BINS.start_opl) / BINS.bin_opl).astype(int)] = 1
     got = extract_ranges(1000 * shape_waveform(box, BINS, PULSE) + 0.01, BINS, pulse=PULSE).range
     assert np.abs(got - truth).max() > 0.02
+
+
+@pytest.mark.parametrize(
+    "kw", [{"threshold_sigma": -1.0}, {"min_photons": -0.5}, {"threshold_sigma": float("nan")}]
+)
+def test_range_options_refuse_negative_or_nan_thresholds(kw):
+    with pytest.raises(ValueError, match="threshold_sigma and min_photons must be >= 0"):
+        RangeOptions(**kw)
+
+
+def test_range_options_accept_zero_thresholds_and_name_bad_choices():
+    o = RangeOptions(threshold_sigma=0.0, min_photons=0.0)
+    assert (o.threshold_sigma, o.min_photons) == (0.0, 0.0)
+    with pytest.raises(ValueError, match=r"unknown return 'middle'; valid: "):
+        RangeOptions(which="middle")
+
+
+def test_photons_of_a_return_exclude_the_background_by_hand():
+    """Noise-free: a return of 100 photons over 3 counts per bin of background. The window
+    around the return holds the pulse (all of it but its far tails) plus 3 per bin of
+    background, which the estimate takes off: about 100, never 100 + the background."""
+    sig = shape_waveform(_impulse(np.array([[50.0]])), BINS, PULSE)
+    assert sig.sum() == pytest.approx(1.0, rel=1e-6)
+    res = extract_ranges(100 * sig + 3.0, BINS, pulse=PULSE)
+    assert res.valid[0] and res.returns[0] == 1
+    assert res.photons[0] == pytest.approx(100.0, rel=0.05)
+    assert abs(res.range[0] - 50.0) < 0.25 * BINS.bin_range
+
+
+def test_two_returns_closer_than_a_pulse_width_read_as_one():
+    """Returns 5 cm apart (one bin) under a 1 ns pulse (15 cm FWHM in range) are one return
+    between them; 1 m apart they are two."""
+    close = shape_waveform(_impulse(np.array([[50.0, 50.05]])), BINS, PULSE)
+    res = extract_ranges(100 * close, BINS, pulse=PULSE)
+    assert res.returns[0] == 1
+    assert 50.0 - BINS.bin_range < res.range[0] < 50.05 + BINS.bin_range
+    apart = shape_waveform(_impulse(np.array([[50.0, 51.0]])), BINS, PULSE)
+    assert extract_ranges(100 * apart, BINS, pulse=PULSE).returns[0] == 2
+
+
+@pytest.mark.parametrize("method", ["matched", "peak"])
+def test_noise_free_reading_interpolates_within_the_bin(method):
+    """The parabola through the peak bin and its neighbours places a noise-free return to
+    within a tenth of a bin (measured: 0.024 matched, 0.046 peak); the peak bin's centre
+    alone is off by up to half a bin."""
+    truth = np.linspace(45.0, 55.0, 37)
+    sig = shape_waveform(_impulse(truth[:, None]), BINS, PULSE)
+    res = extract_ranges(100 * sig, BINS, pulse=PULSE, options=RangeOptions(method=method))
+    assert np.abs(res.range - truth).max() < 0.1 * BINS.bin_range

@@ -80,3 +80,13 @@ def test_metric_bad_input(kwargs, match):
 
 def test_registry():
     assert list(METRICS) == ["mse", "rmse", "mae", "grad", "sal"]
+
+
+def test_metrics_take_nested_lists_by_hand():
+    """Plain nested lists are arrays too: one cell off by 1 of 4 -> MSE 1/4, RMSE 1/2."""
+    from simlunar.metrics import metric
+
+    recon, truth = [[1.0, 2.0], [3.0, 4.0]], [[1.0, 2.0], [3.0, 5.0]]
+    assert metric("mse", recon, truth) == pytest.approx(0.25)
+    assert metric("rmse", recon, truth) == pytest.approx(0.5)
+    assert metric("mae", truth, recon) == pytest.approx(0.25)

@@ -54,3 +54,17 @@ def test_hazard_options_refuse_bad_values():
         HazardOptions(window_px=4)
     with pytest.raises(ValueError, match="slope_deg"):
         HazardOptions(slope_deg=0.0)
+
+
+def test_detection_scores_count_only_cells_inside_the_mask():
+
+    truth = np.array([[1, 1, 0, 0]], bool)
+    found = np.array([[1, 0, 1, 0]], bool)
+    # whole grid: 1 true positive of 2 flagged and of 2 true hazards
+    assert detection_scores(found, truth) == {"hazard_precision": 0.5, "hazard_recall": 0.5}
+    # the mask drops the false alarm (col 2) and the missed hazard (col 1)
+    mask = np.array([[1, 0, 0, 1]], bool)
+    assert detection_scores(found, truth, mask) == {"hazard_precision": 1.0, "hazard_recall": 1.0}
+    # a mask keeping only the false alarm: precision 0, nothing to miss
+    mask = np.array([[0, 0, 1, 0]], bool)
+    assert detection_scores(found, truth, mask) == {"hazard_precision": 0.0, "hazard_recall": 1.0}

@@ -45,3 +45,15 @@ def test_interior_mask_bad_input(shape, pitch, match):
 def test_sparsest_pitch_bad_density():
     with pytest.raises(ValueError):
         sparsest_pitch((10, 10), [0.0])
+
+
+def test_a_one_row_grid_is_a_valid_shape_with_no_interior():
+    """(1, 5) is a grid (rows >= 1): its every cell is on the border, so no pitch leaves an
+    interior, and the error says so (not that the shape is invalid)."""
+    from simlunar.metrics.interior import interior_mask
+
+    with pytest.raises(ValueError, match="leaves no interior cell in a 1 x 5 grid"):
+        interior_mask((1, 5), 0.0)
+    with pytest.raises(ValueError, match=r"shape must be \(rows, cols\) >= 1"):
+        interior_mask((0, 5), 0.0)
+    np.testing.assert_array_equal(interior_mask((3, 3), 0.0), [[0, 0, 0], [0, 1, 0], [0, 0, 0]])

@@ -10,6 +10,7 @@ runs in seconds.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 from collections.abc import Callable
@@ -320,7 +321,6 @@ CASES = [
     Case("merge key of a scalar", "name: x\nterrain: {<<: 3}\n", "exp.yaml"),
     # the renderer asked for by the environment
     Case("unknown SIMLUNAR_VARIANT", GOOD, "SIMLUNAR_VARIANT=rgb_fast: unknown variant 'rgb_fast'", env={"SIMLUNAR_VARIANT": "rgb_fast"}),
-    Case("CUDA variant without a GPU", GOOD, "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
     # a finished folder whose scans is a file: refused before anything is deleted
     Case("--save-scans with scans a file", with_("study", SCANNER), "scans is not a folder", args=("--save-scans",), setup=lambda d: ((d / "results").mkdir(), (d / "results" / "config.yaml").write_text("x: 1\n"), (d / "results" / "results.csv").write_text("unit\n"), (d / "results" / "scans").write_text("a file"))),
     # a learned map whose model file was never trained: once found only after the render, as
@@ -508,7 +508,7 @@ CMDS = [
     Cmd("render merge-key duplicate", ("render", "scene.yaml", "--out", "r"), "duplicate key 'scale'", setup=yaml_file("scene.yaml", "b: &b {preset: aerial_1}\nname: s\nterrain: {<<: *b, scale: 0.1, scale: 0.2}\n")),
     # doctor
     Cmd("doctor unknown SIMLUNAR_VARIANT", ("doctor", "--short"), "SIMLUNAR_VARIANT=rgb_fast: unknown variant", env={"SIMLUNAR_VARIANT": "rgb_fast"}),
-    Cmd("doctor CUDA without a GPU", ("doctor",), "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
+    Cmd("doctor CUDA without a GPU", ("doctor",), "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", code=3, env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")]),
     # fit (python -m simlunar.pipeline.fit)
     Cmd("fit --maxiter -5", ("fit", "res", "--train-seeds", "1", "--test-seeds", "2", "--maxiter", "-5"), "--maxiter must be an integer >= 1, got -5"),
     Cmd("fit --trials 0", ("fit", "res", "--train-seeds", "1", "--test-seeds", "2", "--trials", "0"), "--trials must be an integer >= 1, got 0"),
@@ -517,6 +517,10 @@ CMDS = [
     Cmd("fit without seeds", ("fit", "res"), "the following arguments are required"),
     Cmd("fit of a missing folder", ("fit", "nope", "--train-seeds", "1", "--test-seeds", "2"), "nope"),
 ]  # fmt: skip
+
+
+def _raise_exit(code: int):
+    raise SystemExit(code)
 
 
 def _main(argv, monkeypatch) -> int:
@@ -548,6 +552,8 @@ def _main(argv, monkeypatch) -> int:
     "case", [pytest.param(c, marks=c.marks) for c in CMDS], ids=[c.name for c in CMDS]
 )
 def test_every_subcommand_keeps_the_promise(case, tmp_path, monkeypatch, capsys):
+    # an environment failure (exit 3) leaves through os._exit, which would end pytest
+    monkeypatch.setattr(os, "_exit", _raise_exit)
     d = tmp_path / "case"
     d.mkdir()
     if case.setup is not None:
@@ -606,3 +612,325 @@ def test_enormous_sizes_are_refused_under_a_memory_limit(name, tmp_path):
     lines = r.stderr.splitlines()
     assert len(lines) == 1 and expect in lines[0], r.stderr
     assert not (tmp_path / "o").exists()
+
+
+# --------------------------------------------------------------------------- faults and inputs
+# Each class of bad input found by the fault audit: learned model files, training outputs,
+# LIDAR options, structured-light rigs, sizes, YAML bombs, the environment. Every case: one
+# stderr line, its exit code, and the case folder unchanged.
+MODEL = "models/m.joblib"
+LEARNED = with_(
+    "study.strategy_options",
+    {"l": {"strategy": "learned", "placement": "lloyd", "feature_opts": {"model": MODEL}}},
+    with_("study.strategies", ["random", "l"]),
+)
+
+
+@functools.lru_cache(maxsize=1)
+def _model_bytes() -> tuple[bytes, dict]:
+    """A real tiny model (trained in about a second): its joblib bytes and its record."""
+    import json
+    import tempfile
+
+    from scipy import ndimage
+
+    from simlunar.features.learned import LearnedOptions
+    from simlunar.planner.learning import train_learned_map
+
+    gen = np.random.default_rng(7)
+    pairs = []
+    for _ in range(2):
+        z = ndimage.gaussian_filter(gen.standard_normal((48, 64)), 3) * 5
+        img = np.clip(0.5 + ndimage.gaussian_filter(gen.standard_normal((48, 64)), 1), 0.01, 1)
+        pairs.append((img, z))
+    model = train_learned_map(
+        pairs, densities=[1 / 16], options=LearnedOptions(pixels_per_example=500, max_iter=5), rng=0
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        path, record = model.save(Path(tmp) / "m.joblib")
+        return path.read_bytes(), json.loads(record.read_text())
+
+
+class _Boom:
+    """Unpickling this writes a file: a case whose folder stays unchanged was never unpickled."""
+
+    def __reduce__(self):
+        return (open, ("UNPICKLED", "w"))
+
+
+def model_files(data=None, record=None, *, edit=None, rehash=False, raw_record=None):
+    """A setup writing ``models/m.joblib`` (``data``: bytes or a callable of the good bytes)
+    and ``models/m.json`` (the good record, ``edit``-ed, or ``raw_record`` text); ``rehash``:
+    the record's hash made to match the written bytes (a forged but consistent record)."""
+    import hashlib
+    import json
+
+    def setup(d: Path) -> None:
+        good, meta = _model_bytes()
+        body = good if data is None else (data(good) if callable(data) else data)
+        meta = dict(meta if record in (None, "missing") else record)
+        if edit is not None:
+            edit(meta)
+        if rehash:
+            meta["model_sha256"] = hashlib.sha256(body).hexdigest()
+        (d / "models").mkdir(exist_ok=True)
+        (d / MODEL).write_bytes(body)
+        rec = d / "models" / "m.json"
+        if raw_record is not None:
+            rec.write_bytes(raw_record if isinstance(raw_record, bytes) else raw_record.encode())
+        elif record != "missing":
+            rec.write_text(json.dumps(meta))
+
+    return setup
+
+
+def _set(key, value):
+    def edit(meta):
+        cur = meta
+        *head, last = key.split(".")
+        for k in head:
+            cur[k] = dict(cur[k])
+            cur = cur[k]
+        cur[last] = value
+
+    return edit
+
+
+MODEL_KEY = "study.strategy_options.l.feature_opts.model: "
+FAULT_CASES = [
+    # learned model files: refused in one line before any render, never unpickled unverified
+    Case("model truncated", LEARNED, MODEL_KEY + "models/m.joblib: SHA-256 does not match its record", setup=model_files(lambda b: b[: len(b) // 2])),
+    Case("model empty", LEARNED, "models/m.joblib: SHA-256 does not match its record", setup=model_files(b"")),
+    Case("model a random pickle", LEARNED, "models/m.joblib: SHA-256 does not match its record", setup=model_files(lambda b: __import__("pickle").dumps(_Boom()))),
+    Case("model a renamed text file", LEARNED, "models/m.joblib: SHA-256 does not match its record", setup=model_files(b"name: not a model\n")),
+    Case("model forged record for a hostile pickle", LEARNED, "models/m.joblib: SHA-256 does not match", setup=model_files(lambda b: __import__("pickle").dumps(_Boom()), edit=_set("model_sha256", "0" * 64))),
+    Case("model consistent record, foreign payload", LEARNED, "models/m.joblib: not a simlunar-learned-map/1 model file", setup=model_files(lambda b: __import__("pickle").dumps({"models": [1, 2]}), rehash=True)),
+    Case("model consistent record, payload not regressors", LEARNED, "is not a regressor of the", setup=model_files(lambda b: __import__("pickle").dumps({"format": "simlunar-learned-map/1", "models": {"0.0625": "x"}}), rehash=True)),
+    Case("model other feature set", LEARNED, "trained on feature set version 0, this simlunar computes", setup=model_files(edit=_set("feature_set_version", 0))),
+    Case("model other feature names", LEARNED, "retrain the model", setup=model_files(edit=_set("feature_names", ["a", "b"]))),
+    Case("model other scikit-learn", LEARNED, "saved with scikit-learn 0.1, installed", setup=model_files(edit=_set("versions.scikit-learn", "0.1"))),
+    Case("model other format", LEARNED, "not a simlunar-learned-map/1 model (format 'x/9')", setup=model_files(edit=_set("format", "x/9"))),
+    Case("model record not JSON", LEARNED, "models/m.json: not a JSON model record", setup=model_files(raw_record="{densities: [")),
+    Case("model record a JSON list", LEARNED, "models/m.json: not a model record (a JSON list)", setup=model_files(raw_record="[1, 2]")),
+    Case("model record binary", LEARNED, "models/m.json: not a JSON model record", setup=model_files(raw_record=b"\xff\xfe{\x00")),
+    Case("model record other densities", LEARNED, "models/m.joblib: densities [0.0625] differ from its record's [0.5]", setup=model_files(edit=_set("densities", [0.5]))),
+    Case("model record densities not numbers", LEARNED, "'densities' must list distinct sample fractions in (0, 1], got 'all'", setup=model_files(edit=_set("densities", "all"))),
+    Case("model record density above 1", LEARNED, "'densities' must list distinct sample fractions", setup=model_files(edit=_set("densities", [2.0]))),
+    Case("model record densities repeated", LEARNED, "'densities' must list distinct", setup=model_files(edit=_set("densities", [0.0625, 0.0625]))),
+    Case("model record missing", LEARNED, "cannot read models/m.json", setup=model_files(record="missing")),
+    Case("model record empty", LEARNED, "models/m.json: not a JSON model record", setup=model_files(raw_record="")),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", FAULT_CASES, ids=[c.name for c in FAULT_CASES])
+def test_fault_case_exits_2_with_one_line_and_writes_nothing(case, tmp_path, monkeypatch):
+    _run_case(case, tmp_path, monkeypatch)
+    assert not (tmp_path / "case" / "UNPICKLED").exists()
+
+
+def test_the_good_model_passes_the_checks(tmp_path, monkeypatch):
+    """The model cases differ from a model that loads (each fails for its own reason)."""
+    from simlunar.config.loading import validate_data
+    from simlunar.pipeline.preflight import check_units
+    from simlunar.pipeline.runner import expand
+
+    model_files()(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    check_units(expand(validate_data(LEARNED, base_dir=tmp_path)))
+
+
+def training(**over):
+    """A setup writing a valid training YAML (``train.yaml``) over the good experiment."""
+    data = {
+        "name": "t",
+        "seed": 100,
+        "experiments": ["exp.yaml"],
+        "scale": 0.25,
+        "terrain_seeds": 1,
+        "sun_elevations_deg": [30],
+        "densities": ["1/16"],
+        "options": {"layouts": 1, "pixels_per_example": 500, "max_iter": 5},
+        "model": "models/t.joblib",
+        **over,
+    }
+    return both(yaml_file("exp.yaml", GOOD), yaml_file("train.yaml", data))
+
+
+ROOT_IGNORES_PERMISSIONS = pytest.mark.skipif(
+    os.geteuid() == 0, reason="root writes into read-only folders"
+)
+
+
+def read_only_dir(name):
+    def setup(d: Path) -> None:
+        (d / name).mkdir()
+        (d / name).chmod(0o555)
+
+    return setup
+
+
+FAULT_CMDS = [
+    # simlunar train: the output checked before minutes of rendering; suns above the horizon
+    Cmd("train --out a folder", ("train", "train.yaml", "--out", "m.joblib"), "--out m.joblib: is a folder, not a file", setup=both(training(), lambda d: (d / "m.joblib").mkdir())),
+    Cmd("train --out below a file", ("train", "train.yaml", "--out", "f/m.joblib"), "--out f/m.joblib: f: is a file, not a folder", setup=both(training(), lambda d: (d / "f").write_text("x"))),
+    Cmd("train --out in a read-only folder", ("train", "train.yaml", "--out", "ro/m.joblib"), "ro is not writable (permission denied)", setup=both(training(), read_only_dir("ro")), marks=[ROOT_IGNORES_PERMISSIONS]),
+    Cmd("train --out record is a folder", ("train", "train.yaml", "--out", "m.joblib"), "--out m.json: is a folder, not a file", setup=both(training(), lambda d: (d / "m.json").mkdir())),
+    Cmd("train model below a file", ("train", "train.yaml"), "model models/t.joblib: models: is a file, not a folder", setup=both(training(), lambda d: (d / "models").write_text("x"))),
+    Cmd("train --out not joblib", ("train", "train.yaml", "--out", "m.pkl"), "--out m.pkl: a learned model file ends in .joblib", setup=training()),
+    Cmd("train sun at 0 deg", ("train", "train.yaml"), "sun_elevations_deg[0]: Input should be greater than 0", setup=training(sun_elevations_deg=[0])),
+    Cmd("train sun at -45 deg", ("train", "train.yaml"), "sun_elevations_deg[1]: Input should be greater than 0", setup=training(sun_elevations_deg=[30, -45])),
+    Cmd("train sun above the zenith", ("train", "train.yaml"), "Input should be less than or equal to 90", setup=training(sun_elevations_deg=[120])),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "case", [pytest.param(c, marks=c.marks) for c in FAULT_CMDS], ids=[c.name for c in FAULT_CMDS]
+)
+def test_fault_command_keeps_the_promise(case, tmp_path, monkeypatch, capsys):
+    test_every_subcommand_keeps_the_promise(case, tmp_path, monkeypatch, capsys)
+
+
+# LIDAR options: the library's rules and every size bounded, in the schema
+LIDAR = {"kind": "lidar", "planners": ["random"], "densities": ["1/64"], "trials": 1}
+LIDAR_GOOD = with_("study", LIDAR, with_("render.camera", PERSPECTIVE))
+
+
+def lidar(key: str, value) -> dict:
+    return with_(f"study.{key}", value, LIDAR_GOOD)
+
+
+LIDAR_CASES = [
+    Case("lidar margin 5 m in the default 8 m window", lidar("options.margin_m", 5), "study.options.margin_m: 5 m leaves no range in the 8 m window of a rendered batch (steered_beam.window_m must exceed 2 x margin_m = 10 m)"),
+    Case("lidar margin equal to half the window", lidar("options.steered_beam.window_m", 4), "steered_beam.window_m must exceed 2 x margin_m = 4 m"),
+    Case("lidar divergence above pi/2", lidar("options.steered_beam.divergence_mrad", 2000), "study.options.steered_beam.divergence_mrad: Input should be less than or equal to 1570.79"),
+    Case("lidar signal photons 1e30", lidar("options.detector.signal_photons", 1e30), "study.options.detector.signal_photons: Input should be less than or equal to 1000000000000"),
+    Case("lidar background 1e30 photons/s", lidar("options.detector.background_photons_per_s", 1e30), "study.options.detector.background_photons_per_s: Input should be less than or equal to"),
+    Case("lidar dark counts 1e20", lidar("options.detector.dark_count_rate_hz", 1e20), "study.options.detector.dark_count_rate_hz: Input should be less than or equal to"),
+    Case("lidar oracle planner", lidar("planners", ["random", "oracle_greedy"]), "study.planners[1]: 'oracle_greedy' is not a planner of a lidar study: reads the true depth"),
+    Case("lidar hessian oracle planner", lidar("planners", ["oracle_hessian"]), "study.planners[0]: 'oracle_hessian' is not a planner of a lidar study"),
+    Case("lidar sequential planner", lidar("planners", ["sequential"]), "study.planners[0]: 'sequential' is not a planner of a lidar study: asks a sensor back"),
+    Case("lidar learned planner", lidar("planners", ["learned"]), "study.planners[0]: 'learned' is not a planner of a lidar study: predicts its map for one sample density"),
+    Case("lidar zero slew rate", lidar("options.steered_beam.max_rate_rad_s", 1e-300), "study.options.steered_beam.max_rate_rad_s: Input should be greater than or equal to 0.000001"),
+    Case("lidar zero acceleration", lidar("options.steered_beam.max_accel_rad_s2", 1e-300), "study.options.steered_beam.max_accel_rad_s2: Input should be greater than or equal to"),
+    Case("lidar pulse rate 1e-300", lidar("options.steered_beam.pulse_rate_hz", 1e-300), "study.options.steered_beam.pulse_rate_hz: Input should be greater than or equal to 0.001"),
+    Case("lidar settle 1e300 ms", lidar("options.steered_beam.settle_ms", 1e300), "study.options.steered_beam.settle_ms: Input should be less than or equal to"),
+    Case("lidar footprint rays 1e6", lidar("options.steered_beam.footprint_rays", 1_000_000), "study.options.steered_beam.footprint_rays: Input should be less than or equal to 4096"),
+    Case("lidar transient spp 1e7", lidar("options.transient.spp", 10_000_000), "study.options.transient.spp: Input should be less than or equal to 65536"),
+    Case("lidar pulses per point 1e9", lidar("options.steered_beam.pulses_per_point", 10**9), "study.options.steered_beam.pulses_per_point: Input should be less than or equal to 1000000"),
+    Case("lidar detector pulses 1e9", lidar("options.detector.pulses", 10**9), "study.options.detector.pulses: Input should be less than or equal to 1000000"),
+    Case("lidar fwhm 1 s", lidar("options.pulse.fwhm_ns", 1e9), "study.options.pulse.fwhm_ns: Input should be less than or equal to 10000"),
+    Case("lidar jitter 1 s", lidar("options.pulse.jitter_ns", 1e9), "study.options.pulse.jitter_ns: Input should be less than or equal to 10000"),
+    Case("lidar bins of a micrometre", lidar("options.bin_range_m", 1e-6), "study.options.bin_range_m: 1e-06 m makes 8e+06 time bins of the 8 m window (at most 100000)"),
+    Case("lidar pulse wider than the bins allow", lidar("options", {"bin_range_m": 1e-3, "margin_m": 0.001, "steered_beam": {"window_m": 0.01}, "pulse": {"fwhm_ns": 9000}}), "study.options.pulse.fwhm_ns: a 9000 ns pulse spans 1.35e+06 time bins of 0.001 m (at most 100000)"),
+    Case("lidar batch 1e9 beams", lidar("options.steered_beam.batch", 10**9), "study.options.steered_beam.batch: Input should be less than or equal to 1000000"),
+    Case("lidar flash receiver 1e5 px", lidar("options", {"flash": {"receiver_px": [100000, 64]}}), "Input should be less than or equal to 8192", ),
+    Case("lidar micromirror receiver 0 px", lidar("options", {"micromirror": {"receiver_px": [64, 0]}}), "Input should be greater than or equal to 1"),
+    Case("lidar flash pulse rate 0", with_("study.sensor", "flash", lidar("options.flash.pulse_rate_hz", 0)), "study.options.flash.pulse_rate_hz: Input should be greater than or equal to 0.001"),
+    Case("sweep product above the unit limit", {**GOOD, "sweep": {"render.spp": list(range(1, 101)), "study.trials": list(range(1, 101))}}, "sweep: 100 x 100 sweep points x 1 terrain seeds = units = 1e+04, more than the limit of 5e+03 (set SIMLUNAR_MAX_UNITS", env={"SIMLUNAR_MAX_UNITS": "5000"}),
+    Case("sweep product of a million", {**GOOD, "sweep": {"render.spp": list(range(1, 101)), "study.trials": list(range(1, 101)), "seed": list(range(100))}}, "sweep: 100 x 100 x 100 sweep points x 1 terrain seeds = units = 1e+06, more than the limit of 1e+04"),
+    Case("SIMLUNAR_MAX_UNITS not a number", GOOD, "SIMLUNAR_MAX_UNITS=lots: expected a positive count", env={"SIMLUNAR_MAX_UNITS": "lots"}),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", LIDAR_CASES, ids=[c.name for c in LIDAR_CASES])
+def test_lidar_and_size_case_exits_2_with_one_line(case, tmp_path, monkeypatch):
+    _run_case(case, tmp_path, monkeypatch)
+
+
+def test_the_good_lidar_config_passes_the_checks(tmp_path):
+    from simlunar.config.loading import validate_data
+    from simlunar.pipeline.preflight import check_units
+    from simlunar.pipeline.runner import expand
+
+    flash = with_("study.options", {"flash": {"receiver_px": [64, 48]}}, LIDAR_GOOD)
+    for data in (LIDAR_GOOD, with_("study.sensor", "flash", flash)):
+        check_units(expand(validate_data(data, base_dir=tmp_path)))
+
+
+# structured-light rigs that cannot work, refused before config.yaml is written
+SCAN_GOOD = with_("study", SCANNER)
+NO_GPU = pytest.mark.skipif(Path("/dev/nvidia0").exists(), reason="a GPU is present")
+
+
+def scan(key: str, value, base=None) -> dict:
+    return with_(f"study.{key}", value, base or SCAN_GOOD)
+
+
+def lock_folder(d: Path) -> None:
+    (d / "results").mkdir()
+    (d / "results" / ".lock").mkdir()
+
+
+SCAN_CASES = [
+    Case("rig projector inside the bed (aerial)", scan("options.rig.altitude_m", 0.01, scan("rig", "aerial")), "study.options.rig: the projector is 0.01 m above the terrain's median height, inside its relief (at least 10 cells = 2 m"),
+    Case("rig projector inside the bed (moonyard)", scan("options.rig.distance_m", 0.001, with_("terrain.preset", "moonyard", SCAN_GOOD)), "the projector is 0.00094 m above the terrain's median height, inside its relief"),
+    Case("rig fill 1e-6", scan("options.rig.fill", 1e-6), "study.options.rig.fill: Input should be greater than or equal to 0.01"),
+    Case("rig fill 0.01 puts the projector in the bed", scan("options.rig.fill", 0.01), "study.options.rig: the projector is 0.336 m above the terrain's median height"),
+    Case("rig projector fov 179 deg", scan("options.rig.fov_x_deg", 179), "study.options.rig.fov_x_deg: Input should be less than or equal to 120"),
+    Case("rig camera fov 179 deg", scan("options.rig.cam_fov_x_deg", 179), "study.options.rig.cam_fov_x_deg: Input should be less than or equal to 120"),
+    Case("rig baseline 1000 km", scan("options.rig.baseline_m", 1e6), "study.options.rig: a baseline of 1e+06 m is more than 5 x the projector's 32.2 m standoff"),
+    Case("gray black threshold 1.0", scan("options.gray_opts.black_threshold", 1.0), "study.options.gray_opts.black_threshold: Input should be less than 0.8"),
+    Case("gray white threshold 0.9", scan("options.gray_opts.white_threshold", 0.9), "study.options.gray_opts.white_threshold: Input should be less than 0.8"),
+    Case("sun 1e30 x the projector", scan("scan_light", "sun", with_("render.light", {"kind": "sun", "elevation_deg": 40, "irradiance": 1e30}, SCAN_GOOD)), "render.light.irradiance: Input should be less than or equal to 1000000"),
+    Case("projector blur 1000 px", scan("projector_blur_px", 1000), "study.projector_blur_px: 1000 px blurs the pattern over the whole 256 x 192 image (at most 48 px"),
+    Case("projector blur '1000 px'", scan("projector_blur_px", "1000 px"), "study.projector_blur_px: 1000 px blurs the pattern"),
+    Case("camera blur 500 px", scan("camera_blur_px", 500), "study.camera_blur_px: 500 px blurs the pattern over the whole 256 x 192 image"),
+    Case("camera blur '1 m'", scan("camera_blur_px", "1 m"), "study.camera_blur_px:"),
+    Case("camera blur negative", scan("camera_blur_px", -1), "study.camera_blur_px: Input should be greater than or equal to 0"),
+    Case("projector gamma 1e9", scan("projector_gamma", 1e9), "study.projector_gamma: Input should be less than or equal to 10"),
+    Case("SIMLUNAR_VARIANT unknown", GOOD, "SIMLUNAR_VARIANT=rgb_fast: unknown variant", env={"SIMLUNAR_VARIANT": "rgb_fast"}),
+    Case("lock file is a folder", GOOD, "results/.lock is not a file", setup=lock_folder),
+    Case("terrain spacing 1e-300", dem_cfg(spacing_m=1e-300), "dem.npy: a spacing of 1e-300 m per cell is below 1e-06 m", setup=files(dem__npy=good_dem)),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", SCAN_CASES, ids=[c.name for c in SCAN_CASES])
+def test_rig_and_environment_case_exits_2_with_one_line(case, tmp_path, monkeypatch):
+    _run_case(case, tmp_path, monkeypatch)
+
+
+def test_camera_blur_with_its_unit_is_accepted_as_documented(tmp_path):
+    from simlunar.config.loading import validate_data
+
+    cfg = validate_data(scan("camera_blur_px", "1 px", scan("projector_blur_px", "0.5 px")))
+    assert (cfg.study.camera_blur_px, cfg.study.projector_blur_px) == (1.0, 0.5)
+
+
+SCAN_CMDS = [
+    Cmd("run CUDA without a GPU exits 3", ("run", "exp.yaml", "--out", "o"), "SIMLUNAR_VARIANT=cuda_ad_rgb: cuda_ad_rgb requested but unusable", code=3, setup=yaml_file("exp.yaml", GOOD), env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[NO_GPU]),
+    Cmd("render CUDA without a GPU exits 3", ("render", "scene.yaml", "--out", "r"), "cuda_ad_rgb requested but unusable", code=3, setup=yaml_file("scene.yaml", SCENE), env={"SIMLUNAR_VARIANT": "cuda_ad_rgb"}, marks=[NO_GPU]),
+    Cmd("terrain preset grid 2e7 x 2e7", ("terrain", "big.yaml", "--out", "t"), "big.yaml: grid: 20000000 x 20000000 cells = 4e+14, more than the limit", setup=yaml_file("big.yaml", {"grid": {"rows": 20000000, "cols": 20000000}})),
+    Cmd("terrain preset grid above a lowered limit", ("terrain", "big.yaml", "--out", "t"), "more than the limit of 1e+03", setup=yaml_file("big.yaml", {"grid": {"rows": 64, "cols": 64}}), env={"SIMLUNAR_MAX_CELLS": "1000"}),
+    Cmd("terrain --stats sidecar spacing 1e-300", ("terrain", "dem.npy", "--stats"), "--stats: dem.npy: a spacing of 1e-300 m per cell is below 1e-06 m", setup=side_json("1e-300")),
+    Cmd("terrain --stats sidecar spacing 1e-9", ("terrain", "dem.npy", "--stats"), "a spacing of 1e-09 m per cell is below", setup=side_json("1e-9")),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "case", [pytest.param(c, marks=c.marks) for c in SCAN_CMDS], ids=[c.name for c in SCAN_CMDS]
+)
+def test_rig_and_environment_command_keeps_the_promise(case, tmp_path, monkeypatch, capsys):
+    test_every_subcommand_keeps_the_promise(case, tmp_path, monkeypatch, capsys)
+
+
+def test_there_are_at_least_60_fault_cases():
+    fault = FAULT_CASES + FAULT_CMDS + LIDAR_CASES + SCAN_CASES + SCAN_CMDS + OTHER_CASES
+    assert len(fault) >= 60
+    assert len({c.name for c in fault}) == len(fault)
+
+
+# bounded YAML, resumable tables, an empty interior region
+SMALL_VIEW = {**PERSPECTIVE, "width": 20, "height": 16}
+OTHER_CASES = [
+    Case("yaml 5000 nested brackets", "name: x\nterrain: " + "[" * 5000 + "]" * 5000 + "\n", "exp.yaml: line 2: collections nested more than 100 deep"),
+    Case("yaml 5000 nested flow mappings", "name: x\nterrain: " + "{a: " * 5000 + "1" + "}" * 5000 + "\n", "collections nested more than 100 deep"),
+    Case("yaml 3000 nested block mappings", "name: x\nterrain:\n" + "".join("  " * i + f"k{i}:\n" for i in range(1, 3000)) + "  " * 3000 + "v: 1\n", "exp.yaml: line 102: collections nested more than 100 deep"),
+    Case("yaml 11 MB document", "name: x\n#" + "a" * 11_000_000 + "\n", "exp.yaml: the document has 1.1e+07 characters, more than 1e+07"),
+    Case("interior region empty", with_("study.score_region", "interior", with_("study.densities", ["1/64"], with_("render.camera", SMALL_VIEW))), "study.score_region: interior: a border band of 8.0 px leaves no interior cell in a 16 x 20 grid"),
+    Case("interior region empty (both)", with_("study.score_region", "both", with_("study.densities", ["1/64"], with_("render.camera", SMALL_VIEW))), "study.score_region: both: a border band of 8.0 px leaves no interior cell"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("case", OTHER_CASES, ids=[c.name for c in OTHER_CASES])
+def test_bounded_input_case_exits_2_with_one_line(case, tmp_path, monkeypatch):
+    _run_case(case, tmp_path, monkeypatch)

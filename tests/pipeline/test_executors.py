@@ -281,3 +281,42 @@ def test_dask_killing_the_scheduler_is_one_error_naming_it_and_keeps_finished_un
     kept = [p for p in (out / "units").glob("*.json") if not p.name.startswith(".")]
     assert 1 <= len(kept) < 4 and f"{len(kept)} of 4 units finished" in msg
     assert elapsed < 2 * HANG_S  # found lost, not waited out (worker_wait_s=600)
+
+
+def test_a_server_talking_garbage_is_one_line_within_the_connect_timeout():
+    """A server that sends bytes at once (an HTTP banner, noise) passes a plain connect and
+    used to leave Dask's Client waiting for its own timeout, then a traceback."""
+    import socket
+    import threading
+
+    from simlunar.errors import ConfigError
+    from simlunar.pipeline.executors import DaskExecutor
+
+    srv = socket.socket()
+    srv.bind(("127.0.0.1", 0))
+    srv.listen(4)
+    port = srv.getsockname()[1]
+
+    def serve():
+        try:
+            while True:
+                c, _ = srv.accept()
+                c.sendall(b"HTTP/1.0 200 OK\r\n\r\n" + b"\x00garbage" * 50)
+                c.close()
+        except OSError:
+            pass
+
+    threading.Thread(target=serve, daemon=True).start()
+    t0 = time.monotonic()
+    try:
+        with pytest.raises(ConfigError) as err:
+            DaskExecutor(f"tcp://127.0.0.1:{port}", timeout_s=2.0).open()
+    finally:
+        srv.close()
+    assert time.monotonic() - t0 < 2.0 + 1.0
+    msg = str(err.value)
+    assert "\n" not in msg
+    assert msg == (
+        f"--scheduler tcp://127.0.0.1:{port}: something listens there but it does not speak "
+        "Dask's protocol (not a Dask scheduler)"
+    )

@@ -333,3 +333,28 @@ def test_the_tables_code_is_the_code_this_process_loaded(monkeypatch):
     before = summaries.tables_code()
     monkeypatch.setattr(summaries, "file_sha256", lambda path: "edited since")
     assert summaries.tables_code() == before
+
+
+def test_results_columns_do_not_depend_on_the_order_of_a_records_keys():
+    """A resumed run mixes cached records (JSON, keys sorted) and fresh ones (the study's
+    order): the CSV columns must be the same either way (a resumed LIDAR sweep wrote them in
+    another order)."""
+    from simlunar.pipeline.runner import collect_rows
+    from simlunar.results.records import WorkUnit
+
+    fresh = {
+        "planner": "random",
+        "k": 4,
+        "seconds": 1.5,
+        "frames": 3,
+        "metric": "mse",
+        "value": 1.0,
+    }
+    cached = dict(sorted(fresh.items()))
+    units = [WorkUnit(0, "a", {"x": 1}, {}), WorkUnit(1, "b", {"x": 2}, {})]
+    cols = []
+    for first, second in ((fresh, cached), (cached, fresh), (cached, cached)):
+        _, c = collect_rows(units, {"a": {"rows": [first]}, "b": {"rows": [second]}})
+        cols.append(c)
+    assert cols[0] == cols[1] == cols[2]
+    assert cols[0] == ["unit", "x", "planner", "k", "metric", "frames", "seconds", "value"]

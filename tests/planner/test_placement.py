@@ -255,3 +255,19 @@ def test_strategy_options_lists_what_plan_accepts():
     assert strategy_options("grid") == ()
     with pytest.raises(ValueError, match="unknown strategy"):
         strategy_options("stipple")
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_halftone_of_a_density_dense_in_its_top_half_stays_there(seed):
+    """The halftone diffuses on a randomly flipped grid and flips the picks back: with all the
+    density in the top half, every pick is in the top half whichever flips were drawn."""
+    from simlunar.planner.placement import halftone
+
+    d = np.zeros((20, 30))
+    d[:10] = 1.0
+    d[:10, :15] = 3.0  # dense in the top-left quarter too: the column flip is checked as well
+    flat = halftone(d, 60, rng=seed)
+    r, c = np.divmod(flat, 30)
+    assert flat.size == 60 and np.unique(flat).size == 60
+    assert r.max() < 10
+    assert (c < 15).sum() > (c >= 15).sum()

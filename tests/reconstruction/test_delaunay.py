@@ -237,3 +237,47 @@ def test_a_sliver_inside_the_hull_leaves_no_hole():
     assert np.isfinite(out).all()  # the hull holds the whole grid
     assert out[3, 2] == pytest.approx(2.0 + (2.0 - 0.5) / 3.5, abs=1e-9)  # along 2 -> 3
     assert out.min() >= vals.min() - 1e-9 and out.max() <= vals.max() + 1e-9
+
+
+def test_unsorted_duplicate_points_are_averaged():
+    """Three samples at (2, 2), not next to each other in the input, become one of their mean
+    (1 + 3 + 8) / 3 = 4; the corners are 0, so the centre cell reads 4 and the midpoint
+    (1, 1) of the corner-centre edge reads 2 (linear)."""
+    pts = np.array([[2.0, 2.0], [0, 0], [0, 4], [2, 2], [4, 0], [4, 4], [2, 2]])
+    vals = np.array([1.0, 0, 0, 3, 0, 0, 8])
+    out = reconstruct(pts, vals, (5, 5))
+    assert out[2, 2] == pytest.approx(4.0, abs=1e-12)
+    assert out[1, 1] == pytest.approx(2.0, abs=1e-12)
+    assert out[0, 0] == 0.0 and out[4, 4] == 0.0
+
+
+def test_a_sliver_fills_its_cells_along_its_longest_edge_by_hand():
+    """a = (0, 0) value 0, b = (4, 4) value 8, m = (2, 2 + 1e-10) value 2: a triangle of
+    height ~1e-10 (a sliver: |det| < 1e-9 x its longest edge) whose plane cannot be read.
+    Its cells take the value along a-b interpolated through m projected onto it (t_m = 1/2):
+    (1, 1) at t = 1/4 -> 0 + (2 - 0) (1/4) / (1/2) = 1, (3, 3) at t = 3/4 -> 2 + (8 - 2)
+    (1/4) / (1/2) = 5; the cells off the sliver stay NaN (outside the hull)."""
+    pts = np.array([[0.0, 0.0], [4.0, 4.0], [2.0, 2.0 + 1e-10]])
+    out = reconstruct(pts, np.array([0.0, 8.0, 2.0]), (5, 5), outside="nan")
+    np.testing.assert_allclose(np.diag(out), [0.0, 1.0, 2.0, 5.0, 8.0], atol=1e-6)
+    off = ~np.eye(5, dtype=bool)
+    assert np.isnan(out[off]).all()
+    # the same sliver listed in another vertex order: the same cells and values
+    again = reconstruct(pts[[2, 0, 1]], np.array([2.0, 0.0, 8.0]), (5, 5), outside="nan")
+    np.testing.assert_allclose(again, out, atol=1e-6)
+
+
+@pytest.mark.parametrize("order", [(0, 1, 2), (2, 0, 1), (1, 2, 0), (2, 1, 0)])
+@pytest.mark.parametrize("offset", [(3.0, 5.0), (6.0, 1.0)])
+def test_a_sliver_away_from_the_origin_in_any_vertex_order(order, offset):
+    """The sliver of the test above moved off the origin and listed in every rotation and a
+    reflection of its vertices: the same cells and values (1 and 5 between the samples)."""
+    dr, dc = offset
+    pts = np.array([[0.0, 0.0], [4.0, 4.0], [2.0, 2.0 + 1e-10]]) + np.array([dr, dc])
+    vals = np.array([0.0, 8.0, 2.0])
+    idx = list(order)
+    out = reconstruct(pts[idx], vals[idx], (12, 12), outside="nan")
+    r0, c0 = int(dr), int(dc)
+    diag = [out[r0 + i, c0 + i] for i in range(5)]
+    np.testing.assert_allclose(diag, [0.0, 1.0, 2.0, 5.0, 8.0], atol=1e-6)
+    assert np.isfinite(out).sum() == 5
