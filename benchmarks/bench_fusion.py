@@ -23,7 +23,7 @@ import time
 import numpy as np
 
 SHAPE = (1000, 1600)
-SMOKE_SHAPE = (100, 160)
+SMOKE_SHAPE = (200, 320)  # 250 samples: enough for the held-out check (>= 20 left out)
 DENSITY = 1 / 256
 REPEATS = 3
 

@@ -7,7 +7,7 @@ import bench_fusion  # benchmarks/ is on the path (tests/conftest.py)
 
 def test_fusion_benchmark_smoke():
     fig = bench_fusion.fusion(smoke=True)
-    assert fig["cells"] == 100 * 160
+    assert fig["cells"] == 200 * 320
     for key in ("reference_s", "ours_s", "photoclinometry_s", "smoothed_s"):
         assert fig[key] > 0
     # the lit scene at 1/256: the image-anchored methods beat linear even at this size

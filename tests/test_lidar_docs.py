@@ -10,7 +10,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-BLOCKS = re.findall(r"^```python\n(.*?)^```", (ROOT / "docs" / "lidar.md").read_text(), re.S | re.M)
+BLOCKS = re.findall(
+    r"^```python(?: runnable)?\n(.*?)^```", (ROOT / "docs" / "lidar.md").read_text(), re.S | re.M
+)
 
 
 def _run(code: str) -> str:

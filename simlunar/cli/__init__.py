@@ -50,7 +50,7 @@ COMMANDS = {
     ),
     "train": (
         "train",
-        "Train the learned importance map: <model>.joblib and its record <model>.json.",
+        "Train a learned map or reconstruction: <model>.joblib and its record <model>.json.",
     ),
     "figures": (
         "run",

@@ -23,8 +23,7 @@ def train(
     ),
     out: str = typer.Option(None, "--out", help="model file (.joblib) [default: the YAML's model]"),
 ) -> None:
-    """Train the learned importance map, or the learned reconstruction (target: reconstruction):
-    <model>.joblib and its record <model>.json."""
+    """Train a learned map or reconstruction: <model>.joblib and its record <model>.json."""
     from simlunar.config.training import load_training
     from simlunar.pipeline.train import train_from_config
 

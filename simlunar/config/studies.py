@@ -9,6 +9,7 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
+    create_model,
     field_validator,
     model_validator,
 )
@@ -60,6 +61,13 @@ def _reconstructions_input_type():
     for n in names:
         model = options_model(RECONSTRUCTIONS[n].options, f"reconstruction {n}")
         items.append(dict[Literal[n], model])
+        # {label: {reconstruction: n, options}}: the same reconstruction under a label of its own
+        labelled = create_model(
+            f"Labelled{model.__name__}",
+            __base__=model,
+            reconstruction=(Literal[n], Field(description="the registered reconstruction")),
+        )
+        items.append(dict[str, labelled])
     return list[Union[tuple(items)]]  # noqa: UP007 - built at run time
 
 

@@ -66,5 +66,6 @@ def test_refusals_before_training(tmp_path, recorded):
     )
     r = CliRunner().invoke(app, ["train", str(tmp_path / "none.yaml")])
     assert r.exit_code == 2
-    assert r.stderr == f"error: experiment file not found: {tmp_path / 'none.yaml'}\n"
+    assert r.stderr.startswith(f"error: experiment file not found: {tmp_path / 'none.yaml'}")
+    assert r.stderr.count("\n") == 1  # one line (with a did-you-mean for train.yaml)
     assert recorded == []

@@ -57,7 +57,10 @@ def _line(data, prefix="", root=Root) -> str:
 @pytest.mark.parametrize(
     ("data", "line"),
     [
-        ({"seed": 1, "render": {"spq": 8}}, "render.spq: unknown key (valid keys: spp, blur_px)"),
+        (
+            {"seed": 1, "render": {"spq": 8}},
+            "render.spq: unknown key (valid keys: spp, blur_px) (did you mean 'spp'?)",
+        ),
         (
             {"seed": 1, "light": {"kind": "msg_b", "x": 2}},
             "light.x: unknown key (valid keys: kind, y)",
@@ -71,7 +74,10 @@ def _line(data, prefix="", root=Root) -> str:
         ),
         ({}, "seed: Field required"),
         # a misspelt key first, not the required key it leaves missing
-        ({"sed": 1}, "sed: unknown key (valid keys: seed, render, light, opts, items)"),
+        (
+            {"sed": 1},
+            "sed: unknown key (valid keys: seed, render, light, opts, items) (did you mean 'seed'?)",
+        ),
         # a model validator naming a key inside the data: the path is that key's
         ({"seed": 1, "render": {"spp": 3}}, "render.spp: must be even"),
     ],
@@ -112,4 +118,6 @@ def test_validate_file_data(tmp_path):
     assert validate_file_data(Root, {"seed": 2}, f).seed == 2
     with pytest.raises(ConfigError) as info:
         validate_file_data(Root, {"seed": 2, "render": {"spq": 1}}, f)
-    assert str(info.value) == f"{f}: render.spq: unknown key (valid keys: spp, blur_px)"
+    assert str(info.value) == (
+        f"{f}: render.spq: unknown key (valid keys: spp, blur_px) (did you mean 'spp'?)"
+    )

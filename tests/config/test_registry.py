@@ -34,12 +34,15 @@ def test_an_unknown_name_lists_the_valid_ones_sorted():
     valid = ", ".join(sorted({*STRATEGIES, *MEASURING}))
     with pytest.raises(ConfigError) as info:
         registry.check_strategy("wavlet", "study.strategies[1]")
-    assert str(info.value) == f"study.strategies[1]: unknown strategy 'wavlet' (valid: {valid})"
+    assert str(info.value) == (
+        f"study.strategies[1]: unknown strategy 'wavlet' (valid: {valid}) (did you mean 'wavelet'?)"
+    )
     with pytest.raises(ConfigError) as info:
         registry.check_metric("mse2", "study.metrics[0]")
     assert (
         str(info.value)
         == f"study.metrics[0]: unknown metric 'mse2' (valid: {', '.join(sorted(METRICS))})"
+        " (did you mean 'mse'?)"
     )
     with pytest.raises(
         ConfigError, match=r"^study\.modes\[0\]: unknown scan mode 'binary' \(valid: "

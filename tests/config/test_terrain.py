@@ -42,6 +42,7 @@ def test_unknown_presets_and_missing_files():
     assert info.value.key is None
     assert str(info.value) == (
         "unknown terrain preset 'aerial_9' (valid: aerial_1, aerial_2, aerial_3, moonyard)"
+        " (did you mean 'aerial_1', 'aerial_2' or 'aerial_3'?)"
     )
     with pytest.raises(PresetError, match=r"^terrain preset file not found: nowhere/x\.yaml$"):
         preset_path("nowhere/x.yaml")

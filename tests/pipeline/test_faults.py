@@ -51,8 +51,9 @@ def write_exp(path: Path, data: dict) -> Path:
     return path
 
 
-def tree(root: Path, *, skip=("provenance.json",)) -> dict[str, str]:
-    """Relative path -> SHA-256 of every file under ``root`` (``skip``: names with timings)."""
+def tree(root: Path, *, skip=("provenance.json", "report.html")) -> dict[str, str]:
+    """Relative path -> SHA-256 of every file under ``root`` (``skip``: names with timings;
+    report.html is written by the command, not by the pipeline)."""
     return {
         str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
         for p in sorted(root.rglob("*"))

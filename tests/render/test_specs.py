@@ -39,7 +39,8 @@ def test_specs_build_by_name():
     with pytest.raises(ValueError, match=r"^unknown light 'moon'; valid: ambient, camera, "):
         specs.make_light("moon")
     with pytest.raises(
-        ValueError, match=r"^unknown BSDF 'phong'; valid: lambert, oren_nayar, hapke$"
+        ValueError,
+        match=r"^unknown BSDF 'phong'; valid: lambert, oren_nayar, hapke, lunar_lambert$",
     ):
         specs.make_bsdf("phong")
 

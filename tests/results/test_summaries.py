@@ -51,8 +51,8 @@ def test_score_and_samples_saved_tables(tmp_path):
     assert "| Half | 2.00* | 2.00 | 2.00 | 2.00 (2) |" in md.splitlines()
     assert r"\textbf{2.00 [2.00, 2.00]}" in tex
     csv = (tmp_path / "scores.csv").read_text().splitlines()
-    assert csv[0] == "point,terrain_seed,metric,strategy,score,ci_low,ci_high"
-    assert ",all,mse,half,2.0,2.0,2.0" in csv[-1]
+    assert csv[0] == "point,terrain_seed,metric,strategy,reconstruction,score,ci_low,ci_high"
+    assert ",all,mse,half,linear,2.0,2.0,2.0" in csv[-1]
     assert len(csv) == 1 + 2 * 2 + 2  # per seed and strategy, then pooled per strategy
 
 

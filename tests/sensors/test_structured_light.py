@@ -22,9 +22,10 @@ def scans(monkeypatch):
     gray_depth = np.full(SHAPE, 10.0)
     gray_depth[0, 0] = np.nan  # a pixel the gray code did not decode
 
-    def fake_gray(capture, rig, options):
-        calls["gray"] += 1
-        return SimpleNamespace(depth=gray_depth.copy(), renders=22)
+    class FakeCoding:
+        def scan(self, capture, rig, *, keep_frames=False):
+            calls["gray"] += 1
+            return SimpleNamespace(depth=gray_depth.copy(), renders=22)
 
     def fake_dots(capture, rig, uv, *, depth_range, options):
         calls["dots"].append((uv.copy(), depth_range))
@@ -32,7 +33,7 @@ def scans(monkeypatch):
         depth[1, 2] = 7.0  # one dot found; the other planned pixel's dot was not
         return SimpleNamespace(depth=depth, renders=3)
 
-    monkeypatch.setattr(sl, "gray_code_scan", fake_gray)
+    monkeypatch.setattr(sl, "make_coding", lambda name, options=None: FakeCoding())
     monkeypatch.setattr(sl, "dot_scan", fake_dots)
     return calls
 
@@ -55,7 +56,7 @@ def test_gray_code_needs_no_plan_and_is_scanned_once(scans):
     assert (
         isinstance(a, Acquisition) and a.frames == 22 and len(a.values) == SHAPE[0] * SHAPE[1] - 1
     )
-    assert a.detail.mode == "gray_code" and a.detail.gray is not None and a.detail.dots is None
+    assert a.detail.mode == "gray_code" and a.detail.coded is not None and a.detail.dots is None
     assert b.detail.renders == 22
 
 
@@ -80,7 +81,7 @@ def test_data_reduction_measures_the_dots_only(scans):
     a = _sensor("data_reduction").acquire(RC)
     assert scans["gray"] == 0
     np.testing.assert_array_equal(a.rc, [[1, 2]])
-    assert a.values.tolist() == [7.0] and a.detail.gray is None
+    assert a.values.tolist() == [7.0] and a.detail.coded is None
 
 
 def test_refusals(scans):
@@ -92,4 +93,10 @@ def test_refusals(scans):
         ValueError, match=r"^unknown scan mode 'laser'; valid: \['ambiguity_enhancement', "
     ):
         sl.StructuredLightOptions(mode="laser")
-    assert sl.MODES == ("gray_code", "ambiguity_enhancement", "data_reduction")
+    assert sl.MODES == (
+        "gray_code",
+        "phase_shift",
+        "micro_phase_shift",
+        "ambiguity_enhancement",
+        "data_reduction",
+    )
