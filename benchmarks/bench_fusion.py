@@ -42,7 +42,7 @@ def _best(fn, repeats):
     return best, cpu, out
 
 
-def fusion(smoke: bool = False) -> dict:
+def fusion(*, smoke: bool = False) -> dict:
     from simlunar.reconstruction import Guide, run_reconstruction
     from simlunar.reconstruction.synthetic import jittered_samples, lit_terrain
 

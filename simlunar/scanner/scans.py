@@ -83,8 +83,14 @@ class GrayCodeOptions:
         kept). Not a YAML option: the study sets it when scans are exported.
     """
 
-    black_threshold: float = option(0.05, doc="validity (frame units)", ge=0.0, le=1.0)
-    white_threshold: float = option(0.01, doc="bit reliability (frame units)", ge=0.0, le=1.0)
+    # frames are exposed so the white frame's bright pixels sit at 0.8 of the range
+    # (CaptureOptions.target_level): a threshold at or above it marks every pixel invalid
+    black_threshold: float = option(
+        0.05, doc="validity (frame units; below 0.8, the white level)", ge=0.0, lt=0.8
+    )
+    white_threshold: float = option(
+        0.01, doc="bit reliability (frame units; below 0.8)", ge=0.0, lt=0.8
+    )
     inverses: str = option(
         "linearity", doc="inverse patterns by linearity of light or rendered", choices=_INVERSES
     )

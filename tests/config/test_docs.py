@@ -30,7 +30,10 @@ def test_rows_carry_type_unit_default_and_description(reference):
     lines = reference.splitlines()
     assert "| `spp` | integer |  | `16` |  |" in lines
     assert "| `elevation_deg` | number | deg | `30.0` | above the horizon (0 < e <= 90) |" in lines
-    assert "| `fwhm_ns` | number | ns | `2.0` | pulse full width at half maximum (ns) |" in lines
+    assert (
+        "| `fwhm_ns` | number | ns | `2.0` | pulse full width at half maximum (ns, at most 10 us) |"
+        in lines
+    )
     assert "| `densities` | [number] |  | required |  |" in lines
     assert any(
         line.startswith("| `strategy_options` | {name: section} |  | `{}` |") for line in lines

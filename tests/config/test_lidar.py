@@ -72,7 +72,7 @@ def test_lengths_take_units():
         (SteeredBeamCfg, {"order": "spiral"}, "Input should be 'nn2opt', 'raster' or 'given'"),
         (SteeredBeamCfg, {"profile": "tophat"}, "Input should be 'gaussian' or 'uniform'"),
         (FlashCfg, {"zoom": 1}, "greater than or equal to 2"),
-        (FlashCfg, {"receiver_px": (64, 0)}, "greater than 0"),
+        (FlashCfg, {"receiver_px": (64, 0)}, "greater than or equal to 1"),
         (LidarOptionsCfg, {"bin_range_m": 0}, "greater than 0"),
     ],
 )

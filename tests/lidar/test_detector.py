@@ -84,24 +84,6 @@ def test_bad_options_are_rejected():
         DetectorOptions(signal_photons=-1.0)
 
 
-def test_link_budget_is_the_lidar_equation():
-    # 10 uJ at 1064 nm, 2e-3 m^2, 30 %: a Lambertian plane of albedo 0.12 at 50 m returns
-    # E rho A eta / (pi R^2 h nu) photons; the renderer gives L = rho / (pi R^2) at 1 W/sr
-    from simlunar.lidar import LinkBudget
-
-    lb = LinkBudget()
-    hnu = 6.62607015e-34 * 299_792_458.0 / 1064e-9
-    want = 10e-6 * 0.12 * 2e-3 * 0.3 / (np.pi * 50.0**2 * hnu)
-    det = lb.detector(pulses=3)
-    assert det.pulses == 3
-    assert det.signal_photons * 0.12 / (np.pi * 50.0**2) == pytest.approx(want)
-    flash = LinkBudget(field_sr=1e-6, lit_sr=1e-2)  # one pixel of a 10^4-pixel flash
-    # field / lit = 1e-4: the pulse's energy shared by 10^4 pixels
-    assert flash.detector().signal_photons == pytest.approx(lb.detector().signal_photons * 1e-4)
-    with pytest.raises(ValueError, match="efficiency"):
-        LinkBudget(efficiency=1.5)
-
-
 def test_coates_correction_of_a_saturated_histogram_by_hand():
     """10 pulses: bin 0 fires 2 times (2 of 10 armed: -ln 0.8), bin 1 fires on all 8 pulses
     still armed (saturated: inf), bin 2 has no armed pulse left (0, not NaN)."""
