@@ -99,7 +99,7 @@ def _plane_precision(trials: int) -> dict:
     }
 
 
-def lidar(smoke: bool = False) -> dict:
+def lidar(*, smoke: bool = False) -> dict:
     from simlunar.geometry import Intrinsics
     from simlunar.lidar import (
         DetectorOptions,

@@ -9,28 +9,28 @@ measures every lit camera pixel at once (a full-field scan, usable as a scan mod
 and under the dot rescans of ambiguity enhancement), ``meta["label"]`` / ``meta["style"]``
 how figures name and draw it.
 
-A coding class is built from its options object (``Coding(options)``) and has:
+A coding class is built from its options object (``Coding(options)``) and has::
 
-``full_field`` : bool
-``frames(proj_shape) -> int``
-    Frames a scan captures (the stack the decoder reads, white and black included): what the
-    memory budget of a scan is sized by (:mod:`simlunar.pipeline.preflight`).
-``frame_names(proj_shape) -> list[str]``, ``frame_order`` : str
-    Names and order of the exported frames (:mod:`simlunar.results.exports`).
-``patterns(proj_shape) -> (frames, H, W) float32 in [0, 1]``
-    The projected stack in export order.
-``decode(frames, proj_shape)``
-    The decode of a captured stack in that order (white and black last).
-``scan(capture, rig, *, keep_frames=False) -> CodedScan``
-    Capture, decode, triangulate (:class:`simlunar.scanner.scans.CodedScan`); the decode has
-    ``valid``, ``lit``, ``contrast``, ``col``, ``row``, ``proj_shape``, ``proj_uv()`` and
-    ``decoded_index()``.
-``method`` : "plane" or "rays" (how its correspondences are triangulated)
-``export_meta(decode) -> dict``
-    Plain data describing the scan for the export manifest.
-``truth_scores(scan, truth) -> dict[str, float]``
-    Decode error rates against camera ground truth (``truth`` from
-    :func:`simlunar.render.capture.camera_truth`).
+    ``full_field`` : bool
+    ``frames(proj_shape) -> int``
+        Frames a scan captures (the stack the decoder reads, white and black included): what the
+        memory budget of a scan is sized by (:mod:`simlunar.pipeline.preflight`).
+    ``frame_names(proj_shape) -> list[str]``, ``frame_order`` : str
+        Names and order of the exported frames (:mod:`simlunar.results.exports`).
+    ``patterns(proj_shape) -> (frames, H, W) float32 in [0, 1]``
+        The projected stack in export order.
+    ``decode(frames, proj_shape)``
+        The decode of a captured stack in that order (white and black last).
+    ``scan(capture, rig, *, keep_frames=False) -> CodedScan``
+        Capture, decode, triangulate (:class:`simlunar.scanner.scans.CodedScan`); the decode has
+        ``valid``, ``lit``, ``contrast``, ``col``, ``row``, ``proj_shape``, ``proj_uv()`` and
+        ``decoded_index()``.
+    ``method`` : "plane" or "rays" (how its correspondences are triangulated)
+    ``export_meta(decode) -> dict``
+        Plain data describing the scan for the export manifest.
+    ``truth_scores(scan, truth) -> dict[str, float]``
+        Decode error rates against camera ground truth (``truth`` from
+        :func:`simlunar.render.capture.camera_truth`).
 
 Adding a coding: its module (patterns, decoder, options class, coding class), one
 ``CODINGS.register`` line here, tests and docs (CONTRIBUTING.md, "Adding a coding").
