@@ -73,6 +73,7 @@ from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = [
     "ShadingOptions",
+    "blend_detail",
     "fallback_gamma",
     "fuse_slopes",
     "heldout_gamma",
@@ -211,8 +212,13 @@ def fuse_slopes(
         a constant slope field over samples of that plane, the plane (to rounding).
     """
     z_fc = frankot_chellappa(gr * spacing, gc * spacing, along=along, across_weight=across_weight)
-    detail = reanchored_detail(z_fc, lin)
-    return np.where(lin.hull, lin.heights + gamma * detail, lin.heights)
+    return blend_detail(lin, z_fc, gamma)
+
+
+def blend_detail(lin: LinearField, field: np.ndarray, gamma: float) -> np.ndarray:
+    """``z_lin + gamma * hull * (z_a - z_lin)``: ``field`` re-anchored on the samples, weighted
+    by ``gamma`` inside their hull (the linear reconstruction's nearest fill outside)."""
+    return np.where(lin.hull, lin.heights + gamma * reanchored_detail(field, lin), lin.heights)
 
 
 def _axis_error(direction, light) -> float:
@@ -319,8 +325,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
         info["gamma"] = gamma
     if gamma == 0.0:
         return Reconstructed(lin.heights, info)
-    z = np.where(lin.hull, lin.heights + gamma * reanchored_detail(z_fc, lin), lin.heights)
-    return Reconstructed(z, info)
+    return Reconstructed(blend_detail(lin, z_fc, gamma), info)
 
 
 def heldout_gamma(field: np.ndarray, lin: LinearField, *, every: int = 5) -> tuple[float, int]:
