@@ -79,11 +79,13 @@ def test_gallery_names_folder_overrides_and_unrun(tmp_path, monkeypatch):
 
 @pytest.fixture(scope="session")
 def site() -> Path:
-    """The site built as `make docs` builds it (incrementally into build/docs/html)."""
+    """The site built as `make docs` builds it, into build/docs/html, but from a fresh environment
+    (-E): an incremental build re-reads only changed pages, so a warning on an unchanged page
+    would pass here and fail on a fresh clone."""
     pytest.importorskip("sphinx", reason="the docs extra is not installed: pip install -e .[docs]")
     simlunar_docs.gallery_run(ROOT)
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
-    argv = [sys.executable, "-m", "sphinx", "-b", "html", "-W", "--keep-going", "-q"]
+    argv = [sys.executable, "-m", "sphinx", "-b", "html", "-E", "-W", "--keep-going", "-q"]
     r = subprocess.run(
         [*argv, "docs", str(HTML)], cwd=ROOT, env=env, capture_output=True, text=True, check=False
     )

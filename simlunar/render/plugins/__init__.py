@@ -10,9 +10,7 @@ imports Mitsuba.
 ``NAME``): a new BSDF's plugin is registered without an edit here. It is not read from the BSDF
 registry (:data:`simlunar.render.materials.BSDFS`, whose ``meta["plugin"]`` names the same
 modules, tests/render/test_plugins.py) because that registry builds Mitsuba textures, so it
-imports the backend, which imports this package.
-
-================  =============================================  ==========================="""
+imports the backend, which imports this package."""
 
 from __future__ import annotations
 
