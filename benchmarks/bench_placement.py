@@ -1,4 +1,4 @@
-"""Placement benchmark (issue 20): deterministic variable-density placement at full resolution.
+"""Placement benchmark: deterministic variable-density placement (halftone + Lloyd) at full size.
 
 ``placement``: k = 50 000 samples on a 1000 x 1600 map, the wavelet importance map of the
 synthetic lunar scene of ``bench_sampling`` (its overhead Lambert image). Ours:

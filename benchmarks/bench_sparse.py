@@ -1,4 +1,4 @@
-"""Sparse frames at DLP size: the lit-pixel light tracer against Mitsuba's ptracer (issue 24).
+"""Sparse frames at DLP size: the lit-pixel light tracer against Mitsuba's ptracer.
 
 ``sparse_frame``: the rig of ``experiments/scanner_ambiguity_dlp.yaml`` (the full moonyard,
 1024 x 768 projector, 2048 x 1536 camera of 60 deg field of view, Oren-Nayar 20 deg, max_depth

@@ -1,4 +1,4 @@
-"""Measured check of issue 20 part B (not a test, not a benchmark of speed).
+"""Measured check of the learned importance map and sequential refinement (not a test, no timing).
 
 Quarter-scale aerial_1, aerial_3 and moonyard: render guide images and truth for terrain seeds
 (the unit of work's render path), train one learned map on the training seeds of all three

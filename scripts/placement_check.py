@@ -1,4 +1,4 @@
-"""Measured check of issue 20's placement (not a test): samples saved at equal MSE.
+"""Measured check of the halftone + Lloyd placement (not a test): samples saved at equal MSE.
 
 Quarter-scale presets, terrain seeds 0-2, densities 1/16 ... 1/2048, the project's own ``plan``,
 ``reconstruct`` and ``metric``. The guide image is an overhead Lambert hillshade of the heights

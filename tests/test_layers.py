@@ -1,4 +1,4 @@
-"""The architecture's layer rules (../shared/ARCHITECTURE.md), checked on the source."""
+"""The layer rules written in CONTRIBUTING.md, checked on the source."""
 
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def _own_imports(path: Path) -> set[str]:
     return names
 
 
-# package -> packages it must not import (ARCHITECTURE.md): the study protocol returns numbers
+# package -> packages it must not import (CONTRIBUTING.md): the study protocol returns numbers
 # (tables and figures are plotting's), and the scanner measures the pixels it is given (the
 # planner chooses them in the study)
 FORBIDDEN = {"study": {"plotting", "pipeline", "results", "config"}, "scanner": {"planner"}}

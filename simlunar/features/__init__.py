@@ -30,7 +30,7 @@ FEATURES: dict[str, Callable[..., np.ndarray]] = {
 }
 
 
-# ---- maps that need a trained model (issue 20), apart from the image-only maps above -----------
+# ---- maps that need a trained model, apart from the image-only maps above ---------------------
 def _learned(image, *, model, density: float) -> np.ndarray:
     """``simlunar.features.learned.learned``, imported on use: that module imports
     scikit-learn and joblib, which every importer of this package (the planner, the studies,

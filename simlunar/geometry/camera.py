@@ -1,6 +1,6 @@
 """Pinhole and orthographic cameras, projectors and scanner rigs.
 
-Conventions (../shared/ARCHITECTURE.md):
+Conventions (CONTRIBUTING.md, "Conventions recap"):
 
 * World frame right-handed, z up, metres.
 * Device frames OpenCV-style: x right, y down, z forward (along the optical axis).

@@ -11,8 +11,8 @@ in bin ``i``. Every unbiased estimate of ``tau`` (amplitude and background known
 at least ``1 / I(tau)``, ``I(tau) = sum_i (d lambda_i / d tau)^2 / lambda_i``, so the range's
 standard deviation is at least ``sigma_R = (c / 2) I(tau)^(-1/2)``. Without background and
 binning ``I = N / sigma_t^2`` and ``sigma_R = (c / 2) sigma_t / sqrt(N)``: 65.4 mm / sqrt(N)
-for a 1 ns FWHM pulse with 0.1 ns RMS jitter (sigma_t = 0.4363 ns). Source: the independent
-check in REFERENCES.md ("LIDAR physics, checked independently"); the bound of a Poisson
+for a 1 ns FWHM pulse with 0.1 ns RMS jitter (sigma_t = 0.4363 ns; by hand in
+tests/lidar/test_bounds.py). Source: the bound of a Poisson
 process's location parameter (e.g. Snyder & Miller, *Random Point Processes in Time and
 Space*, 1991).
 """

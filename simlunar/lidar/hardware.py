@@ -3,7 +3,8 @@
 The renderer gives two radiances per receiver pixel / beam: the laser's return, for an
 isotropic point laser of 1 W/sr at the receiver (``TransientOptions.laser_intensity``), and the
 sun's, for a sun of irradiance 1 W/m^2 on a surface facing it (``SunLight.irradiance``). The
-hardware turns them into photons (REFERENCES.md, "LIDAR physics, checked independently"):
+hardware turns them into photons (checked in tests/lidar/test_hardware.py, and per flash pixel
+on a rendered plane in tests/render/test_lidar_scan.py):
 
 - **Signal** per pulse. A pulse of energy ``E`` spread evenly over the lit solid angle
   ``Omega_lit`` has intensity ``E / Omega_lit``; a receiver pixel of solid angle ``Omega_pix``
@@ -17,8 +18,8 @@ hardware turns them into photons (REFERENCES.md, "LIDAR physics, checked indepen
 - **Sun** per second: ``L_sun S_band A Omega_rx eta / (h nu)`` with ``S_band`` the solar
   spectral irradiance times the filter's bandwidth; per bin of duration ``dt``, on a
   Lambertian target: ``n = S_band cos(theta_sun) (rho / pi) Omega_rx A eta dt / (h nu)``.
-  ``S`` = 0.64 W m^-2 nm^-1 at 1064 nm above the atmosphere (ASTM E490, the value of
-  REFERENCES.md); ``Omega_rx`` is the receiver pixel's solid angle (a beam's: its receiver
+  ``S`` = 0.64 W m^-2 nm^-1 at 1064 nm above the atmosphere (ASTM E490, air mass
+  zero); ``Omega_rx`` is the receiver pixel's solid angle (a beam's: its receiver
   field of view, a disk of full angle ``field_rad``).
 
 :data:`INSTRUMENTS` holds three instrument presets; their sources and which numbers are
@@ -212,7 +213,7 @@ def pixel_solid_angles(fx: float, fy: float, cx: float, cy: float, width: int, h
 
 #: Instrument presets (docs/lidar.md, "Instruments": sources; ``*`` = an assumption).
 INSTRUMENTS: dict[str, LidarHardware] = {
-    # LOLA (Smith et al. 2010, Space Sci. Rev. 150; REFERENCES.md): 1064 nm, 2.7 mJ over 5
+    # LOLA (Smith et al. 2010, Space Sci. Rev. 150): 1064 nm, 2.7 mJ over 5
     # beams, 28 Hz, 14 cm telescope, 100 urad beams, linear-mode Si APD. Receiver field
     # 400 urad, 5 ns pulse: recalled from Smith et al. 2010*; efficiencies, filter, jitter*.
     "lola_beam": LidarHardware(
@@ -230,10 +231,10 @@ INSTRUMENTS: dict[str, LidarHardware] = {
         dark_count_rate_hz=0.0,
         solar_irradiance_w_m2_nm=0.64,
     ),
-    # ALHAT-class hazard-detection flash (REFERENCES.md: 128 x 128, about 1 km slant range,
-    # rocks > 30 cm, slopes > 5 deg, any lighting). Wavelength, energy, pulse, rate,
-    # aperture, efficiencies, filter: assumptions* sized to give ~200 photons per pixel from
-    # albedo 0.12 at 1 km over a 1 deg field.
+    # ALHAT-class hazard-detection flash (Amzajerdian et al. 2015, AIAA GNC; not rechecked here):
+    # 128 x 128, about 1 km slant range, rocks > 30 cm, slopes > 5 deg, any lighting. Wavelength,
+    # energy, pulse, rate, aperture, efficiencies, filter: assumptions* sized to give ~200 photons
+    # per pixel from albedo 0.12 at 1 km over a 1 deg field.
     "alhat_flash": LidarHardware(
         pulse_energy_j=30e-3,
         wavelength_m=1064e-9,

@@ -4,7 +4,7 @@ A SPAD fires on the first photon it sees and is then blind for a dead time ``tau
 (non-paralysable: photons arriving while blind neither count nor extend it). With strong
 returns or sunlight, early photons blind the detector for later ones: the histogram piles up
 towards early times (a range bias) and undercounts. Rounding the dead time to whole bins
-undercounts by 11-18 % at 1.5 ns (REFERENCES.md, "LIDAR physics, checked independently"), so:
+undercounts by 11-18 % at 1.5 ns (docs/lidar.md, "How a return is made", step 4), so:
 
 - :func:`spad_counts` simulates every photon in continuous time (the event-level simulation):
   per pulse, Poisson arrivals from the piecewise-constant rate of each bin, uniform inside

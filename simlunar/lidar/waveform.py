@@ -8,7 +8,7 @@ microchip lasers and SPAD / APD receivers flown on landers).
 
 **Keeping the sub-bin arrival time.** A box-binned impulse response places every path at its
 bin's centre: a plane's range then snaps to the bin grid (+25 ... -19 mm at 5 cm bins, RMS
-2.7-14x the Cramer-Rao bound; REFERENCES.md, "LIDAR physics, checked independently"). So the
+2.7-14x the Cramer-Rao bound; docs/lidar.md, "How a return is made", step 3). So the
 returns are rendered on ``oversample`` finer bins with a *linear* (tent) splat -- a path at
 fractional bin position ``x`` puts ``1 - f`` of its weight on the fine bin whose centre is just
 below ``x`` and ``f`` on the next (:func:`splat_paths`; simlunar's film in

@@ -94,7 +94,7 @@ STRATEGY_NAMES = {
     "oracle_hessian": "Oracle Hessian (true depth)",
     "sequential": "Sequential (multi-round)",
 }
-# ---- learned importance map (issue 20, simlunar.features.learned): a weighted strategy whose
+# ---- learned importance map (simlunar.features.learned): a weighted strategy whose
 # map comes from a trained model: feature_opts={"model": "<name>.joblib", "density": k / N}
 WEIGHTED += ("learned",)
 STRATEGY_NAMES["learned"] = "Learned"

@@ -6,7 +6,7 @@ light (the paper, eq. 3.5: ``I ~ a + b (s . grad z)``; for a Lambert surface
 needed in advance: the samples' linear reconstruction ``z_lin`` carries the low-frequency
 slopes, and the image is regressed on them at the scale the samples resolve.
 
-Method (``shared/REFERENCES.md``, "the image in the reconstruction", measured by the project):
+Method (measured by the project; ``docs/reconstruction.md``, "Calibration from the samples alone"):
 blur the image and ``z_lin`` with one Gaussian (sigma = ``sigma_pitch`` x pitch, pitch =
 density^-1/2 cells) and fit ``I_blur ~ a + b_r d_r z_blur + b_c d_c z_blur`` by least squares
 over valid pixels (neither shadowed nor saturated) *inside the samples' convex hull*, away from

@@ -4,9 +4,9 @@ The same smoothing and re-anchoring as :mod:`.shading` with no image: the linear
 reconstruction, Gaussian-smoothed over about a sample pitch, re-anchored to the samples by
 linearly interpolating its residuals there, ``z_a = z_s + linear_interp(samples of (z -
 z_s))``, and ``z = z_lin + gamma * hull * (z_a - z_lin)``. Whatever a guided reconstruction
-gains over this control is the image's, not the smoothing's (``shared/REFERENCES.md``: a
-box-smoothed, re-anchored linear reconstruction gained 1.18x on the moonyard, more than a
-guided filter).
+gains over this control is the image's, not the smoothing's (``docs/reconstruction.md``, "Measured
+numbers": a box-smoothed, re-anchored linear reconstruction gained 1.18x on the moonyard; a
+guided filter gained 1.04-1.17x in the project's exploratory runs).
 
 The smoothing extends the field by point reflection about its edges (``2 z_edge - z``), which
 keeps a plane a plane, so a plane sampled over the whole grid is reproduced exactly.

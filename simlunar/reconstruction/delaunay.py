@@ -6,8 +6,8 @@ are Delaunay-triangulated and linearly interpolated to every cell of the native 
 Fast path: the triangulation comes from Shewchuk's Triangle (the ``triangle`` package,
 divide and conquer, exact predicates) and each triangle is filled by a compiled rasteriser
 (:mod:`._raster`), instead of locating every one of the rows * cols cells in the triangulation
-as scipy's ``LinearNDInterpolator`` does (measured numbers in ``shared/REFERENCES.md`` and in
-``benchmarks/bench_sampling.py``).
+as scipy's ``LinearNDInterpolator`` does (measured by ``benchmarks/bench_sampling.py``; numbers in
+``docs/benchmarks.md``).
 """
 
 from __future__ import annotations

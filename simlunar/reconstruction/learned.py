@@ -31,7 +31,7 @@ At reconstruction: ``z = z_lin + h r - L(h r at the samples)``, r the predicted 
 the Delaunay-linear interpolation, so every measured cell keeps its measured value (a sample at
 a non-integer position reads r bilinearly).
 
-Measured in ``shared/REFERENCES.md`` (quarter-scale aerial presets, 30 deg sun, uniform Lloyd
+Measured in the project's exploratory runs (quarter-scale aerial presets, 30 deg sun, uniform Lloyd
 layouts, samples saved at equal MSE vs linear, geometric mean over 1/64-1/2048): a
 gradient-boosting residual on image features 1.65x (aerial_1) / 2.05x (aerial_3); with the
 integrated slope as a feature 1.85x / 2.41x.

@@ -11,7 +11,7 @@ with ``u = b / |b|``, ``t`` across it, ``r = p_s - u . grad z_lin`` the slope al
 that the image adds to the linear reconstruction's (``p_s = clip((I_smooth - a) / (g |b|))``
 as in :mod:`.shading`), ``grad`` central differences with mirrored edges. The ridge
 ``lam_r`` and the cross-sun term ``lam_t`` are what make it well posed: without them every sun
-line floats between the anchors (``shared/REFERENCES.md``: 3-8x worse than linear at 1/256;
+line floats between the anchors (``docs/reconstruction.md``: 3-8x worse than linear at 1/256;
 here the exact re-anchoring below limits the damage, but CG then needs several times the
 iterations). The ridge scales with the sample pitch, ``lam_r = ridge / pitch^2`` (the
 correction decays over about a pitch); a fixed ``lam_r = 0.002`` made the result 0.45x of
@@ -26,7 +26,7 @@ re-anchored exactly on the samples and blended as in :mod:`.shading`:
 ``z = z_lin + gamma * hull * (d - linear_interp(d at the samples))`` with the same fallback
 rule for ``gamma``.
 
-The project measured this family (``shared/REFERENCES.md``, quarter-scale presets): 1.37x /
+The project measured this family (``docs/reconstruction.md``, "Measured numbers"): 1.37x /
 1.75x fewer samples than linear for equal MSE on aerial_1 / aerial_3, but 0.82x on the
 moonyard under a 75 deg sun (harmful at high sun), against 1.73x / 2.37x / 1.12x for the
 integrated slope of :mod:`.shading`.

@@ -37,7 +37,8 @@ default, :func:`heldout_gamma`): every fifth sample is left out and the least-sq
 the image's detail that predicts the left-out samples from the others is the largest ``gamma``
 allowed. On the full-resolution moonyard under its 75 deg sun the share alone let the sun image
 through at sparse densities (held-out share 0.5-0.65 at 1/1024-1/2048) where its detail is
-albedo, 10x linear's MSE; the check finds that and keeps linear. The project measured (``shared/REFERENCES.md``, quarter-scale presets):
+albedo, 10x linear's MSE; the check finds that and keeps linear. The project measured
+(``docs/reconstruction.md``, "When it fails" and "Measured numbers"; quarter-scale presets):
 share 0.62 at a 30 deg sun (1.73-2.37x fewer samples than linear for equal MSE), 0.11 at 60 deg
 (1.08x), 0.002 under camera-centred light (1.00x).
 

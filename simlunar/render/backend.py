@@ -5,7 +5,7 @@ This is the single entry point to Mitsuba: every other module of ``simlunar.rend
 environment Dr.Jit reads (``DRJIT_LIBLLVM_PATH``, ``DRJIT_CACHE_DIR``) is set before Dr.Jit is
 imported, and our BSDF plugins are registered only after the variant is set.
 
-Order of preference (issue 2): ``cuda_ad_rgb`` when a CUDA GPU is usable, else ``llvm_ad_rgb``
+Order of preference: ``cuda_ad_rgb`` when a CUDA GPU is usable, else ``llvm_ad_rgb``
 when a libLLVM >= 16 is found and passes a probe, else ``scalar_rgb`` with a one-line warning.
 Old LLVM (14/15) aborts the whole process inside Dr.Jit, so every candidate is first tried in a
 child process; the verdict is cached in the kernel-cache folder keyed by library path, size,

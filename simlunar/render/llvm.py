@@ -1,10 +1,10 @@
 """Discovery of a shared libLLVM that Dr.Jit's LLVM backend can use.
 
 Dr.Jit 1.5 needs LLVM >= 16 (LLVM 14/15 abort inside the JIT with "Cannot select ... fminimum",
-see ../shared/REFERENCES.md). This module never loads a library itself: it only lists candidates
+observed with Dr.Jit 1.5.0). This module never loads a library itself: it only lists candidates
 and reads their versions from file names, so it is safe to import anywhere (no mitsuba/drjit).
 
-Search order (issue 2): ``DRJIT_LIBLLVM_PATH``, then a PyPI-packaged LLVM installed in the
+Search order: ``DRJIT_LIBLLVM_PATH``, then a PyPI-packaged LLVM installed in the
 current environment (``karellen-llvm-core``), then the system's libLLVM >= 16.
 
 Run ``python -m simlunar.render.llvm`` to print the best candidate (exit 1 when none).

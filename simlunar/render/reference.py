@@ -101,7 +101,7 @@ def lunar_lambert(wi, wo, n, albedo=1.0, L=0.5) -> np.ndarray:
     ``f = albedo / pi ((1 - L) + 2 L / (cos i + cos o))`` above the surface, 0 below.
 
     ``L = 0`` is Lambert, ``L = 1`` Lommel-Seeliger normalised to ``albedo / pi`` at normal
-    incidence and emission (../shared/REFERENCES.md, "Extension cost"); every ``L`` gives
+    incidence and emission (at i = o = 0 the bracket is (1 - L) + 2 L / 2 = 1); every ``L`` gives
     ``albedo / pi`` there, so ``albedo`` is the normal albedo for any ``L``.
 
     Parameters

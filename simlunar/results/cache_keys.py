@@ -20,7 +20,7 @@ __all__ = [
 
 #: study keys added after caches existed, with the value that gives the numbers of before
 NEW_STUDY_DEFAULTS = {"score_region": "full", "reconstructions": ["linear"]}
-#: planner option keys added after caches existed (issue 20), with their defaults
+#: planner option keys added after caches existed (placement, oracles, sequential), with defaults
 NEW_PLANNER_DEFAULTS = {
     "placement": "random",
     "density_power": None,

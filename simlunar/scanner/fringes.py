@@ -1,7 +1,9 @@
 """Multi-frequency fringe phase (NumPy only): fringe periods, N-step wrapped phase and its noise,
 temporal (hierarchical) unwrapping.
 
-Formulas (../shared/REFERENCES.md, "Phase shift"): from ``I_n = A + B cos(phi + 2 pi n / N)`` the
+Formulas (N-step phase: Srinivasan, Liu & Halioua 1984, Appl. Opt. 23; noise and temporal
+unwrapping: the reviews of Zuo et al., Opt. Lasers Eng. 2018 and 2016): from
+``I_n = A + B cos(phi + 2 pi n / N)`` the
 wrapped phase is ``phi = atan2(-sum I_n sin(2 pi n / N), sum I_n cos(2 pi n / N))``, the
 modulation ``B = (2 / N) |sum I_n exp(-i 2 pi n / N)|`` and the phase noise of white frame noise
 ``sigma_I`` is ``sigma_phi = sqrt(2 / N) sigma_I / B``; unwrapping goes from the coarsest level up

@@ -1,7 +1,7 @@
 """Binary-reflected gray-code patterns and their decoder (NumPy only).
 
 The stack layout, bit order and decision rules follow OpenCV contrib
-``structured_light.GrayCodePattern`` (../shared/REFERENCES.md, "Structured light"), so stacks made
+``structured_light.GrayCodePattern`` (its documentation and source), so stacks made
 here decode with OpenCV and the other way round:
 
 * ``ceil(log2 W)`` column bits, then ``ceil(log2 H)`` row bits, most significant bit first;

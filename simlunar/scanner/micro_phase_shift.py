@@ -3,7 +3,8 @@
 All fringes lie in one narrow band of high frequencies, so every pattern is blurred (by
 defocus, subsurface scattering) and spread by interreflections about equally: the property
 that makes the coding robust where the coarse levels of temporal unwrapping fail
-(../shared/REFERENCES.md, "Structured light": low frequencies suffer from interreflections).
+(Gupta, Agrawal, Veeraraghavan & Narasimhan, CVPR 2011: low frequencies suffer from
+interreflections).
 
 Per axis ``F + 2`` patterns (columns, then rows, then white and black)::
 

@@ -11,7 +11,7 @@ coarser one ``ratio`` times longer, the coarsest longer than the axis) and ``o =
 the offset that centres the ``n`` pixels of the axis in the coarsest period (so its phase is
 unambiguous and never wraps at the axis' ends).
 
-Decoder (../shared/REFERENCES.md, "Phase shift"), per camera pixel and level, from the captured
+Decoder (the formulas and sources of :mod:`.fringes`), per camera pixel and level, from the captured
 ``I_n = A + B cos(phi + 2 pi n / N)``:
 
 * wrapped phase ``phi = atan2(-sum I_n sin(2 pi n / N), sum I_n cos(2 pi n / N))`` (unbiased

@@ -3,7 +3,7 @@
 Fresh simple crater of diameter D (radius R = D/2), heights relative to the pre-impact surface:
 
 - rim-crest-to-floor depth ``d = 0.196 D**1.01`` and rim height ``h = 0.036 D**1.014``
-  (Pike 1977, fresh lunar simple craters; see ../shared/REFERENCES.md);
+  (Pike 1977, fresh lunar simple craters, as in NASA's synthterrain);
 - bowl (r = dist / R <= 1): ``z = h - d + d r**2`` (parabolic, floor at ``h - d``, rim crest at r = 1);
 - ejecta blanket (r > 1): ``z = h r**-3`` tapered to zero at ``r = 3`` (thickness decaying as the
   inverse cube of distance, McGetchin et al. 1973).

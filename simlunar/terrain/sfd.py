@@ -1,8 +1,8 @@
 """Cumulative size-frequency laws N(>D) for craters and rocks, and sampling from them.
 
 All laws give the cumulative number of features with diameter larger than ``D`` (metres) per
-square metre. Sources (see ../shared/REFERENCES.md; the numbers are the ones used by NASA's
-synthterrain, Apache-2.0):
+square metre. Sources (the numbers are the ones used by NASA's synthterrain, Apache-2.0,
+https://github.com/NeoGeographyToolkit/synthterrain):
 
 - craters, Trask equilibrium: ``10**-1.1 * D**-2`` per m^2 (Trask 1966, Surveyor/Ranger counts);
 - craters, VIPER environmental specification: ``29174 D**-1.92`` (D <= 80 m) and

@@ -1,4 +1,4 @@
-"""The planners of issue 20 in the YAML: placement, oracles, sequential, learned, score_region."""
+"""Lloyd-placement planners in the YAML: placement, oracles, sequential, learned, score_region."""
 
 from __future__ import annotations
 

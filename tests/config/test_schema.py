@@ -560,7 +560,7 @@ _PERSPECTIVE = {
     ],
 )
 def test_a_key_without_effect_is_refused_in_one_line(data, message):
-    # the silent trap: spacing_m: 200 on a preset was recorded in config.yaml and
+    # the silent trap these close: spacing_m: 200 on a preset was recorded in config.yaml and
     # ignored (results byte-identical to the 0.2 m run)
     assert error_of(data).startswith(message)
 

@@ -13,7 +13,7 @@ PULSE = PulseOptions(fwhm_s=1e-9, jitter_s=0.1e-9)
 
 def test_closed_form_65_4_mm_over_sqrt_n():
     # by hand: sigma_t = sqrt((1 ns / 2.35482)^2 + (0.1 ns)^2) = 0.43628 ns;
-    # c / 2 x sigma_t = 0.149896 m/ns x 0.43628 ns = 65.40 mm (REFERENCES.md)
+    # c / 2 x sigma_t = 0.149896 m/ns x 0.43628 ns = 65.40 mm
     assert range_crlb(1.0, pulse=PULSE) == pytest.approx(0.06540, abs=5e-6)
     assert range_crlb([1.0, 100.0], pulse=PULSE) == pytest.approx([0.06540, 0.006540], rel=1e-3)
 

@@ -278,7 +278,7 @@ CASES = [
     Case("unknown scan light", with_("study", {**SCANNER, "scan_light": "moon"}), "scan_light"),
     Case("unknown rig option", with_("study", {**SCANNER, "options": {"rig": {"tilt_deg": 3}}}), "tilt"),
     Case("unknown strategy option", with_("study.strategy_options", {"wavelet": {"blue_nose": True}}), "blue_nose"),
-    # issue 22: scanner options checked with the library's rules before anything runs
+    # scanner options checked with the library's rules before anything runs
     Case("scanner metric unknown", with_("study", {**SCANNER, "metrics": ["msee"]}), "study.metrics[0]: unknown metric 'msee'"),
     Case("scanner planners twice", with_("study", {**SCAN_DOTS, "planners": ["random", "random"]}), "study.planners: names must be unique"),
     Case("scanner metrics twice", with_("study", {**SCANNER, "metrics": ["mse", "mse"]}), "study.metrics: names must be unique"),

@@ -72,7 +72,7 @@ def test_fusion_experiments_protocol():
 
 def test_paper_protocol_in_the_tables():
     # paper section 4.1: 11 densities 1/2 .. 1/2048, 20 trials, the five strategies, and
-    # beside them the image-free uniform Lloyd reference and an oracle bound (issue 20)
+    # beside them the image-free uniform Lloyd reference and an oracle bound
     for name in ("table1_aerial", "table2_moonyard"):
         cfg = load_experiment(next(p for p in EXPERIMENTS if p.stem == name))
         assert isinstance(cfg.study, SamplingStudyCfg)

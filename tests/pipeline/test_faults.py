@@ -509,7 +509,7 @@ def test_a_lost_cluster_is_one_line_exit_3_and_keeps_finished_units(tmp_path, mo
 
 @pytest.mark.slow
 def test_real_units_a_dem_multiplied_by_5_is_recomputed(tmp_path):
-    """Issue 12's case with real units: the same config, the DEM's heights times 5."""
+    """A changed DEM file with real units: the same config, the DEM's heights times 5."""
     rng = np.random.default_rng(4)
     np.save(tmp_path / "dem.npy", rng.normal(0, 0.3, (24, 32)).cumsum(axis=1) * 0.2)
     data = {

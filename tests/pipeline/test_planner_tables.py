@@ -1,4 +1,4 @@
-"""scores.md of a sampling run with the planners of issue 20: samples saved vs Uniform Lloyd,
+"""scores.md of a sampling run with the Lloyd-placement planners: samples saved vs Uniform Lloyd,
 headroom captured vs the oracle, interior-only rows, rounds of multi-round labels."""
 
 from __future__ import annotations

@@ -113,7 +113,7 @@ def test_rendered_plane_keeps_the_sub_bin_range(mi):
     # beams at incidence angles that put a plane's range at 10 offsets across one 5 cm bin: the
     # noise-free reading of the rendered (tent-splatted, oversampled) return through a 1 ns pulse
     # is within 1 mm at every offset. A box-binned film snaps them to the bin centre
-    # (+25 ... -19 mm: REFERENCES.md, "LIDAR physics, checked independently").
+    # (+25 ... -19 mm: docs/lidar.md, "How a return is made", step 3).
     from simlunar.lidar import shape_waveform
     from simlunar.render.beam_capture import BeamCapture, capture_beams
 
