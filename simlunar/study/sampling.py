@@ -369,7 +369,7 @@ def run_sampling_study(
     todo = {s: planners[s] for s in strategies if s not in kept}
     total, done = len(strategies) * o.trials * len(ks), len(kept) * o.trials * len(ks)
     with stage("sampling study", total=total, unit="acquisitions", done=done) as bar:
-        if progress is not None:
+        if progress is not None and done:  # strategies restored from ``steps``
             progress(done, total)
         finished: dict = {s: [] for s in todo}
         tasks = iter(())
