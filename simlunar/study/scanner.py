@@ -279,9 +279,8 @@ def run_scanner_study(
                 step = functools.partial(
                     _mode_step, sensor, one, evaluate, recons, rguide, o.budget, say
                 )
-                done, _ = resumable(
-                    steps, f"scan mode {mode} planner {label}", step, streams=streams
-                )
+                name = f"scan mode {mode}" + (f" planner {label}" if label else "")
+                done, _ = resumable(steps, name, step, streams=streams)
                 for planner, trial, trial_rows, detail in done:
                     rows += trial_rows
                     # the shared coded scan is not kept with every step: put back
