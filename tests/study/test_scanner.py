@@ -380,7 +380,8 @@ def test_a_scan_cut_short_at_its_second_step_resumes_bit_identical(rig, monkeypa
         clean = st.run_scanner_study(scene, opts, rng=3)
     closed = {e.path: e for e in events if e.finished}
     scan = closed[("scanner study", "gray_code scan")]
-    assert (scan.done, scan.total, scan.unit) == (14, 14, "frames")  # 6 + 6 bit pairs, W, B
+    # captured frames: a pattern and its inverse per bit (6 + 6 bits), white, black
+    assert (scan.done, scan.total, scan.unit) == (26, 26, "frames")
     dots = [e for p, e in closed.items() if p[-1] == "dot frames"]
     assert len(dots) == 2 and all(e.done == e.total > 1 for e in dots)
     assert closed[("scanner study",)].done == closed[("scanner study",)].total == 4
