@@ -102,3 +102,40 @@ def test_deferred_off_the_main_thread_just_runs_the_block(sigint):
     t.start()
     t.join()
     assert seen == [False]
+
+
+def test_a_real_ctrl_c_inside_a_study_keeps_its_finished_steps(sigint, monkeypatch):
+    """SIGINT through the flag while the second strategy of a sampling study computes: the
+    first strategy is kept, the rerun computes only the others and gives the same rows."""
+    import numpy as np
+
+    from simlunar.study import protocol
+    from simlunar.study.sampling import SamplingStudyOptions, run_sampling_study
+    from simlunar.study.steps import MemorySteps
+
+    rng = np.random.default_rng(0)
+    depth = np.cumsum(np.cumsum(rng.normal(size=(32, 32)), 0), 1)
+    image = rng.random((32, 32)).astype(np.float32)
+    opts = SamplingStudyOptions(
+        strategies=("random", "grid"), densities=(1 / 8,), trials=2, metrics=("mse",)
+    )
+    clean = run_sampling_study(depth, image, opts, rng=1)
+    real = protocol._task_outcomes
+    computed = []
+
+    def task(state, label, trial):
+        if label == "grid" and not computed.count("resumed"):
+            _ctrl_c()
+        computed.append(label)
+        return real(state, label, trial)
+
+    monkeypatch.setattr(protocol, "_task_outcomes", task)
+    interrupts.install()
+    steps = MemorySteps()
+    with pytest.raises(KeyboardInterrupt):
+        run_sampling_study(depth, image, opts, rng=1, steps=steps)
+    assert interrupts.interrupted() and list(steps.saved) == ["sampling strategy random"]
+    computed[:] = ["resumed"]
+    resumed = run_sampling_study(depth, image, opts, rng=1, steps=steps)
+    assert computed == ["resumed", "grid", "grid"]
+    assert resumed.rows == clean.rows

@@ -1,16 +1,24 @@
-"""The progress of a run (units done, cached, the current unit's stage): a live bar on a
-terminal, and plain lines where stderr is a file or a pipe (``simlunar run ... 2> run.log``,
-a batch job), where a live bar would print nothing until the run ends."""
+"""The progress of a run (units done, cached, and inside the current unit its open stages
+with their totals: frames of a scan, beams, acquisitions of a study, steps): a live bar per
+stage on a terminal, and plain lines where stderr is a file or a pipe (``simlunar run ... 2>
+run.log``, a batch job), where a live bar would print nothing until the run ends.
+
+The stages come from the library as :class:`simlunar.progress.Event` (the unit reports them
+when it runs in this process: serially, or a single unit with ``--workers``)."""
 
 from __future__ import annotations
 
 import sys
 import time
 
+from simlunar.progress import Event
+
 __all__ = []
 
 
 class _Bar:
+    """Live bars on stderr: the units, then one indented bar per open stage of the unit."""
+
     def __init__(self, total: int, done: int, name: str):
         from rich.console import Console
         from rich.progress import (
@@ -23,30 +31,44 @@ class _Bar:
         )
 
         self.p = Progress(
-            TextColumn(f"[bold]{name}[/] units"),
+            TextColumn("{task.description}"),
             BarColumn(),
             MofNCompleteColumn(),
+            TextColumn("{task.fields[unit]}"),
             TimeElapsedColumn(),
             TextColumn("ETA"),
             TimeRemainingColumn(),
             console=Console(stderr=True),
             transient=False,
         )
-        self.task = self.p.add_task("units", total=total, completed=done)
-        self.sub = None
+        self.task = self.p.add_task(f"[bold]{name}[/]", total=total, completed=done, unit="units")
+        self.stages: dict[tuple, int] = {}  # open stage path -> its bar
         self.p.start()
 
+    def event(self, ev: Event) -> None:
+        """Show a stage of the current unit (its bar added, updated or removed)."""
+        if ev.finished:
+            self._close(ev.path)
+            return
+        task = self.stages.get(ev.path)
+        if task is None:
+            label = "  " * (ev.depth + 1) + ev.stage
+            task = self.p.add_task(label, total=ev.total, completed=ev.done, unit=ev.unit)
+            self.stages[ev.path] = task
+        else:
+            self.p.update(task, completed=ev.done, total=ev.total)
+
     def stage(self, name: str, done: int, total: int) -> None:
-        """Within-unit progress (in-process runs only): a second bar for the current stage."""
-        if self.sub is None:
-            self.sub = self.p.add_task(name, total=total)
-        self.p.update(self.sub, completed=done, total=total, description=name)
+        """A one-level stage (the older form of :meth:`event`)."""
+        self.event(Event((name,), done, total, "steps"))
+
+    def _close(self, path: tuple) -> None:
+        for p in [p for p in self.stages if p[: len(path)] == path]:
+            self.p.remove_task(self.stages.pop(p))
 
     def advance(self) -> None:
         self.p.advance(self.task)
-        if self.sub is not None:
-            self.p.remove_task(self.sub)
-            self.sub = None
+        self._close(())
 
     def stop(self) -> None:
         self.p.stop()
@@ -54,29 +76,41 @@ class _Bar:
 
 class _Lines:
     """Progress as lines on a stream: one per finished unit (with elapsed time and an ETA from
-    the units computed so far), and the current unit's stage at most once per ``every_s``."""
+    the units computed so far), and the current unit's open stages (outermost first, each
+    with its count and total) at most once per ``every_s``."""
 
-    def __init__(self, total: int, done: int, name: str, *, stream=None, every_s: float = 60.0):
+    def __init__(self, total: int, done: int, name: str, *, stream=None, every_s: float = 30.0):
         self.total, self.done, self.name = total, done, name
         self.stream = sys.stderr if stream is None else stream
         self.every_s = every_s
         self.t0 = time.monotonic()
         self.n_new = 0
         self.last_stage = self.t0
+        self.open: dict[tuple, Event] = {}
         self._say(f"{done}/{total} units ({done} cached)")
 
     def _say(self, text: str) -> None:
         print(f"{self.name}: {text}", file=self.stream, flush=True)
 
-    def stage(self, name: str, done: int, total: int) -> None:
+    def event(self, ev: Event) -> None:
+        if ev.finished:
+            self.open = {p: e for p, e in self.open.items() if p[: len(ev.path)] != ev.path}
+        else:
+            self.open[ev.path] = ev
         now = time.monotonic()
-        if now - self.last_stage >= self.every_s:
+        if self.open and now - self.last_stage >= self.every_s:
             self.last_stage = now
-            self._say(f"unit {self.done + 1}/{self.total}: {name} {done}/{total}")
+            stages = " > ".join(e.text() for e in self.open.values())
+            self._say(f"unit {self.done + 1}/{self.total}: {stages}")
+
+    def stage(self, name: str, done: int, total: int) -> None:
+        """A one-level stage (the older form of :meth:`event`)."""
+        self.event(Event((name,), done, total, "steps"))
 
     def advance(self) -> None:
         self.done += 1
         self.n_new += 1
+        self.open = {}
         elapsed = time.monotonic() - self.t0
         self.last_stage = time.monotonic()
         left = (self.total - self.done) * elapsed / self.n_new

@@ -32,21 +32,18 @@ from simlunar.config.loading import apply_sweep_value, to_plain
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.yamlio import dump_yaml
 from simlunar.errors import (
-    InfrastructureError,
-    InputChangedError,
     ResultFolderError,
     RunInterrupted,
 )
 from simlunar.interrupts import interrupted
 from simlunar.pipeline import preflight
-from simlunar.pipeline.executors import Executor, LocalPoolExecutor, accepts_keyword
+from simlunar.pipeline.executors import Executor, LocalPoolExecutor
 from simlunar.pipeline.inputs import check_size, input_hashes
-from simlunar.pipeline.progress import _progress
+from simlunar.pipeline.resume import compute_missing, kept_message, prune_steps
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.plotting.lidar_tables import lidar_tables
 from simlunar.plotting.scanner_tables import scanner_tables
 from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
-from simlunar.results.exports import write_scan_export
 from simlunar.results.figures import write_figures_pruned
 from simlunar.results.folder import (
     _check_writable,
@@ -324,7 +321,7 @@ def run_experiment(
             # after the units, while the summary or the figures were written (whatever
             # the interrupted code raised: the Ctrl-C decides)
             done = len(UnitCache(out).keys() & {u.key for u in units})
-            raise RunInterrupted(_kept(out, done, len(units), "interrupted")) from None
+            raise RunInterrupted(kept_message(out, done, len(units), "interrupted")) from None
         finally:
             lock.release()
 
@@ -383,6 +380,7 @@ def _run_locked(run: _Run) -> RunSummary:
     # nothing of a finished folder is removed before this run is known to be able to write
     _check_writable(out, scan_dirs)
     previous = _read_provenance(out)  # before anything is removed: its run time is kept
+    prune_steps(out, {u.key for u in todo})  # steps only of the units still to compute
     if (
         not todo
         and not stale
@@ -398,7 +396,7 @@ def _run_locked(run: _Run) -> RunSummary:
         cache.remove_except(set(keys))
     prune_scans(out, scan_dirs)  # the exports of units no longer produced go with them
 
-    _compute_missing(run, cache, todo, records, n_cached)
+    compute_missing(run, cache, todo, records, n_cached)
 
     rows, columns = collect_rows(units, records)
     atomic_write_text(out / "results.csv", csv_text(rows, columns))
@@ -430,47 +428,6 @@ def _cached_records(cache: UnitCache, out: Path, units, scan_dirs):
         elif u.key not in {t.key for t in todo}:
             todo.append(u)
     return records, todo
-
-
-def _compute_missing(run: _Run, cache: UnitCache, todo, records: dict, n_cached: int) -> None:
-    """Compute the ``todo`` units on the executor, caching each (and its scan export) as it
-    comes; its record is added to ``records``. A Ctrl-C or a cluster failure says what is kept."""
-    out, total = run.out, len(run.units)
-    bar = _progress(run.progress, total, n_cached, run.cfg.name)
-    n_new = 0
-    try:
-        # with the input hashes of each unit's key: the unit checks the files it reads
-        payloads = [{"config": u.config, "inputs": u.inputs} for u in todo]
-        hook = bar.stage if bar is not None and accepts_keyword(run.compute, "progress") else None
-        # executors written against the older two-argument run() still work without a hook
-        kw = {"progress": hook} if hook is not None else {}
-        for i, result in run.executor.run(run.compute, payloads, **kw):
-            u = todo[i]
-            arrays = result.pop("arrays", {}) or {}
-            scans = result.pop("scans", None)
-            if scans is not None:  # before the cache entry: a cached unit has its scans
-                write_scan_export(out / "scans" / f"unit{u.index}", scans, unit_key=u.key)
-            record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
-            cache.save(u.key, record, arrays)
-            records[u.key] = json.loads(json.dumps(record, default=float))
-            n_new += 1
-            if bar is not None:
-                bar.advance()
-    except BaseException as exc:
-        if isinstance(exc, KeyboardInterrupt) or interrupted():
-            # a Ctrl-C, whatever the interrupted code made of it (the renderer's start-up
-            # turns it into other errors)
-            raise RunInterrupted(_kept(out, n_cached + n_new, total, "interrupted")) from None
-        if isinstance(exc, InfrastructureError):
-            raise InfrastructureError(f"{exc}; {_kept(out, n_cached + n_new, total)}") from None
-        if isinstance(exc, InputChangedError):
-            raise InputChangedError(f"{exc}; {_kept(out, n_cached + n_new, total)}") from None
-        raise
-    finally:
-        if bar is not None:
-            bar.stop()
-    if interrupted():  # a Ctrl-C swallowed by the code it interrupted
-        raise RunInterrupted(_kept(out, n_cached + n_new, total, "interrupted"))
 
 
 def _tables(cfg: ExperimentCfg, units, records: dict, rows: list[dict], out: Path):
@@ -526,12 +483,4 @@ def _summary(run: _Run, n_cached: int, n_computed: int, md: str, records: dict) 
         md,
         written,
         _notes(run.checks, run.units, records),
-    )
-
-
-def _kept(out: Path, done: int, total: int, what: str = "") -> str:
-    head = f"{what}: " if what else ""
-    return (
-        f"{head}{done} of {total} units finished and kept in {out / 'units'}; "
-        "rerun the same command to resume"
     )

@@ -24,6 +24,7 @@ from simlunar.pipeline.figure_inputs import RENDER_LOCK
 from simlunar.pipeline.preflight import check_out_file
 from simlunar.pipeline.unit import fill_invalid, int_seed, scene_inputs, sensor_image, stage_seeds
 from simlunar.planner.learning import train_learned_map, train_learned_reconstruction
+from simlunar.progress import Event, reporting
 from simlunar.render import render
 from simlunar.render.scene import luminance
 
@@ -85,11 +86,12 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
     check_out_file(path.with_suffix(".json"), option=option)
     t0 = time.perf_counter()
     examples, described = [], []
-    for what, exp in _scenes(cfg, experiments):
+    scenes = _scenes(cfg, experiments)
+    for what, exp in scenes:
         examples.append(guide_view(exp))
         described.append(what)
-        log(f"rendered {len(examples)}: {what['preset']} seed_index {what['seed_index']} "
-            f"sun {what['sun_elevation_deg']}")  # fmt: skip
+        log(f"rendered {len(examples)}/{len(scenes)}: {what['preset']} seed_index "
+            f"{what['seed_index']} sun {what['sun_elevation_deg']}")  # fmt: skip
     render_s = time.perf_counter() - t0
     provenance = {
         "name": cfg.name,
@@ -105,9 +107,39 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
         "render_seconds": round(render_s, 3),
     }
     options = LearnedOptions(**cfg.options.model_dump())
+    target = "reconstruction" if cfg.target == "reconstruction" else "map"
+    log(f"fitting the learned {target} on {len(examples)} examples "
+        f"({len(cfg.densities)} densities)")  # fmt: skip
+    t1 = time.perf_counter()
+    with reporting(_StageLines(log)):
+        model = _fit(cfg, examples, options, provenance)
+    log(f"fitted in {time.perf_counter() - t1:.1f} s")
+    path = Path(out) if out is not None else Path(cfg.model)
+    return model.save(path)
+
+
+class _StageLines:
+    """The fitting's stages (:mod:`simlunar.progress`) as log lines: each stage's progress at
+    most once per ``every_s``, and when it reaches its total."""
+
+    def __init__(self, log, *, every_s: float = 10.0):
+        self.log, self.every_s = log, every_s
+        self.last = time.monotonic()
+
+    def __call__(self, ev: Event) -> None:
+        now = time.monotonic()
+        complete = ev.total is not None and ev.done == ev.total
+        if ev.finished or ev.done == 0 or not (complete or now - self.last >= self.every_s):
+            return
+        self.last = now
+        self.log(ev.text())
+
+
+def _fit(cfg: TrainCfg, examples, options: LearnedOptions, provenance: dict):
+    """The model of ``cfg.target`` fitted to the rendered examples."""
     if cfg.target == "reconstruction":
         recon = cfg.reconstruction or LearnedReconCfg()
-        model = train_learned_reconstruction(
+        return train_learned_reconstruction(
             examples,
             densities=cfg.densities,
             options=options,
@@ -116,13 +148,10 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
             rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 21])),
             provenance=provenance,
         )
-    else:
-        model = train_learned_map(
-            examples,
-            densities=cfg.densities,
-            options=options,
-            rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 20])),
-            provenance=provenance,
-        )
-    path = Path(out) if out is not None else Path(cfg.model)
-    return model.save(path)
+    return train_learned_map(
+        examples,
+        densities=cfg.densities,
+        options=options,
+        rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 20])),
+        provenance=provenance,
+    )

@@ -16,6 +16,7 @@ scanner (:func:`simlunar.study.scanner.run_scanner_study`); both are the one pro
 
 from __future__ import annotations
 
+import contextlib
 import time
 from typing import Any
 
@@ -39,6 +40,8 @@ from simlunar.pipeline.figure_inputs import (
 )
 from simlunar.pipeline.guide import build_guide
 from simlunar.pipeline.inputs import read_unit_models, verify_inputs
+from simlunar.pipeline.resume import UnitSteps
+from simlunar.progress import reporting, stage
 from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
 from simlunar.render.scene import luminance
@@ -173,9 +176,13 @@ def compute_unit(
     payload : dict
         ``{"config": <plain resolved experiment dict without sweep>, "inputs": <its input
         files' hashes, as in its cache key>}`` (:func:`simlunar.pipeline.inputs.input_hashes`;
-        without ``inputs`` nothing is verified).
-    progress : callable(stage, done, total), optional
-        Within-unit progress of the sampling study (in-process executors pass it).
+        without ``inputs`` nothing is verified), and optionally ``"steps": {"folder", "key"}``:
+        the unit's working folder, where its study keeps finished sub-steps
+        (:class:`simlunar.pipeline.resume.UnitSteps`) and finds those of an interrupted run.
+    progress : callable(event), optional
+        Listener of the unit's progress (:func:`simlunar.progress.reporting`: stages with
+        their totals, down to the frames of a scan and the beams of a LIDAR acquisition);
+        in-process executors pass it.
     study_workers : int
         Forked processes for the sampling study's (strategy, trial) tasks; the results do not
         depend on it.
@@ -189,47 +196,54 @@ def compute_unit(
     """
     cfg = ExperimentCfg.model_validate(payload["config"])
     inputs = payload.get("inputs")
-    if not inputs:
-        return _compute_unit(cfg, progress, study_workers)
-    # the files the run hashed into this unit's cache key must be the ones it reads: models
-    # are loaded from the verified bytes (and pinned, never read again); the other files
-    # (preset, DEM, albedo) are checked before and after the unit
-    models = read_unit_models(inputs)
-    loaded = {k for k in inputs if k.endswith(".feature_opts.model")}
-    loaded |= {f"{k}.json" for k in loaded}
-    verify_inputs(inputs, skip=loaded)
-    with pinned_models(models):
-        record = _compute_unit(cfg, progress, study_workers)
-    verify_inputs(inputs, skip=loaded)
-    return record
+    where = payload.get("steps")
+    steps = None if not where else UnitSteps(where["folder"], where["key"])
+    listening = reporting(progress) if progress is not None else contextlib.nullcontext()
+    with listening:
+        if not inputs:
+            return _compute_unit(cfg, steps, study_workers)
+        # the files the run hashed into this unit's cache key must be the ones it reads:
+        # models are loaded from the verified bytes (and pinned, never read again); the other
+        # files (preset, DEM, albedo) are checked before and after the unit
+        models = read_unit_models(inputs)
+        loaded = {k for k in inputs if k.endswith(".feature_opts.model")}
+        loaded |= {f"{k}.json" for k in loaded}
+        verify_inputs(inputs, skip=loaded)
+        with pinned_models(models):
+            record = _compute_unit(cfg, steps, study_workers)
+        verify_inputs(inputs, skip=loaded)
+        return record
 
 
-def _compute_unit(cfg, progress, study_workers: int) -> dict[str, Any]:
+def _compute_unit(cfg, steps, study_workers: int) -> dict[str, Any]:
     seeds = stage_seeds(cfg.seed)
     timings: dict[str, float] = {}
     t = time.perf_counter()
-    terrain, camera, lights, bsdf = scene_inputs(cfg)
+    with stage("terrain", total=1) as s:
+        terrain, camera, lights, bsdf = scene_inputs(cfg)
+        s.advance()
     timings["terrain_s"] = time.perf_counter() - t
     r = cfg.render
     scene = RenderScene(
         terrain, camera, lights, bsdf, r.spp, int_seed(seeds["render"]), r.max_depth
     )
     if isinstance(cfg.study, SamplingStudyCfg):
-        record = _sampling_unit(cfg, scene, seeds, timings, progress, study_workers)
+        record = _sampling_unit(cfg, scene, seeds, timings, steps, study_workers)
     elif isinstance(cfg.study, LidarStudyCfg):
-        record = _lidar_unit(cfg, scene, seeds, timings)
+        record = _lidar_unit(cfg, scene, seeds, timings, steps)
     else:
         # the scanner study renders throughout (one scene per pattern sequence)
         with RENDER_LOCK:
-            record = _scanner_unit(cfg, scene, seeds, timings)
+            record = _scanner_unit(cfg, scene, seeds, timings, steps)
     return record.to_dict()
 
 
 def _render_guide(cfg, scene: RenderScene, seeds, timings):
     """The guide view: ``(image in [0, 1], radiance, render result with its ground truth)``."""
     t = time.perf_counter()
-    with RENDER_LOCK:
+    with RENDER_LOCK, stage("guide render", total=1, unit="frames") as s:
         result = scene.render()
+        s.advance()
     timings["render_s"] = time.perf_counter() - t
     t = time.perf_counter()
     radiance = luminance(result.image)
@@ -238,7 +252,7 @@ def _render_guide(cfg, scene: RenderScene, seeds, timings):
     return image, radiance, result
 
 
-def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -> UnitRecord:
+def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> UnitRecord:
     """Render the guide view, then the sampling study with the ideal sensor."""
     image, radiance, result = _render_guide(cfg, scene, seeds, timings)
     t = time.perf_counter()
@@ -255,7 +269,9 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
         "albedo": np.asarray(scene.terrain.albedo, np.float32),
     }
     if cfg.figures.enabled:
-        arrays.update(_figure_arrays(cfg, scene, image, depth, seeds, timings))
+        with stage("figure arrays", total=1) as s:
+            arrays.update(_figure_arrays(cfg, scene, image, depth, seeds, timings))
+            s.advance()
     guide, guide_meta = _guide(cfg, scene, image, seeds, timings, arrays)
     t = time.perf_counter()
     study = run_sampling_study(
@@ -264,8 +280,8 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
         translate.sampling_options(cfg.study),
         rng=np.random.default_rng(seeds["study"]),
         workers=workers,
-        progress=None if progress is None else (lambda d, n: progress("sampling study", d, n)),
         guide=guide,
+        steps=steps,
     )
     timings["study_s"] = time.perf_counter() - t
     return UnitRecord(
@@ -300,9 +316,11 @@ def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict):
     def develop(radiance, rng):
         return sensor_image(radiance, cfg.render.sensor, rng=rng)
 
-    guide, frames = build_guide(
-        cfg, scene, image, seeds["guide"], develop=develop, lock=RENDER_LOCK, timings=timings
-    )
+    with stage("guide frames", total=1) as s:
+        guide, frames = build_guide(
+            cfg, scene, image, seeds["guide"], develop=develop, lock=RENDER_LOCK, timings=timings
+        )
+        s.advance()
     arrays.update({f"guide_{name}": img for name, img in frames.items()})
     return guide, {"guide_frames": list(guide.frames)}
 
@@ -380,7 +398,7 @@ def _plain_scores(scores) -> dict:
     return {str(m): {str(s): float(v) for s, v in by.items()} for m, by in dict(scores).items()}
 
 
-def _scanner_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
+def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     """The scanner study with the structured-light sensor on a rig aimed at the terrain."""
     s, r = cfg.study, cfg.render
     t = time.perf_counter()
@@ -399,7 +417,7 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
         extra_lights=tuple(scene.lights) if s.scan_light == "sun" else (),
     )
     options = translate.scanner_options(s, r, seed=scene.seed)
-    res = run_scanner_study(study_scene, options, rng=seeds["study"])
+    res = run_scanner_study(study_scene, options, rng=seeds["study"], steps=steps)
     timings["study_s"] = time.perf_counter() - t
     guide = res.guide
     arrays = {
@@ -418,7 +436,7 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
     )
 
 
-def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
+def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     """Render the guide view, then the LIDAR study with the sensor at the guide camera (the
     sun of a sun-lit scene is the LIDAR's background)."""
     image, _, result = _render_guide(cfg, scene, seeds, timings)
@@ -435,6 +453,7 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
             lidar_translate.lidar_options(cfg.study, seed=scene.seed),
             rng=np.random.default_rng(seeds["study"]),
             reconstruction_guide=guide,
+            steps=steps,
         )
     timings["study_s"] = time.perf_counter() - t
     arrays = {"image": image, "depth": depth, **arrays}

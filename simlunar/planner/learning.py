@@ -31,6 +31,7 @@ from simlunar.features.learned import (
 )
 from simlunar.features.maps import check_image
 from simlunar.planner.sequential import uniform_layout
+from simlunar.progress import stage
 from simlunar.reconstruction import RECONSTRUCTIONS, Guide, reconstruct
 from simlunar.reconstruction.learned import FORMAT as RECON_FORMAT
 from simlunar.reconstruction.learned import (
@@ -194,9 +195,11 @@ def train_learned_map(
     dens = _checked_densities(densities)
     t0 = time.perf_counter()
     models = {}
-    for d in dens:
-        x, y = _training_set(ex, d, opt, rng)
-        models[d] = _fit_boosted(x, y, opt, rng)
+    with stage("fitting", total=len(dens), unit="densities") as fitted:
+        for d in dens:
+            x, y = _training_set(ex, d, opt, rng)
+            models[d] = _fit_boosted(x, y, opt, rng)
+            fitted.advance()
     head = {
         "format": FORMAT,
         "feature_set_version": FEATURE_SET_VERSION,
@@ -209,32 +212,40 @@ def _recon_training_set(examples, densities, options, with_shading, shading_opti
     """Features and residual / h targets: ``options.pixels_per_example`` pixels per example and
     density, spread over ``options.layouts`` uniform Lloyd layouts."""
     xs, ys = [], []
-    for image, truth in examples:
-        guide = Guide(image) if with_shading else None
-        n = truth.size
-        for d in densities:
-            k = max(4, round(d * n))
-            for j in range(options.layouts):
-                r, c = np.divmod(uniform_layout(truth.shape, k, rng=rng), truth.shape[1])
-                pts = np.column_stack((r, c))
-                vals = truth[r, c]
-                shade = None
-                if with_shading:
-                    shade = shading_heights(
-                        pts, vals, truth.shape, guide=guide, options=shading_options
-                    )
-                x, h, z_lin = residual_features(image, pts, vals, shading=shade)
-                if h == 0:  # linear is exact on these samples: no residual to learn
-                    continue
-                y = ((truth - z_lin) / h).ravel()
-                share = options.pixels_per_example // options.layouts
-                share += j < options.pixels_per_example % options.layouts
-                take = rng.choice(n, min(share, n), replace=False)
-                xs.append(x[take])
-                ys.append(y[take])
+    with stage("training set", total=len(examples), unit="examples") as done:
+        for image, truth in examples:
+            _example_rows(image, truth, densities, options, with_shading, shading_options, rng,
+                          xs, ys)  # fmt: skip
+            done.advance()
     if not xs:
         raise ValueError("every training layout's samples lie on planes: nothing to learn")
     return np.concatenate(xs), np.concatenate(ys)
+
+
+def _example_rows(image, truth, densities, options, with_shading, shading_options, rng, xs, ys):
+    """One example's features and targets appended to ``xs`` and ``ys``."""
+    guide = Guide(image) if with_shading else None
+    n = truth.size
+    for d in densities:
+        k = max(4, round(d * n))
+        for j in range(options.layouts):
+            r, c = np.divmod(uniform_layout(truth.shape, k, rng=rng), truth.shape[1])
+            pts = np.column_stack((r, c))
+            vals = truth[r, c]
+            shade = None
+            if with_shading:
+                shade = shading_heights(
+                    pts, vals, truth.shape, guide=guide, options=shading_options
+                )
+            x, h, z_lin = residual_features(image, pts, vals, shading=shade)
+            if h == 0:  # linear is exact on these samples: no residual to learn
+                continue
+            y = ((truth - z_lin) / h).ravel()
+            share = options.pixels_per_example // options.layouts
+            share += j < options.pixels_per_example % options.layouts
+            take = rng.choice(n, min(share, n), replace=False)
+            xs.append(x[take])
+            ys.append(y[take])
 
 
 def train_learned_reconstruction(
@@ -296,7 +307,9 @@ def train_learned_reconstruction(
         RECONSTRUCTIONS["shading"].make_options(shading_options)  # bad keys fail before work
     t0 = time.perf_counter()
     x, y = _recon_training_set(ex, dens, opt, with_shading, shading_options, rng)
-    model = _fit_boosted(x, y, opt, rng)
+    with stage("fitting", total=1, unit="models") as fitted:
+        model = _fit_boosted(x, y, opt, rng)
+        fitted.advance()
     head = {
         "format": RECON_FORMAT,
         "recon_feature_version": RECON_FEATURE_VERSION,

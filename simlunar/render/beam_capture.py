@@ -15,6 +15,7 @@ import numpy as np
 
 from simlunar.lidar.footprint import FootprintOptions
 from simlunar.lidar.waveform import TimeBins
+from simlunar.progress import stage
 from simlunar.render import beams as _beams
 from simlunar.render.cameras import film_dict
 from simlunar.render.lights import emitter_dicts
@@ -259,17 +260,19 @@ def capture_beams(
     o = None if origins is None else np.asarray(origins, float).reshape(n, 3)
     groups = [fired] if o is None else _origin_groups(fired, o, max_shift_m)
     k = 0
-    for group in groups:
-        if o is not None:
-            offset[group] = _place_laser(capture, d[group], o[group])
-        order = group[np.argsort(pred[group])]
-        for idx, s0 in _gated_batches(order, pred, capture.batch, span, margin_m):
-            bo = None if o is None else o[idx]
-            hist[idx], steady[idx] = capture.render_batch(d[idx], s0, seed + k, origins=bo)
-            start[idx] = s0
-            if sun is not None:
-                sun[idx] = capture.render_sun(d[idx], seed + k, origins=bo)
-            k += 1
+    with stage("beams", total=len(fired), unit="beams") as beams:
+        for group in groups:
+            if o is not None:
+                offset[group] = _place_laser(capture, d[group], o[group])
+            order = group[np.argsort(pred[group])]
+            for idx, s0 in _gated_batches(order, pred, capture.batch, span, margin_m):
+                bo = None if o is None else o[idx]
+                hist[idx], steady[idx] = capture.render_batch(d[idx], s0, seed + k, origins=bo)
+                start[idx] = s0
+                if sun is not None:
+                    sun[idx] = capture.render_sun(d[idx], seed + k, origins=bo)
+                k += 1
+                beams.advance(len(idx))
     if origins is not None:
         capture.set_laser(capture.origin)
     return BeamReturns(

@@ -14,6 +14,7 @@ from simlunar.geometry import Rig
 from simlunar.imaging.blur import gaussian_blur
 from simlunar.imaging.exposure import AUTO_EXPOSURE_LEVEL, AUTO_EXPOSURE_PERCENTILE
 from simlunar.imaging.sensor import apply_sensor
+from simlunar.progress import advance
 from simlunar.render.lights import ProjectorLight, SunLight
 from simlunar.render.scene import TerrainScene, luminance
 from simlunar.render.sparse import LitTracer
@@ -319,10 +320,13 @@ class RenderCapture:
         """
         imgs = np.asarray(images)
         if self.sensor is None:
-            return (imgs * np.float32(self.gain)).astype(np.float32, copy=False)
-        out = np.empty(imgs.shape, np.float32)
-        for i, im in enumerate(imgs):
-            out[i] = apply_sensor(im, self.sensor, rng=self.rng)
+            out = (imgs * np.float32(self.gain)).astype(np.float32, copy=False)
+        else:
+            out = np.empty(imgs.shape, np.float32)
+            for i, im in enumerate(imgs):
+                out[i] = apply_sensor(im, self.sensor, rng=self.rng)
+        # every captured frame passes here once: the scan's frames stage counts them
+        advance(len(out), unit="frames")
         return out
 
 

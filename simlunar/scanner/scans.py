@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.geometry import Rig
+from simlunar.progress import stage
 from simlunar.registry import check_bounds, option
 from simlunar.scanner import dots as _dots
 from simlunar.scanner import gray_code as gc
@@ -401,6 +402,14 @@ def dot_scan(
         min_cam_spacing=o.min_cam_spacing,
         exact=o.exact,
     )
+    # the black frame, then the scheduled dot frames (a capture counts each into the stage)
+    with stage("dot frames", total=1 + len(schedule), unit="frames"):
+        return _dot_frames(capture, rig, proj_uv, schedule, depth_range, o, (H, W))
+
+
+def _dot_frames(capture, rig: Rig, proj_uv, schedule, depth_range, o: DotOptions, shape):
+    """:func:`dot_scan` after scheduling: capture, detect, match and triangulate the dots."""
+    H, W = shape
     black = np.asarray(capture.sense(render_checked(capture, np.zeros((1, H, W), np.float32))))[0]
     segments = _dots.epipolar_segments(rig, proj_uv, depth_range)
     cam_uv = np.full((len(proj_uv), 2), np.nan)

@@ -12,6 +12,8 @@ flash LIDAR without revisits) runs once per trial under the planner label ``"non
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -21,6 +23,7 @@ from simlunar.features import check_image
 from simlunar.metrics import METRICS
 from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
 from simlunar.planner import STRATEGIES, plan
+from simlunar.progress import stage
 from simlunar.reconstruction import Guide
 from simlunar.sensors import SENSORS
 from simlunar.sensors.base import Acquisition
@@ -34,6 +37,7 @@ from simlunar.study.protocol import (
 )
 from simlunar.study.sampling import _cost, _seed, sample_count
 from simlunar.study.scanner import guided_weights
+from simlunar.study.steps import Steps, resumable
 
 __all__ = [
     "LIDARS",
@@ -179,6 +183,7 @@ def run_lidar_study(
     sensor=None,
     progress: Callable[[str], None] | None = None,
     reconstruction_guide: Guide | None = None,
+    steps: Steps | None = None,
 ) -> LidarStudyResult:
     """Plan, acquire with a LIDAR, reconstruct and score, for every planner, density and trial.
 
@@ -198,6 +203,9 @@ def run_lidar_study(
     reconstruction_guide : Guide, optional
         What the guided reconstructions read; default ``Guide(image)`` (the guide camera's
         frame, light unknown: the camera is not a nadir view in general).
+    steps : Steps, optional
+        Where each planner's finished acquisitions are kept (:mod:`simlunar.study.steps`): a
+        planner found there is not measured again; the result is the same bit for bit.
 
     Returns
     -------
@@ -226,19 +234,41 @@ def run_lidar_study(
     trials = Trials(planners, ks, int(o.trials), seeds)
     evaluate = _Scores(depth, image, camera, o.metrics, o.hazard)
     rows, examples = [], {}
-    top = int(np.argmax(dens))
     recons = reconstruction_options(o.reconstructions, outside=o.outside)
     rguide = reconstruction_guide if reconstruction_guide is not None else Guide(image)
-    for outcomes in run_protocol(
-        sensor, trials, evaluate, outside=o.outside, reconstructions=recons, guide=rguide
-    ):
+    run = functools.partial(
+        run_protocol, sensor, evaluate=evaluate, outside=o.outside, reconstructions=recons,
+        guide=rguide,
+    )  # fmt: skip
+    per_planner = len(ks) * int(o.trials)
+    total = len(planners) * per_planner
+    with stage("lidar study", total=total, unit="acquisitions") as bar:
+        for label in planners:  # one step per planner: kept in ``steps`` once finished
+            one = dataclasses.replace(trials, planners={label: planners[label]})
+            step = functools.partial(_planner_step, run, one, dens, progress, bar)
+            (planner_rows, example), loaded = resumable(steps, f"lidar planner {label}", step)
+            rows += planner_rows
+            if example is not None:
+                examples[label] = example
+            if loaded:
+                bar.advance(per_planner)
+    return LidarStudyResult(rows=rows, examples=examples)
+
+
+def _planner_step(run, trials: Trials, dens, progress, bar) -> tuple[list, Acquisition | None]:
+    """The rows of one planner's acquisitions (every density and trial) and its example
+    acquisition (trial 0 at the largest density)."""
+    rows, example = [], None
+    top = int(np.argmax(dens))
+    for outcomes in run(trials=trials):
         for oc in outcomes:
             rows += _rows(oc, dens[oc.budget_index])
             if oc.trial == 0 and oc.budget_index == top:
-                examples[oc.label] = oc.acquisition
+                example = oc.acquisition
+        bar.advance(len(outcomes))
         if progress is not None:
             progress(f"{outcomes[0].label} / trial {outcomes[0].trial}")
-    return LidarStudyResult(rows=rows, examples=examples)
+    return rows, example
 
 
 def _rows(oc, density: float) -> list[dict]:

@@ -41,6 +41,7 @@ __all__ = [
     "Planner",
     "Trials",
     "guide_cost",
+    "light_outcome",
     "reconstruction_of",
     "reconstruction_options",
     "run_protocol",
@@ -310,11 +311,14 @@ def _init_worker(state):
 
 def _worker_task(task):
     # in a worker, only the scores travel back (the acquisition's arrays stay)
-    return [
-        Outcome(o.label, o.trial, o.budget_index, o.k, _light(o.acquisition), o.scores, o.rounds,
-                o.recon_scores, o.recon_info)
-        for o in _task_outcomes(_STATE, *task)
-    ]  # fmt: skip
+    return [light_outcome(o) for o in _task_outcomes(_STATE, *task)]
+
+
+def light_outcome(o: Outcome) -> Outcome:
+    """``o`` without its acquisition's samples (its cost kept): what crosses a process
+    boundary or goes into a checkpoint when only the scores are needed."""
+    return Outcome(o.label, o.trial, o.budget_index, o.k, _light(o.acquisition), o.scores,
+                   o.rounds, o.recon_scores, o.recon_info)  # fmt: skip
 
 
 def _light(acq: Acquisition) -> Acquisition:
@@ -333,8 +337,14 @@ def _map_tasks(state, tasks, workers):
     pool = cf.ProcessPoolExecutor(
         min(workers, len(tasks)), mp_context=ctx, initializer=_init_worker, initargs=(state,)
     )
+    return _pool_results(pool, pool.map(_worker_task, tasks))
+
+
+def _pool_results(pool: cf.ProcessPoolExecutor, results) -> Iterator[list[Outcome]]:
+    """The pool's outcomes in task order, each as soon as it and those before it are done
+    (a caller keeps finished tasks before the last one ends)."""
     try:
-        out = list(pool.map(_worker_task, tasks))
+        yield from results
     except BrokenProcessPool:
         _stop(pool)
         raise InfrastructureError(
@@ -345,7 +355,6 @@ def _map_tasks(state, tasks, workers):
         _stop(pool)  # Ctrl-C: the workers ignore SIGINT, so end them instead of waiting
         raise
     pool.shutdown(wait=True)
-    return iter(out)
 
 
 def _stop(pool: cf.ProcessPoolExecutor) -> None:

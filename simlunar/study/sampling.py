@@ -10,6 +10,7 @@ reconstruction against the true depth.
 
 from __future__ import annotations
 
+import dataclasses
 import zlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -25,11 +26,13 @@ from simlunar.metrics.interior import interior_mask, sparsest_pitch
 from simlunar.planner import (
     check_k,
 )
+from simlunar.progress import stage
 from simlunar.reconstruction import Guide
 from simlunar.sensors.ideal import IdealOptions, IdealSampler
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
+    light_outcome,
     reconstruction_options,
     run_protocol,
 )
@@ -40,6 +43,7 @@ from simlunar.study.sampling_scores import (
     scored_metrics,
 )
 from simlunar.study.stats import bootstrap_scores, samples_saved
+from simlunar.study.steps import Steps
 
 __all__ = [
     "PAPER_STRATEGIES",
@@ -301,6 +305,7 @@ def run_sampling_study(
     workers: int = 1,
     progress: Callable[[int, int], None] | None = None,
     guide: Guide | None = None,
+    steps: Steps | None = None,
 ) -> SamplingStudyResult:
     """Run the paper's sampling protocol on one scene.
 
@@ -324,6 +329,9 @@ def run_sampling_study(
         co-located frame, spacing); default ``Guide(image)`` (one frame, light unknown, unit
         spacing). Its grid must be the depth's. The reconstructions get the sensor's samples
         as measured: depth (camera distance) falls where height rises.
+    steps : Steps, optional
+        Where each strategy's finished trials are kept (:mod:`simlunar.study.steps`): a
+        strategy found there is not computed again; the result is the same bit for bit.
 
     Returns
     -------
@@ -354,20 +362,55 @@ def run_sampling_study(
     rounds = {s: np.ones(shape, np.int64) for s in strategies}
     info: dict = {r: {s: {} for s in strategies} for r in recons}
     frames: dict = {}
-    total, done = len(strategies) * o.trials * len(ks), 0
-    for outcomes in run_protocol(
-        sensor, trials, evaluate, outside=o.outside, workers=workers,
-        reconstructions=recons, guide=guide,
-    ):  # fmt: skip
+    kept = _kept_strategies(steps, strategies)
+    for outcomes in kept.values():
         for oc in outcomes:
             _record_outcome(oc, errors, info, frames, rounds, shape)
-        done += len(ks)
-        if progress is not None:
+    todo = {s: planners[s] for s in strategies if s not in kept}
+    total, done = len(strategies) * o.trials * len(ks), len(kept) * o.trials * len(ks)
+    with stage("sampling study", total=total, unit="acquisitions", done=done) as bar:
+        if progress is not None and done:  # strategies restored from ``steps``
             progress(done, total)
+        finished: dict = {s: [] for s in todo}
+        tasks = iter(())
+        if todo:  # only the strategies no previous run finished
+            tasks = run_protocol(
+                sensor, dataclasses.replace(trials, planners=todo), evaluate,
+                outside=o.outside, workers=workers, reconstructions=recons, guide=guide,
+            )  # fmt: skip
+        for outcomes in tasks:
+            for oc in outcomes:
+                _record_outcome(oc, errors, info, frames, rounds, shape)
+            label = outcomes[0].label
+            finished[label].append([light_outcome(oc) for oc in outcomes])
+            if steps is not None and len(finished[label]) == o.trials:
+                # every trial of this strategy done: kept, so a rerun starts after it
+                steps.save(_step_name(label), finished.pop(label))
+            done += len(ks)
+            bar.update(done)
+            if progress is not None:
+                progress(done, total)
     res = _result(o, strategies, dens, ks, errors, names, list(recons), frames)
     res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], MeasuringPlanner)}
     res.info = {r: by for r, by in info.items() if any(by.values())}
     return res
+
+
+def _step_name(label: str) -> str:
+    return f"sampling strategy {label}"
+
+
+def _kept_strategies(steps: Steps | None, strategies) -> dict:
+    """label -> its outcomes (light: no samples), of the strategies a previous run of this
+    study finished (:mod:`simlunar.study.steps`)."""
+    if steps is None:
+        return {}
+    kept = {}
+    for label in strategies:
+        trials = steps.load(_step_name(label))
+        if trials is not None:
+            kept[label] = [oc for outcomes in trials for oc in outcomes]
+    return kept
 
 
 def _check_inputs(o: SamplingStudyOptions, depth, image, guide: Guide | None):

@@ -11,6 +11,8 @@ against the guide view's ground truth.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -19,6 +21,7 @@ import numpy as np
 from simlunar.features import check_image
 from simlunar.geometry import Rig
 from simlunar.planner import plan, strategy_weights
+from simlunar.progress import stage
 from simlunar.reconstruction import Guide
 from simlunar.render.capture import (
     CaptureOptions,
@@ -27,16 +30,12 @@ from simlunar.render.capture import (
     camera_truth,
     render_guide,
 )
-from simlunar.scanner import gray_errors
 from simlunar.scanner.codings import DEFAULT_CODING, coding_for
 from simlunar.scanner.rigs import RIG_PRESETS, rig_preset
 from simlunar.scanner.scans import (
     SCAN_PLANNERS,
     CodedScan,
     DotOptions,
-    GrayCodeOptions,
-    GrayScan,
-    gray_code_scan,
     low_contrast_pixels,
 )
 from simlunar.sensors.structured_light import (
@@ -46,6 +45,7 @@ from simlunar.sensors.structured_light import (
     StructuredLightOptions,
     mode_coding,
 )
+from simlunar.study._bit_errors import bit_error_table, interreflection_comparison
 from simlunar.study.depth_scores import score_depth
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
@@ -54,6 +54,7 @@ from simlunar.study.protocol import (
     run_protocol,
 )
 from simlunar.study.sampling import _cost
+from simlunar.study.steps import Steps, resumable
 
 __all__ = [
     "ScannerScene",
@@ -80,19 +81,6 @@ def depth_range_from_terrain(terrain, rig: Rig, *, margin: float = 0.05) -> tupl
         raise ValueError("the projector does not see the terrain")
     z = z[inside]
     return (float(z.min() * (1 - margin)), float(z.max() * (1 + margin)))
-
-
-def bit_error_table(
-    gray: GrayScan, truth: dict, mask=None, *, edge_margin: int = 1
-) -> dict[str, float]:
-    """Per-bit error rates of a gray-code decode against camera ground truth.
-
-    ``mask`` (camera (rows, cols) bool) restricts the pixels; always only pixels lit by the
-    projector in both the ground truth and the decode count, and for each bit only pixels
-    ``edge_margin`` pixels away from that bit's true stripe edges
-    (:func:`simlunar.scanner.gray_errors.stable_bits`; 0 keeps every pixel).
-    """
-    return gray_errors.bit_error_table(gray.decode, truth, mask, edge_margin=edge_margin)
 
 
 @dataclass(frozen=True, eq=False)
@@ -228,6 +216,7 @@ def run_scanner_study(
     rng=None,
     progress=None,
     reconstruction_guide: Guide | None = None,
+    steps: Steps | None = None,
 ) -> ScannerStudyResult:
     """Scan a terrain with a rig in several modes and score the guide-view depth.
 
@@ -240,6 +229,10 @@ def run_scanner_study(
     reconstruction_guide : Guide, optional
         What the guided reconstructions read; default the guide view's image (one frame named
         after ``guide_light``, light unknown: the rig camera is not a nadir view).
+    steps : Steps, optional
+        Where finished coded scans and (mode, planner) rescans are kept
+        (:mod:`simlunar.study.steps`): those found there are not scanned again, and the result
+        is the same bit for bit.
 
     Returns
     -------
@@ -248,41 +241,79 @@ def run_scanner_study(
     o = options or ScannerStudyOptions()
     say = progress or (lambda _msg: None)
     noise_rng, plan_rng = np.random.default_rng(rng).spawn(2)
-    capture, guide = _capture_and_guide(scene, o, noise_rng)
+    with stage("white frame and guide view", total=1) as s:
+        capture, guide = _capture_and_guide(scene, o, noise_rng)
+        s.advance()
     depth_range = depth_range_from_terrain(scene.terrain, scene.rig)
+    modes = sorted(o.modes, key=lambda m: m in DOT_MODES)  # full-field scans first
+    n_steps = len(o.scanned_codings()) + sum(
+        len(o.planners) if m in DOT_MODES else 1 for m in modes
+    )
+    # each step is kept in ``steps`` with the capture's noise stream after it (every frame
+    # draws its noise from that one stream): a resumed study draws what this one draws
+    streams = (capture.rng,)
     coded: dict[str, CodedScan] = {}
-    for name in o.scanned_codings():  # every full-field scan once, before the dots
-        say(f"{name} scan")
-        coding = coding_for(o.codings, name)
-        coded[name] = coding.scan(capture, scene.rig, keep_frames=o.keep_frames)
-    evaluate = _ScanScores(guide, o.metrics, capture)
-    recons = reconstruction_options(o.reconstructions)
-    rguide = reconstruction_guide
-    if rguide is None:
-        rguide = Guide(np.asarray(guide.image, float), frames=(o.guide_light,))
-    seeds = _plan_seeds(o, plan_rng)
-    rows: list[dict] = []
-    scans: dict = {}
-    for mode in sorted(o.modes, key=lambda m: m in DOT_MODES):  # full-field scans first
-        options = o.sensor_options(mode)
-        name = options.scanned_coding
-        sensor = StructuredLight(
-            capture,
-            scene.rig,
-            depth_range=depth_range,
-            options=options,
-            coded=None if name is None else coded[name],
-        )
-        trials = _mode_trials(o, mode, sensor, guide, seeds)
+    with stage("scanner study", total=n_steps, unit="steps") as bar:
+        for name in o.scanned_codings():  # every full-field scan once, before the dots
+            say(f"{name} scan")
+            scan = functools.partial(_coded_scan, o, name, capture, scene.rig)
+            coded[name], _ = resumable(steps, f"coded scan {name}", scan, streams=streams)
+            bar.advance()
+        evaluate = _ScanScores(guide, o.metrics, capture)
+        recons = reconstruction_options(o.reconstructions)
+        rguide = reconstruction_guide
+        if rguide is None:
+            rguide = Guide(np.asarray(guide.image, float), frames=(o.guide_light,))
+        seeds = _plan_seeds(o, plan_rng)
+        rows: list[dict] = []
+        scans: dict = {}
+        for mode in modes:
+            options = o.sensor_options(mode)
+            shared = None if options.scanned_coding is None else coded[options.scanned_coding]
+            sensor = StructuredLight(
+                capture, scene.rig, depth_range=depth_range, options=options, coded=shared
+            )
+            trials = _mode_trials(o, mode, sensor, guide, seeds)
+            for label in trials.planners:  # one step per planner (one for a full-field mode)
+                one = dataclasses.replace(trials, planners={label: trials.planners[label]})
+                step = functools.partial(
+                    _mode_step, sensor, one, evaluate, recons, rguide, o.budget, say
+                )
+                name = f"scan mode {mode}" + (f" planner {label}" if label else "")
+                done, _ = resumable(steps, name, step, streams=streams)
+                for planner, trial, trial_rows, detail in done:
+                    rows += trial_rows
+                    # the shared coded scan is not kept with every step: put back
+                    scans[(mode, planner, trial)] = dataclasses.replace(detail, coded=shared)
+                bar.advance()
+    return ScannerStudyResult(rows=rows, guide=guide, coded=coded, scans=scans)
+
+
+def _coded_scan(o: ScannerStudyOptions, name: str, capture, rig: Rig) -> CodedScan:
+    """The full-field scan with coding ``name``; its frames counted as a progress stage."""
+    coding = coding_for(o.codings, name)
+    frames = coding.frames(rig.projector.intrinsics.shape)
+    with stage(f"{name} scan", total=frames, unit="frames"):
+        return coding.scan(capture, rig, keep_frames=o.keep_frames)
+
+
+def _mode_step(sensor, trials: Trials, evaluate, recons, rguide, budget: float, say) -> list:
+    """The trials of one (scan mode, planner): ``(planner, trial, rows, scan detail without
+    its shared coded scan)`` per trial, in order."""
+    out = []
+    (label,) = trials.planners
+    mode = sensor.options.mode
+    with stage(f"{mode} {label}".strip(), total=int(trials.trials), unit="trials") as bar:
         for outcomes in run_protocol(
             sensor, trials, evaluate, reconstructions=recons, guide=rguide
         ):
             for oc in outcomes:
                 planner = oc.label if sensor.needs_plan else ""
                 say(f"{mode} / {planner} / trial {oc.trial}" if planner else "")
-                rows += _rows(mode, planner, oc, o.budget)
-                scans[(mode, planner, oc.trial)] = oc.acquisition.detail
-    return ScannerStudyResult(rows=rows, guide=guide, coded=coded, scans=scans)
+                detail = dataclasses.replace(oc.acquisition.detail, coded=None)
+                out.append((planner, oc.trial, _rows(mode, planner, oc, budget), detail))
+            bar.advance()
+    return out
 
 
 def _capture_and_guide(scene: ScannerScene, o: ScannerStudyOptions, noise_rng):
@@ -406,44 +437,6 @@ def _rows(mode: str, planner: str, oc, budget: float) -> list[dict]:
         for r, scores in oc.recon_scores.items()
         for name, v in scores.items()
     ]
-
-
-def interreflection_comparison(
-    terrain,
-    rig: Rig,
-    *,
-    depths=(2, 3),
-    mask_fn=None,
-    spp: int = 16,
-    seed: int = 0,
-    bsdf=None,
-    gray: GrayCodeOptions | None = None,
-) -> dict:
-    """Gray-code bit error rates with and without interreflections.
-
-    Parameters
-    ----------
-    depths : path depths to compare (Mitsuba convention: 2 = direct only, >= 3 interreflections)
-    mask_fn : callable(positions (rows, cols, 3)) -> bool (rows, cols), optional
-        Selects camera pixels by the world point they see (e.g. inside craters).
-
-    Returns
-    -------
-    dict depth -> dict of ``ber_c<i>`` / ``ber_r<i>`` rates (noise-free frames)
-    """
-    guide = render_guide(terrain, rig, spp=spp, seed=seed, bsdf=bsdf, max_depth=2)
-    out = {}
-    for depth in depths:
-        cap = RenderCapture(
-            terrain, rig, CaptureOptions(max_depth=depth, spp=spp, seed=seed), bsdf=bsdf
-        )
-        g = gray_code_scan(cap, rig, gray)
-        truth = camera_truth(cap, guide)
-        mask = None
-        if mask_fn is not None:
-            mask = np.asarray(mask_fn(np.asarray(cap.scene.ground_truth().position)), bool)
-        out[depth] = bit_error_table(g, truth, mask)
-    return out
 
 
 def aim_rig_at_terrain(

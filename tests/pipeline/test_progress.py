@@ -8,6 +8,7 @@ import re
 import sys
 
 from simlunar.pipeline import progress
+from simlunar.progress import Event
 
 
 def test_lines_report_each_unit_with_elapsed_and_eta(monkeypatch):
@@ -33,9 +34,77 @@ def test_lines_show_the_stage_at_most_once_per_interval(monkeypatch):
     bar = progress._Lines(2, 0, "t", stream=out, every_s=60.0)
     for t, done in [(10.0, 1), (59.0, 2), (61.0, 3), (100.0, 4), (122.0, 5)]:
         now[0] = t
-        bar.stage("sampling", done, 10)
+        bar.event(Event(("sampling study",), done, 10, "acquisitions"))
     stages = [ln for ln in out.getvalue().splitlines() if "sampling" in ln]
-    assert stages == ["t: unit 1/2: sampling 3/10", "t: unit 1/2: sampling 5/10"]
+    assert stages == [
+        "t: unit 1/2: sampling study 3/10 acquisitions",
+        "t: unit 1/2: sampling study 5/10 acquisitions",
+    ]
+
+
+def test_lines_name_every_open_stage_with_its_total_and_drop_closed_ones(monkeypatch):
+    now = [0.0]
+    monkeypatch.setattr(progress.time, "monotonic", lambda: now[0])
+    out = io.StringIO()
+    bar = progress._Lines(1, 0, "dlp", stream=out, every_s=30.0)
+    study = ("scanner study",)
+    scan = (*study, "gray_code scan")
+    for t, ev in [
+        (1.0, Event(study, 0, 3, "steps")),
+        (2.0, Event(scan, 0, 22, "frames")),
+        (31.0, Event(scan, 12, 22, "frames")),  # 30 s after the start: shown
+        (40.0, Event(scan, 22, 22, "frames", finished=True)),
+        (41.0, Event(study, 1, 3, "steps")),
+        (62.0, Event(study, 2, 3, "steps")),  # shown, without the closed scan
+    ]:
+        now[0] = t
+        bar.event(ev)
+    bar.advance()
+    assert out.getvalue().splitlines() == [
+        "dlp: 0/1 units (0 cached)",
+        "dlp: unit 1/1: scanner study 0/3 steps > gray_code scan 12/22 frames",
+        "dlp: unit 1/1: scanner study 2/3 steps",
+        "dlp: 1/1 units, 0:01:02 elapsed",
+    ]
+
+
+def test_the_older_three_argument_stage_still_shows(monkeypatch):
+    now = [100.0]
+    monkeypatch.setattr(progress.time, "monotonic", lambda: now[0])
+    out = io.StringIO()
+    bar = progress._Lines(1, 0, "t", stream=out, every_s=1.0)
+    now[0] = 102.0
+    bar.stage("study", 2, 3)
+    assert out.getvalue().splitlines()[-1] == "t: unit 1/1: study 2/3 steps"
+
+
+def test_the_bar_shows_each_stage_under_the_units_and_removes_it_when_closed(monkeypatch):
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    monkeypatch.setattr(sys, "stderr", Tty())
+    bar = progress._progress(True, 1, 0, "t")
+    try:
+        study = ("sampling study",)
+        bar.event(Event(study, 0, 250, "acquisitions"))
+        bar.event(Event((*study, "inner"), 1, None, "frames"))
+        tasks = {t.description: t for t in bar.p.tasks}
+        assert tasks["[bold]t[/]"].fields["unit"] == "units"
+        # the study counts its acquisitions, not units
+        inner = tasks["  sampling study"]
+        assert (inner.total, inner.fields["unit"]) == (250, "acquisitions")
+        assert tasks["    inner"].total is None
+        bar.event(Event(study, 40, 250, "acquisitions"))
+        assert bar.p.tasks[1].completed == 40
+        bar.event(Event(study, 250, 250, "acquisitions", finished=True))
+        assert [t.description for t in bar.p.tasks] == ["[bold]t[/]"]  # nested one gone too
+        bar.event(Event(("guide render",), 0, 1, "frames"))
+        bar.advance()
+        assert [t.description for t in bar.p.tasks] == ["[bold]t[/]"]
+        assert bar.p.tasks[0].completed == 1
+    finally:
+        bar.stop()
 
 
 def test_a_run_logged_to_a_file_gets_lines_and_a_terminal_gets_the_bar(monkeypatch):

@@ -147,3 +147,30 @@ def test_shipped_reconstruction_training_yaml_loads():
     cfg, exps = load_training(ROOT / "experiments" / "training" / "learned_recon_quarter.yaml")
     assert cfg.target == "reconstruction" and cfg.model.endswith(".joblib")
     assert cfg.seed not in {e.seed for e in exps} and cfg.scale <= 0.25
+
+
+def test_train_says_rendered_i_of_n_then_fits_with_its_stages(tmp_path, monkeypatch):
+    monkeypatch.setattr(train_mod, "guide_view", _synthetic_view)
+    res = CliRunner().invoke(app, ["train", str(_yaml(tmp_path, densities=["1/16", "1/64"]))])
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    rendered = [ln.split(":")[0] for ln in lines if ln.startswith("rendered")]
+    # 2 presets x 2 terrain seeds x 2 suns, each with the total
+    assert rendered == [f"rendered {i}/8" for i in range(1, 9)]
+    fit = lines[len(rendered) :]
+    assert fit[0] == "fitting the learned map on 8 examples (2 densities)"
+    # the fitting stage reaches its total (the first density may be shown too, at most
+    # every 10 s); then the time and the two files
+    assert fit[-4] == "fitting 2/2 densities"
+    assert fit[-3].startswith("fitted in ") and fit[-3].endswith(" s")
+    assert fit[-2].startswith("model:") and fit[-1].startswith("record:")
+
+
+def test_train_of_a_reconstruction_reports_its_training_set_and_fit(tmp_path, monkeypatch):
+    monkeypatch.setattr(train_mod, "guide_view", _recon_view)
+    cfg, experiments = load_training(_yaml(tmp_path, target="reconstruction"))
+    lines: list[str] = []
+    train_mod.train_from_config(cfg, experiments, log=lines.append)
+    assert lines[8] == "fitting the learned reconstruction on 8 examples (1 densities)"
+    assert "training set 8/8 examples" in lines
+    assert lines[-2:-1] == ["fitting 1/1 models"] and lines[-1].startswith("fitted in ")

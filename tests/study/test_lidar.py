@@ -113,3 +113,43 @@ def test_every_reconstruction_gets_rows_and_tables_read_one():
     # the other reconstruction's rows are not pooled into linear's
     assert time_table(rows)["grid"]["value"] == pytest.approx(time_table(res.rows)["grid"]["value"])
     assert time_table(rows, reconstruction="other")["grid"]["value"] == pytest.approx([1e9])
+
+
+class _Noisy(_Timed):
+    """The stand-in with photon noise from the acquisition's rng; counts its acquisitions."""
+
+    def __init__(self, depth, stop_at=None):
+        super().__init__(depth)
+        self.calls, self.stop_at = 0, stop_at
+
+    def acquire(self, rc, *, rng=None):
+        self.calls += 1
+        if self.calls == self.stop_at:
+            raise KeyboardInterrupt
+        acq = super().acquire(rc)
+        noise = np.random.default_rng(rng).normal(0, 0.01, len(acq.values))
+        return Acquisition(acq.rc, acq.values + noise, acq.shape, acq.frames, acq.seconds)
+
+
+def test_a_study_cut_short_at_its_second_planner_resumes_exactly():
+    from simlunar.progress import reporting
+    from simlunar.study.steps import MemorySteps
+
+    image, depth = _guide()
+    o = LidarStudyOptions(planners=("random", "grid", "wavelet"), densities=(1 / 16,), trials=2)
+    clean = run_lidar_study(_scene(), (image, depth), o, rng=4, sensor=_Noisy(depth))
+    steps = MemorySteps()
+    with pytest.raises(KeyboardInterrupt):  # at the second planner's first acquisition
+        run_lidar_study(_scene(), (image, depth), o, rng=4, sensor=_Noisy(depth, 3), steps=steps)
+    assert list(steps.saved) == ["lidar planner random"]
+    sensor, events = _Noisy(depth), []
+    with reporting(events.append):
+        resumed = run_lidar_study(_scene(), (image, depth), o, rng=4, sensor=sensor, steps=steps)
+    assert sensor.calls == 4  # grid and wavelet, two trials each: random was kept
+    assert resumed.rows == clean.rows
+    np.testing.assert_array_equal(
+        resumed.examples["random"].values, clean.examples["random"].values
+    )
+    study = [e for e in events if e.path == ("lidar study",)]
+    assert (study[0].done, study[0].total, study[0].unit) == (0, 6, "acquisitions")
+    assert [e.done for e in study[1:]] == [2, 3, 4, 5, 6, 6] and study[-1].finished

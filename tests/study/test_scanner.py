@@ -354,3 +354,67 @@ def test_low_contrast_rescans_the_least_lit_pixels_of_the_gray_code_scan(rig):
     assert {tuple(p) for p in ae.planned_rc} == {tuple(p) for p in want}
     mse = {(r["mode"], r["metric"]): r["value"] for r in res.rows}
     assert mse[("ambiguity_enhancement", "mse")] <= mse[("gray_code", "mse")] * 1.05
+
+
+def test_a_scan_cut_short_at_its_second_step_resumes_bit_identical(rig, monkeypatch):
+    """Ctrl-C at the second sub-step (the gray-code mode, after the coded scan) keeps the
+    coded scan; the rerun scans nothing again but the dot rescans, whose noise continues the
+    capture's stream where the kept scan left it: the rows are those of an uninterrupted
+    study. Its progress counts every frame of each scan."""
+    from simlunar.imaging.sensor import SensorModel
+    from simlunar.progress import reporting
+    from simlunar.study.steps import MemorySteps
+
+    xx, yy = grid()
+    terr = terrain(0.05 * np.sin(6 * xx) + 0.2 * yy)
+    noisy = SensorModel(full_well_e=2000.0, read_noise_e=20.0, bits=10)
+    scene = st.ScannerScene(terr, rig, camera_model=noisy)
+    opts = st.ScannerStudyOptions(
+        modes=("gray_code", "ambiguity_enhancement"),
+        planners=("random", "wavelet"),
+        metrics=("mse",),
+        capture=CaptureOptions(spp=2, max_depth=2),
+    )
+    events: list = []
+    with reporting(events.append):
+        clean = st.run_scanner_study(scene, opts, rng=3)
+    closed = {e.path: e for e in events if e.finished}
+    scan = closed[("scanner study", "gray_code scan")]
+    # captured frames: a pattern and its inverse per bit (6 + 6 bits), white, black
+    assert (scan.done, scan.total, scan.unit) == (26, 26, "frames")
+    dots = [e for p, e in closed.items() if p[-1] == "dot frames"]
+    assert len(dots) == 2 and all(e.done == e.total > 1 for e in dots)
+    assert closed[("scanner study",)].done == closed[("scanner study",)].total == 4
+
+    real_scan, real_step = st._coded_scan, st._mode_step
+    scans, steps_run = [], []
+
+    def coded_scan(o, name, capture, rig_):
+        scans.append(name)
+        return real_scan(o, name, capture, rig_)
+
+    def mode_step(sensor, trials, *args):
+        if not steps_run:
+            steps_run.append("stopped")
+            raise KeyboardInterrupt
+        steps_run.append((sensor.options.mode, *trials.planners))
+        return real_step(sensor, trials, *args)
+
+    monkeypatch.setattr(st, "_coded_scan", coded_scan)
+    monkeypatch.setattr(st, "_mode_step", mode_step)
+    steps = MemorySteps()
+    with pytest.raises(KeyboardInterrupt):
+        st.run_scanner_study(scene, opts, rng=3, steps=steps)
+    assert list(steps.saved) == ["coded scan gray_code"] and scans == ["gray_code"]
+    scans.clear()
+    resumed = st.run_scanner_study(scene, opts, rng=3, steps=steps)
+    assert scans == [] and steps.loads == ["coded scan gray_code"]
+    assert steps_run[1:] == [
+        ("gray_code", ""),
+        ("ambiguity_enhancement", "random"),
+        ("ambiguity_enhancement", "wavelet"),
+    ]
+    assert resumed.rows == clean.rows
+    # the kept scan is the one the rescans use (not a copy per step)
+    ae = resumed.scans[("ambiguity_enhancement", "random", 0)]
+    assert ae.coded is resumed.coded["gray_code"]
