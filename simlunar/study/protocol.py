@@ -337,14 +337,15 @@ def _map_tasks(state, tasks, workers):
     pool = cf.ProcessPoolExecutor(
         min(workers, len(tasks)), mp_context=ctx, initializer=_init_worker, initargs=(state,)
     )
-    return _pool_results(pool, pool.map(_worker_task, tasks))
+    return _pool_results(pool, [pool.submit(_worker_task, t) for t in tasks])
 
 
-def _pool_results(pool: cf.ProcessPoolExecutor, results) -> Iterator[list[Outcome]]:
+def _pool_results(pool: cf.ProcessPoolExecutor, futures: list) -> Iterator[list[Outcome]]:
     """The pool's outcomes in task order, each as soon as it and those before it are done
     (a caller keeps finished tasks before the last one ends)."""
     try:
-        yield from results
+        for future in futures:
+            yield future.result()
     except BrokenProcessPool:
         _stop(pool)
         raise InfrastructureError(
@@ -359,13 +360,17 @@ def _pool_results(pool: cf.ProcessPoolExecutor, results) -> Iterator[list[Outcom
 
 def _stop(pool: cf.ProcessPoolExecutor) -> None:
     """End a pool's workers now (their tasks are abandoned) and release it."""
-    # the executor has no public way to end running workers; _processes is {pid: Process}
+    # The executor has no public way to end running workers (_processes is {pid: Process}).
+    # Ending them makes its manager thread mark every pending future failed, which raises
+    # InvalidStateError in that thread for a future already cancelled (CPython 3.11
+    # terminate_broken): so nothing here cancels a future (no Executor.map, whose iterator
+    # cancels on close, and no cancel_futures).
     for proc in list((getattr(pool, "_processes", None) or {}).values()):
         try:
             proc.terminate()
         except (OSError, ValueError):
             pass  # already gone
-    pool.shutdown(wait=False, cancel_futures=True)
+    pool.shutdown(wait=False)
 
 
 def _warm_kernels(outside: str, reconstructions: Mapping | None = None, guide=None) -> None:
