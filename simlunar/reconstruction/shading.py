@@ -328,7 +328,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     return Reconstructed(blend_detail(lin, z_fc, gamma), info)
 
 
-def heldout_gamma(field: np.ndarray, lin: LinearField, *, every: int = 5) -> tuple[float, int]:
+def heldout_gamma(field, lin: LinearField, *, every: int = 5) -> tuple[float, int]:
     """The weight of ``field``'s detail that best predicts held-out samples, in [0, 1].
 
     Every ``every``-th sample (in row-major order: spread over the grid, no randomness) is
@@ -339,6 +339,19 @@ def heldout_gamma(field: np.ndarray, lin: LinearField, *, every: int = 5) -> tup
     samples, 0 where the detail is albedo (a high sun on a bright-and-dark surface), where it
     would make the reconstruction worse than linear. The kept samples are 4/5 of all, so the
     check runs at a 12 % wider pitch: a conservative estimate.
+
+    Parameters
+    ----------
+    field : ndarray, shape (rows, cols), or callable
+        The detail field, or ``field(keep) -> ndarray (rows, cols)`` that makes it from the
+        kept samples only (``keep``: their :class:`LinearField`). A field made from the
+        samples themselves (the learned residual, whose features read the distance to the
+        nearest sample and the samples' own residuals) must be remade without the samples it
+        is checked on, or the check would see them.
+    lin : LinearField
+        The linear reconstruction of all the samples.
+    every : int
+        Every ``every``-th sample is held out.
 
     Returns
     -------
@@ -360,6 +373,8 @@ def heldout_gamma(field: np.ndarray, lin: LinearField, *, every: int = 5) -> tup
     if len(tp) < 20:
         return 0.0, len(tp)
     resid = tv - at_points(keep.heights, tp)
+    if callable(field):
+        field = field(keep)
     d = at_points(reanchored_detail(field, keep), tp)
     dd = float(d @ d)
     if not dd > 0:
