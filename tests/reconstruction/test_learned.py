@@ -264,7 +264,7 @@ def test_map_and_reconstruction_files_refuse_each_other(model, tmp_path):
 
 def test_registered_by_name_and_cached_per_path_and_hash(model, held_out, tmp_path):
     entry = RECONSTRUCTIONS["learned"]
-    assert entry.meta == {"guided": True, "needs_model": True}
+    assert entry.meta == {"guided": True, "needs_model": True, "results_version": 2}
     path, _ = model.save(tmp_path / "r.joblib")
     img, z = held_out[2]
     pts, vals = layout(z, 1 / 32, 9)
