@@ -34,7 +34,10 @@ NEW_PLANNER_DEFAULTS = {
 #: render keys added after caches existed, with the value that gives the numbers of before
 NEW_RENDER_DEFAULTS = {"guide_frames": []}
 #: keys added inside a planner option section after the table above, with their defaults
-NEW_NESTED_DEFAULTS = {"sequential": {"first_round": "uniform"}}
+NEW_NESTED_DEFAULTS = {
+    "sequential": {"first_round": "uniform"},
+    "oracle": {"reconstruction": "linear"},
+}
 
 
 def without_new_defaults(study: dict) -> dict:
