@@ -20,28 +20,40 @@ from simlunar.config.loading import to_plain
 from simlunar.config.training import LearnedReconCfg, TrainCfg, _preset, _sweep_presets
 from simlunar.config.yamlio import dump_yaml
 from simlunar.features.learned import LearnedOptions
-from simlunar.pipeline.figure_inputs import RENDER_LOCK
+from simlunar.pipeline.figure_inputs import RENDER_LOCK, RenderScene
+from simlunar.pipeline.guide import build_guide
 from simlunar.pipeline.preflight import check_out_file
 from simlunar.pipeline.unit import fill_invalid, int_seed, scene_inputs, sensor_image, stage_seeds
 from simlunar.planner.learning import train_learned_map, train_learned_reconstruction
-from simlunar.render import render
+from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render.scene import luminance
 
 __all__ = ["guide_view", "train_from_config"]
 
 
-def guide_view(cfg) -> tuple[np.ndarray, np.ndarray]:
+def guide_view(cfg, *, with_guide: bool = False):
     """``(image float32, depth float64)`` of an experiment config's scene, as its unit renders
-    them (the same seeds per stage)."""
+    them (the same seeds per stage); with ``with_guide``, ``(image, depth, guide)``: the
+    :class:`~simlunar.reconstruction.Guide` its guided reconstructions read (the frames of
+    ``render.guide_frames`` rendered as the unit renders them,
+    :func:`simlunar.pipeline.guide.build_guide`)."""
     seeds = stage_seeds(cfg.seed)
     terrain, camera, lights, bsdf = scene_inputs(cfg)
     r = cfg.render
+    scene = RenderScene(terrain, camera, lights, bsdf, r.spp, int_seed(seeds["render"]),
+                        r.max_depth)  # fmt: skip
     with RENDER_LOCK:
-        res = render(terrain, camera, lights=lights, bsdf=bsdf, spp=r.spp,
-                     seed=int_seed(seeds["render"]), max_depth=r.max_depth)  # fmt: skip
+        res = scene.render()
     image = sensor_image(luminance(res.image), r.sensor, rng=np.random.default_rng(seeds["sensor"]))
     depth, _ = fill_invalid(np.where(res.gt.valid, res.gt.depth, np.nan))
-    return image, depth
+    if not with_guide:
+        return image, depth
+
+    def develop(radiance, rng):
+        return sensor_image(radiance, r.sensor, rng=rng)
+
+    guide, _ = build_guide(cfg, scene, image, seeds["guide"], develop=develop, lock=RENDER_LOCK)
+    return image, depth, guide
 
 
 def _scenes(cfg: TrainCfg, experiments) -> list[tuple[dict, object]]:
@@ -84,9 +96,13 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
     check_out_file(path, option=option)
     check_out_file(path.with_suffix(".json"), option=option)
     t0 = time.perf_counter()
-    examples, described = [], []
+    examples, described, guides = [], [], []
+    error_name, error_options = cfg.error_reconstruction_spec()
+    with_guide = bool(RECONSTRUCTIONS[error_name].meta.get("guided"))
     for what, exp in _scenes(cfg, experiments):
-        examples.append(guide_view(exp))
+        view = guide_view(exp, with_guide=True) if with_guide else guide_view(exp)
+        examples.append(view[:2])
+        guides.append(view[2] if with_guide else None)
         described.append(what)
         log(f"rendered {len(examples)}: {what['preset']} seed_index {what['seed_index']} "
             f"sun {what['sun_elevation_deg']}")  # fmt: skip
@@ -95,8 +111,8 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
         "name": cfg.name,
         "description": cfg.description,
         "command": command,
-        "training_config": cfg.model_dump(mode="json"),
-        "training_yaml": dump_yaml(cfg.model_dump(mode="json")),
+        "training_config": cfg.recorded(),
+        "training_yaml": dump_yaml(cfg.recorded()),
         "examples": described,
         "held_out_presets": list(cfg.held_out_presets),
         "experiments": [
@@ -117,12 +133,18 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
             provenance=provenance,
         )
     else:
+        target = {}
+        if cfg.error_reconstruction != "linear":  # the call (and the model) of before
+            target = {"error_reconstruction": error_name,
+                      "reconstruction_options": error_options,
+                      "guides": guides if with_guide else None}  # fmt: skip
         model = train_learned_map(
             examples,
             densities=cfg.densities,
             options=options,
             rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 20])),
             provenance=provenance,
+            **target,
         )
     path = Path(out) if out is not None else Path(cfg.model)
     return model.save(path)
