@@ -78,7 +78,9 @@ def test_error_target_is_the_error_of_the_reconstruction_given():
     # linear passed explicitly is the default, exactly
     from simlunar.reconstruction import reconstruct
 
-    lin = error_target(z, density=1 / 8, rng=3, reconstruct=lambda rc, v: reconstruct(rc, v, z.shape))
+    lin = error_target(
+        z, density=1 / 8, rng=3, reconstruct=lambda rc, v: reconstruct(rc, v, z.shape)
+    )
     np.testing.assert_array_equal(lin, error_target(z, density=1 / 8, rng=3))
 
 
