@@ -99,30 +99,25 @@ def test_the_default_reconstructions_keep_the_cache_key_of_before():
     assert other[0].key != a.key
 
 
-def test_a_reconstruction_with_a_results_version_has_it_in_the_key(tmp_path):
+def test_a_reconstruction_with_a_results_version_has_it_in_the_key():
     from simlunar.reconstruction import RECONSTRUCTIONS
     from simlunar.results.cache_keys import reconstruction_versions
 
     assert RECONSTRUCTIONS["learned"].meta["results_version"] == 2
-    study = {"reconstructions": ["linear", "shading", {"learned": {"model": "m.joblib"}},
-                                 {"l2": {"reconstruction": "learned", "model": "n.joblib"}}]}  # fmt: skip
-    assert reconstruction_versions(study) == {"learned": 2}
+    recons = ["linear", "shading", {"learned": {"model": "m.joblib"}},
+              {"l2": {"reconstruction": "learned", "model": "n.joblib"}}]  # fmt: skip
+    assert reconstruction_versions({"reconstructions": recons}) == {"learned": 2}
     assert reconstruction_versions({"reconstructions": ["linear", "shading"]}) == {}
     a = expand(cfg(sweep={}))[0]
-    keyed = {**a.config, "study": {**a.config["study"], **study}}
-    plain = {
-        **a.config,
-        "study": {**a.config["study"], "reconstructions": study["reconstructions"]},
-    }
-    old = dict(RECONSTRUCTIONS["learned"].meta)
-    try:  # the version, and only it, moves the key
-        k2 = unit_key(keyed, a.inputs)
-        RECONSTRUCTIONS["learned"].meta["results_version"] = 3
-        assert unit_key(keyed, a.inputs) != k2
+    config = {**a.config, "study": {**a.config["study"], "reconstructions": recons}}
+    before = unit_key(config, a.inputs)
+    meta = RECONSTRUCTIONS["learned"].meta
+    try:  # a new version of the method: a new key for the same config
+        meta["results_version"] = 3
+        assert unit_key(config, a.inputs) != before
     finally:
-        RECONSTRUCTIONS["learned"].meta.clear()
-        RECONSTRUCTIONS["learned"].meta.update(old)
-    assert unit_key(plain, a.inputs) == k2
+        meta["results_version"] = 2
+    assert unit_key(config, a.inputs) == before
 
 
 def test_cached_rows_without_a_reconstruction_are_linear_rows():
