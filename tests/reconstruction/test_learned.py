@@ -454,3 +454,25 @@ def test_registered_learned_runs_the_check_by_default(model, tmp_path):
     mse = [np.mean((h - z) ** 2) for h in (lin, on.heights, off.heights)]
     assert mse[1] <= 1.01 * mse[0] < mse[2]
     assert "gamma" in on.info and "gamma" not in off.info
+
+
+def test_heldout_check_pools_its_splits_on_a_sparse_layout(model, held_out):
+    # 64 x 96 cells at 1/96: 64 samples, one split leaves ~13 inside the hull (shading's
+    # check returns 0 there); pooled over the five splits the planted relation keeps its gain
+    from simlunar.reconstruction._anchor import linear_field
+    from simlunar.reconstruction.shading import heldout_gamma
+
+    img, z = held_out[0]
+    pts, vals = layout(z, 1 / 96, 2)
+    lin = linear_field(pts, vals, z.shape)
+    r = model._residual(pts, vals, z.shape, Guide(img), 1)[0]
+    assert heldout_gamma(r, lin) == (0.0, heldout_gamma(r, lin)[1])
+    assert heldout_gamma(r, lin)[1] < 20
+    out = model.reconstruct(pts, vals, z.shape, guide=Guide(img), heldout_check=True)
+    assert out.info["heldout_samples"] >= 20 and out.info["gamma"] > 0.5
+    lin_mse = np.mean((lin.heights - z) ** 2)
+    assert np.mean((out.heights - z) ** 2) < 0.5 * lin_mse
+    # a noise residual on the same sparse layout stays near linear
+    noise = LearnedReconstruction(_NoiseModel(), model.meta)
+    got = noise.reconstruct(pts, vals, z.shape, guide=Guide(img), heldout_check=True)
+    assert np.mean((got.heights - z) ** 2) < 1.05 * lin_mse
