@@ -39,8 +39,10 @@ re-anchored detail on the left-out samples (in [0, 1]) weighs the residual insid
 hull (:func:`simlunar.reconstruction.shading.blend_detail`; linear's nearest fill outside).
 Where one split leaves fewer than 20 samples inside the hull (sparse layouts), the five splits
 are pooled (every sample left out once, five more predictions) instead of falling back to
-linear: with one split only, the check cost the gain at 1/1024-1/2048 on quarter-scale
-aerial_1 under the 30 deg sun (1.39x instead of 1.68x over 1/64-1/2048).
+linear. Measured on quarter-scale aerial_1 (experiment seed 11, 2 terrains, uniform Lloyd,
+1/64-1/2048; experiments/fusion_oracle_quarter.yaml): without the check 1.68x under the 30 deg
+sun and 0.95x under camera-centred light; with one split 1.39x and 1.00x (the two sparsest
+densities fell back to linear); with the pooled splits 1.60x and 1.00x.
 A model trained under a 30 deg sun and asked under camera-centred light (the image is albedo)
 measured 0.95x linear's samples at equal MSE on quarter-scale aerial_1 without the check; the
 check costs a second prediction.
