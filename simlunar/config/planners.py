@@ -102,6 +102,12 @@ class OracleOptsCfg(_Model):
     batch_share: float = Field(0.15, gt=0, description="batch, a share of the current count")
     smooth_pitch: float = Field(0.25, ge=0, description="error smoothing sigma (pitches)")
     nms_pitch: float = Field(1.0, gt=0, description="peak suppression window (pitches)")
+    reconstruction: str = Field(
+        "linear",
+        min_length=1,
+        description="whose true error the oracle feeds back: linear (the paper's) or a name "
+        "or label of study.reconstructions (e.g. shading: the bound for the fused model)",
+    )
 
 
 #: maps a sequential strategy may take as its prior (none: the error estimate alone)

@@ -268,9 +268,10 @@ class RenderCfg(_Model):
     max_depth: int = Field(3, ge=2, le=16, description="path depth (2 = direct light only)")
     guide_frames: Annotated[list[GuideFrameCfg], AfterValidator(_unique_frames)] = Field(
         default_factory=list,
-        description="extra frames of the guide view for the guided reconstructions (sampling "
-        "and LIDAR studies): camera (camera-centred light, the albedo frame) or {sun: "
-        "{elevation_deg, azimuth_deg}}; each is one more exposure through the same sensor",
+        description="extra frames of the guide view for the guided reconstructions (sampling, "
+        "scanner and LIDAR studies): camera (camera-centred light, the albedo frame; in a "
+        "scanner study the projector's flood frame) or {sun: {elevation_deg, azimuth_deg}}; "
+        "each is one more exposure through the same sensor",
     )
     sensor: SensorCfg | None = Field(
         default_factory=SensorCfg, description="null = use noiseless radiance"

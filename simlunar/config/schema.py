@@ -118,6 +118,15 @@ class ExperimentCfg(_Model):
                 "render.sensor.exposure_e: a scanner study sets the exposure from its white "
                 "calibration frame (the auto exposure); leave exposure_e null"
             )
+        if (
+            isinstance(self.study, ScannerStudyCfg)
+            and self.study.guide_light == "projector"
+            and "camera" in self.render.guide_frames
+        ):
+            raise ValueError(
+                "render.guide_frames: camera (the projector's flood frame) is the scanner's "
+                "guide view already (study.guide_light: projector); use guide_light: sun"
+            )
         if isinstance(self.study, ScannerStudyCfg) and not isinstance(
             self.render.light, SunLightCfg
         ):

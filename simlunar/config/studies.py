@@ -145,6 +145,10 @@ class SamplingStudyCfg(_Model):
 
     _unique = field_validator("strategies", "metrics")(unique_names)
 
+    def _reconstruction_labels(self) -> list[str]:
+        """The labels of ``reconstructions`` (a name, or the one key of a mapping)."""
+        return [r if isinstance(r, str) else next(iter(r)) for r in self.reconstructions]
+
     @model_validator(mode="after")
     def _options_fit(self) -> SamplingStudyCfg:
 
@@ -157,6 +161,12 @@ class SamplingStudyCfg(_Model):
                 raise ValueError(
                     f"strategy_options.{label}: a label of an oracle ({base}) starts with "
                     "'oracle', so every table shows it as a bound"
+                )
+            recon = opts.oracle.reconstruction if opts is not None else "linear"
+            if recon != "linear" and recon not in self._reconstruction_labels():
+                raise ValueError(
+                    f"strategy_options.{label}.oracle.reconstruction: {recon!r} is not one of "
+                    f"study.reconstructions ({', '.join(self._reconstruction_labels())})"
                 )
             try:
                 check_planner_options(base, opts or PlannerOptsCfg())

@@ -18,6 +18,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, field_validator, model_validator
 
+from simlunar.config.derived import reconstruction_mapping, reconstruction_specs
 from simlunar.config.fields import Deg, Density, _Model
 from simlunar.config.loading import load_experiment
 from simlunar.config.messages import validate_file_data
@@ -113,6 +114,13 @@ class TrainCfg(_Model):
     reconstruction: LearnedReconCfg | None = Field(
         None, description="features of the learned reconstruction (target: reconstruction)"
     )
+    error_reconstruction: str | dict[str, dict[str, Any]] = Field(
+        "linear",
+        description="target: map only: the reconstruction whose error the map learns, a name "
+        "or {name: {options}} of the reconstruction registry: linear (the paper's) or e.g. "
+        "shading (the fused model: sample where the camera cannot tell); a guided one reads "
+        "each example's guide frames (render.guide_frames of its experiment)",
+    )
     model: str = Field(description="output model file (.joblib, its .json beside it)")
 
     @field_validator("model")
@@ -128,7 +136,30 @@ class TrainCfg(_Model):
             raise ValueError(f"densities: must be distinct, got {self.densities}")
         if self.reconstruction is not None and self.target != "reconstruction":
             raise ValueError("reconstruction: only with target: reconstruction")
+        if self.error_reconstruction != "linear" and self.target != "map":
+            raise ValueError("error_reconstruction: only with target: map")
         return self
+
+    @field_validator("error_reconstruction")
+    @classmethod
+    def _one_registered_reconstruction(cls, v):
+        if isinstance(v, dict) and len(v) == 1 and "reconstruction" in next(iter(v.values())):
+            raise ValueError("a registered reconstruction's name, not a label")
+        (item,) = reconstruction_specs([v])  # names and options checked by the registry
+        return item
+
+    def error_reconstruction_spec(self) -> tuple[str, dict]:
+        """``(name, options)`` of ``error_reconstruction``."""
+        ((name, opts),) = reconstruction_mapping([self.error_reconstruction]).items()
+        return name, opts
+
+    def recorded(self) -> dict:
+        """The config as recorded with the model: without ``error_reconstruction`` when it is
+        linear, so a map trained as before has the record of before."""
+        out = self.model_dump(mode="json")
+        if out.get("error_reconstruction") == "linear":
+            del out["error_reconstruction"]
+        return out
 
 
 def load_training(path: str | Path):

@@ -400,7 +400,24 @@ def scanner_options(
         dots=dot_options(o.dot_opts),
         planner_opts={name: planner_kwargs(name, p) for name, p in o.planner_opts.items()},
         reconstructions=reconstruction_mapping(study.reconstructions),
+        guide_frames=scanner_guide_frames(render),
     )
+
+
+def scanner_guide_frames(render: RenderCfg) -> tuple:
+    """``render.guide_frames`` as the scanner study takes them: ``"camera"`` (the projector's
+    flood frame) or the SunLight spec of another sun."""
+    out = []
+    for f in render.guide_frames:
+        if isinstance(f, str):
+            out.append(f)
+        else:
+            s = f.sun
+            cfg = SunLightCfg(
+                elevation_deg=s.elevation_deg, azimuth_deg=s.azimuth_deg, irradiance=s.irradiance
+            )
+            out.append(lights(cfg, 0.0)[0])
+    return tuple(out)
 
 
 def sampling_options(study: SamplingStudyCfg) -> SamplingStudyOptions:

@@ -43,7 +43,11 @@ from simlunar.pipeline.resume import compute_missing, kept_message, prune_steps
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.plotting.lidar_tables import lidar_tables
 from simlunar.plotting.scanner_tables import scanner_tables
-from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
+from simlunar.results.cache_keys import (
+    reconstruction_versions,
+    render_without_new_defaults,
+    without_new_defaults,
+)
 from simlunar.results.figures import write_figures_pruned
 from simlunar.results.folder import (
     _check_writable,
@@ -127,15 +131,16 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
             "sparse_mesh_roughness_threshold",
         )
     }
-    blob = json.dumps(
-        {
-            "cache_version": CACHE_VERSION,
-            "config": relevant,
-            "inputs": {k: v["sha256"] for k, v in inputs.items()},
-            "simlunar": simlunar.__version__,
-        },
-        sort_keys=True,
-    )
+    key = {
+        "cache_version": CACHE_VERSION,
+        "config": relevant,
+        "inputs": {k: v["sha256"] for k, v in inputs.items()},
+        "simlunar": simlunar.__version__,
+    }
+    versions = reconstruction_versions(study) if isinstance(study, dict) else {}
+    if versions:  # only then: every other unit keeps its key
+        key["reconstruction_versions"] = versions
+    blob = json.dumps(key, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 

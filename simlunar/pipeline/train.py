@@ -20,29 +20,41 @@ from simlunar.config.loading import to_plain
 from simlunar.config.training import LearnedReconCfg, TrainCfg, _preset, _sweep_presets
 from simlunar.config.yamlio import dump_yaml
 from simlunar.features.learned import LearnedOptions
-from simlunar.pipeline.figure_inputs import RENDER_LOCK
+from simlunar.pipeline.figure_inputs import RENDER_LOCK, RenderScene
+from simlunar.pipeline.guide import build_guide
 from simlunar.pipeline.preflight import check_out_file
 from simlunar.pipeline.unit import fill_invalid, int_seed, scene_inputs, sensor_image, stage_seeds
 from simlunar.planner.learning import train_learned_map, train_learned_reconstruction
 from simlunar.progress import Event, reporting
-from simlunar.render import render
+from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render.scene import luminance
 
 __all__ = ["guide_view", "train_from_config"]
 
 
-def guide_view(cfg) -> tuple[np.ndarray, np.ndarray]:
+def guide_view(cfg, *, with_guide: bool = False):
     """``(image float32, depth float64)`` of an experiment config's scene, as its unit renders
-    them (the same seeds per stage)."""
+    them (the same seeds per stage); with ``with_guide``, ``(image, depth, guide)``: the
+    :class:`~simlunar.reconstruction.Guide` its guided reconstructions read (the frames of
+    ``render.guide_frames`` rendered as the unit renders them,
+    :func:`simlunar.pipeline.guide.build_guide`)."""
     seeds = stage_seeds(cfg.seed)
     terrain, camera, lights, bsdf = scene_inputs(cfg)
     r = cfg.render
+    scene = RenderScene(terrain, camera, lights, bsdf, r.spp, int_seed(seeds["render"]),
+                        r.max_depth)  # fmt: skip
     with RENDER_LOCK:
-        res = render(terrain, camera, lights=lights, bsdf=bsdf, spp=r.spp,
-                     seed=int_seed(seeds["render"]), max_depth=r.max_depth)  # fmt: skip
+        res = scene.render()
     image = sensor_image(luminance(res.image), r.sensor, rng=np.random.default_rng(seeds["sensor"]))
     depth, _ = fill_invalid(np.where(res.gt.valid, res.gt.depth, np.nan))
-    return image, depth
+    if not with_guide:
+        return image, depth
+
+    def develop(radiance, rng):
+        return sensor_image(radiance, r.sensor, rng=rng)
+
+    guide, _ = build_guide(cfg, scene, image, seeds["guide"], develop=develop, lock=RENDER_LOCK)
+    return image, depth, guide
 
 
 def _scenes(cfg: TrainCfg, experiments) -> list[tuple[dict, object]]:
@@ -85,10 +97,14 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
     check_out_file(path, option=option)
     check_out_file(path.with_suffix(".json"), option=option)
     t0 = time.perf_counter()
-    examples, described = [], []
+    examples, described, guides = [], [], []
+    error_name, _ = cfg.error_reconstruction_spec()
+    with_guide = bool(RECONSTRUCTIONS[error_name].meta.get("guided"))
     scenes = _scenes(cfg, experiments)
     for what, exp in scenes:
-        examples.append(guide_view(exp))
+        view = guide_view(exp, with_guide=True) if with_guide else guide_view(exp)
+        examples.append(view[:2])
+        guides.append(view[2] if with_guide else None)
         described.append(what)
         log(f"rendered {len(examples)}/{len(scenes)}: {what['preset']} seed_index "
             f"{what['seed_index']} sun {what['sun_elevation_deg']}")  # fmt: skip
@@ -97,8 +113,8 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
         "name": cfg.name,
         "description": cfg.description,
         "command": command,
-        "training_config": cfg.model_dump(mode="json"),
-        "training_yaml": dump_yaml(cfg.model_dump(mode="json")),
+        "training_config": cfg.recorded(),
+        "training_yaml": dump_yaml(cfg.recorded()),
         "examples": described,
         "held_out_presets": list(cfg.held_out_presets),
         "experiments": [
@@ -112,7 +128,7 @@ def train_from_config(cfg: TrainCfg, experiments, *, out: str | Path | None = No
         f"({len(cfg.densities)} densities)")  # fmt: skip
     t1 = time.perf_counter()
     with reporting(_StageLines(log)):
-        model = _fit(cfg, examples, options, provenance)
+        model = _fit(cfg, examples, options, provenance, guides)
     log(f"fitted in {time.perf_counter() - t1:.1f} s")
     path = Path(out) if out is not None else Path(cfg.model)
     return model.save(path)
@@ -135,8 +151,9 @@ class _StageLines:
         self.log(ev.text())
 
 
-def _fit(cfg: TrainCfg, examples, options: LearnedOptions, provenance: dict):
-    """The model of ``cfg.target`` fitted to the rendered examples."""
+def _fit(cfg: TrainCfg, examples, options: LearnedOptions, provenance: dict, guides: list):
+    """The model of ``cfg.target`` fitted to the rendered examples (``guides``: each
+    example's guide, for a map learned on a guided reconstruction's error)."""
     if cfg.target == "reconstruction":
         recon = cfg.reconstruction or LearnedReconCfg()
         return train_learned_reconstruction(
@@ -148,10 +165,18 @@ def _fit(cfg: TrainCfg, examples, options: LearnedOptions, provenance: dict):
             rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 21])),
             provenance=provenance,
         )
+    target = {}
+    if cfg.error_reconstruction != "linear":  # the call (and the model) of before
+        error_name, error_options = cfg.error_reconstruction_spec()
+        with_guide = bool(RECONSTRUCTIONS[error_name].meta.get("guided"))
+        target = {"error_reconstruction": error_name,
+                  "reconstruction_options": error_options,
+                  "guides": guides if with_guide else None}  # fmt: skip
     return train_learned_map(
         examples,
         densities=cfg.densities,
         options=options,
         rng=np.random.default_rng(np.random.SeedSequence([cfg.seed, 20])),
         provenance=provenance,
+        **target,
     )

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Sequence
-from dataclasses import asdict
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy import ndimage
@@ -32,7 +32,8 @@ from simlunar.features.learned import (
 from simlunar.features.maps import check_image
 from simlunar.planner.sequential import uniform_layout
 from simlunar.progress import stage
-from simlunar.reconstruction import RECONSTRUCTIONS, Guide, reconstruct
+from simlunar.reconstruction import RECONSTRUCTIONS, Guide, run_reconstruction
+from simlunar.reconstruction import reconstruct as reconstruct_linear
 from simlunar.reconstruction.learned import FORMAT as RECON_FORMAT
 from simlunar.reconstruction.learned import (
     RECON_FEATURE_VERSION,
@@ -45,7 +46,9 @@ from simlunar.reconstruction.learned import (
 __all__ = ["error_target", "train_learned_map", "train_learned_reconstruction"]
 
 
-def error_target(truth, *, density: float, layouts: int = 3, rng=None) -> np.ndarray:
+def error_target(
+    truth, *, density: float, layouts: int = 3, rng=None, reconstruct=None
+) -> np.ndarray:
     """Log squared error of uniform layouts' reconstructions, smoothed at half the pitch.
 
     Parameters
@@ -58,6 +61,11 @@ def error_target(truth, *, density: float, layouts: int = 3, rng=None) -> np.nda
         Independent uniform layouts (:func:`simlunar.planner.sequential.uniform_layout`)
         whose squared errors are averaged.
     rng : None, int, SeedSequence or Generator
+    reconstruct : callable, optional
+        ``reconstruct(rc, values) -> heights`` (rc (k, 2) int64, values (k,) the truth there,
+        heights (rows, cols)): the reconstruction whose error is the target, e.g. the fused
+        ``shading`` reconstruction with the example's guide ("sample where the camera cannot
+        tell"); default Delaunay-linear (the paper's).
 
     Returns
     -------
@@ -72,7 +80,10 @@ def error_target(truth, *, density: float, layouts: int = 3, rng=None) -> np.nda
     sq = np.zeros_like(z)
     for _ in range(layouts):
         r, c = np.divmod(uniform_layout(z.shape, k, rng=rng), z.shape[1])
-        sq += (reconstruct(np.column_stack((r, c)), z[r, c], z.shape) - z) ** 2
+        rc = np.column_stack((r, c))
+        rec = reconstruct_linear(rc, z[r, c], z.shape) if reconstruct is None else (
+            np.asarray(reconstruct(rc, z[r, c]), dtype=np.float64))  # fmt: skip
+        sq += (rec - z) ** 2
     sq = ndimage.gaussian_filter(sq / layouts, 0.5 * pitch_of(density), mode="nearest")
     eps = 1e-6 * float(sq.mean()) + 1e-30
     return np.log(sq + eps).astype(np.float32)
@@ -148,12 +159,16 @@ def _training_meta(head, dens, opt, ex, t0, provenance, **counts) -> dict:
     return meta
 
 
-def _training_set(examples, density, options, rng):
-    """Features and centred targets of ``options.pixels_per_example`` pixels per example."""
+def _training_set(examples, density, options, rng, reconstructors=None):
+    """Features and centred targets of ``options.pixels_per_example`` pixels per example
+    (the target: the error of each example's ``reconstructors`` entry, None: linear)."""
     xs, ys = [], []
     pitch = pitch_of(density)
-    for image, truth in examples:
-        y = error_target(truth, density=density, layouts=options.layouts, rng=rng).ravel()
+    fns = reconstructors or [None] * len(examples)
+    for (image, truth), fn in zip(examples, fns, strict=True):
+        y = error_target(
+            truth, density=density, layouts=options.layouts, rng=rng, reconstruct=fn
+        ).ravel()
         x = image_features(image, pitch=pitch).reshape(y.size, -1)
         take = rng.choice(y.size, min(options.pixels_per_example, y.size), replace=False)
         xs.append(x[take])
@@ -168,6 +183,9 @@ def train_learned_map(
     options: LearnedOptions | None = None,
     rng,
     provenance: dict | None = None,
+    error_reconstruction: str = "linear",
+    reconstruction_options=None,
+    guides: Sequence[Guide] | None = None,
 ) -> LearnedMap:
     """Learn one importance model per density from rendered (image, truth) examples.
 
@@ -184,6 +202,18 @@ def train_learned_map(
     provenance : dict, optional
         JSON-serialisable description of where the examples came from (the training YAML,
         presets, seeds, sun angles); saved with the model.
+    error_reconstruction : str
+        The registered reconstruction (:data:`simlunar.reconstruction.RECONSTRUCTIONS`)
+        whose error is the target: ``linear`` (the paper's, the default: the model and its
+        record as before) or e.g. ``shading``, the fused model: the map then learns where
+        the reconstruction that reads the image still errs ("sample where the camera cannot
+        tell": shadows, albedo edges, weak shading). Recorded in the model's record
+        (``error_reconstruction``, its options and the guide frames it read).
+    reconstruction_options : options object or mapping, optional
+        Its options (defaults when None).
+    guides : sequence of Guide, optional
+        What the camera saw in each example, for a guided reconstruction (one per example,
+        on its grid); default ``Guide(image)`` (the example's image, light unknown).
 
     Returns
     -------
@@ -193,19 +223,64 @@ def train_learned_map(
     rng = np.random.default_rng(rng)
     ex = _check_examples(examples)
     dens = _checked_densities(densities)
+    fns, recorded = _error_reconstructors(ex, error_reconstruction, reconstruction_options,
+                                          guides)  # fmt: skip
     t0 = time.perf_counter()
     models = {}
     with stage("fitting", total=len(dens), unit="densities") as fitted:
         for d in dens:
-            x, y = _training_set(ex, d, opt, rng)
+            x, y = _training_set(ex, d, opt, rng, fns)
             models[d] = _fit_boosted(x, y, opt, rng)
             fitted.advance()
     head = {
         "format": FORMAT,
         "feature_set_version": FEATURE_SET_VERSION,
         "feature_names": list(FEATURE_NAMES),
+        **recorded,
     }
     return LearnedMap(models, _training_meta(head, dens, opt, ex, t0, provenance))
+
+
+def _error_reconstructors(examples, name, options, guides) -> tuple[list | None, dict]:
+    """Per example the ``(rc, values) -> heights`` of reconstruction ``name`` (None for all
+    when it is ``linear`` with its defaults: the target of before) and what the record says of
+    it (nothing for linear: the record of before)."""
+    entry, opts = RECONSTRUCTIONS.resolve(name, options)  # unknown name: a ValueError
+    if guides is not None and len(guides) != len(examples):
+        raise ValueError(f"guides: one per example ({len(examples)}), got {len(guides)}")
+    if name == "linear" and opts == entry.make_options({}):
+        if guides is not None:
+            raise ValueError("guides are for a guided error_reconstruction, not linear")
+        return None, {}
+    guided = bool(entry.meta.get("guided"))
+    if guides is None:
+        guides = [Guide(image) for image, _ in examples] if guided else [None] * len(examples)
+    for i, (g, (image, _)) in enumerate(zip(guides, examples, strict=True)):
+        if guided and (g is None or g.shape != image.shape[:2]):
+            raise ValueError(f"guides[{i}]: a Guide on the example's grid {image.shape[:2]}")
+    fns = [_Recon(name, opts, truth.shape, g) for (_, truth), g in zip(examples, guides)]
+    frames = sorted({f for g in guides if g is not None for f in g.frames})
+    recorded = {
+        "error_reconstruction": name,
+        "error_reconstruction_options": asdict(opts),
+        "error_guide_frames": frames if guided else [],
+    }
+    return fns, recorded
+
+
+@dataclass(frozen=True, eq=False)
+class _Recon:
+    """``(rc, values) -> heights`` of one registered reconstruction on one example."""
+
+    name: str
+    options: object
+    shape: tuple
+    guide: object
+
+    def __call__(self, rc, values):
+        return run_reconstruction(
+            self.name, rc, values, self.shape, guide=self.guide, options=self.options
+        ).heights
 
 
 def _recon_training_set(examples, densities, options, with_shading, shading_options, rng):

@@ -5,7 +5,8 @@ They bound what any planner could gain and are labelled "Oracle ..." in every ta
 - :func:`oracle_greedy`: error feedback on the truth. A framed grid of ``start`` k samples (the
   image border rows and columns included), then batches of about ``batch`` (15 %) more samples at
   the non-maximum-suppressed peaks of the smoothed true squared error of the current
-  Delaunay-linear reconstruction, until exactly k.
+  reconstruction (Delaunay-linear, or the one given as ``reconstruct``: an oracle for a fused,
+  image-anchored model reads that model's error), until exactly k.
 - :func:`oracle_hessian`: the true depth's Hessian norm |H|^p as the density, placed by
   :func:`simlunar.planner.placement.place` (halftone + weighted Lloyd with the border covered).
 
@@ -19,7 +20,7 @@ import numpy as np
 from scipy import ndimage
 
 from simlunar.planner.placement import density_from_map, place
-from simlunar.reconstruction import reconstruct
+from simlunar.reconstruction import reconstruct as _linear
 
 __all__ = ["ORACLES", "framed_grid", "hessian_norm", "oracle_greedy", "oracle_hessian"]
 
@@ -86,6 +87,7 @@ def oracle_greedy(
     batch: float = 0.15,
     smooth: float = 0.25,
     window: float = 1.0,
+    reconstruct=None,
 ) -> np.ndarray:
     """Greedy error-feedback refiner on the true depth (an oracle bound, never realisable).
 
@@ -106,6 +108,10 @@ def oracle_greedy(
     window : float, > 0
         Non-maximum suppression window, in current pitches (odd, >= 3 cells): a batch takes
         the highest local maxima of the smoothed error within that window.
+    reconstruct : callable, optional
+        ``reconstruct(rc, values) -> heights``: rc (n, 2) int64 (row, col) of the current
+        samples, values (n,) the truth there, heights (rows, cols) the reconstruction whose
+        true error is fed back; default Delaunay-linear (nearest sample outside the hull).
 
     Returns
     -------
@@ -125,11 +131,21 @@ def oracle_greedy(
             f"got {start}, {batch}, {smooth}, {window}"
         )
     shape, n = truth.shape, truth.size
+    if reconstruct is None:
+
+        def reconstruct(rc, values):
+            return _linear(rc, values, shape)
+
     flat = framed_grid(shape, max(4, int(start * k)))
     sampled = np.zeros(n, dtype=bool)
     sampled[flat] = True
     while flat.size < k:
-        rec = reconstruct(np.column_stack(np.divmod(flat, shape[1])), truth.ravel()[flat], shape)
+        rec = np.asarray(
+            reconstruct(np.column_stack(np.divmod(flat, shape[1])), truth.ravel()[flat]),
+            dtype=np.float64,
+        )
+        if rec.shape != shape:
+            raise ValueError(f"reconstruct returned shape {rec.shape}, the truth's is {shape}")
         pitch = np.sqrt(n / flat.size)
         e2 = ndimage.gaussian_filter((rec - truth) ** 2, sigma=smooth * pitch, mode="nearest")
         hole = ndimage.distance_transform_edt(~sampled.reshape(shape))

@@ -384,8 +384,9 @@ _ORACLE_KEYS = {
 }
 
 
-def _oracle_greedy_strategy(k, shape, weights, rng, *, truth, **opts):
-    return oracle_greedy(truth, k, rng=rng, **{_ORACLE_KEYS[n]: v for n, v in opts.items()})
+def _oracle_greedy_strategy(k, shape, weights, rng, *, truth, reconstruct=None, **opts):
+    kw = {_ORACLE_KEYS[n]: v for n, v in opts.items()}
+    return oracle_greedy(truth, k, rng=rng, reconstruct=reconstruct, **kw)
 
 
 def _oracle_hessian_strategy(k, shape, weights, rng, *, truth, **opts):
@@ -439,6 +440,7 @@ def plan(
     shape=None,
     truth=None,
     rng,
+    oracle_reconstruct=None,
     **opts,
 ) -> SamplePlan:
     """Choose ``k`` distinct pixels with the named strategy.
@@ -459,6 +461,10 @@ def plan(
         True depth, required by the ``oracle_*`` strategies and read by no other.
     rng : None, int, SeedSequence or Generator
         Randomness (the grid shift, the draws).
+    oracle_reconstruct : callable, optional
+        ``oracle_greedy`` only: ``(rc, values) -> heights``, the reconstruction whose true
+        error the oracle feeds back (default Delaunay-linear;
+        :func:`simlunar.planner.oracle.oracle_greedy`).
     **opts
         Strategy options, see the module docstring.
 
@@ -482,6 +488,12 @@ def plan(
                 f"strategy {strategy!r} is an oracle: it needs truth= (the true depth)"
             )
         opts["truth"] = truth
+    if oracle_reconstruct is not None:
+        if base != "oracle_greedy":
+            raise ValueError(
+                f"oracle_reconstruct is an option of oracle_greedy only, not of {strategy!r}"
+            )
+        opts["reconstruct"] = oracle_reconstruct
     k = check_k(k, grid_shape[0] * grid_shape[1])
     if base in WEIGHTED and weights is None:
         if image is None:

@@ -44,6 +44,8 @@ RECONSTRUCTIONS.register(
     summary="linear + a trained image residual",
     guided=True,
     needs_model=True,
+    # 2: the held-out check (option heldout_check, on by default) weighs the residual
+    results_version=2,
 )
 
 

@@ -346,7 +346,12 @@ def reconstruction_saved_entries(points: list[Point], rows: list[dict]) -> list[
         ``label`` (the sweep point's, empty for a single one), ``sweep`` (its sweep values,
         terrain seed aside), ``metric``, ``strategies``,
         ``reconstructions`` (the compared ones, configured order), ``saved``
-        (reconstruction -> strategy -> float64 (seeds,)), ``seeds``.
+        (reconstruction -> strategy -> float64 (seeds,)), ``seeds`` and, when the point has
+        the uniform Lloyd layout (:data:`HEADROOM_REFERENCE`), ``joint``: every (layout,
+        reconstruction) pair against uniform Lloyd reconstructed by linear, the image-free
+        baseline (reconstruction, ``linear`` first -> strategy -> float64 (seeds,)), so the
+        best layout + reconstruction reads against the paper's reconstruction on the best
+        image-free layout; empty without uniform Lloyd.
     """
     by_key: dict[str, dict[str, Point]] = {}
     for p in points:
@@ -362,8 +367,10 @@ def reconstruction_saved_entries(points: list[Point], rows: list[dict]) -> list[
         _, ks, e_base = error_arrays(rows, base, m)
         n_pix = base.n_pixels or np.inf
         saved: dict[str, dict[str, np.ndarray]] = {}
+        errors = {BASELINE_RECONSTRUCTION: e_base}
         for p in others:
             _, _, e_other = error_arrays(rows, p, m)
+            errors[p.reconstruction] = e_other
             saved[p.reconstruction] = {
                 s: np.array([
                     samples_saved(
@@ -375,10 +382,22 @@ def reconstruction_saved_entries(points: list[Point], rows: list[dict]) -> list[
                 ])
                 for s in base.strategies
             }  # fmt: skip
+        joint = {}
+        if HEADROOM_REFERENCE in base.strategies:
+            ref = e_base[HEADROOM_REFERENCE]
+            joint = {
+                r: {s: np.array([
+                        samples_saved({"_ref": ref[j].mean(axis=1), "_it": e[s][j].mean(axis=1)},
+                                      ks, reference="_ref", n_pixels=n_pix).summary["_it"]
+                        for j in range(len(base.seeds))])
+                    for s in base.strategies}
+                for r, e in errors.items()
+            }  # fmt: skip
         label = _label(base.sweep, {}) if n_sweep > 1 else ""
         out.append(
             {"label": label, "sweep": base.sweep, "metric": m, "strategies": list(base.strategies),
-             "reconstructions": list(saved), "saved": saved, "seeds": list(base.seeds)}
+             "reconstructions": list(saved), "saved": saved, "seeds": list(base.seeds),
+             "joint": joint}
         )  # fmt: skip
     return out
 

@@ -14,6 +14,7 @@ __all__ = [
     "NEW_PLANNER_DEFAULTS",
     "NEW_RENDER_DEFAULTS",
     "NEW_STUDY_DEFAULTS",
+    "reconstruction_versions",
     "render_without_new_defaults",
     "without_new_defaults",
 ]
@@ -33,7 +34,10 @@ NEW_PLANNER_DEFAULTS = {
 #: render keys added after caches existed, with the value that gives the numbers of before
 NEW_RENDER_DEFAULTS = {"guide_frames": []}
 #: keys added inside a planner option section after the table above, with their defaults
-NEW_NESTED_DEFAULTS = {"sequential": {"first_round": "uniform"}}
+NEW_NESTED_DEFAULTS = {
+    "sequential": {"first_round": "uniform"},
+    "oracle": {"reconstruction": "linear"},
+}
 
 
 def without_new_defaults(study: dict) -> dict:
@@ -70,3 +74,22 @@ def render_without_new_defaults(render: dict) -> dict:
     """The render section less keys added later at the value that changes nothing (no extra
     guide frames), so the cache keys of earlier runs stay valid."""
     return {k: v for k, v in render.items() if NEW_RENDER_DEFAULTS.get(k, object()) != v}
+
+
+def reconstruction_versions(study: dict) -> dict:
+    """``{registered name: version}`` of the configured reconstructions whose registry entry
+    states a ``results_version`` (bumped when a change of the method changes its numbers under
+    the same options, e.g. the learned reconstruction's held-out check): part of a unit's
+    cache key, so cached results of the method as it was are not served; empty (the key as
+    before) when no configured reconstruction states one."""
+    from simlunar.reconstruction import RECONSTRUCTIONS
+
+    out = {}
+    for item in study.get("reconstructions") or ():
+        name, opts = next(iter(item.items())) if isinstance(item, dict) else (item, None)
+        base = (opts or {}).get("reconstruction", name) if isinstance(opts, dict) else name
+        entry = RECONSTRUCTIONS[base] if isinstance(base, str) and base in RECONSTRUCTIONS else None
+        version = None if entry is None else entry.meta.get("results_version")
+        if version is not None:
+            out[str(base)] = version
+    return out

@@ -246,6 +246,9 @@ class SamplingStudyOptions:
     strategy_options : mapping str -> mapping, optional
         Per label planner options (see ``simlunar.planner``), plus ``"strategy"``. Labels of
         :data:`simlunar.planner.ORACLES` are the ONLY ones given the true depth (``truth=``);
+        an ``oracle_greedy`` label may add ``"reconstruction"``: a label of
+        ``reconstructions`` whose true error it feeds back (default ``linear``: the oracle
+        of the paper's reconstruction; e.g. ``shading``: the bound for the fused model);
         ``sequential`` (:data:`simlunar.planner.MEASURING`) takes ``{"sequential":
         SequentialOptions, "prior": map name or None, "feature_opts": ...}`` and reads the scene
         through the sensor's ``acquire`` only, round by round. The ``learned`` map is computed
@@ -346,7 +349,7 @@ def run_sampling_study(
     depth, image, guide, dens, recons = _check_inputs(o, depth, image, guide)
     sensor = IdealSampler(depth, IdealOptions(range_noise_std=float(o.range_noise_std)))
     ks = [sample_count(d, depth.size) for d in dens]
-    planners, maps_cache = study_planners(o, image, depth, ks)
+    planners, maps_cache = study_planners(o, image, depth, ks, guide=guide)
     inner = None
     if o.score_region != "full":
         inner = interior_mask(depth.shape, sparsest_pitch(depth.shape, dens))

@@ -3,11 +3,15 @@
 A label names a strategy of :func:`simlunar.planner.plan` (with its options) or a measuring one
 (:func:`simlunar.planner.plan_sequential`). Every distinct importance map is computed once per
 study and shared across densities and trials; only the ``oracle_*`` labels get the true depth,
-and the multi-round planner reads the scene through the sensor only, round by round.
+and the multi-round planner reads the scene through the sensor only, round by round. An
+``oracle_greedy`` label whose options name a ``reconstruction`` (one of the study's, e.g.
+``shading``) feeds back that reconstruction's true error, computed with the study's guide: the
+bound of sampling for that fused model.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,28 +24,81 @@ from simlunar.planner import (
     plan_sequential,
     strategy_weights,
 )
+from simlunar.reconstruction import run_reconstruction
 from simlunar.sensors.base import Acquisition
+from simlunar.study.protocol import (
+    DEFAULT_RECONSTRUCTION,
+    reconstruction_of,
+    reconstruction_options,
+)
 
 __all__ = [
     "MapPlanner",
     "MeasuringPlanner",
+    "OracleReconstruction",
     "importance_maps",
     "measuring_planner",
+    "oracle_reconstruction",
     "study_planners",
 ]
 
 
-def study_planners(o, image, depth, ks) -> tuple[dict, dict]:
+@dataclass(frozen=True, eq=False)
+class OracleReconstruction:
+    """``(rc, values) -> heights``: the reconstruction ``name`` of a study (its options, the
+    study's guide) on a grid of ``shape``: what an oracle of that reconstruction reads."""
+
+    name: str
+    options: object
+    shape: tuple
+    guide: object = None
+
+    def __call__(self, rc, values) -> np.ndarray:
+        base = reconstruction_of(self.options)
+        return run_reconstruction(
+            base, rc, values, self.shape, guide=self.guide, options=self.options
+        ).heights
+
+
+def oracle_reconstruction(name, reconstructions: Mapping, shape, guide=None):
+    """The :class:`OracleReconstruction` of label ``name`` among a study's reconstructions
+    (``name -> options``, :func:`simlunar.study.protocol.reconstruction_options`); None for
+    ``linear``: the oracle's own Delaunay-linear (nearest sample outside the hull, whatever
+    the study's ``outside``: a NaN outside the hull is no error to feed back), as before.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is not ``linear`` nor one of the study's reconstructions.
+    """
+    if name == DEFAULT_RECONSTRUCTION:
+        return None
+    if name not in reconstructions:
+        raise ValueError(
+            f"an oracle's reconstruction {name!r} is not one of the study's reconstructions "
+            f"({', '.join(reconstructions)})"
+        )
+    return OracleReconstruction(str(name), reconstructions[name], tuple(shape), guide)
+
+
+def study_planners(o, image, depth, ks, *, guide=None) -> tuple[dict, dict]:
     """Label -> protocol planner of a :class:`~simlunar.study.sampling.SamplingStudyOptions`
     ``o`` (and the importance-map cache); each distinct importance map computed once.
 
     Only the ``oracle_*`` labels get the true depth; ``sequential`` gets the sensor (through
-    the protocol), never the depth.
+    the protocol), never the depth. An ``oracle_greedy`` label's option ``reconstruction``
+    (a label of ``o.reconstructions``) names the reconstruction whose true error it reads
+    (with ``guide``, the study's :class:`~simlunar.reconstruction.Guide`).
     """
     planners, maps_cache = {}, {}
     for label in o.strategies:
         opts = dict(o.strategy_options.get(label, {}))
         base = opts.pop("strategy", label)
+        recon_fn = None
+        if base == "oracle_greedy" and "reconstruction" in opts:
+            recons = reconstruction_options(o.reconstructions, outside=o.outside)
+            recon_fn = oracle_reconstruction(opts.pop("reconstruction"), recons, depth.shape,
+                                             guide)  # fmt: skip
         if base not in STRATEGIES and base not in MEASURING:
             valid = ", ".join([*STRATEGIES, *MEASURING])
             raise ValueError(f"unknown strategy {base!r}; valid: {valid}")
@@ -53,7 +110,7 @@ def study_planners(o, image, depth, ks) -> tuple[dict, dict]:
         truth = depth if base in ORACLES else None  # the oracles, and nothing else, read it
         # validate options once, before any long loop
         plan(base, 4, weights=weights[ks[0]], shape=depth.shape, truth=truth, rng=0, **plan_opts)
-        planners[label] = MapPlanner(base, weights, depth.shape, plan_opts, truth)
+        planners[label] = MapPlanner(base, weights, depth.shape, plan_opts, truth, recon_fn)
     return planners, maps_cache
 
 
@@ -87,7 +144,8 @@ def measuring_planner(opts: dict, image, shape, ks, cache: dict) -> MeasuringPla
 class MapPlanner:
     """A strategy of :func:`simlunar.planner.plan` with its map(s): ``(k, rng) -> (k, 2) rc``.
 
-    ``truth`` is the true depth for an oracle strategy and None for every other.
+    ``truth`` is the true depth for an oracle strategy and None for every other;
+    ``reconstruct`` the reconstruction an ``oracle_greedy`` reads the error of (None: linear).
     """
 
     base: str
@@ -95,11 +153,12 @@ class MapPlanner:
     shape: tuple
     opts: dict
     truth: np.ndarray | None = None
+    reconstruct: object = None
 
     def __call__(self, k: int, rng) -> np.ndarray:
         return plan(
             self.base, k, weights=self.weights[k], shape=self.shape, truth=self.truth, rng=rng,
-            **self.opts,
+            oracle_reconstruct=self.reconstruct, **self.opts,
         ).rc  # fmt: skip
 
 

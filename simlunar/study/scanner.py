@@ -22,7 +22,7 @@ from simlunar.features import check_image
 from simlunar.geometry import Rig
 from simlunar.planner import plan, strategy_weights
 from simlunar.progress import stage
-from simlunar.reconstruction import Guide
+from simlunar.reconstruction import RECONSTRUCTIONS, Guide
 from simlunar.render.capture import (
     CaptureOptions,
     GuideView,
@@ -30,6 +30,7 @@ from simlunar.render.capture import (
     camera_truth,
     render_guide,
 )
+from simlunar.render.lights import SunLight
 from simlunar.scanner.codings import DEFAULT_CODING, coding_for
 from simlunar.scanner.rigs import RIG_PRESETS, rig_preset
 from simlunar.scanner.scans import (
@@ -50,6 +51,7 @@ from simlunar.study.depth_scores import score_depth
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
+    reconstruction_of,
     reconstruction_options,
     run_protocol,
 )
@@ -57,6 +59,7 @@ from simlunar.study.sampling import _cost
 from simlunar.study.steps import Steps, resumable
 
 __all__ = [
+    "CAMERA_FRAME",
     "ScannerScene",
     "ScannerStudyOptions",
     "ScannerStudyResult",
@@ -66,8 +69,13 @@ __all__ = [
     "guided_weights",
     "interreflection_comparison",
     "run_scanner_study",
+    "scanner_guide",
     "summarize",
+    "sun_frame_name",
 ]
+
+#: name of the projector's flood frame among the guide frames (a co-located light)
+CAMERA_FRAME = "camera"
 
 
 def depth_range_from_terrain(terrain, rig: Rig, *, margin: float = 0.05) -> tuple[float, float]:
@@ -133,6 +141,15 @@ class ScannerStudyOptions:
     reconstructions : mapping name -> options, or names
         Reconstructions of :data:`simlunar.reconstruction.RECONSTRUCTIONS` run on every scan
         (default ``linear`` alone); a guided one reads the guide camera's image.
+    guide_frames : tuple of ``"camera"`` or SunLight specs
+        Extra frames of the guide view for the guided reconstructions, rendered only when one
+        is configured: ``"camera"`` is the projector's flood frame (its all-white frame: the
+        paper's section 5 lights every pixel before a scan), a light co-located with the guide
+        camera, so nearly pure albedo: with a sun guide (``guide_light="sun"``) it becomes the
+        :attr:`Guide.flat <simlunar.reconstruction.Guide>` whose ratio cancels albedo; a
+        SunLight spec renders the guide view under another sun (:attr:`Guide.others`,
+        photometric stereo). The rig camera is not a nadir view: the frames' light directions
+        are left unknown (the reconstruction calibrates them from the samples).
     """
 
     modes: tuple = (DEFAULT_CODING, "ambiguity_enhancement")
@@ -148,9 +165,22 @@ class ScannerStudyOptions:
     planner_opts: Mapping = field(default_factory=dict)
     reconstructions: Mapping | tuple = (DEFAULT_RECONSTRUCTION,)
     keep_frames: bool = False
+    guide_frames: tuple = ()
 
     def __post_init__(self):
         reconstruction_options(self.reconstructions)
+        object.__setattr__(self, "guide_frames", tuple(self.guide_frames))
+        for f in self.guide_frames:
+            if f == CAMERA_FRAME:
+                if self.guide_light == "projector":
+                    raise ValueError(
+                        "guide_frames: camera (the projector's flood frame) is the guide "
+                        "view's own light already (guide_light: projector)"
+                    )
+            elif not isinstance(f, SunLight):
+                raise ValueError(f"guide_frames: each is 'camera' or a SunLight spec, got {f!r}")
+        if self.guide_frames.count(CAMERA_FRAME) > 1:
+            raise ValueError("guide_frames: camera is listed twice")
         unknown = [m for m in self.modes if m not in MODES]
         if unknown:
             raise ValueError(f"unknown scan mode(s) {unknown}; valid: {sorted(MODES)}")
@@ -263,7 +293,7 @@ def run_scanner_study(
         recons = reconstruction_options(o.reconstructions)
         rguide = reconstruction_guide
         if rguide is None:
-            rguide = Guide(np.asarray(guide.image, float), frames=(o.guide_light,))
+            rguide = scanner_guide(scene, o, guide, recons)
         seeds = _plan_seeds(o, plan_rng)
         rows: list[dict] = []
         scans: dict = {}
@@ -314,6 +344,47 @@ def _mode_step(sensor, trials: Trials, evaluate, recons, rguide, budget: float, 
                 out.append((planner, oc.trial, _rows(mode, planner, oc, budget), detail))
             bar.advance()
     return out
+
+
+def scanner_guide(
+    scene: ScannerScene, o: ScannerStudyOptions, guide: GuideView, recons: Mapping
+) -> Guide:
+    """What the guided reconstructions of a scanner study read: the guide view's image (named
+    after ``guide_light``) and, when a configured reconstruction is guided, the frames of
+    ``o.guide_frames`` rendered in the same view with the guide's render settings (frame i
+    with seed ``capture.seed + 1 + i``): ``camera``, the projector's flood frame, becomes
+    :attr:`Guide.flat`; each other sun one of :attr:`Guide.others` (direction unknown).
+    """
+    image = np.asarray(guide.image, float)
+    guided = any(RECONSTRUCTIONS[reconstruction_of(v)].meta.get("guided") for v in recons.values())
+    if not guided or not o.guide_frames:
+        return Guide(image, frames=(o.guide_light,))
+    c = o.capture
+    flat, others, names = None, [], [o.guide_light]
+    for i, frame in enumerate(o.guide_frames):
+        camera = frame == CAMERA_FRAME
+        view = render_guide(
+            scene.terrain,
+            scene.rig,
+            light="projector" if camera else "sun",
+            sun=None if camera else frame,
+            bsdf=scene.bsdf,
+            max_depth=c.max_depth,
+            spp=c.spp,
+            seed=c.seed + 1 + i,
+        )
+        if camera:
+            flat = view.image
+            names.append(CAMERA_FRAME)
+        else:
+            others.append((view.image, None))
+            names.append(sun_frame_name(frame))
+    return Guide(image, flat=flat, others=tuple(others), frames=tuple(names))
+
+
+def sun_frame_name(sun: SunLight) -> str:
+    """``sun_el<e>_az<a>`` (degrees) of a further sun's guide frame."""
+    return f"sun_el{np.degrees(sun.elevation):g}_az{np.degrees(sun.azimuth):g}"
 
 
 def _capture_and_guide(scene: ScannerScene, o: ScannerStudyOptions, noise_rng):

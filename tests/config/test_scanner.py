@@ -35,3 +35,21 @@ def test_camera_blur_defaults_to_a_sharp_lens_and_rejects_negative_sigma():
     assert cfg.study.camera_blur_px == 0.0
     with pytest.raises(ConfigError, match=r"study\.camera_blur_px"):
         load_experiment(EXPERIMENT, parse_set(["study.camera_blur_px=-0.5"]))
+
+
+def test_render_guide_frames_reach_the_scanner_study():
+    import numpy as np
+
+    from simlunar.config import translate
+    from simlunar.render.lights import SunLight
+
+    sets = ["render.light={kind: sun, elevation_deg: 30, azimuth_deg: 135}",
+            "study.guide_light=sun", "study.reconstructions=[linear, shading]",
+            "render.guide_frames=[camera, {sun: {elevation_deg: 40, azimuth_deg: 250}}]"]  # fmt: skip
+    cfg = load_experiment(EXPERIMENT, parse_set(sets))
+    frames = translate.scanner_options(cfg.study, cfg.render).guide_frames
+    assert frames[0] == "camera" and isinstance(frames[1], SunLight)
+    assert np.degrees([frames[1].elevation, frames[1].azimuth]) == pytest.approx([40, 250])
+    # the projector-lit guide view is the flood frame already
+    with pytest.raises(ConfigError, match="flood frame"):
+        load_experiment(EXPERIMENT, parse_set(["render.guide_frames=[camera]"]))

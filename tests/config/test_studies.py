@@ -121,3 +121,22 @@ def test_lidar_planner_options_belong_to_its_planners():
                 planner_opts={"grid": {"uniform_mix": 0.5}}) == (
         "Value error, planner_opts.grid.uniform_mix: strategy 'grid' takes no options"
     )  # fmt: skip
+
+
+def test_an_oracle_reads_the_error_of_one_of_the_studys_reconstructions():
+    from simlunar.config import translate
+
+    ok = SamplingStudyCfg(
+        densities=[0.5], strategies=["oracle_greedy", "oracle_fused"],
+        reconstructions=["linear", {"fused": {"reconstruction": "shading"}}],
+        strategy_options={"oracle_fused": {"strategy": "oracle_greedy",
+                                           "oracle": {"reconstruction": "fused"}}},
+    )  # fmt: skip
+    opts = translate.sampling_options(ok).strategy_options
+    assert opts["oracle_fused"]["reconstruction"] == "fused"
+    msg = _msg(
+        SamplingStudyCfg, densities=[0.5], strategies=["oracle_s"],
+        strategy_options={"oracle_s": {"strategy": "oracle_greedy",
+                                       "oracle": {"reconstruction": "shading"}}},
+    )  # fmt: skip
+    assert "oracle_s.oracle.reconstruction: 'shading' is not one of study.reconstructions" in msg

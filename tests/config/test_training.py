@@ -90,3 +90,25 @@ def test_more_refusals(tmp_path):
         load_training(path)
     with pytest.raises(ValidationError, match="greater than or equal to 0"):
         TrainCfg(name="x", seed=-1, experiments=["e.yaml"], densities=[0.5], model="m.joblib")
+
+
+def test_the_error_reconstruction_of_a_map_is_checked_and_recorded_only_when_not_linear():
+    from simlunar.config.training import TrainCfg
+
+    base = {"name": "t", "seed": 1, "experiments": ["x.yaml"], "densities": [0.1],
+            "model": "m.joblib"}  # fmt: skip
+    plain = TrainCfg(**base)
+    assert plain.error_reconstruction == "linear" and "error_reconstruction" not in plain.recorded()
+    fused = TrainCfg(**base, error_reconstruction={"shading": {"gain": 0.5}})
+    assert fused.error_reconstruction_spec() == ("shading", {"gain": 0.5})
+    assert fused.recorded()["error_reconstruction"] == {"shading": {"gain": 0.5}}
+    assert TrainCfg(**base, error_reconstruction="shading").error_reconstruction_spec() == (
+        "shading", {})  # fmt: skip
+    for bad, match in (
+        ({"error_reconstruction": "shadin"}, "unknown reconstruction 'shadin'"),
+        ({"error_reconstruction": {"shading": {"gains": 1}}}, "gains"),
+        ({"error_reconstruction": {"s2": {"reconstruction": "shading"}}}, "not a label"),
+        ({"error_reconstruction": "shading", "target": "reconstruction"}, "only with target: map"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            TrainCfg(**base, **bad)

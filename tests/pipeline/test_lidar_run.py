@@ -77,3 +77,21 @@ def test_save_scans_writes_las_files_laspy_reads(tmp_path):
     assert np.abs(z).max() < 3.0
     assert np.asarray(las.gps_time).max() <= manifest["seconds"]["grid"]
     assert (folder / "grid.ply").is_file() and (folder / "grid_range.exr").is_file()
+
+
+def test_a_lidar_study_scores_every_reconstruction_with_extra_guide_frames(tmp_path):
+    out = tmp_path / "lidar"
+    args = ["run", str(ROOT / "experiments" / "lidar_descent_altimeter.yaml"), "--out", str(out)]
+    tiny = [*TINY, "--set", "study.planners=[grid]", "--set", "study.densities=[1/8]",
+            "--set", "render.guide_frames=[camera]",
+            "--set", "study.reconstructions=[linear, smoothed, shading]"]  # fmt: skip
+    r = CliRunner().invoke(app, [*args, *tiny, "--no-progress"])
+    assert r.exit_code == 0, r.output
+    with (out / "results.csv").open() as f:
+        rows = [row for row in csv.DictReader(f) if row["metric"] == "mse"]
+    by = {row["reconstruction"]: row for row in rows}
+    assert set(by) == {"linear", "smoothed", "shading"}
+    assert all(float(row["value"]) > 0 for row in rows)
+    assert by["linear"]["guide_frames"] == "" and by["smoothed"]["exposures"] == ""
+    assert "camera" in by["shading"]["guide_frames"].split("+")
+    assert int(by["shading"]["exposures"]) == len(by["shading"]["guide_frames"].split("+"))

@@ -99,6 +99,27 @@ def test_the_default_reconstructions_keep_the_cache_key_of_before():
     assert other[0].key != a.key
 
 
+def test_a_reconstruction_with_a_results_version_has_it_in_the_key():
+    from simlunar.reconstruction import RECONSTRUCTIONS
+    from simlunar.results.cache_keys import reconstruction_versions
+
+    assert RECONSTRUCTIONS["learned"].meta["results_version"] == 2
+    recons = ["linear", "shading", {"learned": {"model": "m.joblib"}},
+              {"l2": {"reconstruction": "learned", "model": "n.joblib"}}]  # fmt: skip
+    assert reconstruction_versions({"reconstructions": recons}) == {"learned": 2}
+    assert reconstruction_versions({"reconstructions": ["linear", "shading"]}) == {}
+    a = expand(cfg(sweep={}))[0]
+    config = {**a.config, "study": {**a.config["study"], "reconstructions": recons}}
+    before = unit_key(config, a.inputs)
+    meta = RECONSTRUCTIONS["learned"].meta
+    try:  # a new version of the method: a new key for the same config
+        meta["results_version"] = 3
+        assert unit_key(config, a.inputs) != before
+    finally:
+        meta["results_version"] = 2
+    assert unit_key(config, a.inputs) == before
+
+
 def test_cached_rows_without_a_reconstruction_are_linear_rows():
     from simlunar.pipeline.runner import collect_rows
 

@@ -174,3 +174,34 @@ def test_train_of_a_reconstruction_reports_its_training_set_and_fit(tmp_path, mo
     assert lines[8] == "fitting the learned reconstruction on 8 examples (1 densities)"
     assert "training set 8/8 examples" in lines
     assert lines[-2:-1] == ["fitting 1/1 models"] and lines[-1].startswith("fitted in ")
+
+
+def test_train_a_map_on_the_fused_reconstructions_error(tmp_path, monkeypatch):
+    from simlunar.reconstruction import Guide
+
+    seen = []
+
+    def view(cfg, *, with_guide=False):
+        image, depth = _recon_view(cfg)
+        seen.append(with_guide)
+        # the experiment's guide: here a co-located frame too (as render.guide_frames: camera)
+        flat = np.full(image.shape, 0.5, np.float32)
+        guide = Guide(image, flat=flat, frames=("sun", "camera"))
+        return (image, depth, guide) if with_guide else (image, depth)
+
+    monkeypatch.setattr(train_mod, "guide_view", view)
+    res = CliRunner().invoke(app, ["train", str(_yaml(tmp_path))])
+    assert res.exit_code == 0, res.output
+    plain = json.loads((tmp_path / "models" / "tiny.json").read_text())
+    assert "error_reconstruction" not in plain  # linear: the record of before
+    assert "error_reconstruction" not in plain["provenance"]["training_config"]
+    assert seen == [False] * 8
+    path = _yaml(tmp_path, error_reconstruction="shading", model=str(tmp_path / "f.joblib"))
+    res = CliRunner().invoke(app, ["train", str(path)])
+    assert res.exit_code == 0, res.output
+    record = json.loads((tmp_path / "f.json").read_text())
+    assert seen[8:] == [True] * 8
+    assert record["error_reconstruction"] == "shading"
+    assert record["error_guide_frames"] == ["camera", "sun"]
+    assert record["provenance"]["training_config"]["error_reconstruction"] == "shading"
+    LearnedMap.load(tmp_path / "f.joblib")

@@ -110,3 +110,43 @@ def test_realisable_strategies_ignore_truth():
     a = plan("wavelet", 300, image=image, rng=1, placement="lloyd")
     b = plan("wavelet", 300, image=image, truth=depth, rng=1, placement="lloyd")
     np.testing.assert_array_equal(a.flat, b.flat)
+
+
+def test_greedy_oracle_reads_the_error_of_the_reconstruction_it_is_given():
+    # a "reconstruction" exact on the left half (cols < 64) and linear elsewhere: every sample
+    # the refiner adds beyond its framed grid goes where that reconstruction errs, the right
+    # half; with linear's error (the default) both halves get samples
+    rr, cc = np.mgrid[0 : SHAPE[0], 0 : SHAPE[1]].astype(float)
+    rough = ndimage.gaussian_filter(np.random.default_rng(2).standard_normal(SHAPE), 2.0)
+    depth = rough / rough.std() + 0.01 * rr
+    left = cc < 64
+
+    def half_exact(rc, values):
+        return np.where(left, depth, reconstruct(rc, values, SHAPE))
+
+    k, start = 600, 0.25
+    grid = set(framed_grid(SHAPE, int(start * k)).tolist())
+    fed = oracle_greedy(depth, k, start=start, reconstruct=half_exact)
+    added = np.array(sorted(set(fed.tolist()) - grid))
+    assert len(fed) == k and len(added) == k - len(grid)
+    assert np.all(added % SHAPE[1] >= 64)
+    plain = oracle_greedy(depth, k, start=start)
+    assert np.mean(plain % SHAPE[1] < 64) > 0.3
+    # linear passed explicitly is the default, exactly
+    np.testing.assert_array_equal(
+        oracle_greedy(depth, k, start=start, reconstruct=lambda rc, v: reconstruct(rc, v, SHAPE)),
+        plain,
+    )
+    np.testing.assert_array_equal(
+        plan("oracle_greedy", k, truth=depth, rng=0, start_share=start,
+             oracle_reconstruct=half_exact).flat,
+        fed,
+    )  # fmt: skip
+
+
+def test_oracle_reconstruction_errors_are_clear():
+    depth, _ = _patch_terrain()
+    with pytest.raises(ValueError, match="returned shape"):
+        oracle_greedy(depth, 50, reconstruct=lambda rc, v: np.zeros((3, 3)))
+    with pytest.raises(ValueError, match="oracle_greedy only"):
+        plan("oracle_hessian", 50, truth=depth, rng=0, oracle_reconstruct=lambda rc, v: depth)

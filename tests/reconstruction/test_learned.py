@@ -81,8 +81,11 @@ def held_out():
     return [planted_pair(s) for s in range(100, 103)]
 
 
-def _recon(m):
-    return lambda img, pts, vals: m.reconstruct(pts, vals, img.shape, guide=Guide(img)).heights
+def _recon(m, check=False):
+    """The model's reconstruction, without the held-out check unless ``check``."""
+    return lambda img, pts, vals: (
+        m.reconstruct(pts, vals, img.shape, guide=Guide(img), heldout_check=check).heights
+    )
 
 
 def test_feature_stack_names_shapes_and_scale():
@@ -261,7 +264,7 @@ def test_map_and_reconstruction_files_refuse_each_other(model, tmp_path):
 
 def test_registered_by_name_and_cached_per_path_and_hash(model, held_out, tmp_path):
     entry = RECONSTRUCTIONS["learned"]
-    assert entry.meta == {"guided": True, "needs_model": True}
+    assert entry.meta == {"guided": True, "needs_model": True, "results_version": 2}
     path, _ = model.save(tmp_path / "r.joblib")
     img, z = held_out[2]
     pts, vals = layout(z, 1 / 32, 9)
@@ -376,10 +379,100 @@ def test_shading_feature_comes_from_the_registered_reconstruction(monkeypatch, t
     run_reconstruction(
         "learned", pts, vals, z.shape, guide=Guide(img), options={"model": str(path)}
     )
-    assert calls == [0.5]  # the recorded shading options, at reconstruction too
+    # the recorded shading options, at reconstruction too (twice: all the samples, then the
+    # held-out check's 4/5)
+    assert calls == [0.5, 0.5]
 
 
 def test_check_model_file_reads_the_record_without_unpickling(model, tmp_path, no_unpickling):
     path, record = model.save(tmp_path / "m.joblib")
     got, meta = lr.check_model_file(str(path))
     assert got == path and meta == json.loads(record.read_text())
+
+
+class _NoiseModel:
+    """A "model" whose residual is pure noise: a fixed unit-variance field, the same at every
+    call (so the held-out check's second prediction sees the same noise), unrelated to the
+    truth."""
+
+    def predict(self, x):
+        return np.random.default_rng(0).standard_normal(len(x))
+
+
+def test_heldout_check_returns_linear_for_a_noise_residual(model):
+    # 128 x 192 cells: 150-770 held-out samples per layout, so the check's weight of pure
+    # noise is ~0 to within its sampling error (on 64 x 96 cells, ~40 held out: 0.987x seen)
+    terrains = [planted_pair(s, shape=(128, 192)) for s in range(100, 103)]
+    noise = LearnedReconstruction(_NoiseModel(), model.meta)
+    for d in DENSITIES:
+        unchecked = gains(_recon(noise), terrains, d)
+        checked = gains(_recon(noise, check=True), terrains, d)
+        assert max(unchecked) < 0.9, unchecked  # without the check the noise costs
+        # with it: linear's MSE within 1 % (the check's weight is ~0 for noise)
+        np.testing.assert_allclose(checked, 1.0, atol=0.01)
+
+
+def test_heldout_check_keeps_the_gain_of_a_planted_relation(model, held_out):
+    img, z = held_out[0]
+    pts, vals = layout(z, DENSITIES[0], 3)
+    out = model.reconstruct(pts, vals, z.shape, guide=Guide(img), heldout_check=True)
+    assert out.info["heldout_samples"] >= 20 and out.info["gamma"] > 0.8
+    np.testing.assert_allclose(out.heights[pts[:, 0], pts[:, 1]], vals, atol=1e-9)
+    for d in (*DENSITIES, 1 / 48):
+        g = gains(_recon(model, check=True), held_out, d)
+        assert min(g) >= MIN_GAIN, (d, g)
+
+
+def test_heldout_check_predicts_again_without_the_left_out_samples(model, held_out):
+    img, z = held_out[1]
+    pts, vals = layout(z, DENSITIES[1], 4)
+    seen = []
+
+    class Spy:
+        def predict(self, x):
+            seen.append(x[:, feature_names().index("log2_density")][0])
+            return model.model.predict(x)
+
+    spy = LearnedReconstruction(Spy(), model.meta)
+    spy.reconstruct(pts, vals, z.shape, guide=Guide(img), heldout_check=True)
+    # two predictions: all samples, then 4/5 of them (one in five left out)
+    assert len(seen) == 2
+    n_keep = len(pts) - len(range(0, len(pts), 5))
+    np.testing.assert_allclose(2.0 ** np.array(seen) * z.size, [len(pts), n_keep], rtol=1e-5)
+
+
+def test_registered_learned_runs_the_check_by_default(model, tmp_path):
+    assert LearnedReconOptions(model="m.joblib").heldout_check is True
+    path, _ = LearnedReconstruction(_NoiseModel(), model.meta).save(tmp_path / "noise.joblib")
+    img, z = planted_pair(102, shape=(128, 192))  # enough held-out samples (see above)
+    pts, vals = layout(z, DENSITIES[0], 5)
+    lin = reconstruct(pts, vals, z.shape)
+    on = run_reconstruction("learned", pts, vals, z.shape, guide=Guide(img),
+                            options={"model": str(path)})  # fmt: skip
+    off = run_reconstruction("learned", pts, vals, z.shape, guide=Guide(img),
+                             options={"model": str(path), "heldout_check": False})  # fmt: skip
+    mse = [np.mean((h - z) ** 2) for h in (lin, on.heights, off.heights)]
+    assert mse[1] <= 1.01 * mse[0] < mse[2]
+    assert "gamma" in on.info and "gamma" not in off.info
+
+
+def test_heldout_check_pools_its_splits_on_a_sparse_layout(model, held_out):
+    # 64 x 96 cells at 1/96: 64 samples, one split leaves ~13 inside the hull (shading's
+    # check returns 0 there); pooled over the five splits the planted relation keeps its gain
+    from simlunar.reconstruction._anchor import linear_field
+    from simlunar.reconstruction.shading import heldout_gamma
+
+    img, z = held_out[0]
+    pts, vals = layout(z, 1 / 96, 2)
+    lin = linear_field(pts, vals, z.shape)
+    r = model._residual(pts, vals, z.shape, Guide(img), 1)[0]
+    assert heldout_gamma(r, lin) == (0.0, heldout_gamma(r, lin)[1])
+    assert heldout_gamma(r, lin)[1] < 20
+    out = model.reconstruct(pts, vals, z.shape, guide=Guide(img), heldout_check=True)
+    assert out.info["heldout_samples"] >= 20 and out.info["gamma"] > 0.5
+    lin_mse = np.mean((lin.heights - z) ** 2)
+    assert np.mean((out.heights - z) ** 2) < 0.5 * lin_mse
+    # a noise residual on the same sparse layout stays near linear
+    noise = LearnedReconstruction(_NoiseModel(), model.meta)
+    got = noise.reconstruct(pts, vals, z.shape, guide=Guide(img), heldout_check=True)
+    assert np.mean((got.heights - z) ** 2) < 1.05 * lin_mse

@@ -114,3 +114,40 @@ def test_the_sweep_figure_gets_one_point_per_sweep_value():
     np.testing.assert_allclose(line.get_ydata(), [math.sqrt(8), 1.0])
     assert "2 terrain seeds [95 % Student t interval" in captions[stem]
     plt.close(fig)
+
+
+def test_layout_and_reconstruction_together_vs_uniform_lloyd_and_linear():
+    # uniform Lloyd + linear: e = 1 / k; the wavelet layout saves 1.5x with linear; the
+    # reconstruction 'smooth' saves g[j] on every layout: together 1.5 g[j] (power laws:
+    # the interpolation is exact)
+    gains = [2.0, 4.0]
+    study = {"strategies": ["lloyd_uniform", "wavelet"], "metrics": ["mse"],
+             "reconstructions": ["linear", "smooth"]}  # fmt: skip
+    recs = [{"sweep": {}, "config": {"name": "t", "study": study, "terrain": {"seed_index": j}},
+             "meta": {"shape": [32, 32]}} for j in range(2)]  # fmt: skip
+    rows = [
+        {"unit": j, "strategy": s, "reconstruction": r, "density": d, "k": k, "trial": t,
+         "metric": "mse", "value": 1.0 / (f * k * (g if r == "smooth" else 1.0))}
+        for j, g in enumerate(gains) for s, f in (("lloyd_uniform", 1.0), ("wavelet", 1.5))
+        for d, k in zip(DENS, KS) for t in range(2) for r in ("linear", "smooth")
+    ]  # fmt: skip
+    points = aggregate.summarise(recs, rows, seed=0, n_boot=10)
+    (entry,) = aggregate.reconstruction_saved_entries(points, rows)
+    joint = entry["joint"]
+    assert list(joint) == ["linear", "smooth"]
+    np.testing.assert_allclose(joint["linear"]["lloyd_uniform"], [1.0, 1.0])
+    np.testing.assert_allclose(joint["linear"]["wavelet"], [1.5, 1.5])
+    np.testing.assert_allclose(joint["smooth"]["lloyd_uniform"], gains)
+    np.testing.assert_allclose(joint["smooth"]["wavelet"], [3.0, 6.0])
+    from simlunar.plotting.tables import reconstruction_saved_tables
+
+    md, tex = reconstruction_saved_tables([entry], title="t")
+    assert "\\begin{table}" in tex
+    assert "layout + reconstruction vs Uniform Lloyd + linear at equal MSE" in md
+    assert "| Wavelet | 1.50 [1.50, 1.50] | 1.50–1.50 | 4.24" in md
+    # without uniform Lloyd there is no such table
+    (plain,) = aggregate.reconstruction_saved_entries(
+        aggregate.summarise(_records(2), _rows(gains), seed=0, n_boot=10), _rows(gains)
+    )
+    assert plain["joint"] == {}
+    assert "Uniform Lloyd + linear" not in reconstruction_saved_tables([plain], title="t")[0]

@@ -418,3 +418,51 @@ def test_a_scan_cut_short_at_its_second_step_resumes_bit_identical(rig, monkeypa
     # the kept scan is the one the rescans use (not a copy per step)
     ae = resumed.scans[("ambiguity_enhancement", "random", 0)]
     assert ae.coded is resumed.coded["gray_code"]
+
+
+def test_scanner_guide_frames_reach_every_guided_reconstruction(rig):
+    # the projector's flood frame (paper section 5: every pixel lit before a scan) is the
+    # co-located frame of a sun-lit guide view; another sun is a photometric-stereo frame
+    from simlunar.render import make_light
+    from simlunar.render.capture import render_guide
+
+    xx, yy = grid()
+    h = 0.05 * np.exp(-((xx - 0.1) ** 2 + yy**2) / 0.02)
+    terr = terrain(h)
+    sun = make_light("sun", elevation=np.radians(30), azimuth=np.radians(135))
+    sun2 = make_light("sun", elevation=np.radians(40), azimuth=np.radians(250))
+    cap = CaptureOptions(spp=2, max_depth=2, seed=5)
+    opts = st.ScannerStudyOptions(
+        modes=("gray_code",), planners=("random",), metrics=("mse",), guide_light="sun",
+        capture=cap, reconstructions=("linear", "smoothed", "shading"),
+        guide_frames=("camera", sun2),
+    )  # fmt: skip
+    scene = st.ScannerScene(terr, rig, sun=sun)
+    res = st.run_scanner_study(scene, opts, rng=0)
+    mse = {r["reconstruction"]: r for r in res.rows if r["metric"] == "mse"}
+    assert set(mse) == {"linear", "smoothed", "shading"}
+    assert all(np.isfinite(r["value"]) for r in mse.values())
+    assert "guide_frames" not in mse["linear"] and "guide_frames" not in mse["smoothed"]
+    frames = mse["shading"]["guide_frames"].split("+")
+    assert "camera" in frames and mse["shading"]["exposures"] == len(frames) >= 2
+    # the frames themselves: the flood frame and the other sun, in the guide view
+    recons = {n: None for n in opts.reconstructions}
+    g = st.scanner_guide(scene, opts, res.guide, st.reconstruction_options(recons))
+    assert g.frames == ("sun", "camera", "sun_el40_az250")
+    flood = render_guide(terr, rig, light="projector", bsdf=None, max_depth=2, spp=2, seed=6)
+    np.testing.assert_allclose(g.flat, flood.image)
+    other = render_guide(terr, rig, light="sun", sun=sun2, max_depth=2, spp=2, seed=7)
+    np.testing.assert_allclose(g.others[0][0], other.image)
+    assert g.others[0][1] is None  # the rig camera is no nadir view: direction unknown
+    # no guided reconstruction: no extra frame is rendered
+    lin = st.reconstruction_options(("linear",))
+    assert st.scanner_guide(scene, opts, res.guide, lin).frames == ("sun",)
+
+
+def test_scanner_guide_frames_are_checked():
+    with pytest.raises(ValueError, match="guide view's own light already"):
+        st.ScannerStudyOptions(guide_light="projector", guide_frames=("camera",))
+    with pytest.raises(ValueError, match="'camera' or a SunLight"):
+        st.ScannerStudyOptions(guide_light="sun", guide_frames=("moon",))
+    with pytest.raises(ValueError, match="listed twice"):
+        st.ScannerStudyOptions(guide_light="sun", guide_frames=("camera", "camera"))
