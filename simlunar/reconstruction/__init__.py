@@ -33,6 +33,8 @@ RECONSTRUCTIONS.register(
     PhotoclinometryOptions,
     summary="linearised photoclinometry, sparse least squares",
     guided=True,
+    # 2: the held-out check (option heldout_check, on by default) caps gamma
+    results_version=2,
 )
 RECONSTRUCTIONS.register(
     "smoothed", smoothed, SmoothedOptions, summary="image-free control", guided=False
