@@ -23,21 +23,27 @@ from simlunar.config.fields import (
 )
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
-    FEATURE_OPTION_KEYS,
     CoefficientsCfg,
     FeatureOptsCfg,
     OracleOptsCfg,
+    PlannerOptions,
     PlannerOptsCfg,
     SequentialCfg,
+    StrategyOptions,
     StrategyOptionsCfg,
     check_planner_options,
 )
 from simlunar.config.quantities import log_spaced
-from simlunar.planner import MEASURING, ORACLES, STRATEGIES
+from simlunar.planner import (
+    DEFAULT_PLANNER,
+    MEASURING,
+    ORACLES,
+    PAPER_STRATEGIES,
+    STRATEGIES,
+)
 from simlunar.reconstruction import RECONSTRUCTIONS
 
 __all__ = [
-    "FEATURE_OPTION_KEYS",
     "LIDAR_BLOCKS",
     "DensityRange",
     "FeatureOptsCfg",
@@ -112,9 +118,7 @@ class SamplingStudyCfg(_Model):
     """The sampling study of the paper's section 4."""
 
     kind: Literal["sampling"] = "sampling"
-    strategies: list[str] = Field(
-        default_factory=lambda: ["random", "grid", "gradient", "entropy", "wavelet"], min_length=1
-    )
+    strategies: list[str] = Field(default_factory=lambda: list(PAPER_STRATEGIES), min_length=1)
     densities: Annotated[
         list[Density],
         BeforeValidator(_densities, json_schema_input_type=list[Density] | DensityRange),
@@ -122,7 +126,7 @@ class SamplingStudyCfg(_Model):
     trials: int = Field(20, ge=1, le=1000)
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
     range_noise_std_m: Metres = Field(0.0, ge=0, description="range-sensor noise (m)")
-    strategy_options: dict[str, StrategyOptionsCfg] = Field(
+    strategy_options: StrategyOptions = Field(
         default_factory=dict,
         description="label -> options; a label not registered as a strategy names one in "
         "'strategy' (e.g. wavelet_bn: {strategy: wavelet, blue_noise: true})",
@@ -186,7 +190,7 @@ class LidarStudyCfg(_Model):
         "directed by the plan) or micromirror_flash (lights only the planned pixels)",
     )
     planners: list[str] = Field(
-        default_factory=lambda: ["wavelet", "random", "grid"],
+        default_factory=lambda: [DEFAULT_PLANNER, "random", "grid"],
         min_length=1,
         description="planner strategies (from the guide image); unused by a flash without revisits",
     )
@@ -200,7 +204,7 @@ class LidarStudyCfg(_Model):
     )
     trials: int = Field(3, ge=1, le=1000, description="planner draws and photon noise")
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad"], min_length=1)
-    planner_opts: dict[str, PlannerOptsCfg] = Field(
+    planner_opts: PlannerOptions = Field(
         default_factory=dict, description="planner name -> options (study.planners only)"
     )
     hazard: HazardCfg | None = Field(
