@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.features.log_energy import LogEnergyOptions, log_energy
 from simlunar.features.maps import (
     EntropyOptions,
     WaveletOptions,
@@ -69,6 +70,7 @@ MAPS.register("wavelet", wavelet, WaveletOptions, summary="wavelet energy", labe
               **_PAPER)  # fmt: skip
 MAPS.register("saliency", saliency, NoMapOptions, summary="Itti saliency", label="Saliency",
               **_PAPER)  # fmt: skip
+MAPS.register("log_energy", log_energy, LogEnergyOptions, summary="LoG energy", label="LoG energy")
 MAPS.register(
     "learned", _learned, LearnedMapOptions, summary="trained model", label="Learned",
     needs_model=True, runtime=("density",), cache_defaults=True,

@@ -78,6 +78,7 @@ for _map in MAPS:  # every map is a planner of its own name: the paper's weighte
     register_map_planner(_map, _map)
 register_map_planner("combination", COMBINATION, label="Combination")
 register_map_planner("wavelet_lloyd", "wavelet", "lloyd")
+register_map_planner("log_lloyd", "log_energy", "lloyd")
 PLANNERS.register("lloyd_uniform", lloyd_uniform_planner, UniformLloydOptions,
                   label="Uniform Lloyd (no image)")  # fmt: skip
 PLANNERS.register("oracle_greedy", oracle_greedy_planner, OracleGreedyOptions,
