@@ -118,7 +118,10 @@ class SamplingStudyCfg(_Model):
     """The sampling study of the paper's section 4."""
 
     kind: Literal["sampling"] = "sampling"
-    strategies: list[str] = Field(default_factory=lambda: list(PAPER_STRATEGIES), min_length=1)
+    # the YAML default lists random first (the row order of every run without the key)
+    strategies: list[str] = Field(
+        default_factory=lambda: ["random", "grid", *PAPER_STRATEGIES[2:]], min_length=1
+    )
     densities: Annotated[
         list[Density],
         BeforeValidator(_densities, json_schema_input_type=list[Density] | DensityRange),

@@ -89,7 +89,7 @@ PLANNERS.register("sequential", plan_sequential, SequentialOptions,
                   label="Sequential (multi-round)", measuring=True, section="sequential")  # fmt: skip
 
 #: the strategies of the paper's section 4 (the sampling study's default), in its order
-PAPER_STRATEGIES = ("random", "grid", "gradient", "entropy", "wavelet")
+PAPER_STRATEGIES = ("grid", "random", "gradient", "entropy", "wavelet")
 #: the recommended image-directed planner (the LIDAR and scanner studies' first planner; the
 #: map of the figures' sample panels)
 DEFAULT_PLANNER = "wavelet"
