@@ -221,6 +221,6 @@ def test_bad_input(args, kwargs, match):
 
 def test_registry_names():
     assert set(STRATEGIES) == {
-        "grid", "random", *MAPS, "combination", "wavelet_lloyd", "lloyd_uniform", *ORACLES,
+        "grid", "random", *MAPS, "combination", "wavelet_lloyd", "log_lloyd", "lloyd_uniform", *ORACLES,
         *MEASURING,
     }  # fmt: skip
