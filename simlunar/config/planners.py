@@ -1,117 +1,164 @@
-"""Planner options of the schema: a strategy label's options (placement, density mapping,
-feature maps, combination weights, the oracle's schedule, multi-round options) and the check of
-which strategy takes which (shared by the sampling study and the scanner study's planners)."""
+"""Planner options of the schema, derived from the registries: a strategy label's options
+(placement, density mapping, feature maps, combination weights, the oracle's schedule,
+multi-round options) and the check of which strategy takes which (shared by the sampling
+study and the scanner and LIDAR studies' planners).
+
+Nothing here lists a planner, a placement or a map: the YAML keys are the fields of the options
+classes of :data:`simlunar.planner.PLACEMENTS`, :data:`simlunar.planner.PLANNERS` and
+:data:`simlunar.features.MAPS` (:func:`simlunar.config.derived.options_model`), and which
+planner takes which key is read from the entries (:func:`check_planner_options`). A planner or
+map registered later (a test's, a plug-in's) is usable from YAML with no edit here.
+"""
 
 from __future__ import annotations
 
-from typing import Literal
+import copy
+import dataclasses
+from collections.abc import Mapping
+from typing import Annotated, Any, Literal
 
-from pydantic import Field, PositiveInt, field_validator, model_validator
+from pydantic import (
+    BeforeValidator,
+    Field,
+    create_model,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
+from simlunar.config.derived import options_model
 from simlunar.config.fields import _Model
-from simlunar.features.maps import check_entropy_size
+from simlunar.features import MAPS
+from simlunar.planner import PLACEMENTS, PLANNERS, MapSource
+from simlunar.planner.registry import COMBINATION, combinable, field_names
 
 __all__ = [
-    "FEATURE_OPTION_KEYS",
-    "STRATEGY_OPTION_KEYS",
     "CoefficientsCfg",
     "FeatureOptsCfg",
     "OracleOptsCfg",
+    "PlannerOptions",
     "PlannerOptsCfg",
     "SequentialCfg",
+    "StrategyOptions",
     "StrategyOptionsCfg",
     "check_planner_options",
+    "effective_placement",
+    "feature_keys",
+    "own_placements",
+    "section_models",
 ]
 
 
-# Planner options. Defaults are the library's (a test compares them with the signatures of
-# simlunar.planner / simlunar.features); the translation passes them to the weighted strategies.
-#: the feature-map options each weighted strategy's map takes
-FEATURE_OPTION_KEYS = {
-    "uniform": (),
-    "gradient": (),
-    "saliency": (),
-    "entropy": ("size", "scale"),
-    "wavelet": ("wavelet", "levels", "boundary"),
-    "learned": ("model",),
-}
+def feature_keys(name: str) -> tuple[str, ...]:
+    """The YAML ``feature_opts`` keys of map ``name`` (its options less the ones the planner
+    sets at run time, e.g. the learned map's density); none for ``uniform`` or an unknown map."""
+    if name not in MAPS:
+        return ()
+    runtime = MAPS[name].meta.get("runtime", ())
+    return tuple(k for k in field_names(MAPS[name].options) if k not in runtime)
 
 
-class FeatureOptsCfg(_Model):
-    """Options of the strategy's importance map (:func:`simlunar.features.feature_map`).
+def _merged(classes, *, what: str) -> dict[str, tuple[Any, Any]]:
+    """name -> (annotation, FieldInfo) of the fields of several options classes: the first
+    declaration of a name wins; a later one must agree on its bounds and choices."""
+    out: dict[str, tuple[Any, Any]] = {}
+    rules: dict[str, tuple] = {}
+    for cls, skip in classes:
+        model = options_model(cls)
+        for name, info in model.model_fields.items():
+            if name in skip:
+                continue
+            meta = dataclasses.fields(cls)[field_names(cls).index(name)].metadata
+            rule = tuple(meta.get(k) for k in ("ge", "gt", "le", "lt", "choices"))
+            if name in out:
+                if rules[name] != rule:
+                    raise TypeError(f"{what} option {name!r} is declared twice with other bounds")
+                continue
+            out[name], rules[name] = (info.annotation, copy.copy(info)), rule
+    return out
 
-    ``wavelet``, ``levels``, ``boundary`` belong to the wavelet map; ``size``, ``scale`` to the
-    entropy map. A ``combination`` passes each map the options that belong to it.
-    """
 
-    wavelet: str = Field("db2", description="wavelet map: PyWavelets wavelet name")
-    levels: PositiveInt | None = Field(
-        None, description="wavelet map: decomposition levels summed, finest first; null = all"
-    )
-    boundary: Literal["symmetric", "periodic"] = Field("symmetric", description="wavelet map")
-    size: PositiveInt = Field(9, description="entropy map: odd window side (px), 1..63")
-    scale: Literal["minmax", "unit"] = Field("minmax", description="entropy map: 8-bit scaling")
-    model: str | None = Field(
-        None,
-        description="learned map: model file (.joblib beside its .json, written by "
-        "`simlunar train`), relative to the working folder",
-    )
+# ---- feature_opts: the options of every map, one flat section ---------------------------------
+def _owners() -> dict[str, list[str]]:
+    owners: dict[str, list[str]] = {}
+    for name in MAPS:
+        for key in feature_keys(name):
+            owners.setdefault(key, []).append(name)
+    return owners
 
-    @field_validator("model")
-    @classmethod
-    def _joblib(cls, v: str | None) -> str | None:
-        if v is not None and not v.endswith(".joblib"):
-            raise ValueError(f"a learned model file ends in .joblib, got {v!r}")
+
+class _FeatureOptsBase(_Model):
+    """Options of the strategy's importance map (:func:`simlunar.features.feature_map`); each
+    key belongs to the maps whose options class declares it, and a ``combination`` passes each
+    map the keys that belong to it."""
+
+    @model_serializer(mode="wrap")
+    def _without_new_defaults(self, handler):
+        # the options of a map registered after the cache keys were fixed are left out at their
+        # defaults (results/cache_keys.py), so adding a map keeps every earlier cache valid
+        data = handler(self)
+        if isinstance(data, dict):
+            for key, maps in _owners().items():
+                if key in data and not any(MAPS[m].meta.get("cache_defaults") for m in maps):
+                    if data[key] == type(self).model_fields[key].default:
+                        del data[key]
+        return data
+
+
+def _map_rule(key: str):
+    """A field validator: the value through the options class of every map that declares
+    ``key`` (the map's own rule, e.g. an odd entropy window)."""
+
+    def check(cls, v):
+        for m in _owners().get(key, ()):
+            MAPS[m].options(**{key: v})
         return v
 
-    @field_validator("size")
-    @classmethod
-    def _entropy_window(cls, v: int) -> int:
-        check_entropy_size(v)  # the map's own rule
-        return v
-
-    @field_validator("wavelet")
-    @classmethod
-    def _known_wavelet(cls, v: str) -> str:
-        import pywt
-
-        if v not in pywt.wavelist(kind="discrete"):
-            raise ValueError(f"unknown discrete wavelet {v!r} (e.g. db2, haar, sym4)")
-        return v
+    return field_validator(key)(classmethod(check))
 
 
-class CoefficientsCfg(_Model):
+_FEATURE_FIELDS = _merged(
+    [(MAPS[n].options, MAPS[n].meta.get("runtime", ())) for n in MAPS], what="map"
+)
+FeatureOptsCfg = create_model(
+    "FeatureOptsCfg",
+    __base__=_FeatureOptsBase,
+    __doc__=_FeatureOptsBase.__doc__,
+    __validators__={f"_rule_{k}": _map_rule(k) for k in _FEATURE_FIELDS},
+    **_FEATURE_FIELDS,
+)
+
+
+# ---- coefficients: one weight per combinable map ----------------------------------------------
+class _CoefficientsBase(_Model):
     """``combination`` strategy: the weight of each feature map (maps normalised to mean 1;
     ``uniform`` is the constant map)."""
-
-    uniform: float | None = Field(None, ge=0)
-    gradient: float | None = Field(None, ge=0)
-    entropy: float | None = Field(None, ge=0)
-    wavelet: float | None = Field(None, ge=0)
-    saliency: float | None = Field(None, ge=0)
 
     def as_mapping(self) -> dict[str, float]:
         return {k: v for k, v in self.model_dump().items() if v is not None}
 
 
-class OracleOptsCfg(_Model):
-    """``oracle_greedy`` only: the truth-driven refiner's schedule
-    (:func:`simlunar.planner.oracle.oracle_greedy`)."""
-
-    start_share: float = Field(0.25, gt=0, le=1, description="share of k in the framed grid")
-    batch_share: float = Field(0.15, gt=0, description="batch, a share of the current count")
-    smooth_pitch: float = Field(0.25, ge=0, description="error smoothing sigma (pitches)")
-    nms_pitch: float = Field(1.0, gt=0, description="peak suppression window (pitches)")
-    reconstruction: str = Field(
-        "linear",
-        min_length=1,
-        description="whose true error the oracle feeds back: linear (the paper's) or a name "
-        "or label of study.reconstructions (e.g. shading: the bound for the fused model)",
-    )
+CoefficientsCfg = create_model(
+    "CoefficientsCfg",
+    __base__=_CoefficientsBase,
+    __doc__=_CoefficientsBase.__doc__,
+    **{n: (float | None, Field(None, ge=0)) for n in combinable()},
+)
 
 
-#: maps a sequential strategy may take as its prior (none: the error estimate alone)
-SEQUENTIAL_PRIORS = ("none", "wavelet", "gradient", "entropy", "saliency", "learned")
+# ---- sections: a planner's options under a YAML key of their own -----------------------------
+def section_models() -> dict[str, tuple[str, type]]:
+    """YAML section -> (planner, derived model) of the planners registered with ``section``
+    (``oracle``: the greedy oracle's schedule); the measuring planner's section is
+    :class:`SequentialCfg`."""
+    return {
+        e.meta["section"]: (n, options_model(e.options, f"{n} options"))
+        for n, e in PLANNERS.items()
+        if e.meta.get("section") and not e.meta.get("measuring")
+    }
+
+
+OracleOptsCfg = section_models()["oracle"][1]
 
 
 class SequentialCfg(_Model):
@@ -126,7 +173,7 @@ class SequentialCfg(_Model):
     uniform_mix: float = Field(0.5, ge=0, le=1, description="uniform share of the estimate")
     prior_power: float = Field(0.5, gt=0, description="power of the prior map")
     nms_pitches: float = Field(0.7, gt=0, description="peak suppression radius (pitches)")
-    prior: Literal["none", "wavelet", "gradient", "entropy", "saliency", "learned"] = Field(
+    prior: Literal[("none", *MAPS)] = Field(  # type: ignore[valid-type]
         "none", description="image map multiplying the estimate (feature_opts are its options)"
     )
     first_round: Literal["uniform", "prior"] = Field(
@@ -142,127 +189,182 @@ class SequentialCfg(_Model):
         return self
 
 
-#: lloyd placement options (placement: lloyd, lloyd_uniform, oracle_hessian)
-LLOYD_KEYS = ("lloyd_iterations", "border_pitch")
-#: options that follow placement: random only / lloyd only
-RANDOM_ONLY_KEYS = ("density_cap", "cap_block", "blue_noise", "blue_noise_radius")
-#: the option keys each non-weighted strategy takes (weighted ones: all but oracle/sequential)
-STRATEGY_OPTION_KEYS = {
-    "grid": (),
-    "random": (),
-    "lloyd_uniform": LLOYD_KEYS,
-    "oracle_greedy": ("oracle",),
-    "oracle_hessian": ("density_power", "uniform_mix", *LLOYD_KEYS),
-    "sequential": ("sequential", "feature_opts"),
-}
-#: uniform_mix when the YAML leaves it out, by placement (the library's defaults)
-UNIFORM_MIX_DEFAULT = {"random": 0.0, "lloyd": 0.25}
+# ---- the planner options: placement, the placements' and planners' options, the sections ------
+_DEFAULT_PLACEMENT = next(iter(PLACEMENTS))
 
 
-class PlannerOptsCfg(_Model):
+def _top_level_classes():
+    """Options classes whose fields are top-level YAML keys: every placement's, then every
+    function planner's without a section of its own."""
+    out = [(PLACEMENTS[p].options, ()) for p in PLACEMENTS]
+    for e in PLANNERS.values():
+        if not isinstance(e.target, MapSource) and not e.meta.get("section"):
+            out.append((e.options, ()))
+    return out
+
+
+def _placement_defaults(placement: str) -> dict[str, Any]:
+    """The library defaults of a placement's options that differ from the YAML's."""
+    fields = PlannerOptsCfg.model_fields
+    return {
+        f.name: f.default
+        for f in dataclasses.fields(PLACEMENTS[placement].options)
+        if f.name in fields and f.default != fields[f.name].default
+    }
+
+
+class _PlannerOptsBase(_Model):
     """Options of a strategy (:func:`simlunar.planner.plan`).
 
-    ``placement`` says how samples follow a weighted strategy's map: ``random`` (the paper's
-    weighted random draw, paper parity) or ``lloyd`` (error-diffusion halftone of the density,
-    weighted Lloyd relaxation, border covered). ``oracle`` holds ``oracle_greedy``'s schedule,
-    ``sequential`` the multi-round options of ``sequential``.
+    ``placement`` says how samples follow a map planner's map: ``random`` (the paper's
+    weighted random draw, paper parity; the default keeps a planner's own placement, e.g.
+    ``wavelet_lloyd``'s) or ``lloyd`` (error-diffusion halftone of the density, weighted Lloyd
+    relaxation, border covered). ``oracle`` holds ``oracle_greedy``'s schedule, ``sequential``
+    the multi-round options of ``sequential``.
     """
-
-    placement: Literal["random", "lloyd"] = Field(
-        "random", description="random: the paper's weighted draw; lloyd: halftone + Lloyd"
-    )
-    density_power: float | None = Field(
-        None, gt=0, description="power of the map; null = 1 (random) or 1/2 (lloyd)"
-    )
-    uniform_mix: float = Field(
-        0.0, ge=0, le=1, description="mixture with uniform; left out = 0 (random), 0.25 (lloyd)"
-    )
-    lloyd_iterations: int = Field(20, ge=0, le=1000, description="lloyd: relaxation steps")
-    border_pitch: float | None = Field(
-        0.75, ge=0, description="lloyd: snap samples this many pitches from the border onto it"
-    )
-    density_cap: float | None = Field(
-        None, ge=1, description="max regional density, a multiple of the mean; null = none"
-    )
-    cap_block: PositiveInt = Field(16, description="block side (px) of density_cap")
-    blue_noise: bool = Field(False, description="Poisson-disk-like weighted sampling")
-    blue_noise_radius: float = Field(0.5, gt=0, description="radius factor of blue_noise")
-    feature_opts: FeatureOptsCfg = Field(default_factory=FeatureOptsCfg)
-    coefficients: CoefficientsCfg = Field(
-        default_factory=CoefficientsCfg, description="combination only: map weights"
-    )
-    oracle: OracleOptsCfg = Field(
-        default_factory=OracleOptsCfg, description="oracle_greedy only: its schedule"
-    )
-    sequential: SequentialCfg = Field(
-        default_factory=SequentialCfg, description="sequential only: rounds and estimate"
-    )
 
     @model_validator(mode="before")
     @classmethod
-    def _mix_of_placement(cls, data):
-        # the library's uniform share depends on the placement: fill it in when left out
-        if isinstance(data, dict) and "uniform_mix" not in data:
-            mix = UNIFORM_MIX_DEFAULT.get(data.get("placement", "random"))
-            if mix:
-                data = {**data, "uniform_mix": mix}
+    def _defaults_of_placement(cls, data):
+        # a placement's own defaults (uniform_mix 0.25 for lloyd) fill the keys left out
+        if isinstance(data, dict) and data.get("placement", _DEFAULT_PLACEMENT) in PLACEMENTS:
+            fill = _placement_defaults(data.get("placement", _DEFAULT_PLACEMENT))
+            data = {**fill, **data}
         return data
 
 
-class StrategyOptionsCfg(PlannerOptsCfg):
+def _planner_fields() -> dict[str, tuple[Any, Any]]:
+    fields: dict[str, tuple[Any, Any]] = {
+        "placement": (
+            Literal[tuple(PLACEMENTS)],
+            Field(
+                _DEFAULT_PLACEMENT,
+                description="; ".join(f"{n}: {e.summary}" for n, e in PLACEMENTS.items()),
+            ),
+        )
+    }
+    fields.update(_merged(_top_level_classes(), what="planner"))
+    fields["feature_opts"] = (FeatureOptsCfg, Field(default_factory=FeatureOptsCfg))
+    fields["coefficients"] = (
+        CoefficientsCfg,
+        Field(default_factory=CoefficientsCfg, description="combination only: map weights"),
+    )
+    for section, (name, model) in section_models().items():
+        fields[section] = (model, Field(default_factory=model, description=f"{name} only"))
+    fields["sequential"] = (
+        SequentialCfg,
+        Field(default_factory=SequentialCfg, description="sequential only: rounds and estimate"),
+    )
+    return fields
+
+
+PlannerOptsCfg = create_model(
+    "PlannerOptsCfg", __base__=_PlannerOptsBase, __doc__=_PlannerOptsBase.__doc__,
+    **_planner_fields(),
+)  # fmt: skip
+
+
+class StrategyOptionsCfg(PlannerOptsCfg):  # type: ignore[misc, valid-type]
     """A strategy label's options: ``strategy`` names the registered strategy (default: the
     label itself), the rest are its planner options."""
 
     strategy: str | None = Field(None, description="registered strategy; null = the label")
 
 
-def _changed(opts: _Model, default: _Model) -> list[str]:
+def own_placements(value):
+    """``label -> options`` with each map planner's own placement filled in where the YAML
+    leaves ``placement`` out (so ``wavelet_lloyd: {uniform_mix: 0}`` is a Lloyd layout with
+    no uniform share, and its dump names the placement); any other value unchanged."""
+    if not isinstance(value, Mapping):
+        return value
+    out = {}
+    for label, opts in value.items():
+        base = opts.get("strategy") or label if isinstance(opts, Mapping) else None
+        if base in PLANNERS and "placement" not in opts:
+            source = PLANNERS[base].target
+            if isinstance(source, MapSource) and source.placement != _DEFAULT_PLACEMENT:
+                opts = {**opts, "placement": source.placement}
+        out[label] = opts
+    return out
+
+
+#: ``label -> options`` of a study's planners (the placement of a map planner filled in)
+PlannerOptions = Annotated[dict[str, PlannerOptsCfg], BeforeValidator(own_placements)]
+#: ``label -> options`` of the sampling study's strategies (``strategy`` may name the planner)
+StrategyOptions = Annotated[dict[str, StrategyOptionsCfg], BeforeValidator(own_placements)]
+
+
+# ---- which planner takes which key: read from the entries ------------------------------------
+def effective_placement(base: str, opts) -> str:
+    """The placement a map planner uses: the YAML's, or the planner's own when the YAML leaves
+    the default (``wavelet_lloyd`` is placed by Lloyd unless told otherwise)."""
+    source = PLANNERS[base].target
+    if opts.placement != _DEFAULT_PLACEMENT or not isinstance(source, MapSource):
+        return opts.placement
+    return source.placement
+
+
+def _changed(opts, default) -> list[str]:
     return [k for k in type(default).model_fields if getattr(opts, k) != getattr(default, k)]
 
 
-def check_planner_options(base: str, opts: PlannerOptsCfg) -> None:
+def _sections() -> dict[str, str]:
+    """YAML section -> the planner that takes it."""
+    return {e.meta["section"]: n for n, e in PLANNERS.items() if e.meta.get("section")}
+
+
+def check_planner_options(base: str, opts) -> None:
     """Raise ``ValueError("<key>: problem")`` for options the strategy ``base`` does not take."""
+    entry = PLANNERS[base]
     default = PlannerOptsCfg(placement=opts.placement)
     changed = [k for k in _changed(opts, default) if k != "strategy"]
-    if opts.placement != "random":
+    if opts.placement != _DEFAULT_PLACEMENT:
         changed.insert(0, "placement")
-    if base in STRATEGY_OPTION_KEYS:
-        bad = [k for k in changed if k not in STRATEGY_OPTION_KEYS[base]]
-        if bad and not STRATEGY_OPTION_KEYS[base]:
+    if not isinstance(entry.target, MapSource):
+        section = entry.meta.get("section")
+        allowed = (section,) if section else field_names(entry.options)
+        if entry.meta.get("measuring"):
+            allowed = (*allowed, "feature_opts")
+        bad = [k for k in changed if k not in allowed]
+        if bad and not allowed:
             raise ValueError(f"{bad[0]}: strategy {base!r} takes no options")
         if bad:
-            valid = ", ".join(STRATEGY_OPTION_KEYS[base])
+            valid = ", ".join(allowed)
             raise ValueError(f"{bad[0]}: not an option of strategy {base!r} (valid: {valid})")
-        features = [opts.sequential.prior] if base == "sequential" else []
-        _check_feature_opts(opts.feature_opts, [f for f in features if f != "none"])
+        prior = [opts.sequential.prior] if entry.meta.get("measuring") else []
+        _check_feature_opts(opts.feature_opts, [f for f in prior if f != "none"])
         return
-    for key in ("oracle", "sequential"):
+    for key, owner in _sections().items():
         if key in changed:
-            raise ValueError(f"{key}: only the {key}{'_greedy' * (key == 'oracle')} strategy "
-                             f"takes it ({base!r})")  # fmt: skip
-    wrong = RANDOM_ONLY_KEYS if opts.placement == "lloyd" else LLOYD_KEYS
+            raise ValueError(f"{key}: only the {owner} strategy takes it ({base!r})")
+    placement = effective_placement(base, opts)
+    mine = field_names(PLACEMENTS[placement].options)
     for k in changed:
-        if k in wrong:
-            need = "random" if opts.placement == "lloyd" else "lloyd"
-            raise ValueError(f"{k}: needs placement: {need} (strategy {base!r})")
-    if base == "combination":
+        if k in ("placement", "feature_opts", "coefficients") or k in mine:
+            continue
+        need = [p for p in PLACEMENTS if k in field_names(PLACEMENTS[p].options)]
+        if need:
+            raise ValueError(f"{k}: needs placement: {need[0]} (strategy {base!r})")
+        raise ValueError(f"{k}: not an option of strategy {base!r}")
+    if entry.target.map == COMBINATION:
         if not opts.coefficients.as_mapping():
-            raise ValueError("coefficients: strategy 'combination' needs at least one weight")
+            raise ValueError(f"coefficients: strategy {base!r} needs at least one weight")
         features = list(opts.coefficients.as_mapping())
     else:
         if "coefficients" in changed:
             raise ValueError(f"coefficients: only the combination strategy takes them ({base!r})")
-        features = [base]
+        features = [entry.target.map]
     _check_feature_opts(opts.feature_opts, features)
 
 
-def _check_feature_opts(fo: FeatureOptsCfg, features: list[str]) -> None:
-    allowed = {k for f in features for k in FEATURE_OPTION_KEYS.get(f, ())}
+def _check_feature_opts(fo, features: list[str]) -> None:
+    allowed = {k for f in features for k in feature_keys(f)}
     for k in _changed(fo, FeatureOptsCfg()):
         if k not in allowed:
             raise ValueError(
                 f"feature_opts.{k}: not an option of the {'/'.join(features) or 'no'} map "
                 f"(valid: {', '.join(sorted(allowed)) or 'none'})"
             )
-    if "learned" in features and fo.model is None:
-        raise ValueError("feature_opts.model: the learned map needs its model file (.joblib)")
+    for f in features:
+        if f in MAPS and MAPS[f].meta.get("needs_model") and fo.model is None:
+            raise ValueError(f"feature_opts.model: the {f} map needs its model file (.joblib)")

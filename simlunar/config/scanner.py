@@ -31,12 +31,13 @@ from simlunar.config.fields import (
 )
 from simlunar.config.render import MAX_SPP
 from simlunar.config.studies import (
+    PlannerOptions,
     PlannerOptsCfg,
     Reconstructions,
     _reconstructions_field,
     check_planner_options,
 )
-from simlunar.planner import STRATEGIES
+from simlunar.planner import DEFAULT_PLANNER, STRATEGIES
 from simlunar.scanner.codings import CODINGS, DEFAULT_CODING, full_field_codings
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.scanner.scheduling import check_spacings
@@ -170,7 +171,7 @@ ScannerOptionsCfg = create_model(
     dot_opts=(DotOptsCfg, Field(default_factory=DotOptsCfg)),
     capture_opts=(CaptureOptsCfg, Field(default_factory=CaptureOptsCfg)),
     planner_opts=(
-        dict[str, PlannerOptsCfg],
+        PlannerOptions,
         Field(default_factory=dict, description="planner name -> options (study.planners only)"),
     ),
 )
@@ -193,7 +194,7 @@ class ScannerStudyCfg(_Model):
         description="the full-field coding ambiguity enhancement rescans (and low_contrast ranks)",
     )
     planners: list[str] = Field(
-        default_factory=lambda: ["wavelet", "random"],
+        default_factory=lambda: [DEFAULT_PLANNER, "random"],
         min_length=1,
         description="what picks the dots (dot modes): a planner strategy (from the guide "
         "image) or low_contrast (the gray-code pixels the projector lit least; "

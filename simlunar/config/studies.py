@@ -23,21 +23,27 @@ from simlunar.config.fields import (
 )
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
 from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
-    FEATURE_OPTION_KEYS,
     CoefficientsCfg,
     FeatureOptsCfg,
     OracleOptsCfg,
+    PlannerOptions,
     PlannerOptsCfg,
     SequentialCfg,
+    StrategyOptions,
     StrategyOptionsCfg,
     check_planner_options,
 )
 from simlunar.config.quantities import log_spaced
-from simlunar.planner import MEASURING, ORACLES, STRATEGIES
+from simlunar.planner import (
+    DEFAULT_PLANNER,
+    MEASURING,
+    ORACLES,
+    PAPER_STRATEGIES,
+    STRATEGIES,
+)
 from simlunar.reconstruction import RECONSTRUCTIONS
 
 __all__ = [
-    "FEATURE_OPTION_KEYS",
     "LIDAR_BLOCKS",
     "DensityRange",
     "FeatureOptsCfg",
@@ -112,8 +118,9 @@ class SamplingStudyCfg(_Model):
     """The sampling study of the paper's section 4."""
 
     kind: Literal["sampling"] = "sampling"
+    # the YAML default lists random first (the row order of every run without the key)
     strategies: list[str] = Field(
-        default_factory=lambda: ["random", "grid", "gradient", "entropy", "wavelet"], min_length=1
+        default_factory=lambda: ["random", "grid", *PAPER_STRATEGIES[2:]], min_length=1
     )
     densities: Annotated[
         list[Density],
@@ -122,7 +129,7 @@ class SamplingStudyCfg(_Model):
     trials: int = Field(20, ge=1, le=1000)
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad", "sal"], min_length=1)
     range_noise_std_m: Metres = Field(0.0, ge=0, description="range-sensor noise (m)")
-    strategy_options: dict[str, StrategyOptionsCfg] = Field(
+    strategy_options: StrategyOptions = Field(
         default_factory=dict,
         description="label -> options; a label not registered as a strategy names one in "
         "'strategy' (e.g. wavelet_bn: {strategy: wavelet, blue_noise: true})",
@@ -196,7 +203,7 @@ class LidarStudyCfg(_Model):
         "directed by the plan) or micromirror_flash (lights only the planned pixels)",
     )
     planners: list[str] = Field(
-        default_factory=lambda: ["wavelet", "random", "grid"],
+        default_factory=lambda: [DEFAULT_PLANNER, "random", "grid"],
         min_length=1,
         description="planner strategies (from the guide image); unused by a flash without revisits",
     )
@@ -210,7 +217,7 @@ class LidarStudyCfg(_Model):
     )
     trials: int = Field(3, ge=1, le=1000, description="planner draws and photon noise")
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad"], min_length=1)
-    planner_opts: dict[str, PlannerOptsCfg] = Field(
+    planner_opts: PlannerOptions = Field(
         default_factory=dict, description="planner name -> options (study.planners only)"
     )
     hazard: HazardCfg | None = Field(

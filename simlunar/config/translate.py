@@ -11,6 +11,7 @@ the code that reads them); nothing else converts units.
 from __future__ import annotations
 
 import math
+import typing
 from typing import Any
 
 import numpy as np
@@ -19,6 +20,7 @@ from pydantic import ValidationError
 from simlunar.config.derived import reconstruction_mapping
 from simlunar.config.fields import library_values
 from simlunar.config.messages import format_validation_error
+from simlunar.config.planners import effective_placement, feature_keys
 from simlunar.config.render import (
     CameraLightCfg,
     OrthoNadirCfg,
@@ -28,12 +30,7 @@ from simlunar.config.render import (
     SunLightCfg,
 )
 from simlunar.config.scanner import CODING_OPTS, DotOptsCfg, RigCfg, ScannerStudyCfg
-from simlunar.config.studies import (
-    FEATURE_OPTION_KEYS,
-    FeatureOptsCfg,
-    PlannerOptsCfg,
-    SamplingStudyCfg,
-)
+from simlunar.config.studies import PlannerOptsCfg, SamplingStudyCfg
 from simlunar.config.terrain import (
     PresetError,
     TerrainOverridesCfg,
@@ -43,7 +40,8 @@ from simlunar.config.terrain import (
 from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose, rover_mast_camera
 from simlunar.imaging.exposure import auto_exposure_e
 from simlunar.imaging.sensor import SensorModel
-from simlunar.planner import SequentialOptions
+from simlunar.planner import COMBINATION, PLACEMENTS, PLANNERS, MapSource
+from simlunar.planner.registry import field_names
 from simlunar.render.capture import CaptureOptions
 from simlunar.render.lights import make_light
 from simlunar.render.materials import make_bsdf
@@ -245,62 +243,75 @@ def sensor_model(cfg: SensorCfg, reference: np.ndarray | None = None):
 # --------------------------------------------------------------------------- planners
 
 
-def feature_opts(base: str, opts: FeatureOptsCfg, features: list[str] | None = None) -> dict:
-    """The ``feature_opts`` of :func:`simlunar.planner.plan` for strategy ``base``."""
+def feature_opts(base: str, opts, features: list[str] | None = None) -> dict:
+    """The ``feature_opts`` of :func:`simlunar.planner.plan` for map ``base`` (a map of
+    :data:`simlunar.features.MAPS`; for the combination, one dict per map of ``features``)."""
 
     def of(feature: str) -> dict:
-        return {k: getattr(opts, k) for k in FEATURE_OPTION_KEYS.get(feature, ())}
+        return {k: getattr(opts, k) for k in feature_keys(feature)}
 
-    if base == "combination":
+    if base == COMBINATION:
         return {f: of(f) for f in features or []}
     return of(base)
 
 
-def planner_kwargs(base: str, opts: PlannerOptsCfg) -> dict[str, Any]:
-    """Keyword options of :func:`simlunar.planner.plan` for strategy ``base`` (none for grid
-    and random, which take none).
+def _library_values(options_cls, opts, keys) -> dict[str, Any]:
+    """The values of ``keys`` the YAML set (``model_fields_set``) as the library's options
+    class takes them: a null for a field that takes none means the library's default."""
+    hints = typing.get_type_hints(options_cls)
+    out = {}
+    for k in keys:
+        if k not in opts.model_fields_set:
+            continue
+        v = getattr(opts, k)
+        if v is None and type(None) not in typing.get_args(hints.get(k)):
+            continue
+        out[k] = v
+    return out
 
-    ``sequential`` (not a :func:`~simlunar.planner.plan` strategy: it measures while it plans)
-    gets ``{"sequential": SequentialOptions, "prior": map name or None, "feature_opts": ...}``
-    for the study's planner adapter (:mod:`simlunar.study.sampling`).
+
+def planner_kwargs(base: str, opts: PlannerOptsCfg) -> dict[str, Any]:
+    """Keyword options of :func:`simlunar.planner.plan` for strategy ``base``, derived from its
+    entry of :data:`simlunar.planner.PLANNERS`.
+
+    A map planner gets its placement's options, ``feature_opts`` (its map's) and, for the
+    combination, ``coefficients``; a function planner the fields of its options class (from
+    its YAML section when it has one, e.g. ``oracle``). ``sequential`` (not a
+    :func:`~simlunar.planner.plan` strategy: it measures while it plans) gets
+    ``{"sequential": SequentialOptions, "prior": map name or None, "feature_opts": ...}`` for
+    the study's planner adapter (:mod:`simlunar.study.sampling`).
     """
-    if base in ("grid", "random"):
-        return {}
-    lloyd = {"lloyd_iterations": opts.lloyd_iterations, "border_pitch": opts.border_pitch}
-    if base == "lloyd_uniform":
-        return lloyd
-    if base == "oracle_greedy":
-        return opts.oracle.model_dump()
-    if base == "oracle_hessian":  # the oracle's own density defaults unless the YAML sets them
-        kw = {"density_power": opts.density_power, "uniform_mix": opts.uniform_mix, **lloyd}
-        if opts.density_power is None:
-            kw.pop("density_power")
-        if "uniform_mix" not in opts.model_fields_set:
-            kw.pop("uniform_mix")
-        return kw
-    if base == "sequential":
+    entry = PLANNERS[base]
+    source = entry.target
+    if entry.meta.get("measuring"):
         q = opts.sequential.model_dump()
         prior = q.pop("prior")
         return {
-            "sequential": SequentialOptions(**q),
+            entry.meta["section"]: entry.options(**q),
             "prior": None if prior == "none" else prior,
             "feature_opts": feature_opts(prior, opts.feature_opts),
         }
-    kw: dict[str, Any] = {"uniform_mix": opts.uniform_mix}
-    if opts.placement == "random":
-        kw.update(
-            density_cap=opts.density_cap,
-            cap_block=opts.cap_block,
-            blue_noise=opts.blue_noise,
-            blue_noise_radius=opts.blue_noise_radius,
-        )
-        if opts.density_power is not None:
-            kw["density_power"] = opts.density_power
+    if not isinstance(source, MapSource):
+        section = entry.meta.get("section")
+        values = getattr(opts, section) if section else opts
+        return _library_values(entry.options, values, field_names(entry.options))
+    placement = effective_placement(base, opts)
+    options_cls = PLACEMENTS[placement].options
+    if placement == opts.placement:
+        # every option of the placement, as the YAML resolved it (its defaults are the library's)
+        kw: dict[str, Any] = {} if placement == source.placement else {"placement": placement}
+        kw.update({k: getattr(opts, k) for k in field_names(options_cls)})
     else:
-        kw.update(placement="lloyd", density_power=opts.density_power, **lloyd)
+        # the planner's own placement: the keys the YAML changed, the placement's defaults else
+        default = PlannerOptsCfg()
+        kw = {
+            k: getattr(opts, k)
+            for k in field_names(options_cls)
+            if getattr(opts, k) != getattr(default, k)
+        }
     coeffs = opts.coefficients.as_mapping()
-    kw["feature_opts"] = feature_opts(base, opts.feature_opts, list(coeffs))
-    if base == "combination":
+    kw["feature_opts"] = feature_opts(source.map, opts.feature_opts, list(coeffs))
+    if source.map == COMBINATION:
         kw["coefficients"] = coeffs
     return kw
 

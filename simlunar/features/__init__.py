@@ -1,17 +1,21 @@
 """Image -> importance maps for image-directed range sampling (paper section 4.1).
 
-``feature_map(name, image, **opts)`` returns a float64 (rows, cols) map >= 0; names are the keys
-of ``FEATURES``: ``gradient``, ``entropy``, ``wavelet``, ``saliency``, and of
-``TRAINED_FEATURES``: ``learned`` (a trained model, :mod:`simlunar.features.learned`).
+``feature_map(name, image, **opts)`` returns a float64 (rows, cols) map >= 0; names are the
+entries of :data:`MAPS` (:mod:`simlunar.features.registry`), each registered here once with
+its options class: ``gradient``, ``entropy``, ``wavelet``, ``saliency`` and
+``learned`` (a trained model, :mod:`simlunar.features.learned`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.features.log_energy import LogEnergyOptions, log_energy
 from simlunar.features.maps import (
+    EntropyOptions,
+    WaveletOptions,
     check_image,
     entropy,
     gradient,
@@ -20,17 +24,30 @@ from simlunar.features.maps import (
     wavelet,
     wavelet_levels,
 )
+from simlunar.features.registry import MAPS, NoMapOptions, feature_map, image_maps, map_options
 from simlunar.features.saliency import saliency
-
-FEATURES: dict[str, Callable[..., np.ndarray]] = {
-    "gradient": gradient,
-    "entropy": entropy,
-    "wavelet": wavelet,
-    "saliency": saliency,
-}
+from simlunar.registry import check_bounds, option
 
 
-# ---- maps that need a trained model, apart from the image-only maps above ---------------------
+# ---- maps that need a trained model (issue 20), apart from the image-only maps -------------
+@dataclass(frozen=True)
+class LearnedMapOptions:
+    """Options of the learned map (:func:`simlunar.features.learned.learned`): the model file
+    (from YAML) and the plan's density k / N (set by the planner, not a YAML key)."""
+
+    model: str | None = option(
+        None,
+        doc="learned map: model file (.joblib beside its .json, written by `simlunar train`), "
+        "relative to the working folder",
+    )
+    density: float | None = option(None, doc="learned map: the plan's k / N", gt=0, le=1)
+
+    def __post_init__(self):
+        check_bounds(self)
+        if self.model is not None and not str(self.model).endswith(".joblib"):
+            raise ValueError(f"a learned model file ends in .joblib, got {self.model!r}")
+
+
 def _learned(image, *, model, density: float) -> np.ndarray:
     """``simlunar.features.learned.learned``, imported on use: that module imports
     scikit-learn and joblib, which every importer of this package (the planner, the studies,
@@ -40,46 +57,41 @@ def _learned(image, *, model, density: float) -> np.ndarray:
     return learned(image, model=model, density=density)
 
 
-#: name -> map of a trained model; options ``model`` (a ``.joblib`` path) and ``density`` (k / N)
-TRAINED_FEATURES: dict[str, Callable[..., np.ndarray]] = {"learned": _learned}
+# The registry lives in .registry; its entries are added here. Meta: label (display name of
+# the planner of the same name), combine (a map of the combination planner; the paper's four),
+# cache_defaults (its options at their defaults are in the cache keys of runs made before this
+# registry; a newer map's defaults are left out of them, so old caches stay valid).
+_PAPER = {"combine": True, "cache_defaults": True}
+MAPS.register("gradient", gradient, NoMapOptions, summary="gradient magnitude", label="Gradient",
+              **_PAPER)  # fmt: skip
+MAPS.register("entropy", entropy, EntropyOptions, summary="local entropy", label="Entropy",
+              **_PAPER)  # fmt: skip
+MAPS.register("wavelet", wavelet, WaveletOptions, summary="wavelet energy", label="Wavelet",
+              **_PAPER)  # fmt: skip
+MAPS.register("saliency", saliency, NoMapOptions, summary="Itti saliency", label="Saliency",
+              **_PAPER)  # fmt: skip
+MAPS.register("log_energy", log_energy, LogEnergyOptions, summary="LoG energy", label="LoG energy")
+MAPS.register(
+    "learned", _learned, LearnedMapOptions, summary="trained model", label="Learned",
+    needs_model=True, runtime=("density",), cache_defaults=True,
+)  # fmt: skip
 
-
-def feature_map(name: str, image, **opts) -> np.ndarray:
-    """Compute the importance map ``name`` of ``image``.
-
-    Parameters
-    ----------
-    name : str
-        One of ``FEATURES`` or ``TRAINED_FEATURES`` (``learned``: options ``model``, a
-        ``.joblib`` path, and ``density``, k / N).
-    image : ndarray, shape (rows, cols) or (rows, cols, 3)
-        Guide image (linear radiance or any intensity scale); must be finite.
-    **opts
-        Options of the chosen map (e.g. ``size``/``scale`` for entropy, ``levels`` for wavelet).
-
-    Returns
-    -------
-    ndarray of float64, shape (rows, cols), >= 0
-    """
-    fn = FEATURES.get(name) if isinstance(name, str) else None
-    if fn is None and isinstance(name, str) and name in TRAINED_FEATURES:
-        missing = sorted({"model", "density"} - set(opts))
-        if missing:
-            raise ValueError(f"feature {name!r} needs option(s) {missing}")
-        fn = TRAINED_FEATURES[name]
-    if fn is None:
-        valid = ", ".join([*FEATURES, *TRAINED_FEATURES])
-        raise ValueError(f"unknown feature {name!r}; valid: {valid}")
-    return fn(image, **opts)
-
+#: name -> map function of the image-only maps (a view of :data:`MAPS`)
+FEATURES = {n: MAPS[n].target for n in image_maps()}
 
 __all__ = [
     "FEATURES",
-    "TRAINED_FEATURES",
+    "MAPS",
+    "EntropyOptions",
+    "LearnedMapOptions",
+    "NoMapOptions",
+    "WaveletOptions",
     "check_image",
     "entropy",
     "feature_map",
     "gradient",
+    "image_maps",
+    "map_options",
     "saliency",
     "to_gray",
     "to_uint8",

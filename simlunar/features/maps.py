@@ -5,15 +5,20 @@ Each map is float64 (rows, cols), >= 0, computed on the gray image (``to_gray``)
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pywt
 
 from simlunar.features._kernels import sliding_entropy
+from simlunar.registry import check_bounds, option
 
 __all__ = [
     "BOUNDARIES",
     "MAX_ENTROPY_SIZE",
     "RGB2GRAY",
+    "EntropyOptions",
+    "WaveletOptions",
     "check_entropy_size",
     "check_image",
     "entropy",
@@ -100,6 +105,18 @@ def check_entropy_size(size: int) -> None:
         raise ValueError(f"entropy window size must be odd, 1..{MAX_ENTROPY_SIZE}, got {size}")
 
 
+@dataclass(frozen=True)
+class EntropyOptions:
+    """Options of the entropy map (:func:`entropy`)."""
+
+    size: int = option(9, doc="entropy map: odd window side, 1..63", unit="px", ge=1)
+    scale: str = option("minmax", doc="entropy map: 8-bit scaling", choices=("minmax", "unit"))
+
+    def __post_init__(self):
+        check_bounds(self)
+        check_entropy_size(self.size)  # odd, at most MAX_ENTROPY_SIZE
+
+
 def entropy(image, *, size: int = 9, scale: str = "minmax") -> np.ndarray:
     """Local Shannon entropy (bits) in a ``size`` x ``size`` window, MATLAB ``entropyfilt``.
 
@@ -131,6 +148,24 @@ def entropy(image, *, size: int = 9, scale: str = "minmax") -> np.ndarray:
 
 
 BOUNDARIES = ("symmetric", "periodic")
+
+
+@dataclass(frozen=True)
+class WaveletOptions:
+    """Options of the wavelet energy map (:func:`wavelet`)."""
+
+    wavelet: str = option("db2", doc="wavelet map: PyWavelets wavelet name")
+    levels: int | None = option(
+        None, doc="wavelet map: decomposition levels summed, finest first; null = all", ge=1
+    )
+    boundary: str = option("symmetric", doc="wavelet map", choices=BOUNDARIES)
+
+    def __post_init__(self):
+        check_bounds(self)
+        if isinstance(self.levels, float):
+            raise ValueError(f"levels must be an integer, got {self.levels!r}")
+        if self.wavelet not in pywt.wavelist(kind="discrete"):
+            raise ValueError(f"unknown discrete wavelet {self.wavelet!r} (e.g. db2, haar, sym4)")
 
 
 def _wavelet_level_energy(image, wavelet, levels, boundary):

@@ -8,15 +8,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.features import feature_map
-from simlunar.planner import plan
+from simlunar.planner import DEFAULT_PLANNER, plan, strategy_weights
 from simlunar.reconstruction import reconstruct
 from simlunar.render import render
 from simlunar.render.materials import OrenNayarBSDF, sigma_map_from_energy
 from simlunar.render.scene import luminance
 from simlunar.terrain.types import Terrain
 
-__all__ = ["RENDER_LOCK", "RenderScene", "panel_arrays", "sparse_mesh_render"]
+__all__ = ["RENDER_LOCK", "RenderScene", "panel_arrays", "panel_energy", "sparse_mesh_render"]
 
 #: Renders of units running concurrently in threads (``LocalPoolExecutor``) take turns: each
 #: render already uses every core, and Mitsuba scenes are built and rendered one at a time.
@@ -49,14 +48,20 @@ class RenderScene:
         )
 
 
+def panel_energy(image) -> np.ndarray:
+    """The map the figures' panels plan from: the default planner's (the wavelet energy),
+    float64 (rows, cols)."""
+    return strategy_weights(DEFAULT_PLANNER, image)
+
+
 def panel_arrays(image, depth, energy, density: float, *, rng) -> dict:
     """Arrays for the image panels: wavelet energy, one wavelet plan and its reconstruction.
 
-    ``energy`` is ``feature_map("wavelet", image)`` (float64), the map the plan samples from.
+    ``energy`` is :func:`panel_energy` of ``image`` (float64), the map the plan samples from.
     """
     n = image.size
     k = max(3, round(density * n))
-    p = plan("wavelet", k, weights=energy, rng=rng)
+    p = plan(DEFAULT_PLANNER, k, weights=energy, rng=rng)
     pts = p.rc  # index coordinates: cell (r, c) sits at (r, c)
     filled = np.where(np.isfinite(depth), depth, np.nanmean(depth))
     recon = reconstruct(pts, filled[p.rows, p.cols], image.shape)
@@ -106,7 +111,7 @@ def sparse_mesh_render(
     threshold : float or None
         Normalised-energy threshold above which the geometry is kept metric.
     energy : (rows, cols) float64 or None
-        ``feature_map("wavelet", image)`` when already computed (the plan samples from it).
+        :func:`panel_energy` of ``image`` when already computed (the plan samples from it).
 
     Returns
     -------
@@ -117,9 +122,9 @@ def sparse_mesh_render(
     """
     terrain, bsdf = scene.terrain, scene.bsdf
     if energy is None:
-        energy = feature_map("wavelet", image)
+        energy = panel_energy(image)
     k = max(3, round(density * image.size))
-    p = plan("wavelet", k, weights=energy, rng=rng)
+    p = plan(DEFAULT_PLANNER, k, weights=energy, rng=rng)
     pts = p.rc  # index coordinates: cell (r, c) sits at (r, c)
     heights = np.asarray(terrain.heights, np.float64)
     recon = reconstruct(pts, heights[p.rows, p.cols], heights.shape)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from simlunar.errors import SimlunarError
 from simlunar.planner import NelderMeadOptions, ScoreProtocol, fit_combination, score_combination
-from simlunar.planner.combination import DEFAULT_PROTOCOL
+from simlunar.planner.combination import DEFAULT_FEATURES, DEFAULT_PROTOCOL
 from simlunar.results.figures import load_results
 from simlunar.results.store import UnitCache, atomic_write_bytes
 
@@ -56,7 +56,7 @@ def run_fit(
     *,
     train_seeds: list[int],
     test_seeds: list[int],
-    features: tuple[str, ...] = ("uniform", "gradient", "entropy", "wavelet", "saliency"),
+    features: tuple[str, ...] = DEFAULT_FEATURES,
     protocol: ScoreProtocol = DEFAULT_PROTOCOL,
     search: NelderMeadOptions = FIT_SEARCH,
     entropy_scale: str = "unit",

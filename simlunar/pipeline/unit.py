@@ -27,7 +27,6 @@ from simlunar.config import lidar_translate, translate
 from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
-from simlunar.features import feature_map
 from simlunar.features.learned import pinned_models
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
@@ -36,6 +35,7 @@ from simlunar.pipeline.figure_inputs import (
     RENDER_LOCK,
     RenderScene,
     panel_arrays,
+    panel_energy,
     sparse_mesh_render,
 )
 from simlunar.pipeline.guide import build_guide
@@ -373,7 +373,7 @@ def _trial_means(v: np.ndarray) -> list:
 def _figure_arrays(cfg, scene: RenderScene, image, depth, seeds, timings) -> dict:
     """The image panels' arrays and, for a nadir view, the sparse-mesh renders (Fig. 4)."""
     panel_ss, mesh_ss = seeds["panels"].spawn(2)
-    energy = feature_map("wavelet", image)  # once, for the panels and the sparse mesh
+    energy = panel_energy(image)  # once, for the panels and the sparse mesh
     f = cfg.figures
     out = panel_arrays(image, depth, energy, f.panel_density, rng=np.random.default_rng(panel_ss))
     if f.sparse_mesh_density is not None and isinstance(cfg.render.camera, OrthoNadirCfg):

@@ -35,7 +35,7 @@ __all__ = [
 ]
 
 #: the maps :func:`fit_combination` weights by default
-DEFAULT_FEATURES = ("uniform", "gradient", "entropy", "wavelet", "saliency")
+DEFAULT_FEATURES = COMBINABLE
 
 
 @dataclass(frozen=True)

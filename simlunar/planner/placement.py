@@ -20,12 +20,24 @@ Schloemer & Deussen 2009 (capacity-constrained point distributions).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 import simlunar.planner._placement_kernels as _k
+from simlunar.registry import check_bounds, option
 
-__all__ = ["cvt_energy", "density_from_map", "halftone", "lloyd", "place", "samples_per_cell"]
+__all__ = [
+    "LloydOptions",
+    "cvt_energy",
+    "density_from_map",
+    "halftone",
+    "lloyd",
+    "lloyd_layout",
+    "place",
+    "samples_per_cell",
+]
 
 #: half-width of the uniform jitter of the halftone threshold (0.5 +- this)
 THRESHOLD_JITTER = 0.1
@@ -365,3 +377,48 @@ def cvt_energy(density, flat) -> float:
     cells = np.indices(d.shape).reshape(2, -1).T
     dist = cKDTree(sites.astype(np.float64)).query(cells.astype(np.float64))[0]
     return float(np.sum((d.ravel() ** 2) * dist**2))
+
+
+@dataclass(frozen=True)
+class LloydOptions:
+    """Options of the ``lloyd`` placement (:func:`lloyd_layout`): the density of the map
+    (:func:`density_from_map`) placed by halftone + weighted Lloyd (:func:`place`)."""
+
+    density_power: float | None = option(
+        None, doc="power of the map; null = 1 (random) or 1/2 (lloyd)", gt=0
+    )
+    uniform_mix: float = option(
+        0.25, doc="mixture with uniform; left out = 0 (random), 0.25 (lloyd)", ge=0, le=1
+    )
+    lloyd_iterations: int = option(20, doc="lloyd: relaxation steps", ge=0, le=1000)
+    border_pitch: float | None = option(
+        0.75, doc="lloyd: snap samples this many pitches from the border onto it", ge=0
+    )
+
+    def __post_init__(self):
+        check_bounds(self)
+
+
+def lloyd_layout(weights, k: int, *, rng, options: LloydOptions) -> np.ndarray:
+    """The ``lloyd`` placement of a map: ``place(density_from_map(weights), k)``.
+
+    Parameters
+    ----------
+    weights : ndarray, shape (rows, cols), >= 0
+        Importance map.
+    k : int
+    rng : numpy.random.Generator
+        The halftone threshold jitter.
+    options : LloydOptions
+        ``density_power`` None is 1/2 (a 2-D CVT of weight density^2 follows the density).
+
+    Returns
+    -------
+    ndarray of int64, shape (k,)
+        Flat (row-major) indices.
+    """
+    power = 0.5 if options.density_power is None else options.density_power
+    density = density_from_map(weights, power=power, mix=options.uniform_mix)
+    return place(
+        density, k, rng=rng, iterations=options.lloyd_iterations, border=options.border_pitch
+    )

@@ -9,6 +9,7 @@ by subject: :mod:`~simlunar.plotting.layout` (sizes, grids, legends, saving),
 
 from __future__ import annotations
 
+from simlunar.planner import PAPER_STRATEGIES
 from simlunar.plotting.density import (
     BAND_LABEL,
     BAND_LABEL_SEEDS,
@@ -50,9 +51,7 @@ from simlunar.plotting.scanner import (
 from simlunar.plotting.style import style
 
 #: fixed colours so a strategy looks the same in every figure (see simlunar.plotting.style)
-STRATEGY_COLORS = {
-    n: style(n).colour for n in ("random", "grid", "gradient", "entropy", "wavelet", "saliency")
-}
+STRATEGY_COLORS = {n: style(n).colour for n in (*PAPER_STRATEGIES, "saliency")}
 
 __all__ = [
     "BAND_LABEL",

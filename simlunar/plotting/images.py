@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import matplotlib.pyplot as plt
 import numpy as np
 
+from simlunar.planner import DEFAULT_PLANNER
 from simlunar.plotting.layout import LABEL_PT, PAGE_W, TICK_PT, TITLE_PT
 from simlunar.plotting.style import label
 
@@ -122,7 +123,7 @@ class PanelText:
     """
 
     density_label: str = ""
-    planner: str = "wavelet"
+    planner: str = DEFAULT_PLANNER
     point: str = ""
 
 

@@ -5,6 +5,7 @@ one-axis sweep, the score against the swept value."""
 
 from __future__ import annotations
 
+from simlunar.planner import DEFAULT_PLANNER
 from simlunar.plotting import figures as F
 from simlunar.plotting.forest import saved_forest_plot
 from simlunar.plotting.reconstructions import category_labels, reconstruction_saved_vs_sweep
@@ -112,7 +113,7 @@ def _image_panels(rec: dict, arr: dict, emit, captions: dict[str, str], *, title
         (arr["plan_rows"], arr["plan_cols"]),
         arr["reconstruction"],
         arr["depth"],
-        text=F.PanelText(label, "wavelet", _label(rec) if titled else ""),
+        text=F.PanelText(label, DEFAULT_PLANNER, _label(rec) if titled else ""),
         spacing_m=_spacing(rec),
     )
     stem = f"panels_unit{rec.get('index', 0)}"

@@ -22,7 +22,7 @@ import numpy as np
 from simlunar.features import check_image
 from simlunar.metrics import METRICS
 from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
-from simlunar.planner import STRATEGIES, plan
+from simlunar.planner import DEFAULT_PLANNER, STRATEGIES, plan
 from simlunar.progress import stage
 from simlunar.reconstruction import Guide
 from simlunar.sensors import SENSORS
@@ -86,7 +86,7 @@ class LidarStudyOptions:
 
     sensor: str = "steered_beam"
     sensor_options: object = None
-    planners: Sequence[str] = ("wavelet", "random", "grid")
+    planners: Sequence[str] = (DEFAULT_PLANNER, "random", "grid")
     densities: Sequence[float] = (1 / 64, 1 / 256)
     trials: int = 3
     metrics: Sequence[str] = ("mse", "grad")

@@ -23,9 +23,7 @@ from simlunar.metrics import samples_for_equal_error as _samples_for_equal_error
 from simlunar.metrics import score as _score
 from simlunar.metrics._fast import error_sums
 from simlunar.metrics.interior import interior_mask, sparsest_pitch
-from simlunar.planner import (
-    check_k,
-)
+from simlunar.planner import PAPER_STRATEGIES, check_k
 from simlunar.progress import stage
 from simlunar.reconstruction import Guide
 from simlunar.sensors.ideal import IdealOptions, IdealSampler
@@ -53,8 +51,6 @@ __all__ = [
     "run_sampling_study",
     "sample_count",
 ]
-
-PAPER_STRATEGIES = ("grid", "random", "gradient", "entropy", "wavelet")
 
 
 def paper_densities() -> list[float]:

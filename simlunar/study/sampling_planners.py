@@ -16,10 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.features import MAPS
 from simlunar.planner import (
     MEASURING,
     ORACLES,
     STRATEGIES,
+    map_of,
     plan,
     plan_sequential,
     strategy_weights,
@@ -115,15 +117,17 @@ def study_planners(o, image, depth, ks, *, guide=None) -> tuple[dict, dict]:
 
 
 def importance_maps(base: str, opts: dict, image, ks, cache: dict) -> dict:
-    """k -> the strategy's importance map (one map for every k but the learned one's, which
+    """k -> the strategy's importance map (one map for every k but a trained model's, which
     is per density)."""
     fo = opts.get("feature_opts")
     n = image.shape[0] * image.shape[1]
+    source = map_of(base)
+    per_density = source in MAPS and MAPS[source].meta.get("needs_model")
     out = {}
     for k in ks:
-        if base == "learned":
+        if per_density:
             fo = {**(opts.get("feature_opts") or {}), "density": k / n}
-        key = (base, repr(fo), repr(opts.get("coefficients")))
+        key = (source, repr(fo), repr(opts.get("coefficients")))
         if key not in cache:
             cache[key] = strategy_weights(
                 base, image, feature_opts=fo, coefficients=opts.get("coefficients")

@@ -20,7 +20,7 @@ import numpy as np
 
 from simlunar.features import check_image
 from simlunar.geometry import Rig
-from simlunar.planner import plan, strategy_weights
+from simlunar.planner import DEFAULT_PLANNER, plan, strategy_weights
 from simlunar.progress import stage
 from simlunar.reconstruction import RECONSTRUCTIONS, Guide
 from simlunar.render.capture import (
@@ -153,7 +153,7 @@ class ScannerStudyOptions:
     """
 
     modes: tuple = (DEFAULT_CODING, "ambiguity_enhancement")
-    planners: tuple = ("wavelet", "random")
+    planners: tuple = (DEFAULT_PLANNER, "random")
     budget: float = 0.1
     trials: int = 1
     metrics: tuple = ("mse", "grad", "sal")

@@ -12,7 +12,13 @@ from simlunar.config import studies, translate
 from simlunar.config.loading import validate_data
 from simlunar.errors import ConfigError
 from simlunar.pipeline.runner import unit_key
-from simlunar.planner import SequentialOptions, strategies
+from simlunar.planner import (
+    LloydOptions,
+    OracleGreedyOptions,
+    OracleHessianOptions,
+    SequentialOptions,
+    placement,
+)
 from simlunar.results.cache_keys import (
     NEW_NESTED_DEFAULTS,
     NEW_PLANNER_DEFAULTS,
@@ -44,10 +50,12 @@ def _defaults(fn) -> dict:
 
 def test_lloyd_defaults_are_the_library_defaults():
     kw = translate.planner_kwargs("wavelet", studies.PlannerOptsCfg(placement="lloyd"))
-    lib = _defaults(strategies._lloyd_placed)
-    assert kw["uniform_mix"] == lib["uniform_mix"] == 0.25
-    assert kw["lloyd_iterations"] == lib["lloyd_iterations"]
-    assert kw["border_pitch"] == lib["border_pitch"]
+    lib, place = LloydOptions(), _defaults(placement.place)
+    assert (
+        kw["uniform_mix"] == lib.uniform_mix == 0.25 == _defaults(placement.density_from_map)["mix"]
+    )
+    assert kw["lloyd_iterations"] == lib.lloyd_iterations == place["iterations"]
+    assert kw["border_pitch"] == lib.border_pitch == place["border"]
     assert kw["density_power"] is None  # the library's placement default (1/2 for lloyd)
     assert "blue_noise" not in kw and kw["placement"] == "lloyd"
     # random placement: exactly the keys of before (same numbers, same cache keys)
@@ -55,15 +63,28 @@ def test_lloyd_defaults_are_the_library_defaults():
 
 
 def test_oracle_and_sequential_defaults_are_the_library_defaults():
-    greedy = translate.planner_kwargs("oracle_greedy", studies.PlannerOptsCfg())
-    names = strategies._ORACLE_KEYS
     from simlunar.planner.oracle import oracle_greedy, oracle_hessian
 
-    lib = _defaults(oracle_greedy)
-    assert {k: lib[names[k]] for k in greedy} == greedy
-    hess = translate.planner_kwargs("oracle_hessian", studies.PlannerOptsCfg())
-    lib = _defaults(oracle_hessian)
-    assert {k: lib[names[k]] for k in hess} == hess
+    # the YAML's oracle section is the library's options class; its defaults the function's
+    assert studies.PlannerOptsCfg().oracle.model_dump() == asdict(OracleGreedyOptions())
+    g, lib = OracleGreedyOptions(), _defaults(oracle_greedy)
+    assert (g.start_share, g.batch_share, g.smooth_pitch, g.nms_pitch) == (
+        lib["start"],
+        lib["batch"],
+        lib["smooth"],
+        lib["window"],
+    )
+    h, lib = OracleHessianOptions(), _defaults(oracle_hessian)
+    assert (h.density_power, h.uniform_mix, h.lloyd_iterations, h.border_pitch) == (
+        lib["power"],
+        lib["mix"],
+        lib["iterations"],
+        lib["border"],
+    )
+    # options the YAML leaves out are the library's own (the oracle's density defaults)
+    assert translate.planner_kwargs("oracle_hessian", studies.PlannerOptsCfg()) == {}
+    set_ = studies.PlannerOptsCfg(uniform_mix=0.1, density_power=None)
+    assert translate.planner_kwargs("oracle_hessian", set_) == {"uniform_mix": 0.1}
     seq = translate.planner_kwargs("sequential", studies.PlannerOptsCfg())
     assert seq["sequential"] == SequentialOptions() and seq["prior"] is None
     # the cache-key tables hold the schema's defaults

@@ -3,19 +3,26 @@ per refusal), the placement-dependent default of uniform_mix, the feature-map op
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import numpy as np
 import pytest
 from pydantic import ValidationError
 
+from simlunar.config import translate
+from simlunar.config.loading import validate_data
 from simlunar.config.planners import (
-    FEATURE_OPTION_KEYS,
-    STRATEGY_OPTION_KEYS,
     CoefficientsCfg,
     FeatureOptsCfg,
     PlannerOptsCfg,
     SequentialCfg,
     StrategyOptionsCfg,
     check_planner_options,
+    feature_keys,
 )
+from simlunar.errors import ConfigError
+from simlunar.features import MAPS
+from simlunar.planner import PLANNERS, plan, planner_label, planner_options, register_map_planner
 
 
 def _refusal(base: str, **opts) -> str:
@@ -87,13 +94,16 @@ def test_options_a_strategy_does_not_take_are_refused(base, opts, message):
     assert _refusal(base, **opts) == message
 
 
-def test_every_strategy_option_key_is_a_planner_option():
+def test_every_planner_option_is_a_yaml_key():
+    # derived: every plan() option of every registered planner is a YAML key (or a section)
     fields = set(PlannerOptsCfg.model_fields)
-    for base, keys in STRATEGY_OPTION_KEYS.items():
-        assert set(keys) <= fields, base
+    for name, entry in PLANNERS.items():
+        keys = {entry.meta["section"]} if entry.meta.get("section") else set(planner_options(name))
+        assert keys <= fields, name
     feature_fields = set(FeatureOptsCfg.model_fields)
-    for name, keys in FEATURE_OPTION_KEYS.items():
-        assert set(keys) <= feature_fields, name
+    for name in MAPS:
+        assert set(feature_keys(name)) <= feature_fields, name
+    assert "density" not in feature_fields  # the learned map's density is the plan's k / N
 
 
 @pytest.mark.parametrize(
@@ -122,3 +132,85 @@ def test_coefficients_and_the_sequential_rules():
         SequentialCfg(first_round="prior")
     with pytest.raises(ValidationError, match="greater than or equal to 2"):
         SequentialCfg(max_rounds=1)
+
+
+def _experiment(study_extra: dict) -> dict:
+    return {
+        "name": "t",
+        "seed": 1,
+        "terrain": {"preset": "aerial_1", "scale": 0.125},
+        "study": {"densities": ["1/8"], "trials": 1, "metrics": ["mse"], **study_extra},
+    }
+
+
+def test_unknown_planner_options_are_refused_with_did_you_mean():
+    d = _experiment(
+        {"strategies": ["wavelet"], "strategy_options": {"wavelet": {"blu_noise": True}}}
+    )
+    with pytest.raises(ConfigError, match=r"study.strategy_options.wavelet.blu_noise: .*"
+                       r"\(did you mean 'blue_noise'\?\)$"):  # fmt: skip
+        validate_data(d)
+    d = _experiment(
+        {"strategies": ["wavelet"], "strategy_options": {"wavelet": {"feature_opts": {"levls": 1}}}}
+    )
+    with pytest.raises(ConfigError, match=r"feature_opts.levls: .*\(did you mean 'levels'\?\)$"):
+        validate_data(d)
+    # a key of another placement: the placement it needs, from the placement registry
+    d = _experiment(
+        {"strategies": ["wavelet_lloyd"], "strategy_options": {"wavelet_lloyd": {"cap_block": 8}}}
+    )
+    with pytest.raises(ConfigError, match=r"cap_block: needs placement: random"):
+        validate_data(d)
+
+
+@dataclass(frozen=True)
+class _RampOptions:
+    """Options of the test's ramp map (none)."""
+
+
+def _ramp(image) -> np.ndarray:
+    """A map growing to the right: column index + 1."""
+    g = np.asarray(image, dtype=np.float64)
+    return np.broadcast_to(np.arange(1.0, g.shape[1] + 1.0), g.shape[:2]).copy()
+
+
+@pytest.fixture
+def ramp_planner():
+    """A map and a planner on it registered by the test alone, removed afterwards."""
+    MAPS.register("ramp", _ramp, _RampOptions, label="Ramp")
+    register_map_planner("ramp_lloyd", "ramp", "lloyd")
+    yield
+    del PLANNERS._entries["ramp_lloyd"], MAPS._entries["ramp"]
+
+
+def test_a_planner_registered_elsewhere_is_usable_from_yaml(ramp_planner):
+    d = _experiment(
+        {"strategies": ["ramp_lloyd"], "strategy_options": {"ramp_lloyd": {"lloyd_iterations": 3}}}
+    )
+    cfg = validate_data(d)
+    kw = translate.strategy_options(cfg.study)["ramp_lloyd"]
+    assert kw == {  # the Lloyd placement's options: its defaults, the YAML's iterations
+        "density_power": None, "uniform_mix": 0.25, "lloyd_iterations": 3, "border_pitch": 0.75,
+        "feature_opts": {},
+    }  # fmt: skip
+    assert planner_label("ramp_lloyd") == "Ramp, Lloyd"
+    image = np.zeros((24, 32))
+    p = plan("ramp_lloyd", 40, image=image, rng=0, **kw)
+    # the Lloyd layout of the ramp's density (power 1/2, 25 % uniform): more samples on the right
+    assert (p.cols >= 16).sum() > (p.cols < 16).sum()
+    # the planner's own placement, unless the YAML names one: placement options follow it
+    with pytest.raises(ConfigError, match=r"ramp_lloyd.blue_noise: needs placement: random"):
+        validate_data(_experiment({
+            "strategies": ["ramp_lloyd"], "strategy_options": {"ramp_lloyd": {"blue_noise": True}},
+        }))  # fmt: skip
+
+
+def test_a_planners_own_placement_keeps_explicit_defaults(ramp_planner):
+    d = _experiment(
+        {"strategies": ["ramp_lloyd"], "strategy_options": {"ramp_lloyd": {"uniform_mix": 0.0}}}
+    )
+    cfg = validate_data(d)
+    opts = cfg.study.strategy_options["ramp_lloyd"]
+    assert opts.placement == "lloyd"  # filled from the entry: the dump names it
+    kw = translate.strategy_options(cfg.study)["ramp_lloyd"]
+    assert kw["uniform_mix"] == 0.0 and "placement" not in kw  # the planner's own

@@ -25,7 +25,7 @@ def test_names_come_from_the_components():
 def test_a_newly_registered_strategy_is_valid_at_once(monkeypatch):
     with pytest.raises(ConfigError):
         registry.check_strategy("brand_new", "study.strategies[0]")
-    monkeypatch.setitem(STRATEGIES, "brand_new", STRATEGIES["random"])
+    monkeypatch.setitem(STRATEGIES._entries, "brand_new", STRATEGIES["random"])
     registry.check_strategy("brand_new", "study.strategies[0]")
     registry.check_scan_planner("brand_new", "study.planners[0]")
 

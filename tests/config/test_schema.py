@@ -4,6 +4,7 @@ sweep normalisation, the translation module and the documented YAML reference.""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import inspect
 import math
 import typing
@@ -21,6 +22,7 @@ from simlunar.config.docs import json_schema, schema_model
 from simlunar.config.loading import validate_data
 from simlunar.config.scene import SceneCfg
 from simlunar.errors import ConfigError
+from simlunar.planner import RandomDrawOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -150,7 +152,6 @@ def _defaults(fn) -> dict:
 def test_option_defaults_are_the_library_defaults():
     from simlunar.features import maps
     from simlunar.imaging.sensor import SensorModel
-    from simlunar.planner import strategies
     from simlunar.render.capture import CaptureOptions
     from simlunar.scanner import rigs
     from simlunar.scanner.scans import DotOptions, GrayCodeOptions
@@ -166,7 +167,7 @@ def test_option_defaults_are_the_library_defaults():
     assert translate.dot_options(scanner_cfg.DotOptsCfg()) == DotOptions()
     sparse = {k: v for k, v in vars(CaptureOptions()).items() if k.startswith("sparse_")}
     assert scanner_cfg.CaptureOptsCfg().model_dump() == sparse
-    weighted = _defaults(strategies._weighted)
+    weighted = dataclasses.asdict(RandomDrawOptions())
     kw = translate.planner_kwargs("wavelet", studies.PlannerOptsCfg())
     assert {k: kw[k] for k in weighted} == weighted
     assert kw["feature_opts"] == _defaults(maps.wavelet)

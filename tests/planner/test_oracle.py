@@ -95,7 +95,7 @@ def test_framed_grid_covers_border_and_corners():
         ({"shape": SHAPE}, "needs truth="),
         ({"truth": np.zeros((10, 10)), "shape": SHAPE}, "mismatched grid shapes"),
         ({"truth": np.full(SHAPE, np.nan)}, "NaN"),
-        ({"truth": np.zeros(SHAPE), "smooth_pitch": -1.0}, "smooth >= 0"),
+        ({"truth": np.zeros(SHAPE), "smooth_pitch": -1.0}, "smooth_pitch must be >= 0"),
         ({"truth": np.zeros(SHAPE), "placement": "lloyd"}, "unknown option"),
     ],
 )

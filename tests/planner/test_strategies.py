@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from simlunar.planner import ORACLES, STRATEGIES, WEIGHTED, SamplePlan, combine_maps, plan
+from simlunar.features import MAPS
+from simlunar.planner import MEASURING, ORACLES, STRATEGIES, SamplePlan, combine_maps, plan
 
 SHAPE = (60, 80)
 
@@ -219,4 +220,7 @@ def test_bad_input(args, kwargs, match):
 
 
 def test_registry_names():
-    assert set(STRATEGIES) == {"grid", "random", *WEIGHTED, "lloyd_uniform", *ORACLES}
+    assert set(STRATEGIES) == {
+        "grid", "random", *MAPS, "combination", "wavelet_lloyd", "log_lloyd", "lloyd_uniform", *ORACLES,
+        *MEASURING,
+    }  # fmt: skip
