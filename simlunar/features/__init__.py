@@ -29,7 +29,7 @@ from simlunar.features.saliency import saliency
 from simlunar.registry import check_bounds, option
 
 
-# ---- maps that need a trained model (issue 20), apart from the image-only maps -------------
+# ---- maps that need a trained model, apart from the image-only maps ------------------------
 @dataclass(frozen=True)
 class LearnedMapOptions:
     """Options of the learned map (:func:`simlunar.features.learned.learned`): the model file
