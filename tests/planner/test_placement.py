@@ -371,3 +371,14 @@ def test_four_sites_become_the_four_corners(shape, seed):
     corners = {0, shape[1] - 1, n - shape[1], n - 1}
     assert set(lloyd(np.ones(shape), sites, iterations=0).tolist()) == corners
     assert set(lloyd(np.ones(shape), sites, iterations=3).tolist()) == corners
+
+
+@pytest.mark.parametrize("placement", ["random", "lloyd"])
+def test_plan_weights_below_one_plan_like_the_same_weights_scaled_up(placement):
+    """Importance weights are relative: a map of values below 1e-4 (summing to about 0.24,
+    under 1) plans the same samples as the same map x 10^4."""
+    w = np.random.default_rng(3).random(SHAPE)
+    assert (1e-4 * w).sum() < 1.0  # the case: every weight and their sum below 1
+    small = plan("wavelet", 120, weights=1e-4 * w, rng=6, placement=placement)
+    large = plan("wavelet", 120, weights=w, rng=6, placement=placement)
+    np.testing.assert_array_equal(small.flat, large.flat)
