@@ -245,3 +245,16 @@ def test_apd_detection_threshold_by_hand():
     assert least == 7.0
     _, least = _detection_threshold(np.array([4.0]), 5, RangeOptions(min_photons=9.0), apd, 3)
     assert least == 9.0
+
+
+def test_a_wide_return_is_tested_in_a_window_of_its_own_width_by_hand():
+    """A 4 ns pulse (sigma 5.09 bins) over 5 counts per bin, noise free: the significance
+    window is +-ceil(1.5 sigma) = +-8 bins, 17 bins holding 0.905 of the pulse over 85
+    background counts, whose 5-sigma Poisson quantile is 135. 70 photons give 85 + 63.3 =
+    148.3 > 135: detected; 40 give 121.2: not. (A 3-bin window would hold 0.23 of the pulse:
+    15 + 16.2 against its quantile 38, and miss both.)"""
+    wide = PulseOptions(fwhm_s=4e-9)
+    assert wide.sigma_bins(BINS) == pytest.approx(5.09, abs=0.01)
+    sig = shape_waveform(_impulse(np.array([[50.0]])), BINS, wide)
+    assert extract_ranges(70 * sig + 5.0, BINS, pulse=wide).valid[0]
+    assert not extract_ranges(40 * sig + 5.0, BINS, pulse=wide).valid[0]
