@@ -41,8 +41,8 @@ GROUPS = {
     ),
     "metrics": (
         ["metrics/errors.py", "metrics/score.py", "metrics/interior.py", "metrics/hazard.py"],
-        ["tests/metrics/test_metrics.py", "tests/metrics/test_interior.py",
-         "tests/metrics/test_hazard.py"],
+        ["tests/metrics/test_errors.py", "tests/metrics/test_score.py",
+         "tests/metrics/test_interior.py", "tests/metrics/test_hazard.py"],
     ),
     "placement": (["planner/placement.py"], ["tests/planner/test_placement.py"]),
     "gray_code": (["scanner/gray_code.py"], ["tests/scanner/test_gray_code.py"]),

@@ -96,3 +96,39 @@ def test_coates_correction_of_a_saturated_histogram_by_hand():
         [-np.log(1 - 2 / 10), -np.log(1 - 4 / 8), -np.log(1 - 1 / 4)],
         rtol=1e-12,
     )
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"background_photons_per_s": -1.0}, "background_photons_per_s"),
+        ({"dark_count_rate_hz": float("nan")}, "dark_count_rate_hz"),
+        ({"signal_photons": float("inf")}, "signal_photons"),
+        ({"dead_time_s": -1e-9}, "dead_time_s"),
+        ({"dead_time_s": float("nan")}, "dead_time_s"),
+    ],
+)
+def test_detector_options_refuse_bad_values(kw, match):
+    with pytest.raises(ValueError, match=match):
+        DetectorOptions(**kw)
+
+
+def test_an_apd_with_a_dead_time_is_refused():
+    from simlunar.lidar.apd import ApdOptions
+
+    with pytest.raises(ValueError, match="linear-mode APD has no dead time"):
+        DetectorOptions(apd=ApdOptions(), dead_time_s=1e-9)
+    assert DetectorOptions(apd=ApdOptions()).regime == "linear_apd"
+
+
+@pytest.mark.parametrize("dead", [0.0, np.inf])
+def test_dead_time_counts_without_a_finite_dead_time_are_the_plain_counts(dead):
+    """No dead time (Poisson) and an infinite one (one detection per pulse) need no bin
+    width: photon_counts_dead_time hands them to photon_counts, the same draws per seed."""
+    lam = np.full((3, BINS.count), 0.05)
+    lam[:, 12] = 2.0
+    opts = DetectorOptions(pulses=50, dead_time_s=dead)
+    a = photon_counts_dead_time(lam, BINS, options=opts, rng=11)
+    np.testing.assert_array_equal(a, photon_counts(lam, options=opts, rng=11))
+    if np.isinf(dead):
+        assert (a.sum(axis=1) <= 50).all()

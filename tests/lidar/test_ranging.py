@@ -186,3 +186,75 @@ def test_noise_free_reading_interpolates_within_the_bin(method):
     sig = shape_waveform(_impulse(truth[:, None]), BINS, PULSE)
     res = extract_ranges(100 * sig, BINS, pulse=PULSE, options=RangeOptions(method=method))
     assert np.abs(res.range - truth).max() < 0.1 * BINS.bin_range
+
+
+def test_a_flat_topped_return_is_one_return():
+    """Raw-peak scoring of a return split evenly over two bins (50 and 50 counts over a
+    background of 1): both bins are the window's maximum, and only the first of a run of
+    equal scores is a peak, so there is one return, between the two bins."""
+    counts = np.ones((1, BINS.count))
+    counts[0, 200:202] = 50.0
+    opts = RangeOptions(method="peak", fit="parabola")
+    res = extract_ranges(counts, BINS, pulse=PULSE, options=opts)
+    assert res.returns[0] == 1
+    # bins 200 and 201 span ranges 50.00-50.05 and 50.05-50.10: their boundary is 50.05
+    assert res.range[0] == pytest.approx(BINS.range_of(201.0), abs=0.5 * BINS.bin_range)
+
+
+def test_last_return_with_the_parabola_alone_by_hand():
+    """Returns at the centres of the bins of 47.00-47.05 m (weight 1) and 52.00-52.05 m
+    (weight 0.3), noise free: the parabola's vertex alone (no ML refinement to pull a wrong
+    bin back) reads each return to a quarter of a bin; a return read from the bin after
+    its peak would be half a bin off (the vertex clipped to that bin's edge)."""
+    truth = np.array([[47.025, 52.025]])
+    sig = 100 * shape_waveform(_impulse(truth, [[1.0, 0.3]]), BINS, PULSE)
+    for which, want in (("first", 47.025), ("last", 52.025), ("strongest", 47.025)):
+        opts = RangeOptions(which=which, fit="parabola")
+        res = extract_ranges(sig, BINS, pulse=PULSE, options=opts)
+        assert res.returns[0] == 2
+        assert abs(res.range[0] - want) < 0.25 * BINS.bin_range
+
+
+def test_background_estimate_leaves_the_return_out():
+    """Noise free, 100 photons over exactly 3 counts per bin: the background is the mean away
+    from the return (3.000), so the photons of the return are the pulse's counts in the
+    window of the kernel's width, 100 x (the kernel's mass there) = 99.9994, to 1e-6."""
+    from simlunar.lidar.waveform import pulse_kernel
+
+    sig = shape_waveform(_impulse(np.array([[50.0]])), BINS, PULSE)
+    half = pulse_kernel(BINS, PULSE).size // 2
+    peak = int(np.argmax(sig[0]))
+    want = 100 * sig[0, peak - half : peak + half + 1].sum()
+    res = extract_ranges(100 * sig + 3.0, BINS, pulse=PULSE)
+    assert want == pytest.approx(100.0, abs=1e-3)
+    assert res.photons[0] == pytest.approx(want, rel=1e-6)
+
+
+def test_apd_detection_threshold_by_hand():
+    """A linear-mode APD's window of 5 bins over 3 pulses with expected background 4 pe:
+    variance F x 4 + 5 x 3 x 0.5^2 (excess noise, and the amplifier's per bin and pulse), the
+    threshold 5 standard deviations above 4; the least signal is the APD's own threshold
+    when it is above min_photons."""
+    from simlunar.lidar.apd import ApdOptions
+    from simlunar.lidar.ranging import _detection_threshold
+
+    apd = ApdOptions(gain=100.0, ionisation_ratio=0.02, amplifier_noise_pe=0.5, threshold_pe=7.0)
+    f = 0.02 * 100 + 0.98 * (2 - 1 / 100)  # McIntyre: 3.9502
+    c_thr, least = _detection_threshold(np.array([4.0]), 5, RangeOptions(), apd, 3)
+    np.testing.assert_allclose(c_thr, 4.0 + 5.0 * np.sqrt(f * 4.0 + 5 * 3 * 0.25), rtol=1e-12)
+    assert least == 7.0
+    _, least = _detection_threshold(np.array([4.0]), 5, RangeOptions(min_photons=9.0), apd, 3)
+    assert least == 9.0
+
+
+def test_a_wide_return_is_tested_in_a_window_of_its_own_width_by_hand():
+    """A 4 ns pulse (sigma 5.09 bins) over 5 counts per bin, noise free: the significance
+    window is +-ceil(1.5 sigma) = +-8 bins, 17 bins holding 0.905 of the pulse over 85
+    background counts, whose 5-sigma Poisson quantile is 135. 70 photons give 85 + 63.3 =
+    148.3 > 135: detected; 40 give 121.2: not. (A 3-bin window would hold 0.23 of the pulse:
+    15 + 16.2 against its quantile 38, and miss both.)"""
+    wide = PulseOptions(fwhm_s=4e-9)
+    assert wide.sigma_bins(BINS) == pytest.approx(5.09, abs=0.01)
+    sig = shape_waveform(_impulse(np.array([[50.0]])), BINS, wide)
+    assert extract_ranges(70 * sig + 5.0, BINS, pulse=wide).valid[0]
+    assert not extract_ranges(40 * sig + 5.0, BINS, pulse=wide).valid[0]

@@ -68,3 +68,13 @@ def test_detection_scores_count_only_cells_inside_the_mask():
     # a mask keeping only the false alarm: precision 0, nothing to miss
     mask = np.array([[0, 0, 1, 0]], bool)
     assert detection_scores(found, truth, mask) == {"hazard_precision": 0.0, "hazard_recall": 1.0}
+
+
+def test_the_default_relief_limit_is_0_3_m():
+    """HazardOptions() flags what stands more than 0.3 m above the local median: a 0.5 m
+    block is a rock, a 0.2 m one is not (flat ground, no slope limit in the way)."""
+    for height, rock in ((0.5, True), (0.2, False)):
+        z = np.zeros((40, 40))
+        z[18:21, 18:21] = height
+        flags = hazard_map(_grid(z), HazardOptions(slope_deg=89.0))
+        assert flags[18:21, 18:21].all() == rock

@@ -57,3 +57,9 @@ def test_a_one_row_grid_is_a_valid_shape_with_no_interior():
     with pytest.raises(ValueError, match=r"shape must be \(rows, cols\) >= 1"):
         interior_mask((0, 5), 0.0)
     np.testing.assert_array_equal(interior_mask((3, 3), 0.0), [[0, 0, 0], [0, 1, 0], [0, 0, 0]])
+
+
+def test_a_one_column_grid_is_a_valid_shape_with_no_interior():
+    """(5, 1) is a grid too (cols >= 1): no interior, and the error says so."""
+    with pytest.raises(ValueError, match="leaves no interior cell in a 5 x 1 grid"):
+        interior_mask((5, 1), 0.0)

@@ -70,3 +70,15 @@ def test_check_densities():
         check_densities([])
     with pytest.raises(ValueError, match=r"^densities must lie in \(0, 1\], got \[0\.5, 0\.0\]$"):
         check_densities([0.5, 0.0])
+
+
+def test_samples_for_equal_error_from_a_single_sample():
+    """Sample counts start at 1 (one sample is a valid plan): e_random = 1 / k and e_s = 1 / (2 k)
+    at k = 1, 2, 4; e_random(2) = 1/2 is e_s(1) and e_random(4) = 1/4 is e_s(2), so the strategy
+    needs half the samples there; e_random(1) = 1 is above e_s's range (NaN)."""
+    ks = [1, 2, 4]
+    out = samples_for_equal_error({"random": [1.0, 0.5, 0.25], "s": [0.5, 0.25, 0.125]}, ks)
+    assert np.isnan(out["s"][0])
+    np.testing.assert_allclose(out["s"][1:], 0.5, rtol=1e-12)
+    with pytest.raises(ValueError, match="distinct positive"):
+        samples_for_equal_error({"random": [1.0, 2.0]}, [0, 2])

@@ -271,3 +271,114 @@ def test_halftone_of_a_density_dense_in_its_top_half_stays_there(seed):
     assert flat.size == 60 and np.unique(flat).size == 60
     assert r.max() < 10
     assert (c < 15).sum() > (c >= 15).sum()
+
+
+# ------------------------------------------------------------------ hand-computed cases
+
+
+def test_cvt_energy_by_hand():
+    """Density [1, 1, 2] (scaled to [1/4, 1/4, 1/2]) on one row, one site at column 0: the
+    cells are 0, 1 and 2 px from it, so the energy is (1/4)^2 0 + (1/4)^2 1 + (1/2)^2 4
+    = 1.0625 px^2; with a second site on column 2 only the middle cell is off a site."""
+    d = np.array([[1.0, 1.0, 2.0]])
+    assert cvt_energy(d, [0]) == pytest.approx(1.0625, rel=1e-12)
+    assert cvt_energy(d, [0, 2]) == pytest.approx(0.0625, rel=1e-12)
+
+
+def test_samples_per_cell_when_every_positive_cell_is_full():
+    """One positive cell and k = 3 on a 4 x 4 grid: that cell holds one sample (the cap) and
+    the other two spread evenly over the 15 zero-density cells (2/15 each), so the map still
+    sums to k."""
+    d = np.zeros((4, 4))
+    d[0, 0] = 5.0
+    t = samples_per_cell(d, 3)
+    assert t[0, 0] == 1.0
+    np.testing.assert_allclose(t.ravel()[1:], 2.0 / 15.0, rtol=1e-12)
+    np.testing.assert_allclose(t.sum(), 3.0, rtol=1e-12)
+
+
+def test_densities_below_one_and_summing_below_one_scale_like_any_other():
+    """samples_per_cell depends only on the density's shape, not its scale: a map of values
+    far below 1 (summing to 0.012) gives the same samples as the same map x 1000, and the
+    importance map of values below 1 is raised to the power before normalising (sqrt of
+    0.01, 0.04, 0.09, 0.16 = 0.1 ... 0.4, summing to 1)."""
+    small = np.array([[0.001, 0.002], [0.003, 0.006]])
+    np.testing.assert_allclose(small.sum(), 0.012)
+    np.testing.assert_allclose(samples_per_cell(small, 2), samples_per_cell(1000 * small, 2))
+    # k x share: 2 x [1, 2, 3, 6] / 12 = [1/6, 1/3, 1/2, 1]
+    np.testing.assert_allclose(samples_per_cell(small, 2), [[1 / 6, 1 / 3], [0.5, 1.0]])
+    w = np.array([[0.01, 0.04], [0.09, 0.16]])
+    np.testing.assert_allclose(density_from_map(w, power=0.5, mix=0.0), [[0.1, 0.2], [0.3, 0.4]])
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_halftone_never_picks_a_cell_of_zero_density(seed):
+    """Density zero on every other column: at k = 100 on 60 x 80 the halftone works on 5 x 5
+    blocks that hold zero and positive cells alike, and a block's samples go to its cells in
+    proportion to the density (keys Exp(1) / density: infinite where it is zero), so no
+    sample lands on a zero column."""
+    d = _ramp_density()
+    d[:, 1::2] = 0.0
+    flat = halftone(d, 100, rng=seed)
+    assert flat.size == 100 and np.unique(flat).size == 100
+    assert np.all(flat % 2 == 0)
+
+
+def test_fix_count_takes_from_the_smallest_and_gives_to_the_largest_residuals():
+    """The halftone's count fix-up (error diffusion rarely lands on exactly k): an excess
+    is taken from the blocks whose diffused value is furthest below their count, a shortage
+    given to the blocks furthest above theirs (and below their capacity)."""
+    from simlunar.planner.placement import _fix_count
+
+    cap = np.ones(3, dtype=np.int64)
+    count = np.array([1, 1, 1])
+    _fix_count(count, np.array([0.6, 0.9, 0.7]), cap, 1)  # residuals -0.4, -0.1, -0.3
+    np.testing.assert_array_equal(count, [0, 1, 0])
+    count = np.array([0, 0, 0])
+    _fix_count(count, np.array([0.9, 0.2, 0.6]), cap, 2)  # residuals 0.9, 0.2, 0.6
+    np.testing.assert_array_equal(count, [1, 0, 1])
+    count = np.array([0, 0, 1, 0])
+    _fix_count(count, np.array([0.9, 0.8, 0.7, 0.1]), np.array([1, 0, 1, 1]), 3)
+    np.testing.assert_array_equal(count, [1, 0, 1, 1])  # block 1 has no capacity
+
+
+def test_snap_moves_sites_within_the_border_band_onto_each_edge_by_hand():
+    """Uniform density, 25 sites on 20 x 20: 1/16 sample per cell, a pitch of 4 px, so a site
+    closer than 0.75 x 4 = 3 px to an edge goes onto it (with iterations=0 nothing else
+    moves). Sites 1 or 2 px from each of the four edges are snapped; sites exactly 3 px
+    from an edge and the interior stay."""
+    shape = (20, 20)
+    corners = [(0, 0), (0, 19), (19, 0), (19, 19)]
+    near = {(2, 10): (0, 10), (17, 10): (19, 10), (10, 1): (10, 0), (10, 18): (10, 19)}
+    stay = [(3, 5), (16, 14), (5, 3), (14, 16)]
+    interior = [(r, c) for r in (5, 8, 11, 14) for c in (6, 9, 12)] + [(9, 10)]
+    sites = corners + list(near) + stay + interior
+    assert len(sites) == 25
+    flat = [r * 20 + c for r, c in sites]
+    want = corners + list(near.values()) + stay + interior
+    out = lloyd(np.ones(shape), flat, iterations=0)
+    np.testing.assert_array_equal(out, np.sort([r * 20 + c for r, c in want]))
+
+
+@pytest.mark.parametrize("shape", [(20, 3), (3, 20), (9, 9)])
+@pytest.mark.parametrize("seed", range(3))
+def test_four_sites_become_the_four_corners(shape, seed):
+    """With the border on, the four corners are always sampled by distinct sites: four sites
+    end on exactly the four corners, even where one site is nearest to two corners (a
+    narrow grid)."""
+    n = shape[0] * shape[1]
+    sites = np.random.default_rng(seed).choice(n, 4, replace=False)
+    corners = {0, shape[1] - 1, n - shape[1], n - 1}
+    assert set(lloyd(np.ones(shape), sites, iterations=0).tolist()) == corners
+    assert set(lloyd(np.ones(shape), sites, iterations=3).tolist()) == corners
+
+
+@pytest.mark.parametrize("placement", ["random", "lloyd"])
+def test_plan_weights_below_one_plan_like_the_same_weights_scaled_up(placement):
+    """Importance weights are relative: a map of values below 1e-4 (summing to about 0.24,
+    under 1) plans the same samples as the same map x 10^4."""
+    w = np.random.default_rng(3).random(SHAPE)
+    assert (1e-4 * w).sum() < 1.0  # the case: every weight and their sum below 1
+    small = plan("wavelet", 120, weights=1e-4 * w, rng=6, placement=placement)
+    large = plan("wavelet", 120, weights=w, rng=6, placement=placement)
+    np.testing.assert_array_equal(small.flat, large.flat)

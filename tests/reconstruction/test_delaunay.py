@@ -7,6 +7,7 @@ import pytest
 from scipy.interpolate import LinearNDInterpolator
 
 from simlunar.reconstruction import reconstruct, triangulate
+from simlunar.reconstruction.delaunay import loo_residuals
 
 
 def _grid_cells(shape):
@@ -281,3 +282,98 @@ def test_a_sliver_away_from_the_origin_in_any_vertex_order(order, offset):
     diag = [out[r0 + i, c0 + i] for i in range(5)]
     np.testing.assert_allclose(diag, [0.0, 1.0, 2.0, 5.0, 8.0], atol=1e-6)
     assert np.isfinite(out).sum() == 5
+
+
+def test_fewer_than_three_points_have_no_triangle():
+    for k in (1, 2):
+        tris = triangulate(np.arange(2 * k, dtype=float).reshape(k, 2))
+        assert tris.shape == (0, 3) and tris.dtype == np.int32
+
+
+#: slivers a-m-b by hand: a and b 4 cells apart along a row, a column or a diagonal, m at
+#: their midpoint moved by h along ``shift``; (reconstruct sorts the points, so which edge
+#: Triangle lists first depends on the geometry: these put the long edge first, last and
+#: between the other two)
+SLIVERS = {
+    "diagonal, m right": ((0, 0), (4, 4), (0, 1)),
+    "diagonal, m left": ((0, 0), (4, 4), (0, -1)),
+    "anti-diagonal, m left": ((0, 4), (4, 0), (0, -1)),
+    "row, m up": ((2, 0), (2, 4), (-1, 0)),
+    "row, m down": ((2, 0), (2, 4), (1, 0)),
+    "column, m left": ((0, 2), (4, 2), (0, -1)),
+}
+
+
+@pytest.mark.parametrize("offset", [(0, 0), (20, 30)])
+@pytest.mark.parametrize("geometry", list(SLIVERS))
+def test_the_sliver_threshold_is_a_height_of_1e_9_cells_over_the_longest_edge(geometry, offset):
+    """a value 0, b value 8, m (their midpoint moved by h) value 2. The height over the long
+    edge a-b is h (row, column) or h / sqrt(2) (diagonals). h = 1e-4 and 1.8e-9 (at least
+    1.27e-9 high) are thin triangles read by their plane (clamped to the vertices' values):
+    along a-b it is linear, 0, 2, 4, 6, 8 at a + i (b - a) / 4; h = 0.9e-9 and 0.5e-9
+    (under 1e-9 high) are slivers, valued along a-b through m (t_m = 1/2): 0, 1, 2, 5, 8. The same away
+    from the origin (coordinates much larger than the edges)."""
+    a, b, shift = (np.array(v, dtype=float) for v in SLIVERS[geometry])
+    a, b = a + offset, b + offset
+    cells = [tuple(int(x) for x in a + i * (b - a) / 4) for i in range(5)]
+    shape = (offset[0] + 5, offset[1] + 5)
+    plane, along = [0.0, 2.0, 4.0, 6.0, 8.0], [0.0, 1.0, 2.0, 5.0, 8.0]
+    for h, want in ((1e-4, plane), (1.8e-9, plane), (0.9e-9, along), (0.5e-9, along)):
+        pts = np.array([a, b, (a + b) / 2 + h * shift])
+        out = reconstruct(pts, np.array([0.0, 8.0, 2.0]), shape, outside="nan")
+        np.testing.assert_allclose([out[c] for c in cells], want, atol=1e-6, err_msg=f"h={h}")
+        assert np.isfinite(out).sum() == 5
+
+
+def _loo_reference(pts, z):
+    """Per sample: the least-squares plane through its Delaunay neighbours (scipy's Qhull
+    triangulation, numpy's lstsq) evaluated at the sample; 0 with fewer than three
+    neighbours or a rank-deficient fit."""
+    from scipy.spatial import Delaunay
+
+    ptr, nbr = Delaunay(pts).vertex_neighbor_vertices
+    out = np.zeros(len(pts))
+    for i in range(len(pts)):
+        j = nbr[ptr[i] : ptr[i + 1]]
+        a = np.column_stack((np.ones(j.size), pts[j] - pts[i]))
+        if j.size >= 3 and np.linalg.matrix_rank(a) == 3:
+            coef = np.linalg.lstsq(a, z[j] - z[i], rcond=None)[0]
+            out[i] = -coef[0]
+    return out
+
+
+def test_loo_residuals_by_hand():
+    """Triangle A (0, 0), B (0, 4), C (4, 0) with D (1, 1) inside; z = r + 2 c on A, B, C
+    (0, 8, 4) and 8 at D. D's three neighbours span the plane r + 2 c = 3 at D: residual 5.
+    A's neighbours B, C, D span z = 10 - 1.5 r - 0.5 c: residual 0 - 10 = -10. Every sample
+    has exactly three neighbours, so each residual is its value minus the plane through the
+    other three samples."""
+    pts = np.array([[0.0, 0.0], [0.0, 4.0], [4.0, 0.0], [1.0, 1.0]])
+    z = np.array([0.0, 8.0, 4.0, 8.0])
+    res = loo_residuals(pts, z)
+    assert res[3] == pytest.approx(5.0, abs=1e-9)
+    assert res[0] == pytest.approx(-10.0, abs=1e-9)
+
+    def through(i):  # the plane through the other three samples, at sample i
+        o = [j for j in range(4) if j != i]
+        coef = np.linalg.solve(np.column_stack((np.ones(3), pts[o])), z[o])
+        return z[i] - coef @ [1.0, *pts[i]]
+
+    np.testing.assert_allclose(res, [through(i) for i in range(4)], atol=1e-9)
+
+
+def test_loo_residuals_of_collinear_neighbours_are_zero():
+    """Square corners (0, 0), (0, 2), (2, 0), (2, 2) at 0 and the centre (1, 1) at 1: the
+    centre's four neighbours fit the plane 0, residual 1; each corner's three neighbours
+    (two corners and the centre) lie on one line, so its fit is degenerate: 0."""
+    pts = np.array([[0.0, 0.0], [0.0, 2.0], [2.0, 0.0], [2.0, 2.0], [1.0, 1.0]])
+    res = loo_residuals(pts, np.array([0.0, 0.0, 0.0, 0.0, 1.0]))
+    np.testing.assert_allclose(res, [0.0, 0.0, 0.0, 0.0, 1.0], atol=1e-12)
+
+
+def test_loo_residuals_match_a_least_squares_reference(rng):
+    pts = rng.uniform(0.0, 50.0, size=(80, 2))
+    z = np.sin(pts[:, 0] / 7.0) + 0.1 * pts[:, 1] + rng.normal(scale=0.2, size=80)
+    np.testing.assert_allclose(loo_residuals(pts, z), _loo_reference(pts, z), atol=1e-9)
+    # fewer than three points span no triangle: every residual is 0
+    np.testing.assert_array_equal(loo_residuals(pts[:2], z[:2]), [0.0, 0.0])

@@ -279,3 +279,64 @@ def test_streaming_decoder_equals_decode_in_any_order_and_reports_missing_frames
         s.add_pair(nb, images[0], images[1])
     with pytest.raises(ValueError, match="camera shape"):
         s.add_pair(0, images[0][:-1], images[1][:-1])
+
+
+def test_default_white_threshold_is_opencvs_5():
+    """OpenCV's rule with its default white threshold 5: a bit is unreliable where
+    |pattern - inverse| < 5, so a difference of exactly 5 is reliable and 4 is not."""
+    W, H = 5, 3
+    stack = gc.encode(W, H).astype(float)
+    white, black = (a.astype(float) for a in gc.white_black(W, H))
+    stack[2, 1, 1], stack[3, 1, 1] = 130.0, 125.0
+    stack[2, 2, 2], stack[3, 2, 2] = 129.0, 125.0
+    res = gc.decode(stack, white, black, proj_shape=(H, W))
+    assert res.reliable[1, 1, 1] and res.valid[1, 1]
+    assert not res.reliable[1, 2, 2] and not res.valid[2, 2]
+
+
+def test_proj_uv_is_the_decoded_pixel_centre_by_hand():
+    """A camera that sees the projector pixel for pixel: camera pixel (r, c) decodes to column c
+    and row r, so its projector coordinates are the pixel centre (c + 0.5, r + 0.5); a
+    shadowed pixel has none (NaN)."""
+    W, H = 6, 4
+    stack = gc.encode(W, H).astype(float)
+    white, black = (a.astype(float) for a in gc.white_black(W, H))
+    black[3, 5] = 250.0  # white - black = 5 <= 40: shadow
+    uv = gc.decode(stack, white, black, proj_shape=(H, W)).proj_uv()
+    r, c = np.mgrid[0:H, 0:W]
+    want = np.stack([c + 0.5, r + 0.5], axis=-1).astype(float)
+    want[3, 5] = np.nan
+    np.testing.assert_array_equal(uv, want)
+
+
+def test_frame_names_by_hand():
+    """OpenCV's order: each column bit's pattern then its inverse, MSB first, then the rows,
+    then white and black."""
+    assert gc.frame_names(2, 1) == [
+        "col0", "col0_inv", "col1", "col1_inv", "row0", "row0_inv", "white", "black"
+    ]  # fmt: skip
+    names = gc.frame_names(gc.num_bits(1024), gc.num_bits(768))
+    assert len(names) == 2 * (10 + 10) + 2 and names[-3] == "row9_inv"
+
+
+def test_interleave_rebuilds_the_encoded_stack():
+    """The positive patterns and their inverses interleaved are encode()'s stack; by hand
+    on two 1 x 1 frames: [p0, i0, p1, i1]."""
+    stack = gc.encode(6, 4)
+    pos = gc.positive_patterns(6, 4)
+    np.testing.assert_array_equal(gc.interleave(pos, 255 - pos), stack)
+    out = gc.interleave(np.array([[[1.0]], [[2.0]]]), np.array([[[3.0]], [[4.0]]]))
+    np.testing.assert_array_equal(out[:, 0, 0], [1.0, 3.0, 2.0, 4.0])
+
+
+def test_decode_takes_frames_as_nested_lists():
+    """Frames need only be array_like: the stack, white and black as nested lists decode as
+    the arrays do (a camera that sees the projector pixel for pixel: column c, row r)."""
+    W, H = 5, 3
+    stack = gc.encode(W, H).astype(float)
+    white, black = (a.astype(float) for a in gc.white_black(W, H))
+    res = gc.decode(stack.tolist(), white.tolist(), black.tolist(), proj_shape=(H, W))
+    r, c = np.mgrid[0:H, 0:W]
+    assert res.valid.all()
+    np.testing.assert_array_equal(res.col, c)
+    np.testing.assert_array_equal(res.row, r)
