@@ -45,6 +45,7 @@ from simlunar.pipeline.progress import _progress
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
 from simlunar.plotting.lidar_tables import lidar_tables
 from simlunar.plotting.scanner_tables import scanner_tables
+from simlunar.results.array_exports import write_array_export
 from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
 from simlunar.results.exports import write_scan_export
 from simlunar.results.figures import write_figures_pruned
@@ -54,6 +55,7 @@ from simlunar.results.folder import (
     _read_provenance,
     _remove_empty,
     _scans_present,
+    array_folders,
     claim_folder,
     folder_complete,
     prune_scans,
@@ -377,11 +379,12 @@ def _run_locked(run: _Run) -> RunSummary:
     cache = UnitCache(out)
     keys = [u.key for u in units]
     scan_dirs = scan_folders(units)
-    records, todo = _cached_records(cache, out, units, scan_dirs)
+    array_dirs = array_folders(units)
+    records, todo = _cached_records(cache, out, units, scan_dirs, array_dirs)
     n_cached = len(units) - len(todo)
     stale = cache.keys() - set(keys)
     # nothing of a finished folder is removed before this run is known to be able to write
-    _check_writable(out, scan_dirs)
+    _check_writable(out, scan_dirs, array_dirs)
     previous = _read_provenance(out)  # before anything is removed: its run time is kept
     if (
         not todo
@@ -397,6 +400,7 @@ def _run_locked(run: _Run) -> RunSummary:
         _invalidate(out)
         cache.remove_except(set(keys))
     prune_scans(out, scan_dirs)  # the exports of units no longer produced go with them
+    prune_scans(out, array_dirs, sub="arrays")
 
     _compute_missing(run, cache, todo, records, n_cached)
 
@@ -416,7 +420,7 @@ def _run_locked(run: _Run) -> RunSummary:
     return _summary(run, n_cached, len(todo), md, records)
 
 
-def _cached_records(cache: UnitCache, out: Path, units, scan_dirs):
+def _cached_records(cache: UnitCache, out: Path, units, scan_dirs, array_dirs=None):
     """The records of the units already finished, and the units (one per key) to compute."""
     records: dict[str, dict] = {}
     todo: list[WorkUnit] = []
@@ -425,6 +429,7 @@ def _cached_records(cache: UnitCache, out: Path, units, scan_dirs):
         # a cached unit whose scan export is missing (deleted, interrupted) is computed again:
         # the numbers are the same (seeded), the export comes back
         scans_ok = _scans_present(out, scan_dirs, u)
+        scans_ok = scans_ok and _scans_present(out, array_dirs or {}, u, sub="arrays")
         if rec is not None and cache.arrays_readable(u.key) and scans_ok:
             records[u.key] = rec
         elif u.key not in {t.key for t in todo}:
@@ -450,6 +455,9 @@ def _compute_missing(run: _Run, cache: UnitCache, todo, records: dict, n_cached:
             scans = result.pop("scans", None)
             if scans is not None:  # before the cache entry: a cached unit has its scans
                 write_scan_export(out / "scans" / f"unit{u.index}", scans, unit_key=u.key)
+            exports = result.pop("exports", None)
+            if exports is not None:  # the reconstructions of --save-arrays, before caching too
+                write_array_export(out / "arrays" / f"unit{u.index}", exports, unit_key=u.key)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
             cache.save(u.key, record, arrays)
             records[u.key] = json.loads(json.dumps(record, default=float))

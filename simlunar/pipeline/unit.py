@@ -42,6 +42,7 @@ from simlunar.pipeline.inputs import read_unit_models, verify_inputs
 from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
 from simlunar.render.scene import luminance
+from simlunar.results.array_exports import array_export_payload, export_view
 from simlunar.results.exports import scan_export_payload
 from simlunar.results.lidar_exports import lidar_export_payload
 from simlunar.results.records import UnitRecord
@@ -185,7 +186,9 @@ def compute_unit(
     dict
         :meth:`UnitRecord.to_dict`: ``rows`` (tidy dicts), ``scores`` ({metric: {strategy:
         score}}), ``arrays`` (name -> ndarray, for figures), ``timings`` (stage -> seconds),
-        ``meta`` and, for a scanner or lidar unit with ``save_scans``, ``scans``.
+        ``meta`` and, for a scanner or lidar unit with ``save_scans``, ``scans``; for a
+        sampling or lidar unit with ``save_arrays``, ``exports`` (its reconstructions,
+        :func:`simlunar.results.array_exports.array_export_payload`).
     """
     cfg = ExperimentCfg.model_validate(payload["config"])
     inputs = payload.get("inputs")
@@ -266,8 +269,15 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
         workers=workers,
         progress=None if progress is None else (lambda d, n: progress("sampling study", d, n)),
         guide=guide,
+        keep_trial=0 if cfg.study.save_arrays else None,
     )
     timings["study_s"] = time.perf_counter() - t
+    exports = None
+    if cfg.study.save_arrays:  # written by the runner into arrays/unit<i>/
+        view = export_view(scene.camera, scene.terrain, depth.shape)
+        exports = array_export_payload(
+            study.grids, depth, densities=study.densities, ks=study.ks, view=view
+        )
     return UnitRecord(
         rows=[dict(r) for r in study.rows],
         scores=_plain_scores(study.scores),
@@ -282,6 +292,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, progress, workers) -
             **_reconstruction_meta(study),
             **guide_meta,
         },
+        exports=exports,
     )
 
 
@@ -435,6 +446,7 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
             lidar_translate.lidar_options(cfg.study, seed=scene.seed),
             rng=np.random.default_rng(seeds["study"]),
             reconstruction_guide=guide,
+            keep_trial=0 if cfg.study.save_arrays else None,
         )
     timings["study_s"] = time.perf_counter() - t
     arrays = {"image": image, "depth": depth, **arrays}
@@ -444,6 +456,12 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
     scans = None
     if cfg.study.save_scans:  # written by the runner into scans/unit<i>/
         scans = lidar_export_payload(res.examples, scene.camera, image.shape[:2])
+    exports = None
+    if cfg.study.save_arrays:  # written by the runner into arrays/unit<i>/
+        view = export_view(scene.camera, scene.terrain, depth.shape)
+        exports = array_export_payload(
+            res.grids, depth, densities=res.densities, ks=res.ks, view=view
+        )
     return UnitRecord(
         rows=[dict(row) for row in res.rows],
         scores={},
@@ -456,4 +474,5 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
             **guide_meta,
         },
         scans=scans,
+        exports=exports,
     )

@@ -130,10 +130,20 @@ class LidarStudyResult:
         flash) and, with hazards, ``hazard_precision`` / ``hazard_recall``.
     examples : dict planner -> Acquisition
         Trial 0 at the largest density (for figures).
+    grids : dict (planner, density index, reconstruction) -> ndarray float32 (rows, cols)
+        The reconstructed depth grids of trial ``keep_trial`` (:func:`run_lidar_study`), for
+        an export; empty unless asked for.
+    densities : list of float
+        The planned densities, in the order of the grids' density index.
+    ks : list of int
+        The planned pixel count of each density (0: a flash without a plan).
     """
 
     rows: list
     examples: dict
+    grids: dict = field(default_factory=dict)
+    densities: list = field(default_factory=list)
+    ks: list = field(default_factory=list)
 
 
 class _Scores:
@@ -179,6 +189,7 @@ def run_lidar_study(
     sensor=None,
     progress: Callable[[str], None] | None = None,
     reconstruction_guide: Guide | None = None,
+    keep_trial: int | None = None,
 ) -> LidarStudyResult:
     """Plan, acquire with a LIDAR, reconstruct and score, for every planner, density and trial.
 
@@ -198,6 +209,9 @@ def run_lidar_study(
     reconstruction_guide : Guide, optional
         What the guided reconstructions read; default ``Guide(image)`` (the guide camera's
         frame, light unknown: the camera is not a nadir view in general).
+    keep_trial : int, optional
+        Keep the reconstructed grids of this trial (:attr:`LidarStudyResult.grids`, for an
+        export); no score changes.
 
     Returns
     -------
@@ -225,20 +239,23 @@ def run_lidar_study(
 
     trials = Trials(planners, ks, int(o.trials), seeds)
     evaluate = _Scores(depth, image, camera, o.metrics, o.hazard)
-    rows, examples = [], {}
+    rows, examples, grids = [], {}, {}
     top = int(np.argmax(dens))
     recons = reconstruction_options(o.reconstructions, outside=o.outside)
     rguide = reconstruction_guide if reconstruction_guide is not None else Guide(image)
     for outcomes in run_protocol(
-        sensor, trials, evaluate, outside=o.outside, reconstructions=recons, guide=rguide
-    ):
+        sensor, trials, evaluate, outside=o.outside, reconstructions=recons, guide=rguide,
+        keep_trial=keep_trial,
+    ):  # fmt: skip
         for oc in outcomes:
             rows += _rows(oc, dens[oc.budget_index])
+            for r, grid in (oc.grids or {}).items():
+                grids[(oc.label, oc.budget_index, r)] = grid
             if oc.trial == 0 and oc.budget_index == top:
                 examples[oc.label] = oc.acquisition
         if progress is not None:
             progress(f"{outcomes[0].label} / trial {outcomes[0].trial}")
-    return LidarStudyResult(rows=rows, examples=examples)
+    return LidarStudyResult(rows=rows, examples=examples, grids=grids, densities=dens, ks=list(ks))
 
 
 def _rows(oc, density: float) -> list[dict]:

@@ -92,6 +92,9 @@ class SamplingStudyResult:
         The reconstructions run on every acquisition, in order.
     info : dict reconstruction -> strategy -> key -> ndarray float64 (densities, trials)
         The numeric diagnostics each reconstruction reported (e.g. ``shading_share``).
+    grids : dict (strategy, density index, reconstruction) -> ndarray float32 (rows, cols)
+        The reconstructed grids of trial ``keep_trial`` (:func:`run_sampling_study`); empty
+        unless asked for.
     """
 
     rows: list[dict]
@@ -105,6 +108,7 @@ class SamplingStudyResult:
     rounds: dict = field(default_factory=dict)
     reconstructions: list = field(default_factory=lambda: [DEFAULT_RECONSTRUCTION])
     info: dict = field(default_factory=dict)
+    grids: dict = field(default_factory=dict, repr=False)
 
     def errors(
         self, metric: str, reconstruction: str = DEFAULT_RECONSTRUCTION
@@ -301,6 +305,7 @@ def run_sampling_study(
     workers: int = 1,
     progress: Callable[[int, int], None] | None = None,
     guide: Guide | None = None,
+    keep_trial: int | None = None,
 ) -> SamplingStudyResult:
     """Run the paper's sampling protocol on one scene.
 
@@ -324,6 +329,9 @@ def run_sampling_study(
         co-located frame, spacing); default ``Guide(image)`` (one frame, light unknown, unit
         spacing). Its grid must be the depth's. The reconstructions get the sensor's samples
         as measured: depth (camera distance) falls where height rises.
+    keep_trial : int, optional
+        Keep the reconstructed grids of this trial (:attr:`SamplingStudyResult.grids`, for an
+        export); no score changes.
 
     Returns
     -------
@@ -336,6 +344,8 @@ def run_sampling_study(
     """
     o = options or SamplingStudyOptions()
     depth, image, guide, dens, recons = _check_inputs(o, depth, image, guide)
+    if keep_trial is not None and not 0 <= keep_trial < o.trials:
+        raise ValueError(f"keep_trial must be in [0, {o.trials}), got {keep_trial}")
     sensor = IdealSampler(depth, IdealOptions(range_noise_std=float(o.range_noise_std)))
     ks = [sample_count(d, depth.size) for d in dens]
     planners, maps_cache = study_planners(o, image, depth, ks)
@@ -354,19 +364,23 @@ def run_sampling_study(
     rounds = {s: np.ones(shape, np.int64) for s in strategies}
     info: dict = {r: {s: {} for s in strategies} for r in recons}
     frames: dict = {}
+    grids: dict = {}
     total, done = len(strategies) * o.trials * len(ks), 0
     for outcomes in run_protocol(
         sensor, trials, evaluate, outside=o.outside, workers=workers,
-        reconstructions=recons, guide=guide,
+        reconstructions=recons, guide=guide, keep_trial=keep_trial,
     ):  # fmt: skip
         for oc in outcomes:
             _record_outcome(oc, errors, info, frames, rounds, shape)
+            for r, grid in (oc.grids or {}).items():
+                grids[(oc.label, oc.budget_index, r)] = grid
         done += len(ks)
         if progress is not None:
             progress(done, total)
     res = _result(o, strategies, dens, ks, errors, names, list(recons), frames)
     res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], MeasuringPlanner)}
     res.info = {r: by for r, by in info.items() if any(by.values())}
+    res.grids = grids
     return res
 
 
