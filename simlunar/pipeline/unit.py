@@ -47,7 +47,7 @@ from simlunar.results.exports import scan_export_payload
 from simlunar.results.lidar_exports import lidar_export_payload
 from simlunar.results.records import UnitRecord
 from simlunar.sensors.lidar import LidarScene
-from simlunar.study.lidar import run_lidar_study
+from simlunar.study.lidar import beam_table, run_lidar_study
 from simlunar.study.sampling import run_sampling_study
 from simlunar.study.scanner import ScannerScene, aim_rig_at_terrain, run_scanner_study
 
@@ -453,6 +453,8 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings) -> UnitRecord:
     for label, acq in res.examples.items():
         # where the example acquisition measured, and what: (row, col, depth) per sample
         arrays[f"samples_{label}"] = np.c_[acq.rc, acq.values].astype(np.float64)
+        # every beam in visiting order: (row, col, time, depth), for the scan figure
+        arrays[f"beams_{label}"] = beam_table(acq)
     scans = None
     if cfg.study.save_scans:  # written by the runner into scans/unit<i>/
         scans = lidar_export_payload(res.examples, scene.camera, image.shape[:2])

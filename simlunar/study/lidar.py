@@ -40,6 +40,7 @@ __all__ = [
     "NO_PLAN",
     "LidarStudyOptions",
     "LidarStudyResult",
+    "beam_table",
     "run_lidar_study",
     "time_table",
 ]
@@ -256,6 +257,46 @@ def run_lidar_study(
         if progress is not None:
             progress(f"{outcomes[0].label} / trial {outcomes[0].trial}")
     return LidarStudyResult(rows=rows, examples=examples, grids=grids, densities=dens, ks=list(ks))
+
+
+def beam_table(acq: Acquisition) -> np.ndarray:
+    """Every sample of a LIDAR acquisition in the order the sensor took them.
+
+    Parameters
+    ----------
+    acq : Acquisition
+        Of a LIDAR sensor: its ``detail`` is the :class:`~simlunar.render.lidar_scan.LidarScan`
+        (``valid``, visiting ``order``, ``times``); ``planned`` the aimed-at guide pixels
+        (None for a flash without a plan: its receiver pixels, where each measured point
+        projects).
+
+    Returns
+    -------
+    ndarray float64, shape (n, 4)
+        Per sample, in visiting order (``scan.order``; a flash's frames one after the other):
+        guide ``row``, ``col`` (index coordinates; NaN for a flash pixel that measured
+        nothing), ``time`` (s from the acquisition's start; NaN where the sensor keeps none) and
+        the measured z-depth (m; NaN where no return was detected).
+    """
+    scan = acq.detail
+    valid = np.asarray(scan.valid).ravel()
+    n = valid.size
+    if int(valid.sum()) != len(acq.values):
+        raise ValueError(
+            f"the acquisition has {len(acq.values)} values for {int(valid.sum())} valid samples"
+        )
+    rc = np.full((n, 2), np.nan)
+    if acq.planned is not None and len(acq.planned) == n:
+        rc[:] = np.asarray(acq.planned, float)
+    else:
+        rc[valid] = np.asarray(acq.rc, float)
+    depth = np.full(n, np.nan)
+    depth[valid] = np.asarray(acq.values, float)
+    times = np.full(n, np.nan) if scan.times is None else np.asarray(scan.times, float).ravel()
+    order = np.asarray(scan.order).ravel()
+    if sorted(order.tolist()) != list(range(n)):
+        order = np.arange(n)  # a merged flash: its samples are already frame after frame
+    return np.c_[rc, times, depth][order]
 
 
 def _rows(oc, density: float) -> list[dict]:
