@@ -314,6 +314,7 @@ def lidar_scan(study: dict, planners: list[str], *, densest: float | None = None
         "guide image the planner read and the true z-depth of the guide view (its range "
         "image). Top row: the planned beams on the guide image, joined in the order the "
         "sensor visited them (the line and dots run from dark, first, to bright, last: a "
-        "steered beam's scan order, docs/lidar.md; a flash's frames one after the other). Bottom row: the z-depth each beam measured, on the colour scale of the "
+        "steered beam's scan order, docs/lidar.md; a flash's frames one after the other, the "
+        "dots of one frame, which fire together, in the plan's order). Bottom row: the z-depth each beam measured, on the colour scale of the "
         "true depth; a grey x is a beam that returned no range."
     )

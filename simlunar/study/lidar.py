@@ -273,7 +273,8 @@ def beam_table(acq: Acquisition) -> np.ndarray:
     Returns
     -------
     ndarray float64, shape (n, 4)
-        Per sample, in visiting order (``scan.order``; a flash's frames one after the other):
+        Per sample, in visiting order (``scan.order``, then by time where every sample has
+        one: a flash's frames one after the other, a frame's dots in the plan's order):
         guide ``row``, ``col`` (index coordinates; NaN for a flash pixel that measured
         nothing), ``time`` (s from the acquisition's start; NaN where the sensor keeps none) and
         the measured z-depth (m; NaN where no return was detected).
@@ -296,7 +297,12 @@ def beam_table(acq: Acquisition) -> np.ndarray:
     order = np.asarray(scan.order).ravel()
     if sorted(order.tolist()) != list(range(n)):
         order = np.arange(n)  # a merged flash: its samples are already frame after frame
-    return np.c_[rc, times, depth][order]
+    table = np.c_[rc, times, depth][order]
+    if np.isfinite(table[:, 2]).all():
+        # by time, ties in that order: a flash's frames one after the other (the dots of one
+        # frame fire together and keep the plan's order)
+        table = table[np.argsort(table[:, 2], kind="stable")]
+    return table
 
 
 def _rows(oc, density: float) -> list[dict]:

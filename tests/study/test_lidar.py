@@ -149,3 +149,15 @@ def test_beam_table_of_a_flash_places_the_measured_pixels():
     bad = Acquisition(np.zeros((1, 2)), np.array([1.0]), (8, 8), detail=scan)
     with pytest.raises(ValueError, match="2 valid samples"):
         beam_table(bad)
+
+
+def test_beam_table_of_a_multi_frame_flash_runs_frame_after_frame():
+    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.study.lidar import beam_table
+
+    planned = np.array([[0, 0], [1, 1], [2, 2], [3, 3]])
+    times = np.array([0.1, 0.0, 0.1, 0.0])  # frame 0: beams 1 and 3; frame 1: beams 0 and 2
+    scan = LidarScan(np.ones(4), np.ones(4, bool), np.zeros((4, 3)), np.ones(4), np.arange(4),
+                     0.2, 2, times=times)  # fmt: skip
+    acq = Acquisition(planned, np.arange(4.0), (4, 4), detail=scan, planned=planned)
+    np.testing.assert_array_equal(beam_table(acq)[:, 0], [1, 3, 0, 2])
