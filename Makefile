@@ -10,7 +10,7 @@ ONLY ?=
 EXPERIMENT ?= experiments/quickstart.yaml
 PYTEST_ARGS ?=
 
-.PHONY: setup run test bench lint format clean doctor docs docs-gallery browser
+.PHONY: setup run test bench lint format clean doctor docs docs-gallery browser learned-quick
 
 setup: $(STAMP)
 
@@ -27,6 +27,14 @@ $(STAMP): pyproject.toml scripts/ensure_llvm.sh
 run: setup
 	$(VPY) -m simlunar.cli render scenes/quickstart_scene.yaml --out results/quickstart_render
 	$(VPY) -m simlunar.cli run $(EXPERIMENT)
+
+# the quick learned path: trains the small learned-map model only when it is missing or older
+# than its training YAML, then runs experiments/learned_quick.yaml (README, "Experiments")
+models/learned_quarter.joblib: experiments/training/learned_quarter.yaml | setup
+	$(VPY) -m simlunar.cli train experiments/training/learned_quarter.yaml
+
+learned-quick: setup models/learned_quarter.joblib
+	$(VPY) -m simlunar.cli run experiments/learned_quick.yaml
 
 test: setup browser
 	$(VPY) -m pytest $(PYTEST_ARGS)

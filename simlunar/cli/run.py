@@ -56,6 +56,11 @@ def run(
     save_scans: bool = flag(
         "--save-scans", "scanner and lidar studies: export each unit's scan to scans/unit<i>/"
     ),
+    save_arrays: bool = flag(
+        "--save-arrays",
+        "sampling and lidar studies: write each unit's reconstructions and error maps "
+        "(GeoTIFF, EXR) to arrays/unit<i>/",
+    ),
     dry_run: bool = flag(
         "--dry-run",
         "check everything, list the units, estimate time and memory; write nothing",
@@ -65,6 +70,7 @@ def run(
     from simlunar.config.advice import config_warnings
     from simlunar.config.loading import load_experiment
     from simlunar.pipeline.runner import run_experiment
+    from simlunar.results.array_exports import check_save_arrays
     from simlunar.results.exports import check_save_scans
     from simlunar.results.report import write_report
 
@@ -76,7 +82,12 @@ def run(
         if save_scans:
             check_save_scans(cfg)
             # an override before validation, so every sweep point is checked with it
-            cfg = load_experiment(experiment, {**overrides, "study.save_scans": True})
+            overrides = {**overrides, "study.save_scans": True}
+            cfg = load_experiment(experiment, overrides)
+        if save_arrays:
+            check_save_arrays(cfg)
+            overrides = {**overrides, "study.save_arrays": True}
+            cfg = load_experiment(experiment, overrides)
         for line in config_warnings(cfg):
             typer.echo(line, err=True)
         out_dir = Path(out) if out else Path("results") / cfg.name

@@ -149,6 +149,12 @@ class SamplingStudyCfg(_Model):
         "and give 95 % bootstrap intervals",
     )
     reconstructions: Reconstructions = _reconstructions_field()
+    save_arrays: bool = Field(
+        False,
+        description="write arrays/unit<i>/ per unit: trial 0's reconstruction of every "
+        "planner, density and reconstruction and its error map (reconstruction - truth), "
+        "GeoTIFF and EXR (docs/experiments.md); changes no number",
+    )
 
     _unique = field_validator("strategies", "metrics")(unique_names)
 
@@ -241,6 +247,12 @@ class LidarStudyCfg(_Model):
         "over terrain seeds in the figures)",
     )
     reconstructions: Reconstructions = _reconstructions_field()
+    save_arrays: bool = Field(
+        False,
+        description="write arrays/unit<i>/ per unit: trial 0's reconstruction of every "
+        "planner, density and reconstruction and its error map (reconstruction - truth), "
+        "GeoTIFF and EXR (docs/experiments.md); changes no number",
+    )
 
     _unique = field_validator("planners", "metrics")(unique_names)
 

@@ -102,7 +102,7 @@ def check_out_dir(out: str | Path, *, option: str = "--out") -> Path:
     if not os.access(anc, os.W_OK | os.X_OK):
         raise ResultFolderError(f"{option} {p}: {anc} is not writable (permission denied)")
     if p.is_dir():
-        for sub in ("units", "figures", "scans", "config.yaml", LOCK_NAME):
+        for sub in ("units", "figures", "scans", "arrays", "config.yaml", LOCK_NAME):
             q = p / sub
             want_dir = sub not in ("config.yaml", LOCK_NAME)
             if q.exists() and q.is_dir() != want_dir:

@@ -35,6 +35,7 @@ from simlunar.interrupts import interrupted
 from simlunar.pipeline.executors import LocalPoolExecutor, SerialExecutor, accepts_keyword
 from simlunar.pipeline.progress import _progress
 from simlunar.progress import Event
+from simlunar.results.array_exports import write_array_export
 from simlunar.results.exports import write_scan_export
 from simlunar.results.store import UNITS_DIR, UnitCache
 
@@ -166,6 +167,9 @@ def compute_missing(run, cache: UnitCache, todo, records: dict, n_cached: int) -
             scans = result.pop("scans", None)
             if scans is not None:  # before the cache entry: a cached unit has its scans
                 write_scan_export(out / "scans" / f"unit{u.index}", scans, unit_key=u.key)
+            exports = result.pop("exports", None)
+            if exports is not None:  # the reconstructions of --save-arrays, before caching too
+                write_array_export(out / "arrays" / f"unit{u.index}", exports, unit_key=u.key)
             record = {**result, "index": u.index, "sweep": u.sweep, "config": u.config}
             cache.save(u.key, record, arrays)
             records[u.key] = json.loads(json.dumps(record, default=float))

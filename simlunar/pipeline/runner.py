@@ -55,6 +55,7 @@ from simlunar.results.folder import (
     _read_provenance,
     _remove_empty,
     _scans_present,
+    array_folders,
     claim_folder,
     folder_complete,
     prune_scans,
@@ -379,11 +380,12 @@ def _run_locked(run: _Run) -> RunSummary:
     cache = UnitCache(out)
     keys = [u.key for u in units]
     scan_dirs = scan_folders(units)
-    records, todo = _cached_records(cache, out, units, scan_dirs)
+    array_dirs = array_folders(units)
+    records, todo = _cached_records(cache, out, units, scan_dirs, array_dirs)
     n_cached = len(units) - len(todo)
     stale = cache.keys() - set(keys)
     # nothing of a finished folder is removed before this run is known to be able to write
-    _check_writable(out, scan_dirs)
+    _check_writable(out, scan_dirs, array_dirs)
     previous = _read_provenance(out)  # before anything is removed: its run time is kept
     prune_steps(out, {u.key for u in todo})  # steps only of the units still to compute
     if (
@@ -400,6 +402,7 @@ def _run_locked(run: _Run) -> RunSummary:
         _invalidate(out)
         cache.remove_except(set(keys))
     prune_scans(out, scan_dirs)  # the exports of units no longer produced go with them
+    prune_scans(out, array_dirs, sub="arrays")
 
     compute_missing(run, cache, todo, records, n_cached)
 
@@ -419,7 +422,7 @@ def _run_locked(run: _Run) -> RunSummary:
     return _summary(run, n_cached, len(todo), md, records)
 
 
-def _cached_records(cache: UnitCache, out: Path, units, scan_dirs):
+def _cached_records(cache: UnitCache, out: Path, units, scan_dirs, array_dirs=None):
     """The records of the units already finished, and the units (one per key) to compute."""
     records: dict[str, dict] = {}
     todo: list[WorkUnit] = []
@@ -428,6 +431,7 @@ def _cached_records(cache: UnitCache, out: Path, units, scan_dirs):
         # a cached unit whose scan export is missing (deleted, interrupted) is computed again:
         # the numbers are the same (seeded), the export comes back
         scans_ok = _scans_present(out, scan_dirs, u)
+        scans_ok = scans_ok and _scans_present(out, array_dirs or {}, u, sub="arrays")
         if rec is not None and cache.arrays_readable(u.key) and scans_ok:
             records[u.key] = rec
         elif u.key not in {t.key for t in todo}:

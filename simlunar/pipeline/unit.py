@@ -45,11 +45,12 @@ from simlunar.progress import reporting, stage
 from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
 from simlunar.render.scene import luminance
+from simlunar.results.array_exports import array_export_payload, export_view
 from simlunar.results.exports import scan_export_payload
 from simlunar.results.lidar_exports import lidar_export_payload
 from simlunar.results.records import UnitRecord
 from simlunar.sensors.lidar import LidarScene
-from simlunar.study.lidar import run_lidar_study
+from simlunar.study.lidar import beam_table, run_lidar_study
 from simlunar.study.sampling import run_sampling_study
 from simlunar.study.scanner import ScannerScene, aim_rig_at_terrain, run_scanner_study
 
@@ -192,7 +193,9 @@ def compute_unit(
     dict
         :meth:`UnitRecord.to_dict`: ``rows`` (tidy dicts), ``scores`` ({metric: {strategy:
         score}}), ``arrays`` (name -> ndarray, for figures), ``timings`` (stage -> seconds),
-        ``meta`` and, for a scanner or lidar unit with ``save_scans``, ``scans``.
+        ``meta`` and, for a scanner or lidar unit with ``save_scans``, ``scans``; for a
+        sampling or lidar unit with ``save_arrays``, ``exports`` (its reconstructions,
+        :func:`simlunar.results.array_exports.array_export_payload`).
     """
     cfg = ExperimentCfg.model_validate(payload["config"])
     inputs = payload.get("inputs")
@@ -282,8 +285,15 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
         workers=workers,
         guide=guide,
         steps=steps,
+        keep_trial=0 if cfg.study.save_arrays else None,
     )
     timings["study_s"] = time.perf_counter() - t
+    exports = None
+    if cfg.study.save_arrays:  # written by the runner into arrays/unit<i>/
+        view = export_view(scene.camera, scene.terrain, depth.shape)
+        exports = array_export_payload(
+            study.grids, depth, densities=study.densities, ks=study.ks, view=view
+        )
     return UnitRecord(
         rows=[dict(r) for r in study.rows],
         scores=_plain_scores(study.scores),
@@ -298,6 +308,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
             **_reconstruction_meta(study),
             **guide_meta,
         },
+        exports=exports,
     )
 
 
@@ -454,15 +465,24 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
             rng=np.random.default_rng(seeds["study"]),
             reconstruction_guide=guide,
             steps=steps,
+            keep_trial=0 if cfg.study.save_arrays else None,
         )
     timings["study_s"] = time.perf_counter() - t
     arrays = {"image": image, "depth": depth, **arrays}
     for label, acq in res.examples.items():
         # where the example acquisition measured, and what: (row, col, depth) per sample
         arrays[f"samples_{label}"] = np.c_[acq.rc, acq.values].astype(np.float64)
+        # every beam in visiting order: (row, col, time, depth), for the scan figure
+        arrays[f"beams_{label}"] = beam_table(acq)
     scans = None
     if cfg.study.save_scans:  # written by the runner into scans/unit<i>/
         scans = lidar_export_payload(res.examples, scene.camera, image.shape[:2])
+    exports = None
+    if cfg.study.save_arrays:  # written by the runner into arrays/unit<i>/
+        view = export_view(scene.camera, scene.terrain, depth.shape)
+        exports = array_export_payload(
+            res.grids, depth, densities=res.densities, ks=res.ks, view=view
+        )
     return UnitRecord(
         rows=[dict(row) for row in res.rows],
         scores={},
@@ -475,4 +495,5 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
             **guide_meta,
         },
         scans=scans,
+        exports=exports,
     )

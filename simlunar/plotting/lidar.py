@@ -1,5 +1,6 @@
 """LIDAR figures: a return waveform with its detected returns; error against scan time (and
-samples) per planner from a LIDAR study's tidy rows. The summary and the tables of those rows
+samples) per planner from a LIDAR study's tidy rows; one scan (guide image, beams in visiting
+order, measured depths). The summary and the tables of those rows
 are in :mod:`simlunar.plotting.lidar_tables` (no Matplotlib; re-exported here)."""
 
 from __future__ import annotations
@@ -7,13 +8,29 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 import numpy as np
+from matplotlib.collections import LineCollection
+from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
+from simlunar.plotting.images import DEPTH_CMAP
+from simlunar.plotting.layout import LABEL_PT, PAGE_W, TICK_PT, TITLE_PT
 from simlunar.plotting.lidar_tables import lidar_summary, lidar_tables
-from simlunar.plotting.style import metric_axis, styles
+from simlunar.plotting.style import label, metric_axis, styles
 
-__all__ = ["error_vs_time", "lidar_summary", "lidar_tables", "waveform"]
+__all__ = [
+    "ORDER_CMAP",
+    "error_vs_time",
+    "lidar_summary",
+    "lidar_tables",
+    "scan_figure",
+    "waveform",
+]
+
+#: colour map of the visiting order (first beam dark, last bright; not the depth's map)
+ORDER_CMAP = "plasma"
+#: at most this many planners (columns) in a scan figure
+MAX_SCAN_PLANNERS = 4
 
 #: what the error bars of :func:`error_vs_time` show, by how many terrain seeds (units) it pools
 BAND_TRIALS = "bars: ±1 s.d. over trials"
@@ -122,3 +139,119 @@ def error_vs_time(
     ax.legend(fontsize=7, frameon=False, title=BAND_SEEDS if pooled else BAND_TRIALS,
               title_fontsize=6)  # fmt: skip
     return fig, ax
+
+
+def scan_figure(
+    image: np.ndarray,
+    depth: np.ndarray,
+    beams: dict[str, np.ndarray],
+    *,
+    title: str = "",
+) -> Figure:
+    """One LIDAR scan per planner: where the beams went, in which order, and what they measured.
+
+    Left column: the guide image and the true z-depth of the guide view (its range image).
+    One column per planner (at most :data:`MAX_SCAN_PLANNERS`): top, the guide image with
+    the planned beams joined in visiting order by a line coloured from first (dark) to last
+    (bright); bottom, the measured z-depth at each beam on the colour scale of the true depth
+    (a grey x: a beam that returned no range).
+
+    Parameters
+    ----------
+    image : (rows, cols) float
+        Guide image in [0, 1].
+    depth : (rows, cols) float
+        True z-depth of the guide view (m; NaN where it misses the terrain).
+    beams : dict planner label -> (n, 4) float
+        :func:`simlunar.study.lidar.beam_table`: row, col, time (s), measured depth (m) per
+        beam in visiting order.
+    title : str
+        Figure title (experiment, sensor, sweep point).
+
+    Returns
+    -------
+    Figure
+    """
+    image = np.asarray(image, float)
+    if image.ndim == 3:
+        image = image.mean(axis=-1)
+    depth = np.asarray(depth, float)
+    labels = list(beams)[:MAX_SCAN_PLANNERS]
+    if not labels:
+        raise ValueError("scan_figure needs the beams of at least one planner")
+    rows, cols = image.shape
+    ncol = 1 + len(labels)
+    panel_w = min(2.2, (PAGE_W - 0.9) / ncol)
+    fig = Figure(
+        figsize=(panel_w * ncol + 0.9, 2 * panel_w * rows / cols + 0.9), layout="constrained"
+    )
+    axes = fig.subplots(2, ncol, squeeze=False)
+    finite = depth[np.isfinite(depth)]
+    lo, hi = np.percentile(finite, [1, 99]) if finite.size else (0.0, 1.0)
+    norm = Normalize(lo, hi if hi > lo else lo + 1.0)
+    _image(axes[0, 0], image, "guide image")
+    im = axes[1, 0].imshow(depth, cmap=DEPTH_CMAP, norm=norm, interpolation="nearest")
+    _frame(axes[1, 0], "true z-depth")
+    order = None
+    for j, name in enumerate(labels, start=1):
+        b = np.asarray(beams[name], float).reshape(-1, 4)
+        n = len(b)
+        measured = np.isfinite(b[:, 3])
+        order = _path(axes[0, j], image, b)
+        pct = 100.0 * measured.mean() if n else 0.0
+        axes[0, j].set_title(f"{label(name)}: {n} beams", fontsize=TITLE_PT - 1)
+        ax = axes[1, j]
+        ax.imshow(np.ones_like(image), cmap="gray", vmin=0, vmax=1.25, interpolation="nearest")
+        size = float(np.clip(2000.0 / max(n, 1), 1.0, 12.0))
+        ax.scatter(b[measured, 1], b[measured, 0], c=b[measured, 3], cmap=DEPTH_CMAP,
+                   norm=norm, s=size, linewidths=0)  # fmt: skip
+        miss = ~measured & np.isfinite(b[:, 0])
+        if miss.any():
+            ax.scatter(b[miss, 1], b[miss, 0], marker="x", color="0.45", s=size, linewidths=0.5)
+        _frame(ax, f"measured: {pct:.0f} % returned")
+    if order is not None:
+        cb = fig.colorbar(order, ax=list(axes[0, 1:]), shrink=0.85, aspect=15, pad=0.02)
+        cb.set_label("visiting order (share of the scan)", fontsize=TICK_PT)
+        cb.ax.tick_params(labelsize=TICK_PT - 1)
+    cb = fig.colorbar(im, ax=list(axes[1, :]), shrink=0.85, aspect=15, pad=0.02)
+    cb.set_label("z-depth (m)", fontsize=TICK_PT)
+    cb.ax.tick_params(labelsize=TICK_PT - 1)
+    if title:
+        fig.suptitle(title, fontsize=LABEL_PT)
+    return fig
+
+
+def _frame(ax, title: str) -> None:
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_title(title, fontsize=TITLE_PT - 1)
+
+
+def _image(ax, image, title: str) -> None:
+    ax.imshow(image, cmap="gray", vmin=0.0, vmax=max(float(np.nanmax(image)), 1e-9),
+              interpolation="nearest")  # fmt: skip
+    _frame(ax, title)
+
+
+def _path(ax, image, b: np.ndarray):
+    """The guide image faded, the beams' tour as a line coloured by visiting order, the beams
+    as dots; returns the line (its colour scale: the share of the scan, 0 to 1)."""
+    top = max(float(np.nanmax(image)), 1e-9)
+    # the image in mid greys (0.25-0.75): both ends of the order's colours stand out on it
+    ax.imshow(image, cmap="gray", vmin=-0.5 * top, vmax=1.5 * top, interpolation="nearest")
+    ax.set_xlim(-0.5, image.shape[1] - 0.5)
+    ax.set_ylim(image.shape[0] - 0.5, -0.5)
+    xy = b[:, [1, 0]]
+    ok = np.isfinite(xy).all(axis=1)
+    xy = xy[ok]
+    share = np.linspace(0.0, 1.0, max(len(xy), 2))[: len(xy)]
+    segs = np.stack([xy[:-1], xy[1:]], axis=1) if len(xy) > 1 else np.empty((0, 2, 2))
+    line = LineCollection(segs, cmap=ORDER_CMAP, norm=Normalize(0.0, 1.0), linewidths=0.5)
+    line.set_array(share[:-1] if len(share) > 1 else share[:0])
+    ax.add_collection(line)
+    size = float(np.clip(600.0 / max(len(xy), 1), 0.3, 6.0))
+    ax.scatter(xy[:, 0], xy[:, 1], c=share, cmap=ORDER_CMAP, norm=Normalize(0.0, 1.0), s=size,
+               linewidths=0, zorder=3)  # fmt: skip
+    ax.set_xticks([])
+    ax.set_yticks([])
+    return line

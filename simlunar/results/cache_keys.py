@@ -10,6 +10,7 @@ must equal the schema's defaults (a test keeps them so).
 from __future__ import annotations
 
 __all__ = [
+    "EXPORT_ONLY_KEYS",
     "NEW_NESTED_DEFAULTS",
     "NEW_PLANNER_DEFAULTS",
     "NEW_RENDER_DEFAULTS",
@@ -21,6 +22,10 @@ __all__ = [
 
 #: study keys added after caches existed, with the value that gives the numbers of before
 NEW_STUDY_DEFAULTS = {"score_region": "full", "reconstructions": ["linear"]}
+#: study keys that ask for files besides the results and change no number at any value: never
+#: in a cache key or a folder's identity (``--save-arrays`` on a finished folder computes its
+#: units again for the export only; results.csv stays byte-identical)
+EXPORT_ONLY_KEYS = ("save_arrays",)
 #: planner option keys added after caches existed (placement, oracles, sequential), with defaults
 NEW_PLANNER_DEFAULTS = {
     "placement": "random",
@@ -42,9 +47,14 @@ NEW_NESTED_DEFAULTS = {
 
 def without_new_defaults(study: dict) -> dict:
     """The study section less keys added later at the value that changes nothing, so the
-    cache keys of earlier runs stay valid (tests/pipeline/test_runner.py keeps the tables
+    cache keys of earlier runs stay valid, and less the export-only keys
+    (:data:`EXPORT_ONLY_KEYS`) (tests/pipeline/test_runner.py keeps the tables
     equal to the schema's defaults)."""
-    out = {k: v for k, v in study.items() if NEW_STUDY_DEFAULTS.get(k, object()) != v}
+    out = {
+        k: v
+        for k, v in study.items()
+        if NEW_STUDY_DEFAULTS.get(k, object()) != v and k not in EXPORT_ONLY_KEYS
+    }
 
     def strip(opts):
         if not isinstance(opts, dict):

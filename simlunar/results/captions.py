@@ -303,3 +303,18 @@ def lidar_error(
         f"mean over {runs}{f' on each of {seeds} terrain seeds' if seeds > 1 else ''}; error "
         f"bars: {bars}.{per}"
     )
+
+
+def lidar_scan(study: dict, planners: list[str], *, densest: float | None = None) -> str:
+    """Caption of ``lidar_scan_unit<i>``: one unit's example scans."""
+    sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
+    at = " at the study's largest density" if densest else ""
+    return (
+        f"One {sensor} scan per planner ({_strategy_list(planners)}): trial 0{at}. Left: the "
+        "guide image the planner read and the true z-depth of the guide view (its range "
+        "image). Top row: the planned beams on the guide image, joined in the order the "
+        "sensor visited them (the line and dots run from dark, first, to bright, last: a "
+        "steered beam's scan order, docs/lidar.md; a flash's frames one after the other, the "
+        "dots of one frame, which fire together, in the plan's order). Bottom row: the z-depth each beam measured, on the colour scale of the "
+        "true depth; a grey x is a beam that returned no range."
+    )

@@ -13,6 +13,7 @@ from typing import Any
 
 from simlunar.config.yamlio import YAMLError, safe_load_text
 from simlunar.errors import ResultFolderError
+from simlunar.results.array_exports import array_export_complete
 from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
 from simlunar.results.exports import export_complete
 from simlunar.results.md_tables import TABLES_DIR
@@ -24,6 +25,7 @@ from simlunar.results.store import (
 
 __all__ = [
     "RESULT_FILES",
+    "array_folders",
     "claim_folder",
     "folder_complete",
     "prune_figures",
@@ -165,17 +167,32 @@ def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
     return out
 
 
-def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit) -> bool:
+def array_folders(units: list[WorkUnit]) -> dict[str, str]:
+    """``{"unit<i>": unit key}``: the ``arrays/`` folders these units export (units with
+    ``study.save_arrays``; of units sharing a key, the first, which is the one computed)."""
+    out: dict[str, str] = {}
+    seen: set[str] = set()
+    for u in units:
+        if (u.config.get("study") or {}).get("save_arrays") and u.key not in seen:
+            seen.add(u.key)
+            out[f"unit{u.index}"] = u.key
+    return out
+
+
+def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit, sub: str = "scans") -> bool:
     name = f"unit{u.index}"
     if scan_dirs.get(name) != u.key:
         return True  # exports nothing (or a unit of the same key does)
-    return export_complete(out / "scans" / name, u.key)
+    complete = array_export_complete if sub == "arrays" else export_complete
+    return complete(out / sub / name, u.key)
 
 
-def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
-    """Remove ``scans/unit<i>/`` folders that do not hold the export of the unit that now
-    has index i (another configuration's, an interrupted one, or save_scans turned off)."""
-    folder = out / "scans"
+def prune_scans(out: Path, scan_dirs: dict[str, str], sub: str = "scans") -> list[Path]:
+    """Remove ``scans/unit<i>/`` folders (``sub="arrays"``: ``arrays/unit<i>/``) that do not
+    hold the export of the unit that now has index i (another configuration's, an
+    interrupted one, or save_scans / save_arrays turned off)."""
+    folder = out / sub
+    complete = array_export_complete if sub == "arrays" else export_complete
     removed: list[Path] = []
     if not folder.is_dir():
         return removed
@@ -183,7 +200,7 @@ def prune_scans(out: Path, scan_dirs: dict[str, str]) -> list[Path]:
         if not (p.is_dir() and re.fullmatch(r"unit\d+", p.name)):
             continue  # only what the runner writes
         key = scan_dirs.get(p.name)
-        if key is None or not export_complete(p, key):
+        if key is None or not complete(p, key):
             shutil.rmtree(p)
             removed.append(p)
     if not any(folder.iterdir()):
@@ -199,10 +216,11 @@ def _read_provenance(out: Path) -> dict:
     return prov if isinstance(prov, dict) else {}
 
 
-def _check_writable(out: Path, scan_dirs: dict[str, str]) -> None:
+def _check_writable(out: Path, scan_dirs: dict[str, str], array_dirs=None) -> None:
     """Write (and remove) a small file in each folder the run writes into, so a full disk,
     a quota or a folder made read-only fails here (exit 3) before any result is deleted."""
     folders = [out, out / "units", out / "figures"] + ([out / "scans"] if scan_dirs else [])
+    folders += [out / "arrays"] if array_dirs else []
     for d in folders:
         if d.exists() and not d.is_dir():
             raise ResultFolderError(f"--out {out}: {d} is not a folder")

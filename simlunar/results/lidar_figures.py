@@ -1,12 +1,15 @@
 """The figures of a LIDAR-study result folder: error against modelled scan time and against
-the range samples measured, one curve per planner (docs/lidar.md)."""
+the range samples measured, one curve per planner, and a picture of each unit's scan (guide
+image, beams in visiting order, measured depths) (docs/lidar.md)."""
 
 from __future__ import annotations
 
 from simlunar.plotting.layout import panel_grid
-from simlunar.plotting.lidar import error_vs_time
+from simlunar.plotting.lidar import MAX_SCAN_PLANNERS, error_vs_time, scan_figure
+from simlunar.plotting.style import point_title
 from simlunar.results import captions as captions_text
 from simlunar.results.aggregate import density_panels, first_reconstruction_rows
+from simlunar.results.store import UnitCache
 
 __all__ = ["lidar_figures"]
 
@@ -46,3 +49,45 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
             captions[f"lidar_error_vs_{name}_{m}"] = captions_text.lidar_error(
                 m, study, x, len(groups), seeds=seeds, by=by
             )
+    if "dir" in res:
+        _scan_figures(res, emit, captions)
+
+
+def _scan_figures(res: dict, emit, captions: dict) -> None:
+    """``lidar_scan_unit<i>`` of the first :data:`MAX_PANELS` units: the guide image, each
+    planner's beams in visiting order and what they measured (a unit cached before the beams
+    were kept draws none)."""
+    config = res["config"]
+    study = config.get("study", {})
+    cache = UnitCache(res["dir"])
+    for rec in res["units"][:MAX_PANELS]:
+        arrays = cache.load_arrays(rec["key"], strict=True)
+        beams = {k[len("beams_") :]: v for k, v in arrays.items() if k.startswith("beams_")}
+        if not beams or "image" not in arrays or "depth" not in arrays:
+            continue
+        order = [p for p in study.get("planners") or [] if p in beams]
+        beams = {p: beams[p] for p in [*order, *[p for p in beams if p not in order]]}
+        sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
+        point = point_title(rec.get("sweep") or {})
+        densest = _densest(study)
+        at = f", k/N = {_fraction(densest)}, trial 0" if densest else ", trial 0"
+        title = f"{config.get('name', '')}: {sensor} scan{at}" + (f" ({point})" if point else "")
+        fig = scan_figure(arrays["image"], arrays["depth"], beams, title=title)
+        stem = f"lidar_scan_unit{rec.get('index', 0)}"
+        emit(fig, stem)
+        shown = list(beams)[:MAX_SCAN_PLANNERS]
+        captions[stem] = captions_text.lidar_scan(study, shown, densest=densest)
+
+
+def _fraction(d: float) -> str:
+    """``1/16`` for a unit fraction, else ``0.3``."""
+    inv = 1.0 / d
+    return f"1/{round(inv)}" if abs(inv - round(inv)) < 1e-6 * inv else f"{d:.3g}"
+
+
+def _densest(study: dict) -> float | None:
+    dens = study.get("densities") or []
+    try:
+        return max(float(d) for d in dens) if dens else None
+    except (TypeError, ValueError):
+        return None

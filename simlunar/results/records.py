@@ -36,6 +36,11 @@ class UnitRecord:
         (:func:`simlunar.results.exports.scan_export_payload`), which the runner writes to
         ``scans/unit<i>/`` and drops before caching; None otherwise (then absent from the dict
         form, so cached results are unchanged).
+    exports : dict or None
+        Units with ``study.save_arrays``: the reconstructions to export
+        (:func:`simlunar.results.array_exports.array_export_payload`), written by the runner
+        to ``arrays/unit<i>/`` and dropped before caching; None otherwise (absent from the
+        dict form).
     """
 
     rows: list[dict[str, Any]]
@@ -44,6 +49,7 @@ class UnitRecord:
     timings: dict[str, float]
     meta: dict[str, Any] = field(default_factory=dict)
     scans: dict[str, Any] | None = None
+    exports: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out = {
@@ -55,6 +61,8 @@ class UnitRecord:
         }
         if self.scans is not None:
             out["scans"] = self.scans
+        if self.exports is not None:
+            out["exports"] = self.exports
         return out
 
 

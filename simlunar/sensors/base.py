@@ -43,6 +43,9 @@ class Acquisition:
         Acquisition time in seconds where the sensor models it (0 where it does not).
     detail : object
         The sensor's own record of the acquisition (e.g. a structured-light ``ScanResult``).
+    planned : ndarray, shape (n, 2), or None
+        Every planned (row, col) in the sensor's own sample order, measured or not, where the
+        sensor keeps it (a LIDAR that aims at planned pixels); ``rc`` holds those measured.
     """
 
     rc: np.ndarray
@@ -51,6 +54,7 @@ class Acquisition:
     frames: int = 0
     seconds: float = 0.0
     detail: Any = None
+    planned: np.ndarray | None = None
 
     @classmethod
     def from_map(cls, measured: np.ndarray, **kw) -> Acquisition:

@@ -88,9 +88,12 @@ def _to_guide(scan: LidarScan, camera: Camera, rc=None, *, detail=None, **cost) 
         # snapped, they are exact lattices, whose Delaunay triangles are well shaped (nearly
         # co-circular float points gave sliver triangles that the rasteriser extrapolated)
         rc = np.round(np.stack([uv[:, 1] - 0.5, uv[:, 0] - 0.5], axis=-1), 6)
+        planned = None
     else:
-        rc = np.asarray(rc).reshape(-1, 2)[valid]
-    return Acquisition(rc, z, camera.shape, detail=scan if detail is None else detail, **cost)
+        planned = np.asarray(rc).reshape(-1, 2)
+        rc = planned[valid]
+    detail = scan if detail is None else detail
+    return Acquisition(rc, z, camera.shape, detail=detail, planned=planned, **cost)
 
 
 class SteeredBeam:

@@ -44,6 +44,7 @@ __all__ = [
     "NO_PLAN",
     "LidarStudyOptions",
     "LidarStudyResult",
+    "beam_table",
     "run_lidar_study",
     "time_table",
 ]
@@ -134,10 +135,20 @@ class LidarStudyResult:
         flash) and, with hazards, ``hazard_precision`` / ``hazard_recall``.
     examples : dict planner -> Acquisition
         Trial 0 at the largest density (for figures).
+    grids : dict (planner, density index, reconstruction) -> ndarray float32 (rows, cols)
+        The reconstructed depth grids of trial ``keep_trial`` (:func:`run_lidar_study`), for
+        an export; empty unless asked for.
+    densities : list of float
+        The planned densities, in the order of the grids' density index.
+    ks : list of int
+        The planned pixel count of each density (0: a flash without a plan).
     """
 
     rows: list
     examples: dict
+    grids: dict = field(default_factory=dict)
+    densities: list = field(default_factory=list)
+    ks: list = field(default_factory=list)
 
 
 class _Scores:
@@ -184,6 +195,7 @@ def run_lidar_study(
     progress: Callable[[str], None] | None = None,
     reconstruction_guide: Guide | None = None,
     steps: Steps | None = None,
+    keep_trial: int | None = None,
 ) -> LidarStudyResult:
     """Plan, acquire with a LIDAR, reconstruct and score, for every planner, density and trial.
 
@@ -206,6 +218,9 @@ def run_lidar_study(
     steps : Steps, optional
         Where each planner's finished acquisitions are kept (:mod:`simlunar.study.steps`): a
         planner found there is not measured again; the result is the same bit for bit.
+    keep_trial : int, optional
+        Keep the reconstructed grids of this trial (:attr:`LidarStudyResult.grids`, for an
+        export); no score changes.
 
     Returns
     -------
@@ -233,12 +248,12 @@ def run_lidar_study(
 
     trials = Trials(planners, ks, int(o.trials), seeds)
     evaluate = _Scores(depth, image, camera, o.metrics, o.hazard)
-    rows, examples = [], {}
+    rows, examples, grids = [], {}, {}
     recons = reconstruction_options(o.reconstructions, outside=o.outside)
     rguide = reconstruction_guide if reconstruction_guide is not None else Guide(image)
     run = functools.partial(
         run_protocol, sensor, evaluate=evaluate, outside=o.outside, reconstructions=recons,
-        guide=rguide,
+        guide=rguide, keep_trial=keep_trial,
     )  # fmt: skip
     per_planner = len(ks) * int(o.trials)
     total = len(planners) * per_planner
@@ -246,29 +261,80 @@ def run_lidar_study(
         for label in planners:  # one step per planner: kept in ``steps`` once finished
             one = dataclasses.replace(trials, planners={label: planners[label]})
             step = functools.partial(_planner_step, run, one, dens, progress, bar)
-            (planner_rows, example), loaded = resumable(steps, f"lidar planner {label}", step)
+            (planner_rows, example, planner_grids), loaded = resumable(
+                steps, f"lidar planner {label}" + ("" if keep_trial is None else " grids"), step
+            )
             rows += planner_rows
+            grids.update(planner_grids)
             if example is not None:
                 examples[label] = example
             if loaded:
                 bar.advance(per_planner)
-    return LidarStudyResult(rows=rows, examples=examples)
+    return LidarStudyResult(rows=rows, examples=examples, grids=grids, densities=dens, ks=list(ks))
 
 
-def _planner_step(run, trials: Trials, dens, progress, bar) -> tuple[list, Acquisition | None]:
-    """The rows of one planner's acquisitions (every density and trial) and its example
-    acquisition (trial 0 at the largest density)."""
-    rows, example = [], None
+def _planner_step(run, trials: Trials, dens, progress, bar) -> tuple:
+    """The rows of one planner's acquisitions (every density and trial), its example
+    acquisition (trial 0 at the largest density) and its kept grids (``keep_trial``)."""
+    rows, example, grids = [], None, {}
     top = int(np.argmax(dens))
     for outcomes in run(trials=trials):
         for oc in outcomes:
             rows += _rows(oc, dens[oc.budget_index])
+            for r, grid in (oc.grids or {}).items():
+                grids[(oc.label, oc.budget_index, r)] = grid
             if oc.trial == 0 and oc.budget_index == top:
                 example = oc.acquisition
         bar.advance(len(outcomes))
         if progress is not None:
             progress(f"{outcomes[0].label} / trial {outcomes[0].trial}")
-    return rows, example
+    return rows, example, grids
+
+
+def beam_table(acq: Acquisition) -> np.ndarray:
+    """Every sample of a LIDAR acquisition in the order the sensor took them.
+
+    Parameters
+    ----------
+    acq : Acquisition
+        Of a LIDAR sensor: its ``detail`` is the :class:`~simlunar.render.lidar_scan.LidarScan`
+        (``valid``, visiting ``order``, ``times``); ``planned`` the aimed-at guide pixels
+        (None for a flash without a plan: its receiver pixels, where each measured point
+        projects).
+
+    Returns
+    -------
+    ndarray float64, shape (n, 4)
+        Per sample, in visiting order (``scan.order``, then by time where every sample has
+        one: a flash's frames one after the other, a frame's dots in the plan's order):
+        guide ``row``, ``col`` (index coordinates; NaN for a flash pixel that measured
+        nothing), ``time`` (s from the acquisition's start; NaN where the sensor keeps none) and
+        the measured z-depth (m; NaN where no return was detected).
+    """
+    scan = acq.detail
+    valid = np.asarray(scan.valid).ravel()
+    n = valid.size
+    if int(valid.sum()) != len(acq.values):
+        raise ValueError(
+            f"the acquisition has {len(acq.values)} values for {int(valid.sum())} valid samples"
+        )
+    rc = np.full((n, 2), np.nan)
+    if acq.planned is not None and len(acq.planned) == n:
+        rc[:] = np.asarray(acq.planned, float)
+    else:
+        rc[valid] = np.asarray(acq.rc, float)
+    depth = np.full(n, np.nan)
+    depth[valid] = np.asarray(acq.values, float)
+    times = np.full(n, np.nan) if scan.times is None else np.asarray(scan.times, float).ravel()
+    order = np.asarray(scan.order).ravel()
+    if sorted(order.tolist()) != list(range(n)):
+        order = np.arange(n)  # a merged flash: its samples are already frame after frame
+    table = np.c_[rc, times, depth][order]
+    if np.isfinite(table[:, 2]).all():
+        # by time, ties in that order: a flash's frames one after the other (the dots of one
+        # frame fire together and keep the plan's order)
+        table = table[np.argsort(table[:, 2], kind="stable")]
+    return table
 
 
 def _rows(oc, density: float) -> list[dict]:

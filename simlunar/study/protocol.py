@@ -104,6 +104,9 @@ class Outcome:
         ``shading_share``), plus ``guide_frames`` (the guide frames it read, a tuple of names;
         empty for an image-free reconstruction) and ``exposures`` (their count: each frame is
         one camera exposure).
+    grids : dict reconstruction -> ndarray float32 (rows, cols), or None
+        The reconstructed grids themselves, only for the trial ``run_protocol(keep_trial=)``
+        names (exports); None otherwise.
     """
 
     label: str
@@ -115,6 +118,7 @@ class Outcome:
     rounds: int = 1
     recon_scores: dict | None = None
     recon_info: dict | None = None
+    grids: dict | None = None
 
     def __post_init__(self):
         if self.recon_scores is None:
@@ -216,6 +220,7 @@ def run_protocol(
     workers: int = 1,
     reconstructions: Mapping | Sequence | None = None,
     guide: Guide | None = None,
+    keep_trial: int | None = None,
 ) -> Iterator[list[Outcome]]:
     """Run the protocol; yields, per (label, trial) task in order, its outcomes per budget.
 
@@ -241,6 +246,9 @@ def run_protocol(
         The sample values reach the reconstruction as the sensor measured them (a camera
         distance -- depth -- falls where height rises: a reconstruction that relates the
         samples to the image must fit a signed gain, as the shading calibration does).
+    keep_trial : int, optional
+        The outcomes of this trial carry their reconstructed grids (:attr:`Outcome.grids`,
+        float32) for an export; None (default): no grid is kept. Changes no score.
     """
     if outside not in OUTSIDE_POLICIES:
         raise ValueError(
@@ -259,6 +267,7 @@ def run_protocol(
         "outside": outside,
         "reconstructions": recons,
         "guide": guide,
+        "keep_trial": keep_trial,
     }
     tasks = [(label, t) for label in trials.planners for t in range(int(trials.trials))]
     return _map_tasks(state, tasks, workers)
@@ -277,16 +286,19 @@ def _task_outcomes(state, label: str, trial: int) -> list[Outcome]:
         else:
             rc = None if planner is None else planner(k, plan_rng)
             acq = sensor.acquire(rc, rng=sensor_rng)
-        scores, info = _reconstruct_all(state, acq)
+        keep = state.get("keep_trial") == trial
+        scores, info, grids = _reconstruct_all(state, acq, keep=keep)
         first = next(iter(scores.values()))
-        out.append(Outcome(label, trial, bi, k, acq, first, rounds, scores, info))
+        out.append(Outcome(label, trial, bi, k, acq, first, rounds, scores, info, grids))
     return out
 
 
-def _reconstruct_all(state, acq: Acquisition) -> tuple[dict, dict]:
-    """Every configured reconstruction of one acquisition, scored; and what each reported."""
+def _reconstruct_all(state, acq: Acquisition, *, keep: bool = False):
+    """Every configured reconstruction of one acquisition, scored; what each reported; and,
+    with ``keep``, the reconstructed grids (float32; else None)."""
     guide = state["guide"]
     scores, infos = {}, {}
+    grids = {} if keep else None
     for name, opts in state["reconstructions"].items():
         base = reconstruction_of(opts)
         rec = run_reconstruction(base, acq.rc, acq.values, acq.shape, guide=guide, options=opts)
@@ -295,7 +307,9 @@ def _reconstruct_all(state, acq: Acquisition) -> tuple[dict, dict]:
         frames, exposures = guide_cost(base, guide, info)
         info.pop("frames", None)
         infos[name] = {**info, "guide_frames": frames, "exposures": exposures}
-    return scores, infos
+        if grids is not None:
+            grids[name] = np.asarray(rec.heights, np.float32)
+    return scores, infos, grids
 
 
 _STATE: dict = {}
@@ -310,15 +324,15 @@ def _init_worker(state):
 
 
 def _worker_task(task):
-    # in a worker, only the scores travel back (the acquisition's arrays stay)
+    # in a worker, only the scores (and kept grids) travel back (the acquisition's arrays stay)
     return [light_outcome(o) for o in _task_outcomes(_STATE, *task)]
 
 
 def light_outcome(o: Outcome) -> Outcome:
-    """``o`` without its acquisition's samples (its cost kept): what crosses a process
-    boundary or goes into a checkpoint when only the scores are needed."""
+    """``o`` without its acquisition's samples (its cost and any kept grids kept): what
+    crosses a process boundary or goes into a checkpoint when only the scores are needed."""
     return Outcome(o.label, o.trial, o.budget_index, o.k, _light(o.acquisition), o.scores,
-                   o.rounds, o.recon_scores, o.recon_info)  # fmt: skip
+                   o.rounds, o.recon_scores, o.recon_info, o.grids)  # fmt: skip
 
 
 def _light(acq: Acquisition) -> Acquisition:

@@ -92,6 +92,9 @@ class SamplingStudyResult:
         The reconstructions run on every acquisition, in order.
     info : dict reconstruction -> strategy -> key -> ndarray float64 (densities, trials)
         The numeric diagnostics each reconstruction reported (e.g. ``shading_share``).
+    grids : dict (strategy, density index, reconstruction) -> ndarray float32 (rows, cols)
+        The reconstructed grids of trial ``keep_trial`` (:func:`run_sampling_study`); empty
+        unless asked for.
     """
 
     rows: list[dict]
@@ -105,6 +108,7 @@ class SamplingStudyResult:
     rounds: dict = field(default_factory=dict)
     reconstructions: list = field(default_factory=lambda: [DEFAULT_RECONSTRUCTION])
     info: dict = field(default_factory=dict)
+    grids: dict = field(default_factory=dict, repr=False)
 
     def errors(
         self, metric: str, reconstruction: str = DEFAULT_RECONSTRUCTION
@@ -305,6 +309,7 @@ def run_sampling_study(
     progress: Callable[[int, int], None] | None = None,
     guide: Guide | None = None,
     steps: Steps | None = None,
+    keep_trial: int | None = None,
 ) -> SamplingStudyResult:
     """Run the paper's sampling protocol on one scene.
 
@@ -331,6 +336,9 @@ def run_sampling_study(
     steps : Steps, optional
         Where each strategy's finished trials are kept (:mod:`simlunar.study.steps`): a
         strategy found there is not computed again; the result is the same bit for bit.
+    keep_trial : int, optional
+        Keep the reconstructed grids of this trial (:attr:`SamplingStudyResult.grids`, for an
+        export); no score changes.
 
     Returns
     -------
@@ -343,6 +351,8 @@ def run_sampling_study(
     """
     o = options or SamplingStudyOptions()
     depth, image, guide, dens, recons = _check_inputs(o, depth, image, guide)
+    if keep_trial is not None and not 0 <= keep_trial < o.trials:
+        raise ValueError(f"keep_trial must be in [0, {o.trials}), got {keep_trial}")
     sensor = IdealSampler(depth, IdealOptions(range_noise_std=float(o.range_noise_std)))
     ks = [sample_count(d, depth.size) for d in dens]
     planners, maps_cache = study_planners(o, image, depth, ks, guide=guide)
@@ -361,10 +371,17 @@ def run_sampling_study(
     rounds = {s: np.ones(shape, np.int64) for s in strategies}
     info: dict = {r: {s: {} for s in strategies} for r in recons}
     frames: dict = {}
-    kept = _kept_strategies(steps, strategies)
+    grids: dict = {}
+
+    def record(oc) -> None:
+        _record_outcome(oc, errors, info, frames, rounds, shape)
+        for r, grid in (oc.grids or {}).items():
+            grids[(oc.label, oc.budget_index, r)] = grid
+
+    kept = _kept_strategies(steps, strategies, keep_trial)
     for outcomes in kept.values():
         for oc in outcomes:
-            _record_outcome(oc, errors, info, frames, rounds, shape)
+            record(oc)
     todo = {s: planners[s] for s in strategies if s not in kept}
     total, done = len(strategies) * o.trials * len(ks), len(kept) * o.trials * len(ks)
     with stage("sampling study", total=total, unit="acquisitions", done=done) as bar:
@@ -376,15 +393,16 @@ def run_sampling_study(
             tasks = run_protocol(
                 sensor, dataclasses.replace(trials, planners=todo), evaluate,
                 outside=o.outside, workers=workers, reconstructions=recons, guide=guide,
+                keep_trial=keep_trial,
             )  # fmt: skip
         for outcomes in tasks:
             for oc in outcomes:
-                _record_outcome(oc, errors, info, frames, rounds, shape)
+                record(oc)
             label = outcomes[0].label
             finished[label].append([light_outcome(oc) for oc in outcomes])
             if steps is not None and len(finished[label]) == o.trials:
                 # every trial of this strategy done: kept, so a rerun starts after it
-                steps.save(_step_name(label), finished.pop(label))
+                steps.save(_step_name(label, keep_trial), finished.pop(label))
             done += len(ks)
             bar.update(done)
             if progress is not None:
@@ -392,21 +410,23 @@ def run_sampling_study(
     res = _result(o, strategies, dens, ks, errors, names, list(recons), frames)
     res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], MeasuringPlanner)}
     res.info = {r: by for r, by in info.items() if any(by.values())}
+    res.grids = grids
     return res
 
 
-def _step_name(label: str) -> str:
-    return f"sampling strategy {label}"
+def _step_name(label: str, keep_trial: int | None = None) -> str:
+    # a step that kept a trial's grids (an export) is another step than one that did not
+    return f"sampling strategy {label}" + ("" if keep_trial is None else f" grids {keep_trial}")
 
 
-def _kept_strategies(steps: Steps | None, strategies) -> dict:
+def _kept_strategies(steps: Steps | None, strategies, keep_trial: int | None = None) -> dict:
     """label -> its outcomes (light: no samples), of the strategies a previous run of this
     study finished (:mod:`simlunar.study.steps`)."""
     if steps is None:
         return {}
     kept = {}
     for label in strategies:
-        trials = steps.load(_step_name(label))
+        trials = steps.load(_step_name(label, keep_trial))
         if trials is not None:
             kept[label] = [oc for outcomes in trials for oc in outcomes]
     return kept

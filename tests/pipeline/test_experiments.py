@@ -81,3 +81,24 @@ def test_paper_protocol_in_the_tables():
         assert {"random", "grid", "gradient", "entropy", "wavelet"} <= set(cfg.study.strategies)
         assert {"lloyd_uniform", "oracle_greedy"} <= set(cfg.study.strategies)
         assert cfg.study.terrain_seeds >= 5  # intervals over terrain realisations
+
+
+def test_learned_quick_uses_the_model_its_training_yaml_writes(with_shipped_models):
+    """experiments/learned_quick.yaml (README's quick learned path): its learned planner reads
+    the model `simlunar train experiments/training/learned_quarter.yaml` writes, at that
+    model's densities, beside the two Lloyd layouts it is compared with, on a preset the model
+    held out."""
+    from simlunar.config.training import load_training
+
+    root = Path(__file__).resolve().parents[2]
+    cfg = load_experiment(root / "experiments" / "learned_quick.yaml")
+    train, _ = load_training(root / "experiments" / "training" / "learned_quarter.yaml")
+    study = cfg.study
+    assert {"lloyd_uniform", "wavelet_lloyd", "learned_lloyd"} <= set(study.strategies)
+    opts = study.strategy_options["learned_lloyd"]
+    assert opts.strategy == "learned" and opts.placement == "lloyd"
+    assert opts.feature_opts.model == train.model
+    assert sorted(study.densities) == sorted(train.densities)
+    assert cfg.terrain.preset in train.held_out_presets
+    for doc in ("README.md", "docs/experiments.md", "Makefile"):
+        assert "learned_quick" in (root / doc).read_text(), doc

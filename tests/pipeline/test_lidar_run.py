@@ -55,6 +55,9 @@ def test_a_tiny_steered_beam_study_runs_end_to_end(tmp_path):
     assert by_k[128] > by_k[32]
     figs = {p.name for p in (out / "figures").iterdir()}
     assert {"lidar_error_vs_time_mse.png", "lidar_error_vs_samples_grad.png"} <= figs
+    # the picture of the scan: guide image, beams in visiting order, measured depths
+    assert "lidar_scan_unit0.png" in figs
+    assert "## lidar_scan_unit0" in (out / "figures" / "captions.md").read_text()
 
 
 def test_save_scans_writes_las_files_laspy_reads(tmp_path):
@@ -66,7 +69,7 @@ def test_save_scans_writes_las_files_laspy_reads(tmp_path):
     out = tmp_path / "lidar"
     args = ["run", str(ROOT / "experiments" / "lidar_descent_altimeter.yaml"), "--out", str(out)]
     tiny = [*TINY, "--set", "study.planners=[grid]", "--set", "study.densities=[1/16]"]
-    r = CliRunner().invoke(app, [*args, *tiny, "--no-progress", "--save-scans"])
+    r = CliRunner().invoke(app, [*args, *tiny, "--no-progress", "--save-scans", "--save-arrays"])
     assert r.exit_code == 0, r.output
     folder = out / "scans" / "unit0"
     manifest = json.loads((folder / "manifest.json").read_text())
@@ -77,6 +80,11 @@ def test_save_scans_writes_las_files_laspy_reads(tmp_path):
     assert np.abs(z).max() < 3.0
     assert np.asarray(las.gps_time).max() <= manifest["seconds"]["grid"]
     assert (folder / "grid.ply").is_file() and (folder / "grid_range.exr").is_file()
+    # --save-arrays: a perspective view exports depth on the pixel grid, without a CRS
+    arrays = json.loads((out / "arrays" / "unit0" / "manifest.json").read_text())
+    assert arrays["quantity"] == "depth" and arrays["crs"] is None
+    names = {f["tif"] for f in arrays["files"]}
+    assert names == {"truth_depth.tif", "grid_1-16_linear_depth.tif", "grid_1-16_linear_error.tif"}
 
 
 def test_a_lidar_study_scores_every_reconstruction_with_extra_guide_frames(tmp_path):

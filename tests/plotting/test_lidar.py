@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from simlunar.plotting.lidar import waveform
 
@@ -54,3 +55,43 @@ def test_error_vs_time_draws_a_curve_per_planner(tmp_path):
     assert ax.get_xlabel() == "range samples measured"
     assert ax.containers[0].lines[0].get_xdata().tolist() == [64, 256]
     fig.savefig(tmp_path / "t.png")
+
+
+def _beams(n, rng):
+    rc = rng.uniform(0, 31, size=(n, 2))
+    depth = 20.0 + rc[:, 0] / 31
+    depth[::7] = np.nan  # no return: 8 of 50, 10 of 64 (84 % returned)
+    return np.c_[rc, np.linspace(0, 1, n), depth]
+
+
+def test_scan_figure_draws_the_tour_and_the_measured_depths(tmp_path):
+    from matplotlib.collections import LineCollection
+
+    from simlunar.plotting.lidar import MAX_SCAN_PLANNERS, scan_figure
+
+    rng = np.random.default_rng(0)
+    image = rng.uniform(size=(32, 32))
+    depth = 20.0 + np.repeat(np.arange(32.0)[:, None], 32, axis=1) / 31
+    beams = {"wavelet": _beams(50, rng), "grid": _beams(64, rng)}
+    fig = scan_figure(image, depth, beams, title="exp: steered beam scan")
+    assert fig._suptitle.get_text() == "exp: steered beam scan"
+    titles = [ax.get_title() for ax in fig.axes]
+    assert titles[:6] == ["guide image", "Wavelet: 50 beams", "Grid: 64 beams",
+                          "true z-depth", "measured: 84 % returned",
+                          "measured: 84 % returned"]  # fmt: skip
+    # the tour: one segment between consecutive beams, coloured by their share of the scan
+    tour = next(c for c in fig.axes[1].collections if isinstance(c, LineCollection))
+    assert len(tour.get_segments()) == 49
+    np.testing.assert_allclose(tour.get_array()[[0, -1]], [0.0, 48 / 49])
+    np.testing.assert_array_equal(tour.get_segments()[0], beams["wavelet"][:2, [1, 0]])
+    # two colour bars: visiting order and depth
+    assert {ax.get_ylabel() for ax in fig.axes[6:]} == {
+        "visiting order (share of the scan)",
+        "z-depth (m)",
+    }
+    fig.savefig(tmp_path / "scan.png")
+    many = {f"p{i}": _beams(10, rng) for i in range(MAX_SCAN_PLANNERS + 2)}
+    fig = scan_figure(image, depth, many)
+    assert sum(ax.get_title().endswith("beams") for ax in fig.axes) == MAX_SCAN_PLANNERS
+    with pytest.raises(ValueError, match="at least one planner"):
+        scan_figure(image, depth, {})

@@ -71,3 +71,37 @@ def test_at_most_max_panels():
            "units": units, "rows": _rows(range(MAX_PANELS + 2))}  # fmt: skip
     figures, _ = _draw(res)
     assert len([ax for ax in figures[0][1].axes if ax.get_title()]) == MAX_PANELS
+
+
+def test_a_scan_figure_per_unit_from_its_cached_beams(tmp_path):
+    import numpy as np
+
+    from simlunar.results.store import UnitCache
+
+    rng = np.random.default_rng(1)
+    rc = rng.integers(0, 16, size=(20, 2)).astype(float)
+    beams = np.c_[rc, np.arange(20) * 1e-3, 10.0 + rc[:, 0] / 16]
+    arrays = {"image": rng.uniform(size=(16, 16)).astype(np.float32),
+              "depth": 10.0 + np.tile(np.arange(16.0)[:, None] / 16, (1, 16)),
+              "beams_random": beams, "beams_wavelet": beams[::-1].copy()}  # fmt: skip
+    cache = UnitCache(tmp_path)
+    cache.save("k0", {"rows": []}, arrays)
+    cache.save("k1", {"rows": []}, {"image": arrays["image"], "depth": arrays["depth"]})
+    study = {"metrics": ["mse"], "planners": ["wavelet", "random"], "sensor": "steered_beam",
+             "densities": [1 / 16, 1 / 64]}  # fmt: skip
+    units = [{**_unit(0, 30, 0), "key": "k0"}, {**_unit(1, 60, 0), "key": "k1"}]
+    res = {"config": {"name": "exp", "study": study,
+                      "sweep": {"render.light.elevation_deg": [30, 60]}},
+           "units": units, "rows": _rows(range(2)), "dir": tmp_path}  # fmt: skip
+    figures, captions = _draw(res)
+    scans = [(n, f) for n, f in figures if n.startswith("lidar_scan")]
+    # the second unit was cached without beams: no scan figure for it
+    assert [n for n, _ in scans] == ["lidar_scan_unit0"]
+    fig = scans[0][1]
+    title = fig._suptitle.get_text()
+    assert title.startswith("exp: steered beam scan, k/N = 1/16, trial 0")
+    # planners in the study's order
+    assert [ax.get_title() for ax in fig.axes[1:3]] == ["Wavelet: 20 beams", "Random: 20 beams"]
+    cap = captions["lidar_scan_unit0"]
+    assert "steered beam scan per planner (Wavelet; Random)" in cap
+    assert "visited" in cap and "no range" in cap

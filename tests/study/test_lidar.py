@@ -153,3 +153,51 @@ def test_a_study_cut_short_at_its_second_planner_resumes_exactly():
     study = [e for e in events if e.path == ("lidar study",)]
     assert (study[0].done, study[0].total, study[0].unit) == (0, 6, "acquisitions")
     assert [e.done for e in study[1:]] == [2, 3, 4, 5, 6, 6] and study[-1].finished
+
+
+def test_beam_table_lists_every_beam_in_visiting_order():
+    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.study.lidar import beam_table
+
+    planned = np.array([[0, 0], [0, 5], [3, 5], [3, 0]])
+    valid = np.array([True, False, True, True])
+    pts = np.zeros((4, 3))
+    times = np.array([0.0, 0.3, 0.2, 0.1])
+    order = np.array([0, 3, 2, 1])  # visited 0, 3, 2, 1: times ascending
+    scan = LidarScan(np.ones(4), valid, pts, np.ones(4), order, 0.4, 4, times=times)
+    acq = Acquisition(planned[valid], np.array([10.0, 12.0, 13.0]), (4, 6), detail=scan,
+                      planned=planned)  # fmt: skip
+    t = beam_table(acq)
+    assert t.shape == (4, 4)
+    np.testing.assert_array_equal(t[:, :2], planned[order])
+    np.testing.assert_array_equal(t[:, 2], [0.0, 0.1, 0.2, 0.3])
+    # beam 1 returned nothing: NaN depth, still in the tour
+    np.testing.assert_array_equal(t[:, 3], [10.0, 13.0, 12.0, np.nan])
+
+
+def test_beam_table_of_a_flash_places_the_measured_pixels():
+    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.study.lidar import beam_table
+
+    valid = np.array([True, True, False])
+    scan = LidarScan(np.ones(3), valid, np.zeros((3, 3)), np.ones(3), np.arange(3), 0.1, 1)
+    acq = Acquisition(np.array([[1.0, 2.0], [3.0, 4.0]]), np.array([5.0, 6.0]), (8, 8),
+                      detail=scan)  # fmt: skip
+    t = beam_table(acq)
+    np.testing.assert_array_equal(t[:2], [[1, 2, np.nan, 5], [3, 4, np.nan, 6]])
+    assert np.isnan(t[2]).all()  # a receiver pixel without a return has no guide position
+    bad = Acquisition(np.zeros((1, 2)), np.array([1.0]), (8, 8), detail=scan)
+    with pytest.raises(ValueError, match="2 valid samples"):
+        beam_table(bad)
+
+
+def test_beam_table_of_a_multi_frame_flash_runs_frame_after_frame():
+    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.study.lidar import beam_table
+
+    planned = np.array([[0, 0], [1, 1], [2, 2], [3, 3]])
+    times = np.array([0.1, 0.0, 0.1, 0.0])  # frame 0: beams 1 and 3; frame 1: beams 0 and 2
+    scan = LidarScan(np.ones(4), np.ones(4, bool), np.zeros((4, 3)), np.ones(4), np.arange(4),
+                     0.2, 2, times=times)  # fmt: skip
+    acq = Acquisition(planned, np.arange(4.0), (4, 4), detail=scan, planned=planned)
+    np.testing.assert_array_equal(beam_table(acq)[:, 0], [1, 3, 0, 2])
