@@ -26,6 +26,7 @@ __all__ = [
     "HazardCfg",
     "LidarOptionsCfg",
     "MicromirrorCfg",
+    "MotionCfg",
     "PulseCfg",
     "RangingCfg",
     "SteeredBeamCfg",
@@ -204,6 +205,17 @@ class SteeredBeamCfg(_Model):
     order: Literal["nn2opt", "raster", "given"] = Field(
         "nn2opt", description="visiting order: nearest neighbour + 2-opt, raster, the planner's"
     )
+    model: Literal["gimbal", "galvanometer", "continuous_raster"] = Field(
+        "gimbal",
+        description="steering model: stop-and-stare gimbal (trapezoidal axes), stop-and-stare "
+        "galvanometer (rate + small-step response settle_ms), continuous raster (lines swept "
+        "at max_rate_rad_s, fired on the fly; docs/lidar.md)",
+    )
+    line_pitch_mrad: float | None = Field(
+        None,
+        gt=0,
+        description="continuous raster: line height (mrad); none = the guide camera's pixel",
+    )
     window_m: Metres = Field(
         8.0,
         gt=0,
@@ -244,6 +256,41 @@ class MicromirrorCfg(_Model):
     )
 
 
+class MotionCfg(_Model):
+    """The platform's motion during a steered-beam scan
+    (:class:`simlunar.lidar.trajectory.PlatformMotion`), starting at the guide camera."""
+
+    kind: Literal["hover", "descent"] = Field("descent", description="hover or descent")
+    descent_rate_m_s: float = Field(
+        2.0, ge=0, le=1000, description="descent: vertical speed, down (m/s)"
+    )
+    horizontal_m_s: tuple[float, float] = Field(
+        (0.0, 0.0), description="descent: horizontal velocity (x, y) (m/s)"
+    )
+    attitude_jitter_urad: float = Field(
+        0.0, ge=0, le=1e5, description="RMS line-of-sight jitter per axis (urad)"
+    )
+    jitter_bandwidth_hz: float = Field(
+        10.0, gt=0, le=1e5, description="highest frequency of the jitter (Hz)"
+    )
+    compensation: Literal["exact", "noisy", "start"] = Field(
+        "exact",
+        description="pose the points are placed with: the true one, the true one plus "
+        "navigation noise, or the scan's start (no motion compensation)",
+    )
+    position_noise_m: float = Field(
+        0.0, ge=0, le=1e3, description="noisy: navigation position error per axis, RMS (m)"
+    )
+    attitude_noise_urad: float = Field(
+        0.0, ge=0, le=1e5, description="noisy: pointing knowledge error per axis, RMS (urad)"
+    )
+    retarget: bool = Field(
+        True,
+        description="re-aim each beam at its planned point on the gate's reference plane from "
+        "where the platform is",
+    )
+
+
 class GateCfg(_Model):
     """The range gate (:class:`simlunar.lidar.gate.GateOptions`): a reference plane from the
     navigation datum or an altimeter reading; ``margin_m`` must cover the relief about it."""
@@ -278,6 +325,9 @@ class LidarOptionsCfg(_Model):
         "steered_beam.window_m > 2 x margin_m",
     )
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)
+    motion: MotionCfg | None = Field(
+        None, description="steered beam: the platform's motion during the scan (none: at rest)"
+    )
     flash: FlashCfg = Field(default_factory=FlashCfg)
     micromirror: MicromirrorCfg = Field(default_factory=MicromirrorCfg)
 
@@ -372,6 +422,11 @@ def check_lidar_study(study) -> None:
                 f"study.planners[{i}]: {name!r} is not a planner of a lidar study: {why}"
             )
     o = study.options
+    if o.motion is not None and study.sensor != "steered_beam":
+        raise ValueError(
+            f"study.options.motion: a moving platform is modelled for the steered beam only, "
+            f"not {study.sensor!r}"
+        )
     if study.sensor == "steered_beam":
         sb = o.steered_beam
         # simlunar.render.lidar_scan.SteeredBeamOptions: window_m > 2 margin_m >= 0 (each

@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 from simlunar.config.derived import reconstruction_mapping
-from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
+from simlunar.config.lidar import HazardCfg, LidarOptionsCfg, MotionCfg
 from simlunar.config.studies import (
     LidarStudyCfg,
 )
@@ -23,6 +23,7 @@ from simlunar.lidar import (
 from simlunar.lidar.apd import ApdOptions
 from simlunar.lidar.gate import GateOptions
 from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
+from simlunar.lidar.trajectory import Navigation, PlatformMotion
 from simlunar.metrics.hazard import HazardOptions
 from simlunar.render.flash_lidar import FlashOptions
 from simlunar.render.lidar_scan import SteeredBeamOptions, with_hardware
@@ -30,7 +31,13 @@ from simlunar.render.transient import TransientOptions
 from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
 from simlunar.study.lidar import LidarStudyOptions
 
-__all__ = ["hazard_options", "lidar_hardware", "lidar_options", "lidar_sensor_options"]
+__all__ = [
+    "hazard_options",
+    "lidar_hardware",
+    "lidar_options",
+    "lidar_sensor_options",
+    "motion_options",
+]
 
 
 #: YAML key of :class:`~simlunar.config.lidar.HardwareCfg` -> (LidarHardware field, SI factor)
@@ -126,7 +133,10 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
                 settle_s=b.settle_ms * 1e-3,
                 pulse_rate_hz=b.pulse_rate_hz,
                 pulses_per_point=b.pulses_per_point,
+                model=b.model,
+                line_pitch_rad=None if b.line_pitch_mrad is None else b.line_pitch_mrad * 1e-3,
             ),
+            motion=motion_options(o.motion),
             order=OrderOptions(method=b.order),
             window_m=b.window_m,
             batch=b.batch,
@@ -147,6 +157,18 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
     m = o.micromirror
     w, h = m.receiver_px
     return MicromirrorOptions(FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common), (h, w))
+
+
+def motion_options(cfg: MotionCfg | None) -> PlatformMotion | None:
+    """:class:`~simlunar.lidar.trajectory.PlatformMotion` of a config (None: at rest)."""
+    if cfg is None:
+        return None
+    v = (0.0, 0.0, 0.0)
+    if cfg.kind == "descent":
+        v = (cfg.horizontal_m_s[0], cfg.horizontal_m_s[1], -cfg.descent_rate_m_s)
+    nav = Navigation(cfg.compensation, cfg.position_noise_m, cfg.attitude_noise_urad * 1e-6)
+    return PlatformMotion(v, cfg.attitude_jitter_urad * 1e-6, cfg.jitter_bandwidth_hz, nav,
+                          cfg.retarget)  # fmt: skip
 
 
 def hazard_options(cfg: HazardCfg | None) -> HazardOptions | None:

@@ -20,11 +20,13 @@ where each measured point projects, and its cost is the modelled acquisition tim
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from simlunar.geometry import Camera, Intrinsics
+from simlunar.lidar import order_scan, pointing_angles, scan_timing
 from simlunar.render.flash_lidar import FlashOptions, flash_window, micromirror_flash, read_flash
 from simlunar.render.lidar_scan import (
     LidarScan,
@@ -110,7 +112,14 @@ class SteeredBeam:
 
     def __init__(self, scene: LidarScene, options: SteeredBeamOptions | None = None) -> None:
         self.scene = scene
-        self.options = options or SteeredBeamOptions()
+        o = options or SteeredBeamOptions()
+        if o.steering.model == "continuous_raster" and o.steering.line_pitch_rad is None:
+            # one line per guide pixel row at the boresight
+            pitch = 1.0 / scene.camera.intrinsics.fy
+            o = dataclasses.replace(
+                o, steering=dataclasses.replace(o.steering, line_pitch_rad=pitch)
+            )
+        self.options = o
         self.capture = beam_capture(
             scene.terrain,
             scene.camera.position,
@@ -123,10 +132,27 @@ class SteeredBeam:
         """Range the planned guide pixels ``rc`` ((k, 2) int (row, col)); ``rng``: photon noise."""
         if rc is None:
             raise ValueError("a steered beam ranges planned pixels: rc is required")
-        cam = self.scene.camera
+        cam, m = self.scene.camera, self.options.motion
         d = guide_directions(cam, rc)
-        scan = steered_beam_scan(self.capture, d, options=self.options, rng=rng, boresight=cam.pose)
-        return _to_guide(scan, cam, rc, frames=scan.frames, seconds=scan.seconds)
+        if m is None:
+            scan = steered_beam_scan(self.capture, d, options=self.options, rng=rng,
+                                     boresight=cam.pose)  # fmt: skip
+            return _to_guide(scan, cam, rc, frames=scan.frames, seconds=scan.seconds)
+        g = np.random.default_rng(rng)
+        traj = m.trajectory(cam.position, jitter_seed=int(g.integers(2**31)))
+        scan = steered_beam_scan(self.capture, d, options=self.options, rng=g, boresight=cam.pose,
+                                 trajectory=traj, navigation=m.navigation,
+                                 retarget=m.retarget)  # fmt: skip
+        # a moving beam measures where its points project, not the planned pixels exactly
+        return _to_guide(scan, cam, None, frames=scan.frames, seconds=scan.seconds)
+
+    def scan_seconds(self, rc: np.ndarray) -> float:
+        """Modelled time (s) of scanning guide pixels ``rc`` (k, 2) (the steering mechanics
+        and the visiting order; no render, no measurement: what a planner may ask)."""
+        cam, o = self.scene.camera, self.options
+        angles = pointing_angles(guide_directions(cam, rc), cam.pose)
+        order = order_scan(angles, steering=o.steering, options=o.order)
+        return float(scan_timing(angles, order, options=o.steering).total_s)
 
 
 @dataclass(frozen=True)
