@@ -14,17 +14,20 @@ from typing import Annotated, Literal
 from pydantic import Field, PositiveInt, field_validator, model_validator
 
 from simlunar.config.fields import Deg, Metres, _Model
+from simlunar.config.planners import StrategyOptionsCfg
 
 __all__ = [
     "MAX_BINS",
     "MAX_PHOTONS",
     "ApdCfg",
     "DetectorCfg",
+    "FitCfg",
     "FlashCfg",
     "GateCfg",
     "HardwareCfg",
     "HazardCfg",
     "LidarOptionsCfg",
+    "LidarPlannerOptsCfg",
     "MicromirrorCfg",
     "MotionCfg",
     "PulseCfg",
@@ -241,6 +244,17 @@ class FlashCfg(_Model):
         0, ge=0, le=64, description="plan-directed zoomed frames after the full frame"
     )
     zoom: int = Field(4, ge=2, le=16, description="a revisit sees 1/zoom of the field per axis")
+    revisit_from: Literal["plan", "ranges", "both"] = Field(
+        "plan",
+        description="what directs the revisits: the image plan's tiles, the roughest tiles of "
+        "the first frame's own ranges, or both (range_weight)",
+    )
+    range_weight: float = Field(
+        0.5, ge=0, le=1, description="revisit_from both: the ranges' share of a tile's score"
+    )
+    repoint_ms: float = Field(
+        0.0, ge=0, le=1e6, description="time to re-point and re-zoom before each revisit (ms)"
+    )
 
 
 class MicromirrorCfg(_Model):
@@ -289,6 +303,28 @@ class MotionCfg(_Model):
         description="re-aim each beam at its planned point on the gate's reference plane from "
         "where the platform is",
     )
+
+
+class FitCfg(_Model):
+    """A planner fitted to its sensor (:class:`simlunar.study.lidar.SensorFit`)."""
+
+    kind: Literal["scan_time", "receiver"] = Field(
+        "scan_time",
+        description="scan_time: the most samples whose tour (visiting order of the sensor) "
+        "fits the reference planner's scan time at the same density; receiver (micromirror): "
+        "at most `frames` dots per receiver pixel",
+    )
+    reference: str = Field("grid", description="scan_time: the planner label setting the budget")
+    frames: PositiveInt | None = Field(
+        None, le=1024, description="receiver: dots per receiver pixel; none = the least for k"
+    )
+
+
+class LidarPlannerOptsCfg(StrategyOptionsCfg):
+    """A LIDAR planner label's options: its strategy and planner options, and optionally a
+    fit to the sensor."""
+
+    fit: FitCfg | None = Field(None, description="fit the plan to the sensor (docs/lidar.md)")
 
 
 class GateCfg(_Model):
@@ -393,14 +429,12 @@ class HazardCfg(_Model):
 
 
 #: planners a LIDAR study cannot run: the oracles read the true depth and ``sequential`` asks
-#: a sensor back (the LIDAR study gives a planner neither); ``learned`` predicts a map per
-#: sample density, which the LIDAR study's planners are not given
+#: a sensor back (the LIDAR study gives a planner neither); the learned map runs (its map per
+#: density)
 LIDAR_UNAVAILABLE_PLANNERS = {
     "oracle_greedy": "reads the true depth (a bound of the sampling study only)",
     "oracle_hessian": "reads the true depth (a bound of the sampling study only)",
     "sequential": "asks a sensor back between rounds (the sampling study only)",
-    "learned": "predicts its map for one sample density, which the lidar study's planners "
-    "are not given (use it in a sampling study)",
 }
 
 
@@ -415,12 +449,29 @@ def check_lidar_study(study) -> None:
     ValueError
         ``study.<key>: ...`` naming the first offending key.
     """
-    for i, name in enumerate(study.planners):
+    for i, label in enumerate(study.planners):
+        opts = study.planner_opts.get(label)
+        name = (opts.strategy if opts is not None else None) or label
         why = LIDAR_UNAVAILABLE_PLANNERS.get(name)
         if why is not None:
             raise ValueError(
                 f"study.planners[{i}]: {name!r} is not a planner of a lidar study: {why}"
             )
+        fit = None if opts is None else opts.fit
+        if fit is None:
+            continue
+        where = f"study.planner_opts.{label}.fit"
+        if fit.kind == "receiver" and study.sensor != "micromirror_flash":
+            raise ValueError(f"{where}: a receiver fit is for the micromirror_flash sensor")
+        if fit.kind == "scan_time":
+            ref = study.planner_opts.get(fit.reference)
+            if fit.reference not in study.planners or (ref is not None and ref.fit is not None):
+                raise ValueError(
+                    f"{where}.reference: {fit.reference!r} must be an unfitted planner of "
+                    f"study.planners ({', '.join(study.planners)})"
+                )
+            if study.sensor == "flash":
+                raise ValueError(f"{where}: a flash's time is its frames, not a tour")
     o = study.options
     if o.motion is not None and study.sensor != "steered_beam":
         raise ValueError(

@@ -29,7 +29,7 @@ from simlunar.render.flash_lidar import FlashOptions
 from simlunar.render.lidar_scan import SteeredBeamOptions, with_hardware
 from simlunar.render.transient import TransientOptions
 from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
-from simlunar.study.lidar import LidarStudyOptions
+from simlunar.study.lidar import LidarStudyOptions, SensorFit
 
 __all__ = [
     "hazard_options",
@@ -148,7 +148,9 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
         flash = FlashOptions(pulse_rate_hz=f.pulse_rate_hz, **common)
         flash = flash if hardware is None else with_hardware(flash, hardware)
         w, h = f.receiver_px
-        return FlashLidarOptions(flash, receiver_px=(h, w), revisits=f.revisits, zoom=f.zoom)
+        return FlashLidarOptions(flash, receiver_px=(h, w), revisits=f.revisits, zoom=f.zoom,
+                                 revisit_from=f.revisit_from, range_weight=f.range_weight,
+                                 repoint_s=f.repoint_ms * 1e-3)  # fmt: skip
     if hardware is not None:
         raise ValueError(
             "options.instrument: a micromirror flash has no hardware link budget yet (its "
@@ -186,7 +188,13 @@ def lidar_options(study: LidarStudyCfg, *, seed: int = 0) -> LidarStudyOptions:
         densities=tuple(study.densities),
         trials=study.trials,
         metrics=tuple(study.metrics),
-        planner_opts={n: planner_kwargs(n, p) for n, p in study.planner_opts.items()},
+        planner_opts={n: planner_kwargs(p.strategy or n, p) for n, p in study.planner_opts.items()},
+        strategies={n: p.strategy for n, p in study.planner_opts.items() if p.strategy},
+        fits={
+            n: SensorFit(p.fit.kind, p.fit.reference, p.fit.frames)
+            for n, p in study.planner_opts.items()
+            if p.fit is not None
+        },
         hazard=hazard_options(study.hazard),
         reconstructions=reconstruction_mapping(study.reconstructions),
     )

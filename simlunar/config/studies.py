@@ -21,7 +21,7 @@ from simlunar.config.fields import (
     _Model,
     unique_names,
 )
-from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
+from simlunar.config.lidar import HazardCfg, LidarOptionsCfg, LidarPlannerOptsCfg
 from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
     FEATURE_OPTION_KEYS,
     CoefficientsCfg,
@@ -200,8 +200,10 @@ class LidarStudyCfg(_Model):
     )
     trials: int = Field(3, ge=1, le=1000, description="planner draws and photon noise")
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad"], min_length=1)
-    planner_opts: dict[str, PlannerOptsCfg] = Field(
-        default_factory=dict, description="planner name -> options (study.planners only)"
+    planner_opts: dict[str, LidarPlannerOptsCfg] = Field(
+        default_factory=dict,
+        description="planner label -> options (study.planners only); a label not registered "
+        "as a strategy names one in 'strategy'; 'fit' fits it to the sensor",
     )
     hazard: HazardCfg | None = Field(
         None, description="also score landing-hazard detection (precision / recall); null = off"
@@ -243,9 +245,10 @@ class LidarStudyCfg(_Model):
                 f"planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
             )
         for name, opts in self.planner_opts.items():
-            if name in STRATEGIES:
+            base = opts.strategy or name
+            if base in STRATEGIES:
                 try:
-                    check_planner_options(name, opts)
+                    check_planner_options(base, opts)
                 except ValueError as exc:
                     raise ValueError(f"planner_opts.{name}.{exc}") from None
         return self

@@ -113,3 +113,87 @@ def test_every_reconstruction_gets_rows_and_tables_read_one():
     # the other reconstruction's rows are not pooled into linear's
     assert time_table(rows)["grid"]["value"] == pytest.approx(time_table(res.rows)["grid"]["value"])
     assert time_table(rows, reconstruction="other")["grid"]["value"] == pytest.approx([1e9])
+
+
+class _Paced(_Timed):
+    """The stand-in with a tour-like time: 1 ms per sample + 0.1 ms per pixel of path in the
+    planner's row-major order, and a micromirror-like receiver for the receiver fit."""
+
+    class options:  # the attribute the receiver fit reads
+        receiver_px = (8, 8)
+
+    def scan_seconds(self, rc):
+        rc = np.asarray(rc, float)
+        o = np.lexsort((rc[:, 1], rc[:, 0]))
+        path = np.abs(np.diff(rc[o], axis=0)).max(axis=1).sum() if len(rc) > 1 else 0.0
+        return 1e-3 * len(rc) + 1e-4 * path
+
+    def acquire(self, rc, *, rng=None):
+        acq = super().acquire(rc, rng=rng)
+        return Acquisition(acq.rc, acq.values, acq.shape, frames=len(rc),
+                           seconds=self.scan_seconds(rc))  # fmt: skip
+
+
+def test_a_scan_time_fit_scans_within_its_reference_s_time():
+    from simlunar.study.lidar import SensorFit
+
+    image, depth = _guide()
+    o = LidarStudyOptions(
+        planners=("grid", "wavelet_lloyd"),
+        strategies={"wavelet_lloyd": "wavelet"},
+        planner_opts={"wavelet_lloyd": {"placement": "lloyd"}},
+        fits={"wavelet_lloyd": SensorFit("scan_time", "grid")},
+        densities=(1 / 16, 1 / 64),
+        trials=1,
+    )
+    rows = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Paced(depth)).rows
+    sec = {(r["planner"], r["k"]): (r["seconds"], r["samples"]) for r in rows}
+    for k in (16, 64):
+        assert sec[("wavelet_lloyd", k)][0] <= sec[("grid", k)][0] + 1e-12
+        # the budget is used: near the reference's time (one more sample would exceed it)
+        assert sec[("wavelet_lloyd", k)][0] > 0.8 * sec[("grid", k)][0]
+
+
+def test_a_receiver_fit_keeps_one_dot_per_receiver_pixel():
+    from simlunar.lidar.planning import receiver_cells
+    from simlunar.study.lidar import SensorFit
+
+    image, depth = _guide()
+    seen = []
+
+    class _Rx(_Paced):
+        def acquire(self, rc, *, rng=None):
+            seen.append(np.asarray(rc))
+            return super().acquire(rc, rng=rng)
+
+    o = LidarStudyOptions(
+        sensor="micromirror_flash",
+        planners=("wavelet",),
+        fits={"wavelet": SensorFit("receiver")},
+        densities=(1 / 16,),
+        trials=2,
+    )
+    run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Rx(depth))
+    assert len(seen) == 2
+    for rc in seen:
+        assert len(rc) == 64
+        assert np.bincount(receiver_cells(rc, (32, 32), (8, 8)), minlength=64).max() == 1
+
+
+def test_the_learned_map_gets_its_density(monkeypatch):
+    # the learned map is predicted per sample density: the LIDAR study asks it once per k
+    import simlunar.study.sampling_planners as sp
+
+    asked = []
+
+    def weights(base, image, *, feature_opts=None, coefficients=None):
+        asked.append((base, (feature_opts or {}).get("density")))
+        return np.ones(image.shape[:2])
+
+    monkeypatch.setattr(sp, "strategy_weights", weights)
+    image, depth = _guide()
+    o = LidarStudyOptions(planners=("learned",), densities=(1 / 16, 1 / 64), trials=1,
+                          planner_opts={"learned": {"feature_opts": {"model": "m.joblib"}}})  # fmt: skip
+    rows = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Timed(depth)).rows
+    assert sorted(asked) == [("learned", 1 / 64), ("learned", 1 / 16)]
+    assert {r["k"] for r in rows} == {16, 64}
