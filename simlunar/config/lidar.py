@@ -342,7 +342,9 @@ class GateCfg(_Model):
 class LidarOptionsCfg(_Model):
     """Options shared by the LIDARs and the block of each sensor."""
 
-    instrument: Literal["lola_beam", "alhat_flash", "rover_mast_scanner"] | None = Field(
+    instrument: (
+        Literal["lola_beam", "alhat_flash", "rover_mast_scanner", "micromirror_flash"] | None
+    ) = Field(
         None,
         description="instrument preset (docs/lidar.md, Instruments); none = generic hardware "
         "with the pulse, rate and divergence keys; an instrument or hardware key sets them",
@@ -401,8 +403,10 @@ _HARDWARE_SET = {
     "pulse": ("fwhm_ns", "jitter_ns"),
     "steered_beam": ("divergence_mrad", "pulse_rate_hz"),
     "flash": ("pulse_rate_hz",),
+    "micromirror": ("pulse_rate_hz",),
 }
-_DEFAULTS = {"pulse": PulseCfg(), "steered_beam": SteeredBeamCfg(), "flash": FlashCfg()}
+_DEFAULTS = {"pulse": PulseCfg(), "steered_beam": SteeredBeamCfg(), "flash": FlashCfg(),
+             "micromirror": MicromirrorCfg()}  # fmt: skip
 _HARDWARE_KEY = {
     "fwhm_ns": "pulse_fwhm_ns",
     "jitter_ns": "jitter_ns",

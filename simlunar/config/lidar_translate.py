@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 from simlunar.config.derived import reconstruction_mapping
-from simlunar.config.lidar import HazardCfg, LidarOptionsCfg, MotionCfg
+from simlunar.config.lidar import HardwareCfg, HazardCfg, LidarOptionsCfg, MotionCfg
 from simlunar.config.studies import (
     LidarStudyCfg,
 )
@@ -60,15 +60,19 @@ _HARDWARE_SI = {
 
 def lidar_hardware(o: LidarOptionsCfg, sensor: str) -> LidarHardware | None:
     """The instrument of a config (preset + hardware overrides, SI) or None where the expert
-    photon scales are used (set, or a micromirror flash without an instrument)."""
+    photon scales are used (set, or a micromirror flash without an instrument or hardware
+    keys)."""
     d = o.detector
     expert = any(getattr(d, k) is not None for k in type(d).model_fields if k.startswith("expert_"))
-    if expert or (sensor == "micromirror_flash" and o.instrument is None):
+    if expert or (
+        sensor == "micromirror_flash" and o.instrument is None and o.hardware == HardwareCfg()
+    ):
         return None
     if o.instrument is not None:
         base = INSTRUMENTS[o.instrument]
     else:  # generic hardware timed and steered by the pulse and sensor blocks
-        rate = o.flash.pulse_rate_hz if sensor == "flash" else o.steered_beam.pulse_rate_hz
+        rate = {"flash": o.flash.pulse_rate_hz, "micromirror_flash": o.micromirror.pulse_rate_hz}
+        rate = rate.get(sensor, o.steered_beam.pulse_rate_hz)
         base = LidarHardware(
             pulse_fwhm_s=o.pulse.fwhm_ns * 1e-9,
             jitter_s=o.pulse.jitter_ns * 1e-9,
@@ -151,14 +155,11 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
         return FlashLidarOptions(flash, receiver_px=(h, w), revisits=f.revisits, zoom=f.zoom,
                                  revisit_from=f.revisit_from, range_weight=f.range_weight,
                                  repoint_s=f.repoint_ms * 1e-3)  # fmt: skip
-    if hardware is not None:
-        raise ValueError(
-            "options.instrument: a micromirror flash has no hardware link budget yet (its "
-            "projector's dots are no uniform flash); use detector.expert_signal_photons"
-        )
     m = o.micromirror
     w, h = m.receiver_px
-    return MicromirrorOptions(FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common), (h, w))
+    mm = FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common)
+    mm = mm if hardware is None else with_hardware(mm, hardware)
+    return MicromirrorOptions(mm, (h, w))
 
 
 def motion_options(cfg: MotionCfg | None) -> PlatformMotion | None:
