@@ -25,6 +25,7 @@ from simlunar.lidar.gate import GateOptions
 from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
 from simlunar.lidar.trajectory import Navigation, PlatformMotion
 from simlunar.metrics.hazard import HazardOptions
+from simlunar.metrics.safe_site import SiteOptions
 from simlunar.render.flash_lidar import FlashOptions
 from simlunar.render.lidar_scan import SteeredBeamOptions, with_hardware
 from simlunar.render.transient import TransientOptions
@@ -197,5 +198,6 @@ def lidar_options(study: LidarStudyCfg, *, seed: int = 0) -> LidarStudyOptions:
             if p.fit is not None
         },
         hazard=hazard_options(study.hazard),
+        safe_site=None if study.safe_site is None else SiteOptions(**study.safe_site.model_dump()),
         reconstructions=reconstruction_mapping(study.reconstructions),
     )

@@ -21,7 +21,7 @@ from simlunar.config.fields import (
     _Model,
     unique_names,
 )
-from simlunar.config.lidar import HazardCfg, LidarOptionsCfg, LidarPlannerOptsCfg
+from simlunar.config.lidar import HazardCfg, LidarOptionsCfg, LidarPlannerOptsCfg, SafeSiteCfg
 from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
     FEATURE_OPTION_KEYS,
     CoefficientsCfg,
@@ -207,6 +207,11 @@ class LidarStudyCfg(_Model):
     )
     hazard: HazardCfg | None = Field(
         None, description="also score landing-hazard detection (precision / recall); null = off"
+    )
+    safe_site: SafeSiteCfg | None = Field(
+        None,
+        description="also score whether the landing site chosen from the reconstruction is "
+        "truly safe (safe_site, safe_site_precision, safe_sites_available); null = off",
     )
     options: LidarOptionsCfg = Field(
         default_factory=LidarOptionsCfg,

@@ -21,6 +21,7 @@ from simlunar.features import check_image
 from simlunar.lidar.planning import fit_to_time, receiver_capped_plan
 from simlunar.metrics import METRICS
 from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
+from simlunar.metrics.safe_site import SiteOptions, safe_site_scores
 from simlunar.planner import STRATEGIES, WEIGHTED, plan
 from simlunar.reconstruction import Guide
 from simlunar.sensors import SENSORS
@@ -119,6 +120,10 @@ class LidarStudyOptions:
         The strategy of a planner label that is not itself a strategy name.
     fits : mapping label -> SensorFit
         Labels fitted to the sensor (scan time or receiver pixels).
+    safe_site : SiteOptions or None
+        Also score whether the landing site chosen from the reconstruction is truly safe
+        (``safe_site``, ``safe_site_precision``, ``safe_sites_available``,
+        :mod:`simlunar.metrics.safe_site`).
     """
 
     sensor: str = "steered_beam"
@@ -133,6 +138,7 @@ class LidarStudyOptions:
     reconstructions: Mapping | Sequence = (DEFAULT_RECONSTRUCTION,)
     strategies: Mapping[str, str] = field(default_factory=dict)
     fits: Mapping[str, SensorFit] = field(default_factory=dict)
+    safe_site: SiteOptions | None = None
 
     def __post_init__(self):
         reconstruction_options(self.reconstructions, outside=self.outside)
@@ -194,8 +200,10 @@ class LidarStudyResult:
 class _Scores:
     """Scores of one reconstruction in the guide view (and its acquisition's yield)."""
 
-    def __init__(self, truth, image, camera, metrics, hazard: HazardOptions | None):
+    def __init__(self, truth, image, camera, metrics, hazard: HazardOptions | None, site=None):
         self.truth = np.asarray(truth, float)
+        self.site = site
+        self.true_points = camera.unproject_depth(self.truth) if site is not None else None
         self.image = image
         self.camera = camera
         self.metrics = tuple(metrics)
@@ -212,6 +220,9 @@ class _Scores:
         if self.hazard is not None:
             found = hazard_map(self.camera.unproject_depth(recon), self.hazard)
             out.update(detection_scores(found, self.true_hazards, np.isfinite(self.truth)))
+        if self.site is not None:
+            rec = self.camera.unproject_depth(np.asarray(recon, float))
+            out.update(safe_site_scores(rec, self.true_points, self.site))
         return out
 
 
@@ -318,7 +329,7 @@ def run_lidar_study(
         return _seed(base, label, trial, di, 0), _seed(base, label, trial, di, 1)
 
     trials = Trials(planners, ks, int(o.trials), seeds)
-    evaluate = _Scores(depth, image, camera, o.metrics, o.hazard)
+    evaluate = _Scores(depth, image, camera, o.metrics, o.hazard, o.safe_site)
     rows, examples = [], {}
     top = int(np.argmax(dens))
     recons = reconstruction_options(o.reconstructions, outside=o.outside)

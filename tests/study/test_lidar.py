@@ -197,3 +197,16 @@ def test_the_learned_map_gets_its_density(monkeypatch):
     rows = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Timed(depth)).rows
     assert sorted(asked) == [("learned", 1 / 64), ("learned", 1 / 16)]
     assert {r["k"] for r in rows} == {16, 64}
+
+
+def test_safe_site_rows_come_beside_the_hazard_scores():
+    from simlunar.metrics.safe_site import SiteOptions
+
+    image, depth = _guide()
+    site = SiteOptions(semi_axes_m=(3.0, 3.0), pitch_m=6.0, window_px=5, baseline_px=1)
+    o = LidarStudyOptions(planners=("grid",), densities=(1 / 4,), trials=1, safe_site=site,
+                          hazard=HazardOptions())  # fmt: skip
+    rows = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Timed(depth)).rows
+    got = {r["metric"]: r["value"] for r in rows}
+    assert {"safe_site", "safe_site_precision", "safe_sites_available"} <= set(got)
+    assert got["safe_site"] in (0.0, 1.0) and 0.0 <= got["safe_sites_available"] <= 1.0
