@@ -70,7 +70,7 @@ def main() -> None:
 
 def _equal_time(rows, a) -> None:
     errs = equal_time_errors(rows, a.times, metric=a.metric)
-    print(f"| pair | time (s) | seeds | geo-mean ratio | wins | Wilcoxon p | sign p |")
+    print("| pair | time (s) | seeds | geo-mean ratio | wins | Wilcoxon p | sign p |")
     print("|---|---:|---:|---:|---:|---:|---:|")
     for pair in a.pairs:
         x, y = pair.split(":")

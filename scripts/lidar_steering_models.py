@@ -4,6 +4,7 @@ PYTHONPATH=. python scripts/lidar_steering_models.py
 """
 
 import numpy as np
+
 from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.lidar import SteeringOptions, order_scan, pointing_angles, scan_timing
 from simlunar.planner import plan
