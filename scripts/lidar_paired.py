@@ -55,8 +55,18 @@ def main() -> None:
     ap.add_argument("--by", default=None, help="a sweep column: one comparison per value")
     ap.add_argument("--best", action="store_true")
     ap.add_argument("--higher", action="store_true", help="higher metric is better")
+    ap.add_argument(
+        "--cells",
+        nargs="*",
+        default=[],
+        help="pairs of sweep cells 'TEXT/planner vs TEXT/planner' (TEXT: a substring of the --by "
+        "column), paired by terrain_seed",
+    )
     a = ap.parse_args()
     rows = [r for r in _rows(a.folder) if r["metric"] == a.metric]
+    if a.cells:
+        _cells(rows, a)
+        return
     groups = sorted({r.get(a.by, "") for r in rows}) if a.by else [""]
     for g in groups:
         sub = [r for r in rows if not a.by or r.get(a.by, "") == g]
@@ -136,6 +146,36 @@ def _equal_k(rows, a) -> None:
             print(f"| {x} / {y} | {k} | {np.nanmean(sa):.3g} / {np.nanmean(sb):.3g} | {r['n']} | "
                   f"{np.nanmean(va):.3g} | {np.nanmean(vb):.3g} | {r['ratio']:.3f} | "
                   f"{r['wins']}/{r['n']} | {r['wilcoxon_p']:.3g} | {r['sign_p']:.3g} |")  # fmt: skip
+
+
+def _cells(rows, a) -> None:
+    def cell(spec):
+        text, planner = spec.rsplit("/", 1)
+        d: dict = {}
+        for r in rows:
+            if text in r[a.by] and r["planner"] == planner:
+                d.setdefault(int(r["terrain_seed"]), []).append(
+                    (float(r["value"]), float(r["seconds"]))
+                )
+        return d
+
+    print("| A | B | seconds A / B | seeds | mean A | mean B | wins A | Wilcoxon p | sign p |")
+    print("|---|---|---|---:|---:|---:|---:|---:|---:|")
+    for pair in a.cells:
+        x, y = pair.split(" vs ")
+        cx, cy = cell(x), cell(y)
+        seeds = sorted(set(cx) & set(cy))
+        va = np.array([np.mean([v for v, _ in cx[s]]) for s in seeds])
+        vb = np.array([np.mean([v for v, _ in cy[s]]) for s in seeds])
+        ta = np.mean([t for s in seeds for _, t in cx[s]])
+        tb = np.mean([t for s in seeds for _, t in cy[s]])
+        d = va - vb
+        better = d > 0 if a.higher else d < 0
+        wins, nz = int(better.sum()), int((d != 0).sum())
+        sign = stats.binomtest(wins, nz, 0.5).pvalue if nz else 1.0
+        wil = stats.wilcoxon(d).pvalue if np.any(d != 0) else 1.0
+        print(f"| {x} | {y} | {ta:.3g} / {tb:.3g} | {len(seeds)} | {va.mean():.4g} | "
+              f"{vb.mean():.4g} | {wins}/{nz} | {wil:.3g} | {sign:.3g} |")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -29,6 +29,8 @@ TINY = [
     "--set",
     "study.planners=[random, grid]",
     "--set",
+    "study.planner_opts={}",
+    "--set",
     "study.densities=[1/8, 1/32]",
     "--set",
     "study.trials=1",
