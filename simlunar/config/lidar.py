@@ -14,20 +14,25 @@ from typing import Annotated, Literal
 from pydantic import Field, PositiveInt, field_validator, model_validator
 
 from simlunar.config.fields import Deg, Metres, _Model
+from simlunar.config.planners import StrategyOptionsCfg
 
 __all__ = [
     "MAX_BINS",
     "MAX_PHOTONS",
     "ApdCfg",
     "DetectorCfg",
+    "FitCfg",
     "FlashCfg",
     "GateCfg",
     "HardwareCfg",
     "HazardCfg",
     "LidarOptionsCfg",
+    "LidarPlannerOptsCfg",
     "MicromirrorCfg",
+    "MotionCfg",
     "PulseCfg",
     "RangingCfg",
+    "SafeSiteCfg",
     "SteeredBeamCfg",
     "TransientCfg",
     "check_lidar_study",
@@ -204,6 +209,17 @@ class SteeredBeamCfg(_Model):
     order: Literal["nn2opt", "raster", "given"] = Field(
         "nn2opt", description="visiting order: nearest neighbour + 2-opt, raster, the planner's"
     )
+    model: Literal["gimbal", "galvanometer", "continuous_raster"] = Field(
+        "gimbal",
+        description="steering model: stop-and-stare gimbal (trapezoidal axes), stop-and-stare "
+        "galvanometer (rate + small-step response settle_ms), continuous raster (lines swept "
+        "at max_rate_rad_s, fired on the fly; docs/lidar.md)",
+    )
+    line_pitch_mrad: float | None = Field(
+        None,
+        gt=0,
+        description="continuous raster: line height (mrad); none = the guide camera's pixel",
+    )
     window_m: Metres = Field(
         8.0,
         gt=0,
@@ -229,6 +245,17 @@ class FlashCfg(_Model):
         0, ge=0, le=64, description="plan-directed zoomed frames after the full frame"
     )
     zoom: int = Field(4, ge=2, le=16, description="a revisit sees 1/zoom of the field per axis")
+    revisit_from: Literal["plan", "ranges", "both"] = Field(
+        "plan",
+        description="what directs the revisits: the image plan's tiles, the roughest tiles of "
+        "the first frame's own ranges, or both (range_weight)",
+    )
+    range_weight: float = Field(
+        0.5, ge=0, le=1, description="revisit_from both: the ranges' share of a tile's score"
+    )
+    repoint_ms: float = Field(
+        0.0, ge=0, le=1e6, description="time to re-point and re-zoom before each revisit (ms)"
+    )
 
 
 class MicromirrorCfg(_Model):
@@ -242,6 +269,63 @@ class MicromirrorCfg(_Model):
     pulse_rate_hz: float = Field(
         30.0, ge=1e-3, le=1e9, description="pulse repetition rate (1/s, 1e-3 .. 1e9)"
     )
+
+
+class MotionCfg(_Model):
+    """The platform's motion during a steered-beam scan
+    (:class:`simlunar.lidar.trajectory.PlatformMotion`), starting at the guide camera."""
+
+    kind: Literal["hover", "descent"] = Field("descent", description="hover or descent")
+    descent_rate_m_s: float = Field(
+        2.0, ge=0, le=1000, description="descent: vertical speed, down (m/s)"
+    )
+    horizontal_m_s: tuple[float, float] = Field(
+        (0.0, 0.0), description="descent: horizontal velocity (x, y) (m/s)"
+    )
+    attitude_jitter_urad: float = Field(
+        0.0, ge=0, le=1e5, description="RMS line-of-sight jitter per axis (urad)"
+    )
+    jitter_bandwidth_hz: float = Field(
+        10.0, gt=0, le=1e5, description="highest frequency of the jitter (Hz)"
+    )
+    compensation: Literal["exact", "noisy", "start"] = Field(
+        "exact",
+        description="pose the points are placed with: the true one, the true one plus "
+        "navigation noise, or the scan's start (no motion compensation)",
+    )
+    position_noise_m: float = Field(
+        0.0, ge=0, le=1e3, description="noisy: navigation position error per axis, RMS (m)"
+    )
+    attitude_noise_urad: float = Field(
+        0.0, ge=0, le=1e5, description="noisy: pointing knowledge error per axis, RMS (urad)"
+    )
+    retarget: bool = Field(
+        True,
+        description="re-aim each beam at its planned point on the gate's reference plane from "
+        "where the platform is",
+    )
+
+
+class FitCfg(_Model):
+    """A planner fitted to its sensor (:class:`simlunar.study.lidar.SensorFit`)."""
+
+    kind: Literal["scan_time", "receiver"] = Field(
+        "scan_time",
+        description="scan_time: the most samples whose tour (visiting order of the sensor) "
+        "fits the reference planner's scan time at the same density; receiver (micromirror): "
+        "at most `frames` dots per receiver pixel",
+    )
+    reference: str = Field("grid", description="scan_time: the planner label setting the budget")
+    frames: PositiveInt | None = Field(
+        None, le=1024, description="receiver: dots per receiver pixel; none = the least for k"
+    )
+
+
+class LidarPlannerOptsCfg(StrategyOptionsCfg):
+    """A LIDAR planner label's options: its strategy and planner options, and optionally a
+    fit to the sensor."""
+
+    fit: FitCfg | None = Field(None, description="fit the plan to the sensor (docs/lidar.md)")
 
 
 class GateCfg(_Model):
@@ -259,7 +343,9 @@ class GateCfg(_Model):
 class LidarOptionsCfg(_Model):
     """Options shared by the LIDARs and the block of each sensor."""
 
-    instrument: Literal["lola_beam", "alhat_flash", "rover_mast_scanner"] | None = Field(
+    instrument: (
+        Literal["lola_beam", "alhat_flash", "rover_mast_scanner", "micromirror_flash"] | None
+    ) = Field(
         None,
         description="instrument preset (docs/lidar.md, Instruments); none = generic hardware "
         "with the pulse, rate and divergence keys; an instrument or hardware key sets them",
@@ -278,6 +364,9 @@ class LidarOptionsCfg(_Model):
         "steered_beam.window_m > 2 x margin_m",
     )
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)
+    motion: MotionCfg | None = Field(
+        None, description="steered beam: the platform's motion during the scan (none: at rest)"
+    )
     flash: FlashCfg = Field(default_factory=FlashCfg)
     micromirror: MicromirrorCfg = Field(default_factory=MicromirrorCfg)
 
@@ -315,8 +404,10 @@ _HARDWARE_SET = {
     "pulse": ("fwhm_ns", "jitter_ns"),
     "steered_beam": ("divergence_mrad", "pulse_rate_hz"),
     "flash": ("pulse_rate_hz",),
+    "micromirror": ("pulse_rate_hz",),
 }
-_DEFAULTS = {"pulse": PulseCfg(), "steered_beam": SteeredBeamCfg(), "flash": FlashCfg()}
+_DEFAULTS = {"pulse": PulseCfg(), "steered_beam": SteeredBeamCfg(), "flash": FlashCfg(),
+             "micromirror": MicromirrorCfg()}  # fmt: skip
 _HARDWARE_KEY = {
     "fwhm_ns": "pulse_fwhm_ns",
     "jitter_ns": "jitter_ns",
@@ -342,15 +433,40 @@ class HazardCfg(_Model):
         return v
 
 
+class SafeSiteCfg(_Model):
+    """The landing question (:class:`simlunar.metrics.safe_site.SiteOptions`): is the site
+    chosen from the reconstruction truly safe? Thresholds: rocks above 0.3 m (ALHAT), slopes
+    above 12 deg (Apollo LM limit as usually quoted: an assumption); docs/lidar.md."""
+
+    slope_deg: Deg = Field(12.0, gt=0, lt=90, description="largest safe slope")
+    rock_height_m: Metres = Field(
+        0.3, gt=0, description="largest safe height above the local median (rocks)"
+    )
+    window_px: int = Field(15, ge=3, le=255, description="median neighbourhood side (odd, px)")
+    baseline_px: PositiveInt = Field(2, le=64, description="slope half-baseline (px)")
+    semi_axes_m: tuple[float, float] = Field(
+        (4.0, 4.0), description="landing ellipse semi-axes along world x and y (m)"
+    )
+    pitch_m: Metres = Field(8.0, gt=0, description="spacing of the candidate ellipse centres")
+    max_hazard_fraction: float = Field(
+        0.0, ge=0, lt=1, description="a site is safe with at most this share of hazard pixels"
+    )
+
+    @field_validator("window_px")
+    @classmethod
+    def _odd(cls, v: int) -> int:
+        if v % 2 == 0:
+            raise ValueError(f"must be odd (a centred window), got {v}")
+        return v
+
+
 #: planners a LIDAR study cannot run: the oracles read the true depth and ``sequential`` asks
-#: a sensor back (the LIDAR study gives a planner neither); ``learned`` predicts a map per
-#: sample density, which the LIDAR study's planners are not given
+#: a sensor back (the LIDAR study gives a planner neither); the learned map runs (its map per
+#: density)
 LIDAR_UNAVAILABLE_PLANNERS = {
     "oracle_greedy": "reads the true depth (a bound of the sampling study only)",
     "oracle_hessian": "reads the true depth (a bound of the sampling study only)",
     "sequential": "asks a sensor back between rounds (the sampling study only)",
-    "learned": "predicts its map for one sample density, which the lidar study's planners "
-    "are not given (use it in a sampling study)",
 }
 
 
@@ -365,13 +481,35 @@ def check_lidar_study(study) -> None:
     ValueError
         ``study.<key>: ...`` naming the first offending key.
     """
-    for i, name in enumerate(study.planners):
+    for i, label in enumerate(study.planners):
+        opts = study.planner_opts.get(label)
+        name = (opts.strategy if opts is not None else None) or label
         why = LIDAR_UNAVAILABLE_PLANNERS.get(name)
         if why is not None:
             raise ValueError(
                 f"study.planners[{i}]: {name!r} is not a planner of a lidar study: {why}"
             )
+        fit = None if opts is None else opts.fit
+        if fit is None:
+            continue
+        where = f"study.planner_opts.{label}.fit"
+        if fit.kind == "receiver" and study.sensor != "micromirror_flash":
+            raise ValueError(f"{where}: a receiver fit is for the micromirror_flash sensor")
+        if fit.kind == "scan_time":
+            ref = study.planner_opts.get(fit.reference)
+            if fit.reference not in study.planners or (ref is not None and ref.fit is not None):
+                raise ValueError(
+                    f"{where}.reference: {fit.reference!r} must be an unfitted planner of "
+                    f"study.planners ({', '.join(study.planners)})"
+                )
+            if study.sensor == "flash":
+                raise ValueError(f"{where}: a flash's time is its frames, not a tour")
     o = study.options
+    if o.motion is not None and study.sensor != "steered_beam":
+        raise ValueError(
+            f"study.options.motion: a moving platform is modelled for the steered beam only, "
+            f"not {study.sensor!r}"
+        )
     if study.sensor == "steered_beam":
         sb = o.steered_beam
         # simlunar.render.lidar_scan.SteeredBeamOptions: window_m > 2 margin_m >= 0 (each

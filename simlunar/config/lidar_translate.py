@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 from simlunar.config.derived import reconstruction_mapping
-from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
+from simlunar.config.lidar import HardwareCfg, HazardCfg, LidarOptionsCfg, MotionCfg
 from simlunar.config.studies import (
     LidarStudyCfg,
 )
@@ -23,14 +23,22 @@ from simlunar.lidar import (
 from simlunar.lidar.apd import ApdOptions
 from simlunar.lidar.gate import GateOptions
 from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
+from simlunar.lidar.trajectory import Navigation, PlatformMotion
 from simlunar.metrics.hazard import HazardOptions
+from simlunar.metrics.safe_site import SiteOptions
 from simlunar.render.flash_lidar import FlashOptions
 from simlunar.render.lidar_scan import SteeredBeamOptions, with_hardware
 from simlunar.render.transient import TransientOptions
 from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
-from simlunar.study.lidar import LidarStudyOptions
+from simlunar.study.lidar import LidarStudyOptions, SensorFit
 
-__all__ = ["hazard_options", "lidar_hardware", "lidar_options", "lidar_sensor_options"]
+__all__ = [
+    "hazard_options",
+    "lidar_hardware",
+    "lidar_options",
+    "lidar_sensor_options",
+    "motion_options",
+]
 
 
 #: YAML key of :class:`~simlunar.config.lidar.HardwareCfg` -> (LidarHardware field, SI factor)
@@ -53,15 +61,19 @@ _HARDWARE_SI = {
 
 def lidar_hardware(o: LidarOptionsCfg, sensor: str) -> LidarHardware | None:
     """The instrument of a config (preset + hardware overrides, SI) or None where the expert
-    photon scales are used (set, or a micromirror flash without an instrument)."""
+    photon scales are used (set, or a micromirror flash without an instrument or hardware
+    keys)."""
     d = o.detector
     expert = any(getattr(d, k) is not None for k in type(d).model_fields if k.startswith("expert_"))
-    if expert or (sensor == "micromirror_flash" and o.instrument is None):
+    if expert or (
+        sensor == "micromirror_flash" and o.instrument is None and o.hardware == HardwareCfg()
+    ):
         return None
     if o.instrument is not None:
         base = INSTRUMENTS[o.instrument]
     else:  # generic hardware timed and steered by the pulse and sensor blocks
-        rate = o.flash.pulse_rate_hz if sensor == "flash" else o.steered_beam.pulse_rate_hz
+        rate = {"flash": o.flash.pulse_rate_hz, "micromirror_flash": o.micromirror.pulse_rate_hz}
+        rate = rate.get(sensor, o.steered_beam.pulse_rate_hz)
         base = LidarHardware(
             pulse_fwhm_s=o.pulse.fwhm_ns * 1e-9,
             jitter_s=o.pulse.jitter_ns * 1e-9,
@@ -126,7 +138,10 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
                 settle_s=b.settle_ms * 1e-3,
                 pulse_rate_hz=b.pulse_rate_hz,
                 pulses_per_point=b.pulses_per_point,
+                model=b.model,
+                line_pitch_rad=None if b.line_pitch_mrad is None else b.line_pitch_mrad * 1e-3,
             ),
+            motion=motion_options(o.motion),
             order=OrderOptions(method=b.order),
             window_m=b.window_m,
             batch=b.batch,
@@ -138,15 +153,26 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
         flash = FlashOptions(pulse_rate_hz=f.pulse_rate_hz, **common)
         flash = flash if hardware is None else with_hardware(flash, hardware)
         w, h = f.receiver_px
-        return FlashLidarOptions(flash, receiver_px=(h, w), revisits=f.revisits, zoom=f.zoom)
-    if hardware is not None:
-        raise ValueError(
-            "options.instrument: a micromirror flash has no hardware link budget yet (its "
-            "projector's dots are no uniform flash); use detector.expert_signal_photons"
-        )
+        return FlashLidarOptions(flash, receiver_px=(h, w), revisits=f.revisits, zoom=f.zoom,
+                                 revisit_from=f.revisit_from, range_weight=f.range_weight,
+                                 repoint_s=f.repoint_ms * 1e-3)  # fmt: skip
     m = o.micromirror
     w, h = m.receiver_px
-    return MicromirrorOptions(FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common), (h, w))
+    mm = FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common)
+    mm = mm if hardware is None else with_hardware(mm, hardware)
+    return MicromirrorOptions(mm, (h, w))
+
+
+def motion_options(cfg: MotionCfg | None) -> PlatformMotion | None:
+    """:class:`~simlunar.lidar.trajectory.PlatformMotion` of a config (None: at rest)."""
+    if cfg is None:
+        return None
+    v = (0.0, 0.0, 0.0)
+    if cfg.kind == "descent":
+        v = (cfg.horizontal_m_s[0], cfg.horizontal_m_s[1], -cfg.descent_rate_m_s)
+    nav = Navigation(cfg.compensation, cfg.position_noise_m, cfg.attitude_noise_urad * 1e-6)
+    return PlatformMotion(v, cfg.attitude_jitter_urad * 1e-6, cfg.jitter_bandwidth_hz, nav,
+                          cfg.retarget)  # fmt: skip
 
 
 def hazard_options(cfg: HazardCfg | None) -> HazardOptions | None:
@@ -164,7 +190,14 @@ def lidar_options(study: LidarStudyCfg, *, seed: int = 0) -> LidarStudyOptions:
         densities=tuple(study.densities),
         trials=study.trials,
         metrics=tuple(study.metrics),
-        planner_opts={n: planner_kwargs(n, p) for n, p in study.planner_opts.items()},
+        planner_opts={n: planner_kwargs(p.strategy or n, p) for n, p in study.planner_opts.items()},
+        strategies={n: p.strategy for n, p in study.planner_opts.items() if p.strategy},
+        fits={
+            n: SensorFit(p.fit.kind, p.fit.reference, p.fit.frames)
+            for n, p in study.planner_opts.items()
+            if p.fit is not None
+        },
         hazard=hazard_options(study.hazard),
+        safe_site=None if study.safe_site is None else SiteOptions(**study.safe_site.model_dump()),
         reconstructions=reconstruction_mapping(study.reconstructions),
     )

@@ -203,7 +203,7 @@ def _check_registries(cfg: ExperimentCfg, data: dict) -> None:
             _check_names(study, "modes", registry.check_scan_mode)
             _check_names(study, "metrics", registry.check_metric)
         if isinstance(study, LidarStudyCfg):
-            _check_names(study, "planners", registry.check_strategy)
+            _check_names(study, "planners", registry.check_strategy, study.planner_opts)
             _check_names(study, "metrics", registry.check_metric)
             try:
                 check_lidar_study(study)

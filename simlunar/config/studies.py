@@ -21,7 +21,7 @@ from simlunar.config.fields import (
     _Model,
     unique_names,
 )
-from simlunar.config.lidar import HazardCfg, LidarOptionsCfg
+from simlunar.config.lidar import HazardCfg, LidarOptionsCfg, LidarPlannerOptsCfg, SafeSiteCfg
 from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
     CoefficientsCfg,
     FeatureOptsCfg,
@@ -32,6 +32,7 @@ from simlunar.config.planners import (  # noqa: F401 - the schema's planner mode
     StrategyOptions,
     StrategyOptionsCfg,
     check_planner_options,
+    own_placements,
 )
 from simlunar.config.quantities import log_spaced
 from simlunar.planner import (
@@ -223,11 +224,20 @@ class LidarStudyCfg(_Model):
     )
     trials: int = Field(3, ge=1, le=1000, description="planner draws and photon noise")
     metrics: list[str] = Field(default_factory=lambda: ["mse", "grad"], min_length=1)
-    planner_opts: PlannerOptions = Field(
-        default_factory=dict, description="planner name -> options (study.planners only)"
+    planner_opts: Annotated[dict[str, LidarPlannerOptsCfg], BeforeValidator(own_placements)] = (
+        Field(
+            default_factory=dict,
+            description="planner label -> options (study.planners only); a label not registered "
+            "as a strategy names one in 'strategy'; 'fit' fits it to the sensor",
+        )
     )
     hazard: HazardCfg | None = Field(
         None, description="also score landing-hazard detection (precision / recall); null = off"
+    )
+    safe_site: SafeSiteCfg | None = Field(
+        None,
+        description="also score whether the landing site chosen from the reconstruction is "
+        "truly safe (safe_site, safe_site_precision, safe_sites_available); null = off",
     )
     options: LidarOptionsCfg = Field(
         default_factory=LidarOptionsCfg,
@@ -272,9 +282,10 @@ class LidarStudyCfg(_Model):
                 f"planner_opts.{stray[0]}: not in study.planners ({', '.join(self.planners)})"
             )
         for name, opts in self.planner_opts.items():
-            if name in STRATEGIES:
+            base = opts.strategy or name
+            if base in STRATEGIES:
                 try:
-                    check_planner_options(name, opts)
+                    check_planner_options(base, opts)
                 except ValueError as exc:
                     raise ValueError(f"planner_opts.{name}.{exc}") from None
         return self

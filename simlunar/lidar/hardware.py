@@ -267,6 +267,27 @@ INSTRUMENTS: dict[str, LidarHardware] = {
         dark_count_rate_hz=100.0,
         solar_irradiance_w_m2_nm=0.64,
     ),
+    # Micromirror-steered flash (the paper's envisioned sensor): every number an assumption*:
+    # a compact 1064 nm laser (1 mJ, 1 ns at 30 Hz) lighting a digital micromirror device whose
+    # on-mirrors send equal shares of the pulse to their dots (the device's throughput, 0.65*,
+    # folded into optics_efficiency 0.6 x 0.65 = 0.39*), a 50 mm receiver aperture*, a
+    # linear-mode APD array (efficiency 0.5*), 1 nm filter*. Divergence and field: the guide
+    # camera's (set by the sensor; these two are unused).
+    "micromirror_flash": LidarHardware(
+        pulse_energy_j=1e-3,
+        wavelength_m=1064e-9,
+        pulse_fwhm_s=1e-9,
+        jitter_s=0.1e-9,
+        pulse_rate_hz=30.0,
+        aperture_diameter_m=0.05,
+        optics_efficiency=0.39,
+        detector_efficiency=0.5,
+        filter_bandwidth_m=1e-9,
+        divergence_rad=np.radians(40.0),
+        field_rad=np.radians(40.0),
+        dark_count_rate_hz=0.0,
+        solar_irradiance_w_m2_nm=0.64,
+    ),
 }
 
 

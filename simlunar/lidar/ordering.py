@@ -19,7 +19,7 @@ import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
-from simlunar.lidar.steering import SteeringOptions, move_time, scan_timing
+from simlunar.lidar.steering import SteeringOptions, move_time, raster_sweep, scan_timing
 
 __all__ = [
     "METHODS",
@@ -250,7 +250,7 @@ def two_opt(
         tour,
         np.ascontiguousarray(nbrs, dtype=np.int64),
         float(steering.max_rate_rad_s),
-        float(steering.max_accel_rad_s2),
+        float(steering.move_accel_rad_s2),
         float(steering.settle_s),
         int(options.max_passes),
     )
@@ -275,6 +275,8 @@ def order_scan(
     p = np.asarray(angles, float)
     n = len(p)
     given = np.arange(n, dtype=np.int64)
+    if steering.model == "continuous_raster":
+        return raster_sweep(p, options=steering).order  # the raster fires in its own order
     if options.method == "given" or n < 3:
         return given
     if options.method == "raster":

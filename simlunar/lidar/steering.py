@@ -1,14 +1,24 @@
 """Mechanics of a steered beam: two-axis pointing, move times, dwell, scan time.
 
-A gimbal or galvanometer pair points the beam by two angles (azimuth, elevation). Each axis
-moves with a trapezoidal velocity profile (rest to rest: accelerate at ``max_accel``, cruise
-at ``max_rate``, decelerate), both axes at once, so a move takes the longer of the two axes'
-times, then ``settle_s`` for the mirror or gimbal to settle. At each point the beam stays for
-``pulses_per_point`` pulses at ``pulse_rate_hz`` (stop and stare). A scan's time is the sum of
-its moves, settles and dwells.
+Three steering models (``SteeringOptions.model``):
 
-Axis move time for an angle ``d``: ``2 sqrt(d / a)`` when ``d <= v^2 / a`` (the axis never
-reaches ``v``), else ``d / v + v / a``.
+- ``"gimbal"`` (stop and stare): each axis moves with a trapezoidal velocity profile (rest to
+  rest: accelerate at ``max_accel``, cruise at ``max_rate``, decelerate), both axes at once, so
+  a move takes the longer of the two axes' times, then ``settle_s``. At each point the beam
+  stays for ``pulses_per_point`` pulses at ``pulse_rate_hz``. A scan's time is the sum of its
+  moves, settles and dwells. Axis move time for an angle ``d``: ``2 sqrt(d / a)`` when
+  ``d <= v^2 / a`` (the axis never reaches ``v``), else ``d / v + v / a``.
+- ``"galvanometer"`` (stop and stare, inertia-free mirrors): a move takes ``d / v`` plus the
+  small-step response ``settle_s`` (a galvanometer is specified by its small-step response
+  time and its largest angular speed; the acceleration phase is inside the step response).
+- ``"continuous_raster"``: the fast axis sweeps lines of constant elevation at ``max_rate``
+  over the plan's azimuth span, serpentine, and fires each point as the beam passes it (no
+  stop); elevations are grouped into lines of ``line_pitch_rad`` (the slow axis fine-steers
+  within a line, an assumption), only lines holding points are swept, a line with points
+  closer than the beam's travel during one dwell (``max_rate x dwell``) is swept again for
+  them, and a turnaround (``2 v / a``) or the slow axis's step to the next line (trapezoid +
+  settle), whichever is longer, separates sweeps. Its time depends on the lines a plan
+  occupies, not on how many points each holds: a grid is its cheapest pattern.
 """
 
 from __future__ import annotations
@@ -16,6 +26,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+#: the steering models of :class:`SteeringOptions`
+MODELS = ("gimbal", "galvanometer", "continuous_raster")
 
 
 @dataclass(frozen=True)
@@ -34,6 +47,11 @@ class SteeringOptions:
         Laser pulse repetition rate (1/s).
     pulses_per_point : int
         Pulses accumulated into one point's histogram.
+    model : {"gimbal", "galvanometer", "continuous_raster"}
+        The steering model (module docstring).
+    line_pitch_rad : float or None
+        Continuous raster: elevation height of a line (rad); required by that model (the
+        steered-beam sensor sets it to the guide camera's pixel pitch when None).
     """
 
     max_rate_rad_s: float = 2.0
@@ -41,8 +59,16 @@ class SteeringOptions:
     settle_s: float = 1e-3
     pulse_rate_hz: float = 10_000.0
     pulses_per_point: int = 1
+    model: str = "gimbal"
+    line_pitch_rad: float | None = None
 
     def __post_init__(self) -> None:
+        if self.model not in MODELS:
+            raise ValueError(f"unknown steering model {self.model!r}; valid: {', '.join(MODELS)}")
+        if self.line_pitch_rad is not None and not (
+            np.isfinite(self.line_pitch_rad) and self.line_pitch_rad > 0
+        ):
+            raise ValueError(f"line_pitch_rad must be finite and > 0, got {self.line_pitch_rad}")
         for name in ("max_rate_rad_s", "max_accel_rad_s2", "pulse_rate_hz"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -51,6 +77,12 @@ class SteeringOptions:
             raise ValueError(f"settle_s must be >= 0 s, got {self.settle_s}")
         if int(self.pulses_per_point) < 1:
             raise ValueError(f"pulses_per_point must be >= 1, got {self.pulses_per_point}")
+
+    @property
+    def move_accel_rad_s2(self) -> float:
+        """The acceleration of a stop-and-stare move: infinite for a galvanometer (its
+        acceleration is inside the small-step response ``settle_s``)."""
+        return np.inf if self.model == "galvanometer" else float(self.max_accel_rad_s2)
 
     @property
     def dwell_s(self) -> float:
@@ -80,6 +112,8 @@ def axis_move_time(delta, options: SteeringOptions) -> np.ndarray:
     """Rest-to-rest time (s) of one axis turning by ``delta`` (rad, any sign, array)."""
     d = np.abs(np.asarray(delta, float))
     v, a = options.max_rate_rad_s, options.max_accel_rad_s2
+    if options.model == "galvanometer":
+        return d / v
     return np.where(d <= v * v / a, 2.0 * np.sqrt(d / a), d / v + v / a)
 
 
@@ -115,6 +149,8 @@ def scan_timing(
     p = np.asarray(angles, float)
     if p.ndim != 2 or p.shape[1] != 2:
         raise ValueError(f"angles must have shape (n, 2), got {p.shape}")
+    if options.model == "continuous_raster":
+        return raster_sweep(p, options=options).timing
     if order is not None:
         p = p[np.asarray(order)]
     if len(p) == 0:
@@ -167,6 +203,8 @@ def point_times(
     """
     p = np.asarray(angles, float)
     n = len(p)
+    if options.model == "continuous_raster":
+        return raster_sweep(p, options=options).times
     idx = np.arange(n) if order is None else np.asarray(order)
     if n == 0:
         return np.zeros(0)
@@ -180,12 +218,112 @@ def point_times(
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class RasterSweep:
+    """A continuous raster's schedule of a plan (:func:`raster_sweep`).
+
+    Attributes
+    ----------
+    times : (n,) float64
+        When each point fires (s from the scan's start), in the input order.
+    order : (n,) int64
+        Firing order (a permutation).
+    sweeps : int
+        Line sweeps (a line swept again for points too close to fire in one pass counts twice).
+    lines : int
+        Distinct lines holding points.
+    timing : ScanTiming
+        ``move_s``: the sweeps; ``settle_s``: turnarounds and line steps; ``dwell_s``: the
+        last point's dwell past the end of the last sweep (0 if it fits inside).
+    """
+
+    times: np.ndarray
+    order: np.ndarray
+    sweeps: int
+    lines: int
+    timing: ScanTiming
+
+
+def raster_sweep(angles: np.ndarray, *, options: SteeringOptions) -> RasterSweep:
+    """Schedule a plan's pointings on a continuous raster (module docstring).
+
+    Parameters
+    ----------
+    angles : (n, 2) float
+        Pointing angles (azimuth, elevation) (rad); the visiting order is the raster's own.
+    options : SteeringOptions
+        ``max_rate_rad_s`` (sweep speed), ``max_accel_rad_s2`` (turnaround ``2 v / a``, and
+        the slow axis's trapezoid), ``settle_s`` (after a line step), ``line_pitch_rad``,
+        ``dwell_s``.
+
+    Returns
+    -------
+    RasterSweep
+    """
+    p = np.asarray(angles, float)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"angles must have shape (n, 2), got {p.shape}")
+    if options.line_pitch_rad is None:
+        raise ValueError("a continuous raster needs line_pitch_rad (the height of a line)")
+    n = len(p)
+    if n == 0:
+        return RasterSweep(np.zeros(0), np.zeros(0, np.int64), 0, 0, ScanTiming(0.0, 0, 0, 0))
+    v, a, dwell = options.max_rate_rad_s, options.max_accel_rad_s2, options.dwell_s
+    az0, span = p[:, 0].min(), float(np.ptp(p[:, 0]))
+    sweep_s, turn_s = span / v, 2.0 * v / a
+    line = np.floor((p[:, 1].max() - p[:, 1]) / options.line_pitch_rad + 0.5).astype(np.int64)
+    gap = v * dwell  # the beam's travel while one point fires
+    # passes: points of a line in azimuth, first-fit into passes whose last point is >= gap back
+    srt = np.lexsort((p[:, 0], line))
+    pass_of = np.zeros(n, np.int64)
+    key = []
+    start = 0
+    for i in range(1, n + 1):
+        if i == n or line[srt[i]] != line[srt[start]]:
+            ends: list[float] = []
+            for j in srt[start:i]:
+                for q, e in enumerate(ends):
+                    if p[j, 0] >= e + gap - 1e-15:
+                        ends[q], pass_of[j] = p[j, 0], q
+                        break
+                else:
+                    pass_of[j] = len(ends)
+                    ends.append(p[j, 0])
+            key += [(int(line[srt[start]]), q) for q in range(len(ends))]
+            start = i
+    times = np.empty(n)
+    t, move, settle, forward, prev_line = 0.0, 0.0, 0.0, True, None
+    sweep_id = {k: s for s, k in enumerate(key)}
+    sid = np.array([sweep_id[(int(line[j]), int(pass_of[j]))] for j in range(n)])
+    for s_i, (ln, _) in enumerate(key):
+        if prev_line is not None:
+            step = turn_s
+            if ln != prev_line:
+                d = (ln - prev_line) * options.line_pitch_rad
+                step = max(turn_s, float(axis_move_time(d, options)) + options.settle_s)
+            t += step
+            settle += step
+        sel = sid == s_i
+        off = (p[sel, 0] - az0) if forward else (az0 + span - p[sel, 0])
+        times[sel] = t + off / v
+        t += sweep_s
+        move += sweep_s
+        forward, prev_line = not forward, ln
+    tail = max(0.0, float(times.max()) + dwell - t)
+    order = np.argsort(times, kind="stable").astype(np.int64)
+    timing = ScanTiming(total_s=t + tail, move_s=move, settle_s=settle, dwell_s=tail)
+    return RasterSweep(times, order, len(key), len(set(line.tolist())), timing)
+
+
 __all__ = [
+    "MODELS",
+    "RasterSweep",
     "ScanTiming",
     "SteeringOptions",
     "axis_move_time",
     "move_time",
     "point_times",
     "pointing_angles",
+    "raster_sweep",
     "scan_timing",
 ]

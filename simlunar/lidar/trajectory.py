@@ -5,8 +5,17 @@ milliseconds a point takes tens of seconds; a descent at 2 m/s moves tens of met
 beam then leaves from the platform's position at its firing time
 (:func:`simlunar.lidar.steering.point_times`) and its point is ``position(t) + R d``: with the
 pose known exactly (navigation), the cloud lands on the terrain; with one pose for the whole
-scan, it is smeared by the motion. Attitude is held constant (a gimbal stabilised in the
-world frame); the velocity is constant (hover: zero).
+scan, it is smeared by the motion. The velocity is constant (hover: zero). The line of sight
+is stabilised in the world frame up to an attitude jitter: a small rotation per axis, a sum of
+``JITTER_TONES`` sinusoids of random phase and frequency up to ``jitter_bandwidth_hz`` with an
+RMS of ``attitude_jitter_rad`` per axis (a stationary, band-limited process; an assumption of
+its shape), seeded by ``jitter_seed``.
+
+:class:`Navigation` is what the sensor knows of its pose when it places its points
+(:func:`place_points`): ``"exact"`` (the true pose at each firing), ``"noisy"`` (the true
+pose plus white navigation errors per point, ``position_noise_m`` per axis and
+``attitude_noise_rad`` per axis, from the point's own ``rng``) or ``"start"`` (no motion
+compensation: the pose at the scan's start, no jitter).
 """
 
 from __future__ import annotations
@@ -15,7 +24,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Trajectory"]
+__all__ = [
+    "JITTER_TONES",
+    "Navigation",
+    "PlatformMotion",
+    "Trajectory",
+    "place_points",
+    "rotate_small",
+]
+
+#: sinusoids summed into each axis's attitude jitter
+JITTER_TONES = 8
+#: what the sensor knows of its pose (:class:`Navigation`)
+COMPENSATIONS = ("exact", "noisy", "start")
 
 
 @dataclass(frozen=True, eq=False)
@@ -28,12 +49,25 @@ class Trajectory:
         Position at ``t = 0`` (m).
     velocity_m_s : (3,) float
         Velocity (m/s); zero = hover.
+    attitude_jitter_rad : float
+        RMS line-of-sight jitter per axis (rad); 0 = none.
+    jitter_bandwidth_hz : float
+        Highest frequency of the jitter (Hz).
+    jitter_seed : int
+        Seed of the jitter's phases and frequencies.
     """
 
     position_m: tuple = (0.0, 0.0, 0.0)
     velocity_m_s: tuple = (0.0, 0.0, 0.0)
+    attitude_jitter_rad: float = 0.0
+    jitter_bandwidth_hz: float = 10.0
+    jitter_seed: int = 0
 
     def __post_init__(self) -> None:
+        if not (np.isfinite(self.attitude_jitter_rad) and self.attitude_jitter_rad >= 0):
+            raise ValueError(f"attitude_jitter_rad must be >= 0, got {self.attitude_jitter_rad}")
+        if not (np.isfinite(self.jitter_bandwidth_hz) and self.jitter_bandwidth_hz > 0):
+            raise ValueError(f"jitter_bandwidth_hz must be > 0, got {self.jitter_bandwidth_hz}")
         for name in ("position_m", "velocity_m_s"):
             v = np.asarray(getattr(self, name), float)
             if v.shape != (3,) or not np.isfinite(v).all():
@@ -47,12 +81,142 @@ class Trajectory:
         return cls(position_m, (0.0, 0.0, 0.0))
 
     @classmethod
-    def descent(cls, position_m, rate_m_s: float, horizontal_m_s=(0.0, 0.0)) -> Trajectory:
-        """Descending at ``rate_m_s`` (> 0: down) with a horizontal drift (m/s)."""
+    def descent(
+        cls, position_m, rate_m_s: float, horizontal_m_s=(0.0, 0.0), **jitter
+    ) -> Trajectory:
+        """Descending at ``rate_m_s`` (> 0: down) with a horizontal drift (m/s); ``jitter``:
+        the attitude jitter fields."""
         h = np.asarray(horizontal_m_s, float).reshape(2)
-        return cls(position_m, (h[0], h[1], -float(rate_m_s)))
+        return cls(position_m, (h[0], h[1], -float(rate_m_s)), **jitter)
+
+    def attitude_at(self, times_s) -> np.ndarray:
+        """Line-of-sight jitter as small rotation vectors (..., 3) (rad) at ``times_s``."""
+        t = np.asarray(times_s, float)
+        if self.attitude_jitter_rad == 0:
+            return np.zeros((*t.shape, 3))
+        g = np.random.default_rng(self.jitter_seed)
+        f = g.uniform(0.0, self.jitter_bandwidth_hz, (3, JITTER_TONES))
+        ph = g.uniform(0.0, 2 * np.pi, (3, JITTER_TONES))
+        amp = self.attitude_jitter_rad * np.sqrt(2.0 / JITTER_TONES)  # RMS per axis
+        arg = 2 * np.pi * f * t[..., None, None] + ph
+        return amp * np.cos(arg).sum(axis=-1)
 
     def at(self, times_s) -> np.ndarray:
         """Positions (..., 3) (m) at ``times_s`` (...) (s)."""
         t = np.asarray(times_s, float)[..., None]
         return self.position_m + t * self.velocity_m_s
+
+
+def rotate_small(vectors: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
+    """Rotate ``vectors`` (n, 3) by rotation vectors ``rotvec`` (n, 3) (rad; Rodrigues, exact)."""
+    v = np.asarray(vectors, float)
+    w = np.asarray(rotvec, float)
+    th = np.linalg.norm(w, axis=-1, keepdims=True)
+    k = np.divide(w, th, out=np.zeros_like(w), where=th > 0)
+    c, s = np.cos(th), np.sin(th)
+    return v * c + np.cross(k, v) * s + k * (k * v).sum(-1, keepdims=True) * (1 - c)
+
+
+@dataclass(frozen=True)
+class Navigation:
+    """What the sensor knows of its pose when it places its points (module docstring).
+
+    Parameters
+    ----------
+    compensation : {"exact", "noisy", "start"}
+    position_noise_m : float
+        ``noisy``: RMS position error per axis (m).
+    attitude_noise_rad : float
+        ``noisy``: RMS pointing knowledge error per axis (rad).
+    """
+
+    compensation: str = "exact"
+    position_noise_m: float = 0.0
+    attitude_noise_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.compensation not in COMPENSATIONS:
+            raise ValueError(
+                f"unknown compensation {self.compensation!r}; valid: {', '.join(COMPENSATIONS)}"
+            )
+        for name in ("position_noise_m", "attitude_noise_rad"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be finite and >= 0, got {v}")
+
+
+def place_points(
+    ranges: np.ndarray,
+    commanded: np.ndarray,
+    times_s: np.ndarray,
+    trajectory: Trajectory,
+    navigation: Navigation = Navigation(),
+    *,
+    rng=None,
+) -> np.ndarray:
+    """World points (n, 3) (m) of ranges measured along commanded directions, as the sensor
+    places them with its pose knowledge.
+
+    Parameters
+    ----------
+    ranges : (n,) float
+        Slant ranges (m; NaN where invalid).
+    commanded : (n, 3) float
+        Unit directions the beam was commanded to (world frame, before jitter).
+    times_s : (n,) float
+        Firing times (s).
+    trajectory : Trajectory
+        The true motion (its jitter is what ``exact`` and ``noisy`` know).
+    navigation : Navigation
+    rng : seed or Generator
+        ``noisy``: the navigation errors.
+
+    Returns
+    -------
+    (n, 3) float64
+    """
+    r = np.asarray(ranges, float)[:, None]
+    d = np.asarray(commanded, float)
+    t = np.asarray(times_s, float)
+    if navigation.compensation == "start":
+        return trajectory.at(np.zeros_like(t)) + r * d
+    pos, att = trajectory.at(t), trajectory.attitude_at(t)
+    if navigation.compensation == "noisy":
+        g = np.random.default_rng(rng)
+        pos = pos + g.normal(0.0, navigation.position_noise_m, pos.shape)
+        att = att + g.normal(0.0, navigation.attitude_noise_rad, att.shape)
+    return pos + r * rotate_small(d, att)
+
+
+@dataclass(frozen=True)
+class PlatformMotion:
+    """A sensor's motion from wherever it starts: what a study configures (the start is the
+    guide camera's centre).
+
+    Parameters
+    ----------
+    velocity_m_s : (3,) float
+        Constant velocity (m/s); (0, 0, -2) is a 2 m/s descent, zero a hover.
+    attitude_jitter_rad, jitter_bandwidth_hz
+        As for :class:`Trajectory` (its phases drawn per acquisition).
+    navigation : Navigation
+        How the points are placed.
+    retarget : bool
+        Re-aim each beam at its planned direction's point on the gate's reference plane from
+        where the platform is (:func:`simlunar.render.lidar_scan.steered_beam_scan`).
+    """
+
+    velocity_m_s: tuple = (0.0, 0.0, 0.0)
+    attitude_jitter_rad: float = 0.0
+    jitter_bandwidth_hz: float = 10.0
+    navigation: Navigation = Navigation()
+    retarget: bool = True
+
+    def __post_init__(self) -> None:
+        Trajectory((0.0, 0.0, 0.0), self.velocity_m_s, self.attitude_jitter_rad,
+                   self.jitter_bandwidth_hz)  # fmt: skip
+
+    def trajectory(self, start_m, *, jitter_seed: int = 0) -> Trajectory:
+        """The trajectory from ``start_m`` (3,) m."""
+        return Trajectory(start_m, self.velocity_m_s, self.attitude_jitter_rad,
+                          self.jitter_bandwidth_hz, int(jitter_seed))  # fmt: skip

@@ -87,7 +87,7 @@ def lidar_tables(
     """Markdown and LaTeX tables of a LIDAR study: per (point, planner, k) the mean scan time
     and the mean of each metric over trials and units (``by``: a column splitting the rows
     into points, e.g. a sweep axis)."""
-    extra = [m for m in ("valid_fraction", "hazard_precision", "hazard_recall")
+    extra = [m for m in ("valid_fraction", "hazard_precision", "hazard_recall", "safe_site")
              if m not in metrics and any(r["metric"] == m for r in rows)]  # fmt: skip
     names = [*metrics, *extra]
     points = sorted({str(r.get(by)) for r in rows}) if by else [None]

@@ -30,6 +30,7 @@ __all__ = [
     "flash_window",
     "micromirror_flash",
     "micromirror_frames",
+    "micromirror_lit_sr",
     "read_flash",
     "receiver_solid_angles",
 ]
@@ -139,6 +140,14 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
     )
 
 
+def micromirror_lit_sr(camera: Camera) -> float:
+    """The rendered micromirror's lit solid angle for the link budget (sr): ``W H / (fx fy)``,
+    so that each of its ``W H`` mirrors carries ``E / (W H)`` of the pulse (``camera``: the
+    projector's intrinsics = the guide camera's)."""
+    k = camera.intrinsics
+    return float(k.width * k.height / (k.fx * k.fy))
+
+
 def micromirror_frames(pixels: np.ndarray, camera: Camera, receiver_shape) -> np.ndarray:
     """Frame index (k,) of each planned pixel: dots sharing a receiver pixel never share a frame.
 
@@ -194,12 +203,19 @@ def micromirror_flash(
     -------
     LidarScan
         Arrays over the k planned pixels; ``frames`` = flash frames fired.
+
+    Notes
+    -----
+    **Link budget** (with ``options.hardware``; :func:`micromirror_lit_sr`): the pulse lights
+    the whole micromirror array and each mirror sends its equal share ``E / N_mirrors`` towards
+    its dot when on (a digital micromirror device: amplitude, not phase, so energy on "off"
+    mirrors is lost; the array's throughput is folded into ``optics_efficiency``, an
+    assumption). The rendered projector gives every pixel the power ``scale / (fx fy)``, so the
+    render's lit solid angle is ``W H / (fx fy)`` (the field's area on the plane at 1 m) and a
+    receiver pixel's photons follow the flash's formula with it: on a Lambertian plane a dot
+    seen whole by its receiver pixel gets ``(E / N_mirrors / h nu) (rho / pi) cos(theta) A / R^2
+    eta`` (tested against this hand value).
     """
-    if options.hardware is not None:
-        raise ValueError(
-            "a micromirror flash has no hardware link budget yet (its projector's dots are not "
-            "a uniform flash): use the expert photon scales (detector.signal_photons)"
-        )
     rng = np.random.default_rng(rng)
     uv = np.asarray(pixels, float).reshape(-1, 2)
     h, w = camera.shape
@@ -262,7 +278,7 @@ def _fire_micromirror_frames(terrain, camera: Camera, receiver: Camera, uv, *, o
             sun=scene["sun"],
             projector=light,
         )
-        res = _read_frame(fr, receiver, options, rng)
+        res = _read_frame(fr, receiver, options, rng, lit_sr=micromirror_lit_sr(camera))
         ranges[sel], photons[sel] = res.range[row[sel], col[sel]], res.photons[row[sel], col[sel]]
         returns[sel], times[sel] = res.returns[row[sel], col[sel]], f * per_frame
     return ranges, photons, returns, times, n_frames

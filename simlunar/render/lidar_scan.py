@@ -43,6 +43,7 @@ from simlunar.lidar import (
 from simlunar.lidar.gate import GateOptions, plane_ranges
 from simlunar.lidar.hardware import LidarHardware
 from simlunar.lidar.spad import spad_correct
+from simlunar.lidar.trajectory import Navigation, PlatformMotion, place_points, rotate_small
 from simlunar.render.beam_capture import BeamCapture, capture_beams
 from simlunar.render.transient import TransientOptions
 
@@ -144,6 +145,10 @@ class SteeredBeamOptions(_ReturnOptions):
         Range window of each rendered batch (m).
     batch : int
         Beams per render launch.
+    motion : PlatformMotion or None
+        The platform's motion during the scan (:mod:`simlunar.lidar.trajectory`); None = at
+        rest. Used by :class:`simlunar.sensors.SteeredBeam` (which starts it at the guide
+        camera); :func:`steered_beam_scan` takes the trajectory itself.
     """
 
     footprint: FootprintOptions = field(default_factory=FootprintOptions)
@@ -151,6 +156,7 @@ class SteeredBeamOptions(_ReturnOptions):
     order: OrderOptions = field(default_factory=OrderOptions)
     window_m: float = 8.0
     batch: int = 4096
+    motion: PlatformMotion | None = None
 
     def __post_init__(self) -> None:
         if not (self.bin_range_m > 0 and self.window_m > 2 * self.margin_m >= 0):
@@ -325,6 +331,8 @@ def steered_beam_scan(
     rng=None,
     boresight: Pose | None = None,
     trajectory=None,
+    navigation=None,
+    retarget: bool = True,
 ) -> LidarScan:
     """Scan planned directions with a steered beam.
 
@@ -341,8 +349,17 @@ def steered_beam_scan(
         Gimbal zero (its forward axis); None = looking along the mean direction.
     trajectory : Trajectory or None
         The platform's motion (:mod:`simlunar.lidar.trajectory`): each beam leaves from its
-        position at the beam's firing time (the pose known exactly); None = at rest at the
-        capture's origin. The gimbal's attitude is held in the world frame.
+        position at the beam's firing time, turned by the line of sight's attitude jitter;
+        None = at rest at the capture's origin. The firing times come from the pointing
+        angles seen from the scan's start.
+    navigation : Navigation or None
+        How the points are placed (:func:`simlunar.lidar.trajectory.place_points`); None =
+        the pose known exactly.
+    retarget : bool
+        With a trajectory: command each beam from the platform's position at its firing time
+        towards where its planned direction (from the start) meets the gate's reference plane
+        (what navigation and the plane give, never the terrain); False: hold the planned
+        directions in the world frame.
 
     Returns
     -------
@@ -365,11 +382,16 @@ def steered_beam_scan(
     timing = scan_timing(angles, order, options=options.steering)
     lead = steps * det.pulses / options.steering.pulse_rate_hz  # the altimeter's steps first
     times = lead + point_times(angles, order, options=options.steering)
-    origins = None if trajectory is None else trajectory.at(times)
+    origins, fired = None, d
+    if trajectory is not None:
+        origins = trajectory.at(times)
+        if retarget:
+            d = _retarget(capture.origin, d, origins, datum, options.gate)
+        fired = rotate_small(d, trajectory.attitude_at(times))  # the jitter the sensor ignores
     pred = plane_ranges(
         capture.origin if origins is None else origins, d, datum_z=datum, options=options.gate
     )
-    ret = _render_returns(capture, d, pred, times, origins, options)
+    ret = _render_returns(capture, fired, pred, times, origins, options)
     bins = options.window
     bg = 0.0 if ret.sun is None else ret.sun
     counts = _counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
@@ -379,11 +401,14 @@ def steered_beam_scan(
     if ret.opl_offset is not None:
         ranges = ranges - ret.opl_offset / 2.0  # the render's laser offset, not the sensor's
     ranges = np.where(valid, ranges, np.nan)
-    o = capture.origin if origins is None else origins
+    if trajectory is None:
+        points = capture.origin + ranges[:, None] * d
+    else:
+        points = place_points(ranges, d, times, trajectory, navigation or Navigation(), rng=rng)
     return LidarScan(
         ranges=ranges,
         valid=valid,
-        points=o + ranges[:, None] * d,
+        points=points,
         photons=res.photons,
         order=order,
         # the altimeter's window steps fire pulses_per_point pulses each before the scan
@@ -393,6 +418,17 @@ def steered_beam_scan(
         times=times,
         returns=res.returns,
     )
+
+
+def _retarget(origin, d, origins, datum_z, gate) -> np.ndarray:
+    """Directions from ``origins`` (n, 3) to where the rays ``origin + r d`` meet the plane
+    ``z = datum_z`` (unchanged where a ray misses it within the gate's range)."""
+    r = plane_ranges(origin, d, datum_z=datum_z, options=gate)
+    ok = np.isfinite(r) & (r < gate.max_range_m)
+    target = origin + np.where(ok, r, 1.0)[:, None] * d
+    out = target - origins
+    out /= np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(ok[:, None], out, d)
 
 
 def _render_returns(capture: BeamCapture, d, pred, times, origins, options: SteeredBeamOptions):

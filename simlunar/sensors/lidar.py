@@ -20,12 +20,21 @@ where each measured point projects, and its cost is the modelled acquisition tim
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from simlunar.geometry import Camera, Intrinsics
-from simlunar.render.flash_lidar import FlashOptions, flash_window, micromirror_flash, read_flash
+from simlunar.lidar import order_scan, pointing_angles, scan_timing
+from simlunar.lidar.planning import choose_tiles, tile_range_scores
+from simlunar.render.flash_lidar import (
+    FlashOptions,
+    flash_window,
+    micromirror_flash,
+    micromirror_frames,
+    read_flash,
+)
 from simlunar.render.lidar_scan import (
     LidarScan,
     SteeredBeamOptions,
@@ -113,7 +122,14 @@ class SteeredBeam:
 
     def __init__(self, scene: LidarScene, options: SteeredBeamOptions | None = None) -> None:
         self.scene = scene
-        self.options = options or SteeredBeamOptions()
+        o = options or SteeredBeamOptions()
+        if o.steering.model == "continuous_raster" and o.steering.line_pitch_rad is None:
+            # one line per guide pixel row at the boresight
+            pitch = 1.0 / scene.camera.intrinsics.fy
+            o = dataclasses.replace(
+                o, steering=dataclasses.replace(o.steering, line_pitch_rad=pitch)
+            )
+        self.options = o
         self.capture = beam_capture(
             scene.terrain,
             scene.camera.position,
@@ -126,10 +142,27 @@ class SteeredBeam:
         """Range the planned guide pixels ``rc`` ((k, 2) int (row, col)); ``rng``: photon noise."""
         if rc is None:
             raise ValueError("a steered beam ranges planned pixels: rc is required")
-        cam = self.scene.camera
+        cam, m = self.scene.camera, self.options.motion
         d = guide_directions(cam, rc)
-        scan = steered_beam_scan(self.capture, d, options=self.options, rng=rng, boresight=cam.pose)
-        return _to_guide(scan, cam, rc, frames=scan.frames, seconds=scan.seconds)
+        if m is None:
+            scan = steered_beam_scan(self.capture, d, options=self.options, rng=rng,
+                                     boresight=cam.pose)  # fmt: skip
+            return _to_guide(scan, cam, rc, frames=scan.frames, seconds=scan.seconds)
+        g = np.random.default_rng(rng)
+        traj = m.trajectory(cam.position, jitter_seed=int(g.integers(2**31)))
+        scan = steered_beam_scan(self.capture, d, options=self.options, rng=g, boresight=cam.pose,
+                                 trajectory=traj, navigation=m.navigation,
+                                 retarget=m.retarget)  # fmt: skip
+        # a moving beam measures where its points project, not the planned pixels exactly
+        return _to_guide(scan, cam, None, frames=scan.frames, seconds=scan.seconds)
+
+    def scan_seconds(self, rc: np.ndarray) -> float:
+        """Modelled time (s) of scanning guide pixels ``rc`` (k, 2) (the steering mechanics
+        and the visiting order; no render, no measurement: what a planner may ask)."""
+        cam, o = self.scene.camera, self.options
+        angles = pointing_angles(guide_directions(cam, rc), cam.pose)
+        order = order_scan(angles, steering=o.steering, options=o.order)
+        return float(scan_timing(angles, order, options=o.steering).total_s)
 
 
 @dataclass(frozen=True)
@@ -146,20 +179,49 @@ class FlashLidarOptions:
         Zoomed frames directed by the plan after the full-field frame (0: no plan).
     zoom : int >= 2
         A revisit frame sees 1 / zoom of the field on each axis (tiles of a zoom x zoom grid).
+    revisit_from : {"plan", "ranges", "both"}
+        What directs the revisits: the tiles holding most planned pixels (the image), the tiles
+        whose first-frame ranges are roughest (:func:`~simlunar.lidar.planning.tile_range_scores`:
+        the sensor's own measurement), or ``range_weight`` of the ranges' share plus the rest
+        of the plan's (:func:`~simlunar.lidar.planning.choose_tiles`).
+    range_weight : float in [0, 1]
+        ``both``: the ranges' share of a tile's score.
+    repoint_s : float >= 0
+        Time to re-point and re-zoom the receiver before each revisit (s), added per revisit.
     """
 
     flash: FlashOptions = field(default_factory=FlashOptions)
     receiver_px: tuple[int, int] = (64, 64)
     revisits: int = 0
     zoom: int = 4
+    revisit_from: str = "plan"
+    range_weight: float = 0.5
+    repoint_s: float = 0.0
 
     def __post_init__(self):
+        if self.revisit_from not in ("plan", "ranges", "both"):
+            raise ValueError(
+                f"revisit_from must be plan, ranges or both, got {self.revisit_from!r}"
+            )
+        if not 0.0 <= self.range_weight <= 1.0:
+            raise ValueError(f"range_weight must be in [0, 1], got {self.range_weight}")
+        if not (np.isfinite(self.repoint_s) and self.repoint_s >= 0):
+            raise ValueError(f"repoint_s must be >= 0 s, got {self.repoint_s}")
         if len(self.receiver_px) != 2 or min(self.receiver_px) < 1:
             raise ValueError(f"receiver_px must be (rows, cols) >= 1, got {self.receiver_px}")
         if int(self.revisits) < 0 or int(self.zoom) < 2:
             raise ValueError(f"need revisits >= 0 and zoom >= 2, got {self.revisits}, {self.zoom}")
         if int(self.revisits) > int(self.zoom) ** 2:
             raise ValueError(f"revisits {self.revisits} > the {self.zoom}^2 tiles of the field")
+
+
+def _tile_counts(rc: np.ndarray, shape, zoom: int) -> np.ndarray:
+    """Planned pixels per tile of a zoom x zoom grid over ``shape``, (zoom, zoom)."""
+    h, w = shape
+    rc = np.asarray(rc, float).reshape(-1, 2)
+    ti = np.clip((rc[:, 0] * zoom // h).astype(int), 0, zoom - 1)
+    tj = np.clip((rc[:, 1] * zoom // w).astype(int), 0, zoom - 1)
+    return np.bincount(ti * zoom + tj, minlength=zoom * zoom).reshape(zoom, zoom)
 
 
 def revisit_tiles(rc: np.ndarray, shape, zoom: int, count: int) -> np.ndarray:
@@ -212,7 +274,7 @@ class FlashLidar:
 
     @property
     def needs_plan(self) -> bool:
-        return self.options.revisits > 0
+        return self.options.revisits > 0 and self.options.revisit_from != "ranges"
 
     def _frame(self, camera: Camera, key, rng) -> LidarScan:
         """A frame through ``camera``: rendered once per field (``key``), read with fresh noise."""
@@ -233,9 +295,9 @@ class FlashLidar:
         scans = [full]
         tiles = np.zeros((0, 2), int)
         if o.revisits > 0:
-            if rc is None:
+            if rc is None and o.revisit_from != "ranges":
                 raise ValueError("flash revisits are directed by a plan: rc is required")
-            tiles = revisit_tiles(rc, cam.shape, o.zoom, o.revisits)
+            tiles = self._revisit_tiles(rc, full)
             for t, r in zip(tiles, rngs[1:]):
                 tcam = tile_camera(cam, t, o.zoom, o.receiver_px)
                 scans.append(self._frame(tcam, tuple(int(x) for x in t), r))
@@ -248,9 +310,19 @@ class FlashLidar:
             flat[0] = _subset(flat[0], ~inside)
         merged = _concat(flat)
         per_frame = o.flash.detector.pulses / o.flash.pulse_rate_hz
-        return _to_guide(
-            merged, cam, frames=len(scans), seconds=len(scans) * per_frame, detail=merged
-        )
+        seconds = len(scans) * per_frame + len(tiles) * o.repoint_s
+        return _to_guide(merged, cam, frames=len(scans), seconds=seconds, detail=merged)
+
+    def _revisit_tiles(self, rc, full: LidarScan) -> np.ndarray:
+        """The revisits' tiles from the plan, the full frame's own ranges, or both."""
+        o, cam = self.options, self.scene.camera
+        plan_counts = rough = None
+        if o.revisit_from != "ranges":
+            if o.revisit_from == "plan":
+                return revisit_tiles(rc, cam.shape, o.zoom, o.revisits)
+            plan_counts = _tile_counts(rc, cam.shape, o.zoom)
+        rough = tile_range_scores(full.points, full.valid, o.zoom)
+        return choose_tiles(plan_counts, rough, o.revisits, range_weight=o.range_weight)
 
 
 def _or(a, n, fill=0):
@@ -364,3 +436,13 @@ class MicromirrorFlash:
             bsdf=s.bsdf,
         )
         return _to_guide(scan, s.camera, rc, frames=scan.frames, seconds=scan.seconds)
+
+    def scan_seconds(self, rc: np.ndarray) -> float:
+        """Modelled time (s) of lighting guide pixels ``rc`` (k, 2): frames (the most dots
+        sharing a receiver pixel) x pulses / rate; no render (what a planner may ask)."""
+        f = self.options.flash
+        if len(rc) == 0:
+            return 0.0
+        uv = np.asarray(rc, float)[:, ::-1] + 0.5
+        frames = int(micromirror_frames(uv, self.scene.camera, self.options.receiver_px).max()) + 1
+        return frames * f.detector.pulses / f.pulse_rate_hz

@@ -20,9 +20,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.features import check_image
+from simlunar.lidar.planning import fit_to_time, receiver_capped_plan
 from simlunar.metrics import METRICS
 from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
-from simlunar.planner import DEFAULT_PLANNER, STRATEGIES, plan
+from simlunar.metrics.safe_site import SiteOptions, safe_site_scores
+from simlunar.planner import DEFAULT_PLANNER, STRATEGIES, map_of, plan
 from simlunar.progress import stage
 from simlunar.reconstruction import Guide
 from simlunar.sensors import SENSORS
@@ -36,14 +38,16 @@ from simlunar.study.protocol import (
     run_protocol,
 )
 from simlunar.study.sampling import _cost, _seed, sample_count
-from simlunar.study.scanner import guided_weights
+from simlunar.study.sampling_planners import importance_maps
 from simlunar.study.steps import Steps, resumable
 
 __all__ = [
+    "FITS",
     "LIDARS",
     "NO_PLAN",
     "LidarStudyOptions",
     "LidarStudyResult",
+    "SensorFit",
     "beam_table",
     "run_lidar_study",
     "time_table",
@@ -53,6 +57,39 @@ __all__ = [
 NO_PLAN = "none"
 #: the LIDAR sensors of :data:`simlunar.sensors.SENSORS`
 LIDARS = ("steered_beam", "flash", "micromirror_flash")
+#: the sensor-aware planning rules of :class:`SensorFit`
+FITS = ("scan_time", "receiver")
+
+
+@dataclass(frozen=True)
+class SensorFit:
+    """A planner label fitted to its sensor (:mod:`simlunar.lidar.planning`).
+
+    Attributes
+    ----------
+    kind : {"scan_time", "receiver"}
+        ``scan_time`` (tour-aware, any plan-directed LIDAR with a ``scan_seconds``): the
+        largest sample count whose plan, in the sensor's own visiting order, scans within the
+        time of the ``reference`` planner's plan at the same density
+        (:func:`~simlunar.lidar.planning.fit_to_time`; searched over ``k / 4 .. 4 k``).
+        ``receiver`` (micromirror flash): at most ``frames`` dots per receiver pixel
+        (:func:`~simlunar.lidar.planning.receiver_capped_plan`), the label's strategy map (a
+        weighted strategy's) steering where.
+    reference : str
+        ``scan_time``: the planner label whose scan time is the budget (in the study).
+    frames : int or None
+        ``receiver``: most dots per receiver pixel; None = the least that holds k.
+    """
+
+    kind: str = "scan_time"
+    reference: str = "grid"
+    frames: int | None = None
+
+    def __post_init__(self):
+        if self.kind not in FITS:
+            raise ValueError(f"unknown sensor fit {self.kind!r}; valid: {', '.join(FITS)}")
+        if self.frames is not None and int(self.frames) < 1:
+            raise ValueError(f"frames must be >= 1, got {self.frames}")
 
 
 @dataclass(frozen=True)
@@ -66,7 +103,8 @@ class LidarStudyOptions:
         ``micromirror_flash``.
     sensor_options : options object of that sensor, or None (its defaults)
     planners : sequence of str
-        Strategy names of :data:`simlunar.planner.STRATEGIES` (from the guide image).
+        Planner labels: strategy names of :data:`simlunar.planner.STRATEGIES` (from the guide
+        image), or labels whose strategy ``strategies`` names.
     densities : sequence of float
         Planned pixels k / N of the guide view, each in (0, 1].
     trials : int >= 1
@@ -83,6 +121,14 @@ class LidarStudyOptions:
     reconstructions : mapping name -> options, or names
         Reconstructions of :data:`simlunar.reconstruction.RECONSTRUCTIONS` run on every
         acquisition (default ``linear`` alone); a guided one reads the guide camera's image.
+    strategies : mapping label -> str
+        The strategy of a planner label that is not itself a strategy name.
+    fits : mapping label -> SensorFit
+        Labels fitted to the sensor (scan time or receiver pixels).
+    safe_site : SiteOptions or None
+        Also score whether the landing site chosen from the reconstruction is truly safe
+        (``safe_site``, ``safe_site_precision``, ``safe_sites_available``,
+        :mod:`simlunar.metrics.safe_site`).
     """
 
     sensor: str = "steered_beam"
@@ -95,6 +141,9 @@ class LidarStudyOptions:
     hazard: HazardOptions | None = None
     outside: str = "nearest"
     reconstructions: Mapping | Sequence = (DEFAULT_RECONSTRUCTION,)
+    strategies: Mapping[str, str] = field(default_factory=dict)
+    fits: Mapping[str, SensorFit] = field(default_factory=dict)
+    safe_site: SiteOptions | None = None
 
     def __post_init__(self):
         reconstruction_options(self.reconstructions, outside=self.outside)
@@ -111,9 +160,21 @@ class LidarStudyOptions:
         bad = [m for m in self.metrics if m not in METRICS]
         if bad:
             raise ValueError(f"unknown metric {bad[0]!r}; valid: {', '.join(METRICS)}")
-        bad = [p for p in self.planners if p not in STRATEGIES]
+        bad = [p for p in self.planners if self.strategies.get(p, p) not in STRATEGIES]
         if bad or not self.planners:
             raise ValueError(f"unknown planner {bad}; valid: {', '.join(STRATEGIES)}")
+        for label, fit in self.fits.items():
+            if label not in self.planners:
+                raise ValueError(f"fits for {label!r}, not a planner of the study")
+            if fit.kind == "scan_time" and (
+                fit.reference not in self.planners or fit.reference in self.fits
+            ):
+                raise ValueError(
+                    f"fits[{label!r}]: reference {fit.reference!r} must be an unfitted planner "
+                    "of the study"
+                )
+            if fit.kind == "receiver" and self.sensor != "micromirror_flash":
+                raise ValueError(f"fits[{label!r}]: a receiver fit is for the micromirror flash")
         if not self.densities or not all(0 < d <= 1 for d in self.densities):
             raise ValueError(f"densities must be in (0, 1], got {list(self.densities)}")
         stray = sorted(set(self.planner_opts) - set(self.planners))
@@ -154,8 +215,10 @@ class LidarStudyResult:
 class _Scores:
     """Scores of one reconstruction in the guide view (and its acquisition's yield)."""
 
-    def __init__(self, truth, image, camera, metrics, hazard: HazardOptions | None):
+    def __init__(self, truth, image, camera, metrics, hazard: HazardOptions | None, site=None):
         self.truth = np.asarray(truth, float)
+        self.site = site
+        self.true_points = camera.unproject_depth(self.truth) if site is not None else None
         self.image = image
         self.camera = camera
         self.metrics = tuple(metrics)
@@ -172,17 +235,52 @@ class _Scores:
         if self.hazard is not None:
             found = hazard_map(self.camera.unproject_depth(recon), self.hazard)
             out.update(detection_scores(found, self.true_hazards, np.isfinite(self.truth)))
+        if self.site is not None:
+            rec = self.camera.unproject_depth(np.asarray(recon, float))
+            out.update(safe_site_scores(rec, self.true_points, self.site))
         return out
 
 
-def _planner(name: str, image: np.ndarray, opts: Mapping) -> Callable:
-    weights, opts = guided_weights(name, image, opts)
-    plan(name, 3, weights=weights, shape=image.shape[:2], rng=0, **opts)  # options checked once
+def _planner(base: str, image: np.ndarray, opts: Mapping, ks, cache: dict) -> Callable:
+    """``(k, rng) -> rc`` of strategy ``base``; its map per k (the learned map's is per
+    density, :func:`~simlunar.study.sampling_planners.importance_maps`), each computed once."""
+    opts = dict(opts)
+    maps = importance_maps(base, opts, image, ks, cache)
+    rest = {k: v for k, v in opts.items() if k not in ("feature_opts", "coefficients")}
+    shape = image.shape[:2]
+    plan(base, 3, weights=maps[ks[0]], shape=shape, rng=0, **rest)  # options checked once
 
     def planner(k, rng):
-        return plan(name, int(k), weights=weights, shape=image.shape[:2], rng=rng, **opts).rc
+        w = maps.get(int(k))
+        if w is None:  # a fitted planner asks other counts: the nearest density's map
+            w = maps[min(maps, key=lambda q: abs(np.log(q / max(int(k), 1))))]
+        return plan(base, int(k), weights=w, shape=shape, rng=rng, **rest).rc
 
+    planner.map = lambda k: maps[int(k)] if map_of(base) is not None else None
     return planner
+
+
+def _fitted(fit: SensorFit, planner, reference, sensor, shape) -> Callable:
+    """A planner fitted to ``sensor`` (:class:`SensorFit`)."""
+    n = int(shape[0]) * int(shape[1])
+    if fit.kind == "receiver":
+        rx = tuple(sensor.options.receiver_px)
+
+        def capped(k, rng):
+            return receiver_capped_plan(planner.map(k), int(k), shape=shape, receiver_shape=rx,
+                                        frames=fit.frames, rng=rng)  # fmt: skip
+
+        return capped
+    if not hasattr(sensor, "scan_seconds"):
+        raise ValueError(f"a scan-time fit needs a sensor with scan_seconds, not {sensor.name!r}")
+
+    def timed(k, rng):
+        budget = sensor.scan_seconds(reference(k, rng))
+        rc, _ = fit_to_time(lambda q: planner(q, rng), sensor.scan_seconds, budget,
+                            k_max=min(4 * int(k), n), k_min=max(1, int(k) // 4))  # fmt: skip
+        return rc
+
+    return timed
 
 
 def run_lidar_study(
@@ -237,9 +335,16 @@ def run_lidar_study(
     camera = scene.camera
     base = int(np.random.default_rng(rng).integers(0, 2**63))
     if sensor.needs_plan:
-        planners = {p: _planner(p, image, o.planner_opts.get(p, {})) for p in o.planners}
         dens = [float(d) for d in o.densities]
         ks = [sample_count(d, depth.size) for d in dens]
+        cache: dict = {}
+        planners = {
+            p: _planner(o.strategies.get(p, p), image, o.planner_opts.get(p, {}), ks, cache)
+            for p in o.planners
+        }
+        for label, fit in o.fits.items():
+            ref = planners.get(fit.reference)
+            planners[label] = _fitted(fit, planners[label], ref, sensor, depth.shape)
     else:
         planners, dens, ks = {NO_PLAN: None}, [0.0], [0]
 
@@ -247,7 +352,7 @@ def run_lidar_study(
         return _seed(base, label, trial, di, 0), _seed(base, label, trial, di, 1)
 
     trials = Trials(planners, ks, int(o.trials), seeds)
-    evaluate = _Scores(depth, image, camera, o.metrics, o.hazard)
+    evaluate = _Scores(depth, image, camera, o.metrics, o.hazard, o.safe_site)
     rows, examples, grids = [], {}, {}
     recons = reconstruction_options(o.reconstructions, outside=o.outside)
     rguide = reconstruction_guide if reconstruction_guide is not None else Guide(image)

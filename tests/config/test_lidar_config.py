@@ -32,7 +32,8 @@ def test_the_shipped_lidar_experiments_validate(name):
     "sets, message",
     [
         (["study.sensor=sonar"], r"study\.sensor"),
-        (["study.planners=[wavelet, psychic]"], r"study\.planners\[1\]: unknown strategy"),
+        (["study.planners=[wavelet, psychic]", "study.planner_opts={}"],
+         r"study\.planners\[1\]: unknown strategy"),
         (["study.metrics=[mse, mse]"], r"study\.metrics"),
         (["study.trials=0"], r"study\.trials"),
         (["study.densities=[2]"], r"study\.densities"),

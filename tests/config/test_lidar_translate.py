@@ -48,6 +48,8 @@ def test_flash_and_micromirror_translate_receiver_width_height_to_rows_cols():
         parse_set(
             [
                 "study.sensor=flash",
+                "study.planner_opts={}",
+                "study.planners=[wavelet, random]",
                 "study.options.steered_beam={}",
                 "study.options.flash={receiver_px: [32, 32], revisits: 2, zoom: 4}",
                 "study.options.detector.dead_time_ns=null",

@@ -67,7 +67,12 @@ def test_pixel_solid_angles_are_exact_and_fall_as_cos3():
 
 
 def test_presets_and_overrides():
-    assert set(INSTRUMENTS) == {"lola_beam", "alhat_flash", "rover_mast_scanner"}
+    assert set(INSTRUMENTS) == {
+        "lola_beam",
+        "alhat_flash",
+        "rover_mast_scanner",
+        "micromirror_flash",
+    }
     lola = instrument("lola_beam", pulse_rate_hz=10e3)
     assert lola.pulse_energy_j == pytest.approx(0.54e-3) and lola.pulse_rate_hz == 1e4
     assert lola.aperture_m2 == pytest.approx(np.pi * 0.07**2)

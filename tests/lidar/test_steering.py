@@ -99,3 +99,65 @@ def test_point_times_add_up_to_the_scan_time():
     assert t[0] == 0.0
     assert t[2] == pytest.approx(0.004 + 0.2 + 0.001)
     assert np.all(np.diff(t[order]) > 0)
+
+
+def test_galvanometer_moves_are_rate_plus_step_response():
+    # inertia-free: 0.1 rad at 1 rad/s = 0.1 s (+ 0.01 s step response); the gimbal takes 0.2 s
+    g = SteeringOptions(**{**OPTS.__dict__, "model": "galvanometer"})
+    assert axis_move_time([0.1, -0.4], g) == pytest.approx([0.1, 0.4])
+    a, b = np.array([[0.0, 0.0]]), np.array([[0.1, 0.05]])
+    assert move_time(a, b, g) == pytest.approx([0.11])
+    p = np.array([[0.0, 0.0], [0.1, 0.0], [0.1, 0.3]])
+    # moves 0.11 + 0.31, dwells 3 x 2 / 100
+    assert scan_timing(p, options=g).total_s == pytest.approx(0.42 + 0.06)
+
+
+def test_continuous_raster_time_by_hand():
+    from simlunar.lidar.steering import raster_sweep
+
+    # v = 1 rad/s, a = 10: turnaround 0.2 s; lines 0.01 rad apart; a step of 0.02 rad takes
+    # 2 sqrt(0.002) = 0.0894 s + 0.01 settle < 0.2: the turnaround sets it
+    r = SteeringOptions(**{**OPTS.__dict__, "model": "continuous_raster", "line_pitch_rad": 0.01})
+    # two lines (el 0.02 and 0.0), azimuth span 0.4 rad: 2 sweeps of 0.4 s + one turnaround
+    p = np.array([[0.0, 0.02], [0.4, 0.02], [0.2, 0.02], [0.1, 0.0], [0.3, 0.0]])
+    s = raster_sweep(p, options=r)
+    assert (s.sweeps, s.lines) == (2, 2)
+    assert s.timing.total_s == pytest.approx(0.8 + 0.2 + 0.0)
+    # first line forwards, second backwards (serpentine)
+    assert s.times == pytest.approx([0.0, 0.4, 0.2, 0.6 + 0.3, 0.6 + 0.1])
+    assert scan_timing(p, options=r).total_s == pytest.approx(s.timing.total_s)
+    assert point_times_of(p, r) == pytest.approx(s.times)
+    # two points closer than v x dwell = 0.02 rad on one line: that line is swept twice
+    q = np.array([[0.0, 0.0], [0.01, 0.0], [0.4, 0.0]])
+    s2 = raster_sweep(q, options=r)
+    # the point at 0.01 rad fires on the way back at 0.6 + 0.39 s; its dwell (0.02 s) ends
+    # 0.01 s after the second sweep
+    assert s2.sweeps == 2 and s2.timing.total_s == pytest.approx(0.4 + 0.2 + 0.4 + 0.01)
+
+
+def point_times_of(p, options):
+    from simlunar.lidar import point_times
+
+    return point_times(p, options=options)
+
+
+def test_continuous_raster_makes_the_grid_the_cheapest_pattern():
+    from simlunar.lidar.steering import raster_sweep
+
+    r = SteeringOptions(max_rate_rad_s=2.0, max_accel_rad_s2=50.0, settle_s=1e-3,
+                        pulse_rate_hz=1e4, pulses_per_point=4, model="continuous_raster",
+                        line_pitch_rad=0.005)  # fmt: skip
+    g = np.mgrid[0:16, 0:16].reshape(2, -1).T * 0.04  # 256 points on 16 lines
+    rand = np.random.default_rng(0).uniform(0, 0.6, (256, 2))
+    tg, tr = raster_sweep(g, options=r).timing.total_s, raster_sweep(rand, options=r).timing.total_s
+    assert tg < 0.5 * tr
+    gim = SteeringOptions(max_rate_rad_s=2.0, max_accel_rad_s2=50.0, settle_s=1e-3,
+                          pulse_rate_hz=1e4, pulses_per_point=4)  # fmt: skip
+    assert scan_timing(g, options=gim).total_s > tg  # stop-and-stare pays for every stop
+
+
+def test_continuous_raster_needs_its_line_pitch():
+    with pytest.raises(ValueError, match="line_pitch_rad"):
+        scan_timing(np.zeros((2, 2)), options=SteeringOptions(model="continuous_raster"))
+    with pytest.raises(ValueError, match="unknown steering model"):
+        SteeringOptions(model="resonant")

@@ -19,3 +19,58 @@ def test_hover_and_descent_by_hand():
 def test_bad_trajectory():
     with pytest.raises(ValueError, match="position_m must be 3 finite numbers"):
         Trajectory((0.0, np.nan, 1.0))
+
+
+def test_attitude_jitter_is_stationary_with_its_rms():
+    from simlunar.lidar.trajectory import JITTER_TONES
+
+    t = np.linspace(0.0, 200.0, 200_001)
+    tr = Trajectory((0, 0, 50.0), attitude_jitter_rad=1e-3, jitter_bandwidth_hz=5.0)
+    w = tr.attitude_at(t)
+    assert w.shape == (t.size, 3)
+    # each axis a sum of JITTER_TONES sinusoids of amplitude sigma sqrt(2 / M): RMS = sigma
+    assert JITTER_TONES >= 4
+    assert np.sqrt((w**2).mean(axis=0)) == pytest.approx([1e-3] * 3, rel=0.05)
+    assert np.abs(w.mean(axis=0)).max() < 1e-4
+    assert tr.attitude_at([0.0, 1.0]) == pytest.approx(tr.attitude_at([0.0, 1.0]))  # seeded
+    assert not np.allclose(Trajectory((0, 0, 1), attitude_jitter_rad=1e-3, jitter_seed=1)
+                           .attitude_at(1.0), tr.attitude_at(1.0))  # fmt: skip
+    assert Trajectory.hover((0, 0, 1)).attitude_at([1.0, 2.0]) == pytest.approx(np.zeros((2, 3)))
+
+
+def test_rotate_small_matches_rodrigues_by_hand():
+    from simlunar.lidar.trajectory import rotate_small
+
+    # 90 deg about z turns x into y; a zero rotation changes nothing
+    v = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    w = np.array([[0.0, 0.0, np.pi / 2], [0.0, 0.0, 0.0]])
+    assert rotate_small(v, w) == pytest.approx(np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]))
+    # a small rotation about x of 1e-3 tilts +z towards -y by 1e-3
+    assert rotate_small(np.array([[0.0, 0.0, 1.0]]), np.array([[1e-3, 0.0, 0.0]]))[0] == (
+        pytest.approx([0.0, -np.sin(1e-3), np.cos(1e-3)])
+    )
+
+
+def test_place_points_round_trip_and_its_compensations():
+    from simlunar.lidar.trajectory import Navigation, place_points, rotate_small
+
+    rng = np.random.default_rng(0)
+    tr = Trajectory.descent((0.0, 0.0, 50.0), 2.0, (0.5, 0.0), attitude_jitter_rad=2e-3)
+    t = np.linspace(0.0, 10.0, 50)
+    cmd = np.column_stack([rng.normal(0, 0.2, (50, 2)), -np.ones(50)])
+    cmd /= np.linalg.norm(cmd, axis=1, keepdims=True)
+    fired = rotate_small(cmd, tr.attitude_at(t))
+    pos = tr.at(t)
+    r = (pos[:, 2] - 0.0) / -fired[:, 2]  # the plane z = 0
+    truth = pos + r[:, None] * fired
+    exact = place_points(r, cmd, t, tr)
+    assert exact == pytest.approx(truth, abs=1e-9)
+    start = place_points(r, cmd, t, tr, Navigation("start"))
+    assert np.abs(start[:, 2]).max() > 10.0  # 20 m of descent ignored
+    noisy = place_points(r, cmd, t, tr, Navigation("noisy", 0.1, 0.0), rng=1)
+    err = noisy - truth
+    assert np.sqrt((err**2).mean()) == pytest.approx(0.1, rel=0.3)
+    with pytest.raises(ValueError, match="unknown compensation"):
+        Navigation("perfect")
+    with pytest.raises(ValueError, match="attitude_jitter_rad"):
+        Trajectory((0, 0, 1.0), attitude_jitter_rad=-1.0)

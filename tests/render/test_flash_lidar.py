@@ -87,6 +87,46 @@ def test_flash_photons_follow_the_lidar_equation_per_pixel(mi):
     assert want[8, 8] / want[0, 0] > 1.3  # centre vs corner: cos^3 x cos x cos^2 (R^2)
 
 
+def test_micromirror_photons_follow_the_lidar_equation_per_dot(mi):
+    # a micromirror of 8 x 8 mirrors (the guide camera's pixels, 6 deg field) with a receiver of
+    # the same 8 x 8 pixels: each receiver pixel sees its dot whole. A dot lit alone gets
+    # E / (8 x 8) of the pulse, so its expected photons are the beam's lidar equation
+    # (E / h nu) (rho / pi) cos(theta) A / R^2 eta divided by 64 (a DMD: equal shares)
+    from simlunar.geometry import Projector
+    from simlunar.lidar import TimeBins
+    from simlunar.lidar.hardware import instrument
+    from simlunar.render.flash_lidar import (
+        FlashOptions,
+        micromirror_lit_sr,
+        receiver_solid_angles,
+    )
+    from simlunar.render.lidar_scan import with_hardware
+    from simlunar.render.lights import ProjectorLight
+    from simlunar.render.transient import TransientOptions, flash_frame
+
+    hw = instrument("micromirror_flash")
+    opts = with_hardware(FlashOptions(transient=TransientOptions(spp=64)), hw)
+    cam = _camera(8, 6.0)
+    bins = TimeBins.for_ranges(45.0, 60.0, 0.05)
+    for r, c in ((4, 4), (1, 6)):
+        pattern = np.zeros((8, 8), np.float32)
+        pattern[r, c] = 1.0
+        light = ProjectorLight(Projector(cam.intrinsics, cam.pose), pattern,
+                               scale=opts.transient.laser_intensity)  # fmt: skip
+        frame = flash_frame(_plane(), cam, bins=bins, options=opts.transient, projector=light)
+        omega = receiver_solid_angles(cam)
+        det = opts.photon_detector(field_sr=1.0, lit_sr=micromirror_lit_sr(cam))
+        got = frame.steady[r, c] * omega[r, c] * det.signal_photons
+        d = cam.directions_device(np.array([[c + 0.5, r + 0.5]]))[0]
+        cos = d[2] / np.linalg.norm(d)
+        want = hw.lambert_signal_photons(H / cos, 0.2, np.arccos(cos)) / 64
+        assert got == pytest.approx(want, rel=0.03)
+        assert np.delete(frame.steady.ravel(), r * 8 + c).max() < 1e-3 * frame.steady[r, c]
+    # about 1.9e3 photons per dot and pulse from albedo 0.12 at 50 m on a 128 x 128 array
+    full = hw.lambert_signal_photons(50.0, 0.12) / 128**2
+    assert 1e3 < full < 4e3
+
+
 def test_a_return_outside_the_gate_is_lost(mi, monkeypatch):
     from simlunar.lidar.gate import GateOptions
     from simlunar.render.flash_lidar import FlashOptions, flash_scan

@@ -159,6 +159,20 @@ def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
     # control: the same ranges from the starting pose
     still = cam.position + scan.ranges[scan.valid, None] * d[scan.valid]
     assert np.abs(still[:, 2] - 0.3 * still[:, 0]).max() > 1.0
+    # with 2 mrad of line-of-sight jitter, retargeted beams: placed with the known pose (the
+    # jitter included) the cloud still lies on the plane; without motion compensation
+    # ("start") it does not
+    from simlunar.lidar.trajectory import Navigation
+
+    jit = Trajectory.descent(cam.position, 4.0, horizontal_m_s=(1.0, 0.0),
+                             attitude_jitter_rad=2e-3, jitter_bandwidth_hz=2.0)  # fmt: skip
+    for nav, on_plane in ((Navigation("exact"), True), (Navigation("start"), False)):
+        s2 = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose, trajectory=jit,
+                               navigation=nav)  # fmt: skip
+        assert s2.valid.mean() > 0.9
+        q = s2.points[s2.valid]
+        miss = np.abs(q[:, 2] - 0.3 * q[:, 0])
+        assert (miss.max() < 0.03) if on_plane else (miss.max() > 1.0)
 
 
 @pytest.mark.parametrize("correct", [True, False])

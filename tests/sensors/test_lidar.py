@@ -182,3 +182,35 @@ def test_micromirror_flash_ranges_the_planned_pixels(mi):
     assert acq.rc.tolist() == rc.tolist()
     assert acq.frames == 2 and acq.seconds == pytest.approx(2 * 4 / 20.0)
     assert acq.values == pytest.approx(H, abs=flash.bin_range_m)
+
+
+@pytest.mark.render
+def test_flash_revisits_from_the_first_frame_s_ranges_and_their_repointing_time(mi):
+    # a 1 m box on the plane in one quarter of the field; the plan points at another quarter.
+    # Revisits from the ranges go to the box's quarter (the first frame's own points are
+    # rough there), from the plan to the plan's; each revisit costs the re-pointing time too
+    from simlunar.render.flash_lidar import FlashOptions
+    from simlunar.render.transient import TransientOptions
+    from simlunar.sensors import FlashLidar, FlashLidarOptions, LidarScene
+
+    t = _plane()
+    h = t.heights.copy()
+    h[36:39, 41:44] = 1.0  # world x in (1, 4), y in (1, 4)
+    terrain = Terrain(h, t.albedo, t.spacing, t.origin)
+    cam = _camera(32, 8.0)
+    uv, _ = cam.project(np.array([[2.5, 2.5, 1.0]]))
+    box_tile = [int(uv[0, 1] * 2 // 32), int(uv[0, 0] * 2 // 32)]
+    other = [1 - box_tile[0], 1 - box_tile[1]]
+    rc = np.array([[other[0] * 16 + 8, other[1] * 16 + 8]] * 4)
+    flash = FlashOptions(detector=DET, pulse=PulseOptions(fwhm_s=1e-9),
+                         transient=TransientOptions(spp=8), pulse_rate_hz=20.0)  # fmt: skip
+    scene = LidarScene(terrain, cam)
+    for source, tile in (("ranges", box_tile), ("plan", other)):
+        o = FlashLidarOptions(flash, receiver_px=(8, 8), revisits=1, zoom=2,
+                              revisit_from=source, repoint_s=0.05)  # fmt: skip
+        sensor = FlashLidar(scene, o)
+        assert sensor.needs_plan == (source != "ranges")
+        acq = sensor.acquire(None if source == "ranges" else rc, rng=0)
+        assert acq.seconds == pytest.approx(2 * 4 / 20.0 + 0.05)
+        ti = (acq.rc[:, 0] // 16).astype(int) * 2 + (acq.rc[:, 1] // 16).astype(int)
+        assert np.bincount(ti, minlength=4)[tile[0] * 2 + tile[1]] == 64  # the revisit's

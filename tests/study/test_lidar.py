@@ -201,3 +201,100 @@ def test_beam_table_of_a_multi_frame_flash_runs_frame_after_frame():
                      0.2, 2, times=times)  # fmt: skip
     acq = Acquisition(planned, np.arange(4.0), (4, 4), detail=scan, planned=planned)
     np.testing.assert_array_equal(beam_table(acq)[:, 0], [1, 3, 0, 2])
+
+
+class _Paced(_Timed):
+    """The stand-in with a tour-like time: 1 ms per sample + 0.1 ms per pixel of path in the
+    planner's row-major order, and a micromirror-like receiver for the receiver fit."""
+
+    class options:  # the attribute the receiver fit reads
+        receiver_px = (8, 8)
+
+    def scan_seconds(self, rc):
+        rc = np.asarray(rc, float)
+        o = np.lexsort((rc[:, 1], rc[:, 0]))
+        path = np.abs(np.diff(rc[o], axis=0)).max(axis=1).sum() if len(rc) > 1 else 0.0
+        return 1e-3 * len(rc) + 1e-4 * path
+
+    def acquire(self, rc, *, rng=None):
+        acq = super().acquire(rc, rng=rng)
+        return Acquisition(acq.rc, acq.values, acq.shape, frames=len(rc),
+                           seconds=self.scan_seconds(rc))  # fmt: skip
+
+
+def test_a_scan_time_fit_scans_within_its_reference_s_time():
+    from simlunar.study.lidar import SensorFit
+
+    image, depth = _guide()
+    o = LidarStudyOptions(
+        planners=("grid", "wavelet_lloyd"),
+        strategies={"wavelet_lloyd": "wavelet"},
+        planner_opts={"wavelet_lloyd": {"placement": "lloyd"}},
+        fits={"wavelet_lloyd": SensorFit("scan_time", "grid")},
+        densities=(1 / 16, 1 / 64),
+        trials=1,
+    )
+    rows = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Paced(depth)).rows
+    sec = {(r["planner"], r["k"]): (r["seconds"], r["samples"]) for r in rows}
+    for k in (16, 64):
+        assert sec[("wavelet_lloyd", k)][0] <= sec[("grid", k)][0] + 1e-12
+        # the budget is used: near the reference's time (one more sample would exceed it)
+        assert sec[("wavelet_lloyd", k)][0] > 0.8 * sec[("grid", k)][0]
+
+
+def test_a_receiver_fit_keeps_one_dot_per_receiver_pixel():
+    from simlunar.lidar.planning import receiver_cells
+    from simlunar.study.lidar import SensorFit
+
+    image, depth = _guide()
+    seen = []
+
+    class _Rx(_Paced):
+        def acquire(self, rc, *, rng=None):
+            seen.append(np.asarray(rc))
+            return super().acquire(rc, rng=rng)
+
+    o = LidarStudyOptions(
+        sensor="micromirror_flash",
+        planners=("wavelet",),
+        fits={"wavelet": SensorFit("receiver")},
+        densities=(1 / 16,),
+        trials=2,
+    )
+    run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Rx(depth))
+    assert len(seen) == 2
+    for rc in seen:
+        assert len(rc) == 64
+        assert np.bincount(receiver_cells(rc, (32, 32), (8, 8)), minlength=64).max() == 1
+
+
+def test_the_learned_map_gets_its_density(monkeypatch):
+    # the learned map is predicted per sample density: the LIDAR study asks it once per k
+    import simlunar.study.sampling_planners as sp
+
+    asked = []
+
+    def weights(base, image, *, feature_opts=None, coefficients=None):
+        asked.append((base, (feature_opts or {}).get("density")))
+        return np.ones(image.shape[:2])
+
+    monkeypatch.setattr(sp, "strategy_weights", weights)
+    image, depth = _guide()
+    o = LidarStudyOptions(planners=("learned",), densities=(1 / 16, 1 / 64), trials=1,
+                          planner_opts={"learned": {"feature_opts": {"model": "m.joblib"}}})  # fmt: skip
+    rows = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Timed(depth)).rows
+    assert sorted(asked) == [("learned", 1 / 64), ("learned", 1 / 16)]
+    assert {r["k"] for r in rows} == {16, 64}
+
+
+def test_safe_site_rows_come_beside_the_hazard_scores():
+    from simlunar.metrics.safe_site import SiteOptions
+
+    image, depth = _guide()
+    site = SiteOptions(semi_axes_m=(3.0, 3.0), pitch_m=6.0, window_px=5, baseline_px=1)
+    o = LidarStudyOptions(planners=("grid",), densities=(1 / 4,), trials=1, safe_site=site,
+                          hazard=HazardOptions())  # fmt: skip
+    rows = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Timed(depth)).rows
+    got = {r["metric"]: r["value"] for r in rows}
+    assert {"safe_site", "safe_site_precision", "safe_sites_available"} <= set(got)
+    assert got["safe_site"] in (0.0, 1.0) and 0.0 <= got["safe_sites_available"] <= 1.0

@@ -1,0 +1,171 @@
+"""The landing question: is the site chosen from the reconstruction truly safe?
+
+A lander picks one of several candidate landing ellipses from what it measured. Each candidate
+is judged by the hazard map of :mod:`simlunar.metrics.hazard` inside it: its hazard fraction is
+the share of its (known) pixels flagged as too steep or too rocky. The lander chooses the
+candidate with the smallest *reconstructed* hazard fraction (ties: the one nearest the aim
+point, the view's centre); the choice is **truly safe** when the *true* hazard fraction of that
+candidate is at most ``max_hazard_fraction`` (default 0: not one hazard pixel in the ellipse).
+Over trials and terrain seeds the mean of ``safe_site`` is the probability that the chosen site
+is safe. ``safe_site_precision`` is the share of the candidates the reconstruction calls safe
+that are truly safe (1 when it calls none safe), ``safe_sites_available`` the share of
+candidates truly safe (what a perfect sensor could choose from).
+
+Thresholds (:class:`SiteOptions`): rocks higher than 0.3 m (the ALHAT hazard-detection
+requirement, rocks > 30 cm: REFERENCES.md) and slopes steeper than 12 deg (the Apollo lunar
+module's landing-slope limit as usually quoted: an **assumption**, not verified in
+REFERENCES.md; ALHAT's detection requirement of 5 deg slopes is stricter). The ellipse size
+(4 m semi-axes: a lander's footprint plus terminal guidance dispersion) is an assumption too.
+Membership of a pixel in an ellipse is by its ground (x, y): the reconstruction's points for the
+choice, the true points for the judgement.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from simlunar.metrics.hazard import HazardOptions, hazard_map
+
+__all__ = ["SiteOptions", "grid_sites", "safe_site_scores", "site_fractions"]
+
+
+@dataclass(frozen=True)
+class SiteOptions:
+    """Safe-site thresholds and candidates (module docstring for sources).
+
+    Attributes
+    ----------
+    slope_deg : float
+        Largest safe slope (degrees) over ``baseline_px``.
+    rock_height_m : float
+        Largest safe height above the local median (m).
+    window_px, baseline_px : int
+        As for :class:`~simlunar.metrics.hazard.HazardOptions`.
+    semi_axes_m : (2,) float
+        Semi-axes of a landing ellipse along world x and y (m).
+    pitch_m : float
+        Spacing of the candidate centres on a grid over the view (m).
+    max_hazard_fraction : float in [0, 1)
+        A site is safe when at most this share of its pixels is hazardous.
+    """
+
+    slope_deg: float = 12.0
+    rock_height_m: float = 0.3
+    window_px: int = 15
+    baseline_px: int = 2
+    semi_axes_m: tuple = (4.0, 4.0)
+    pitch_m: float = 8.0
+    max_hazard_fraction: float = 0.0
+
+    def __post_init__(self):
+        self.hazard  # noqa: B018 - checks slope, rock height, window, baseline
+        a = np.asarray(self.semi_axes_m, float)
+        if a.shape != (2,) or not np.all(np.isfinite(a)) or a.min() <= 0:
+            raise ValueError(f"semi_axes_m must be two lengths > 0, got {self.semi_axes_m}")
+        if not (np.isfinite(self.pitch_m) and self.pitch_m > 0):
+            raise ValueError(f"pitch_m must be > 0, got {self.pitch_m}")
+        if not 0.0 <= self.max_hazard_fraction < 1.0:
+            raise ValueError(
+                f"max_hazard_fraction must be in [0, 1), got {self.max_hazard_fraction}"
+            )
+
+    @property
+    def hazard(self) -> HazardOptions:
+        """The hazard map's options."""
+        return HazardOptions(self.slope_deg, self.rock_height_m, self.window_px, self.baseline_px)
+
+
+def grid_sites(points: np.ndarray, options: SiteOptions) -> np.ndarray:
+    """Candidate ellipse centres (m, 2) (world x, y, m) on a grid of ``pitch_m`` whose ellipses
+    lie inside the known ground of ``points`` (rows, cols, 3)'s bounding box."""
+    p = np.asarray(points, float).reshape(-1, 3)
+    p = p[np.isfinite(p).all(axis=1)]
+    if len(p) == 0:
+        raise ValueError("grid_sites: no known point in the view")
+    a = np.asarray(options.semi_axes_m, float)
+    lo, hi = p[:, :2].min(axis=0) + a, p[:, :2].max(axis=0) - a
+    if np.any(hi < lo):
+        raise ValueError(f"the view ({np.ptp(p[:, :2], axis=0)} m) is smaller than an ellipse")
+    n = np.floor((hi - lo) / options.pitch_m).astype(int) + 1
+    off = lo + 0.5 * ((hi - lo) - (n - 1) * options.pitch_m)  # centred in the view
+    gx = off[0] + options.pitch_m * np.arange(n[0])
+    gy = off[1] + options.pitch_m * np.arange(n[1])
+    return np.stack(np.meshgrid(gx, gy, indexing="ij"), -1).reshape(-1, 2)
+
+
+def site_fractions(
+    points: np.ndarray, hazards: np.ndarray, centres: np.ndarray, semi_axes_m
+) -> np.ndarray:
+    """Hazard fraction (m,) of each ellipse: flagged / known pixels whose ground (x, y) lies
+    inside it (NaN for an ellipse with no known pixel).
+
+    Parameters
+    ----------
+    points : (rows, cols, 3) float
+        World points of the view's pixels (NaN where unknown).
+    hazards : (rows, cols) bool
+    centres : (m, 2) float
+        Ellipse centres (world x, y, m).
+    semi_axes_m : (2,) float
+        Semi-axes along x and y (m).
+    """
+    p = np.asarray(points, float).reshape(-1, 3)
+    h = np.asarray(hazards, bool).reshape(-1)
+    if h.size != len(p):
+        raise ValueError(f"hazards {np.shape(hazards)} and points {np.shape(points)} differ")
+    known = np.isfinite(p).all(axis=1)
+    xy, h = p[known, :2], h[known]
+    a = np.asarray(semi_axes_m, float)
+    c = np.asarray(centres, float).reshape(-1, 2)
+    out = np.full(len(c), np.nan)
+    for i, ci in enumerate(c):
+        inside = (((xy - ci) / a) ** 2).sum(axis=1) <= 1.0
+        if inside.any():
+            out[i] = h[inside].mean()
+    return out
+
+
+def safe_site_scores(
+    recon_points: np.ndarray,
+    true_points: np.ndarray,
+    options: SiteOptions = SiteOptions(),
+    *,
+    centres: np.ndarray | None = None,
+) -> dict[str, float]:
+    """Whether the site chosen from the reconstruction is truly safe (module docstring).
+
+    Parameters
+    ----------
+    recon_points, true_points : (rows, cols, 3) float
+        The view's reconstructed and true world points (m; NaN where unknown).
+    options : SiteOptions
+    centres : (m, 2) float or None
+        Candidate ellipse centres (world x, y, m); None = :func:`grid_sites` of the truth's
+        view.
+
+    Returns
+    -------
+    dict
+        ``safe_site`` (1.0 if the chosen site is truly safe, else 0.0), ``safe_site_precision``
+        and ``safe_sites_available``.
+    """
+    c = grid_sites(true_points, options) if centres is None else np.asarray(centres, float)
+    if len(c) == 0:
+        raise ValueError("safe_site_scores: no candidate site")
+    hz = options.hazard
+    f_rec = site_fractions(recon_points, hazard_map(recon_points, hz), c, options.semi_axes_m)
+    f_true = site_fractions(true_points, hazard_map(true_points, hz), c, options.semi_axes_m)
+    tol = options.max_hazard_fraction
+    rec = np.where(np.isfinite(f_rec), f_rec, np.inf)  # unmeasured: never chosen first
+    aim = np.nanmean(np.asarray(true_points, float).reshape(-1, 3)[:, :2], axis=0)
+    dist = np.linalg.norm(c - aim, axis=1)
+    chosen = int(np.lexsort((dist, rec))[0])
+    truly = np.isfinite(f_true) & (f_true <= tol + 1e-12)
+    called = np.isfinite(f_rec) & (f_rec <= tol + 1e-12)
+    return {
+        "safe_site": float(truly[chosen]),
+        "safe_site_precision": float(truly[called].mean()) if called.any() else 1.0,
+        "safe_sites_available": float(truly.mean()),
+    }
