@@ -12,9 +12,9 @@ that are truly safe (1 when it calls none safe), ``safe_sites_available`` the sh
 candidates truly safe (what a perfect sensor could choose from).
 
 Thresholds (:class:`SiteOptions`): rocks higher than 0.3 m (the ALHAT hazard-detection
-requirement, rocks > 30 cm: REFERENCES.md) and slopes steeper than 12 deg (the Apollo lunar
-module's landing-slope limit as usually quoted: an **assumption**, not verified in
-REFERENCES.md; ALHAT's detection requirement of 5 deg slopes is stricter). The ellipse size
+requirement, rocks > 30 cm: Amzajerdian et al. 2015, AIAA GNC) and slopes steeper than 12 deg
+(the Apollo lunar module's landing-slope limit as usually quoted: an **assumption**, not
+verified here; ALHAT's detection requirement of 5 deg slopes is stricter). The ellipse size
 (4 m semi-axes: a lander's footprint plus terminal guidance dispersion) is an assumption too.
 Membership of a pixel in an ellipse is by its ground (x, y): the reconstruction's points for the
 choice, the true points for the judgement.
