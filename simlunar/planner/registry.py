@@ -43,7 +43,7 @@ __all__ = [
     "register_map_planner",
 ]
 
-#: placement name -> Entry(fn(weights, k, *, rng, options), options class)
+#: placement name -> Entry(``fn(weights, k, *, rng, options)``, options class)
 PLACEMENTS = Registry("placement")
 #: planner name -> Entry(MapSource or fn, options class); registered by :mod:`simlunar.planner`
 PLANNERS = Registry("strategy")

@@ -274,7 +274,7 @@ CASES = [
     Case("sun guide light without a sun", {**with_("study", {**SCANNER, "guide_light": "sun"}), "render": {**GOOD.get("render", {}), "light": {"kind": "camera"}}}, "study.guide_light: sun needs render.light.kind sun"),
     Case("low_contrast without the gray code", with_("study", {**SCANNER, "modes": ["data_reduction"], "planners": ["low_contrast"]}), "planners: low_contrast ranks the pixels of the gray-code scan"),
     Case("options for low_contrast", with_("study", {**SCANNER, "planners": ["low_contrast"], "options": {"planner_opts": {"low_contrast": {"feature_opts": {"levels": 1}}}}}), "options.planner_opts.low_contrast: low_contrast takes no options"),
-    Case("unknown scanner planner", with_("study", {**SCANNER, "planners": ["low_contrst"]}), "study.planners[0]: unknown planner 'low_contrst' (valid: combination, entropy, gradient, grid, learned, lloyd_uniform, low_contrast, random, saliency, wavelet)"),
+    Case("unknown scanner planner", with_("study", {**SCANNER, "planners": ["low_contrst"]}), "study.planners[0]: unknown planner 'low_contrst' (valid: combination, entropy, gradient, grid, learned, lloyd_uniform, log_energy, log_lloyd, low_contrast, random, saliency, wavelet, wavelet_lloyd)"),
     Case("unknown scan light", with_("study", {**SCANNER, "scan_light": "moon"}), "scan_light"),
     Case("unknown rig option", with_("study", {**SCANNER, "options": {"rig": {"tilt_deg": 3}}}), "tilt"),
     Case("unknown strategy option", with_("study.strategy_options", {"wavelet": {"blue_nose": True}}), "blue_nose"),
