@@ -10,6 +10,9 @@ from simlunar.errors import SimlunarError
 
 __all__ = ["report"]
 
+# The library is imported inside the command, not at the top: results.report imports the
+# config loader (the scientific stack, about 4 s), which `simlunar report --help` should not pay.
+
 
 def report(
     results_dir: str = typer.Argument(..., help="a result folder of `simlunar run`"),

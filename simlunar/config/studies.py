@@ -84,6 +84,15 @@ Reconstructions = Annotated[
 ]
 
 
+def _save_arrays_field():
+    return Field(
+        False,
+        description="write arrays/unit<i>/ per unit: trial 0's reconstruction of every "
+        "planner, density and reconstruction and its error map (reconstruction - truth), "
+        "GeoTIFF and EXR (docs/experiments.md); changes no number",
+    )
+
+
 def _reconstructions_field():
     return Field(
         default_factory=lambda: ["linear"],
@@ -150,12 +159,7 @@ class SamplingStudyCfg(_Model):
         "and give 95 % bootstrap intervals",
     )
     reconstructions: Reconstructions = _reconstructions_field()
-    save_arrays: bool = Field(
-        False,
-        description="write arrays/unit<i>/ per unit: trial 0's reconstruction of every "
-        "planner, density and reconstruction and its error map (reconstruction - truth), "
-        "GeoTIFF and EXR (docs/experiments.md); changes no number",
-    )
+    save_arrays: bool = _save_arrays_field()
 
     _unique = field_validator("strategies", "metrics")(unique_names)
 
@@ -257,12 +261,7 @@ class LidarStudyCfg(_Model):
         "over terrain seeds in the figures)",
     )
     reconstructions: Reconstructions = _reconstructions_field()
-    save_arrays: bool = Field(
-        False,
-        description="write arrays/unit<i>/ per unit: trial 0's reconstruction of every "
-        "planner, density and reconstruction and its error map (reconstruction - truth), "
-        "GeoTIFF and EXR (docs/experiments.md); changes no number",
-    )
+    save_arrays: bool = _save_arrays_field()
 
     _unique = field_validator("planners", "metrics")(unique_names)
 

@@ -33,6 +33,7 @@ from simlunar.config.schema import ExperimentCfg
 from simlunar.config.translate import coding_options, rig_kwargs
 from simlunar.errors import ConfigError, InfrastructureError, ResultFolderError
 from simlunar.geometry import Camera, Intrinsics, Pose
+from simlunar.metrics.interior import interior_mask, sparsest_pitch
 from simlunar.pipeline.inputs import (
     MAX_ABS_COORD_M,
     MAX_NAN_FRACTION,
@@ -450,7 +451,6 @@ def check_score_region(cfg: Any, shape: tuple[int, int]) -> None:
     s = cfg.study
     if getattr(s, "kind", None) != "sampling" or getattr(s, "score_region", "full") == "full":
         return
-    from simlunar.metrics.interior import interior_mask, sparsest_pitch
 
     try:
         interior_mask(shape, sparsest_pitch(shape, s.densities))

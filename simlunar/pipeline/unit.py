@@ -288,12 +288,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
         keep_trial=0 if cfg.study.save_arrays else None,
     )
     timings["study_s"] = time.perf_counter() - t
-    exports = None
-    if cfg.study.save_arrays:  # written by the runner into arrays/unit<i>/
-        view = export_view(scene.camera, scene.terrain, depth.shape)
-        exports = array_export_payload(
-            study.grids, depth, densities=study.densities, ks=study.ks, view=view
-        )
+    exports = _array_exports(cfg, scene, depth, study)
     return UnitRecord(
         rows=[dict(r) for r in study.rows],
         scores=_plain_scores(study.scores),
@@ -309,6 +304,17 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
             **guide_meta,
         },
         exports=exports,
+    )
+
+
+def _array_exports(cfg, scene: RenderScene, depth, result) -> dict | None:
+    """The ``arrays/unit<i>/`` payload of a sampling or lidar study's ``result`` (its grids,
+    densities and ks) when ``study.save_arrays`` is set (written by the runner); else None."""
+    if not cfg.study.save_arrays:
+        return None
+    view = export_view(scene.camera, scene.terrain, depth.shape)
+    return array_export_payload(
+        result.grids, depth, densities=result.densities, ks=result.ks, view=view
     )
 
 
@@ -477,12 +483,7 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     scans = None
     if cfg.study.save_scans:  # written by the runner into scans/unit<i>/
         scans = lidar_export_payload(res.examples, scene.camera, image.shape[:2])
-    exports = None
-    if cfg.study.save_arrays:  # written by the runner into arrays/unit<i>/
-        view = export_view(scene.camera, scene.terrain, depth.shape)
-        exports = array_export_payload(
-            res.grids, depth, densities=res.densities, ks=res.ks, view=view
-        )
+    exports = _array_exports(cfg, scene, depth, res)
     return UnitRecord(
         rows=[dict(row) for row in res.rows],
         scores={},

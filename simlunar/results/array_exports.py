@@ -51,6 +51,7 @@ import numpy as np
 
 from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
+from simlunar.geometry import OrthoCamera
 from simlunar.imaging.exr import write_exr
 
 __all__ = [
@@ -123,7 +124,6 @@ def export_view(camera, terrain, shape=None) -> dict[str, Any]:
         a nadir view; None otherwise), ``transform`` (6 floats, GDAL order) and ``crs`` (WKT
         string or None).
     """
-    from simlunar.geometry import OrthoCamera
 
     nadir = (
         isinstance(camera, OrthoCamera)

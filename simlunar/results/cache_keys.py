@@ -92,6 +92,8 @@ def reconstruction_versions(study: dict) -> dict:
     the same options, e.g. the learned reconstruction's held-out check): part of a unit's
     cache key, so cached results of the method as it was are not served; empty (the key as
     before) when no configured reconstruction states one."""
+    # imported here: results.folder imports this module, and the reconstructions (their
+    # scientific stack) are needed only to key a unit, not to read a folder
     from simlunar.reconstruction import RECONSTRUCTIONS
 
     out = {}

@@ -155,28 +155,28 @@ def _invalidate(out: Path) -> None:
     prune_figures(out, keep=())
 
 
-def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
-    """``{"unit<i>": unit key}``: the ``scans/`` folders these units export (units with
-    ``study.save_scans``; of units sharing a key, the first, which is the one computed)."""
+def _export_folders(units: list[WorkUnit], flag: str) -> dict[str, str]:
+    """``{"unit<i>": unit key}`` of the units whose study section sets ``flag`` (of units
+    sharing a key, the first, which is the one computed)."""
     out: dict[str, str] = {}
     seen: set[str] = set()
     for u in units:
-        if (u.config.get("study") or {}).get("save_scans") and u.key not in seen:
+        if (u.config.get("study") or {}).get(flag) and u.key not in seen:
             seen.add(u.key)
             out[f"unit{u.index}"] = u.key
     return out
+
+
+def scan_folders(units: list[WorkUnit]) -> dict[str, str]:
+    """``{"unit<i>": unit key}``: the ``scans/`` folders these units export (units with
+    ``study.save_scans``; of units sharing a key, the first, which is the one computed)."""
+    return _export_folders(units, "save_scans")
 
 
 def array_folders(units: list[WorkUnit]) -> dict[str, str]:
     """``{"unit<i>": unit key}``: the ``arrays/`` folders these units export (units with
     ``study.save_arrays``; of units sharing a key, the first, which is the one computed)."""
-    out: dict[str, str] = {}
-    seen: set[str] = set()
-    for u in units:
-        if (u.config.get("study") or {}).get("save_arrays") and u.key not in seen:
-            seen.add(u.key)
-            out[f"unit{u.index}"] = u.key
-    return out
+    return _export_folders(units, "save_arrays")
 
 
 def _scans_present(out: Path, scan_dirs: dict[str, str], u: WorkUnit, sub: str = "scans") -> bool:

@@ -16,6 +16,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+from simlunar.config.loading import load_experiment, to_plain
 from simlunar.errors import ResultFolderError, SimlunarError
 from simlunar.results.folder import read_folder_config
 from simlunar.results.md_tables import parse_markdown
@@ -91,7 +92,6 @@ def run_overrides(folder: str | Path, shipped: str | Path | None = None) -> dict
     folder's experiment name. Empty when the file is missing or cannot be validated here
     (a learned map's model file absent, say): then nothing is claimed.
     """
-    from simlunar.config.loading import load_experiment, to_plain
 
     folder = Path(folder)
     cfg = read_folder_config(folder / "config.yaml")
