@@ -92,6 +92,16 @@ def _gray(image) -> np.ndarray:
     return g / mean if mean > 0 else g
 
 
+def _sample_distance(upts: np.ndarray, shape, pitch: float) -> np.ndarray:
+    """Distance (px) of every cell to the nearest sampled cell, shape ``shape``; ``4 * pitch``
+    everywhere when no sample lies inside the grid."""
+    mask = np.ones(shape, dtype=bool)
+    cells = np.rint(upts).astype(np.int64)
+    inside = (cells >= 0).all(1) & (cells[:, 0] < shape[0]) & (cells[:, 1] < shape[1])
+    mask[cells[inside, 0], cells[inside, 1]] = False
+    return ndimage.distance_transform_edt(mask) if not mask.all() else np.full(shape, 4 * pitch)
+
+
 def residual_features(
     image,
     points_rc,
@@ -151,11 +161,7 @@ def residual_features(
     slope = pitch / unit
     lap = ndimage.gaussian_laplace(z_lin, 0.5 * pitch, mode="nearest") * pitch**2 / unit
     loo_map = reconstruct(upts, np.abs(loo), shape) / unit if len(upts) else np.zeros(shape)
-    mask = np.ones(shape, dtype=bool)
-    cells = np.rint(upts).astype(np.int64)
-    inside = (cells >= 0).all(1) & (cells[:, 0] < shape[0]) & (cells[:, 1] < shape[1])
-    mask[cells[inside, 0], cells[inside, 1]] = False
-    dist = ndimage.distance_transform_edt(mask) if not mask.all() else np.full(shape, 4 * pitch)
+    dist = _sample_distance(upts, shape, pitch)
     sample = [
         (z_lin - ndimage.gaussian_filter(z_lin, pitch, mode="nearest")) / unit,
         dr * slope,

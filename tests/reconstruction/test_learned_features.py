@@ -53,3 +53,13 @@ def test_anchor_keeps_the_measured_cells():
 
 def test_learned_re_exports_the_features():
     assert learned.feature_names is feature_names and learned.anchor is anchor
+
+
+def test_sample_distance_by_hand():
+    from simlunar.reconstruction.learned_features import _sample_distance
+
+    d = _sample_distance(np.array([[0.0, 0.0], [2.2, 3.0]]), (3, 4), pitch=2.0)
+    assert d[0, 0] == 0 and d[2, 3] == 0 and d[0, 3] == 2.0 and np.isclose(d[1, 1], np.sqrt(2))
+    assert d[2, 0] == 2.0  # (2, 0) is two rows from (0, 0) and three columns from (2, 3)
+    outside = _sample_distance(np.array([[9.0, 9.0]]), (3, 4), pitch=2.0)
+    assert (outside == 8.0).all()
