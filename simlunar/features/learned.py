@@ -34,10 +34,8 @@ import hashlib
 import io
 import json
 import math
-import os
 import pickle
 import platform
-import tempfile
 import threading
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
@@ -58,6 +56,7 @@ from simlunar.features._stack import (
     image_features,
 )
 from simlunar.features.maps import check_image
+from simlunar.features.model_save import save_with_record
 
 __all__ = [
     "FORMAT",
@@ -302,70 +301,6 @@ class LearnedMap:
                 f"{sorted(meta['densities'])}"
             )
         return cls(models, {k: v for k, v in meta.items() if k not in ("model_file",)})
-
-
-def save_with_record(path, payload, meta: dict) -> tuple[Path, Path]:
-    """Write ``payload`` with joblib to ``path`` and ``meta`` beside it as JSON (``.json``),
-    with the model file's name and SHA-256 added: the record a load checks before unpickling.
-
-    Atomic: both files are written beside their targets and fsynced before either is renamed
-    (:func:`_write_pair`), so a failed save leaves the old model and record untouched and its
-    error names the file.
-
-    Parameters
-    ----------
-    path : str or Path
-        Ends in ``.joblib``; parent folders are created.
-    payload : object
-        What joblib pickles.
-    meta : dict
-        The JSON record (not changed).
-
-    Returns
-    -------
-    (Path, Path)
-        The joblib file and its record.
-    """
-    path = _model_path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    buf = io.BytesIO()
-    joblib.dump(payload, buf)
-    data = buf.getvalue()
-    meta = {**meta, "model_file": path.name, "model_sha256": hashlib.sha256(data).hexdigest()}
-    record = (json.dumps(meta, indent=2, sort_keys=True) + "\n").encode()
-    sidecar = path.with_suffix(".json")
-    _write_pair(((path, data), (sidecar, record)))
-    return path, sidecar
-
-
-def _write_pair(files) -> None:
-    """Write each ``(path, bytes)`` beside its target and fsync it; only when every one is
-    written are they renamed over their targets, so a failed save (a full disk, a read-only
-    folder) leaves the old model and record untouched. ``OSError`` names the target file."""
-    done: list[tuple[str, Path]] = []
-    try:
-        for target, data in files:
-            try:
-                fd, tmp = tempfile.mkstemp(
-                    prefix=f".{target.name}.", suffix=".tmp", dir=target.parent
-                )
-                done.append((tmp, target))
-                with os.fdopen(fd, "wb") as f:
-                    f.write(data)
-                    f.flush()
-                    os.fsync(f.fileno())
-                os.chmod(tmp, 0o644)
-            except OSError as exc:
-                raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from None
-        # the model before its record: a reader between the two renames finds the new model
-        # beside the old record and refuses it (hash), never a mismatched pair in use
-        for tmp, target in done:
-            os.replace(tmp, target)
-        done.clear()
-    finally:
-        for tmp, _ in done:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
 
 
 def _parse_record(record: bytes, sidecar: Path) -> dict:

@@ -3,15 +3,12 @@ translation), unit strings converted, the hazard window odd, bounds with their r
 
 from __future__ import annotations
 
-from dataclasses import asdict
-
 import pytest
 from pydantic import ValidationError
 
 from simlunar.config.lidar import (
     DetectorCfg,
     FlashCfg,
-    HazardCfg,
     LidarOptionsCfg,
     PulseCfg,
     SteeredBeamCfg,
@@ -19,7 +16,6 @@ from simlunar.config.lidar import (
 )
 from simlunar.config.lidar_translate import lidar_sensor_options
 from simlunar.config.studies import LidarStudyCfg
-from simlunar.metrics.hazard import HazardOptions
 from simlunar.render.flash_lidar import FlashOptions
 from simlunar.render.lidar_scan import SteeredBeamOptions
 from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
@@ -44,16 +40,6 @@ def test_flash_and_micromirror_defaults_are_the_librarys():
     assert flash.flash.pulse_rate_hz == FlashOptions().pulse_rate_hz
     mm = lidar_sensor_options(LidarStudyCfg(kind="lidar", sensor="micromirror_flash"))
     assert mm.receiver_px == MicromirrorOptions().receiver_px
-
-
-def test_hazard_defaults_and_units():
-    assert HazardCfg().model_dump() == asdict(HazardOptions())
-    h = HazardCfg(relief_m="25 cm", slope_deg="0.25 rad")
-    assert h.relief_m == pytest.approx(0.25) and h.slope_deg == pytest.approx(14.32394487827058)
-    with pytest.raises(ValidationError, match=r"must be odd \(a centred window\), got 16"):
-        HazardCfg(window_px=16)
-    with pytest.raises(ValidationError, match="less than 90"):
-        HazardCfg(slope_deg=90)
 
 
 def test_lengths_take_units():

@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 
-import joblib
 import numpy as np
 import pytest
 from scipy import ndimage
@@ -13,7 +11,7 @@ from scipy.stats import rankdata
 
 from simlunar.features import feature_map
 from simlunar.features._stack import FEATURE_NAMES, image_features
-from simlunar.features.learned import LearnedMap, LearnedOptions, pitch_of, save_with_record
+from simlunar.features.learned import LearnedMap, LearnedOptions, pitch_of
 from simlunar.planner import plan
 from simlunar.planner.learning import error_target, train_learned_map
 
@@ -188,17 +186,6 @@ def test_registered_feature_and_strategy(model, held_out, tmp_path):
 def test_options_are_validated(kwargs, match):
     with pytest.raises(ValueError, match=match):
         LearnedOptions(**kwargs)
-
-
-def test_save_with_record_writes_the_hash_and_leaves_meta_alone(tmp_path):
-    meta = {"format": "x", "densities": [0.01]}
-    path, sidecar = save_with_record(tmp_path / "sub" / "m.joblib", {"a": [1, 2]}, meta)
-    assert meta == {"format": "x", "densities": [0.01]}
-    assert sidecar == path.with_suffix(".json") and path.parent.name == "sub"
-    record = json.loads(sidecar.read_text())
-    assert record["model_file"] == "m.joblib"
-    assert record["model_sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
-    assert joblib.load(path) == {"a": [1, 2]}
 
 
 def test_training_inputs_are_validated():

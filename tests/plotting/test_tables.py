@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import pytest
-
 from simlunar.plotting.tables import score_tables
 
 # paper Table 2 (moonyard), MSE/GRAD/SAL rows, Grid/Random/Gradient/Entropy/Wavelet
@@ -56,18 +54,6 @@ def test_missing_scores_show_a_dash():
     )
     assert "| MSE | **1.00** | – |" in md
     assert "--" in tex and "–" not in tex
-
-
-def test_t_interval_by_hand():
-    from simlunar.plotting.tables import t_interval
-
-    # [1, 2, 3]: mean 2, s = 1, t(0.975, 2) = 4.302653 -> half width 4.302653 / sqrt(3) = 2.48414
-    m, lo, hi = t_interval([1.0, 2.0, 3.0])
-    assert m == 2.0
-    assert lo == pytest.approx(2.0 - 2.484138, abs=1e-6)
-    assert hi == pytest.approx(2.0 + 2.484138, abs=1e-6)
-    with pytest.raises(ValueError, match="at least two"):
-        t_interval([1.0])
 
 
 def test_intervals_print_and_bold_only_where_marked():

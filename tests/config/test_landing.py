@@ -1,0 +1,37 @@
+"""Landing-question configuration (simlunar.config.landing)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+import pytest
+from pydantic import ValidationError
+
+from simlunar.config import lidar
+from simlunar.config.landing import HazardCfg, SafeSiteCfg
+from simlunar.metrics.hazard import HazardOptions
+
+
+def test_hazard_defaults_and_units():
+    assert HazardCfg().model_dump() == asdict(HazardOptions())
+    h = HazardCfg(relief_m="25 cm", slope_deg="0.25 rad")
+    assert h.relief_m == pytest.approx(0.25) and h.slope_deg == pytest.approx(14.32394487827058)
+    with pytest.raises(ValidationError, match=r"must be odd \(a centred window\), got 16"):
+        HazardCfg(window_px=16)
+    with pytest.raises(ValidationError, match="less than 90"):
+        HazardCfg(slope_deg=90)
+
+
+def test_safe_site_thresholds_and_units():
+    s = SafeSiteCfg()
+    assert (s.slope_deg, s.rock_height_m, s.semi_axes_m) == (12.0, 0.3, (4.0, 4.0))
+    s = SafeSiteCfg(rock_height_m="20 cm", pitch_m="0.01 km")
+    assert s.rock_height_m == pytest.approx(0.2) and s.pitch_m == pytest.approx(10.0)
+    with pytest.raises(ValidationError, match=r"must be odd \(a centred window\), got 4"):
+        SafeSiteCfg(window_px=4)
+    with pytest.raises(ValidationError, match="less than 1"):
+        SafeSiteCfg(max_hazard_fraction=1.0)
+
+
+def test_lidar_re_exports_the_landing_models():
+    assert lidar.HazardCfg is HazardCfg and lidar.SafeSiteCfg is SafeSiteCfg

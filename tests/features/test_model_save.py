@@ -1,0 +1,42 @@
+"""Atomic model file + JSON record saving (simlunar.features.model_save)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import joblib
+import pytest
+
+from simlunar.features import learned
+from simlunar.features.model_save import save_with_record
+
+
+def test_save_with_record_writes_the_hash_and_leaves_meta_alone(tmp_path):
+    meta = {"format": "x", "densities": [0.01]}
+    path, sidecar = save_with_record(tmp_path / "sub" / "m.joblib", {"a": [1, 2]}, meta)
+    assert meta == {"format": "x", "densities": [0.01]}
+    assert sidecar == path.with_suffix(".json") and path.parent.name == "sub"
+    record = json.loads(sidecar.read_text())
+    assert record["model_file"] == "m.joblib"
+    assert record["model_sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+    assert joblib.load(path) == {"a": [1, 2]}
+
+
+def test_a_resave_replaces_both_and_leaves_no_temporary_files(tmp_path):
+    save_with_record(tmp_path / "m.joblib", {"v": 1}, {"format": "x"})
+    path, sidecar = save_with_record(tmp_path / "m.joblib", {"v": 2}, {"format": "y"})
+    assert joblib.load(path) == {"v": 2} and json.loads(sidecar.read_text())["format"] == "y"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.joblib", "m.json"]
+
+
+def test_an_unwritable_target_names_the_file(tmp_path):
+    (tmp_path / "m.json").mkdir()
+    (tmp_path / "m.json" / "x").write_text("keeps the folder non-empty")
+    with pytest.raises(OSError):
+        save_with_record(tmp_path / "m.joblib", {"v": 1}, {})
+    assert not [p for p in tmp_path.iterdir() if p.suffix == ".tmp"]
+
+
+def test_learned_re_exports_save_with_record():
+    assert learned.save_with_record is save_with_record
