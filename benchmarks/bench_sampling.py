@@ -217,7 +217,7 @@ def sampling_protocol_20trials(*, smoke: bool = False) -> dict:
         "ours_s": round(ours_s, 2),
         "workers": 2,
         "smoke": smoke,
-        "reconstructions": 5 * len(opts.densities) * opts.trials,
+        "reconstructions": 5 * len(res.densities) * opts.trials,  # the densities run
         **{f"mse_score_{s}": round(v, 3) for s, v in scores.items()},
     }
 
