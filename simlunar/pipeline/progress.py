@@ -13,7 +13,7 @@ import time
 
 from simlunar.progress import Event
 
-__all__ = []
+__all__ = ["unit_fraction"]
 
 
 class _Bar:
@@ -42,14 +42,22 @@ class _Bar:
             transient=False,
         )
         self.task = self.p.add_task(f"[bold]{name}[/]", total=total, completed=done, unit="units")
+        self.units_done = done
         self.stages: dict[tuple, int] = {}  # open stage path -> its bar
+        self.open: dict[tuple, Event] = {}
         self.p.start()
 
     def event(self, ev: Event) -> None:
         """Show a stage of the current unit (its bar added, updated or removed)."""
         if ev.finished:
             self._close(ev.path)
-            return
+        else:
+            self._show(ev)
+        # the units bar moves inside a unit too, so a one-unit run has an ETA
+        self.p.update(self.task, completed=self.units_done + unit_fraction(self.open.values()))
+
+    def _show(self, ev: Event) -> None:
+        self.open[ev.path] = ev
         task = self.stages.get(ev.path)
         if task is None:
             label = "  " * (ev.depth + 1) + ev.stage
@@ -63,12 +71,14 @@ class _Bar:
         self.event(Event((name,), done, total, "steps"))
 
     def _close(self, path: tuple) -> None:
+        self.open = {p: e for p, e in self.open.items() if p[: len(path)] != path}
         for p in [p for p in self.stages if p[: len(path)] == path]:
             self.p.remove_task(self.stages.pop(p))
 
     def advance(self) -> None:
-        self.p.advance(self.task)
+        self.units_done += 1
         self._close(())
+        self.p.update(self.task, completed=self.units_done)
 
     def stop(self) -> None:
         self.p.stop()
@@ -84,6 +94,7 @@ class _Lines:
         self.stream = sys.stderr if stream is None else stream
         self.every_s = every_s
         self.t0 = time.monotonic()
+        self.unit_t0 = self.t0
         self.n_new = 0
         self.last_stage = self.t0
         self.open: dict[tuple, Event] = {}
@@ -101,7 +112,17 @@ class _Lines:
         if self.open and now - self.last_stage >= self.every_s:
             self.last_stage = now
             stages = " > ".join(e.text() for e in self.open.values())
-            self._say(f"unit {self.done + 1}/{self.total}: {stages}")
+            self._say(f"unit {self.done + 1}/{self.total}: {stages}{self._unit_eta(now)}")
+
+    def _unit_eta(self, now: float) -> str:
+        """``", unit 38 %, ETA 0:05:00"``: this unit's share done, and the time left for it
+        and the units after it (at this unit's pace); empty before anything is done."""
+        frac = unit_fraction(self.open.values())
+        if frac <= 0.0:
+            return ""
+        per_unit = (now - self.unit_t0) / frac
+        left = per_unit * (1.0 - frac) + per_unit * (self.total - self.done - 1)
+        return f", unit {100 * frac:.0f} %, ETA {_clock(left)}"
 
     def stage(self, name: str, done: int, total: int) -> None:
         """A one-level stage (the older form of :meth:`event`)."""
@@ -112,13 +133,35 @@ class _Lines:
         self.n_new += 1
         self.open = {}
         elapsed = time.monotonic() - self.t0
-        self.last_stage = time.monotonic()
+        self.last_stage = self.unit_t0 = time.monotonic()
         left = (self.total - self.done) * elapsed / self.n_new
         eta = f", ETA {_clock(left)}" if self.done < self.total else ""
         self._say(f"{self.done}/{self.total} units, {_clock(elapsed)} elapsed{eta}")
 
     def stop(self) -> None:
         pass
+
+
+def unit_fraction(open_stages) -> float:
+    """How much of the current unit is done, read from its open stages (0 to 1).
+
+    The outermost stage counts ``done / total``; a stage opened inside it adds its own
+    fraction of one of the outer stage's items, and so on inward (``study 1/4 steps >
+    scan 11/22 frames`` is (1 + 0.5) / 4 = 0.375). A stage without a total adds nothing.
+
+    Parameters
+    ----------
+    open_stages : iterable of Event
+        The unit's open stages (any order; one per depth, as the library opens them).
+    """
+    chain = sorted(open_stages, key=lambda e: e.depth)
+    frac = 0.0
+    for ev in reversed(chain):
+        if not ev.total:
+            frac = 0.0
+            continue
+        frac = min(1.0, (min(ev.done, ev.total) + frac) / ev.total)
+    return frac
 
 
 def _clock(seconds: float) -> str:
