@@ -47,8 +47,11 @@ def new_axes(ax, figsize):
     return fig, ax
 
 
-def legend_outside(ax, *, handles=None, labels=None, ncols: int = 2) -> None:
-    """A single panel's legend below its axes, in ``ncols`` columns (never on the data)."""
+def legend_outside(
+    ax, *, handles=None, labels=None, ncols: int = 2, title: str | None = None
+) -> None:
+    """A single panel's legend below its axes, in ``ncols`` columns (never on the data), with
+    an optional small ``title`` (what the bars or bands show)."""
     if handles is None:
         handles, labels = ax.get_legend_handles_labels()
     if not handles:
@@ -63,6 +66,8 @@ def legend_outside(ax, *, handles=None, labels=None, ncols: int = 2) -> None:
         frameon=False,
         handlelength=1.8,
         ncols=min(ncols, len(labels)),
+        title=title,
+        title_fontsize=LEGEND_PT - 2,
     )
 
 

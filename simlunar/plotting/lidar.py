@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from simlunar.plotting.images import DEPTH_CMAP
-from simlunar.plotting.layout import LABEL_PT, PAGE_W, TICK_PT, TITLE_PT
+from simlunar.plotting.layout import LABEL_PT, PAGE_W, TICK_PT, TITLE_PT, legend_outside
 from simlunar.plotting.lidar_tables import lidar_summary, lidar_tables
 from simlunar.plotting.style import label, metric_axis, styles
 
@@ -110,7 +110,7 @@ def error_vs_time(
     (Figure, Axes)
     """
     if ax is None:
-        fig = Figure(figsize=(3.4, 2.8), layout="constrained")
+        fig = Figure(figsize=(3.4, 3.6), layout="constrained")
         ax = fig.add_subplot()
     else:
         fig = ax.figure
@@ -136,8 +136,8 @@ def error_vs_time(
     ax.set_ylabel(metric_axis(metric))
     if title:
         ax.set_title(title, fontsize=8)
-    ax.legend(fontsize=7, frameon=False, title=BAND_SEEDS if pooled else BAND_TRIALS,
-              title_fontsize=6)  # fmt: skip
+    # below the axes: inside, the legend and its note ran through the error bars
+    legend_outside(ax, title=BAND_SEEDS if pooled else BAND_TRIALS)
     return fig, ax
 
 

@@ -33,7 +33,7 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
         seeds = max(1, int(study.get("terrain_seeds", 1) or 1))
     for m in study.get("metrics") or []:
         for x, name in (("seconds", "time"), ("samples", "samples")):
-            fig, axes = panel_grid(len(groups))
+            fig, axes = panel_grid(len(groups), height=3.6)  # room for the legend below
             for ax, (title, members) in zip(axes, groups):
                 error_vs_time(
                     res["rows"],
