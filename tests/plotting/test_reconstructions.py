@@ -49,10 +49,17 @@ def test_categorical_axis_and_panel_cap():
         pts, strategies=strategies, reconstructions=["shading"], axis_label="light"
     )
     try:
-        assert len(axes) == MAX_PANELS
+        # every planner of the study gets its panel (a cap of 4 dropped the fifth, wavelet)
+        assert [ax.get_title() for ax in axes] == ["Grid", "Random", "A", "B", "C", "D"]
         assert [t.get_text() for t in axes[0].get_xticklabels()] == ["Sun", "Camera-centred light"]
         missing = next(ln for ln in axes[2].get_lines() if ln.get_label() == "Shading")
         assert np.isnan(missing.get_ydata()).all()  # no value for that strategy: nothing drawn
+    finally:
+        plt.close(fig)
+    many = [f"s{i}" for i in range(MAX_PANELS + 3)]
+    fig, axes = reconstruction_saved_vs_sweep(pts, strategies=many, reconstructions=["shading"])
+    try:
+        assert len(axes) == MAX_PANELS
     finally:
         plt.close(fig)
     with pytest.raises(ValueError, match="needs points"):
