@@ -93,8 +93,11 @@ def panels(density_label: str, point: str, *, metres: bool = True) -> str:
     )
 
 
-def sparse_mesh(n_samples: int | None, rough: bool, *, threshold: float | None = None) -> str:
-    """Caption of ``sparse_mesh_unit<i>`` (paper Fig. 4)."""
+def sparse_mesh(
+    n_samples: int | None, rough: bool, *, threshold: float | None = None, light: str = "sun"
+) -> str:
+    """Caption of ``sparse_mesh_unit<i>`` (paper Fig. 4); ``light`` is the unit's light kind
+    (what makes the terraces' steps dark depends on it)."""
     n = f"{n_samples} " if n_samples else ""
     thr = (
         f" Cells whose normalised energy is {threshold:g} or more keep the minimum roughness "
@@ -123,9 +126,16 @@ def sparse_mesh(n_samples: int | None, rough: bool, *, threshold: float | None =
         f"{diff}All renders share one exposure (the 99.5th percentile of the full-resolution "
         f"render), so brightness differences are real. Dark wedges along the borders of the "
         f"sparse-mesh renders lie outside the samples' convex hull, where the mesh takes the "
-        f"nearest sample's height (terraces with steps between them): steps facing away from "
-        f"the sun render dark, more so the lower the sun."
-    )
+        f"nearest sample's height (terraces with steps between them): {_STEPS.get(light, '')}"
+    ).rstrip()
+
+
+#: why the terraces' steps of a sparse mesh render dark, by light kind
+_STEPS = {
+    "sun": "steps facing away from the sun render dark, more so the lower the sun.",
+    "camera": "under camera-centred light the steep steps are lit and seen at grazing angles, "
+    "so they render dark whichever way they face.",
+}
 
 
 def score_vs_sweep(metric: str, path: str, study: dict, *, seeds: int = 1) -> str:

@@ -145,6 +145,7 @@ def _sparse_mesh_panels(
         n,
         "sparse_mesh_render_rough" in arr,
         threshold=fig_cfg.get("sparse_mesh_roughness_threshold"),
+        light=((rec.get("config", {}).get("render") or {}).get("light") or {}).get("kind", "sun"),
     )
 
 

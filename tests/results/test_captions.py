@@ -47,3 +47,12 @@ def test_panel_captions_explain_the_border_bands_and_the_scale():
     text = C.panels("k/N = 1/32", "sun elevation: 5°")
     assert "Axes in metres" in text and "convex hull" in text and "nearest sample" in text
     assert "Axes in image pixels" in C.panels("", "", metres=False)
+
+
+def test_the_sparse_mesh_caption_explains_dark_steps_by_the_units_own_light():
+    sun = C.sparse_mesh(1250, True, threshold=0.8, light="sun")
+    camera = C.sparse_mesh(1250, True, threshold=0.8, light="camera")
+    assert "facing away from the sun" in sun
+    # a camera-lit unit's caption must not talk about a sun it does not have
+    assert "sun" not in camera.split("convex hull")[1]
+    assert "camera-centred light" in camera
