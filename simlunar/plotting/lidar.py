@@ -208,7 +208,7 @@ def scan_figure(
         miss = ~measured & np.isfinite(b[:, 0])
         if miss.any():
             ax.scatter(b[miss, 1], b[miss, 0], marker="x", color="0.45", s=size, linewidths=0.5)
-        _frame(ax, f"measured: {pct:.0f} % returned")
+        _frame(ax, f"{pct:.0f} % returned")  # short: long titles ran into each other
     if order is not None:
         cb = fig.colorbar(order, ax=list(axes[0, 1:]), shrink=0.85, aspect=15, pad=0.02)
         cb.set_label("visiting order (share of the scan)", fontsize=TICK_PT)

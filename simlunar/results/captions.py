@@ -326,5 +326,6 @@ def lidar_scan(study: dict, planners: list[str], *, densest: float | None = None
         "sensor visited them (the line and dots run from dark, first, to bright, last: a "
         "steered beam's scan order, docs/lidar.md; a flash's frames one after the other, the "
         "dots of one frame, which fire together, in the plan's order). Bottom row: the z-depth each beam measured, on the colour scale of the "
-        "true depth; a grey x is a beam that returned no range."
+        "true depth (its title: the share of beams that returned a range); a grey x is a beam "
+        "that returned no range."
     )

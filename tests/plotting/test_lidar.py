@@ -77,8 +77,8 @@ def test_scan_figure_draws_the_tour_and_the_measured_depths(tmp_path):
     assert fig._suptitle.get_text() == "exp: steered beam scan"
     titles = [ax.get_title() for ax in fig.axes]
     assert titles[:6] == ["guide image", "Wavelet: 50 beams", "Grid: 64 beams",
-                          "true z-depth", "measured: 84 % returned",
-                          "measured: 84 % returned"]  # fmt: skip
+                          "true z-depth", "84 % returned",
+                          "84 % returned"]  # fmt: skip
     # the tour: one segment between consecutive beams, coloured by their share of the scan
     tour = next(c for c in fig.axes[1].collections if isinstance(c, LineCollection))
     assert len(tour.get_segments()) == 49
