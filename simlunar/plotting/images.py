@@ -197,6 +197,8 @@ def _panel_axes(axes, shape, ext):
             figsize=(PAGE_W, _panel_height(shape, 1.45, 2, extra)),
             constrained_layout=True,
         )
+        # a gap after each colour bar, so its label does not read as the next panel's y label
+        fig.get_layout_engine().set(wspace=0.12)
     else:
         fig = axes[0].figure if isinstance(axes, (list, tuple)) else np.ravel(axes)[0].figure
     axes = np.asarray(axes).ravel()
