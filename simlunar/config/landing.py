@@ -4,11 +4,30 @@
 
 from __future__ import annotations
 
-from pydantic import Field, PositiveInt, field_validator
+from typing import Annotated
+
+from pydantic import AfterValidator, Field, PositiveInt
 
 from simlunar.config.fields import Deg, Metres, _Model
 
-__all__ = ["HazardCfg", "SafeSiteCfg"]
+__all__ = ["HazardCfg", "MedianWindowPx", "SafeSiteCfg", "SlopeBaselinePx"]
+
+
+def _odd(v: int) -> int:
+    """A median window's side: odd, so that the window is centred on its pixel."""
+    if v % 2 == 0:
+        raise ValueError(f"must be odd (a centred window), got {v}")
+    return v
+
+
+#: side of the median neighbourhood a hazard's relief is measured against (odd, 3 .. 255 px)
+MedianWindowPx = Annotated[
+    int,
+    Field(ge=3, le=255, description="median neighbourhood side (odd, px)"),
+    AfterValidator(_odd),
+]
+#: half-baseline of a hazard's slope (1 .. 64 px)
+SlopeBaselinePx = Annotated[PositiveInt, Field(le=64, description="slope half-baseline (px)")]
 
 
 class HazardCfg(_Model):
@@ -17,15 +36,8 @@ class HazardCfg(_Model):
 
     slope_deg: Deg = Field(15.0, gt=0, lt=90, description="largest safe slope")
     relief_m: Metres = Field(0.3, gt=0, description="largest safe height above the local median")
-    window_px: int = Field(15, ge=3, le=255, description="median neighbourhood side (odd, px)")
-    baseline_px: PositiveInt = Field(2, le=64, description="slope half-baseline (px)")
-
-    @field_validator("window_px")
-    @classmethod
-    def _odd(cls, v: int) -> int:
-        if v % 2 == 0:
-            raise ValueError(f"must be odd (a centred window), got {v}")
-        return v
+    window_px: MedianWindowPx = 15
+    baseline_px: SlopeBaselinePx = 2
 
 
 class SafeSiteCfg(_Model):
@@ -37,8 +49,8 @@ class SafeSiteCfg(_Model):
     rock_height_m: Metres = Field(
         0.3, gt=0, description="largest safe height above the local median (rocks)"
     )
-    window_px: int = Field(15, ge=3, le=255, description="median neighbourhood side (odd, px)")
-    baseline_px: PositiveInt = Field(2, le=64, description="slope half-baseline (px)")
+    window_px: MedianWindowPx = 15
+    baseline_px: SlopeBaselinePx = 2
     semi_axes_m: tuple[float, float] = Field(
         (4.0, 4.0), description="landing ellipse semi-axes along world x and y (m)"
     )
@@ -46,10 +58,3 @@ class SafeSiteCfg(_Model):
     max_hazard_fraction: float = Field(
         0.0, ge=0, lt=1, description="a site is safe with at most this share of hazard pixels"
     )
-
-    @field_validator("window_px")
-    @classmethod
-    def _odd(cls, v: int) -> int:
-        if v % 2 == 0:
-            raise ValueError(f"must be odd (a centred window), got {v}")
-        return v

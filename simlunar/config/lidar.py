@@ -32,7 +32,9 @@ __all__ = [
     "MicromirrorCfg",
     "MotionCfg",
     "PulseCfg",
+    "PulseRateHz",
     "RangingCfg",
+    "ReceiverPx",
     "SafeSiteCfg",
     "SteeredBeamCfg",
     "TransientCfg",
@@ -47,6 +49,17 @@ MAX_PHOTONS = 1e12
 #: most time bins of one histogram (a rendered batch's window over ``bin_range_m``): each bin
 #: is a film channel per beam or receiver pixel, so 1e5 bins x 4096 beams is already 6.5 GB
 MAX_BINS = 100_000
+
+#: a pulse repetition rate (1/s): every LIDAR block's ``pulse_rate_hz``
+PulseRateHz = Annotated[
+    float, Field(ge=1e-3, le=1e9, description="pulse repetition rate (1/s, 1e-3 .. 1e9)")
+]
+_SidePx = Annotated[int, Field(ge=1, le=8192)]
+#: a flash receiver's pixel grid (width, height): ``flash`` and ``micromirror``
+ReceiverPx = Annotated[
+    tuple[_SidePx, _SidePx],
+    Field(description="receiver (width, height), each 1 .. 8192; the guide camera's aspect"),
+]
 
 
 class PulseCfg(_Model):
@@ -201,9 +214,7 @@ class SteeredBeamCfg(_Model):
     settle_ms: float = Field(
         1.0, ge=0, le=1e6, description="settle time after every move (ms, at most 1000 s)"
     )
-    pulse_rate_hz: float = Field(
-        10_000.0, ge=1e-3, le=1e9, description="pulse repetition rate (1/s, 1e-3 .. 1e9)"
-    )
+    pulse_rate_hz: PulseRateHz = 10_000.0
     pulses_per_point: PositiveInt = Field(
         1, le=1_000_000, description="pulses fired at each pointing (at most 1e6)"
     )
@@ -234,14 +245,8 @@ class SteeredBeamCfg(_Model):
 class FlashCfg(_Model):
     """A flash LIDAR co-boresighted with the guide camera (:class:`simlunar.sensors.FlashLidar`)."""
 
-    receiver_px: tuple[
-        Annotated[int, Field(ge=1, le=8192)], Annotated[int, Field(ge=1, le=8192)]
-    ] = Field(
-        (64, 64), description="receiver (width, height), each 1 .. 8192; the guide camera's aspect"
-    )
-    pulse_rate_hz: float = Field(
-        30.0, ge=1e-3, le=1e9, description="pulse repetition rate (1/s, 1e-3 .. 1e9)"
-    )
+    receiver_px: ReceiverPx = (64, 64)
+    pulse_rate_hz: PulseRateHz = 30.0
     revisits: int = Field(
         0, ge=0, le=64, description="plan-directed zoomed frames after the full frame"
     )
@@ -262,14 +267,8 @@ class FlashCfg(_Model):
 class MicromirrorCfg(_Model):
     """A micromirror-steered flash (:class:`simlunar.sensors.MicromirrorFlash`)."""
 
-    receiver_px: tuple[
-        Annotated[int, Field(ge=1, le=8192)], Annotated[int, Field(ge=1, le=8192)]
-    ] = Field(
-        (64, 64), description="receiver (width, height), each 1 .. 8192; the guide camera's aspect"
-    )
-    pulse_rate_hz: float = Field(
-        30.0, ge=1e-3, le=1e9, description="pulse repetition rate (1/s, 1e-3 .. 1e9)"
-    )
+    receiver_px: ReceiverPx = (64, 64)
+    pulse_rate_hz: PulseRateHz = 30.0
 
 
 class MotionCfg(_Model):

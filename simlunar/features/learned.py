@@ -52,6 +52,7 @@ from simlunar import __version__ as simlunar_version
 from simlunar.features._stack import (
     FEATURE_NAMES,
     FEATURE_SET_VERSION,
+    _check_sklearn_version,
     _model_path,
     image_features,
 )
@@ -359,11 +360,7 @@ def _check_meta(meta: dict, path: Path, digest: str) -> None:
             f"{path}: trained on feature set version {meta.get('feature_set_version')!r}, this "
             f"simlunar computes version {FEATURE_SET_VERSION}: retrain the model"
         )
-    saved = meta.get("versions", {}).get("scikit-learn")
-    if saved != sklearn.__version__:
-        raise ValueError(
-            f"{path}: saved with scikit-learn {saved}, installed {sklearn.__version__}: retrain"
-        )
+    _check_sklearn_version(meta, path)
     if digest != meta.get("model_sha256"):
         raise ValueError(f"{path}: SHA-256 does not match its record (modified or replaced)")
 

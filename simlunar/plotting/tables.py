@@ -417,15 +417,9 @@ def reconstruction_saved_tables(entries: list[dict], *, title: str = "") -> tupl
     )
 
     def table(e):
-        header = ["Strategy"]
-        for r in e["reconstructions"]:
-            header += [f"{display_label(r)} vs linear", "seeds: range"]
-        rows = []
-        for s in e["strategies"]:
-            cells = []
-            for r in e["reconstructions"]:
-                cells += list(_seed_summary(np.asarray(e["saved"][r][s], dtype=float), log=True))
-            rows.append((display_label(s), cells))
+        header, rows = _saved_columns(
+            e["strategies"], e["saved"], e["reconstructions"], "{} vs linear"
+        )
         what = (
             f"samples saved vs linear at equal {_name(METRIC_NAMES, e['metric'])}, paired by seed"
         )
@@ -443,15 +437,7 @@ def reconstruction_saved_tables(entries: list[dict], *, title: str = "") -> tupl
     )
 
     def table2(e):
-        header = ["Strategy"]
-        for r in e["joint"]:
-            header += [f"with {display_label(r)}", "seeds: range"]
-        rows = []
-        for s in e["strategies"]:
-            cells = []
-            for r in e["joint"]:
-                cells += list(_seed_summary(np.asarray(e["joint"][r][s], dtype=float), log=True))
-            rows.append((display_label(s), cells))
+        header, rows = _saved_columns(e["strategies"], e["joint"], e["joint"], "with {}")
         what = (
             f"layout + reconstruction vs Uniform Lloyd + linear at equal "
             f"{_name(METRIC_NAMES, e['metric'])}, paired by seed"
@@ -460,3 +446,22 @@ def reconstruction_saved_tables(entries: list[dict], *, title: str = "") -> tupl
 
     md2, tex2 = _seed_tables(joint, expl2, title, table2)
     return md + "\n" + md2, tex + "\n" + tex2
+
+
+def _saved_columns(strategies, saved: dict, columns, head: str) -> tuple[list[str], list]:
+    """Header and rows of a per-seed table with a (samples saved, seed range) column pair per
+    key of ``columns`` (a reconstruction), headed ``head.format(its display label)``.
+
+    A strategy's cells in a column pair are the per-seed summary (:func:`_seed_summary`, in
+    log space) of ``saved[column][strategy]`` (per-seed samples saved, ratios > 0).
+    """
+    header = ["Strategy"]
+    for r in columns:
+        header += [head.format(display_label(r)), "seeds: range"]
+    rows = []
+    for s in strategies:
+        cells = []
+        for r in columns:
+            cells += list(_seed_summary(np.asarray(saved[r][s], dtype=float), log=True))
+        rows.append((display_label(s), cells))
+    return header, rows

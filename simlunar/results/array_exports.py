@@ -53,6 +53,7 @@ from simlunar.atomic import atomic_write
 from simlunar.errors import ConfigError
 from simlunar.geometry import OrthoCamera
 from simlunar.imaging.exr import write_exr
+from simlunar.terrain.geotiff import float32_profile
 
 __all__ = [
     "ARRAY_EXPORT_KINDS",
@@ -218,24 +219,13 @@ def write_geotiff(path, grid, *, transform=None, crs=None, name="value", tags=No
     """
     import rasterio
     from rasterio.crs import CRS
-    from rasterio.transform import Affine
 
     a = np.asarray(grid, np.float32)
     if a.ndim != 2:
         raise ValueError(f"a GeoTIFF band must be 2-D (rows, cols), got shape {a.shape}")
     if transform is None:
         transform = pixel_transform(a.shape[0])
-    profile = {
-        "driver": "GTiff",
-        "width": a.shape[1],
-        "height": a.shape[0],
-        "count": 1,
-        "dtype": "float32",
-        "transform": Affine(*transform),
-        "nodata": float("nan"),
-        "compress": "deflate",
-        "predictor": 3,
-    }
+    profile = float32_profile(a.shape, count=1, transform=transform)
     if crs is not None:
         profile["crs"] = CRS.from_user_input(crs)
 

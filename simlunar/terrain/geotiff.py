@@ -41,29 +41,50 @@ def _meta(terrain: Terrain) -> dict:
     return meta
 
 
-__all__ = ["LUNAR_CRS"]
+__all__ = ["LUNAR_CRS", "float32_profile"]
+
+
+def float32_profile(shape: tuple[int, int], *, count: int, transform) -> dict:
+    """The rasterio write profile of a float32 GeoTIFF of ``count`` bands: NaN nodata, deflate
+    with the floating-point predictor (lossless, smaller); no CRS (the caller adds one).
+
+    Parameters
+    ----------
+    shape : (rows, cols)
+        Band shape (pixels).
+    count : int
+        Number of bands.
+    transform : 6 floats
+        GDAL affine ``(a, b, c, d, e, f)``: x = a col + b row + c, y = d col + e row + f.
+
+    Returns
+    -------
+    dict
+        Keywords of ``rasterio.open(path, "w", **profile)``.
+    """
+    from rasterio.transform import Affine
+
+    return {
+        "driver": "GTiff",
+        "width": shape[1],
+        "height": shape[0],
+        "count": count,
+        "dtype": "float32",
+        "transform": Affine(*transform),
+        "nodata": float("nan"),
+        "compress": "deflate",
+        "predictor": 3,  # floating-point predictor
+    }
 
 
 def _write_geotiff(path: Path, h: np.ndarray, a: np.ndarray, terrain: Terrain) -> None:
     import rasterio
     from rasterio.crs import CRS
-    from rasterio.transform import Affine
 
     x0, y0 = terrain.origin
     sp = terrain.spacing
-    crs = CRS.from_wkt(terrain.crs) if terrain.crs else CRS.from_string(LUNAR_CRS)
-    profile = {
-        "driver": "GTiff",
-        "width": h.shape[1],
-        "height": h.shape[0],
-        "count": 2,
-        "dtype": "float32",
-        "crs": crs,
-        "transform": Affine(sp, 0.0, x0, 0.0, -sp, y0),
-        "nodata": float("nan"),
-        "compress": "deflate",
-        "predictor": 3,  # floating-point predictor: lossless, smaller
-    }
+    profile = float32_profile(h.shape, count=2, transform=(sp, 0.0, x0, 0.0, -sp, y0))
+    profile["crs"] = CRS.from_wkt(terrain.crs) if terrain.crs else CRS.from_string(LUNAR_CRS)
     if min(h.shape) >= 256:  # 256 x 256 tiles (QGIS reads windows fast); else strips
         profile.update(tiled=True, blockxsize=256, blockysize=256)
 

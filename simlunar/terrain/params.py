@@ -12,6 +12,7 @@ YAML presets use unit suffixes (``spacing_m``, ``d_min_m``, ``diffusivity_m2_per
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import ClassVar
 
 import numpy as np
 
@@ -100,55 +101,74 @@ class BedParams:
 
 
 @dataclass(frozen=True)
-class CraterParams:
-    """Crater population: cumulative law, diameter range (m), diffusion degradation."""
+class _Population:
+    """A size-frequency population (craters, rocks): on/off, its cumulative law
+    (:func:`simlunar.terrain.sfd.get_law`; ``coefficient`` and ``exponent`` of a power law) and
+    the diameter range (m) it is drawn over.
+
+    Checks, in order: the diameter range, the subclass's own fields (:meth:`_check_own`), then
+    the law (an unknown law or bad power-law parameters fail last).
+    """
 
     enabled: bool = True
-    law: str = "trask"
+    law: str = ""
     d_min: float = 1.0
     d_max: float = 30.0
     coefficient: float | None = None
     exponent: float | None = None
-    diffusivity: float = 5.5  # m^2/Myr, Fassett & Thomson 2014
-    max_age_myr: float = 20.0
+
+    #: the population's YAML section, in messages (``craters.d_min_m``) and for its law
+    section: ClassVar[str] = ""
 
     def __post_init__(self):
-        _check_diameters("craters", self.d_min, self.d_max)
-        _num(self.diffusivity, "craters.diffusivity_m2_per_myr", lo=0.0)
-        _num(self.max_age_myr, "craters.max_age_myr", lo=0.0)
-        self.law_fn()  # unknown law / bad power-law parameters fail here
+        _check_diameters(self.section, self.d_min, self.d_max)
+        self._check_own()
+        self.law_fn()
+
+    def _check_own(self):
+        """Check the subclass's own fields (``ParamError`` naming the key)."""
 
     def law_fn(self):
+        """The population's cumulative size-frequency law (:func:`sfd.get_law`)."""
         return sfd.get_law(
-            "craters", self.law, coefficient=self.coefficient, exponent=self.exponent
+            self.section, self.law, coefficient=self.coefficient, exponent=self.exponent
         )
 
 
 @dataclass(frozen=True)
-class RockParams:
+class CraterParams(_Population):
+    """Crater population: cumulative law, diameter range (m), diffusion degradation."""
+
+    law: str = "trask"
+    diffusivity: float = 5.5  # m^2/Myr, Fassett & Thomson 2014
+    max_age_myr: float = 20.0
+
+    section: ClassVar[str] = "craters"
+
+    def _check_own(self):
+        _num(self.diffusivity, "craters.diffusivity_m2_per_myr", lo=0.0)
+        _num(self.max_age_myr, "craters.max_age_myr", lo=0.0)
+
+
+@dataclass(frozen=True)
+class RockParams(_Population):
     """Rock population: cumulative law, diameter range (m), clustering, albedo contrast."""
 
-    enabled: bool = True
     law: str = "intercrater"
     d_min: float = 0.3
     d_max: float = 3.0
-    coefficient: float | None = None
-    exponent: float | None = None
     cluster_fraction: float = 0.5
     cluster_radius: float = 3.0
     mean_per_cluster: float = 8.0
     albedo_contrast: float = 0.1
 
-    def __post_init__(self):
-        _check_diameters("rocks", self.d_min, self.d_max)
+    section: ClassVar[str] = "rocks"
+
+    def _check_own(self):
         _num(self.cluster_fraction, "rocks.cluster_fraction", lo=0.0, hi=1.0)
         _num(self.cluster_radius, "rocks.cluster_radius_m", lo=0.0, lo_open=True)
         _num(self.mean_per_cluster, "rocks.mean_per_cluster", lo=1.0)
         _num(self.albedo_contrast, "rocks.albedo_contrast", lo=-0.9, hi=5.0)
-        self.law_fn()
-
-    def law_fn(self):
-        return sfd.get_law("rocks", self.law, coefficient=self.coefficient, exponent=self.exponent)
 
 
 @dataclass(frozen=True)

@@ -5,10 +5,10 @@ from __future__ import annotations
 from dataclasses import asdict
 
 import pytest
-from pydantic import ValidationError
+from pydantic import TypeAdapter, ValidationError
 
 from simlunar.config import lidar
-from simlunar.config.landing import HazardCfg, SafeSiteCfg
+from simlunar.config.landing import HazardCfg, MedianWindowPx, SafeSiteCfg, SlopeBaselinePx
 from simlunar.metrics.hazard import HazardOptions
 
 
@@ -35,3 +35,23 @@ def test_safe_site_thresholds_and_units():
 
 def test_lidar_re_exports_the_landing_models():
     assert lidar.HazardCfg is HazardCfg and lidar.SafeSiteCfg is SafeSiteCfg
+
+
+@pytest.mark.parametrize(
+    ("key", "kind", "edge", "value", "error"),
+    [
+        ("window_px", MedianWindowPx, 3, 2, "greater than or equal to 3"),
+        ("window_px", MedianWindowPx, 255, 257, "less than or equal to 255"),
+        ("window_px", MedianWindowPx, 9, 8, r"must be odd \(a centred window\), got 8"),
+        ("baseline_px", SlopeBaselinePx, 1, 0, "greater than 0"),
+        ("baseline_px", SlopeBaselinePx, 64, 65, "less than or equal to 64"),
+    ],
+)
+def test_window_and_baseline_types_bound_both_models(key, kind, edge, value, error):
+    assert TypeAdapter(kind).validate_python(edge) == edge
+    with pytest.raises(ValidationError, match=error):
+        TypeAdapter(kind).validate_python(value)
+    for model in (HazardCfg, SafeSiteCfg):
+        assert getattr(model(**{key: edge}), key) == edge
+        with pytest.raises(ValidationError, match=error):
+            model(**{key: value})

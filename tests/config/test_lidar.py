@@ -10,6 +10,7 @@ from simlunar.config.lidar import (
     DetectorCfg,
     FlashCfg,
     LidarOptionsCfg,
+    MicromirrorCfg,
     PulseCfg,
     SteeredBeamCfg,
     TransientCfg,
@@ -59,6 +60,10 @@ def test_lengths_take_units():
         (SteeredBeamCfg, {"profile": "tophat"}, "Input should be 'gaussian' or 'uniform'"),
         (FlashCfg, {"zoom": 1}, "greater than or equal to 2"),
         (FlashCfg, {"receiver_px": (64, 0)}, "greater than or equal to 1"),
+        (MicromirrorCfg, {"receiver_px": (8193, 64)}, "less than or equal to 8192"),
+        (SteeredBeamCfg, {"pulse_rate_hz": 1e-4}, "greater than or equal to 0.001"),
+        (FlashCfg, {"pulse_rate_hz": 2e9}, "less than or equal to 1000000000"),
+        (MicromirrorCfg, {"pulse_rate_hz": 0}, "greater than or equal to 0.001"),
         (LidarOptionsCfg, {"bin_range_m": 0}, "greater than 0"),
     ],
 )

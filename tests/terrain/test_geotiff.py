@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from simlunar.terrain import io as tio
-from simlunar.terrain.geotiff import LUNAR_CRS
+from simlunar.terrain.geotiff import LUNAR_CRS, float32_profile
 
 
 def test_foreign_geotiff_loads_spacing_origin_nodata_and_crs(tmp_path):
@@ -144,3 +144,19 @@ def test_pre_geotiff_simlunar_tif_still_loads(tmp_path):
     assert t.spacing == 0.25 and t.origin == (1.0, 2.0)
     np.testing.assert_array_equal(t.heights, h)
     np.testing.assert_array_equal(t.albedo, a)
+
+
+def test_float32_profile_is_a_lossless_float_geotiff_without_crs(tmp_path):
+    import rasterio
+
+    p = float32_profile((3, 5), count=2, transform=(0.5, 0.0, 10.0, 0.0, -0.5, 20.0))
+    assert (p["width"], p["height"], p["count"], p["dtype"]) == (5, 3, 2, "float32")
+    assert "crs" not in p and np.isnan(p["nodata"])
+    assert tuple(p["transform"])[:6] == (0.5, 0.0, 10.0, 0.0, -0.5, 20.0)
+    bands = np.arange(30, dtype=np.float32).reshape(2, 3, 5) / 7
+    bands[1, 2, 4] = np.nan
+    with rasterio.open(tmp_path / "x.tif", "w", **p) as dst:
+        dst.write(bands)
+    with rasterio.open(tmp_path / "x.tif") as src:  # deflate + predictor 3 is lossless
+        assert src.compression.value == "DEFLATE" and src.crs is None
+        np.testing.assert_array_equal(src.read(), bands)
