@@ -21,7 +21,8 @@ pytestmark = pytest.mark.render
 
 
 def test_steered_beam_scan_on_a_plane(mi):
-    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+    from simlunar.lidar.scan import SteeredBeamOptions, steered_beam_scan
+    from simlunar.render.beam_capture import beam_capture
 
     steer = SteeringOptions(
         max_rate_rad_s=1.0,
@@ -41,7 +42,7 @@ def test_steered_beam_scan_on_a_plane(mi):
     )
     cam = _camera(64, 40.0)
     uv = np.random.default_rng(0).uniform(0, 64, (50, 2))
-    from simlunar.render.lidar_scan import guide_directions
+    from simlunar.lidar.scan import guide_directions
 
     d = guide_directions(cam, uv[:, ::-1] - 0.5)  # the same rays, from (row, col)
     assert d == pytest.approx(cam.rays(uv)[1])
@@ -88,7 +89,8 @@ def _truth_raises(monkeypatch):
 @pytest.mark.parametrize("altimeter", [False, True])
 def test_steered_gate_never_reads_the_truth(mi, monkeypatch, altimeter):
     from simlunar.lidar.gate import GateOptions
-    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+    from simlunar.lidar.scan import SteeredBeamOptions, steered_beam_scan
+    from simlunar.render.beam_capture import beam_capture
 
     opts = SteeredBeamOptions(
         footprint=FootprintOptions(5e-4, samples=4),
@@ -103,7 +105,7 @@ def test_steered_gate_never_reads_the_truth(mi, monkeypatch, altimeter):
     cap = beam_capture(_plane(), cam.position, options=opts)
     _truth_raises(monkeypatch)
     rc = np.array([[4, 4], [16, 16], [28, 3], [10, 25]])
-    from simlunar.render.lidar_scan import guide_directions
+    from simlunar.lidar.scan import guide_directions
 
     d = guide_directions(cam, rc)
     scan = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose)
@@ -119,13 +121,9 @@ def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
     # scan takes about 2 s (slow gimbal), the platform falls about 8 m. With each beam leaving
     # from the platform's position at its firing time (the pose known exactly) every point
     # lies on the plane; the same ranges placed from the starting pose miss it by metres.
+    from simlunar.lidar.scan import SteeredBeamOptions, guide_directions, steered_beam_scan
     from simlunar.lidar.trajectory import Trajectory
-    from simlunar.render.lidar_scan import (
-        SteeredBeamOptions,
-        beam_capture,
-        guide_directions,
-        steered_beam_scan,
-    )
+    from simlunar.render.beam_capture import beam_capture
 
     n = 80
     x = -n / 2 + np.arange(n) + 0.5
@@ -180,7 +178,8 @@ def test_spad_scan_pile_up_and_its_correction(mi, correct):
     # 30 signal photons per pulse on a SPAD with a 1.5 ns dead time: the raw reading is early
     # (the first photon arrives on the pulse's leading edge); the scans' refit removes it
     from simlunar.lidar import RangeOptions
-    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+    from simlunar.lidar.scan import SteeredBeamOptions, steered_beam_scan
+    from simlunar.render.beam_capture import beam_capture
 
     det = DetectorOptions(signal_photons=2e6 * 30 / 51, background_photons_per_s=0.0,
                           dead_time_s=1.5e-9)  # fmt: skip
