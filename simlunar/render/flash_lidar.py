@@ -95,15 +95,15 @@ def micromirror_flash(
 
     Notes
     -----
-    **Link budget** (with ``options.hardware``;
-    :func:`~simlunar.lidar.flash.micromirror_lit_sr`): the pulse lights the whole micromirror
-    array and each mirror sends its equal share ``E / N_mirrors`` towards its dot when on (a
-    digital micromirror device: amplitude, not phase, so energy on "off" mirrors is lost; the array's throughput is folded into ``optics_efficiency``, an
+    **Link budget** (with ``options.hardware``; :func:`~simlunar.lidar.flash.micromirror_lit_sr`):
+    the pulse lights the whole micromirror array and each mirror sends its equal share ``E /
+    N_mirrors`` towards its dot when on (a digital micromirror device: amplitude, not phase, so
+    energy on "off" mirrors is lost; the array's throughput is folded into ``optics_efficiency``, an
     assumption). The rendered projector gives every pixel the power ``scale / (fx fy)``, so the
     render's lit solid angle is ``W H / (fx fy)`` (the field's area on the plane at 1 m) and a
-    receiver pixel's photons follow the flash's formula with it: on a Lambertian plane a dot
-    seen whole by its receiver pixel gets ``(E / N_mirrors / h nu) (rho / pi) cos(theta) A / R^2
-    eta`` (tested against this hand value).
+    receiver pixel's photons follow the flash's formula with it: on a Lambertian plane a dot seen
+    whole by its receiver pixel gets ``(E / N_mirrors / h nu) (rho / pi) cos(theta) A / R^2 eta``
+    (tested against this hand value).
     """
     rng = np.random.default_rng(rng)
     uv = np.asarray(pixels, float).reshape(-1, 2)
