@@ -49,7 +49,7 @@ class TransientOptions:
     spp : int
         Samples per pixel of a flash frame (steered beams use ``FootprintOptions.samples``).
     max_depth : int
-        Longest path (2 = direct only; see the module note on steered beams).
+        Longest path (2 = direct only; see :mod:`simlunar.render.transient` on steered beams).
     seed : int
         Sampler seed.
     laser_intensity : float
