@@ -110,9 +110,11 @@ def lidar(*, smoke: bool = False) -> dict:
         pointing_angles,
         scan_timing,
     )
+    from simlunar.lidar.flash import FlashOptions, flash_window
+    from simlunar.lidar.scan import SteeredBeamOptions, steered_beam_scan
     from simlunar.render import backend
-    from simlunar.render.flash_lidar import FlashOptions, flash_scan, flash_window
-    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+    from simlunar.render.beam_capture import beam_capture
+    from simlunar.render.flash_lidar import flash_scan
     from simlunar.render.lights import SunLight
     from simlunar.render.transient import TransientOptions
 

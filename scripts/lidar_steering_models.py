@@ -7,8 +7,8 @@ import numpy as np
 
 from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.lidar import SteeringOptions, order_scan, pointing_angles, scan_timing
+from simlunar.lidar.scan import guide_directions
 from simlunar.planner import plan
-from simlunar.render.lidar_scan import guide_directions
 
 cam = Camera(
     Intrinsics.from_fov(128, 128, 40.0),

@@ -62,9 +62,14 @@ def _own_imports(path: Path) -> set[str]:
 
 
 # package -> packages it must not import (CONTRIBUTING.md): the study protocol returns numbers
-# (tables and figures are plotting's), and the scanner measures the pixels it is given (the
-# planner chooses them in the study)
-FORBIDDEN = {"study": {"plotting", "pipeline", "results", "config"}, "scanner": {"planner"}}
+# (tables and figures are plotting's), the scanner measures the pixels it is given (the
+# planner chooses them in the study), and the LIDAR acquisitions on arrays are handed their
+# rendered capture (ARCHITECTURE: lidar sits below render)
+FORBIDDEN = {
+    "study": {"plotting", "pipeline", "results", "config"},
+    "scanner": {"planner"},
+    "lidar": {"render"},
+}
 
 
 @pytest.mark.parametrize("package, forbidden", sorted(FORBIDDEN.items()))

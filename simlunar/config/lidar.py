@@ -1,8 +1,8 @@
 """LIDAR sections of the schema: the sensor options of a ``lidar`` study (docs/lidar.md).
 
 Keys carry their unit (``_ns``, ``_mrad``, ``_deg_s``); :mod:`simlunar.config.translate`
-turns them into the library's SI options (:class:`~simlunar.render.lidar_scan.SteeredBeamOptions`,
-:class:`~simlunar.render.flash_lidar.FlashOptions`, ...). Only the block of the study's sensor
+turns them into the library's SI options (:class:`~simlunar.lidar.scan.SteeredBeamOptions`,
+:class:`~simlunar.lidar.flash.FlashOptions`, ...). Only the block of the study's sensor
 may differ from its defaults (``steered_beam``, ``flash`` or ``micromirror``).
 """
 
@@ -177,7 +177,7 @@ class RangingCfg(_Model):
 
 
 class TransientCfg(_Model):
-    """Transient rendering of the returns (:class:`simlunar.render.transient.TransientOptions`);
+    """Transient rendering of the returns (:class:`simlunar.lidar.returns.TransientOptions`);
     its sampler seed is the unit's render seed."""
 
     spp: PositiveInt = Field(
@@ -192,7 +192,7 @@ class TransientCfg(_Model):
 
 class SteeredBeamCfg(_Model):
     """A gimbaled altimeter / galvanometer scanner at the guide camera
-    (:class:`simlunar.render.lidar_scan.SteeredBeamOptions`)."""
+    (:class:`simlunar.lidar.scan.SteeredBeamOptions`)."""
 
     divergence_mrad: float = Field(
         1.0,
@@ -468,7 +468,7 @@ def check_lidar_study(study) -> None:
         )
     if study.sensor == "steered_beam":
         sb = o.steered_beam
-        # simlunar.render.lidar_scan.SteeredBeamOptions: window_m > 2 margin_m >= 0 (each
+        # simlunar.lidar.scan.SteeredBeamOptions: window_m > 2 margin_m >= 0 (each
         # batch's window holds the ray-cast ranges with the margin on both sides)
         if not sb.window_m > 2 * o.margin_m:
             raise ValueError(

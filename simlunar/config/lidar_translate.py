@@ -21,14 +21,14 @@ from simlunar.lidar import (
     SteeringOptions,
 )
 from simlunar.lidar.apd import ApdOptions
+from simlunar.lidar.flash import FlashOptions
 from simlunar.lidar.gate import GateOptions
 from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
+from simlunar.lidar.returns import TransientOptions
+from simlunar.lidar.scan import SteeredBeamOptions, with_hardware
 from simlunar.lidar.trajectory import Navigation, PlatformMotion
 from simlunar.metrics.hazard import HazardOptions
 from simlunar.metrics.safe_site import SiteOptions
-from simlunar.render.flash_lidar import FlashOptions
-from simlunar.render.lidar_scan import SteeredBeamOptions, with_hardware
-from simlunar.render.transient import TransientOptions
 from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
 from simlunar.study.lidar import LidarStudyOptions, SensorFit
 

@@ -15,8 +15,15 @@
 - :mod:`~simlunar.lidar.footprint`: the beam's angular profile and footprint geometry
 - :mod:`~simlunar.lidar.steering`: two-axis steering mechanics and scan time
 - :mod:`~simlunar.lidar.ordering`: raster reference and nearest neighbour + 2-opt ordering
+- :mod:`~simlunar.lidar.returns`: what every acquisition shares (options, rendered returns ->
+  photon counts -> ranges, the :class:`~simlunar.lidar.returns.LidarScan`)
+- :mod:`~simlunar.lidar.scan`: the steered-beam acquisition (altimeter, ordering, timing, a
+  moving platform)
+- :mod:`~simlunar.lidar.flash`: the flash and micromirror-flash acquisitions on rendered frames
 
-The rendering of the histograms lives in :mod:`simlunar.render.transient`.
+The rendering of the histograms lives in :mod:`simlunar.render.transient`,
+:mod:`simlunar.render.beam_capture` and :mod:`simlunar.render.flash_lidar`; this package never
+imports :mod:`simlunar.render` (a scan is given its capture).
 """
 
 from simlunar.lidar.bounds import range_crlb

@@ -6,7 +6,7 @@ own pose (navigation: position and attitude in the world frame) and a reference 
 the map datum (``z = datum_z``; a lander's navigation altitude above the landing site, a rover's
 mast height above its wheels' plane) or the plane through an **altimeter reading** along the
 boresight (one beam ranged with its window stepped out from the sensor until a return is
-found, :func:`simlunar.render.lidar_scan.altimeter_datum`). The predicted range of a ray is
+found, :func:`simlunar.lidar.scan.altimeter_datum`). The predicted range of a ray is
 where it meets that horizontal plane; the window covers it with ``margin_m`` on both sides,
 which must cover the terrain's relief about the plane: a return outside its window is lost, as
 with a real gate. The cost of a wide margin is time bins (memory and render time) and the

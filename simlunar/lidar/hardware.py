@@ -4,7 +4,7 @@ The renderer gives two radiances per receiver pixel / beam: the laser's return, 
 isotropic point laser of 1 W/sr at the receiver (``TransientOptions.laser_intensity``), and the
 sun's, for a sun of irradiance 1 W/m^2 on a surface facing it (``SunLight.irradiance``). The
 hardware turns them into photons (checked in tests/lidar/test_hardware.py, and per flash pixel
-on a rendered plane in tests/render/test_lidar_scan.py):
+on a rendered plane in tests/lidar/test_scan.py):
 
 - **Signal** per pulse. A pulse of energy ``E`` spread evenly over the lit solid angle
   ``Omega_lit`` has intensity ``E / Omega_lit``; a receiver pixel of solid angle ``Omega_pix``

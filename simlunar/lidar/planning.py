@@ -11,7 +11,7 @@ sensors, :mod:`simlunar.study.lidar`):
   same density) every comparison is at equal scan time.
 - :func:`receiver_capped_plan` (receiver-aware micromirror): at most ``frames`` dots per
   receiver pixel, so the micromirror fires at most ``frames`` frames (dots sharing a receiver
-  pixel need separate frames, :func:`simlunar.render.flash_lidar.micromirror_frames`). The
+  pixel need separate frames, :func:`simlunar.lidar.flash.micromirror_frames`). The
   ``k`` dots are shared among the receiver pixels in proportion to the importance map's mass in
   each, capped at ``frames`` (water-filling), and placed inside each receiver pixel by a
   weighted draw without replacement.

@@ -146,9 +146,7 @@ def scan_timing(
     -------
     ScanTiming
     """
-    p = np.asarray(angles, float)
-    if p.ndim != 2 or p.shape[1] != 2:
-        raise ValueError(f"angles must have shape (n, 2), got {p.shape}")
+    p = _angle_array(angles)
     if options.model == "continuous_raster":
         return raster_sweep(p, options=options).timing
     if order is not None:
@@ -163,6 +161,15 @@ def scan_timing(
     settle = float(moving.sum() * options.settle_s)
     dwell = float(len(p) * options.dwell_s)
     return ScanTiming(total_s=move + settle + dwell, move_s=move, settle_s=settle, dwell_s=dwell)
+
+
+def _angle_array(angles) -> np.ndarray:
+    """``angles`` as an (n, 2) float64 array of (azimuth, elevation) (rad); a clear error
+    for any other shape."""
+    p = np.asarray(angles, float)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"angles must have shape (n, 2), got {p.shape}")
+    return p
 
 
 def pointing_angles(directions: np.ndarray, boresight_pose) -> np.ndarray:
@@ -260,9 +267,7 @@ def raster_sweep(angles: np.ndarray, *, options: SteeringOptions) -> RasterSweep
     -------
     RasterSweep
     """
-    p = np.asarray(angles, float)
-    if p.ndim != 2 or p.shape[1] != 2:
-        raise ValueError(f"angles must have shape (n, 2), got {p.shape}")
+    p = _angle_array(angles)
     if options.line_pitch_rad is None:
         raise ValueError("a continuous raster needs line_pitch_rad (the height of a line)")
     n = len(p)

@@ -203,7 +203,7 @@ class PlatformMotion:
         How the points are placed.
     retarget : bool
         Re-aim each beam at its planned direction's point on the gate's reference plane from
-        where the platform is (:func:`simlunar.render.lidar_scan.steered_beam_scan`).
+        where the platform is (:func:`simlunar.lidar.scan.steered_beam_scan`).
     """
 
     velocity_m_s: tuple = (0.0, 0.0, 0.0)

@@ -10,10 +10,10 @@ Importing this package does not import Mitsuba; :func:`simlunar.render.backend.i
 - BSDF specs: ``LambertBSDF``, ``OrenNayarBSDF``, ``HapkeBSDF``, ``make_bsdf``
 - mesh / cameras: ``terrain_mesh``, ``sensor_dict``
 - time of flight (mitransient): ``TransientOptions``, ``FlashFrame``, ``flash_frame``,
-  ``BeamCapture``, ``BeamReturns``, ``capture_beams``; LIDAR acquisitions:
-  ``SteeredBeamOptions``, ``FlashOptions``, ``LidarScan``, ``beam_capture``,
-  ``steered_beam_scan``, ``flash_scan``, ``micromirror_flash``, ``micromirror_frames``,
-  ``guide_directions``, ``receiver_rc``
+  ``BeamCapture``, ``BeamReturns``, ``capture_beams``, ``beam_capture``; rendered flash
+  LIDARs: ``flash_scan``, ``micromirror_flash`` (the LIDARs' options, ordering, photon counts
+  and ranging are :mod:`simlunar.lidar`'s: :mod:`~simlunar.lidar.scan`,
+  :mod:`~simlunar.lidar.flash`, :mod:`~simlunar.lidar.returns`)
 - :mod:`simlunar.render.specs` gathers every light and BSDF spec (NumPy only)
 """
 
@@ -46,16 +46,9 @@ _EXPORTS = {
     "BeamCapture": "beam_capture",
     "BeamReturns": "beam_capture",
     "capture_beams": "beam_capture",
-    "SteeredBeamOptions": "lidar_scan",
-    "FlashOptions": "flash_lidar",
-    "LidarScan": "lidar_scan",
-    "beam_capture": "lidar_scan",
-    "steered_beam_scan": "lidar_scan",
+    "beam_capture": "beam_capture",
     "flash_scan": "flash_lidar",
     "micromirror_flash": "flash_lidar",
-    "micromirror_frames": "flash_lidar",
-    "guide_directions": "lidar_scan",
-    "receiver_rc": "lidar_scan",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -1,10 +1,12 @@
 """Steered beams rendered in batches with mitransient (only simlunar/render imports Mitsuba).
 
-A :class:`BeamCapture` holds one transient scene whose sensor fires many beams from one origin
-(each a footprint of rays, :mod:`simlunar.render.beams`); :func:`capture_beams` cuts the beams
-into range-gated batches around the ranges the instrument predicts (:mod:`simlunar.lidar.gate`)
-and returns their histograms as :class:`BeamReturns`. The film, the laser and the terrain entries
-are the flash's (:mod:`simlunar.render.transient`).
+A :class:`BeamCapture` (made for a steered beam's options by :func:`beam_capture`) holds one
+transient scene whose sensor fires many beams from one origin (each a footprint of rays,
+:mod:`simlunar.render.beams`); :func:`capture_beams` (:meth:`BeamCapture.render_beams`) cuts the
+beams into range-gated batches around the ranges the instrument predicts
+(:mod:`simlunar.lidar.gate`) and returns their histograms as :class:`BeamReturns`. The film, the
+laser and the terrain entries are the flash's (:mod:`simlunar.render.transient`). The steered
+scan that reads them (ordering, photon counts, ranging, timing) is :mod:`simlunar.lidar.scan`.
 """
 
 from __future__ import annotations
@@ -14,23 +16,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.lidar.footprint import FootprintOptions
+from simlunar.lidar.returns import TransientOptions
+from simlunar.lidar.scan import SteeredBeamOptions
 from simlunar.lidar.waveform import TimeBins
 from simlunar.progress import stage
 from simlunar.render import beams as _beams
 from simlunar.render.cameras import film_dict
 from simlunar.render.lights import emitter_dicts
 from simlunar.render.scene import LUMINANCE, luminance
-from simlunar.render.transient import (
-    TransientOptions,
-    _laser,
-    _mitsuba,
-    _terrain_entries,
-    transient_film,
-)
+from simlunar.render.transient import _laser, _mitsuba, _terrain_entries, transient_film
 
 __all__ = [
     "BeamCapture",
     "BeamReturns",
+    "beam_capture",
     "capture_beams",
 ]
 
@@ -202,6 +201,12 @@ class BeamCapture:
         img = self._launch(self._sun_scene, directions, seed, origins)
         return luminance(np.asarray(img, np.float32)[0, : len(directions), :3])
 
+    def render_beams(self, directions: np.ndarray, predicted_range: np.ndarray, **kwargs):
+        """:func:`capture_beams` of this capture: the returns of many beams, batched and
+        range-gated around their predicted ranges (what a scan of
+        :mod:`simlunar.lidar.scan` calls)."""
+        return capture_beams(self, directions, predicted_range, **kwargs)
+
 
 def capture_beams(
     capture: BeamCapture,
@@ -247,44 +252,57 @@ def capture_beams(
     BeamReturns
     """
     d = np.asarray(directions, float)
-    n, nb = len(d), capture.window.count
     pred = np.asarray(predicted_range, float).reshape(-1)
-    if pred.shape != (n,):
-        raise ValueError(f"predicted_range must have shape ({n},), got {pred.shape}")
-    hist, start = np.zeros((n, nb * capture.oversample), np.float32), np.full(n, np.nan)
-    steady, sun = np.zeros(n, np.float32), (np.zeros(n, np.float32) if capture.has_sun else None)
-    span = capture.window.bin_range * nb - 2.0 * margin_m
+    if pred.shape != (len(d),):
+        raise ValueError(f"predicted_range must have shape ({len(d)},), got {pred.shape}")
+    out = _empty_returns(capture, pred)
+    width = capture.window.bin_range * capture.window.count
+    span = width - 2.0 * margin_m
     if span <= 0:
-        raise ValueError(f"window of {capture.window.bin_range * nb} m is shorter than 2 margins")
-    offset, fired = np.zeros(n), np.flatnonzero(np.isfinite(pred))
-    o = None if origins is None else np.asarray(origins, float).reshape(n, 3)
+        raise ValueError(f"window of {width} m is shorter than 2 margins")
+    fired = np.flatnonzero(np.isfinite(pred))
+    o = None if origins is None else np.asarray(origins, float).reshape(len(d), 3)
     groups = [fired] if o is None else _origin_groups(fired, o, max_shift_m)
     k = 0
     with stage("beams", total=len(fired), unit="beams") as beams:
         for group in groups:
             if o is not None:
-                offset[group] = _place_laser(capture, d[group], o[group])
+                out.opl_offset[group] = _place_laser(capture, d[group], o[group])
             order = group[np.argsort(pred[group])]
             for idx, s0 in _gated_batches(order, pred, capture.batch, span, margin_m):
-                bo = None if o is None else o[idx]
-                hist[idx], steady[idx] = capture.render_batch(d[idx], s0, seed + k, origins=bo)
-                start[idx] = s0
-                if sun is not None:
-                    sun[idx] = capture.render_sun(d[idx], seed + k, origins=bo)
+                _render_batch_into(out, capture, idx, d, s0, seed + k, o)
                 k += 1
                 beams.advance(len(idx))
     if origins is not None:
         capture.set_laser(capture.origin)
+    return out
+
+
+def _empty_returns(capture: BeamCapture, pred: np.ndarray) -> BeamReturns:
+    """The :class:`BeamReturns` of beams with predicted ranges ``pred`` (n,) m before any is
+    rendered: zero histograms and luminances, NaN window starts, zero laser offsets."""
+    n = len(pred)
     return BeamReturns(
-        histograms=hist,
-        start_opl=start,
+        histograms=np.zeros((n, capture.window.count * capture.oversample), np.float32),
+        start_opl=np.full(n, np.nan),
         bin_opl=capture.window.bin_opl,
-        steady=steady,
-        sun=sun,
+        steady=np.zeros(n, np.float32),
+        sun=np.zeros(n, np.float32) if capture.has_sun else None,
         predicted_range=pred,
         oversample=capture.oversample,
-        opl_offset=offset,
+        opl_offset=np.zeros(n),
     )
+
+
+def _render_batch_into(out: BeamReturns, capture: BeamCapture, idx, d, start_opl, seed, origins):
+    """Render the beams ``idx`` (directions ``d[idx]``, origins ``origins[idx]`` or the
+    capture's) in one launch whose window starts at ``start_opl`` (m) and write their
+    histograms, luminances and window start into ``out``."""
+    bo = None if origins is None else origins[idx]
+    out.histograms[idx], out.steady[idx] = capture.render_batch(d[idx], start_opl, seed, origins=bo)
+    out.start_opl[idx] = start_opl
+    if out.sun is not None:
+        out.sun[idx] = capture.render_sun(d[idx], seed, origins=bo)
 
 
 def _origin_groups(fired: np.ndarray, origins: np.ndarray, max_shift_m: float) -> list:
@@ -320,3 +338,19 @@ def _gated_batches(order: np.ndarray, pred: np.ndarray, batch: int, span: float,
         j = i + int(np.searchsorted(pred[order[i:j]], r0 + span, side="right"))
         yield order[i:j], 2.0 * max(r0 - margin_m, 0.0)
         i = j
+
+
+def beam_capture(terrain, origin, *, options: SteeredBeamOptions, sun=None, bsdf=None):
+    """The reusable render of a steered beam at ``origin`` (3,) m over ``terrain``: a
+    :class:`BeamCapture` with ``options``' footprint, window, rendering and batch size (the
+    capture :func:`simlunar.lidar.scan.steered_beam_scan` reads)."""
+    return BeamCapture(
+        terrain,
+        origin,
+        footprint=options.footprint,
+        window=options.window,
+        options=options.transient,
+        bsdf=bsdf,
+        sun=sun,
+        batch=options.batch,
+    )

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.geometry import Camera
+from simlunar.lidar.returns import TransientOptions
 from simlunar.lidar.waveform import TimeBins
 from simlunar.render import backend
 from simlunar.render import beams as _beams
@@ -48,43 +49,6 @@ __all__ = [
 ]
 
 _RGB = LUMINANCE.astype(np.float64)
-
-
-@dataclass(frozen=True)
-class TransientOptions:
-    """Rendering of time-of-flight returns.
-
-    Parameters
-    ----------
-    spp : int
-        Samples per pixel of a flash frame (steered beams use ``FootprintOptions.samples``).
-    max_depth : int
-        Longest path (2 = direct only; see the module note on steered beams).
-    seed : int
-        Sampler seed.
-    laser_intensity : float
-        Radiant intensity of the point laser (W/sr); the histograms scale with it.
-    oversample : int
-        Rendered (fine) time bins per output bin. With the linear splat of the film, 2 keeps
-        a plane's noise-free range within 0.01 mm at 0.65 pulse sigma per bin and 0.2 mm at
-        0.44 (tests/lidar/test_ranging.py); memory grows with it.
-    """
-
-    spp: int = 64
-    max_depth: int = 2
-    seed: int = 0
-    laser_intensity: float = 1.0
-    oversample: int = 2
-
-    def __post_init__(self) -> None:
-        if int(self.spp) < 1 or int(self.seed) < 0:
-            raise ValueError("spp must be >= 1 and seed >= 0")
-        if int(self.oversample) < 1:
-            raise ValueError(f"oversample must be >= 1, got {self.oversample}")
-        if self.max_depth == 0 or self.max_depth < -1:
-            raise ValueError(f"max_depth must be -1 or >= 1, got {self.max_depth}")
-        if not self.laser_intensity > 0:
-            raise ValueError(f"laser_intensity must be > 0 W/sr, got {self.laser_intensity}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -207,7 +171,7 @@ def flash_frame(
     camera: Camera,
     *,
     bins: TimeBins,
-    options: TransientOptions = TransientOptions(),
+    options: TransientOptions = TransientOptions(),  # noqa: B008 (frozen)
     bsdf=None,
     sun=None,
     projector=None,

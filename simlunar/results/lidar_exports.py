@@ -100,7 +100,7 @@ def lidar_export_payload(examples: dict, camera, shape) -> dict[str, Any]:
     Parameters
     ----------
     examples : dict label -> Acquisition
-        Their ``detail`` is the :class:`~simlunar.render.lidar_scan.LidarScan`.
+        Their ``detail`` is the :class:`~simlunar.lidar.returns.LidarScan`.
     camera : geometry.Camera
         The guide camera (the sensor's origin; the range images' grid).
     shape : (rows, cols)

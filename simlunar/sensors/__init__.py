@@ -4,7 +4,7 @@
 options class and one line here (CONTRIBUTING.md shows the ideal sampler as the example).
 """
 
-from simlunar.render.lidar_scan import SteeredBeamOptions
+from simlunar.lidar.scan import SteeredBeamOptions
 from simlunar.sensors.base import Acquisition, NothingMeasured, Sensor
 from simlunar.sensors.ideal import IdealOptions, IdealSampler
 from simlunar.sensors.lidar import (

@@ -1,9 +1,10 @@
 """Time-of-flight range sensors: steered beam, flash LIDAR and micromirror-steered flash.
 
-Each wraps an acquisition of :mod:`simlunar.render.lidar_scan` behind the
+Each wraps an acquisition of :mod:`simlunar.lidar.scan` / :mod:`simlunar.lidar.flash` (rendered by
+:mod:`simlunar.render.beam_capture` / :mod:`simlunar.render.flash_lidar`) behind the
 :class:`~simlunar.sensors.base.Sensor` protocol. A sensor is bound to a scene (terrain, BSDF,
 sun) and to the guide camera; its ranges become z-depths in the guide view
-(:meth:`~simlunar.render.lidar_scan.LidarScan.depth`) at the guide (row, col) index coordinates
+(:meth:`~simlunar.lidar.returns.LidarScan.depth`) at the guide (row, col) index coordinates
 where each measured point projects, and its cost is the modelled acquisition time.
 
 - :class:`SteeredBeam`: one beam visits the planned pixels' directions from the guide camera's
@@ -27,21 +28,12 @@ import numpy as np
 
 from simlunar.geometry import Camera, Intrinsics
 from simlunar.lidar import order_scan, pointing_angles, scan_timing
+from simlunar.lidar.flash import FlashOptions, flash_window, micromirror_frames, read_flash
 from simlunar.lidar.planning import choose_tiles, tile_range_scores
-from simlunar.render.flash_lidar import (
-    FlashOptions,
-    flash_window,
-    micromirror_flash,
-    micromirror_frames,
-    read_flash,
-)
-from simlunar.render.lidar_scan import (
-    LidarScan,
-    SteeredBeamOptions,
-    beam_capture,
-    guide_directions,
-    steered_beam_scan,
-)
+from simlunar.lidar.returns import LidarScan
+from simlunar.lidar.scan import SteeredBeamOptions, guide_directions, steered_beam_scan
+from simlunar.render.beam_capture import beam_capture
+from simlunar.render.flash_lidar import micromirror_flash
 from simlunar.render.transient import flash_frame
 from simlunar.sensors.base import Acquisition, NothingMeasured
 

@@ -17,8 +17,8 @@ from simlunar.config.lidar import (
 )
 from simlunar.config.lidar_translate import lidar_sensor_options
 from simlunar.config.studies import LidarStudyCfg
-from simlunar.render.flash_lidar import FlashOptions
-from simlunar.render.lidar_scan import SteeredBeamOptions
+from simlunar.lidar.flash import FlashOptions
+from simlunar.lidar.scan import SteeredBeamOptions
 from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
 
 

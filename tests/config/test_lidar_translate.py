@@ -13,8 +13,8 @@ from simlunar.config.lidar import HazardCfg
 from simlunar.config.loading import load_experiment
 from simlunar.config.studies import LidarStudyCfg
 from simlunar.config.yamlio import parse_set
+from simlunar.lidar.scan import SteeredBeamOptions
 from simlunar.metrics.hazard import HazardOptions
-from simlunar.render.lidar_scan import SteeredBeamOptions
 from simlunar.sensors import FlashLidarOptions, MicromirrorOptions
 
 EXPERIMENTS = Path(__file__).resolve().parents[2] / "experiments"

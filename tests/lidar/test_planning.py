@@ -83,7 +83,7 @@ def test_receiver_capped_plan_never_puts_two_dots_in_a_receiver_pixel_per_frame(
 def test_receiver_capped_plan_matches_the_micromirror_frame_count():
     # the micromirror sensor's own frame assignment fires exactly `frames` frames
     from simlunar.geometry import Camera, Intrinsics, Pose
-    from simlunar.render.flash_lidar import micromirror_frames
+    from simlunar.lidar.flash import micromirror_frames
 
     cam = Camera(Intrinsics.from_fov(64, 64, 40.0), Pose.look_at([0, 0, 50.0], [0, 0, 0.0]))
     for k, frames in ((256, 1), (500, 2)):

@@ -161,3 +161,16 @@ def test_continuous_raster_needs_its_line_pitch():
         scan_timing(np.zeros((2, 2)), options=SteeringOptions(model="continuous_raster"))
     with pytest.raises(ValueError, match="unknown steering model"):
         SteeringOptions(model="resonant")
+
+
+@pytest.mark.parametrize("bad", [np.zeros((4, 3)), np.zeros(4), np.zeros((2, 2, 2))])
+def test_timings_refuse_angles_that_are_not_n_by_2(bad):
+    from simlunar.lidar.steering import raster_sweep
+
+    raster = SteeringOptions(model="continuous_raster", line_pitch_rad=0.01)
+    for call in (
+        lambda: scan_timing(bad, options=SteeringOptions()),
+        lambda: raster_sweep(bad, options=raster),
+    ):
+        with pytest.raises(ValueError, match=r"angles must have shape \(n, 2\), got"):
+            call()

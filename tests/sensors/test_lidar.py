@@ -56,7 +56,7 @@ def test_tile_camera_sees_one_tile_of_the_guide_field():
 
 
 def test_receiver_samples_snap_to_the_guide_lattice():
-    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.lidar.returns import LidarScan
     from simlunar.sensors.lidar import _to_guide
 
     guide = _camera(32, 20.0)
@@ -99,7 +99,7 @@ def test_registry_names_the_lidar_sensors():
 
 @pytest.mark.render
 def test_steered_beam_ranges_the_planned_pixels(mi):
-    from simlunar.render.lidar_scan import SteeredBeamOptions, guide_directions
+    from simlunar.lidar.scan import SteeredBeamOptions, guide_directions
     from simlunar.sensors import LidarScene, SteeredBeam
 
     steer = SteeringOptions(1.0, 10.0, 1e-3, 1000.0, 4)
@@ -129,7 +129,7 @@ def test_steered_beam_ranges_the_planned_pixels(mi):
 
 @pytest.mark.render
 def test_flash_lidar_with_and_without_revisits(mi):
-    from simlunar.render.flash_lidar import FlashOptions
+    from simlunar.lidar.flash import FlashOptions
     from simlunar.render.transient import TransientOptions
     from simlunar.sensors import FlashLidar, FlashLidarOptions, LidarScene
 
@@ -163,7 +163,7 @@ def test_flash_lidar_with_and_without_revisits(mi):
 
 @pytest.mark.render
 def test_micromirror_flash_ranges_the_planned_pixels(mi):
-    from simlunar.render.flash_lidar import FlashOptions
+    from simlunar.lidar.flash import FlashOptions
     from simlunar.render.transient import TransientOptions
     from simlunar.sensors import LidarScene, MicromirrorFlash, MicromirrorOptions
 
@@ -189,7 +189,7 @@ def test_flash_revisits_from_the_first_frame_s_ranges_and_their_repointing_time(
     # a 1 m box on the plane in one quarter of the field; the plan points at another quarter.
     # Revisits from the ranges go to the box's quarter (the first frame's own points are
     # rough there), from the plan to the plan's; each revisit costs the re-pointing time too
-    from simlunar.render.flash_lidar import FlashOptions
+    from simlunar.lidar.flash import FlashOptions
     from simlunar.render.transient import TransientOptions
     from simlunar.sensors import FlashLidar, FlashLidarOptions, LidarScene
 

@@ -156,7 +156,7 @@ def test_a_study_cut_short_at_its_second_planner_resumes_exactly():
 
 
 def test_beam_table_lists_every_beam_in_visiting_order():
-    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.lidar.returns import LidarScan
     from simlunar.study.lidar import beam_table
 
     planned = np.array([[0, 0], [0, 5], [3, 5], [3, 0]])
@@ -176,7 +176,7 @@ def test_beam_table_lists_every_beam_in_visiting_order():
 
 
 def test_beam_table_of_a_flash_places_the_measured_pixels():
-    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.lidar.returns import LidarScan
     from simlunar.study.lidar import beam_table
 
     valid = np.array([True, True, False])
@@ -192,7 +192,7 @@ def test_beam_table_of_a_flash_places_the_measured_pixels():
 
 
 def test_beam_table_of_a_multi_frame_flash_runs_frame_after_frame():
-    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.lidar.returns import LidarScan
     from simlunar.study.lidar import beam_table
 
     planned = np.array([[0, 0], [1, 1], [2, 2], [3, 3]])

@@ -1,7 +1,11 @@
-"""Steered-beam LIDAR end to end on a plane: ranges, ordering and timing, a gate that never reads
-the truth, a moving platform, SPAD pile-up; flash LIDARs: test_flash_lidar.py."""
+"""Steered-beam LIDAR acquisition: on arrays through a capture that returns a plane's impulse
+responses (ranges, order, time, the altimeter's steps, a moving platform's firing order), and
+rendered end to end on a plane (ranges, ordering and timing, a gate that never reads the truth, a
+moving platform, SPAD pile-up); flash LIDARs: test_flash.py and tests/render/test_flash_lidar.py."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
@@ -14,14 +18,17 @@ from simlunar.lidar import (
     SteeringOptions,
     scan_timing,
 )
+from simlunar.lidar.gate import GateOptions
+from simlunar.lidar.scan import SteeredBeamOptions, altimeter_datum, steered_beam_scan
+from simlunar.lidar.waveform import splat_paths
 from simlunar.terrain import Terrain
 from tests.render._lidar_planes import DET, H, _camera, _plane
 
-pytestmark = pytest.mark.render
 
-
+@pytest.mark.render
 def test_steered_beam_scan_on_a_plane(mi):
-    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+    from simlunar.lidar.scan import SteeredBeamOptions, steered_beam_scan
+    from simlunar.render.beam_capture import beam_capture
 
     steer = SteeringOptions(
         max_rate_rad_s=1.0,
@@ -41,7 +48,7 @@ def test_steered_beam_scan_on_a_plane(mi):
     )
     cam = _camera(64, 40.0)
     uv = np.random.default_rng(0).uniform(0, 64, (50, 2))
-    from simlunar.render.lidar_scan import guide_directions
+    from simlunar.lidar.scan import guide_directions
 
     d = guide_directions(cam, uv[:, ::-1] - 0.5)  # the same rays, from (row, col)
     assert d == pytest.approx(cam.rays(uv)[1])
@@ -85,10 +92,12 @@ def _truth_raises(monkeypatch):
     monkeypatch.setattr(Terrain, "points", boom)
 
 
+@pytest.mark.render
 @pytest.mark.parametrize("altimeter", [False, True])
 def test_steered_gate_never_reads_the_truth(mi, monkeypatch, altimeter):
     from simlunar.lidar.gate import GateOptions
-    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+    from simlunar.lidar.scan import SteeredBeamOptions, steered_beam_scan
+    from simlunar.render.beam_capture import beam_capture
 
     opts = SteeredBeamOptions(
         footprint=FootprintOptions(5e-4, samples=4),
@@ -103,7 +112,7 @@ def test_steered_gate_never_reads_the_truth(mi, monkeypatch, altimeter):
     cap = beam_capture(_plane(), cam.position, options=opts)
     _truth_raises(monkeypatch)
     rc = np.array([[4, 4], [16, 16], [28, 3], [10, 25]])
-    from simlunar.render.lidar_scan import guide_directions
+    from simlunar.lidar.scan import guide_directions
 
     d = guide_directions(cam, rc)
     scan = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose)
@@ -114,18 +123,15 @@ def test_steered_gate_never_reads_the_truth(mi, monkeypatch, altimeter):
         assert (4 + 24) * p <= scan.frames <= (4 + 26) * p
 
 
+@pytest.mark.render
 def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
     # a tilted plane (z = 0.3 x) scanned while descending at 4 m/s and drifting 1 m/s east: the
     # scan takes about 2 s (slow gimbal), the platform falls about 8 m. With each beam leaving
     # from the platform's position at its firing time (the pose known exactly) every point
     # lies on the plane; the same ranges placed from the starting pose miss it by metres.
+    from simlunar.lidar.scan import SteeredBeamOptions, guide_directions, steered_beam_scan
     from simlunar.lidar.trajectory import Trajectory
-    from simlunar.render.lidar_scan import (
-        SteeredBeamOptions,
-        beam_capture,
-        guide_directions,
-        steered_beam_scan,
-    )
+    from simlunar.render.beam_capture import beam_capture
 
     n = 80
     x = -n / 2 + np.arange(n) + 0.5
@@ -175,12 +181,14 @@ def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
         assert (miss.max() < 0.03) if on_plane else (miss.max() > 1.0)
 
 
+@pytest.mark.render
 @pytest.mark.parametrize("correct", [True, False])
 def test_spad_scan_pile_up_and_its_correction(mi, correct):
     # 30 signal photons per pulse on a SPAD with a 1.5 ns dead time: the raw reading is early
     # (the first photon arrives on the pulse's leading edge); the scans' refit removes it
     from simlunar.lidar import RangeOptions
-    from simlunar.render.lidar_scan import SteeredBeamOptions, beam_capture, steered_beam_scan
+    from simlunar.lidar.scan import SteeredBeamOptions, steered_beam_scan
+    from simlunar.render.beam_capture import beam_capture
 
     det = DetectorOptions(signal_photons=2e6 * 30 / 51, background_photons_per_s=0.0,
                           dead_time_s=1.5e-9)  # fmt: skip
@@ -205,3 +213,125 @@ def test_spad_scan_pile_up_and_its_correction(mi, correct):
         assert np.mean(scan.photons / 400) == pytest.approx(30.0, rel=0.1)
     else:
         assert err.mean() < -0.02
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class _Returns:
+    """The fields of BeamReturns that a scan reads."""
+
+    histograms: np.ndarray
+    start_opl: np.ndarray
+    sun: None
+    oversample: int
+    opl_offset: None
+
+
+class _PlaneCapture:
+    """A beam capture without rendering: each beam's return is a unit impulse at the range where
+    its ray from its origin meets the plane ``z = 0`` (tent-splatted on ``oversample`` finer
+    bins, as the film does), each batch's window ``margin_m`` before its predicted range."""
+
+    has_sun, sun_irradiance, oversample = False, 1.0, 2
+
+    def __init__(self, origin, window):
+        self.origin, self.window, self.launches = np.asarray(origin, float), window, []
+
+    def _hist(self, d, start_opl, origins):
+        o = np.broadcast_to(self.origin if origins is None else origins, d.shape)
+        r = o[:, 2] / -d[:, 2]
+        fine = dataclasses.replace(self.window.refined(self.oversample), start_opl=0.0)
+        return splat_paths(2.0 * r[:, None] - np.reshape(start_opl, (-1, 1)), 1.0, fine)
+
+    def render_batch(self, directions, start_opl, seed=0, origins=None):
+        d = np.asarray(directions, float)
+        return self._hist(d, start_opl, origins).astype(np.float32), np.zeros(len(d))
+
+    def render_beams(self, directions, predicted_range, *, margin_m, seed, origins=None):
+        d = np.asarray(directions, float)
+        start = 2.0 * np.maximum(predicted_range - margin_m, 0.0)
+        self.launches.append(None if origins is None else np.array(origins))
+        return _Returns(
+            histograms=self._hist(d, start, origins).astype(np.float32),
+            start_opl=start,
+            sun=None,
+            oversample=self.oversample,
+            opl_offset=None,
+        )
+
+
+def _beam_options(**kwargs):
+    steer = SteeringOptions(max_rate_rad_s=1.0, max_accel_rad_s2=10.0, settle_s=1e-3,
+                            pulse_rate_hz=1000.0, pulses_per_point=4)  # fmt: skip
+    return SteeredBeamOptions(pulse=PulseOptions(fwhm_s=1e-9), steering=steer, window_m=4.0,
+                              detector=DetectorOptions(signal_photons=200.0,
+                                                       background_photons_per_s=0.0),
+                              margin_m=1.0, **kwargs)  # fmt: skip
+
+
+def test_steered_scan_on_arrays_reads_the_plane():
+    # 40 beams from 50 m over the plane z = 0, gated by the datum z = 0: every range is
+    # 50 / cos within a tenth of a bin, the order a permutation priced by the steering model
+    opts = _beam_options()
+    cam = _camera(64, 40.0)
+    d = cam.rays(np.random.default_rng(0).uniform(0, 64, (40, 2)))[1]
+    cap = _PlaneCapture(cam.position, opts.window)
+    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose)
+    assert scan.valid.all()
+    assert scan.ranges == pytest.approx(H / -d[:, 2], abs=0.1 * opts.bin_range_m)
+    assert scan.points[:, 2] == pytest.approx(0.0, abs=0.1 * opts.bin_range_m)
+    assert sorted(scan.order) == list(range(40))
+    from simlunar.lidar import pointing_angles
+
+    timing = scan_timing(pointing_angles(d, cam.pose), scan.order, options=opts.steering)
+    assert scan.seconds == pytest.approx(timing.total_s)
+    assert scan.frames == 40 * 4
+    # each beam is measured when the beam gets there: the first visited at 0 s, in order
+    assert scan.times[scan.order[0]] == 0.0
+    assert np.all(np.diff(scan.times[scan.order]) > 0)
+
+
+def test_the_altimeter_finds_the_plane_and_its_steps_cost_time():
+    # the window (4 m, margins 1 m) steps out in 2 m steps from 0.1 m: step k covers
+    # [r0, r0 + 4] m with r0 = 0.1 + 2 (k - 1), so the plane 50 m below the boresight is first
+    # inside in step k = 24 (46.1 to 50.1 m); each step fires pulses_per_point pulses before
+    # the scan starts
+    opts = _beam_options(gate=GateOptions(altimeter=True))
+    cam = _camera(64, 40.0)
+    cap = _PlaneCapture(cam.position, opts.window)
+    datum, steps = altimeter_datum(cap, [0.0, 0.0, -1.0], options=opts, rng=0)
+    assert datum == pytest.approx(0.0, abs=0.1 * opts.bin_range_m)
+    assert steps == 24
+    d = cam.rays(np.random.default_rng(0).uniform(0, 64, (10, 2)))[1]
+    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose)
+    lead = 24 * 4 / 1000.0
+    assert scan.seconds == pytest.approx(scan.timing.total_s + lead)
+    assert scan.frames == (10 + 24) * 4
+    assert scan.times.min() == pytest.approx(lead)
+    # no plane within the instrument's range: a clear error
+    far = _PlaneCapture([0.0, 0.0, 500.0], opts.window)
+    near = _beam_options(gate=GateOptions(altimeter=True, max_range_m=100.0))
+    with pytest.raises(ValueError, match=r"no return along the boresight within 100\.0 m"):
+        altimeter_datum(far, [0.0, 0.0, -1.0], options=near, rng=0)
+
+
+def test_a_moving_platform_s_beams_are_rendered_in_firing_order():
+    # a platform descending at 2 m/s: the beams leave from where it is when each fires, are
+    # rendered in firing order (their origins' heights fall) and come back in the planned
+    # order; with the pose known exactly every point lies on the plane
+    from simlunar.lidar.trajectory import Trajectory
+
+    opts = _beam_options()
+    cam = _camera(64, 40.0)
+    d = cam.rays(np.random.default_rng(0).uniform(0, 64, (30, 2)))[1]
+    traj = Trajectory.descent(cam.position, 2.0)
+    cap = _PlaneCapture(cam.position, opts.window)
+    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, trajectory=traj)
+    fired = cap.launches[0]
+    assert np.all(np.diff(fired[:, 2]) < 0)  # firing order: ever lower
+    assert fired[:, 2] == pytest.approx(np.sort(H - 2.0 * scan.times)[::-1])
+    assert scan.valid.all()
+    assert scan.points[:, 2] == pytest.approx(0.0, abs=0.1 * opts.bin_range_m)
+    # the ranges are from where the platform was: after the first beam (fired at the start),
+    # shorter than from the start by more than a bin
+    later = np.delete(np.arange(30), scan.order[0])
+    assert np.all(scan.ranges[later] < H / -d[later, 2] - opts.bin_range_m)

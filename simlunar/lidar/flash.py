@@ -1,0 +1,155 @@
+"""Flash LIDAR acquisition on arrays: a receiver array lit by whole-field pulses, and the
+micromirror flash that lights only the planned pixels.
+
+A flash reads every receiver pixel of one rendered frame (:func:`read_flash`, :func:`read_frame`);
+its range gate comes from the reference plane (:func:`flash_window`, :mod:`simlunar.lidar.gate`),
+never from the terrain. The micromirror flash fires as many frames as dots share a receiver pixel
+(:func:`micromirror_frames`) and its link budget spreads the pulse over the lit micromirror field
+(:func:`micromirror_lit_sr`). Photon counts and ranges are read as for every LIDAR
+(:mod:`simlunar.lidar.returns`). The frames are rendered by :mod:`simlunar.render.flash_lidar`
+(:func:`~simlunar.render.flash_lidar.flash_scan`,
+:func:`~simlunar.render.flash_lidar.micromirror_flash`) on mitransient.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from simlunar.geometry import Camera
+from simlunar.lidar.gate import gate_bins, plane_ranges
+from simlunar.lidar.hardware import pixel_solid_angles
+from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
+from simlunar.lidar.waveform import TimeBins
+
+__all__ = [
+    "FlashOptions",
+    "flash_window",
+    "micromirror_frames",
+    "micromirror_lit_sr",
+    "read_flash",
+    "read_frame",
+    "receiver_rc",
+    "receiver_solid_angles",
+]
+
+
+@dataclass(frozen=True)
+class FlashOptions(ReturnOptions):
+    """A flash LIDAR: a receiver array lit by whole-field pulses.
+
+    Parameters
+    ----------
+    pulse, detector, ranging, transient, bin_range_m
+        As for every LIDAR (:class:`~simlunar.lidar.returns.ReturnOptions`); ``detector.pulses``
+        pulses per frame.
+    margin_m : float
+        Range margin (m) around the terrain's nearest and farthest point in view.
+    pulse_rate_hz : float
+        Pulse repetition rate (1/s): a frame takes ``detector.pulses / pulse_rate_hz``.
+    """
+
+    pulse_rate_hz: float = 30.0
+
+    def __post_init__(self) -> None:
+        if not (self.bin_range_m > 0 and self.margin_m >= 0 and self.pulse_rate_hz > 0):
+            raise ValueError("need bin_range_m > 0, margin_m >= 0 and pulse_rate_hz > 0")
+
+
+def flash_window(camera: Camera, *, options: FlashOptions) -> TimeBins:
+    """The flash receiver's range gate: the ranges where its pixel rays meet the reference
+    plane (``options.gate``), with ``options.margin_m`` on both sides (never the terrain)."""
+    if options.gate.altimeter:
+        raise ValueError("gate.altimeter: a flash takes its reference plane from gate.datum_z_m")
+    _, d = camera.rays(camera.pixel_centers().reshape(-1, 2))
+    r = plane_ranges(camera.pose.position, d, datum_z=options.gate.datum_z_m, options=options.gate)
+    r = r[r < options.gate.max_range_m]  # pixels above the plane's horizon are not gated
+    if r.size == 0:
+        raise ValueError("gate: no receiver pixel meets the reference plane within max_range_m")
+    return gate_bins(r, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
+
+
+def receiver_solid_angles(camera: Camera) -> np.ndarray:
+    """Exact solid angle (sr) of every pixel of a receiver ``camera``, (rows, cols)."""
+    k = camera.intrinsics
+    return pixel_solid_angles(k.fx, k.fy, k.cx, k.cy, k.width, k.height)
+
+
+def read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=None):
+    """Photon counts and ranges of a rendered frame through ``camera`` (its receiver).
+
+    Every pixel collects in proportion to its own solid angle (``cos^3`` off axis): with
+    hardware, ``Omega_pix`` itself and the pulse spread over ``lit_sr`` (default: the whole
+    receiver field); with the expert override the photon scales are the boresight pixel's.
+    """
+    omega = receiver_solid_angles(camera)
+    if options.hardware is None:
+        weight, det = omega / omega.max(), options.detector
+    else:
+        lit = float(omega.sum()) if lit_sr is None else float(lit_sr)
+        det = options.photon_detector(field_sr=1.0, lit_sr=lit, sun_irradiance=frame.sun_irradiance)
+        weight = omega
+    bg = 0.0 if frame.sun is None else frame.sun * weight
+    hist = frame.histograms * weight[..., None].astype(np.float32)
+    counts = detect_counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
+    return read_ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
+
+
+def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> LidarScan:
+    """Read a rendered flash frame (:func:`~simlunar.render.transient.flash_frame` through
+    ``camera``) with fresh photon noise: a frame rendered once serves many noisy reads."""
+    rng = np.random.default_rng(rng)
+    res = read_frame(frame, camera, options, rng)
+    _, d = camera.rays(camera.pixel_centers())
+    return LidarScan(
+        ranges=res.range,
+        valid=res.valid,
+        points=camera.pose.position + res.range[..., None] * d,
+        photons=res.photons,
+        order=np.arange(res.range.size).reshape(res.range.shape),
+        seconds=options.detector.pulses / options.pulse_rate_hz,
+        frames=1,
+        times=np.zeros(res.range.shape),
+        returns=res.returns,
+    )
+
+
+def micromirror_lit_sr(camera: Camera) -> float:
+    """The rendered micromirror's lit solid angle for the link budget (sr): ``W H / (fx fy)``,
+    so that each of its ``W H`` mirrors carries ``E / (W H)`` of the pulse (``camera``: the
+    projector's intrinsics = the guide camera's)."""
+    k = camera.intrinsics
+    return float(k.width * k.height / (k.fx * k.fy))
+
+
+def micromirror_frames(pixels: np.ndarray, camera: Camera, receiver_shape) -> np.ndarray:
+    """Frame index (k,) of each planned pixel: dots sharing a receiver pixel never share a frame.
+
+    ``pixels`` (k, 2) are (u, v) in ``camera``; the receiver (rows, cols) sees the same field
+    of view, so receiver pixel = floor of the scaled (u, v), at any depth (co-located).
+    """
+    rh, rw = receiver_shape
+    h, w = camera.shape
+    uv = np.asarray(pixels, float)
+    cell = np.floor(uv[:, 1] * rh / h).astype(np.int64) * rw + np.floor(uv[:, 0] * rw / w)
+    cell = cell.astype(np.int64)
+    order = np.argsort(cell, kind="stable")
+    sc = cell[order]
+    first = np.searchsorted(sc, sc, side="left")
+    frames = np.empty(len(uv), np.int64)
+    frames[order] = np.arange(len(uv)) - first
+    return frames
+
+
+def receiver_rc(receiver_shape, guide_shape) -> np.ndarray:
+    """Receiver pixel centres as guide (row, col) index coordinates, (rows * cols, 2) float.
+
+    A co-boresighted receiver of the same field of view: receiver pixel (i, j) has its centre at
+    guide (u, v) = ((j + 1/2) W / w, (i + 1/2) H / h), i.e. index coordinates (v - 1/2, u - 1/2),
+    row-major (the order of a flash scan's flattened arrays).
+    """
+    (h, w), (gh, gw) = receiver_shape, guide_shape
+    i, j = np.mgrid[0:h, 0:w]
+    v, u = (i.ravel() + 0.5) * gh / h, (j.ravel() + 0.5) * gw / w
+    return np.stack([v - 0.5, u - 0.5], axis=1)

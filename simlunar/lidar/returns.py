@@ -1,0 +1,255 @@
+"""What every LIDAR acquisition shares: the returns' options, reading counts and ranges, the scan.
+
+- :class:`TransientOptions`: how the returns are rendered (read by :mod:`simlunar.render.transient`
+  and :mod:`simlunar.render.beam_capture`; it lives here, beside the acquisitions' options that
+  carry it, so that :mod:`simlunar.lidar` never imports :mod:`simlunar.render`).
+- :class:`ReturnOptions`: pulse, detector, ranging, rendering, gate and instrument of every LIDAR
+  (:class:`~simlunar.lidar.scan.SteeredBeamOptions`, :class:`~simlunar.lidar.flash.FlashOptions`).
+- :func:`detect_counts`, :func:`read_ranges`: rendered impulse responses -> photon counts ->
+  ranges (pulse and jitter, the sun's background and its shot noise, dead time, pile-up).
+- :class:`LidarScan`: the ranges of one acquisition and its cost.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.geometry import Camera
+from simlunar.lidar.detector import (
+    DetectorOptions,
+    expected_counts,
+    photon_counts,
+    photon_counts_dead_time,
+)
+from simlunar.lidar.gate import GateOptions
+from simlunar.lidar.hardware import LidarHardware
+from simlunar.lidar.ranging import RangeOptions, extract_ranges
+from simlunar.lidar.spad import spad_correct
+from simlunar.lidar.steering import ScanTiming
+from simlunar.lidar.waveform import PulseOptions, TimeBins, shape_waveform
+
+__all__ = [
+    "LidarScan",
+    "ReturnOptions",
+    "TransientOptions",
+    "detect_counts",
+    "read_ranges",
+]
+
+
+@dataclass(frozen=True)
+class TransientOptions:
+    """Rendering of time-of-flight returns.
+
+    Parameters
+    ----------
+    spp : int
+        Samples per pixel of a flash frame (steered beams use ``FootprintOptions.samples``).
+    max_depth : int
+        Longest path (2 = direct only; see :mod:`simlunar.render.transient` on steered beams).
+    seed : int
+        Sampler seed.
+    laser_intensity : float
+        Radiant intensity of the point laser (W/sr); the histograms scale with it.
+    oversample : int
+        Rendered (fine) time bins per output bin. With the linear splat of the film, 2 keeps
+        a plane's noise-free range within 0.01 mm at 0.65 pulse sigma per bin and 0.2 mm at
+        0.44 (tests/lidar/test_ranging.py); memory grows with it.
+    """
+
+    spp: int = 64
+    max_depth: int = 2
+    seed: int = 0
+    laser_intensity: float = 1.0
+    oversample: int = 2
+
+    def __post_init__(self) -> None:
+        if int(self.spp) < 1 or int(self.seed) < 0:
+            raise ValueError("spp must be >= 1 and seed >= 0")
+        if int(self.oversample) < 1:
+            raise ValueError(f"oversample must be >= 1, got {self.oversample}")
+        if self.max_depth == 0 or self.max_depth < -1:
+            raise ValueError(f"max_depth must be -1 or >= 1, got {self.max_depth}")
+        if not self.laser_intensity > 0:
+            raise ValueError(f"laser_intensity must be > 0 W/sr, got {self.laser_intensity}")
+
+
+@dataclass(frozen=True)
+class ReturnOptions:
+    """What every LIDAR here shares: rendering the returns and reading ranges from them.
+
+    Parameters
+    ----------
+    pulse : PulseOptions
+        Pulse FWHM and timing jitter (s).
+    detector : DetectorOptions
+        Photon scales, dark counts, dead time, pulses per reading.
+    ranging : RangeOptions
+    transient : TransientOptions
+        Rendering (path depth, seed, laser intensity W/sr).
+    bin_range_m : float
+        Range width of a time bin (m).
+    margin_m : float
+        Range margin (m) around the expected ranges.
+    hardware : LidarHardware or None
+        The instrument: when given, the photon scales and dark counts of ``detector`` are
+        derived from it (the lidar equation, :mod:`simlunar.lidar.hardware`) and the rendered
+        laser intensity and sun irradiance; ``detector``'s own ``signal_photons`` and
+        ``background_photons_per_s`` are then the expert override used only without it.
+        :func:`~simlunar.lidar.scan.with_hardware` also sets the pulse, rates and divergence
+        from it.
+    gate : GateOptions
+        The range gate: a reference plane (datum or altimeter reading) and the instrument's
+        range limits (:mod:`simlunar.lidar.gate`); ``margin_m`` must cover the terrain's
+        relief about the plane.
+    """
+
+    pulse: PulseOptions = field(default_factory=PulseOptions)
+    detector: DetectorOptions = field(default_factory=DetectorOptions)
+    ranging: RangeOptions = field(default_factory=RangeOptions)
+    transient: TransientOptions = field(default_factory=TransientOptions)
+    bin_range_m: float = 0.05
+    margin_m: float = 2.0
+    hardware: LidarHardware | None = None
+    gate: GateOptions = field(default_factory=GateOptions)
+
+    def photon_detector(
+        self, *, pulses=None, field_sr=None, lit_sr=None, sun_irradiance=1.0
+    ) -> DetectorOptions:
+        """The detector with the photon scales of :attr:`hardware` (or the expert override).
+
+        ``field_sr`` / ``lit_sr``: a flash pixel's solid angle and the lit field (sr); None for
+        a steered beam. ``pulses`` replaces the detector's pulses per reading.
+        """
+        det = self.detector
+        if pulses is not None:
+            det = dataclasses.replace(det, pulses=int(pulses))
+        if self.hardware is None:
+            return det
+        hw = self.hardware.detector(
+            field_sr=field_sr,
+            lit_sr=lit_sr,
+            laser_intensity=self.transient.laser_intensity,
+            sun_irradiance=max(sun_irradiance, 1e-30),
+        )
+        return dataclasses.replace(
+            det,
+            signal_photons=hw.signal_photons,
+            background_photons_per_s=hw.background_photons_per_s,
+            dark_count_rate_hz=hw.dark_count_rate_hz,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class LidarScan:
+    """Ranges of one acquisition and its cost (arrays in the input order of the samples).
+
+    Attributes
+    ----------
+    ranges : (n,) float64
+        Slant range (m); NaN where invalid.
+    valid : (n,) bool
+    points : (n, 3) float64
+        World points ``origin + range * direction`` (m); NaN where invalid.
+    photons : (n,) float64
+        Estimated signal photons of the reported return.
+    order : (n,) int64
+        Visiting order (indices into the samples); ``arange(n)`` for flash sensors.
+    seconds : float
+        Acquisition time (s).
+    frames : int
+        Pulses fired (steered beam) or flash frames.
+    timing : ScanTiming or None
+        Breakdown for steered beams.
+    times : (n,) float64 or None
+        When each sample was measured (s from the acquisition's start): a steered beam's
+        first pulse at that pointing, a flash frame's start.
+    returns : (n,) int64 or None
+        Returns detected in each sample's histogram (the reported one is ``which``).
+    """
+
+    ranges: np.ndarray
+    valid: np.ndarray
+    points: np.ndarray
+    photons: np.ndarray
+    order: np.ndarray
+    seconds: float
+    frames: int
+    timing: ScanTiming | None = None
+    times: np.ndarray | None = None
+    returns: np.ndarray | None = None
+
+    def depth(self, camera: Camera) -> np.ndarray:
+        """z-depth (m) of :attr:`points` along ``camera``'s optical axis (the guide view's
+        depth convention of :class:`~simlunar.geometry.types.GroundTruth`); NaN where invalid."""
+        return (self.points - camera.pose.position) @ camera.pose.forward
+
+
+def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions, ranging):
+    """Ranges of photon ``counts`` (..., bins.count); a SPAD's detected returns refitted
+    without pile-up (:func:`simlunar.lidar.spad.spad_correct`).
+
+    Parameters
+    ----------
+    counts : (..., bins.count) array
+        Photon counts (:func:`detect_counts`).
+    background : float or (...) array
+        The sun's steady luminance per reading (scaled by ``det.background_photons_per_s``).
+    bins : TimeBins
+    pulse : PulseOptions
+    det : DetectorOptions
+    ranging : RangeOptions
+
+    Returns
+    -------
+    RangeResult
+        Ranges (m) from the window's start, photons, returns per reading.
+    """
+    res = extract_ranges(counts, bins, pulse=pulse, options=ranging, apd=det.apd,
+                         pulses=det.pulses)  # fmt: skip
+    if det.regime != "spad" or not ranging.pileup_correction or not res.valid.any():
+        return res
+    c = np.asarray(counts).reshape(-1, bins.count)
+    ok = res.valid.reshape(-1)
+    bg = np.broadcast_to(np.asarray(background, float), res.valid.shape).reshape(-1)
+    per_bin = (bg * det.background_photons_per_s + det.dark_count_rate_hz) * bins.bin_s
+    fit = spad_correct(c[ok], bins, pulses=det.pulses, dead_time_s=det.dead_time_s,
+                       sigma_bins=pulse.sigma_bins(bins), background=per_bin[ok])  # fmt: skip
+    rng_m, ph = res.range.reshape(-1).copy(), res.photons.reshape(-1).copy()
+    rng_m[ok], ph[ok] = fit.range, fit.photons * det.pulses
+    return dataclasses.replace(res, range=rng_m.reshape(res.range.shape),
+                               photons=ph.reshape(res.photons.shape))  # fmt: skip
+
+
+def detect_counts(
+    hist, background, bins: TimeBins, pulse, detector: DetectorOptions, rng, oversample=1
+):
+    """Photon counts of rendered impulse responses: the pulse's shape, the expected counts of
+    laser, sun and dark counts, then Poisson noise (with dead time where the detector has one).
+
+    Parameters
+    ----------
+    hist : (..., bins.count * oversample) float
+        Rendered returns per fine time bin.
+    background : float or (...) array
+        The sun's steady luminance per reading.
+    bins : TimeBins
+    pulse : PulseOptions
+    detector : DetectorOptions
+    rng : Generator
+    oversample : int
+        Fine bins per output bin of ``hist``.
+
+    Returns
+    -------
+    (..., bins.count) array
+        Photon counts per output bin.
+    """
+    shaped = shape_waveform(hist, bins, pulse, oversample=oversample)
+    lam = expected_counts(shaped, background, bins, detector)
+    if 0 < detector.dead_time_s < np.inf:
+        return photon_counts_dead_time(lam, bins, options=detector, rng=rng)
+    return photon_counts(lam, options=detector, rng=rng)

@@ -1,0 +1,318 @@
+"""Steered-beam LIDAR acquisition: a gimbal / galvanometer beam visits planned directions.
+
+:func:`steered_beam_scan` orders the planned directions (:func:`simlunar.lidar.order_scan`),
+times them on the steering mechanics (:mod:`simlunar.lidar.steering`), predicts each beam's
+range from the gate's reference plane (:mod:`simlunar.lidar.gate`; an altimeter reading with
+:func:`altimeter_datum`), has the returns rendered by a beam capture, applies the sensor physics
+(pulse and jitter, photon counts with the sun's background and its shot noise, dead time, range
+extraction: :mod:`simlunar.lidar.returns`) and prices the acquisition in seconds.
+
+The capture is any object with the methods of :class:`simlunar.render.beam_capture.BeamCapture`
+(``render_beams``, ``render_batch``, ``render_sun``, ``has_sun``, ``origin``, ``oversample``,
+``sun_irradiance``), made by :func:`simlunar.render.beam_capture.beam_capture`: this package
+never imports :mod:`simlunar.render` (only it imports Mitsuba). The flash LIDARs are in
+:mod:`simlunar.lidar.flash` and :mod:`simlunar.render.flash_lidar`.
+
+Ranges are slant ranges from the sensor's origin along the beam (m).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.geometry import Camera, Pose
+from simlunar.lidar.detector import DetectorOptions
+from simlunar.lidar.footprint import FootprintOptions
+from simlunar.lidar.gate import GateOptions, plane_ranges
+from simlunar.lidar.hardware import LidarHardware
+from simlunar.lidar.ordering import OrderOptions, order_scan
+from simlunar.lidar.ranging import extract_ranges
+from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
+from simlunar.lidar.steering import SteeringOptions, point_times, pointing_angles, scan_timing
+from simlunar.lidar.trajectory import Navigation, PlatformMotion, place_points, rotate_small
+from simlunar.lidar.waveform import TimeBins
+
+__all__ = [
+    "SteeredBeamOptions",
+    "altimeter_datum",
+    "guide_directions",
+    "steered_beam_scan",
+    "with_hardware",
+]
+
+
+@dataclass(frozen=True)
+class SteeredBeamOptions(ReturnOptions):
+    """A steered-beam LIDAR (gimbaled altimeter or galvanometer scanner).
+
+    Parameters
+    ----------
+    pulse, ranging, transient, bin_range_m
+        As for every LIDAR (:class:`~simlunar.lidar.returns.ReturnOptions`).
+    detector : DetectorOptions
+        Its ``pulses`` is replaced by ``steering.pulses_per_point``.
+    margin_m : float
+        Range margin (m) on both sides of the ray-cast ranges in each batch's window.
+    footprint : FootprintOptions
+        Divergence (rad), profile and rays per beam.
+    steering : SteeringOptions
+        Slew rate (rad/s), acceleration (rad/s^2), settle (s), pulse rate (Hz), pulses/point.
+    order : OrderOptions
+    window_m : float
+        Range window of each rendered batch (m).
+    batch : int
+        Beams per render launch.
+    motion : PlatformMotion or None
+        The platform's motion during the scan (:mod:`simlunar.lidar.trajectory`); None = at
+        rest. Used by :class:`simlunar.sensors.SteeredBeam` (which starts it at the guide
+        camera); :func:`steered_beam_scan` takes the trajectory itself.
+    """
+
+    footprint: FootprintOptions = field(default_factory=FootprintOptions)
+    steering: SteeringOptions = field(default_factory=SteeringOptions)
+    order: OrderOptions = field(default_factory=OrderOptions)
+    window_m: float = 8.0
+    batch: int = 4096
+    motion: PlatformMotion | None = None
+
+    def __post_init__(self) -> None:
+        if not (self.bin_range_m > 0 and self.window_m > 2 * self.margin_m >= 0):
+            raise ValueError("need bin_range_m > 0 and window_m > 2 margin_m >= 0")
+        if int(self.batch) < 1:
+            raise ValueError(f"batch must be >= 1, got {self.batch}")
+
+    @property
+    def window(self) -> TimeBins:
+        """Bins of one batch's window (start set per batch)."""
+        return TimeBins.for_ranges(0.0, self.window_m, self.bin_range_m)
+
+
+def with_hardware(options, hardware: LidarHardware):
+    """``options`` (:class:`SteeredBeamOptions` or :class:`~simlunar.lidar.flash.FlashOptions`)
+    measuring with ``hardware``: its pulse and jitter, photon scales
+    (:meth:`~simlunar.lidar.returns.ReturnOptions.photon_detector`), pulse rate and, for a
+    steered beam, its divergence."""
+    out = dataclasses.replace(options, hardware=hardware, pulse=hardware.pulse)
+    if isinstance(out, SteeredBeamOptions):
+        return dataclasses.replace(
+            out,
+            footprint=dataclasses.replace(out.footprint, divergence_rad=hardware.divergence_rad),
+            steering=dataclasses.replace(out.steering, pulse_rate_hz=hardware.pulse_rate_hz),
+        )
+    return dataclasses.replace(out, pulse_rate_hz=hardware.pulse_rate_hz)
+
+
+def guide_directions(camera: Camera, rc: np.ndarray) -> np.ndarray:
+    """Unit world directions (k, 3) through the centres of guide pixels ``rc`` (k, 2) (row, col)."""
+    rc = np.asarray(rc, float).reshape(-1, 2)
+    return camera.rays(rc[:, ::-1] + 0.5)[1]
+
+
+def altimeter_datum(capture, boresight, *, options: SteeredBeamOptions, rng=None):
+    """Range the boresight and return the plane it meets: ``(datum_z (m), window steps)``.
+
+    The beam's window (``options.window_m``) is stepped out from ``gate.min_range_m`` in
+    steps of ``window_m - 2 margin_m`` (overlapping by the margins) until a return is
+    detected, up to ``gate.max_range_m``; each step fires ``steering.pulses_per_point``
+    pulses. The plane is horizontal through the measured point (the IMU gives the vertical).
+
+    Parameters
+    ----------
+    capture : BeamCapture
+        From :func:`simlunar.render.beam_capture.beam_capture`.
+    boresight : (3,) float
+        Direction of the altimeter's beam (world; normalised here).
+    options : SteeredBeamOptions
+    rng : seed or Generator
+        Photon noise.
+
+    Raises
+    ------
+    NothingMeasured-like ValueError
+        No return within the instrument's range.
+    """
+    d = np.asarray(boresight, float).reshape(1, 3)
+    d = d / np.linalg.norm(d)
+    det = _beam_detector(capture, options)
+    bins, g = options.window, options.gate
+    step = options.window_m - 2.0 * options.margin_m
+    r0, k = g.min_range_m, 0
+    while r0 < g.max_range_m:
+        k += 1
+        hist, _ = capture.render_batch(d, 2.0 * r0, seed=options.transient.seed + 7919 * k)
+        bg = capture.render_sun(d) if capture.has_sun else 0.0
+        counts = detect_counts(hist, bg, bins, options.pulse, det, rng, capture.oversample)
+        res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging,
+                             apd=det.apd, pulses=det.pulses)  # fmt: skip
+        if res.valid[0]:
+            r = float(res.range[0]) + r0
+            return float(capture.origin[2] + r * d[0, 2]), k
+        r0 += step
+    raise ValueError(f"altimeter: no return along the boresight within {g.max_range_m} m")
+
+
+def steered_beam_scan(
+    capture,
+    directions: np.ndarray,
+    *,
+    options: SteeredBeamOptions,
+    rng=None,
+    boresight: Pose | None = None,
+    trajectory=None,
+    navigation=None,
+    retarget: bool = True,
+) -> LidarScan:
+    """Scan planned directions with a steered beam.
+
+    Parameters
+    ----------
+    capture : BeamCapture
+        From :func:`simlunar.render.beam_capture.beam_capture` (terrain, origin, sun, BSDF).
+    directions : (n, 3) float
+        Unit world directions of the planned samples, in the planner's order.
+    options : SteeredBeamOptions
+    rng : seed or Generator
+        Photon noise.
+    boresight : Pose or None
+        Gimbal zero (its forward axis); None = looking along the mean direction.
+    trajectory : Trajectory or None
+        The platform's motion (:mod:`simlunar.lidar.trajectory`): each beam leaves from its
+        position at the beam's firing time, turned by the line of sight's attitude jitter;
+        None = at rest at the capture's origin. The firing times come from the pointing
+        angles seen from the scan's start.
+    navigation : Navigation or None
+        How the points are placed (:func:`simlunar.lidar.trajectory.place_points`); None =
+        the pose known exactly.
+    retarget : bool
+        With a trajectory: command each beam from the platform's position at its firing time
+        towards where its planned direction (from the start) meets the gate's reference plane
+        (what navigation and the plane give, never the terrain); False: hold the planned
+        directions in the world frame.
+
+    Returns
+    -------
+    LidarScan
+    """
+    rng = np.random.default_rng(rng)
+    d = _unit(np.asarray(directions, float))
+    det = _beam_detector(capture, options)
+    datum, steps = options.gate.datum_z_m, 0
+    if options.gate.altimeter:
+        bore = d.mean(axis=0) if boresight is None else boresight.forward
+        datum, steps = altimeter_datum(capture, bore, options=options, rng=rng)
+    if boresight is None:
+        boresight = Pose.look_at(capture.origin, capture.origin + d.mean(axis=0))
+    angles = pointing_angles(d, boresight)
+    order = order_scan(angles, steering=options.steering, options=options.order)
+    timing = scan_timing(angles, order, options=options.steering)
+    lead = steps * det.pulses / options.steering.pulse_rate_hz  # the altimeter's steps first
+    times = lead + point_times(angles, order, options=options.steering)
+    origins, d, fired = _aim(capture.origin, d, times, trajectory, datum, options.gate, retarget)
+    pred = plane_ranges(
+        capture.origin if origins is None else origins, d, datum_z=datum, options=options.gate
+    )
+    ret = _render_returns(capture, fired, pred, times, origins, options)
+    ranges, valid, res = _read_returns(ret, det, options, rng)
+    if trajectory is None:
+        points = capture.origin + ranges[:, None] * d
+    else:
+        points = place_points(ranges, d, times, trajectory, navigation or Navigation(), rng=rng)
+    return LidarScan(
+        ranges=ranges,
+        valid=valid,
+        points=points,
+        photons=res.photons,
+        order=order,
+        # the altimeter's window steps fire pulses_per_point pulses each before the scan
+        seconds=timing.total_s + lead,
+        frames=(len(d) + steps) * int(options.steering.pulses_per_point),
+        timing=timing,
+        times=times,
+        returns=res.returns,
+    )
+
+
+def _unit(d: np.ndarray) -> np.ndarray:
+    """Rows of ``d`` (n, 3) scaled to unit length."""
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def _beam_detector(capture, options: SteeredBeamOptions) -> DetectorOptions:
+    """The detector of one pointing: ``steering.pulses_per_point`` pulses, photon scales of the
+    instrument under the capture's sun."""
+    return options.photon_detector(
+        pulses=options.steering.pulses_per_point, sun_irradiance=capture.sun_irradiance
+    )
+
+
+def _aim(origin, d, times, trajectory, datum_z, gate: GateOptions, retarget: bool):
+    """Where the beams leave from and where they point, at their firing ``times`` (n,) s.
+
+    Returns
+    -------
+    origins : (n, 3) float or None
+        The platform's positions (m); None without a ``trajectory`` (at rest at ``origin``).
+    commanded : (n, 3) float
+        The directions the sensor commands (retargeted to the reference plane if asked).
+    fired : (n, 3) float
+        The directions the beams take: ``commanded`` turned by the line of sight's attitude
+        jitter, which the sensor ignores.
+    """
+    if trajectory is None:
+        return None, d, d
+    origins = trajectory.at(times)
+    if retarget:
+        d = _retarget(origin, d, origins, datum_z, gate)
+    return origins, d, rotate_small(d, trajectory.attitude_at(times))
+
+
+def _read_returns(ret, det: DetectorOptions, options: SteeredBeamOptions, rng):
+    """Slant ranges (n,) m (NaN where invalid), their validity (n,) and the RangeResult of
+    rendered :class:`~simlunar.render.beam_capture.BeamReturns` ``ret``."""
+    bins = options.window
+    bg = 0.0 if ret.sun is None else ret.sun
+    counts = detect_counts(ret.histograms, bg, bins, options.pulse, det, rng, ret.oversample)
+    res = read_ranges(counts, bg, bins, options.pulse, det, options.ranging)
+    valid = res.valid & np.isfinite(ret.start_opl)
+    ranges = res.range + ret.start_opl / 2.0
+    if ret.opl_offset is not None:
+        ranges = ranges - ret.opl_offset / 2.0  # the render's laser offset, not the sensor's
+    return np.where(valid, ranges, np.nan), valid, res
+
+
+def _retarget(origin, d, origins, datum_z, gate) -> np.ndarray:
+    """Directions from ``origins`` (n, 3) to where the rays ``origin + r d`` meet the plane
+    ``z = datum_z`` (unchanged where a ray misses it within the gate's range)."""
+    r = plane_ranges(origin, d, datum_z=datum_z, options=gate)
+    ok = np.isfinite(r) & (r < gate.max_range_m)
+    target = origin + np.where(ok, r, 1.0)[:, None] * d
+    out = target - origins
+    out /= np.linalg.norm(out, axis=1, keepdims=True)
+    return np.where(ok[:, None], out, d)
+
+
+def _render_returns(capture, d, pred, times, origins, options: SteeredBeamOptions):
+    """The beams' returns (input order), rendered in firing order when the platform moves
+    between launches (``origins`` (n, 3) m at the firing ``times``; None: at rest)."""
+    if origins is None:
+        return capture.render_beams(d, pred, margin_m=options.margin_m,
+                                    seed=options.transient.seed)  # fmt: skip
+    fire = np.argsort(times, kind="stable")
+    inv = np.empty_like(fire)
+    inv[fire] = np.arange(len(fire))
+    ret = capture.render_beams(d[fire], pred[fire], margin_m=options.margin_m,
+                               seed=options.transient.seed, origins=origins[fire])  # fmt: skip
+    return _reorder(ret, inv)
+
+
+def _reorder(ret, inv):
+    """BeamReturns of beams rendered in another order, back in the input order."""
+    take = {
+        f.name: (getattr(ret, f.name)[inv] if isinstance(getattr(ret, f.name), np.ndarray)
+                 and getattr(ret, f.name).ndim >= 1 else getattr(ret, f.name))
+        for f in dataclasses.fields(ret)
+    }  # fmt: skip
+    return type(ret)(**take)

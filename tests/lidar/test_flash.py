@@ -1,0 +1,125 @@
+"""Flash LIDAR acquisition on arrays (no rendering): the receiver's lattice and solid angles, the
+range gate from the reference plane, frames of the micromirror flash, reading a frame."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from simlunar.geometry import Camera, Intrinsics, Pose
+from simlunar.lidar import DetectorOptions, PulseOptions
+from simlunar.lidar.flash import (
+    FlashOptions,
+    flash_window,
+    micromirror_frames,
+    micromirror_lit_sr,
+    read_flash,
+    receiver_rc,
+    receiver_solid_angles,
+)
+from simlunar.lidar.gate import GateOptions
+from simlunar.lidar.waveform import splat_paths
+
+H = 50.0
+
+
+def _nadir(px: int, fov_deg: float, height: float = H) -> Camera:
+    pose = Pose.look_at([0.0, 0.0, height], [0.0, 0.0, 0.0], up=(0.0, 1.0, 0.0))
+    return Camera(Intrinsics.from_fov(px, px, fov_deg), pose)
+
+
+def test_flash_options_refuse_bad_bins_margins_and_rates():
+    for kwargs in ({"bin_range_m": 0.0}, {"margin_m": -1.0}, {"pulse_rate_hz": 0.0}):
+        with pytest.raises(ValueError, match="need bin_range_m > 0"):
+            FlashOptions(**kwargs)
+
+
+def test_receiver_pixels_on_the_guide_lattice():
+    # a 16 x 16 receiver on a 64 x 64 guide: receiver pixel (0, 0) has its centre at guide
+    # (u, v) = (2, 2), index coordinates (1.5, 1.5); pixel (1, 1) (row-major index 17) at 5.5
+    rc = receiver_rc((16, 16), (64, 64))
+    assert rc.shape == (256, 2)
+    assert rc[0] == pytest.approx([1.5, 1.5]) and rc[17] == pytest.approx([5.5, 5.5])
+    assert rc[15] == pytest.approx([1.5, 61.5])  # (row 0, col 15)
+    # a non-square receiver over a non-square guide scales each axis by itself
+    assert receiver_rc((2, 4), (10, 40))[5] == pytest.approx([7.0, 14.5])
+
+
+def test_receiver_solid_angles_tile_the_field():
+    # the pixels of a pinhole receiver tile its rectangular field, whose solid angle is
+    # 4 asin(sin(a) sin(b)) for half-angles a, b (a right rectangular pyramid)
+    cam = _nadir(16, 30.0)
+    omega = receiver_solid_angles(cam)
+    assert omega.shape == (16, 16)
+    a = b = np.radians(15.0)
+    assert omega.sum() == pytest.approx(4 * np.arcsin(np.sin(a) * np.sin(b)), rel=1e-12)
+    # symmetric about the axis, dimmest in the corners (about cos^3 off axis)
+    assert omega == pytest.approx(omega[::-1, ::-1], rel=1e-12)
+    assert omega[0, 0] < omega[7, 7]
+
+
+def test_micromirror_lit_sr_is_the_field_on_a_plane_at_one_metre():
+    # an 8 x 8 micromirror over 6 deg: fx = fy = 4 / tan(3 deg), lit W H / (fx fy)
+    cam = _nadir(8, 6.0)
+    assert micromirror_lit_sr(cam) == pytest.approx(64 * np.tan(np.radians(3.0)) ** 2 / 16)
+
+
+def test_micromirror_frames_keep_receiver_pixels_apart():
+    # receiver 8 x 8 on a 32 x 32 guide: 4 x 4 guide pixels per receiver pixel; the first two
+    # dots share receiver pixel (0, 0), the last three are alone
+    cam = _nadir(32, 6.0)
+    uv = np.array([[3.5, 3.5], [2.5, 2.5], [20.5, 9.5], [30.5, 30.5], [12.5, 27.5]])
+    assert list(micromirror_frames(uv, cam, (8, 8))) == [0, 1, 0, 0, 0]
+    # three dots in one receiver pixel: frames 0, 1, 2 in their order
+    assert list(micromirror_frames(np.array([[1.0, 1], [2, 2], [3, 3]]), cam, (8, 8))) == [0, 1, 2]
+
+
+def test_flash_window_covers_the_plane_with_its_margins():
+    # nadir receiver at 50 m over the datum z = 0: the pixel rays meet it between 50 m (the
+    # centre) and 50 / cos(corner angle); the window adds margin_m on both sides
+    cam = _nadir(8, 20.0)
+    opts = FlashOptions(margin_m=1.0, bin_range_m=0.05)
+    bins = flash_window(cam, options=opts)
+    d = cam.rays(cam.pixel_centers().reshape(-1, 2))[1]
+    r = H / -d[:, 2]
+    assert bins.range_of(0) == pytest.approx(r.min() - 1.0)
+    assert bins.range_of(bins.count) == pytest.approx(r.max() + 1.0, abs=0.05)
+    assert bins.bin_range == pytest.approx(0.05)
+    # a datum 10 m higher brings the window 10 m nearer
+    up = flash_window(cam, options=FlashOptions(margin_m=1.0, gate=GateOptions(datum_z_m=10.0)))
+    assert up.range_of(0) == pytest.approx(r.min() * 0.8 - 1.0)
+
+
+def test_flash_window_refuses_the_altimeter_and_a_field_above_the_horizon():
+    with pytest.raises(ValueError, match=r"gate\.altimeter"):
+        flash_window(_nadir(8, 20.0), options=FlashOptions(gate=GateOptions(altimeter=True)))
+    sky = Camera(Intrinsics.from_fov(8, 8, 20.0), Pose.look_at([0, 0, H], [0, 0, 2 * H]))
+    with pytest.raises(ValueError, match="no receiver pixel meets the reference plane"):
+        flash_window(sky, options=FlashOptions())
+
+
+def test_read_flash_ranges_a_plane():
+    # a 4 x 4 receiver over the plane z = 0 with its rendered returns at the true ranges
+    # (tent-splatted on 2x finer bins, as the film does): the read ranges are the true ones
+    # within a tenth of a bin, the points lie on the plane, one frame of pulses / rate seconds
+    cam = _nadir(4, 20.0)
+    det = DetectorOptions(signal_photons=200.0, background_photons_per_s=0.0, pulses=8)
+    opts = FlashOptions(detector=det, pulse=PulseOptions(fwhm_s=1e-9), pulse_rate_hz=20.0)
+    bins = flash_window(cam, options=opts)
+    d = cam.rays(cam.pixel_centers())[1]
+    truth = H / -d[..., 2]
+    hist = splat_paths(2.0 * truth[..., None], 1.0, bins.refined(2)).reshape(4, 4, -1)
+    frame = SimpleNamespace(
+        histograms=hist.astype(np.float32), sun=None, bins=bins, oversample=2, sun_irradiance=1.0
+    )
+    scan = read_flash(frame, cam, options=opts, rng=0)
+    assert scan.valid.all()
+    assert scan.ranges == pytest.approx(truth, abs=0.1 * opts.bin_range_m)
+    assert scan.points[..., 2] == pytest.approx(0.0, abs=0.1 * opts.bin_range_m)
+    assert scan.seconds == pytest.approx(8 / 20.0) and scan.frames == 1
+    assert np.array_equal(scan.order, np.arange(16).reshape(4, 4))
+    # a fresh read of the same frame draws fresh photon noise
+    again = read_flash(frame, cam, options=opts, rng=1)
+    assert not np.array_equal(again.photons, scan.photons)
