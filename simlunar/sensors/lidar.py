@@ -52,6 +52,7 @@ __all__ = [
     "MicromirrorFlash",
     "MicromirrorOptions",
     "SteeredBeam",
+    "join_scans",
     "revisit_tiles",
     "tile_camera",
 ]
@@ -163,6 +164,16 @@ class SteeredBeam:
         angles = pointing_angles(guide_directions(cam, rc), cam.pose)
         order = order_scan(angles, steering=o.steering, options=o.order)
         return float(scan_timing(angles, order, options=o.steering).total_s)
+
+    def repoint_seconds(self, from_rc, to_rc) -> float:
+        """Modelled time (s) of re-pointing the beam from guide pixel ``from_rc`` to ``to_rc``
+        ((2,) (row, col)) between two scans: the move and its settle (no dwell), as
+        :func:`~simlunar.lidar.scan_timing` prices every move of a tour."""
+        cam, o = self.scene.camera, self.options
+        rc = np.asarray([from_rc, to_rc], float).reshape(2, 2)
+        a = pointing_angles(guide_directions(cam, rc), cam.pose)
+        t = scan_timing(a[1:], options=o.steering, start=a[0])
+        return float(t.move_s + t.settle_s)
 
 
 @dataclass(frozen=True)
@@ -358,11 +369,35 @@ def _subset(s: LidarScan, keep: np.ndarray) -> LidarScan:
     )
 
 
-def _concat(scans: list[LidarScan]) -> LidarScan:
+def join_scans(scans, gaps_s=None) -> LidarScan:
+    """Scans one after the other as one flat scan: each one's times start where the previous
+    ended, plus ``gaps_s[i]`` (s, e.g. re-pointing) before scan ``i + 1``.
+
+    Parameters
+    ----------
+    scans : sequence of LidarScan
+    gaps_s : sequence of float, length ``len(scans) - 1``, optional (default zeros)
+
+    Returns
+    -------
+    LidarScan
+        Flat (n,) arrays in scan order, ``order`` 0..n-1, ``seconds`` the sum of the scans'
+        and the gaps, ``frames`` their sum.
+    """
+    gaps = np.zeros(max(len(scans) - 1, 0)) if gaps_s is None else np.asarray(gaps_s, float)
+    if len(gaps) != max(len(scans) - 1, 0) or (gaps < 0).any():
+        raise ValueError(f"need {len(scans) - 1} gaps >= 0 s between {len(scans)} scans")
+    merged = _concat([_flat(s) for s in scans], gaps)
+    return dataclasses.replace(merged, seconds=merged.seconds + float(gaps.sum()))
+
+
+def _concat(scans: list[LidarScan], gaps=None) -> LidarScan:
     """The frames one after the other: each one's times start where the previous ended."""
     cat = np.concatenate
     n = sum(s.ranges.size for s in scans)
     start = np.cumsum([0.0] + [s.seconds for s in scans[:-1]])
+    if gaps is not None:
+        start = start + np.cumsum([0.0, *gaps])
     return LidarScan(
         cat([s.ranges for s in scans]),
         cat([s.valid for s in scans]),
