@@ -121,7 +121,7 @@ def _rounds(k=64, **kw):
 def test_the_second_round_follows_the_first_round_s_measured_ranges():
     depth = np.full((N, N), 30.0)
     clean = _Beam(depth)
-    acq, rounds = _rounds().acquire(64, clean, 1, 2)
+    _, rounds = _rounds().acquire(64, clean, 1, 2)
     assert rounds == len(clean.asked) == 4
 
     def spike(rc, v):  # a corrupted first-round range near (24, 24)
