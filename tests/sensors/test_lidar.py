@@ -3,6 +3,8 @@ cost from the steering / pulse-rate model, plan-directed flash revisits."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -214,3 +216,69 @@ def test_flash_revisits_from_the_first_frame_s_ranges_and_their_repointing_time(
         assert acq.seconds == pytest.approx(2 * 4 / 20.0 + 0.05)
         ti = (acq.rc[:, 0] // 16).astype(int) * 2 + (acq.rc[:, 1] // 16).astype(int)
         assert np.bincount(ti, minlength=4)[tile[0] * 2 + tile[1]] == 64  # the revisit's
+
+
+def _beam_options():
+    from simlunar.render.lidar_scan import SteeredBeamOptions
+
+    return SteeredBeamOptions(
+        footprint=FootprintOptions(5e-4, samples=8),
+        pulse=PulseOptions(fwhm_s=1e-9),
+        detector=DET,
+        steering=SteeringOptions(1.0, 10.0, 1e-3, 1000.0, 4),
+        window_m=4.0,
+        margin_m=1.0,
+        batch=32,
+    )
+
+
+def test_repointing_is_the_move_and_settle_of_a_two_point_tour(mi):
+    from simlunar.sensors import LidarScene, SteeredBeam
+
+    sensor = SteeredBeam(LidarScene(_plane(), _camera(32, 40.0)), _beam_options())
+    a, b = np.array([3, 4]), np.array([28, 20])
+    one = sensor.scan_seconds(a[None])  # one dwell, no move
+    # a tour of a and b: one dwell each plus the move a -> b and its settle
+    assert sensor.repoint_seconds(a, b) == pytest.approx(
+        sensor.scan_seconds(np.stack([a, b])) - 2 * one
+    )
+    assert sensor.repoint_seconds(b, a) == pytest.approx(sensor.repoint_seconds(a, b))
+    assert sensor.repoint_seconds(a, a) == 0.0
+
+
+def test_join_scans_runs_times_on_across_scans_and_gaps():
+    from simlunar.render.lidar_scan import LidarScan
+    from simlunar.sensors.lidar import join_scans
+
+    def scan(n, seconds):
+        return LidarScan(np.ones(n), np.ones(n, bool), np.zeros((n, 3)), np.ones(n),
+                         np.arange(n)[::-1], seconds, n, times=np.linspace(0, seconds, n))  # fmt: skip
+
+    j = join_scans([scan(2, 1.0), scan(3, 2.0)], [0.5])
+    assert j.seconds == pytest.approx(3.5) and j.frames == 5
+    np.testing.assert_allclose(j.times, [0.0, 1.0, 1.5, 2.5, 3.5])
+    with pytest.raises(ValueError, match="gaps"):
+        join_scans([scan(2, 1.0), scan(3, 2.0)], [0.5, 0.5])
+
+
+def test_a_multi_round_steered_beam_ranges_every_round_and_adds_up_their_time(mi):
+    from simlunar.planner import SequentialOptions
+    from simlunar.sensors import LidarScene, SteeredBeam
+    from simlunar.study.lidar_planners import LidarRounds
+
+    sensor = SteeredBeam(LidarScene(_plane(), _camera(32, 40.0)), _beam_options())
+    scans = []
+    acquire = sensor.acquire
+    sensor.acquire = lambda rc, rng=None: scans.append(acquire(rc, rng=rng)) or scans[-1]
+    rounds = LidarRounds(SequentialOptions(max_rounds=3, first_share=0.5, batch_share=0.3),
+                         None, (32, 32))  # fmt: skip
+    acq, n = rounds.acquire(40, sensor, 1, 2)
+    assert n == len(scans) == 3 and len(acq.values) == 40
+    assert acq.values == pytest.approx(H, abs=0.05)  # z-depth of the plane from 50 m
+    gaps = [
+        sensor.repoint_seconds(a.planned[a.detail.order[-1]], b.planned[b.detail.order[0]])
+        for a, b in itertools.pairwise(scans)
+    ]
+    assert min(gaps) > 0
+    assert acq.seconds == pytest.approx(sum(s.seconds for s in scans) + sum(gaps))
+    assert acq.frames == sum(s.frames for s in scans) == 40 * 4
