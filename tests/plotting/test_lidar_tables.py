@@ -54,10 +54,9 @@ def test_a_swept_option_makes_separate_points_of_one_curve():
 
 
 def test_oracle_rows_are_labelled_bounds():
-    rows = _rows() + [
-        {"unit": "0", "planner": "oracle_greedy", "k": "64", "trial": "0", "metric": "mse",
-         "value": "0.001", "seconds": "3.5"}
-    ]  # fmt: skip
+    oracle = {"unit": "0", "planner": "oracle_greedy", "k": "64", "trial": "0", "metric": "mse",
+              "value": "0.001", "seconds": "3.5"}  # fmt: skip
+    rows = [*_rows(), oracle]
     md, tex = lidar_tables(rows, metrics=["mse"], title="t")
     assert "| oracle_greedy (a bound) | 64 | 3.5 | 0.001 |" in md
     assert "bounds, not planners" in md and "oracle\\_greedy (a bound)" in tex
