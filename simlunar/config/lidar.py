@@ -273,7 +273,7 @@ class MicromirrorCfg(_Model):
 
 
 class MotionCfg(_Model):
-    """The platform's motion during a steered-beam scan
+    """The platform's motion during a steered-beam scan or between flash frames
     (:class:`simlunar.lidar.trajectory.PlatformMotion`), starting at the guide camera."""
 
     kind: Literal["hover", "descent"] = Field("descent", description="hover or descent")
@@ -366,7 +366,9 @@ class LidarOptionsCfg(_Model):
     )
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)
     motion: MotionCfg | None = Field(
-        None, description="steered beam: the platform's motion during the scan (none: at rest)"
+        None,
+        description="steered beam or flash: the platform's motion during the scan (a beam's "
+        "pose per pulse, a flash frame's per frame; none: at rest)",
     )
     flash: FlashCfg = Field(default_factory=FlashCfg)
     micromirror: MicromirrorCfg = Field(default_factory=MicromirrorCfg)
@@ -494,10 +496,10 @@ def check_lidar_study(study) -> None:
             if study.sensor == "flash":
                 raise ValueError(f"{where}: a flash's time is its frames, not a tour")
     o = study.options
-    if o.motion is not None and study.sensor != "steered_beam":
+    if o.motion is not None and study.sensor == "micromirror_flash":
         raise ValueError(
-            f"study.options.motion: a moving platform is modelled for the steered beam only, "
-            f"not {study.sensor!r}"
+            "study.options.motion: a moving platform is modelled for the steered beam and the "
+            "flash, not the micromirror_flash (its frames are rendered together)"
         )
     if study.sensor == "steered_beam":
         sb = o.steered_beam

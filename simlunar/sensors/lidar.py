@@ -25,9 +25,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.geometry import Camera, Intrinsics
+from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.lidar import order_scan, pointing_angles, scan_timing
 from simlunar.lidar.planning import choose_tiles, tile_range_scores
+from simlunar.lidar.trajectory import PlatformMotion, place_points, rotate_small
 from simlunar.render.flash_lidar import (
     FlashOptions,
     flash_window,
@@ -199,6 +200,10 @@ class FlashLidarOptions:
         ``both``: the ranges' share of a tile's score.
     repoint_s : float >= 0
         Time to re-point and re-zoom the receiver before each revisit (s), added per revisit.
+    motion : PlatformMotion or None
+        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest): each frame
+        is taken from the pose at its own time (frame ``i`` at ``i`` x (frame time +
+        ``repoint_s``)) and its points are placed with the sensor's navigation.
     """
 
     flash: FlashOptions = field(default_factory=FlashOptions)
@@ -208,6 +213,7 @@ class FlashLidarOptions:
     revisit_from: str = "plan"
     range_weight: float = 0.5
     repoint_s: float = 0.0
+    motion: PlatformMotion | None = None
 
     def __post_init__(self):
         if self.revisit_from not in ("plan", "ranges", "both"):
@@ -287,9 +293,17 @@ class FlashLidar:
     def needs_plan(self) -> bool:
         return self.options.revisits > 0 and self.options.revisit_from != "ranges"
 
-    def _frame(self, camera: Camera, key, rng) -> LidarScan:
-        """A frame through ``camera``: rendered once per field (``key``), read with fresh noise."""
+    def _frame(self, camera: Camera, key, rng, moving=None, t: float = 0.0) -> LidarScan:
+        """A frame through ``camera``: rendered once per field (``key``), read with fresh noise;
+        on a moving platform (``moving``, a :class:`_Moving`) through the pose at time ``t``
+        (rendered for that pose alone), its points placed with the sensor's navigation."""
         s, f = self.scene, self.options.flash
+        if moving is not None:
+            cam = moving.camera(camera, t)
+            bins = flash_window(cam, options=f)
+            frame = flash_frame(s.terrain, cam, bins=bins, options=f.transient, bsdf=s.bsdf,
+                                sun=s.sun)  # fmt: skip
+            return moving.place(read_flash(frame, cam, options=f, rng=rng), cam, t)
         if key not in self._frames:
             bins = flash_window(camera, options=f)
             self._frames[key] = flash_frame(
@@ -301,17 +315,21 @@ class FlashLidar:
         """One full-field frame, then ``revisits`` zoomed frames at the sub-fields with most
         planned pixels ``rc`` ((k, 2) (row, col); ignored without revisits)."""
         o, cam = self.options, self.scene.camera
-        rngs = np.random.default_rng(rng).spawn(1 + int(o.revisits))
-        full = self._frame(self.receiver, None, rngs[0])
+        g = np.random.default_rng(rng)
+        rngs = g.spawn(1 + int(o.revisits))
+        per_frame = o.flash.detector.pulses / o.flash.pulse_rate_hz
+        moving = None if o.motion is None else _Moving(o.motion, cam.position, g)
+        full = self._frame(self.receiver, None, rngs[0], moving, 0.0)
         scans = [full]
         tiles = np.zeros((0, 2), int)
         if o.revisits > 0:
             if rc is None and o.revisit_from != "ranges":
                 raise ValueError("flash revisits are directed by a plan: rc is required")
             tiles = self._revisit_tiles(rc, full)
-            for t, r in zip(tiles, rngs[1:]):
+            for i, (t, r) in enumerate(zip(tiles, rngs[1:]), 1):
                 tcam = tile_camera(cam, t, o.zoom, o.receiver_px)
-                scans.append(self._frame(tcam, tuple(int(x) for x in t), r))
+                when = i * (per_frame + o.repoint_s)  # each revisit re-points first
+                scans.append(self._frame(tcam, tuple(int(x) for x in t), r, moving, when))
         flat = [_flat(s) for s in scans]
         if len(tiles):
             # the finer revisit samples supersede the full frame's inside their tiles
@@ -320,7 +338,6 @@ class FlashLidar:
             inside = (t[:, None, :] == tiles[None]).all(-1).any(-1)
             flat[0] = _subset(flat[0], ~inside)
         merged = _concat(flat)
-        per_frame = o.flash.detector.pulses / o.flash.pulse_rate_hz
         seconds = len(scans) * per_frame + len(tiles) * o.repoint_s
         return _to_guide(merged, cam, frames=len(scans), seconds=seconds, detail=merged)
 
@@ -334,6 +351,33 @@ class FlashLidar:
             plan_counts = _tile_counts(rc, cam.shape, o.zoom)
         rough = tile_range_scores(full.points, full.valid, o.zoom)
         return choose_tiles(plan_counts, rough, o.revisits, range_weight=o.range_weight)
+
+
+class _Moving:
+    """A flash LIDAR on a moving platform: the receiver's pose at a frame's time and the
+    points as the sensor places them (:mod:`simlunar.lidar.trajectory`)."""
+
+    def __init__(self, motion: PlatformMotion, start, rng) -> None:
+        self.motion = motion
+        self.rng = rng
+        self.trajectory = motion.trajectory(start, jitter_seed=int(rng.integers(2**31)))
+
+    def camera(self, camera: Camera, t: float) -> Camera:
+        """``camera`` moved to the platform's position at ``t`` (s), turned by its jitter."""
+        w = np.broadcast_to(self.trajectory.attitude_at(t), (3, 3))
+        axes = rotate_small(np.asarray(camera.pose.rotation, float).T, w).T
+        return Camera(camera.intrinsics, Pose(axes, self.trajectory.at(t)))
+
+    def place(self, scan: LidarScan, camera: Camera, t: float) -> LidarScan:
+        """``scan`` (read through the moved ``camera``) with its points placed by the
+        navigation: commanded directions are the receiver pixels' rays before the jitter."""
+        _, d = camera.rays(camera.pixel_centers())
+        d = d.reshape(-1, 3)
+        commanded = rotate_small(d, np.broadcast_to(-self.trajectory.attitude_at(t), d.shape))
+        times = np.full(d.shape[0], float(t))
+        pts = place_points(scan.ranges.ravel(), commanded, times, self.trajectory,
+                           self.motion.navigation, rng=self.rng)  # fmt: skip
+        return dataclasses.replace(scan, points=pts.reshape(scan.points.shape))
 
 
 def _or(a, n, fill=0):

@@ -282,3 +282,38 @@ def test_a_multi_round_steered_beam_ranges_every_round_and_adds_up_their_time(mi
     assert min(gaps) > 0
     assert acq.seconds == pytest.approx(sum(s.seconds for s in scans) + sum(gaps))
     assert acq.frames == sum(s.frames for s in scans) == 40 * 4
+
+
+@pytest.mark.render
+def test_a_descending_flash_takes_each_frame_from_its_own_pose(mi):
+    # 10 m/s descent over the z = 0 plane; the full frame at t = 0 from 50 m, the revisit
+    # after one frame (0.2 s) and its re-pointing (0.3 s): at t = 0.5 s, from 45 m.
+    # Navigation "exact" places every point on the plane; "start" (the pose at t = 0 for all)
+    # lifts the revisit's points by the 5 m the platform came down, the full frame's by none
+    from simlunar.lidar.trajectory import Navigation, PlatformMotion
+    from simlunar.render.flash_lidar import FlashOptions
+    from simlunar.render.transient import TransientOptions
+    from simlunar.sensors import FlashLidar, FlashLidarOptions, LidarScene
+
+    flash = FlashOptions(detector=DET, pulse=PulseOptions(fwhm_s=1e-9),
+                         transient=TransientOptions(spp=8), pulse_rate_hz=20.0)  # fmt: skip
+    scene = LidarScene(_plane(), _camera(32, 8.0))
+    rc = np.array([[20, 3], [25, 10], [30, 14]])  # tile (1, 0) of a 2 x 2 zoom
+
+    def run(compensation):
+        motion = PlatformMotion((0.0, 0.0, -10.0), navigation=Navigation(compensation))
+        opts = FlashLidarOptions(flash, receiver_px=(8, 8), revisits=1, zoom=2, repoint_s=0.3,
+                                 motion=motion)  # fmt: skip
+        acq = FlashLidar(scene, opts).acquire(rc, rng=0)
+        pts = acq.detail.points[acq.detail.valid]
+        revisit = np.arange(len(acq.detail.valid))[acq.detail.valid] >= 48  # after the full frame
+        return acq, pts, revisit
+
+    acq, pts, revisit = run("exact")
+    assert acq.frames == 2 and acq.seconds == pytest.approx(2 * 0.2 + 0.3)
+    assert pts[:, 2] == pytest.approx(0.0, abs=flash.bin_range_m)
+    assert acq.values == pytest.approx(H, abs=flash.bin_range_m)
+    _, pts, revisit = run("start")
+    assert revisit.sum() == 64
+    assert pts[~revisit, 2] == pytest.approx(0.0, abs=flash.bin_range_m)
+    assert pts[revisit, 2] == pytest.approx(5.0, abs=flash.bin_range_m)
