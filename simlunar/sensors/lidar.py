@@ -12,7 +12,8 @@ where each measured point projects, and its cost is the modelled acquisition tim
 - :class:`FlashLidar`: a low-resolution receiver co-boresighted with the guide camera takes one
   full-field frame; with ``revisits`` > 0 the planned pixels direct that many zoomed frames at
   the sub-fields (tiles of ``1 / zoom`` of the field) holding most planned pixels, whose finer
-  samples replace the full-field ones there. Seconds: frames x pulses / pulse rate.
+  samples replace the full-field ones there. Seconds: frames x pulses / pulse rate. On a moving
+  platform (``FlashLidarOptions.motion``) each frame is taken from the pose at its time.
 - :class:`MicromirrorFlash`: a micromirror projector at the guide camera lights only the
   planned pixels; a small receiver times them (dots sharing a receiver pixel go to different
   frames).
