@@ -272,7 +272,7 @@ class MicromirrorCfg(_Model):
 
 
 class MotionCfg(_Model):
-    """The platform's motion during a steered-beam scan
+    """The platform's motion during a steered-beam scan or between flash frames
     (:class:`simlunar.lidar.trajectory.PlatformMotion`), starting at the guide camera."""
 
     kind: Literal["hover", "descent"] = Field("descent", description="hover or descent")
@@ -365,7 +365,9 @@ class LidarOptionsCfg(_Model):
     )
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)
     motion: MotionCfg | None = Field(
-        None, description="steered beam: the platform's motion during the scan (none: at rest)"
+        None,
+        description="steered beam or flash: the platform's motion during the scan (a beam's "
+        "pose per pulse, a flash frame's per frame; none: at rest)",
     )
     flash: FlashCfg = Field(default_factory=FlashCfg)
     micromirror: MicromirrorCfg = Field(default_factory=MicromirrorCfg)
@@ -416,14 +418,50 @@ _HARDWARE_KEY = {
 }
 
 
-#: planners a LIDAR study cannot run: the oracles read the true depth and ``sequential`` asks
-#: a sensor back (the LIDAR study gives a planner neither); the learned map runs (its map per
-#: density)
-LIDAR_UNAVAILABLE_PLANNERS = {
-    "oracle_greedy": "reads the true depth (a bound of the sampling study only)",
-    "oracle_hessian": "reads the true depth (a bound of the sampling study only)",
-    "sequential": "asks a sensor back between rounds (the sampling study only)",
+#: what a LIDAR study asks of a planner label, by strategy: an oracle reads the true depth in
+#: its planner step (a bound: its label starts "oracle", as in the sampling study); the
+#: multi-round planner asks the LIDAR back between rounds (its samples must be the planned
+#: cells, the platform at rest)
+LIDAR_PLANNER_RULES = {
+    "oracle_greedy": "reads the true depth: a bound, not a planner",
+    "oracle_hessian": "reads the true depth: a bound, not a planner",
+    "sequential": "asks the LIDAR back between rounds",
 }
+
+
+def _check_planner_rules(study, i: int, label: str, name: str) -> None:
+    """An oracle's label names it a bound; a multi-round planner needs a sensor that ranges
+    the planned cells, at rest, unfitted."""
+    why = LIDAR_PLANNER_RULES.get(name)
+    if why is None:
+        return
+    where = f"study.planners[{i}]"
+    if name.startswith("oracle") and not label.startswith("oracle"):
+        raise ValueError(
+            f"{where}: the label {label!r} of {name!r} ({why}) must start with 'oracle', so "
+            "every table shows it as a bound"
+        )
+    opts = study.planner_opts.get(label)
+    recon = opts.oracle.reconstruction if opts is not None else "linear"
+    labels = [r if isinstance(r, str) else next(iter(r)) for r in study.reconstructions]
+    if name == "oracle_greedy" and recon != "linear" and recon not in labels:
+        raise ValueError(
+            f"study.planner_opts.{label}.oracle.reconstruction: {recon!r} is not one of "
+            f"study.reconstructions ({', '.join(labels)})"
+        )
+    if name == "sequential":
+        if study.sensor == "flash":
+            raise ValueError(
+                f"{where}: {label!r} {why}, but a flash LIDAR measures its receiver pixels, "
+                "not planned cells (use steered_beam or micromirror_flash)"
+            )
+        if study.options.motion is not None:
+            raise ValueError(
+                f"{where}: {label!r} {why}; multi-round planning on a moving platform is not "
+                "modelled (remove study.options.motion)"
+            )
+        if opts is not None and opts.fit is not None:
+            raise ValueError(f"study.planner_opts.{label}.fit: a multi-round planner is not fitted")
 
 
 def check_lidar_study(study) -> None:
@@ -440,11 +478,7 @@ def check_lidar_study(study) -> None:
     for i, label in enumerate(study.planners):
         opts = study.planner_opts.get(label)
         name = (opts.strategy if opts is not None else None) or label
-        why = LIDAR_UNAVAILABLE_PLANNERS.get(name)
-        if why is not None:
-            raise ValueError(
-                f"study.planners[{i}]: {name!r} is not a planner of a lidar study: {why}"
-            )
+        _check_planner_rules(study, i, label, name)
         fit = None if opts is None else opts.fit
         if fit is None:
             continue
@@ -461,10 +495,10 @@ def check_lidar_study(study) -> None:
             if study.sensor == "flash":
                 raise ValueError(f"{where}: a flash's time is its frames, not a tour")
     o = study.options
-    if o.motion is not None and study.sensor != "steered_beam":
+    if o.motion is not None and study.sensor == "micromirror_flash":
         raise ValueError(
-            f"study.options.motion: a moving platform is modelled for the steered beam only, "
-            f"not {study.sensor!r}"
+            "study.options.motion: a moving platform is modelled for the steered beam and the "
+            "flash, not the micromirror_flash (its frames are rendered together)"
         )
     if study.sensor == "steered_beam":
         sb = o.steered_beam

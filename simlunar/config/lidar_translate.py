@@ -155,7 +155,8 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
         w, h = f.receiver_px
         return FlashLidarOptions(flash, receiver_px=(h, w), revisits=f.revisits, zoom=f.zoom,
                                  revisit_from=f.revisit_from, range_weight=f.range_weight,
-                                 repoint_s=f.repoint_ms * 1e-3)  # fmt: skip
+                                 repoint_s=f.repoint_ms * 1e-3,
+                                 motion=motion_options(o.motion))  # fmt: skip
     m = o.micromirror
     w, h = m.receiver_px
     mm = FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common)

@@ -216,7 +216,10 @@ class LidarStudyCfg(_Model):
     planners: list[str] = Field(
         default_factory=lambda: [DEFAULT_PLANNER, "random", "grid"],
         min_length=1,
-        description="planner strategies (from the guide image); unused by a flash without revisits",
+        description="planner strategies (from the guide image; oracle_*: bounds that read the "
+        "true depth in the planner step, labels starting 'oracle'; sequential: multi-round, each "
+        "round measured by the LIDAR, its time counting every round); unused by a flash without "
+        "revisits",
     )
     densities: Annotated[
         list[Density],

@@ -221,11 +221,11 @@ def _select(a: np.ndarray, taken: np.ndarray, m: int, radius: float, rng) -> np.
     return np.concatenate(chosen)
 
 
-def _measure(measure: Callable, rc: np.ndarray) -> np.ndarray:
+def _measure(measure: Callable, rc: np.ndarray, missing: str = "raise") -> np.ndarray:
     vals = np.asarray(measure(rc), dtype=np.float64)
     if vals.shape != (len(rc),):
         raise ValueError(f"measure returned shape {vals.shape} for {len(rc)} cells")
-    if not np.all(np.isfinite(vals)):
+    if np.isinf(vals).any() or (missing == "raise" and np.isnan(vals).any()):
         raise ValueError("measure returned NaN or infinite values")
     return vals
 
@@ -240,7 +240,7 @@ def _check_prior(prior, shape):
 
 
 def plan_sequential(
-    k: int, *, shape, measure: Callable, prior=None, options=None, rng
+    k: int, *, shape, measure: Callable, prior=None, options=None, rng, missing: str = "raise"
 ) -> SequentialPlan:
     """Place k samples in rounds, each round's batch from the samples measured so far.
 
@@ -257,15 +257,22 @@ def plan_sequential(
         Importance map >= 0 that multiplies the error estimate (see :func:`error_estimate`).
     options : SequentialOptions, optional
     rng : None, int, SeedSequence or Generator
+    missing : {"raise", "skip"}
+        A NaN from ``measure`` (a cell the sensor measured nothing at, e.g. a LIDAR beam
+        without a detected return): an error, or a cell taken but left out of the error
+        estimate (which needs 3 measured cells).
 
     Returns
     -------
     SequentialPlan
-        Exactly k distinct cells, their measured values and the round of each.
+        Exactly k distinct cells, their measured values (NaN where ``missing="skip"`` let
+        one through) and the round of each.
     """
     opt = options or SequentialOptions()
     if not isinstance(opt, SequentialOptions):
         raise ValueError(f"options must be a SequentialOptions, got {type(opt).__name__}")
+    if missing not in ("raise", "skip"):
+        raise ValueError(f"missing must be 'raise' or 'skip', got {missing!r}")
     rng = np.random.default_rng(rng)
     shape = tuple(int(s) for s in shape)
     n = shape[0] * shape[1]
@@ -280,18 +287,22 @@ def plan_sequential(
         flat = place(density, first, rng=rng)
     else:
         flat = uniform_layout(shape, first, rng=rng)
-    vals = [_measure(measure, np.column_stack(np.divmod(flat, shape[1])))]
+    vals = [_measure(measure, np.column_stack(np.divmod(flat, shape[1])), missing)]
     flats, rounds = [flat], 1
     radius = opt.nms_pitches * float(np.sqrt(n / k))
     while (done := sum(f.size for f in flats)) < k:
         m = k - done if rounds == opt.max_rounds - 1 else min(batch, k - done)
         cur = np.concatenate(flats)
         rc = np.column_stack(np.divmod(cur, shape[1]))
-        a = error_estimate(rc, np.concatenate(vals), shape, prior=prior, options=opt)
+        got = np.concatenate(vals)
+        seen = np.isfinite(got)
+        if seen.sum() < 3:
+            raise ValueError(f"round {rounds}: {int(seen.sum())} cells measured, need 3")
+        a = error_estimate(rc[seen], got[seen], shape, prior=prior, options=opt)
         taken = np.zeros(shape, dtype=bool)
         taken.ravel()[cur] = True
         new = _select(a, taken, m, radius, rng)
-        vals.append(_measure(measure, np.column_stack(np.divmod(new, shape[1]))))
+        vals.append(_measure(measure, np.column_stack(np.divmod(new, shape[1])), missing))
         flats.append(new)
         rounds += 1
     cur = np.concatenate(flats)

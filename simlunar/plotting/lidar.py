@@ -16,7 +16,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 from simlunar.plotting.images import DEPTH_CMAP
 from simlunar.plotting.layout import LABEL_PT, PAGE_W, TICK_PT, TITLE_PT, legend_outside
 from simlunar.plotting.lidar_tables import lidar_summary, lidar_tables
-from simlunar.plotting.style import label, metric_axis, styles
+from simlunar.plotting.style import PLACEMENT_LINES, label, metric_axis, styles
 
 __all__ = [
     "ORDER_CMAP",
@@ -123,8 +123,10 @@ def error_vs_time(
     for p in names:
         d = summary[p]
         err = np.clip([d["value"] - d["lo"], d["hi"] - d["value"]], 0, None)
+        # a truth-reading oracle is a bound: dotted, as in the sampling study's figures
+        ls = PLACEMENT_LINES["oracle"] if p.startswith("oracle") else "-"
         ax.errorbar(d[x], d["value"], yerr=err, marker=st[p].marker, color=st[p].colour,
-                    label=st[p].label, lw=1.2, capsize=2, ms=4)  # fmt: skip
+                    label=st[p].label, lw=1.2, capsize=2, ms=4, ls=ls)  # fmt: skip
         pooled |= bool((d["units"] > 1).any())
     ax.set_xscale("log")
     ax.set_yscale("log")

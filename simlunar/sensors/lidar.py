@@ -13,7 +13,8 @@ where each measured point projects, and its cost is the modelled acquisition tim
 - :class:`FlashLidar`: a low-resolution receiver co-boresighted with the guide camera takes one
   full-field frame; with ``revisits`` > 0 the planned pixels direct that many zoomed frames at
   the sub-fields (tiles of ``1 / zoom`` of the field) holding most planned pixels, whose finer
-  samples replace the full-field ones there. Seconds: frames x pulses / pulse rate.
+  samples replace the full-field ones there. Seconds: frames x pulses / pulse rate. On a moving
+  platform (``FlashLidarOptions.motion``) each frame is taken from the pose at its time.
 - :class:`MicromirrorFlash`: a micromirror projector at the guide camera lights only the
   planned pixels; a small receiver times them (dots sharing a receiver pixel go to different
   frames).
@@ -26,12 +27,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.geometry import Camera, Intrinsics
+from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.lidar import order_scan, pointing_angles, scan_timing
 from simlunar.lidar.flash import FlashOptions, flash_window, micromirror_frames, read_flash
 from simlunar.lidar.planning import choose_tiles, tile_range_scores
 from simlunar.lidar.returns import LidarScan
 from simlunar.lidar.scan import SteeredBeamOptions, guide_directions, steered_beam_scan
+from simlunar.lidar.trajectory import PlatformMotion, place_points, rotate_small
 from simlunar.render.beam_capture import beam_capture
 from simlunar.render.flash_lidar import micromirror_flash
 from simlunar.render.transient import flash_frame
@@ -44,6 +46,7 @@ __all__ = [
     "MicromirrorFlash",
     "MicromirrorOptions",
     "SteeredBeam",
+    "join_scans",
     "revisit_tiles",
     "tile_camera",
 ]
@@ -156,6 +159,16 @@ class SteeredBeam:
         order = order_scan(angles, steering=o.steering, options=o.order)
         return float(scan_timing(angles, order, options=o.steering).total_s)
 
+    def repoint_seconds(self, from_rc, to_rc) -> float:
+        """Modelled time (s) of re-pointing the beam from guide pixel ``from_rc`` to ``to_rc``
+        ((2,) (row, col)) between two scans: the move and its settle (no dwell), as
+        :func:`~simlunar.lidar.scan_timing` prices every move of a tour."""
+        cam, o = self.scene.camera, self.options
+        rc = np.asarray([from_rc, to_rc], float).reshape(2, 2)
+        a = pointing_angles(guide_directions(cam, rc), cam.pose)
+        t = scan_timing(a[1:], options=o.steering, start=a[0])
+        return float(t.move_s + t.settle_s)
+
 
 @dataclass(frozen=True)
 class FlashLidarOptions:
@@ -180,6 +193,10 @@ class FlashLidarOptions:
         ``both``: the ranges' share of a tile's score.
     repoint_s : float >= 0
         Time to re-point and re-zoom the receiver before each revisit (s), added per revisit.
+    motion : PlatformMotion or None
+        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest): each frame
+        is taken from the pose at its own time (frame ``i`` at ``i`` x (frame time +
+        ``repoint_s``)) and its points are placed with the sensor's navigation.
     """
 
     flash: FlashOptions = field(default_factory=FlashOptions)
@@ -189,6 +206,7 @@ class FlashLidarOptions:
     revisit_from: str = "plan"
     range_weight: float = 0.5
     repoint_s: float = 0.0
+    motion: PlatformMotion | None = None
 
     def __post_init__(self):
         if self.revisit_from not in ("plan", "ranges", "both"):
@@ -268,9 +286,17 @@ class FlashLidar:
     def needs_plan(self) -> bool:
         return self.options.revisits > 0 and self.options.revisit_from != "ranges"
 
-    def _frame(self, camera: Camera, key, rng) -> LidarScan:
-        """A frame through ``camera``: rendered once per field (``key``), read with fresh noise."""
+    def _frame(self, camera: Camera, key, rng, moving=None, t: float = 0.0) -> LidarScan:
+        """A frame through ``camera``: rendered once per field (``key``), read with fresh noise;
+        on a moving platform (``moving``, a :class:`_Moving`) through the pose at time ``t``
+        (rendered for that pose alone), its points placed with the sensor's navigation."""
         s, f = self.scene, self.options.flash
+        if moving is not None:
+            cam = moving.camera(camera, t)
+            bins = flash_window(cam, options=f)
+            frame = flash_frame(s.terrain, cam, bins=bins, options=f.transient, bsdf=s.bsdf,
+                                sun=s.sun)  # fmt: skip
+            return moving.place(read_flash(frame, cam, options=f, rng=rng), cam, t)
         if key not in self._frames:
             bins = flash_window(camera, options=f)
             self._frames[key] = flash_frame(
@@ -282,17 +308,21 @@ class FlashLidar:
         """One full-field frame, then ``revisits`` zoomed frames at the sub-fields with most
         planned pixels ``rc`` ((k, 2) (row, col); ignored without revisits)."""
         o, cam = self.options, self.scene.camera
-        rngs = np.random.default_rng(rng).spawn(1 + int(o.revisits))
-        full = self._frame(self.receiver, None, rngs[0])
+        g = np.random.default_rng(rng)
+        rngs = g.spawn(1 + int(o.revisits))
+        per_frame = o.flash.detector.pulses / o.flash.pulse_rate_hz
+        moving = None if o.motion is None else _Moving(o.motion, cam.position, g)
+        full = self._frame(self.receiver, None, rngs[0], moving, 0.0)
         scans = [full]
         tiles = np.zeros((0, 2), int)
         if o.revisits > 0:
             if rc is None and o.revisit_from != "ranges":
                 raise ValueError("flash revisits are directed by a plan: rc is required")
             tiles = self._revisit_tiles(rc, full)
-            for t, r in zip(tiles, rngs[1:]):
+            for i, (t, r) in enumerate(zip(tiles, rngs[1:]), 1):
                 tcam = tile_camera(cam, t, o.zoom, o.receiver_px)
-                scans.append(self._frame(tcam, tuple(int(x) for x in t), r))
+                when = i * (per_frame + o.repoint_s)  # each revisit re-points first
+                scans.append(self._frame(tcam, tuple(int(x) for x in t), r, moving, when))
         flat = [_flat(s) for s in scans]
         if len(tiles):
             # the finer revisit samples supersede the full frame's inside their tiles
@@ -301,7 +331,6 @@ class FlashLidar:
             inside = (t[:, None, :] == tiles[None]).all(-1).any(-1)
             flat[0] = _subset(flat[0], ~inside)
         merged = _concat(flat)
-        per_frame = o.flash.detector.pulses / o.flash.pulse_rate_hz
         seconds = len(scans) * per_frame + len(tiles) * o.repoint_s
         return _to_guide(merged, cam, frames=len(scans), seconds=seconds, detail=merged)
 
@@ -315,6 +344,33 @@ class FlashLidar:
             plan_counts = _tile_counts(rc, cam.shape, o.zoom)
         rough = tile_range_scores(full.points, full.valid, o.zoom)
         return choose_tiles(plan_counts, rough, o.revisits, range_weight=o.range_weight)
+
+
+class _Moving:
+    """A flash LIDAR on a moving platform: the receiver's pose at a frame's time and the
+    points as the sensor places them (:mod:`simlunar.lidar.trajectory`)."""
+
+    def __init__(self, motion: PlatformMotion, start, rng) -> None:
+        self.motion = motion
+        self.rng = rng
+        self.trajectory = motion.trajectory(start, jitter_seed=int(rng.integers(2**31)))
+
+    def camera(self, camera: Camera, t: float) -> Camera:
+        """``camera`` moved to the platform's position at ``t`` (s), turned by its jitter."""
+        w = np.broadcast_to(self.trajectory.attitude_at(t), (3, 3))
+        axes = rotate_small(np.asarray(camera.pose.rotation, float).T, w).T
+        return Camera(camera.intrinsics, Pose(axes, self.trajectory.at(t)))
+
+    def place(self, scan: LidarScan, camera: Camera, t: float) -> LidarScan:
+        """``scan`` (read through the moved ``camera``) with its points placed by the
+        navigation: commanded directions are the receiver pixels' rays before the jitter."""
+        _, d = camera.rays(camera.pixel_centers())
+        d = d.reshape(-1, 3)
+        commanded = rotate_small(d, np.broadcast_to(-self.trajectory.attitude_at(t), d.shape))
+        times = np.full(d.shape[0], float(t))
+        pts = place_points(scan.ranges.ravel(), commanded, times, self.trajectory,
+                           self.motion.navigation, rng=self.rng)  # fmt: skip
+        return dataclasses.replace(scan, points=pts.reshape(scan.points.shape))
 
 
 def _or(a, n, fill=0):
@@ -350,11 +406,35 @@ def _subset(s: LidarScan, keep: np.ndarray) -> LidarScan:
     )
 
 
-def _concat(scans: list[LidarScan]) -> LidarScan:
+def join_scans(scans, gaps_s=None) -> LidarScan:
+    """Scans one after the other as one flat scan: each one's times start where the previous
+    ended, plus ``gaps_s[i]`` (s, e.g. re-pointing) before scan ``i + 1``.
+
+    Parameters
+    ----------
+    scans : sequence of LidarScan
+    gaps_s : sequence of float, length ``len(scans) - 1``, optional (default zeros)
+
+    Returns
+    -------
+    LidarScan
+        Flat (n,) arrays in scan order, ``order`` 0..n-1, ``seconds`` the sum of the scans'
+        and the gaps, ``frames`` their sum.
+    """
+    gaps = np.zeros(max(len(scans) - 1, 0)) if gaps_s is None else np.asarray(gaps_s, float)
+    if len(gaps) != max(len(scans) - 1, 0) or (gaps < 0).any():
+        raise ValueError(f"need {len(scans) - 1} gaps >= 0 s between {len(scans)} scans")
+    merged = _concat([_flat(s) for s in scans], gaps)
+    return dataclasses.replace(merged, seconds=merged.seconds + float(gaps.sum()))
+
+
+def _concat(scans: list[LidarScan], gaps=None) -> LidarScan:
     """The frames one after the other: each one's times start where the previous ended."""
     cat = np.concatenate
     n = sum(s.ranges.size for s in scans)
     start = np.cumsum([0.0] + [s.seconds for s in scans[:-1]])
+    if gaps is not None:
+        start = start + np.cumsum([0.0, *gaps])
     return LidarScan(
         cat([s.ranges for s in scans]),
         cat([s.valid for s in scans]),

@@ -8,37 +8,41 @@ LIDAR directs its zoomed revisits at the sub-fields holding most of them), the p
 carries the acquisition's modelled ``seconds`` and ``frames`` beside its sample count, so
 error can be read against scan time as well as against samples. A sensor that needs no plan (a
 flash LIDAR without revisits) runs once per trial under the planner label ``"none"``.
+
+Every planner of the sampling study runs (:mod:`simlunar.study.lidar_planners`): the image
+strategies, the oracles (bounds: they read the true depth in the planner step, never through
+the sensor) and multi-round planning (each round measured by the LIDAR; ``seconds`` counts
+every round and the re-pointing between them, so equal-scan-time comparisons are fair).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from simlunar.features import check_image
-from simlunar.lidar.planning import fit_to_time, receiver_capped_plan
 from simlunar.metrics import METRICS
 from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
 from simlunar.metrics.safe_site import SiteOptions, safe_site_scores
-from simlunar.planner import DEFAULT_PLANNER, STRATEGIES, map_of, plan
+from simlunar.planner import DEFAULT_PLANNER, MEASURING, STRATEGIES
 from simlunar.progress import stage
 from simlunar.reconstruction import Guide
 from simlunar.sensors import SENSORS
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import LidarScene
 from simlunar.study.depth_scores import score_depth
+from simlunar.study.lidar_planners import lidar_planners
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
     reconstruction_options,
     run_protocol,
 )
-from simlunar.study.sampling import _cost, _seed, sample_count
-from simlunar.study.sampling_planners import importance_maps
+from simlunar.study.sampling import _cost, _seeds, sample_count
 from simlunar.study.steps import Steps, resumable
 
 __all__ = [
@@ -104,7 +108,10 @@ class LidarStudyOptions:
     sensor_options : options object of that sensor, or None (its defaults)
     planners : sequence of str
         Planner labels: strategy names of :data:`simlunar.planner.STRATEGIES` (from the guide
-        image), or labels whose strategy ``strategies`` names.
+        image; an ``oracle_*`` reads the guide view's true depth in its planner step: a bound,
+        its label starts ``oracle``), ``sequential`` (multi-round: the LIDAR measures each
+        round, :class:`~simlunar.study.lidar_planners.LidarRounds`), or labels whose strategy
+        ``strategies`` names.
     densities : sequence of float
         Planned pixels k / N of the guide view, each in (0, 1].
     trials : int >= 1
@@ -112,7 +119,10 @@ class LidarStudyOptions:
     metrics : sequence of str
         Names of :data:`simlunar.metrics.METRICS` (against the guide view's true depth).
     planner_opts : mapping str -> mapping
-        Per planner options of :func:`simlunar.planner.plan` (``feature_opts`` included).
+        Per planner options of :func:`simlunar.planner.plan` (``feature_opts`` included; an
+        ``oracle_greedy``'s ``reconstruction``: a label of ``reconstructions`` whose true error
+        it reads; ``sequential``'s ``{"sequential": SequentialOptions, "prior": map name or
+        None, "feature_opts": ...}``).
     hazard : HazardOptions or None
         Also score hazard detection (``hazard_precision``, ``hazard_recall``) of the
         reconstruction against the true depth's hazards.
@@ -160,9 +170,10 @@ class LidarStudyOptions:
         bad = [m for m in self.metrics if m not in METRICS]
         if bad:
             raise ValueError(f"unknown metric {bad[0]!r}; valid: {', '.join(METRICS)}")
-        bad = [p for p in self.planners if self.strategies.get(p, p) not in STRATEGIES]
+        valid = (*STRATEGIES, *MEASURING)
+        bad = [p for p in self.planners if self.strategies.get(p, p) not in valid]
         if bad or not self.planners:
-            raise ValueError(f"unknown planner {bad}; valid: {', '.join(STRATEGIES)}")
+            raise ValueError(f"unknown planner {bad}; valid: {', '.join(valid)}")
         for label, fit in self.fits.items():
             if label not in self.planners:
                 raise ValueError(f"fits for {label!r}, not a planner of the study")
@@ -173,6 +184,8 @@ class LidarStudyOptions:
                     f"fits[{label!r}]: reference {fit.reference!r} must be an unfitted planner "
                     "of the study"
                 )
+            if self.strategies.get(label, label) in MEASURING:
+                raise ValueError(f"fits[{label!r}]: a multi-round planner is not fitted")
             if fit.kind == "receiver" and self.sensor != "micromirror_flash":
                 raise ValueError(f"fits[{label!r}]: a receiver fit is for the micromirror flash")
         if not self.densities or not all(0 < d <= 1 for d in self.densities):
@@ -241,46 +254,31 @@ class _Scores:
         return out
 
 
-def _planner(base: str, image: np.ndarray, opts: Mapping, ks, cache: dict) -> Callable:
-    """``(k, rng) -> rc`` of strategy ``base``; its map per k (the learned map's is per
-    density, :func:`~simlunar.study.sampling_planners.importance_maps`), each computed once."""
-    opts = dict(opts)
-    maps = importance_maps(base, opts, image, ks, cache)
-    rest = {k: v for k, v in opts.items() if k not in ("feature_opts", "coefficients")}
-    shape = image.shape[:2]
-    plan(base, 3, weights=maps[ks[0]], shape=shape, rng=0, **rest)  # options checked once
+@dataclass(frozen=True, eq=False)
+class _Plan:
+    """What the protocol repeats for one study: planners per label, densities, counts."""
 
-    def planner(k, rng):
-        w = maps.get(int(k))
-        if w is None:  # a fitted planner asks other counts: the nearest density's map
-            w = maps[min(maps, key=lambda q: abs(np.log(q / max(int(k), 1))))]
-        return plan(base, int(k), weights=w, shape=shape, rng=rng, **rest).rc
-
-    planner.map = lambda k: maps[int(k)] if map_of(base) is not None else None
-    return planner
+    planners: dict
+    dens: list
+    ks: list
 
 
-def _fitted(fit: SensorFit, planner, reference, sensor, shape) -> Callable:
-    """A planner fitted to ``sensor`` (:class:`SensorFit`)."""
-    n = int(shape[0]) * int(shape[1])
-    if fit.kind == "receiver":
-        rx = tuple(sensor.options.receiver_px)
+def _check_guide(guide) -> tuple[np.ndarray, np.ndarray]:
+    image = check_image(np.asarray(guide[0], float))
+    depth = np.asarray(guide[1], float)
+    if image.shape[:2] != depth.shape:
+        raise ValueError(f"image {image.shape[:2]} and depth {depth.shape} must have the same grid")
+    return image, depth
 
-        def capped(k, rng):
-            return receiver_capped_plan(planner.map(k), int(k), shape=shape, receiver_shape=rx,
-                                        frames=fit.frames, rng=rng)  # fmt: skip
 
-        return capped
-    if not hasattr(sensor, "scan_seconds"):
-        raise ValueError(f"a scan-time fit needs a sensor with scan_seconds, not {sensor.name!r}")
-
-    def timed(k, rng):
-        budget = sensor.scan_seconds(reference(k, rng))
-        rc, _ = fit_to_time(lambda q: planner(q, rng), sensor.scan_seconds, budget,
-                            k_max=min(4 * int(k), n), k_min=max(1, int(k) // 4))  # fmt: skip
-        return rc
-
-    return timed
+def _study_plan(o: LidarStudyOptions, sensor, image, depth, guide: Guide) -> _Plan:
+    """The study's planners (:func:`~simlunar.study.lidar_planners.lidar_planners`), or the
+    one label :data:`NO_PLAN` of a sensor that needs no plan."""
+    if not sensor.needs_plan:
+        return _Plan({NO_PLAN: None}, [0.0], [0])
+    dens = [float(d) for d in o.densities]
+    ks = [sample_count(d, depth.size) for d in dens]
+    return _Plan(lidar_planners(o, image, depth, ks, sensor=sensor, guide=guide), dens, ks)
 
 
 def run_lidar_study(
@@ -290,7 +288,6 @@ def run_lidar_study(
     *,
     rng,
     sensor=None,
-    progress: Callable[[str], None] | None = None,
     reconstruction_guide: Guide | None = None,
     steps: Steps | None = None,
     keep_trial: int | None = None,
@@ -303,13 +300,13 @@ def run_lidar_study(
         Terrain, guide camera (the LIDAR's origin and boresight), BSDF, sun.
     guide : (image (rows, cols), depth (rows, cols))
         The guide camera's image and true z-depth (m; NaN where the view misses the terrain).
+        Only the scores and the oracles' planner step read the depth; the sensor never does.
     options : LidarStudyOptions, optional
     rng : seed of the study; split per (planner label, trial, density) and purpose
         (planner, photon noise) with ``SeedSequence``, so adding a planner changes no other's
         numbers.
     sensor : Sensor, optional
         Measures instead of ``options.sensor`` built on ``scene`` (tests, shared captures).
-    progress : callable(str), optional
     reconstruction_guide : Guide, optional
         What the guided reconstructions read; default ``Guide(image)`` (the guide camera's
         frame, light unknown: the camera is not a nadir view in general).
@@ -325,47 +322,34 @@ def run_lidar_study(
     LidarStudyResult
     """
     o = options or LidarStudyOptions()
-    image = check_image(np.asarray(guide[0], float))
-    depth = np.asarray(guide[1], float)
-    if image.shape[:2] != depth.shape:
-        raise ValueError(f"image {image.shape[:2]} and depth {depth.shape} must have the same grid")
+    image, depth = _check_guide(guide)
     if sensor is None:
         cls, opts_cls = SENSORS[o.sensor]
         sensor = cls(scene, o.sensor_options or opts_cls())
-    camera = scene.camera
-    base = int(np.random.default_rng(rng).integers(0, 2**63))
-    if sensor.needs_plan:
-        dens = [float(d) for d in o.densities]
-        ks = [sample_count(d, depth.size) for d in dens]
-        cache: dict = {}
-        planners = {
-            p: _planner(o.strategies.get(p, p), image, o.planner_opts.get(p, {}), ks, cache)
-            for p in o.planners
-        }
-        for label, fit in o.fits.items():
-            ref = planners.get(fit.reference)
-            planners[label] = _fitted(fit, planners[label], ref, sensor, depth.shape)
-    else:
-        planners, dens, ks = {NO_PLAN: None}, [0.0], [0]
-
-    def seeds(label, trial, di):
-        return _seed(base, label, trial, di, 0), _seed(base, label, trial, di, 1)
-
-    trials = Trials(planners, ks, int(o.trials), seeds)
-    evaluate = _Scores(depth, image, camera, o.metrics, o.hazard, o.safe_site)
-    rows, examples, grids = [], {}, {}
-    recons = reconstruction_options(o.reconstructions, outside=o.outside)
     rguide = reconstruction_guide if reconstruction_guide is not None else Guide(image)
+    p = _study_plan(o, sensor, image, depth, rguide)
+    base = int(np.random.default_rng(rng).integers(0, 2**63))
+    trials = Trials(p.planners, p.ks, int(o.trials), functools.partial(_seeds, base))
+    evaluate = _Scores(depth, image, scene.camera, o.metrics, o.hazard, o.safe_site)
+    recons = reconstruction_options(o.reconstructions, outside=o.outside)
     run = functools.partial(
         run_protocol, sensor, evaluate=evaluate, outside=o.outside, reconstructions=recons,
         guide=rguide, keep_trial=keep_trial,
     )  # fmt: skip
-    per_planner = len(ks) * int(o.trials)
-    total = len(planners) * per_planner
-    with stage("lidar study", total=total, unit="acquisitions") as bar:
-        for label in planners:  # one step per planner: kept in ``steps`` once finished
-            one = dataclasses.replace(trials, planners={label: planners[label]})
-            step = functools.partial(_planner_step, run, one, dens, progress, bar)
+    rows, examples, grids = _run_planners(run, trials, p.dens, steps, keep_trial)
+    return LidarStudyResult(rows=rows, examples=examples, grids=grids, densities=p.dens,
+                            ks=list(p.ks))  # fmt: skip
+
+
+def _run_planners(run, trials: Trials, dens, steps, keep_trial) -> tuple[list, dict, dict]:
+    """Every planner's step (kept in ``steps`` once finished): rows, examples, grids."""
+    rows, examples, grids = [], {}, {}
+    per_planner = len(trials.ks) * int(trials.trials)
+    with stage("lidar study", total=len(trials.planners) * per_planner,
+               unit="acquisitions") as bar:  # fmt: skip
+        for label, planner in trials.planners.items():
+            one = dataclasses.replace(trials, planners={label: planner})
+            step = functools.partial(_planner_step, run, one, dens, bar)
             (planner_rows, example, planner_grids), loaded = resumable(
                 steps, f"lidar planner {label}" + ("" if keep_trial is None else " grids"), step
             )
@@ -375,24 +359,24 @@ def run_lidar_study(
                 examples[label] = example
             if loaded:
                 bar.advance(per_planner)
-    return LidarStudyResult(rows=rows, examples=examples, grids=grids, densities=dens, ks=list(ks))
+    return rows, examples, grids
 
 
-def _planner_step(run, trials: Trials, dens, progress, bar) -> tuple:
+def _planner_step(run, trials: Trials, dens, bar) -> tuple:
     """The rows of one planner's acquisitions (every density and trial), its example
     acquisition (trial 0 at the largest density) and its kept grids (``keep_trial``)."""
     rows, example, grids = [], None, {}
     top = int(np.argmax(dens))
+    (planner,) = trials.planners.values()
+    measures = bool(getattr(planner, "measures", False))
     for outcomes in run(trials=trials):
         for oc in outcomes:
-            rows += _rows(oc, dens[oc.budget_index])
+            rows += _rows(oc, dens[oc.budget_index], measures)
             for r, grid in (oc.grids or {}).items():
                 grids[(oc.label, oc.budget_index, r)] = grid
             if oc.trial == 0 and oc.budget_index == top:
                 example = oc.acquisition
         bar.advance(len(outcomes))
-        if progress is not None:
-            progress(f"{outcomes[0].label} / trial {outcomes[0].trial}")
     return rows, example, grids
 
 
@@ -402,7 +386,7 @@ def beam_table(acq: Acquisition) -> np.ndarray:
     Parameters
     ----------
     acq : Acquisition
-        Of a LIDAR sensor: its ``detail`` is the :class:`~simlunar.render.lidar_scan.LidarScan`
+        Of a LIDAR sensor: its ``detail`` is the :class:`~simlunar.lidar.returns.LidarScan`
         (``valid``, visiting ``order``, ``times``); ``planned`` the aimed-at guide pixels
         (None for a flash without a plan: its receiver pixels, where each measured point
         projects).
@@ -442,13 +426,16 @@ def beam_table(acq: Acquisition) -> np.ndarray:
     return table
 
 
-def _rows(oc, density: float) -> list[dict]:
+def _rows(oc, density: float, measures: bool = False) -> list[dict]:
+    """Tidy rows of one outcome; a multi-round planner's carry its ``rounds`` (its
+    ``seconds`` and ``frames`` are every round's)."""
     acq = oc.acquisition
+    rounds = {"rounds": int(oc.rounds)} if measures else {}
     return [
         {"planner": oc.label, "reconstruction": r, **_cost(oc.recon_info[r]),
          "density": density, "k": oc.k, "trial": oc.trial, "metric": m,
          "value": float(v), "seconds": float(acq.seconds), "frames": int(acq.frames),
-         "samples": len(acq.values)}
+         "samples": len(acq.values), **rounds}
         for r, scores in oc.recon_scores.items()
         for m, v in scores.items()
     ]  # fmt: skip

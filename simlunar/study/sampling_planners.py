@@ -189,9 +189,13 @@ class MeasuringPlanner:
             cost[1] += acq.seconds
             return acq.values
 
-        prior = None if self.priors is None else self.priors[k]
-        sp = plan_sequential(
-            k, shape=self.shape, measure=measure, prior=prior, options=self.options, rng=plan_rng
-        )
+        sp = self.rounds(k, measure, plan_rng)
         acq = Acquisition(sp.plan.rc, np.asarray(sp.values), self.shape, cost[0], cost[1])
         return acq, sp.rounds
+
+    def rounds(self, k: int, measure, plan_rng, *, missing: str = "raise"):
+        """:func:`~simlunar.planner.plan_sequential` of ``k`` cells with this planner's
+        options and its prior at ``k``, reading the scene through ``measure`` only."""
+        prior = None if self.priors is None else self.priors[k]
+        return plan_sequential(k, shape=self.shape, measure=measure, prior=prior,
+                               options=self.options, rng=plan_rng, missing=missing)  # fmt: skip

@@ -126,3 +126,18 @@ def test_hazard_options():
     assert isinstance(h, HazardOptions)
     assert h.slope_deg == pytest.approx(11.459155902616464) and h.relief_m == pytest.approx(0.2)
     assert (h.window_px, h.baseline_px) == (15, 2)
+
+
+def test_a_flash_takes_the_platform_s_motion_and_a_micromirror_refuses_it():
+    from simlunar.config.lidar import check_lidar_study
+
+    study = LidarStudyCfg(kind="lidar", sensor="flash",
+                          options={"flash": {"receiver_px": [32, 32]},
+                                   "motion": {"kind": "descent", "descent_rate_m_s": 2.0}})  # fmt: skip
+    check_lidar_study(study)
+    so = lidar_translate.lidar_sensor_options(study)
+    assert so.motion.velocity_m_s == pytest.approx((0.0, 0.0, -2.0))
+    mm = LidarStudyCfg(kind="lidar", sensor="micromirror_flash",
+                       options={"motion": {"kind": "hover"}})  # fmt: skip
+    with pytest.raises(ValueError, match="not the micromirror_flash"):
+        check_lidar_study(mm)

@@ -230,3 +230,32 @@ def test_a_prior_first_round_is_the_prior_maps_lloyd_layout():
     assert 0.9 < u_left / (u_first.size - u_left) < 1.1
     with pytest.raises(ValueError, match="needs a prior"):
         plan_sequential(k, shape=depth.shape, measure=truth.measure, options=opt, rng=0)
+
+
+def test_missing_skip_takes_a_lost_cell_but_leaves_it_out_of_the_estimate():
+    # a LIDAR beam without a return: the cell is spent (never asked again), its NaN does not
+    # reach the error estimate (which reads the measured cells only)
+    depth = rough_patch(2, (30, 40))
+    first = {}
+
+    def lossy(rc):
+        v = depth[tuple(rc.T)].copy()
+        if not first:  # the first round loses its first 4 cells
+            first["rc"] = rc.copy()
+            v[:4] = np.nan
+        return v
+
+    sp = plan_sequential(80, shape=depth.shape, measure=lossy, rng=3, missing="skip")
+    assert len(sp.plan.flat) == 80 and len(np.unique(sp.plan.flat)) == 80
+    assert int(np.isnan(sp.values).sum()) == 4
+    lost = {tuple(x) for x in first["rc"][:4].tolist()}
+    got = {tuple(x) for x in sp.plan.rc[np.isnan(sp.values)].astype(int).tolist()}
+    assert got == lost
+    first.clear()
+    with pytest.raises(ValueError, match="NaN"):
+        plan_sequential(80, shape=depth.shape, measure=lossy, rng=3)
+    with pytest.raises(ValueError, match="need 3"):
+        plan_sequential(80, shape=depth.shape, measure=lambda rc: np.full(len(rc), np.nan),
+                        rng=0, missing="skip")  # fmt: skip
+    with pytest.raises(ValueError, match="missing must be"):
+        plan_sequential(80, shape=depth.shape, measure=lossy, rng=0, missing="zero")

@@ -95,3 +95,13 @@ def test_scan_figure_draws_the_tour_and_the_measured_depths(tmp_path):
     assert sum(ax.get_title().endswith("beams") for ax in fig.axes) == MAX_SCAN_PLANNERS
     with pytest.raises(ValueError, match="at least one planner"):
         scan_figure(image, depth, {})
+
+
+def test_an_oracle_curve_is_dotted_as_a_bound():
+    from simlunar.plotting.lidar import error_vs_time
+
+    rows = [{**r, "planner": "oracle_greedy"} for r in _rows() if r["planner"] == "grid"]
+    _, ax = error_vs_time(_rows() + rows, metric="mse", planners=["grid", "oracle_greedy"])
+    lines = {c.get_label(): c.lines[0] for c in ax.containers}
+    assert lines["Oracle greedy (true error)"].get_linestyle() == ":"
+    assert lines["Grid"].get_linestyle() == "-"

@@ -51,3 +51,14 @@ def test_a_swept_option_makes_separate_points_of_one_curve():
     assert d["seconds"].tolist() == [0.4, 0.67] and d["value"].tolist() == [3.0, 1.0]
     assert d["units"].tolist() == [2, 1]
     assert lidar_summary(rows, metric="mse")["wavelet"]["units"].tolist() == [3]
+
+
+def test_oracle_rows_are_labelled_bounds():
+    oracle = {"unit": "0", "planner": "oracle_greedy", "k": "64", "trial": "0", "metric": "mse",
+              "value": "0.001", "seconds": "3.5"}  # fmt: skip
+    rows = [*_rows(), oracle]
+    md, tex = lidar_tables(rows, metrics=["mse"], title="t")
+    assert "| oracle_greedy (a bound) | 64 | 3.5 | 0.001 |" in md
+    assert "bounds, not planners" in md and "oracle\\_greedy (a bound)" in tex
+    plain, _ = lidar_tables(_rows(), metrics=["mse"], title="t")
+    assert "(a bound)" not in plain and "bounds, not planners" not in plain

@@ -3,6 +3,8 @@ cost from the steering / pulse-rate model, plan-directed flash revisits."""
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -214,3 +216,104 @@ def test_flash_revisits_from_the_first_frame_s_ranges_and_their_repointing_time(
         assert acq.seconds == pytest.approx(2 * 4 / 20.0 + 0.05)
         ti = (acq.rc[:, 0] // 16).astype(int) * 2 + (acq.rc[:, 1] // 16).astype(int)
         assert np.bincount(ti, minlength=4)[tile[0] * 2 + tile[1]] == 64  # the revisit's
+
+
+def _beam_options():
+    from simlunar.lidar.scan import SteeredBeamOptions
+
+    return SteeredBeamOptions(
+        footprint=FootprintOptions(5e-4, samples=8),
+        pulse=PulseOptions(fwhm_s=1e-9),
+        detector=DET,
+        steering=SteeringOptions(1.0, 10.0, 1e-3, 1000.0, 4),
+        window_m=4.0,
+        margin_m=1.0,
+        batch=32,
+    )
+
+
+def test_repointing_is_the_move_and_settle_of_a_two_point_tour(mi):
+    from simlunar.sensors import LidarScene, SteeredBeam
+
+    sensor = SteeredBeam(LidarScene(_plane(), _camera(32, 40.0)), _beam_options())
+    a, b = np.array([3, 4]), np.array([28, 20])
+    one = sensor.scan_seconds(a[None])  # one dwell, no move
+    # a tour of a and b: one dwell each plus the move a -> b and its settle
+    assert sensor.repoint_seconds(a, b) == pytest.approx(
+        sensor.scan_seconds(np.stack([a, b])) - 2 * one
+    )
+    assert sensor.repoint_seconds(b, a) == pytest.approx(sensor.repoint_seconds(a, b))
+    assert sensor.repoint_seconds(a, a) == 0.0
+
+
+def test_join_scans_runs_times_on_across_scans_and_gaps():
+    from simlunar.lidar.returns import LidarScan
+    from simlunar.sensors.lidar import join_scans
+
+    def scan(n, seconds):
+        return LidarScan(np.ones(n), np.ones(n, bool), np.zeros((n, 3)), np.ones(n),
+                         np.arange(n)[::-1], seconds, n, times=np.linspace(0, seconds, n))  # fmt: skip
+
+    j = join_scans([scan(2, 1.0), scan(3, 2.0)], [0.5])
+    assert j.seconds == pytest.approx(3.5) and j.frames == 5
+    np.testing.assert_allclose(j.times, [0.0, 1.0, 1.5, 2.5, 3.5])
+    with pytest.raises(ValueError, match="gaps"):
+        join_scans([scan(2, 1.0), scan(3, 2.0)], [0.5, 0.5])
+
+
+def test_a_multi_round_steered_beam_ranges_every_round_and_adds_up_their_time(mi):
+    from simlunar.planner import SequentialOptions
+    from simlunar.sensors import LidarScene, SteeredBeam
+    from simlunar.study.lidar_planners import LidarRounds
+
+    sensor = SteeredBeam(LidarScene(_plane(), _camera(32, 40.0)), _beam_options())
+    scans = []
+    acquire = sensor.acquire
+    sensor.acquire = lambda rc, rng=None: scans.append(acquire(rc, rng=rng)) or scans[-1]
+    rounds = LidarRounds(SequentialOptions(max_rounds=3, first_share=0.5, batch_share=0.3),
+                         None, (32, 32))  # fmt: skip
+    acq, n = rounds.acquire(40, sensor, 1, 2)
+    assert n == len(scans) == 3 and len(acq.values) == 40
+    assert acq.values == pytest.approx(H, abs=0.05)  # z-depth of the plane from 50 m
+    gaps = [
+        sensor.repoint_seconds(a.planned[a.detail.order[-1]], b.planned[b.detail.order[0]])
+        for a, b in itertools.pairwise(scans)
+    ]
+    assert min(gaps) > 0
+    assert acq.seconds == pytest.approx(sum(s.seconds for s in scans) + sum(gaps))
+    assert acq.frames == sum(s.frames for s in scans) == 40 * 4
+
+
+@pytest.mark.render
+def test_a_descending_flash_takes_each_frame_from_its_own_pose(mi):
+    # 10 m/s descent over the z = 0 plane; the full frame at t = 0 from 50 m, the revisit
+    # after one frame (0.2 s) and its re-pointing (0.3 s): at t = 0.5 s, from 45 m.
+    # Navigation "exact" places every point on the plane; "start" (the pose at t = 0 for all)
+    # lifts the revisit's points by the 5 m the platform came down, the full frame's by none
+    from simlunar.lidar.flash import FlashOptions
+    from simlunar.lidar.trajectory import Navigation, PlatformMotion
+    from simlunar.render.transient import TransientOptions
+    from simlunar.sensors import FlashLidar, FlashLidarOptions, LidarScene
+
+    flash = FlashOptions(detector=DET, pulse=PulseOptions(fwhm_s=1e-9),
+                         transient=TransientOptions(spp=8), pulse_rate_hz=20.0)  # fmt: skip
+    scene = LidarScene(_plane(), _camera(32, 8.0))
+    rc = np.array([[20, 3], [25, 10], [30, 14]])  # tile (1, 0) of a 2 x 2 zoom
+
+    def run(compensation):
+        motion = PlatformMotion((0.0, 0.0, -10.0), navigation=Navigation(compensation))
+        opts = FlashLidarOptions(flash, receiver_px=(8, 8), revisits=1, zoom=2, repoint_s=0.3,
+                                 motion=motion)  # fmt: skip
+        acq = FlashLidar(scene, opts).acquire(rc, rng=0)
+        pts = acq.detail.points[acq.detail.valid]
+        revisit = np.arange(len(acq.detail.valid))[acq.detail.valid] >= 48  # after the full frame
+        return acq, pts, revisit
+
+    acq, pts, revisit = run("exact")
+    assert acq.frames == 2 and acq.seconds == pytest.approx(2 * 0.2 + 0.3)
+    assert pts[:, 2] == pytest.approx(0.0, abs=flash.bin_range_m)
+    assert acq.values == pytest.approx(H, abs=flash.bin_range_m)
+    _, pts, revisit = run("start")
+    assert revisit.sum() == 64
+    assert pts[~revisit, 2] == pytest.approx(0.0, abs=flash.bin_range_m)
+    assert pts[revisit, 2] == pytest.approx(5.0, abs=flash.bin_range_m)
