@@ -14,7 +14,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from simlunar.config import registry
-from simlunar.config.lidar import check_lidar_study
+from simlunar.config.lidar_checks import check_lidar_study
 from simlunar.config.messages import (
     format_validation_error,
     is_label_mapping,

@@ -30,6 +30,7 @@ import numpy as np
 from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.lidar import order_scan, pointing_angles, scan_timing
 from simlunar.lidar.flash import FlashOptions, flash_window, micromirror_frames, read_flash
+from simlunar.lidar.join import concat_scans, flat_scan, subset_scan
 from simlunar.lidar.planning import choose_tiles, tile_range_scores
 from simlunar.lidar.returns import LidarScan
 from simlunar.lidar.scan import SteeredBeamOptions, guide_directions, steered_beam_scan
@@ -46,7 +47,6 @@ __all__ = [
     "MicromirrorFlash",
     "MicromirrorOptions",
     "SteeredBeam",
-    "join_scans",
     "revisit_tiles",
     "tile_camera",
 ]
@@ -323,14 +323,14 @@ class FlashLidar:
                 tcam = tile_camera(cam, t, o.zoom, o.receiver_px)
                 when = i * (per_frame + o.repoint_s)  # each revisit re-points first
                 scans.append(self._frame(tcam, tuple(int(x) for x in t), r, moving, when))
-        flat = [_flat(s) for s in scans]
+        flat = [flat_scan(s) for s in scans]
         if len(tiles):
             # the finer revisit samples supersede the full frame's inside their tiles
             uv, _ = cam.project(np.where(flat[0].valid[:, None], flat[0].points, 0.0))
             t = np.stack([uv[:, 1] * o.zoom // cam.shape[0], uv[:, 0] * o.zoom // cam.shape[1]], -1)
             inside = (t[:, None, :] == tiles[None]).all(-1).any(-1)
-            flat[0] = _subset(flat[0], ~inside)
-        merged = _concat(flat)
+            flat[0] = subset_scan(flat[0], ~inside)
+        merged = concat_scans(flat)
         seconds = len(scans) * per_frame + len(tiles) * o.repoint_s
         return _to_guide(merged, cam, frames=len(scans), seconds=seconds, detail=merged)
 
@@ -371,81 +371,6 @@ class _Moving:
         pts = place_points(scan.ranges.ravel(), commanded, times, self.trajectory,
                            self.motion.navigation, rng=self.rng)  # fmt: skip
         return dataclasses.replace(scan, points=pts.reshape(scan.points.shape))
-
-
-def _or(a, n, fill=0):
-    return np.full(n, fill) if a is None else np.asarray(a).ravel()
-
-
-def _flat(s: LidarScan) -> LidarScan:
-    n = s.ranges.size
-    return LidarScan(
-        s.ranges.ravel(),
-        s.valid.ravel(),
-        s.points.reshape(-1, 3),
-        s.photons.ravel(),
-        np.arange(n),
-        s.seconds,
-        s.frames,
-        times=_or(s.times, n, 0.0).astype(float),
-        returns=_or(s.returns, n).astype(np.int64),
-    )
-
-
-def _subset(s: LidarScan, keep: np.ndarray) -> LidarScan:
-    return LidarScan(
-        s.ranges[keep],
-        s.valid[keep],
-        s.points[keep],
-        s.photons[keep],
-        np.arange(int(keep.sum())),
-        s.seconds,
-        s.frames,
-        times=s.times[keep],
-        returns=s.returns[keep],
-    )
-
-
-def join_scans(scans, gaps_s=None) -> LidarScan:
-    """Scans one after the other as one flat scan: each one's times start where the previous
-    ended, plus ``gaps_s[i]`` (s, e.g. re-pointing) before scan ``i + 1``.
-
-    Parameters
-    ----------
-    scans : sequence of LidarScan
-    gaps_s : sequence of float, length ``len(scans) - 1``, optional (default zeros)
-
-    Returns
-    -------
-    LidarScan
-        Flat (n,) arrays in scan order, ``order`` 0..n-1, ``seconds`` the sum of the scans'
-        and the gaps, ``frames`` their sum.
-    """
-    gaps = np.zeros(max(len(scans) - 1, 0)) if gaps_s is None else np.asarray(gaps_s, float)
-    if len(gaps) != max(len(scans) - 1, 0) or (gaps < 0).any():
-        raise ValueError(f"need {len(scans) - 1} gaps >= 0 s between {len(scans)} scans")
-    merged = _concat([_flat(s) for s in scans], gaps)
-    return dataclasses.replace(merged, seconds=merged.seconds + float(gaps.sum()))
-
-
-def _concat(scans: list[LidarScan], gaps=None) -> LidarScan:
-    """The frames one after the other: each one's times start where the previous ended."""
-    cat = np.concatenate
-    n = sum(s.ranges.size for s in scans)
-    start = np.cumsum([0.0] + [s.seconds for s in scans[:-1]])
-    if gaps is not None:
-        start = start + np.cumsum([0.0, *gaps])
-    return LidarScan(
-        cat([s.ranges for s in scans]),
-        cat([s.valid for s in scans]),
-        cat([s.points for s in scans]),
-        cat([s.photons for s in scans]),
-        np.arange(n),
-        float(sum(s.seconds for s in scans)),
-        int(sum(s.frames for s in scans)),
-        times=cat([t0 + s.times for t0, s in zip(start, scans)]),
-        returns=cat([s.returns for s in scans]),
-    )
 
 
 @dataclass(frozen=True)

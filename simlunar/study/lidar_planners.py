@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.lidar.join import join_scans
 from simlunar.lidar.planning import fit_to_time, receiver_capped_plan
 from simlunar.planner import MEASURING, ORACLES, map_of, plan
 from simlunar.sensors.base import Acquisition
-from simlunar.sensors.lidar import join_scans
 from simlunar.study.protocol import reconstruction_options
 from simlunar.study.sampling_planners import (
     MeasuringPlanner,
@@ -188,7 +188,7 @@ def merge_rounds(acqs: list[Acquisition], sensor) -> Acquisition:
     """The rounds of a multi-round acquisition as one: samples of every round, in order;
     ``seconds`` the rounds' scan times plus the re-pointing between them (each round's own
     time already counts its tour and its lead); ``frames`` their sum; ``detail`` the rounds'
-    scans joined (:func:`simlunar.sensors.lidar.join_scans`: times run on across rounds)
+    scans joined (:func:`simlunar.lidar.join.join_scans`: times run on across rounds)
     where every round has a LIDAR scan."""
     if not acqs:
         raise ValueError("no round to merge")

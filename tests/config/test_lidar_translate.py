@@ -129,7 +129,7 @@ def test_hazard_options():
 
 
 def test_a_flash_takes_the_platform_s_motion_and_a_micromirror_refuses_it():
-    from simlunar.config.lidar import check_lidar_study
+    from simlunar.config.lidar_checks import check_lidar_study
 
     study = LidarStudyCfg(kind="lidar", sensor="flash",
                           options={"flash": {"receiver_px": [32, 32]},

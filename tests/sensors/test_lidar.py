@@ -246,21 +246,6 @@ def test_repointing_is_the_move_and_settle_of_a_two_point_tour(mi):
     assert sensor.repoint_seconds(a, a) == 0.0
 
 
-def test_join_scans_runs_times_on_across_scans_and_gaps():
-    from simlunar.lidar.returns import LidarScan
-    from simlunar.sensors.lidar import join_scans
-
-    def scan(n, seconds):
-        return LidarScan(np.ones(n), np.ones(n, bool), np.zeros((n, 3)), np.ones(n),
-                         np.arange(n)[::-1], seconds, n, times=np.linspace(0, seconds, n))  # fmt: skip
-
-    j = join_scans([scan(2, 1.0), scan(3, 2.0)], [0.5])
-    assert j.seconds == pytest.approx(3.5) and j.frames == 5
-    np.testing.assert_allclose(j.times, [0.0, 1.0, 1.5, 2.5, 3.5])
-    with pytest.raises(ValueError, match="gaps"):
-        join_scans([scan(2, 1.0), scan(3, 2.0)], [0.5, 0.5])
-
-
 def test_a_multi_round_steered_beam_ranges_every_round_and_adds_up_their_time(mi):
     from simlunar.planner import SequentialOptions
     from simlunar.sensors import LidarScene, SteeredBeam

@@ -1,0 +1,39 @@
+"""The rules a LIDAR study's options must meet together, checked on the schema's values
+(one line naming the offending key, before anything runs)."""
+
+from __future__ import annotations
+
+import pytest
+
+from simlunar.config.lidar_checks import LIDAR_PLANNER_RULES, check_lidar_study
+from simlunar.config.studies import LidarStudyCfg
+
+
+def study(**kw) -> LidarStudyCfg:
+    return LidarStudyCfg.model_validate({"kind": "lidar", **kw})
+
+
+def test_the_default_study_passes_and_every_rule_names_a_strategy():
+    check_lidar_study(study())
+    assert set(LIDAR_PLANNER_RULES) == {"oracle_greedy", "oracle_hessian", "sequential"}
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (
+            {"planners": ["bound"], "planner_opts": {"bound": {"strategy": "oracle_hessian"}}},
+            r"study.planners\[0\]: the label 'bound' .* must start with 'oracle'",
+        ),
+        ({"sensor": "flash", "planners": ["sequential"]}, "measures its receiver pixels"),
+        (
+            {"planner_opts": {"random": {"fit": {"kind": "receiver"}}}},
+            "study.planner_opts.random.fit: a receiver fit is for the micromirror_flash",
+        ),
+        ({"options": {"margin_m": 5}}, "study.options.margin_m: 5 m leaves no range"),
+        ({"options": {"bin_range_m": 1e-6}}, "study.options.bin_range_m: .* time bins"),
+    ],
+)
+def test_a_bad_combination_is_one_line_naming_its_key(kw, match):
+    with pytest.raises(ValueError, match=match):
+        check_lidar_study(study(**kw))
