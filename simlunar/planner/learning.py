@@ -289,16 +289,19 @@ def _recon_training_set(examples, densities, options, with_shading, shading_opti
     xs, ys = [], []
     with stage("training set", total=len(examples), unit="examples") as done:
         for image, truth in examples:
-            _example_rows(image, truth, densities, options, with_shading, shading_options, rng,
-                          xs, ys)  # fmt: skip
+            x, y = _example_rows(image, truth, densities, options, with_shading, shading_options,
+                                 rng)  # fmt: skip
+            xs += x
+            ys += y
             done.advance()
     if not xs:
         raise ValueError("every training layout's samples lie on planes: nothing to learn")
     return np.concatenate(xs), np.concatenate(ys)
 
 
-def _example_rows(image, truth, densities, options, with_shading, shading_options, rng, xs, ys):
-    """One example's features and targets appended to ``xs`` and ``ys``."""
+def _example_rows(image, truth, densities, options, with_shading, shading_options, rng):
+    """One example's features and targets: ``(xs, ys)``, lists of arrays (one per layout)."""
+    xs, ys = [], []
     guide = Guide(image) if with_shading else None
     n = truth.size
     for d in densities:
@@ -321,6 +324,7 @@ def _example_rows(image, truth, densities, options, with_shading, shading_option
             take = rng.choice(n, min(share, n), replace=False)
             xs.append(x[take])
             ys.append(y[take])
+    return xs, ys
 
 
 def train_learned_reconstruction(

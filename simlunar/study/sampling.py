@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import zlib
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -306,7 +306,6 @@ def run_sampling_study(
     *,
     rng,
     workers: int = 1,
-    progress: Callable[[int, int], None] | None = None,
     guide: Guide | None = None,
     steps: Steps | None = None,
     keep_trial: int | None = None,
@@ -326,8 +325,6 @@ def run_sampling_study(
     workers : int
         Processes (fork) that run (strategy, trial) tasks in parallel; results do not depend on
         it (every task has its own seed).
-    progress : callable(done, total), optional
-        Called with the number of acquisitions done after each (strategy, trial) task.
     guide : Guide, optional
         What the camera saw, for the guided reconstructions (its frames, light directions,
         co-located frame, spacing); default ``Guide(image)`` (one frame, light unknown, unit
@@ -385,8 +382,6 @@ def run_sampling_study(
     todo = {s: planners[s] for s in strategies if s not in kept}
     total, done = len(strategies) * o.trials * len(ks), len(kept) * o.trials * len(ks)
     with stage("sampling study", total=total, unit="acquisitions", done=done) as bar:
-        if progress is not None and done:  # strategies restored from ``steps``
-            progress(done, total)
         finished: dict = {s: [] for s in todo}
         tasks = iter(())
         if todo:  # only the strategies no previous run finished
@@ -405,8 +400,6 @@ def run_sampling_study(
                 steps.save(_step_name(label, keep_trial), finished.pop(label))
             done += len(ks)
             bar.update(done)
-            if progress is not None:
-                progress(done, total)
     res = _result(o, strategies, dens, ks, errors, names, list(recons), frames)
     res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], MeasuringPlanner)}
     res.info = {r: by for r, by in info.items() if any(by.values())}

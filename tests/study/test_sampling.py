@@ -8,15 +8,16 @@ import pytest
 from simlunar.metrics import depth_gradient_weights, metric
 from simlunar.planner import plan, strategy_weights
 from simlunar.plotting.tables import score_tables
+from simlunar.progress import reporting
 from simlunar.reconstruction import reconstruct
 from simlunar.study import sampling
 from simlunar.study.sampling import SamplingStudyOptions, paper_densities
 
 
-def run_sampling_study(depth, image, *, rng, workers=1, progress=None, **options):
+def run_sampling_study(depth, image, *, rng, workers=1, **options):
     """The study with its options as keywords (SamplingStudyOptions fields)."""
     return sampling.run_sampling_study(
-        depth, image, SamplingStudyOptions(**options), rng=rng, workers=workers, progress=progress
+        depth, image, SamplingStudyOptions(**options), rng=rng, workers=workers
     )
 
 
@@ -266,12 +267,12 @@ def test_wavelet_beats_random_on_lambert_dem(seed):
 def test_progress_and_nan_policy(scene):
     depth, image = scene
     seen = []
-    res = run_sampling_study(
-        depth, image, densities=DENS, trials=2, rng=0, metrics=["mse"],
-        strategies=["random", "wavelet"], outside="nan",
-        progress=lambda done, total: seen.append((done, total)),
-    )  # fmt: skip
-    assert seen == [(3, 12), (6, 12), (9, 12), (12, 12)]
+    with reporting(lambda ev: seen.append((ev.done, ev.total))):  # the progress channel
+        res = run_sampling_study(
+            depth, image, densities=DENS, trials=2, rng=0, metrics=["mse"],
+            strategies=["random", "wavelet"], outside="nan",
+        )  # fmt: skip
+    assert seen == [(0, 12), (3, 12), (6, 12), (9, 12), (12, 12), (12, 12)]
     # NaN outside the hull is excluded, never propagated into the errors
     assert all(np.isfinite(r["value"]) for r in res.rows)
     near = run_sampling_study(
