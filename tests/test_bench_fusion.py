@@ -12,4 +12,4 @@ def test_fusion_benchmark_smoke():
         assert fig[key] > 0
     # the lit scene at 1/256: the image-anchored methods beat linear even at this size
     assert fig["shading_gain"] > 1.0 and fig["photoclinometry_gain"] > 1.0
-    assert set(bench_fusion.BENCHMARKS) == {"fusion"}
+    assert set(bench_fusion.BENCHMARKS) == {"fusion", "learned_check"}
