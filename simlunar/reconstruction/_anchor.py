@@ -10,7 +10,14 @@ from scipy import ndimage
 
 from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
 
-__all__ = ["LinearField", "at_points", "linear_field", "reanchored_detail", "sample_pitch"]
+__all__ = [
+    "LinearField",
+    "at_points",
+    "cell_indices",
+    "linear_field",
+    "reanchored_detail",
+    "sample_pitch",
+]
 
 
 class LinearField:
@@ -57,22 +64,25 @@ def sample_pitch(k: int, shape) -> float:
     return math.sqrt(shape[0] * shape[1] / max(int(k), 1))
 
 
+def cell_indices(points: np.ndarray, shape) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(rows, cols)`` integer indices of (row, col) points when every one sits on a cell
+    centre inside a grid of ``shape``; None otherwise (such points are read bilinearly)."""
+    r, c = points[:, 0], points[:, 1]
+    ri, ci = np.rint(r), np.rint(c)
+    if not (np.array_equal(ri, r) and np.array_equal(ci, c)):
+        return None
+    if (ri < 0).any() or (ri >= shape[0]).any() or (ci < 0).any() or (ci >= shape[1]).any():
+        return None
+    return ri.astype(np.intp), ci.astype(np.intp)
+
+
 def at_points(field: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Values of ``field`` at (row, col) points: a lookup on integer points, bilinear (edge
     values beyond the grid) otherwise."""
-    r, c = points[:, 0], points[:, 1]
-    rows, cols = field.shape
-    ri, ci = np.rint(r), np.rint(c)
-    if (
-        np.array_equal(ri, r)
-        and np.array_equal(ci, c)
-        and (ri >= 0).all()
-        and (ri < rows).all()
-        and (ci >= 0).all()
-        and (ci < cols).all()
-    ):
-        return field[ri.astype(np.intp), ci.astype(np.intp)]
-    return ndimage.map_coordinates(field, [r, c], order=1, mode="nearest")
+    cells = cell_indices(points, field.shape)
+    if cells is not None:
+        return field[cells]
+    return ndimage.map_coordinates(field, [points[:, 0], points[:, 1]], order=1, mode="nearest")
 
 
 def reanchored_detail(field: np.ndarray, lin: LinearField) -> np.ndarray:

@@ -73,7 +73,7 @@ from simlunar.features._stack import (
     _model_path,
     _sha256_file,
 )
-from simlunar.reconstruction._anchor import linear_field
+from simlunar.reconstruction._anchor import cell_indices, linear_field
 from simlunar.reconstruction.base import Reconstructed
 from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
 from simlunar.reconstruction.learned_features import (
@@ -279,14 +279,8 @@ class LearnedReconstruction:
 def _sample_cells(pts: np.ndarray, shape) -> np.ndarray | None:
     """Flat indices of the samples' cells, or None unless every sample sits on a cell centre
     inside the grid (off-centre samples are read bilinearly, from neighbours too)."""
-    r, c = pts[:, 0], pts[:, 1]
-    ri, ci = np.rint(r), np.rint(c)
-    on_cells = np.array_equal(ri, r) and np.array_equal(ci, c)
-    if not on_cells or (ri < 0).any() or (ci < 0).any():
-        return None
-    if (ri >= shape[0]).any() or (ci >= shape[1]).any():
-        return None
-    return np.unique(np.ravel_multi_index((ri.astype(np.intp), ci.astype(np.intp)), shape))
+    cells = cell_indices(pts, shape)
+    return None if cells is None else np.unique(np.ravel_multi_index(cells, shape))
 
 
 def check_model_file(path) -> tuple[Path, dict]:
