@@ -14,7 +14,9 @@ sensors, :mod:`simlunar.study.lidar`):
   pixel need separate frames, :func:`simlunar.lidar.flash.micromirror_frames`). The
   ``k`` dots are shared among the receiver pixels in proportion to the importance map's mass in
   each, capped at ``frames`` (water-filling), and placed inside each receiver pixel by a
-  weighted draw without replacement.
+  weighted draw without replacement. :func:`receiver_capped_layout` keeps a planner's own
+  layout instead (a Lloyd layout's spacing) and moves only the dots over the cap, each to the
+  nearest free guide pixel of a receiver pixel with room.
 - :func:`tile_range_scores` and :func:`choose_tiles` (flash revisits): the zoomed revisits go to
   the tiles whose first-frame ranges look least like a plane (the RMS residual of a plane fit to
   the measured points, unmeasured pixels counted as rough), mixed with the image plan's share
@@ -26,10 +28,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 __all__ = [
     "choose_tiles",
     "fit_to_time",
+    "receiver_capped_layout",
     "receiver_capped_plan",
     "receiver_cells",
     "tile_range_scores",
@@ -168,6 +172,71 @@ def receiver_capped_plan(
         out.append(members[g.choice(len(members), int(counts[q]), replace=False, p=p)])
     sel = np.concatenate(out)
     return pix[sel].astype(np.int64)
+
+
+def receiver_capped_layout(rc, *, shape, receiver_shape, frames: int | None = None) -> np.ndarray:
+    """A layout ``rc`` moved as little as needed to put at most ``frames`` dots in any
+    receiver pixel.
+
+    Dots in receiver pixels within the cap stay where they are. Of the dots in a receiver
+    pixel over the cap, the ones nearest (Euclidean, guide pixels) to a free guide pixel of a
+    receiver pixel with room move there, nearest first, until no receiver pixel is over: a
+    Lloyd layout keeps its spacing except where it clustered (where
+    :func:`receiver_capped_plan` would redraw every dot inside its receiver pixel).
+    Deterministic.
+
+    Parameters
+    ----------
+    rc : (k, 2) int
+        The layout (row, col), distinct guide pixels.
+    shape, receiver_shape : (rows, cols)
+        Guide view; receiver (same field of view).
+    frames : int or None
+        Most dots per receiver pixel; None = the least that holds ``k``.
+
+    Returns
+    -------
+    (k, 2) int64 (row, col): distinct pixels; row ``i`` is dot ``i`` of ``rc``, moved or not.
+    """
+    h, w = (int(x) for x in shape)
+    rh, rw = (int(x) for x in receiver_shape)
+    cells = rh * rw
+    out = np.asarray(rc, dtype=np.int64).reshape(-1, 2).copy()
+    k = len(out)
+    if k and (out.min() < 0 or (out[:, 0] >= h).any() or (out[:, 1] >= w).any()):
+        raise ValueError(f"rc must lie in the guide view {h} x {w}")
+    flat = out[:, 0] * w + out[:, 1]
+    if np.unique(flat).size != k:
+        raise ValueError("rc must be distinct guide pixels")
+    frames = -(-k // cells) if frames is None else int(frames)
+    r, c = np.mgrid[0:h, 0:w]
+    pix = np.stack([r.ravel(), c.ravel()], -1)
+    pix_cell = receiver_cells(pix, (h, w), (rh, rw))
+    cap = np.minimum(frames, np.bincount(pix_cell, minlength=cells))
+    if k > int(cap.sum()):
+        raise ValueError(
+            f"k = {k} dots do not fit {frames} per receiver pixel of {rh} x {rw} "
+            f"(at most {int(cap.sum())})"
+        )
+    dot_cell = receiver_cells(out, (h, w), (rh, rw))
+    count = np.bincount(dot_cell, minlength=cells)
+    used = np.zeros(h * w, bool)
+    used[flat] = True
+    while (count > cap).any():
+        movers = np.flatnonzero(count[dot_cell] > cap[dot_cell])
+        free = np.flatnonzero(~used & (count[pix_cell] < cap[pix_cell]))
+        dist, nearest = cKDTree(pix[free]).query(out[movers])
+        for i in np.argsort(dist, kind="stable"):
+            d, target = movers[i], free[nearest[i]]
+            src, dst = dot_cell[d], pix_cell[target]
+            if count[src] <= cap[src] or used[target] or count[dst] >= cap[dst]:
+                continue  # settled already, or its target was taken: the next pass
+            used[out[d, 0] * w + out[d, 1]] = False
+            used[target] = True
+            count[src] -= 1
+            count[dst] += 1
+            out[d], dot_cell[d] = pix[target], dst
+    return out
 
 
 def _water_fill(mass: np.ndarray, cap: np.ndarray, k: int, g) -> np.ndarray:

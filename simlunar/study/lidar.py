@@ -76,9 +76,12 @@ class SensorFit:
         largest sample count whose plan, in the sensor's own visiting order, scans within the
         time of the ``reference`` planner's plan at the same density
         (:func:`~simlunar.lidar.planning.fit_to_time`; searched over ``k / 4 .. 4 k``).
-        ``receiver`` (micromirror flash): at most ``frames`` dots per receiver pixel
-        (:func:`~simlunar.lidar.planning.receiver_capped_plan`), the label's strategy map (a
-        weighted strategy's) steering where.
+        ``receiver`` (micromirror flash): at most ``frames`` dots per receiver pixel. A map
+        drawn by the paper's weighted random draw is drawn again under the cap, its map
+        steering where (:func:`~simlunar.lidar.planning.receiver_capped_plan`); every other
+        planner (a Lloyd placement, the grid, uniform Lloyd, ...) keeps its own layout and
+        moves only the dots over the cap, each to the nearest free pixel of a receiver pixel
+        with room (:func:`~simlunar.lidar.planning.receiver_capped_layout`).
     reference : str
         ``scan_time``: the planner label whose scan time is the budget (in the study).
     frames : int or None

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.lidar.join import join_scans
-from simlunar.lidar.planning import fit_to_time, receiver_capped_plan
-from simlunar.planner import MEASURING, ORACLES, map_of, plan
+from simlunar.lidar.planning import fit_to_time, receiver_capped_layout, receiver_capped_plan
+from simlunar.planner import MEASURING, ORACLES, PLANNERS, map_of, plan
 from simlunar.sensors.base import Acquisition
 from simlunar.study.protocol import reconstruction_options
 from simlunar.study.sampling_planners import (
@@ -79,8 +79,20 @@ def lidar_planners(o, image, depth, ks, *, sensor, guide=None) -> dict[str, Call
         planners[label] = _planner(base, image, opts, ks, cache, truth=truth, reconstruct=recon)
     for label, fit in o.fits.items():
         ref = planners.get(fit.reference)
-        planners[label] = _fitted(fit, planners[label], ref, sensor, depth.shape)
+        base = o.strategies.get(label, label)
+        keep = _keeps_layout(base, o.planner_opts.get(label, {}))
+        planners[label] = _fitted(fit, planners[label], ref, sensor, depth.shape, keep)
     return planners
+
+
+def _keeps_layout(base: str, opts: Mapping) -> bool:
+    """Whether a receiver fit keeps planner ``base``'s own layout
+    (:func:`~simlunar.lidar.planning.receiver_capped_layout`): every planner but a map drawn
+    by the paper's weighted random draw, which the receiver cap redraws inside each receiver
+    pixel instead (:func:`~simlunar.lidar.planning.receiver_capped_plan`)."""
+    if map_of(base) is None:
+        return True
+    return opts.get("placement", PLANNERS[base].target.placement) != "random"
 
 
 def _oracle_truth(label: str, depth) -> np.ndarray:
@@ -134,11 +146,16 @@ def _planner(base: str, image, opts: Mapping, ks, cache: dict, *, truth=None, re
     return planner
 
 
-def _fitted(fit, planner, reference, sensor, shape) -> Callable:
-    """A planner fitted to ``sensor`` (:class:`~simlunar.study.lidar.SensorFit`)."""
+def _fitted(fit, planner, reference, sensor, shape, keep_layout: bool = False) -> Callable:
+    """A planner fitted to ``sensor`` (:class:`~simlunar.study.lidar.SensorFit`); a receiver
+    fit with ``keep_layout`` moves the planner's own layout under the cap."""
     n = int(shape[0]) * int(shape[1])
     if fit.kind == "receiver":
         rx = tuple(sensor.options.receiver_px)
+        if keep_layout:
+            return lambda k, rng: receiver_capped_layout(
+                planner(k, rng), shape=shape, receiver_shape=rx, frames=fit.frames
+            )
 
         def capped(k, rng):
             return receiver_capped_plan(planner.map(k), int(k), shape=shape, receiver_shape=rx,

@@ -120,3 +120,64 @@ def test_choose_tiles_mixes_the_plan_and_the_ranges():
     assert choose_tiles(None, rough, 1).tolist() == [[3, 3]]
     with pytest.raises(ValueError, match="needs plan_counts"):
         choose_tiles(None, None, 1)
+
+
+def test_receiver_capped_layout_moves_only_the_dots_over_the_cap():
+    from simlunar.lidar.planning import receiver_capped_layout
+
+    # 8 x 8 guide, 4 x 4 receiver (2 x 2 guide px each). Dots at (0,0) and (0,1) share
+    # receiver pixel 0; (5,5) is alone. With one frame, one of the pair moves to the nearest
+    # free pixel of a receiver pixel with room: (0,1) -> (0,2) (distance 1, receiver pixel 1)
+    rc = np.array([[0, 0], [0, 1], [5, 5]])
+    out = receiver_capped_layout(rc, shape=(8, 8), receiver_shape=(4, 4), frames=1)
+    assert out.tolist() == [[0, 0], [0, 2], [5, 5]]
+    # a layout already within the cap is returned unchanged
+    same = receiver_capped_layout(out, shape=(8, 8), receiver_shape=(4, 4), frames=1)
+    assert np.array_equal(same, out)
+    # two frames hold the pair: nothing moves
+    two = receiver_capped_layout(rc, shape=(8, 8), receiver_shape=(4, 4), frames=2)
+    assert np.array_equal(two, rc)
+
+
+def test_receiver_capped_layout_keeps_a_clustered_layout_close():
+    from simlunar.lidar.planning import receiver_capped_layout
+
+    # a 64 x 64 guide, 16 x 16 receiver: 200 distinct dots piled into the top-left 20 x 20
+    g = np.random.default_rng(4)
+    flat = g.choice(20 * 20, 200, replace=False)
+    rc = np.stack([flat // 20, flat % 20], -1)
+    before = np.bincount(receiver_cells(rc, (64, 64), (16, 16)), minlength=256)
+    for frames in (1, 2):
+        out = receiver_capped_layout(rc, shape=(64, 64), receiver_shape=(16, 16), frames=frames)
+        assert out.shape == rc.shape
+        assert len({tuple(x) for x in out}) == len(out)  # distinct
+        per_cell = np.bincount(receiver_cells(out, (64, 64), (16, 16)), minlength=256)
+        assert per_cell.max() <= frames
+        # dots in receiver pixels within the cap never move
+        cell = receiver_cells(rc, (64, 64), (16, 16))
+        stay = before[cell] <= frames
+        assert np.array_equal(out[stay], rc[stay])
+    with pytest.raises(ValueError, match="do not fit 1 per receiver pixel"):
+        receiver_capped_layout(np.argwhere(np.ones((64, 64)))[:257], shape=(64, 64),
+                               receiver_shape=(16, 16), frames=1)  # fmt: skip
+    with pytest.raises(ValueError, match="distinct"):
+        receiver_capped_layout([[1, 1], [1, 1]], shape=(64, 64), receiver_shape=(16, 16))
+
+
+def test_receiver_capped_layout_undoes_a_small_displacement_by_one_pixel():
+    from simlunar.lidar.planning import receiver_capped_layout
+
+    # one dot per receiver pixel of a 16 x 16 receiver on a 64 x 64 guide, at (4i+1, 4j+1);
+    # ten dots pushed 3 rows down, to (4i+4, 4j+1): each now shares receiver pixel (i+1, j)
+    # (rows 4i+4 .. 4i+7) with the dot there, and left (i, j) empty. The nearest free pixel
+    # with room for the pushed dot is (4i+3, 4j+1) in its old receiver pixel, 1 px away (the
+    # other dot of the pair is 2 px from it): exactly the pushed dots move, each by 1 px.
+    i, j = np.mgrid[0:16, 0:16]
+    rc = np.stack([4 * i.ravel() + 1, 4 * j.ravel() + 1], -1)
+    even = np.flatnonzero(i.ravel() % 2 == 0)  # rows 0, 2, ..., 14: no pushed dot lands on another
+    pushed = np.random.default_rng(5).choice(even, 10, replace=False)
+    rc[pushed, 0] += 3
+    out = receiver_capped_layout(rc, shape=(64, 64), receiver_shape=(16, 16), frames=1)
+    moved = np.flatnonzero((out != rc).any(1))
+    assert sorted(moved) == sorted(pushed)
+    assert np.array_equal(out[pushed], rc[pushed] - [1, 0])

@@ -268,6 +268,39 @@ def test_a_receiver_fit_keeps_one_dot_per_receiver_pixel():
         assert np.bincount(receiver_cells(rc, (32, 32), (8, 8)), minlength=64).max() == 1
 
 
+def test_a_receiver_fit_keeps_a_lloyd_layout_and_moves_only_the_dots_over_the_cap():
+    # a Lloyd-placed label under a receiver fit: the sensor gets the planner's own layout
+    # moved under the cap (receiver_capped_layout), not a redraw inside receiver pixels
+    from simlunar.lidar.planning import receiver_capped_layout, receiver_cells
+    from simlunar.study.lidar import SensorFit
+
+    image, depth = _guide()
+    seen = []
+
+    class _Rx(_Paced):
+        def acquire(self, rc, *, rng=None):
+            seen.append(np.asarray(rc))
+            return super().acquire(rc, rng=rng)
+
+    def study(fits):
+        seen.clear()
+        o = LidarStudyOptions(sensor="micromirror_flash", planners=("lloyd_uniform",),
+                              fits=fits, densities=(1 / 16,), trials=1)  # fmt: skip
+        run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Rx(depth))
+        return seen[0]
+
+    free = study({})
+    capped = study({"lloyd_uniform": SensorFit("receiver")})
+    assert np.bincount(receiver_cells(capped, (32, 32), (8, 8)), minlength=64).max() == 1
+    expect = receiver_capped_layout(free, shape=(32, 32), receiver_shape=(8, 8))
+    np.testing.assert_array_equal(capped, expect)
+    # and the layout is the planner's: the dots within the cap did not move
+    cell = receiver_cells(free, (32, 32), (8, 8))
+    alone = np.bincount(cell, minlength=64)[cell] == 1
+    np.testing.assert_array_equal(capped[alone], free[alone])
+    assert alone.sum() > len(free) // 2
+
+
 def test_the_learned_map_gets_its_density(monkeypatch):
     # the learned map is predicted per sample density: the LIDAR study asks it once per k
     import simlunar.study.sampling_planners as sp
