@@ -271,7 +271,7 @@ class MicromirrorCfg(_Model):
 
 
 class MotionCfg(_Model):
-    """The platform's motion during a steered-beam scan or between flash frames
+    """The platform's motion during a steered-beam scan or between flash or micromirror frames
     (:class:`simlunar.lidar.trajectory.PlatformMotion`), starting at the guide camera."""
 
     kind: Literal["hover", "descent"] = Field("descent", description="hover or descent")
@@ -300,8 +300,8 @@ class MotionCfg(_Model):
     )
     retarget: bool = Field(
         True,
-        description="re-aim each beam at its planned point on the gate's reference plane from "
-        "where the platform is",
+        description="steered beam: re-aim each beam at its planned point on the gate's "
+        "reference plane from where the platform is (a micromirror keeps its planned mirrors)",
     )
 
 
@@ -365,8 +365,8 @@ class LidarOptionsCfg(_Model):
     steered_beam: SteeredBeamCfg = Field(default_factory=SteeredBeamCfg)
     motion: MotionCfg | None = Field(
         None,
-        description="steered beam or flash: the platform's motion during the scan (a beam's "
-        "pose per pulse, a flash frame's per frame; none: at rest)",
+        description="the platform's motion during the scan (a steered beam's pose per pulse, a "
+        "flash or micromirror frame's per frame; none: at rest)",
     )
     flash: FlashCfg = Field(default_factory=FlashCfg)
     micromirror: MicromirrorCfg = Field(default_factory=MicromirrorCfg)

@@ -88,11 +88,6 @@ def check_lidar_study(study) -> None:
             if study.sensor == "flash":
                 raise ValueError(f"{where}: a flash's time is its frames, not a tour")
     o = study.options
-    if o.motion is not None and study.sensor == "micromirror_flash":
-        raise ValueError(
-            "study.options.motion: a moving platform is modelled for the steered beam and the "
-            "flash, not the micromirror_flash (its frames are rendered together)"
-        )
     if study.sensor == "steered_beam":
         sb = o.steered_beam
         # simlunar.lidar.scan.SteeredBeamOptions: window_m > 2 margin_m >= 0 (each

@@ -161,7 +161,7 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
     w, h = m.receiver_px
     mm = FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common)
     mm = mm if hardware is None else with_hardware(mm, hardware)
-    return MicromirrorOptions(mm, (h, w))
+    return MicromirrorOptions(mm, (h, w), motion=motion_options(o.motion))
 
 
 def motion_options(cfg: MotionCfg | None) -> PlatformMotion | None:

@@ -15,7 +15,9 @@ its shape), seeded by ``jitter_seed``.
 (:func:`place_points`): ``"exact"`` (the true pose at each firing), ``"noisy"`` (the true
 pose plus white navigation errors per point, ``position_noise_m`` per axis and
 ``attitude_noise_rad`` per axis, from the point's own ``rng``) or ``"start"`` (no motion
-compensation: the pose at the scan's start, no jitter).
+compensation: the pose at the scan's start, no jitter). :func:`camera_at` is a co-boresighted
+device (flash receiver, micromirror projector) carried by the platform: moved to its position
+at a time and turned by the jitter then.
 """
 
 from __future__ import annotations
@@ -24,11 +26,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.geometry import Camera, Pose
+
 __all__ = [
     "JITTER_TONES",
     "Navigation",
     "PlatformMotion",
     "Trajectory",
+    "camera_at",
     "place_points",
     "rotate_small",
 ]
@@ -115,6 +120,15 @@ def rotate_small(vectors: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
     k = np.divide(w, th, out=np.zeros_like(w), where=th > 0)
     c, s = np.cos(th), np.sin(th)
     return v * c + np.cross(k, v) * s + k * (k * v).sum(-1, keepdims=True) * (1 - c)
+
+
+def camera_at(camera: Camera, trajectory: Trajectory, t: float) -> Camera:
+    """``camera`` carried by the platform: at ``trajectory``'s position at time ``t`` (s), its
+    axes turned by the attitude jitter then (the line of sight is held in the world frame up
+    to the jitter, so ``camera``'s own position is replaced and its orientation kept)."""
+    w = np.broadcast_to(trajectory.attitude_at(t), (3, 3))
+    axes = rotate_small(np.asarray(camera.pose.rotation, float).T, w).T
+    return Camera(camera.intrinsics, Pose(axes, trajectory.at(t)))
 
 
 @dataclass(frozen=True)

@@ -4,8 +4,10 @@ micromirror flash that lights only the planned pixels.
 Only the frames' rendering lives here: :func:`flash_scan` renders one flash frame and reads it
 with :func:`simlunar.lidar.flash.read_flash`; :func:`micromirror_flash` renders one frame per
 group of dots (:func:`simlunar.lidar.flash.micromirror_frames`) through a projector that lights
-them and reads each with :func:`simlunar.lidar.flash.read_frame`. The range gate, photon counts,
-ranges and the options are :mod:`simlunar.lidar.flash`'s.
+them and reads each with :func:`simlunar.lidar.flash.read_frame`; on a moving platform each of
+its frames is rendered from the platform's pose at that frame's time
+(:mod:`simlunar.lidar.trajectory`). The range gate, photon counts, ranges and the options are
+:mod:`simlunar.lidar.flash`'s.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from simlunar.lidar.flash import (
     read_frame,
 )
 from simlunar.lidar.returns import LidarScan
+from simlunar.lidar.trajectory import Navigation, camera_at, place_points
 from simlunar.render.lights import ProjectorLight
 from simlunar.render.transient import flash_frame
 
@@ -66,6 +69,8 @@ def micromirror_flash(
     rng=None,
     sun=None,
     bsdf=None,
+    trajectory=None,
+    navigation=None,
 ) -> LidarScan:
     """Micromirror-steered flash: light only the planned pixels, time them on a small receiver.
 
@@ -86,12 +91,24 @@ def micromirror_flash(
     options : FlashOptions
     receiver_shape : (rows, cols)
     rng, sun, bsdf
-        As for :func:`flash_scan`.
+        As for :func:`flash_scan`; ``rng`` also draws ``navigation``'s errors.
+    trajectory : Trajectory or None
+        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest at ``camera``):
+        frame ``f`` fires at ``f x pulses / pulse_rate_hz`` and is rendered with projector and
+        receiver at the platform's position then, turned by the jitter then
+        (:func:`~simlunar.lidar.trajectory.camera_at`; ``camera``'s own position is not used).
+        The mirrors stay the planned pixels (the dots keep their directions in the device
+        frame: no re-aiming), so a dot's receiver pixel is the same in every pose.
+    navigation : Navigation or None
+        How the points are placed (:func:`~simlunar.lidar.trajectory.place_points`, along
+        ``camera``'s rays of the planned pixels, the commanded directions); None = the pose
+        known exactly.
 
     Returns
     -------
     LidarScan
-        Arrays over the k planned pixels; ``frames`` = flash frames fired.
+        Arrays over the k planned pixels; ``frames`` = flash frames fired; ``times`` each dot's
+        frame's firing time (s).
 
     Notes
     -----
@@ -113,14 +130,19 @@ def micromirror_flash(
     if receiver.shape != (rh, rw):
         raise ValueError(f"receiver_shape {receiver_shape} must keep the aspect of {(h, w)}")
     ranges, photons, returns, times, n_frames = _fire_micromirror_frames(
-        terrain, camera, receiver, uv, options=options, rng=rng, scene={"sun": sun, "bsdf": bsdf}
-    )
+        terrain, camera, receiver, uv, options=options, rng=rng,
+        scene={"sun": sun, "bsdf": bsdf}, trajectory=trajectory,
+    )  # fmt: skip
     _, d = camera.rays(uv)
     valid = np.isfinite(ranges)
+    if trajectory is None:
+        points = camera.pose.position + ranges[:, None] * d
+    else:
+        points = place_points(ranges, d, times, trajectory, navigation or Navigation(), rng=rng)
     return LidarScan(
         ranges=ranges,
         valid=valid,
-        points=camera.pose.position + ranges[:, None] * d,
+        points=points,
         photons=photons,
         order=np.arange(len(uv)),
         seconds=n_frames * options.detector.pulses / options.pulse_rate_hz,
@@ -130,11 +152,14 @@ def micromirror_flash(
     )
 
 
-def _fire_micromirror_frames(terrain, camera: Camera, receiver: Camera, uv, *, options, rng, scene):
+def _fire_micromirror_frames(
+    terrain, camera: Camera, receiver: Camera, uv, *, options, rng, scene, trajectory=None
+):
     """Render and read frame after frame of a micromirror flash: frame f lights the dots of
     :func:`~simlunar.lidar.flash.micromirror_frames` f (one projector pixel each) and each dot
     reads its receiver pixel; ``scene``: the ``sun`` and ``bsdf`` of
-    :func:`~simlunar.render.transient.flash_frame`.
+    :func:`~simlunar.render.transient.flash_frame`; with a ``trajectory`` projector, receiver
+    and range gate are those of the platform's pose at the frame's time.
 
     Returns
     -------
@@ -153,6 +178,12 @@ def _fire_micromirror_frames(terrain, camera: Camera, receiver: Camera, uv, *, o
     col = np.clip(np.floor(uv[:, 0] * rw / w).astype(int), 0, rw - 1)
     row = np.clip(np.floor(uv[:, 1] * rh / h).astype(int), 0, rh - 1)
     for f in range(n_frames):
+        if trajectory is not None:
+            # projector and receiver move together: a dot keeps its receiver pixel
+            moved = camera_at(camera, trajectory, f * per_frame)
+            projector = Projector(camera.intrinsics, moved.pose)
+            receiver = Camera(receiver.intrinsics, moved.pose)
+            bins = flash_window(moved, options=options)
         sel = np.flatnonzero(frame_of == f)
         pattern = np.zeros((h, w), np.float32)
         pattern[

@@ -17,7 +17,8 @@ where each measured point projects, and its cost is the modelled acquisition tim
   platform (``FlashLidarOptions.motion``) each frame is taken from the pose at its time.
 - :class:`MicromirrorFlash`: a micromirror projector at the guide camera lights only the
   planned pixels; a small receiver times them (dots sharing a receiver pixel go to different
-  frames).
+  frames). On a moving platform (``MicromirrorOptions.motion``) each frame is rendered from the
+  pose at its time and its dots are scored where their points project in the guide view.
 """
 
 from __future__ import annotations
@@ -27,14 +28,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simlunar.geometry import Camera, Intrinsics, Pose
+from simlunar.geometry import Camera, Intrinsics
 from simlunar.lidar import order_scan, pointing_angles, scan_timing
 from simlunar.lidar.flash import FlashOptions, flash_window, micromirror_frames, read_flash
 from simlunar.lidar.join import concat_scans, flat_scan, subset_scan
 from simlunar.lidar.planning import choose_tiles, tile_range_scores
 from simlunar.lidar.returns import LidarScan
 from simlunar.lidar.scan import SteeredBeamOptions, guide_directions, steered_beam_scan
-from simlunar.lidar.trajectory import PlatformMotion, place_points, rotate_small
+from simlunar.lidar.trajectory import PlatformMotion, camera_at, place_points, rotate_small
 from simlunar.render.beam_capture import beam_capture
 from simlunar.render.flash_lidar import micromirror_flash
 from simlunar.render.transient import flash_frame
@@ -357,9 +358,7 @@ class _Moving:
 
     def camera(self, camera: Camera, t: float) -> Camera:
         """``camera`` moved to the platform's position at ``t`` (s), turned by its jitter."""
-        w = np.broadcast_to(self.trajectory.attitude_at(t), (3, 3))
-        axes = rotate_small(np.asarray(camera.pose.rotation, float).T, w).T
-        return Camera(camera.intrinsics, Pose(axes, self.trajectory.at(t)))
+        return camera_at(camera, self.trajectory, t)
 
     def place(self, scan: LidarScan, camera: Camera, t: float) -> LidarScan:
         """``scan`` (read through the moved ``camera``) with its points placed by the
@@ -384,10 +383,17 @@ class MicromirrorOptions:
         ``(guide pixels / receiver pixels) x 16`` for a clean return (docs/lidar.md).
     receiver_px : (rows, cols)
         The receiver timing the dots (same field of view as the guide camera).
+    motion : PlatformMotion or None
+        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest): frame ``f``
+        is rendered from the pose at ``f`` x pulses / pulse rate
+        (:func:`~simlunar.render.flash_lidar.micromirror_flash`) and its dots' points are
+        placed with the sensor's navigation. The mirrors stay the planned pixels
+        (``motion.retarget`` is the steered beam's).
     """
 
     flash: FlashOptions = field(default_factory=FlashOptions)
     receiver_px: tuple[int, int] = (64, 64)
+    motion: PlatformMotion | None = None
 
     def __post_init__(self):
         if len(self.receiver_px) != 2 or min(self.receiver_px) < 1:
@@ -417,11 +423,22 @@ class MicromirrorFlash:
         self.options = options or MicromirrorOptions()
 
     def acquire(self, rc: np.ndarray | None, *, rng=None) -> Acquisition:
-        """Light and time the planned guide pixels ``rc`` ((k, 2) int (row, col))."""
+        """Light and time the planned guide pixels ``rc`` ((k, 2) int (row, col)); ``rng``:
+        photon noise (and, moving, the jitter's phases and the navigation errors)."""
         if rc is None:
             raise ValueError("a micromirror flash lights planned pixels: rc is required")
         s, o = self.scene, self.options
         uv = np.asarray(rc, float)[:, ::-1] + 0.5
+        if o.motion is not None:
+            g = np.random.default_rng(rng)
+            traj = o.motion.trajectory(s.camera.position, jitter_seed=int(g.integers(2**31)))
+            scan = micromirror_flash(s.terrain, s.camera, uv, options=o.flash,
+                                     receiver_shape=tuple(o.receiver_px), rng=g, sun=s.sun,
+                                     bsdf=s.bsdf, trajectory=traj,
+                                     navigation=o.motion.navigation)  # fmt: skip
+            # a moving platform's dots land off the planned pixels' points: scored where
+            # their points project, as a moving steered beam's
+            return _to_guide(scan, s.camera, None, frames=scan.frames, seconds=scan.seconds)
         scan = micromirror_flash(
             s.terrain,
             s.camera,

@@ -128,7 +128,7 @@ def test_hazard_options():
     assert (h.window_px, h.baseline_px) == (15, 2)
 
 
-def test_a_flash_takes_the_platform_s_motion_and_a_micromirror_refuses_it():
+def test_a_flash_and_a_micromirror_take_the_platform_s_motion():
     from simlunar.config.lidar_checks import check_lidar_study
 
     study = LidarStudyCfg(kind="lidar", sensor="flash",
@@ -138,6 +138,11 @@ def test_a_flash_takes_the_platform_s_motion_and_a_micromirror_refuses_it():
     so = lidar_translate.lidar_sensor_options(study)
     assert so.motion.velocity_m_s == pytest.approx((0.0, 0.0, -2.0))
     mm = LidarStudyCfg(kind="lidar", sensor="micromirror_flash",
-                       options={"motion": {"kind": "hover"}})  # fmt: skip
-    with pytest.raises(ValueError, match="not the micromirror_flash"):
-        check_lidar_study(mm)
+                       options={"motion": {"kind": "descent", "descent_rate_m_s": 3.0,
+                                           "compensation": "start"}})  # fmt: skip
+    check_lidar_study(mm)
+    so = lidar_translate.lidar_sensor_options(mm)
+    assert so.motion.velocity_m_s == pytest.approx((0.0, 0.0, -3.0))
+    assert so.motion.navigation.compensation == "start"
+    at_rest = LidarStudyCfg(kind="lidar", sensor="micromirror_flash")
+    assert lidar_translate.lidar_sensor_options(at_rest).motion is None

@@ -74,3 +74,29 @@ def test_place_points_round_trip_and_its_compensations():
         Navigation("perfect")
     with pytest.raises(ValueError, match="attitude_jitter_rad"):
         Trajectory((0, 0, 1.0), attitude_jitter_rad=-1.0)
+
+
+def test_camera_at_carries_a_device_to_the_pose_at_a_time():
+    from simlunar.geometry import Camera, Intrinsics, Pose
+    from simlunar.lidar.trajectory import camera_at, rotate_small
+
+    cam = Camera(
+        Intrinsics.from_fov(16, 16, 10.0),
+        Pose.look_at([5.0, 5.0, 99.0], [5.0, 5.0, 0.0], up=(0.0, 1.0, 0.0)),
+    )
+    # a 4 m/s descent with 1 m/s drift from (0, 0, 50): at 2.5 s at (2.5, 0, 40); the camera's
+    # own position is replaced, its orientation kept without jitter
+    tr = Trajectory.descent((0.0, 0.0, 50.0), 4.0, horizontal_m_s=(1.0, 0.0))
+    moved = camera_at(cam, tr, 2.5)
+    assert moved.position == pytest.approx([2.5, 0.0, 40.0])
+    assert moved.pose.rotation == pytest.approx(cam.pose.rotation, abs=1e-15)
+    assert moved.intrinsics == cam.intrinsics
+    # with jitter every axis (and so every pixel's ray) turns by the jitter's rotation then
+    jt = Trajectory((0.0, 0.0, 50.0), attitude_jitter_rad=2e-3, jitter_seed=3)
+    turned = camera_at(cam, jt, 0.7)
+    w = jt.attitude_at(0.7)
+    assert np.linalg.norm(w) > 1e-4
+    uv = np.array([[0.5, 0.5], [8.0, 8.0], [15.5, 3.5]])
+    before = cam.rays(uv)[1]
+    after = turned.rays(uv)[1]
+    assert after == pytest.approx(rotate_small(before, np.broadcast_to(w, before.shape)), abs=1e-12)

@@ -135,3 +135,65 @@ def test_a_return_outside_the_gate_is_lost(mi, monkeypatch):
     off = FlashOptions(detector=DET, transient=TransientOptions(spp=8), margin_m=1.0,
                        gate=GateOptions(datum_z_m=5.0))  # fmt: skip
     assert not flash_scan(_plane(), cam, options=off, rng=0).valid.any()
+
+
+def _moving_micromirror(trajectory, navigation):
+    """Six dots of a 32 x 32 guide camera (6 deg field, 50 m above the z = 0 plane) timed by an
+    8 x 8 receiver: the first three share receiver pixel (0, 0), so frames 0, 1, 2 (the rest
+    fire in frame 0); 4 pulses at 20 Hz = 0.2 s a frame."""
+    from simlunar.lidar.flash import FlashOptions
+    from simlunar.render.flash_lidar import micromirror_flash
+    from simlunar.render.transient import TransientOptions
+
+    cam = _camera(32, 6.0)
+    uv = np.array([[0.5, 0.5], [2.5, 1.5], [3.5, 3.5], [20.5, 9.5], [30.5, 30.5], [12.5, 27.5]])
+    det = DetectorOptions(signal_photons=2e6 * 16, background_photons_per_s=0.0, pulses=4)
+    opts = FlashOptions(detector=det, pulse=PulseOptions(fwhm_s=1e-9),
+                        transient=TransientOptions(spp=256), pulse_rate_hz=20.0)  # fmt: skip
+    scan = micromirror_flash(_plane(), cam, uv, options=opts, receiver_shape=(8, 8), rng=0,
+                             trajectory=trajectory, navigation=navigation)  # fmt: skip
+    assert scan.frames == 3 and scan.seconds == pytest.approx(3 * 0.2)
+    assert scan.times == pytest.approx([0.0, 0.2, 0.4, 0.0, 0.0, 0.0])
+    assert scan.valid.all()
+    return cam, uv, opts, scan
+
+
+def test_a_moving_micromirror_renders_each_frame_from_its_pose(mi):
+    # a 10 m/s descent with (2, -1) m/s drift and 1 mrad of jitter from (0, 0, 50): frame f
+    # fires at 0.2 f s from p(t) = (2t, -t, 50 - 10t), every dot along the camera's ray of its
+    # planned pixel turned by the jitter then. Ranges: where that ray from p(t) meets the
+    # plane, R = z(t) / -d'_z (2 m shorter a frame); with the exact pose every point lands
+    # there. Tolerance: one range bin (the at-rest dots' range error, above) along a ray
+    # with |d'_z| <= 1 (and |d'_xy| < 0.06 of it across)
+    from simlunar.lidar.trajectory import Navigation, Trajectory, rotate_small
+
+    tr = Trajectory.descent((0.0, 0.0, H), 10.0, horizontal_m_s=(2.0, -1.0),
+                            attitude_jitter_rad=1e-3, jitter_seed=5)  # fmt: skip
+    cam, uv, opts, scan = _moving_micromirror(tr, Navigation("exact"))
+    t = scan.times
+    w = tr.attitude_at(t)
+    assert np.abs(w).max() > 2e-4  # the jitter is there
+    d = rotate_small(cam.rays(uv)[1], w)
+    p = tr.at(t)
+    want_r = p[:, 2] / -d[:, 2]
+    assert np.abs(scan.ranges - want_r).max() < opts.bin_range_m
+    assert want_r[2] < want_r[0] - 3.9  # 4 m closer two frames on
+    assert np.abs(scan.points[:, 2]).max() < opts.bin_range_m
+    truth = p + want_r[:, None] * d
+    assert np.abs(scan.points - truth).max() < opts.bin_range_m
+
+
+def test_a_descending_micromirror_placed_from_its_start_is_lifted_by_the_metres_descended(mi):
+    # 10 m/s straight down, the pose at t = 0 for every dot ("start"): a dot of frame f ranges
+    # R = (50 - 10 t) / -d_z along its ray and is placed at (0, 0, 50) + R d, whose height
+    # is 50 - (50 - 10 t) = 10 t: 0, 2 and 4 m for frames 0, 1, 2, while its horizontal
+    # place is the true one (no drift: the ray leaves from the same x, y)
+    from simlunar.lidar.trajectory import Navigation, Trajectory
+
+    tr = Trajectory.descent((0.0, 0.0, H), 10.0)
+    cam, uv, opts, scan = _moving_micromirror(tr, Navigation("start"))
+    lift = np.array([0.0, 2.0, 4.0, 0.0, 0.0, 0.0])
+    assert scan.points[:, 2] == pytest.approx(lift, abs=opts.bin_range_m)
+    d = cam.rays(uv)[1]
+    truth_xy = ((H - lift) / -d[:, 2])[:, None] * d[:, :2]
+    assert scan.points[:, :2] == pytest.approx(truth_xy, abs=opts.bin_range_m)
