@@ -15,7 +15,8 @@ its shape), seeded by ``jitter_seed``.
 (:func:`place_points`): ``"exact"`` (the true pose at each firing), ``"noisy"`` (the true
 pose plus white navigation errors per point, ``position_noise_m`` per axis and
 ``attitude_noise_rad`` per axis, from the point's own ``rng``) or ``"start"`` (no motion
-compensation: the pose at the scan's start, no jitter).
+compensation: the pose at the trajectory's start, t = 0, no jitter; in every round of a
+multi-round scan).
 """
 
 from __future__ import annotations
