@@ -9,7 +9,8 @@ where each measured point projects, and its cost is the modelled acquisition tim
 
 - :class:`SteeredBeam`: one beam visits the planned pixels' directions from the guide camera's
   centre, in the order of :func:`simlunar.lidar.order_scan`; seconds from the steering
-  mechanics (:func:`simlunar.lidar.scan_timing`).
+  mechanics (:func:`simlunar.lidar.scan_timing`). The rounds of a multi-round plan
+  (:class:`BeamRounds`) continue a moving platform's trajectory one after the other.
 - :class:`FlashLidar`: a low-resolution receiver co-boresighted with the guide camera takes one
   full-field frame; with ``revisits`` > 0 the planned pixels direct that many zoomed frames at
   the sub-fields (tiles of ``1 / zoom`` of the field) holding most planned pixels, whose finer

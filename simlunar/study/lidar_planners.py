@@ -9,7 +9,9 @@ A label of a LIDAR study plans, from the guide image, the guide pixels the senso
   sampling study); the real sensor then measures its beams as any planner's;
 - ``sequential`` (:data:`simlunar.planner.MEASURING`, :class:`LidarRounds`): the LIDAR itself
   measures each round; the next round is planned from the measured ranges, and the rounds'
-  scan times add up with the re-pointing between them (:func:`merge_rounds`);
+  scan times add up with the re-pointing between them (:func:`merge_rounds`); on a moving
+  platform a steered beam's rounds continue its trajectory
+  (:class:`~simlunar.sensors.lidar.BeamRounds`);
 - any of those fitted to the sensor (:class:`~simlunar.study.lidar.SensorFit`).
 """
 
@@ -57,7 +59,8 @@ def lidar_planners(o, image, depth, ks, *, sensor, guide=None) -> dict[str, Call
     ------
     ValueError
         An oracle on a guide view with pixels off the terrain, a multi-round planner on a
-        sensor whose samples are not the planned cells, or a fit of a multi-round planner.
+        sensor whose samples are not the planned cells or on a moving sensor without rounds
+        that continue its trajectory, or a fit of a multi-round planner.
     """
     cache: dict = {}
     planners = {}
