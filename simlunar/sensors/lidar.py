@@ -205,10 +205,10 @@ class BeamRounds:
     platform (``SteeredBeamOptions.motion``) the rounds continue one trajectory (from the
     guide camera at t = 0, its jitter phases drawn once): round ``r`` starts when round
     ``r - 1`` ended plus the re-pointing from its last visited beam to this round's first
-    (:meth:`SteeredBeam.repoint_seconds`; the first from :func:`~simlunar.lidar.scan.
-    visiting_order`, as the scan visits), so its beams leave from where the platform is then;
-    its points are placed with the sensor's navigation (``start``: from the pose at t = 0 in
-    every round) and scored where they project in the guide view.
+    (:meth:`SteeredBeam.repoint_seconds`; the first as the scan visits,
+    :func:`~simlunar.lidar.scan.visiting_order`), so its beams leave from where the platform
+    is then; its points are placed with the sensor's navigation (``start``: from the pose at
+    t = 0 in every round) and scored where they project in the guide view.
 
     Parameters
     ----------
