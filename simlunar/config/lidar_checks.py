@@ -14,7 +14,7 @@ __all__ = ["LIDAR_PLANNER_RULES", "check_lidar_study"]
 #: what a LIDAR study asks of a planner label, by strategy: an oracle reads the true depth in
 #: its planner step (a bound: its label starts "oracle", as in the sampling study); the
 #: multi-round planner asks the LIDAR back between rounds (its samples must be the planned
-#: cells, the platform at rest)
+#: cells; on a moving platform, a steered beam's)
 LIDAR_PLANNER_RULES = {
     "oracle_greedy": "reads the true depth: a bound, not a planner",
     "oracle_hessian": "reads the true depth: a bound, not a planner",
@@ -24,7 +24,7 @@ LIDAR_PLANNER_RULES = {
 
 def _check_planner_rules(study, i: int, label: str, name: str) -> None:
     """An oracle's label names it a bound; a multi-round planner needs a sensor that ranges
-    the planned cells, at rest, unfitted."""
+    the planned cells (on a moving platform: the steered beam), unfitted."""
     why = LIDAR_PLANNER_RULES.get(name)
     if why is None:
         return
@@ -48,10 +48,11 @@ def _check_planner_rules(study, i: int, label: str, name: str) -> None:
                 f"{where}: {label!r} {why}, but a flash LIDAR measures its receiver pixels, "
                 "not planned cells (use steered_beam or micromirror_flash)"
             )
-        if study.options.motion is not None:
+        if study.options.motion is not None and study.sensor != "steered_beam":
+            # a steered beam's rounds continue the trajectory (sensors.lidar.BeamRounds)
             raise ValueError(
-                f"{where}: {label!r} {why}; multi-round planning on a moving platform is not "
-                "modelled (remove study.options.motion)"
+                f"{where}: {label!r} {why}; on a moving platform (study.options.motion) "
+                f"multi-round planning is modelled for the steered_beam, not the {study.sensor}"
             )
         if opts is not None and opts.fit is not None:
             raise ValueError(f"study.planner_opts.{label}.fit: a multi-round planner is not fitted")

@@ -40,6 +40,7 @@ __all__ = [
     "altimeter_datum",
     "guide_directions",
     "steered_beam_scan",
+    "visiting_order",
     "with_hardware",
 ]
 
@@ -111,7 +112,7 @@ def guide_directions(camera: Camera, rc: np.ndarray) -> np.ndarray:
     return camera.rays(rc[:, ::-1] + 0.5)[1]
 
 
-def altimeter_datum(capture, boresight, *, options: SteeredBeamOptions, rng=None):
+def altimeter_datum(capture, boresight, *, options: SteeredBeamOptions, rng=None, origin=None):
     """Range the boresight and return the plane it meets: ``(datum_z (m), window steps)``.
 
     The beam's window (``options.window_m``) is stepped out from ``gate.min_range_m`` in
@@ -128,6 +129,9 @@ def altimeter_datum(capture, boresight, *, options: SteeredBeamOptions, rng=None
     options : SteeredBeamOptions
     rng : seed or Generator
         Photon noise.
+    origin : (3,) float or None
+        Where the altimeter fires from (m; a moving platform at a later round's start,
+        rendered through ``capture.render_beams`` with that origin); None = the capture's origin.
 
     Raises
     ------
@@ -139,19 +143,45 @@ def altimeter_datum(capture, boresight, *, options: SteeredBeamOptions, rng=None
     det = _beam_detector(capture, options)
     bins, g = options.window, options.gate
     step = options.window_m - 2.0 * options.margin_m
+    z0 = capture.origin[2] if origin is None else float(np.asarray(origin, float).reshape(3)[2])
     r0, k = g.min_range_m, 0
     while r0 < g.max_range_m:
         k += 1
-        hist, _ = capture.render_batch(d, 2.0 * r0, seed=options.transient.seed + 7919 * k)
-        bg = capture.render_sun(d) if capture.has_sun else 0.0
+        hist, bg, start = _altimeter_window(capture, d, r0, origin, options, seed=k)
         counts = detect_counts(hist, bg, bins, options.pulse, det, rng, capture.oversample)
         res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging,
                              apd=det.apd, pulses=det.pulses)  # fmt: skip
         if res.valid[0]:
-            r = float(res.range[0]) + r0
-            return float(capture.origin[2] + r * d[0, 2]), k
+            r = float(res.range[0]) + start
+            return float(z0 + r * d[0, 2]), k
         r0 += step
     raise ValueError(f"altimeter: no return along the boresight within {g.max_range_m} m")
+
+
+def _altimeter_window(capture, d, r0: float, origin, options: SteeredBeamOptions, *, seed: int):
+    """The altimeter's ``seed``-th step: its histogram (1, bins * oversample), sun background
+    and window start (m) for the window from ``r0`` m along ``d`` (1, 3), from the capture's
+    origin or from ``origin`` (3,) m (the render's laser moved there and back)."""
+    s = options.transient.seed + 7919 * seed
+    if origin is None:
+        hist, _ = capture.render_batch(d, 2.0 * r0, seed=s)
+        return hist, (capture.render_sun(d) if capture.has_sun else 0.0), r0
+    m = options.margin_m  # a window that starts at r0: the prediction a margin past it
+    ret = capture.render_beams(d, np.array([r0 + m]), margin_m=m, seed=s,
+                               origins=np.asarray(origin, float).reshape(1, 3))  # fmt: skip
+    start = float(ret.start_opl[0]) / 2.0
+    if ret.opl_offset is not None:
+        start -= float(ret.opl_offset[0]) / 2.0  # the render's laser offset (0 for one beam)
+    return ret.histograms, (0.0 if ret.sun is None else ret.sun), start
+
+
+def visiting_order(directions: np.ndarray, *, boresight: Pose, options: SteeredBeamOptions):
+    """Gimbal angles (n, 2) rad and visiting order (n,) of a scan of unit world
+    ``directions`` (n, 3) from a gimbal whose zero is ``boresight``: what
+    :func:`steered_beam_scan` visits, available before the scan (a multi-round acquisition
+    on a moving platform starts a round after re-pointing to its first beam)."""
+    angles = pointing_angles(_unit(np.asarray(directions, float)), boresight)
+    return angles, order_scan(angles, steering=options.steering, options=options.order)
 
 
 def steered_beam_scan(
@@ -164,6 +194,7 @@ def steered_beam_scan(
     trajectory=None,
     navigation=None,
     retarget: bool = True,
+    start_s: float = 0.0,
 ) -> LidarScan:
     """Scan planned directions with a steered beam.
 
@@ -191,35 +222,47 @@ def steered_beam_scan(
         towards where its planned direction (from the start) meets the gate's reference plane
         (what navigation and the plane give, never the terrain); False: hold the planned
         directions in the world frame.
+    start_s : float >= 0
+        With a trajectory: the time (s) on it at which this scan starts (a later round of a
+        multi-round acquisition continues the trajectory); the altimeter then ranges from
+        the platform's position at that time. The scan's ``times`` and ``seconds`` stay
+        counted from its own start.
 
     Returns
     -------
     LidarScan
     """
+    start_s = float(start_s)
+    if not (np.isfinite(start_s) and start_s >= 0):
+        raise ValueError(f"start_s must be finite and >= 0 s, got {start_s}")
+    if start_s > 0 and trajectory is None:
+        raise ValueError("start_s is a time on the platform's trajectory: it needs a trajectory")
     rng = np.random.default_rng(rng)
     d = _unit(np.asarray(directions, float))
     det = _beam_detector(capture, options)
     datum, steps = options.gate.datum_z_m, 0
     if options.gate.altimeter:
         bore = d.mean(axis=0) if boresight is None else boresight.forward
-        datum, steps = altimeter_datum(capture, bore, options=options, rng=rng)
+        # at t = 0 the platform is at the capture's origin
+        at = None if start_s == 0 else trajectory.at(start_s)
+        datum, steps = altimeter_datum(capture, bore, options=options, rng=rng, origin=at)
     if boresight is None:
         boresight = Pose.look_at(capture.origin, capture.origin + d.mean(axis=0))
-    angles = pointing_angles(d, boresight)
-    order = order_scan(angles, steering=options.steering, options=options.order)
+    angles, order = visiting_order(directions, boresight=boresight, options=options)
     timing = scan_timing(angles, order, options=options.steering)
     lead = steps * det.pulses / options.steering.pulse_rate_hz  # the altimeter's steps first
     times = lead + point_times(angles, order, options=options.steering)
-    origins, d, fired = _aim(capture.origin, d, times, trajectory, datum, options.gate, retarget)
+    clock = times + start_s  # when each beam fires on the trajectory
+    origins, d, fired = _aim(capture.origin, d, clock, trajectory, datum, options.gate, retarget)
     pred = plane_ranges(
         capture.origin if origins is None else origins, d, datum_z=datum, options=options.gate
     )
-    ret = _render_returns(capture, fired, pred, times, origins, options)
+    ret = _render_returns(capture, fired, pred, clock, origins, options)
     ranges, valid, res = _read_returns(ret, det, options, rng)
     if trajectory is None:
         points = capture.origin + ranges[:, None] * d
     else:
-        points = place_points(ranges, d, times, trajectory, navigation or Navigation(), rng=rng)
+        points = place_points(ranges, d, clock, trajectory, navigation or Navigation(), rng=rng)
     return LidarScan(
         ranges=ranges,
         valid=valid,

@@ -15,9 +15,10 @@ its shape), seeded by ``jitter_seed``.
 (:func:`place_points`): ``"exact"`` (the true pose at each firing), ``"noisy"`` (the true
 pose plus white navigation errors per point, ``position_noise_m`` per axis and
 ``attitude_noise_rad`` per axis, from the point's own ``rng``) or ``"start"`` (no motion
-compensation: the pose at the scan's start, no jitter). :func:`camera_at` is a co-boresighted
-device (flash receiver, micromirror projector) carried by the platform: moved to its position
-at a time and turned by the jitter then.
+compensation: the pose at the trajectory's start, t = 0, no jitter; in every round of a
+multi-round scan). :func:`camera_at` is a co-boresighted device (flash receiver, micromirror
+projector) carried by the platform: moved to its position at a time and turned by the jitter
+then.
 """
 
 from __future__ import annotations

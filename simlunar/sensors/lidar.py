@@ -9,7 +9,8 @@ where each measured point projects, and its cost is the modelled acquisition tim
 
 - :class:`SteeredBeam`: one beam visits the planned pixels' directions from the guide camera's
   centre, in the order of :func:`simlunar.lidar.order_scan`; seconds from the steering
-  mechanics (:func:`simlunar.lidar.scan_timing`).
+  mechanics (:func:`simlunar.lidar.scan_timing`). The rounds of a multi-round plan
+  (:class:`BeamRounds`) continue a moving platform's trajectory one after the other.
 - :class:`FlashLidar`: a low-resolution receiver co-boresighted with the guide camera takes one
   full-field frame; with ``revisits`` > 0 the planned pixels direct that many zoomed frames at
   the sub-fields (tiles of ``1 / zoom`` of the field) holding most planned pixels, whose finer
@@ -34,7 +35,12 @@ from simlunar.lidar.flash import FlashOptions, flash_window, micromirror_frames,
 from simlunar.lidar.join import concat_scans, flat_scan, subset_scan
 from simlunar.lidar.planning import choose_tiles, tile_range_scores
 from simlunar.lidar.returns import LidarScan
-from simlunar.lidar.scan import SteeredBeamOptions, guide_directions, steered_beam_scan
+from simlunar.lidar.scan import (
+    SteeredBeamOptions,
+    guide_directions,
+    steered_beam_scan,
+    visiting_order,
+)
 from simlunar.lidar.trajectory import PlatformMotion, camera_at, place_points, rotate_small
 from simlunar.render.beam_capture import beam_capture
 from simlunar.render.flash_lidar import micromirror_flash
@@ -42,6 +48,7 @@ from simlunar.render.transient import flash_frame
 from simlunar.sensors.base import Acquisition, NothingMeasured
 
 __all__ = [
+    "BeamRounds",
     "FlashLidar",
     "FlashLidarOptions",
     "LidarScene",
@@ -139,18 +146,36 @@ class SteeredBeam:
         if rc is None:
             raise ValueError("a steered beam ranges planned pixels: rc is required")
         cam, m = self.scene.camera, self.options.motion
-        d = guide_directions(cam, rc)
         if m is None:
+            d = guide_directions(cam, rc)
             scan = steered_beam_scan(self.capture, d, options=self.options, rng=rng,
                                      boresight=cam.pose)  # fmt: skip
             return _to_guide(scan, cam, rc, frames=scan.frames, seconds=scan.seconds)
         g = np.random.default_rng(rng)
-        traj = m.trajectory(cam.position, jitter_seed=int(g.integers(2**31)))
-        scan = steered_beam_scan(self.capture, d, options=self.options, rng=g, boresight=cam.pose,
-                                 trajectory=traj, navigation=m.navigation,
-                                 retarget=m.retarget)  # fmt: skip
+        return self._moving(rc, g, self.trajectory(g), 0.0)
+
+    def trajectory(self, rng):
+        """The platform's trajectory from the guide camera's centre at t = 0 (its jitter
+        phases drawn from ``rng``, a Generator); None at rest."""
+        m = self.options.motion
+        if m is None:
+            return None
+        return m.trajectory(self.scene.camera.position, jitter_seed=int(rng.integers(2**31)))
+
+    def _moving(self, rc, rng, trajectory, start_s: float) -> Acquisition:
+        """The acquisition of ``rc`` on ``trajectory`` from ``start_s`` (s on it)."""
+        cam, m = self.scene.camera, self.options.motion
+        scan = steered_beam_scan(self.capture, guide_directions(cam, rc), options=self.options,
+                                 rng=rng, boresight=cam.pose, trajectory=trajectory,
+                                 navigation=m.navigation, retarget=m.retarget,
+                                 start_s=start_s)  # fmt: skip
         # a moving beam measures where its points project, not the planned pixels exactly
         return _to_guide(scan, cam, None, frames=scan.frames, seconds=scan.seconds)
+
+    def rounds(self, *, rng=None) -> BeamRounds:
+        """The rounds of one multi-round acquisition, measured one after the other
+        (:class:`BeamRounds`; photon noise and the trajectory's jitter from ``rng``)."""
+        return BeamRounds(self, rng)
 
     def scan_seconds(self, rc: np.ndarray) -> float:
         """Modelled time (s) of scanning guide pixels ``rc`` (k, 2) (the steering mechanics
@@ -169,6 +194,66 @@ class SteeredBeam:
         a = pointing_angles(guide_directions(cam, rc), cam.pose)
         t = scan_timing(a[1:], options=o.steering, start=a[0])
         return float(t.move_s + t.settle_s)
+
+
+class BeamRounds:
+    """The rounds of one multi-round acquisition of a :class:`SteeredBeam`, measured one after
+    the other: ``rounds(rc)`` ranges round ``rc`` ((m, 2) planned guide pixels) and returns its
+    :class:`~simlunar.sensors.base.Acquisition` (what
+    :class:`~simlunar.study.lidar_planners.LidarRounds` measures through).
+
+    At rest every round is :meth:`SteeredBeam.acquire` with the same generator. On a moving
+    platform (``SteeredBeamOptions.motion``) the rounds continue one trajectory (from the
+    guide camera at t = 0, its jitter phases drawn once): round ``r`` starts when round
+    ``r - 1`` ended plus the re-pointing from its last visited beam to this round's first
+    (:meth:`SteeredBeam.repoint_seconds`; the first as the scan visits,
+    :func:`~simlunar.lidar.scan.visiting_order`), so its beams leave from where the platform
+    is then; its points are placed with the sensor's navigation (``start``: from the pose at
+    t = 0 in every round) and scored where they project in the guide view.
+
+    Parameters
+    ----------
+    sensor : SteeredBeam
+    rng : seed or Generator
+        Photon noise of every round and the trajectory's jitter phases.
+
+    Attributes
+    ----------
+    trajectory : Trajectory or None
+        The platform's motion (None at rest).
+    starts_s : list of float
+        When each round measured so far started (s on the trajectory; empty at rest).
+    gaps_s : list of float or None
+        The re-pointing (s) before each later round, as the start times count it; None at
+        rest (:func:`~simlunar.study.lidar_planners.merge_rounds` prices it itself).
+    """
+
+    def __init__(self, sensor: SteeredBeam, rng=None) -> None:
+        self.sensor = sensor
+        self.rng = np.random.default_rng(rng)
+        self.trajectory = sensor.trajectory(self.rng)
+        self.starts_s: list[float] = []
+        self.gaps_s: list[float] | None = None if self.trajectory is None else []
+        self._end_s, self._last = 0.0, None
+
+    def __call__(self, rc: np.ndarray) -> Acquisition:
+        """The acquisition of this round's planned guide pixels ``rc`` (m, 2)."""
+        if self.trajectory is None:
+            return self.sensor.acquire(rc, rng=self.rng)
+        rc = np.asarray(rc).reshape(-1, 2)
+        start = self._end_s
+        if self._last is not None:
+            cam = self.sensor.scene.camera
+            _, order = visiting_order(guide_directions(cam, rc), boresight=cam.pose,
+                                      options=self.sensor.options)  # fmt: skip
+            gap = self.sensor.repoint_seconds(self._last, rc[order[0]])
+            self.gaps_s.append(gap)
+            start += gap
+        acq = self.sensor._moving(rc, self.rng, self.trajectory, start)
+        self.starts_s.append(start)
+        self._end_s = start + acq.seconds
+        self._last = rc[np.asarray(acq.detail.order).ravel()[-1]]
+        return acq
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,9 @@ A label of a LIDAR study plans, from the guide image, the guide pixels the senso
   sampling study); the real sensor then measures its beams as any planner's;
 - ``sequential`` (:data:`simlunar.planner.MEASURING`, :class:`LidarRounds`): the LIDAR itself
   measures each round; the next round is planned from the measured ranges, and the rounds'
-  scan times add up with the re-pointing between them (:func:`merge_rounds`);
+  scan times add up with the re-pointing between them (:func:`merge_rounds`); on a moving
+  platform a steered beam's rounds continue its trajectory
+  (:class:`~simlunar.sensors.lidar.BeamRounds`);
 - any of those fitted to the sensor (:class:`~simlunar.study.lidar.SensorFit`).
 """
 
@@ -57,7 +59,8 @@ def lidar_planners(o, image, depth, ks, *, sensor, guide=None) -> dict[str, Call
     ------
     ValueError
         An oracle on a guide view with pixels off the terrain, a multi-round planner on a
-        sensor whose samples are not the planned cells, or a fit of a multi-round planner.
+        sensor whose samples are not the planned cells or on a moving sensor without rounds
+        that continue its trajectory, or a fit of a multi-round planner.
     """
     cache: dict = {}
     planners = {}
@@ -112,10 +115,12 @@ def _check_rounds(label: str, sensor, fits: Mapping) -> None:
             f"{label!r}: a flash LIDAR measures its receiver pixels, not planned cells: "
             "multi-round planning needs a steered beam or a micromirror flash"
         )
-    if getattr(getattr(sensor, "options", None), "motion", None) is not None:
+    if getattr(getattr(sensor, "options", None), "motion", None) is not None and not hasattr(
+        sensor, "rounds"
+    ):
         raise ValueError(
-            f"{label!r}: multi-round planning with a moving platform is not modelled (each "
-            "round would restart the trajectory)"
+            f"{label!r}: multi-round planning on a moving platform needs a sensor whose rounds "
+            f"continue the platform's trajectory (the steered beam); {sensor.name!r} has none"
         )
     if label in fits:
         raise ValueError(f"fits[{label!r}]: a multi-round planner is not fitted to a sensor")
@@ -201,15 +206,25 @@ def _repoint_s(sensor, before: Acquisition, after: Acquisition) -> float:
     return float(repoint(before.planned[last], after.planned[first]))
 
 
-def merge_rounds(acqs: list[Acquisition], sensor) -> Acquisition:
+def merge_rounds(acqs: list[Acquisition], sensor, *, gaps_s=None) -> Acquisition:
     """The rounds of a multi-round acquisition as one: samples of every round, in order;
     ``seconds`` the rounds' scan times plus the re-pointing between them (each round's own
     time already counts its tour and its lead); ``frames`` their sum; ``detail`` the rounds'
     scans joined (:func:`simlunar.lidar.join.join_scans`: times run on across rounds)
-    where every round has a LIDAR scan."""
+    where every round has a LIDAR scan.
+
+    ``gaps_s`` (one per pair of rounds, s) is the re-pointing the sensor counted when it
+    started each round (a moving platform's rounds,
+    :class:`~simlunar.sensors.lidar.BeamRounds`); None: priced here from the last planned
+    cell of one round to the first of the next (``sensor.repoint_seconds``)."""
     if not acqs:
         raise ValueError("no round to merge")
-    gaps = [_repoint_s(sensor, a, b) for a, b in itertools.pairwise(acqs)]
+    if gaps_s is None:
+        gaps = [_repoint_s(sensor, a, b) for a, b in itertools.pairwise(acqs)]
+    else:
+        gaps = [float(g) for g in gaps_s]
+        if len(gaps) != len(acqs) - 1:
+            raise ValueError(f"need {len(acqs) - 1} re-pointing times, got {len(gaps)}")
     cat = np.concatenate
     planned = None
     if all(a.planned is not None for a in acqs):
@@ -236,6 +251,13 @@ class LidarRounds(MeasuringPlanner):
     samples at the rounds' total time (:func:`merge_rounds`). The planner reads the scene
     through the sensor only.
 
+    A sensor with a ``rounds(rng=)`` method (:meth:`~simlunar.sensors.lidar.SteeredBeam.rounds`)
+    measures the rounds one after the other through it: on a moving platform each round
+    continues the trajectory where the previous ended (plus the re-pointing), and a cell's
+    measured z-depth is that of its beam's point placed by the sensor's navigation (which
+    projects near, not exactly at, the planned cell). Any other sensor measures each round
+    with ``acquire``.
+
     Attributes
     ----------
     options : SequentialOptions or None
@@ -247,11 +269,12 @@ class LidarRounds(MeasuringPlanner):
         """``(Acquisition of every round, rounds)`` of ``k`` planned cells."""
         gen = np.random.default_rng(sensor_rng)
         acqs: list[Acquisition] = []
+        take = sensor.rounds(rng=gen) if hasattr(sensor, "rounds") else None
 
         def measure(rc):
-            acq = sensor.acquire(rc, rng=gen)
+            acq = sensor.acquire(rc, rng=gen) if take is None else take(rc)
             acqs.append(acq)
             return planned_values(acq, len(rc))
 
         sp = self.rounds(k, measure, plan_rng, missing="skip")
-        return merge_rounds(acqs, sensor), sp.rounds
+        return merge_rounds(acqs, sensor, gaps_s=getattr(take, "gaps_s", None)), sp.rounds

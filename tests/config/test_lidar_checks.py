@@ -37,3 +37,12 @@ def test_the_default_study_passes_and_every_rule_names_a_strategy():
 def test_a_bad_combination_is_one_line_naming_its_key(kw, match):
     with pytest.raises(ValueError, match=match):
         check_lidar_study(study(**kw))
+
+
+def test_multi_round_planning_on_a_moving_platform_is_for_the_steered_beam():
+    motion = {"kind": "descent", "descent_rate_m_s": 2.0}
+    check_lidar_study(study(planners=["sequential"], options={"motion": motion}))
+    with pytest.raises(ValueError, match=r"study.planners\[0\]: 'sequential' asks the LIDAR back "
+                       r".*modelled for the steered_beam, not the micromirror_flash"):  # fmt: skip
+        check_lidar_study(study(sensor="micromirror_flash", planners=["sequential"],
+                                options={"motion": motion}))  # fmt: skip

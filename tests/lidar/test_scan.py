@@ -335,3 +335,58 @@ def test_a_moving_platform_s_beams_are_rendered_in_firing_order():
     # shorter than from the start by more than a bin
     later = np.delete(np.arange(30), scan.order[0])
     assert np.all(scan.ranges[later] < H / -d[later, 2] - opts.bin_range_m)
+
+
+def test_a_later_round_continues_the_trajectory_from_its_start_time():
+    # a second round starting at t = 5 s on a 2 m/s descent from 50 m: every beam leaves from
+    # 50 - 2 (5 + t) m (t its time from the round's start), the points still lie on the plane,
+    # and the scan's own times and seconds are those of the same scan at rest
+    from simlunar.lidar.trajectory import Trajectory
+
+    opts = _beam_options()
+    cam = _camera(64, 40.0)
+    d = cam.rays(np.random.default_rng(0).uniform(0, 64, (30, 2)))[1]
+    traj = Trajectory.descent(cam.position, 2.0)
+    cap = _PlaneCapture(cam.position, opts.window)
+    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, trajectory=traj,
+                             start_s=5.0)  # fmt: skip
+    rest = steered_beam_scan(_PlaneCapture(cam.position, opts.window), d, options=opts, rng=1,
+                             boresight=cam.pose)  # fmt: skip
+    np.testing.assert_array_equal(scan.times, rest.times)
+    assert scan.seconds == rest.seconds and scan.times.min() == 0.0
+    fired = cap.launches[0]
+    assert fired[:, 2] == pytest.approx(np.sort(H - 2.0 * (5.0 + scan.times))[::-1])
+    assert scan.valid.all()
+    assert scan.points[:, 2] == pytest.approx(0.0, abs=0.1 * opts.bin_range_m)
+    # start_s = 0 is the scan that starts the trajectory, bit for bit
+    a = steered_beam_scan(_PlaneCapture(cam.position, opts.window), d, options=opts, rng=1,
+                          boresight=cam.pose, trajectory=traj)  # fmt: skip
+    b = steered_beam_scan(_PlaneCapture(cam.position, opts.window), d, options=opts, rng=1,
+                          boresight=cam.pose, trajectory=traj, start_s=0.0)  # fmt: skip
+    np.testing.assert_array_equal(a.points, b.points)
+    with pytest.raises(ValueError, match="needs a trajectory"):
+        steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, start_s=1.0)
+    with pytest.raises(ValueError, match="start_s must be finite and >= 0"):
+        steered_beam_scan(cap, d, options=opts, rng=1, trajectory=traj, start_s=-1.0)
+
+
+def test_a_later_round_s_altimeter_ranges_from_where_the_platform_is():
+    # at t = 5 s of a 2 m/s descent the platform is 40 m above the plane: the altimeter's
+    # window (4 m, stepped by 2 m from 0.1 m) first holds 40 m at step k = 19 (36.1 to 40.1 m),
+    # not at the k = 24 of 50 m, and the datum is still the plane z = 0
+    from simlunar.lidar.trajectory import Trajectory
+
+    opts = _beam_options(gate=GateOptions(altimeter=True))
+    cam = _camera(64, 40.0)
+    cap = _PlaneCapture(cam.position, opts.window)
+    datum, steps = altimeter_datum(cap, [0.0, 0.0, -1.0], options=opts, rng=0,
+                                   origin=[0.0, 0.0, 40.0])  # fmt: skip
+    assert datum == pytest.approx(0.0, abs=0.1 * opts.bin_range_m) and steps == 19
+    d = cam.rays(np.random.default_rng(0).uniform(0, 64, (10, 2)))[1]
+    traj = Trajectory.descent(cam.position, 2.0)
+    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, trajectory=traj,
+                             start_s=5.0)  # fmt: skip
+    assert scan.frames == (10 + 19) * 4
+    assert scan.times.min() == pytest.approx(19 * 4 / 1000.0)
+    # on the plane up to photon noise (these points scatter by a few mm)
+    assert scan.points[:, 2] == pytest.approx(0.0, abs=0.02)

@@ -3,6 +3,7 @@ cost from the steering / pulse-rate model, plan-directed flash revisits."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -267,6 +268,82 @@ def test_a_multi_round_steered_beam_ranges_every_round_and_adds_up_their_time(mi
     assert min(gaps) > 0
     assert acq.seconds == pytest.approx(sum(s.seconds for s in scans) + sum(gaps))
     assert acq.frames == sum(s.frames for s in scans) == 40 * 4
+
+
+@pytest.mark.render
+def test_a_descending_steered_beam_s_rounds_continue_its_trajectory(mi):
+    # multi-round planning while descending at 2 m/s and drifting 1 m/s east over the z = 0
+    # plane from 50 m (a slow gimbal: rounds of seconds, the platform falls metres). Round r starts when round r - 1 ended plus the re-pointing from its
+    # last beam to round r's first (not at t = 0), so each beam leaves from where the platform
+    # is at (round start + its time in the round). With the pose known exactly ("exact")
+    # every round's points lie on the plane (z-depth 50 m in the guide view); placed from
+    # the pose at t = 0 ("start") each point sits 2 m/s x its firing time above the plane:
+    # the trajectory's altitude at that time, hand-checkable at each round's first beam
+    from simlunar.lidar.trajectory import Navigation, PlatformMotion
+    from simlunar.planner import SequentialOptions
+    from simlunar.sensors import LidarScene, SteeredBeam
+    from simlunar.study.lidar_planners import LidarRounds
+
+    sensor = SteeredBeam(LidarScene(_plane(), _camera(32, 40.0)), _beam_options())
+    plan = LidarRounds(SequentialOptions(max_rounds=3, first_share=0.5, batch_share=0.3),
+                       None, (32, 32))  # fmt: skip
+
+    class Kept:  # the sensor's rounds of one acquisition, with the cells each was asked
+        def __init__(self, rounds):
+            self.rounds, self.asked, self.scans = rounds, [], []
+
+        @property
+        def gaps_s(self):
+            return self.rounds.gaps_s
+
+        def __call__(self, rc):
+            self.asked.append(np.asarray(rc))
+            self.scans.append(self.rounds(rc))
+            return self.scans[-1]
+
+    def run(compensation):
+        motion = PlatformMotion((1.0, 0.0, -2.0), navigation=Navigation(compensation))
+        sensor.options = dataclasses.replace(sensor.options, motion=motion)
+        kept = []
+        sensor.rounds = lambda rng=None: (
+            kept.append(Kept(SteeredBeam.rounds(sensor, rng=rng))) or kept[0]
+        )
+        acq, n = plan.acquire(40, sensor, 1, 2)
+        del sensor.rounds
+        return acq, n, kept[0].rounds, kept[0]
+
+    acq, n, br, k = run("exact")
+    scans = k.scans
+    assert n == len(scans) == 3 and len(acq.values) > 0.9 * 40
+    # each round starts at the previous round's end plus the re-pointing from its last beam
+    # to the next round's first (visiting order)
+    for r in (1, 2):
+        a, b = scans[r - 1], scans[r]
+        gap = sensor.repoint_seconds(k.asked[r - 1][a.detail.order[-1]],
+                                     k.asked[r][b.detail.order[0]])  # fmt: skip
+        assert br.gaps_s[r - 1] == gap > 0
+        assert br.starts_s[r] == pytest.approx(br.starts_s[r - 1] + a.seconds + gap)
+    assert br.starts_s[0] == 0.0
+    assert acq.seconds == pytest.approx(br.starts_s[-1] + scans[-1].seconds)
+    # every round's points on the plane (photon noise: within 5 cm, one time bin)
+    pts = acq.detail.points[acq.detail.valid]
+    assert pts[:, 2] == pytest.approx(0.0, abs=0.05)
+    assert acq.values == pytest.approx(H, abs=0.05)
+    # the joined scan's times are the trajectory's: round r's from its start
+    sizes = np.cumsum([0] + [len(s.detail.valid) for s in scans])
+    for r, s in enumerate(scans):
+        np.testing.assert_allclose(acq.detail.times[sizes[r]:sizes[r + 1]],
+                                   br.starts_s[r] + s.detail.times)  # fmt: skip
+    _, _, br, k = run("start")
+    scans = k.scans
+    assert br.starts_s[1] > scans[0].seconds
+    for r, s in enumerate(scans):
+        t = br.starts_s[r] + s.detail.times  # when each beam fired on the trajectory
+        v = s.detail.valid
+        assert s.detail.points[v, 2] == pytest.approx(2.0 * t[v], abs=0.05)
+        first = s.detail.order[0]  # fired when the round starts
+        assert s.detail.times[first] == 0.0 and v[first]
+        assert s.detail.points[first, 2] == pytest.approx(2.0 * br.starts_s[r], abs=0.05)
 
 
 @pytest.mark.render

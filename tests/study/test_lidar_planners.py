@@ -211,3 +211,61 @@ def test_multi_round_refuses_a_flash():
     o = LidarStudyOptions(planners=("sequential",), densities=(1 / 16,), trials=1)
     with pytest.raises(ValueError, match="flash LIDAR measures its receiver pixels"):
         run_lidar_study(_scene(), (depth.astype(np.float32), depth), o, rng=0, sensor=beam)
+
+
+class _Moving(_Beam):
+    """A stand-in moving beam: ``options.motion`` set; with ``rounds`` it measures a
+    multi-round acquisition through its own round-by-round acquirer, which starts round r
+    0.25 s after round r - 1 ended (its re-pointing) and records the starts."""
+
+    def __init__(self, depth, *, with_rounds=True):
+        super().__init__(depth)
+        self.options = type("Opts", (), {"motion": object()})()
+        self.starts: list[float] = []
+        if with_rounds:
+            self.rounds = self._rounds
+
+    def _rounds(self, *, rng=None):
+        return _Take(self, rng)
+
+
+class _Take:
+    """The rounds of one acquisition of a :class:`_Moving`."""
+
+    def __init__(self, sensor, rng):
+        self.sensor, self.rng, self.gaps_s, self.end = sensor, rng, [], None
+
+    def __call__(self, rc):
+        start = 0.0 if self.end is None else self.end + 0.25
+        if self.end is not None:
+            self.gaps_s.append(0.25)
+        acq = self.sensor.acquire(rc, rng=self.rng)
+        self.sensor.starts.append(start)
+        self.end = start + acq.seconds
+        return acq
+
+
+def test_a_moving_sensor_s_rounds_are_measured_through_it_and_merged_with_its_repointing():
+    sensor = _Moving(_bump())
+    acq, rounds = _rounds().acquire(64, sensor, 1, 2)
+    assert rounds == len(sensor.starts) >= 2
+    # its own re-pointing (0.25 s) is counted, not the repoint_seconds of a sensor at rest
+    assert sensor.repoints == []
+    assert acq.seconds == pytest.approx(64e-3 + 0.25 * (rounds - 1))
+    assert acq.detail.times[len(sensor.asked[0])] == pytest.approx(sensor.starts[1])
+
+
+def test_multi_round_refuses_a_moving_sensor_whose_rounds_would_restart_the_trajectory():
+    depth = _bump()
+    o = LidarStudyOptions(planners=("sequential",), densities=(1 / 16,), trials=1)
+    with pytest.raises(ValueError, match="needs a sensor whose rounds continue the platform"):
+        run_lidar_study(_scene(), (depth.astype(np.float32), depth), o, rng=0,
+                        sensor=_Moving(depth, with_rounds=False))  # fmt: skip
+
+
+def test_merge_rounds_takes_one_repointing_per_pair_of_rounds():
+    a = Acquisition(np.zeros((2, 2)), np.ones(2), (4, 4), frames=2, seconds=0.25)
+    b = Acquisition(np.ones((1, 2)), np.ones(1), (4, 4), frames=1, seconds=0.5)
+    assert merge_rounds([a, b], object(), gaps_s=[0.125]).seconds == 0.875
+    with pytest.raises(ValueError, match="need 1 re-pointing times, got 2"):
+        merge_rounds([a, b], object(), gaps_s=[0.1, 0.2])
