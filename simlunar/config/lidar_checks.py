@@ -48,12 +48,6 @@ def _check_planner_rules(study, i: int, label: str, name: str) -> None:
                 f"{where}: {label!r} {why}, but a flash LIDAR measures its receiver pixels, "
                 "not planned cells (use steered_beam or micromirror_flash)"
             )
-        if study.options.motion is not None and study.sensor != "steered_beam":
-            # a steered beam's rounds continue the trajectory (sensors.lidar.BeamRounds)
-            raise ValueError(
-                f"{where}: {label!r} {why}; on a moving platform (study.options.motion) "
-                f"multi-round planning is modelled for the steered_beam, not the {study.sensor}"
-            )
         if opts is not None and opts.fit is not None:
             raise ValueError(f"study.planner_opts.{label}.fit: a multi-round planner is not fitted")
 

@@ -29,7 +29,8 @@ from simlunar.lidar.scan import SteeredBeamOptions, with_hardware
 from simlunar.lidar.trajectory import Navigation, PlatformMotion
 from simlunar.metrics.hazard import HazardOptions
 from simlunar.metrics.safe_site import SiteOptions
-from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
+from simlunar.sensors.lidar import FlashLidarOptions
+from simlunar.sensors.micromirror import MicromirrorOptions
 from simlunar.study.lidar import LidarStudyOptions, SensorFit
 
 __all__ = [

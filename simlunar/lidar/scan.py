@@ -32,7 +32,7 @@ from simlunar.lidar.ordering import OrderOptions, order_scan
 from simlunar.lidar.ranging import extract_ranges
 from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
 from simlunar.lidar.steering import SteeringOptions, point_times, pointing_angles, scan_timing
-from simlunar.lidar.trajectory import Navigation, PlatformMotion, place_points, rotate_small
+from simlunar.lidar.trajectory import Flight, PlatformMotion, place_points, rotate_small
 from simlunar.lidar.waveform import TimeBins
 
 __all__ = [
@@ -191,10 +191,7 @@ def steered_beam_scan(
     options: SteeredBeamOptions,
     rng=None,
     boresight: Pose | None = None,
-    trajectory=None,
-    navigation=None,
-    retarget: bool = True,
-    start_s: float = 0.0,
+    flight: Flight | None = None,
 ) -> LidarScan:
     """Scan planned directions with a steered beam.
 
@@ -209,34 +206,20 @@ def steered_beam_scan(
         Photon noise.
     boresight : Pose or None
         Gimbal zero (its forward axis); None = looking along the mean direction.
-    trajectory : Trajectory or None
-        The platform's motion (:mod:`simlunar.lidar.trajectory`): each beam leaves from its
-        position at the beam's firing time, turned by the line of sight's attitude jitter;
-        None = at rest at the capture's origin. The firing times come from the pointing
-        angles seen from the scan's start.
-    navigation : Navigation or None
-        How the points are placed (:func:`simlunar.lidar.trajectory.place_points`); None =
-        the pose known exactly.
-    retarget : bool
-        With a trajectory: command each beam from the platform's position at its firing time
-        towards where its planned direction (from the start) meets the gate's reference plane
-        (what navigation and the plane give, never the terrain); False: hold the planned
-        directions in the world frame.
-    start_s : float >= 0
-        With a trajectory: the time (s) on it at which this scan starts (a later round of a
-        multi-round acquisition continues the trajectory); the altimeter then ranges from
-        the platform's position at that time. The scan's ``times`` and ``seconds`` stay
-        counted from its own start.
+    flight : Flight or None
+        The platform's motion (:class:`~simlunar.lidar.trajectory.Flight`): each beam leaves
+        from the trajectory's position at its firing time (``flight.start_s`` + its time in
+        the scan), turned by the attitude jitter then, aimed as ``flight.retarget`` says; its
+        points are placed by ``flight.navigation``; the altimeter ranges from the position at
+        ``flight.start_s``. The firing times come from the pointing angles seen from the
+        scan's start. None = at rest at the capture's origin.
 
     Returns
     -------
     LidarScan
     """
-    start_s = float(start_s)
-    if not (np.isfinite(start_s) and start_s >= 0):
-        raise ValueError(f"start_s must be finite and >= 0 s, got {start_s}")
-    if start_s > 0 and trajectory is None:
-        raise ValueError("start_s is a time on the platform's trajectory: it needs a trajectory")
+    trajectory = None if flight is None else flight.trajectory
+    start_s = 0.0 if flight is None else float(flight.start_s)
     rng = np.random.default_rng(rng)
     d = _unit(np.asarray(directions, float))
     det = _beam_detector(capture, options)
@@ -253,6 +236,7 @@ def steered_beam_scan(
     lead = steps * det.pulses / options.steering.pulse_rate_hz  # the altimeter's steps first
     times = lead + point_times(angles, order, options=options.steering)
     clock = times + start_s  # when each beam fires on the trajectory
+    retarget = flight is not None and flight.retarget
     origins, d, fired = _aim(capture.origin, d, clock, trajectory, datum, options.gate, retarget)
     pred = plane_ranges(
         capture.origin if origins is None else origins, d, datum_z=datum, options=options.gate
@@ -262,7 +246,7 @@ def steered_beam_scan(
     if trajectory is None:
         points = capture.origin + ranges[:, None] * d
     else:
-        points = place_points(ranges, d, clock, trajectory, navigation or Navigation(), rng=rng)
+        points = place_points(ranges, d, clock, trajectory, flight.navigation, rng=rng)
     return LidarScan(
         ranges=ranges,
         valid=valid,

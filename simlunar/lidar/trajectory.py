@@ -31,6 +31,7 @@ from simlunar.geometry import Camera, Pose
 
 __all__ = [
     "JITTER_TONES",
+    "Flight",
     "Navigation",
     "PlatformMotion",
     "Trajectory",
@@ -158,6 +159,38 @@ class Navigation:
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"{name} must be finite and >= 0, got {v}")
+
+
+@dataclass(frozen=True)
+class Flight:
+    """A scan measured from a moving platform: the trajectory it flies, what the sensor knows
+    of its pose, and when on the trajectory the scan starts.
+
+    Attributes
+    ----------
+    trajectory : Trajectory
+        Each beam or frame leaves from the platform's position at its firing time, turned by
+        the line of sight's attitude jitter then.
+    navigation : Navigation
+        How the points are placed (:func:`place_points`); default the pose known exactly.
+    start_s : float >= 0
+        When the scan's first beam or frame fires on the trajectory (s): a later round of a
+        multi-round acquisition continues where the previous one ended. The scan's ``times``
+        and ``seconds`` stay counted from its own start.
+    retarget : bool
+        Steered beam only (:func:`~simlunar.lidar.scan.steered_beam_scan`): command each beam
+        from where the platform is towards where its planned direction (from the start) meets
+        the gate's reference plane; False: hold the planned directions in the world frame.
+    """
+
+    trajectory: Trajectory
+    navigation: Navigation = Navigation()
+    start_s: float = 0.0
+    retarget: bool = True
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.start_s) and self.start_s >= 0):
+            raise ValueError(f"start_s must be finite and >= 0 s, got {self.start_s}")
 
 
 def place_points(

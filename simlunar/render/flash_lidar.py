@@ -8,9 +8,21 @@ them and reads each with :func:`simlunar.lidar.flash.read_frame`; on a moving pl
 its frames is rendered from the platform's pose at that frame's time
 (:mod:`simlunar.lidar.trajectory`). The range gate, photon counts, ranges and the options are
 :mod:`simlunar.lidar.flash`'s.
+
+The micromirror's **link budget** (with ``options.hardware``;
+:func:`~simlunar.lidar.flash.micromirror_lit_sr`): the pulse lights the whole micromirror array and each mirror sends its equal share ``E /
+N_mirrors`` towards its dot when on (a digital micromirror device: amplitude, not phase, so
+energy on "off" mirrors is lost; the array's throughput is folded into ``optics_efficiency``, an
+assumption). The rendered projector gives every pixel the power ``scale / (fx fy)``, so the
+render's lit solid angle is ``W H / (fx fy)`` (the field's area on the plane at 1 m) and a
+receiver pixel's photons follow the flash's formula with it: on a Lambertian plane a dot seen
+whole by its receiver pixel gets ``(E / N_mirrors / h nu) (rho / pi) cos(theta) A / R^2 eta``
+(tested against this hand value).
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -24,7 +36,7 @@ from simlunar.lidar.flash import (
     read_frame,
 )
 from simlunar.lidar.returns import LidarScan
-from simlunar.lidar.trajectory import Navigation, camera_at, place_points
+from simlunar.lidar.trajectory import Flight, camera_at, place_points
 from simlunar.render.lights import ProjectorLight
 from simlunar.render.transient import flash_frame
 
@@ -67,10 +79,8 @@ def micromirror_flash(
     options: FlashOptions,
     receiver_shape: tuple[int, int] = (64, 64),
     rng=None,
-    sun=None,
-    bsdf=None,
-    trajectory=None,
-    navigation=None,
+    scene: Mapping | None = None,
+    flight: Flight | None = None,
 ) -> LidarScan:
     """Micromirror-steered flash: light only the planned pixels, time them on a small receiver.
 
@@ -79,7 +89,8 @@ def micromirror_flash(
     field of view times the returns. Dots in the same receiver pixel go to different frames
     (:func:`~simlunar.lidar.flash.micromirror_frames`). Every receiver pixel ray only gets
     light where it meets a lit dot, so the render needs ``options.transient.spp`` of about
-    ``(camera pixels / receiver pixels) x 16`` for a clean return.
+    ``(camera pixels / receiver pixels) x 16`` for a clean return. Its link budget: the module
+    docstring.
 
     Parameters
     ----------
@@ -90,37 +101,25 @@ def micromirror_flash(
         Planned (u, v) pixel coordinates in ``camera``.
     options : FlashOptions
     receiver_shape : (rows, cols)
-    rng, sun, bsdf
-        As for :func:`flash_scan`; ``rng`` also draws ``navigation``'s errors.
-    trajectory : Trajectory or None
-        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest at ``camera``):
-        frame ``f`` fires at ``f x pulses / pulse_rate_hz`` and is rendered with projector and
-        receiver at the platform's position then, turned by the jitter then
-        (:func:`~simlunar.lidar.trajectory.camera_at`; ``camera``'s own position is not used).
-        The mirrors stay the planned pixels (the dots keep their directions in the device
-        frame: no re-aiming), so a dot's receiver pixel is the same in every pose.
-    navigation : Navigation or None
-        How the points are placed (:func:`~simlunar.lidar.trajectory.place_points`, along
-        ``camera``'s rays of the planned pixels, the commanded directions); None = the pose
-        known exactly.
+    rng : seed or Generator
+        Photon noise (and the navigation's errors).
+    scene : mapping or None
+        ``sun`` and ``bsdf`` as for :func:`flash_scan` (None: no sun, the default BSDF).
+    flight : Flight or None
+        The platform's motion (:class:`~simlunar.lidar.trajectory.Flight`; None: at rest at
+        ``camera``): frame ``f`` fires at ``flight.start_s + f x pulses / pulse_rate_hz`` and
+        is rendered with projector and receiver at the platform's position then, turned by
+        the jitter then (:func:`~simlunar.lidar.trajectory.camera_at`; ``camera``'s own
+        position is not used). The mirrors stay the planned pixels (no re-aiming), so a dot's
+        receiver pixel is the same in every pose; its point is placed by ``flight.navigation``
+        along ``camera``'s ray of its planned pixel (the commanded direction). ``times`` count
+        from ``flight.start_s``.
 
     Returns
     -------
     LidarScan
         Arrays over the k planned pixels; ``frames`` = flash frames fired; ``times`` each dot's
         frame's firing time (s).
-
-    Notes
-    -----
-    **Link budget** (with ``options.hardware``; :func:`~simlunar.lidar.flash.micromirror_lit_sr`):
-    the pulse lights the whole micromirror array and each mirror sends its equal share ``E /
-    N_mirrors`` towards its dot when on (a digital micromirror device: amplitude, not phase, so
-    energy on "off" mirrors is lost; the array's throughput is folded into ``optics_efficiency``, an
-    assumption). The rendered projector gives every pixel the power ``scale / (fx fy)``, so the
-    render's lit solid angle is ``W H / (fx fy)`` (the field's area on the plane at 1 m) and a
-    receiver pixel's photons follow the flash's formula with it: on a Lambertian plane a dot seen
-    whole by its receiver pixel gets ``(E / N_mirrors / h nu) (rho / pi) cos(theta) A / R^2 eta``
-    (tested against this hand value).
     """
     rng = np.random.default_rng(rng)
     uv = np.asarray(pixels, float).reshape(-1, 2)
@@ -131,14 +130,15 @@ def micromirror_flash(
         raise ValueError(f"receiver_shape {receiver_shape} must keep the aspect of {(h, w)}")
     ranges, photons, returns, times, n_frames = _fire_micromirror_frames(
         terrain, camera, receiver, uv, options=options, rng=rng,
-        scene={"sun": sun, "bsdf": bsdf}, trajectory=trajectory,
+        scene=dict(scene or {}), flight=flight,
     )  # fmt: skip
     _, d = camera.rays(uv)
     valid = np.isfinite(ranges)
-    if trajectory is None:
+    if flight is None:
         points = camera.pose.position + ranges[:, None] * d
     else:
-        points = place_points(ranges, d, times, trajectory, navigation or Navigation(), rng=rng)
+        points = place_points(ranges, d, flight.start_s + times, flight.trajectory,
+                              flight.navigation, rng=rng)  # fmt: skip
     return LidarScan(
         ranges=ranges,
         valid=valid,
@@ -153,13 +153,14 @@ def micromirror_flash(
 
 
 def _fire_micromirror_frames(
-    terrain, camera: Camera, receiver: Camera, uv, *, options, rng, scene, trajectory=None
+    terrain, camera: Camera, receiver: Camera, uv, *, options, rng, scene, flight=None
 ):
     """Render and read frame after frame of a micromirror flash: frame f lights the dots of
     :func:`~simlunar.lidar.flash.micromirror_frames` f (one projector pixel each) and each dot
     reads its receiver pixel; ``scene``: the ``sun`` and ``bsdf`` of
-    :func:`~simlunar.render.transient.flash_frame`; with a ``trajectory`` projector, receiver
-    and range gate are those of the platform's pose at the frame's time.
+    :func:`~simlunar.render.transient.flash_frame` (missing: none); with a ``flight`` projector, receiver
+    and range gate are those of the platform's pose at the frame's time (``flight.start_s`` +
+    its time in the scan).
 
     Returns
     -------
@@ -178,9 +179,9 @@ def _fire_micromirror_frames(
     col = np.clip(np.floor(uv[:, 0] * rw / w).astype(int), 0, rw - 1)
     row = np.clip(np.floor(uv[:, 1] * rh / h).astype(int), 0, rh - 1)
     for f in range(n_frames):
-        if trajectory is not None:
+        if flight is not None:
             # projector and receiver move together: a dot keeps its receiver pixel
-            moved = camera_at(camera, trajectory, f * per_frame)
+            moved = camera_at(camera, flight.trajectory, flight.start_s + f * per_frame)
             projector = Projector(camera.intrinsics, moved.pose)
             receiver = Camera(receiver.intrinsics, moved.pose)
             bins = flash_window(moved, options=options)
@@ -195,8 +196,8 @@ def _fire_micromirror_frames(
             receiver,
             bins=bins,
             options=options.transient,
-            bsdf=scene["bsdf"],
-            sun=scene["sun"],
+            bsdf=scene.get("bsdf"),
+            sun=scene.get("sun"),
             projector=light,
         )
         res = read_frame(fr, receiver, options, rng, lit_sr=micromirror_lit_sr(camera))

@@ -11,10 +11,9 @@ from simlunar.sensors.lidar import (
     FlashLidar,
     FlashLidarOptions,
     LidarScene,
-    MicromirrorFlash,
-    MicromirrorOptions,
     SteeredBeam,
 )
+from simlunar.sensors.micromirror import MicromirrorFlash, MicromirrorOptions
 from simlunar.sensors.structured_light import (
     MODES,
     ScanResult,

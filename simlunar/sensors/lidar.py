@@ -10,13 +10,14 @@ where each measured point projects, and its cost is the modelled acquisition tim
 - :class:`SteeredBeam`: one beam visits the planned pixels' directions from the guide camera's
   centre, in the order of :func:`simlunar.lidar.order_scan`; seconds from the steering
   mechanics (:func:`simlunar.lidar.scan_timing`). The rounds of a multi-round plan
-  (:class:`BeamRounds`) continue a moving platform's trajectory one after the other.
+  (:class:`~simlunar.sensors.rounds.PlatformRounds`) continue a moving platform's trajectory
+  one after the other.
 - :class:`FlashLidar`: a low-resolution receiver co-boresighted with the guide camera takes one
   full-field frame; with ``revisits`` > 0 the planned pixels direct that many zoomed frames at
   the sub-fields (tiles of ``1 / zoom`` of the field) holding most planned pixels, whose finer
   samples replace the full-field ones there. Seconds: frames x pulses / pulse rate. On a moving
   platform (``FlashLidarOptions.motion``) each frame is taken from the pose at its time.
-- :class:`MicromirrorFlash`: a micromirror projector at the guide camera lights only the
+- :class:`~simlunar.sensors.micromirror.MicromirrorFlash` (its own module): a micromirror projector at the guide camera lights only the
   planned pixels; a small receiver times them (dots sharing a receiver pixel go to different
   frames). On a moving platform (``MicromirrorOptions.motion``) each frame is rendered from the
   pose at its time and its dots are scored where their points project in the guide view.
@@ -31,7 +32,7 @@ import numpy as np
 
 from simlunar.geometry import Camera, Intrinsics
 from simlunar.lidar import order_scan, pointing_angles, scan_timing
-from simlunar.lidar.flash import FlashOptions, flash_window, micromirror_frames, read_flash
+from simlunar.lidar.flash import FlashOptions, flash_window, read_flash
 from simlunar.lidar.join import concat_scans, flat_scan, subset_scan
 from simlunar.lidar.planning import choose_tiles, tile_range_scores
 from simlunar.lidar.returns import LidarScan
@@ -41,19 +42,16 @@ from simlunar.lidar.scan import (
     steered_beam_scan,
     visiting_order,
 )
-from simlunar.lidar.trajectory import PlatformMotion, camera_at, place_points, rotate_small
+from simlunar.lidar.trajectory import Flight, PlatformMotion, camera_at, place_points, rotate_small
 from simlunar.render.beam_capture import beam_capture
-from simlunar.render.flash_lidar import micromirror_flash
 from simlunar.render.transient import flash_frame
 from simlunar.sensors.base import Acquisition, NothingMeasured
+from simlunar.sensors.rounds import PlatformRounds, platform_trajectory
 
 __all__ = [
-    "BeamRounds",
     "FlashLidar",
     "FlashLidarOptions",
     "LidarScene",
-    "MicromirrorFlash",
-    "MicromirrorOptions",
     "SteeredBeam",
     "revisit_tiles",
     "tile_camera",
@@ -157,25 +155,32 @@ class SteeredBeam:
     def trajectory(self, rng):
         """The platform's trajectory from the guide camera's centre at t = 0 (its jitter
         phases drawn from ``rng``, a Generator); None at rest."""
-        m = self.options.motion
-        if m is None:
-            return None
-        return m.trajectory(self.scene.camera.position, jitter_seed=int(rng.integers(2**31)))
+        return platform_trajectory(self.scene.camera, self.options.motion, rng)
 
     def _moving(self, rc, rng, trajectory, start_s: float) -> Acquisition:
         """The acquisition of ``rc`` on ``trajectory`` from ``start_s`` (s on it)."""
         cam, m = self.scene.camera, self.options.motion
+        flight = Flight(trajectory, m.navigation, start_s, m.retarget)
         scan = steered_beam_scan(self.capture, guide_directions(cam, rc), options=self.options,
-                                 rng=rng, boresight=cam.pose, trajectory=trajectory,
-                                 navigation=m.navigation, retarget=m.retarget,
-                                 start_s=start_s)  # fmt: skip
+                                 rng=rng, boresight=cam.pose, flight=flight)  # fmt: skip
         # a moving beam measures where its points project, not the planned pixels exactly
         return _to_guide(scan, cam, None, frames=scan.frames, seconds=scan.seconds)
 
-    def rounds(self, *, rng=None) -> BeamRounds:
+    def rounds(self, *, rng=None) -> PlatformRounds:
         """The rounds of one multi-round acquisition, measured one after the other
-        (:class:`BeamRounds`; photon noise and the trajectory's jitter from ``rng``)."""
-        return BeamRounds(self, rng)
+        (:class:`~simlunar.sensors.rounds.PlatformRounds`; photon noise and the trajectory's
+        jitter from ``rng``)."""
+        return PlatformRounds(self, rng)
+
+    def round_gap_seconds(self, last_rc, rc) -> float:
+        """Re-pointing (s) between two rounds: from guide pixel ``last_rc`` ((2,), the last
+        beam of a round) to the first beam the next round ``rc`` ((m, 2)) visits
+        (:func:`~simlunar.lidar.scan.visiting_order`)."""
+        cam = self.scene.camera
+        rc = np.asarray(rc).reshape(-1, 2)
+        _, order = visiting_order(guide_directions(cam, rc), boresight=cam.pose,
+                                  options=self.options)  # fmt: skip
+        return self.repoint_seconds(last_rc, rc[order[0]])
 
     def scan_seconds(self, rc: np.ndarray) -> float:
         """Modelled time (s) of scanning guide pixels ``rc`` (k, 2) (the steering mechanics
@@ -194,66 +199,6 @@ class SteeredBeam:
         a = pointing_angles(guide_directions(cam, rc), cam.pose)
         t = scan_timing(a[1:], options=o.steering, start=a[0])
         return float(t.move_s + t.settle_s)
-
-
-class BeamRounds:
-    """The rounds of one multi-round acquisition of a :class:`SteeredBeam`, measured one after
-    the other: ``rounds(rc)`` ranges round ``rc`` ((m, 2) planned guide pixels) and returns its
-    :class:`~simlunar.sensors.base.Acquisition` (what
-    :class:`~simlunar.study.lidar_planners.LidarRounds` measures through).
-
-    At rest every round is :meth:`SteeredBeam.acquire` with the same generator. On a moving
-    platform (``SteeredBeamOptions.motion``) the rounds continue one trajectory (from the
-    guide camera at t = 0, its jitter phases drawn once): round ``r`` starts when round
-    ``r - 1`` ended plus the re-pointing from its last visited beam to this round's first
-    (:meth:`SteeredBeam.repoint_seconds`; the first as the scan visits,
-    :func:`~simlunar.lidar.scan.visiting_order`), so its beams leave from where the platform
-    is then; its points are placed with the sensor's navigation (``start``: from the pose at
-    t = 0 in every round) and scored where they project in the guide view.
-
-    Parameters
-    ----------
-    sensor : SteeredBeam
-    rng : seed or Generator
-        Photon noise of every round and the trajectory's jitter phases.
-
-    Attributes
-    ----------
-    trajectory : Trajectory or None
-        The platform's motion (None at rest).
-    starts_s : list of float
-        When each round measured so far started (s on the trajectory; empty at rest).
-    gaps_s : list of float or None
-        The re-pointing (s) before each later round, as the start times count it; None at
-        rest (:func:`~simlunar.study.lidar_planners.merge_rounds` prices it itself).
-    """
-
-    def __init__(self, sensor: SteeredBeam, rng=None) -> None:
-        self.sensor = sensor
-        self.rng = np.random.default_rng(rng)
-        self.trajectory = sensor.trajectory(self.rng)
-        self.starts_s: list[float] = []
-        self.gaps_s: list[float] | None = None if self.trajectory is None else []
-        self._end_s, self._last = 0.0, None
-
-    def __call__(self, rc: np.ndarray) -> Acquisition:
-        """The acquisition of this round's planned guide pixels ``rc`` (m, 2)."""
-        if self.trajectory is None:
-            return self.sensor.acquire(rc, rng=self.rng)
-        rc = np.asarray(rc).reshape(-1, 2)
-        start = self._end_s
-        if self._last is not None:
-            cam = self.sensor.scene.camera
-            _, order = visiting_order(guide_directions(cam, rc), boresight=cam.pose,
-                                      options=self.sensor.options)  # fmt: skip
-            gap = self.sensor.repoint_seconds(self._last, rc[order[0]])
-            self.gaps_s.append(gap)
-            start += gap
-        acq = self.sensor._moving(rc, self.rng, self.trajectory, start)
-        self.starts_s.append(start)
-        self._end_s = start + acq.seconds
-        self._last = rc[np.asarray(acq.detail.order).ravel()[-1]]
-        return acq
 
 
 @dataclass(frozen=True)
@@ -455,93 +400,3 @@ class _Moving:
         pts = place_points(scan.ranges.ravel(), commanded, times, self.trajectory,
                            self.motion.navigation, rng=self.rng)  # fmt: skip
         return dataclasses.replace(scan, points=pts.reshape(scan.points.shape))
-
-
-@dataclass(frozen=True)
-class MicromirrorOptions:
-    """Options of :class:`MicromirrorFlash`.
-
-    Attributes
-    ----------
-    flash : FlashOptions
-        As for the flash LIDAR; ``transient.spp`` needs about
-        ``(guide pixels / receiver pixels) x 16`` for a clean return (docs/lidar.md).
-    receiver_px : (rows, cols)
-        The receiver timing the dots (same field of view as the guide camera).
-    motion : PlatformMotion or None
-        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest): frame ``f``
-        is rendered from the pose at ``f`` x pulses / pulse rate
-        (:func:`~simlunar.render.flash_lidar.micromirror_flash`) and its dots' points are
-        placed with the sensor's navigation. The mirrors stay the planned pixels
-        (``motion.retarget`` is the steered beam's).
-    """
-
-    flash: FlashOptions = field(default_factory=FlashOptions)
-    receiver_px: tuple[int, int] = (64, 64)
-    motion: PlatformMotion | None = None
-
-    def __post_init__(self):
-        if len(self.receiver_px) != 2 or min(self.receiver_px) < 1:
-            raise ValueError(f"receiver_px must be (rows, cols) >= 1, got {self.receiver_px}")
-
-
-class MicromirrorFlash:
-    """The paper's envisioned sensor: a micromirror array at the guide camera lights only the
-    planned pixels; a low-resolution receiver times their returns.
-
-    Parameters
-    ----------
-    scene : LidarScene
-        Its guide camera needs a centred principal point (the projector emitter).
-    options : MicromirrorOptions, optional
-    """
-
-    name = "micromirror_flash"
-    needs_plan = True
-
-    def __init__(self, scene: LidarScene, options: MicromirrorOptions | None = None) -> None:
-        if not scene.camera.intrinsics.is_centred:
-            raise ValueError(
-                "a micromirror flash needs a guide camera with a centred principal point"
-            )
-        self.scene = scene
-        self.options = options or MicromirrorOptions()
-
-    def acquire(self, rc: np.ndarray | None, *, rng=None) -> Acquisition:
-        """Light and time the planned guide pixels ``rc`` ((k, 2) int (row, col)); ``rng``:
-        photon noise (and, moving, the jitter's phases and the navigation errors)."""
-        if rc is None:
-            raise ValueError("a micromirror flash lights planned pixels: rc is required")
-        s, o = self.scene, self.options
-        uv = np.asarray(rc, float)[:, ::-1] + 0.5
-        if o.motion is not None:
-            g = np.random.default_rng(rng)
-            traj = o.motion.trajectory(s.camera.position, jitter_seed=int(g.integers(2**31)))
-            scan = micromirror_flash(s.terrain, s.camera, uv, options=o.flash,
-                                     receiver_shape=tuple(o.receiver_px), rng=g, sun=s.sun,
-                                     bsdf=s.bsdf, trajectory=traj,
-                                     navigation=o.motion.navigation)  # fmt: skip
-            # a moving platform's dots land off the planned pixels' points: scored where
-            # their points project, as a moving steered beam's
-            return _to_guide(scan, s.camera, None, frames=scan.frames, seconds=scan.seconds)
-        scan = micromirror_flash(
-            s.terrain,
-            s.camera,
-            uv,
-            options=o.flash,
-            receiver_shape=tuple(o.receiver_px),
-            rng=rng,
-            sun=s.sun,
-            bsdf=s.bsdf,
-        )
-        return _to_guide(scan, s.camera, rc, frames=scan.frames, seconds=scan.seconds)
-
-    def scan_seconds(self, rc: np.ndarray) -> float:
-        """Modelled time (s) of lighting guide pixels ``rc`` (k, 2): frames (the most dots
-        sharing a receiver pixel) x pulses / rate; no render (what a planner may ask)."""
-        f = self.options.flash
-        if len(rc) == 0:
-            return 0.0
-        uv = np.asarray(rc, float)[:, ::-1] + 0.5
-        frames = int(micromirror_frames(uv, self.scene.camera, self.options.receiver_px).max()) + 1
-        return frames * f.detector.pulses / f.pulse_rate_hz

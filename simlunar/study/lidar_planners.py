@@ -11,7 +11,7 @@ A label of a LIDAR study plans, from the guide image, the guide pixels the senso
   measures each round; the next round is planned from the measured ranges, and the rounds'
   scan times add up with the re-pointing between them (:func:`merge_rounds`); on a moving
   platform a steered beam's rounds continue its trajectory
-  (:class:`~simlunar.sensors.lidar.BeamRounds`);
+  (:class:`~simlunar.sensors.rounds.PlatformRounds`);
 - any of those fitted to the sensor (:class:`~simlunar.study.lidar.SensorFit`).
 """
 
@@ -215,7 +215,7 @@ def merge_rounds(acqs: list[Acquisition], sensor, *, gaps_s=None) -> Acquisition
 
     ``gaps_s`` (one per pair of rounds, s) is the re-pointing the sensor counted when it
     started each round (a moving platform's rounds,
-    :class:`~simlunar.sensors.lidar.BeamRounds`); None: priced here from the last planned
+    :class:`~simlunar.sensors.rounds.PlatformRounds`); None: priced here from the last planned
     cell of one round to the first of the next (``sensor.repoint_seconds``)."""
     if not acqs:
         raise ValueError("no round to merge")

@@ -19,7 +19,8 @@ from simlunar.config.lidar_translate import lidar_sensor_options
 from simlunar.config.studies import LidarStudyCfg
 from simlunar.lidar.flash import FlashOptions
 from simlunar.lidar.scan import SteeredBeamOptions
-from simlunar.sensors.lidar import FlashLidarOptions, MicromirrorOptions
+from simlunar.sensors.lidar import FlashLidarOptions
+from simlunar.sensors.micromirror import MicromirrorOptions
 
 
 def test_steered_beam_defaults_are_the_librarys():

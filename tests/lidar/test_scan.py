@@ -130,7 +130,7 @@ def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
     # from the platform's position at its firing time (the pose known exactly) every point
     # lies on the plane; the same ranges placed from the starting pose miss it by metres.
     from simlunar.lidar.scan import SteeredBeamOptions, guide_directions, steered_beam_scan
-    from simlunar.lidar.trajectory import Trajectory
+    from simlunar.lidar.trajectory import Flight, Trajectory
     from simlunar.render.beam_capture import beam_capture
 
     n = 80
@@ -157,7 +157,7 @@ def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
     cap = beam_capture(plane, cam.position, options=opts)
     rc = np.random.default_rng(2).integers(4, 28, (24, 2))
     d = guide_directions(cam, rc)
-    scan = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose, trajectory=traj)
+    scan = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose, flight=Flight(traj))
     assert scan.seconds > 1.5 and scan.times.max() > 1.5
     assert scan.valid.mean() > 0.9
     p = scan.points[scan.valid]
@@ -173,8 +173,8 @@ def test_a_descending_platform_s_cloud_lands_on_the_terrain(mi):
     jit = Trajectory.descent(cam.position, 4.0, horizontal_m_s=(1.0, 0.0),
                              attitude_jitter_rad=2e-3, jitter_bandwidth_hz=2.0)  # fmt: skip
     for nav, on_plane in ((Navigation("exact"), True), (Navigation("start"), False)):
-        s2 = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose, trajectory=jit,
-                               navigation=nav)  # fmt: skip
+        s2 = steered_beam_scan(cap, d, options=opts, rng=0, boresight=cam.pose,
+                               flight=Flight(jit, nav))  # fmt: skip
         assert s2.valid.mean() > 0.9
         q = s2.points[s2.valid]
         miss = np.abs(q[:, 2] - 0.3 * q[:, 0])
@@ -318,14 +318,14 @@ def test_a_moving_platform_s_beams_are_rendered_in_firing_order():
     # a platform descending at 2 m/s: the beams leave from where it is when each fires, are
     # rendered in firing order (their origins' heights fall) and come back in the planned
     # order; with the pose known exactly every point lies on the plane
-    from simlunar.lidar.trajectory import Trajectory
+    from simlunar.lidar.trajectory import Flight, Trajectory
 
     opts = _beam_options()
     cam = _camera(64, 40.0)
     d = cam.rays(np.random.default_rng(0).uniform(0, 64, (30, 2)))[1]
     traj = Trajectory.descent(cam.position, 2.0)
     cap = _PlaneCapture(cam.position, opts.window)
-    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, trajectory=traj)
+    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, flight=Flight(traj))
     fired = cap.launches[0]
     assert np.all(np.diff(fired[:, 2]) < 0)  # firing order: ever lower
     assert fired[:, 2] == pytest.approx(np.sort(H - 2.0 * scan.times)[::-1])
@@ -341,15 +341,15 @@ def test_a_later_round_continues_the_trajectory_from_its_start_time():
     # a second round starting at t = 5 s on a 2 m/s descent from 50 m: every beam leaves from
     # 50 - 2 (5 + t) m (t its time from the round's start), the points still lie on the plane,
     # and the scan's own times and seconds are those of the same scan at rest
-    from simlunar.lidar.trajectory import Trajectory
+    from simlunar.lidar.trajectory import Flight, Trajectory
 
     opts = _beam_options()
     cam = _camera(64, 40.0)
     d = cam.rays(np.random.default_rng(0).uniform(0, 64, (30, 2)))[1]
     traj = Trajectory.descent(cam.position, 2.0)
     cap = _PlaneCapture(cam.position, opts.window)
-    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, trajectory=traj,
-                             start_s=5.0)  # fmt: skip
+    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose,
+                             flight=Flight(traj, start_s=5.0))  # fmt: skip
     rest = steered_beam_scan(_PlaneCapture(cam.position, opts.window), d, options=opts, rng=1,
                              boresight=cam.pose)  # fmt: skip
     np.testing.assert_array_equal(scan.times, rest.times)
@@ -360,21 +360,19 @@ def test_a_later_round_continues_the_trajectory_from_its_start_time():
     assert scan.points[:, 2] == pytest.approx(0.0, abs=0.1 * opts.bin_range_m)
     # start_s = 0 is the scan that starts the trajectory, bit for bit
     a = steered_beam_scan(_PlaneCapture(cam.position, opts.window), d, options=opts, rng=1,
-                          boresight=cam.pose, trajectory=traj)  # fmt: skip
+                          boresight=cam.pose, flight=Flight(traj))  # fmt: skip
     b = steered_beam_scan(_PlaneCapture(cam.position, opts.window), d, options=opts, rng=1,
-                          boresight=cam.pose, trajectory=traj, start_s=0.0)  # fmt: skip
+                          boresight=cam.pose, flight=Flight(traj, start_s=0.0))  # fmt: skip
     np.testing.assert_array_equal(a.points, b.points)
-    with pytest.raises(ValueError, match="needs a trajectory"):
-        steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, start_s=1.0)
     with pytest.raises(ValueError, match="start_s must be finite and >= 0"):
-        steered_beam_scan(cap, d, options=opts, rng=1, trajectory=traj, start_s=-1.0)
+        Flight(traj, start_s=-1.0)
 
 
 def test_a_later_round_s_altimeter_ranges_from_where_the_platform_is():
     # at t = 5 s of a 2 m/s descent the platform is 40 m above the plane: the altimeter's
     # window (4 m, stepped by 2 m from 0.1 m) first holds 40 m at step k = 19 (36.1 to 40.1 m),
     # not at the k = 24 of 50 m, and the datum is still the plane z = 0
-    from simlunar.lidar.trajectory import Trajectory
+    from simlunar.lidar.trajectory import Flight, Trajectory
 
     opts = _beam_options(gate=GateOptions(altimeter=True))
     cam = _camera(64, 40.0)
@@ -384,8 +382,8 @@ def test_a_later_round_s_altimeter_ranges_from_where_the_platform_is():
     assert datum == pytest.approx(0.0, abs=0.1 * opts.bin_range_m) and steps == 19
     d = cam.rays(np.random.default_rng(0).uniform(0, 64, (10, 2)))[1]
     traj = Trajectory.descent(cam.position, 2.0)
-    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose, trajectory=traj,
-                             start_s=5.0)  # fmt: skip
+    scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose,
+                             flight=Flight(traj, start_s=5.0))  # fmt: skip
     assert scan.frames == (10 + 19) * 4
     assert scan.times.min() == pytest.approx(19 * 4 / 1000.0)
     # on the plane up to photon noise (these points scatter by a few mm)

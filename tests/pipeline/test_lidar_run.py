@@ -210,3 +210,24 @@ def test_multi_round_planning_on_a_descending_platform_runs(tmp_path):
     t = np.asarray(las.gps_time)
     assert float(row["seconds"]) == pytest.approx(manifest["seconds"]["sequential"])
     assert 0.5 * manifest["seconds"]["sequential"] < t.max() <= manifest["seconds"]["sequential"]
+
+
+def test_multi_round_planning_on_a_descending_micromirror_runs(tmp_path):
+    # sequential through the moving micromirror on the tiny scene: the rounds continue one
+    # trajectory (each round's first frame when the last ended), the row counts every round
+    # and its frames, and its seconds are the frames' (the mirrors switch at once)
+    out = tmp_path / "mm"
+    args = ["run", str(ROOT / "experiments" / "lidar_descent_micromirror.yaml"), "--out", str(out)]
+    motion = ("study.options.motion={kind: descent, descent_rate_m_s: 2.0, "
+              "horizontal_m_s: [1.0, 0.0]}")  # fmt: skip
+    tiny = [*TINY, "--set", "study.planners=[sequential]", "--set", "study.densities=[1/16]",
+            "--set", "study.options.micromirror={receiver_px: [8, 8]}",
+            "--set", "study.options.transient={spp: 32}", "--set", motion]  # fmt: skip
+    r = CliRunner().invoke(app, [*args, *tiny, "--no-progress", "--no-figures"])
+    assert r.exit_code == 0, r.output
+    with (out / "results.csv").open() as f:
+        rows = [row for row in csv.DictReader(f) if row["metric"] == "mse"]
+    assert len(rows) == 1 and 0 < float(rows[0]["value"]) < 1.0
+    row = rows[0]
+    assert int(row["rounds"]) >= 2 and int(row["frames"]) >= int(row["rounds"])
+    assert float(row["seconds"]) == pytest.approx(int(row["frames"]) * 4 / 30.0)

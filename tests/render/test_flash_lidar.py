@@ -142,6 +142,7 @@ def _moving_micromirror(trajectory, navigation):
     8 x 8 receiver: the first three share receiver pixel (0, 0), so frames 0, 1, 2 (the rest
     fire in frame 0); 4 pulses at 20 Hz = 0.2 s a frame."""
     from simlunar.lidar.flash import FlashOptions
+    from simlunar.lidar.trajectory import Flight
     from simlunar.render.flash_lidar import micromirror_flash
     from simlunar.render.transient import TransientOptions
 
@@ -151,7 +152,7 @@ def _moving_micromirror(trajectory, navigation):
     opts = FlashOptions(detector=det, pulse=PulseOptions(fwhm_s=1e-9),
                         transient=TransientOptions(spp=256), pulse_rate_hz=20.0)  # fmt: skip
     scan = micromirror_flash(_plane(), cam, uv, options=opts, receiver_shape=(8, 8), rng=0,
-                             trajectory=trajectory, navigation=navigation)  # fmt: skip
+                             flight=Flight(trajectory, navigation))  # fmt: skip
     assert scan.frames == 3 and scan.seconds == pytest.approx(3 * 0.2)
     assert scan.times == pytest.approx([0.0, 0.2, 0.4, 0.0, 0.0, 0.0])
     assert scan.valid.all()

@@ -165,29 +165,6 @@ def test_flash_lidar_with_and_without_revisits(mi):
 
 
 @pytest.mark.render
-def test_micromirror_flash_ranges_the_planned_pixels(mi):
-    from simlunar.lidar.flash import FlashOptions
-    from simlunar.render.transient import TransientOptions
-    from simlunar.sensors import LidarScene, MicromirrorFlash, MicromirrorOptions
-
-    det = DetectorOptions(signal_photons=2e6 * 16, background_photons_per_s=0.0, pulses=4)
-    flash = FlashOptions(
-        detector=det,
-        pulse=PulseOptions(fwhm_s=1e-9),
-        transient=TransientOptions(spp=256),
-        pulse_rate_hz=20.0,
-    )
-    sensor = MicromirrorFlash(
-        LidarScene(_plane(), _camera(32, 6.0)), MicromirrorOptions(flash, receiver_px=(8, 8))
-    )
-    rc = np.array([[3, 3], [2, 2], [9, 20], [30, 30], [27, 12]])  # two share receiver (0, 0)
-    acq = sensor.acquire(rc, rng=0)
-    assert acq.rc.tolist() == rc.tolist()
-    assert acq.frames == 2 and acq.seconds == pytest.approx(2 * 4 / 20.0)
-    assert acq.values == pytest.approx(H, abs=flash.bin_range_m)
-
-
-@pytest.mark.render
 def test_flash_revisits_from_the_first_frame_s_ranges_and_their_repointing_time(mi):
     # a 1 m box on the plane in one quarter of the field; the plan points at another quarter.
     # Revisits from the ranges go to the box's quarter (the first frame's own points are
@@ -379,32 +356,3 @@ def test_a_descending_flash_takes_each_frame_from_its_own_pose(mi):
     assert revisit.sum() == 64
     assert pts[~revisit, 2] == pytest.approx(0.0, abs=flash.bin_range_m)
     assert pts[revisit, 2] == pytest.approx(5.0, abs=flash.bin_range_m)
-
-
-@pytest.mark.render
-def test_a_descending_micromirror_scores_its_dots_where_they_land(mi):
-    # 10 m/s straight down with the exact pose: the dots of frame f (0.2 f s, from 50 - 2f m)
-    # land on the plane along their planned rays, so the guide view (from 50 m, nadir,
-    # principal point c = 16) sees them at z-depth 50 and at c + (uv - c)(50 - 2f) / 50
-    # (closer to the nadir); a tolerance of 0.05 px covers a range bin's error across
-    # (under 3 mm at 50 m, 0.02 px). The cost is the frames', as at rest
-    from simlunar.lidar.flash import FlashOptions
-    from simlunar.lidar.trajectory import Navigation, PlatformMotion
-    from simlunar.render.transient import TransientOptions
-    from simlunar.sensors import LidarScene, MicromirrorFlash, MicromirrorOptions
-
-    det = DetectorOptions(signal_photons=2e6 * 16, background_photons_per_s=0.0, pulses=4)
-    flash = FlashOptions(detector=det, pulse=PulseOptions(fwhm_s=1e-9),
-                         transient=TransientOptions(spp=256), pulse_rate_hz=20.0)  # fmt: skip
-    motion = PlatformMotion((0.0, 0.0, -10.0), navigation=Navigation("exact"))
-    opts = MicromirrorOptions(flash, receiver_px=(8, 8), motion=motion)
-    sensor = MicromirrorFlash(LidarScene(_plane(), _camera(32, 6.0)), opts)
-    rc = np.array([[0, 0], [1, 2], [3, 3], [9, 20], [30, 30], [27, 12]])  # 3 share (0, 0)
-    acq = sensor.acquire(rc, rng=0)
-    assert acq.frames == 3 and acq.seconds == pytest.approx(3 * 4 / 20.0)
-    assert acq.planned is None  # scored where the points project
-    assert acq.values == pytest.approx(H, abs=flash.bin_range_m)
-    shrink = (H - 2.0 * np.array([0, 1, 2, 0, 0, 0]))[:, None] / H
-    want = 16.0 + (rc + 0.5 - 16.0) * shrink - 0.5
-    assert acq.rc == pytest.approx(want, abs=0.05)
-    assert np.abs(acq.rc[2] - rc[2]).min() > 0.9  # four metres lower: a pixel inwards

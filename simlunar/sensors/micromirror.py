@@ -1,0 +1,131 @@
+"""The micromirror-steered flash LIDAR: the paper's envisioned image-directed range sensor.
+
+A micromirror projector at the guide camera lights only the planned pixels; a low-resolution
+receiver times their returns (dots sharing a receiver pixel go to different frames,
+:func:`~simlunar.lidar.flash.micromirror_frames`), rendered by
+:func:`~simlunar.render.flash_lidar.micromirror_flash`. On a moving platform
+(``MicromirrorOptions.motion``) each frame is rendered from the pose at its time and its dots
+are scored where their points project in the guide view; the rounds of a multi-round plan
+continue the trajectory (:class:`~simlunar.sensors.rounds.PlatformRounds`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simlunar.lidar.flash import FlashOptions, micromirror_frames
+from simlunar.lidar.trajectory import Flight, PlatformMotion
+from simlunar.render.flash_lidar import micromirror_flash
+from simlunar.sensors.base import Acquisition
+from simlunar.sensors.lidar import LidarScene, _to_guide
+from simlunar.sensors.rounds import PlatformRounds, platform_trajectory
+
+__all__ = ["MicromirrorFlash", "MicromirrorOptions"]
+
+
+@dataclass(frozen=True)
+class MicromirrorOptions:
+    """Options of :class:`MicromirrorFlash`.
+
+    Attributes
+    ----------
+    flash : FlashOptions
+        As for the flash LIDAR; ``transient.spp`` needs about
+        ``(guide pixels / receiver pixels) x 16`` for a clean return (docs/lidar.md).
+    receiver_px : (rows, cols)
+        The receiver timing the dots (same field of view as the guide camera).
+    motion : PlatformMotion or None
+        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest): frame ``f``
+        is rendered from the pose at ``f`` x pulses / pulse rate
+        (:func:`~simlunar.render.flash_lidar.micromirror_flash`) and its dots' points are
+        placed with the sensor's navigation. The mirrors stay the planned pixels
+        (``motion.retarget`` is the steered beam's).
+    """
+
+    flash: FlashOptions = field(default_factory=FlashOptions)
+    receiver_px: tuple[int, int] = (64, 64)
+    motion: PlatformMotion | None = None
+
+    def __post_init__(self):
+        if len(self.receiver_px) != 2 or min(self.receiver_px) < 1:
+            raise ValueError(f"receiver_px must be (rows, cols) >= 1, got {self.receiver_px}")
+
+
+class MicromirrorFlash:
+    """The paper's envisioned sensor: a micromirror array at the guide camera lights only the
+    planned pixels; a low-resolution receiver times their returns.
+
+    Parameters
+    ----------
+    scene : LidarScene
+        Its guide camera needs a centred principal point (the projector emitter).
+    options : MicromirrorOptions, optional
+    """
+
+    name = "micromirror_flash"
+    needs_plan = True
+
+    def __init__(self, scene: LidarScene, options: MicromirrorOptions | None = None) -> None:
+        if not scene.camera.intrinsics.is_centred:
+            raise ValueError(
+                "a micromirror flash needs a guide camera with a centred principal point"
+            )
+        self.scene = scene
+        self.options = options or MicromirrorOptions()
+
+    def acquire(self, rc: np.ndarray | None, *, rng=None) -> Acquisition:
+        """Light and time the planned guide pixels ``rc`` ((k, 2) int (row, col)); ``rng``:
+        photon noise (and, moving, the jitter's phases and the navigation errors)."""
+        if rc is None:
+            raise ValueError("a micromirror flash lights planned pixels: rc is required")
+        s, o = self.scene, self.options
+        uv = np.asarray(rc, float)[:, ::-1] + 0.5
+        if o.motion is not None:
+            g = np.random.default_rng(rng)
+            return self._moving(rc, g, self.trajectory(g), 0.0)
+        scan = micromirror_flash(
+            s.terrain,
+            s.camera,
+            uv,
+            options=o.flash,
+            receiver_shape=tuple(o.receiver_px),
+            rng=rng,
+            scene={"sun": s.sun, "bsdf": s.bsdf},
+        )
+        return _to_guide(scan, s.camera, rc, frames=scan.frames, seconds=scan.seconds)
+
+    def trajectory(self, rng):
+        """The platform's trajectory from the guide camera's centre at t = 0 (its jitter
+        phases drawn from ``rng``, a Generator); None at rest."""
+        return platform_trajectory(self.scene.camera, self.options.motion, rng)
+
+    def _moving(self, rc, rng, trajectory, start_s: float) -> Acquisition:
+        """The acquisition of ``rc`` on ``trajectory``, its first frame at ``start_s`` (s on
+        it)."""
+        s, o = self.scene, self.options
+        uv = np.asarray(rc, float)[:, ::-1] + 0.5
+        scan = micromirror_flash(s.terrain, s.camera, uv, options=o.flash,
+                                 receiver_shape=tuple(o.receiver_px), rng=rng,
+                                 scene={"sun": s.sun, "bsdf": s.bsdf},
+                                 flight=Flight(trajectory, o.motion.navigation, start_s))  # fmt: skip
+        # a moving platform's dots land off the planned pixels' points: scored where their
+        # points project, as a moving steered beam's
+        return _to_guide(scan, s.camera, None, frames=scan.frames, seconds=scan.seconds)
+
+    def rounds(self, *, rng=None) -> PlatformRounds:
+        """The rounds of one multi-round acquisition, measured one after the other
+        (:class:`~simlunar.sensors.rounds.PlatformRounds`: on a moving platform each round's
+        first frame fires when the previous round's last ended; the mirrors switch at once)."""
+        return PlatformRounds(self, rng)
+
+    def scan_seconds(self, rc: np.ndarray) -> float:
+        """Modelled time (s) of lighting guide pixels ``rc`` (k, 2): frames (the most dots
+        sharing a receiver pixel) x pulses / rate; no render (what a planner may ask)."""
+        f = self.options.flash
+        if len(rc) == 0:
+            return 0.0
+        uv = np.asarray(rc, float)[:, ::-1] + 0.5
+        frames = int(micromirror_frames(uv, self.scene.camera, self.options.receiver_px).max()) + 1
+        return frames * f.detector.pulses / f.pulse_rate_hz
