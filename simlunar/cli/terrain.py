@@ -38,7 +38,7 @@ def terrain(
     """Generate a terrain: dem.<fmt>, albedo.png, hillshade.png, mesh.ply, features.json."""
     from simlunar.config.terrain import merged_preset
     from simlunar.config.translate import terrain_params
-    from simlunar.pipeline.inputs import check_size
+    from simlunar.pipeline.inputs import check_dem_file, check_size
     from simlunar.pipeline.preflight import check_out_dir
     from simlunar.terrain import generate, io, stats
 
@@ -53,7 +53,15 @@ def terrain(
     if Path(preset).suffix.lower() in io.FORMATS + io.GDAL_FORMATS:
         if not print_stats or out is not None:
             raise SimlunarError(f"{preset}: a DEM file is only read with --stats (and no --out)")
-        _dem_stats(preset)
+        check_dem_file(preset, key="--stats")  # size, finite heights, spacing and extent
+        with user_input():
+            dem = io.load_dem(preset)
+            side, features = _side_features(preset)
+        typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
+        if side is not None:
+            typer.echo(f"features: {side}")
+        for line in stats.terrain_report(dem, **features):
+            typer.echo(line)
         return
     if not 0 < scale <= 1:
         raise SimlunarError(f"--scale must lie in (0, 1], got {scale}")
@@ -86,26 +94,15 @@ def terrain(
         typer.echo(f"{name:<10} {path}")
 
 
-def _dem_stats(path: str) -> None:
-    """Print the statistics of a DEM file, with the craters and rocks of the ``features.json``
-    beside it (as ``simlunar terrain`` writes them) when there is one."""
-    from simlunar.pipeline.inputs import check_dem_file
-    from simlunar.terrain import io, stats
-
-    check_dem_file(path, key="--stats")  # size, finite heights, spacing and extent
-    with user_input():
-        dem = io.load_dem(path)
-    diameters = {"craters": [], "rocks": []}
+def _side_features(path: str) -> tuple[Path | None, dict]:
+    """The ``features.json`` beside a DEM file (as ``simlunar terrain`` writes it) and its
+    craters and rocks as ``terrain_report`` takes them (objects with a ``diameter``); ``(None,
+    no features)`` when there is none."""
     side = Path(path).with_name("features.json")
-    if side.is_file():
-        with user_input():
-            diameters = _feature_diameters(side)
-    typer.echo(f"{path}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
-    if side.is_file():
-        typer.echo(f"features: {side}")
-    features = {k: [SimpleNamespace(diameter=d) for d in v] for k, v in diameters.items()}
-    for line in stats.terrain_report(dem, **features):
-        typer.echo(line)
+    if not side.is_file():
+        return None, {"craters": [], "rocks": []}
+    diameters = _feature_diameters(side)
+    return side, {k: [SimpleNamespace(diameter=d) for d in v] for k, v in diameters.items()}
 
 
 def _feature_diameters(path: Path) -> dict[str, list[float]]:

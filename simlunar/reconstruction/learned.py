@@ -73,6 +73,7 @@ from simlunar.features._stack import (
     _model_path,
     _sha256_file,
 )
+from simlunar.features.model_save import save_with_record
 from simlunar.reconstruction._anchor import cell_indices, linear_field
 from simlunar.reconstruction.base import Reconstructed
 from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
@@ -251,8 +252,6 @@ class LearnedReconstruction:
         (Path, Path)
             The joblib file and its record.
         """
-        from simlunar.features.learned import save_with_record
-
         return save_with_record(path, {"format": FORMAT, "model": self.model}, self.meta)
 
     @classmethod
