@@ -270,6 +270,8 @@ def samples_saved_tables(entries: list[dict], *, title: str = "") -> tuple[str, 
             g = e["summary"][s]
             cells.append("–" if not math.isfinite(g) else f"{g:.2f} ({e['n_summary'][s]})")
             rows.append((display_label(s), cells))
+        if not rows:  # the reference is the only strategy: nothing to compare with it
+            continue
         where = f"{e['label']}: " if e.get("label") else ""
         cap = f"{title}: {where}samples saved vs {ref} at equal {metric}"
         lines = ["| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]
@@ -279,6 +281,8 @@ def samples_saved_tables(entries: list[dict], *, title: str = "") -> tuple[str, 
         out += [" & ".join(tex_escape(h) for h in header) + " \\\\", "\\midrule"]
         out += [" & ".join([tex_escape(lab), *c]) + " \\\\" for lab, c in rows]
         tex.append(_tex_end(out))
+    if len(md) == 1:  # every table empty: no explanation either
+        return "", ""
     return "\n".join(md), "\n".join(tex)
 
 
@@ -331,7 +335,10 @@ def _seed_tables(entries: list[dict], expl: str, title: str, table) -> tuple[str
     md, tex = [expl + "\n"], ["% " + expl + "\n"]
     for e in entries:
         what, header, rows = table(e)
-        _append_seed_table(md, tex, _seed_caption(title, e, what), header, rows)
+        if rows:  # a table with no row (the reference alone) is left out
+            _append_seed_table(md, tex, _seed_caption(title, e, what), header, rows)
+    if len(md) == 1:
+        return "", ""
     return "\n".join(md), "\n".join(tex)
 
 

@@ -165,3 +165,22 @@ def test_paired_saved_table_without_an_oracle_by_hand():
     assert "| Grid | 0.90 [0.90, 0.90] | 0.90–0.90 |" in md
     assert "paired by seed (3 terrain seeds)" in md and "1.10--1.30" in tex
     assert paired_saved_tables([], title="t") == ("", "")
+
+
+def test_a_study_of_the_reference_alone_prints_no_empty_table():
+    # one layout (the reference itself): nothing is compared with it, so neither the
+    # samples-saved nor the paired table is printed (not a header without rows)
+    from simlunar.plotting.tables import paired_saved_tables, samples_saved_tables
+
+    alone = {"label": "", "reference": "lloyd_uniform", "metric": "mse",
+             "strategies": ["lloyd_uniform"], "ks": [100], "densities": [0.5],
+             "factor": {"lloyd_uniform": [1.0]}, "flag": {"lloyd_uniform": [0]},
+             "summary": {"lloyd_uniform": 1.0}, "n_summary": {"lloyd_uniform": 1}}  # fmt: skip
+    assert samples_saved_tables([alone], title="t") == ("", "")
+    paired = {"label": "", "metric": "mse", "strategies": ["lloyd_uniform"], "seeds": [0, 1],
+              "saved": {}}  # fmt: skip
+    assert paired_saved_tables([paired], title="t") == ("", "")
+    # beside a table with rows, the empty one is left out and the other kept
+    other = {**paired, "label": "b", "strategies": ["grid"], "saved": {"grid": [0.9, 0.8]}}
+    md, _ = paired_saved_tables([paired, other], title="t")
+    assert md.count("### ") == 1 and "t: b: samples saved" in md
