@@ -8,7 +8,6 @@ import platform
 import typer
 
 from simlunar.cli.common import flag
-from simlunar.render import backend
 
 __all__ = ["doctor"]
 
@@ -20,6 +19,7 @@ __all__ = ["doctor"]
 def doctor(short: bool = flag("--short", "One line only.")) -> None:
     """Versions, the chosen Mitsuba variant and why, libLLVM, kernel cache, cores, GPU."""
     from simlunar.pipeline.preflight import check_renderer
+    from simlunar.render import backend
 
     check_renderer()  # a bad SIMLUNAR_VARIANT in one line
     info = backend.choose_variant()

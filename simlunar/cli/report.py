@@ -7,7 +7,6 @@ from pathlib import Path
 import typer
 
 from simlunar.errors import SimlunarError
-from simlunar.results.store import FolderLock
 
 __all__ = ["report"]
 
@@ -20,6 +19,7 @@ def report(
 ) -> None:
     """Write report.html of a result folder: config, versions, tables, figures, timings."""
     from simlunar.results.report import write_report
+    from simlunar.results.store import FolderLock
 
     if not Path(results_dir).is_dir():
         raise SimlunarError(f"{results_dir}: no such folder")

@@ -12,7 +12,6 @@ from simlunar.cli.common import flag, user_input
 from simlunar.config.yamlio import parse_set
 from simlunar.errors import SimlunarError
 from simlunar.pipeline.executors import make_executor
-from simlunar.results.store import FolderLock
 
 __all__ = ["figures", "run"]
 
@@ -127,6 +126,7 @@ def figures(
     """Draw the figures of a result folder without recomputing (only those whose inputs changed)."""
     from simlunar.pipeline.preflight import check_out_dir
     from simlunar.results.figures import write_figures_pruned
+    from simlunar.results.store import FolderLock
 
     check_out_dir(results_dir, option="figures")
     if not Path(results_dir).is_dir():

@@ -9,7 +9,6 @@ import typer
 
 from simlunar.cli.common import flag
 from simlunar.errors import ConfigError
-from simlunar.results.store import atomic_write_text
 
 __all__ = ["schema"]
 
@@ -28,6 +27,7 @@ def schema(
     """JSON Schema of experiment (scene, preset) YAMLs (for editors: yaml-language-server)."""
     from simlunar.config.docs import SCHEMA_KINDS, json_schema, reference_markdown
     from simlunar.pipeline.preflight import check_out_file
+    from simlunar.results.store import atomic_write_text
 
     if kind not in SCHEMA_KINDS:
         raise ConfigError(

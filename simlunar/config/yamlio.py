@@ -9,7 +9,6 @@ from typing import Any
 import yaml
 
 from simlunar.errors import ConfigError
-from simlunar.registry import did_you_mean_file
 
 #: what the YAML reader raises on invalid text
 YAMLError = yaml.YAMLError
@@ -156,6 +155,9 @@ def safe_load_bounded(text: str):
 def load_yaml(path: str | Path) -> dict:
     path = Path(path)
     if not path.is_file():
+        # imported here: `simlunar run --help` imports this module and nothing of simlunar else
+        from simlunar.registry import did_you_mean_file
+
         raise FileNotFoundError(f"experiment file not found: {path}{did_you_mean_file(path)}")
     try:
         data = safe_load_bounded(path.read_text())
