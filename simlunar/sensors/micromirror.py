@@ -80,21 +80,19 @@ class MicromirrorFlash:
         photon noise (and, moving, the jitter's phases and the navigation errors)."""
         if rc is None:
             raise ValueError("a micromirror flash lights planned pixels: rc is required")
-        s, o = self.scene, self.options
-        uv = np.asarray(rc, float)[:, ::-1] + 0.5
-        if o.motion is not None:
+        if self.options.motion is not None:
             g = np.random.default_rng(rng)
             return self._moving(rc, g, self.trajectory(g), 0.0)
-        scan = micromirror_flash(
-            s.terrain,
-            s.camera,
-            uv,
-            options=o.flash,
-            receiver_shape=tuple(o.receiver_px),
-            rng=rng,
-            scene={"sun": s.sun, "bsdf": s.bsdf},
-        )
-        return _to_guide(scan, s.camera, rc, frames=scan.frames, seconds=scan.seconds)
+        scan = self._scan(rc, rng)
+        return _to_guide(scan, self.scene.camera, rc, frames=scan.frames, seconds=scan.seconds)
+
+    def _scan(self, rc, rng, flight: Flight | None = None):
+        """The rendered scan of planned guide pixels ``rc`` (at rest without a ``flight``)."""
+        s, o = self.scene, self.options
+        uv = np.asarray(rc, float)[:, ::-1] + 0.5
+        return micromirror_flash(s.terrain, s.camera, uv, options=o.flash,
+                                 receiver_shape=tuple(o.receiver_px), rng=rng,
+                                 scene={"sun": s.sun, "bsdf": s.bsdf}, flight=flight)  # fmt: skip
 
     def trajectory(self, rng):
         """The platform's trajectory from the guide camera's centre at t = 0 (its jitter
@@ -104,15 +102,11 @@ class MicromirrorFlash:
     def _moving(self, rc, rng, trajectory, start_s: float) -> Acquisition:
         """The acquisition of ``rc`` on ``trajectory``, its first frame at ``start_s`` (s on
         it)."""
-        s, o = self.scene, self.options
-        uv = np.asarray(rc, float)[:, ::-1] + 0.5
-        scan = micromirror_flash(s.terrain, s.camera, uv, options=o.flash,
-                                 receiver_shape=tuple(o.receiver_px), rng=rng,
-                                 scene={"sun": s.sun, "bsdf": s.bsdf},
-                                 flight=Flight(trajectory, o.motion.navigation, start_s))  # fmt: skip
+        flight = Flight(trajectory, self.options.motion.navigation, start_s)
+        scan = self._scan(rc, rng, flight)
         # a moving platform's dots land off the planned pixels' points: scored where their
         # points project, as a moving steered beam's
-        return _to_guide(scan, s.camera, None, frames=scan.frames, seconds=scan.seconds)
+        return _to_guide(scan, self.scene.camera, None, frames=scan.frames, seconds=scan.seconds)
 
     def rounds(self, *, rng=None) -> PlatformRounds:
         """The rounds of one multi-round acquisition, measured one after the other
