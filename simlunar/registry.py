@@ -29,6 +29,7 @@ __all__ = [
     "did_you_mean",
     "did_you_mean_file",
     "option",
+    "option_docs",
     "option_info",
     "shared_option",
 ]
@@ -132,6 +133,50 @@ def option_info(options_cls) -> dict[str, dict]:
         meta = {k: f.metadata.get(k) for k in ("doc", "unit", "ge", "gt", "le", "lt", "choices")}
         out[f.name] = {"default": default, "type": f.type, **meta}
     return out
+
+
+def _bounds_text(info: dict) -> str:
+    """``>= 0, < 1`` from an :func:`option_info` row (empty without bounds)."""
+    signs = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}
+    parts = [f"{signs[k]} {info[k]:g}" for k in signs if info.get(k) is not None]
+    if info.get("choices") is not None:
+        parts.append("one of " + ", ".join(map(repr, info["choices"])))
+    return ", ".join(parts)
+
+
+def option_docs(options_cls) -> list[str]:
+    """A numpydoc ``Attributes`` section, one entry per field of an options dataclass, from
+    the metadata :func:`option` wrote (doc, unit, bounds) and the default; empty when no field
+    was declared with :func:`option`. The API reference appends it to the class's docstring,
+    so a field is documented where it is declared, and only there.
+
+    Examples
+    --------
+    ``shadow: float = option(0.02, doc="shadowed below this", ge=0, lt=1)`` gives::
+
+        shadow : float, default 0.02
+            Shadowed below this. >= 0, < 1.
+    """
+    info = option_info(options_cls)
+    if not any(row["doc"] for row in info.values()):
+        return []
+    lines = ["Attributes", "----------"]
+    for name, row in info.items():
+        kind = row["type"] if isinstance(row["type"], str) else getattr(row["type"], "__name__", "")
+        head = f"{name} : {kind}" if kind else name
+        default = row["default"]
+        if default is not dataclasses.MISSING and not dataclasses.is_dataclass(default):
+            head += f", default {default!r}"
+        lines.append(head)
+        text = row["doc"] or ""
+        extra = ", ".join(x for x in (row["unit"] and f"unit {row['unit']}", _bounds_text(row)) if x)
+        if text:
+            text = text[0].upper() + text[1:] + ("" if text.endswith(".") else ".")
+        if extra:
+            text = f"{text} {extra[0].upper()}{extra[1:]}." if text else f"{extra}."
+        if text:
+            lines.append(f"    {text}")
+    return lines
 
 
 def check_bounds(obj) -> None:

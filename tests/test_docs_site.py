@@ -50,6 +50,23 @@ def test_bars_escaped_in_prose_only():
     ]
 
 
+def test_an_options_class_gets_its_fields_documented_from_their_declarations():
+    from simlunar.reconstruction.calibration import CalibrationOptions
+
+    lines = ["Options of the calibration."]
+    simlunar_docs._on_docstring(None, "class", "x", CalibrationOptions, {}, lines)
+    assert lines[1:4] == ["", "Attributes", "----------"]
+    assert "shadow : float, default 0.02" in lines
+    # a docstring that writes its own section keeps it, and only it
+    own = ["Summary.", "", "Attributes", "----------", "shadow : float", "    Mine."]
+    simlunar_docs._on_docstring(None, "class", "x", CalibrationOptions, {}, own)
+    assert own[-1] == "    Mine." and own.count("Attributes") == 1
+    # a function's docstring is left alone
+    fn = ["Summary."]
+    simlunar_docs._on_docstring(None, "function", "x", CalibrationOptions, {}, fn)
+    assert fn == ["Summary."]
+
+
 def test_api_pages_cover_every_module(tmp_path):
     text = simlunar_docs._api(tmp_path)
     pages = {p.stem for p in (tmp_path / "api").glob("*.rst")}

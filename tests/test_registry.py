@@ -11,6 +11,7 @@ from simlunar.registry import (
     check_bounds,
     did_you_mean,
     option,
+    option_docs,
     option_info,
     shared_option,
 )
@@ -97,6 +98,28 @@ def test_option_info_carries_doc_unit_bounds_and_default():
     assert info["sigma"]["unit"] == "cell" and info["sigma"]["gt"] == 0.0
     assert info["gain"]["default"] == 1.0 and info["gain"]["doc"] == "a gain"
     assert info["mode"]["choices"] == ("a", "b")
+
+
+def test_option_docs_write_each_field_once_as_a_numpydoc_attributes_section():
+    # the API reference's text of a field comes from its declaration: doc, default, unit, bounds
+    assert option_docs(_Opts) == [
+        "Attributes",
+        "----------",
+        "gain : float, default 1.0",
+        "    A gain. >= 0, <= 4.",
+        "sigma : float, default 2.0",
+        "    A width. Unit cell, > 0.",
+        "mode : str, default 'a'",
+        "    A mode. One of 'a', 'b'.",
+    ]
+
+
+def test_option_docs_are_empty_for_a_class_without_declared_options():
+    @dataclass(frozen=True)
+    class Plain:
+        x: float = 1.0
+
+    assert option_docs(Plain) == []
 
 
 def test_did_you_mean_is_empty_when_nothing_is_close():

@@ -19,6 +19,7 @@ markers that ``make docs`` refreshes (``simlunar.config.docs.update_docs``).
 
 from __future__ import annotations
 
+import dataclasses
 import html
 import re
 import shutil
@@ -33,6 +34,7 @@ if str(ROOT) not in sys.path:  # run as a script (make docs-gallery): this check
 
 import simlunar  # noqa: E402
 from simlunar.config.yamlio import load_yaml  # noqa: E402
+from simlunar.registry import option_docs  # noqa: E402
 from simlunar.results.report import read_captions, run_overrides  # noqa: E402
 
 __all__ = [
@@ -258,7 +260,21 @@ def _escape_bars(lines: list[str]) -> None:
 
 
 def _on_docstring(app, what, name, obj, options, lines) -> None:
+    _add_option_docs(what, obj, lines)
     _escape_bars(lines)
+
+
+def _add_option_docs(what, obj, lines: list[str]) -> None:
+    """Append an options dataclass's ``Attributes`` section, made from what each field's
+    :func:`simlunar.registry.option` declares (doc, unit, bounds, default), in place: a field
+    is documented where it is declared. A docstring that writes its own section keeps it."""
+    if what != "class" or not dataclasses.is_dataclass(obj):
+        return
+    if any(line.strip() in ("Attributes", "Parameters") for line in lines):
+        return
+    extra = option_docs(obj)
+    if extra:
+        lines.extend(["", *extra])
 
 
 def gallery_run(root: str | Path = ROOT) -> Path | None:
