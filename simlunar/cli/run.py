@@ -3,15 +3,9 @@ figures of a result folder redrawn."""
 
 from __future__ import annotations
 
-import logging
-from pathlib import Path
-
 import typer
 
-from simlunar.cli.common import flag, user_input
-from simlunar.config.yamlio import parse_set
-from simlunar.errors import SimlunarError
-from simlunar.pipeline.executors import make_executor
+from simlunar.cli.common import flag
 
 __all__ = ["figures", "run"]
 
@@ -23,9 +17,10 @@ _SET_OPTION = typer.Option(
     show_default=False,
 )
 
-# The library is imported inside each command, not at the top: importing it takes about 3 s (the
-# scientific stack, and config.registry, which reads every planner, sensor and renderer), which
-# `simlunar run --help` and a mistyped option should not pay (0.3 s with these imports here).
+# The commands' work is in simlunar.cli.run_actions, imported when a command runs: the library
+# takes about 3 s to import (the scientific stack, and config.registry, which reads every
+# planner, sensor and renderer), which `simlunar run --help` and a mistyped option should not
+# pay (0.3 s with the signatures alone).
 
 
 def run(
@@ -67,55 +62,19 @@ def run(
     ),
 ) -> None:
     """Run (or resume) an experiment: results.csv, scores.md/.tex, provenance.json, figures/."""
-    from simlunar.config.advice import config_warnings
-    from simlunar.config.loading import load_experiment
-    from simlunar.pipeline.runner import run_experiment
-    from simlunar.results.array_exports import check_save_arrays
-    from simlunar.results.exports import check_save_scans
-    from simlunar.results.report import write_report
+    from simlunar.cli import run_actions
 
-    with user_input():
-        overrides = parse_set(set_ or [])
-        if pdf:
-            overrides = {**overrides, "figures.formats": ["png", "pdf"]}
-        cfg = load_experiment(experiment, overrides)
-        if save_scans:
-            check_save_scans(cfg)
-            # an override before validation, so every sweep point is checked with it
-            overrides = {**overrides, "study.save_scans": True}
-            cfg = load_experiment(experiment, overrides)
-        if save_arrays:
-            check_save_arrays(cfg)
-            overrides = {**overrides, "study.save_arrays": True}
-            cfg = load_experiment(experiment, overrides)
-        for line in config_warnings(cfg):
-            typer.echo(line, err=True)
-        out_dir = Path(out) if out else Path("results") / cfg.name
-        if dry_run:
-            from simlunar.pipeline.estimate import estimate_run
-            from simlunar.pipeline.preflight import check_out_dir
-
-            check_out_dir(out_dir)
-            est = estimate_run(cfg, out_dir, workers=workers or 1, figures=figures)
-            for line in est.lines(out_dir):
-                typer.echo(line)
-            return
-        executor = make_executor(workers=workers, scheduler=scheduler)
-    if scheduler:
-        # a lost scheduler or worker is reported in one line; Dask's own log would add pages
-        logging.getLogger("distributed").setLevel(logging.CRITICAL)
-    summary = run_experiment(cfg, out_dir, executor=executor, progress=progress, figures=figures)
-    typer.echo(summary.scores_markdown)
-    for note in summary.notes:
-        typer.echo(note)
-    typer.echo(
-        f"work units: {summary.units_total} ({summary.units_cached} cached, "
-        f"{summary.units_computed} computed) in {summary.elapsed_s:.1f} s"
+    flags = {"pdf": pdf, "save_scans": save_scans, "save_arrays": save_arrays, "dry_run": dry_run}
+    run_actions.run_experiment_command(
+        experiment,
+        out=out,
+        workers=workers,
+        scheduler=scheduler,
+        set_=set_ or [],
+        progress=progress,
+        figures=figures,
+        flags=flags,
     )
-    typer.echo(f"results: {out_dir}")
-    if summary.figures:
-        typer.echo(f"figures: {summary.figures_dir}")
-    typer.echo(f"report: {write_report(out_dir)}")
 
 
 def figures(
@@ -124,32 +83,6 @@ def figures(
     force: bool = flag("--force", "redraw even when the figures' inputs are unchanged"),
 ) -> None:
     """Draw the figures of a result folder without recomputing (only those whose inputs changed)."""
-    from simlunar.pipeline.preflight import check_out_dir
-    from simlunar.results.figures import write_figures_pruned
-    from simlunar.results.store import FolderLock
+    from simlunar.cli import run_actions
 
-    check_out_dir(results_dir, option="figures")
-    if not Path(results_dir).is_dir():
-        raise SimlunarError(f"{results_dir}: no such folder")
-    fig_dir = Path(results_dir) / "figures"
-    before = {p: p.stat().st_mtime_ns for p in fig_dir.glob("*")} if fig_dir.is_dir() else {}
-    with FolderLock(results_dir):  # not while a run writes into the folder
-        paths = write_figures_pruned(
-            results_dir, formats=("png", "pdf") if pdf else None, force=force
-        )
-    # a figure is redrawn when its file is new or rewritten; the others were up to date
-    redrawn = [p for p in paths if before.get(p) != p.stat().st_mtime_ns]
-    removed = sorted(set(before) - set(paths) - {fig_dir / "captions.md"})
-    kept = [p for p in paths if p not in redrawn]
-    if redrawn:
-        typer.echo(f"redrew {len(redrawn)} file(s) in {fig_dir}:")
-        for p in redrawn:
-            typer.echo(f"  {p.name}")
-    if kept:
-        how = "use --force to redraw them" if not redrawn else "their inputs did not change"
-        typer.echo(f"up to date, not redrawn: {len(kept)} file(s) ({how})")
-    for p in removed:
-        if not p.exists():
-            typer.echo(f"removed {p.name} (no longer produced)")
-    if not paths:
-        typer.echo(f"no figures for {results_dir} (its study draws none)")
+    run_actions.redraw_figures(results_dir, pdf=pdf, force=force)
