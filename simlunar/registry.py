@@ -169,7 +169,9 @@ def option_docs(options_cls) -> list[str]:
             head += f", default {default!r}"
         lines.append(head)
         text = row["doc"] or ""
-        extra = ", ".join(x for x in (row["unit"] and f"unit {row['unit']}", _bounds_text(row)) if x)
+        extra = ", ".join(
+            x for x in (row["unit"] and f"unit {row['unit']}", _bounds_text(row)) if x
+        )
         if text:
             text = text[0].upper() + text[1:] + ("" if text.endswith(".") else ".")
         if extra:

@@ -30,7 +30,7 @@ def test_pdf_and_export_flags_are_overrides_validated_with_the_experiment():
 
 
 def test_save_scans_is_refused_for_a_study_without_a_scan():
-    with pytest.raises(SimlunarError, match="save.scans"):
+    with pytest.raises(SimlunarError, match="--save-scans: experiment 'quickstart' has a sampling"):
         run_actions._load(
             str(EXPERIMENTS / "quickstart.yaml"), [], **{**NO_FLAGS, "save_scans": True}
         )
