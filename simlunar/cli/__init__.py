@@ -7,8 +7,10 @@ finished units kept; 130 interrupted (Ctrl-C): one line saying what was kept and
 resume; 1 an internal error (a bug): the traceback and a line asking to report it.
 
 A command is the function of its name in its module (:data:`COMMANDS`: one module per command
-or group of commands that need the same library), which imports what it uses at its top; every
-command runs inside :func:`~simlunar.cli.common.user_errors`. The root command imports a
+or group of commands that need the same library), whose top imports Typer and the signature's
+needs only: the library is imported when the command runs (by ``run`` and ``figures`` through
+:mod:`simlunar.cli.run_actions`, which imports it at its top); every command runs inside
+:func:`~simlunar.cli.common.user_errors`. The root command imports a
 command's module only when that command is invoked (or its help asked for): ``simlunar --help``
 and ``--version`` need Typer alone, where the modules behind the commands (the scientific
 stack, the pydantic models, Mitsuba's backend) take seconds to import.
