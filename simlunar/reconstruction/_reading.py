@@ -9,7 +9,9 @@ drift between them.
 
 from __future__ import annotations
 
-__all__ = ["READING_OPTIONS", "check_share_band"]
+from simlunar.registry import check_bounds
+
+__all__ = ["READING_OPTIONS", "ReadingChecks", "check_share_band"]
 
 READING_OPTIONS: dict[str, dict] = {
     "gain": dict(default=1.0, doc="g: divides the calibrated |b| when reading slopes", gt=0, le=10),
@@ -48,3 +50,12 @@ def check_share_band(options) -> None:
         raise ValueError(
             f"share_hi must be > share_lo, got {options.share_hi!r} <= {options.share_lo!r}"
         )
+
+
+class ReadingChecks:
+    """Base of an options dataclass that reads slopes from the image: its ``__post_init__``
+    checks every field's declared bounds, then the share band (:func:`check_share_band`)."""
+
+    def __post_init__(self) -> None:
+        check_bounds(self)
+        check_share_band(self)

@@ -48,18 +48,17 @@ from scipy import ndimage, sparse
 from scipy.sparse import linalg as splinalg
 
 from simlunar.reconstruction._anchor import linear_field
-from simlunar.reconstruction._reading import READING_OPTIONS, check_share_band
+from simlunar.reconstruction._reading import READING_OPTIONS, ReadingChecks
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import calibrate
 from simlunar.reconstruction.integrate import central_gradient
 from simlunar.reconstruction.shading import (
     ShadingOptions,
-    blend_detail,
+    checked_blend,
     fallback_gamma,
-    heldout_gamma,
     shading_frames,
 )
-from simlunar.registry import check_bounds, option, shared_option
+from simlunar.registry import option, shared_option
 
 __all__ = [
     "PhotoclinometryOptions",
@@ -70,7 +69,7 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class PhotoclinometryOptions:
+class PhotoclinometryOptions(ReadingChecks):
     """Options of the sparse least-squares photoclinometry (:func:`photoclinometry`)."""
 
     ridge: float = option(
@@ -106,10 +105,6 @@ class PhotoclinometryOptions:
         "weight that best predicts the left-out samples caps gamma",
         choices=(True, False),
     )
-
-    def __post_init__(self):
-        check_bounds(self)
-        check_share_band(self)
 
     def shading(self) -> ShadingOptions:
         """The shared reading of the image (frames, calibration, slopes, fallback)."""
@@ -335,18 +330,14 @@ def photoclinometry(
     d, iterations, status = _correction(lin, p_s, valid, cal.direction, o)
     info["cg_iterations"] = iterations
     info["cg_converged"] = status == 0
-    if o.heldout_check:
-        # the correction is anchored on the samples: remade from the kept ones only
-        def remade(keep):
-            return _correction(keep, p_s, valid, cal.direction, o)[0]
 
-        g_cv, n_test = heldout_gamma(remade, lin, pool_folds=True)
-        info["heldout_gamma"], info["heldout_samples"] = g_cv, n_test
-        gamma = min(gamma, g_cv)
-        info["gamma"] = gamma
-        if gamma == 0.0:
-            return Reconstructed(lin.heights, info)
-    return Reconstructed(blend_detail(lin, d, gamma), info)
+    # the correction is anchored on the samples: remade from the kept ones only
+    def remade(keep):
+        return _correction(keep, p_s, valid, cal.direction, o)[0]
+
+    checked = remade if o.heldout_check else None
+    z = checked_blend(lin, d, gamma, info, remade=checked, pool_folds=True)
+    return Reconstructed(z, info)
 
 
 def _correction(lin, p_s, valid, u, o: PhotoclinometryOptions) -> tuple[np.ndarray, int, int]:

@@ -61,7 +61,7 @@ from simlunar.reconstruction._anchor import (
     linear_field,
     reanchored_detail,
 )
-from simlunar.reconstruction._reading import READING_OPTIONS, check_share_band
+from simlunar.reconstruction._reading import READING_OPTIONS, ReadingChecks
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import (
     Calibration,
@@ -70,11 +70,12 @@ from simlunar.reconstruction.calibration import (
     valid_pixels,
 )
 from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
-from simlunar.registry import check_bounds, option, shared_option
+from simlunar.registry import option, shared_option
 
 __all__ = [
     "ShadingOptions",
     "blend_detail",
+    "checked_blend",
     "fallback_gamma",
     "fuse_slopes",
     "heldout_gamma",
@@ -84,7 +85,7 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class ShadingOptions:
+class ShadingOptions(ReadingChecks):
     """Options of the image-anchored reconstruction (:func:`shading`)."""
 
     gain: float = shared_option(READING_OPTIONS, "gain")
@@ -125,10 +126,6 @@ class ShadingOptions:
         "image's detail must predict its departure from the others' linear interpolation",
         choices=(True, False),
     )
-
-    def __post_init__(self):
-        check_bounds(self)
-        check_share_band(self)
 
     def calibration(self) -> CalibrationOptions:
         return CalibrationOptions(
@@ -220,6 +217,23 @@ def blend_detail(lin: LinearField, field: np.ndarray, gamma: float) -> np.ndarra
     """``z_lin + gamma * hull * (z_a - z_lin)``: ``field`` re-anchored on the samples, weighted
     by ``gamma`` inside their hull (the linear reconstruction's nearest fill outside)."""
     return np.where(lin.hull, lin.heights + gamma * reanchored_detail(field, lin), lin.heights)
+
+
+def checked_blend(
+    lin: LinearField, detail, gamma: float, info: dict, *, remade=None, pool_folds=False
+) -> np.ndarray:
+    """:func:`blend_detail` at ``gamma``, first capped by the held-out check of ``remade``
+    (:func:`heldout_gamma`'s ``field``: the detail, or a function of the kept samples that
+    makes it again; None: no check), which records ``heldout_gamma``, ``heldout_samples`` and
+    the capped ``gamma`` in ``info``; the linear heights where the weight is 0."""
+    if remade is not None:
+        g_cv, n_test = heldout_gamma(remade, lin, pool_folds=pool_folds)
+        info["heldout_gamma"], info["heldout_samples"] = g_cv, n_test
+        gamma = min(gamma, g_cv)
+        info["gamma"] = gamma
+    if gamma == 0.0:
+        return lin.heights
+    return blend_detail(lin, detail, gamma)
 
 
 def _axis_error(direction, light) -> float:
@@ -319,14 +333,8 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     along, weight = (None, 1.0) if stereo else (cal0.direction, o.across_weight)
     sp = guide.spacing
     z_fc = frankot_chellappa(gr * sp, gc * sp, along=along, across_weight=weight)
-    if o.heldout_check:
-        g_cv, n_test = heldout_gamma(z_fc, lin)
-        info["heldout_gamma"], info["heldout_samples"] = g_cv, n_test
-        gamma = min(gamma, g_cv)
-        info["gamma"] = gamma
-    if gamma == 0.0:
-        return Reconstructed(lin.heights, info)
-    return Reconstructed(blend_detail(lin, z_fc, gamma), info)
+    checked = z_fc if o.heldout_check else None
+    return Reconstructed(checked_blend(lin, z_fc, gamma, info, remade=checked), info)
 
 
 def heldout_gamma(
