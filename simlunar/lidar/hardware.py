@@ -35,6 +35,7 @@ import numpy as np
 
 from simlunar.lidar.detector import PLANCK, DetectorOptions
 from simlunar.lidar.waveform import SPEED_OF_LIGHT, PulseOptions
+from simlunar.registry import check_bounds, option
 
 __all__ = [
     "INSTRUMENTS",
@@ -46,62 +47,57 @@ __all__ = [
 
 @dataclass(frozen=True)
 class LidarHardware:
-    """A LIDAR's transmitter, receiver and detector (SI units).
+    """A LIDAR's transmitter, receiver and detector (SI units)."""
 
-    Parameters
-    ----------
-    pulse_energy_j : float
-        Laser energy per pulse leaving the instrument (J) (per beam of a multi-beam laser).
-    wavelength_m : float
-        Laser wavelength (m).
-    pulse_fwhm_s : float
-        Pulse full width at half maximum (s).
-    jitter_s : float
-        RMS timing jitter of detector and timing electronics (s).
-    pulse_rate_hz : float
-        Pulse repetition rate (1/s).
-    aperture_diameter_m : float
-        Receiver telescope / lens clear aperture (m).
-    optics_efficiency : float
-        Receiver optics transmission (filter included), in (0, 1].
-    detector_efficiency : float
-        Photon detection efficiency of the detector, in (0, 1].
-    filter_bandwidth_m : float
-        Receiver filter bandwidth (m), e.g. 1e-9 for 1 nm.
-    divergence_rad : float
-        Full beam divergence of a steered beam (rad; twice the 1/e^2 half-angle).
-    field_rad : float
-        Full-angle receiver field of view of a steered beam (rad; a disk); a flash's pixels
-        take theirs from the receiver's intrinsics.
-    dark_count_rate_hz : float
-        Dark (or noise-equivalent) counts per second.
-    solar_irradiance_w_m2_nm : float
-        Solar spectral irradiance at the wavelength above the atmosphere (W m^-2 nm^-1).
-    """
-
-    pulse_energy_j: float = 10e-6
-    wavelength_m: float = 1064e-9
-    pulse_fwhm_s: float = 1e-9
-    jitter_s: float = 0.1e-9
-    pulse_rate_hz: float = 10e3
-    aperture_diameter_m: float = 0.05
-    optics_efficiency: float = 0.6
-    detector_efficiency: float = 0.4
-    filter_bandwidth_m: float = 1e-9
-    divergence_rad: float = 1e-3
-    field_rad: float = 1e-3
-    dark_count_rate_hz: float = 0.0
-    solar_irradiance_w_m2_nm: float = 0.64
+    pulse_energy_j: float = option(
+        10e-6,
+        doc="laser energy per pulse leaving the instrument (per beam of a multi-beam laser)",
+        unit="J",
+        gt=0,
+    )
+    wavelength_m: float = option(1064e-9, doc="laser wavelength", unit="m", gt=0)
+    pulse_fwhm_s: float = option(1e-9, doc="pulse full width at half maximum", unit="s", gt=0)
+    jitter_s: float = option(
+        0.1e-9, doc="RMS timing jitter of detector and timing electronics", unit="s", ge=0
+    )
+    pulse_rate_hz: float = option(10e3, doc="pulse repetition rate", unit="1/s", gt=0)
+    aperture_diameter_m: float = option(
+        0.05, doc="receiver telescope / lens clear aperture", unit="m", gt=0
+    )
+    optics_efficiency: float = option(
+        0.6, doc="receiver optics transmission (filter included)", gt=0, le=1
+    )
+    detector_efficiency: float = option(
+        0.4, doc="photon detection efficiency of the detector", gt=0, le=1
+    )
+    filter_bandwidth_m: float = option(
+        1e-9, doc="receiver filter bandwidth, e.g. 1e-9 for 1 nm", unit="m", gt=0
+    )
+    divergence_rad: float = option(
+        1e-3,
+        doc="full beam divergence of a steered beam (twice the 1/e^2 half-angle)",
+        unit="rad",
+        gt=0,
+    )
+    field_rad: float = option(
+        1e-3,
+        doc="full-angle receiver field of view of a steered beam (a disk); a flash's pixels "
+        "take theirs from the receiver's intrinsics",
+        unit="rad",
+        gt=0,
+    )
+    dark_count_rate_hz: float = option(
+        0.0, doc="dark (or noise-equivalent) counts per second", unit="1/s", ge=0
+    )
+    solar_irradiance_w_m2_nm: float = option(
+        0.64,
+        doc="solar spectral irradiance at the wavelength above the atmosphere",
+        unit="W m^-2 nm^-1",
+        gt=0,
+    )
 
     def __post_init__(self) -> None:
-        for name, value in dataclasses.asdict(self).items():
-            zero_ok = name in ("jitter_s", "dark_count_rate_hz")
-            if not (np.isfinite(value) and (value >= 0 if zero_ok else value > 0)):
-                bound = ">= 0" if zero_ok else "> 0"
-                raise ValueError(f"{name} must be finite and {bound}, got {value}")
-        for name in ("optics_efficiency", "detector_efficiency"):
-            if getattr(self, name) > 1:
-                raise ValueError(f"{name} must be <= 1, got {getattr(self, name)}")
+        check_bounds(self)
 
     @property
     def photon_energy_j(self) -> float:
