@@ -27,7 +27,19 @@ import numpy as np
 from simlunar.lidar.apd import ApdOptions, apd_waveform
 from simlunar.lidar.spad import spad_counts
 from simlunar.lidar.waveform import TimeBins
-from simlunar.registry import check_bounds, option
+from simlunar.registry import check_bounds, option, shared_option
+
+#: the detector options that :class:`DetectorOptions` and
+#: :class:`~simlunar.lidar.hardware.LidarHardware` declare alike (the hardware's dark counts
+#: become the detector's): name -> keywords of :func:`simlunar.registry.option`
+DETECTOR_OPTIONS: dict[str, dict] = {
+    "dark_count_rate_hz": dict(
+        default=0.0,
+        doc="dark (or noise-equivalent) counts per second, uniform in time",
+        unit="1/s",
+        ge=0,
+    ),
+}
 
 
 @dataclass(frozen=True)
@@ -48,9 +60,7 @@ class DetectorOptions:
         unit="photon/s",
         ge=0,
     )
-    dark_count_rate_hz: float = option(
-        0.0, doc="dark counts per second, uniform in time", unit="1/s", ge=0
-    )
+    dark_count_rate_hz: float = shared_option(DETECTOR_OPTIONS, "dark_count_rate_hz")
     pulses: int = option(1, doc="shots accumulated into one histogram", ge=1)
     dead_time_s: float = option(
         0.0,
@@ -203,6 +213,7 @@ PLANCK = 6.62607015e-34
 
 
 __all__ = [
+    "DETECTOR_OPTIONS",
     "PLANCK",
     "DetectorOptions",
     "coates_correction",

@@ -33,9 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.lidar.detector import PLANCK, DetectorOptions
+from simlunar.lidar.detector import DETECTOR_OPTIONS, PLANCK, DetectorOptions
 from simlunar.lidar.waveform import SPEED_OF_LIGHT, PulseOptions
-from simlunar.registry import check_bounds, option
+from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = [
     "INSTRUMENTS",
@@ -86,9 +86,7 @@ class LidarHardware:
         unit="rad",
         gt=0,
     )
-    dark_count_rate_hz: float = option(
-        0.0, doc="dark (or noise-equivalent) counts per second", unit="1/s", ge=0
-    )
+    dark_count_rate_hz: float = shared_option(DETECTOR_OPTIONS, "dark_count_rate_hz")
     solar_irradiance_w_m2_nm: float = option(
         0.64,
         doc="solar spectral irradiance at the wavelength above the atmosphere",
