@@ -21,39 +21,39 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.registry import check_bounds, option
+
 __all__ = ["ApdOptions", "apd_waveform"]
 
 
 @dataclass(frozen=True)
 class ApdOptions:
-    """A linear-mode APD receiver.
+    """A linear-mode APD receiver."""
 
-    Parameters
-    ----------
-    gain : float
-        Mean avalanche gain ``M`` (>= 1).
-    ionisation_ratio : float
-        ``k`` in [0, 1] (Si about 0.02, InGaAs about 0.45).
-    amplifier_noise_pe : float
-        RMS amplifier noise per bin and pulse referred to the input (photoelectrons: the output
-        noise in electrons divided by ``M``).
-    threshold_pe : float
-        Discriminator threshold: the least signal (photoelectrons, summed over the pulses) of
-        a detected return.
-    """
-
-    gain: float = 100.0
-    ionisation_ratio: float = 0.02
-    amplifier_noise_pe: float = 0.5
-    threshold_pe: float = 5.0
+    gain: float = option(100.0, doc="mean avalanche gain M", ge=1)
+    ionisation_ratio: float = option(
+        0.02,
+        doc="k, the hole / electron ionisation ratio (Si about 0.02, InGaAs about 0.45)",
+        ge=0,
+        le=1,
+    )
+    amplifier_noise_pe: float = option(
+        0.5,
+        doc="RMS amplifier noise per bin and pulse referred to the input (the output noise in "
+        "electrons divided by M)",
+        unit="photoelectron",
+        ge=0,
+    )
+    threshold_pe: float = option(
+        5.0,
+        doc="discriminator threshold: the least signal (summed over the pulses) of a detected "
+        "return",
+        unit="photoelectron",
+        ge=0,
+    )
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.gain) and self.gain >= 1):
-            raise ValueError(f"gain must be >= 1, got {self.gain}")
-        if not 0 <= self.ionisation_ratio <= 1:
-            raise ValueError(f"ionisation_ratio must be in [0, 1], got {self.ionisation_ratio}")
-        if not (self.amplifier_noise_pe >= 0 and self.threshold_pe >= 0):
-            raise ValueError("amplifier_noise_pe and threshold_pe must be >= 0")
+        check_bounds(self)
 
     @property
     def excess_noise(self) -> float:

@@ -27,47 +27,57 @@ import numpy as np
 from simlunar.lidar.apd import ApdOptions, apd_waveform
 from simlunar.lidar.spad import spad_counts
 from simlunar.lidar.waveform import TimeBins
+from simlunar.registry import check_bounds, option, shared_option
+
+#: the detector options that :class:`DetectorOptions` and
+#: :class:`~simlunar.lidar.hardware.LidarHardware` declare alike (the hardware's dark counts
+#: become the detector's): name -> keywords of :func:`simlunar.registry.option`
+DETECTOR_OPTIONS: dict[str, dict] = {
+    "dark_count_rate_hz": dict(
+        default=0.0,
+        doc="dark (or noise-equivalent) counts per second, uniform in time",
+        unit="1/s",
+        ge=0,
+    ),
+}
 
 
 @dataclass(frozen=True)
 class DetectorOptions:
-    """Receiver photon model.
+    """Receiver photon model."""
 
-    Parameters
-    ----------
-    signal_photons : float
-        Expected detected photons per pulse per unit of the rendered transient value
-        (photons; lumps pulse energy, receiver aperture, optics and quantum efficiency).
-    background_photons_per_s : float
-        Expected detected photons per second per unit of the rendered steady sun radiance
-        (photons/s; lumps aperture, field of view, filter bandwidth and efficiency).
-    dark_count_rate_hz : float
-        Dark counts per second (1/s), uniform in time.
-    pulses : int
-        Shots accumulated into one histogram.
-    dead_time_s : float
-        SPAD dead time (s): 0 = no dead time (photon counts, or an APD), ``inf`` = at most one
-        detection per pulse, finite = a Geiger-mode SPAD with a non-paralysable dead time
-        simulated in continuous time (:mod:`simlunar.lidar.spad`).
-    apd : ApdOptions or None
-        A linear-mode APD (gain, excess noise, amplifier noise, threshold;
-        :mod:`simlunar.lidar.apd`): the waveform in photoelectrons instead of photon counts.
-    """
-
-    signal_photons: float = 100.0
-    background_photons_per_s: float = 1e9
-    dark_count_rate_hz: float = 0.0
-    pulses: int = 1
-    dead_time_s: float = 0.0
-    apd: ApdOptions | None = None
+    signal_photons: float = option(
+        100.0,
+        doc="expected detected photons per pulse per unit of the rendered transient value "
+        "(lumps pulse energy, receiver aperture, optics and quantum efficiency)",
+        unit="photon",
+        ge=0,
+    )
+    background_photons_per_s: float = option(
+        1e9,
+        doc="expected detected photons per second per unit of the rendered steady sun radiance "
+        "(lumps aperture, field of view, filter bandwidth and efficiency)",
+        unit="photon/s",
+        ge=0,
+    )
+    dark_count_rate_hz: float = shared_option(DETECTOR_OPTIONS, "dark_count_rate_hz")
+    pulses: int = option(1, doc="shots accumulated into one histogram", ge=1)
+    dead_time_s: float = option(
+        0.0,
+        doc="SPAD dead time, >= 0 (inf allowed): 0 = no dead time (photon counts, or an APD), "
+        "inf = at most one detection per pulse, finite = a Geiger-mode SPAD with a "
+        "non-paralysable dead time simulated in continuous time (simlunar.lidar.spad)",
+        unit="s",
+    )
+    apd: ApdOptions | None = option(
+        None,
+        doc="a linear-mode APD (gain, excess noise, amplifier noise, threshold; "
+        "simlunar.lidar.apd): the waveform in photoelectrons instead of photon counts",
+    )
 
     def __post_init__(self) -> None:
-        for name in ("signal_photons", "background_photons_per_s", "dark_count_rate_hz"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
-        if int(self.pulses) < 1:
-            raise ValueError(f"pulses must be >= 1, got {self.pulses}")
+        check_bounds(self)
+        # inf is a valid dead time (one detection per pulse), so it has no numeric bound
         if not self.dead_time_s >= 0:
             raise ValueError(f"dead_time_s must be >= 0 s, got {self.dead_time_s}")
         if self.apd is not None and self.dead_time_s != 0:
@@ -203,6 +213,7 @@ PLANCK = 6.62607015e-34
 
 
 __all__ = [
+    "DETECTOR_OPTIONS",
     "PLANCK",
     "DetectorOptions",
     "coates_correction",

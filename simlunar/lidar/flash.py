@@ -22,6 +22,7 @@ from simlunar.lidar.gate import gate_bins, plane_ranges
 from simlunar.lidar.hardware import pixel_solid_angles
 from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
 from simlunar.lidar.waveform import TimeBins
+from simlunar.registry import option
 
 __all__ = [
     "FlashOptions",
@@ -39,22 +40,16 @@ __all__ = [
 class FlashOptions(ReturnOptions):
     """A flash LIDAR: a receiver array lit by whole-field pulses.
 
-    Parameters
-    ----------
-    pulse, detector, ranging, transient, bin_range_m
-        As for every LIDAR (:class:`~simlunar.lidar.returns.ReturnOptions`); ``detector.pulses``
-        pulses per frame.
-    margin_m : float
-        Range margin (m) around the terrain's nearest and farthest point in view.
-    pulse_rate_hz : float
-        Pulse repetition rate (1/s): a frame takes ``detector.pulses / pulse_rate_hz``.
+    The fields of every LIDAR are :class:`~simlunar.lidar.returns.ReturnOptions`'s;
+    ``detector.pulses`` is the pulses per frame.
     """
 
-    pulse_rate_hz: float = 30.0
-
-    def __post_init__(self) -> None:
-        if not (self.bin_range_m > 0 and self.margin_m >= 0 and self.pulse_rate_hz > 0):
-            raise ValueError("need bin_range_m > 0, margin_m >= 0 and pulse_rate_hz > 0")
+    pulse_rate_hz: float = option(
+        30.0,
+        doc="pulse repetition rate: a frame takes detector.pulses / pulse_rate_hz",
+        unit="1/s",
+        gt=0,
+    )
 
 
 def flash_window(camera: Camera, *, options: FlashOptions) -> TimeBins:

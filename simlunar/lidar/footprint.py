@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.registry import check_bounds, option
+
 __all__ = [
     "PROFILES",
     "FootprintOptions",
@@ -29,30 +31,27 @@ PROFILES = ("gaussian", "uniform")
 
 @dataclass(frozen=True)
 class FootprintOptions:
-    """Angular profile of one beam (laser spot times receiver field of view).
+    """Angular profile of one beam (laser spot times receiver field of view)."""
 
-    Parameters
-    ----------
-    divergence_rad : float in [0, pi/2)
-        Full divergence angle (rad): twice the 1/e^2 intensity half-angle for
-        ``"gaussian"``, the full cone angle for ``"uniform"``; 0 = a single ray.
-    profile : "gaussian" or "uniform"
-        Radial intensity profile across the cone.
-    samples : int
-        Rays traced per beam (the footprint's Monte Carlo samples; the render's spp).
-    """
-
-    divergence_rad: float = 1e-3
-    profile: str = "gaussian"
-    samples: int = 16
+    divergence_rad: float = option(
+        1e-3,
+        doc="full divergence angle, in [0, pi/2): twice the 1/e^2 intensity half-angle for "
+        "gaussian, the full cone angle for uniform; 0 = a single ray",
+        unit="rad",
+        ge=0,
+        lt=np.pi / 2,
+    )
+    profile: str = option(
+        "gaussian", doc="radial intensity profile across the cone", choices=PROFILES
+    )
+    samples: int = option(
+        16,
+        doc="rays traced per beam (the footprint's Monte Carlo samples; the render's spp)",
+        ge=1,
+    )
 
     def __post_init__(self) -> None:
-        if not 0 <= self.divergence_rad < np.pi / 2:
-            raise ValueError(f"divergence_rad must be in [0, pi/2), got {self.divergence_rad}")
-        if self.profile not in PROFILES:
-            raise ValueError(f"unknown profile {self.profile!r}; valid: {', '.join(PROFILES)}")
-        if int(self.samples) < 1:
-            raise ValueError(f"samples must be >= 1, got {self.samples}")
+        check_bounds(self)
 
     @property
     def sigma_rad(self) -> float:

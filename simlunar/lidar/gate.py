@@ -20,38 +20,41 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.lidar.waveform import TimeBins
+from simlunar.registry import check_bounds, option
 
 __all__ = ["GateOptions", "gate_bins", "plane_ranges"]
 
 
 @dataclass(frozen=True)
 class GateOptions:
-    """Where the receiver expects the ground.
+    """Where the receiver expects the ground."""
 
-    Parameters
-    ----------
-    datum_z_m : float
-        Height of the reference plane in the world frame (m), used without an altimeter.
-    altimeter : bool
-        Measure the plane first: range the boresight with windows stepped from the sensor out
-        to ``max_range_m`` (a pulse per step) and put the plane through that point.
-    max_range_m : float
-        The instrument's largest range (m): rays that would meet the plane farther (or never)
-        are gated at it.
-    min_range_m : float
-        The instrument's smallest range (m).
-    """
-
-    datum_z_m: float = 0.0
-    altimeter: bool = False
-    max_range_m: float = 2000.0
-    min_range_m: float = 0.1
+    datum_z_m: float = option(
+        0.0,
+        doc="height of the reference plane in the world frame, used without an altimeter",
+        unit="m",
+    )
+    altimeter: bool = option(
+        False,
+        doc="measure the plane first: range the boresight with windows stepped from the sensor "
+        "out to max_range_m (a pulse per step) and put the plane through that point",
+    )
+    max_range_m: float = option(
+        2000.0,
+        doc="the instrument's largest range: rays that would meet the plane farther (or never) "
+        "are gated at it",
+        unit="m",
+        gt=0,
+    )
+    min_range_m: float = option(0.1, doc="the instrument's smallest range", unit="m", ge=0)
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.datum_z_m) and 0 <= self.min_range_m < self.max_range_m):
+        check_bounds(self)
+        if not np.isfinite(self.datum_z_m):
+            raise ValueError(f"datum_z_m must be a finite number, got {self.datum_z_m!r}")
+        if not self.min_range_m < self.max_range_m:
             raise ValueError(
-                f"need a finite datum_z_m and 0 <= min_range_m < max_range_m, got "
-                f"{self.datum_z_m}, {self.min_range_m}, {self.max_range_m}"
+                f"min_range_m must be < max_range_m, got {self.min_range_m} >= {self.max_range_m}"
             )
 
 

@@ -22,86 +22,91 @@ on a rendered plane in tests/lidar/test_scan.py):
   zero); ``Omega_rx`` is the receiver pixel's solid angle (a beam's: its receiver
   field of view, a disk of full angle ``field_rad``).
 
-:data:`INSTRUMENTS` holds three instrument presets; their sources and which numbers are
-assumptions are in docs/lidar.md ("Instruments").
+:data:`INSTRUMENTS` holds the instrument presets, read at import from ``instruments.toml``
+beside this module (:func:`load_instruments`); their sources and which numbers are assumptions
+are in that file's comments and in docs/lidar.md ("Instruments").
 """
 
 from __future__ import annotations
 
 import dataclasses
+import sys
 from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
 
 import numpy as np
 
-from simlunar.lidar.detector import PLANCK, DetectorOptions
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+from simlunar.lidar.detector import DETECTOR_OPTIONS, PLANCK, DetectorOptions
 from simlunar.lidar.waveform import SPEED_OF_LIGHT, PulseOptions
+from simlunar.registry import check_bounds, did_you_mean, option, shared_option
 
 __all__ = [
     "INSTRUMENTS",
+    "INSTRUMENTS_FILE",
     "LidarHardware",
     "instrument",
+    "load_instruments",
     "pixel_solid_angles",
 ]
 
 
 @dataclass(frozen=True)
 class LidarHardware:
-    """A LIDAR's transmitter, receiver and detector (SI units).
+    """A LIDAR's transmitter, receiver and detector (SI units)."""
 
-    Parameters
-    ----------
-    pulse_energy_j : float
-        Laser energy per pulse leaving the instrument (J) (per beam of a multi-beam laser).
-    wavelength_m : float
-        Laser wavelength (m).
-    pulse_fwhm_s : float
-        Pulse full width at half maximum (s).
-    jitter_s : float
-        RMS timing jitter of detector and timing electronics (s).
-    pulse_rate_hz : float
-        Pulse repetition rate (1/s).
-    aperture_diameter_m : float
-        Receiver telescope / lens clear aperture (m).
-    optics_efficiency : float
-        Receiver optics transmission (filter included), in (0, 1].
-    detector_efficiency : float
-        Photon detection efficiency of the detector, in (0, 1].
-    filter_bandwidth_m : float
-        Receiver filter bandwidth (m), e.g. 1e-9 for 1 nm.
-    divergence_rad : float
-        Full beam divergence of a steered beam (rad; twice the 1/e^2 half-angle).
-    field_rad : float
-        Full-angle receiver field of view of a steered beam (rad; a disk); a flash's pixels
-        take theirs from the receiver's intrinsics.
-    dark_count_rate_hz : float
-        Dark (or noise-equivalent) counts per second.
-    solar_irradiance_w_m2_nm : float
-        Solar spectral irradiance at the wavelength above the atmosphere (W m^-2 nm^-1).
-    """
-
-    pulse_energy_j: float = 10e-6
-    wavelength_m: float = 1064e-9
-    pulse_fwhm_s: float = 1e-9
-    jitter_s: float = 0.1e-9
-    pulse_rate_hz: float = 10e3
-    aperture_diameter_m: float = 0.05
-    optics_efficiency: float = 0.6
-    detector_efficiency: float = 0.4
-    filter_bandwidth_m: float = 1e-9
-    divergence_rad: float = 1e-3
-    field_rad: float = 1e-3
-    dark_count_rate_hz: float = 0.0
-    solar_irradiance_w_m2_nm: float = 0.64
+    pulse_energy_j: float = option(
+        10e-6,
+        doc="laser energy per pulse leaving the instrument (per beam of a multi-beam laser)",
+        unit="J",
+        gt=0,
+    )
+    wavelength_m: float = option(1064e-9, doc="laser wavelength", unit="m", gt=0)
+    pulse_fwhm_s: float = option(1e-9, doc="pulse full width at half maximum", unit="s", gt=0)
+    jitter_s: float = option(
+        0.1e-9, doc="RMS timing jitter of detector and timing electronics", unit="s", ge=0
+    )
+    pulse_rate_hz: float = option(10e3, doc="pulse repetition rate", unit="1/s", gt=0)
+    aperture_diameter_m: float = option(
+        0.05, doc="receiver telescope / lens clear aperture", unit="m", gt=0
+    )
+    optics_efficiency: float = option(
+        0.6, doc="receiver optics transmission (filter included)", gt=0, le=1
+    )
+    detector_efficiency: float = option(
+        0.4, doc="photon detection efficiency of the detector", gt=0, le=1
+    )
+    filter_bandwidth_m: float = option(
+        1e-9, doc="receiver filter bandwidth, e.g. 1e-9 for 1 nm", unit="m", gt=0
+    )
+    divergence_rad: float = option(
+        1e-3,
+        doc="full beam divergence of a steered beam (twice the 1/e^2 half-angle)",
+        unit="rad",
+        gt=0,
+    )
+    field_rad: float = option(
+        1e-3,
+        doc="full-angle receiver field of view of a steered beam (a disk); a flash's pixels "
+        "take theirs from the receiver's intrinsics",
+        unit="rad",
+        gt=0,
+    )
+    dark_count_rate_hz: float = shared_option(DETECTOR_OPTIONS, "dark_count_rate_hz")
+    solar_irradiance_w_m2_nm: float = option(
+        0.64,
+        doc="solar spectral irradiance at the wavelength above the atmosphere",
+        unit="W m^-2 nm^-1",
+        gt=0,
+    )
 
     def __post_init__(self) -> None:
-        for name, value in dataclasses.asdict(self).items():
-            zero_ok = name in ("jitter_s", "dark_count_rate_hz")
-            if not (np.isfinite(value) and (value >= 0 if zero_ok else value > 0)):
-                bound = ">= 0" if zero_ok else "> 0"
-                raise ValueError(f"{name} must be finite and {bound}, got {value}")
-        for name in ("optics_efficiency", "detector_efficiency"):
-            if getattr(self, name) > 1:
-                raise ValueError(f"{name} must be <= 1, got {getattr(self, name)}")
+        check_bounds(self)
 
     @property
     def photon_energy_j(self) -> float:
@@ -211,84 +216,73 @@ def pixel_solid_angles(fx: float, fy: float, cx: float, cy: float, width: int, h
     return big[1:, 1:] - big[1:, :-1] - big[:-1, 1:] + big[:-1, :-1]
 
 
-#: Instrument presets (docs/lidar.md, "Instruments": sources; ``*`` = an assumption).
-INSTRUMENTS: dict[str, LidarHardware] = {
-    # LOLA (Smith et al. 2010, Space Sci. Rev. 150): 1064 nm, 2.7 mJ over 5
-    # beams, 28 Hz, 14 cm telescope, 100 urad beams, linear-mode Si APD. Receiver field
-    # 400 urad, 5 ns pulse: recalled from Smith et al. 2010*; efficiencies, filter, jitter*.
-    "lola_beam": LidarHardware(
-        pulse_energy_j=2.7e-3 / 5,
-        wavelength_m=1064e-9,
-        pulse_fwhm_s=5e-9,
-        jitter_s=0.5e-9,
-        pulse_rate_hz=28.0,
-        aperture_diameter_m=0.14,
-        optics_efficiency=0.5,
-        detector_efficiency=0.4,
-        filter_bandwidth_m=1e-9,
-        divergence_rad=100e-6,
-        field_rad=400e-6,
-        dark_count_rate_hz=0.0,
-        solar_irradiance_w_m2_nm=0.64,
-    ),
-    # ALHAT-class hazard-detection flash (Amzajerdian et al. 2015, AIAA GNC; not rechecked here):
-    # 128 x 128, about 1 km slant range, rocks > 30 cm, slopes > 5 deg, any lighting. Wavelength,
-    # energy, pulse, rate, aperture, efficiencies, filter: assumptions* sized to give ~200 photons
-    # per pixel from albedo 0.12 at 1 km over a 1 deg field.
-    "alhat_flash": LidarHardware(
-        pulse_energy_j=30e-3,
-        wavelength_m=1064e-9,
-        pulse_fwhm_s=6e-9,
-        jitter_s=0.5e-9,
-        pulse_rate_hz=30.0,
-        aperture_diameter_m=0.05,
-        optics_efficiency=0.6,
-        detector_efficiency=0.5,
-        filter_bandwidth_m=1e-9,
-        divergence_rad=np.radians(1.0),
-        field_rad=np.radians(1.0),
-        dark_count_rate_hz=0.0,
-        solar_irradiance_w_m2_nm=0.64,
-    ),
-    # Rover-mast scanner (pan-tilt, close range 0.3-5 m): every number an assumption*: a
-    # picosecond microchip laser (0.1 ns, 1 nJ at 10 kHz), 25 mm lens, 1 mrad beam and field.
-    "rover_mast_scanner": LidarHardware(
-        pulse_energy_j=1e-9,
-        wavelength_m=1064e-9,
-        pulse_fwhm_s=0.1e-9,
-        jitter_s=0.02e-9,
-        pulse_rate_hz=10e3,
-        aperture_diameter_m=0.025,
-        optics_efficiency=0.6,
-        detector_efficiency=0.3,
-        filter_bandwidth_m=1e-9,
-        divergence_rad=1e-3,
-        field_rad=1e-3,
-        dark_count_rate_hz=100.0,
-        solar_irradiance_w_m2_nm=0.64,
-    ),
-    # Micromirror-steered flash (the paper's envisioned sensor): every number an assumption*:
-    # a compact 1064 nm laser (1 mJ, 1 ns at 30 Hz) lighting a digital micromirror device whose
-    # on-mirrors send equal shares of the pulse to their dots (the device's throughput, 0.65*,
-    # folded into optics_efficiency 0.6 x 0.65 = 0.39*), a 50 mm receiver aperture*, a
-    # linear-mode APD array (efficiency 0.5*), 1 nm filter*. Divergence and field: the guide
-    # camera's (set by the sensor; these two are unused).
-    "micromirror_flash": LidarHardware(
-        pulse_energy_j=1e-3,
-        wavelength_m=1064e-9,
-        pulse_fwhm_s=1e-9,
-        jitter_s=0.1e-9,
-        pulse_rate_hz=30.0,
-        aperture_diameter_m=0.05,
-        optics_efficiency=0.39,
-        detector_efficiency=0.5,
-        filter_bandwidth_m=1e-9,
-        divergence_rad=np.radians(40.0),
-        field_rad=np.radians(40.0),
-        dark_count_rate_hz=0.0,
-        solar_irradiance_w_m2_nm=0.64,
-    ),
-}
+#: the instrument presets' file, beside this module (package data)
+INSTRUMENTS_FILE = "instruments.toml"
+
+
+def _instrument_values(name: str, entry, where: str) -> dict[str, float]:
+    """The :class:`LidarHardware` keywords of one table of an instruments file: every field
+    once, in SI units or (an angle) as ``<field>_deg`` in degrees."""
+    if not isinstance(entry, dict):
+        raise ValueError(f"{where}: {name!r} must be a table of LidarHardware fields")
+    fields = [f.name for f in dataclasses.fields(LidarHardware)]
+    angles = [f for f in fields if f.endswith("_rad")]
+    keys = fields + [f"{a.removesuffix('_rad')}_deg" for a in angles]
+    values = {}
+    for key, v in entry.items():
+        if key not in keys:
+            raise ValueError(f"{where}: [{name}] has no field {key!r}{did_you_mean(key, keys)}")
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise ValueError(f"{where}: [{name}] {key} must be a number, got {v!r}")
+        field = f"{key.removesuffix('_deg')}_rad" if key.endswith("_deg") else key
+        if field in values:
+            raise ValueError(f"{where}: [{name}] gives {field} twice (in rad and in deg)")
+        values[field] = float(np.radians(v)) if key.endswith("_deg") else float(v)
+    missing = [f for f in fields if f not in values]
+    if missing:
+        raise ValueError(f"{where}: [{name}] lacks {', '.join(missing)}")
+    return values
+
+
+def load_instruments(path=None) -> dict[str, LidarHardware]:
+    """The instrument presets of a TOML file: one table per instrument, its keys every field
+    of :class:`LidarHardware` (SI units; an angle may be ``<field>_deg``, in degrees).
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        Default: :data:`INSTRUMENTS_FILE` beside this module (docs/lidar.md, "Instruments":
+        the presets' sources, in the file's comments too).
+
+    Raises
+    ------
+    ValueError
+        A table with a stray key (naming the closest field), a missing field, a value that is
+        not a number, an angle given twice, or a value out of its field's bounds; the message
+        names the file and the instrument.
+    """
+    if path is None:
+        text = resources.files(__package__).joinpath(INSTRUMENTS_FILE).read_text()
+        where = INSTRUMENTS_FILE
+    else:
+        text, where = Path(path).read_text(), str(path)
+    try:
+        table = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ValueError(f"{where}: not valid TOML: {e}") from None
+    out = {}
+    for name, entry in table.items():
+        values = _instrument_values(name, entry, where)
+        try:
+            out[name] = LidarHardware(**values)
+        except ValueError as e:
+            raise ValueError(f"{where}: [{name}] {e}") from None
+    return out
+
+
+#: Instrument presets (docs/lidar.md, "Instruments": sources; ``*`` = an assumption), read from
+#: :data:`INSTRUMENTS_FILE` at import.
+INSTRUMENTS: dict[str, LidarHardware] = load_instruments()
 
 
 def instrument(name: str, **overrides) -> LidarHardware:

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from simlunar.lidar.steering import SteeringOptions, move_time, raster_sweep, scan_timing
+from simlunar.registry import check_bounds, option
 
 __all__ = [
     "METHODS",
@@ -36,30 +37,24 @@ METHODS = ("nn2opt", "raster", "given")
 
 @dataclass(frozen=True)
 class OrderOptions:
-    """How the points of a steered scan are ordered.
+    """How the points of a steered scan are ordered."""
 
-    Parameters
-    ----------
-    method : "nn2opt", "raster" or "given"
-        Nearest neighbour + 2-opt; serpentine raster lines; the planner's order.
-    neighbours : int
-        Candidate neighbours per point for 2-opt.
-    max_passes : int
-        Largest number of 2-opt passes over the tour.
-    line_pitch_rad : float or None
-        Raster line spacing in elevation (rad); None = sqrt(area / n) of the points' box.
-    """
-
-    method: str = "nn2opt"
-    neighbours: int = 8
-    max_passes: int = 50
-    line_pitch_rad: float | None = None
+    method: str = option(
+        "nn2opt",
+        doc="nearest neighbour + 2-opt; serpentine raster lines; the planner's order",
+        choices=METHODS,
+    )
+    neighbours: int = option(8, doc="candidate neighbours per point for 2-opt", ge=1)
+    max_passes: int = option(50, doc="largest number of 2-opt passes over the tour", ge=0)
+    line_pitch_rad: float | None = option(
+        None,
+        doc="raster line spacing in elevation; None = sqrt(area / n) of the points' box",
+        unit="rad",
+        gt=0,
+    )
 
     def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise ValueError(f"unknown order {self.method!r}; valid: {', '.join(METHODS)}")
-        if int(self.neighbours) < 1 or int(self.max_passes) < 0:
-            raise ValueError("neighbours must be >= 1 and max_passes >= 0")
+        check_bounds(self)
 
 
 def raster_order(angles: np.ndarray, line_pitch_rad: float | None = None) -> np.ndarray:

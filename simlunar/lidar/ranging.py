@@ -26,6 +26,7 @@ from scipy import ndimage
 from scipy.special import erf
 
 from simlunar.lidar.waveform import PulseOptions, TimeBins, pulse_kernel
+from simlunar.registry import check_bounds, option
 
 __all__ = ["METHODS", "RETURNS", "RangeOptions", "RangeResult", "extract_ranges"]
 
@@ -36,43 +37,39 @@ FITS = ("ml", "parabola")
 
 @dataclass(frozen=True)
 class RangeOptions:
-    """How a range is read from a histogram.
+    """How a range is read from a histogram."""
 
-    Parameters
-    ----------
-    method : "matched" or "peak"
-        Matched filter (correlate with the pulse response) or the raw histogram's peak.
-    which : "strongest", "first" or "last"
-        Which return to report when several are detected.
-    threshold_sigma : float
-        Detection threshold above the background, in standard deviations of its shot noise.
-    min_photons : float
-        Smallest estimated signal (photons) of a return.
-    fit : "ml" or "parabola"
-        Sub-bin position: maximum-likelihood fit of the pulse (Poisson model) or the
-        parabola's vertex alone (also used where the pulse is narrower than 0.3 bin).
-    pileup_correction : bool
-        With a Geiger-mode SPAD receiver, refit every detected return through the dead time's
-        exact expected histogram (:func:`simlunar.lidar.spad.spad_correct`): range and signal
-        without the pile-up bias (a fit per return; the LIDAR scans apply it).
-    """
-
-    method: str = "matched"
-    which: str = "strongest"
-    threshold_sigma: float = 5.0
-    min_photons: float = 3.0
-    fit: str = "ml"
-    pileup_correction: bool = True
+    method: str = option(
+        "matched",
+        doc="matched filter (correlate with the pulse response) or the raw histogram's peak",
+        choices=METHODS,
+    )
+    which: str = option(
+        "strongest", doc="which return to report when several are detected", choices=RETURNS
+    )
+    threshold_sigma: float = option(
+        5.0,
+        doc="detection threshold above the background, in standard deviations of its shot noise",
+        ge=0,
+    )
+    min_photons: float = option(
+        3.0, doc="smallest estimated signal of a return", unit="photon", ge=0
+    )
+    fit: str = option(
+        "ml",
+        doc="sub-bin position: maximum-likelihood fit of the pulse (Poisson model) or the "
+        "parabola's vertex alone (also used where the pulse is narrower than 0.3 bin)",
+        choices=FITS,
+    )
+    pileup_correction: bool = option(
+        True,
+        doc="with a Geiger-mode SPAD receiver, refit every detected return through the dead "
+        "time's exact expected histogram (simlunar.lidar.spad.spad_correct): range and signal "
+        "without the pile-up bias (a fit per return; the LIDAR scans apply it)",
+    )
 
     def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise ValueError(f"unknown method {self.method!r}; valid: {', '.join(METHODS)}")
-        if self.which not in RETURNS:
-            raise ValueError(f"unknown return {self.which!r}; valid: {', '.join(RETURNS)}")
-        if self.fit not in FITS:
-            raise ValueError(f"unknown fit {self.fit!r}; valid: {', '.join(FITS)}")
-        if not (self.threshold_sigma >= 0 and self.min_photons >= 0):
-            raise ValueError("threshold_sigma and min_photons must be >= 0")
+        check_bounds(self)
 
 
 @dataclass(frozen=True, eq=False)

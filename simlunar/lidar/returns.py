@@ -13,7 +13,7 @@
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from simlunar.lidar.ranging import RangeOptions, extract_ranges
 from simlunar.lidar.spad import spad_correct
 from simlunar.lidar.steering import ScanTiming
 from simlunar.lidar.waveform import PulseOptions, TimeBins, shape_waveform
+from simlunar.registry import check_bounds, option
 
 __all__ = [
     "LidarScan",
@@ -42,79 +43,80 @@ __all__ = [
 
 @dataclass(frozen=True)
 class TransientOptions:
-    """Rendering of time-of-flight returns.
+    """Rendering of time-of-flight returns."""
 
-    Parameters
-    ----------
-    spp : int
-        Samples per pixel of a flash frame (steered beams use ``FootprintOptions.samples``).
-    max_depth : int
-        Longest path (2 = direct only; see :mod:`simlunar.render.transient` on steered beams).
-    seed : int
-        Sampler seed.
-    laser_intensity : float
-        Radiant intensity of the point laser (W/sr); the histograms scale with it.
-    oversample : int
-        Rendered (fine) time bins per output bin. With the linear splat of the film, 2 keeps
-        a plane's noise-free range within 0.01 mm at 0.65 pulse sigma per bin and 0.2 mm at
-        0.44 (tests/lidar/test_ranging.py); memory grows with it.
-    """
-
-    spp: int = 64
-    max_depth: int = 2
-    seed: int = 0
-    laser_intensity: float = 1.0
-    oversample: int = 2
+    spp: int = option(
+        64,
+        doc="samples per pixel of a flash frame (steered beams use FootprintOptions.samples)",
+        ge=1,
+    )
+    max_depth: int = option(
+        2,
+        doc="longest path, -1 (unbounded) or >= 1 (2 = direct only; see "
+        "simlunar.render.transient on steered beams)",
+        ge=-1,
+    )
+    seed: int = option(0, doc="sampler seed", ge=0)
+    laser_intensity: float = option(
+        1.0,
+        doc="radiant intensity of the point laser; the histograms scale with it",
+        unit="W/sr",
+        gt=0,
+    )
+    oversample: int = option(
+        2,
+        doc="rendered (fine) time bins per output bin. With the linear splat of the film, 2 "
+        "keeps a plane's noise-free range within 0.01 mm at 0.65 pulse sigma per bin and 0.2 mm "
+        "at 0.44 (tests/lidar/test_ranging.py); memory grows with it",
+        ge=1,
+    )
 
     def __post_init__(self) -> None:
-        if int(self.spp) < 1 or int(self.seed) < 0:
-            raise ValueError("spp must be >= 1 and seed >= 0")
-        if int(self.oversample) < 1:
-            raise ValueError(f"oversample must be >= 1, got {self.oversample}")
-        if self.max_depth == 0 or self.max_depth < -1:
-            raise ValueError(f"max_depth must be -1 or >= 1, got {self.max_depth}")
-        if not self.laser_intensity > 0:
-            raise ValueError(f"laser_intensity must be > 0 W/sr, got {self.laser_intensity}")
+        check_bounds(self)
+        if self.max_depth == 0:
+            raise ValueError("max_depth must be -1 or >= 1, got 0")
 
 
 @dataclass(frozen=True)
 class ReturnOptions:
-    """What every LIDAR here shares: rendering the returns and reading ranges from them.
+    """What every LIDAR here shares: rendering the returns and reading ranges from them."""
 
-    Parameters
-    ----------
-    pulse : PulseOptions
-        Pulse FWHM and timing jitter (s).
-    detector : DetectorOptions
-        Photon scales, dark counts, dead time, pulses per reading.
-    ranging : RangeOptions
-    transient : TransientOptions
-        Rendering (path depth, seed, laser intensity W/sr).
-    bin_range_m : float
-        Range width of a time bin (m).
-    margin_m : float
-        Range margin (m) around the expected ranges.
-    hardware : LidarHardware or None
-        The instrument: when given, the photon scales and dark counts of ``detector`` are
-        derived from it (the lidar equation, :mod:`simlunar.lidar.hardware`) and the rendered
-        laser intensity and sun irradiance; ``detector``'s own ``signal_photons`` and
-        ``background_photons_per_s`` are then the expert override used only without it.
-        :func:`~simlunar.lidar.scan.with_hardware` also sets the pulse, rates and divergence
-        from it.
-    gate : GateOptions
-        The range gate: a reference plane (datum or altimeter reading) and the instrument's
-        range limits (:mod:`simlunar.lidar.gate`); ``margin_m`` must cover the terrain's
-        relief about the plane.
-    """
+    pulse: PulseOptions = option(doc="pulse FWHM and timing jitter", default_factory=PulseOptions)
+    detector: DetectorOptions = option(
+        doc="photon scales, dark counts, dead time, pulses per reading",
+        default_factory=DetectorOptions,
+    )
+    ranging: RangeOptions = option(
+        doc="how a range is read from a histogram", default_factory=RangeOptions
+    )
+    transient: TransientOptions = option(
+        doc="rendering (path depth, seed, laser intensity)", default_factory=TransientOptions
+    )
+    bin_range_m: float = option(0.05, doc="range width of a time bin", unit="m", gt=0)
+    margin_m: float = option(
+        2.0,
+        doc="range margin on both sides of the predicted ranges in a receiver window (a "
+        "flash: the reference plane's; a steered beam: each beam's, in its batch's window); it "
+        "must cover the terrain's relief about the gate's reference plane",
+        unit="m",
+        ge=0,
+    )
+    hardware: LidarHardware | None = option(
+        None,
+        doc="the instrument: when given, the photon scales and dark counts of detector are "
+        "derived from it (the lidar equation, simlunar.lidar.hardware) and the rendered laser "
+        "intensity and sun irradiance; detector's own signal_photons and "
+        "background_photons_per_s are then the expert override used only without it "
+        "(simlunar.lidar.scan.with_hardware also sets the pulse, rates and divergence from it)",
+    )
+    gate: GateOptions = option(
+        doc="the range gate: a reference plane (datum or altimeter reading) and the "
+        "instrument's range limits (simlunar.lidar.gate)",
+        default_factory=GateOptions,
+    )
 
-    pulse: PulseOptions = field(default_factory=PulseOptions)
-    detector: DetectorOptions = field(default_factory=DetectorOptions)
-    ranging: RangeOptions = field(default_factory=RangeOptions)
-    transient: TransientOptions = field(default_factory=TransientOptions)
-    bin_range_m: float = 0.05
-    margin_m: float = 2.0
-    hardware: LidarHardware | None = None
-    gate: GateOptions = field(default_factory=GateOptions)
+    def __post_init__(self) -> None:
+        check_bounds(self)
 
     def photon_detector(
         self, *, pulses=None, field_sr=None, lit_sr=None, sun_irradiance=1.0

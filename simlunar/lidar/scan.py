@@ -19,7 +19,7 @@ Ranges are slant ranges from the sensor's origin along the beam (m).
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -34,6 +34,7 @@ from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read
 from simlunar.lidar.steering import SteeringOptions, point_times, pointing_angles, scan_timing
 from simlunar.lidar.trajectory import Flight, PlatformMotion, place_points, rotate_small
 from simlunar.lidar.waveform import TimeBins
+from simlunar.registry import option
 
 __all__ = [
     "SteeredBeamOptions",
@@ -49,41 +50,38 @@ __all__ = [
 class SteeredBeamOptions(ReturnOptions):
     """A steered-beam LIDAR (gimbaled altimeter or galvanometer scanner).
 
-    Parameters
-    ----------
-    pulse, ranging, transient, bin_range_m
-        As for every LIDAR (:class:`~simlunar.lidar.returns.ReturnOptions`).
-    detector : DetectorOptions
-        Its ``pulses`` is replaced by ``steering.pulses_per_point``.
-    margin_m : float
-        Range margin (m) on both sides of the ray-cast ranges in each batch's window.
-    footprint : FootprintOptions
-        Divergence (rad), profile and rays per beam.
-    steering : SteeringOptions
-        Slew rate (rad/s), acceleration (rad/s^2), settle (s), pulse rate (Hz), pulses/point.
-    order : OrderOptions
-    window_m : float
-        Range window of each rendered batch (m).
-    batch : int
-        Beams per render launch.
-    motion : PlatformMotion or None
-        The platform's motion during the scan (:mod:`simlunar.lidar.trajectory`); None = at
-        rest. Used by :class:`simlunar.sensors.SteeredBeam` (which starts it at the guide
-        camera); :func:`steered_beam_scan` takes the trajectory itself.
+    The fields of every LIDAR are :class:`~simlunar.lidar.returns.ReturnOptions`'s; the
+    detector's ``pulses`` is replaced by ``steering.pulses_per_point``.
     """
 
-    footprint: FootprintOptions = field(default_factory=FootprintOptions)
-    steering: SteeringOptions = field(default_factory=SteeringOptions)
-    order: OrderOptions = field(default_factory=OrderOptions)
-    window_m: float = 8.0
-    batch: int = 4096
-    motion: PlatformMotion | None = None
+    footprint: FootprintOptions = option(
+        doc="divergence (rad), profile and rays per beam", default_factory=FootprintOptions
+    )
+    steering: SteeringOptions = option(
+        doc="slew rate (rad/s), acceleration (rad/s^2), settle (s), pulse rate (Hz), "
+        "pulses per point",
+        default_factory=SteeringOptions,
+    )
+    order: OrderOptions = option(
+        doc="how the points are ordered (simlunar.lidar.ordering)", default_factory=OrderOptions
+    )
+    window_m: float = option(
+        8.0, doc="range window of each rendered batch (> 2 margin_m)", unit="m", gt=0
+    )
+    batch: int = option(4096, doc="beams per render launch", ge=1)
+    motion: PlatformMotion | None = option(
+        None,
+        doc="the platform's motion during the scan (simlunar.lidar.trajectory); None = at rest. "
+        "Used by simlunar.sensors.SteeredBeam (which starts it at the guide camera); "
+        "steered_beam_scan takes the trajectory itself",
+    )
 
     def __post_init__(self) -> None:
-        if not (self.bin_range_m > 0 and self.window_m > 2 * self.margin_m >= 0):
-            raise ValueError("need bin_range_m > 0 and window_m > 2 margin_m >= 0")
-        if int(self.batch) < 1:
-            raise ValueError(f"batch must be >= 1, got {self.batch}")
+        super().__post_init__()
+        if not self.window_m > 2 * self.margin_m:
+            raise ValueError(
+                f"window_m must be > 2 margin_m, got {self.window_m} <= 2 x {self.margin_m}"
+            )
 
     @property
     def window(self) -> TimeBins:

@@ -27,56 +27,34 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.registry import check_bounds, option
+
 #: the steering models of :class:`SteeringOptions`
 MODELS = ("gimbal", "galvanometer", "continuous_raster")
 
 
 @dataclass(frozen=True)
 class SteeringOptions:
-    """Two-axis steering mechanics (both axes alike).
+    """Two-axis steering mechanics (both axes alike)."""
 
-    Parameters
-    ----------
-    max_rate_rad_s : float
-        Largest angular speed of an axis (rad/s).
-    max_accel_rad_s2 : float
-        Largest angular acceleration of an axis (rad/s^2).
-    settle_s : float
-        Settling time after every move (s).
-    pulse_rate_hz : float
-        Laser pulse repetition rate (1/s).
-    pulses_per_point : int
-        Pulses accumulated into one point's histogram.
-    model : {"gimbal", "galvanometer", "continuous_raster"}
-        The steering model (module docstring).
-    line_pitch_rad : float or None
-        Continuous raster: elevation height of a line (rad); required by that model (the
-        steered-beam sensor sets it to the guide camera's pixel pitch when None).
-    """
-
-    max_rate_rad_s: float = 2.0
-    max_accel_rad_s2: float = 50.0
-    settle_s: float = 1e-3
-    pulse_rate_hz: float = 10_000.0
-    pulses_per_point: int = 1
-    model: str = "gimbal"
-    line_pitch_rad: float | None = None
+    max_rate_rad_s: float = option(2.0, doc="largest angular speed of an axis", unit="rad/s", gt=0)
+    max_accel_rad_s2: float = option(
+        50.0, doc="largest angular acceleration of an axis", unit="rad/s^2", gt=0
+    )
+    settle_s: float = option(1e-3, doc="settling time after every move", unit="s", ge=0)
+    pulse_rate_hz: float = option(10_000.0, doc="laser pulse repetition rate", unit="1/s", gt=0)
+    pulses_per_point: int = option(1, doc="pulses accumulated into one point's histogram", ge=1)
+    model: str = option("gimbal", doc="the steering model (module docstring)", choices=MODELS)
+    line_pitch_rad: float | None = option(
+        None,
+        doc="continuous raster: elevation height of a line; required by that model (the "
+        "steered-beam sensor sets it to the guide camera's pixel pitch when None)",
+        unit="rad",
+        gt=0,
+    )
 
     def __post_init__(self) -> None:
-        if self.model not in MODELS:
-            raise ValueError(f"unknown steering model {self.model!r}; valid: {', '.join(MODELS)}")
-        if self.line_pitch_rad is not None and not (
-            np.isfinite(self.line_pitch_rad) and self.line_pitch_rad > 0
-        ):
-            raise ValueError(f"line_pitch_rad must be finite and > 0, got {self.line_pitch_rad}")
-        for name in ("max_rate_rad_s", "max_accel_rad_s2", "pulse_rate_hz"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be finite and > 0, got {v}")
-        if not self.settle_s >= 0:
-            raise ValueError(f"settle_s must be >= 0 s, got {self.settle_s}")
-        if int(self.pulses_per_point) < 1:
-            raise ValueError(f"pulses_per_point must be >= 1, got {self.pulses_per_point}")
+        check_bounds(self)
 
     @property
     def move_accel_rad_s2(self) -> float:

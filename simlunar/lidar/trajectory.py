@@ -28,9 +28,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.geometry import Camera, Pose
+from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = [
     "JITTER_TONES",
+    "MOTION_OPTIONS",
     "Flight",
     "Navigation",
     "PlatformMotion",
@@ -46,41 +48,78 @@ JITTER_TONES = 8
 COMPENSATIONS = ("exact", "noisy", "start")
 
 
-@dataclass(frozen=True, eq=False)
-class Trajectory:
-    """Constant-velocity motion of the sensor (world frame).
+@dataclass(frozen=True)
+class Navigation:
+    """What the sensor knows of its pose when it places its points (module docstring)."""
 
-    Parameters
-    ----------
-    position_m : (3,) float
-        Position at ``t = 0`` (m).
-    velocity_m_s : (3,) float
-        Velocity (m/s); zero = hover.
-    attitude_jitter_rad : float
-        RMS line-of-sight jitter per axis (rad); 0 = none.
-    jitter_bandwidth_hz : float
-        Highest frequency of the jitter (Hz).
-    jitter_seed : int
-        Seed of the jitter's phases and frequencies.
-    """
-
-    position_m: tuple = (0.0, 0.0, 0.0)
-    velocity_m_s: tuple = (0.0, 0.0, 0.0)
-    attitude_jitter_rad: float = 0.0
-    jitter_bandwidth_hz: float = 10.0
-    jitter_seed: int = 0
+    compensation: str = option(
+        "exact",
+        doc="exact: the true pose at each firing; noisy: plus white navigation errors per point; "
+        "start: the pose at the trajectory's start (no motion compensation)",
+        choices=COMPENSATIONS,
+    )
+    position_noise_m: float = option(0.0, doc="noisy: RMS position error per axis", unit="m", ge=0)
+    attitude_noise_rad: float = option(
+        0.0, doc="noisy: RMS pointing knowledge error per axis", unit="rad", ge=0
+    )
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.attitude_jitter_rad) and self.attitude_jitter_rad >= 0):
-            raise ValueError(f"attitude_jitter_rad must be >= 0, got {self.attitude_jitter_rad}")
-        if not (np.isfinite(self.jitter_bandwidth_hz) and self.jitter_bandwidth_hz > 0):
-            raise ValueError(f"jitter_bandwidth_hz must be > 0, got {self.jitter_bandwidth_hz}")
+        check_bounds(self)
+
+
+#: the motion options that :class:`Trajectory`, :class:`Flight` and :class:`PlatformMotion`
+#: declare alike: name -> keywords of :func:`simlunar.registry.option` (for
+#: :func:`simlunar.registry.shared_option`)
+MOTION_OPTIONS: dict[str, dict] = {
+    "velocity_m_s": dict(
+        default=(0.0, 0.0, 0.0),
+        doc="constant velocity (3,) in the world frame; (0, 0, -2) is a 2 m/s descent, zero a "
+        "hover",
+        unit="m/s",
+    ),
+    "attitude_jitter_rad": dict(
+        default=0.0, doc="RMS line-of-sight jitter per axis (0: none)", unit="rad", ge=0
+    ),
+    "jitter_bandwidth_hz": dict(
+        default=10.0, doc="highest frequency of the jitter", unit="Hz", gt=0
+    ),
+    "navigation": dict(
+        default=Navigation(),
+        doc="how the points are placed (place_points); default the pose known exactly",
+    ),
+    "retarget": dict(
+        default=True,
+        doc="steered beam only (simlunar.lidar.scan.steered_beam_scan): command each beam from "
+        "where the platform is towards where its planned direction (from the start) meets the "
+        "gate's reference plane; False: hold the planned directions in the world frame",
+    ),
+}
+
+
+def _vector3(name: str, value) -> np.ndarray:
+    """``value`` as a read-only (3,) float array; a ``ValueError`` naming ``name`` unless it
+    is 3 finite numbers."""
+    v = np.asarray(value, float)
+    if v.shape != (3,) or not np.isfinite(v).all():
+        raise ValueError(f"{name} must be 3 finite numbers, got {value}")
+    v.setflags(write=False)
+    return v
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """Constant-velocity motion of the sensor (world frame)."""
+
+    position_m: tuple = option((0.0, 0.0, 0.0), doc="position (3,) at t = 0", unit="m")
+    velocity_m_s: tuple = shared_option(MOTION_OPTIONS, "velocity_m_s")
+    attitude_jitter_rad: float = shared_option(MOTION_OPTIONS, "attitude_jitter_rad")
+    jitter_bandwidth_hz: float = shared_option(MOTION_OPTIONS, "jitter_bandwidth_hz")
+    jitter_seed: int = option(0, doc="seed of the jitter's phases and frequencies")
+
+    def __post_init__(self) -> None:
+        check_bounds(self)
         for name in ("position_m", "velocity_m_s"):
-            v = np.asarray(getattr(self, name), float)
-            if v.shape != (3,) or not np.isfinite(v).all():
-                raise ValueError(f"{name} must be 3 finite numbers, got {getattr(self, name)}")
-            v.setflags(write=False)
-            object.__setattr__(self, name, v)
+            object.__setattr__(self, name, _vector3(name, getattr(self, name)))
 
     @classmethod
     def hover(cls, position_m) -> Trajectory:
@@ -134,63 +173,27 @@ def camera_at(camera: Camera, trajectory: Trajectory, t: float) -> Camera:
 
 
 @dataclass(frozen=True)
-class Navigation:
-    """What the sensor knows of its pose when it places its points (module docstring).
-
-    Parameters
-    ----------
-    compensation : {"exact", "noisy", "start"}
-    position_noise_m : float
-        ``noisy``: RMS position error per axis (m).
-    attitude_noise_rad : float
-        ``noisy``: RMS pointing knowledge error per axis (rad).
-    """
-
-    compensation: str = "exact"
-    position_noise_m: float = 0.0
-    attitude_noise_rad: float = 0.0
-
-    def __post_init__(self) -> None:
-        if self.compensation not in COMPENSATIONS:
-            raise ValueError(
-                f"unknown compensation {self.compensation!r}; valid: {', '.join(COMPENSATIONS)}"
-            )
-        for name in ("position_noise_m", "attitude_noise_rad"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v}")
-
-
-@dataclass(frozen=True)
 class Flight:
     """A scan measured from a moving platform: the trajectory it flies, what the sensor knows
-    of its pose, and when on the trajectory the scan starts.
+    of its pose, and when on the trajectory the scan starts."""
 
-    Attributes
-    ----------
-    trajectory : Trajectory
-        Each beam or frame leaves from the platform's position at its firing time, turned by
-        the line of sight's attitude jitter then.
-    navigation : Navigation
-        How the points are placed (:func:`place_points`); default the pose known exactly.
-    start_s : float >= 0
-        When the scan's first beam or frame fires on the trajectory (s): a later round of a
-        multi-round acquisition continues where the previous one ended. The scan's ``times``
-        and ``seconds`` stay counted from its own start.
-    retarget : bool
-        Steered beam only (:func:`~simlunar.lidar.scan.steered_beam_scan`): command each beam
-        from where the platform is towards where its planned direction (from the start) meets
-        the gate's reference plane; False: hold the planned directions in the world frame.
-    """
-
-    trajectory: Trajectory
-    navigation: Navigation = Navigation()
-    start_s: float = 0.0
-    retarget: bool = True
+    trajectory: Trajectory = option(
+        doc="each beam or frame leaves from the platform's position at its firing time, turned "
+        "by the line of sight's attitude jitter then"
+    )
+    navigation: Navigation = shared_option(MOTION_OPTIONS, "navigation")
+    start_s: float = option(
+        0.0,
+        doc="when the scan's first beam or frame fires on the trajectory: a later round of a "
+        "multi-round acquisition continues where the previous one ended. The scan's times and "
+        "seconds stay counted from its own start",
+        unit="s",
+        ge=0,
+    )
+    retarget: bool = shared_option(MOTION_OPTIONS, "retarget")
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.start_s) and self.start_s >= 0):
-            raise ValueError(f"start_s must be finite and >= 0 s, got {self.start_s}")
+        check_bounds(self)
 
 
 def place_points(
@@ -239,30 +242,17 @@ def place_points(
 @dataclass(frozen=True)
 class PlatformMotion:
     """A sensor's motion from wherever it starts: what a study configures (the start is the
-    guide camera's centre).
+    guide camera's centre; the jitter's phases are drawn per acquisition)."""
 
-    Parameters
-    ----------
-    velocity_m_s : (3,) float
-        Constant velocity (m/s); (0, 0, -2) is a 2 m/s descent, zero a hover.
-    attitude_jitter_rad, jitter_bandwidth_hz
-        As for :class:`Trajectory` (its phases drawn per acquisition).
-    navigation : Navigation
-        How the points are placed.
-    retarget : bool
-        Re-aim each beam at its planned direction's point on the gate's reference plane from
-        where the platform is (:func:`simlunar.lidar.scan.steered_beam_scan`).
-    """
-
-    velocity_m_s: tuple = (0.0, 0.0, 0.0)
-    attitude_jitter_rad: float = 0.0
-    jitter_bandwidth_hz: float = 10.0
-    navigation: Navigation = Navigation()
-    retarget: bool = True
+    velocity_m_s: tuple = shared_option(MOTION_OPTIONS, "velocity_m_s")
+    attitude_jitter_rad: float = shared_option(MOTION_OPTIONS, "attitude_jitter_rad")
+    jitter_bandwidth_hz: float = shared_option(MOTION_OPTIONS, "jitter_bandwidth_hz")
+    navigation: Navigation = shared_option(MOTION_OPTIONS, "navigation")
+    retarget: bool = shared_option(MOTION_OPTIONS, "retarget")
 
     def __post_init__(self) -> None:
-        Trajectory((0.0, 0.0, 0.0), self.velocity_m_s, self.attitude_jitter_rad,
-                   self.jitter_bandwidth_hz)  # fmt: skip
+        check_bounds(self)
+        _vector3("velocity_m_s", self.velocity_m_s)
 
     def trajectory(self, start_m, *, jitter_seed: int = 0) -> Trajectory:
         """The trajectory from ``start_m`` (3,) m."""

@@ -29,6 +29,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.special import erf
 
+from simlunar.registry import check_bounds, option
+
 __all__ = [
     "FWHM_PER_SIGMA",
     "SPEED_OF_LIGHT",
@@ -108,24 +110,17 @@ class TimeBins:
 
 @dataclass(frozen=True)
 class PulseOptions:
-    """Laser pulse and detector timing response (both Gaussian).
+    """Laser pulse and detector timing response (both Gaussian)."""
 
-    Parameters
-    ----------
-    fwhm_s : float
-        Full width at half maximum of the emitted pulse (s); 0 = an impulse.
-    jitter_s : float
-        RMS timing jitter of the detector and timing electronics (s).
-    """
-
-    fwhm_s: float = 2e-9
-    jitter_s: float = 0.0
+    fwhm_s: float = option(
+        2e-9, doc="full width at half maximum of the emitted pulse (0: an impulse)", unit="s", ge=0
+    )
+    jitter_s: float = option(
+        0.0, doc="RMS timing jitter of the detector and timing electronics", unit="s", ge=0
+    )
 
     def __post_init__(self) -> None:
-        if not (self.fwhm_s >= 0 and self.jitter_s >= 0):
-            raise ValueError(
-                f"fwhm_s and jitter_s must be >= 0 s, got {self.fwhm_s}, {self.jitter_s}"
-            )
+        check_bounds(self)
 
     @property
     def sigma_s(self) -> float:

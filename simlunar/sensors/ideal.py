@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.registry import check_bounds, option
 from simlunar.sensors.base import Acquisition
 
 __all__ = ["IdealOptions", "IdealSampler"]
@@ -17,19 +18,17 @@ __all__ = ["IdealOptions", "IdealSampler"]
 
 @dataclass(frozen=True)
 class IdealOptions:
-    """Options of :class:`IdealSampler`.
+    """Options of :class:`IdealSampler`."""
 
-    Attributes
-    ----------
-    range_noise_std : float >= 0
-        Standard deviation of additive Gaussian noise on each range sample (m).
-    """
-
-    range_noise_std: float = 0.0
+    range_noise_std: float = option(
+        0.0,
+        doc="standard deviation of additive Gaussian noise on each range sample",
+        unit="m",
+        ge=0,
+    )
 
     def __post_init__(self):
-        if not np.isfinite(self.range_noise_std) or self.range_noise_std < 0:
-            raise ValueError(f"range_noise_std must be >= 0, got {self.range_noise_std}")
+        check_bounds(self)
 
 
 class IdealSampler:

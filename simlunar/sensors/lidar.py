@@ -26,7 +26,7 @@ where each measured point projects, and its cost is the modelled acquisition tim
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -43,16 +43,19 @@ from simlunar.lidar.scan import (
     visiting_order,
 )
 from simlunar.lidar.trajectory import Flight, PlatformMotion, camera_at, place_points, rotate_small
+from simlunar.registry import check_bounds, option, shared_option
 from simlunar.render.beam_capture import beam_capture
 from simlunar.render.transient import flash_frame
 from simlunar.sensors.base import Acquisition, NothingMeasured
 from simlunar.sensors.rounds import PlatformRounds, platform_trajectory
 
 __all__ = [
+    "FLASH_SENSOR_OPTIONS",
     "FlashLidar",
     "FlashLidarOptions",
     "LidarScene",
     "SteeredBeam",
+    "check_receiver_px",
     "revisit_tiles",
     "tile_camera",
 ]
@@ -201,57 +204,75 @@ class SteeredBeam:
         return float(t.move_s + t.settle_s)
 
 
+#: the options that :class:`FlashLidarOptions` and
+#: :class:`~simlunar.sensors.micromirror.MicromirrorOptions` declare alike: name -> keywords of
+#: :func:`simlunar.registry.option` (for :func:`simlunar.registry.shared_option`)
+FLASH_SENSOR_OPTIONS: dict[str, dict] = {
+    "flash": dict(
+        default=dataclasses.MISSING,
+        default_factory=FlashOptions,
+        doc="pulse, detector (its pulses per frame), ranging, rendering, pulse rate",
+    ),
+    "receiver_px": dict(
+        default=(64, 64),
+        doc="the receiver array (rows, cols), each >= 1, with the guide camera's field of view",
+    ),
+    "motion": dict(
+        default=None,
+        doc="the platform's motion (simlunar.lidar.trajectory; None: at rest): each frame is "
+        "taken from the pose at its own time and its points are placed with the sensor's "
+        "navigation",
+    ),
+}
+
+
+def check_receiver_px(receiver_px) -> None:
+    """``ValueError`` unless ``receiver_px`` is (rows, cols), each >= 1."""
+    if len(receiver_px) != 2 or min(receiver_px) < 1:
+        raise ValueError(f"receiver_px must be (rows, cols) >= 1, got {receiver_px}")
+
+
 @dataclass(frozen=True)
 class FlashLidarOptions:
     """Options of :class:`FlashLidar`.
 
-    Attributes
-    ----------
-    flash : FlashOptions
-        Pulse, detector (its ``pulses`` per frame), ranging, rendering, pulse rate (Hz).
-    receiver_px : (rows, cols)
-        Receiver array; the same field of view as the guide camera (same aspect).
-    revisits : int >= 0
-        Zoomed frames directed by the plan after the full-field frame (0: no plan).
-    zoom : int >= 2
-        A revisit frame sees 1 / zoom of the field on each axis (tiles of a zoom x zoom grid).
-    revisit_from : {"plan", "ranges", "both"}
-        What directs the revisits: the tiles holding most planned pixels (the image), the tiles
-        whose first-frame ranges are roughest (:func:`~simlunar.lidar.planning.tile_range_scores`:
-        the sensor's own measurement), or ``range_weight`` of the ranges' share plus the rest
-        of the plan's (:func:`~simlunar.lidar.planning.choose_tiles`).
-    range_weight : float in [0, 1]
-        ``both``: the ranges' share of a tile's score.
-    repoint_s : float >= 0
-        Time to re-point and re-zoom the receiver before each revisit (s), added per revisit.
-    motion : PlatformMotion or None
-        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest): each frame
-        is taken from the pose at its own time (frame ``i`` at ``i`` x (frame time +
-        ``repoint_s``)) and its points are placed with the sensor's navigation.
+    On a moving platform (``motion``) frame ``i`` is taken at ``i`` x (frame time +
+    ``repoint_s``).
     """
 
-    flash: FlashOptions = field(default_factory=FlashOptions)
-    receiver_px: tuple[int, int] = (64, 64)
-    revisits: int = 0
-    zoom: int = 4
-    revisit_from: str = "plan"
-    range_weight: float = 0.5
-    repoint_s: float = 0.0
-    motion: PlatformMotion | None = None
+    flash: FlashOptions = shared_option(FLASH_SENSOR_OPTIONS, "flash")
+    receiver_px: tuple[int, int] = shared_option(FLASH_SENSOR_OPTIONS, "receiver_px")
+    revisits: int = option(
+        0,
+        doc="zoomed frames directed by the plan after the full-field frame (0: no plan; at most "
+        "zoom^2)",
+        ge=0,
+    )
+    zoom: int = option(
+        4,
+        doc="a revisit frame sees 1 / zoom of the field on each axis (tiles of a zoom x zoom grid)",
+        ge=2,
+    )
+    revisit_from: str = option(
+        "plan",
+        doc="what directs the revisits: the tiles holding most planned pixels (the image), the "
+        "tiles whose first-frame ranges are roughest (simlunar.lidar.planning.tile_range_scores: "
+        "the sensor's own measurement), or range_weight of the ranges' share plus the rest of "
+        "the plan's (simlunar.lidar.planning.choose_tiles)",
+        choices=("plan", "ranges", "both"),
+    )
+    range_weight: float = option(0.5, doc="both: the ranges' share of a tile's score", ge=0, le=1)
+    repoint_s: float = option(
+        0.0,
+        doc="time to re-point and re-zoom the receiver before each revisit, added per revisit",
+        unit="s",
+        ge=0,
+    )
+    motion: PlatformMotion | None = shared_option(FLASH_SENSOR_OPTIONS, "motion")
 
     def __post_init__(self):
-        if self.revisit_from not in ("plan", "ranges", "both"):
-            raise ValueError(
-                f"revisit_from must be plan, ranges or both, got {self.revisit_from!r}"
-            )
-        if not 0.0 <= self.range_weight <= 1.0:
-            raise ValueError(f"range_weight must be in [0, 1], got {self.range_weight}")
-        if not (np.isfinite(self.repoint_s) and self.repoint_s >= 0):
-            raise ValueError(f"repoint_s must be >= 0 s, got {self.repoint_s}")
-        if len(self.receiver_px) != 2 or min(self.receiver_px) < 1:
-            raise ValueError(f"receiver_px must be (rows, cols) >= 1, got {self.receiver_px}")
-        if int(self.revisits) < 0 or int(self.zoom) < 2:
-            raise ValueError(f"need revisits >= 0 and zoom >= 2, got {self.revisits}, {self.zoom}")
+        check_bounds(self)
+        check_receiver_px(self.receiver_px)
         if int(self.revisits) > int(self.zoom) ** 2:
             raise ValueError(f"revisits {self.revisits} > the {self.zoom}^2 tiles of the field")
 

@@ -11,15 +11,21 @@ continue the trajectory (:class:`~simlunar.sensors.rounds.PlatformRounds`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from simlunar.lidar.flash import FlashOptions, micromirror_frames
 from simlunar.lidar.trajectory import Flight, PlatformMotion
+from simlunar.registry import check_bounds, shared_option
 from simlunar.render.flash_lidar import micromirror_flash
 from simlunar.sensors.base import Acquisition
-from simlunar.sensors.lidar import LidarScene, _to_guide
+from simlunar.sensors.lidar import (
+    FLASH_SENSOR_OPTIONS,
+    LidarScene,
+    _to_guide,
+    check_receiver_px,
+)
 from simlunar.sensors.rounds import PlatformRounds, platform_trajectory
 
 __all__ = ["MicromirrorFlash", "MicromirrorOptions"]
@@ -29,28 +35,20 @@ __all__ = ["MicromirrorFlash", "MicromirrorOptions"]
 class MicromirrorOptions:
     """Options of :class:`MicromirrorFlash`.
 
-    Attributes
-    ----------
-    flash : FlashOptions
-        As for the flash LIDAR; ``transient.spp`` needs about
-        ``(guide pixels / receiver pixels) x 16`` for a clean return (docs/lidar.md).
-    receiver_px : (rows, cols)
-        The receiver timing the dots (same field of view as the guide camera).
-    motion : PlatformMotion or None
-        The platform's motion (:mod:`simlunar.lidar.trajectory`; None: at rest): frame ``f``
-        is rendered from the pose at ``f`` x pulses / pulse rate
-        (:func:`~simlunar.render.flash_lidar.micromirror_flash`) and its dots' points are
-        placed with the sensor's navigation. The mirrors stay the planned pixels
-        (``motion.retarget`` is the steered beam's).
+    Its flash's ``transient.spp`` needs about ``(guide pixels / receiver pixels) x 16`` for a
+    clean return (docs/lidar.md). On a moving platform (``motion``) frame ``f`` is rendered
+    from the pose at ``f`` x pulses / pulse rate
+    (:func:`~simlunar.render.flash_lidar.micromirror_flash`); the mirrors stay the planned
+    pixels (``motion.retarget`` is the steered beam's).
     """
 
-    flash: FlashOptions = field(default_factory=FlashOptions)
-    receiver_px: tuple[int, int] = (64, 64)
-    motion: PlatformMotion | None = None
+    flash: FlashOptions = shared_option(FLASH_SENSOR_OPTIONS, "flash")
+    receiver_px: tuple[int, int] = shared_option(FLASH_SENSOR_OPTIONS, "receiver_px")
+    motion: PlatformMotion | None = shared_option(FLASH_SENSOR_OPTIONS, "motion")
 
     def __post_init__(self):
-        if len(self.receiver_px) != 2 or min(self.receiver_px) < 1:
-            raise ValueError(f"receiver_px must be (rows, cols) >= 1, got {self.receiver_px}")
+        check_bounds(self)
+        check_receiver_px(self.receiver_px)
 
 
 class MicromirrorFlash:

@@ -31,6 +31,7 @@ from simlunar.metrics.safe_site import SiteOptions, safe_site_scores
 from simlunar.planner import DEFAULT_PLANNER, MEASURING, STRATEGIES
 from simlunar.progress import stage
 from simlunar.reconstruction import Guide
+from simlunar.registry import check_bounds, option
 from simlunar.sensors import SENSORS
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import LidarScene
@@ -69,107 +70,93 @@ FITS = ("scan_time", "receiver")
 class SensorFit:
     """A planner label fitted to its sensor (:mod:`simlunar.lidar.planning`).
 
-    Attributes
-    ----------
-    kind : {"scan_time", "receiver"}
-        ``scan_time`` (tour-aware, any plan-directed LIDAR with a ``scan_seconds``): the
-        largest sample count whose plan, in the sensor's own visiting order, scans within the
-        time of the ``reference`` planner's plan at the same density
-        (:func:`~simlunar.lidar.planning.fit_to_time`; searched over ``k / 4 .. 4 k``).
-        ``receiver`` (micromirror flash): at most ``frames`` dots per receiver pixel. A map
-        drawn by the paper's weighted random draw is drawn again under the cap, its map
-        steering where (:func:`~simlunar.lidar.planning.receiver_capped_plan`); every other
-        planner (a Lloyd placement, the grid, uniform Lloyd, ...) keeps its own layout and
-        moves only the dots over the cap, each to the nearest free pixel of a receiver pixel
-        with room (:func:`~simlunar.lidar.planning.receiver_capped_layout`).
-    reference : str
-        ``scan_time``: the planner label whose scan time is the budget (in the study).
-    frames : int or None
-        ``receiver``: most dots per receiver pixel; None = the least that holds k.
+    ``scan_time`` (tour-aware, any plan-directed LIDAR with a ``scan_seconds``): the largest
+    sample count whose plan, in the sensor's own visiting order, scans within the time of the
+    ``reference`` planner's plan at the same density
+    (:func:`~simlunar.lidar.planning.fit_to_time`; searched over ``k / 4 .. 4 k``).
+    ``receiver`` (micromirror flash): at most ``frames`` dots per receiver pixel. A map drawn
+    by the paper's weighted random draw is drawn again under the cap, its map steering where
+    (:func:`~simlunar.lidar.planning.receiver_capped_plan`); every other planner (a Lloyd
+    placement, the grid, uniform Lloyd, ...) keeps its own layout and moves only the dots over
+    the cap, each to the nearest free pixel of a receiver pixel with room
+    (:func:`~simlunar.lidar.planning.receiver_capped_layout`).
     """
 
-    kind: str = "scan_time"
-    reference: str = "grid"
-    frames: int | None = None
+    kind: str = option("scan_time", doc="the planning rule (class docstring)", choices=FITS)
+    reference: str = option(
+        "grid", doc="scan_time: the planner label whose scan time is the budget (in the study)"
+    )
+    frames: int | None = option(
+        None, doc="receiver: most dots per receiver pixel; None = the least that holds k", ge=1
+    )
 
     def __post_init__(self):
-        if self.kind not in FITS:
-            raise ValueError(f"unknown sensor fit {self.kind!r}; valid: {', '.join(FITS)}")
-        if self.frames is not None and int(self.frames) < 1:
-            raise ValueError(f"frames must be >= 1, got {self.frames}")
+        check_bounds(self)
 
 
 @dataclass(frozen=True)
 class LidarStudyOptions:
-    """What a LIDAR study runs.
+    """What a LIDAR study runs."""
 
-    Attributes
-    ----------
-    sensor : str
-        A LIDAR of :data:`simlunar.sensors.SENSORS`: ``steered_beam``, ``flash`` or
-        ``micromirror_flash``.
-    sensor_options : options object of that sensor, or None (its defaults)
-    planners : sequence of str
-        Planner labels: strategy names of :data:`simlunar.planner.STRATEGIES` (from the guide
-        image; an ``oracle_*`` reads the guide view's true depth in its planner step: a bound,
-        its label starts ``oracle``), ``sequential`` (multi-round: the LIDAR measures each
-        round, :class:`~simlunar.study.lidar_planners.LidarRounds`), or labels whose strategy
-        ``strategies`` names.
-    densities : sequence of float
-        Planned pixels k / N of the guide view, each in (0, 1].
-    trials : int >= 1
-        Planner draws and photon noise per (planner, density).
-    metrics : sequence of str
-        Names of :data:`simlunar.metrics.METRICS` (against the guide view's true depth).
-    planner_opts : mapping str -> mapping
-        Per planner options of :func:`simlunar.planner.plan` (``feature_opts`` included; an
-        ``oracle_greedy``'s ``reconstruction``: a label of ``reconstructions`` whose true error
-        it reads; ``sequential``'s ``{"sequential": SequentialOptions, "prior": map name or
-        None, "feature_opts": ...}``).
-    hazard : HazardOptions or None
-        Also score hazard detection (``hazard_precision``, ``hazard_recall``) of the
-        reconstruction against the true depth's hazards.
-    outside : {"nearest", "nan"}
-        Policy of ``linear`` outside the measured cells' hull.
-    reconstructions : mapping name -> options, or names
-        Reconstructions of :data:`simlunar.reconstruction.RECONSTRUCTIONS` run on every
-        acquisition (default ``linear`` alone); a guided one reads the guide camera's image.
-    strategies : mapping label -> str
-        The strategy of a planner label that is not itself a strategy name.
-    fits : mapping label -> SensorFit
-        Labels fitted to the sensor (scan time or receiver pixels).
-    safe_site : SiteOptions or None
-        Also score whether the landing site chosen from the reconstruction is truly safe
-        (``safe_site``, ``safe_site_precision``, ``safe_sites_available``,
-        :mod:`simlunar.metrics.safe_site`).
-    """
-
-    sensor: str = "steered_beam"
-    sensor_options: object = None
-    planners: Sequence[str] = (DEFAULT_PLANNER, "random", "grid")
-    densities: Sequence[float] = (1 / 64, 1 / 256)
-    trials: int = 3
-    metrics: Sequence[str] = ("mse", "grad")
-    planner_opts: Mapping[str, Mapping] = field(default_factory=dict)
-    hazard: HazardOptions | None = None
-    outside: str = "nearest"
-    reconstructions: Mapping | Sequence = (DEFAULT_RECONSTRUCTION,)
-    strategies: Mapping[str, str] = field(default_factory=dict)
-    fits: Mapping[str, SensorFit] = field(default_factory=dict)
-    safe_site: SiteOptions | None = None
+    sensor: str = option("steered_beam", doc="a LIDAR of simlunar.sensors.SENSORS", choices=LIDARS)
+    sensor_options: object = option(
+        None, doc="options object of that sensor, or None (its defaults)"
+    )
+    planners: Sequence[str] = option(
+        (DEFAULT_PLANNER, "random", "grid"),
+        doc="planner labels: strategy names of simlunar.planner.STRATEGIES (from the guide "
+        "image; an oracle_* reads the guide view's true depth in its planner step: a bound, its "
+        "label starts oracle), sequential (multi-round: the LIDAR measures each round, "
+        "simlunar.study.lidar_planners.LidarRounds), or labels whose strategy strategies names",
+    )
+    densities: Sequence[float] = option(
+        (1 / 64, 1 / 256), doc="planned pixels k / N of the guide view, each in (0, 1]"
+    )
+    trials: int = option(3, doc="planner draws and photon noise per (planner, density)", ge=1)
+    metrics: Sequence[str] = option(
+        ("mse", "grad"),
+        doc="names of simlunar.metrics.METRICS (against the guide view's true depth)",
+    )
+    planner_opts: Mapping[str, Mapping] = option(
+        doc="per planner options of simlunar.planner.plan (feature_opts included; an "
+        "oracle_greedy's reconstruction: a label of reconstructions whose true error it reads; "
+        "sequential's {sequential: SequentialOptions, prior: map name or None, feature_opts: "
+        "...})",
+        default_factory=dict,
+    )
+    hazard: HazardOptions | None = option(
+        None,
+        doc="also score hazard detection (hazard_precision, hazard_recall) of the "
+        "reconstruction against the true depth's hazards",
+    )
+    outside: str = option("nearest", doc="policy of linear outside the measured cells' hull")
+    reconstructions: Mapping | Sequence = option(
+        (DEFAULT_RECONSTRUCTION,),
+        doc="reconstructions of simlunar.reconstruction.RECONSTRUCTIONS run on every acquisition "
+        "(a mapping name -> options, or names; a guided one reads the guide camera's image)",
+    )
+    strategies: Mapping[str, str] = option(
+        doc="the strategy of a planner label that is not itself a strategy name",
+        default_factory=dict,
+    )
+    fits: Mapping[str, SensorFit] = option(
+        doc="labels fitted to the sensor (scan time or receiver pixels)", default_factory=dict
+    )
+    safe_site: SiteOptions | None = option(
+        None,
+        doc="also score whether the landing site chosen from the reconstruction is truly safe "
+        "(safe_site, safe_site_precision, safe_sites_available; simlunar.metrics.safe_site)",
+    )
 
     def __post_init__(self):
+        check_bounds(self)
         reconstruction_options(self.reconstructions, outside=self.outside)
-        if self.sensor not in LIDARS:
-            raise ValueError(f"unknown LIDAR {self.sensor!r}; valid: {', '.join(LIDARS)}")
         opts_cls = SENSORS[self.sensor][1]
         if self.sensor_options is not None and not isinstance(self.sensor_options, opts_cls):
             raise ValueError(
                 f"sensor_options of {self.sensor!r} must be {opts_cls.__name__}, "
                 f"got {type(self.sensor_options).__name__}"
             )
-        if isinstance(self.trials, bool) or int(self.trials) < 1:
-            raise ValueError(f"trials must be an integer >= 1, got {self.trials!r}")
         bad = [m for m in self.metrics if m not in METRICS]
         if bad:
             raise ValueError(f"unknown metric {bad[0]!r}; valid: {', '.join(METRICS)}")

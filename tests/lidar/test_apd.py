@@ -63,10 +63,14 @@ def test_threshold_sets_detection_and_ranges_stay_unbiased():
 
 
 def test_bad_options():
-    with pytest.raises(ValueError, match="gain"):
+    with pytest.raises(ValueError, match=r"gain must be >= 1, got 0\.5"):
         ApdOptions(gain=0.5)
-    with pytest.raises(ValueError, match="ionisation_ratio"):
+    with pytest.raises(ValueError, match=r"ionisation_ratio must be <= 1, got 2\.0"):
         ApdOptions(ionisation_ratio=2.0)
+    with pytest.raises(ValueError, match=r"amplifier_noise_pe must be >= 0, got -0\.1"):
+        ApdOptions(amplifier_noise_pe=-0.1)
+    with pytest.raises(ValueError, match="threshold_pe must be a finite number, got nan"):
+        ApdOptions(threshold_pe=float("nan"))
     from simlunar.lidar import DetectorOptions
 
     with pytest.raises(ValueError, match="no dead time"):

@@ -30,10 +30,17 @@ def _nadir(px: int, fov_deg: float, height: float = H) -> Camera:
     return Camera(Intrinsics.from_fov(px, px, fov_deg), pose)
 
 
-def test_flash_options_refuse_bad_bins_margins_and_rates():
-    for kwargs in ({"bin_range_m": 0.0}, {"margin_m": -1.0}, {"pulse_rate_hz": 0.0}):
-        with pytest.raises(ValueError, match="need bin_range_m > 0"):
-            FlashOptions(**kwargs)
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"bin_range_m": 0.0}, "bin_range_m must be > 0, got 0.0"),
+        ({"margin_m": -1.0}, "margin_m must be >= 0, got -1.0"),
+        ({"pulse_rate_hz": 0.0}, "pulse_rate_hz must be > 0, got 0.0"),
+    ],
+)
+def test_flash_options_refuse_bad_bins_margins_and_rates(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        FlashOptions(**kwargs)
 
 
 def test_receiver_pixels_on_the_guide_lattice():

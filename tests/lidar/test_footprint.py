@@ -33,3 +33,19 @@ def test_footprint_radius_and_spread_by_hand():
     # 50 m at 60 deg incidence: 50 * tan(60) * 0.5 mrad
     assert tilted_plane_spread(50.0, np.pi / 3, o) == pytest.approx(50 * np.sqrt(3) * 5e-4)
     assert tilted_plane_spread(50.0, 0.0, o) == 0.0
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"divergence_rad": -1e-3}, "divergence_rad must be >= 0, got -0.001"),
+        ({"divergence_rad": np.pi / 2}, "divergence_rad must be < 1.5708, got 1.57"),
+        ({"divergence_rad": float("nan")}, "divergence_rad must be a finite number, got nan"),
+        ({"profile": "tophat"}, "profile must be one of 'gaussian', 'uniform', got 'tophat'"),
+        ({"samples": 0}, "samples must be >= 1, got 0"),
+    ],
+)
+def test_footprint_options_refuse_bad_values(kw, match):
+    with pytest.raises(ValueError, match=match):
+        FootprintOptions(**kw)
+    assert FootprintOptions(divergence_rad=0.0).sigma_rad == 0.0  # a single ray is valid

@@ -26,6 +26,15 @@ def test_gate_bins_cover_the_predictions_with_margins():
     assert b.range_of(b.count) == pytest.approx(57.0, abs=0.05)
 
 
-def test_bad_gate():
-    with pytest.raises(ValueError, match="min_range_m < max_range_m"):
-        GateOptions(min_range_m=10.0, max_range_m=5.0)
+@pytest.mark.parametrize(
+    ("kw", "message"),
+    [
+        ({"min_range_m": 10.0, "max_range_m": 5.0}, "min_range_m must be < max_range_m, got 10"),
+        ({"min_range_m": -0.1}, "min_range_m must be >= 0, got -0.1"),
+        ({"max_range_m": float("inf")}, "max_range_m must be a finite number, got inf"),
+        ({"datum_z_m": float("nan")}, "datum_z_m must be a finite number, got nan"),
+    ],
+)
+def test_bad_gate(kw, message):
+    with pytest.raises(ValueError, match=message):
+        GateOptions(**kw)

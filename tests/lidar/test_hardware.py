@@ -7,7 +7,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware, instrument, pixel_solid_angles
+from simlunar.lidar.hardware import (
+    INSTRUMENTS,
+    LidarHardware,
+    instrument,
+    load_instruments,
+    pixel_solid_angles,
+)
 
 HNU_1064 = 6.62607015e-34 * 299_792_458.0 / 1064e-9  # 1.8670e-19 J
 
@@ -80,5 +86,83 @@ def test_presets_and_overrides():
         instrument("lola")
     with pytest.raises(ValueError, match="optics_efficiency must be <= 1"):
         dataclasses.replace(lola, optics_efficiency=1.2)
-    with pytest.raises(ValueError, match="pulse_energy_j must be finite and > 0"):
+    with pytest.raises(ValueError, match=r"pulse_energy_j must be > 0, got 0\.0"):
         LidarHardware(pulse_energy_j=0.0)
+
+
+def test_the_presets_file_holds_the_published_numbers():
+    """Hand-picked values of instruments.toml, with their sources (docs/lidar.md)."""
+    lola = INSTRUMENTS["lola_beam"]
+    # LOLA, Smith et al. 2010 (Space Sci. Rev. 150): 2.7 mJ split into 5 beams at 28 Hz,
+    # a 14 cm telescope, 100 urad beams, 1064 nm
+    assert lola.pulse_energy_j == 2.7e-3 / 5 and lola.pulse_rate_hz == 28.0
+    assert lola.aperture_diameter_m == 0.14 and lola.divergence_rad == 100e-6
+    assert lola.wavelength_m == 1064e-9 and lola.field_rad == 400e-6
+    # the ALHAT-class flash's 1 deg field (an assumption, given in degrees in the file)
+    alhat = INSTRUMENTS["alhat_flash"]
+    assert alhat.field_rad == alhat.divergence_rad == np.radians(1.0) == 0.017453292519943295
+    assert alhat.pulse_energy_j == 30e-3 and alhat.detector_efficiency == 0.5
+    # the micromirror flash: optics 0.6 x the device's throughput 0.65 = 0.39, a 40 deg field
+    mm = INSTRUMENTS["micromirror_flash"]
+    assert mm.optics_efficiency == 0.39 and mm.divergence_rad == np.radians(40.0)
+    assert INSTRUMENTS["rover_mast_scanner"].dark_count_rate_hz == 100.0
+    # ASTM E490 (air mass zero): 0.64 W m^-2 nm^-1 at 1064 nm, in every preset
+    assert {hw.solar_irradiance_w_m2_nm for hw in INSTRUMENTS.values()} == {0.64}
+    assert all(type(v) is float for hw in INSTRUMENTS.values() for v in vars(hw).values())
+
+
+GOOD = """
+[probe]
+pulse_energy_j = 1e-3
+wavelength_m = 1064e-9
+pulse_fwhm_s = 1e-9
+jitter_s = 0.1e-9
+pulse_rate_hz = 30
+aperture_diameter_m = 0.05
+optics_efficiency = 0.5
+detector_efficiency = 0.5
+filter_bandwidth_m = 1e-9
+divergence_deg = 2.0
+field_rad = 1e-3
+dark_count_rate_hz = 0.0
+solar_irradiance_w_m2_nm = 0.64
+"""
+
+
+def test_an_instruments_file_round_trips_its_values(tmp_path):
+    path = tmp_path / "instruments.toml"
+    path.write_text(GOOD)
+    hw = load_instruments(path)["probe"]
+    assert hw.divergence_rad == np.radians(2.0) and hw.pulse_rate_hz == 30.0
+    assert dataclasses.replace(hw, pulse_energy_j=1e-3) == hw
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda t: t.replace("pulse_rate_hz", "pulse_rate"),
+            r"\[probe\] has no field 'pulse_rate' \(did you mean 'pulse_rate_hz'\?\)",
+        ),
+        (lambda t: t.replace("jitter_s = 0.1e-9\n", ""), r"\[probe\] lacks jitter_s"),
+        (
+            lambda t: t.replace("optics_efficiency = 0.5", "optics_efficiency = 1.5"),
+            r"\[probe\] optics_efficiency must be <= 1, got 1\.5",
+        ),
+        (
+            lambda t: t.replace("field_rad = 1e-3", 'field_rad = "1 mrad"'),
+            r"\[probe\] field_rad must be a number, got '1 mrad'",
+        ),
+        (
+            lambda t: t + "divergence_rad = 1e-3\n",
+            r"\[probe\] gives divergence_rad twice \(in rad and in deg\)",
+        ),
+        (lambda t: "probe = 3\n", "'probe' must be a table of LidarHardware fields"),
+        (lambda t: t.replace("[probe]", "[probe"), "not valid TOML"),
+    ],
+)
+def test_a_bad_instruments_entry_is_named(tmp_path, edit, message):
+    path = tmp_path / "instruments.toml"
+    path.write_text(edit(GOOD))
+    with pytest.raises(ValueError, match=message):
+        load_instruments(path)

@@ -80,3 +80,18 @@ def test_ordered_scan_time_by_hand():
     assert t.total_s == pytest.approx(0.7 + 3 * 0.01 + 4 * 0.01)
     # the planner's order: 0.2 + 0.2 (trapezoid 0.2 / 1 + 0.1 = 0.3 each) + 0.3 rad
     assert scan_timing(p, options=steer).total_s == pytest.approx(0.3 + 0.3 + 0.4 + 0.07)
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"method": "tsp"}, "method must be one of 'nn2opt', 'raster', 'given', got 'tsp'"),
+        ({"neighbours": 0}, "neighbours must be >= 1, got 0"),
+        ({"max_passes": -1}, "max_passes must be >= 0, got -1"),
+        ({"line_pitch_rad": 0.0}, r"line_pitch_rad must be > 0, got 0\.0"),
+    ],
+)
+def test_order_options_refuse_bad_values(kw, match):
+    with pytest.raises(ValueError, match=match):
+        OrderOptions(**kw)
+    assert OrderOptions(max_passes=0, line_pitch_rad=None).max_passes == 0

@@ -75,7 +75,7 @@ def test_background_alone_gives_no_return():
 
 
 def test_unknown_method_lists_the_valid_ones():
-    with pytest.raises(ValueError, match="matched, peak"):
+    with pytest.raises(ValueError, match="method must be one of 'matched', 'peak', got 'cfd'"):
         RangeOptions(method="cfd")
 
 
@@ -140,17 +140,24 @@ def test_box_binned_returns_show_the_staircase():
 
 
 @pytest.mark.parametrize(
-    "kw", [{"threshold_sigma": -1.0}, {"min_photons": -0.5}, {"threshold_sigma": float("nan")}]
+    ("kw", "message"),
+    [
+        ({"threshold_sigma": -1.0}, "threshold_sigma must be >= 0, got -1.0"),
+        ({"min_photons": -0.5}, "min_photons must be >= 0, got -0.5"),
+        ({"threshold_sigma": float("nan")}, "threshold_sigma must be a finite number, got nan"),
+    ],
 )
-def test_range_options_refuse_negative_or_nan_thresholds(kw):
-    with pytest.raises(ValueError, match="threshold_sigma and min_photons must be >= 0"):
+def test_range_options_refuse_negative_or_nan_thresholds(kw, message):
+    with pytest.raises(ValueError, match=message):
         RangeOptions(**kw)
 
 
 def test_range_options_accept_zero_thresholds_and_name_bad_choices():
     o = RangeOptions(threshold_sigma=0.0, min_photons=0.0)
     assert (o.threshold_sigma, o.min_photons) == (0.0, 0.0)
-    with pytest.raises(ValueError, match=r"unknown return 'middle'; valid: "):
+    with pytest.raises(
+        ValueError, match=r"which must be one of 'strongest', 'first', 'last', got 'middle'"
+    ):
         RangeOptions(which="middle")
 
 

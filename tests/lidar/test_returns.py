@@ -25,7 +25,7 @@ from simlunar.lidar.waveform import splat_paths
     "kwargs, match",
     [
         ({"spp": 0}, "spp must be >= 1"),
-        ({"seed": -1}, "seed >= 0"),
+        ({"seed": -1}, "seed must be >= 0, got -1"),
         ({"oversample": 0}, "oversample must be >= 1"),
         ({"max_depth": 0}, "max_depth must be -1 or >= 1"),
         ({"laser_intensity": 0.0}, "laser_intensity must be > 0"),

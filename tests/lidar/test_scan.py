@@ -364,7 +364,7 @@ def test_a_later_round_continues_the_trajectory_from_its_start_time():
     b = steered_beam_scan(_PlaneCapture(cam.position, opts.window), d, options=opts, rng=1,
                           boresight=cam.pose, flight=Flight(traj, start_s=0.0))  # fmt: skip
     np.testing.assert_array_equal(a.points, b.points)
-    with pytest.raises(ValueError, match="start_s must be finite and >= 0"):
+    with pytest.raises(ValueError, match=r"start_s must be >= 0, got -1\.0"):
         Flight(traj, start_s=-1.0)
 
 
@@ -388,3 +388,22 @@ def test_a_later_round_s_altimeter_ranges_from_where_the_platform_is():
     assert scan.times.min() == pytest.approx(19 * 4 / 1000.0)
     # on the plane up to photon noise (these points scatter by a few mm)
     assert scan.points[:, 2] == pytest.approx(0.0, abs=0.02)
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        (
+            {"window_m": 4.0, "margin_m": 2.0},
+            r"window_m must be > 2 margin_m, got 4\.0 <= 2 x 2\.0",
+        ),
+        ({"window_m": 0.0}, r"window_m must be > 0, got 0\.0"),
+        ({"margin_m": -0.5}, r"margin_m must be >= 0, got -0\.5"),
+        ({"bin_range_m": 0.0}, r"bin_range_m must be > 0, got 0\.0"),
+        ({"batch": 0}, "batch must be >= 1, got 0"),
+    ],
+)
+def test_steered_beam_options_refuse_bad_windows_and_batches(kw, match):
+    with pytest.raises(ValueError, match=match):
+        SteeredBeamOptions(**kw)
+    assert SteeredBeamOptions(window_m=4.01, margin_m=2.0).window.count == 81  # just above 2 m

@@ -159,8 +159,15 @@ def test_continuous_raster_makes_the_grid_the_cheapest_pattern():
 def test_continuous_raster_needs_its_line_pitch():
     with pytest.raises(ValueError, match="line_pitch_rad"):
         scan_timing(np.zeros((2, 2)), options=SteeringOptions(model="continuous_raster"))
-    with pytest.raises(ValueError, match="unknown steering model"):
+    with pytest.raises(
+        ValueError,
+        match="model must be one of 'gimbal', 'galvanometer', 'continuous_raster', got 'resonant'",
+    ):
         SteeringOptions(model="resonant")
+    with pytest.raises(ValueError, match=r"line_pitch_rad must be > 0, got -0\.01"):
+        SteeringOptions(model="continuous_raster", line_pitch_rad=-0.01)
+    with pytest.raises(ValueError, match="pulses_per_point must be >= 1, got 0"):
+        SteeringOptions(pulses_per_point=0)
 
 
 @pytest.mark.parametrize("bad", [np.zeros((4, 3)), np.zeros(4), np.zeros((2, 2, 2))])

@@ -70,7 +70,9 @@ def test_place_points_round_trip_and_its_compensations():
     noisy = place_points(r, cmd, t, tr, Navigation("noisy", 0.1, 0.0), rng=1)
     err = noisy - truth
     assert np.sqrt((err**2).mean()) == pytest.approx(0.1, rel=0.3)
-    with pytest.raises(ValueError, match="unknown compensation"):
+    with pytest.raises(
+        ValueError, match="compensation must be one of 'exact', 'noisy', 'start', got 'perfect'"
+    ):
         Navigation("perfect")
     with pytest.raises(ValueError, match="attitude_jitter_rad"):
         Trajectory((0, 0, 1.0), attitude_jitter_rad=-1.0)

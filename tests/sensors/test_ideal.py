@@ -51,7 +51,7 @@ def test_bad_truth(truth, message):
 def test_bad_options_and_a_missing_plan():
     with pytest.raises(ValueError, match=r"^range_noise_std must be >= 0, got -0\.1$"):
         IdealOptions(range_noise_std=-0.1)
-    with pytest.raises(ValueError, match=r"^range_noise_std must be >= 0, got nan$"):
+    with pytest.raises(ValueError, match=r"^range_noise_std must be a finite number, got nan$"):
         IdealOptions(range_noise_std=float("nan"))
     with pytest.raises(
         ValueError, match=r"^the ideal sampler measures planned pixels: rc is required$"

@@ -78,8 +78,26 @@ def test_flash_options_refuse_more_revisits_than_tiles():
 
     with pytest.raises(ValueError, match="tiles"):
         FlashLidarOptions(revisits=5, zoom=2)
-    with pytest.raises(ValueError, match="zoom"):
+    with pytest.raises(ValueError, match="zoom must be >= 2, got 1"):
         FlashLidarOptions(zoom=1)
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"revisits": -1}, "revisits must be >= 0, got -1"),
+        ({"revisit_from": "image"}, "revisit_from must be one of 'plan', 'ranges', 'both'"),
+        ({"range_weight": 1.5}, r"range_weight must be <= 1, got 1\.5"),
+        ({"repoint_s": float("inf")}, "repoint_s must be a finite number, got inf"),
+        ({"receiver_px": (64, 0)}, r"receiver_px must be \(rows, cols\) >= 1, got \(64, 0\)"),
+        ({"receiver_px": (64,)}, r"receiver_px must be \(rows, cols\) >= 1"),
+    ],
+)
+def test_flash_options_refuse_bad_values(kw, match):
+    from simlunar.sensors.lidar import FlashLidarOptions
+
+    with pytest.raises(ValueError, match=match):
+        FlashLidarOptions(**kw)
 
 
 def test_a_lidar_needs_a_perspective_guide_camera():

@@ -98,3 +98,13 @@ def test_a_descending_micromirror_scores_its_dots_where_they_land(mi):
     want = 16.0 + (rc + 0.5 - 16.0) * shrink - 0.5
     assert acq.rc == pytest.approx(want, abs=0.05)
     assert np.abs(acq.rc[2] - rc[2]).min() > 0.9  # four metres lower: a pixel inwards
+
+
+def test_micromirror_options_share_the_flash_sensors_receiver_and_its_check():
+    from simlunar.sensors import FlashLidarOptions, MicromirrorOptions
+
+    mm, fl = MicromirrorOptions(), FlashLidarOptions()
+    assert (mm.flash, mm.receiver_px, mm.motion) == (fl.flash, fl.receiver_px, fl.motion)
+    assert mm.receiver_px == (64, 64) and mm.motion is None
+    with pytest.raises(ValueError, match=r"receiver_px must be \(rows, cols\) >= 1, got \(0, 8\)"):
+        MicromirrorOptions(receiver_px=(0, 8))

@@ -9,7 +9,7 @@ import pytest
 from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.metrics.hazard import HazardOptions
 from simlunar.sensors import Acquisition, LidarScene
-from simlunar.study.lidar import LidarStudyOptions, run_lidar_study, time_table
+from simlunar.study.lidar import LidarStudyOptions, SensorFit, run_lidar_study, time_table
 from simlunar.terrain import Terrain
 
 
@@ -79,12 +79,30 @@ def test_a_sensor_without_plan_runs_once_per_trial_as_none():
 
 
 def test_options_refuse_unknown_names():
-    with pytest.raises(ValueError, match="unknown LIDAR"):
+    with pytest.raises(
+        ValueError,
+        match="sensor must be one of 'steered_beam', 'flash', 'micromirror_flash', got 'sonar'",
+    ):
         LidarStudyOptions(sensor="sonar")
     with pytest.raises(ValueError, match="unknown planner"):
         LidarStudyOptions(planners=("psychic",))
     with pytest.raises(ValueError, match="must be FlashLidarOptions"):
         LidarStudyOptions(sensor="flash", sensor_options=HazardOptions())
+
+
+@pytest.mark.parametrize(
+    ("make", "match"),
+    [
+        (lambda: LidarStudyOptions(trials=0), "trials must be >= 1, got 0"),
+        (lambda: LidarStudyOptions(trials=True), "trials must be a finite number, got True"),
+        (lambda: LidarStudyOptions(densities=(0.5, 0.0)), r"densities must be in \(0, 1\]"),
+        (lambda: SensorFit("budget"), "kind must be one of 'scan_time', 'receiver', got 'budget'"),
+        (lambda: SensorFit("receiver", frames=0), "frames must be >= 1, got 0"),
+    ],
+)
+def test_options_refuse_bad_values(make, match):
+    with pytest.raises(ValueError, match=match):
+        make()
 
 
 def test_equal_time_errors_interpolate_in_log_log():
