@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import numbers
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -194,7 +195,7 @@ def check_bounds(obj) -> None:
         rules = [(k, m.get(k)) for k in ("ge", "gt", "le", "lt") if m.get(k) is not None]
         if not rules or v is None:
             continue
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v):
             raise ValueError(f"{f.name} must be a finite number, got {v!r}")
         for k, bound in rules:
             ok = {"ge": v >= bound, "gt": v > bound, "le": v <= bound, "lt": v < bound}[k]

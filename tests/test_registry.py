@@ -2,6 +2,7 @@
 
 from dataclasses import dataclass
 
+import numpy as np
 import pytest
 
 from simlunar.registry import (
@@ -85,12 +86,21 @@ def test_stray_option_key_is_refused_with_a_suggestion():
         ({"sigma": 0.0}, "sigma must be > 0"),
         ({"sigma": float("nan")}, "sigma must be a finite number"),
         ({"gain": True}, "gain must be a finite number"),
+        ({"gain": np.bool_(True)}, "gain must be a finite number"),
+        ({"sigma": np.float32("nan")}, "sigma must be a finite number"),
+        ({"gain": np.int64(5)}, "gain must be <= 4"),
         ({"mode": "c"}, "mode must be one of 'a', 'b'"),
     ],
 )
 def test_bounds_declared_once_are_checked(kw, msg):
     with pytest.raises(ValueError, match=msg):
         _Opts(**kw)
+
+
+def test_numpy_scalars_are_numbers_to_the_bounds():
+    # a value read from an array (float32 image statistics, int64 counts) was refused as
+    # "not a finite number" when only Python int and float counted
+    assert _Opts(gain=np.float32(2.5), sigma=np.int64(3)).sigma == 3
 
 
 def test_option_info_carries_doc_unit_bounds_and_default():
