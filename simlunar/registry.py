@@ -7,7 +7,8 @@ closest), the stray-key check of its options (:func:`build_options`), and the op
 (declared once with :func:`option`, checked by :func:`check_bounds` in the options class's
 ``__post_init__`` and read by ``config/`` to derive the YAML schema).
 
-The options class is a small frozen dataclass that lives beside the code that reads it.
+The options class is a small frozen dataclass that lives beside the code that reads it, derived
+from :class:`Options` (whose ``__post_init__`` runs :func:`check_bounds`).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from typing import Any
 
 __all__ = [
     "Entry",
+    "Options",
     "Registry",
     "UnknownNameError",
     "build_options",
@@ -202,6 +204,30 @@ def check_bounds(obj) -> None:
             if not ok:
                 sign = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}[k]
                 raise ValueError(f"{f.name} must be {sign} {bound:g}, got {v!r}")
+
+
+class Options:
+    """Base of an options dataclass: constructing one checks every field against the bounds
+    its :func:`option` declares (:func:`check_bounds`).
+
+    A subclass with a rule across fields extends ``__post_init__`` and calls
+    ``super().__post_init__()`` first::
+
+        @dataclass(frozen=True)
+        class BandOptions(Options):
+            lo: float = option(0.1, doc="lower edge", ge=0)
+            hi: float = option(0.5, doc="upper edge", le=1)
+
+            def __post_init__(self):
+                super().__post_init__()
+                if self.hi <= self.lo:
+                    raise ValueError("hi must be > lo")
+    """
+
+    __slots__ = ()
+
+    def __post_init__(self) -> None:
+        check_bounds(self)
 
 
 @dataclass(frozen=True)

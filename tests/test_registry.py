@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from simlunar.registry import (
+    Options,
     Registry,
     UnknownNameError,
     build_options,
@@ -95,6 +96,28 @@ def test_stray_option_key_is_refused_with_a_suggestion():
 def test_bounds_declared_once_are_checked(kw, msg):
     with pytest.raises(ValueError, match=msg):
         _Opts(**kw)
+
+
+@dataclass(frozen=True)
+class _Band(Options):
+    lo: float = option(0.1, doc="lower edge", ge=0)
+    hi: float = option(0.5, doc="upper edge", le=1)
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.hi <= self.lo:
+            raise ValueError("hi must be > lo")
+
+
+def test_an_options_subclass_checks_its_declared_bounds_on_construction():
+    with pytest.raises(ValueError, match="lo must be >= 0, got -1"):
+        _Band(lo=-1.0)
+    # the bounds first, then the subclass's rule across fields
+    with pytest.raises(ValueError, match="hi must be <= 1, got 2"):
+        _Band(lo=3.0, hi=2.0)
+    with pytest.raises(ValueError, match="hi must be > lo"):
+        _Band(lo=0.6, hi=0.5)
+    assert _Band(lo=0.2).hi == 0.5 and option_docs(_Band)[2] == "lo : float, default 0.1"
 
 
 def test_numpy_scalars_are_numbers_to_the_bounds():

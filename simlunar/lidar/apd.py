@@ -21,13 +21,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = ["ApdOptions", "apd_waveform"]
 
 
 @dataclass(frozen=True)
-class ApdOptions:
+class ApdOptions(Options):
     """A linear-mode APD receiver."""
 
     gain: float = option(100.0, doc="mean avalanche gain M", ge=1)
@@ -51,9 +51,6 @@ class ApdOptions:
         unit="photoelectron",
         ge=0,
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
     @property
     def excess_noise(self) -> float:

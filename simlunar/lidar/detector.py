@@ -27,7 +27,7 @@ import numpy as np
 from simlunar.lidar.apd import ApdOptions, apd_waveform
 from simlunar.lidar.spad import spad_counts
 from simlunar.lidar.waveform import TimeBins
-from simlunar.registry import check_bounds, option, shared_option
+from simlunar.registry import Options, option, shared_option
 
 #: the detector options that :class:`DetectorOptions` and
 #: :class:`~simlunar.lidar.hardware.LidarHardware` declare alike (the hardware's dark counts
@@ -43,7 +43,7 @@ DETECTOR_OPTIONS: dict[str, dict] = {
 
 
 @dataclass(frozen=True)
-class DetectorOptions:
+class DetectorOptions(Options):
     """Receiver photon model."""
 
     signal_photons: float = option(
@@ -76,7 +76,7 @@ class DetectorOptions:
     )
 
     def __post_init__(self) -> None:
-        check_bounds(self)
+        super().__post_init__()
         # inf is a valid dead time (one detection per pulse), so it has no numeric bound
         if not self.dead_time_s >= 0:
             raise ValueError(f"dead_time_s must be >= 0 s, got {self.dead_time_s}")

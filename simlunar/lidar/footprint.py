@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "PROFILES",
@@ -30,7 +30,7 @@ PROFILES = ("gaussian", "uniform")
 
 
 @dataclass(frozen=True)
-class FootprintOptions:
+class FootprintOptions(Options):
     """Angular profile of one beam (laser spot times receiver field of view)."""
 
     divergence_rad: float = option(
@@ -49,9 +49,6 @@ class FootprintOptions:
         doc="rays traced per beam (the footprint's Monte Carlo samples; the render's spp)",
         ge=1,
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
     @property
     def sigma_rad(self) -> float:

@@ -20,13 +20,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.lidar.waveform import TimeBins
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = ["GateOptions", "gate_bins", "plane_ranges"]
 
 
 @dataclass(frozen=True)
-class GateOptions:
+class GateOptions(Options):
     """Where the receiver expects the ground."""
 
     datum_z_m: float = option(
@@ -49,7 +49,7 @@ class GateOptions:
     min_range_m: float = option(0.1, doc="the instrument's smallest range", unit="m", ge=0)
 
     def __post_init__(self) -> None:
-        check_bounds(self)
+        super().__post_init__()
         if not np.isfinite(self.datum_z_m):
             raise ValueError(f"datum_z_m must be a finite number, got {self.datum_z_m!r}")
         if not self.min_range_m < self.max_range_m:

@@ -44,7 +44,7 @@ else:  # pragma: no cover - Python 3.10
 
 from simlunar.lidar.detector import DETECTOR_OPTIONS, PLANCK, DetectorOptions
 from simlunar.lidar.waveform import SPEED_OF_LIGHT, PulseOptions
-from simlunar.registry import check_bounds, did_you_mean, option, shared_option
+from simlunar.registry import Options, did_you_mean, option, shared_option
 
 __all__ = [
     "INSTRUMENTS",
@@ -57,7 +57,7 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class LidarHardware:
+class LidarHardware(Options):
     """A LIDAR's transmitter, receiver and detector (SI units)."""
 
     pulse_energy_j: float = option(
@@ -104,9 +104,6 @@ class LidarHardware:
         unit="W m^-2 nm^-1",
         gt=0,
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
     @property
     def photon_energy_j(self) -> float:

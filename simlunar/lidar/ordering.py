@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from simlunar.lidar.steering import SteeringOptions, move_time, raster_sweep, scan_timing
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "METHODS",
@@ -36,7 +36,7 @@ METHODS = ("nn2opt", "raster", "given")
 
 
 @dataclass(frozen=True)
-class OrderOptions:
+class OrderOptions(Options):
     """How the points of a steered scan are ordered."""
 
     method: str = option(
@@ -52,9 +52,6 @@ class OrderOptions:
         unit="rad",
         gt=0,
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
 
 def raster_order(angles: np.ndarray, line_pitch_rad: float | None = None) -> np.ndarray:

@@ -26,7 +26,7 @@ from scipy import ndimage
 from scipy.special import erf
 
 from simlunar.lidar.waveform import PulseOptions, TimeBins, pulse_kernel
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = ["METHODS", "RETURNS", "RangeOptions", "RangeResult", "extract_ranges"]
 
@@ -36,7 +36,7 @@ FITS = ("ml", "parabola")
 
 
 @dataclass(frozen=True)
-class RangeOptions:
+class RangeOptions(Options):
     """How a range is read from a histogram."""
 
     method: str = option(
@@ -67,9 +67,6 @@ class RangeOptions:
         "time's exact expected histogram (simlunar.lidar.spad.spad_correct): range and signal "
         "without the pile-up bias (a fit per return; the LIDAR scans apply it)",
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
 
 @dataclass(frozen=True, eq=False)

@@ -30,7 +30,7 @@ from simlunar.lidar.ranging import RangeOptions, extract_ranges
 from simlunar.lidar.spad import spad_correct
 from simlunar.lidar.steering import ScanTiming
 from simlunar.lidar.waveform import PulseOptions, TimeBins, shape_waveform
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "LidarScan",
@@ -42,7 +42,7 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class TransientOptions:
+class TransientOptions(Options):
     """Rendering of time-of-flight returns."""
 
     spp: int = option(
@@ -72,13 +72,13 @@ class TransientOptions:
     )
 
     def __post_init__(self) -> None:
-        check_bounds(self)
+        super().__post_init__()
         if self.max_depth == 0:
             raise ValueError("max_depth must be -1 or >= 1, got 0")
 
 
 @dataclass(frozen=True)
-class ReturnOptions:
+class ReturnOptions(Options):
     """What every LIDAR here shares: rendering the returns and reading ranges from them."""
 
     pulse: PulseOptions = option(doc="pulse FWHM and timing jitter", default_factory=PulseOptions)
@@ -114,9 +114,6 @@ class ReturnOptions:
         "instrument's range limits (simlunar.lidar.gate)",
         default_factory=GateOptions,
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
     def photon_detector(
         self, *, pulses=None, field_sr=None, lit_sr=None, sun_irradiance=1.0

@@ -27,14 +27,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 #: the steering models of :class:`SteeringOptions`
 MODELS = ("gimbal", "galvanometer", "continuous_raster")
 
 
 @dataclass(frozen=True)
-class SteeringOptions:
+class SteeringOptions(Options):
     """Two-axis steering mechanics (both axes alike)."""
 
     max_rate_rad_s: float = option(2.0, doc="largest angular speed of an axis", unit="rad/s", gt=0)
@@ -52,9 +52,6 @@ class SteeringOptions:
         unit="rad",
         gt=0,
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
     @property
     def move_accel_rad_s2(self) -> float:

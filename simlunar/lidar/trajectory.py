@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.geometry import Camera, Pose
-from simlunar.registry import check_bounds, option, shared_option
+from simlunar.registry import Options, option, shared_option
 
 __all__ = [
     "JITTER_TONES",
@@ -49,7 +49,7 @@ COMPENSATIONS = ("exact", "noisy", "start")
 
 
 @dataclass(frozen=True)
-class Navigation:
+class Navigation(Options):
     """What the sensor knows of its pose when it places its points (module docstring)."""
 
     compensation: str = option(
@@ -62,9 +62,6 @@ class Navigation:
     attitude_noise_rad: float = option(
         0.0, doc="noisy: RMS pointing knowledge error per axis", unit="rad", ge=0
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
 
 #: the motion options that :class:`Trajectory`, :class:`Flight` and :class:`PlatformMotion`
@@ -107,7 +104,7 @@ def _vector3(name: str, value) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class Trajectory:
+class Trajectory(Options):
     """Constant-velocity motion of the sensor (world frame)."""
 
     position_m: tuple = option((0.0, 0.0, 0.0), doc="position (3,) at t = 0", unit="m")
@@ -117,7 +114,7 @@ class Trajectory:
     jitter_seed: int = option(0, doc="seed of the jitter's phases and frequencies")
 
     def __post_init__(self) -> None:
-        check_bounds(self)
+        super().__post_init__()
         for name in ("position_m", "velocity_m_s"):
             object.__setattr__(self, name, _vector3(name, getattr(self, name)))
 
@@ -173,7 +170,7 @@ def camera_at(camera: Camera, trajectory: Trajectory, t: float) -> Camera:
 
 
 @dataclass(frozen=True)
-class Flight:
+class Flight(Options):
     """A scan measured from a moving platform: the trajectory it flies, what the sensor knows
     of its pose, and when on the trajectory the scan starts."""
 
@@ -191,9 +188,6 @@ class Flight:
         ge=0,
     )
     retarget: bool = shared_option(MOTION_OPTIONS, "retarget")
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
 
 def place_points(
@@ -240,7 +234,7 @@ def place_points(
 
 
 @dataclass(frozen=True)
-class PlatformMotion:
+class PlatformMotion(Options):
     """A sensor's motion from wherever it starts: what a study configures (the start is the
     guide camera's centre; the jitter's phases are drawn per acquisition)."""
 
@@ -251,7 +245,7 @@ class PlatformMotion:
     retarget: bool = shared_option(MOTION_OPTIONS, "retarget")
 
     def __post_init__(self) -> None:
-        check_bounds(self)
+        super().__post_init__()
         _vector3("velocity_m_s", self.velocity_m_s)
 
     def trajectory(self, start_m, *, jitter_seed: int = 0) -> Trajectory:

@@ -29,7 +29,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.special import erf
 
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "FWHM_PER_SIGMA",
@@ -109,7 +109,7 @@ class TimeBins:
 
 
 @dataclass(frozen=True)
-class PulseOptions:
+class PulseOptions(Options):
     """Laser pulse and detector timing response (both Gaussian)."""
 
     fwhm_s: float = option(
@@ -118,9 +118,6 @@ class PulseOptions:
     jitter_s: float = option(
         0.0, doc="RMS timing jitter of the detector and timing electronics", unit="s", ge=0
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
     @property
     def sigma_s(self) -> float:

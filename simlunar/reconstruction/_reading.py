@@ -9,7 +9,7 @@ drift between them.
 
 from __future__ import annotations
 
-from simlunar.registry import check_bounds
+from simlunar.registry import Options
 
 __all__ = ["READING_OPTIONS", "ReadingChecks", "check_share_band"]
 
@@ -52,10 +52,10 @@ def check_share_band(options) -> None:
         )
 
 
-class ReadingChecks:
+class ReadingChecks(Options):
     """Base of an options dataclass that reads slopes from the image: its ``__post_init__``
     checks every field's declared bounds, then the share band (:func:`check_share_band`)."""
 
     def __post_init__(self) -> None:
-        check_bounds(self)
+        super().__post_init__()
         check_share_band(self)

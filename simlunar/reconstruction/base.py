@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.reconstruction.delaunay import reconstruct
-from simlunar.registry import Registry, check_bounds, option
+from simlunar.registry import Options, Registry, option
 
 __all__ = [
     "RECONSTRUCTIONS",
@@ -128,7 +128,7 @@ class Reconstructed:
 
 
 @dataclass(frozen=True)
-class LinearOptions:
+class LinearOptions(Options):
     """Options of the Delaunay-linear reconstruction (the paper's, section 4.1)."""
 
     outside: str = option(
@@ -136,9 +136,6 @@ class LinearOptions:
         doc="cells outside the samples' convex hull: the nearest sample's value, or NaN",
         choices=("nearest", "nan"),
     )
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 def linear(points_rc, values, shape, *, guide=None, options: LinearOptions | None = None):

@@ -32,13 +32,13 @@ from scipy import ndimage
 
 from simlunar.reconstruction._anchor import LinearField, linear_field
 from simlunar.reconstruction.integrate import gaussian_smooth
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = ["Calibration", "CalibrationOptions", "calibrate", "valid_pixels"]
 
 
 @dataclass(frozen=True)
-class CalibrationOptions:
+class CalibrationOptions(Options):
     """Options of :func:`calibrate`."""
 
     sigma_pitch: float = option(
@@ -70,9 +70,6 @@ class CalibrationOptions:
     block_pitches: float = option(
         4.0, doc="side of the held-out checkerboard blocks in sample pitches", gt=0
     )
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 @dataclass(frozen=True, eq=False)

@@ -21,22 +21,19 @@ from scipy import ndimage
 
 from simlunar.reconstruction._anchor import linear_field, reanchored_detail
 from simlunar.reconstruction.base import Reconstructed
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = ["SmoothedOptions", "plane_preserving_smooth", "smoothed"]
 
 
 @dataclass(frozen=True)
-class SmoothedOptions:
+class SmoothedOptions(Options):
     """Options of the image-free control (:func:`smoothed`)."""
 
     sigma_pitch: float = option(
         0.5, doc="Gaussian sigma as a fraction of the sample pitch", gt=0, le=4
     )
     gamma: float = option(1.0, doc="weight of the re-anchored smoothed detail", ge=0, le=1)
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 def plane_preserving_smooth(z, sigma: float, *, truncate: float = 3.0) -> np.ndarray:

@@ -85,7 +85,7 @@ from simlunar.reconstruction.learned_features import (
     shading_heights,
 )
 from simlunar.reconstruction.shading import blend_detail, heldout_gamma
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "FORMAT",
@@ -109,7 +109,7 @@ RECON_FEATURE_VERSION = 1
 
 
 @dataclass(frozen=True)
-class LearnedReconOptions:
+class LearnedReconOptions(Options):
     """Options of the ``learned`` reconstruction."""
 
     model: str = option(
@@ -132,7 +132,7 @@ class LearnedReconOptions:
         object.__setattr__(self, "model", str(self.model))
         if isinstance(self.threads, bool) or not isinstance(self.threads, int):
             raise ValueError(f"threads must be an integer, got {self.threads!r}")
-        check_bounds(self)
+        super().__post_init__()
 
 
 @dataclass(frozen=True, eq=False)

@@ -10,14 +10,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 from simlunar.sensors.base import Acquisition
 
 __all__ = ["IdealOptions", "IdealSampler"]
 
 
 @dataclass(frozen=True)
-class IdealOptions:
+class IdealOptions(Options):
     """Options of :class:`IdealSampler`."""
 
     range_noise_std: float = option(
@@ -26,9 +26,6 @@ class IdealOptions:
         unit="m",
         ge=0,
     )
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 class IdealSampler:

@@ -43,7 +43,7 @@ from simlunar.lidar.scan import (
     visiting_order,
 )
 from simlunar.lidar.trajectory import Flight, PlatformMotion, camera_at, place_points, rotate_small
-from simlunar.registry import check_bounds, option, shared_option
+from simlunar.registry import Options, option, shared_option
 from simlunar.render.beam_capture import beam_capture
 from simlunar.render.transient import flash_frame
 from simlunar.sensors.base import Acquisition, NothingMeasured
@@ -233,7 +233,7 @@ def check_receiver_px(receiver_px) -> None:
 
 
 @dataclass(frozen=True)
-class FlashLidarOptions:
+class FlashLidarOptions(Options):
     """Options of :class:`FlashLidar`.
 
     On a moving platform (``motion``) frame ``i`` is taken at ``i`` x (frame time +
@@ -271,7 +271,7 @@ class FlashLidarOptions:
     motion: PlatformMotion | None = shared_option(FLASH_SENSOR_OPTIONS, "motion")
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         check_receiver_px(self.receiver_px)
         if int(self.revisits) > int(self.zoom) ** 2:
             raise ValueError(f"revisits {self.revisits} > the {self.zoom}^2 tiles of the field")

@@ -17,7 +17,7 @@ import numpy as np
 
 from simlunar.lidar.flash import FlashOptions, micromirror_frames
 from simlunar.lidar.trajectory import Flight, PlatformMotion
-from simlunar.registry import check_bounds, shared_option
+from simlunar.registry import Options, shared_option
 from simlunar.render.flash_lidar import micromirror_flash
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import (
@@ -32,7 +32,7 @@ __all__ = ["MicromirrorFlash", "MicromirrorOptions"]
 
 
 @dataclass(frozen=True)
-class MicromirrorOptions:
+class MicromirrorOptions(Options):
     """Options of :class:`MicromirrorFlash`.
 
     Its flash's ``transient.spp`` needs about ``(guide pixels / receiver pixels) x 16`` for a
@@ -47,7 +47,7 @@ class MicromirrorOptions:
     motion: PlatformMotion | None = shared_option(FLASH_SENSOR_OPTIONS, "motion")
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         check_receiver_px(self.receiver_px)
 
 

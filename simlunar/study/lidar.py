@@ -31,7 +31,7 @@ from simlunar.metrics.safe_site import SiteOptions, safe_site_scores
 from simlunar.planner import DEFAULT_PLANNER, MEASURING, STRATEGIES
 from simlunar.progress import stage
 from simlunar.reconstruction import Guide
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 from simlunar.sensors import SENSORS
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import LidarScene
@@ -67,7 +67,7 @@ FITS = ("scan_time", "receiver")
 
 
 @dataclass(frozen=True)
-class SensorFit:
+class SensorFit(Options):
     """A planner label fitted to its sensor (:mod:`simlunar.lidar.planning`).
 
     ``scan_time`` (tour-aware, any plan-directed LIDAR with a ``scan_seconds``): the largest
@@ -90,12 +90,9 @@ class SensorFit:
         None, doc="receiver: most dots per receiver pixel; None = the least that holds k", ge=1
     )
 
-    def __post_init__(self):
-        check_bounds(self)
-
 
 @dataclass(frozen=True)
-class LidarStudyOptions:
+class LidarStudyOptions(Options):
     """What a LIDAR study runs."""
 
     sensor: str = option("steered_beam", doc="a LIDAR of simlunar.sensors.SENSORS", choices=LIDARS)
@@ -149,7 +146,7 @@ class LidarStudyOptions:
     )
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         reconstruction_options(self.reconstructions, outside=self.outside)
         opts_cls = SENSORS[self.sensor][1]
         if self.sensor_options is not None and not isinstance(self.sensor_options, opts_cls):
