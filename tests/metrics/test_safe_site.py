@@ -64,7 +64,9 @@ def test_the_chosen_site_is_safe_only_when_the_reconstruction_sees_the_rock():
 def test_bad_site_options():
     with pytest.raises(ValueError, match="semi_axes_m"):
         SiteOptions(semi_axes_m=(0.0, 1.0))
-    with pytest.raises(ValueError, match="max_hazard_fraction"):
+    with pytest.raises(ValueError, match="max_hazard_fraction must be < 1, got 1.0"):
         SiteOptions(max_hazard_fraction=1.0)
-    with pytest.raises(ValueError, match="slope_deg"):
+    with pytest.raises(ValueError, match="slope_deg must be < 90, got 95.0"):
         SiteOptions(slope_deg=95.0)
+    with pytest.raises(ValueError, match="window_px must be odd, got 16"):
+        SiteOptions(window_px=16)
