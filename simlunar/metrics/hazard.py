@@ -17,6 +17,7 @@ from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = [
     "HAZARD_OPTIONS",
+    "SLOPE_LIMIT",
     "HazardOptions",
     "check_odd_window",
     "detection_scores",
@@ -27,11 +28,19 @@ __all__ = [
 #: options the hazard map and the landing question declare alike (name -> keywords of
 #: :func:`simlunar.registry.option`, for :func:`simlunar.registry.shared_option`)
 HAZARD_OPTIONS: dict[str, dict] = {
+    "relief_m": dict(
+        default=0.3, doc="largest safe height above the local median: rocks and boulders",
+        unit="m", gt=0,
+    ),
     "window_px": dict(default=15, doc="side of the median neighbourhood (odd)", unit="px", ge=3),
     "baseline_px": dict(
         default=2, doc="half the pixel step of the slope's central differences", unit="px", ge=1
     ),
-}
+}  # fmt: skip
+
+#: doc, unit and bounds of the slope limit (its default is each class's own: 15 deg for a
+#: hazard map, 12 deg for the landing question, :mod:`simlunar.metrics.safe_site`)
+SLOPE_LIMIT: dict = dict(doc="largest safe slope over baseline_px", unit="deg", gt=0, lt=90)
 
 
 def check_odd_window(options) -> None:
@@ -44,12 +53,8 @@ def check_odd_window(options) -> None:
 class HazardOptions:
     """What counts as a landing hazard."""
 
-    slope_deg: float = option(
-        15.0, doc="largest safe slope over baseline_px", unit="deg", gt=0, lt=90
-    )
-    relief_m: float = option(
-        0.3, doc="largest safe height above the local median: rocks and boulders", unit="m", gt=0
-    )
+    slope_deg: float = option(15.0, **SLOPE_LIMIT)
+    relief_m: float = shared_option(HAZARD_OPTIONS, "relief_m")
     window_px: int = shared_option(HAZARD_OPTIONS, "window_px")
     baseline_px: int = shared_option(HAZARD_OPTIONS, "baseline_px")
 

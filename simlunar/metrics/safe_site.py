@@ -26,7 +26,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.metrics.hazard import HAZARD_OPTIONS, HazardOptions, check_odd_window, hazard_map
+from simlunar.metrics.hazard import (
+    HAZARD_OPTIONS,
+    SLOPE_LIMIT,
+    HazardOptions,
+    check_odd_window,
+    hazard_map,
+)
 from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = ["SiteOptions", "grid_sites", "safe_site_scores", "site_fractions"]
@@ -37,12 +43,8 @@ class SiteOptions:
     """Safe-site thresholds and candidates (module docstring for sources); ``window_px`` and
     ``baseline_px`` as for :class:`~simlunar.metrics.hazard.HazardOptions`."""
 
-    slope_deg: float = option(
-        12.0, doc="largest safe slope over baseline_px", unit="deg", gt=0, lt=90
-    )
-    rock_height_m: float = option(
-        0.3, doc="largest safe height above the local median", unit="m", gt=0
-    )
+    slope_deg: float = option(12.0, **SLOPE_LIMIT)
+    rock_height_m: float = shared_option(HAZARD_OPTIONS, "relief_m")
     window_px: int = shared_option(HAZARD_OPTIONS, "window_px")
     baseline_px: int = shared_option(HAZARD_OPTIONS, "baseline_px")
     semi_axes_m: tuple = option(
