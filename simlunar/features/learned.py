@@ -40,6 +40,7 @@ import threading
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import joblib
 import numpy as np
@@ -57,7 +58,7 @@ from simlunar.features._stack import (
     image_features,
 )
 from simlunar.features.maps import check_image
-from simlunar.features.model_save import save_with_record
+from simlunar.features.model_save import ModelRecord, save_with_record
 from simlunar.registry import check_bounds, option
 
 __all__ = [
@@ -169,18 +170,18 @@ def _versions() -> dict[str, str]:
 
 
 @dataclass(frozen=True, eq=False)
-class LearnedMap:
-    """Trained importance models, one per density, and their record.
+class LearnedMap(ModelRecord):
+    """Trained importance models, one per density, and their record (:class:`ModelRecord`).
 
     Attributes
     ----------
     models : dict of float -> HistGradientBoostingRegressor
         Density k / N -> regressor of the centred log error on :data:`FEATURE_NAMES`.
     meta : dict
-        The JSON record (format, feature set, densities, options, input hashes, versions,
-        provenance).
+        The JSON record.
     """
 
+    FORMAT: ClassVar[str] = FORMAT
     models: dict
     meta: dict = field(default_factory=dict)
 
@@ -220,21 +221,8 @@ class LearnedMap:
         y = self.predict_log(image, density=density)
         return np.exp(y - y.max())
 
-    def save(self, path) -> tuple[Path, Path]:
-        """Write ``path`` (joblib of the regressors) and its JSON sidecar (``.json``).
-
-        Parameters
-        ----------
-        path : str or Path
-            Model file name ending in ``.joblib``; parent folders are created.
-
-        Returns
-        -------
-        (Path, Path)
-            The joblib file and the JSON sidecar.
-        """
-        payload = {"format": FORMAT, "models": {repr(d): m for d, m in self.models.items()}}
-        return save_with_record(path, payload, self.meta)
+    def _payload(self) -> dict:
+        return {"models": {repr(d): m for d, m in self.models.items()}}
 
     @classmethod
     def load(cls, path) -> LearnedMap:
@@ -294,7 +282,7 @@ class LearnedMap:
                 f"{path}: densities {sorted(models)} differ from its record's "
                 f"{sorted(meta['densities'])}"
             )
-        return cls(models, {k: v for k, v in meta.items() if k not in ("model_file",)})
+        return cls._loaded(models, meta)
 
 
 def _parse_record(record: bytes, sidecar: Path) -> dict:
