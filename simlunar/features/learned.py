@@ -40,6 +40,7 @@ import threading
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import joblib
 import numpy as np
@@ -57,7 +58,8 @@ from simlunar.features._stack import (
     image_features,
 )
 from simlunar.features.maps import check_image
-from simlunar.features.model_save import save_with_record
+from simlunar.features.model_save import ModelRecord, save_with_record
+from simlunar.registry import check_bounds, option
 
 __all__ = [
     "FORMAT",
@@ -85,48 +87,40 @@ def pitch_of(density: float) -> float:
 class LearnedOptions:
     """Training options of :func:`simlunar.planner.learning.train_learned_map`.
 
-    Attributes
-    ----------
-    layouts : int >= 1
-        Uniform layouts whose squared errors are averaged into each target.
-    pixels_per_example : int >= 100
-        Training pixels drawn (uniformly, without replacement) per example and density.
-    max_iter, max_leaf_nodes, min_samples_leaf : int
-        ``HistGradientBoostingRegressor`` settings (boosting rounds, tree size, leaf size).
-    learning_rate : float > 0
-    l2_regularization : float >= 0
-    threads : int >= 1
-        OpenMP threads of the boosting (fit and predict). Default 1: on a shared machine
-        scikit-learn's OpenMP threads wait on each other (measured: 96 k x 42 features, 100
-        rounds, 2 cores under load 8: 10 s with one thread, 107 s with two); raise it on an idle
-        machine.
+    ``max_iter``, ``max_leaf_nodes``, ``min_samples_leaf``, ``learning_rate`` and
+    ``l2_regularization`` are scikit-learn ``HistGradientBoostingRegressor`` settings. The
+    threads default to 1: on a shared machine scikit-learn's OpenMP threads wait on each other
+    (measured: 96 k x 42 features, 100 rounds, 2 cores under load 8: 10 s with one thread,
+    107 s with two); raise it on an idle machine.
     """
 
-    layouts: int = 3
-    pixels_per_example: int = 10_000
-    max_iter: int = 200
-    max_leaf_nodes: int = 31
-    min_samples_leaf: int = 50
-    learning_rate: float = 0.1
-    l2_regularization: float = 0.0
-    threads: int = 1
+    layouts: int = option(
+        3, doc="uniform layouts whose squared errors are averaged into each target", ge=1
+    )
+    pixels_per_example: int = option(
+        10_000,
+        doc="training pixels drawn (uniformly, without replacement) per example and density",
+        ge=100,
+    )
+    max_iter: int = option(200, doc="boosting rounds", ge=1)
+    max_leaf_nodes: int = option(31, doc="leaves per tree", ge=2)
+    min_samples_leaf: int = option(50, doc="training pixels per leaf (at least)", ge=1)
+    learning_rate: float = option(0.1, doc="boosting learning rate", gt=0)
+    l2_regularization: float = option(0.0, doc="leaf-value L2 penalty", ge=0)
+    threads: int = option(1, doc="OpenMP threads of the boosting (fit and predict)", ge=1)
 
     def __post_init__(self):
-        for name, lo in (
-            ("layouts", 1),
-            ("pixels_per_example", 100),
-            ("threads", 1),
-            ("max_iter", 1),
-            ("max_leaf_nodes", 2),
-            ("min_samples_leaf", 1),
+        check_bounds(self)
+        for name in (
+            "layouts",
+            "pixels_per_example",
+            "max_iter",
+            "max_leaf_nodes",
+            "min_samples_leaf",
+            "threads",
         ):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-                raise ValueError(f"{name} must be an integer >= {lo}, got {v!r}")
-        if not self.learning_rate > 0:
-            raise ValueError(f"learning_rate must be > 0, got {self.learning_rate!r}")
-        if not self.l2_regularization >= 0:
-            raise ValueError(f"l2_regularization must be >= 0, got {self.l2_regularization!r}")
+            if not isinstance(getattr(self, name), int):
+                raise ValueError(f"{name} must be an integer, got {getattr(self, name)!r}")
 
 
 def _sha256_array(a: np.ndarray) -> str:
@@ -176,18 +170,18 @@ def _versions() -> dict[str, str]:
 
 
 @dataclass(frozen=True, eq=False)
-class LearnedMap:
-    """Trained importance models, one per density, and their record.
+class LearnedMap(ModelRecord):
+    """Trained importance models, one per density, and their record (:class:`ModelRecord`).
 
     Attributes
     ----------
     models : dict of float -> HistGradientBoostingRegressor
         Density k / N -> regressor of the centred log error on :data:`FEATURE_NAMES`.
     meta : dict
-        The JSON record (format, feature set, densities, options, input hashes, versions,
-        provenance).
+        The JSON record.
     """
 
+    FORMAT: ClassVar[str] = FORMAT
     models: dict
     meta: dict = field(default_factory=dict)
 
@@ -227,21 +221,8 @@ class LearnedMap:
         y = self.predict_log(image, density=density)
         return np.exp(y - y.max())
 
-    def save(self, path) -> tuple[Path, Path]:
-        """Write ``path`` (joblib of the regressors) and its JSON sidecar (``.json``).
-
-        Parameters
-        ----------
-        path : str or Path
-            Model file name ending in ``.joblib``; parent folders are created.
-
-        Returns
-        -------
-        (Path, Path)
-            The joblib file and the JSON sidecar.
-        """
-        payload = {"format": FORMAT, "models": {repr(d): m for d, m in self.models.items()}}
-        return save_with_record(path, payload, self.meta)
+    def _payload(self) -> dict:
+        return {"models": {repr(d): m for d, m in self.models.items()}}
 
     @classmethod
     def load(cls, path) -> LearnedMap:
@@ -301,7 +282,7 @@ class LearnedMap:
                 f"{path}: densities {sorted(models)} differ from its record's "
                 f"{sorted(meta['densities'])}"
             )
-        return cls(models, {k: v for k, v in meta.items() if k not in ("model_file",)})
+        return cls._loaded(models, meta)
 
 
 def _parse_record(record: bytes, sidecar: Path) -> dict:

@@ -1,6 +1,7 @@
 """Atomic saving of a model file (joblib) with its JSON record (name and SHA-256), the pair a
 load checks before unpickling (split from :mod:`simlunar.features.learned`, which re-exports
-:func:`save_with_record`)."""
+:func:`save_with_record`), and :class:`ModelRecord`, what the trained-model containers (the
+learned map's and the learned reconstruction's) share."""
 
 from __future__ import annotations
 
@@ -11,12 +12,13 @@ import json
 import os
 import tempfile
 from pathlib import Path
+from typing import ClassVar
 
 import joblib
 
 from simlunar.features._stack import _model_path
 
-__all__ = ["save_with_record"]
+__all__ = ["ModelRecord", "save_with_record"]
 
 
 def save_with_record(path, payload, meta: dict) -> tuple[Path, Path]:
@@ -81,3 +83,49 @@ def _write_pair(files) -> None:
         for tmp, _ in done:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
+
+
+class ModelRecord:
+    """Base of a trained-model container: a frozen dataclass with the model(s) first and
+    ``meta``, the model's JSON record (format, feature set, densities, options, input hashes,
+    library versions, provenance), second.
+
+    A subclass sets :attr:`FORMAT` and :meth:`_payload`. The saved file pickles the payload
+    (a dict of the format and the regressors), never the container, so a file stays loadable
+    whatever module the container lives in.
+    """
+
+    #: the format tag of the payload and of the record
+    FORMAT: ClassVar[str]
+    meta: dict
+
+    def _payload(self) -> dict:
+        """What is pickled beside the format tag (e.g. ``{"model": regressor}``)."""
+        raise NotImplementedError
+
+    def save(self, path) -> tuple[Path, Path]:
+        """Write ``path`` (joblib of the format and :meth:`_payload`) and its JSON record
+        (``.json``), with :func:`save_with_record`.
+
+        Parameters
+        ----------
+        path : str or Path
+            Ends in ``.joblib``; parent folders are created.
+
+        Returns
+        -------
+        (Path, Path)
+            The joblib file and its record.
+        """
+        return save_with_record(path, {"format": self.FORMAT, **self._payload()}, self.meta)
+
+    @property
+    def model_sha256(self) -> str:
+        """SHA-256 (hex) of the model file the record names ("" for a model never saved)."""
+        return str(self.meta.get("model_sha256", ""))
+
+    @classmethod
+    def _loaded(cls, models, meta: dict):
+        """The container of unpickled ``models`` and their checked record, less the record's
+        ``model_file`` (the name the file was saved under; it may have been moved since)."""
+        return cls(models, {k: v for k, v in meta.items() if k != "model_file"})

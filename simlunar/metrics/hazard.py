@@ -13,35 +13,54 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["HazardOptions", "detection_scores", "hazard_map"]
+from simlunar.registry import check_bounds, option, shared_option
+
+__all__ = [
+    "HAZARD_OPTIONS",
+    "SLOPE_LIMIT",
+    "HazardOptions",
+    "check_odd_window",
+    "detection_scores",
+    "hazard_map",
+]
+
+
+#: options the hazard map and the landing question declare alike (name -> keywords of
+#: :func:`simlunar.registry.option`, for :func:`simlunar.registry.shared_option`)
+HAZARD_OPTIONS: dict[str, dict] = {
+    "relief_m": dict(
+        default=0.3, doc="largest safe height above the local median: rocks and boulders",
+        unit="m", gt=0,
+    ),
+    "window_px": dict(default=15, doc="side of the median neighbourhood (odd)", unit="px", ge=3),
+    "baseline_px": dict(
+        default=2, doc="half the pixel step of the slope's central differences", unit="px", ge=1
+    ),
+}  # fmt: skip
+
+#: doc, unit and bounds of the slope limit (its default is each class's own: 15 deg for a
+#: hazard map, 12 deg for the landing question, :mod:`simlunar.metrics.safe_site`)
+SLOPE_LIMIT: dict = dict(doc="largest safe slope over baseline_px", unit="deg", gt=0, lt=90)
+
+
+def check_odd_window(options) -> None:
+    """``ValueError`` unless ``options.window_px`` is odd (a centred median window)."""
+    if int(options.window_px) % 2 == 0:
+        raise ValueError(f"window_px must be odd, got {options.window_px!r}")
 
 
 @dataclass(frozen=True)
 class HazardOptions:
-    """What counts as a landing hazard.
+    """What counts as a landing hazard."""
 
-    Attributes
-    ----------
-    slope_deg : float
-        Largest safe slope (degrees) over ``baseline_px``.
-    relief_m : float
-        Largest safe height above the local median (m): rocks and boulders.
-    window_px : int (odd, >= 3)
-        Side of the median neighbourhood (pixels).
-    baseline_px : int >= 1
-        Half the pixel step of the slope's central differences.
-    """
-
-    slope_deg: float = 15.0
-    relief_m: float = 0.3
-    window_px: int = 15
-    baseline_px: int = 2
+    slope_deg: float = option(15.0, **SLOPE_LIMIT)
+    relief_m: float = shared_option(HAZARD_OPTIONS, "relief_m")
+    window_px: int = shared_option(HAZARD_OPTIONS, "window_px")
+    baseline_px: int = shared_option(HAZARD_OPTIONS, "baseline_px")
 
     def __post_init__(self):
-        if not (0 < self.slope_deg < 90 and self.relief_m > 0):
-            raise ValueError(f"need 0 < slope_deg < 90 and relief_m > 0, got {self}")
-        if int(self.window_px) < 3 or int(self.window_px) % 2 == 0 or int(self.baseline_px) < 1:
-            raise ValueError(f"need an odd window_px >= 3 and baseline_px >= 1, got {self}")
+        check_bounds(self)
+        check_odd_window(self)
 
 
 def _central(points: np.ndarray, step: int, axis: int) -> np.ndarray:

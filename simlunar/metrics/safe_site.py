@@ -26,50 +26,43 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.metrics.hazard import HazardOptions, hazard_map
+from simlunar.metrics.hazard import (
+    HAZARD_OPTIONS,
+    SLOPE_LIMIT,
+    HazardOptions,
+    check_odd_window,
+    hazard_map,
+)
+from simlunar.registry import check_bounds, option, shared_option
 
 __all__ = ["SiteOptions", "grid_sites", "safe_site_scores", "site_fractions"]
 
 
 @dataclass(frozen=True)
 class SiteOptions:
-    """Safe-site thresholds and candidates (module docstring for sources).
+    """Safe-site thresholds and candidates (module docstring for sources); ``window_px`` and
+    ``baseline_px`` as for :class:`~simlunar.metrics.hazard.HazardOptions`."""
 
-    Attributes
-    ----------
-    slope_deg : float
-        Largest safe slope (degrees) over ``baseline_px``.
-    rock_height_m : float
-        Largest safe height above the local median (m).
-    window_px, baseline_px : int
-        As for :class:`~simlunar.metrics.hazard.HazardOptions`.
-    semi_axes_m : (2,) float
-        Semi-axes of a landing ellipse along world x and y (m).
-    pitch_m : float
-        Spacing of the candidate centres on a grid over the view (m).
-    max_hazard_fraction : float in [0, 1)
-        A site is safe when at most this share of its pixels is hazardous.
-    """
-
-    slope_deg: float = 12.0
-    rock_height_m: float = 0.3
-    window_px: int = 15
-    baseline_px: int = 2
-    semi_axes_m: tuple = (4.0, 4.0)
-    pitch_m: float = 8.0
-    max_hazard_fraction: float = 0.0
+    slope_deg: float = option(12.0, **SLOPE_LIMIT)
+    rock_height_m: float = shared_option(HAZARD_OPTIONS, "relief_m")
+    window_px: int = shared_option(HAZARD_OPTIONS, "window_px")
+    baseline_px: int = shared_option(HAZARD_OPTIONS, "baseline_px")
+    semi_axes_m: tuple = option(
+        (4.0, 4.0), doc="semi-axes of a landing ellipse along world x and y (two > 0)", unit="m"
+    )
+    pitch_m: float = option(
+        8.0, doc="spacing of the candidate centres on a grid over the view", unit="m", gt=0
+    )
+    max_hazard_fraction: float = option(
+        0.0, doc="a site is safe when at most this share of its pixels is hazardous", ge=0, lt=1
+    )
 
     def __post_init__(self):
-        self.hazard  # noqa: B018 - checks slope, rock height, window, baseline
+        check_bounds(self)
+        check_odd_window(self)
         a = np.asarray(self.semi_axes_m, float)
         if a.shape != (2,) or not np.all(np.isfinite(a)) or a.min() <= 0:
             raise ValueError(f"semi_axes_m must be two lengths > 0, got {self.semi_axes_m}")
-        if not (np.isfinite(self.pitch_m) and self.pitch_m > 0):
-            raise ValueError(f"pitch_m must be > 0, got {self.pitch_m}")
-        if not 0.0 <= self.max_hazard_fraction < 1.0:
-            raise ValueError(
-                f"max_hazard_fraction must be in [0, 1), got {self.max_hazard_fraction}"
-            )
 
     @property
     def hazard(self) -> HazardOptions:

@@ -22,6 +22,7 @@ from simlunar.metrics import metric as error_metric
 from simlunar.metrics import score as eq43
 from simlunar.planner.strategies import COMBINABLE, check_k, combination_map, combine_maps, plan
 from simlunar.reconstruction import reconstruct
+from simlunar.registry import check_bounds, option
 
 __all__ = [
     "DEFAULT_FEATURES",
@@ -42,59 +43,48 @@ DEFAULT_FEATURES = COMBINABLE
 class ScoreProtocol:
     """How coefficients are scored: the eq. 4.3 protocol of the fit and of the held-out score.
 
-    Attributes
-    ----------
-    densities : sequence of float
-        Densities k / N in (0, 1] of the protocol.
-    trials : int
-        Trials per density; the seeds are fixed across objective evaluations (common random
-        numbers), so the objective is deterministic and Nelder-Mead can compare points.
-    metric : str
-        Error metric the score uses (``mse``, ``rmse``, ``mae``, ``grad``; ``sal`` uses the
-        image's saliency map).
-    placement : {"random", "lloyd"}
-        How the combined map places its samples: the paper's weighted random draw, or the
-        deterministic halftone + weighted Lloyd layout (:mod:`simlunar.planner.placement`,
-        border covered), whose plan changes smoothly with the coefficients. The reference of
-        the eq. 4.3 score stays uniform random sampling either way; with ``lloyd`` the weight
-        on ``uniform`` is the share of the uniform Lloyd layout, so "all on uniform" is the
-        image-free reference layout.
+    The trials' seeds are fixed across objective evaluations (common random numbers), so the
+    objective is deterministic and Nelder-Mead can compare points. With ``placement="lloyd"``
+    the combined map is placed by the deterministic halftone + weighted Lloyd layout
+    (:mod:`simlunar.planner.placement`, border covered), whose plan changes smoothly with the
+    coefficients; the reference of the eq. 4.3 score stays uniform random sampling either way,
+    and the weight on ``uniform`` is the share of the uniform Lloyd layout, so "all on uniform"
+    is the image-free reference layout.
     """
 
-    densities: Sequence[float] = (1 / 16, 1 / 64, 1 / 256, 1 / 1024)
-    trials: int = 2
-    metric: str = "mse"
-    placement: str = "random"
+    densities: Sequence[float] = option(
+        (1 / 16, 1 / 64, 1 / 256, 1 / 1024), doc="densities k / N in (0, 1] of the protocol"
+    )
+    trials: int = option(2, doc="trials per density (common random numbers)")
+    metric: str = option(
+        "mse",
+        doc="error metric the score uses (mse, rmse, mae, grad; sal uses the image's saliency map)",
+    )
+    placement: str = option(
+        "random",
+        doc="how the combined map places its samples: the paper's weighted random draw, or "
+        "the halftone + weighted Lloyd layout",
+        choices=("random", "lloyd"),
+    )
 
     def __post_init__(self):
-        if self.placement not in ("random", "lloyd"):
-            raise ValueError(f"placement must be 'random' or 'lloyd', got {self.placement!r}")
+        check_bounds(self)
 
 
 @dataclass(frozen=True)
 class NelderMeadOptions:
     """The search of :func:`fit_combination`.
 
-    Attributes
-    ----------
-    maxiter : int
-        Nelder-Mead iterations.
-    x0 : sequence of float, optional
-        Starting coefficients (default all ones).
-    step : float
-        Initial simplex size in log-ratio space: each simplex vertex multiplies one
-        coefficient by e^step (scipy's default 5 % steps are too small for the nearly
-        piecewise-constant objective of a sampled plan). Coefficients that are 0 in ``x0``
-        start at 1e-6 of the largest.
-    restarts : int
-        Nelder-Mead runs after the first, each from the best point so far with a fresh
-        simplex (``maxiter`` iterations each).
+    The initial simplex is set in log-ratio space: each vertex multiplies one coefficient by
+    e^step (scipy's default 5 % steps are too small for the nearly piecewise-constant
+    objective of a sampled plan); coefficients that are 0 in ``x0`` start at 1e-6 of the
+    largest. Each restart runs from the best point so far with a fresh simplex.
     """
 
-    maxiter: int = 60
-    x0: Sequence[float] | None = None
-    step: float = 1.0
-    restarts: int = 2
+    maxiter: int = option(60, doc="Nelder-Mead iterations (per run)")
+    x0: Sequence[float] | None = option(None, doc="starting coefficients (None: all ones)")
+    step: float = option(1.0, doc="initial simplex size in log-ratio space")
+    restarts: int = option(2, doc="Nelder-Mead runs after the first")
 
 
 #: the protocol and the search :func:`fit_combination` uses unless told otherwise

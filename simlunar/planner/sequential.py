@@ -32,6 +32,7 @@ from simlunar.planner.strategies import check_k
 from simlunar.planner.types import SamplePlan
 from simlunar.reconstruction import reconstruct
 from simlunar.reconstruction.delaunay import loo_residuals
+from simlunar.registry import check_bounds, option
 
 __all__ = [
     "FIRST_ROUND_MIX",
@@ -54,56 +55,41 @@ FIRST_ROUND_MIX = 0.25
 
 @dataclass(frozen=True)
 class SequentialOptions:
-    """Options of :func:`plan_sequential`.
+    """Options of :func:`plan_sequential`."""
 
-    Attributes
-    ----------
-    max_rounds : int >= 2
-        Rounds cap, the first layout included; the last allowed round takes the rest.
-    first_share : float in (0, 1)
-        Share of k placed by the first, uniform round.
-    batch_share : float in (0, 1]
-        Samples per later round as a share of k (rounded up).
-    temper : float in (0, 1]
-        Power of the smoothed squared residual (1/2: RMS residual).
-    uniform_mix : float in [0, 1]
-        Uniform share of the tempered estimate (normalised to mean 1 first).
-    prior_power : float > 0
-        Power of the prior map (normalised to mean 1) that multiplies the estimate.
-    nms_pitches : float > 0
-        Non-maximum-suppression radius in pitches sqrt(N / k) of the final budget.
-    first_round : {"uniform", "prior"}
-        The first layout: uniform (halftone + Lloyd of a constant density), or the one-shot
-        layout of the prior map (halftone + Lloyd of the density prior^prior_power mixed with
-        :data:`FIRST_ROUND_MIX` uniform, as the ``lloyd`` placement of a map); "prior" needs
-        a prior.
-    """
-
-    max_rounds: int = 12
-    first_share: float = 0.3
-    batch_share: float = 0.12
-    temper: float = 0.5
-    uniform_mix: float = 0.5
-    prior_power: float = 0.5
-    nms_pitches: float = 0.7
-    first_round: str = "uniform"
+    max_rounds: int = option(
+        12, doc="rounds cap, the first layout included; the last allowed round takes the rest", ge=2
+    )
+    first_share: float = option(0.3, doc="share of k placed by the first round", gt=0, lt=1)
+    batch_share: float = option(
+        0.12, doc="samples per later round as a share of k (rounded up)", gt=0, le=1
+    )
+    temper: float = option(
+        0.5, doc="power of the smoothed squared residual (1/2: RMS residual)", gt=0, le=1
+    )
+    uniform_mix: float = option(
+        0.5, doc="uniform share of the tempered estimate (normalised to mean 1 first)", ge=0, le=1
+    )
+    prior_power: float = option(
+        0.5, doc="power of the prior map (normalised to mean 1) that multiplies the estimate", gt=0
+    )
+    nms_pitches: float = option(
+        0.7,
+        doc="non-maximum-suppression radius in pitches sqrt(N / k) of the final budget",
+        gt=0,
+    )
+    first_round: str = option(
+        "uniform",
+        doc="the first layout: uniform (halftone + Lloyd of a constant density), or the "
+        "one-shot layout of the prior map (halftone + Lloyd of the density prior^prior_power "
+        "mixed with FIRST_ROUND_MIX uniform, as the lloyd placement of a map; needs a prior)",
+        choices=("uniform", "prior"),
+    )
 
     def __post_init__(self):
-        if isinstance(self.max_rounds, bool) or not isinstance(self.max_rounds, int):
+        check_bounds(self)
+        if not isinstance(self.max_rounds, int):
             raise ValueError(f"max_rounds must be an integer, got {self.max_rounds!r}")
-        checks = {
-            "max_rounds": (self.max_rounds >= 2, ">= 2"),
-            "first_share": (0.0 < self.first_share < 1.0, "in (0, 1)"),
-            "batch_share": (0.0 < self.batch_share <= 1.0, "in (0, 1]"),
-            "temper": (0.0 < self.temper <= 1.0, "in (0, 1]"),
-            "uniform_mix": (0.0 <= self.uniform_mix <= 1.0, "in [0, 1]"),
-            "prior_power": (self.prior_power > 0.0, "> 0"),
-            "nms_pitches": (self.nms_pitches > 0.0, "> 0"),
-            "first_round": (self.first_round in ("uniform", "prior"), "'uniform' or 'prior'"),
-        }
-        for name, (ok, what) in checks.items():
-            if not ok:
-                raise ValueError(f"{name} must be {what}, got {getattr(self, name)!r}")
 
 
 @dataclass(frozen=True, eq=False)

@@ -65,6 +65,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
@@ -73,7 +74,7 @@ from simlunar.features._stack import (
     _model_path,
     _sha256_file,
 )
-from simlunar.features.model_save import save_with_record
+from simlunar.features.model_save import ModelRecord
 from simlunar.reconstruction._anchor import cell_indices, linear_field
 from simlunar.reconstruction.base import Reconstructed
 from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
@@ -136,18 +137,18 @@ class LearnedReconOptions(Options):
 
 
 @dataclass(frozen=True, eq=False)
-class LearnedReconstruction:
-    """A trained residual model and its record.
+class LearnedReconstruction(ModelRecord):
+    """A trained residual model and its record (:class:`~simlunar.features.model_save.ModelRecord`).
 
     Attributes
     ----------
     model : HistGradientBoostingRegressor
         Residual / h from :func:`feature_names` (``meta["with_shading"]``).
     meta : dict
-        The JSON record (format, feature names, densities, options, input hashes, versions,
-        provenance).
+        The JSON record.
     """
 
+    FORMAT: ClassVar[str] = FORMAT
     model: object
     meta: dict = field(default_factory=dict)
 
@@ -191,7 +192,7 @@ class LearnedReconstruction:
             raise ValueError(f"guide image has shape {guide.shape}, the output grid {shape}")
         pts, vals, _ = _check_inputs(points_rc, values, shape)
         r, h, z_lin = self._residual(pts, vals, shape, guide, threads)
-        info = {"scale_m": h, "model_sha256": str(self.meta.get("model_sha256", ""))[:12]}
+        info = {"scale_m": h, "model_sha256": self.model_sha256[:12]}
         if h == 0:  # every sample on its neighbours' plane: nothing for a residual to scale
             if heldout_check:
                 info.update(gamma=0.0, heldout_gamma=0.0, heldout_samples=0)
@@ -239,20 +240,8 @@ class LearnedReconstruction:
                 r.flat[only] = self.model.predict(x[only]) * h
         return r, h, z_lin
 
-    def save(self, path) -> tuple[Path, Path]:
-        """Write ``path`` (joblib of the regressor) and its JSON record (``.json``).
-
-        Parameters
-        ----------
-        path : str or Path
-            Ends in ``.joblib``; parent folders are created.
-
-        Returns
-        -------
-        (Path, Path)
-            The joblib file and its record.
-        """
-        return save_with_record(path, {"format": FORMAT, "model": self.model}, self.meta)
+    def _payload(self) -> dict:
+        return {"model": self.model}
 
     @classmethod
     def load(cls, path) -> LearnedReconstruction:
@@ -272,7 +261,7 @@ class LearnedReconstruction:
             raise ValueError(f"{path}: cannot be read back ({type(e).__name__}: {e})") from None
         if not isinstance(payload, dict) or payload.get("format") != FORMAT:
             raise ValueError(f"{path}: not a {FORMAT} model file")
-        return cls(payload["model"], {k: v for k, v in meta.items() if k != "model_file"})
+        return cls._loaded(payload["model"], meta)
 
 
 def _sample_cells(pts: np.ndarray, shape) -> np.ndarray | None:

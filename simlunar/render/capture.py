@@ -15,6 +15,7 @@ from simlunar.imaging.blur import gaussian_blur
 from simlunar.imaging.exposure import AUTO_EXPOSURE_LEVEL, AUTO_EXPOSURE_PERCENTILE
 from simlunar.imaging.sensor import apply_sensor
 from simlunar.progress import advance
+from simlunar.registry import check_bounds, option
 from simlunar.render.lights import ProjectorLight, SunLight
 from simlunar.render.scene import TerrainScene, luminance
 from simlunar.render.sparse import LitTracer
@@ -62,70 +63,59 @@ SPARSE_PARTICLES = 256
 class CaptureOptions:
     """Rendering and optics of a :class:`RenderCapture`.
 
-    Attributes
-    ----------
-    max_depth : int >= 2
-        Path depth (2 = direct only; >= 3 includes interreflections).
-    spp, seed : int
-        Samples per pixel and sampler seed for every pattern.
-    projector_scale : float > 0
-        Projector irradiance scale (Mitsuba ``scale``).
-    projector_gamma : float > 0
-        Projector response: pattern values ``p`` are emitted as ``p ** projector_gamma``.
-    projector_blur : float >= 0
-        Gaussian blur (sigma, projector pixels) of every emitted pattern (projector defocus).
-    camera_blur : float >= 0
-        Gaussian point-spread function (sigma, camera pixels) of the camera lens applied to every
-        rendered frame before the sensor: the finite resolving power of the lens (diffraction
-        and aberrations), independent of depth, unlike the thin-lens defocus of ``rig.camera``.
-    target_level : float in (0, 1]
-        The auto exposure (:mod:`simlunar.imaging.exposure`) maps the white frame's
-        99.5th-percentile radiance to this fraction of the sensor range (or of 1 without a
-        sensor), so thresholds are in [0, 1] frame units.
-    sparse_integrator : "path", "ptracer" or "lit"
-        Integrator of sparse patterns (lit fraction <= ``sparse_below``): the path tracer;
-        Mitsuba's light tracer from the projector (which launches ``sparse_spp`` paths per
-        camera pixel); or ``"lit"`` (:class:`simlunar.render.sparse.LitTracer`), which traces
-        ``sparse_particles`` paths per lit projector pixel, so a dot frame costs what its dots
-        cost. With every integrator a pattern with nothing lit (the black frame) is not
-        rendered: it is exactly black.
-    sparse_spp : int >= 1 or None
-        Samples per pixel of sparse patterns (None: ``spp``); not used by ``"lit"``.
-    sparse_below : float in (0, 1]
-        Largest lit fraction of projector pixels counted as sparse.
-    sparse_particles : int >= 1
-        ``"lit"`` only: light paths per lit projector pixel (at pattern value 1).
+    The camera blur is the finite resolving power of the lens (diffraction and aberrations),
+    independent of depth, unlike the thin-lens defocus of ``rig.camera``. The auto exposure
+    (:mod:`simlunar.imaging.exposure`) maps the white frame's 99.5th-percentile radiance to
+    ``target_level``, so thresholds are in [0, 1] frame units. Sparse patterns (lit fraction
+    <= ``sparse_below``) are rendered by the path tracer, by Mitsuba's light tracer from the
+    projector (``"ptracer"``, ``sparse_spp`` paths per camera pixel) or by
+    :class:`simlunar.render.sparse.LitTracer` (``"lit"``, ``sparse_particles`` paths per lit
+    projector pixel, so a dot frame costs what its dots cost). With every integrator a pattern
+    with nothing lit (the black frame) is not rendered: it is exactly black.
     """
 
-    max_depth: int = 3
-    spp: int = 16
-    seed: int = 0
-    projector_scale: float = 1.0
-    projector_gamma: float = 1.0
-    projector_blur: float = 0.0
-    camera_blur: float = 0.0
-    target_level: float = AUTO_EXPOSURE_LEVEL
-    sparse_integrator: str = "path"
-    sparse_spp: int | None = None
-    sparse_below: float = 0.01
-    sparse_particles: int = SPARSE_PARTICLES
+    max_depth: int = option(3, doc="path depth (2 = direct only; >= 3 includes interreflections)")
+    spp: int = option(16, doc="samples per pixel for every pattern")
+    seed: int = option(0, doc="sampler seed for every pattern")
+    projector_scale: float = option(1.0, doc="projector irradiance scale (Mitsuba scale)")
+    projector_gamma: float = option(
+        1.0, doc="projector response: pattern values p are emitted as p ** projector_gamma", gt=0
+    )
+    projector_blur: float = option(
+        0.0,
+        doc="Gaussian blur sigma of every emitted pattern (projector defocus)",
+        unit="px",
+        ge=0,
+    )
+    camera_blur: float = option(
+        0.0,
+        doc="Gaussian point-spread sigma of the camera lens, applied to every rendered "
+        "frame before the sensor",
+        unit="px",
+        ge=0,
+    )
+    target_level: float = option(
+        AUTO_EXPOSURE_LEVEL,
+        doc="fraction of the sensor range (or of 1 without a sensor) the auto exposure maps "
+        "the white frame's 99.5th-percentile radiance to, in (0, 1]",
+    )
+    sparse_integrator: str = option(
+        "path", doc="integrator of sparse patterns", choices=SPARSE_INTEGRATORS
+    )
+    sparse_spp: int | None = option(
+        None, doc="samples per pixel of sparse patterns (None: spp); not used by lit", ge=1
+    )
+    sparse_below: float = option(
+        0.01, doc="largest lit fraction of projector pixels counted as sparse, in (0, 1]"
+    )
+    sparse_particles: int = option(
+        SPARSE_PARTICLES,
+        doc="lit only: light paths per lit projector pixel (at pattern value 1)",
+        ge=1,
+    )
 
     def __post_init__(self):
-        if not self.projector_gamma > 0:
-            raise ValueError(f"projector_gamma must be > 0, got {self.projector_gamma}")
-        if self.projector_blur < 0:
-            raise ValueError(f"projector_blur must be >= 0 px, got {self.projector_blur}")
-        if self.camera_blur < 0:
-            raise ValueError(f"camera_blur must be >= 0 px, got {self.camera_blur}")
-        if self.sparse_integrator not in SPARSE_INTEGRATORS:
-            raise ValueError(
-                f"unknown sparse_integrator {self.sparse_integrator!r}; valid: "
-                + ", ".join(repr(x) for x in SPARSE_INTEGRATORS)
-            )
-        if self.sparse_spp is not None and int(self.sparse_spp) < 1:
-            raise ValueError(f"sparse_spp must be >= 1, got {self.sparse_spp}")
-        if int(self.sparse_particles) < 1:
-            raise ValueError(f"sparse_particles must be >= 1, got {self.sparse_particles}")
+        check_bounds(self)
 
 
 class RenderCapture:

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.geometry import Camera, OrthoCamera, Projector
+from simlunar.registry import check_bounds, option
 from simlunar.render import backend
 from simlunar.render.cameras import to_world_matrix
 
@@ -50,39 +51,27 @@ SUN_ANGULAR_DIAMETER = np.radians(0.53)  # mean apparent diameter of the sun fro
 class SunLight:
     """Distant sun.
 
-    Parameters
-    ----------
-    elevation : float
-        Angle above the horizon (rad), in (0, pi/2].
-    azimuth : float
-        Measured from +y (north) clockwise towards +x (east) (rad).
-    irradiance : float
-        Irradiance on a surface facing the sun (W/m^2; any consistent unit).
-    angular_diameter : float
-        Apparent diameter of the solar disk (rad); 0 gives a point-like sun (hard shadows),
-        ``SUN_ANGULAR_DIAMETER`` (0.53 deg) the real one (soft shadows).
-    disk_samples : int
-        Directions used to integrate the disk when ``angular_diameter > 0`` (rounded up to
-        an even number: the directions come in mirrored pairs).
+    ``angular_diameter`` 0 gives a point-like sun (hard shadows), ``SUN_ANGULAR_DIAMETER``
+    (0.53 deg) the real one (soft shadows).
     """
 
-    elevation: float
-    azimuth: float
-    irradiance: float = 1.0
-    angular_diameter: float = 0.0
-    disk_samples: int = 32
+    elevation: float = option(doc="angle above the horizon", unit="rad", gt=0, le=np.pi / 2)
+    azimuth: float = option(doc="measured from +y (north) clockwise towards +x (east)", unit="rad")
+    irradiance: float = option(
+        1.0, doc="irradiance on a surface facing the sun (any consistent unit)", unit="W/m^2", ge=0
+    )
+    angular_diameter: float = option(
+        0.0, doc="apparent diameter of the solar disk", unit="rad", ge=0, lt=np.pi / 2
+    )
+    disk_samples: int = option(
+        32,
+        doc="directions used to integrate the disk when angular_diameter > 0 (rounded up to an "
+        "even number: the directions come in mirrored pairs)",
+        ge=1,
+    )
 
     def __post_init__(self) -> None:
-        if not 0 < self.elevation <= np.pi / 2:
-            raise ValueError(f"sun elevation must be in (0, pi/2] rad, got {self.elevation}")
-        if not (np.isfinite(self.irradiance) and self.irradiance >= 0):
-            raise ValueError(f"sun irradiance must be >= 0, got {self.irradiance}")
-        if not 0 <= self.angular_diameter < np.pi / 2:
-            raise ValueError(
-                f"sun angular_diameter must be in [0, pi/2) rad, got {self.angular_diameter}"
-            )
-        if int(self.disk_samples) < 1:
-            raise ValueError(f"sun disk_samples must be >= 1, got {self.disk_samples}")
+        check_bounds(self)
 
     @property
     def direction(self) -> np.ndarray:
@@ -124,11 +113,10 @@ class CameraLight:
     centre; for an orthographic camera a directional light along the view direction with
     irradiance ``intensity`` (W/m^2)."""
 
-    intensity: float = 1.0
+    intensity: float = option(1.0, doc="point intensity (W/sr) or irradiance (W/m^2)", ge=0)
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.intensity) and self.intensity >= 0):
-            raise ValueError(f"camera light intensity must be >= 0, got {self.intensity}")
+        check_bounds(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,11 +157,10 @@ class ProjectorLight:
 class AmbientLight:
     """Constant environment radiance (off unless added to the light list)."""
 
-    radiance: float
+    radiance: float = option(doc="radiance of the environment", ge=0)
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.radiance) and self.radiance >= 0):
-            raise ValueError(f"ambient radiance must be >= 0, got {self.radiance}")
+        check_bounds(self)
 
 
 LIGHTS = {

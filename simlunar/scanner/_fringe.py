@@ -23,7 +23,10 @@ TRIANGULATIONS = ("plane", "rays")
 FRINGE_OPTIONS: dict[str, dict] = {
     "axes": dict(default="both", doc="fringes along both axes or columns only", choices=FRINGE_AXES),
     "black_threshold": dict(default=0.05, doc="lit: white - black (frame units)", ge=0, le=1),
-    "method": dict(default="plane", doc="triangulation: column plane or rays", choices=TRIANGULATIONS),
+    "method": dict(
+        default="plane", doc="triangulation: column plane or rays (rays need axes both)",
+        choices=TRIANGULATIONS,
+    ),
 }  # fmt: skip
 """name -> keywords of :func:`simlunar.registry.option` (``default`` its first argument), for
 :func:`simlunar.registry.shared_option`."""

@@ -61,31 +61,28 @@ _CHUNK = 4096
 class MicroPhaseShiftOptions:
     """Options of the micro phase-shift coding (module docstring).
 
-    Attributes
-    ----------
-    period_px : float
-        Mean fringe period (projector pixels).
-    band : float
-        Relative width of the frequency band (Gupta & Nayar keep it narrow, about 10 %).
-    frequencies : int
-        Number of frequencies ``F`` (``F + 2`` patterns per axis).
-    axes : "both" or "cols"
-    black_threshold, min_modulation : float
-        Lit and modulation thresholds (frame units).
-    max_mismatch : float
-        Largest RMS difference between the measured phase vector and the closest pixel's.
-    method : "plane" or "rays" (rays need ``axes="both"``)
-    keep_frames : bool
-        Keep the captured stack (not a YAML option).
+    ``keep_frames`` keeps the captured stack (not a YAML option).
     """
 
     period_px: float = option(16.0, doc="mean fringe period", unit="px", ge=2.0)
-    band: float = option(0.1, doc="relative width of the frequency band", gt=0.0, le=0.5)
-    frequencies: int = option(5, doc="number of fringe frequencies F", ge=2, le=32)
+    band: float = option(
+        0.1,
+        doc="relative width of the frequency band (Gupta & Nayar keep it narrow, about 10 %)",
+        gt=0.0,
+        le=0.5,
+    )
+    frequencies: int = option(
+        5, doc="number of fringe frequencies F (F + 2 patterns per axis)", ge=2, le=32
+    )
     axes: str = shared_option(FRINGE_OPTIONS, "axes")
     black_threshold: float = shared_option(FRINGE_OPTIONS, "black_threshold")
     min_modulation: float = option(0.01, doc="smallest amplitude A (frame units)", ge=0, le=1)
-    max_mismatch: float = option(0.1, doc="largest RMS phase-vector mismatch", gt=0, le=2)
+    max_mismatch: float = option(
+        0.1,
+        doc="largest RMS difference between the measured phase vector and the closest pixel's",
+        gt=0,
+        le=2,
+    )
     method: str = shared_option(FRINGE_OPTIONS, "method")
     keep_frames: bool = False
 

@@ -63,41 +63,35 @@ _INVERSES = ("linearity", "render")
 class PhaseShiftOptions:
     """Options of the phase-shift coding (module docstring).
 
-    Attributes
-    ----------
-    steps : int >= 3
-        Phase shifts ``N`` per level.
-    period_px : float
-        Finest fringe period (projector pixels).
-    ratio : float > 1
-        Period ratio between successive levels (temporal unwrapping needs the coarser level's
-        phase error below ``pi / ratio``).
-    axes : "both" (columns and rows) or "cols" (columns only; triangulation by planes)
-    black_threshold : float
-        Lit if ``white - black`` exceeds it (frame units).
-    min_modulation : float
-        Smallest modulation ``B`` accepted at every level (frame units).
-    unwrap_tolerance : float
-        Largest disagreement between a level's unwrapped phase and the coarser level's scaled
-        phase (rad).
-    inverses : "linearity" or "render"
-        With an even ``steps``, obtain the shifts ``n + N / 2`` by linearity (no render).
-    method : "plane" or "rays" (rays need ``axes="both"``)
-    keep_frames : bool
-        Keep the captured stack in ``CodedScan.frames["images"]`` (not a YAML option).
+    ``keep_frames`` keeps the captured stack in ``CodedScan.frames["images"]`` (not a YAML
+    option).
     """
 
     steps: int = option(4, doc="phase shifts per fringe period", ge=3, le=64)
     period_px: float = option(8.0, doc="finest fringe period", unit="px", ge=2.0)
-    ratio: float = option(8.0, doc="period ratio between unwrapping levels", gt=1.0, le=64.0)
+    ratio: float = option(
+        8.0,
+        doc="period ratio between unwrapping levels (temporal unwrapping needs the coarser "
+        "level's phase error below pi / ratio)",
+        gt=1.0,
+        le=64.0,
+    )
     axes: str = shared_option(FRINGE_OPTIONS, "axes")
     black_threshold: float = shared_option(FRINGE_OPTIONS, "black_threshold")
-    min_modulation: float = option(0.01, doc="smallest modulation B (frame units)", ge=0, le=1)
+    min_modulation: float = option(
+        0.01, doc="smallest modulation B accepted at every level (frame units)", ge=0, le=1
+    )
     unwrap_tolerance: float = option(
-        1.0, doc="largest unwrapping disagreement (rad)", gt=0, le=np.pi
+        1.0,
+        doc="largest disagreement between a level's unwrapped phase and the coarser level's "
+        "scaled phase (rad)",
+        gt=0,
+        le=np.pi,
     )
     inverses: str = option(
-        "linearity", doc="shifts n + N/2 by linearity of light or rendered", choices=_INVERSES
+        "linearity",
+        doc="with an even steps, the shifts n + N/2 by linearity of light (no render) or rendered",
+        choices=_INVERSES,
     )
     method: str = shared_option(FRINGE_OPTIONS, "method")
     keep_frames: bool = False

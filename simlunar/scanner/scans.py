@@ -67,37 +67,33 @@ def _valid(names) -> str:
 class GrayCodeOptions:
     """Options of :func:`gray_code_scan` (OpenCV's decoder conventions).
 
-    Attributes
-    ----------
-    black_threshold, white_threshold : float in [0, 1]
-        OpenCV's validity and bit-reliability thresholds in captured-frame units.
-    inverses : "linearity" or "render"
-        Obtain inverse-pattern images from white, black and pattern renders, or render them.
-    method : "plane" (camera ray x projector column plane) or "rays" (column and row rays)
-    require_reliable : bool
-        A pixel with any unreliable bit is invalid (OpenCV's behaviour).
-    subpixel : bool
-        Sub-pixel stripe-edge refinement of the decoded columns and rows
-        (:func:`simlunar.scanner.subpixel.refine_subpixel`) instead of projector pixel centres.
-    keep_frames : bool
-        Keep the captured stack in ``GrayScan.frames["images"]`` (white and black are always
-        kept). Not a YAML option: the study sets it when scans are exported.
+    ``keep_frames`` keeps the captured stack in ``GrayScan.frames["images"]`` (white and black
+    are always kept); it is not a YAML option: the study sets it when scans are exported.
     """
 
     # frames are exposed so the white frame's bright pixels sit at 0.8 of the range
     # (CaptureOptions.target_level): a threshold at or above it marks every pixel invalid
     black_threshold: float = option(
-        0.05, doc="validity (frame units; below 0.8, the white level)", ge=0.0, lt=0.8
+        0.05,
+        doc="OpenCV's validity threshold (frame units; below 0.8, the white level)",
+        ge=0.0,
+        lt=0.8,
     )
     white_threshold: float = option(
-        0.01, doc="bit reliability (frame units; below 0.8)", ge=0.0, lt=0.8
+        0.01, doc="OpenCV's bit-reliability threshold (frame units; below 0.8)", ge=0.0, lt=0.8
     )
     inverses: str = option(
         "linearity", doc="inverse patterns by linearity of light or rendered", choices=_INVERSES
     )
     method: str = option("plane", doc="triangulation: column plane or rays", choices=_METHODS)
-    require_reliable: bool = option(True, doc="a pixel with an unreliable bit is invalid")
-    subpixel: bool = option(False, doc="sub-pixel stripe-edge refinement")
+    require_reliable: bool = option(
+        True, doc="a pixel with an unreliable bit is invalid (OpenCV's behaviour)"
+    )
+    subpixel: bool = option(
+        False,
+        doc="sub-pixel stripe-edge refinement of the decoded columns and rows "
+        "(simlunar.scanner.subpixel.refine_subpixel) instead of projector pixel centres",
+    )
     keep_frames: bool = False
 
     def __post_init__(self):
@@ -108,40 +104,25 @@ class GrayCodeOptions:
 class DotOptions:
     """Options of :func:`dot_scan`.
 
-    Attributes
-    ----------
-    exact : bool
-        One dot per frame (reference mode) instead of multiplexed frames.
-    radius : float >= 0
-        Dot radius in projector pixels (0 = one pixel).
-    min_proj_spacing, min_cam_spacing, tol : float >= 0
-        Scheduling spacings (projector px, camera px) and the matching tolerance (camera px).
-    rel_threshold, abs_threshold : float in [0, 1]
-        Blob detection thresholds (relative to the frame's brightest dot; absolute in frame
-        units). The relative one stays low because a multiplexed frame mixes bright and dark
-        surfaces: a dot on dark soil must not be lost next to one on a bright rock.
-    batch : int >= 1
-        Frames rendered per ``capture.render`` call (memory bound only).
+    The relative blob threshold stays low because a multiplexed frame mixes bright and dark
+    surfaces: a dot on dark soil must not be lost next to one on a bright rock.
     """
 
-    exact: bool = False
-    radius: float = 0.0
-    min_proj_spacing: float = 8.0
-    min_cam_spacing: float = 6.0
-    tol: float = 2.0
-    rel_threshold: float = 0.02
-    abs_threshold: float = 0.02
-    batch: int = 8
+    exact: bool = option(False, doc="one dot per frame (reference mode) instead of multiplexed")
+    radius: float = option(0.0, doc="dot radius in the projector (0 = one pixel)", unit="px", ge=0)
+    min_proj_spacing: float = option(
+        8.0, doc="scheduling spacing in the projector", unit="px", ge=0
+    )
+    min_cam_spacing: float = option(6.0, doc="scheduling spacing in the camera", unit="px", ge=0)
+    tol: float = option(2.0, doc="matching tolerance in the camera", unit="px", ge=0)
+    rel_threshold: float = option(
+        0.02, doc="blob threshold relative to the frame's brightest dot", ge=0, le=1
+    )
+    abs_threshold: float = option(0.02, doc="absolute blob threshold (frame units)", ge=0, le=1)
+    batch: int = option(8, doc="frames rendered per capture.render call (memory only)", ge=1)
 
     def __post_init__(self):
-        for name in ("radius", "min_proj_spacing", "min_cam_spacing", "tol"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"{name} must be >= 0 px, got {getattr(self, name)}")
-        for name in ("rel_threshold", "abs_threshold"):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(f"{name} must lie in [0, 1], got {getattr(self, name)}")
-        if int(self.batch) < 1:
-            raise ValueError(f"batch must be >= 1, got {self.batch}")
+        check_bounds(self)
 
 
 @dataclass(frozen=True, eq=False)

@@ -185,12 +185,13 @@ def test_registered_feature_and_strategy(model, held_out, tmp_path):
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"layouts": 0}, "layouts"),
-        ({"pixels_per_example": 5}, "pixels_per_example"),
-        ({"max_iter": 1.5}, "max_iter"),
-        ({"learning_rate": 0}, "learning_rate"),
-        ({"l2_regularization": -1}, "l2_regularization"),
-        ({"threads": 0}, "threads"),
+        ({"layouts": 0}, "layouts must be >= 1, got 0"),
+        ({"pixels_per_example": 5}, "pixels_per_example must be >= 100, got 5"),
+        ({"max_iter": 1.5}, "max_iter must be an integer, got 1.5"),
+        ({"max_leaf_nodes": True}, "max_leaf_nodes must be a finite number, got True"),
+        ({"learning_rate": 0}, "learning_rate must be > 0, got 0"),
+        ({"l2_regularization": -1}, "l2_regularization must be >= 0, got -1"),
+        ({"threads": 0}, "threads must be >= 1, got 0"),
     ],
 )
 def test_options_are_validated(kwargs, match):

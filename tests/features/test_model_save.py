@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import hashlib
 import json
+from dataclasses import dataclass, field
+from typing import ClassVar
 
 import joblib
 import pytest
 
 from simlunar.features import learned
-from simlunar.features.model_save import save_with_record
+from simlunar.features.model_save import ModelRecord, save_with_record
 
 
 def test_save_with_record_writes_the_hash_and_leaves_meta_alone(tmp_path):
@@ -40,3 +42,29 @@ def test_an_unwritable_target_names_the_file(tmp_path):
 
 def test_learned_re_exports_save_with_record():
     assert learned.save_with_record is save_with_record
+
+
+@dataclass(frozen=True, eq=False)
+class _Box(ModelRecord):
+    FORMAT: ClassVar[str] = "box/1"
+    model: object
+    meta: dict = field(default_factory=dict)
+
+    def _payload(self) -> dict:
+        return {"model": self.model}
+
+
+def test_a_model_record_saves_its_format_and_payload_and_loads_without_the_file_name(tmp_path):
+    box = _Box([3, 4], {"format": "box/1", "options": {"threads": 2}})
+    assert box.model_sha256 == ""
+    path, sidecar = box.save(tmp_path / "b.joblib")
+    # the container is not pickled: only the format tag and the payload
+    assert joblib.load(path) == {"format": "box/1", "model": [3, 4]}
+    record = json.loads(sidecar.read_text())
+    back = _Box._loaded(joblib.load(path)["model"], record)
+    assert back.model == [3, 4] and "model_file" not in back.meta
+    assert back.model_sha256 == hashlib.sha256(path.read_bytes()).hexdigest()
+    assert back.meta["options"] == {"threads": 2} and box.meta == {
+        "format": "box/1",
+        "options": {"threads": 2},
+    }

@@ -50,10 +50,12 @@ def test_detection_scores_by_hand():
 
 
 def test_hazard_options_refuse_bad_values():
-    with pytest.raises(ValueError, match="window_px"):
+    with pytest.raises(ValueError, match="window_px must be odd, got 4"):
         HazardOptions(window_px=4)
-    with pytest.raises(ValueError, match="slope_deg"):
+    with pytest.raises(ValueError, match=r"slope_deg must be > 0, got 0\.0"):
         HazardOptions(slope_deg=0.0)
+    with pytest.raises(ValueError, match="baseline_px must be >= 1, got 0"):
+        HazardOptions(baseline_px=0)
 
 
 def test_detection_scores_count_only_cells_inside_the_mask():

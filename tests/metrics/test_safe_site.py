@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from simlunar.metrics.hazard import HazardOptions
 from simlunar.metrics.safe_site import SiteOptions, grid_sites, safe_site_scores, site_fractions
+from simlunar.registry import option_info
 
 
 def _points(z: np.ndarray, spacing: float = 0.5) -> np.ndarray:
@@ -64,7 +66,21 @@ def test_the_chosen_site_is_safe_only_when_the_reconstruction_sees_the_rock():
 def test_bad_site_options():
     with pytest.raises(ValueError, match="semi_axes_m"):
         SiteOptions(semi_axes_m=(0.0, 1.0))
-    with pytest.raises(ValueError, match="max_hazard_fraction"):
+    with pytest.raises(ValueError, match=r"max_hazard_fraction must be < 1, got 1\.0"):
         SiteOptions(max_hazard_fraction=1.0)
-    with pytest.raises(ValueError, match="slope_deg"):
+    with pytest.raises(ValueError, match=r"slope_deg must be < 90, got 95\.0"):
         SiteOptions(slope_deg=95.0)
+    with pytest.raises(ValueError, match="window_px must be odd, got 16"):
+        SiteOptions(window_px=16)
+
+
+def test_the_hazard_thresholds_are_declared_once():
+    # the landing question's thresholds are the hazard map's options: same doc, unit and
+    # bounds (the slope's default is each class's own: 12 deg here, 15 deg for a hazard map)
+    site, hazard = option_info(SiteOptions), option_info(HazardOptions)
+    assert site["rock_height_m"] == hazard["relief_m"]
+    assert site["window_px"] == hazard["window_px"]
+    assert site["baseline_px"] == hazard["baseline_px"]
+    assert {**site["slope_deg"], "default": None} == {**hazard["slope_deg"], "default": None}
+    assert (site["slope_deg"]["default"], hazard["slope_deg"]["default"]) == (12.0, 15.0)
+    assert SiteOptions().hazard == HazardOptions(slope_deg=12.0)

@@ -152,5 +152,7 @@ def test_lloyd_placement_all_on_uniform_is_the_uniform_lloyd_layout():
         [(depth, image)], {"uniform": 1.0}, protocol=ScoreProtocol(densities=dens, trials=2), rng=7
     )
     assert abs(drawn - got) > 0.05
-    with pytest.raises(ValueError, match="placement must be 'random' or 'lloyd'"):
+    with pytest.raises(
+        ValueError, match="placement must be one of 'random', 'lloyd', got 'halftone'"
+    ):
         ScoreProtocol(placement="halftone")

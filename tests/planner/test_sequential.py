@@ -171,15 +171,16 @@ def test_uniform_layout_is_exact_and_covers_the_corners():
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"max_rounds": 1}, "max_rounds"),
-        ({"max_rounds": 2.0}, "max_rounds"),
-        ({"first_share": 1.0}, "first_share"),
-        ({"batch_share": 0.0}, "batch_share"),
-        ({"temper": 1.5}, "temper"),
-        ({"uniform_mix": -0.1}, "uniform_mix"),
-        ({"prior_power": 0}, "prior_power"),
-        ({"nms_pitches": 0}, "nms_pitches"),
-        ({"first_round": "grid"}, "first_round"),
+        ({"max_rounds": 1}, "max_rounds must be >= 2, got 1"),
+        ({"max_rounds": 2.0}, "max_rounds must be an integer, got 2.0"),
+        ({"first_share": 1.0}, "first_share must be < 1, got 1.0"),
+        ({"batch_share": 0.0}, "batch_share must be > 0, got 0.0"),
+        ({"temper": 1.5}, "temper must be <= 1, got 1.5"),
+        ({"uniform_mix": -0.1}, "uniform_mix must be >= 0, got -0.1"),
+        ({"prior_power": 0}, "prior_power must be > 0, got 0"),
+        ({"nms_pitches": 0}, "nms_pitches must be > 0, got 0"),
+        ({"nms_pitches": float("inf")}, "nms_pitches must be a finite number, got inf"),
+        ({"first_round": "grid"}, "first_round must be one of 'uniform', 'prior', got 'grid'"),
     ],
 )
 def test_options_are_validated(kwargs, match):

@@ -73,16 +73,25 @@ def test_make_light_registry():
 @pytest.mark.parametrize(
     ("cls", "kw", "msg"),
     [
-        (SunLight, {"elevation": -0.1, "azimuth": 0.0}, "sun elevation"),
-        (SunLight, {"elevation": 0.5, "azimuth": 0.0, "irradiance": -1.0}, "sun irradiance"),
+        (SunLight, {"elevation": -0.1, "azimuth": 0.0}, "elevation must be > 0, got -0.1"),
+        (
+            SunLight,
+            {"elevation": 0.5, "azimuth": 0.0, "irradiance": -1.0},
+            "irradiance must be >= 0, got -1.0",
+        ),
         (
             SunLight,
             {"elevation": 0.5, "azimuth": 0.0, "angular_diameter": -0.1},
-            "angular_diameter",
+            "angular_diameter must be >= 0, got -0.1",
         ),
-        (SunLight, {"elevation": 0.5, "azimuth": 0.0, "disk_samples": 0}, "disk_samples"),
-        (CameraLight, {"intensity": -2.0}, "camera light intensity"),
-        (AmbientLight, {"radiance": float("nan")}, "ambient radiance"),
+        (
+            SunLight,
+            {"elevation": 0.5, "azimuth": 0.0, "disk_samples": 0},
+            "disk_samples must be >= 1, got 0",
+        ),
+        (SunLight, {"elevation": 2.0, "azimuth": 0.0}, "elevation must be <= 1.5708, got 2.0"),
+        (CameraLight, {"intensity": -2.0}, "intensity must be >= 0, got -2.0"),
+        (AmbientLight, {"radiance": float("nan")}, "radiance must be a finite number, got nan"),
     ],
 )
 def test_bad_light_parameters(cls, kw, msg):

@@ -78,7 +78,7 @@ def test_empty_dot_set_and_bad_options_are_rejected(rig):
         GrayCodeOptions(inverses="both")
     with pytest.raises(ValueError, match="batch must be >= 1"):
         DotOptions(batch=0)
-    with pytest.raises(ValueError, match=r"min_proj_spacing must be >= 0"):
+    with pytest.raises(ValueError, match=r"min_proj_spacing must be >= 0, got -1.0"):
         DotOptions(min_proj_spacing=-1.0)
 
 
