@@ -184,9 +184,16 @@ def option_docs(options_cls) -> list[str]:
     return lines
 
 
+def _optional(f) -> bool:
+    """Whether a field may hold None: its default is None or its annotation names None."""
+    return f.default is None or "None" in str(f.type) or "Optional" in str(f.type)
+
+
 def check_bounds(obj) -> None:
     """Check every field of an options dataclass against the bounds declared by
-    :func:`option`; a ``ValueError`` naming the field, its value and the rule."""
+    :func:`option`; a ``ValueError`` naming the field, its value and the rule. None passes
+    the bounds of a field that may hold it (default None, or ``| None`` in its annotation)
+    and fails them elsewhere."""
     for f in dataclasses.fields(obj):
         m = f.metadata
         v = getattr(obj, f.name)
@@ -195,7 +202,7 @@ def check_bounds(obj) -> None:
             hint = did_you_mean(v, m["choices"])
             raise ValueError(f"{f.name} must be one of {valid}, got {v!r}{hint}")
         rules = [(k, m.get(k)) for k in ("ge", "gt", "le", "lt") if m.get(k) is not None]
-        if not rules or v is None:
+        if not rules or (v is None and _optional(f)):
             continue
         if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v):
             raise ValueError(f"{f.name} must be a finite number, got {v!r}")

@@ -120,6 +120,18 @@ def test_an_options_subclass_checks_its_declared_bounds_on_construction():
     assert _Band(lo=0.2).hi == 0.5 and option_docs(_Band)[2] == "lo : float, default 0.1"
 
 
+def test_none_passes_the_bounds_only_of_a_field_that_may_hold_it():
+    @dataclass(frozen=True)
+    class Opt(Options):
+        cap: float | None = option(None, doc="a cap (None: none)", gt=0)
+        width: float = option(1.0, doc="a width", gt=0)
+
+    assert Opt().cap is None
+    # before, None skipped every bound and failed later, far from the option that was wrong
+    with pytest.raises(ValueError, match="width must be a finite number, got None"):
+        Opt(width=None)
+
+
 def test_numpy_scalars_are_numbers_to_the_bounds():
     # a value read from an array (float32 image statistics, int64 counts) was refused as
     # "not a finite number" when only Python int and float counted

@@ -26,12 +26,12 @@ from simlunar.features.maps import (
 )
 from simlunar.features.registry import MAPS, NoMapOptions, feature_map, image_maps, map_options
 from simlunar.features.saliency import saliency
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 
 # ---- maps that need a trained model, apart from the image-only maps ------------------------
 @dataclass(frozen=True)
-class LearnedMapOptions:
+class LearnedMapOptions(Options):
     """Options of the learned map (:func:`simlunar.features.learned.learned`): the model file
     (from YAML) and the plan's density k / N (set by the planner, not a YAML key)."""
 
@@ -43,7 +43,7 @@ class LearnedMapOptions:
     density: float | None = option(None, doc="learned map: the plan's k / N", gt=0, le=1)
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         if self.model is not None and not str(self.model).endswith(".joblib"):
             raise ValueError(f"a learned model file ends in .joblib, got {self.model!r}")
 

@@ -59,7 +59,7 @@ from simlunar.features._stack import (
 )
 from simlunar.features.maps import check_image
 from simlunar.features.model_save import ModelRecord, save_with_record
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "FORMAT",
@@ -84,7 +84,7 @@ def pitch_of(density: float) -> float:
 
 
 @dataclass(frozen=True)
-class LearnedOptions:
+class LearnedOptions(Options):
     """Training options of :func:`simlunar.planner.learning.train_learned_map`.
 
     ``max_iter``, ``max_leaf_nodes``, ``min_samples_leaf``, ``learning_rate`` and
@@ -110,7 +110,7 @@ class LearnedOptions:
     threads: int = option(1, doc="OpenMP threads of the boosting (fit and predict)", ge=1)
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         for name in (
             "layouts",
             "pixels_per_example",

@@ -17,20 +17,20 @@ import numpy as np
 from scipy import ndimage
 
 from simlunar.features.maps import to_gray
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = ["LogEnergyOptions", "log_energy"]
 
 
 @dataclass(frozen=True)
-class LogEnergyOptions:
+class LogEnergyOptions(Options):
     """Options of the LoG energy map (:func:`log_energy`)."""
 
     sigma_px: float = option(1.0, doc="LoG map: finest Gaussian scale", unit="px", gt=0, le=64)
     scales: int = option(3, doc="LoG map: scales sigma_px * 2^i summed, i < scales", ge=1, le=8)
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         if isinstance(self.scales, bool) or int(self.scales) != self.scales:
             raise ValueError(f"scales must be an integer, got {self.scales!r}")
 

@@ -11,7 +11,7 @@ import numpy as np
 import pywt
 
 from simlunar.features._kernels import sliding_entropy
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "BOUNDARIES",
@@ -106,14 +106,14 @@ def check_entropy_size(size: int) -> None:
 
 
 @dataclass(frozen=True)
-class EntropyOptions:
+class EntropyOptions(Options):
     """Options of the entropy map (:func:`entropy`)."""
 
     size: int = option(9, doc="entropy map: odd window side, 1..63", unit="px", ge=1)
     scale: str = option("minmax", doc="entropy map: 8-bit scaling", choices=("minmax", "unit"))
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         check_entropy_size(self.size)  # odd, at most MAX_ENTROPY_SIZE
 
 
@@ -151,7 +151,7 @@ BOUNDARIES = ("symmetric", "periodic")
 
 
 @dataclass(frozen=True)
-class WaveletOptions:
+class WaveletOptions(Options):
     """Options of the wavelet energy map (:func:`wavelet`)."""
 
     wavelet: str = option("db2", doc="wavelet map: PyWavelets wavelet name")
@@ -161,7 +161,7 @@ class WaveletOptions:
     boundary: str = option("symmetric", doc="wavelet map", choices=BOUNDARIES)
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         if isinstance(self.levels, float):
             raise ValueError(f"levels must be an integer, got {self.levels!r}")
         if self.wavelet not in pywt.wavelist(kind="discrete"):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from simlunar.registry import check_bounds, option, shared_option
+from simlunar.registry import Options, option, shared_option
 
 __all__ = [
     "HAZARD_OPTIONS",
@@ -50,7 +50,7 @@ def check_odd_window(options) -> None:
 
 
 @dataclass(frozen=True)
-class HazardOptions:
+class HazardOptions(Options):
     """What counts as a landing hazard."""
 
     slope_deg: float = option(15.0, **SLOPE_LIMIT)
@@ -59,7 +59,7 @@ class HazardOptions:
     baseline_px: int = shared_option(HAZARD_OPTIONS, "baseline_px")
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         check_odd_window(self)
 
 

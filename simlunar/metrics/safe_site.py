@@ -33,13 +33,13 @@ from simlunar.metrics.hazard import (
     check_odd_window,
     hazard_map,
 )
-from simlunar.registry import check_bounds, option, shared_option
+from simlunar.registry import Options, option, shared_option
 
 __all__ = ["SiteOptions", "grid_sites", "safe_site_scores", "site_fractions"]
 
 
 @dataclass(frozen=True)
-class SiteOptions:
+class SiteOptions(Options):
     """Safe-site thresholds and candidates (module docstring for sources); ``window_px`` and
     ``baseline_px`` as for :class:`~simlunar.metrics.hazard.HazardOptions`."""
 
@@ -58,7 +58,7 @@ class SiteOptions:
     )
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         check_odd_window(self)
         a = np.asarray(self.semi_axes_m, float)
         if a.shape != (2,) or not np.all(np.isfinite(a)) or a.min() <= 0:

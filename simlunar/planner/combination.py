@@ -22,7 +22,7 @@ from simlunar.metrics import metric as error_metric
 from simlunar.metrics import score as eq43
 from simlunar.planner.strategies import COMBINABLE, check_k, combination_map, combine_maps, plan
 from simlunar.reconstruction import reconstruct
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "DEFAULT_FEATURES",
@@ -40,7 +40,7 @@ DEFAULT_FEATURES = COMBINABLE
 
 
 @dataclass(frozen=True)
-class ScoreProtocol:
+class ScoreProtocol(Options):
     """How coefficients are scored: the eq. 4.3 protocol of the fit and of the held-out score.
 
     The trials' seeds are fixed across objective evaluations (common random numbers), so the
@@ -66,9 +66,6 @@ class ScoreProtocol:
         "the halftone + weighted Lloyd layout",
         choices=("random", "lloyd"),
     )
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 @dataclass(frozen=True)

@@ -13,13 +13,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.planner._bluenoise import poisson_accept
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = ["RandomDrawOptions", "weighted_draw"]
 
 
 @dataclass(frozen=True)
-class RandomDrawOptions:
+class RandomDrawOptions(Options):
     """Options of the paper's weighted random draw (the ``random`` placement)."""
 
     density_power: float | None = option(
@@ -34,9 +34,6 @@ class RandomDrawOptions:
     cap_block: int = option(16, doc="block side of density_cap", unit="px", ge=1)
     blue_noise: bool = option(False, doc="Poisson-disk-like weighted sampling")
     blue_noise_radius: float = option(0.5, doc="radius factor of blue_noise", gt=0)
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 def weighted_draw(weights, k: int, *, rng, options: RandomDrawOptions) -> np.ndarray:

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 import simlunar.planner._placement_kernels as _k
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "LloydOptions",
@@ -380,7 +380,7 @@ def cvt_energy(density, flat) -> float:
 
 
 @dataclass(frozen=True)
-class LloydOptions:
+class LloydOptions(Options):
     """Options of the ``lloyd`` placement (:func:`lloyd_layout`): the density of the map
     (:func:`density_from_map`) placed by halftone + weighted Lloyd (:func:`place`)."""
 
@@ -394,9 +394,6 @@ class LloydOptions:
     border_pitch: float | None = option(
         0.75, doc="lloyd: snap samples this many pitches from the border onto it", ge=0
     )
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 def lloyd_layout(weights, k: int, *, rng, options: LloydOptions) -> np.ndarray:

@@ -32,7 +32,7 @@ from simlunar.planner.strategies import check_k
 from simlunar.planner.types import SamplePlan
 from simlunar.reconstruction import reconstruct
 from simlunar.reconstruction.delaunay import loo_residuals
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 
 __all__ = [
     "FIRST_ROUND_MIX",
@@ -54,7 +54,7 @@ FIRST_ROUND_MIX = 0.25
 
 
 @dataclass(frozen=True)
-class SequentialOptions:
+class SequentialOptions(Options):
     """Options of :func:`plan_sequential`."""
 
     max_rounds: int = option(
@@ -87,7 +87,7 @@ class SequentialOptions:
     )
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         if not isinstance(self.max_rounds, int):
             raise ValueError(f"max_rounds must be an integer, got {self.max_rounds!r}")
 

@@ -42,7 +42,7 @@ from simlunar.planner.registry import (
     planner_options,
 )
 from simlunar.planner.types import SamplePlan
-from simlunar.registry import UnknownNameError, check_bounds, did_you_mean, option
+from simlunar.registry import Options, UnknownNameError, did_you_mean, option
 
 __all__ = [
     "COMBINABLE",
@@ -179,16 +179,13 @@ def random_planner(k, shape, rng, *, truth=None, options=None) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class UniformLloydOptions:
+class UniformLloydOptions(Options):
     """Options of ``lloyd_uniform``: the ``lloyd`` layout of a uniform density."""
 
     lloyd_iterations: int = option(20, doc="lloyd: relaxation steps", ge=0, le=1000)
     border_pitch: float | None = option(
         0.75, doc="lloyd: snap samples this many pitches from the border onto it", ge=0
     )
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 def lloyd_uniform_planner(k, shape, rng, *, truth=None, options: UniformLloydOptions):
@@ -198,7 +195,7 @@ def lloyd_uniform_planner(k, shape, rng, *, truth=None, options: UniformLloydOpt
 
 
 @dataclass(frozen=True)
-class OracleGreedyOptions:
+class OracleGreedyOptions(Options):
     """``oracle_greedy``: the truth-driven refiner's schedule
     (:func:`simlunar.planner.oracle.oracle_greedy`; YAML section ``oracle``)."""
 
@@ -214,13 +211,13 @@ class OracleGreedyOptions:
     )
 
     def __post_init__(self):
-        check_bounds(self)
+        super().__post_init__()
         if not self.reconstruction:
             raise ValueError("reconstruction: must name a reconstruction, got ''")
 
 
 @dataclass(frozen=True)
-class OracleHessianOptions:
+class OracleHessianOptions(Options):
     """``oracle_hessian``: the true depth's Hessian density placed by halftone + Lloyd
     (:func:`simlunar.planner.oracle.oracle_hessian`)."""
 
@@ -230,9 +227,6 @@ class OracleHessianOptions:
     border_pitch: float | None = option(
         0.75, doc="lloyd: snap samples this many pitches from the border onto it", ge=0
     )
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 def oracle_greedy_planner(k, shape, rng, *, truth, options: OracleGreedyOptions, reconstruct=None):

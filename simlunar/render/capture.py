@@ -15,7 +15,7 @@ from simlunar.imaging.blur import gaussian_blur
 from simlunar.imaging.exposure import AUTO_EXPOSURE_LEVEL, AUTO_EXPOSURE_PERCENTILE
 from simlunar.imaging.sensor import apply_sensor
 from simlunar.progress import advance
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 from simlunar.render.lights import ProjectorLight, SunLight
 from simlunar.render.scene import TerrainScene, luminance
 from simlunar.render.sparse import LitTracer
@@ -60,7 +60,7 @@ SPARSE_PARTICLES = 256
 
 
 @dataclass(frozen=True)
-class CaptureOptions:
+class CaptureOptions(Options):
     """Rendering and optics of a :class:`RenderCapture`.
 
     The camera blur is the finite resolving power of the lens (diffraction and aberrations),
@@ -113,9 +113,6 @@ class CaptureOptions:
         doc="lit only: light paths per lit projector pixel (at pattern value 1)",
         ge=1,
     )
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 class RenderCapture:

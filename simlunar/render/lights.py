@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.geometry import Camera, OrthoCamera, Projector
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 from simlunar.render import backend
 from simlunar.render.cameras import to_world_matrix
 
@@ -48,7 +48,7 @@ SUN_ANGULAR_DIAMETER = np.radians(0.53)  # mean apparent diameter of the sun fro
 
 
 @dataclass(frozen=True)
-class SunLight:
+class SunLight(Options):
     """Distant sun.
 
     ``angular_diameter`` 0 gives a point-like sun (hard shadows), ``SUN_ANGULAR_DIAMETER``
@@ -69,9 +69,6 @@ class SunLight:
         "even number: the directions come in mirrored pairs)",
         ge=1,
     )
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
     @property
     def direction(self) -> np.ndarray:
@@ -108,15 +105,12 @@ class SunLight:
 
 
 @dataclass(frozen=True)
-class CameraLight:
+class CameraLight(Options):
     """Light at the camera: a point light of ``intensity`` (W/sr) at a perspective camera's
     centre; for an orthographic camera a directional light along the view direction with
     irradiance ``intensity`` (W/m^2)."""
 
     intensity: float = option(1.0, doc="point intensity (W/sr) or irradiance (W/m^2)", ge=0)
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -154,13 +148,10 @@ class ProjectorLight:
 
 
 @dataclass(frozen=True)
-class AmbientLight:
+class AmbientLight(Options):
     """Constant environment radiance (off unless added to the light list)."""
 
     radiance: float = option(doc="radiance of the environment", ge=0)
-
-    def __post_init__(self) -> None:
-        check_bounds(self)
 
 
 LIGHTS = {

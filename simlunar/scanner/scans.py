@@ -24,7 +24,7 @@ import numpy as np
 
 from simlunar.geometry import Rig
 from simlunar.progress import stage
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 from simlunar.scanner import dots as _dots
 from simlunar.scanner import gray_code as gc
 from simlunar.scanner.coded import FullFieldCoding, render_checked, scan_inputs
@@ -64,7 +64,7 @@ def _valid(names) -> str:
 
 
 @dataclass(frozen=True)
-class GrayCodeOptions:
+class GrayCodeOptions(Options):
     """Options of :func:`gray_code_scan` (OpenCV's decoder conventions).
 
     ``keep_frames`` keeps the captured stack in ``GrayScan.frames["images"]`` (white and black
@@ -96,12 +96,9 @@ class GrayCodeOptions:
     )
     keep_frames: bool = False
 
-    def __post_init__(self):
-        check_bounds(self)
-
 
 @dataclass(frozen=True)
-class DotOptions:
+class DotOptions(Options):
     """Options of :func:`dot_scan`.
 
     The relative blob threshold stays low because a multiplexed frame mixes bright and dark
@@ -120,9 +117,6 @@ class DotOptions:
     )
     abs_threshold: float = option(0.02, doc="absolute blob threshold (frame units)", ge=0, le=1)
     batch: int = option(8, doc="frames rendered per capture.render call (memory only)", ge=1)
-
-    def __post_init__(self):
-        check_bounds(self)
 
 
 @dataclass(frozen=True, eq=False)

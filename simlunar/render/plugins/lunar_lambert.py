@@ -36,7 +36,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from simlunar.registry import check_bounds, option
+from simlunar.registry import Options, option
 from simlunar.render.plugins._common import INV_PI, opaque, register_plugin, scalar
 
 __all__ = ["NAME", "LunarLambertBSDF", "register"]
@@ -47,7 +47,7 @@ _REGISTERED: set[str] = set()
 
 
 @dataclass(frozen=True)
-class LunarLambertBSDF:
+class LunarLambertBSDF(Options):
     """Lunar-Lambert reflectance (module docstring); the albedo is the terrain's grid.
 
     Parameters
@@ -60,7 +60,7 @@ class LunarLambertBSDF:
     name = NAME
 
     def __post_init__(self) -> None:
-        check_bounds(self)
+        super().__post_init__()
         object.__setattr__(self, "L", float(self.L))
 
     def mitsuba_dict(self, reflectance: Any) -> dict:
