@@ -155,15 +155,3 @@ def _sha256_file(path: Path) -> str:
         for chunk in iter(lambda: f.read(1 << 20), b""):
             h.update(chunk)
     return h.hexdigest()
-
-
-def _check_sklearn_version(meta: dict, path) -> None:
-    """Refuse a model record saved with another scikit-learn than the installed one (pickled
-    regressors do not carry across versions): a one-line ``ValueError`` naming ``path``."""
-    import sklearn  # only when a model is loaded: importing the features stays light
-
-    saved = meta.get("versions", {}).get("scikit-learn")
-    if saved != sklearn.__version__:
-        raise ValueError(
-            f"{path}: saved with scikit-learn {saved}, installed {sklearn.__version__}: retrain"
-        )

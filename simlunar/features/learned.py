@@ -53,12 +53,11 @@ from simlunar import __version__ as simlunar_version
 from simlunar.features._stack import (
     FEATURE_NAMES,
     FEATURE_SET_VERSION,
-    _check_sklearn_version,
     _model_path,
     image_features,
 )
 from simlunar.features.maps import check_image
-from simlunar.features.model_save import ModelRecord, save_with_record
+from simlunar.features.model_save import ModelRecord, check_record_matches, save_with_record
 from simlunar.registry import Options, option
 
 __all__ = [
@@ -341,9 +340,7 @@ def _check_meta(meta: dict, path: Path, digest: str) -> None:
             f"{path}: trained on feature set version {meta.get('feature_set_version')!r}, this "
             f"simlunar computes version {FEATURE_SET_VERSION}: retrain the model"
         )
-    _check_sklearn_version(meta, path)
-    if digest != meta.get("model_sha256"):
-        raise ValueError(f"{path}: SHA-256 does not match its record (modified or replaced)")
+    check_record_matches(meta, path, digest)
 
 
 _CACHE: dict[tuple, LearnedMap] = {}

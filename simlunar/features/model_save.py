@@ -18,7 +18,7 @@ import joblib
 
 from simlunar.features._stack import _model_path
 
-__all__ = ["ModelRecord", "save_with_record"]
+__all__ = ["ModelRecord", "check_record_matches", "save_with_record"]
 
 
 def save_with_record(path, payload, meta: dict) -> tuple[Path, Path]:
@@ -53,6 +53,24 @@ def save_with_record(path, payload, meta: dict) -> tuple[Path, Path]:
     sidecar = path.with_suffix(".json")
     _write_pair(((path, data), (sidecar, record)))
     return path, sidecar
+
+
+def check_record_matches(meta: dict, path, digest: str) -> None:
+    """Refuse a model whose record says it was saved with another scikit-learn than the
+    installed one (pickled regressors do not carry across versions), or whose recorded SHA-256
+    is not ``digest`` (that of the bytes about to be unpickled: a file truncated, modified or
+    replaced since it was saved): a one-line ``ValueError`` naming ``path``."""
+    import sklearn  # only when a model is loaded: importing the features stays light
+
+    saved = meta.get("versions", {}).get("scikit-learn")
+    if saved != sklearn.__version__:
+        raise ValueError(
+            f"{path}: saved with scikit-learn {saved}, installed {sklearn.__version__}: retrain"
+        )
+    if digest != meta.get("model_sha256"):
+        raise ValueError(
+            f"{path}: SHA-256 does not match its record (truncated, modified or replaced)"
+        )
 
 
 def _write_pair(files) -> None:

@@ -74,7 +74,7 @@ from simlunar.features._stack import (
     _model_path,
     _sha256_file,
 )
-from simlunar.features.model_save import ModelRecord
+from simlunar.features.model_save import ModelRecord, check_record_matches
 from simlunar.reconstruction._anchor import cell_indices, linear_field
 from simlunar.reconstruction.base import Reconstructed
 from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
@@ -287,7 +287,6 @@ def check_model_file(path) -> tuple[Path, dict]:
     (Path, dict)
         The path and its JSON record.
     """
-    import sklearn
 
     path = _model_path(path)
     sidecar = path.with_suffix(".json")
@@ -311,15 +310,7 @@ def check_model_file(path) -> tuple[Path, dict]:
             f", image stack {meta.get('feature_set_version')!r}; this simlunar computes "
             f"{RECON_FEATURE_VERSION}, {FEATURE_SET_VERSION}): retrain the model"
         )
-    saved = meta.get("versions", {}).get("scikit-learn")
-    if saved != sklearn.__version__:
-        raise ValueError(
-            f"{path}: saved with scikit-learn {saved}, installed {sklearn.__version__}: retrain"
-        )
-    if _sha256_file(path) != meta.get("model_sha256"):
-        raise ValueError(
-            f"{path}: SHA-256 does not match its record (truncated, modified or replaced)"
-        )
+    check_record_matches(meta, path, _sha256_file(path))
     return path, meta
 
 

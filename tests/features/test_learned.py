@@ -10,7 +10,7 @@ from scipy import ndimage
 from scipy.stats import rankdata
 
 from simlunar.features import feature_map
-from simlunar.features._stack import FEATURE_NAMES, _check_sklearn_version, image_features
+from simlunar.features._stack import FEATURE_NAMES, image_features
 from simlunar.features.learned import LearnedMap, LearnedOptions, pitch_of
 from simlunar.planner import plan
 from simlunar.planner.learning import error_target, train_learned_map
@@ -150,16 +150,6 @@ def test_load_refuses_mismatched_files(model, tmp_path, edit, match):
         sidecar.write_text(json.dumps({**meta, key: value}))
     with pytest.raises(ValueError, match=match):
         LearnedMap.load(path)
-
-
-def test_sklearn_version_check_names_the_file_and_both_versions():
-    import sklearn
-
-    _check_sklearn_version({"versions": {"scikit-learn": sklearn.__version__}}, "m.joblib")
-    for meta, saved in (({"versions": {"scikit-learn": "0.1"}}, "0.1"), ({}, "None")):
-        want = rf"^m\.joblib: saved with scikit-learn {saved}, installed {sklearn.__version__}: "
-        with pytest.raises(ValueError, match=want):
-            _check_sklearn_version(meta, "m.joblib")
 
 
 def test_model_file_must_be_joblib(model, tmp_path):

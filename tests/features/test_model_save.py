@@ -11,7 +11,7 @@ import joblib
 import pytest
 
 from simlunar.features import learned
-from simlunar.features.model_save import ModelRecord, save_with_record
+from simlunar.features.model_save import ModelRecord, check_record_matches, save_with_record
 
 
 def test_save_with_record_writes_the_hash_and_leaves_meta_alone(tmp_path):
@@ -68,3 +68,23 @@ def test_a_model_record_saves_its_format_and_payload_and_loads_without_the_file_
         "format": "box/1",
         "options": {"threads": 2},
     }
+
+
+def test_a_record_of_another_scikit_learn_is_refused_naming_the_file_and_both_versions():
+    import sklearn
+
+    check_record_matches(
+        {"versions": {"scikit-learn": sklearn.__version__}, "model_sha256": "ab"}, "m.joblib", "ab"
+    )
+    for meta, saved in (({"versions": {"scikit-learn": "0.1"}}, "0.1"), ({}, "None")):
+        want = rf"^m\.joblib: saved with scikit-learn {saved}, installed {sklearn.__version__}: "
+        with pytest.raises(ValueError, match=want):
+            check_record_matches(meta, "m.joblib", "ab")
+
+
+def test_a_model_whose_bytes_are_not_those_recorded_is_refused():
+    import sklearn
+
+    meta = {"versions": {"scikit-learn": sklearn.__version__}, "model_sha256": "ab"}
+    with pytest.raises(ValueError, match=r"^m\.joblib: SHA-256 does not match its record"):
+        check_record_matches(meta, "m.joblib", "cd")
