@@ -102,7 +102,6 @@ WITHOUT_OWN_TEST = [
     "render/capture.py",
     "render/plugins/hapke.py",
     "render/plugins/oren_nayar.py",
-    "render/reference.py",
     "scanner/scheduling.py",
     "scanner/subpixel.py",
 ]
