@@ -103,7 +103,6 @@ WITHOUT_OWN_TEST = [
     "render/plugins/hapke.py",
     "render/plugins/oren_nayar.py",
     "scanner/scheduling.py",
-    "scanner/subpixel.py",
 ]
 
 
