@@ -102,7 +102,6 @@ WITHOUT_OWN_TEST = [
     "render/capture.py",
     "render/plugins/hapke.py",
     "render/plugins/oren_nayar.py",
-    "scanner/scheduling.py",
 ]
 
 
