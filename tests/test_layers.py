@@ -95,7 +95,6 @@ TESTS = Path(__file__).resolve().parent
 #: ``tests/test_<module>.py`` for a top-level module). The list only shrinks: a new module
 #: comes with its test module, and a module that gains one leaves the list.
 WITHOUT_OWN_TEST = [
-    "pipeline/scene.py",
     "render/beams.py",
     "render/capture.py",
     "render/plugins/hapke.py",
