@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from simlunar.scanner import gray_code as gc
-from simlunar.scanner import subpixel
 
 
 def test_num_bits_matches_ceil_log2():
@@ -130,71 +129,7 @@ def _ramp_stack(u, v, W, H, slope=1.0):
     return np.stack(stack), np.ones_like(u), np.zeros_like(u)
 
 
-def test_refine_subpixel_recovers_linear_projector_coordinates():
-    # camera 2x finer than a 20 x 13 projector, tilted mapping with sub-pixel offsets
-    W, H = 20, 13
-    y, x = np.mgrid[0:24, 0:38] + 0.5
-    u = 0.31 + 0.5 * x + 0.02 * y
-    v = 0.17 + 0.5 * y - 0.01 * x
-    images, white, black = _ramp_stack(u, v, W, H)
-    dec = gc.decode(
-        images, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.0
-    )
-    assert np.array_equal(dec.col[dec.valid], np.floor(u).astype(int)[dec.valid])
-    ref = subpixel.refine_subpixel(dec, images)
-    sub = ref.subpixel
-    refined = np.isfinite(sub).all(axis=-1) & dec.valid
-    # every pixel bracketed by two edges in its row and column: all but the image borders
-    assert refined[2:-2, 2:-2].all()
-    np.testing.assert_allclose(sub[..., 0][refined], u[refined], atol=1e-9)
-    np.testing.assert_allclose(sub[..., 1][refined], v[refined], atol=1e-9)
-    # the integer decode is off by up to half a projector pixel; proj_uv uses the refinement
-    assert np.abs(dec.proj_uv()[..., 0] - u)[refined].max() > 0.4
-    np.testing.assert_allclose(ref.proj_uv()[refined], np.stack([u, v], -1)[refined], atol=1e-9)
-
-
-def test_refine_subpixel_stays_inside_the_decoded_pixel_and_rejects_wrong_stack():
-    W, H = 8, 4
-    y, x = np.mgrid[0:6, 0:14] + 0.5
-    u, v = 0.4 + 0.55 * x, 0.2 + 0.6 * y
-    images, white, black = _ramp_stack(u, v, W, H)
-    rng = np.random.default_rng(3)
-    noisy = images + 0.05 * rng.standard_normal(images.shape)
-    dec = gc.decode(
-        noisy, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.0
-    )
-    sub = subpixel.refine_subpixel(dec, noisy).subpixel
-    ok = np.isfinite(sub[..., 0])
-    assert ok.any()
-    assert np.all(np.floor(sub[..., 0][ok]) == dec.col[ok])
-    with pytest.raises(ValueError, match="gray-code stack"):
-        subpixel.refine_subpixel(dec, noisy[:-2])
-
-
-def test_refine_subpixel_finds_edges_across_unreliable_edge_pixels():
-    # ramps 1 projector px wide each side: pattern - inverse = 2 * 0.5 * distance, so a pixel
-    # within 0.15 projector px of any stripe edge fails a 0.15 reliability threshold
-    W, H = 20, 13
-    y, x = np.mgrid[0:24, 0:38] + 0.5
-    u = 0.31 + 0.5 * x + 0.02 * y
-    v = 0.17 + 0.5 * y - 0.01 * x
-    images, white, black = _ramp_stack(u, v, W, H, slope=0.5)
-    dec = gc.decode(
-        images, white, black, proj_shape=(H, W), black_threshold=0.5, white_threshold=0.15
-    )
-    assert (dec.lit & ~dec.valid).sum() > 50  # lit but unreliable pixels at stripe edges
-    adjacent = subpixel.refine_subpixel(dec, images, max_gap=0).subpixel
-    across = subpixel.refine_subpixel(dec, images, max_gap=2).subpixel
-    n_adj = np.isfinite(adjacent).all(-1).sum()
-    ok = np.isfinite(across).all(-1)
-    assert ok.sum() > n_adj + 50
-    # the zero crossing is found in the unreliable pixel's signal: still exact on ramps
-    np.testing.assert_allclose(across[ok], np.stack([u, v], -1)[ok], atol=1e-9)
-    with pytest.raises(ValueError, match="max_gap must be >= 0"):
-        subpixel.refine_subpixel(dec, images, max_gap=-1)
-
-
-# --- streaming decoder and compiled refinement against the NumPy reference implementations ---
+# --- streaming decoder against decode -------------------------------------------------------
 
 
 def _noisy_ramp_case(seed, slope=0.5, noise=0.03, white_threshold=0.1):
@@ -219,38 +154,6 @@ def _noisy_ramp_case(seed, slope=0.5, noise=0.03, white_threshold=0.1):
         white_threshold=white_threshold,
     )
     return dec, images
-
-
-@pytest.mark.parametrize("seed", range(6))
-@pytest.mark.parametrize("max_gap", [0, 1, 2, 4])
-def test_compiled_refinement_equals_the_numpy_reference(seed, max_gap):
-    from reference_scanner import refine_along_rows_reference
-
-    dec, images = _noisy_ramp_case(seed)
-    assert (dec.lit & ~dec.valid).sum() > 20 and dec.valid.sum() > 200
-    diff = images[0::2] - images[1::2]
-    ncb = dec.n_col_bits
-    ref_u = refine_along_rows_reference(dec.col, dec.valid, dec.lit, diff[:ncb], ncb, max_gap)
-    ref_v = refine_along_rows_reference(
-        dec.row.T,
-        dec.valid.T,
-        dec.lit.T,
-        diff[ncb:].transpose(0, 2, 1),
-        dec.n_row_bits,
-        max_gap,
-    ).T
-    sub = subpixel.refine_subpixel(dec, images, max_gap=max_gap).subpixel
-    np.testing.assert_array_equal(np.isfinite(sub[..., 0]), np.isfinite(ref_u))
-    np.testing.assert_array_equal(np.isfinite(sub[..., 1]), np.isfinite(ref_v))
-    np.testing.assert_allclose(sub[..., 0], ref_u, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(sub[..., 1], ref_v, rtol=0, atol=1e-12)
-    # float32 signals (what a streamed scan keeps) move the result by float32 rounding only
-    sub32 = subpixel.refine_subpixel_from_diff(
-        dec, diff.astype(np.float32), max_gap=max_gap
-    ).subpixel
-    both = np.isfinite(sub32) & np.isfinite(sub)
-    assert both.sum() >= 0.99 * np.isfinite(sub).sum()
-    np.testing.assert_allclose(sub32[both], sub[both], atol=1e-5)
 
 
 def test_streaming_decoder_equals_decode_in_any_order_and_reports_missing_frames():

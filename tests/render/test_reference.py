@@ -1,4 +1,6 @@
-"""The NumPy reference BRDFs: limits, symmetries, energy and hand-computed values."""
+"""The NumPy reference BRDFs (simlunar/render/reference.py): limits, symmetries, energy and
+hand-computed values of Lambert, lunar-Lambert, Oren-Nayar and Hapke, and the geometry helper
+``local_angles``. Pure NumPy: nothing here needs Mitsuba."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ import numpy as np
 import pytest
 
 from simlunar.render import reference as R
+from tests.render.test_bsdfs import angle_grid
 
 N_UP = np.array([0.0, 0.0, 1.0])
 
@@ -43,6 +46,7 @@ def directional_albedo(fn, theta_i, n=256, **kw):
 
 
 MODELS = [
+    (R.lunar_lambert, dict(albedo=0.3, L=0.6)),
     (R.oren_nayar, dict(albedo=0.8, sigma=0.4)),
     (R.oren_nayar, dict(albedo=0.9, sigma=1.2)),
     (R.oren_nayar, dict(albedo=0.8, sigma=0.4, model="qualitative")),
@@ -295,3 +299,91 @@ def test_lunar_defaults_documented_values():
     assert np.degrees(R.LUNAR_HAPKE.theta_bar) == pytest.approx(23.657)
     # a lunar-looking normal albedo (order 0.1) for the default w
     assert 0.05 < R.hapke_normal_albedo(R.LUNAR_HAPKE.w) < 0.2
+
+
+# --- local_angles ---------------------------------------------------------------------------
+
+
+def test_local_angles_hand_values():
+    # theta_i = 60 deg, theta_o = 30 deg, azimuths 0 and 90 / 180 / 0 deg
+    c_i, c_o, c_dphi = R.local_angles(
+        np.broadcast_to(sph(np.pi / 3), (3, 3)), sph(np.pi / 6, [np.pi / 2, np.pi, 0.0]), N_UP
+    )
+    np.testing.assert_allclose(c_i, [0.5] * 3)
+    np.testing.assert_allclose(c_o, [np.sqrt(3) / 2] * 3)
+    np.testing.assert_allclose(c_dphi, [0.0, -1.0, 1.0], atol=1e-12)
+
+
+def test_local_angles_normalises_and_handles_the_normal_direction():
+    # non-unit inputs are normalised (a BRDF of unnormalised vectors would scale with them)
+    a = R.local_angles(3.0 * sph(0.7), 0.2 * sph(0.3, 2.0), 5.0 * N_UP)
+    b = R.local_angles(sph(0.7), sph(0.3, 2.0), N_UP)
+    np.testing.assert_allclose(a, b, rtol=1e-12)
+    np.testing.assert_allclose(a[2], np.cos(2.0), rtol=1e-12)
+    # a direction along the normal has no azimuth: cos_dphi is defined as 0 there, not NaN
+    c_i, c_o, c_dphi = R.local_angles(N_UP, sph(0.5, 1.0), N_UP)
+    assert (c_i, c_dphi) == (pytest.approx(1.0), 0.0)
+    assert c_o == pytest.approx(np.cos(0.5))
+
+
+def test_lambert_broadcasts_an_albedo_array():
+    albedo = np.array([0.1, 0.5, 0.9])
+    f = R.lambert(np.broadcast_to(sph(0.4), (3, 3)), sph([0.2, 0.3, 0.4]), N_UP, albedo)
+    np.testing.assert_allclose(f, albedo / np.pi)
+
+
+# --- lunar-Lambert (McEwen 1991) --------------------------------------------------------------
+
+
+def test_lunar_lambert_hand_cases():
+    rho = 0.4
+    normal = R.lunar_lambert(N_UP, N_UP, N_UP, rho, L=1.0)
+    assert normal == pytest.approx(rho / np.pi)  # normalised at normal geometry, any L
+    assert R.lunar_lambert(N_UP, N_UP, N_UP, rho, L=0.3) == pytest.approx(rho / np.pi)
+    # cos i = 0.5, cos o = 1: Lommel-Seeliger 2 / (cos i + cos o) = 4 / 3
+    wi = sph(np.pi / 3)
+    assert R.lunar_lambert(wi, N_UP, N_UP, rho, L=1.0) == pytest.approx(rho / np.pi * 4 / 3)
+    # L = 0.25: 0.75 + 0.25 * 4 / 3 = 13 / 12
+    assert R.lunar_lambert(wi, N_UP, N_UP, rho, L=0.25) == pytest.approx(rho / np.pi * 13 / 12)
+    wi_g, wo_g = angle_grid()
+    np.testing.assert_allclose(
+        R.lunar_lambert(wi_g, wo_g, N_UP, rho, L=0.0), R.lambert(wi_g, wo_g, N_UP, rho)
+    )
+    assert R.lunar_lambert(sph(2.0), N_UP, N_UP, rho) == 0.0  # light below the horizon
+
+
+def test_lunar_lambert_l_one_is_lommel_seeliger(rng):
+    # L = 1: f = A/pi 2/(mu0 + mu); Hapke's single-scattering Lommel-Seeliger law is
+    # w/(4 pi (mu0 + mu)) (Hapke 2012, eq. for isotropic single scattering), so the two agree
+    # with w = 8 A; checked against the Hapke reference in its dark, smooth, isotropic limit
+    wi, wo = upper_dirs(rng, 200), upper_dirs(rng, 200)
+    A = 1e-6
+    ll = R.lunar_lambert(wi, wo, N_UP, A, L=1.0)
+    np.testing.assert_allclose(ll, A / np.pi * 2 / (wi[:, 2] + wo[:, 2]), rtol=1e-12)
+    hp = R.hapke(wi, wo, N_UP, lunar(w=8 * A, b=0.0, c=0.0, B0=0.0, h=0.1, theta_bar=0.0))
+    np.testing.assert_allclose(ll, hp, rtol=1e-4)
+
+
+@pytest.mark.parametrize("L", [0.0, 0.4, 1.0])
+@pytest.mark.parametrize("theta_i", [0.0, 0.6, 1.2])
+def test_lunar_lambert_directional_albedo_closed_form(L, theta_i):
+    # int f cos(o) dw_o = A [(1 - L) + 4 L (1 - mu0 ln(1 + 1/mu0))] (integrate
+    # 2 pi A/pi [(1 - L) mu + 2 L mu/(mu0 + mu)] over mu in [0, 1]). Normal incidence with
+    # L = 1 gives 4 (1 - ln 2) A = 1.227 A: A is a normal albedo, not a hemispherical one, so
+    # energy stays below 1 only for A <= 1 / (1 + 3 L) (the grazing limit mu0 -> 0).
+    A, mu0 = 0.2, np.cos(theta_i)
+    want = A * ((1 - L) + 4 * L * (1 - mu0 * np.log(1 + 1 / mu0)))
+    got = directional_albedo(R.lunar_lambert, theta_i, albedo=A, L=L)
+    assert got == pytest.approx(want, rel=1e-4)
+
+
+# --- Oren-Nayar at normal incidence -----------------------------------------------------------
+
+
+def test_oren_nayar_full_at_normal_incidence_hand_value():
+    # theta_i = 0: beta = 0, so tan(beta) = C3 = (2 beta/pi)^2 = 0 and the full model is
+    # rho/pi C1 + 0.17 rho^2/pi s2/(s2 + 0.13) whatever the viewer's azimuth; sigma = 0.5:
+    # C1 = 0.7844828, inter-reflection factor 0.1118421 (see the hand values above)
+    rho = 0.6
+    f = R.oren_nayar(np.broadcast_to(N_UP, (4, 3)), sph(0.7, [0.0, 1.0, 2.0, 3.0]), N_UP, rho, 0.5)
+    np.testing.assert_allclose(f, (rho * 0.7844828 + rho**2 * 0.1118421) / np.pi, rtol=1e-6)
