@@ -153,7 +153,7 @@ def test_directional_albedo_from_sampling_matches_quadrature(mi):
     spec = make_bsdf("oren_nayar", sigma=0.8)
     bsdf = mi.load_dict(bsdf_dict(spec, 0.9))
     _, _, weight = _sample(mi, bsdf, 1.0, n=400_000, seed=7)
-    # midpoint quadrature of the reference (as in test_brdf_reference)
+    # midpoint quadrature of the reference (as in test_reference)
     n = 256
     mu = (np.arange(n) + 0.5) / n
     ph = (np.arange(2 * n) + 0.5) / (2 * n) * 2 * np.pi
