@@ -18,6 +18,8 @@ from simlunar.planner.combination import (
 from simlunar.planner.draw import RandomDrawOptions, weighted_draw
 from simlunar.planner.oracle import (
     ORACLES,
+    OracleGreedyOptions,
+    OracleHessianOptions,
     framed_grid,
     hessian_norm,
     oracle_greedy,
@@ -52,8 +54,6 @@ from simlunar.planner.sequential import (
 )
 from simlunar.planner.strategies import (
     STRATEGIES,
-    OracleGreedyOptions,
-    OracleHessianOptions,
     UniformLloydOptions,
     check_k,
     combine_maps,

@@ -2,30 +2,92 @@
 
 They bound what any planner could gain and are labelled "Oracle ..." in every table:
 
-- :func:`oracle_greedy`: error feedback on the truth. A framed grid of ``start`` k samples (the
-  image border rows and columns included), then batches of about ``batch`` (15 %) more samples at
-  the non-maximum-suppressed peaks of the smoothed true squared error of the current
+- :func:`oracle_greedy`: error feedback on the truth. A framed grid of ``start_share`` k samples
+  (the image border rows and columns included), then batches of about ``batch_share`` (15 %) more
+  samples at the non-maximum-suppressed peaks of the smoothed true squared error of the current
   reconstruction (Delaunay-linear, or the one given as ``reconstruct``: an oracle for a fused,
   image-anchored model reads that model's error), until exactly k.
 - :func:`oracle_hessian`: the true depth's Hessian norm |H|^p as the density, placed by
   :func:`simlunar.planner.placement.place` (halftone + weighted Lloyd with the border covered).
 
-Both take the truth as an array; through :func:`simlunar.planner.plan` they are the strategies
+Both take the truth as an array and their options (:class:`OracleGreedyOptions`,
+:class:`OracleHessianOptions`); through :func:`simlunar.planner.plan` they are the strategies
 ``oracle_greedy`` and ``oracle_hessian`` and need ``truth=``.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
 
 from simlunar.planner.placement import density_from_map, place
 from simlunar.reconstruction import reconstruct as _linear
+from simlunar.registry import Options, option
 
-__all__ = ["ORACLES", "framed_grid", "hessian_norm", "oracle_greedy", "oracle_hessian"]
+__all__ = [
+    "ORACLES",
+    "OracleGreedyOptions",
+    "OracleHessianOptions",
+    "framed_grid",
+    "hessian_norm",
+    "oracle_greedy",
+    "oracle_hessian",
+]
 
 #: the oracle strategies (read the truth; never realisable)
 ORACLES = ("oracle_greedy", "oracle_hessian")
+
+
+@dataclass(frozen=True)
+class OracleGreedyOptions(Options):
+    """``oracle_greedy``: the truth-driven refiner's schedule (:func:`oracle_greedy`; YAML
+    section ``oracle``)."""
+
+    start_share: float = option(
+        0.25,
+        doc="share of k in the initial framed grid (the image border rows and columns included)",
+        gt=0,
+        le=1,
+    )
+    batch_share: float = option(0.15, doc="batch, a share of the current count", gt=0)
+    smooth_pitch: float = option(
+        0.25,
+        doc="Gaussian sigma of the squared-error smoothing, in current pitches sqrt(N / n)",
+        ge=0,
+    )
+    nms_pitch: float = option(
+        1.0,
+        doc="non-maximum suppression window, in current pitches (odd, >= 3 cells): a batch "
+        "takes the highest local maxima of the smoothed error within it",
+        gt=0,
+    )
+    reconstruction: str = option(
+        "linear",
+        doc="whose true error the oracle feeds back: linear (the paper's) or a name or label "
+        "of study.reconstructions (e.g. shading: the bound for the fused model); a study "
+        "passes that reconstruction to plan() as oracle_reconstruct",
+    )
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not self.reconstruction:
+            raise ValueError("reconstruction: must name a reconstruction, got ''")
+
+
+@dataclass(frozen=True)
+class OracleHessianOptions(Options):
+    """``oracle_hessian``: the true depth's Hessian density placed by halftone + Lloyd
+    (:func:`oracle_hessian`; the density as :func:`~simlunar.planner.placement.density_from_map`,
+    the placement as :func:`~simlunar.planner.placement.place`)."""
+
+    density_power: float = option(0.5, doc="power of the Hessian norm", gt=0)
+    uniform_mix: float = option(0.25, doc="mixture with uniform", ge=0, le=1)
+    lloyd_iterations: int = option(20, doc="lloyd: relaxation steps", ge=0, le=1000)
+    border_pitch: float | None = option(
+        0.75, doc="lloyd: snap samples this many pitches from the border onto it", ge=0
+    )
 
 
 def _check_truth(truth, k) -> np.ndarray:
@@ -79,15 +141,7 @@ def _batch(score, sampled, m, window) -> np.ndarray:
 
 
 def oracle_greedy(
-    truth,
-    k: int,
-    *,
-    rng=None,
-    start: float = 0.25,
-    batch: float = 0.15,
-    smooth: float = 0.25,
-    window: float = 1.0,
-    reconstruct=None,
+    truth, k: int, *, rng=None, options: OracleGreedyOptions | None = None, reconstruct=None
 ) -> np.ndarray:
     """Greedy error-feedback refiner on the true depth (an oracle bound, never realisable).
 
@@ -99,15 +153,9 @@ def oracle_greedy(
         Number of samples, 4 <= k <= rows * cols.
     rng : None, int, SeedSequence or Generator
         Unused: the refiner is deterministic given the truth (accepted for the planner interface).
-    start : float in (0, 1]
-        Share of k in the initial framed grid (:func:`framed_grid`).
-    batch : float, > 0
-        Batch size as a share of the current sample count.
-    smooth : float, >= 0
-        Gaussian sigma of the squared-error smoothing, in current pitches sqrt(N / n).
-    window : float, > 0
-        Non-maximum suppression window, in current pitches (odd, >= 3 cells): a batch takes
-        the highest local maxima of the smoothed error within that window.
+    options : OracleGreedyOptions, optional
+        The schedule (initial share, batch, smoothing, suppression window); its
+        ``reconstruction`` names what ``reconstruct`` computes and is not read here.
     reconstruct : callable, optional
         ``reconstruct(rc, values) -> heights``: rc (n, 2) int64 (row, col) of the current
         samples, values (n,) the truth there, heights (rows, cols) the reconstruction whose
@@ -125,18 +173,14 @@ def oracle_greedy(
     """
     del rng
     truth = _check_truth(truth, k)
-    if not 0 < start <= 1 or not batch > 0 or not smooth >= 0 or not window > 0:
-        raise ValueError(
-            "need 0 < start <= 1, batch > 0, smooth >= 0, window > 0; "
-            f"got {start}, {batch}, {smooth}, {window}"
-        )
+    o = options or OracleGreedyOptions()
     shape, n = truth.shape, truth.size
     if reconstruct is None:
 
         def reconstruct(rc, values):
             return _linear(rc, values, shape)
 
-    flat = framed_grid(shape, max(4, int(start * k)))
+    flat = framed_grid(shape, max(4, int(o.start_share * k)))
     sampled = np.zeros(n, dtype=bool)
     sampled[flat] = True
     while flat.size < k:
@@ -147,13 +191,15 @@ def oracle_greedy(
         if rec.shape != shape:
             raise ValueError(f"reconstruct returned shape {rec.shape}, the truth's is {shape}")
         pitch = np.sqrt(n / flat.size)
-        e2 = ndimage.gaussian_filter((rec - truth) ** 2, sigma=smooth * pitch, mode="nearest")
+        e2 = ndimage.gaussian_filter(
+            (rec - truth) ** 2, sigma=o.smooth_pitch * pitch, mode="nearest"
+        )
         hole = ndimage.distance_transform_edt(~sampled.reshape(shape))
         top = float(e2.max())
         # the hole term only orders cells whose error is negligible against the largest
         score = e2 + (1e-9 * top if top > 0 else 1.0) * hole / max(float(hole.max()), 1.0)
-        m = min(int(np.ceil(batch * flat.size)), k - flat.size)
-        new = _batch(score, sampled, m, max(3, 2 * int(window * pitch / 2) + 1))
+        m = min(int(np.ceil(o.batch_share * flat.size)), k - flat.size)
+        new = _batch(score, sampled, m, max(3, 2 * int(o.nms_pitch * pitch / 2) + 1))
         sampled[new] = True
         flat = np.concatenate((flat, new))
     return np.sort(flat)
@@ -183,14 +229,7 @@ def hessian_norm(truth, *, sigma: float = 1.0) -> np.ndarray:
 
 
 def oracle_hessian(
-    truth,
-    k: int,
-    *,
-    rng=None,
-    power: float = 0.5,
-    mix: float = 0.25,
-    iterations: int = 20,
-    border: float | None = 0.75,
+    truth, k: int, *, rng=None, options: OracleHessianOptions | None = None
 ) -> np.ndarray:
     """Density |H|^p of the true depth, placed by halftone + weighted Lloyd (an oracle bound).
 
@@ -202,10 +241,8 @@ def oracle_hessian(
         Number of samples, 4 <= k <= rows * cols.
     rng : None, int, SeedSequence or Generator
         Randomness of the halftone.
-    power, mix : float
-        Density mapping of :func:`simlunar.planner.placement.density_from_map`.
-    iterations, border
-        Lloyd iterations and border snap of :func:`simlunar.planner.placement.place`.
+    options : OracleHessianOptions, optional
+        The density mapping and the Lloyd placement.
 
     Returns
     -------
@@ -213,5 +250,6 @@ def oracle_hessian(
         Sorted distinct flat indices.
     """
     truth = _check_truth(truth, k)
-    density = density_from_map(hessian_norm(truth), power=power, mix=mix)
-    return place(density, k, rng=rng, iterations=iterations, border=border)
+    o = options or OracleHessianOptions()
+    density = density_from_map(hessian_norm(truth), power=o.density_power, mix=o.uniform_mix)
+    return place(density, k, rng=rng, iterations=o.lloyd_iterations, border=o.border_pitch)

@@ -18,9 +18,9 @@ options against the entry:
   the fair image-free reference of the image-directed ``lloyd`` layouts.
 - Oracles (:data:`~simlunar.planner.oracle.ORACLES`, labels "Oracle ..."): they READ THE TRUE
   DEPTH, passed as ``plan(..., truth=depth)``, and can never be realised; they bound the
-  headroom. ``oracle_greedy`` (:class:`OracleGreedyOptions`, see
+  headroom. ``oracle_greedy`` (:class:`~simlunar.planner.oracle.OracleGreedyOptions`, see
   :func:`simlunar.planner.oracle.oracle_greedy`) and ``oracle_hessian``
-  (:class:`OracleHessianOptions`). No other strategy reads ``truth``.
+  (:class:`~simlunar.planner.oracle.OracleHessianOptions`). No other strategy reads ``truth``.
 """
 
 from __future__ import annotations
@@ -30,7 +30,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.features import check_image, feature_map
-from simlunar.planner.oracle import oracle_greedy, oracle_hessian
+from simlunar.planner.oracle import (
+    OracleGreedyOptions,
+    OracleHessianOptions,
+    oracle_greedy,
+    oracle_hessian,
+)
 from simlunar.planner.placement import LloydOptions, lloyd_layout
 from simlunar.planner.registry import (
     COMBINATION,
@@ -47,8 +52,6 @@ from simlunar.registry import Options, UnknownNameError, did_you_mean, option
 __all__ = [
     "COMBINABLE",
     "STRATEGIES",
-    "OracleGreedyOptions",
-    "OracleHessianOptions",
     "UniformLloydOptions",
     "check_k",
     "combination_map",
@@ -194,41 +197,6 @@ def lloyd_uniform_planner(k, shape, rng, *, truth=None, options: UniformLloydOpt
     return lloyd_layout(np.ones(shape), k, rng=rng, options=o)
 
 
-@dataclass(frozen=True)
-class OracleGreedyOptions(Options):
-    """``oracle_greedy``: the truth-driven refiner's schedule
-    (:func:`simlunar.planner.oracle.oracle_greedy`; YAML section ``oracle``)."""
-
-    start_share: float = option(0.25, doc="share of k in the framed grid", gt=0, le=1)
-    batch_share: float = option(0.15, doc="batch, a share of the current count", gt=0)
-    smooth_pitch: float = option(0.25, doc="error smoothing sigma (pitches)", ge=0)
-    nms_pitch: float = option(1.0, doc="peak suppression window (pitches)", gt=0)
-    reconstruction: str = option(
-        "linear",
-        doc="whose true error the oracle feeds back: linear (the paper's) or a name or label "
-        "of study.reconstructions (e.g. shading: the bound for the fused model); a study "
-        "passes that reconstruction to plan() as oracle_reconstruct",
-    )
-
-    def __post_init__(self):
-        super().__post_init__()
-        if not self.reconstruction:
-            raise ValueError("reconstruction: must name a reconstruction, got ''")
-
-
-@dataclass(frozen=True)
-class OracleHessianOptions(Options):
-    """``oracle_hessian``: the true depth's Hessian density placed by halftone + Lloyd
-    (:func:`simlunar.planner.oracle.oracle_hessian`)."""
-
-    density_power: float = option(0.5, doc="power of the Hessian norm", gt=0)
-    uniform_mix: float = option(0.25, doc="mixture with uniform", ge=0, le=1)
-    lloyd_iterations: int = option(20, doc="lloyd: relaxation steps", ge=0, le=1000)
-    border_pitch: float | None = option(
-        0.75, doc="lloyd: snap samples this many pitches from the border onto it", ge=0
-    )
-
-
 def oracle_greedy_planner(k, shape, rng, *, truth, options: OracleGreedyOptions, reconstruct=None):
     o = options
     if reconstruct is None and o.reconstruction != "linear":
@@ -236,18 +204,11 @@ def oracle_greedy_planner(k, shape, rng, *, truth, options: OracleGreedyOptions,
             f"oracle_greedy: reconstruction {o.reconstruction!r} needs its reconstruction "
             "given to plan() as oracle_reconstruct=(rc, values) -> heights"
         )
-    return oracle_greedy(
-        truth, k, rng=rng, start=o.start_share, batch=o.batch_share, smooth=o.smooth_pitch,
-        window=o.nms_pitch, reconstruct=reconstruct,
-    )  # fmt: skip
+    return oracle_greedy(truth, k, rng=rng, options=o, reconstruct=reconstruct)
 
 
 def oracle_hessian_planner(k, shape, rng, *, truth, options: OracleHessianOptions):
-    o = options
-    return oracle_hessian(
-        truth, k, rng=rng, power=o.density_power, mix=o.uniform_mix,
-        iterations=o.lloyd_iterations, border=o.border_pitch,
-    )  # fmt: skip
+    return oracle_hessian(truth, k, rng=rng, options=options)
 
 
 def _grid_inputs(image, weights, shape, truth):

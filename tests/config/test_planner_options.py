@@ -15,7 +15,6 @@ from simlunar.pipeline.runner import unit_key
 from simlunar.planner import (
     LloydOptions,
     OracleGreedyOptions,
-    OracleHessianOptions,
     SequentialOptions,
     placement,
 )
@@ -63,24 +62,9 @@ def test_lloyd_defaults_are_the_library_defaults():
 
 
 def test_oracle_and_sequential_defaults_are_the_library_defaults():
-    from simlunar.planner.oracle import oracle_greedy, oracle_hessian
-
-    # the YAML's oracle section is the library's options class; its defaults the function's
+    # the YAML's oracle section is the library's options class (the oracles read their
+    # options, with no defaults of their own to keep in step)
     assert studies.PlannerOptsCfg().oracle.model_dump() == asdict(OracleGreedyOptions())
-    g, lib = OracleGreedyOptions(), _defaults(oracle_greedy)
-    assert (g.start_share, g.batch_share, g.smooth_pitch, g.nms_pitch) == (
-        lib["start"],
-        lib["batch"],
-        lib["smooth"],
-        lib["window"],
-    )
-    h, lib = OracleHessianOptions(), _defaults(oracle_hessian)
-    assert (h.density_power, h.uniform_mix, h.lloyd_iterations, h.border_pitch) == (
-        lib["power"],
-        lib["mix"],
-        lib["iterations"],
-        lib["border"],
-    )
     # options the YAML leaves out are the library's own (the oracle's density defaults)
     assert translate.planner_kwargs("oracle_hessian", studies.PlannerOptsCfg()) == {}
     set_ = studies.PlannerOptsCfg(uniform_mix=0.1, density_power=None)

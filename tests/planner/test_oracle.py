@@ -7,7 +7,14 @@ import pytest
 from scipy import ndimage
 
 from simlunar.metrics import metric
-from simlunar.planner import ORACLES, STRATEGY_NAMES, framed_grid, oracle_greedy, plan
+from simlunar.planner import (
+    ORACLES,
+    STRATEGY_NAMES,
+    OracleGreedyOptions,
+    framed_grid,
+    oracle_greedy,
+    plan,
+)
 from simlunar.reconstruction import reconstruct
 
 SHAPE = (96, 128)
@@ -124,21 +131,21 @@ def test_greedy_oracle_reads_the_error_of_the_reconstruction_it_is_given():
     def half_exact(rc, values):
         return np.where(left, depth, reconstruct(rc, values, SHAPE))
 
-    k, start = 600, 0.25
-    grid = set(framed_grid(SHAPE, int(start * k)).tolist())
-    fed = oracle_greedy(depth, k, start=start, reconstruct=half_exact)
+    k, opts = 600, OracleGreedyOptions(start_share=0.25)
+    grid = set(framed_grid(SHAPE, int(opts.start_share * k)).tolist())
+    fed = oracle_greedy(depth, k, options=opts, reconstruct=half_exact)
     added = np.array(sorted(set(fed.tolist()) - grid))
     assert len(fed) == k and len(added) == k - len(grid)
     assert np.all(added % SHAPE[1] >= 64)
-    plain = oracle_greedy(depth, k, start=start)
+    plain = oracle_greedy(depth, k, options=opts)
     assert np.mean(plain % SHAPE[1] < 64) > 0.3
     # linear passed explicitly is the default, exactly
     np.testing.assert_array_equal(
-        oracle_greedy(depth, k, start=start, reconstruct=lambda rc, v: reconstruct(rc, v, SHAPE)),
+        oracle_greedy(depth, k, options=opts, reconstruct=lambda rc, v: reconstruct(rc, v, SHAPE)),
         plain,
     )
     np.testing.assert_array_equal(
-        plan("oracle_greedy", k, truth=depth, rng=0, start_share=start,
+        plan("oracle_greedy", k, truth=depth, rng=0, start_share=opts.start_share,
              oracle_reconstruct=half_exact).flat,
         fed,
     )  # fmt: skip
