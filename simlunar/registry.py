@@ -147,6 +147,15 @@ def _bounds_text(info: dict) -> str:
     return ", ".join(parts)
 
 
+def _sentence(text: str) -> str:
+    """``text`` as a sentence: a leading lowercase word capitalised (a symbol such as ``k``,
+    ``lam_t`` or ``dz/dx`` kept as written) and a full stop at the end."""
+    first = text.split(maxsplit=1)[0].rstrip(",:;.")
+    if len(first) > 1 and first.isalpha() and first.islower():
+        text = text[0].upper() + text[1:]
+    return text if text.endswith(".") else text + "."
+
+
 def option_docs(options_cls) -> list[str]:
     """A numpydoc ``Attributes`` section, one entry per field of an options dataclass, from
     the metadata :func:`option` wrote (doc, unit, bounds) and the default; empty when no field
@@ -176,7 +185,7 @@ def option_docs(options_cls) -> list[str]:
             x for x in (row["unit"] and f"unit {row['unit']}", _bounds_text(row)) if x
         )
         if text:
-            text = text[0].upper() + text[1:] + ("" if text.endswith(".") else ".")
+            text = _sentence(text)
         if extra:
             text = f"{text} {extra[0].upper()}{extra[1:]}." if text else f"{extra}."
         if text:

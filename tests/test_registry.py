@@ -159,6 +159,17 @@ def test_option_docs_write_each_field_once_as_a_numpydoc_attributes_section():
     ]
 
 
+def test_option_docs_keep_a_leading_symbol_as_written():
+    @dataclass(frozen=True)
+    class Sym(Options):
+        k: float = option(0.02, doc="k, the ionisation ratio", ge=0)
+        lam: float = option(1.0, doc="lam_t: smoothness across the light.", ge=0)
+
+    docs = option_docs(Sym)
+    assert docs[3] == "    k, the ionisation ratio. >= 0."
+    assert docs[5] == "    lam_t: smoothness across the light. >= 0."
+
+
 def test_option_docs_are_empty_for_a_class_without_declared_options():
     @dataclass(frozen=True)
     class Plain:
