@@ -151,7 +151,7 @@ def _sentence(text: str) -> str:
     """``text`` as a sentence: a leading lowercase word capitalised (a symbol such as ``k``,
     ``lam_t`` or ``dz/dx`` kept as written) and a full stop at the end."""
     first = text.split(maxsplit=1)[0].rstrip(",:;.")
-    if len(first) > 1 and first.isalpha() and first.islower():
+    if first.isalpha() and first.islower() and (len(first) > 1 or first == "a"):
         text = text[0].upper() + text[1:]
     return text if text.endswith(".") else text + "."
 
