@@ -285,5 +285,8 @@ INSTRUMENTS: dict[str, LidarHardware] = load_instruments()
 def instrument(name: str, **overrides) -> LidarHardware:
     """An instrument preset of :data:`INSTRUMENTS`, with fields replaced by ``overrides``."""
     if name not in INSTRUMENTS:
-        raise ValueError(f"unknown instrument {name!r}; valid: {', '.join(INSTRUMENTS)}")
+        raise ValueError(
+            f"unknown instrument {name!r}; valid: {', '.join(INSTRUMENTS)}"
+            f"{did_you_mean(name, INSTRUMENTS)}"
+        )
     return dataclasses.replace(INSTRUMENTS[name], **overrides)

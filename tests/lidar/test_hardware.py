@@ -82,8 +82,9 @@ def test_presets_and_overrides():
     lola = instrument("lola_beam", pulse_rate_hz=10e3)
     assert lola.pulse_energy_j == pytest.approx(0.54e-3) and lola.pulse_rate_hz == 1e4
     assert lola.aperture_m2 == pytest.approx(np.pi * 0.07**2)
-    with pytest.raises(ValueError, match="unknown instrument 'lola'; valid: lola_beam"):
+    with pytest.raises(ValueError, match="unknown instrument 'lola'; valid: lola_beam") as err:
         instrument("lola")
+    assert str(err.value).endswith("(did you mean 'lola_beam'?)")
     with pytest.raises(ValueError, match="optics_efficiency must be <= 1"):
         dataclasses.replace(lola, optics_efficiency=1.2)
     with pytest.raises(ValueError, match=r"pulse_energy_j must be > 0, got 0\.0"):
