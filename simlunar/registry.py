@@ -138,10 +138,13 @@ def option_info(options_cls) -> dict[str, dict]:
     return out
 
 
+#: the bound keywords of :func:`option` and the relation each states
+_SIGNS = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}
+
+
 def _bounds_text(info: dict) -> str:
     """``>= 0, < 1`` from an :func:`option_info` row (empty without bounds)."""
-    signs = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}
-    parts = [f"{signs[k]} {info[k]:g}" for k in signs if info.get(k) is not None]
+    parts = [f"{_SIGNS[k]} {info[k]:g}" for k in _SIGNS if info.get(k) is not None]
     if info.get("choices") is not None:
         parts.append("one of " + ", ".join(map(repr, info["choices"])))
     return ", ".join(parts)
@@ -180,14 +183,9 @@ def option_docs(options_cls) -> list[str]:
         if default is not dataclasses.MISSING and not dataclasses.is_dataclass(default):
             head += f", default {default!r}"
         lines.append(head)
-        text = row["doc"] or ""
-        extra = ", ".join(
-            x for x in (row["unit"] and f"unit {row['unit']}", _bounds_text(row)) if x
-        )
-        if text:
-            text = _sentence(text)
-        if extra:
-            text = f"{text} {extra[0].upper()}{extra[1:]}." if text else f"{extra}."
+        unit = f"unit {row['unit']}" if row["unit"] else ""
+        extra = ", ".join(x for x in (unit, _bounds_text(row)) if x)
+        text = " ".join(_sentence(x) for x in (row["doc"], extra) if x)
         if text:
             lines.append(f"    {text}")
     return lines
@@ -210,7 +208,7 @@ def check_bounds(obj) -> None:
             valid = ", ".join(map(repr, m["choices"]))
             hint = did_you_mean(v, m["choices"])
             raise ValueError(f"{f.name} must be one of {valid}, got {v!r}{hint}")
-        rules = [(k, m.get(k)) for k in ("ge", "gt", "le", "lt") if m.get(k) is not None]
+        rules = [(k, m.get(k)) for k in _SIGNS if m.get(k) is not None]
         if not rules or (v is None and _optional(f)):
             continue
         if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v):
@@ -218,8 +216,7 @@ def check_bounds(obj) -> None:
         for k, bound in rules:
             ok = {"ge": v >= bound, "gt": v > bound, "le": v <= bound, "lt": v < bound}[k]
             if not ok:
-                sign = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}[k]
-                raise ValueError(f"{f.name} must be {sign} {bound:g}, got {v!r}")
+                raise ValueError(f"{f.name} must be {_SIGNS[k]} {bound:g}, got {v!r}")
 
 
 class Options:
