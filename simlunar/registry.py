@@ -224,17 +224,9 @@ class Options:
     its :func:`option` declares (:func:`check_bounds`).
 
     A subclass with a rule across fields extends ``__post_init__`` and calls
-    ``super().__post_init__()`` first::
-
-        @dataclass(frozen=True)
-        class BandOptions(Options):
-            lo: float = option(0.1, doc="lower edge", ge=0)
-            hi: float = option(0.5, doc="upper edge", le=1)
-
-            def __post_init__(self):
-                super().__post_init__()
-                if self.hi <= self.lo:
-                    raise ValueError("hi must be > lo")
+    ``super().__post_init__()`` first, so a value out of its own bounds is named before a rule
+    that reads it (:class:`simlunar.reconstruction._reading.ReadingChecks` adds the share
+    band's ``share_lo < share_hi`` this way).
     """
 
     __slots__ = ()
