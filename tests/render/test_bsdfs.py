@@ -341,12 +341,16 @@ def test_traverse_updates_without_recompiling(mi):
 def test_hapke_traverse_rebuilds_albedo_table(mi):
     bsdf = mi.load_dict(bsdf_dict(make_bsdf("hapke"), 0.12))
     params = mi.traverse(bsdf)
-    for key in ("b", "c", "B0", "h", "theta_bar", "reflectance.value"):
+    for key in ("b", "c", "B0", "h", "theta_bar", "B_C0", "h_C", "reflectance.value"):
         assert key in params
     params["B0"] = 0.0
     params.update()
     v = eval_plugin(mi, bsdf, sph(np.array([0.0])), sph(np.array([0.0])))
     assert np.pi * v[0, 0] == pytest.approx(0.12, rel=2e-3)  # still the grid's normal albedo
+    params["B_C0"] = 0.8  # the coherent surge: the table follows it too
+    params.update()
+    v = eval_plugin(mi, bsdf, sph(np.array([0.0])), sph(np.array([0.0])))
+    assert np.pi * v[0, 0] == pytest.approx(0.12, rel=2e-3)
 
 
 @pytest.mark.parametrize(
@@ -358,6 +362,8 @@ def test_hapke_traverse_rebuilds_albedo_table(mi):
         ({"type": "hapke", "h": 0.0}, "h must be"),
         ({"type": "hapke", "b": 1.2}, "b must be"),
         ({"type": "hapke", "albedo_mode": "x"}, "albedo_mode"),
+        ({"type": "hapke", "h_C": 0.0}, "h_C must be"),
+        ({"type": "hapke", "B_C0": -0.1}, "B_C0 must be"),
     ],
 )
 def test_plugin_errors_name_the_field(mi, d, msg):
