@@ -69,6 +69,7 @@ from simlunar.reconstruction.calibration import (
     calibrate,
     valid_pixels,
 )
+from simlunar.reconstruction.flatfield import flat_field
 from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
 from simlunar.registry import option, shared_option
 
@@ -141,11 +142,16 @@ def fallback_gamma(share: float, options: ShadingOptions | None = None) -> float
     return float(o.gamma_max * np.clip((share - o.share_lo) / (o.share_hi - o.share_lo), 0, 1))
 
 
-def shading_frames(guide: Guide, options: ShadingOptions | None = None):
+def shading_frames(
+    guide: Guide, options: ShadingOptions | None = None, *, linear: LinearField | None = None
+):
     """The frames the slopes are read from: ``[(name, image, valid), ...]``.
 
     With a co-located frame (and ``use_flat``) every sun frame is divided by it (pixels where
     the flat is under ``flat_guard`` of its median are invalid and divided by that floor).
+    When the co-located light is a flash on the rig (``guide.flash``), the flat is first
+    flat-fielded with its geometry on the samples' linear surface ``linear``
+    (:func:`.flatfield.flat_field`; required then).
     Without one, the raw sun frames and, for each other sun, the ratio ``sun / sun_j``
     (albedo-free: ``(s1 . n) / (s2 . n)``, linear in the slope to first order, calibrated like
     any frame). Valid pixels are those neither shadowed nor saturated in the raw sun frames.
@@ -157,10 +163,15 @@ def shading_frames(guide: Guide, options: ShadingOptions | None = None):
         suns += [(f"sun{i + 2}", im) for i, (im, _) in enumerate(guide.others)]
     out = []
     if guide.flat is not None and o.use_flat:
-        med = float(np.median(guide.flat))
+        flat = guide.flat
+        if guide.flash is not None:
+            if linear is None:
+                raise ValueError("a flash's flat frame is flat-fielded on the samples: give linear")
+            flat = flat_field(flat, linear.heights, guide.flash, spacing=guide.spacing)
+        med = float(np.median(flat))
         floor = o.flat_guard * med if med > 0 else o.flat_guard
-        lit = guide.flat > floor
-        den = np.maximum(guide.flat, floor)
+        lit = flat > floor
+        den = np.maximum(flat, floor)
         for name, im in suns:
             out.append((name, im / den, valid_pixels(im, copt) & lit))
     else:
@@ -271,7 +282,26 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     lin = linear_field(points_rc, values, shape)
     if guide.shape != lin.shape:
         raise ValueError(f"guide image has shape {guide.shape}, the output grid {lin.shape}")
-    frames = shading_frames(guide, o)
+    z_fc, gamma, info = _shading_detail(lin, guide, o)
+    if z_fc is None:
+        return Reconstructed(lin.heights, info)
+
+    # the detail is made from the samples (the calibration, the slopes where the image is not
+    # read, the flat-field's surface): the check remakes it from the kept samples only
+    def remade(keep):
+        field = _shading_detail(keep, guide, o)[0]
+        return np.zeros(lin.shape) if field is None else field
+
+    checked = remade if o.heldout_check else None
+    z = checked_blend(lin, z_fc, gamma, info, remade=checked, pool_folds=True)
+    return Reconstructed(z, info)
+
+
+def _shading_detail(lin: LinearField, guide: Guide, o: ShadingOptions):
+    """``(z_fc or None, gamma, info)``: the integrated slope field read from the guide on the
+    samples of ``lin``, its weight by the fallback rule and the diagnostics (None when the
+    image is not used)."""
+    frames = shading_frames(guide, o, linear=lin)
     copt = o.calibration()
     cals = [
         calibrate(im, None, None, spacing=guide.spacing, valid=v, linear=lin, options=copt)
@@ -306,7 +336,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
         info["light_axis_error_deg"] = _axis_error(cal0.direction, guide.light)
     if gamma == 0.0 or cal0.gain == 0.0:
         info["gamma"] = 0.0
-        return Reconstructed(lin.heights, info)
+        return None, 0.0, info
     lr, lc = central_gradient(lin.heights)
     lr /= guide.spacing
     lc /= guide.spacing
@@ -333,8 +363,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     along, weight = (None, 1.0) if stereo else (cal0.direction, o.across_weight)
     sp = guide.spacing
     z_fc = frankot_chellappa(gr * sp, gc * sp, along=along, across_weight=weight)
-    checked = z_fc if o.heldout_check else None
-    return Reconstructed(checked_blend(lin, z_fc, gamma, info, remade=checked), info)
+    return z_fc, gamma, info
 
 
 def heldout_gamma(
@@ -367,7 +396,8 @@ def heldout_gamma(
         When the one split leaves fewer than 20 samples inside the hull (a sparse layout: on
         250 x 400 cells, 1/1024 and sparser), pool all ``every`` splits (each sample held out
         once, ``every`` fields made) into one least-squares weight instead of returning 0.
-        Off (the ``shading`` reconstruction's check, as measured): one split.
+        Off: one split (every reconstruction that checks pools: ``shading``, ``photoclinometry``,
+        ``learned``).
 
     Returns
     -------
