@@ -71,13 +71,13 @@ from simlunar.terrain.types import Terrain
 
 __all__ = [
     "bsdf",
-    "flash_light",
     "build_terrain",
     "camera",
     "capture_options",
     "coding_options",
     "dot_options",
     "feature_opts",
+    "flash_light",
     "lights",
     "planner_kwargs",
     "preset_params",
