@@ -208,7 +208,7 @@ def build_guide(
         light = np.array([0.0, 0.0, 1.0]) if nadir else None
     t = time.perf_counter()
     frames: dict[str, np.ndarray] = {}
-    flat, others, flash_geo = None, [], None
+    flat, others, flash_geo, flat_frames = None, [], None, ("camera",)
     children = seeds.spawn(len(r.guide_frames)) if r.guide_frames else []
     for frame, ss in zip(r.guide_frames, children):
         name = frame_name(frame)
@@ -220,6 +220,8 @@ def build_guide(
                 cfg, scene, frame.flash, ss, develop=develop, lock=lock, radiance=radiance
             )
             frames[name] = flat
+            # flash-on and flash-off in daylight: two exposures for the one frame
+            flat_frames = (f"{name}_on", f"{name}_off") if frame.flash.daylight else (name,)
             continue
         if camera:
             light_cfg = CameraLightCfg(kind="camera")
@@ -252,8 +254,9 @@ def build_guide(
         flat=flat,
         others=tuple(others),
         spacing=float(scene.terrain.spacing),
-        frames=(main, *frames),
+        frames=(main, *(f for n in frames for f in (flat_frames if n == FLASH_FRAME else (n,)))),
         flash=flash_geo,
+        flat_frames=flat_frames,
     )
     return guide, frames
 

@@ -79,6 +79,9 @@ class Guide:
         falloff and a beam): the reconstructions flat-field ``flat`` with it
         (:func:`.flatfield.flat_field` on the samples' linear surface). None: ``flat`` is used
         as it is (the ideal co-located light at infinity, or a flash left uncorrected).
+    flat_frames : tuple of str
+        The exposures ``flat`` cost, as a reconstruction that reads it records them
+        (``("camera",)``; a daylight flash: ``("flash_on", "flash_off")``).
     others : tuple of (image, light)
         Frames of the same view under other suns (photometric stereo), ``light`` as above.
     spacing : float
@@ -94,6 +97,7 @@ class Guide:
     spacing: float = 1.0
     frames: tuple = ("sun",)
     flash: FlashGeometry | None = None
+    flat_frames: tuple = ("camera",)
 
     def __post_init__(self):
         img = _grid(self.image, "image")
@@ -111,6 +115,7 @@ class Guide:
             raise ValueError(f"guide spacing must be a finite number > 0, got {self.spacing!r}")
         object.__setattr__(self, "spacing", s)
         object.__setattr__(self, "frames", tuple(str(f) for f in self.frames))
+        object.__setattr__(self, "flat_frames", tuple(str(f) for f in self.flat_frames))
         if self.flash is not None:
             if not isinstance(self.flash, FlashGeometry):
                 raise ValueError(

@@ -312,7 +312,7 @@ def photoclinometry(
     cal = calibrate(image, None, None, spacing=guide.spacing, valid=valid, linear=lin,
                     options=so.calibration())  # fmt: skip
     gamma = fallback_gamma(cal.usable_share, so) if cal.gain > 0 else 0.0
-    frames = name + ("+camera" if guide.flat is not None and o.use_flat else "")
+    frames = "+".join([name, *(guide.flat_frames if guide.flat is not None and o.use_flat else ())])
     info = {
         "shading_share": float(cal.share),
         "heldout_share": float(cal.heldout_share),

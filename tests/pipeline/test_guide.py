@@ -242,7 +242,10 @@ def test_flash_frames_are_rendered_with_their_geometry(daylight):
     guide, frames = build_guide(cfg, scene, np.zeros(h.shape), np.random.SeedSequence(3),
                                 develop=develop, lock=contextlib.nullcontext(),
                                 radiance=radiance)  # fmt: skip
-    assert guide.frames == ("sun", "flash") and set(frames) == {"flash"}
+    # a daylight frame costs two exposures (flash-on, flash-off): the rows record both
+    flat_frames = ("flash_on", "flash_off") if daylight else ("flash",)
+    assert guide.frames == ("sun", *flat_frames) and set(frames) == {"flash"}
+    assert guide.flat_frames == flat_frames
     assert guide.flash is not None and guide.flat is not None
     # flat-fielded on the TRUE surface, the Lambert frame of constant albedo is constant
     # (render noise only); uncorrected it carries the falloff and the incidence

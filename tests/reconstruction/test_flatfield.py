@@ -108,3 +108,7 @@ def test_shading_reads_the_flat_field_only_from_the_samples():
     assert spread(ratio) < 0.05 and spread(ratio) < 0.25 * spread(uncorrected[0][1])
     res = run_reconstruction("shading", pts, depth[pts[:, 0], pts[:, 1]], shape, guide=guide)
     assert np.isfinite(res.heights).all()
+    # the rows name the exposures the flat cost (a daylight flash: two)
+    day = Guide(scene.image, flat=frame, spacing=s, flash=geo, flat_frames=("f_on", "f_off"))
+    res = run_reconstruction("shading", pts, depth[pts[:, 0], pts[:, 1]], shape, guide=day)
+    assert res.info["frames"].endswith("+f_on+f_off")
