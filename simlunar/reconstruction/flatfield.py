@@ -20,9 +20,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
-from simlunar.geometry import point_irradiance
 from simlunar.reconstruction.integrate import central_gradient
 from simlunar.registry import Options, option
 
@@ -77,27 +77,47 @@ def flash_falloff(values, geometry: FlashGeometry, *, spacing: float = 1.0) -> n
         ``cos^n(theta) cos(i) / d^2`` over its maximum (0 outside the beam or facing away).
     """
     v = np.asarray(values, dtype=np.float64)
+    if v.ndim != 2:
+        raise ValueError(f"values must be a (rows, cols) grid, got shape {v.shape}")
     sign = -1.0 if geometry.values == "depth" else 1.0
     up = sign * v
-    rows, cols = v.shape
     gr, gc = central_gradient(up)
-    normals = np.empty((rows, cols, 3))
-    normals[..., 0] = -gr / spacing
-    normals[..., 1] = -gc / spacing
-    normals[..., 2] = 1.0
-    points = np.empty((rows, cols, 3))
-    points[..., 0] = np.arange(rows)[:, None] * spacing
-    points[..., 1] = np.arange(cols)[None, :] * spacing
-    points[..., 2] = up
-    position = [geometry.row * spacing, geometry.col * spacing, sign * geometry.level]
-    e = point_irradiance(
-        points, normals, position=position, axis=geometry.axis,
-        beam_exponent=geometry.beam_exponent, cutoff=geometry.cutoff,
+    a = geometry.axis
+    e = _falloff(
+        up, gr, gc, float(spacing), geometry.row * spacing, geometry.col * spacing,
+        sign * geometry.level, a[0], a[1], a[2], float(geometry.beam_exponent),
+        float(np.cos(geometry.cutoff)),
     )  # fmt: skip
     top = float(e.max())
     if not top > 0:
         raise ValueError("the flash lights no cell of the surface (check its geometry)")
-    return e / top
+    e /= top
+    return e
+
+
+@numba.njit(cache=True, nogil=True)
+def _falloff(up, gr, gc, s, pr, pc, pu, ar, ac, au, n, cos_cut):  # pragma: no cover - compiled
+    """:func:`simlunar.geometry.point_irradiance` at ``I0 = 1`` of the cells (r s, c s, up)
+    with normals (-gr / s, -gc / s, 1), in one pass (tests/pipeline/test_guide.py checks it
+    against the NumPy function on the rendered light's world frame)."""
+    rows, cols = up.shape
+    out = np.zeros((rows, cols))
+    for r in range(rows):
+        for c in range(cols):
+            dr = pr - r * s
+            dc = pc - c * s
+            du = pu - up[r, c]
+            d2 = dr * dr + dc * dc + du * du
+            d = np.sqrt(d2)
+            mr = -gr[r, c] / s
+            mc = -gc[r, c] / s
+            m = np.sqrt(mr * mr + mc * mc + 1.0)
+            cos_i = (dr * mr + dc * mc + du) / (d * m)
+            cos_t = -(dr * ar + dc * ac + du * au) / d
+            if cos_i <= 0.0 or cos_t <= 0.0 or cos_t < cos_cut - 1e-12:
+                continue
+            out[r, c] = cos_t**n * cos_i / d2
+    return out
 
 
 def flat_field(flat, values, geometry: FlashGeometry, *, spacing: float = 1.0) -> np.ndarray:

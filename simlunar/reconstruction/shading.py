@@ -46,9 +46,10 @@ share 0.62 at a 30 deg sun (1.73-2.37x fewer samples than linear for equal MSE),
 (1.08x), 0.002 under camera-centred light (1.00x).
 
 **A real flash** (``guide.flash``): its frame is flat-fielded from the rig's geometry on the
-samples' linear surface (:mod:`.flatfield`), then once more on the first pass's fused surface
-(``flash_refine``: the flash lights off-centre cells obliquely, so its frame keeps a
-first-order shading of the relief the samples miss). A co-located frame whose own noise
+samples' linear surface (:mod:`.flatfield`); optionally once more on the first pass's fused
+surface (``flash_refine``, off: the flash lights off-centre cells obliquely, so its frame keeps
+a first-order shading of the relief the samples miss, but the fused surface's slope across
+the light is linear's and the second pass gained nothing consistent). A co-located frame whose own noise
 (:func:`frame_noise`, estimated from the frame alone) exceeds ``flat_noise`` -- a daylight
 flash far weaker than the sun, flash-on minus flash-off -- is blurred down to that level first
 (:func:`denoised_flat`): divided raw, its noise went into every pixel of the ratio with heavy
@@ -151,9 +152,10 @@ class ShadingOptions(ReadingChecks):
         le=1,
     )
     flash_refine: bool = option(
-        True,
+        False,
         doc="a flash's flat frame: flat-field it again on the first pass's fused surface (its "
-        "oblique light's shading of the relief the samples miss)",
+        "oblique light's shading of the relief the samples miss); measured on quarter-scale "
+        "aerial_1 at night: -5 % to +7 % per density, no consistent gain, twice the cost",
         choices=(True, False),
     )
 
@@ -177,6 +179,7 @@ def shading_frames(
     *,
     linear: LinearField | None = None,
     surface=None,
+    flat=None,
 ):
     """The frames the slopes are read from: ``[(name, image, valid), ...]``.
 
@@ -185,7 +188,8 @@ def shading_frames(
     When the co-located light is a flash on the rig (``guide.flash``), the flat is first
     flat-fielded with its geometry on the samples' linear surface ``linear``
     (:func:`.flatfield.flat_field`; required then), or on ``surface`` (rows, cols) when given
-    (a fused surface of the same samples).
+    (a fused surface of the same samples). ``flat``: the co-located frame already denoised
+    (:func:`denoised_flat`; default: denoised here).
     Without one, the raw sun frames and, for each other sun, the ratio ``sun / sun_j``
     (albedo-free: ``(s1 . n) / (s2 . n)``, linear in the slope to first order, calibrated like
     any frame). Valid pixels are those neither shadowed nor saturated in the raw sun frames.
@@ -197,7 +201,7 @@ def shading_frames(
         suns += [(f"sun{i + 2}", im) for i, (im, _) in enumerate(guide.others)]
     out = []
     if guide.flat is not None and o.use_flat:
-        flat = denoised_flat(guide.flat, o.flat_noise)
+        flat = denoised_flat(guide.flat, o.flat_noise) if flat is None else flat
         if guide.flash is not None:
             if linear is None and surface is None:
                 raise ValueError("a flash's flat frame is flat-fielded on the samples: give linear")
@@ -353,14 +357,16 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     lin = linear_field(points_rc, values, shape)
     if guide.shape != lin.shape:
         raise ValueError(f"guide image has shape {guide.shape}, the output grid {lin.shape}")
-    z_fc, gamma, info = _refined_detail(lin, guide, o)
+    # the co-located frame's denoising reads the frame alone: once for every pass and fold
+    flat = denoised_flat(guide.flat, o.flat_noise) if guide.flat is not None else None
+    z_fc, gamma, info = _refined_detail(lin, guide, o, flat)
     if z_fc is None:
         return Reconstructed(lin.heights, info)
 
     # the detail is made from the samples (the calibration, the slopes where the image is not
     # read, the flat-field's surface): the check remakes it from the kept samples only
     def remade(keep):
-        field = _refined_detail(keep, guide, o)[0]
+        field = _refined_detail(keep, guide, o, flat)[0]
         return np.zeros(lin.shape) if field is None else field
 
     checked = remade if o.heldout_check else None
@@ -368,29 +374,29 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     return Reconstructed(z, info)
 
 
-def _refined_detail(lin: LinearField, guide: Guide, o: ShadingOptions):
+def _refined_detail(lin: LinearField, guide: Guide, o: ShadingOptions, flat=None):
     """:func:`_shading_detail`, and for a flash's flat frame once more with the flat-field
     computed on the fused surface of the first pass (``flash_refine``): the flash lights
     off-centre cells obliquely (up to ~43 deg from the vertical at the corners of an aerial
     view from 50 m), so its frame keeps a first-order shading of the relief the samples do not
     resolve, which the linear surface's normals cannot divide out and the fused surface's
     mostly can."""
-    z_fc, gamma, info = _shading_detail(lin, guide, o)
+    z_fc, gamma, info = _shading_detail(lin, guide, o, flat=flat)
     if z_fc is None or guide.flash is None or not o.flash_refine:
         return z_fc, gamma, info
     fused = blend_detail(lin, z_fc, gamma)
-    z2, gamma2, info2 = _shading_detail(lin, guide, o, surface=fused)
+    z2, gamma2, info2 = _shading_detail(lin, guide, o, surface=fused, flat=flat)
     if z2 is None:  # the refined frame reads nothing: keep the first pass
         return z_fc, gamma, info
     info2["flash_refined"] = 1.0
     return z2, gamma2, info2
 
 
-def _shading_detail(lin: LinearField, guide: Guide, o: ShadingOptions, *, surface=None):
+def _shading_detail(lin: LinearField, guide: Guide, o: ShadingOptions, *, surface=None, flat=None):
     """``(z_fc or None, gamma, info)``: the integrated slope field read from the guide on the
     samples of ``lin``, its weight by the fallback rule and the diagnostics (None when the
     image is not used); a flash's flat is flat-fielded on ``surface`` (default ``lin``'s)."""
-    frames = shading_frames(guide, o, linear=lin, surface=surface)
+    frames = shading_frames(guide, o, linear=lin, surface=surface, flat=flat)
     copt = o.calibration()
     cals = [
         calibrate(im, None, None, spacing=guide.spacing, valid=v, linear=lin, options=copt)
