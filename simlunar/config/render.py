@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 
 from pydantic import (
     AfterValidator,
+    BeforeValidator,
     Field,
     model_validator,
 )
@@ -26,6 +27,8 @@ __all__ = [
     "BsdfCfg",
     "CameraCfg",
     "CameraLightCfg",
+    "GuideFlashCfg",
+    "GuideFlashFrameCfg",
     "HapkeCfg",
     "LambertCfg",
     "LightCfg",
@@ -169,14 +172,78 @@ class GuideSunFrameCfg(_Model):
     sun: GuideSunCfg
 
 
-#: an extra guide frame: ``camera`` (camera-centred light: nearly pure albedo) or another sun
-GuideFrameCfg = Literal["camera"] | GuideSunFrameCfg
+class GuideFlashCfg(_Model):
+    """A flash on the camera's rig (:class:`simlunar.render.lights.FlashLight`): a point
+    emitter ``baseline_m`` from the camera in its image plane, beam ``cos^n`` along the optical
+    axis, inverse-square falloff. Its output is one of ``intensity_w_sr`` (on-axis W/sr, in the
+    units of the sun's W/m^2), ``energy_j`` with ``exposure_s`` (``I0 = Q (n + 1) / (2 pi t)``)
+    or ``sun_ratio`` (its irradiance on the ground z = 0 straight below it, over the guide
+    sun's on the same ground, ``irradiance sin(elevation)``)."""
+
+    baseline_m: Metres = Field(0.0, ge=0, description="distance from the camera's centre")
+    baseline_azimuth_deg: Deg = Field(
+        0.0, ge=-360, le=360, description="baseline direction from the image's +x towards +y"
+    )
+    intensity_w_sr: float | None = Field(None, gt=0, description="on-axis radiant intensity")
+    energy_j: float | None = Field(None, gt=0, description="energy per flash (with exposure_s)")
+    exposure_s: float | None = Field(None, gt=0, description="exposure the flash fills (s)")
+    sun_ratio: float | None = Field(
+        None, gt=0, le=1e6, description="irradiance below the flash over the sun's (flat ground)"
+    )
+    beam_exponent: float = Field(0.0, ge=0, le=1000, description="n of the cos^n beam")
+    cutoff_deg: Deg = Field(60.0, gt=0, lt=85, description="half-angle of the beam")
+    daylight: bool = Field(
+        False,
+        description="true: the sun stays up, and the frame is flash-on minus flash-off (two "
+        "exposures at the brighter frame's exposure); false: night or shadow, the flash alone",
+    )
+    flat_field: bool = Field(
+        True,
+        description="the reconstructions divide the frame by its falloff, incidence and beam, "
+        "computed from the rig's pose and the samples' linear surface",
+    )
+
+    @model_validator(mode="after")
+    def _one_output(self) -> GuideFlashCfg:
+        given = [k for k in ("intensity_w_sr", "energy_j", "sun_ratio") if getattr(self, k)]
+        if len(given) != 1:
+            raise ValueError(
+                "give the flash's output as one of intensity_w_sr, energy_j (with exposure_s) "
+                f"or sun_ratio, got {', '.join(given) or 'none'}"
+            )
+        if (self.energy_j is None) != (self.exposure_s is None):
+            raise ValueError("energy_j and exposure_s go together")
+        return self
+
+
+class GuideFlashFrameCfg(_Model):
+    """``{flash: {baseline_m: .., sun_ratio: .., daylight: ..}}``: a guide frame under a flash
+    on the camera's rig (the real co-located frame; ``camera`` is its idealisation)."""
+
+    flash: GuideFlashCfg
+
+
+def _ideal_is_camera(value):
+    """``ideal`` is another spelling of ``camera``: the co-located light's limiting case."""
+    return "camera" if value == "ideal" else value
+
+
+#: an extra guide frame: ``camera`` or ``ideal`` (the ideal co-located light: at infinity on
+#: the optical axis, nearly pure albedo), a flash on the rig, or another sun
+GuideFrameCfg = Annotated[
+    Literal["camera"] | GuideSunFrameCfg | GuideFlashFrameCfg, BeforeValidator(_ideal_is_camera)
+]
 
 
 def _unique_frames(frames: list) -> list:
     seen = [f if isinstance(f, str) else f.model_dump_json() for f in frames]
     if len(set(seen)) != len(seen):
         raise ValueError("guide_frames: a frame is listed twice")
+    colocated = [f for f in frames if f == "camera" or isinstance(f, GuideFlashFrameCfg)]
+    if len(colocated) > 1:
+        raise ValueError(
+            "guide_frames: at most one co-located frame (camera, the ideal one, or a flash)"
+        )
     return frames
 
 
@@ -275,9 +342,11 @@ class RenderCfg(_Model):
     guide_frames: Annotated[list[GuideFrameCfg], AfterValidator(_unique_frames)] = Field(
         default_factory=list,
         description="extra frames of the guide view for the guided reconstructions (sampling, "
-        "scanner and LIDAR studies): camera (camera-centred light, the albedo frame; in a "
-        "scanner study the projector's flood frame) or {sun: {elevation_deg, azimuth_deg}}; "
-        "each is one more exposure through the same sensor",
+        "scanner and LIDAR studies): camera (the ideal co-located light: at infinity on the "
+        "optical axis, the albedo frame; in a scanner study the projector's flood frame), "
+        "{flash: {baseline_m, sun_ratio, beam_exponent, daylight, ...}} (a real flash on the "
+        "rig) or {sun: {elevation_deg, azimuth_deg}}; each is one more exposure through the "
+        "same sensor (two for a daylight flash: flash-on and flash-off)",
     )
     sensor: SensorCfg | None = Field(
         default_factory=SensorCfg, description="null = use noiseless radiance"
@@ -289,4 +358,10 @@ class RenderCfg(_Model):
             raise ValueError(
                 "guide_frames: camera is the guide view's own light (render.light) already"
             )
+        for f in self.guide_frames:
+            if isinstance(f, GuideFlashFrameCfg) and not isinstance(self.light, SunLightCfg):
+                if f.flash.daylight or f.flash.sun_ratio is not None:
+                    raise ValueError(
+                        "guide_frames: a flash's daylight and sun_ratio need a sun as render.light"
+                    )
         return self

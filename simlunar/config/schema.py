@@ -36,7 +36,13 @@ from simlunar.config.fields import (  # noqa: F401
     _SetKeysModel,
     _tagged_union,
 )
-from simlunar.config.render import OrthoNadirCfg, PerspectiveCfg, RenderCfg, SunLightCfg
+from simlunar.config.render import (
+    GuideFlashFrameCfg,
+    OrthoNadirCfg,
+    PerspectiveCfg,
+    RenderCfg,
+    SunLightCfg,
+)
 from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.studies import LIDAR_BLOCKS, LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.terrain import TerrainCfg
@@ -117,6 +123,13 @@ class ExperimentCfg(_Model):
             raise ValueError(
                 "render.sensor.exposure_e: a scanner study sets the exposure from its white "
                 "calibration frame (the auto exposure); leave exposure_e null"
+            )
+        if isinstance(self.study, ScannerStudyCfg) and any(
+            isinstance(f, GuideFlashFrameCfg) for f in self.render.guide_frames
+        ):
+            raise ValueError(
+                "render.guide_frames: a flash frame is not simulated in a scanner study (its "
+                "co-located frame is the projector's flood frame: camera)"
             )
         if (
             isinstance(self.study, ScannerStudyCfg)

@@ -10,6 +10,7 @@ the code that reads them); nothing else converts units.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import typing
 from typing import Any
@@ -37,7 +38,14 @@ from simlunar.config.terrain import (
     TerrainPresetCfg,
     merged_preset,
 )
-from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose, rover_mast_camera
+from simlunar.geometry import (
+    Camera,
+    Intrinsics,
+    OrthoCamera,
+    Pose,
+    beam_intensity,
+    rover_mast_camera,
+)
 from simlunar.imaging.exposure import auto_exposure_e
 from simlunar.imaging.sensor import SensorModel
 from simlunar.planner import COMBINATION, PLACEMENTS, PLANNERS, MapSource
@@ -69,6 +77,7 @@ __all__ = [
     "coding_options",
     "dot_options",
     "feature_opts",
+    "flash_light",
     "lights",
     "planner_kwargs",
     "preset_params",
@@ -212,6 +221,48 @@ def lights(light, ambient_radiance: float) -> list:
     if ambient_radiance > 0:
         out.append(make_light("ambient", radiance=ambient_radiance))
     return out
+
+
+def flash_light(cfg, sun, camera):
+    """The :class:`~simlunar.render.lights.FlashLight` of a flash guide frame on ``camera``.
+
+    Parameters
+    ----------
+    cfg : GuideFlashCfg
+        The frame's ``flash`` block.
+    sun : SunLightCfg or None
+        The guide view's sun (needed by ``sun_ratio``).
+    camera : geometry.Camera or geometry.OrthoCamera
+        The rig's camera (the flash sits ``baseline_m`` from its centre).
+
+    ``sun_ratio``: the on-axis intensity that gives the ground z = 0 straight below the light
+    ``sun_ratio`` times the sun's irradiance on that ground, ``irradiance sin(elevation)``:
+    ``I0 = ratio E_sun sin(e) h^2 / cos^n(theta)`` (``h`` the light's height, ``theta`` the
+    angle of straight down from its axis).
+    """
+    geo = make_light(
+        "flash",
+        baseline=cfg.baseline_m,
+        baseline_azimuth=math.radians(cfg.baseline_azimuth_deg),
+        beam_exponent=cfg.beam_exponent,
+        cutoff=math.radians(cfg.cutoff_deg),
+    )
+    if cfg.intensity_w_sr is not None:
+        intensity = cfg.intensity_w_sr
+    elif cfg.energy_j is not None:
+        intensity = beam_intensity(cfg.energy_j, cfg.exposure_s, cfg.beam_exponent)
+    else:
+        if sun is None:
+            raise ValueError("flash.sun_ratio: needs a sun as render.light")
+        position, _ = geo.pose(camera)
+        below = np.array([position[0], position[1], 0.0])
+        if position[2] <= 0:
+            raise ValueError("flash.sun_ratio: the flash is not above the ground z = 0")
+        unit = float(geo.irradiance(camera, below, [0.0, 0.0, 1.0]))  # at I0 = 1 W/sr
+        if unit <= 0:
+            raise ValueError("flash.sun_ratio: the ground below the flash is outside its beam")
+        intensity = cfg.sun_ratio * sun.irradiance * math.sin(sun.elevation) / unit
+    return dataclasses.replace(geo, intensity=float(intensity))
 
 
 def bsdf(cfg):

@@ -11,6 +11,7 @@ from simlunar.geometry.camera import (
     pixel_centers,
     rover_mast_camera,
 )
+from simlunar.geometry.emitters import beam_intensity, beam_profile, point_irradiance
 
 __all__ = [
     "Camera",
@@ -19,7 +20,10 @@ __all__ = [
     "Pose",
     "Projector",
     "Rig",
+    "beam_intensity",
+    "beam_profile",
     "grid_height_at",
     "pixel_centers",
+    "point_irradiance",
     "rover_mast_camera",
 ]

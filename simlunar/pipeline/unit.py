@@ -123,17 +123,21 @@ def scene_inputs(cfg):
     )
 
 
-def sensor_image(radiance: np.ndarray, cfg: SensorCfg | None, *, rng) -> np.ndarray:
+def sensor_image(
+    radiance: np.ndarray, cfg: SensorCfg | None, *, rng, reference: np.ndarray | None = None
+) -> np.ndarray:
     """Radiance (rows, cols) -> sensor image in [0, 1] (float32).
 
     ``exposure_e: null`` and ``sensor: null`` use the one auto-exposure rule
-    (:mod:`simlunar.imaging.exposure`): the 99.5th percentile of this radiance at 80 % of the
-    full well, or (no sensor) at 0.8 of the [0, 1] image, noiseless.
+    (:mod:`simlunar.imaging.exposure`): the 99.5th percentile of this radiance (or of
+    ``reference``: two frames at one exposure) at 80 % of the full well, or (no sensor) at 0.8
+    of the [0, 1] image, noiseless.
     """
     finite = np.nan_to_num(radiance, nan=0.0)
+    ref = finite if reference is None else np.nan_to_num(reference, nan=0.0)
     if cfg is None:
-        return np.clip(finite * auto_gain(finite), 0, 1).astype(np.float32)
-    model = translate.sensor_model(cfg, reference=finite)
+        return np.clip(finite * auto_gain(ref), 0, 1).astype(np.float32)
+    model = translate.sensor_model(cfg, reference=ref)
     return apply_sensor(finite, model, rng=rng).astype(np.float32)
 
 
@@ -275,7 +279,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
         with stage("figure arrays", total=1) as s:
             arrays.update(_figure_arrays(cfg, scene, image, depth, seeds, timings))
             s.advance()
-    guide, guide_meta = _guide(cfg, scene, image, seeds, timings, arrays)
+    guide, guide_meta = _guide(cfg, scene, image, seeds, timings, arrays, radiance=radiance)
     t = time.perf_counter()
     study = run_sampling_study(
         depth,
@@ -318,7 +322,7 @@ def _array_exports(cfg, scene: RenderScene, depth, result) -> dict | None:
     )
 
 
-def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict):
+def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict, radiance=None):
     """The guided reconstructions' :class:`~simlunar.reconstruction.Guide` (the guide view's
     image and the extra frames of ``render.guide_frames``, :mod:`simlunar.pipeline.guide`)
     and the unit meta naming its frames; ``(None, {})`` when no configured reconstruction reads
@@ -330,13 +334,14 @@ def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict):
     if not any(RECONSTRUCTIONS[n].meta.get("guided") for n in names):
         return None, {}
 
-    def develop(radiance, rng):
-        return sensor_image(radiance, cfg.render.sensor, rng=rng)
+    def develop(rad, rng, reference=None):
+        return sensor_image(rad, cfg.render.sensor, rng=rng, reference=reference)
 
     with stage("guide frames", total=1) as s:
         guide, frames = build_guide(
-            cfg, scene, image, seeds["guide"], develop=develop, lock=RENDER_LOCK, timings=timings
-        )
+            cfg, scene, image, seeds["guide"], develop=develop, lock=RENDER_LOCK,
+            timings=timings, radiance=radiance,
+        )  # fmt: skip
         s.advance()
     arrays.update({f"guide_{name}": img for name, img in frames.items()})
     return guide, {"guide_frames": list(guide.frames)}
@@ -456,10 +461,10 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
 def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     """Render the guide view, then the LIDAR study with the sensor at the guide camera (the
     sun of a sun-lit scene is the LIDAR's background)."""
-    image, _, result = _render_guide(cfg, scene, seeds, timings)
+    image, radiance, result = _render_guide(cfg, scene, seeds, timings)
     depth = np.where(result.gt.valid, result.gt.depth, np.nan).astype(np.float64)
     arrays: dict = {}
-    guide, guide_meta = _guide(cfg, scene, image, seeds, timings, arrays)
+    guide, guide_meta = _guide(cfg, scene, image, seeds, timings, arrays, radiance=radiance)
     sun = scene.lights[0] if isinstance(cfg.render.light, SunLightCfg) else None
     lidar_scene = LidarScene(scene.terrain, scene.camera, bsdf=scene.bsdf, sun=sun)
     t = time.perf_counter()

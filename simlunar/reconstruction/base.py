@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simlunar.reconstruction.delaunay import reconstruct
+from simlunar.reconstruction.flatfield import FlashGeometry
 from simlunar.registry import Options, Registry, option
 
 __all__ = [
@@ -73,6 +74,14 @@ class Guide:
     flat : ndarray, shape (rows, cols), or None
         A frame of the same view under camera-centred (co-located) light: at opposition the
         image is nearly pure albedo, so ``image / flat`` cancels albedo and keeps shading.
+    flash : FlashGeometry or None
+        Where the light of ``flat`` is when it is a flash on the rig (a point emitter with
+        falloff and a beam): the reconstructions flat-field ``flat`` with it
+        (:func:`.flatfield.flat_field` on the samples' linear surface). None: ``flat`` is used
+        as it is (the ideal co-located light at infinity, or a flash left uncorrected).
+    flat_frames : tuple of str
+        The exposures ``flat`` cost, as a reconstruction that reads it records them
+        (``("camera",)``; a daylight flash: ``("flash_on", "flash_off")``).
     others : tuple of (image, light)
         Frames of the same view under other suns (photometric stereo), ``light`` as above.
     spacing : float
@@ -87,6 +96,8 @@ class Guide:
     others: tuple = ()
     spacing: float = 1.0
     frames: tuple = ("sun",)
+    flash: FlashGeometry | None = None
+    flat_frames: tuple = ("camera",)
 
     def __post_init__(self):
         img = _grid(self.image, "image")
@@ -104,6 +115,14 @@ class Guide:
             raise ValueError(f"guide spacing must be a finite number > 0, got {self.spacing!r}")
         object.__setattr__(self, "spacing", s)
         object.__setattr__(self, "frames", tuple(str(f) for f in self.frames))
+        object.__setattr__(self, "flat_frames", tuple(str(f) for f in self.flat_frames))
+        if self.flash is not None:
+            if not isinstance(self.flash, FlashGeometry):
+                raise ValueError(
+                    f"guide flash must be a FlashGeometry, got {type(self.flash).__name__}"
+                )
+            if self.flat is None:
+                raise ValueError("guide flash: describes the flat frame's light, but no flat")
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -308,11 +308,11 @@ def photoclinometry(
     lin = linear_field(points_rc, values, shape)
     if guide.shape != lin.shape:
         raise ValueError(f"guide image has shape {guide.shape}, the output grid {lin.shape}")
-    name, image, valid = shading_frames(guide, so)[0]
+    name, image, valid = shading_frames(guide, so, linear=lin)[0]
     cal = calibrate(image, None, None, spacing=guide.spacing, valid=valid, linear=lin,
                     options=so.calibration())  # fmt: skip
     gamma = fallback_gamma(cal.usable_share, so) if cal.gain > 0 else 0.0
-    frames = name + ("+camera" if guide.flat is not None and o.use_flat else "")
+    frames = "+".join([name, *(guide.flat_frames if guide.flat is not None and o.use_flat else ())])
     info = {
         "shading_share": float(cal.share),
         "heldout_share": float(cal.heldout_share),

@@ -35,12 +35,27 @@ the image does not vary. The share is measured at the calibration's blur (half a
 at the sub-pitch scales the method adds, so a second check caps ``gamma`` (``heldout_check``, on by
 default, :func:`heldout_gamma`): every fifth sample is left out and the least-squares weight of
 the image's detail that predicts the left-out samples from the others is the largest ``gamma``
-allowed. On the full-resolution moonyard under its 75 deg sun the share alone let the sun image
+allowed; when one split leaves fewer than 20 held-out samples in the hull (the sparse end) the
+five splits are pooled, and each split's detail is made again from its kept samples only (the
+calibration, the slopes the image does not give and the flat-field all read the samples).
+On the full-resolution moonyard under its 75 deg sun the share alone let the sun image
 through at sparse densities (held-out share 0.5-0.65 at 1/1024-1/2048) where its detail is
 albedo, 10x linear's MSE; the check finds that and keeps linear. The project measured
 (``docs/reconstruction.md``, "When it fails" and "Measured numbers"; quarter-scale presets):
 share 0.62 at a 30 deg sun (1.73-2.37x fewer samples than linear for equal MSE), 0.11 at 60 deg
 (1.08x), 0.002 under camera-centred light (1.00x).
+
+**A real flash** (``guide.flash``): its frame is flat-fielded from the rig's geometry on the
+samples' linear surface (:mod:`.flatfield`); optionally once more on the first pass's fused
+surface (``flash_refine``, off: the flash lights off-centre cells obliquely, so its frame keeps
+a first-order shading of the relief the samples miss, but the fused surface's slope across
+the light is linear's and the second pass gained nothing consistent). A co-located frame whose own noise
+(:func:`frame_noise`, estimated from the frame alone) exceeds ``flat_noise`` -- a daylight
+flash far weaker than the sun, flash-on minus flash-off -- is blurred down to that level first
+(:func:`denoised_flat`): divided raw, its noise went into every pixel of the ratio with heavy
+tails where it nears zero, and the held-out check, which sees the detail at ~1 % of the cells
+(the samples), let it through: on a quarter-scale aerial_1 render with a flash of 0.1 x the sun
+the top 1 % of cells held 90 % of the excess error and the result was 0.70x of linear at 1/16.
 
 ``info``: ``shading_share``, ``heldout_share``, ``gamma``, ``frames`` (e.g. ``"sun"``,
 ``"sun+camera"``, ``"sun+sun2"``), ``azimuth_deg`` (calibrated ``b``'s azimuth),
@@ -69,6 +84,7 @@ from simlunar.reconstruction.calibration import (
     calibrate,
     valid_pixels,
 )
+from simlunar.reconstruction.flatfield import flat_field
 from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
 from simlunar.registry import option, shared_option
 
@@ -76,7 +92,9 @@ __all__ = [
     "ShadingOptions",
     "blend_detail",
     "checked_blend",
+    "denoised_flat",
     "fallback_gamma",
+    "frame_noise",
     "fuse_slopes",
     "heldout_gamma",
     "shading",
@@ -126,6 +144,20 @@ class ShadingOptions(ReadingChecks):
         "image's detail must predict its departure from the others' linear interpolation",
         choices=(True, False),
     )
+    flat_noise: float = option(
+        0.05,
+        doc="relative noise of the co-located frame above which it is blurred down to it "
+        "(estimated from the frame: denoised_flat)",
+        gt=0,
+        le=1,
+    )
+    flash_refine: bool = option(
+        False,
+        doc="a flash's flat frame: flat-field it again on the first pass's fused surface (its "
+        "oblique light's shading of the relief the samples miss); measured on quarter-scale "
+        "aerial_1 at night: -5 % to +7 % per density, no consistent gain, twice the cost",
+        choices=(True, False),
+    )
 
     def calibration(self) -> CalibrationOptions:
         return CalibrationOptions(
@@ -141,11 +173,23 @@ def fallback_gamma(share: float, options: ShadingOptions | None = None) -> float
     return float(o.gamma_max * np.clip((share - o.share_lo) / (o.share_hi - o.share_lo), 0, 1))
 
 
-def shading_frames(guide: Guide, options: ShadingOptions | None = None):
+def shading_frames(
+    guide: Guide,
+    options: ShadingOptions | None = None,
+    *,
+    linear: LinearField | None = None,
+    surface=None,
+    flat=None,
+):
     """The frames the slopes are read from: ``[(name, image, valid), ...]``.
 
     With a co-located frame (and ``use_flat``) every sun frame is divided by it (pixels where
     the flat is under ``flat_guard`` of its median are invalid and divided by that floor).
+    When the co-located light is a flash on the rig (``guide.flash``), the flat is first
+    flat-fielded with its geometry on the samples' linear surface ``linear``
+    (:func:`.flatfield.flat_field`; required then), or on ``surface`` (rows, cols) when given
+    (a fused surface of the same samples). ``flat``: the co-located frame already denoised
+    (:func:`denoised_flat`; default: denoised here).
     Without one, the raw sun frames and, for each other sun, the ratio ``sun / sun_j``
     (albedo-free: ``(s1 . n) / (s2 . n)``, linear in the slope to first order, calibrated like
     any frame). Valid pixels are those neither shadowed nor saturated in the raw sun frames.
@@ -157,10 +201,16 @@ def shading_frames(guide: Guide, options: ShadingOptions | None = None):
         suns += [(f"sun{i + 2}", im) for i, (im, _) in enumerate(guide.others)]
     out = []
     if guide.flat is not None and o.use_flat:
-        med = float(np.median(guide.flat))
+        flat = denoised_flat(guide.flat, o.flat_noise) if flat is None else flat
+        if guide.flash is not None:
+            if linear is None and surface is None:
+                raise ValueError("a flash's flat frame is flat-fielded on the samples: give linear")
+            known = linear.heights if surface is None else surface
+            flat = flat_field(flat, known, guide.flash, spacing=guide.spacing)
+        med = float(np.median(flat))
         floor = o.flat_guard * med if med > 0 else o.flat_guard
-        lit = guide.flat > floor
-        den = np.maximum(guide.flat, floor)
+        lit = flat > floor
+        den = np.maximum(flat, floor)
         for name, im in suns:
             out.append((name, im / den, valid_pixels(im, copt) & lit))
     else:
@@ -174,6 +224,41 @@ def shading_frames(guide: Guide, options: ShadingOptions | None = None):
             ratio = suns[0][1] / np.maximum(im, floor)
             out.append((f"sun/{name}", ratio, valid[0] & v & (im > floor)))
     return out
+
+
+#: Immerkaer's (1996) noise mask: the difference of two Laplacians, blind to planes and ramps
+_NOISE_MASK = np.array([[1.0, -2.0, 1.0], [-2.0, 4.0, -2.0], [1.0, -2.0, 1.0]])
+
+
+def frame_noise(image) -> float:
+    """Per-pixel noise of a frame relative to its median, estimated from the frame alone.
+
+    Immerkaer's mask (J. Immerkaer, "Fast noise variance estimation", CVIU 64, 1996) responds
+    to white noise of std ``s`` with std ``6 s`` and not to planes or linear ramps; the robust
+    std of its response (1.4826 x MAD) over 6 estimates ``s``. Texture at the pixel scale
+    (albedo) counts as noise here: on the project's quarter-scale aerial renders the ideal
+    co-located frame and a night flash read 0.03, a daylight flash at 1 / 0.1 / 0.01 x the
+    sun 0.04 / 0.20 / 1.9. Infinite when the median is not positive.
+    """
+    f = np.asarray(image, dtype=np.float64)
+    med = float(np.median(f))
+    if f.shape[0] < 3 or f.shape[1] < 3 or not med > 0:
+        return math.inf
+    c = ndimage.convolve(f, _NOISE_MASK, mode="mirror")[1:-1, 1:-1]
+    return float(1.4826 * np.median(np.abs(c - np.median(c))) / 6.0 / med)
+
+
+def denoised_flat(flat, target: float) -> np.ndarray:
+    """``flat`` blurred just enough that its relative noise (:func:`frame_noise`) falls to
+    ``target``: a Gaussian of sigma ``nu / (2 sqrt(pi) target)`` pixels divides white noise by
+    ``nu / target``; unchanged when its noise is at or under ``target`` already. A noisy flat
+    (a daylight flash much weaker than the sun: flash-on minus flash-off) would otherwise put
+    its noise into every pixel of the ratio, heavy-tailed where the flat nears zero."""
+    nu = frame_noise(flat)
+    if nu <= target:
+        return flat
+    sigma = min(nu / (2.0 * math.sqrt(math.pi) * target), max(flat.shape) / 4.0)
+    return ndimage.gaussian_filter(np.asarray(flat, np.float64), sigma, truncate=3.0)
 
 
 def _image_slope(image, valid, cal: Calibration, lin_along, o: ShadingOptions):
@@ -227,8 +312,9 @@ def checked_blend(
     makes it again; None: no check), which records ``heldout_gamma``, ``heldout_samples`` and
     the capped ``gamma`` in ``info``; the linear heights where the weight is 0."""
     if remade is not None:
-        g_cv, n_test = heldout_gamma(remade, lin, pool_folds=pool_folds)
+        g_cv, n_test, r2 = heldout_fit(remade, lin, pool_folds=pool_folds)
         info["heldout_gamma"], info["heldout_samples"] = g_cv, n_test
+        info["heldout_r2"] = r2
         gamma = min(gamma, g_cv)
         info["gamma"] = gamma
     if gamma == 0.0:
@@ -271,7 +357,46 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     lin = linear_field(points_rc, values, shape)
     if guide.shape != lin.shape:
         raise ValueError(f"guide image has shape {guide.shape}, the output grid {lin.shape}")
-    frames = shading_frames(guide, o)
+    # the co-located frame's denoising reads the frame alone: once for every pass and fold
+    flat = denoised_flat(guide.flat, o.flat_noise) if guide.flat is not None else None
+    z_fc, gamma, info = _refined_detail(lin, guide, o, flat)
+    if z_fc is None:
+        return Reconstructed(lin.heights, info)
+
+    # the detail is made from the samples (the calibration, the slopes where the image is not
+    # read, the flat-field's surface): the check remakes it from the kept samples only
+    def remade(keep):
+        field = _refined_detail(keep, guide, o, flat)[0]
+        return np.zeros(lin.shape) if field is None else field
+
+    checked = remade if o.heldout_check else None
+    z = checked_blend(lin, z_fc, gamma, info, remade=checked, pool_folds=True)
+    return Reconstructed(z, info)
+
+
+def _refined_detail(lin: LinearField, guide: Guide, o: ShadingOptions, flat=None):
+    """:func:`_shading_detail`, and for a flash's flat frame once more with the flat-field
+    computed on the fused surface of the first pass (``flash_refine``): the flash lights
+    off-centre cells obliquely (up to ~43 deg from the vertical at the corners of an aerial
+    view from 50 m), so its frame keeps a first-order shading of the relief the samples do not
+    resolve, which the linear surface's normals cannot divide out and the fused surface's
+    mostly can."""
+    z_fc, gamma, info = _shading_detail(lin, guide, o, flat=flat)
+    if z_fc is None or guide.flash is None or not o.flash_refine:
+        return z_fc, gamma, info
+    fused = blend_detail(lin, z_fc, gamma)
+    z2, gamma2, info2 = _shading_detail(lin, guide, o, surface=fused, flat=flat)
+    if z2 is None:  # the refined frame reads nothing: keep the first pass
+        return z_fc, gamma, info
+    info2["flash_refined"] = 1.0
+    return z2, gamma2, info2
+
+
+def _shading_detail(lin: LinearField, guide: Guide, o: ShadingOptions, *, surface=None, flat=None):
+    """``(z_fc or None, gamma, info)``: the integrated slope field read from the guide on the
+    samples of ``lin``, its weight by the fallback rule and the diagnostics (None when the
+    image is not used); a flash's flat is flat-fielded on ``surface`` (default ``lin``'s)."""
+    frames = shading_frames(guide, o, linear=lin, surface=surface, flat=flat)
     copt = o.calibration()
     cals = [
         calibrate(im, None, None, spacing=guide.spacing, valid=v, linear=lin, options=copt)
@@ -293,7 +418,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     gamma = fallback_gamma(share, o)
     used = [frames[i][0] for i in usable] if stereo else [frames[best][0]]
     if guide.flat is not None and o.use_flat:
-        used.append("camera")
+        used.extend(guide.flat_frames)
     info = {
         "shading_share": float(cal0.share),
         "heldout_share": float(cal0.heldout_share),
@@ -306,7 +431,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
         info["light_axis_error_deg"] = _axis_error(cal0.direction, guide.light)
     if gamma == 0.0 or cal0.gain == 0.0:
         info["gamma"] = 0.0
-        return Reconstructed(lin.heights, info)
+        return None, 0.0, info
     lr, lc = central_gradient(lin.heights)
     lr /= guide.spacing
     lc /= guide.spacing
@@ -333,8 +458,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     along, weight = (None, 1.0) if stereo else (cal0.direction, o.across_weight)
     sp = guide.spacing
     z_fc = frankot_chellappa(gr * sp, gc * sp, along=along, across_weight=weight)
-    checked = z_fc if o.heldout_check else None
-    return Reconstructed(checked_blend(lin, z_fc, gamma, info, remade=checked), info)
+    return z_fc, gamma, info
 
 
 def heldout_gamma(
@@ -367,7 +491,8 @@ def heldout_gamma(
         When the one split leaves fewer than 20 samples inside the hull (a sparse layout: on
         250 x 400 cells, 1/1024 and sparser), pool all ``every`` splits (each sample held out
         once, ``every`` fields made) into one least-squares weight instead of returning 0.
-        Off (the ``shading`` reconstruction's check, as measured): one split.
+        Off: one split (every reconstruction that checks pools: ``shading``, ``photoclinometry``,
+        ``learned``).
 
     Returns
     -------
@@ -376,17 +501,27 @@ def heldout_gamma(
     n : int
         The left-out samples used.
     """
+    g, n, _ = heldout_fit(field, lin, every=every, pool_folds=pool_folds)
+    return g, n
+
+
+def heldout_fit(
+    field, lin: LinearField, *, every: int = 5, pool_folds: bool = False
+) -> tuple[float, int, float]:
+    """:func:`heldout_gamma`'s ``(g, n)`` and the share of the held-out samples' departure
+    from the kept samples' interpolation that ``g`` times the detail explains,
+    ``r2 = 1 - |v - z_tr - g d|^2 / |v - z_tr|^2`` (0 when ``g`` is 0)."""
     pts = lin.points
     if len(pts) < 5 * every:
-        return 0.0, 0
+        return 0.0, 0, 0.0
     order = np.lexsort((pts[:, 1], pts[:, 0]))
     parts = [_heldout_split(lin, order, 0, every)]
     if len(parts[0][1]) < 20 and pool_folds:
         parts += [_heldout_split(lin, order, f, every) for f in range(1, every)]
     n = sum(len(tp) for _, tp, _ in parts)
     if n < 20:
-        return 0.0, n
-    num = den = 0.0
+        return 0.0, n, 0.0
+    num = den = ss = 0.0
     for keep, tp, tv in parts:
         if not len(tp):
             continue
@@ -395,9 +530,12 @@ def heldout_gamma(
         d = at_points(reanchored_detail(f, keep), tp)
         num += float(d @ resid)
         den += float(d @ d)
+        ss += float(resid @ resid)
     if not den > 0:
-        return 0.0, n
-    return float(np.clip(num / den, 0.0, 1.0)), n
+        return 0.0, n, 0.0
+    g = float(np.clip(num / den, 0.0, 1.0))
+    r2 = (2.0 * g * num - g * g * den) / ss if ss > 0 else 0.0
+    return g, n, float(r2)
 
 
 def _heldout_split(lin: LinearField, order, start: int, every: int):

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.geometry import Camera, OrthoCamera, Projector
+from simlunar.geometry import Camera, OrthoCamera, Projector, point_irradiance
 from simlunar.registry import Options, option
 from simlunar.render import backend
 from simlunar.render.cameras import to_world_matrix
@@ -36,6 +36,7 @@ __all__ = [
     "SUN_ANGULAR_DIAMETER",
     "AmbientLight",
     "CameraLight",
+    "FlashLight",
     "ProjectorLight",
     "SunLight",
     "check_pattern",
@@ -113,6 +114,84 @@ class CameraLight(Options):
     intensity: float = option(1.0, doc="point intensity (W/sr) or irradiance (W/m^2)", ge=0)
 
 
+@dataclass(frozen=True)
+class FlashLight(Options):
+    """A flash or flood light on the camera's rig: a point emitter at ``baseline`` metres from
+    the camera's centre, in its image plane towards ``baseline_azimuth`` (0: the camera's +x,
+    its image right; pi/2: its +y, image down), its beam along the camera's optical axis.
+
+    Its radiant intensity is ``intensity cos^n(theta)`` (``theta`` from the axis, no light
+    beyond ``cutoff``), so the ground receives ``I0 cos^n(theta) cos(i) / d^2``
+    (:func:`simlunar.geometry.point_irradiance`: inverse-square falloff, incidence, beam).
+    ``intensity`` is W/sr in the units of the sun's W/m^2: a flash of ``Q`` J over an
+    exposure of ``t`` s has ``Q (n + 1) / (2 pi t)`` (:func:`simlunar.geometry.beam_intensity`).
+    It is rendered as a Mitsuba ``projector`` at the light whose texture is the beam profile
+    (:func:`flash_texture`), measured against :meth:`irradiance` in ``tests/render``.
+    The co-located idealisation (light at infinity on the optical axis) is :class:`CameraLight`.
+    """
+
+    intensity: float = option(1.0, doc="on-axis radiant intensity", unit="W/sr", ge=0)
+    baseline: float = option(
+        0.0,
+        doc="distance of the light from the camera's centre in its image plane",
+        unit="m",
+        ge=0,
+    )
+    baseline_azimuth: float = option(
+        0.0,
+        doc="direction of the baseline in the image plane from the camera's +x towards +y",
+        unit="rad",
+    )
+    beam_exponent: float = option(
+        0.0, doc="n of the cos^n beam profile (0: isotropic within the cutoff)", ge=0, le=1000
+    )
+    cutoff: float = option(
+        np.radians(60.0),
+        doc="half-angle of the beam; no light beyond it",
+        unit="rad",
+        gt=0,
+        lt=np.radians(85.0),
+    )
+
+    def pose(self, camera) -> tuple[np.ndarray, np.ndarray]:
+        """World position of the light and its beam axis (unit) on ``camera``'s rig."""
+        if not isinstance(camera, (Camera, OrthoCamera)):
+            raise ValueError(f"flash: unknown camera type {type(camera).__name__}")
+        offset = self.baseline * np.array(
+            [np.cos(self.baseline_azimuth), np.sin(self.baseline_azimuth), 0.0]
+        )
+        position = camera.pose.device_to_world(offset)
+        return np.asarray(position, dtype=np.float64), np.asarray(camera.pose.forward, float)
+
+    def irradiance(self, camera, points, normals) -> np.ndarray:
+        """Irradiance (W/m^2) on world ``points`` (..., 3) with ``normals`` (no occlusion)."""
+        position, axis = self.pose(camera)
+        return point_irradiance(
+            points, normals, position=position, axis=axis, intensity=self.intensity,
+            beam_exponent=self.beam_exponent, cutoff=self.cutoff,
+        )  # fmt: skip
+
+
+#: texels on a side of the flash's beam texture (bilinear: the profile is smooth)
+FLASH_TEXTURE = 512
+
+
+def flash_texture(beam_exponent: float, cutoff: float, size: int = FLASH_TEXTURE) -> np.ndarray:
+    """The ``projector`` texture of a cos^n beam: float32 (size, size), field ``2 cutoff``.
+
+    Mitsuba's ``projector`` delivers ``pi * scale * texture`` on a plane parallel to its image
+    plane at depth 1 (see :class:`ProjectorLight`); a point source of intensity
+    ``I0 cos^n(theta)`` gives that plane ``I0 cos^n(theta) cos^3(theta)``, so the texture is
+    ``cos^(n+3)(theta)`` (0 beyond the cutoff) and the scale ``I0 / pi``.
+    """
+    t = np.tan(cutoff)
+    x = (np.arange(size) + 0.5) / size * 2.0 - 1.0
+    r2 = (x[None, :] ** 2 + x[:, None] ** 2) * t * t
+    cos_t = 1.0 / np.sqrt(1.0 + r2)
+    tex = np.where(cos_t >= np.cos(cutoff), cos_t ** (beam_exponent + 3.0), 0.0)
+    return np.ascontiguousarray(tex, dtype=np.float32)
+
+
 @dataclass(frozen=True, eq=False)
 class ProjectorLight:
     """Pinhole projector (Mitsuba ``projector`` emitter) showing a pattern.
@@ -157,6 +236,7 @@ class AmbientLight(Options):
 LIGHTS = {
     "sun": SunLight,
     "camera": CameraLight,
+    "flash": FlashLight,
     "projector": ProjectorLight,
     "ambient": AmbientLight,
 }
@@ -234,6 +314,30 @@ def emitter_dicts(light, camera, *, index: int = 0) -> dict[str, dict]:
         }
     if isinstance(light, CameraLight):
         return {f"camlight{index}": _camera_light_dict(mi, light, camera)}
+    if isinstance(light, FlashLight):
+        position, axis = light.pose(camera)
+        up = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        to_world = mi.ScalarTransform4f().look_at(
+            origin=mi.ScalarPoint3f(position),
+            target=mi.ScalarPoint3f(position + axis),
+            up=mi.ScalarVector3f(up),
+        )
+        tex = flash_texture(light.beam_exponent, light.cutoff)
+        return {
+            f"flash{index}": {
+                "type": "projector",
+                "fov": float(np.degrees(2.0 * light.cutoff)),
+                "to_world": to_world,
+                "scale": float(light.intensity) / np.pi,
+                "irradiance": {
+                    "type": "bitmap",
+                    "data": mi.TensorXf(tex[..., None]),
+                    "filter_type": "bilinear",
+                    "raw": True,
+                    "wrap_mode": "clamp",
+                },
+            }
+        }
     if isinstance(light, ProjectorLight):
         k = light.projector.intrinsics
         return {

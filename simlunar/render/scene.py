@@ -25,6 +25,7 @@ from simlunar.render.lights import (
     PROJECTOR_ID,
     AmbientLight,
     CameraLight,
+    FlashLight,
     ProjectorLight,
     SunLight,
     check_pattern,
@@ -143,7 +144,7 @@ class TerrainScene:
     camera : geometry.Camera or geometry.OrthoCamera
         Perspective (optionally thin-lens) or orthographic view.
     lights : sequence of light specs
-        :class:`SunLight`, :class:`CameraLight`, :class:`ProjectorLight` (at most one),
+        :class:`SunLight`, :class:`CameraLight`, :class:`FlashLight`, :class:`ProjectorLight` (at most one),
         :class:`AmbientLight`. At least one.
     bsdf : BSDF spec or None
         ``materials.LambertBSDF`` / ``OrenNayarBSDF`` / ``HapkeBSDF``; None means Lambert.
@@ -186,7 +187,7 @@ class TerrainScene:
         lights = list(lights) if lights is not None else []
         if not lights:
             raise ValueError("lights: at least one light is needed")
-        valid = (SunLight, CameraLight, ProjectorLight, AmbientLight)
+        valid = (SunLight, CameraLight, FlashLight, ProjectorLight, AmbientLight)
         for i, light in enumerate(lights):
             if not isinstance(light, valid):
                 raise ValueError(

@@ -578,3 +578,11 @@ def test_a_misspelt_top_level_key_is_named_not_only_the_missing_one():
     data = base()
     data["studdy"] = data.pop("study")
     assert error_of(data).startswith("studdy: unknown key (valid keys: name, description")
+
+
+def test_a_flash_frame_is_refused_in_a_scanner_study():
+    # the scanner's co-located frame is its projector's flood frame (camera); a flash on the
+    # rig is simulated for the sampling and LIDAR studies only
+    data = scanner(guide_light="sun")
+    data["render"] = {"guide_frames": [{"flash": {"baseline_m": 1, "sun_ratio": 1.0}}]}
+    assert "a flash frame is not simulated in a scanner study" in error_of(data)

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from simlunar.config import translate
 from simlunar.config.schema import ExperimentCfg
 from simlunar.pipeline.guide import build_guide, frame_name, grid_light
 from simlunar.render.lights import sun_direction
@@ -114,3 +116,141 @@ def test_frames_are_rendered_and_their_light_directions_match_the_shading():
     flat = guide.flat
     corr_flat = np.corrcoef(flat[inner].ravel(), _lambert(h, spacing, [0, 0, 1])[inner].ravel())
     assert corr_flat[0, 1] > 0.95
+
+
+# --------------------------------------------------------------------------- flash frames
+
+
+def test_flash_frame_config():
+    sun = {"kind": "sun", "elevation_deg": 30, "azimuth_deg": 90}
+    c = _cfg(light=sun, guide_frames=[{"flash": {"baseline_m": 5, "sun_ratio": 0.1}}])
+    (f,) = c.render.guide_frames
+    assert frame_name(f) == "flash" and not f.flash.daylight and f.flash.flat_field
+    # ideal is the camera frame's other name: the same configuration, the same cache key
+    assert _cfg(guide_frames=["ideal"]).render.guide_frames == ["camera"]
+    for bad, match in (
+        ([{"flash": {"baseline_m": 5}}], "one of intensity_w_sr"),
+        ([{"flash": {"sun_ratio": 1, "intensity_w_sr": 3}}], "one of intensity_w_sr"),
+        ([{"flash": {"energy_j": 100}}], "go together"),
+        ([{"flash": {"sun_ratio": 1}}, "ideal"], "at most one co-located"),
+        ([{"flash": {"sun_ratio": 1, "cutoff_deg": 89}}], "less than 85"),
+    ):
+        with pytest.raises(ValueError, match=match):
+            _cfg(light=sun, guide_frames=bad)
+    with pytest.raises(ValueError, match="need a sun"):
+        _cfg(light={"kind": "camera"}, guide_frames=[{"flash": {"sun_ratio": 1.0}}])
+
+
+def test_sun_ratio_sets_the_irradiance_below_the_flash():
+    from simlunar.config import translate
+
+    scene, _, _ = _scene()
+    cfg = _cfg(light={"kind": "sun", "elevation_deg": 30, "azimuth_deg": 90, "irradiance": 3.0},
+               guide_frames=[{"flash": {"baseline_m": 2, "sun_ratio": 0.25, "beam_exponent": 4}}])  # fmt: skip
+    light = translate.flash_light(cfg.render.guide_frames[0].flash, cfg.render.light, scene.camera)
+    pos, _ = light.pose(scene.camera)
+    # below the flash: E = I0 / 20^2 = 0.25 x 3 W/m^2 x sin 30 deg
+    assert pos[2] == pytest.approx(20.0)
+    assert light.intensity / 400.0 == pytest.approx(0.25 * 3.0 * 0.5, rel=1e-12)
+    e = light.irradiance(scene.camera, [pos[0], pos[1], 0.0], [0, 0, 1.0])
+    assert float(e) == pytest.approx(0.375, rel=1e-12)
+    # energy and exposure: I0 = Q (n + 1) / (2 pi t)
+    cfg = _cfg(guide_frames=[{"flash": {"energy_j": 300, "exposure_s": 0.02, "beam_exponent": 1}}])
+    light = translate.flash_light(cfg.render.guide_frames[0].flash, None, scene.camera)
+    assert light.intensity == pytest.approx(300 * 2 / (2 * np.pi * 0.02), rel=1e-12)
+
+
+def test_flash_geometry_in_the_grid_is_the_world_flash():
+    # the flat-field's falloff on the grid (depths) equals the world irradiance of the
+    # rendered light on the same surface, up to its scale
+    from simlunar.pipeline.guide import flash_geometry
+    from simlunar.reconstruction.flatfield import flash_falloff
+    from simlunar.render.lights import FlashLight
+
+    scene, h, spacing = _scene()
+    t, cam = scene.terrain, scene.camera
+    light = FlashLight(intensity=5.0, baseline=3.0, baseline_azimuth=2.0, beam_exponent=3.0)
+    geo = flash_geometry(light, cam, shape=t.shape, spacing=spacing, origin=t.origin)
+    depth = cam.pose.position[2] - h
+    r, c = np.mgrid[0 : h.shape[0], 0 : h.shape[1]]
+    pts = np.stack([t.origin[0] + (c + 0.5) * spacing, t.origin[1] - (r + 0.5) * spacing, h], -1)
+    g_r, g_c = np.gradient(h, spacing)  # rows run to -y: dh/dy = -g_r
+    normals = np.stack([-g_c, g_r, np.ones_like(h)], -1)
+    world = light.irradiance(cam, pts, normals)
+    grid = flash_falloff(depth, geo, spacing=spacing)
+    inner = (slice(1, -1), slice(1, -1))  # np.gradient and the grid's mirrored edges differ
+    np.testing.assert_allclose(grid[inner] / world[inner], (grid / world)[5, 5], rtol=1e-9)
+
+
+def test_daylight_flash_frame_carries_both_frames_noise():
+    # flash-on minus flash-off: each a full exposure with shot and read noise at the flash-on
+    # frame's exposure, so the difference's variance is the sum of both frames' variances
+    # (a frame whose noise were dropped, or the guide image reused as flash-off, fails this)
+    from simlunar.config.render import SensorCfg
+    from simlunar.pipeline.guide import flash_frame
+    from simlunar.pipeline.unit import sensor_image
+
+    cfg = SensorCfg(full_well_e=20000, read_noise_e=5, bits=16)
+
+    def develop(rad, rng, reference=None):
+        return sensor_image(rad, cfg, rng=rng, reference=reference)
+
+    n = 250
+    sun = np.full((n, n), 1.0)
+    sun[:, : n // 2] = 0.5  # two levels: the exposure comes from the brighter (on) frame
+    flash = np.full((n, n), 0.6)
+    diff = flash_frame(flash, develop=develop, rng=7, sun_radiance=sun).astype(np.float64)
+    rng = np.random.default_rng(99)
+    on = develop(sun + flash, rng, sun + flash).astype(np.float64)
+    off = develop(sun, rng, sun + flash).astype(np.float64)
+    for half in (slice(0, n // 2), slice(n // 2, n)):
+        v_sum = on[:, half].var() + off[:, half].var()
+        v_one = max(on[:, half].var(), off[:, half].var())
+        # 31 250 pixels: the variance's relative standard error is 0.8 %
+        assert diff[:, half].var() == pytest.approx(v_sum, rel=0.04)
+        assert diff[:, half].var() > 1.3 * v_one
+        # the mean is the flash's signal at the flash-on exposure
+        assert diff[:, half].mean() == pytest.approx(on[:, half].mean() - off[:, half].mean(),
+                                                     rel=0.01)  # fmt: skip
+    # flash-off is exposed at the brighter frame's exposure: its bright half sits at
+    # 1 / 1.6 of flash-on's, not at the auto exposure of its own
+    bright = slice(n // 2, n)
+    assert off[:, bright].mean() / on[:, bright].mean() == pytest.approx(1 / 1.6, rel=0.01)
+    # at night the flash alone, auto-exposed on itself
+    night = flash_frame(flash, develop=develop, rng=7)
+    assert night.mean() == pytest.approx(0.8, rel=0.01)
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("daylight", [False, True])
+def test_flash_frames_are_rendered_with_their_geometry(daylight):
+    from simlunar.reconstruction.flatfield import flat_field
+
+    scene, h, spacing = _scene()
+    flash = {"baseline_m": 2, "sun_ratio": 1.0, "beam_exponent": 2, "daylight": daylight}
+    cfg = _cfg(light={"kind": "sun", "elevation_deg": 30, "azimuth_deg": 90},
+               guide_frames=[{"flash": flash}], sensor=None)  # fmt: skip
+    sun_scene = dataclasses.replace(scene, lights=translate.lights(cfg.render.light, 0.0))
+    from simlunar.render.scene import luminance
+
+    radiance = luminance(sun_scene.render().image)
+
+    def develop(rad, rng, reference=None):
+        ref = rad if reference is None else reference
+        return rad / np.nanpercentile(ref, 99)
+
+    guide, frames = build_guide(cfg, scene, np.zeros(h.shape), np.random.SeedSequence(3),
+                                develop=develop, lock=contextlib.nullcontext(),
+                                radiance=radiance)  # fmt: skip
+    # a daylight frame costs two exposures (flash-on, flash-off): the rows record both
+    flat_frames = ("flash_on", "flash_off") if daylight else ("flash",)
+    assert guide.frames == ("sun", *flat_frames) and set(frames) == {"flash"}
+    assert guide.flat_frames == flat_frames
+    assert guide.flash is not None and guide.flat is not None
+    # flat-fielded on the TRUE surface, the Lambert frame of constant albedo is constant
+    # (render noise only); uncorrected it carries the falloff and the incidence
+    depth = scene.camera.pose.position[2] - h
+    inner = (slice(2, -2), slice(2, -2))
+    ff = flat_field(guide.flat, depth, guide.flash, spacing=spacing)[inner]
+    raw = guide.flat[inner]
+    assert ff.std() / ff.mean() < 0.03 < raw.std() / raw.mean()

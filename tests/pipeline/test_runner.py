@@ -124,8 +124,10 @@ def test_a_reconstruction_with_a_results_version_has_it_in_the_key():
     assert RECONSTRUCTIONS["learned"].meta["results_version"] == 2
     recons = ["linear", "shading", {"learned": {"model": "m.joblib"}},
               {"l2": {"reconstruction": "learned", "model": "n.joblib"}}]  # fmt: skip
-    assert reconstruction_versions({"reconstructions": recons}) == {"learned": 2}
-    assert reconstruction_versions({"reconstructions": ["linear", "shading"]}) == {}
+    assert reconstruction_versions({"reconstructions": recons}) == {"shading": 2, "learned": 2}
+    # shading 2: its held-out check pools folds and remakes the detail from the kept samples
+    assert reconstruction_versions({"reconstructions": ["linear", "shading"]}) == {"shading": 2}
+    assert reconstruction_versions({"reconstructions": ["linear", "smoothed"]}) == {}
     a = expand(cfg(sweep={}))[0]
     config = {**a.config, "study": {**a.config["study"], "reconstructions": recons}}
     before = unit_key(config, a.inputs)
@@ -408,3 +410,32 @@ def test_results_columns_do_not_depend_on_the_order_of_a_records_keys():
         "seconds",
         "value",
     ]
+
+
+def test_every_swept_key_is_a_results_column_named_by_its_path(tmp_path):
+    # a scalar axis, a dict axis and a list-of-dicts axis: each a column of results.csv named
+    # by its YAML path, its cells the swept value as JSON (pandas groups by them as they are)
+    import csv
+    import json
+
+    frames = [["ideal"], [{"flash": {"baseline_m": 5, "sun_ratio": 0.01, "daylight": True}}]]
+    sweep = {
+        "render.light": [{"kind": "sun", "elevation_deg": 30, "azimuth_deg": 135}],
+        "render.guide_frames": frames,
+        "render.spp": [4, 8],
+    }
+    c = cfg(sweep=sweep)
+    _run(c, tmp_path / "o")
+    with open(tmp_path / "o" / "results.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0])[:4] == ["unit", "render.light", "render.guide_frames", "render.spp"]
+    seen = {(r["render.guide_frames"], r["render.spp"]) for r in rows}
+    assert len(seen) == 4
+    for r in rows:
+        assert json.loads(r["render.guide_frames"]) in frames
+        assert json.loads(r["render.light"]) == sweep["render.light"][0]
+    # the setting as written ("ideal") in the column, the configuration it means in the key
+    units = expand(c)
+    ideal = units[0]
+    camera = expand(cfg(sweep={**sweep, "render.guide_frames": [["camera"]]}))[0]
+    assert ideal.sweep["render.guide_frames"] == ["ideal"] and ideal.key == camera.key

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from simlunar.reconstruction import RECONSTRUCTIONS, Guide, run_reconstruction
+from simlunar.reconstruction.flatfield import FlashGeometry
 from simlunar.reconstruction.synthetic import jittered_samples, lit_terrain
 
 
@@ -105,13 +106,17 @@ def _options(name, tmp_path):
     return {"model": str(path)}
 
 
-def test_every_reconstruction_runs_without_the_truth(tmp_path):
+@pytest.mark.parametrize("flash", [False, True])
+def test_every_reconstruction_runs_without_the_truth(tmp_path, flash):
     shape = (64, 80)
     scene = lit_terrain(shape, rng=0)
     truth = Sealed(scene.heights.copy())
     pts = jittered_samples(shape, 1 / 32, rng=1)
     values = np.array(truth[pts[:, 0], pts[:, 1]])  # measured beforehand, a plain array
-    guide = Guide(scene.image, light=scene.light, flat=scene.flat)
+    # a flash's flat: the reconstructions flat-field it on the samples' surface, not the truth
+    geo = FlashGeometry(row=20.0, col=30.0, level=-30.0, beam_exponent=2.0) if flash else None
+    flat = scene.flat * (0.5 + np.linspace(0, 0.5, shape[1]))[None, :] if flash else scene.flat
+    guide = Guide(scene.image, light=scene.light, flat=flat, flash=geo)
     del scene  # the rendered scene holds the heights too
     truth.seal()
     assert type(values) is np.ndarray

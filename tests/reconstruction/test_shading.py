@@ -180,3 +180,77 @@ def test_checked_blend_caps_gamma_by_the_held_out_samples():
     out = checked_blend(lin, -t.heights, 1.0, info, remade=-t.heights)
     assert info["gamma"] == info["heldout_gamma"] == 0.0
     np.testing.assert_array_equal(out, lin.heights)
+
+
+def test_the_check_pools_folds_at_the_sparse_end():
+    # 250 x 400 cells at 1/2048: 48 samples, one split leaves fewer than 20 in the hull. The
+    # check used to return 0 there (the result was linear exactly); pooled over the five
+    # splits it weighs the detail on every sample held out once
+    shape = (250, 400)
+    t = lit_terrain(shape, rng=3)
+    pts = jittered_samples(shape, 1 / 2048, rng=5)
+    v = t.heights[pts[:, 0], pts[:, 1]]
+    lin = run_reconstruction("linear", pts, v, shape).heights
+    res = run_reconstruction("shading", pts, v, shape, guide=Guide(t.image))
+    assert res.info["heldout_samples"] > 20 and res.info["gamma"] > 0.5
+    assert _mse(res.heights, t.heights) * 1.5 < _mse(lin, t.heights)
+
+
+def test_the_check_remakes_the_detail_without_the_held_out_samples(monkeypatch):
+    import importlib
+
+    mod = importlib.import_module("simlunar.reconstruction.shading")
+
+    t, pts, v = _case(rng=4)
+    seen = []
+    original = mod._shading_detail
+
+    def spy(lin, guide, o, **kw):
+        seen.append({tuple(p) for p in np.asarray(lin.points).tolist()})
+        return original(lin, guide, o, **kw)
+
+    monkeypatch.setattr(mod, "_shading_detail", spy)
+    res = run_reconstruction("shading", pts, v, SHAPE, guide=Guide(t.image))
+    everything = {tuple(p) for p in np.asarray(pts, float).tolist()}
+    assert seen[0] == everything  # the reconstruction's own detail: all samples
+    remade = seen[1:]
+    assert remade and res.info["heldout_samples"] >= 20
+    for kept in remade:  # each fold's detail: made without its held-out fifth
+        assert kept < everything and len(everything) - len(kept) >= len(everything) // 5
+
+
+def test_frame_noise_reads_white_noise_and_not_ramps():
+    from simlunar.reconstruction.shading import denoised_flat, frame_noise
+
+    r, c = np.mgrid[0:300, 0:400]
+    ramp = 1.0 + 0.001 * r - 0.0005 * c  # median 1.05
+    assert frame_noise(ramp) < 1e-9
+    noisy = ramp + np.random.default_rng(0).normal(0, 0.021, ramp.shape)
+    assert frame_noise(noisy) == pytest.approx(0.02, rel=0.05)  # 0.021 / 1.05
+    assert denoised_flat(ramp, 0.05) is ramp  # clean: untouched
+    # blurred towards the target (a 1.1 px Gaussian for 0.02 -> 0.005): the noise divided by
+    # about 3 (the small-sigma kernel does a little less than the continuous 4), the ramp kept
+    blurred = denoised_flat(noisy, 0.005)
+    resid = (blurred - ramp)[10:-10, 10:-10]
+    assert abs(resid.mean()) < 1e-3 and resid.std() < 0.021 / 2.5
+
+
+@pytest.mark.parametrize("snr", [1.0, 3.0])
+def test_a_noisy_flat_is_denoised_before_the_ratio(snr):
+    # a co-located frame buried in noise (a daylight flash much weaker than the sun: its
+    # flash-on minus flash-off), dark albedo patches near zero: read raw (flat_noise 1: no
+    # denoising) the ratio is noise and the result is linear at best; denoised to the sun
+    # frame's level, the ratio keeps the albedo's large scales and the slopes read again
+    shape = (200, 320)
+    t = lit_terrain(shape, albedo_contrast=0.95, rng=4)
+    flat = t.flat + np.random.default_rng(0).normal(0, np.median(t.flat) / snr, shape)
+    guide = Guide(t.image, flat=flat)
+    for density in (1 / 16, 1 / 256):
+        pts = jittered_samples(shape, density, rng=1)
+        v = t.heights[pts[:, 0], pts[:, 1]]
+        lin = _mse(run_reconstruction("linear", pts, v, shape).heights, t.heights)
+        raw = run_reconstruction("shading", pts, v, shape, guide=guide, options={"flat_noise": 1.0})
+        den = run_reconstruction("shading", pts, v, shape, guide=guide)
+        # measured: raw 1.00-1.24x, denoised 1.76-3.1x linear's samples
+        assert lin / _mse(den.heights, t.heights) > 1.5
+        assert lin / _mse(den.heights, t.heights) > 1.3 * lin / _mse(raw.heights, t.heights)
