@@ -201,7 +201,8 @@ def scan_figure(
         measured = np.isfinite(b[:, 3])
         order = _path(axes[0, j], image, b)
         pct = 100.0 * measured.mean() if n else 0.0
-        axes[0, j].set_title(f"{label(name)}: {n} beams", fontsize=TITLE_PT - 1)
+        axes[0, j].set_title(_fit_title(f"{label(name)}: {n} beams", panel_w, TITLE_PT - 1),
+                             fontsize=TITLE_PT - 1)  # fmt: skip
         ax = axes[1, j]
         ax.imshow(np.ones_like(image), cmap="gray", vmin=0, vmax=1.25, interpolation="nearest")
         size = float(np.clip(2000.0 / max(n, 1), 1.0, 12.0))
@@ -221,6 +222,16 @@ def scan_figure(
     if title:
         fig.suptitle(title, fontsize=LABEL_PT)
     return fig
+
+
+def _fit_title(text: str, width_in: float, size_pt: float) -> str:
+    """``text`` broken into lines no wider than a panel of ``width_in`` inches at
+    ``size_pt`` (an average glyph is about 0.55 of the font size wide), so neighbouring
+    panels' titles never run into each other."""
+    import textwrap
+
+    chars = max(8, int(width_in * 72.0 / (0.55 * size_pt)))
+    return "\n".join(textwrap.wrap(text, chars, break_long_words=False)) or text
 
 
 def _frame(ax, title: str) -> None:

@@ -105,3 +105,26 @@ def test_an_oracle_curve_is_dotted_as_a_bound():
     lines = {c.get_label(): c.lines[0] for c in ax.containers}
     assert lines["Oracle greedy (true error)"].get_linestyle() == ":"
     assert lines["Grid"].get_linestyle() == "-"
+
+
+def test_scan_figure_titles_do_not_overlap():
+    """Long planner labels (an oracle's) in narrow panels: the titles are wrapped to their
+    panel, so no two titles of a row share a pixel (they ran into each other)."""
+    from simlunar.plotting.lidar import MAX_SCAN_PLANNERS, scan_figure
+
+    rng = np.random.default_rng(1)
+    image = rng.uniform(size=(32, 48))
+    depth = 20.0 + rng.uniform(size=(32, 48))
+    names = ["oracle_greedy", "oracle_hessian", "sequential_wavelet", "wavelet_lloyd", "grid"]
+    beams = {n: _beams(40, rng) for n in names[:MAX_SCAN_PLANNERS]}
+    fig = scan_figure(image, depth, beams)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)  # a Figure made without pyplot has no renderer of its own
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    boxes = [ax.title.get_window_extent(renderer) for ax in fig.axes if ax.get_title()]
+    assert len(boxes) >= 2 * (1 + len(beams)) - 1
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1 :]:
+            assert not a.overlaps(b), (a, b)
