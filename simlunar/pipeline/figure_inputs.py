@@ -131,7 +131,8 @@ def reconstruction_panel_arrays(options, image, depth, density: float, *, guide,
     if label is None:
         return {}, {}
     k = max(3, round(density * depth.size))
-    one = replace(options, strategies=(label,))
+    kept = {k: v for k, v in options.strategy_options.items() if k == label}
+    one = replace(options, strategies=(label,), strategy_options=kept)
     planners, _ = study_planners(one, image, depth, [k], guide=guide)
     rc = np.asarray(planners[label](k, np.random.default_rng(rng)))
     rows, cols = rc[:, 0].astype(np.int64), rc[:, 1].astype(np.int64)
