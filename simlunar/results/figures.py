@@ -152,7 +152,7 @@ def figure_inputs(res: dict, formats) -> str:
     import importlib.metadata
     import importlib.util
 
-    cfg = {k: v for k, v in res["config"].items() if k != "description"}
+    cfg = {k: v for k, v in res["config"].items() if k not in ("description", "catalogue")}
     code = {}
     for mod in _DRAWING_MODULES:
         spec = importlib.util.find_spec(mod)

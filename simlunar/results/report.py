@@ -103,7 +103,9 @@ def run_overrides(folder: str | Path, shipped: str | Path | None = None) -> dict
         base = to_plain(load_experiment(shipped))
     except (SimlunarError, ValueError, OSError):
         return {}
-    return config_differences(base, cfg)
+    # the catalogue block (what it shows, its run time) is no part of what ran
+    base.pop("catalogue", None)
+    return config_differences(base, {k: v for k, v in cfg.items() if k != "catalogue"})
 
 
 def _inline(text: str) -> str:
