@@ -309,9 +309,11 @@ def reconstruction_panels(
     *,
     metres: bool = True,
     frames: list[str] | None = None,
+    light: str = "",
 ) -> str:
     """Caption of ``recon_panels_unit<i>`` (``frames``: the guide frames the image
-    reconstructions could read, as the unit recorded them)."""
+    reconstructions could read, as the unit recorded them; ``light``: the guide image's light,
+    as :func:`simlunar.plotting.style.point_title` writes it)."""
     at = f" ({density_label})" if density_label else ""
     scene = f" Scene: {point}." if point else ""
     axes = (
@@ -322,6 +324,8 @@ def reconstruction_panels(
     read = (
         f" The image reconstructions read the guide frames {', '.join(frames)}." if frames else ""
     )
+    if light:
+        read = f" Guide image: {light}.{read}"
     names = "; ".join(_recon_text(r) for r in reconstructions)
     return (
         f"The reconstructions of one plan, side by side: {k} samples{at} placed by the "
@@ -335,8 +339,17 @@ def reconstruction_panels(
     )
 
 
-def headroom(metric: str, seeds: int) -> str:
-    """Caption of ``headroom``."""
+def _on(reconstruction: str | None) -> str:
+    """The sentence naming the reconstruction a figure compares planners on (empty for a
+    study of one reconstruction)."""
+    if not reconstruction:
+        return ""
+    return f" Every error is of the {_recon_text(reconstruction)} reconstruction."
+
+
+def headroom(metric: str, seeds: int, *, reconstruction: str | None = None) -> str:
+    """Caption of ``headroom`` (``reconstruction``: the one the planners are compared on,
+    named when the study has several)."""
     n = f"{seeds} terrain seed{'s' * (seeds != 1)}"
     return (
         f"Headroom captured at equal {_metric(metric)}, paired by terrain seed: for each "
@@ -346,12 +359,12 @@ def headroom(metric: str, seeds: int) -> str:
         f"layout's, below 0 worse than the uniform layout. Bars: the mean over the {n}; dots: "
         f"each seed. The oracle reads the true error and cannot be realised: it is a bound, not "
         f"a planner. One panel per sweep point and oracle; scores.md holds the same numbers "
-        f"(mean [95 % t interval over the seeds] and the per-seed range)."
+        f"(mean [95 % t interval over the seeds] and the per-seed range).{_on(reconstruction)}"
     )
 
 
-def saved_forest(metric: str, seeds: int) -> str:
-    """Caption of ``samples_saved_forest``."""
+def saved_forest(metric: str, seeds: int, *, reconstruction: str | None = None) -> str:
+    """Caption of ``samples_saved_forest`` (``reconstruction`` as :func:`headroom`)."""
     if seeds > 1:
         how = (
             f"Marker: the geometric mean over the {seeds} terrain seeds of each seed's samples "
@@ -369,7 +382,7 @@ def saved_forest(metric: str, seeds: int) -> str:
         f"(dotted line at 1; right of it a planner needs fewer samples for the same error; log "
         f"axis). {how} Planners keep the style of every other figure (colour and marker per "
         f"planner); scores.md holds the same numbers in its headroom or paired samples-saved "
-        f"table."
+        f"table.{_on(reconstruction)}"
     )
 
 

@@ -56,8 +56,9 @@ def sampling_figures(res: dict, emit, captions: dict[str, str]) -> None:
     first = aggregate.reconstruction_names(study)[0]
     firsts = [p for p in points if p.reconstruction == first]
     _samples_saved_figures(firsts, emit, captions, first=first)
-    _headroom_figure(firsts, emit, captions)
-    _forest_figure(firsts, emit, captions)
+    named = first if len(aggregate.reconstruction_names(study)) > 1 else None
+    _headroom_figure(firsts, emit, captions, reconstruction=named)
+    _forest_figure(firsts, emit, captions, reconstruction=named)
     _score_figures(res, emit, captions)
     _reconstruction_figure(res, points, emit, captions)
 
@@ -171,6 +172,7 @@ def _reconstruction_panels(
         captions.skip(stem, "the unit's arrays lack a reconstruction of the panels' plan")
         return
     dlabel = f"k/N = 1/{round(1 / meta['density'])}" if meta.get("density") else ""
+    light = ((rec.get("config") or {}).get("render") or {}).get("light")
     fig, _ = reconstruction_panels(
         arr["image"],
         arr["depth"],
@@ -185,6 +187,7 @@ def _reconstruction_panels(
     captions[stem] = captions_text.reconstruction_panels(
         names, meta["planner"], int(meta["k"]), dlabel, _label(rec),
         metres=_spacing(rec) is not None, frames=(rec.get("meta") or {}).get("guide_frames"),
+        light=point_title({"render.light": light}) if light else "",
     )  # fmt: skip
 
 
@@ -307,17 +310,23 @@ def _reconstruction_figure(res: dict, points: list, emit, captions: dict[str, st
     )
 
 
-def _headroom_figure(points: list, emit, captions: dict[str, str]) -> None:
+def _headroom_figure(
+    points: list, emit, captions: dict[str, str], *, reconstruction: str | None = None
+) -> None:
     """``headroom``: each strategy's headroom captured (vs uniform Lloyd, of each oracle), one
     panel per sweep point and oracle; drawn when the study has an oracle and uniform Lloyd."""
     entries = aggregate.headroom_entries(points)[:MAX_UNIT_PANELS]
     if not entries:
         return
     emit(F.headroom_plot(entries), "headroom")
-    captions["headroom"] = captions_text.headroom(entries[0]["metric"], len(entries[0]["seeds"]))
+    captions["headroom"] = captions_text.headroom(
+        entries[0]["metric"], len(entries[0]["seeds"]), reconstruction=reconstruction
+    )
 
 
-def _forest_figure(points: list, emit, captions: dict[str, str]) -> None:
+def _forest_figure(
+    points: list, emit, captions: dict[str, str], *, reconstruction: str | None = None
+) -> None:
     """``samples_saved_forest``: each planner's samples saved vs uniform Lloyd with its 95 %
     interval over terrain seeds, one panel per sweep point; drawn when the study has the
     uniform layout (the figure of the headroom and paired samples-saved tables)."""
@@ -334,7 +343,7 @@ def _forest_figure(points: list, emit, captions: dict[str, str]) -> None:
         return
     emit(fig, "samples_saved_forest")
     captions["samples_saved_forest"] = captions_text.saved_forest(
-        entries[0]["metric"], len(entries[0]["seeds"])
+        entries[0]["metric"], len(entries[0]["seeds"]), reconstruction=reconstruction
     )
 
 
