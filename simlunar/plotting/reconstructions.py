@@ -32,6 +32,7 @@ __all__ = [
     "ROW_PANELS",
     "category_labels",
     "reconstruction_panels",
+    "reconstruction_saved_by_planner",
     "reconstruction_saved_vs_sweep",
 ]
 
@@ -228,3 +229,66 @@ def reconstruction_panels(
     if point:
         fig.suptitle(point, fontsize=TITLE_PT)
     return fig, axes
+
+
+def reconstruction_saved_by_planner(
+    saved: Mapping[str, Mapping[str, object]],
+    *,
+    strategies: Sequence[str],
+    reconstructions: Sequence[str],
+    metric: str = "mse",
+    title: str = "",
+):
+    """Samples saved vs linear at one sweep point: the planners (layouts) along x, one marker
+    per reconstruction beside each other, its interval as an error bar.
+
+    Parameters
+    ----------
+    saved : mapping reconstruction -> strategy -> ``(value, low, high)`` or a number
+        As a point of :func:`reconstruction_saved_vs_sweep` (low / high NaN: no interval).
+    strategies, reconstructions : the categories and the series, in order
+    metric : the metric of the comparison (axis label)
+    title : the sweep point, if any
+
+    Returns
+    -------
+    (Figure, Axes)
+    """
+    from simlunar.plotting.layout import new_axes
+
+    strategies = list(strategies)
+    if not strategies or not reconstructions:
+        raise ValueError("reconstruction_saved_by_planner needs strategies and series")
+    st = styles(reconstructions)
+    n = len(reconstructions)
+    fig, ax = new_axes(None, (max(3.6, 0.42 * len(strategies) * max(n, 2) ** 0.5 + 1.8), 3.2))
+    pos = np.arange(len(strategies), dtype=float)
+    values: list[float] = [0.8, 1.25]
+    for i, r in enumerate(reconstructions):
+        cells = np.array([_cell(saved.get(r, {}).get(s)) for s in strategies], float)
+        y, lo, hi = cells.T
+        x = pos + (i - (n - 1) / 2) * min(0.6 / n, 0.2)
+        ax.plot(x, y, marker=st[r].marker, ms=4.5, ls="none", color=st[r].colour,
+                label=st[r].label)  # fmt: skip
+        ok = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(y)
+        if ok.any():
+            yerr = np.vstack([np.clip(y - lo, 0, None), np.clip(hi - y, 0, None)])
+            ax.errorbar(x[ok], y[ok], yerr=yerr[:, ok], fmt="none", ecolor=st[r].colour,
+                        capsize=2, elinewidth=0.8)  # fmt: skip
+        values += [float(v) for v in np.concatenate([y, lo, hi])]
+    ax.axhline(1.0, color="k", lw=0.6, ls=":")
+    ax.set_xticks(pos, [label(s) for s in strategies], fontsize=TICK_PT, rotation=30, ha="right")
+    ax.set_xlim(pos[0] - 0.6, pos[-1] + 0.6)
+    ax.tick_params(axis="y", labelsize=TICK_PT)
+    ax.set_xlabel("planner (layout the reconstructions share)", fontsize=LABEL_PT)
+    ax.set_ylabel(
+        f"samples saved vs linear\n(equal {METRIC_NAMES.get(metric, metric)})", fontsize=LABEL_PT
+    )
+    if title:
+        ax.set_title(title, fontsize=TITLE_PT)
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ratio_axis(ax, values)
+    # beside the axes: below them the rotated planner names would run into it
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=TICK_PT,
+              title="reconstruction", title_fontsize=TICK_PT)  # fmt: skip
+    return fig, ax

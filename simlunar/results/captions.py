@@ -280,23 +280,35 @@ def samples_saved(
     )
 
 
-def reconstruction_saved(metric: str, path: str, seeds: int, reconstructions: list[str]) -> str:
-    """Caption of ``reconstruction_saved_vs_<axis>`` and ``reconstruction_saved``."""
+def reconstruction_saved(
+    metric: str, path: str | None, seeds: int, reconstructions: list[str]
+) -> str:
+    """Caption of ``reconstruction_saved_vs_<axis>`` (``path``: the axis' readable name) and
+    ``reconstruction_saved`` (``path`` None: one sweep point, the planners along x; else the
+    sweep points)."""
     n = f"{seeds} terrain seed{'s' * (seeds != 1)}"
     interval = (
         "; error bars: its two-sided 95 % Student t interval over the seeds, in log space"
         if seeds > 1
         else "; one terrain seed gives no interval, so no error bar is drawn"
     )
+    names = "; ".join(label(r) for r in reconstructions)
+    against = f", against {path}" if path else ""
+    layout = (
+        "One panel per layout (strategy)."
+        if path
+        else "The planners along x (each one's layout is shared by every reconstruction), one "
+        "marker per reconstruction."
+    )
     return (
-        f"Samples saved by each reconstruction ({'; '.join(label(r) for r in reconstructions)}) over "
-        f"Delaunay-linear on the same layout, against {path}: per terrain seed, the samples "
-        f"linear needs to reach the reconstruction's {_metric(metric)} (interpolated on "
-        f"linear's log-log error-vs-samples curve) over the reconstruction's own, as a "
-        f"geometric mean over the densities inside linear's measured range; then the "
-        f"geometric mean over the {n} (marker){interval}. Above 1 (dotted) the reconstruction needs "
-        f"fewer samples than linear for the same error. One panel per layout (strategy); "
-        f"scores.md and reconstructions.csv hold the same numbers."
+        f"Samples saved by each reconstruction ({names}) over Delaunay-linear on the same "
+        f"layout{against}: per terrain seed, the samples linear needs to reach the "
+        f"reconstruction's {_metric(metric)} (interpolated on linear's log-log "
+        f"error-vs-samples curve) over the reconstruction's own, as a geometric mean over the "
+        f"densities inside linear's measured range; then the geometric mean over the {n} "
+        f"(marker){interval}. Above 1 (dotted) the reconstruction needs fewer samples than "
+        f"linear for the same error. {layout} scores.md and reconstructions.csv hold the same "
+        f"numbers."
     )
 
 

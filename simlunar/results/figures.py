@@ -131,6 +131,8 @@ _DRAWING_MODULES = (
     "simlunar.plotting.density",
     "simlunar.plotting.images",
     "simlunar.plotting.headroom",
+    "simlunar.plotting.forest",
+    "simlunar.plotting.reconstructions",
     "simlunar.plotting.scanner",
     "simlunar.plotting.lidar",
     "simlunar.plotting.style",

@@ -17,6 +17,7 @@ from simlunar.plotting.forest import saved_forest_plot
 from simlunar.plotting.reconstructions import (
     category_labels,
     reconstruction_panels,
+    reconstruction_saved_by_planner,
     reconstruction_saved_vs_sweep,
 )
 from simlunar.plotting.style import axis_name, label, point_title
@@ -296,17 +297,26 @@ def _reconstruction_figure(res: dict, points: list, emit, captions: dict[str, st
         saved = {r: {s: seed_summary_numbers(v, log=True)[:3] for s, v in by.items()}
                  for r, by in e["saved"].items()}  # fmt: skip
         series.append((x, saved))
-    fig, _ = reconstruction_saved_vs_sweep(
-        series,
-        strategies=entries[0]["strategies"],
-        reconstructions=recon_list,
-        metric=entries[0]["metric"],
-        axis_label=axis_label,
-    )
+    if len(entries) == 1:  # one point: the planners along x, a marker per reconstruction
+        fig, _ = reconstruction_saved_by_planner(
+            series[0][1],
+            strategies=entries[0]["strategies"],
+            reconstructions=recon_list,
+            metric=entries[0]["metric"],
+            title=point_title(entries[0]["sweep"]),
+        )
+    else:
+        fig, _ = reconstruction_saved_vs_sweep(
+            series,
+            strategies=entries[0]["strategies"],
+            reconstructions=recon_list,
+            metric=entries[0]["metric"],
+            axis_label=axis_label,
+        )
     emit(fig, stem)
     seeds = max(len(e["seeds"]) for e in entries)
     captions[stem] = captions_text.reconstruction_saved(
-        entries[0]["metric"], axis_label or "the study's one point", seeds, recon_list
+        entries[0]["metric"], axis_label if len(entries) > 1 else None, seeds, recon_list
     )
 
 

@@ -114,15 +114,16 @@ def test_error_curves_one_per_planner_and_reconstruction(tmp_path):
 def test_samples_saved_by_each_reconstruction_at_a_single_sweep_point(tmp_path):
     figs, captions = _draw(_folder(tmp_path))
     fig = figs["reconstruction_saved"]  # one point: no sweep axis, still drawn
-    panels = [ax for ax in fig.axes if ax.get_title()]
-    assert [ax.get_title() for ax in panels] == ["Random", "Wavelet"]
-    for ax in panels:
-        (line,) = [ln for ln in ax.get_lines() if ln.get_label() == "Shading"]
-        # hand computation: linear's error 100/k, shading's half of it: 2x at every density
-        np.testing.assert_allclose(line.get_ydata(), [2.0], rtol=1e-6)
-        assert ax.collections, "no interval bar over the 2 terrain seeds"
+    (ax,) = fig.axes  # the planners along x, a marker per reconstruction
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["Random", "Wavelet"]
+    (line,) = [ln for ln in ax.get_lines() if ln.get_label() == "Shading"]
+    # hand computation: linear's error 100/k, shading's half of it: 2x for every planner
+    np.testing.assert_allclose(line.get_ydata(), [2.0, 2.0], rtol=1e-6)
+    assert ax.collections, "no interval bar over the 2 terrain seeds"
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["Shading"]
     cap = captions["reconstruction_saved"]
     assert "95 % Student t interval over the seeds" in cap and "2 terrain seeds" in cap
+    assert "planners along x" in cap
 
 
 def test_a_one_axis_sweep_draws_against_the_swept_value(tmp_path):
