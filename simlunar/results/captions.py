@@ -399,10 +399,17 @@ def saved_forest(metric: str, seeds: int, *, reconstruction: str | None = None) 
 
 
 def lidar_error(
-    metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1, by: str | None = None
+    metric: str,
+    study: dict,
+    x: str,
+    n_panels: int,
+    *,
+    seeds: int = 1,
+    by: str | None = None,
+    reconstructions: list[str] | None = None,
 ) -> str:
     """Caption of ``lidar_error_vs_<time|samples>_<metric>`` (``x``: ``seconds`` or
-    ``samples``)."""
+    ``samples``; ``reconstructions``: the ones drawn, a line style each, when several)."""
     sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
     trials = study.get("trials", 3)
     axis = (
@@ -422,11 +429,18 @@ def lidar_error(
     if by:
         per = f" Each point of a curve is one value of {by} (and density)."
     runs = f"{trials} trial{'s' if trials != 1 else ''}"
+    recon = (
+        f" Each planner has a curve per reconstruction of the same scans "
+        f"({'; '.join(_recon_text(r) for r in reconstructions)}): colour and marker name the "
+        f"planner, the line style the reconstruction."
+        if reconstructions
+        else ""
+    )
     return (
         f"Image-directed LIDAR ({sensor}): error of the reconstructed guide-view depth "
         f"({_metric(metric)}) against {axis}, per planner, log-log; points: one per density, "
         f"mean over {runs}{f' on each of {seeds} terrain seeds' if seeds > 1 else ''}; error "
-        f"bars: {bars}.{per}"
+        f"bars: {bars}.{per}{recon}"
     )
 
 

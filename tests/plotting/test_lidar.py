@@ -128,3 +128,29 @@ def test_scan_figure_titles_do_not_overlap():
     for i, a in enumerate(boxes):
         for b in boxes[i + 1 :]:
             assert not a.overlaps(b), (a, b)
+
+
+def test_error_vs_time_draws_every_reconstruction_of_a_planner():
+    """Rows of two reconstructions (linear's without the column, as older rows are written):
+    a curve per planner and reconstruction, colour by planner, line style by reconstruction,
+    a legend entry for each planner and each reconstruction."""
+    from matplotlib.colors import to_hex
+
+    from simlunar.plotting.lidar import error_vs_time
+
+    rows = _rows() + [{**r, "reconstruction": "shading", "value": str(0.5 * float(r["value"]))}
+                      for r in _rows()]  # fmt: skip
+    fig, ax = error_vs_time(rows, metric="mse", planners=["grid", "wavelet"],
+                            reconstructions=["linear", "shading"])  # fmt: skip
+    curves = {c.get_label(): c.lines[0] for c in ax.containers}
+    assert list(curves) == ["Grid, Linear", "Wavelet, Linear", "Grid, Shading", "Wavelet, Shading"]
+    np.testing.assert_allclose(
+        curves["Grid, Shading"].get_ydata(), 0.5 * curves["Grid, Linear"].get_ydata()
+    )
+    c = {k: to_hex(v.get_color()) for k, v in curves.items()}
+    assert c["Grid, Linear"] == c["Grid, Shading"] != c["Wavelet, Linear"]
+    ls = {k: v.get_linestyle() for k, v in curves.items()}
+    assert ls["Grid, Linear"] == ls["Wavelet, Linear"] != ls["Grid, Shading"]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert texts == ["planner: Grid", "planner: Wavelet", "reconstruction: Linear",
+                     "reconstruction: Shading"]  # fmt: skip
