@@ -140,7 +140,7 @@ def test_error_vs_time_draws_every_reconstruction_of_a_planner():
 
     rows = _rows() + [{**r, "reconstruction": "shading", "value": str(0.5 * float(r["value"]))}
                       for r in _rows()]  # fmt: skip
-    fig, ax = error_vs_time(rows, metric="mse", planners=["grid", "wavelet"],
+    _fig, ax = error_vs_time(rows, metric="mse", planners=["grid", "wavelet"],
                             reconstructions=["linear", "shading"])  # fmt: skip
     curves = {c.get_label(): c.lines[0] for c in ax.containers}
     assert list(curves) == ["Grid, Linear", "Wavelet, Linear", "Grid, Shading", "Wavelet, Shading"]
