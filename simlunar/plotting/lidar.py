@@ -227,7 +227,7 @@ def scan_figure(
         measured = np.isfinite(b[:, 3])
         order = _path(axes[0, j], image, b)
         pct = 100.0 * measured.mean() if n else 0.0
-        axes[0, j].set_title(_fit_title(f"{label(name)}: {n} beams", panel_w, TITLE_PT - 1),
+        axes[0, j].set_title(_fit_title(label(name), f"{n} beams", panel_w, TITLE_PT - 1),
                              fontsize=TITLE_PT - 1)  # fmt: skip
         ax = axes[1, j]
         ax.imshow(np.ones_like(image), cmap="gray", vmin=0, vmax=1.25, interpolation="nearest")
@@ -240,7 +240,7 @@ def scan_figure(
         _frame(ax, f"{pct:.0f} % returned")  # short: long titles ran into each other
     if order is not None:
         cb = fig.colorbar(order, ax=list(axes[0, 1:]), shrink=0.85, aspect=15, pad=0.02)
-        cb.set_label("visiting order (share of the scan)", fontsize=TICK_PT)
+        cb.set_label("visiting order\n(share of the scan)", fontsize=TICK_PT)
         cb.ax.tick_params(labelsize=TICK_PT - 1)
     cb = fig.colorbar(im, ax=list(axes[1, :]), shrink=0.85, aspect=15, pad=0.02)
     cb.set_label("z-depth (m)", fontsize=TICK_PT)
@@ -250,14 +250,18 @@ def scan_figure(
     return fig
 
 
-def _fit_title(text: str, width_in: float, size_pt: float) -> str:
-    """``text`` broken into lines no wider than a panel of ``width_in`` inches at
-    ``size_pt`` (an average glyph is about 0.55 of the font size wide), so neighbouring
-    panels' titles never run into each other."""
+def _fit_title(name: str, count: str, width_in: float, size_pt: float) -> str:
+    """``"name: count"`` on one line when it fits a panel of ``width_in`` inches at
+    ``size_pt`` (an average glyph is about 0.55 of the font size wide), else the name wrapped
+    to the panel and the count on a line of its own, so neighbouring panels' titles never run
+    into each other."""
     import textwrap
 
     chars = max(8, int(width_in * 72.0 / (0.55 * size_pt)))
-    return "\n".join(textwrap.wrap(text, chars, break_long_words=False)) or text
+    one = f"{name}: {count}"
+    if len(one) <= chars:
+        return one
+    return "\n".join([*textwrap.wrap(name, chars, break_long_words=False), count])
 
 
 def _frame(ax, title: str) -> None:

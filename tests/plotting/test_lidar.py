@@ -86,7 +86,7 @@ def test_scan_figure_draws_the_tour_and_the_measured_depths(tmp_path):
     np.testing.assert_array_equal(tour.get_segments()[0], beams["wavelet"][:2, [1, 0]])
     # two colour bars: visiting order and depth
     assert {ax.get_ylabel() for ax in fig.axes[6:]} == {
-        "visiting order (share of the scan)",
+        "visiting order\n(share of the scan)",
         "z-depth (m)",
     }
     fig.savefig(tmp_path / "scan.png")
