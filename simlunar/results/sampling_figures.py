@@ -350,6 +350,11 @@ def _forest_figure(
     try:
         fig = saved_forest_plot(entries)
     except ValueError:  # no planner with a finite saving (or no uniform layout)
+        if entries:  # the uniform layout ran, but nothing beside it can be compared
+            captions.skip("samples_saved_forest", f"no planner besides "
+                          f"{label(aggregate.HEADROOM_REFERENCE)} has a finite samples saved "
+                          "against it (the study's other planners: "
+                          f"{'; '.join(label(s) for s in entries[0]['strategies']) or 'none'})")  # fmt: skip
         return
     emit(fig, "samples_saved_forest")
     captions["samples_saved_forest"] = captions_text.saved_forest(

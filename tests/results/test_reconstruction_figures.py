@@ -160,6 +160,8 @@ def test_a_study_of_one_planner_draws_no_empty_figure_and_says_why(tmp_path):
     figs, captions = _draw(res)
     assert "samples_saved" not in figs and "samples_saved" in captions.not_drawn
     assert "Uniform Lloyd" in captions.not_drawn["samples_saved"]
+    assert "samples_saved_forest" not in figs
+    assert "other planners: none" in captions.not_drawn["samples_saved_forest"]
     # no wavelet planner ran: no panels claim wavelet samples; the study's planner titles them
     assert "panels_unit0" not in figs and "panels_unit0" in captions.not_drawn
     assert any("Uniform Lloyd samples" in ax.get_title() for ax in figs["recon_panels_unit0"].axes)
