@@ -214,7 +214,8 @@ def reconstruction_panels(
               vmin=vmin, vmax=vmax)  # fmt: skip
     _cbar(fig, im, axes[0, :].tolist(), "depth (m)")
     top = max(float(np.nanmax(image)), 1e-12)
-    dens = f", {density_label}" if density_label else ""
+    # two lines, as the error panels' titles beside it: one line ran into them
+    dens = f"\n{density_label}" if density_label else ""
     _show(axes[1, 0], image, f"{label(planner)} samples{dens}", extent=ext, vmin=0, vmax=top)
     rows, cols = samples
     _scatter_samples(axes[1, 0], rows, cols, spacing_m if ext is not None else None)

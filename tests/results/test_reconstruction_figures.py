@@ -142,7 +142,7 @@ def test_reconstruction_panels_share_their_scales(tmp_path):
     assert len(images) == 6  # truth + 2 reconstructions, samples + 2 error maps
     top, bottom = images[:3], images[3:]
     assert [ax.get_title() for ax in top] == ["true depth", "Linear", "Shading"]
-    assert bottom[0].get_title() == "Wavelet samples, k/N = 1/16"
+    assert bottom[0].get_title() == "Wavelet samples\nk/N = 1/16"
     assert bottom[1].get_title().startswith("Linear - truth\nRMS ")
     clims = {ax.get_images()[0].get_clim() for ax in top}
     assert len(clims) == 1  # one depth scale: the truth's
