@@ -242,7 +242,10 @@ def error_vs_density(
             lw=1.5 if ref else 1.1,
             ls=ls,
             color=c,
-            label=st[s].label if r is None else f"{st[s].label}, {label(r)}",
+            # by reconstruction the legend is built below (an entry per planner and per
+            # reconstruction); the leading "_" keeps a curve's own label out of legends that
+            # gather the artists (shared_legend of a multi-panel figure)
+            label=st[s].label if r is None else f"_{st[s].label}, {label(r)}",
             zorder=4 if ref else 2,
         )
         drawn_s += [s] if s not in drawn_s else []

@@ -91,7 +91,7 @@ def test_error_curves_one_per_planner_and_reconstruction(tmp_path):
     ax = figs["error_vs_density_mse"].axes[0]
     lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) == len(DENSITIES)]
     assert len(lines) == 4  # 2 planners x 2 reconstructions
-    by = {ln.get_label(): ln for ln in lines}
+    by = {ln.get_label().lstrip("_"): ln for ln in lines}
     assert set(by) == {"Random, Linear", "Random, Shading", "Wavelet, Linear", "Wavelet, Shading"}
     # colour names the planner, line style the reconstruction: each pair differs in just one
     assert to_hex(by["Random, Linear"].get_color()) == to_hex(by["Random, Shading"].get_color())
@@ -192,3 +192,13 @@ def test_linear_alone_draws_no_reconstruction_comparison(tmp_path):
     assert "recon_panels_unit0" not in figs  # panels_unit0 shows the one reconstruction
     ax = figs["error_vs_density_mse"].axes[0]
     assert len([ln for ln in ax.get_lines() if len(ln.get_xdata()) == len(DENSITIES)]) == 2
+
+
+def test_a_shared_legend_of_several_panels_names_planners_and_reconstructions_once(tmp_path):
+    figs, _ = _draw(_folder(tmp_path, seeds=1, sweep_points=(30, 60)))
+    fig = figs["error_vs_density_mse"]
+    assert len([ax for ax in fig.axes if ax.get_lines()]) == 2
+    texts = _legend_texts(fig)
+    # not one entry per curve ("Random, Linear", ...): one per planner and per reconstruction
+    assert [t for t in texts if not t.startswith("band")] == [
+        "planner: Random", "planner: Wavelet", "reconstruction: Linear", "reconstruction: Shading"]  # fmt: skip
