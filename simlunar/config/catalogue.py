@@ -101,7 +101,9 @@ def experiment_catalogue(directory: str | Path) -> list[Entry]:
             cat = CatalogueCfg.model_validate(data.get("catalogue") or {})
         except ValueError as exc:
             raise ValueError(f"{path}: catalogue: {exc}") from None
-        out.append(Entry(path.stem, " ".join(cat.shows.split()), _units(data), cat.run_time))
+        shows = " ".join(cat.shows.split())
+        shows = shows[:1].upper() + shows[1:]  # every row a sentence
+        out.append(Entry(path.stem, shows, _units(data), cat.run_time))
     return out
 
 
