@@ -42,12 +42,12 @@ FIRST_RUN_NOTE = (
     "Run times are wall clock of `simlunar run` into an empty result folder, figures included "
     "unless stated, `--workers 1` unless stated, each with the machine's load beside it (a "
     "number measured on a shared machine is slower than on an idle one). A first run on a "
-    "machine compiles the renderer's kernels once into the kernel cache (`DRJIT_CACHE_DIR`, "
-    "docs/install.md): the first run of each kind of study takes longer than the time given "
-    "(the quickstart's first run is given beside it; a LIDAR study compiles the transient "
-    "renderer's kernels too, so its first run is slower still). "
-    "`simlunar run EXPERIMENT --dry-run` prints the units and an estimate of time and memory "
-    "for your machine without running anything (docs/experiments.md)."
+    "machine also compiles kernels once (the renderer's into `DRJIT_CACHE_DIR`, the Numba "
+    "kernels into `__pycache__`) and reads the libraries from disk: what that cost when "
+    "measured is in docs/install.md, and the quickstart's first run with an empty kernel "
+    "cache is given beside its time. `simlunar run EXPERIMENT --dry-run` prints the units "
+    "and an estimate of time and memory for your machine without running anything "
+    "(docs/experiments.md)."
 )
 
 
