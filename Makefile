@@ -51,12 +51,14 @@ format: setup
 	$(VENV)/bin/ruff format simlunar tests benchmarks
 
 # the documentation site: build/docs/html/index.html (Sphinx, warnings are errors). The
-# configuration reference in docs/experiments.md is refreshed from the schema first; the
+# configuration reference in docs/experiments.md is refreshed from the schema first, the
+# experiment catalogue in README.md and docs/experiments.md from experiments/*.yaml; the
 # gallery shows results/<experiment>/figures, or, when the quickstart has none, a small
 # quickstart run made here once (build/docs-runs/quickstart, about 30 s of CPU; figures are
 # results and never committed)
 docs: setup docs-gallery
 	$(VPY) -c "from simlunar.config.docs import update_docs; update_docs('docs/experiments.md')"
+	$(VPY) -m simlunar.config.catalogue README.md docs/experiments.md
 	$(VPY) -m sphinx -b html -W --keep-going -q docs build/docs/html
 	@echo "docs: build/docs/html/index.html"
 

@@ -145,3 +145,30 @@ def test_search_finds_a_term_in_chromium(site, tmp_path):
     none = dump_dom(f"{url}?q=zyxwvutsrqp", tmp_path / "p2", budget_ms=8000)
     rest = none.split('id="search-results"')[-1]
     assert not re.findall(r'<li[^>]*>\s*<a [^>]*href="', rest)
+
+
+def test_the_index_links_every_guide_and_the_reproduction():
+    index = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    toctree = index.split("```{toctree}", 1)[1].split("```", 1)[0].split()
+    guides = sorted(p.stem for p in (ROOT / "docs").glob("*.md") if p.stem != "index")
+    assert "reproduction" in guides
+    missing = [g for g in guides if g not in toctree or f"]({g}.md)" not in index]
+    assert not missing, f"guides not in the index's toctree and prose: {missing}"
+    # the site's reproduction page is the repository's REPRODUCTION.md itself, not a copy
+    page = (ROOT / "docs" / "reproduction.md").read_text(encoding="utf-8")
+    assert "{include} ../REPRODUCTION.md" in page and len(page.splitlines()) <= 3
+
+
+@pytest.mark.slow
+def test_reproduction_and_a_reconstruction_figure_in_chromium(site, tmp_path):
+    dom = dump_dom((site / "index.html").as_uri(), tmp_path / "p0")
+    assert 'href="reproduction.html' in dom
+    rep = dump_dom((site / "reproduction.html").as_uri(), tmp_path / "p1")
+    assert "Reproducing the paper" in rep and "Table 2: moonyard" in rep
+    assert rep.count("<table") >= 10  # its tables rendered as tables, not as text
+    page = site / "reconstruction.html"
+    dom = dump_dom(page.as_uri(), tmp_path / "p2")
+    srcs = [s for s in re.findall(r'<img [^>]*src="([^"]+)"', dom) if "recon_panels" in s]
+    assert srcs, "the reconstruction guide shows no reconstruction panels"
+    loaded, total, line = images_load(srcs, page.parent, tmp_path / "probe")
+    assert (loaded, total) == (len(srcs), len(srcs)), line

@@ -47,7 +47,7 @@ from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.studies import LIDAR_BLOCKS, LidarStudyCfg, SamplingStudyCfg
 from simlunar.config.terrain import TerrainCfg
 
-__all__ = ["ExperimentCfg", "FiguresCfg", "StudyCfg"]
+__all__ = ["CatalogueCfg", "ExperimentCfg", "FiguresCfg", "RunTimeCfg", "StudyCfg"]
 
 #: the study of an experiment, chosen by its ``kind``; the kind picks the range sensor
 StudyCfg = _tagged_union("sampling", SamplingStudyCfg, ScannerStudyCfg, LidarStudyCfg)
@@ -96,6 +96,51 @@ class FiguresCfg(_Model):
         return math.radians(lo), math.radians(hi)
 
 
+class RunTimeCfg(_Model):
+    """One measured run time of a shipped experiment, with the conditions it was measured in
+    (the experiment catalogue prints them together; no number without its machine load)."""
+
+    wall_min: float | None = Field(
+        None,
+        gt=0,
+        description="wall-clock minutes of `simlunar run` into an empty result folder, "
+        "figures included unless the note says otherwise; null = not re-measured",
+    )
+    load: str = Field(
+        "",
+        description="the machine while it ran: cores and 1-minute load average, e.g. "
+        "'2 cores, load 1.8-1.9'; required with wall_min",
+    )
+    note: str = Field(
+        "",
+        description="what else the number depends on: options (--workers 2), a warm or "
+        "empty kernel cache, where it was measured",
+    )
+    first_run_min: float | None = Field(
+        None,
+        gt=0,
+        description="wall-clock minutes of the same run on a machine whose kernel cache "
+        "(DRJIT_CACHE_DIR) is empty: the first run compiles the renderer's kernels",
+    )
+
+    @model_validator(mode="after")
+    def _load_with_time(self) -> RunTimeCfg:
+        if (self.wall_min is not None or self.first_run_min is not None) and not self.load:
+            raise ValueError("load: a measured run time needs the machine's load beside it")
+        return self
+
+
+class CatalogueCfg(_Model):
+    """What a shipped experiment shows and how long it runs: the rows of the experiment
+    catalogue (README, docs/experiments.md), generated from these blocks. Changes no number
+    and no cache key."""
+
+    shows: str = Field(
+        "", description="what the experiment shows, in a sentence or two (catalogue column)"
+    )
+    run_time: RunTimeCfg = Field(default_factory=RunTimeCfg)
+
+
 class ExperimentCfg(_Model):
     """One experiment: a scene, a study, and optional sweep axes (cartesian product)."""
 
@@ -111,6 +156,11 @@ class ExperimentCfg(_Model):
         "(each point is validated against this schema; unit strings become numbers)",
     )
     figures: FiguresCfg = Field(default_factory=FiguresCfg)
+    catalogue: CatalogueCfg = Field(
+        default_factory=CatalogueCfg,
+        description="the experiment's row of the experiment catalogue (what it shows, its "
+        "measured run time); no effect on the run",
+    )
 
     @model_validator(mode="after")
     def _study_fits_render(self) -> ExperimentCfg:

@@ -1,21 +1,33 @@
-"""Inputs of a sampling unit's figures: the image panels (a wavelet plan and its reconstruction)
-and the sparse-mesh renders of the paper's Fig. 4."""
+"""Inputs of a sampling unit's figures: the image panels (a wavelet plan and its reconstruction),
+the reconstruction panels (one plan of the study's own planner reconstructed by every
+configured reconstruction) and the sparse-mesh renders of the paper's Fig. 4."""
 
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from simlunar.planner import DEFAULT_PLANNER, plan, strategy_weights
-from simlunar.reconstruction import reconstruct
+from simlunar.planner import DEFAULT_PLANNER, MEASURING, ORACLES, plan, strategy_weights
+from simlunar.reconstruction import reconstruct, run_reconstruction
 from simlunar.render import render
 from simlunar.render.materials import OrenNayarBSDF, sigma_map_from_energy
 from simlunar.render.scene import luminance
+from simlunar.study.protocol import reconstruction_of, reconstruction_options
+from simlunar.study.sampling_planners import study_planners
 from simlunar.terrain.types import Terrain
 
-__all__ = ["RENDER_LOCK", "RenderScene", "panel_arrays", "panel_energy", "sparse_mesh_render"]
+__all__ = [
+    "RENDER_LOCK",
+    "RenderScene",
+    "panel_arrays",
+    "panel_energy",
+    "panel_planner",
+    "reconstruction_panel_arrays",
+    "sparse_mesh_render",
+]
 
 #: Renders of units running concurrently in threads (``LocalPoolExecutor``) take turns: each
 #: render already uses every core, and Mitsuba scenes are built and rendered one at a time.
@@ -71,6 +83,70 @@ def panel_arrays(image, depth, energy, density: float, *, rng) -> dict:
         "plan_cols": np.asarray(p.cols, np.int32),
         "reconstruction": recon.astype(np.float64),
     }
+
+
+def panel_planner(strategies: Sequence[str], strategy_options: Mapping) -> str | None:
+    """The study's planner label whose plan the reconstruction panels show: the default
+    planner (wavelet) when the study ran it, else the first label that plans from the image
+    or none (no oracle, which reads the truth, and no multi-round planner, which measures as
+    it goes); None when the study has no such label."""
+    labels = [str(s) for s in strategies]
+    if DEFAULT_PLANNER in labels:
+        return DEFAULT_PLANNER
+    for lb in labels:
+        base = (strategy_options.get(lb) or {}).get("strategy", lb)
+        if base not in ORACLES and base not in MEASURING:
+            return lb
+    return None
+
+
+def reconstruction_panel_arrays(options, image, depth, density: float, *, guide, rng):
+    """One plan of the study's own planner (:func:`panel_planner`) at ``density``,
+    reconstructed by every configured reconstruction from the same samples.
+
+    Parameters
+    ----------
+    options : SamplingStudyOptions
+        The study (its strategies, strategy options, reconstructions and ``outside`` policy).
+    image, depth : (rows, cols) float
+        Guide image and true depth of the guide view (finite).
+    density : float
+        k / N of the plan (``figures.panel_density``).
+    guide : Guide or None
+        What the camera saw, for the guided reconstructions (None when none is configured).
+    rng : seed or Generator
+        Drives the plan.
+
+    Returns
+    -------
+    (dict, dict)
+        Arrays ``recon_panel_rows`` / ``recon_panel_cols`` (int32 (k,)) and
+        ``recon_panel_<i>`` (float32 (rows, cols), the i-th reconstruction in the configured
+        order); and the meta ``{"recon_panels": {planner, density, k, reconstructions}}``
+        that names them. Both empty when the study has no planner to show
+        (:func:`panel_planner`). The samples are the true depth at the planned pixels, without
+        range noise, as the image panels take them.
+    """
+    label = panel_planner(options.strategies, options.strategy_options)
+    if label is None:
+        return {}, {}
+    k = max(3, round(density * depth.size))
+    kept = {k: v for k, v in options.strategy_options.items() if k == label}
+    one = replace(options, strategies=(label,), strategy_options=kept)
+    planners, _ = study_planners(one, image, depth, [k], guide=guide)
+    rc = np.asarray(planners[label](k, np.random.default_rng(rng)))
+    rows, cols = rc[:, 0].astype(np.int64), rc[:, 1].astype(np.int64)
+    values = np.asarray(depth, np.float64)[rows, cols]
+    recons = reconstruction_options(options.reconstructions, outside=options.outside)
+    out = {"recon_panel_rows": rows.astype(np.int32), "recon_panel_cols": cols.astype(np.int32)}
+    for i, opts in enumerate(recons.values()):
+        rec = run_reconstruction(
+            reconstruction_of(opts), rc, values, depth.shape, guide=guide, options=opts
+        )
+        out[f"recon_panel_{i}"] = np.asarray(rec.heights, np.float32)
+    meta = {"planner": label, "density": float(density), "k": int(k),
+            "reconstructions": list(recons)}  # fmt: skip
+    return out, {"recon_panels": meta}
 
 
 def sparse_mesh_render(

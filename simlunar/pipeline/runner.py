@@ -81,7 +81,7 @@ from simlunar.results.summaries import (
 __all__ = ["ROW_COLUMNS", "RunSummary", "collect_rows", "expand", "run_experiment", "unit_key"]
 
 #: keys that do not change a unit's numbers (excluded from its cache key)
-_NON_RESULT_KEYS = ("name", "description", "sweep")
+_NON_RESULT_KEYS = ("name", "description", "sweep", "catalogue")
 #: the row columns in their fixed order (each present when some row has it); ``reconstruction``
 #: is in every row (``linear`` for rows cached before reconstructions were configurable)
 ROW_COLUMNS = (

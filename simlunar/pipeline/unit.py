@@ -36,6 +36,7 @@ from simlunar.pipeline.figure_inputs import (
     RenderScene,
     panel_arrays,
     panel_energy,
+    reconstruction_panel_arrays,
     sparse_mesh_render,
 )
 from simlunar.pipeline.guide import build_guide
@@ -280,11 +281,26 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
             arrays.update(_figure_arrays(cfg, scene, image, depth, seeds, timings))
             s.advance()
     guide, guide_meta = _guide(cfg, scene, image, seeds, timings, arrays, radiance=radiance)
+    options = translate.sampling_options(cfg.study)
+    panel_meta: dict = {}
+    if cfg.figures.enabled:
+        t = time.perf_counter()
+        with stage("reconstruction panels", total=1) as s:
+            # its own seed (the third child of the panels' seeds), whatever runs before it
+            ss = np.random.SeedSequence(
+                seeds["panels"].entropy, spawn_key=(*seeds["panels"].spawn_key, 2)
+            )
+            panels, panel_meta = reconstruction_panel_arrays(
+                options, image, depth, cfg.figures.panel_density, guide=guide, rng=ss
+            )
+            arrays.update(panels)
+            s.advance()
+        timings["recon_panels_s"] = time.perf_counter() - t
     t = time.perf_counter()
     study = run_sampling_study(
         depth,
         image,
-        translate.sampling_options(cfg.study),
+        options,
         rng=np.random.default_rng(seeds["study"]),
         workers=workers,
         guide=guide,
@@ -306,6 +322,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
             **_rounds(study),
             **_reconstruction_meta(study),
             **guide_meta,
+            **panel_meta,
         },
         exports=exports,
     )

@@ -24,6 +24,7 @@ __all__ = [
     "BAND_LABEL_SEEDS",
     "LEGEND_RIGHT_SIZE",
     "NICE_RATIOS",
+    "RECONSTRUCTION_LINES",
     "REFERENCE",
     "density_axis",
     "density_label",
@@ -31,6 +32,7 @@ __all__ = [
     "mean_error_by_density",
     "ratio_axis",
     "ratio_ticks",
+    "reconstruction_linestyles",
     "samples_saved_plot",
     "score_vs_sweep",
 ]
@@ -188,6 +190,7 @@ def error_vs_density(
     ax=None,
     title: str | None = None,
     band_label: str = BAND_LABEL,
+    reconstructions: Sequence[str] | None = None,
 ):
     """Reconstruction error against sampling density per strategy (paper Fig. 3).
 
@@ -195,6 +198,13 @@ def error_vs_density(
     or of several pooled units), the band +- one standard deviation over them (``band_label``,
     also a legend entry). Density falls to the right, as in the paper. The random reference
     is drawn last and dashed, so no curve hides it. The legend sits below the axes.
+
+    With two or more ``reconstructions`` (the values of the rows' ``reconstruction`` column;
+    rows without one are ``linear``'s) every strategy gets one curve per reconstruction:
+    colour and marker name the planner, the line style the reconstruction
+    (:func:`reconstruction_linestyles`), and the legend has an entry for each planner and
+    each reconstruction. One reconstruction, or none given: the curves of the rows as
+    ``where`` selects them, line style by placement.
     """
     from matplotlib.patches import Patch
 
@@ -202,26 +212,44 @@ def error_vs_density(
     if strategies is None:
         strategies = list(dict.fromkeys(r["strategy"] for r in rows))
     st = styles(strategies)
+    recons = list(reconstructions or [])
+    by_recon = len(recons) >= 2
+    lines = reconstruction_linestyles(recons)
+    series = [(s, r) for s in strategies for r in recons] if by_recon else [
+        (s, None) for s in strategies]  # fmt: skip
+    data = _with_reconstruction(rows) if by_recon else rows
     band = False
     all_d: list[float] = []
-    for s in strategies:
-        d, m, sd = mean_error_by_density(rows, metric=metric, strategy=s, where=where)
+    drawn_s: list[str] = []
+    drawn_r: list[str] = []
+    for s, r in series:
+        sel = dict(where or {})
+        if r is not None:
+            sel["reconstruction"] = r
+        d, m, sd = mean_error_by_density(data, metric=metric,
+                                         strategy=s, where=sel)  # fmt: skip
         if d.size == 0:
             continue
         all_d += d.tolist()
         ref = s == REFERENCE
         c = st[s].colour
+        ls = lines[r] if r is not None else ("--" if ref else st[s].linestyle)
         ax.plot(
             d,
             m,
             marker=st[s].marker,
             ms=3,
             lw=1.5 if ref else 1.1,
-            ls="--" if ref else st[s].linestyle,
+            ls=ls,
             color=c,
-            label=st[s].label,
+            # by reconstruction the legend is built below (an entry per planner and per
+            # reconstruction); the leading "_" keeps a curve's own label out of legends that
+            # gather the artists (shared_legend of a multi-panel figure)
+            label=st[s].label if r is None else f"_{st[s].label}, {label(r)}",
             zorder=4 if ref else 2,
         )
+        drawn_s += [s] if s not in drawn_s else []
+        drawn_r += [r] if r is not None and r not in drawn_r else []
         if np.any(sd > 0):
             lo = np.clip(m - sd, np.nanmin(m[m > 0]) * 0.5 if np.any(m > 0) else 1e-12, None)
             ax.fill_between(d, lo, m + sd, color=c, alpha=0.12, lw=0, zorder=1)
@@ -237,13 +265,44 @@ def error_vs_density(
     ax.tick_params(axis="y", labelsize=TICK_PT)
     if title:
         ax.set_title(title, fontsize=TITLE_PT)
-    handles, labels = ax.get_legend_handles_labels()
+    if by_recon:  # one entry per planner (colour, marker) and per reconstruction (line)
+        handles = [Line2D([], [], color=st[s].colour, marker=st[s].marker, ms=3, lw=1.1)
+                   for s in drawn_s]  # fmt: skip
+        labels = [f"planner: {st[s].label}" for s in drawn_s]
+        handles += [Line2D([], [], color="0.2", lw=1.1, ls=lines[r]) for r in drawn_r]
+        labels += [f"reconstruction: {label(r)}" for r in drawn_r]
+    else:
+        handles, labels = ax.get_legend_handles_labels()
     if band:
         handles.append(Patch(color="0.5", alpha=0.3, lw=0))
         labels.append(band_label)
     legend_outside(ax, handles=handles, labels=labels)
     ax.grid(True, which="major", alpha=0.3)
     return fig, ax
+
+
+#: line styles of the reconstructions of one figure, in their configured order (the first,
+#: linear by default, solid)
+RECONSTRUCTION_LINES = ("-", (0, (5, 2)), (0, (1, 1.2)), (0, (5, 1.5, 1, 1.5)),
+                        (0, (8, 2, 1, 2, 1, 2)), (0, (2, 2)))  # fmt: skip
+
+
+def reconstruction_linestyles(names: Sequence[str]) -> dict[str, str | tuple]:
+    """One line style per reconstruction name: :data:`RECONSTRUCTION_LINES` in order, then
+    dashes that grow by one point per further name, so no two names of a figure share one."""
+    out: dict[str, str | tuple] = {}
+    n = len(RECONSTRUCTION_LINES)
+    for i, name in enumerate(dict.fromkeys(names)):
+        out[name] = RECONSTRUCTION_LINES[i] if i < n else (0, (3 + i - n, 1, 1, 1))
+    return out
+
+
+def _with_reconstruction(rows: Sequence[dict]) -> list[dict] | Sequence[dict]:
+    """Rows with a ``reconstruction`` column (``linear`` where a row names none, as rows of a
+    study of one reconstruction are written)."""
+    if all("reconstruction" in r and r["reconstruction"] for r in rows):
+        return rows
+    return [r if r.get("reconstruction") else {**r, "reconstruction": "linear"} for r in rows]
 
 
 def _sweep_positions(xs: Sequence) -> tuple[bool, np.ndarray]:

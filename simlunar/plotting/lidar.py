@@ -11,8 +11,10 @@ import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
+from simlunar.plotting.density import reconstruction_linestyles
 from simlunar.plotting.images import DEPTH_CMAP
 from simlunar.plotting.layout import LABEL_PT, PAGE_W, TICK_PT, TITLE_PT, legend_outside
 from simlunar.plotting.lidar_tables import lidar_summary, lidar_tables
@@ -100,10 +102,15 @@ def error_vs_time(
     by: str | None = None,
     title: str = "",
     ax=None,
+    reconstructions: Sequence[str] | None = None,
 ):
     """Mean error of each planner against modelled scan time (``x="seconds"``) or the range
     samples measured (``x="samples"``), log-log, with its interval as error bars
     (:func:`lidar_summary`; ``by`` a column whose values are separate points).
+
+    With two or more ``reconstructions`` (values of the rows' ``reconstruction`` column,
+    ``linear`` for rows without one) each planner gets a curve per reconstruction: colour and
+    marker name the planner, the line style the reconstruction, and the legend lists both.
 
     Returns
     -------
@@ -114,20 +121,32 @@ def error_vs_time(
         ax = fig.add_subplot()
     else:
         fig = ax.figure
-    summary = lidar_summary(rows, metric=metric, where=where, by=by)
+    recons = list(reconstructions or [])
+    by_recon = len(recons) >= 2
+    if by_recon:
+        rows = [r if r.get("reconstruction") else {**r, "reconstruction": "linear"} for r in rows]
+    summaries = {
+        r: lidar_summary(rows, metric=metric, where={**(where or {}), "reconstruction": r}, by=by)
+        for r in recons
+    } if by_recon else {None: lidar_summary(rows, metric=metric, where=where, by=by)}  # fmt: skip
     # the requested planners first, then any other label of the rows (a planless flash: none)
-    names = [p for p in (planners or []) if p in summary]
-    names += [p for p in summary if p not in names]
+    found = [p for s in summaries.values() for p in s]
+    names = [p for p in (planners or []) if p in found]
+    names += [p for p in dict.fromkeys(found) if p not in names]
     st = styles(names)
+    lines = reconstruction_linestyles(recons)
     pooled = False
-    for p in names:
-        d = summary[p]
-        err = np.clip([d["value"] - d["lo"], d["hi"] - d["value"]], 0, None)
-        # a truth-reading oracle is a bound: dotted, as in the sampling study's figures
-        ls = PLACEMENT_LINES["oracle"] if p.startswith("oracle") else "-"
-        ax.errorbar(d[x], d["value"], yerr=err, marker=st[p].marker, color=st[p].colour,
-                    label=st[p].label, lw=1.2, capsize=2, ms=4, ls=ls)  # fmt: skip
-        pooled |= bool((d["units"] > 1).any())
+    for r, summary in summaries.items():
+        for p in (p for p in names if p in summary):
+            d = summary[p]
+            err = np.clip([d["value"] - d["lo"], d["hi"] - d["value"]], 0, None)
+            # a truth-reading oracle is a bound: dotted, as in the sampling study's figures
+            ls = PLACEMENT_LINES["oracle"] if p.startswith("oracle") else "-"
+            ls = lines[r] if r is not None else ls
+            name = st[p].label if r is None else f"{st[p].label}, {label(r)}"
+            ax.errorbar(d[x], d["value"], yerr=err, marker=st[p].marker, color=st[p].colour,
+                        label=name, lw=1.2, capsize=2, ms=4, ls=ls)  # fmt: skip
+            pooled |= bool((d["units"] > 1).any())
     ax.set_xscale("log")
     ax.set_yscale("log")
     # 1-2-5 labels: a scan-time range within one decade still gets tick labels
@@ -139,7 +158,14 @@ def error_vs_time(
     if title:
         ax.set_title(title, fontsize=8)
     # below the axes: inside, the legend and its note ran through the error bars
-    legend_outside(ax, title=BAND_SEEDS if pooled else BAND_TRIALS)
+    handles = labels = None
+    if by_recon:  # one entry per planner (colour, marker) and per reconstruction (line)
+        handles = [Line2D([], [], color=st[p].colour, marker=st[p].marker, ms=4, lw=1.2)
+                   for p in names]  # fmt: skip
+        labels = [f"planner: {st[p].label}" for p in names]
+        handles += [Line2D([], [], color="0.2", lw=1.2, ls=lines[r]) for r in recons]
+        labels += [f"reconstruction: {label(r)}" for r in recons]
+    legend_outside(ax, handles=handles, labels=labels, title=BAND_SEEDS if pooled else BAND_TRIALS)
     return fig, ax
 
 
@@ -201,7 +227,8 @@ def scan_figure(
         measured = np.isfinite(b[:, 3])
         order = _path(axes[0, j], image, b)
         pct = 100.0 * measured.mean() if n else 0.0
-        axes[0, j].set_title(f"{label(name)}: {n} beams", fontsize=TITLE_PT - 1)
+        axes[0, j].set_title(_fit_title(label(name), f"{n} beams", panel_w, TITLE_PT - 1),
+                             fontsize=TITLE_PT - 1)  # fmt: skip
         ax = axes[1, j]
         ax.imshow(np.ones_like(image), cmap="gray", vmin=0, vmax=1.25, interpolation="nearest")
         size = float(np.clip(2000.0 / max(n, 1), 1.0, 12.0))
@@ -213,7 +240,7 @@ def scan_figure(
         _frame(ax, f"{pct:.0f} % returned")  # short: long titles ran into each other
     if order is not None:
         cb = fig.colorbar(order, ax=list(axes[0, 1:]), shrink=0.85, aspect=15, pad=0.02)
-        cb.set_label("visiting order (share of the scan)", fontsize=TICK_PT)
+        cb.set_label("visiting order\n(share of the scan)", fontsize=TICK_PT)
         cb.ax.tick_params(labelsize=TICK_PT - 1)
     cb = fig.colorbar(im, ax=list(axes[1, :]), shrink=0.85, aspect=15, pad=0.02)
     cb.set_label("z-depth (m)", fontsize=TICK_PT)
@@ -221,6 +248,20 @@ def scan_figure(
     if title:
         fig.suptitle(title, fontsize=LABEL_PT)
     return fig
+
+
+def _fit_title(name: str, count: str, width_in: float, size_pt: float) -> str:
+    """``"name: count"`` on one line when it fits a panel of ``width_in`` inches at
+    ``size_pt`` (an average glyph is about 0.55 of the font size wide), else the name wrapped
+    to the panel and the count on a line of its own, so neighbouring panels' titles never run
+    into each other."""
+    import textwrap
+
+    chars = max(8, int(width_in * 72.0 / (0.55 * size_pt)))
+    one = f"{name}: {count}"
+    if len(one) <= chars:
+        return one
+    return "\n".join([*textwrap.wrap(name, chars, break_long_words=False), count])
 
 
 def _frame(ax, title: str) -> None:

@@ -11,7 +11,7 @@ method's gain is expected to fall as the sun rises (REFERENCES, 2026-11-28: 1.73
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -27,7 +27,14 @@ from simlunar.plotting.layout import (
 )
 from simlunar.plotting.style import _UNIT_SUFFIXES, _with_unit, label, styles
 
-__all__ = ["MAX_PANELS", "ROW_PANELS", "category_labels", "reconstruction_saved_vs_sweep"]
+__all__ = [
+    "MAX_PANELS",
+    "ROW_PANELS",
+    "category_labels",
+    "reconstruction_panels",
+    "reconstruction_saved_by_planner",
+    "reconstruction_saved_vs_sweep",
+]
 
 #: most strategy panels of one figure (the first ones in the study's order), in rows of
 #: :data:`ROW_PANELS`; a study's planners all fit (a cap of 4 dropped the paper's own wavelet
@@ -132,3 +139,157 @@ def _cell(v) -> tuple[float, float, float]:
     if isinstance(v, (tuple, list)):
         return tuple(math.nan if x is None else float(x) for x in v)
     return (math.nan if v is None else float(v), math.nan, math.nan)
+
+
+def reconstruction_panels(
+    image: np.ndarray,
+    truth: np.ndarray,
+    reconstructions: Mapping[str, np.ndarray],
+    samples: tuple[np.ndarray, np.ndarray],
+    *,
+    planner: str,
+    density_label: str = "",
+    point: str = "",
+    spacing_m: float | None = None,
+):
+    """Every reconstruction of one plan beside the truth, and their error maps.
+
+    Top row: the true depth, then each reconstruction (configured order), all on the true
+    depth's colour scale (one colour bar, m). Bottom row: the guide image with the planned
+    samples (under the truth), then each reconstruction's error (reconstruction - truth) on
+    one symmetric scale for all of them, at the 99th percentile of |error| over every map
+    (one colour bar, m); each error panel's title gives its RMS error.
+
+    Parameters
+    ----------
+    image : (rows, cols) float
+        Guide (sensor) image.
+    truth : (rows, cols) float
+        True depth from the camera (m).
+    reconstructions : mapping name -> (rows, cols) float
+        The reconstructions of the same samples (at least one).
+    samples : (plan_rows, plan_cols)
+        The sampled pixels.
+    planner : str
+        The study's planner that placed them (its display label titles the samples panel).
+    density_label, point : str
+        ``"k/N = 1/32"`` and the sweep point (figure title), either may be empty.
+    spacing_m : float, optional
+        Cell size of a nadir orthographic view: axes in metres; None = pixels.
+
+    Returns
+    -------
+    (Figure, ndarray of Axes (2, 1 + len(reconstructions)))
+    """
+    import matplotlib.pyplot as plt
+
+    from simlunar.plotting.images import (
+        DEPTH_CMAP,
+        _cbar,
+        _extent,
+        _metre_labels,
+        _panel_height,
+        _scatter_samples,
+        _show,
+    )
+    from simlunar.plotting.layout import PAGE_W
+
+    if not reconstructions:
+        raise ValueError("reconstruction_panels needs at least one reconstruction")
+    names = list(reconstructions)
+    n = len(names) + 1
+    ext = _extent(np.shape(truth), spacing_m)
+    per = min(PAGE_W / n - 0.35, 2.6)
+    fig, axes = plt.subplots(
+        2, n, figsize=(max(PAGE_W, n * (per + 0.35)), _panel_height(np.shape(truth), per, 2, 0.55)),
+        constrained_layout=True, squeeze=False,
+    )  # fmt: skip
+    truth = np.asarray(truth, float)
+    vmin, vmax = float(np.nanmin(truth)), float(np.nanmax(truth))
+    errors = {r: np.asarray(reconstructions[r], float) - truth for r in names}
+    lim = float(np.nanpercentile(np.abs(np.stack(list(errors.values()))), 99)) or 1e-12
+    im = _show(axes[0, 0], truth, "true depth", cmap=DEPTH_CMAP, extent=ext, vmin=vmin, vmax=vmax)
+    for j, r in enumerate(names, start=1):
+        _show(axes[0, j], reconstructions[r], label(r), cmap=DEPTH_CMAP, extent=ext,
+              vmin=vmin, vmax=vmax)  # fmt: skip
+    _cbar(fig, im, axes[0, :].tolist(), "depth (m)")
+    top = max(float(np.nanmax(image)), 1e-12)
+    # two lines, as the error panels' titles beside it: one line ran into them
+    dens = f"\n{density_label}" if density_label else ""
+    _show(axes[1, 0], image, f"{label(planner)} samples{dens}", extent=ext, vmin=0, vmax=top)
+    rows, cols = samples
+    _scatter_samples(axes[1, 0], rows, cols, spacing_m if ext is not None else None)
+    for j, r in enumerate(names, start=1):
+        rms = float(np.sqrt(np.nanmean(errors[r] ** 2)))
+        im = _show(axes[1, j], errors[r], f"{label(r)} - truth\nRMS {rms:.3g} m", cmap="coolwarm",
+                   extent=ext, vmin=-lim, vmax=lim)  # fmt: skip
+    _cbar(fig, im, axes[1, 1:].tolist(), "error (m)")
+    if ext is not None:
+        flat = list(axes.ravel())
+        _metre_labels(flat, left={0, n}, bottom=set(range(n, 2 * n)))
+    if point:
+        fig.suptitle(point, fontsize=TITLE_PT)
+    return fig, axes
+
+
+def reconstruction_saved_by_planner(
+    saved: Mapping[str, Mapping[str, object]],
+    *,
+    strategies: Sequence[str],
+    reconstructions: Sequence[str],
+    metric: str = "mse",
+    title: str = "",
+):
+    """Samples saved vs linear at one sweep point: the planners (layouts) along x, one marker
+    per reconstruction beside each other, its interval as an error bar.
+
+    Parameters
+    ----------
+    saved : mapping reconstruction -> strategy -> ``(value, low, high)`` or a number
+        As a point of :func:`reconstruction_saved_vs_sweep` (low / high NaN: no interval).
+    strategies, reconstructions : the categories and the series, in order
+    metric : the metric of the comparison (axis label)
+    title : the sweep point, if any
+
+    Returns
+    -------
+    (Figure, Axes)
+    """
+    from simlunar.plotting.layout import new_axes
+
+    strategies = list(strategies)
+    if not strategies or not reconstructions:
+        raise ValueError("reconstruction_saved_by_planner needs strategies and series")
+    st = styles(reconstructions)
+    n = len(reconstructions)
+    fig, ax = new_axes(None, (max(3.6, 0.42 * len(strategies) * max(n, 2) ** 0.5 + 1.8), 3.2))
+    pos = np.arange(len(strategies), dtype=float)
+    values: list[float] = [0.8, 1.25]
+    for i, r in enumerate(reconstructions):
+        cells = np.array([_cell(saved.get(r, {}).get(s)) for s in strategies], float)
+        y, lo, hi = cells.T
+        x = pos + (i - (n - 1) / 2) * min(0.6 / n, 0.2)
+        ax.plot(x, y, marker=st[r].marker, ms=4.5, ls="none", color=st[r].colour,
+                label=st[r].label)  # fmt: skip
+        ok = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(y)
+        if ok.any():
+            yerr = np.vstack([np.clip(y - lo, 0, None), np.clip(hi - y, 0, None)])
+            ax.errorbar(x[ok], y[ok], yerr=yerr[:, ok], fmt="none", ecolor=st[r].colour,
+                        capsize=2, elinewidth=0.8)  # fmt: skip
+        values += [float(v) for v in np.concatenate([y, lo, hi])]
+    ax.axhline(1.0, color="k", lw=0.6, ls=":")
+    ax.set_xticks(pos, [label(s) for s in strategies], fontsize=TICK_PT, rotation=30, ha="right")
+    ax.set_xlim(pos[0] - 0.6, pos[-1] + 0.6)
+    ax.tick_params(axis="y", labelsize=TICK_PT)
+    ax.set_xlabel("planner (layout the reconstructions share)", fontsize=LABEL_PT)
+    ax.set_ylabel(
+        f"samples saved vs linear\n(equal {METRIC_NAMES.get(metric, metric)})", fontsize=LABEL_PT
+    )
+    if title:
+        ax.set_title(title, fontsize=TITLE_PT)
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ratio_axis(ax, values)
+    # beside the axes: below them the rotated planner names would run into it
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=TICK_PT,
+              title="reconstruction", title_fontsize=TICK_PT)  # fmt: skip
+    return fig, ax

@@ -9,12 +9,13 @@ from pathlib import Path
 
 from simlunar.plotting.figures import close, save
 from simlunar.results import lidar_figures, sampling_figures, scanner_figures
+from simlunar.results.captions import Captions
 from simlunar.results.store import atomic_write_bytes
 
 __all__ = ["draw"]
 
 
-def draw(res: dict, formats: list[str]) -> tuple[list[Path], dict[str, str]]:
+def draw(res: dict, formats: list[str]) -> tuple[list[Path], Captions]:
     """Draw the figures of the folder's study kind into ``figures/``.
 
     Parameters
@@ -26,8 +27,9 @@ def draw(res: dict, formats: list[str]) -> tuple[list[Path], dict[str, str]]:
 
     Returns
     -------
-    (list of Path, dict)
-        The files written, and the caption of each figure stem.
+    (list of Path, Captions)
+        The files written, and the caption of each figure stem (with the figures not
+        drawn and why, :attr:`Captions.not_drawn`).
     """
     fig_dir = res["dir"] / "figures"
     written: list[Path] = []
@@ -44,6 +46,6 @@ def draw(res: dict, formats: list[str]) -> tuple[list[Path], dict[str, str]]:
         "scanner": scanner_figures.scanner_figures,
         "lidar": lidar_figures.lidar_figures,
     }[res["config"].get("study", {}).get("kind", "sampling")]
-    captions: dict[str, str] = {}
+    captions = Captions()
     figures_of_kind(res, emit, captions)
     return written, captions

@@ -10,17 +10,35 @@ from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.style import METRIC_UNITS, axis_name, label
 
 __all__ = [
+    "Captions",
     "bit_errors",
     "error_vs_density",
     "headroom",
     "lidar_error",
     "panels",
+    "reconstruction_panels",
+    "reconstruction_saved",
     "samples_saved",
     "scanner_errors",
     "scanner_vs_sweep",
     "score_vs_sweep",
     "sparse_mesh",
 ]
+
+
+class Captions(dict):
+    """The captions of a folder's figures (``{stem: caption}``) and the figures not drawn
+    with the reason of each (:attr:`not_drawn`, written to ``figures/not_drawn.md`` and shown
+    by the report): a figure with nothing to show is left out, never drawn empty."""
+
+    def __init__(self, *args, **kw):
+        super().__init__(*args, **kw)
+        self.not_drawn: dict[str, str] = {}
+
+    def skip(self, stem: str, reason: str) -> None:
+        """Record that figure ``stem`` is not drawn, and why (one sentence)."""
+        self.not_drawn[stem] = reason
+
 
 _METRIC_TEXT = {
     "mse": "mean squared depth error over all cells",
@@ -41,8 +59,22 @@ def _metric(m: str) -> str:
     return f"{_METRIC_TEXT.get(m, METRIC_NAMES.get(m, m))}{f', in {unit}' if unit else ''}"
 
 
-def error_vs_density(metric: str, study: dict, n_panels: int, *, seeds: int = 1) -> str:
-    """Caption of ``error_vs_density_<metric>`` (``seeds``: terrain seeds pooled per panel)."""
+def _recon_text(name: str) -> str:
+    """A reconstruction's name as the captions write it (``linear`` is Delaunay-linear)."""
+    return "Delaunay-linear" if name == "linear" else label(name)
+
+
+def error_vs_density(
+    metric: str,
+    study: dict,
+    n_panels: int,
+    *,
+    seeds: int = 1,
+    reconstructions: list[str] | None = None,
+) -> str:
+    """Caption of ``error_vs_density_<metric>`` (``seeds``: terrain seeds pooled per panel;
+    ``reconstructions``: the reconstructions drawn, one line style each when several)."""
+    recons = list(reconstructions or ["linear"])
     trials = study.get("trials", 20)
     strategies = _strategy_list(study.get("strategies") or [])
     per = " One panel per scene or sweep point." if n_panels > 1 else ""
@@ -63,12 +95,25 @@ def error_vs_density(metric: str, study: dict, n_panels: int, *, seeds: int = 1)
             f"mean over {trials} trials per density; shaded band: ±1 standard deviation "
             f"over those trials (a fresh grid shift, random draw and noise per trial)"
         )
+    if len(recons) > 1:
+        which = (
+            f"each reconstruction ({'; '.join(_recon_text(r) for r in recons)}) from the same "
+            f"k range samples"
+        )
+        styles_text = (
+            " Colour and marker name the planner, the line style the reconstruction (the "
+            "legend lists both); every reconstruction of a planner reads the same plans."
+        )
+        ref = ref.replace(" is dashed and", " is")
+    else:
+        which = f"the {_recon_text(recons[0])} reconstruction from k range samples"
+        styles_text = ""
     return (
         f"Reconstruction error against sampling density k/N (log-log; density falls to the "
-        f"right, as in the paper's Fig. 3). y: {_metric(metric)} of the Delaunay "
-        f"reconstruction from k range samples against the full-resolution ground truth. "
+        f"right, as in the paper's Fig. 3). y: {_metric(metric)} of {which} against the "
+        f"full-resolution ground truth. "
         f"Lines: {over}, clipped below at half the smallest mean on the log axis. "
-        f"Strategies: {strategies}.{ref}{per}"
+        f"Strategies: {strategies}.{styles_text}{ref}{per}"
     )
 
 
@@ -214,9 +259,12 @@ def bit_errors(n_units: int, all_zero: bool, n_bits: int = 0) -> str:
     )
 
 
-def samples_saved(metric: str, references: list[str], point: str) -> str:
-    """Caption of ``samples_saved`` (``samples_saved_point<i>``)."""
-    refs = " and ".join(references)
+def samples_saved(
+    metric: str, references: list[str], point: str, *, reconstruction: str = "linear"
+) -> str:
+    """Caption of ``samples_saved`` (``samples_saved_point<i>``; ``reconstruction``: the one
+    whose errors the planners are compared on)."""
+    refs = " and ".join(label(r) for r in references)
     where = f" Sweep point: {point}." if point else ""
     return (
         f"Samples saved at equal error, one panel per reference ({refs}): for each strategy "
@@ -225,28 +273,95 @@ def samples_saved(metric: str, references: list[str], point: str) -> str:
         f"divided by the strategy's own sample count; above 1 the strategy needs fewer "
         f"samples than the reference for the same error. Errors pool the terrain seeds and "
         f"trials. Hollow markers: outside the reference's measured range (extrapolated, "
-        f"clipped to [1, N]); they are left out of the tables' geometric-mean summary.{where}"
+        f"clipped to [1, N]); they are left out of the tables' geometric-mean summary. Every "
+        f"error is of the {_recon_text(reconstruction)} reconstruction; a point is one "
+        f"density, without an interval (reconstruction_saved* gives intervals over terrain "
+        f"seeds).{where}"
     )
 
 
-def reconstruction_saved(metric: str, path: str, seeds: int, reconstructions: list[str]) -> str:
-    """Caption of ``reconstruction_saved_vs_<axis>``."""
+def reconstruction_saved(
+    metric: str, path: str | None, seeds: int, reconstructions: list[str]
+) -> str:
+    """Caption of ``reconstruction_saved_vs_<axis>`` (``path``: the axis' readable name) and
+    ``reconstruction_saved`` (``path`` None: one sweep point, the planners along x; else the
+    sweep points)."""
     n = f"{seeds} terrain seed{'s' * (seeds != 1)}"
-    interval = " [95 % Student t interval, in log space]" if seeds > 1 else ""
+    interval = (
+        "; error bars: its two-sided 95 % Student t interval over the seeds, in log space"
+        if seeds > 1
+        else "; one terrain seed gives no interval, so no error bar is drawn"
+    )
+    names = "; ".join(label(r) for r in reconstructions)
+    against = f", against {path}" if path else ""
+    layout = (
+        "One panel per layout (strategy)."
+        if path
+        else "The planners along x (each one's layout is shared by every reconstruction), one "
+        "marker per reconstruction."
+    )
     return (
-        f"Samples saved by each reconstruction ({', '.join(reconstructions)}) over "
-        f"Delaunay-linear on the same layout, against {path}: per terrain seed, the samples "
-        f"linear needs to reach the reconstruction's {_metric(metric)} (interpolated on "
-        f"linear's log-log error-vs-samples curve) over the reconstruction's own, as a "
-        f"geometric mean over the densities inside linear's measured range; then the "
-        f"geometric mean over the {n}{interval}. Above 1 (dotted) the reconstruction needs "
-        f"fewer samples than linear for the same error. One panel per layout (strategy); "
-        f"scores.md and reconstructions.csv hold the same numbers."
+        f"Samples saved by each reconstruction ({names}) over Delaunay-linear on the same "
+        f"layout{against}: per terrain seed, the samples linear needs to reach the "
+        f"reconstruction's {_metric(metric)} (interpolated on linear's log-log "
+        f"error-vs-samples curve) over the reconstruction's own, as a geometric mean over the "
+        f"densities inside linear's measured range; then the geometric mean over the {n} "
+        f"(marker){interval}. Above 1 (dotted) the reconstruction needs fewer samples than "
+        f"linear for the same error. {layout} scores.md and reconstructions.csv hold the same "
+        f"numbers."
     )
 
 
-def headroom(metric: str, seeds: int) -> str:
-    """Caption of ``headroom``."""
+def reconstruction_panels(
+    reconstructions: list[str],
+    planner: str,
+    k: int,
+    density_label: str,
+    point: str,
+    *,
+    metres: bool = True,
+    frames: list[str] | None = None,
+    light: str = "",
+) -> str:
+    """Caption of ``recon_panels_unit<i>`` (``frames``: the guide frames the image
+    reconstructions could read, as the unit recorded them; ``light``: the guide image's light,
+    as :func:`simlunar.plotting.style.point_title` writes it)."""
+    at = f" ({density_label})" if density_label else ""
+    scene = f" Scene: {point}." if point else ""
+    axes = (
+        "Axes in metres on the ground (a pixel is one terrain cell)."
+        if metres
+        else "Axes in image pixels (a perspective view)."
+    )
+    read = (
+        f" The image reconstructions read the guide frames {', '.join(frames)}." if frames else ""
+    )
+    if light:
+        read = f" Guide image: {light}.{read}"
+    names = "; ".join(_recon_text(r) for r in reconstructions)
+    return (
+        f"The reconstructions of one plan, side by side: {k} samples{at} placed by the "
+        f"study's {label(planner)} planner (bottom left, red dots on the guide image; the "
+        f"samples are the true depth at those pixels, without range noise), reconstructed "
+        f"by each configured reconstruction ({names}). Top: the true depth, then each "
+        f"reconstruction, all on the true depth's colour scale (m). Bottom: each "
+        f"reconstruction's error, reconstruction - truth (m), on one symmetric scale for all "
+        f"of them, clipped at the 99th percentile of |error| over every map; the title gives "
+        f"the RMS error over all cells. {axes}{read}{scene}"
+    )
+
+
+def _on(reconstruction: str | None) -> str:
+    """The sentence naming the reconstruction a figure compares planners on (empty for a
+    study of one reconstruction)."""
+    if not reconstruction:
+        return ""
+    return f" Every error is of the {_recon_text(reconstruction)} reconstruction."
+
+
+def headroom(metric: str, seeds: int, *, reconstruction: str | None = None) -> str:
+    """Caption of ``headroom`` (``reconstruction``: the one the planners are compared on,
+    named when the study has several)."""
     n = f"{seeds} terrain seed{'s' * (seeds != 1)}"
     return (
         f"Headroom captured at equal {_metric(metric)}, paired by terrain seed: for each "
@@ -256,12 +371,12 @@ def headroom(metric: str, seeds: int) -> str:
         f"layout's, below 0 worse than the uniform layout. Bars: the mean over the {n}; dots: "
         f"each seed. The oracle reads the true error and cannot be realised: it is a bound, not "
         f"a planner. One panel per sweep point and oracle; scores.md holds the same numbers "
-        f"(mean [95 % t interval over the seeds] and the per-seed range)."
+        f"(mean [95 % t interval over the seeds] and the per-seed range).{_on(reconstruction)}"
     )
 
 
-def saved_forest(metric: str, seeds: int) -> str:
-    """Caption of ``samples_saved_forest``."""
+def saved_forest(metric: str, seeds: int, *, reconstruction: str | None = None) -> str:
+    """Caption of ``samples_saved_forest`` (``reconstruction`` as :func:`headroom`)."""
     if seeds > 1:
         how = (
             f"Marker: the geometric mean over the {seeds} terrain seeds of each seed's samples "
@@ -279,15 +394,22 @@ def saved_forest(metric: str, seeds: int) -> str:
         f"(dotted line at 1; right of it a planner needs fewer samples for the same error; log "
         f"axis). {how} Planners keep the style of every other figure (colour and marker per "
         f"planner); scores.md holds the same numbers in its headroom or paired samples-saved "
-        f"table."
+        f"table.{_on(reconstruction)}"
     )
 
 
 def lidar_error(
-    metric: str, study: dict, x: str, n_panels: int, *, seeds: int = 1, by: str | None = None
+    metric: str,
+    study: dict,
+    x: str,
+    n_panels: int,
+    *,
+    seeds: int = 1,
+    by: str | None = None,
+    reconstructions: list[str] | None = None,
 ) -> str:
     """Caption of ``lidar_error_vs_<time|samples>_<metric>`` (``x``: ``seconds`` or
-    ``samples``)."""
+    ``samples``; ``reconstructions``: the ones drawn, a line style each, when several)."""
     sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
     trials = study.get("trials", 3)
     axis = (
@@ -307,11 +429,18 @@ def lidar_error(
     if by:
         per = f" Each point of a curve is one value of {by} (and density)."
     runs = f"{trials} trial{'s' if trials != 1 else ''}"
+    recon = (
+        f" Each planner has a curve per reconstruction of the same scans "
+        f"({'; '.join(_recon_text(r) for r in reconstructions)}): colour and marker name the "
+        f"planner, the line style the reconstruction."
+        if reconstructions
+        else ""
+    )
     return (
         f"Image-directed LIDAR ({sensor}): error of the reconstructed guide-view depth "
         f"({_metric(metric)}) against {axis}, per planner, log-log; points: one per density, "
         f"mean over {runs}{f' on each of {seeds} terrain seeds' if seeds > 1 else ''}; error "
-        f"bars: {bars}.{per}"
+        f"bars: {bars}.{per}{recon}"
     )
 
 

@@ -15,6 +15,7 @@ from simlunar.results.folder import prune_figures, read_folder_config
 from simlunar.results.store import UnitCache, atomic_write_bytes, file_sha256, read_csv
 
 __all__ = [
+    "NOT_DRAWN",
     "STAMP",
     "figure_inputs",
     "load_results",
@@ -130,6 +131,8 @@ _DRAWING_MODULES = (
     "simlunar.plotting.density",
     "simlunar.plotting.images",
     "simlunar.plotting.headroom",
+    "simlunar.plotting.forest",
+    "simlunar.plotting.reconstructions",
     "simlunar.plotting.scanner",
     "simlunar.plotting.lidar",
     "simlunar.plotting.style",
@@ -151,7 +154,7 @@ def figure_inputs(res: dict, formats) -> str:
     import importlib.metadata
     import importlib.util
 
-    cfg = {k: v for k, v in res["config"].items() if k != "description"}
+    cfg = {k: v for k, v in res["config"].items() if k not in ("description", "catalogue")}
     code = {}
     for mod in _DRAWING_MODULES:
         spec = importlib.util.find_spec(mod)
@@ -228,16 +231,26 @@ def _draw(res: dict, formats: list[str]) -> list[Path]:
     return written
 
 
+#: the file of ``figures/`` that names the figures not drawn and why
+NOT_DRAWN = "not_drawn.md"
+
+
 def write_captions(fig_dir: Path, captions: dict[str, str], written: list[Path]) -> None:
-    """Write ``figures/captions.md``: one section per figure (stem), its caption beside it."""
-    if not captions:
-        return
-    lines = ["# Figure captions", ""]
-    for stem, text in captions.items():
-        lines += [f"## {stem}", "", text, ""]
-    path = fig_dir / "captions.md"
-    atomic_write_bytes(path, "\n".join(lines).encode())
-    written.append(path)
+    """Write ``figures/captions.md``: one section per figure (stem), its caption beside it;
+    and, when ``captions`` names figures not drawn (``captions.not_drawn``, see
+    :class:`simlunar.results.captions.Captions`), ``figures/not_drawn.md`` in the same form,
+    each figure's reason beside it."""
+    sections = (("captions.md", "Figure captions", captions),
+                (NOT_DRAWN, "Figures not drawn", getattr(captions, "not_drawn", {})))  # fmt: skip
+    for name, title, texts in sections:
+        if not texts:
+            continue
+        lines = [f"# {title}", ""]
+        for stem, text in texts.items():
+            lines += [f"## {stem}", "", text, ""]
+        path = fig_dir / name
+        atomic_write_bytes(path, "\n".join(lines).encode())
+        written.append(path)
 
 
 def write_figures_pruned(out_dir: str | Path, *, formats=None, force: bool = False) -> list[Path]:

@@ -84,11 +84,11 @@ def _first_difference(old: Any, new: Any, path: str = "") -> str:
 
 
 def _identity(config: dict) -> dict:
-    """The part of a plain config that a result folder belongs to: all but the description,
-    the figure file formats (they change no unit, table or figure content) and study keys
+    """The part of a plain config that a result folder belongs to: all but the description
+    and the catalogue block (what the experiment shows, its run time), the figure file formats (they change no unit, table or figure content) and study keys
     added later at the value that changes nothing (a folder written before them is the same
     experiment)."""
-    out = {k: v for k, v in config.items() if k != "description"}
+    out = {k: v for k, v in config.items() if k not in ("description", "catalogue")}
     if isinstance(out.get("study"), dict):  # keys added later, at their no-change default
         out["study"] = without_new_defaults(out["study"])
     if isinstance(out.get("render"), dict):

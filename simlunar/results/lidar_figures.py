@@ -8,7 +8,11 @@ from simlunar.plotting.layout import panel_grid
 from simlunar.plotting.lidar import MAX_SCAN_PLANNERS, error_vs_time, scan_figure
 from simlunar.plotting.style import point_title
 from simlunar.results import captions as captions_text
-from simlunar.results.aggregate import density_panels, first_reconstruction_rows
+from simlunar.results.aggregate import (
+    density_panels,
+    first_reconstruction_rows,
+    reconstruction_names,
+)
 from simlunar.results.store import UnitCache
 
 __all__ = ["lidar_figures"]
@@ -21,10 +25,13 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
     """``lidar_error_vs_time_<metric>`` and ``lidar_error_vs_samples_<metric>``: one panel per
     sweep point (its terrain seeds pooled into the interval), or, when the one swept key is a
     sensor option that changes each acquisition's cost (a flash's revisits), one panel whose
-    curves run over its values. The first configured reconstruction's rows (linear's by
-    default)."""
-    res = {**res, "rows": first_reconstruction_rows(res)}
+    curves run over its values. With several reconstructions, a curve per planner and
+    reconstruction (line style by reconstruction)."""
     study = res["config"].get("study", {})
+    recons = reconstruction_names(study)
+    by_recon = len(recons) > 1 and any(r.get("reconstruction") for r in res["rows"])
+    if not by_recon:
+        res = {**res, "rows": first_reconstruction_rows(res)}
     sweep = list(res["config"].get("sweep") or {})
     by = sweep[0] if len(sweep) == 1 and sweep[0].startswith("study.options.") else None
     groups = [("", res["units"])] if by else density_panels(res["units"])[:MAX_PANELS]
@@ -44,11 +51,13 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
                     by=by,
                     title=title if len(groups) > 1 else "",
                     ax=ax,
+                    reconstructions=recons if by_recon else None,
                 )
             emit(fig, f"lidar_error_vs_{name}_{m}")
             captions[f"lidar_error_vs_{name}_{m}"] = captions_text.lidar_error(
-                m, study, x, len(groups), seeds=seeds, by=by
-            )
+                m, study, x, len(groups), seeds=seeds, by=by,
+                reconstructions=recons if by_recon else None,
+            )  # fmt: skip
     if "dir" in res:
         _scan_figures(res, emit, captions)
 

@@ -47,13 +47,14 @@ code{background:#f3f3f3;padding:0 .2rem} .muted{color:#666}
 """
 
 
-def read_captions(fig_dir: str | Path) -> dict[str, str]:
-    """``{figure stem: caption}`` from ``figures/captions.md`` (empty when there is none).
+def read_captions(fig_dir: str | Path, name: str = "captions.md") -> dict[str, str]:
+    """``{figure stem: caption}`` from ``figures/captions.md`` (empty when there is none);
+    with ``name="not_drawn.md"``, ``{figure stem: why it was not drawn}``.
 
-    The file is the one :func:`simlunar.results.figures.write_captions` writes: a ``## stem``
-    heading per figure followed by its caption paragraph.
+    The files are the ones :func:`simlunar.results.figures.write_captions` writes: a
+    ``## stem`` heading per figure followed by its paragraph.
     """
-    path = Path(fig_dir) / "captions.md"
+    path = Path(fig_dir) / name
     if not path.is_file():
         return {}
     out: dict[str, str] = {}
@@ -102,7 +103,9 @@ def run_overrides(folder: str | Path, shipped: str | Path | None = None) -> dict
         base = to_plain(load_experiment(shipped))
     except (SimlunarError, ValueError, OSError):
         return {}
-    return config_differences(base, cfg)
+    # the catalogue block (what it shows, its run time) is no part of what ran
+    base.pop("catalogue", None)
+    return config_differences(base, {k: v for k, v in cfg.items() if k != "catalogue"})
 
 
 def _inline(text: str) -> str:
@@ -204,8 +207,19 @@ def _figures(fig_dir: Path) -> str:
     pngs = sorted(fig_dir.glob("*.png")) if fig_dir.is_dir() else []
     order = {s: i for i, s in enumerate(captions)}
     pngs.sort(key=lambda p: (order.get(p.stem, len(order)), p.name))
+    skipped = read_captions(fig_dir, "not_drawn.md")
+    why = ""
+    if skipped:
+        items = "".join(
+            f"<li><code>{html.escape(stem)}</code>: {_inline(text)}</li>"
+            for stem, text in skipped.items()
+        )
+        why = f"<h3>Not drawn</h3><ul class='not-drawn'>{items}</ul>"
     if not pngs:
-        return "<p class='muted'>No figures (run without --no-figures, or `simlunar figures`).</p>"
+        return (
+            "<p class='muted'>No figures (run without --no-figures, or `simlunar figures`).</p>"
+            + why
+        )
     out = []
     for p in pngs:
         data = base64.b64encode(p.read_bytes()).decode("ascii")
@@ -215,7 +229,7 @@ def _figures(fig_dir: Path) -> str:
             f'src="data:image/png;base64,{data}"><figcaption><strong>{html.escape(p.stem)}'
             f"</strong>. {_inline(cap)}</figcaption></figure>"
         )
-    return "\n".join(out)
+    return "\n".join([*out, why] if why else out)
 
 
 def build_report(folder: str | Path) -> str:

@@ -7,9 +7,15 @@ from __future__ import annotations
 import numpy as np
 
 from simlunar.plotting import figures as F
-from simlunar.plotting.style import axis_name, reference_mode
+from simlunar.plotting.style import axis_name, label, reference_mode
 from simlunar.results import captions as captions_text
-from simlunar.results.aggregate import SEED_AXES, first_reconstruction_rows, sweep_value
+from simlunar.results.aggregate import (
+    SEED_AXES,
+    first_reconstruction_rows,
+    reconstruction_names,
+    row_reconstruction,
+    sweep_value,
+)
 
 __all__ = ["scanner_figures"]
 
@@ -50,10 +56,41 @@ def _ambient_axis(rows: list[dict], units: list[dict], path: str):
 
 
 def scanner_figures(res: dict, emit, captions: dict) -> None:
-    """Draw the scanner figures through ``emit(fig, stem)``; captions into ``captions`` (the
-    first configured reconstruction's rows: linear's by default)."""
+    """Draw the scanner figures through ``emit(fig, stem)``; captions into ``captions``: the
+    errors of the first configured reconstruction's rows (linear's by default) and, with
+    several reconstructions, the same figure of each other one (``<stem>_<reconstruction>``,
+    its title naming it)."""
     rows = first_reconstruction_rows(res)
+    names = reconstruction_names(res["config"].get("study") or {})
+    all_rows = res["rows"]
     res = {**res, "rows": rows}
+    _error_figures(res, rows, emit, captions, "", names[0] if len(names) > 1 else None)
+    for name in names[1:]:
+        mine = [r for r in all_rows if row_reconstruction(r) == name]
+        if mine:
+            _error_figures(res, mine, emit, captions, f"_{name}", name)
+    n_units = len({str(r.get("unit", "0")) for r in rows})
+    ber = sorted(
+        {r["metric"] for r in rows if r["metric"].startswith("ber_")},
+        key=lambda n: (n[4], int(n[5:])),
+    )
+    if ber:
+        vals = {n: np.mean([float(r["value"]) for r in rows if r["metric"] == n]) for n in ber}
+        # a NaN rate (no pixel near that bit's stripe edges) is no error either
+        all_zero = not any(np.isfinite(v) and v > 0 for v in vals.values())
+        text = captions_text.bit_errors(n_units, all_zero, len(ber))
+        if all_zero and hasattr(captions, "skip"):  # the report lists it among "Not drawn"
+            captions.skip("gray_code_bit_errors", text.removeprefix("Not drawn: "))
+        else:
+            captions["gray_code_bit_errors"] = text
+        if not all_zero:  # 14 zero rates are a sentence (the caption), not a figure
+            fig, _ = F.bit_error_rates(vals)
+            emit(fig, "gray_code_bit_errors")
+
+
+def _error_figures(res: dict, rows: list, emit, captions: dict, suffix: str, recon) -> None:
+    """``scanner_vs_<axis>`` or ``scanner_errors`` (``+ suffix``) of ``rows``; ``recon``
+    names their reconstruction in the title and caption (None: the study has one)."""
     cfg = res["config"]
     metrics = list(cfg["study"].get("metrics") or [])
     sweep = cfg.get("sweep") or {}
@@ -82,10 +119,12 @@ def scanner_figures(res: dict, emit, captions: dict) -> None:
             )
         F.shared_legend(fig, axes, prune_labels=False)
         axis = path.rsplit(".", 1)[-1]
-        emit(fig, f"scanner_vs_{axis}")
-        captions[f"scanner_vs_{axis}"] = captions_text.scanner_vs_sweep(
+        stem = f"scanner_vs_{axis}{suffix}"
+        _title(fig, recon)
+        emit(fig, stem)
+        captions[stem] = captions_text.scanner_vs_sweep(
             metrics, path, int(cfg["study"].get("trials", 1))
-        )
+        ) + _named(recon)
     else:
         summary = _scanner_pooled(rows, metrics)
         relative = reference_mode(summary) is not None and len(summary) > 1
@@ -97,19 +136,17 @@ def scanner_figures(res: dict, emit, captions: dict) -> None:
         if relative:
             for ax, m in zip(axes[len(metrics) :], metrics):
                 F.scanner_relative_bars(summary, metric=m, ax=ax)
-        emit(fig, "scanner_errors")
-        captions["scanner_errors"] = captions_text.scanner_errors(
+        _title(fig, recon)
+        emit(fig, f"scanner_errors{suffix}")
+        captions[f"scanner_errors{suffix}"] = captions_text.scanner_errors(
             metrics, n_units, n_min=min(e["n"] for e in summary), relative=relative
-        )
-    ber = sorted(
-        {r["metric"] for r in rows if r["metric"].startswith("ber_")},
-        key=lambda n: (n[4], int(n[5:])),
-    )
-    if ber:
-        vals = {n: np.mean([float(r["value"]) for r in rows if r["metric"] == n]) for n in ber}
-        # a NaN rate (no pixel near that bit's stripe edges) is no error either
-        all_zero = not any(np.isfinite(v) and v > 0 for v in vals.values())
-        captions["gray_code_bit_errors"] = captions_text.bit_errors(n_units, all_zero, len(ber))
-        if not all_zero:  # 14 zero rates are a sentence (the caption), not a figure
-            fig, ax = F.bit_error_rates(vals)
-            emit(fig, "gray_code_bit_errors")
+        ) + _named(recon)
+
+
+def _title(fig, recon) -> None:
+    if recon:
+        fig.suptitle(f"reconstruction: {label(recon)}", fontsize=8)
+
+
+def _named(recon) -> str:
+    return f" Depths of the {label(recon)} reconstruction of every scan." if recon else ""

@@ -53,6 +53,7 @@ def test_notebooks_exist_and_are_stripped():
         "fig_image_panels",
         "fig4_sparse_mesh",
         "ablation_scores",
+        "fused_camera",
     }
     for p in NOTEBOOKS:
         nb = nbformat.read(p, as_version=4)
@@ -81,5 +82,13 @@ def test_notebook_runs(path, results, monkeypatch):
         "fig_image_panels",
         "fig4_sparse_mesh",
         "ablation_scores",
+        "fused_camera",
     ):
         assert any("image/png" in o.get("data", {}) for o in outputs), path.name
+    if path.stem == "fused_camera":
+        # the quickstart reconstructs every plan twice: the notebook draws both, compares
+        # shading with linear on each layout, and shows one plan reconstructed both ways
+        assert "reconstructions: linear, shading" in text
+        assert "Shading on Wavelet:" in text and "Shading on Random:" in text
+        assert sum("image/png" in o.get("data", {}) for o in outputs) == 3
+        assert "no reconstruction panels" not in text

@@ -46,10 +46,12 @@ def test_a_warned_run_goes_on_and_figures_says_what_it_redrew(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "warning: render.light.elevation_deg" in r.stderr
     pngs = sorted(p.name for p in (tmp_path / "o" / "figures").glob("*.png"))
-    assert pngs
+    # captions.md, and not_drawn.md (no wavelet planner: no panels_unit<i>)
+    notes = sorted(p.name for p in (tmp_path / "o" / "figures").glob("*.md"))
+    assert pngs and notes == ["captions.md", "not_drawn.md"]
     r = _cli("figures", "o", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
-    assert f"up to date, not redrawn: {len(pngs) + 1} file(s) (use --force" in r.stdout
+    assert f"up to date, not redrawn: {len(pngs) + 2} file(s) (use --force" in r.stdout
     assert "redrew" not in r.stdout
     (tmp_path / "o" / "figures" / pngs[0]).unlink()
     r = _cli("figures", "o", cwd=tmp_path)
@@ -57,4 +59,4 @@ def test_a_warned_run_goes_on_and_figures_says_what_it_redrew(tmp_path):
     lines = r.stdout.splitlines()
     assert lines[0].startswith("redrew ") and f"  {pngs[0]}" in lines
     r = _cli("figures", "o", "--force", cwd=tmp_path)
-    assert f"redrew {len(pngs) + 1} file(s)" in r.stdout
+    assert f"redrew {len(pngs) + 2} file(s)" in r.stdout

@@ -239,3 +239,64 @@ def test_sparse_mesh_render_constant_and_roughness_modulated():
     np.testing.assert_array_equal(plain["sparse_mesh_render"], const)
     lam = sparse_mesh_render(scene(LambertBSDF()), image, rng=3, sigma_range=(lo, hi), **kw)
     assert set(lam) == {"sparse_mesh_render"}
+
+
+# --- reconstruction panels ----------------------------------------------------------------------
+
+
+def test_panel_planner_is_a_planner_the_study_ran():
+    opts = {"wavelet_lloyd": {"strategy": "wavelet", "placement": "lloyd"},
+            "seq": {"strategy": "sequential"}}  # fmt: skip
+    assert fi.panel_planner(["random", "wavelet", "grid"], {}) == "wavelet"
+    # no wavelet: the first label that plans without the truth and without measuring
+    assert fi.panel_planner(["oracle_greedy", "seq", "wavelet_lloyd"], opts) == "wavelet_lloyd"
+    assert fi.panel_planner(["lloyd_uniform"], {}) == "lloyd_uniform"
+    assert fi.panel_planner(["oracle_greedy", "sequential"], {}) is None
+
+
+def test_reconstruction_panels_reconstruct_one_plan_with_every_reconstruction():
+    from simlunar.reconstruction import Guide, reconstruct
+    from simlunar.study.sampling import SamplingStudyOptions
+
+    img = _image()
+    r, c = np.mgrid[0 : SHAPE[0], 0 : SHAPE[1]]
+    depth = 50.0 - 0.1 * r - 0.05 * c + 0.02 * np.sin(c)  # a smooth, non-planar surface
+    options = SamplingStudyOptions(
+        strategies=("random", "wavelet_lloyd", "sequential_wavelet"),
+        strategy_options={"wavelet_lloyd": {"strategy": "wavelet", "placement": "lloyd"},
+                          "sequential_wavelet": {"strategy": "sequential"}},
+        densities=(0.25,), trials=1, metrics=("mse",),
+        reconstructions=("linear", "smoothed"),
+    )  # fmt: skip
+    arrays, meta = fi.reconstruction_panel_arrays(
+        options, img, depth, 1 / 8, guide=Guide(img), rng=np.random.default_rng(3)
+    )
+    k = round(SHAPE[0] * SHAPE[1] / 8)
+    # the study had no wavelet: the first planner that plans from the image alone drew it
+    assert meta == {"recon_panels": {"planner": "random", "density": 0.125, "k": k,
+                                     "reconstructions": ["linear", "smoothed"]}}  # fmt: skip
+    rows, cols = arrays["recon_panel_rows"], arrays["recon_panel_cols"]
+    assert len(rows) == k == len(set(zip(rows.tolist(), cols.tolist())))
+    # linear is Delaunay-linear of the true depth at the planned pixels: exact there
+    lin = arrays["recon_panel_0"]
+    np.testing.assert_allclose(lin[rows, cols], depth[rows, cols], rtol=1e-6)
+    expect = reconstruct(np.c_[rows, cols].astype(float), depth[rows, cols], SHAPE)
+    np.testing.assert_allclose(lin, expect, rtol=1e-6)
+    # the second reconstruction is another grid of the same samples, not a copy of linear
+    assert arrays["recon_panel_1"].shape == SHAPE
+    assert not np.allclose(arrays["recon_panel_1"], lin)
+    # the same seed draws the same plan
+    again, _ = fi.reconstruction_panel_arrays(
+        options, img, depth, 1 / 8, guide=Guide(img), rng=np.random.default_rng(3)
+    )
+    np.testing.assert_array_equal(again["recon_panel_rows"], rows)
+
+
+def test_reconstruction_panels_of_a_study_of_oracles_alone_are_empty():
+    from simlunar.study.sampling import SamplingStudyOptions
+
+    options = SamplingStudyOptions(strategies=("oracle_greedy",), densities=(0.25,), trials=1,
+                                   metrics=("mse",))  # fmt: skip
+    img = _image()
+    assert fi.reconstruction_panel_arrays(options, img, img + 10.0, 1 / 8, guide=None,
+                                          rng=0) == ({}, {})  # fmt: skip

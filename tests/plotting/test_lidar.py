@@ -86,7 +86,7 @@ def test_scan_figure_draws_the_tour_and_the_measured_depths(tmp_path):
     np.testing.assert_array_equal(tour.get_segments()[0], beams["wavelet"][:2, [1, 0]])
     # two colour bars: visiting order and depth
     assert {ax.get_ylabel() for ax in fig.axes[6:]} == {
-        "visiting order (share of the scan)",
+        "visiting order\n(share of the scan)",
         "z-depth (m)",
     }
     fig.savefig(tmp_path / "scan.png")
@@ -105,3 +105,52 @@ def test_an_oracle_curve_is_dotted_as_a_bound():
     lines = {c.get_label(): c.lines[0] for c in ax.containers}
     assert lines["Oracle greedy (true error)"].get_linestyle() == ":"
     assert lines["Grid"].get_linestyle() == "-"
+
+
+def test_scan_figure_titles_do_not_overlap():
+    """Long planner labels (an oracle's) in narrow panels: the titles are wrapped to their
+    panel, so no two titles of a row share a pixel (they ran into each other)."""
+    from simlunar.plotting.lidar import MAX_SCAN_PLANNERS, scan_figure
+
+    rng = np.random.default_rng(1)
+    image = rng.uniform(size=(32, 48))
+    depth = 20.0 + rng.uniform(size=(32, 48))
+    names = ["oracle_greedy", "oracle_hessian", "sequential_wavelet", "wavelet_lloyd", "grid"]
+    beams = {n: _beams(40, rng) for n in names[:MAX_SCAN_PLANNERS]}
+    fig = scan_figure(image, depth, beams)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)  # a Figure made without pyplot has no renderer of its own
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    boxes = [ax.title.get_window_extent(renderer) for ax in fig.axes if ax.get_title()]
+    assert len(boxes) >= 2 * (1 + len(beams)) - 1
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1 :]:
+            assert not a.overlaps(b), (a, b)
+
+
+def test_error_vs_time_draws_every_reconstruction_of_a_planner():
+    """Rows of two reconstructions (linear's without the column, as older rows are written):
+    a curve per planner and reconstruction, colour by planner, line style by reconstruction,
+    a legend entry for each planner and each reconstruction."""
+    from matplotlib.colors import to_hex
+
+    from simlunar.plotting.lidar import error_vs_time
+
+    rows = _rows() + [{**r, "reconstruction": "shading", "value": str(0.5 * float(r["value"]))}
+                      for r in _rows()]  # fmt: skip
+    _fig, ax = error_vs_time(rows, metric="mse", planners=["grid", "wavelet"],
+                            reconstructions=["linear", "shading"])  # fmt: skip
+    curves = {c.get_label(): c.lines[0] for c in ax.containers}
+    assert list(curves) == ["Grid, Linear", "Wavelet, Linear", "Grid, Shading", "Wavelet, Shading"]
+    np.testing.assert_allclose(
+        curves["Grid, Shading"].get_ydata(), 0.5 * curves["Grid, Linear"].get_ydata()
+    )
+    c = {k: to_hex(v.get_color()) for k, v in curves.items()}
+    assert c["Grid, Linear"] == c["Grid, Shading"] != c["Wavelet, Linear"]
+    ls = {k: v.get_linestyle() for k, v in curves.items()}
+    assert ls["Grid, Linear"] == ls["Wavelet, Linear"] != ls["Grid, Shading"]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert texts == ["planner: Grid", "planner: Wavelet", "reconstruction: Linear",
+                     "reconstruction: Shading"]  # fmt: skip

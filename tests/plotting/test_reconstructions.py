@@ -73,3 +73,25 @@ def test_category_labels_name_only_what_differs():
               {"kind": "sun", "elevation_deg": 60.0, "azimuth_deg": 135.0}, {"kind": "camera"}]  # fmt: skip
     assert category_labels(lights) == ["Sun 30°", "Sun 60°", "Camera-centred light"]
     assert category_labels([5, 30]) == [5, 30]
+
+
+def test_reconstruction_panels_titles_do_not_overlap_with_many_reconstructions():
+    """Four reconstructions and a long planner name (five narrow columns): no two titles
+    share a pixel (the samples panel's one-line title ran into the error panel beside it)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from simlunar.plotting.reconstructions import reconstruction_panels
+
+    rng = np.random.default_rng(0)
+    truth = 50.0 + rng.random((50, 80))
+    recons = {n: truth + 0.01 * rng.random((50, 80))
+              for n in ("linear", "smoothed", "shading_sun", "shading")}  # fmt: skip
+    rows, cols = rng.integers(0, 50, 60), rng.integers(0, 80, 60)
+    fig, axes = reconstruction_panels(rng.random((50, 80)), truth, recons, (rows, cols),
+                                      planner="lloyd_uniform", density_label="k/N = 1/64",
+                                      spacing_m=1.0)  # fmt: skip
+    assert axes.shape == (2, 5)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    boxes = [ax.title.get_window_extent(canvas.get_renderer()) for ax in axes.ravel()]
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])

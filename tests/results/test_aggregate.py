@@ -112,7 +112,10 @@ def test_the_sweep_figure_gets_one_point_per_sweep_value():
     line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "Smooth")
     np.testing.assert_allclose(line.get_xdata(), [15, 60], atol=1)  # dodged a little
     np.testing.assert_allclose(line.get_ydata(), [math.sqrt(8), 1.0])
-    assert "2 terrain seeds [95 % Student t interval" in captions[stem]
+    assert (
+        "2 terrain seeds (marker); error bars: its two-sided 95 % Student t interval"
+        in (captions[stem])
+    )
     plt.close(fig)
 
 

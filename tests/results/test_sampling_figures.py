@@ -12,6 +12,7 @@ import pytest
 
 from simlunar.errors import ResultFolderError
 from simlunar.results import sampling_figures as sf
+from simlunar.results.captions import Captions
 
 DENSITIES = [0.5, 0.25, 0.125]
 
@@ -59,7 +60,7 @@ def _folder(tmp_path, sweep_points=(30,), seeds=2):
 
 
 def _draw(res):
-    drawn, captions = [], {}
+    drawn, captions = [], Captions()
     sf.sampling_figures(res, lambda fig, stem: drawn.append(stem), captions)
     return drawn, captions
 

@@ -5,9 +5,11 @@ rates drawn only when some bit was wrong, the sun-to-projector axis when it is p
 from __future__ import annotations
 
 import matplotlib.pyplot as plt
+import numpy as np
 import pytest
 
 from simlunar.results import scanner_figures as sc
+from simlunar.results.captions import Captions
 
 
 @pytest.fixture(autouse=True)
@@ -32,7 +34,7 @@ def test_pooled_mean_sd_and_count_by_hand():
 
 
 def _draw(res):
-    drawn, captions = [], {}
+    drawn, captions = [], Captions()
     sc.scanner_figures(res, lambda fig, stem: drawn.append(stem), captions)
     return drawn, captions
 
@@ -50,7 +52,9 @@ def test_errors_and_their_ratio_to_gray_code_and_zero_bit_errors_as_a_sentence()
     rows += [_row(0, "gray_code", "", f"ber_c{i}", 0.0) for i in range(3)]
     drawn, captions = _draw(_res(rows))
     assert drawn == ["scanner_errors"]
-    assert "gray_code_bit_errors" in captions  # the caption says no bit was wrong
+    # not drawn, and why: no bit was wrong (figures/not_drawn.md, the report)
+    assert "gray_code_bit_errors" not in captions
+    assert captions.not_drawn["gray_code_bit_errors"].startswith("all 3 per-bit gray-code")
     rows += [_row(0, "gray_code", "", "ber_r0", 0.01)]
     drawn, _ = _draw(_res(rows))
     assert drawn == ["scanner_errors", "gray_code_bit_errors"]
@@ -81,3 +85,28 @@ def test_no_second_axis_unless_proportional():
     assert sc._ambient_axis(rows[:1], units, "a") is None  # a unit without the ratio
     named = [{"index": i, "sweep": {"a": "sun"}} for i in range(2)]
     assert sc._ambient_axis(rows, named, "a") is None  # not a number
+
+
+def test_every_reconstruction_gets_its_error_figure():
+    rows = [
+        _row(0, "gray_code", "", "mse", 2.0),
+        _row(0, "ambiguity_enhancement", "wavelet", "mse", 1.0),
+    ]
+    rows = [{**r, "reconstruction": "linear"} for r in rows] + [
+        {**r, "reconstruction": "smoothed", "value": str(float(r["value"]) / 2)} for r in rows
+    ]
+    res = _res(rows)
+    res["config"]["study"]["reconstructions"] = ["linear", "smoothed"]
+    figs, captions = {}, Captions()
+    sc.scanner_figures(res, lambda fig, stem: figs.__setitem__(stem, fig), captions)
+    assert list(figs) == ["scanner_errors", "scanner_errors_smoothed"]
+    assert figs["scanner_errors_smoothed"]._suptitle.get_text() == "reconstruction: Smoothed"
+    assert "Smoothed reconstruction" in captions["scanner_errors_smoothed"]
+    # each figure draws its own reconstruction's rows: the bars of smoothed are half linear's
+    heights = {
+        stem: sorted(p.get_height() for p in fig.axes[0].patches if p.get_height() > 0)
+        for stem, fig in figs.items()
+    }
+    np.testing.assert_allclose(
+        heights["scanner_errors_smoothed"], np.asarray(heights["scanner_errors"]) / 2
+    )
