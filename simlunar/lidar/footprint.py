@@ -38,6 +38,7 @@ class FootprintOptions(Options):
         doc="full divergence angle, in [0, pi/2): twice the 1/e^2 intensity half-angle for "
         "gaussian, the full cone angle for uniform; 0 = a single ray",
         unit="rad",
+        key_unit="mrad",
         ge=0,
         lt=np.pi / 2,
     )
@@ -46,8 +47,10 @@ class FootprintOptions(Options):
     )
     samples: int = option(
         16,
-        doc="rays traced per beam (the footprint's Monte Carlo samples; the render's spp)",
+        doc="rays traced per beam (the footprint's Monte Carlo samples; the render's spp; at "
+        "most 4096)",
         ge=1,
+        le=4096,
     )
 
     @property

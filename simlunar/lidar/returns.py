@@ -47,34 +47,34 @@ class TransientOptions(Options):
 
     spp: int = option(
         64,
-        doc="samples per pixel of a flash frame (steered beams use FootprintOptions.samples)",
+        doc="samples per pixel of a flash frame (steered beams use FootprintOptions.samples; "
+        "at most 65536)",
         ge=1,
+        le=65_536,
     )
     max_depth: int = option(
         2,
-        doc="longest path, -1 (unbounded) or >= 1 (2 = direct only; see "
+        doc="longest path (2 = direct only, the least that sees the laser; see "
         "simlunar.render.transient on steered beams)",
-        ge=-1,
+        ge=2,
+        le=16,
     )
     seed: int = option(0, doc="sampler seed", ge=0)
     laser_intensity: float = option(
         1.0,
         doc="radiant intensity of the point laser; the histograms scale with it",
         unit="W/sr",
+        key_unit="W/sr",
         gt=0,
     )
     oversample: int = option(
         2,
         doc="rendered (fine) time bins per output bin. With the linear splat of the film, 2 "
         "keeps a plane's noise-free range within 0.01 mm at 0.65 pulse sigma per bin and 0.2 mm "
-        "at 0.44 (tests/lidar/test_ranging.py); memory grows with it",
+        "at 0.44 (tests/lidar/test_ranging.py); memory grows with it (at most 16)",
         ge=1,
+        le=16,
     )
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.max_depth == 0:
-            raise ValueError("max_depth must be -1 or >= 1, got 0")
 
 
 @dataclass(frozen=True)
