@@ -98,6 +98,11 @@ DETECTOR = Block(
             optional=_EXPERT,
             null={"dead_time_s": math.inf},
             nested={"apd": APD},
+            # an expert scale's sanity limits (the photon counts are Poisson draws)
+            limits={
+                "signal_photons": {"le": MAX_PHOTONS},
+                "background_photons_per_s": {"le": MAX_PHOTONS * 1e6},
+            },
         ),
     ),
 )

@@ -116,8 +116,10 @@ class Part:
     fields (or all: True) default to null = the library's default, an override; ``null``
     maps a field to what a null means (``math.inf``; ``"hardware"``: the instrument's value,
     the key's default null); ``nested`` maps a field holding an options object (or None) to
-    the block of its own keys; ``check``: build the options at load, so the class's rules
-    across fields name the block (False where a rule reads fields of another block).
+    the block of its own keys; ``limits`` adds bounds (in SI) to a key whose YAML meaning is
+    narrower than the field's (an expert override); ``check``: build the options at load, so
+    the class's rules across fields name the block (False where a rule reads fields of another
+    block).
     """
 
     name: str
@@ -128,6 +130,7 @@ class Part:
     optional: bool | tuple[str, ...] = False
     null: Mapping[str, Any] = field(default_factory=dict)
     nested: Mapping[str, Block] = field(default_factory=dict)
+    limits: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
     check: bool = True
 
     def infos(self, hints: dict) -> dict[str, dict]:
@@ -142,7 +145,7 @@ class Part:
                 row["default"] is dataclasses.MISSING or _holds_options(hints[name])
             ):
                 continue  # a nested options object: a block of its own, or the caller's
-            out[name] = row
+            out[name] = {**row, **self.limits.get(name, {})}
         return out
 
 

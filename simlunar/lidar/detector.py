@@ -29,9 +29,10 @@ from simlunar.lidar.spad import spad_counts
 from simlunar.lidar.waveform import TimeBins
 from simlunar.registry import Options, option, shared_option
 
-#: most photons per pulse and unit radiance (and per second of dark counts) a detector may be
-#: given: the photon counts are Poisson draws, whose sampler (NumPy) refuses a mean above
-#: ~1e18, and a pulse of 1e12 photons saturates any real detector many times over
+#: most dark counts per second a detector may be given, and (config) most photons per pulse and
+#: unit radiance of an expert photon scale: the photon counts are Poisson draws, whose sampler
+#: (NumPy) refuses a mean above ~1e18. Not a bound of the photon scales an instrument derives
+#: (per unit of a rendered radiance, which is small: a LOLA-class beam's is ~1e13)
 MAX_PHOTONS = 1e12
 
 #: the detector options that :class:`DetectorOptions` and
@@ -58,7 +59,6 @@ class DetectorOptions(Options):
         "(lumps pulse energy, receiver aperture, optics and quantum efficiency)",
         unit="photon",
         ge=0,
-        le=MAX_PHOTONS,
     )
     background_photons_per_s: float = option(
         1e9,
@@ -66,7 +66,6 @@ class DetectorOptions(Options):
         "(lumps aperture, field of view, filter bandwidth and efficiency)",
         unit="photon/s",
         ge=0,
-        le=MAX_PHOTONS * 1e6,
     )
     dark_count_rate_hz: float = shared_option(DETECTOR_OPTIONS, "dark_count_rate_hz")
     pulses: int = option(1, doc="shots accumulated into one histogram (at most 1e6)", ge=1,

@@ -199,3 +199,18 @@ def test_the_instrument_names_are_the_presets():
 
     ann = LidarOptionsCfg.model_fields["instrument"].annotation
     assert set(ann.__args__[0].__args__) == set(INSTRUMENTS)
+
+
+def test_every_instrument_preset_translates_at_its_own_numbers():
+    # a bound on the detector's photon scales once refused the LOLA-class preset's own
+    # scale (~9e12 photons per unit rendered radiance at 0.54 mJ)
+    from simlunar.lidar.hardware import INSTRUMENTS
+
+    for name in INSTRUMENTS:
+        for sensor in ("steered_beam", "flash", "micromirror_flash"):
+            study = LidarStudyCfg(kind="lidar", sensor=sensor, options={"instrument": name})
+            det = lidar_translate.lidar_sensor_options(study, seed=0)
+            flash = getattr(det, "flash", det)
+            assert flash.hardware is INSTRUMENTS[name] or flash.hardware == INSTRUMENTS[name]
+            if sensor == "steered_beam":
+                assert flash.photon_detector().signal_photons > 0
