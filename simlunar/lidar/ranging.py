@@ -67,6 +67,15 @@ class RangeOptions(Options):
         "time's exact expected histogram (simlunar.lidar.spad.spad_correct): range and signal "
         "without the pile-up bias (a fit per return; the LIDAR scans apply it)",
     )
+    edge_sigma: float = option(
+        0.0,
+        doc="reject a return whose position lies within this many timing sigmas (at least one "
+        "bin) of the window's first or last bin: the gate's edge cuts it and biases its "
+        "position (a pulse centred outside the window reads at its edge); 0 = keep every "
+        "return (the ideal window)",
+        ge=0,
+        le=100,
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,6 +189,9 @@ def extract_ranges(
     sig = pulse.sigma_bins(bins)
     if options.fit == "ml" and sig >= 0.3 and valid.any():
         pos[valid] = _ml_position(c[valid], pos[valid], bg[valid, 0], sig)
+    if options.edge_sigma > 0:
+        guard = max(options.edge_sigma * sig, 1.0)
+        valid &= (pos >= guard) & (pos <= bins.count - guard)
     rng_m = bins.range_of(pos)
     rows = np.arange(len(idx))
     ph = np.where(valid, photons[rows, idx], 0.0)
