@@ -67,6 +67,13 @@ class RangeOptions(Options):
         "time's exact expected histogram (simlunar.lidar.spad.spad_correct): range and signal "
         "without the pile-up bias (a fit per return; the LIDAR scans apply it)",
     )
+    spad_background: str = option(
+        "given",
+        doc="the background a SPAD's pile-up correction assumes: given (the caller's, e.g. the "
+        "render's sun and the dark counts) or histogram (estimated from each histogram's "
+        "signal-free leading bins, simlunar.lidar.spad.spad_background)",
+        choices=("given", "histogram"),
+    )
     edge_sigma: float = option(
         0.0,
         doc="reject a return whose position lies within this many timing sigmas (at least one "

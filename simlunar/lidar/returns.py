@@ -27,7 +27,7 @@ from simlunar.lidar.detector import (
 from simlunar.lidar.gate import GateOptions
 from simlunar.lidar.hardware import LidarHardware
 from simlunar.lidar.ranging import RangeOptions, extract_ranges
-from simlunar.lidar.spad import spad_correct
+from simlunar.lidar.spad import spad_background, spad_correct
 from simlunar.lidar.steering import ScanTiming
 from simlunar.lidar.waveform import PulseOptions, TimeBins, shape_waveform
 from simlunar.registry import Options, option
@@ -196,7 +196,8 @@ def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions,
     counts : (..., bins.count) array
         Photon counts (:func:`detect_counts`).
     background : float or (...) array
-        The sun's steady luminance per reading (scaled by ``det.background_photons_per_s``).
+        The sun's steady luminance per reading (scaled by ``det.background_photons_per_s``);
+        unused by the SPAD correction with ``ranging.spad_background = "histogram"``.
     bins : TimeBins
     pulse : PulseOptions
     det : DetectorOptions
@@ -215,6 +216,13 @@ def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions,
     ok = res.valid.reshape(-1)
     bg = np.broadcast_to(np.asarray(background, float), res.valid.shape).reshape(-1)
     per_bin = (bg * det.background_photons_per_s + det.dark_count_rate_hz) * bins.bin_s
+    if ranging.spad_background == "histogram":  # the histogram's own, never the render's
+        sigma = pulse.sigma_bins(bins)
+        pos = (2.0 * res.range.reshape(-1)[ok] - bins.start_opl) / bins.bin_opl
+        free = np.floor(pos - 4.0 * sigma - 1.0).clip(0).astype(int)
+        per_bin = per_bin.copy()
+        per_bin[ok] = spad_background(c[ok], bins, pulses=det.pulses,
+                                      dead_time_s=det.dead_time_s, free_bins=free)  # fmt: skip
     fit = spad_correct(c[ok], bins, pulses=det.pulses, dead_time_s=det.dead_time_s,
                        sigma_bins=pulse.sigma_bins(bins), background=per_bin[ok])  # fmt: skip
     rng_m, ph = res.range.reshape(-1).copy(), res.photons.reshape(-1).copy()
