@@ -63,8 +63,8 @@ class RangeOptions(Options):
     )
     pileup_correction: bool = option(
         True,
-        doc="with a Geiger-mode SPAD receiver, refit every detected return through the dead "
-        "time's exact expected histogram (simlunar.lidar.spad.spad_correct): range and signal "
+        doc="with a Geiger-mode receiver (a SPAD, or first photon: infinite dead time), refit "
+        "every detected return through the dead time's exact expected histogram (simlunar.lidar.spad.spad_correct): range and signal "
         "without the pile-up bias (a fit per return; the LIDAR scans apply it)",
     )
     spad_background: str = option(

@@ -188,8 +188,9 @@ class LidarScan:
 
 
 def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions, ranging):
-    """Ranges of photon ``counts`` (..., bins.count); a SPAD's detected returns refitted
-    without pile-up (:func:`simlunar.lidar.spad.spad_correct`).
+    """Ranges of photon ``counts`` (..., bins.count); a Geiger-mode receiver's (a SPAD's or a
+    first-photon one's) detected returns refitted without pile-up
+    (:func:`simlunar.lidar.spad.spad_correct`).
 
     Parameters
     ----------
@@ -210,7 +211,9 @@ def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions,
     """
     res = extract_ranges(counts, bins, pulse=pulse, options=ranging, apd=det.apd,
                          pulses=det.pulses)  # fmt: skip
-    if det.regime != "spad" or not ranging.pileup_correction or not res.valid.any():
+    # a first-photon receiver (infinite dead time) piles up as a SPAD does: corrected alike
+    geiger = det.regime in ("spad", "first_photon")
+    if not geiger or not ranging.pileup_correction or not res.valid.any():
         return res
     c = np.asarray(counts).reshape(-1, bins.count)
     ok = res.valid.reshape(-1)

@@ -146,3 +146,25 @@ def test_the_pile_up_correction_needs_no_true_background():
     # whatever the caller hands it
     ten = read_ranges(h, 10 * rate, BINS, PULSE, det, RangeOptions(spad_background="histogram"))
     assert np.array_equal(ten.range, own.range)
+
+
+def test_a_first_photon_receiver_is_corrected_in_a_reading():
+    # one detection per pulse (infinite dead time) at 3 photons per pulse: the histogram piles
+    # up towards the return's leading edge (the reading early by centimetres); the reading of
+    # a scan refits it through the exact expected histogram as it does a SPAD's
+    from simlunar.lidar import extract_ranges
+    from simlunar.lidar.returns import read_ranges
+
+    lam = 3.0 * _shape() + 1e-4
+    h = spad_counts(np.tile(lam, (20, 1)), BINS, dead_time_s=np.inf, pulses=2000, rng=5)
+    det = DetectorOptions(pulses=2000, dead_time_s=np.inf, background_photons_per_s=0.0)
+    assert det.regime == "first_photon"
+    raw = extract_ranges(h, BINS, pulse=PULSE)
+    fixed = read_ranges(h, 0.0, BINS, PULSE, det, RangeOptions())
+    off = read_ranges(h, 0.0, BINS, PULSE, det, RangeOptions(pileup_correction=False))
+    assert np.array_equal(off.range, raw.range)
+    bias_raw = np.mean(raw.range - TRUTH)
+    bias_fixed = np.mean(fixed.range - TRUTH)
+    assert bias_raw < -0.01  # early by more than a centimetre
+    assert abs(bias_fixed) < 0.2 * abs(bias_raw) and abs(bias_fixed) < 0.003
+    assert fixed.photons.mean() / 2000 == pytest.approx(3.0, rel=0.1)
