@@ -322,3 +322,33 @@ def test_no_accepted_return_near_an_edge_is_off_by_more_than_a_bin():
     assert np.abs(res.range[res.valid] - truth[res.valid]).max() < BINS.bin_range
     plain = extract_ranges(counts, BINS, pulse=PULSE)
     assert np.abs(plain.range[plain.valid] - truth[plain.valid]).max() > BINS.bin_range
+
+
+@pytest.mark.parametrize("photons, background", [(1.0, 0.002), (0.5, 0.01), (2.0, 0.02)])
+def test_detection_probability_matches_a_monte_carlo(photons, background):
+    # the closed form of the detection test against 3000 simulated histograms at the pulses
+    # it chooses for 90 %, and at half as many
+    from simlunar.lidar.ranging import detection_probability, pulses_for_detection
+
+    n = pulses_for_detection(photons, background, target=0.9, bins=BINS, pulse=PULSE)
+    assert detection_probability(photons, background, n, bins=BINS, pulse=PULSE) >= 0.9
+    assert detection_probability(photons, background, n - 1, bins=BINS, pulse=PULSE) < 0.9
+    rng = np.random.default_rng(int(photons * 100))
+    truth = rng.uniform(45.0, 55.0, 3000)
+    sig = shape_waveform(_impulse(truth[:, None]), BINS, PULSE)
+    for pulses in (n, max(1, n // 2)):
+        lam = photons * sig + background
+        counts = rng.poisson(lam * pulses)
+        res = extract_ranges(counts, BINS, pulse=PULSE)
+        hit = res.valid & (np.abs(res.range - truth) < 3 * BINS.bin_range)
+        p = detection_probability(photons, background, pulses, bins=BINS, pulse=PULSE)
+        assert hit.mean() == pytest.approx(float(p), abs=0.06), pulses
+
+
+def test_pulses_for_detection_refuses_what_it_cannot_reach():
+    from simlunar.lidar.ranging import pulses_for_detection
+
+    with pytest.raises(ValueError, match=r"not detected with probability 0\.9"):
+        pulses_for_detection(1e-4, 0.5, target=0.9, bins=BINS, pulse=PULSE, max_pulses=100)
+    with pytest.raises(ValueError, match=r"target must be in \(0, 1\)"):
+        pulses_for_detection(1.0, 0.0, target=1.0, bins=BINS, pulse=PULSE)
