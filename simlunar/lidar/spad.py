@@ -35,7 +35,11 @@ from simlunar.lidar.waveform import TimeBins
 __all__ = ["SpadFit", "spad_background", "spad_correct", "spad_counts", "spad_expected"]
 
 
-@numba.njit(cache=True, nogil=True)
+# not cached on disk: numba's np.random in a cached function read wrong draws (a third of the
+# counts) in a process that had run another numba function first (the Lloyd planner), when the
+# cache was written by a process that had not (tests/lidar/test_spad.py after
+# tests/config/test_planners.py); compiling it costs about a second
+@numba.njit(cache=False, nogil=True)
 def _simulate(lam, pulses, dead_bins, seed):  # pragma: no cover - compiled
     np.random.seed(seed)  # noqa: NPY002 - numba supports the legacy generator only
     n, m = lam.shape
