@@ -131,7 +131,7 @@ STEERED_BEAM = Block(
         Part("steering", SteeringOptions),
         Part("order", OrderOptions, only=("method",), rename={"method": "order"}),
         # window_m > 2 margin_m reads the block above: checked with it (config.lidar_checks)
-        Part("beam", SteeredBeamOptions, only=("window_m", "batch"), check=False),
+        Part("beam", SteeredBeamOptions, only=("window_m", "field_clip", "batch"), check=False),
     ),
 )
 FLASH = Block(

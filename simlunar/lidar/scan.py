@@ -26,7 +26,7 @@ import numpy as np
 from simlunar.geometry import Camera, Pose
 from simlunar.lidar.detector import DetectorOptions
 from simlunar.lidar.flash import FlashOptions
-from simlunar.lidar.footprint import FootprintOptions
+from simlunar.lidar.footprint import FootprintOptions, spot_in_field
 from simlunar.lidar.gate import GateOptions, plane_ranges
 from simlunar.lidar.hardware import LidarHardware
 from simlunar.lidar.ordering import OrderOptions, order_scan
@@ -70,6 +70,12 @@ class SteeredBeamOptions(ReturnOptions):
     )
     window_m: float = option(
         8.0, doc="range window of each rendered batch (> 2 margin_m)", unit="m", gt=0
+    )
+    field_clip: bool = option(
+        False,
+        doc="scale each beam's signal by the share of its spot inside the receiver's field "
+        "(the hardware's field_rad; simlunar.lidar.footprint.spot_in_field: 0.865 for a "
+        "Gaussian beam as wide as the field); False: the receiver sees the whole spot (ideal)",
     )
     batch: int = option(4096, doc="beams per render launch (memory only; at most 1e6)", ge=1,
                         le=1_000_000)  # fmt: skip
@@ -316,10 +322,15 @@ def _unit(d: np.ndarray) -> np.ndarray:
 
 def _beam_detector(capture, options: SteeredBeamOptions) -> DetectorOptions:
     """The detector of one pointing: ``steering.pulses_per_point`` pulses, photon scales of the
-    instrument under the capture's sun."""
-    return options.photon_detector(
+    instrument under the capture's sun (the signal clipped by the receiver's field with
+    ``field_clip``)."""
+    det = options.photon_detector(
         pulses=options.steering.pulses_per_point, sun_irradiance=capture.sun_irradiance
     )
+    if options.field_clip and options.hardware is not None:
+        share = spot_in_field(options.hardware.field_rad, options.footprint)
+        det = dataclasses.replace(det, signal_photons=det.signal_photons * share)
+    return det
 
 
 def _aim(origin, d, times, trajectory, datum_z, gate: GateOptions, retarget: bool):
