@@ -162,9 +162,7 @@ def write_lidar_ply(path, points, *, times, photons, returns) -> Path:
     return write_ply(path, rec, fields=_PLY, comment=comment)
 
 
-def lidar_export_payload(
-    examples: dict, camera, shape, *, crs: str | None = None
-) -> dict[str, Any]:
+def lidar_export_payload(examples: dict, camera, shape, crs: str | None = None) -> dict[str, Any]:
     """What :func:`write_lidar_export` writes, from a LIDAR study's example acquisitions.
 
     Parameters

@@ -135,3 +135,21 @@ def test_the_terrain_s_crs_is_written_and_a_local_frame_writes_none(tmp_path):
     assert las.header.global_encoding.wkt
     local = laspy.read(write_las(tmp_path / "l.las", pts, times=t, photons=ph, returns=ret))
     assert not [v for v in local.header.vlrs if v.record_id == 2112]
+
+
+def test_the_payload_carries_the_terrain_s_crs_and_the_sensor_origin():
+    # the unit hands the payload the terrain's CRS as its fourth argument
+    from types import SimpleNamespace
+
+    from simlunar.geometry import Camera, Intrinsics, Pose
+    from simlunar.results.lidar_exports import lidar_export_payload
+
+    cam = Camera(Intrinsics.from_fov(8, 8, 40.0), Pose.look_at((0.0, 0.0, 10.0), (0.0, 0.0, 0.0)))
+    scan = SimpleNamespace(valid=np.array([True, False]), points=np.array([[1.0, 0, 0], [0, 0, 0]]),
+                           times=None, returns=None, photons=np.array([5.0, 0.0]))  # fmt: skip
+    # the acquisition's planned cells and values are those of its valid points
+    acq = SimpleNamespace(detail=scan, rc=np.array([[1, 1]]), values=np.array([9.0]), seconds=0.5)
+    payload = lidar_export_payload({"grid": acq}, cam, (8, 8), 'LOCAL_CS["moon"]')
+    assert payload["crs"] == 'LOCAL_CS["moon"]'
+    assert payload["labels"]["grid"]["origin"] == pytest.approx([0.0, 0.0, 10.0])
+    assert len(payload["labels"]["grid"]["points"]) == 1
