@@ -94,15 +94,19 @@ def option(
     le: float | None = None,
     lt: float | None = None,
     choices: tuple | None = None,
+    key_unit: str | None = None,
     default_factory: Callable[[], Any] | Any = dataclasses.MISSING,
 ):
     """A dataclass field with its documentation, unit and bounds written once.
 
-    ``unit`` is the SI unit of the library value (the YAML key may carry a suffix that
-    ``config/`` converts); ``ge``/``gt``/``le``/``lt`` are inclusive / exclusive bounds and
-    ``choices`` the allowed values, checked by :func:`check_bounds`.
+    ``unit`` is the SI unit of the library value; ``key_unit`` the unit its YAML key is
+    written in where that is not ``unit`` (``"ns"`` for a field in ``"s"``: the key
+    ``fwhm_s`` becomes ``fwhm_ns``, its default and bounds converted by ``config/``, which
+    knows the factor). ``ge``/``gt``/``le``/``lt`` are inclusive / exclusive bounds (of each
+    element of a tuple) and ``choices`` the allowed values, checked by :func:`check_bounds`.
     """
-    meta = {"doc": doc, "unit": unit, "ge": ge, "gt": gt, "le": le, "lt": lt, "choices": choices}
+    meta = {"doc": doc, "unit": unit, "ge": ge, "gt": gt, "le": le, "lt": lt, "choices": choices,
+            "key_unit": key_unit}  # fmt: skip
     if default_factory is not dataclasses.MISSING:
         return field(default_factory=default_factory, metadata=meta)
     return field(default=default, metadata=meta)
@@ -123,8 +127,8 @@ def shared_option(table: Mapping[str, Mapping[str, Any]], name: str):
 
 
 def option_info(options_cls) -> dict[str, dict]:
-    """name -> {"default", "doc", "unit", "ge", "gt", "le", "lt", "choices", "type"} of each
-    field of an options dataclass (the input of the derived YAML schema and docs)."""
+    """name -> {"default", "doc", "unit", "ge", "gt", "le", "lt", "choices", "key_unit", "type"}
+    of each field of an options dataclass (the input of the derived YAML schema and docs)."""
     out = {}
     for f in dataclasses.fields(options_cls):
         if f.default is not dataclasses.MISSING:
@@ -133,7 +137,8 @@ def option_info(options_cls) -> dict[str, dict]:
             default = f.default_factory()
         else:
             default = dataclasses.MISSING
-        meta = {k: f.metadata.get(k) for k in ("doc", "unit", "ge", "gt", "le", "lt", "choices")}
+        keys = ("doc", "unit", "ge", "gt", "le", "lt", "choices", "key_unit")
+        meta = {k: f.metadata.get(k) for k in keys}
         out[f.name] = {"default": default, "type": f.type, **meta}
     return out
 
@@ -200,7 +205,7 @@ def check_bounds(obj) -> None:
     """Check every field of an options dataclass against the bounds declared by
     :func:`option`; a ``ValueError`` naming the field, its value and the rule. None passes
     the bounds of a field that may hold it (default None, or ``| None`` in its annotation)
-    and fails them elsewhere."""
+    and fails them elsewhere; the bounds of a tuple hold for each of its elements."""
     for f in dataclasses.fields(obj):
         m = f.metadata
         v = getattr(obj, f.name)
@@ -211,12 +216,14 @@ def check_bounds(obj) -> None:
         rules = [(k, m.get(k)) for k in _SIGNS if m.get(k) is not None]
         if not rules or (v is None and _optional(f)):
             continue
-        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v):
-            raise ValueError(f"{f.name} must be a finite number, got {v!r}")
-        for k, bound in rules:
-            ok = {"ge": v >= bound, "gt": v > bound, "le": v <= bound, "lt": v < bound}[k]
-            if not ok:
-                raise ValueError(f"{f.name} must be {_SIGNS[k]} {bound:g}, got {v!r}")
+        for x in v if isinstance(v, tuple) else (v,):
+            if isinstance(x, bool) or not isinstance(x, numbers.Real) or not math.isfinite(x):
+                raise ValueError(f"{f.name} must be a finite number, got {v!r}")
+            for k, bound in rules:
+                ok = {"ge": x >= bound, "gt": x > bound, "le": x <= bound, "lt": x < bound}[k]
+                if not ok:
+                    each = " each" if isinstance(v, tuple) else ""
+                    raise ValueError(f"{f.name} must be{each} {_SIGNS[k]} {bound:g}, got {v!r}")
 
 
 class Options:

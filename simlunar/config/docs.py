@@ -93,7 +93,8 @@ def _default(field) -> str:
 def _unit(name: str) -> str:
     units = (
         ("_deg", "deg"), ("_m", "m"), ("_px", "px"), ("_e", "e-"), ("_ns", "ns"),
-        ("_ms", "ms"), ("_mrad", "mrad"), ("_hz", "1/s"), ("_per_s", "1/s"),
+        ("_ms", "ms"), ("_mrad", "mrad"), ("_urad", "urad"), ("_uj", "uJ"), ("_nm", "nm"),
+        ("_mm", "mm"), ("_hz", "1/s"), ("_per_s", "1/s"),
         ("_rad_s2", "rad/s²"), ("_rad_s", "rad/s"), ("_w_sr", "W/sr"),
     )  # fmt: skip
     for suffix, unit in units:

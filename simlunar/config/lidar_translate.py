@@ -7,30 +7,21 @@ from __future__ import annotations
 import dataclasses
 
 from simlunar.config.derived import reconstruction_mapping
-from simlunar.config.lidar import HardwareCfg, HazardCfg, LidarOptionsCfg, MotionCfg
-from simlunar.config.studies import (
-    LidarStudyCfg,
+from simlunar.config.lidar import (
+    BLOCKS,
+    HardwareCfg,
+    HazardCfg,
+    LidarOptionsCfg,
+    MotionCfg,
+    instrument_hardware,
 )
+from simlunar.config.studies import LidarStudyCfg
 from simlunar.config.translate import planner_kwargs
-from simlunar.lidar import (
-    DetectorOptions,
-    FootprintOptions,
-    OrderOptions,
-    PulseOptions,
-    RangeOptions,
-    SteeringOptions,
-)
-from simlunar.lidar.apd import ApdOptions
-from simlunar.lidar.flash import FlashOptions
-from simlunar.lidar.gate import GateOptions
-from simlunar.lidar.hardware import INSTRUMENTS, LidarHardware
-from simlunar.lidar.returns import TransientOptions
-from simlunar.lidar.scan import SteeredBeamOptions, with_hardware
-from simlunar.lidar.trajectory import Navigation, PlatformMotion
+from simlunar.lidar.hardware import LidarHardware
+from simlunar.lidar.scan import SteeredBeamOptions, generic_hardware, with_hardware
+from simlunar.lidar.trajectory import PlatformMotion
 from simlunar.metrics.hazard import HazardOptions
 from simlunar.metrics.safe_site import SiteOptions
-from simlunar.sensors.lidar import FlashLidarOptions
-from simlunar.sensors.micromirror import MicromirrorOptions
 from simlunar.study.lidar import LidarStudyOptions, SensorFit
 
 __all__ = [
@@ -42,28 +33,12 @@ __all__ = [
 ]
 
 
-#: YAML key of :class:`~simlunar.config.lidar.HardwareCfg` -> (LidarHardware field, SI factor)
-_HARDWARE_SI = {
-    "pulse_energy_uj": ("pulse_energy_j", 1e-6),
-    "wavelength_nm": ("wavelength_m", 1e-9),
-    "pulse_fwhm_ns": ("pulse_fwhm_s", 1e-9),
-    "jitter_ns": ("jitter_s", 1e-9),
-    "pulse_rate_hz": ("pulse_rate_hz", 1.0),
-    "aperture_diameter_mm": ("aperture_diameter_m", 1e-3),
-    "optics_efficiency": ("optics_efficiency", 1.0),
-    "detector_efficiency": ("detector_efficiency", 1.0),
-    "filter_bandwidth_nm": ("filter_bandwidth_m", 1e-9),
-    "divergence_urad": ("divergence_rad", 1e-6),
-    "field_urad": ("field_rad", 1e-6),
-    "dark_count_rate_hz": ("dark_count_rate_hz", 1.0),
-    "solar_irradiance_w_m2_nm": ("solar_irradiance_w_m2_nm", 1.0),
-}
-
-
-def lidar_hardware(o: LidarOptionsCfg, sensor: str) -> LidarHardware | None:
+def lidar_hardware(o: LidarOptionsCfg, sensor: str, options=None) -> LidarHardware | None:
     """The instrument of a config (preset + hardware overrides, SI) or None where the expert
     photon scales are used (set, or a micromirror flash without an instrument or hardware
-    keys)."""
+    keys). Without an instrument: the generic hardware of the sensor's ``options`` (its
+    pulse, rate and divergence, :func:`~simlunar.lidar.scan.generic_hardware`) with the
+    hardware overrides."""
     d = o.detector
     expert = any(getattr(d, k) is not None for k in type(d).model_fields if k.startswith("expert_"))
     if expert or (
@@ -71,55 +46,21 @@ def lidar_hardware(o: LidarOptionsCfg, sensor: str) -> LidarHardware | None:
     ):
         return None
     if o.instrument is not None:
-        base = INSTRUMENTS[o.instrument]
-    else:  # generic hardware timed and steered by the pulse and sensor blocks
-        rate = {"flash": o.flash.pulse_rate_hz, "micromirror_flash": o.micromirror.pulse_rate_hz}
-        rate = rate.get(sensor, o.steered_beam.pulse_rate_hz)
-        base = LidarHardware(
-            pulse_fwhm_s=o.pulse.fwhm_ns * 1e-9,
-            jitter_s=o.pulse.jitter_ns * 1e-9,
-            pulse_rate_hz=rate,
-            divergence_rad=o.steered_beam.divergence_mrad * 1e-3,
-            field_rad=o.steered_beam.divergence_mrad * 1e-3,
-        )
-    over = {
-        _HARDWARE_SI[k][0]: v * _HARDWARE_SI[k][1]
-        for k, v in o.hardware.model_dump().items()
-        if v is not None
-    }
-    return dataclasses.replace(base, **over)
+        return instrument_hardware(o)
+    base = generic_hardware(options)
+    return dataclasses.replace(base, **BLOCKS["hardware"].library(o.hardware, "hardware"))
 
 
 def _lidar_common(o: LidarOptionsCfg, seed: int) -> dict:
-    """Pulse, detector, ranging and transient options (SI) shared by the LIDARs."""
-    d = o.detector
-    dead = float("inf") if d.dead_time_ns is None else d.dead_time_ns * 1e-9
-    expert = {}
-    if d.expert_signal_photons is not None:
-        expert["signal_photons"] = d.expert_signal_photons
-    if d.expert_background_photons_per_s is not None:
-        expert["background_photons_per_s"] = d.expert_background_photons_per_s
-    if d.expert_dark_count_rate_hz is not None:
-        expert["dark_count_rate_hz"] = d.expert_dark_count_rate_hz
+    """Pulse, detector, ranging, transient and gate options (SI) shared by the LIDARs."""
     return {
-        "pulse": PulseOptions(fwhm_s=o.pulse.fwhm_ns * 1e-9, jitter_s=o.pulse.jitter_ns * 1e-9),
-        "detector": DetectorOptions(
-            pulses=d.pulses,
-            dead_time_s=dead,
-            apd=None if d.apd is None else ApdOptions(**d.apd.model_dump()),
-            **expert,
-        ),
-        "ranging": RangeOptions(**o.ranging.model_dump()),
-        "transient": TransientOptions(
-            spp=o.transient.spp,
-            max_depth=o.transient.max_depth,
-            seed=seed,
-            laser_intensity=o.transient.laser_intensity_w_sr,
-            oversample=o.transient.oversample,
-        ),
+        "pulse": BLOCKS["pulse"].options(o.pulse),
+        "detector": BLOCKS["detector"].options(o.detector),
+        "ranging": BLOCKS["ranging"].options(o.ranging),
+        "transient": BLOCKS["transient"].options(o.transient, seed=seed),
         "bin_range_m": o.bin_range_m,
         "margin_m": o.margin_m,
-        "gate": GateOptions(**o.gate.model_dump()),
+        "gate": BLOCKS["gate"].options(o.gate),
     }
 
 
@@ -128,53 +69,39 @@ def lidar_sensor_options(study: LidarStudyCfg, *, seed: int = 0):
     ``seed``: the transient renderer's sampler seed (the unit's render seed)."""
     o = study.options
     common = _lidar_common(o, seed)
-    hardware = lidar_hardware(o, study.sensor)
+    motion = motion_options(o.motion)
     if study.sensor == "steered_beam":
-        b = o.steered_beam
+        b, cfg = BLOCKS["steered_beam"], o.steered_beam
         beam = SteeredBeamOptions(
-            footprint=FootprintOptions(b.divergence_mrad * 1e-3, b.profile, b.footprint_rays),
-            steering=SteeringOptions(
-                max_rate_rad_s=b.max_rate_rad_s,
-                max_accel_rad_s2=b.max_accel_rad_s2,
-                settle_s=b.settle_ms * 1e-3,
-                pulse_rate_hz=b.pulse_rate_hz,
-                pulses_per_point=b.pulses_per_point,
-                model=b.model,
-                line_pitch_rad=None if b.line_pitch_mrad is None else b.line_pitch_mrad * 1e-3,
-            ),
-            motion=motion_options(o.motion),
-            order=OrderOptions(method=b.order),
-            window_m=b.window_m,
-            batch=b.batch,
+            footprint=b.options(cfg, "footprint"),
+            steering=b.options(cfg, "steering"),
+            order=b.options(cfg, "order"),
+            motion=motion,
+            **b.library(cfg, "beam"),
             **common,
         )
+        hardware = lidar_hardware(o, study.sensor, beam)
         return beam if hardware is None else with_hardware(beam, hardware)
-    if study.sensor == "flash":
-        f = o.flash
-        flash = FlashOptions(pulse_rate_hz=f.pulse_rate_hz, **common)
-        flash = flash if hardware is None else with_hardware(flash, hardware)
-        w, h = f.receiver_px
-        return FlashLidarOptions(flash, receiver_px=(h, w), revisits=f.revisits, zoom=f.zoom,
-                                 revisit_from=f.revisit_from, range_weight=f.range_weight,
-                                 repoint_s=f.repoint_ms * 1e-3,
-                                 motion=motion_options(o.motion))  # fmt: skip
-    m = o.micromirror
-    w, h = m.receiver_px
-    mm = FlashOptions(pulse_rate_hz=m.pulse_rate_hz, **common)
-    mm = mm if hardware is None else with_hardware(mm, hardware)
-    return MicromirrorOptions(mm, (h, w), motion=motion_options(o.motion))
+    name = "flash" if study.sensor == "flash" else "micromirror"
+    b, cfg = BLOCKS[name], getattr(o, name)
+    flash = b.options(cfg, "flash", **common)
+    hardware = lidar_hardware(o, study.sensor, flash)
+    flash = flash if hardware is None else with_hardware(flash, hardware)
+    sensor = b.library(cfg, "sensor", hardware=hardware)
+    return b.parts["sensor"].options(**sensor, flash=flash, motion=motion)
 
 
 def motion_options(cfg: MotionCfg | None) -> PlatformMotion | None:
-    """:class:`~simlunar.lidar.trajectory.PlatformMotion` of a config (None: at rest)."""
+    """:class:`~simlunar.lidar.trajectory.PlatformMotion` of a config (None: at rest): the
+    block's keys, its navigation, and the velocity from ``kind``, ``descent_rate_m_s`` and
+    ``horizontal_m_s``."""
     if cfg is None:
         return None
     v = (0.0, 0.0, 0.0)
     if cfg.kind == "descent":
         v = (cfg.horizontal_m_s[0], cfg.horizontal_m_s[1], -cfg.descent_rate_m_s)
-    nav = Navigation(cfg.compensation, cfg.position_noise_m, cfg.attitude_noise_urad * 1e-6)
-    return PlatformMotion(v, cfg.attitude_jitter_urad * 1e-6, cfg.jitter_bandwidth_hz, nav,
-                          cfg.retarget)  # fmt: skip
+    b = BLOCKS["motion"]
+    return b.options(cfg, "motion", velocity_m_s=v, navigation=b.options(cfg, "navigation"))
 
 
 def hazard_options(cfg: HazardCfg | None) -> HazardOptions | None:

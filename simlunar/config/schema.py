@@ -36,6 +36,7 @@ from simlunar.config.fields import (  # noqa: F401
     _SetKeysModel,
     _tagged_union,
 )
+from simlunar.config.lidar import receiver_wh
 from simlunar.config.render import (
     GuideFlashFrameCfg,
     OrthoNadirCfg,
@@ -214,7 +215,7 @@ class ExperimentCfg(_Model):
         if s.sensor == "steered_beam":
             return self
         block = LIDAR_BLOCKS[s.sensor]
-        rw, rh = getattr(s.options, block).receiver_px
+        rw, rh = receiver_wh(s.options, block)
         if round(cam.height * rw / cam.width) != rh:
             raise ValueError(
                 f"study.options.{block}.receiver_px: ({rw}, {rh}) must keep the camera's "

@@ -52,6 +52,27 @@ class ApdOptions(Options):
         ge=0,
     )
 
+    full_scale_pe: float | None = option(
+        None,
+        doc="the digitiser's full scale per pulse and bin, referred to the input: each pulse's "
+        "waveform (signal, background and amplifier noise) clips there (the amplifier and "
+        "digitiser saturate); None: no saturation (an ideal receiver)",
+        unit="photoelectron",
+        gt=0,
+    )
+    bits: int | None = option(
+        None,
+        doc="the digitiser's resolution: each pulse's waveform is rounded to full_scale_pe / "
+        "2^bits steps (needs full_scale_pe); None: not quantised",
+        ge=1,
+        le=24,
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.bits is not None and self.full_scale_pe is None:
+            raise ValueError("bits: a digitiser's resolution needs its full_scale_pe")
+
     @property
     def excess_noise(self) -> float:
         """McIntyre's excess noise factor ``F = k M + (1 - k) (2 - 1 / M)``."""
@@ -73,10 +94,34 @@ def apd_waveform(expected: np.ndarray, *, options: ApdOptions, pulses: int, rng=
     Returns
     -------
     (..., count) float64
-        Mean ``pulses x expected``, variance ``F x mean + pulses x amplifier_noise_pe^2``.
+        Mean ``pulses x expected``, variance ``F x mean + pulses x amplifier_noise_pe^2``;
+        with ``options.full_scale_pe`` the sum over the pulses of each pulse's waveform
+        clipped at the full scale (and rounded to its ``bits``): at most ``pulses x
+        full_scale_pe`` per bin.
     """
     rng = np.random.default_rng(rng)
-    lam = np.asarray(expected, float) * int(pulses)
+    if options.full_scale_pe is not None:
+        return _digitised(np.asarray(expected, float), options, int(pulses), rng)
+    return _draw(np.asarray(expected, float), options, int(pulses), rng)
+
+
+def _digitised(expected: np.ndarray, options: ApdOptions, pulses: int, rng) -> np.ndarray:
+    """The sum over ``pulses`` of each pulse's waveform clipped at the full scale and rounded
+    to the digitiser's steps (each pulse drawn on its own: the clipping is per pulse)."""
+    fs = float(options.full_scale_pe)
+    step = None if options.bits is None else fs / 2 ** int(options.bits)
+    out = np.zeros(expected.shape)
+    for _ in range(pulses):
+        w = np.minimum(_draw(expected, options, 1, rng), fs)
+        if step is not None:
+            w = np.round(w / step) * step
+        out += w
+    return out
+
+
+def _draw(expected: np.ndarray, options: ApdOptions, pulses: int, rng) -> np.ndarray:
+    """The unclipped waveform over ``pulses`` pulses (module docstring)."""
+    lam = expected * pulses
     n = rng.poisson(lam)
     f1 = options.excess_noise - 1.0
     out = n.astype(float)

@@ -29,6 +29,12 @@ from simlunar.lidar.spad import spad_counts
 from simlunar.lidar.waveform import TimeBins
 from simlunar.registry import Options, option, shared_option
 
+#: most dark counts per second a detector may be given, and (config) most photons per pulse and
+#: unit radiance of an expert photon scale: the photon counts are Poisson draws, whose sampler
+#: (NumPy) refuses a mean above ~1e18. Not a bound of the photon scales an instrument derives
+#: (per unit of a rendered radiance, which is small: a LOLA-class beam's is ~1e13)
+MAX_PHOTONS = 1e12
+
 #: the detector options that :class:`DetectorOptions` and
 #: :class:`~simlunar.lidar.hardware.LidarHardware` declare alike (the hardware's dark counts
 #: become the detector's): name -> keywords of :func:`simlunar.registry.option`
@@ -38,6 +44,7 @@ DETECTOR_OPTIONS: dict[str, dict] = {
         doc="dark (or noise-equivalent) counts per second, uniform in time",
         unit="1/s",
         ge=0,
+        le=MAX_PHOTONS,
     ),
 }
 
@@ -61,13 +68,15 @@ class DetectorOptions(Options):
         ge=0,
     )
     dark_count_rate_hz: float = shared_option(DETECTOR_OPTIONS, "dark_count_rate_hz")
-    pulses: int = option(1, doc="shots accumulated into one histogram", ge=1)
+    pulses: int = option(1, doc="shots accumulated into one histogram (at most 1e6)", ge=1,
+                         le=1_000_000)  # fmt: skip
     dead_time_s: float = option(
         0.0,
         doc="SPAD dead time, >= 0 (inf allowed): 0 = no dead time (photon counts, or an APD), "
         "inf = at most one detection per pulse, finite = a Geiger-mode SPAD with a "
         "non-paralysable dead time simulated in continuous time (simlunar.lidar.spad)",
         unit="s",
+        key_unit="ns",
     )
     apd: ApdOptions | None = option(
         None,
@@ -81,7 +90,9 @@ class DetectorOptions(Options):
         if not self.dead_time_s >= 0:
             raise ValueError(f"dead_time_s must be >= 0 s, got {self.dead_time_s}")
         if self.apd is not None and self.dead_time_s != 0:
-            raise ValueError("a linear-mode APD has no dead time: set dead_time_s = 0 or no apd")
+            raise ValueError(
+                "apd: a linear-mode APD has no dead time (set dead_time_s = 0 or no apd)"
+            )
 
     @property
     def regime(self) -> str:

@@ -46,9 +46,10 @@ class FlashOptions(ReturnOptions):
 
     pulse_rate_hz: float = option(
         30.0,
-        doc="pulse repetition rate: a frame takes detector.pulses / pulse_rate_hz",
+        doc="pulse repetition rate (1e-3 .. 1e9): a frame takes detector.pulses / pulse_rate_hz",
         unit="1/s",
-        gt=0,
+        ge=1e-3,
+        le=1e9,
     )
 
 

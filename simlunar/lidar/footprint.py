@@ -23,6 +23,7 @@ __all__ = [
     "FootprintOptions",
     "cone_offsets",
     "footprint_radius",
+    "spot_in_field",
     "tilted_plane_spread",
 ]
 
@@ -38,6 +39,7 @@ class FootprintOptions(Options):
         doc="full divergence angle, in [0, pi/2): twice the 1/e^2 intensity half-angle for "
         "gaussian, the full cone angle for uniform; 0 = a single ray",
         unit="rad",
+        key_unit="mrad",
         ge=0,
         lt=np.pi / 2,
     )
@@ -46,8 +48,10 @@ class FootprintOptions(Options):
     )
     samples: int = option(
         16,
-        doc="rays traced per beam (the footprint's Monte Carlo samples; the render's spp)",
+        doc="rays traced per beam (the footprint's Monte Carlo samples; the render's spp; at "
+        "most 4096)",
         ge=1,
+        le=4096,
     )
 
     @property
@@ -82,6 +86,26 @@ def cone_offsets(u: np.ndarray, options: FootprintOptions) -> np.ndarray:
     else:
         r = 0.5 * options.divergence_rad * np.sqrt(u[:, 0])
     return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
+
+
+def spot_in_field(field_rad: float, options: FootprintOptions) -> float:
+    """The share of a beam's spot (as :func:`cone_offsets` samples it) inside a concentric
+    receiver field of full angle ``field_rad``.
+
+    Gaussian (per-axis sigma ``s = divergence / 4``, truncated at 3 s): the radial offset is
+    Rayleigh, so ``(1 - exp(-rho^2 / (2 s^2))) / (1 - exp(-4.5))`` with ``rho = field / 2``, i.e.
+    ``1 - exp(-2 (field / divergence)^2)`` before the truncation (0.865 for a field equal to
+    the divergence); uniform: ``(field / divergence)^2``; both at most 1.
+    """
+    if options.divergence_rad == 0:
+        return 1.0
+    rho = 0.5 * float(field_rad)
+    if options.profile == "gaussian":
+        s = options.sigma_rad
+        if rho >= 3.0 * s:
+            return 1.0
+        return float(-np.expm1(-(rho**2) / (2.0 * s**2)) / -np.expm1(-4.5))
+    return float(min(1.0, (rho / (0.5 * options.divergence_rad)) ** 2))
 
 
 def footprint_radius(range_m, options: FootprintOptions) -> np.ndarray:

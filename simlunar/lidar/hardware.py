@@ -64,16 +64,23 @@ class LidarHardware(Options):
         10e-6,
         doc="laser energy per pulse leaving the instrument (per beam of a multi-beam laser)",
         unit="J",
+        key_unit="uJ",
         gt=0,
     )
-    wavelength_m: float = option(1064e-9, doc="laser wavelength", unit="m", gt=0)
-    pulse_fwhm_s: float = option(1e-9, doc="pulse full width at half maximum", unit="s", gt=0)
+    wavelength_m: float = option(1064e-9, doc="laser wavelength", unit="m", key_unit="nm", gt=0)
+    pulse_fwhm_s: float = option(
+        1e-9, doc="pulse full width at half maximum (at most 10 us)", unit="s", key_unit="ns",
+        gt=0, le=1e-5,
+    )  # fmt: skip
     jitter_s: float = option(
-        0.1e-9, doc="RMS timing jitter of detector and timing electronics", unit="s", ge=0
+        0.1e-9, doc="RMS timing jitter of detector and timing electronics (at most 10 us)",
+        unit="s", key_unit="ns", ge=0, le=1e-5,
+    )  # fmt: skip
+    pulse_rate_hz: float = option(
+        10e3, doc="pulse repetition rate (1e-3 .. 1e9)", unit="1/s", ge=1e-3, le=1e9
     )
-    pulse_rate_hz: float = option(10e3, doc="pulse repetition rate", unit="1/s", gt=0)
     aperture_diameter_m: float = option(
-        0.05, doc="receiver telescope / lens clear aperture", unit="m", gt=0
+        0.05, doc="receiver telescope / lens clear aperture", unit="m", key_unit="mm", gt=0
     )
     optics_efficiency: float = option(
         0.6, doc="receiver optics transmission (filter included)", gt=0, le=1
@@ -82,20 +89,32 @@ class LidarHardware(Options):
         0.4, doc="photon detection efficiency of the detector", gt=0, le=1
     )
     filter_bandwidth_m: float = option(
-        1e-9, doc="receiver filter bandwidth, e.g. 1e-9 for 1 nm", unit="m", gt=0
+        1e-9, doc="receiver filter bandwidth, e.g. 1e-9 for 1 nm", unit="m", key_unit="nm", gt=0
     )
     divergence_rad: float = option(
         1e-3,
-        doc="full beam divergence of a steered beam (twice the 1/e^2 half-angle)",
+        doc="full beam divergence of a steered beam (twice the 1/e^2 half-angle; below pi/2, "
+        "a cone within a hemisphere)",
         unit="rad",
+        key_unit="urad",
         gt=0,
+        lt=np.pi / 2,
     )
     field_rad: float = option(
         1e-3,
-        doc="full-angle receiver field of view of a steered beam (a disk); a flash's pixels "
-        "take theirs from the receiver's intrinsics",
+        doc="full-angle receiver field of view: a steered beam's (a disk), or a flash "
+        "receiver's across its array (its pixels take theirs from the receiver's intrinsics)",
         unit="rad",
+        key_unit="urad",
         gt=0,
+        lt=np.pi,
+    )
+    receiver_px: tuple[int, int] | None = option(
+        None,
+        doc="the receiver array (rows, cols) of a flash or micromirror receiver, each 1 .. "
+        "8192; None: one detector (a steered beam)",
+        ge=1,
+        le=8192,
     )
     dark_count_rate_hz: float = shared_option(DETECTOR_OPTIONS, "dark_count_rate_hz")
     solar_irradiance_w_m2_nm: float = option(
@@ -218,32 +237,41 @@ INSTRUMENTS_FILE = "instruments.toml"
 
 
 def _instrument_values(name: str, entry, where: str) -> dict[str, float]:
-    """The :class:`LidarHardware` keywords of one table of an instruments file: every field
-    once, in SI units or (an angle) as ``<field>_deg`` in degrees."""
+    """The :class:`LidarHardware` keywords of one table of an instruments file: each field at
+    most once, in SI units or (an angle) as ``<field>_deg`` in degrees; a tuple field (the
+    receiver array) as a list of numbers; a field left out keeps its declared default."""
     if not isinstance(entry, dict):
         raise ValueError(f"{where}: {name!r} must be a table of LidarHardware fields")
     fields = [f.name for f in dataclasses.fields(LidarHardware)]
+    tuples = [f.name for f in dataclasses.fields(LidarHardware) if "tuple" in str(f.type)]
     angles = [f for f in fields if f.endswith("_rad")]
     keys = fields + [f"{a.removesuffix('_rad')}_deg" for a in angles]
     values = {}
     for key, v in entry.items():
         if key not in keys:
             raise ValueError(f"{where}: [{name}] has no field {key!r}{did_you_mean(key, keys)}")
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise ValueError(f"{where}: [{name}] {key} must be a number, got {v!r}")
         field = f"{key.removesuffix('_deg')}_rad" if key.endswith("_deg") else key
         if field in values:
             raise ValueError(f"{where}: [{name}] gives {field} twice (in rad and in deg)")
+        if field in tuples:
+            if not isinstance(v, list) or not all(_number(x) for x in v):
+                raise ValueError(f"{where}: [{name}] {key} must be a list of numbers, got {v!r}")
+            values[field] = tuple(v)
+            continue
+        if not _number(v):
+            raise ValueError(f"{where}: [{name}] {key} must be a number, got {v!r}")
         values[field] = float(np.radians(v)) if key.endswith("_deg") else float(v)
-    missing = [f for f in fields if f not in values]
-    if missing:
-        raise ValueError(f"{where}: [{name}] lacks {', '.join(missing)}")
     return values
 
 
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
 def load_instruments(path=None) -> dict[str, LidarHardware]:
-    """The instrument presets of a TOML file: one table per instrument, its keys every field
-    of :class:`LidarHardware` (SI units; an angle may be ``<field>_deg``, in degrees).
+    """The instrument presets of a TOML file: one table per instrument, its keys fields of
+    :class:`LidarHardware` (SI units; an angle may be ``<field>_deg``, in degrees; a field
+    left out keeps its declared default).
 
     Parameters
     ----------
@@ -254,9 +282,9 @@ def load_instruments(path=None) -> dict[str, LidarHardware]:
     Raises
     ------
     ValueError
-        A table with a stray key (naming the closest field), a missing field, a value that is
-        not a number, an angle given twice, or a value out of its field's bounds; the message
-        names the file and the instrument.
+        A table with a stray key (naming the closest field), a value that is not a number
+        (a list of numbers for the receiver array), an angle given twice, or a value out of
+        its field's bounds; the message names the file and the instrument.
     """
     if path is None:
         text = resources.files(__package__).joinpath(INSTRUMENTS_FILE).read_text()

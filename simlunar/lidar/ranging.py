@@ -28,7 +28,15 @@ from scipy.special import erf
 from simlunar.lidar.waveform import PulseOptions, TimeBins, pulse_kernel
 from simlunar.registry import Options, option
 
-__all__ = ["METHODS", "RETURNS", "RangeOptions", "RangeResult", "extract_ranges"]
+__all__ = [
+    "METHODS",
+    "RETURNS",
+    "RangeOptions",
+    "RangeResult",
+    "detection_probability",
+    "extract_ranges",
+    "pulses_for_detection",
+]
 
 METHODS = ("matched", "peak")
 RETURNS = ("strongest", "first", "last")
@@ -63,9 +71,25 @@ class RangeOptions(Options):
     )
     pileup_correction: bool = option(
         True,
-        doc="with a Geiger-mode SPAD receiver, refit every detected return through the dead "
-        "time's exact expected histogram (simlunar.lidar.spad.spad_correct): range and signal "
+        doc="with a Geiger-mode receiver (a SPAD, or first photon: infinite dead time), refit "
+        "every detected return through the dead time's exact expected histogram (simlunar.lidar.spad.spad_correct): range and signal "
         "without the pile-up bias (a fit per return; the LIDAR scans apply it)",
+    )
+    spad_background: str = option(
+        "given",
+        doc="the background a SPAD's pile-up correction assumes: given (the caller's, e.g. the "
+        "render's sun and the dark counts) or histogram (estimated from each histogram's "
+        "signal-free leading bins, simlunar.lidar.spad.spad_background)",
+        choices=("given", "histogram"),
+    )
+    edge_sigma: float = option(
+        0.0,
+        doc="reject a return whose position lies within this many timing sigmas (at least one "
+        "bin) of the window's first or last bin: the gate's edge cuts it and biases its "
+        "position (a pulse centred outside the window reads at its edge); 0 = keep every "
+        "return (the ideal window)",
+        ge=0,
+        le=100,
     )
 
 
@@ -180,6 +204,9 @@ def extract_ranges(
     sig = pulse.sigma_bins(bins)
     if options.fit == "ml" and sig >= 0.3 and valid.any():
         pos[valid] = _ml_position(c[valid], pos[valid], bg[valid, 0], sig)
+    if options.edge_sigma > 0:
+        guard = max(options.edge_sigma * sig, 1.0)
+        valid &= (pos >= guard) & (pos <= bins.count - guard)
     rng_m = bins.range_of(pos)
     rows = np.arange(len(idx))
     ph = np.where(valid, photons[rows, idx], 0.0)
@@ -271,3 +298,67 @@ def _ml_position(
         amp = np.where(ok, np.maximum(amp + d_amp, 0.5 * amp), amp)
     bad = ~np.isfinite(tau) | (np.abs(tau - pos0) > 2.0)
     return np.where(bad, pos0, tau)
+
+
+def detection_probability(signal_photons, background_per_bin: float, pulses, *, bins: TimeBins,
+                          pulse: PulseOptions, options: RangeOptions = RangeOptions()):  # fmt: skip
+    """Probability that a photon-counting histogram of ``pulses`` pulses holds a detected
+    return (:func:`extract_ranges`' test), in closed form.
+
+    The test counts the photons in a window of ``2 m + 1`` bins about the return (``m =
+    ceil(1.5 sigma)`` bins) against the Poisson quantile ``c`` of its background at
+    ``threshold_sigma``: ``P = P(Poisson(n (f S + w b)) > c(n w b))`` with ``S`` the signal
+    photons per pulse, ``f`` the pulse's share inside the window (averaged over the return's
+    position in the window's central bin), ``b`` the background photons per bin and pulse and ``w`` the window's
+    bins; the return's signal must also reach ``min_photons`` (its expectation ``n S`` is
+    compared). The background is taken as known (the reading estimates it from the histogram).
+
+    Returns
+    -------
+    float64 array of the broadcast shape of ``signal_photons`` and ``pulses``
+    """
+    from scipy import stats
+
+    s = np.asarray(signal_photons, float)
+    n = np.asarray(pulses, float)
+    sig = pulse.sigma_bins(bins)
+    m = max(1, int(np.ceil(1.5 * sig)))
+    w = 2 * m + 1
+    # the return's centre anywhere in the window's central bin: the share averaged over it
+    u = np.linspace(-0.5, 0.5, 21)
+    root = max(sig, 1e-9) * np.sqrt(2.0)
+    f = float(np.mean(0.5 * (erf((m + 0.5 - u) / root) - erf((-m - 0.5 - u) / root))))
+    mu_bg = np.maximum(n * w * background_per_bin, 1e-9)
+    c_thr = stats.poisson.isf(stats.norm.sf(options.threshold_sigma), mu_bg)
+    p = stats.poisson.sf(c_thr, n * (f * s) + mu_bg)
+    return np.where(n * s >= options.min_photons, p, 0.0)
+
+
+def pulses_for_detection(signal_photons: float, background_per_bin: float, *, target: float,
+                         bins: TimeBins, pulse: PulseOptions,
+                         options: RangeOptions = RangeOptions(),
+                         max_pulses: int = 1_000_000) -> int:  # fmt: skip
+    """The fewest pulses per point whose histogram detects a return of ``signal_photons`` per
+    pulse with probability at least ``target`` (:func:`detection_probability`); a
+    ``ValueError`` when even ``max_pulses`` do not.
+    """
+    if not 0 < target < 1:
+        raise ValueError(f"target must be in (0, 1), got {target}")
+
+    def ok(n: int) -> bool:
+        return bool(detection_probability(signal_photons, background_per_bin, n, bins=bins,
+                                          pulse=pulse, options=options) >= target)  # fmt: skip
+
+    if not ok(max_pulses):
+        raise ValueError(
+            f"{signal_photons:g} photons per pulse are not detected with probability {target} "
+            f"within {max_pulses} pulses"
+        )
+    hi = 1
+    while not ok(hi):
+        hi *= 2
+    lo = hi // 2  # ok(hi), not ok(lo) (or lo = 0)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if ok(mid) else (mid, hi)
+    return hi

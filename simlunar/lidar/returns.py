@@ -27,7 +27,7 @@ from simlunar.lidar.detector import (
 from simlunar.lidar.gate import GateOptions
 from simlunar.lidar.hardware import LidarHardware
 from simlunar.lidar.ranging import RangeOptions, extract_ranges
-from simlunar.lidar.spad import spad_correct
+from simlunar.lidar.spad import spad_background, spad_correct
 from simlunar.lidar.steering import ScanTiming
 from simlunar.lidar.waveform import PulseOptions, TimeBins, shape_waveform
 from simlunar.registry import Options, option
@@ -47,34 +47,34 @@ class TransientOptions(Options):
 
     spp: int = option(
         64,
-        doc="samples per pixel of a flash frame (steered beams use FootprintOptions.samples)",
+        doc="samples per pixel of a flash frame (steered beams use FootprintOptions.samples; "
+        "at most 65536)",
         ge=1,
+        le=65_536,
     )
     max_depth: int = option(
         2,
-        doc="longest path, -1 (unbounded) or >= 1 (2 = direct only; see "
+        doc="longest path (2 = direct only, the least that sees the laser; see "
         "simlunar.render.transient on steered beams)",
-        ge=-1,
+        ge=2,
+        le=16,
     )
     seed: int = option(0, doc="sampler seed", ge=0)
     laser_intensity: float = option(
         1.0,
         doc="radiant intensity of the point laser; the histograms scale with it",
         unit="W/sr",
+        key_unit="W/sr",
         gt=0,
     )
     oversample: int = option(
         2,
         doc="rendered (fine) time bins per output bin. With the linear splat of the film, 2 "
         "keeps a plane's noise-free range within 0.01 mm at 0.65 pulse sigma per bin and 0.2 mm "
-        "at 0.44 (tests/lidar/test_ranging.py); memory grows with it",
+        "at 0.44 (tests/lidar/test_ranging.py); memory grows with it (at most 16)",
         ge=1,
+        le=16,
     )
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if self.max_depth == 0:
-            raise ValueError("max_depth must be -1 or >= 1, got 0")
 
 
 @dataclass(frozen=True)
@@ -188,15 +188,17 @@ class LidarScan:
 
 
 def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions, ranging):
-    """Ranges of photon ``counts`` (..., bins.count); a SPAD's detected returns refitted
-    without pile-up (:func:`simlunar.lidar.spad.spad_correct`).
+    """Ranges of photon ``counts`` (..., bins.count); a Geiger-mode receiver's (a SPAD's or a
+    first-photon one's) detected returns refitted without pile-up
+    (:func:`simlunar.lidar.spad.spad_correct`).
 
     Parameters
     ----------
     counts : (..., bins.count) array
         Photon counts (:func:`detect_counts`).
     background : float or (...) array
-        The sun's steady luminance per reading (scaled by ``det.background_photons_per_s``).
+        The sun's steady luminance per reading (scaled by ``det.background_photons_per_s``);
+        unused by the SPAD correction with ``ranging.spad_background = "histogram"``.
     bins : TimeBins
     pulse : PulseOptions
     det : DetectorOptions
@@ -209,12 +211,21 @@ def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions,
     """
     res = extract_ranges(counts, bins, pulse=pulse, options=ranging, apd=det.apd,
                          pulses=det.pulses)  # fmt: skip
-    if det.regime != "spad" or not ranging.pileup_correction or not res.valid.any():
+    # a first-photon receiver (infinite dead time) piles up as a SPAD does: corrected alike
+    geiger = det.regime in ("spad", "first_photon")
+    if not geiger or not ranging.pileup_correction or not res.valid.any():
         return res
     c = np.asarray(counts).reshape(-1, bins.count)
     ok = res.valid.reshape(-1)
     bg = np.broadcast_to(np.asarray(background, float), res.valid.shape).reshape(-1)
     per_bin = (bg * det.background_photons_per_s + det.dark_count_rate_hz) * bins.bin_s
+    if ranging.spad_background == "histogram":  # the histogram's own, never the render's
+        sigma = pulse.sigma_bins(bins)
+        pos = (2.0 * res.range.reshape(-1)[ok] - bins.start_opl) / bins.bin_opl
+        free = np.floor(pos - 4.0 * sigma - 1.0).clip(0).astype(int)
+        per_bin = per_bin.copy()
+        per_bin[ok] = spad_background(c[ok], bins, pulses=det.pulses,
+                                      dead_time_s=det.dead_time_s, free_bins=free)  # fmt: skip
     fit = spad_correct(c[ok], bins, pulses=det.pulses, dead_time_s=det.dead_time_s,
                        sigma_bins=pulse.sigma_bins(bins), background=per_bin[ok])  # fmt: skip
     rng_m, ph = res.range.reshape(-1).copy(), res.photons.reshape(-1).copy()

@@ -25,7 +25,8 @@ import numpy as np
 
 from simlunar.geometry import Camera, Pose
 from simlunar.lidar.detector import DetectorOptions
-from simlunar.lidar.footprint import FootprintOptions
+from simlunar.lidar.flash import FlashOptions
+from simlunar.lidar.footprint import FootprintOptions, spot_in_field
 from simlunar.lidar.gate import GateOptions, plane_ranges
 from simlunar.lidar.hardware import LidarHardware
 from simlunar.lidar.ordering import OrderOptions, order_scan
@@ -33,12 +34,14 @@ from simlunar.lidar.ranging import extract_ranges
 from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
 from simlunar.lidar.steering import SteeringOptions, point_times, pointing_angles, scan_timing
 from simlunar.lidar.trajectory import Flight, PlatformMotion, place_points, rotate_small
-from simlunar.lidar.waveform import TimeBins
-from simlunar.registry import option
+from simlunar.lidar.waveform import PulseOptions, TimeBins
+from simlunar.registry import Options, option
 
 __all__ = [
+    "HARDWARE_SETS",
     "SteeredBeamOptions",
     "altimeter_datum",
+    "generic_hardware",
     "guide_directions",
     "steered_beam_scan",
     "visiting_order",
@@ -68,7 +71,14 @@ class SteeredBeamOptions(ReturnOptions):
     window_m: float = option(
         8.0, doc="range window of each rendered batch (> 2 margin_m)", unit="m", gt=0
     )
-    batch: int = option(4096, doc="beams per render launch", ge=1)
+    field_clip: bool = option(
+        False,
+        doc="scale each beam's signal by the share of its spot inside the receiver's field "
+        "(the hardware's field_rad; simlunar.lidar.footprint.spot_in_field: 0.865 for a "
+        "Gaussian beam as wide as the field); False: the receiver sees the whole spot (ideal)",
+    )
+    batch: int = option(4096, doc="beams per render launch (memory only; at most 1e6)", ge=1,
+                        le=1_000_000)  # fmt: skip
     motion: PlatformMotion | None = option(
         None,
         doc="the platform's motion during the scan (simlunar.lidar.trajectory); None = at rest. "
@@ -89,19 +99,64 @@ class SteeredBeamOptions(ReturnOptions):
         return TimeBins.for_ranges(0.0, self.window_m, self.bin_range_m)
 
 
+#: what an instrument's hardware sets in the options it measures with: a
+#: :class:`~simlunar.lidar.hardware.LidarHardware` field -> the (options class, field) pairs it
+#: replaces wherever they are in the options (:func:`with_hardware` applies them; the
+#: configuration refuses a second value of each)
+HARDWARE_SETS: dict[str, tuple[tuple[type, str], ...]] = {
+    "pulse_fwhm_s": ((PulseOptions, "fwhm_s"),),
+    "jitter_s": ((PulseOptions, "jitter_s"),),
+    "divergence_rad": ((FootprintOptions, "divergence_rad"),),
+    "pulse_rate_hz": ((SteeringOptions, "pulse_rate_hz"), (FlashOptions, "pulse_rate_hz")),
+}
+
+
+def _set_from(obj, values: dict[tuple[type, str], object]):
+    """``obj`` with every (class, field) of ``values`` replaced, in it and in the options
+    nested in it (the hardware itself left alone)."""
+    changes = {}
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if isinstance(v, Options) and not isinstance(v, LidarHardware):
+            new = _set_from(v, values)
+            if new is not v:
+                changes[f.name] = new
+    for (cls, name), value in values.items():
+        if isinstance(obj, cls):
+            changes[name] = value
+    return dataclasses.replace(obj, **changes) if changes else obj
+
+
 def with_hardware(options, hardware: LidarHardware):
     """``options`` (:class:`SteeredBeamOptions` or :class:`~simlunar.lidar.flash.FlashOptions`)
-    measuring with ``hardware``: its pulse and jitter, photon scales
-    (:meth:`~simlunar.lidar.returns.ReturnOptions.photon_detector`), pulse rate and, for a
-    steered beam, its divergence."""
-    out = dataclasses.replace(options, hardware=hardware, pulse=hardware.pulse)
-    if isinstance(out, SteeredBeamOptions):
-        return dataclasses.replace(
-            out,
-            footprint=dataclasses.replace(out.footprint, divergence_rad=hardware.divergence_rad),
-            steering=dataclasses.replace(out.steering, pulse_rate_hz=hardware.pulse_rate_hz),
-        )
-    return dataclasses.replace(out, pulse_rate_hz=hardware.pulse_rate_hz)
+    measuring with ``hardware``: its photon scales
+    (:meth:`~simlunar.lidar.returns.ReturnOptions.photon_detector`) and every option of
+    :data:`HARDWARE_SETS` (pulse and jitter, pulse rate and, for a steered beam, its
+    divergence)."""
+    values = {t: getattr(hardware, k) for k, targets in HARDWARE_SETS.items() for t in targets}
+    return _set_from(dataclasses.replace(options, hardware=hardware), values)
+
+
+def generic_hardware(options) -> LidarHardware:
+    """The hardware of ``options`` without an instrument: :class:`LidarHardware`'s defaults
+    with the fields of :data:`HARDWARE_SETS` read from ``options`` (the first place each is
+    found; a flash has no footprint and keeps the default divergence) and a receiver field
+    equal to the beam's divergence (the receiver sees what the beam lights)."""
+    found: dict[str, object] = {}
+
+    def visit(obj) -> None:
+        for k, targets in HARDWARE_SETS.items():
+            for cls, name in targets:
+                if isinstance(obj, cls) and k not in found:
+                    found[k] = getattr(obj, name)
+        for f in dataclasses.fields(obj):
+            v = getattr(obj, f.name)
+            if isinstance(v, Options) and not isinstance(v, LidarHardware):
+                visit(v)
+
+    visit(options)
+    divergence = found.get("divergence_rad", LidarHardware().divergence_rad)
+    return LidarHardware(**found, field_rad=divergence)
 
 
 def guide_directions(camera: Camera, rc: np.ndarray) -> np.ndarray:
@@ -267,10 +322,15 @@ def _unit(d: np.ndarray) -> np.ndarray:
 
 def _beam_detector(capture, options: SteeredBeamOptions) -> DetectorOptions:
     """The detector of one pointing: ``steering.pulses_per_point`` pulses, photon scales of the
-    instrument under the capture's sun."""
-    return options.photon_detector(
+    instrument under the capture's sun (the signal clipped by the receiver's field with
+    ``field_clip``)."""
+    det = options.photon_detector(
         pulses=options.steering.pulses_per_point, sun_irradiance=capture.sun_irradiance
     )
+    if options.field_clip and options.hardware is not None:
+        share = spot_in_field(options.hardware.field_rad, options.footprint)
+        det = dataclasses.replace(det, signal_photons=det.signal_photons * share)
+    return det
 
 
 def _aim(origin, d, times, trajectory, datum_z, gate: GateOptions, retarget: bool):

@@ -32,10 +32,14 @@ from scipy.special import erf
 
 from simlunar.lidar.waveform import TimeBins
 
-__all__ = ["SpadFit", "spad_correct", "spad_counts", "spad_expected"]
+__all__ = ["SpadFit", "spad_background", "spad_correct", "spad_counts", "spad_expected"]
 
 
-@numba.njit(cache=True, nogil=True)
+# not cached on disk: numba's np.random in a cached function read wrong draws (a third of the
+# counts) in a process that had run another numba function first (the Lloyd planner), when the
+# cache was written by a process that had not (tests/lidar/test_spad.py after
+# tests/config/test_planners.py); compiling it costs about a second
+@numba.njit(cache=False, nogil=True)
 def _simulate(lam, pulses, dead_bins, seed):  # pragma: no cover - compiled
     np.random.seed(seed)  # noqa: NPY002 - numba supports the legacy generator only
     n, m = lam.shape
@@ -277,3 +281,69 @@ def spad_correct(
         position=tau.reshape(lead),
         range=bins.range_of(tau).reshape(lead),
     )
+
+
+def spad_background(
+    counts: np.ndarray,
+    bins: TimeBins,
+    *,
+    pulses: int,
+    dead_time_s: float,
+    free_bins: np.ndarray | int,
+    grid: int = 96,
+) -> np.ndarray:
+    """Background photons per bin and pulse estimated from a SPAD histogram's signal-free
+    leading bins (never from the render's background).
+
+    A detection in bin i depends only on the arrivals before it (the detector is armed at
+    the window's start), so the first ``k`` bins of a histogram whose return lies later are
+    the background alone, piled up by itself: their expected sum is
+    ``pulses x sum_{i < k} spad_expected(b)_i``, increasing in the constant rate ``b``. That
+    sum is tabulated on a log grid of ``b`` (1e-7 .. 10 photons per bin) and inverted by
+    interpolation for each histogram's observed sum over its own ``k``.
+
+    Parameters
+    ----------
+    counts : (n, count) int
+        Detections per bin over ``pulses`` pulses.
+    bins : TimeBins
+    pulses : int
+    dead_time_s : float
+        Non-paralysable dead time (s), > 0 (inf: one detection per pulse).
+    free_bins : (n,) int or int
+        The signal-free leading bins of each histogram (those before its return); a
+        histogram with none gets 0.
+    grid : int
+        Rates tabulated.
+
+    Returns
+    -------
+    (n,) float64
+        Background photons per bin and pulse.
+    """
+    h = np.asarray(counts, float).reshape(-1, bins.count)
+    k = np.broadcast_to(np.asarray(free_bins, int), (len(h),)).clip(0, bins.count)
+    kmax = int(k.max()) if len(k) else 0
+    if kmax == 0:
+        return np.zeros(len(h))
+    rates = np.geomspace(1e-7, 10.0, grid)
+    sub = TimeBins(bins.start_opl, bins.bin_opl, kmax)
+    table = spad_expected(np.repeat(rates[:, None], kmax, axis=1), sub,
+                          dead_time_s=dead_time_s)  # fmt: skip
+    cum = np.concatenate([np.zeros((grid, 1)), np.cumsum(table, axis=1)], axis=1)  # (grid, k+1)
+    observed = np.array([h[i, : k[i]].sum() / pulses for i in range(len(h))])
+    out = np.zeros(len(h))
+    for i in range(len(h)):
+        if k[i] == 0:
+            continue
+        col = cum[:, k[i]]
+        out[i] = (
+            0.0
+            if observed[i] <= 0
+            else np.exp(
+                np.interp(
+                    observed[i], col, np.log(rates), left=np.log(rates[0]), right=np.log(rates[-1])
+                )
+            )
+        )
+    return out

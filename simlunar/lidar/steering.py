@@ -37,19 +37,31 @@ MODELS = ("gimbal", "galvanometer", "continuous_raster")
 class SteeringOptions(Options):
     """Two-axis steering mechanics (both axes alike)."""
 
-    max_rate_rad_s: float = option(2.0, doc="largest angular speed of an axis", unit="rad/s", gt=0)
-    max_accel_rad_s2: float = option(
-        50.0, doc="largest angular acceleration of an axis", unit="rad/s^2", gt=0
+    # lower bounds keep every modelled scan time finite (a rate of 1e-300 made it infinite)
+    max_rate_rad_s: float = option(
+        2.0, doc="largest angular speed of an axis (at least 1e-6)", unit="rad/s", ge=1e-6
     )
-    settle_s: float = option(1e-3, doc="settling time after every move", unit="s", ge=0)
-    pulse_rate_hz: float = option(10_000.0, doc="laser pulse repetition rate", unit="1/s", gt=0)
-    pulses_per_point: int = option(1, doc="pulses accumulated into one point's histogram", ge=1)
+    max_accel_rad_s2: float = option(
+        50.0, doc="largest angular acceleration of an axis (at least 1e-6)", unit="rad/s^2",
+        ge=1e-6,
+    )  # fmt: skip
+    settle_s: float = option(
+        1e-3, doc="settling time after every move (at most 1000 s)", unit="s", key_unit="ms",
+        ge=0, le=1000.0,
+    )  # fmt: skip
+    pulse_rate_hz: float = option(
+        10_000.0, doc="laser pulse repetition rate (1e-3 .. 1e9)", unit="1/s", ge=1e-3, le=1e9
+    )
+    pulses_per_point: int = option(
+        1, doc="pulses accumulated into one point's histogram (at most 1e6)", ge=1, le=1_000_000
+    )
     model: str = option("gimbal", doc="the steering model (module docstring)", choices=MODELS)
     line_pitch_rad: float | None = option(
         None,
         doc="continuous raster: elevation height of a line; required by that model (the "
         "steered-beam sensor sets it to the guide camera's pixel pitch when None)",
         unit="rad",
+        key_unit="mrad",
         gt=0,
     )
 

@@ -58,10 +58,13 @@ class Navigation(Options):
         "start: the pose at the trajectory's start (no motion compensation)",
         choices=COMPENSATIONS,
     )
-    position_noise_m: float = option(0.0, doc="noisy: RMS position error per axis", unit="m", ge=0)
-    attitude_noise_rad: float = option(
-        0.0, doc="noisy: RMS pointing knowledge error per axis", unit="rad", ge=0
+    position_noise_m: float = option(
+        0.0, doc="noisy: RMS position error per axis (at most 1 km)", unit="m", ge=0, le=1e3
     )
+    attitude_noise_rad: float = option(
+        0.0, doc="noisy: RMS pointing knowledge error per axis (at most 0.1 rad)", unit="rad",
+        key_unit="urad", ge=0, le=0.1,
+    )  # fmt: skip
 
 
 #: the motion options that :class:`Trajectory`, :class:`Flight` and :class:`PlatformMotion`
@@ -75,10 +78,19 @@ MOTION_OPTIONS: dict[str, dict] = {
         unit="m/s",
     ),
     "attitude_jitter_rad": dict(
-        default=0.0, doc="RMS line-of-sight jitter per axis (0: none)", unit="rad", ge=0
+        default=0.0,
+        doc="RMS line-of-sight jitter per axis (0: none; at most 0.1 rad)",
+        unit="rad",
+        key_unit="urad",
+        ge=0,
+        le=0.1,
     ),
     "jitter_bandwidth_hz": dict(
-        default=10.0, doc="highest frequency of the jitter", unit="Hz", gt=0
+        default=10.0,
+        doc="highest frequency of the jitter (at most 1e5)",
+        unit="Hz",
+        gt=0,
+        le=1e5,
     ),
     "navigation": dict(
         default=Navigation(),

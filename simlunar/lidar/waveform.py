@@ -113,10 +113,20 @@ class PulseOptions(Options):
     """Laser pulse and detector timing response (both Gaussian)."""
 
     fwhm_s: float = option(
-        2e-9, doc="full width at half maximum of the emitted pulse (0: an impulse)", unit="s", ge=0
+        2e-9,
+        doc="full width at half maximum of the emitted pulse (0: an impulse; at most 10 us)",
+        unit="s",
+        key_unit="ns",
+        ge=0,
+        le=1e-5,
     )
     jitter_s: float = option(
-        0.0, doc="RMS timing jitter of the detector and timing electronics", unit="s", ge=0
+        0.0,
+        doc="RMS timing jitter of the detector and timing electronics (at most 10 us)",
+        unit="s",
+        key_unit="ns",
+        ge=0,
+        le=1e-5,
     )
 
     @property

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from simlunar.config.lidar import receiver_wh
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.translate import coding_options, rig_kwargs
 from simlunar.errors import ConfigError, InfrastructureError
@@ -243,8 +244,7 @@ def check_time_bins(s: Any, facts: TerrainFacts) -> None:
         xmin, xmax, ymin, ymax = facts.extent
         span = math.hypot(xmax - xmin, ymax - ymin, facts.zmax - facts.zmin)
         bins = math.ceil((span + 2 * o.margin_m) / o.bin_range_m)
-        block = o.flash if s.sensor == "flash" else o.micromirror
-        w, h = block.receiver_px
+        w, h = receiver_wh(o, "flash" if s.sensor == "flash" else "micromirror")
         pixels = w * h
         what = f"{w} x {h} receiver pixels"
     ov = o.transient.oversample  # rendered on oversample finer bins (docs/lidar.md)

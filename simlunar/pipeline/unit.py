@@ -504,7 +504,7 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
         arrays[f"beams_{label}"] = beam_table(acq)
     scans = None
     if cfg.study.save_scans:  # written by the runner into scans/unit<i>/
-        scans = lidar_export_payload(res.examples, scene.camera, image.shape[:2])
+        scans = lidar_export_payload(res.examples, scene.camera, image.shape[:2], scene.terrain.crs)
     exports = _array_exports(cfg, scene, depth, res)
     return UnitRecord(
         rows=[dict(row) for row in res.rows],

@@ -215,7 +215,10 @@ FLASH_SENSOR_OPTIONS: dict[str, dict] = {
     ),
     "receiver_px": dict(
         default=(64, 64),
-        doc="the receiver array (rows, cols), each >= 1, with the guide camera's field of view",
+        doc="the receiver array (rows, cols), each 1 .. 8192, with the guide camera's field of "
+        "view",
+        ge=1,
+        le=8192,
     ),
     "motion": dict(
         default=None,
@@ -245,13 +248,16 @@ class FlashLidarOptions(Options):
     revisits: int = option(
         0,
         doc="zoomed frames directed by the plan after the full-field frame (0: no plan; at most "
-        "zoom^2)",
+        "zoom^2 and 64)",
         ge=0,
+        le=64,
     )
     zoom: int = option(
         4,
-        doc="a revisit frame sees 1 / zoom of the field on each axis (tiles of a zoom x zoom grid)",
+        doc="a revisit frame sees 1 / zoom of the field on each axis (tiles of a zoom x zoom "
+        "grid; 2 .. 16)",
         ge=2,
+        le=16,
     )
     revisit_from: str = option(
         "plan",
@@ -264,9 +270,12 @@ class FlashLidarOptions(Options):
     range_weight: float = option(0.5, doc="both: the ranges' share of a tile's score", ge=0, le=1)
     repoint_s: float = option(
         0.0,
-        doc="time to re-point and re-zoom the receiver before each revisit, added per revisit",
+        doc="time to re-point and re-zoom the receiver before each revisit, added per revisit "
+        "(at most 1000 s)",
         unit="s",
+        key_unit="ms",
         ge=0,
+        le=1000.0,
     )
     motion: PlatformMotion | None = shared_option(FLASH_SENSOR_OPTIONS, "motion")
 

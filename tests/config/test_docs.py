@@ -30,9 +30,14 @@ def test_rows_carry_type_unit_default_and_description(reference):
     lines = reference.splitlines()
     assert "| `spp` | integer |  | `16` |  |" in lines
     assert "| `elevation_deg` | number | deg | `30.0` | above the horizon (0 < e <= 90) |" in lines
+    # a LIDAR key derived from its library declaration: the unit the key is written in, the
+    # default converted from SI (2e-9 s), the declared doc with the unit
     assert (
-        "| `fwhm_ns` | number | ns | `2.0` | pulse full width at half maximum (ns, at most 10 us) |"
-        in lines
+        "| `fwhm_ns` | number | ns | `2.0` | full width at half maximum of the emitted pulse (0: "
+        "an impulse; at most 10 us) (ns) |" in lines
+    )
+    assert any(
+        line.startswith("| `pulse_energy_uj` | number or null | uJ | `null` |") for line in lines
     )
     assert "| `densities` | [number] |  | required |  |" in lines
     assert any(

@@ -53,9 +53,12 @@ def test_lengths_take_units():
 @pytest.mark.parametrize(
     ("model", "kw", "message"),
     [
-        (PulseCfg, {"fwhm_ns": 0}, "greater than 0"),
+        (PulseCfg, {"fwhm_ns": -1}, "greater than or equal to 0"),
+        (PulseCfg, {"fwhm_ns": 2e4}, "less than or equal to 10000"),
         (PulseCfg, {"jitter_ns": -1}, "greater than or equal to 0"),
-        (DetectorCfg, {"pulses": 0}, "greater than 0"),
+        (DetectorCfg, {"pulses": 0}, "greater than or equal to 1"),
+        # an expert photon scale's sanity limit (the YAML's, not the library's)
+        (DetectorCfg, {"expert_signal_photons": 2e12}, "less than or equal to 1000000000000"),
         (TransientCfg, {"max_depth": 1}, "greater than or equal to 2"),
         (SteeredBeamCfg, {"order": "spiral"}, "Input should be 'nn2opt', 'raster' or 'given'"),
         (SteeredBeamCfg, {"profile": "tophat"}, "Input should be 'gaussian' or 'uniform'"),

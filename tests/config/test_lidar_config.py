@@ -58,3 +58,34 @@ def test_bad_values_are_one_line_errors(sets, message):
     with pytest.raises(ConfigError, match=message) as info:
         load_experiment(DESCENT, parse_set(sets))
     assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "sets, message",
+    [
+        # the gate's rule across fields (GateOptions) at load, naming its block
+        (["study.options.gate={min_range_m: 50, max_range_m: 40}"],
+         r"study\.options\.gate: min_range_m must be < max_range_m"),
+        # a divergence is a cone within a hemisphere: below pi/2 rad = 1570796 urad
+        (["study.options.hardware.divergence_urad=1.6e6"],
+         r"hardware\.divergence_urad: .*less than 1570796"),
+        (["study.options.hardware.receiver_px=[0, 4]"], r"hardware\.receiver_px\[0\]: .*greater than or equal to 1"),
+    ],
+)  # fmt: skip
+def test_the_library_rules_fail_at_load(sets, message):
+    with pytest.raises(ConfigError, match=message) as info:
+        load_experiment(DESCENT, parse_set(sets))
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "sets, message",
+    [
+        (["study.options.pulse.fwhm_n=3"], r"fwhm_n.*did you mean 'fwhm_ns'"),
+        (["study.options.hardware.pulse_energy_j=3"], r"pulse_energy_j.*did you mean 'pulse_energy_uj'"),
+        (["study.options.steered_beam.footprint_ray=3"], r"did you mean 'footprint_rays'"),
+    ],
+)  # fmt: skip
+def test_a_misspelt_derived_key_names_the_closest(sets, message):
+    with pytest.raises(ConfigError, match=message):
+        load_experiment(DESCENT, parse_set(sets))

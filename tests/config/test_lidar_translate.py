@@ -146,3 +146,71 @@ def test_a_flash_and_a_micromirror_take_the_platform_s_motion():
     assert so.motion.navigation.compensation == "start"
     at_rest = LidarStudyCfg(kind="lidar", sensor="micromirror_flash")
     assert lidar_translate.lidar_sensor_options(at_rest).motion is None
+
+
+def _flash_study(instrument, receiver=None, hardware=None):
+    flash = {} if receiver is None else {"receiver_px": receiver}
+    return LidarStudyCfg(kind="lidar", sensor="flash",
+                         options={"instrument": instrument, "flash": flash,
+                                  "hardware": hardware or {}})  # fmt: skip
+
+
+def test_a_flash_takes_its_instrument_s_receiver_array():
+    from simlunar.config.lidar import receiver_wh
+
+    # the ALHAT-class preset is a 128 x 128 array; a YAML receiver_px wins; without an
+    # instrument (or with a one-detector one) the library's 64 x 64
+    assert lidar_translate.lidar_sensor_options(_flash_study("alhat_flash")).receiver_px == (
+        128,
+        128,
+    )
+    assert receiver_wh(_flash_study("alhat_flash").options, "flash") == (128, 128)
+    got = lidar_translate.lidar_sensor_options(_flash_study("alhat_flash", [40, 30]))
+    assert got.receiver_px == (30, 40)
+    # a hardware override of the array, (width, height) as every receiver_px of the YAML
+    o = _flash_study("alhat_flash", hardware={"receiver_px": [48, 32]})
+    assert lidar_translate.lidar_sensor_options(o).receiver_px == (32, 48)
+    assert receiver_wh(o.options, "flash") == (48, 32)
+    assert lidar_translate.lidar_sensor_options(_flash_study(None)).receiver_px == (64, 64)
+    assert lidar_translate.lidar_sensor_options(_flash_study("lola_beam")).receiver_px == (64, 64)
+
+
+def test_hardware_keys_convert_from_their_declared_units():
+    o = LidarStudyCfg(kind="lidar",
+                      options={"instrument": "lola_beam",
+                               "hardware": {"pulse_energy_uj": 10, "wavelength_nm": 1550,
+                                            "aperture_diameter_mm": 100, "divergence_urad": 50,
+                                            "field_urad": 200, "pulse_fwhm_ns": 3}}).options  # fmt: skip
+    hw = lidar_translate.lidar_hardware(o, "steered_beam")
+    assert hw.pulse_energy_j == 10 * 1e-6 and hw.wavelength_m == 1550 * 1e-9
+    assert hw.aperture_diameter_m == 100 * 1e-3 and hw.divergence_rad == 50 * 1e-6
+    assert hw.field_rad == 200 * 1e-6 and hw.pulse_fwhm_s == 3 * 1e-9
+    assert hw.optics_efficiency == 0.5  # the preset's, not overridden
+    # an override block writes back only what it sets
+    assert o.hardware.model_dump() == {
+        "pulse_energy_uj": 10.0, "wavelength_nm": 1550.0, "pulse_fwhm_ns": 3.0,
+        "aperture_diameter_mm": 100.0, "divergence_urad": 50.0, "field_urad": 200.0,
+    }  # fmt: skip
+
+
+def test_the_instrument_names_are_the_presets():
+    from simlunar.config.lidar import LidarOptionsCfg
+    from simlunar.lidar.hardware import INSTRUMENTS
+
+    ann = LidarOptionsCfg.model_fields["instrument"].annotation
+    assert set(ann.__args__[0].__args__) == set(INSTRUMENTS)
+
+
+def test_every_instrument_preset_translates_at_its_own_numbers():
+    # a bound on the detector's photon scales once refused the LOLA-class preset's own
+    # scale (~9e12 photons per unit rendered radiance at 0.54 mJ)
+    from simlunar.lidar.hardware import INSTRUMENTS
+
+    for name in INSTRUMENTS:
+        for sensor in ("steered_beam", "flash", "micromirror_flash"):
+            study = LidarStudyCfg(kind="lidar", sensor=sensor, options={"instrument": name})
+            det = lidar_translate.lidar_sensor_options(study, seed=0)
+            flash = getattr(det, "flash", det)
+            assert flash.hardware is INSTRUMENTS[name] or flash.hardware == INSTRUMENTS[name]
+            if sensor == "steered_beam":
+                assert flash.photon_detector().signal_photons > 0

@@ -77,3 +77,39 @@ def test_bad_options():
         DetectorOptions(apd=ApdOptions(), dead_time_s=1e-9)
     assert DetectorOptions(apd=ApdOptions()).regime == "linear_apd"
     assert DetectorOptions(dead_time_s=1e-9).regime == "spad"
+
+
+def test_a_saturated_return_is_flat_topped_at_the_full_scale_per_pulse():
+    # 2.5e6 photoelectrons in one bin (a descent's APD) against a 1000 pe full scale: each of
+    # 4 pulses clips at 1000, so the bin reads exactly 4000 whatever its noise; a bin far below
+    # the full scale reads as without it (mean 4 x 10, Poisson with F = 1: no excess noise)
+    from simlunar.lidar.apd import ApdOptions, apd_waveform
+
+    opts = ApdOptions(gain=1.0, ionisation_ratio=0.0, amplifier_noise_pe=0.0, full_scale_pe=1000.0)
+    assert opts.excess_noise == pytest.approx(1.0)
+    lam = np.zeros((2000, 3))
+    lam[:, 0], lam[:, 1] = 2.5e6, 10.0
+    w = apd_waveform(lam, options=opts, pulses=4, rng=0)
+    assert (w[:, 0] == 4000.0).all()
+    assert w[:, 1].mean() == pytest.approx(40.0, rel=0.02)
+    assert w[:, 1].var() == pytest.approx(40.0, rel=0.1)
+    assert (w[:, 2] == 0).all()
+    # the ideal receiver (no full scale) keeps every photoelectron
+    ideal = apd_waveform(lam, options=ApdOptions(gain=1.0, ionisation_ratio=0.0,
+                                                 amplifier_noise_pe=0.0), pulses=4, rng=0)  # fmt: skip
+    assert ideal[:, 0].mean() == pytest.approx(1e7, rel=1e-3)
+
+
+def test_the_digitiser_rounds_to_its_steps_with_the_uniform_quantisation_noise():
+    # 8 bits over 256 pe: 1 pe steps; a bin of mean 20.3 pe with 3 pe amplifier noise: every
+    # reading a whole number, the variance F n + sigma^2 + step^2 / 12 (Widrow's model)
+    from simlunar.lidar.apd import ApdOptions, apd_waveform
+
+    opts = ApdOptions(gain=1.0, ionisation_ratio=0.0, amplifier_noise_pe=3.0,
+                      full_scale_pe=256.0, bits=8)  # fmt: skip
+    w = apd_waveform(np.full((40_000, 1), 20.3), options=opts, pulses=1, rng=1)
+    assert np.array_equal(w, np.round(w))
+    assert w.mean() == pytest.approx(20.3, abs=0.05)
+    assert w.var() == pytest.approx(20.3 + 9.0 + 1.0 / 12.0, rel=0.03)
+    with pytest.raises(ValueError, match="bits: a digitiser's resolution needs its full_scale_pe"):
+        ApdOptions(bits=12)

@@ -35,7 +35,7 @@ def _nadir(px: int, fov_deg: float, height: float = H) -> Camera:
     [
         ({"bin_range_m": 0.0}, "bin_range_m must be > 0, got 0.0"),
         ({"margin_m": -1.0}, "margin_m must be >= 0, got -1.0"),
-        ({"pulse_rate_hz": 0.0}, "pulse_rate_hz must be > 0, got 0.0"),
+        ({"pulse_rate_hz": 0.0}, "pulse_rate_hz must be >= 0.001, got 0.0"),
     ],
 )
 def test_flash_options_refuse_bad_bins_margins_and_rates(kwargs, match):

@@ -49,3 +49,46 @@ def test_footprint_options_refuse_bad_values(kw, match):
     with pytest.raises(ValueError, match=match):
         FootprintOptions(**kw)
     assert FootprintOptions(divergence_rad=0.0).sigma_rad == 0.0  # a single ray is valid
+
+
+@pytest.mark.parametrize("profile", ["gaussian", "uniform"])
+@pytest.mark.parametrize("ratio", [0.5, 1.0, 1.4, 4.0])
+def test_spot_in_field_is_the_sampled_spot_s_share(profile, ratio):
+    # the closed form against the footprint's own sampler: the share of 200 000 sampled rays
+    # whose offset lies inside the field's half-angle
+    from simlunar.lidar.footprint import spot_in_field
+
+    o = FootprintOptions(divergence_rad=1e-3, profile=profile)
+    u = np.random.default_rng(0).random((200_000, 2))
+    r = np.hypot(*cone_offsets(u, o).T)
+    share = spot_in_field(ratio * 1e-3, o)
+    assert share == pytest.approx(np.mean(r < 0.5 * ratio * 1e-3), abs=3e-3)
+    if profile == "gaussian" and ratio == 1.0:
+        # the rover preset's 1 mrad beam in its 1 mrad field: 1 - e^-2 of the untruncated
+        # beam (the issue's +16 % signal of a receiver that sees the whole spot: 1 / 0.865)
+        assert share == pytest.approx((1 - np.exp(-2.0)) / (1 - np.exp(-4.5)), rel=1e-12)
+        assert 1 / share == pytest.approx(1.146, abs=0.01)
+
+
+def test_a_steered_beam_s_field_clip_scales_its_signal():
+    from simlunar.lidar.footprint import spot_in_field
+    from simlunar.lidar.hardware import INSTRUMENTS
+    from simlunar.lidar.scan import SteeredBeamOptions, _beam_detector, with_hardware
+
+    class _Sun:
+        sun_irradiance = 1.0
+
+    hw = INSTRUMENTS["rover_mast_scanner"]
+    ideal = with_hardware(SteeredBeamOptions(), hw)
+    clipped = with_hardware(SteeredBeamOptions(field_clip=True), hw)
+    a, b = _beam_detector(_Sun, ideal), _beam_detector(_Sun, clipped)
+    share = spot_in_field(hw.field_rad, clipped.footprint)
+    assert b.signal_photons == pytest.approx(share * a.signal_photons, rel=1e-12)
+    assert share < 0.9 and b.background_photons_per_s == a.background_photons_per_s
+    # LOLA's 400 urad field holds its 100 urad beam whole
+    lola = with_hardware(SteeredBeamOptions(field_clip=True), INSTRUMENTS["lola_beam"])
+    assert _beam_detector(_Sun, lola).signal_photons == pytest.approx(
+        _beam_detector(
+            _Sun, with_hardware(SteeredBeamOptions(), INSTRUMENTS["lola_beam"])
+        ).signal_photons
+    )

@@ -109,7 +109,13 @@ def test_the_presets_file_holds_the_published_numbers():
     assert INSTRUMENTS["rover_mast_scanner"].dark_count_rate_hz == 100.0
     # ASTM E490 (air mass zero): 0.64 W m^-2 nm^-1 at 1064 nm, in every preset
     assert {hw.solar_irradiance_w_m2_nm for hw in INSTRUMENTS.values()} == {0.64}
-    assert all(type(v) is float for hw in INSTRUMENTS.values() for v in vars(hw).values())
+    # every number a float (an int from the file converted), the receiver arrays int pairs
+    for hw in INSTRUMENTS.values():
+        for k, v in vars(hw).items():
+            if k == "receiver_px":
+                assert v is None or (len(v) == 2 and all(type(x) is int for x in v))
+            else:
+                assert type(v) is float, k
 
 
 GOOD = """
@@ -136,6 +142,23 @@ def test_an_instruments_file_round_trips_its_values(tmp_path):
     hw = load_instruments(path)["probe"]
     assert hw.divergence_rad == np.radians(2.0) and hw.pulse_rate_hz == 30.0
     assert dataclasses.replace(hw, pulse_energy_j=1e-3) == hw
+    assert hw.receiver_px is None  # one detector
+
+
+def test_an_instrument_left_out_field_takes_its_declared_default(tmp_path):
+    # a field added to LidarHardware needs no edit of every preset: a preset without it keeps
+    # the declared default (and a preset that gives it, its own value)
+    path = tmp_path / "instruments.toml"
+    path.write_text(GOOD.replace("jitter_s = 0.1e-9\n", "") + "receiver_px = [128, 64]\n")
+    hw = load_instruments(path)["probe"]
+    assert hw.jitter_s == LidarHardware().jitter_s
+    assert hw.receiver_px == (128, 64)
+
+
+def test_the_flash_presets_carry_their_receiver_array_and_field():
+    alhat = INSTRUMENTS["alhat_flash"]
+    assert alhat.receiver_px == (128, 128) and alhat.field_rad == pytest.approx(np.radians(1.0))
+    assert INSTRUMENTS["lola_beam"].receiver_px is None
 
 
 @pytest.mark.parametrize(
@@ -145,7 +168,18 @@ def test_an_instruments_file_round_trips_its_values(tmp_path):
             lambda t: t.replace("pulse_rate_hz", "pulse_rate"),
             r"\[probe\] has no field 'pulse_rate' \(did you mean 'pulse_rate_hz'\?\)",
         ),
-        (lambda t: t.replace("jitter_s = 0.1e-9\n", ""), r"\[probe\] lacks jitter_s"),
+        (
+            lambda t: t + "receiver_px = [128, 0]\n",
+            r"\[probe\] receiver_px must be each >= 1, got \(128, 0\)",
+        ),
+        (
+            lambda t: t + "receiver_px = 128\n",
+            r"\[probe\] receiver_px must be a list of numbers, got 128",
+        ),
+        (
+            lambda t: t.replace("divergence_deg = 2.0", "divergence_deg = 90.0"),
+            r"\[probe\] divergence_rad must be < 1\.5708",
+        ),
         (
             lambda t: t.replace("optics_efficiency = 0.5", "optics_efficiency = 1.5"),
             r"\[probe\] optics_efficiency must be <= 1, got 1\.5",
@@ -167,3 +201,29 @@ def test_a_bad_instruments_entry_is_named(tmp_path, edit, message):
     path.write_text(edit(GOOD))
     with pytest.raises(ValueError, match=message):
         load_instruments(path)
+
+
+def test_with_hardware_sets_every_option_of_hardware_sets_and_nothing_else():
+    from simlunar.lidar.flash import FlashOptions
+    from simlunar.lidar.scan import (
+        HARDWARE_SETS,
+        SteeredBeamOptions,
+        generic_hardware,
+        with_hardware,
+    )
+
+    hw = INSTRUMENTS["lola_beam"]
+    beam = with_hardware(SteeredBeamOptions(window_m=9.0), hw)
+    assert beam.hardware is hw and beam.window_m == 9.0
+    assert (beam.pulse.fwhm_s, beam.pulse.jitter_s) == (hw.pulse_fwhm_s, hw.jitter_s)
+    assert beam.footprint.divergence_rad == hw.divergence_rad == 100e-6
+    assert beam.steering.pulse_rate_hz == hw.pulse_rate_hz == 28.0
+    assert beam.steering.max_rate_rad_s == SteeredBeamOptions().steering.max_rate_rad_s
+    flash = with_hardware(FlashOptions(), INSTRUMENTS["alhat_flash"])
+    assert flash.pulse_rate_hz == 30.0 and flash.pulse.fwhm_s == 6e-9
+    # the generic hardware reads the same options back (and its receiver sees the beam)
+    back = generic_hardware(beam)
+    for k in HARDWARE_SETS:
+        assert getattr(back, k) == getattr(hw, k), k
+    assert back.field_rad == back.divergence_rad
+    assert generic_hardware(FlashOptions()).divergence_rad == LidarHardware().divergence_rad

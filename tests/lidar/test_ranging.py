@@ -265,3 +265,90 @@ def test_a_wide_return_is_tested_in_a_window_of_its_own_width_by_hand():
     sig = shape_waveform(_impulse(np.array([[50.0]])), BINS, wide)
     assert extract_ranges(70 * sig + 5.0, BINS, pulse=wide).valid[0]
     assert not extract_ranges(40 * sig + 5.0, BINS, pulse=wide).valid[0]
+
+
+def _cut_returns(truth, photons=200.0):
+    """Noise-free counts of returns at ``truth`` (m), the histogram cut at the window's edges
+    (bins outside 40-60 m are not recorded): a return near an edge loses part of its pulse."""
+    wide = TimeBins.for_ranges(35.0, 65.0, 0.05)
+    ranges = np.atleast_1d(truth)
+    x = (2 * ranges - wide.start_opl) / wide.bin_opl - 0.5
+    h = np.zeros((len(ranges), wide.count))
+    i0 = np.floor(x).astype(int)
+    f = x - i0
+    h[np.arange(len(ranges)), i0] = 1 - f
+    h[np.arange(len(ranges)), i0 + 1] = f
+    sig = shape_waveform(h, wide, PULSE)
+    first = round((BINS.start_opl - wide.start_opl) / wide.bin_opl)
+    return photons * sig[:, first : first + BINS.count] + 0.01
+
+
+def test_a_return_cut_by_the_gate_s_edge_is_rejected_not_read_biased():
+    # a 1 ns pulse (sigma 0.43 ns, 6.5 cm in range) centred 2 sigma before the window's start
+    # leaves only its tail (5 of 200 photons, falling from the first bin): read without a
+    # guard it is accepted at the window's edge, about 2 sigma (13 cm, 2.6 bins) from the
+    # truth; with the guard it is rejected. Returns centred on the edge (+-0.5 sigma: half a
+    # pulse) are read within 1 cm by the fit, but they too lie within the guard
+    sigma_m = PULSE.sigma_s * 299_792_458.0 / 2
+    truth = 40.0 + np.array([-2.0, -0.5, 0.0, 0.5]) * sigma_m
+    counts = _cut_returns(truth)
+    kept = extract_ranges(counts, BINS, pulse=PULSE)
+    err = kept.range - truth
+    assert kept.valid.all() and err[0] > 1.5 * sigma_m  # the bug: accepted, biased
+    guarded = extract_ranges(counts, BINS, pulse=PULSE, options=RangeOptions(edge_sigma=3.0))
+    assert not guarded.valid.any()
+    assert np.isnan(guarded.range).all()
+    # returns 4 sigma from either edge are kept and unbiased
+    inside = np.array([40.0 + 4 * sigma_m, 50.0, 60.0 - 4 * sigma_m])
+    res = extract_ranges(_cut_returns(inside), BINS, pulse=PULSE,
+                         options=RangeOptions(edge_sigma=3.0))  # fmt: skip
+    assert res.valid.all() and np.abs(res.range - inside).max() < 0.25 * BINS.bin_range
+    # the far edge alike
+    far = _cut_returns([60.0 + 2 * sigma_m])
+    assert extract_ranges(far, BINS, pulse=PULSE).valid.all()
+    assert not extract_ranges(
+        far, BINS, pulse=PULSE, options=RangeOptions(edge_sigma=3)
+    ).valid.any()
+
+
+def test_no_accepted_return_near_an_edge_is_off_by_more_than_a_bin():
+    # swept through the start of the window: with the guard every accepted range is within a
+    # bin of the truth (without it the cut returns are accepted centimetres off)
+    sigma_m = PULSE.sigma_s * 299_792_458.0 / 2
+    truth = np.linspace(40.0 - 2 * sigma_m, 40.0 + 5 * sigma_m, 57)
+    counts = _cut_returns(truth)
+    res = extract_ranges(counts, BINS, pulse=PULSE, options=RangeOptions(edge_sigma=3.0))
+    assert res.valid.any()
+    assert np.abs(res.range[res.valid] - truth[res.valid]).max() < BINS.bin_range
+    plain = extract_ranges(counts, BINS, pulse=PULSE)
+    assert np.abs(plain.range[plain.valid] - truth[plain.valid]).max() > BINS.bin_range
+
+
+@pytest.mark.parametrize("photons, background", [(1.0, 0.002), (0.5, 0.01), (2.0, 0.02)])
+def test_detection_probability_matches_a_monte_carlo(photons, background):
+    # the closed form of the detection test against 3000 simulated histograms at the pulses
+    # it chooses for 90 %, and at half as many
+    from simlunar.lidar.ranging import detection_probability, pulses_for_detection
+
+    n = pulses_for_detection(photons, background, target=0.9, bins=BINS, pulse=PULSE)
+    assert detection_probability(photons, background, n, bins=BINS, pulse=PULSE) >= 0.9
+    assert detection_probability(photons, background, n - 1, bins=BINS, pulse=PULSE) < 0.9
+    rng = np.random.default_rng(int(photons * 100))
+    truth = rng.uniform(45.0, 55.0, 3000)
+    sig = shape_waveform(_impulse(truth[:, None]), BINS, PULSE)
+    for pulses in (n, max(1, n // 2)):
+        lam = photons * sig + background
+        counts = rng.poisson(lam * pulses)
+        res = extract_ranges(counts, BINS, pulse=PULSE)
+        hit = res.valid & (np.abs(res.range - truth) < 3 * BINS.bin_range)
+        p = detection_probability(photons, background, pulses, bins=BINS, pulse=PULSE)
+        assert hit.mean() == pytest.approx(float(p), abs=0.06), pulses
+
+
+def test_pulses_for_detection_refuses_what_it_cannot_reach():
+    from simlunar.lidar.ranging import pulses_for_detection
+
+    with pytest.raises(ValueError, match=r"not detected with probability 0\.9"):
+        pulses_for_detection(1e-4, 0.5, target=0.9, bins=BINS, pulse=PULSE, max_pulses=100)
+    with pytest.raises(ValueError, match=r"target must be in \(0, 1\)"):
+        pulses_for_detection(1.0, 0.0, target=1.0, bins=BINS, pulse=PULSE)

@@ -27,7 +27,9 @@ from simlunar.lidar.waveform import splat_paths
         ({"spp": 0}, "spp must be >= 1"),
         ({"seed": -1}, "seed must be >= 0, got -1"),
         ({"oversample": 0}, "oversample must be >= 1"),
-        ({"max_depth": 0}, "max_depth must be -1 or >= 1"),
+        ({"max_depth": 1}, "max_depth must be >= 2"),  # depth 1 never sees the laser
+        ({"max_depth": -1}, "max_depth must be >= 2"),
+        ({"max_depth": 17}, "max_depth must be <= 16"),
         ({"laser_intensity": 0.0}, "laser_intensity must be > 0"),
     ],
 )

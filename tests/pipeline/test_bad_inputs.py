@@ -802,7 +802,7 @@ def lidar(key: str, value) -> dict:
 LIDAR_CASES = [
     Case("lidar margin 5 m in the default 8 m window", lidar("options.margin_m", 5), "study.options.margin_m: 5 m leaves no range in the 8 m window of a rendered batch (steered_beam.window_m must exceed 2 x margin_m = 10 m)"),
     Case("lidar margin equal to half the window", lidar("options.steered_beam.window_m", 4), "steered_beam.window_m must exceed 2 x margin_m = 4 m"),
-    Case("lidar divergence above pi/2", lidar("options.steered_beam.divergence_mrad", 2000), "study.options.steered_beam.divergence_mrad: Input should be less than or equal to 1570.79"),
+    Case("lidar divergence above pi/2", lidar("options.steered_beam.divergence_mrad", 2000), "study.options.steered_beam.divergence_mrad: Input should be less than 1570.79"),
     Case("lidar signal photons 1e30", lidar("options.detector.expert_signal_photons", 1e30), "study.options.detector.expert_signal_photons: Input should be less than or equal to 1000000000000"),
     Case("lidar background 1e30 photons/s", lidar("options.detector.expert_background_photons_per_s", 1e30), "study.options.detector.expert_background_photons_per_s: Input should be less than or equal to"),
     Case("lidar dark counts 1e20", lidar("options.detector.expert_dark_count_rate_hz", 1e20), "study.options.detector.expert_dark_count_rate_hz: Input should be less than or equal to"),

@@ -89,7 +89,7 @@ def test_flash_options_refuse_more_revisits_than_tiles():
         ({"revisit_from": "image"}, "revisit_from must be one of 'plan', 'ranges', 'both'"),
         ({"range_weight": 1.5}, r"range_weight must be <= 1, got 1\.5"),
         ({"repoint_s": float("inf")}, "repoint_s must be a finite number, got inf"),
-        ({"receiver_px": (64, 0)}, r"receiver_px must be \(rows, cols\) >= 1, got \(64, 0\)"),
+        ({"receiver_px": (64, 0)}, r"receiver_px must be each >= 1, got \(64, 0\)"),
         ({"receiver_px": (64,)}, r"receiver_px must be \(rows, cols\) >= 1"),
     ],
 )

@@ -106,5 +106,5 @@ def test_micromirror_options_share_the_flash_sensors_receiver_and_its_check():
     mm, fl = MicromirrorOptions(), FlashLidarOptions()
     assert (mm.flash, mm.receiver_px, mm.motion) == (fl.flash, fl.receiver_px, fl.motion)
     assert mm.receiver_px == (64, 64) and mm.motion is None
-    with pytest.raises(ValueError, match=r"receiver_px must be \(rows, cols\) >= 1, got \(0, 8\)"):
+    with pytest.raises(ValueError, match=r"receiver_px must be each >= 1, got \(0, 8\)"):
         MicromirrorOptions(receiver_px=(0, 8))
