@@ -39,7 +39,7 @@ from simlunar.config.studies import (
 )
 from simlunar.planner import DEFAULT_PLANNER, STRATEGIES
 from simlunar.scanner.codings import CODINGS, DEFAULT_CODING, full_field_codings
-from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.scanner.rescan import SCAN_PLANNERS
 from simlunar.scanner.scheduling import check_spacings
 from simlunar.sensors.structured_light import MODES, mode_coding
 
@@ -114,7 +114,7 @@ CODING_OPTS = {
 
 
 class DotOptsCfg(_Model):
-    """Dot scan options (:func:`simlunar.scanner.scans.dot_scan`)."""
+    """Dot scan options (:func:`simlunar.scanner.dot_scan.dot_scan`)."""
 
     exact: bool = Field(False, description="one dot per frame (reference mode)")
     radius_px: Px = Field(0.0, description="dot radius (projector px); 0 = one pixel")

@@ -46,7 +46,7 @@ from simlunar.render.capture import CaptureOptions
 from simlunar.render.lights import make_light
 from simlunar.render.materials import make_bsdf
 from simlunar.scanner.codings import CODINGS
-from simlunar.scanner.scans import DotOptions
+from simlunar.scanner.dot_scan import DotOptions
 from simlunar.study.sampling import SamplingStudyOptions
 from simlunar.study.scanner import ScannerStudyOptions
 from simlunar.terrain import generate
@@ -373,7 +373,7 @@ def coding_options(opts) -> dict[str, Any]:
 
 
 def dot_options(opts: DotOptsCfg) -> DotOptions:
-    """:class:`~simlunar.scanner.scans.DotOptions` of a config (``_px`` suffixes dropped)."""
+    """:class:`~simlunar.scanner.dot_scan.DotOptions` of a config (``_px`` suffixes dropped)."""
     return DotOptions(**{k.removesuffix("_px"): v for k, v in opts.model_dump().items()})
 
 

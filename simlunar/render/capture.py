@@ -39,7 +39,7 @@ EXPOSURE_PERCENTILE = AUTO_EXPOSURE_PERCENTILE
 
 
 class Capture(Protocol):
-    """What the structured-light scans (:mod:`simlunar.scanner.scans`) drive: a camera that
+    """What the structured-light scans (:mod:`simlunar.scanner.gray_code`, :mod:`simlunar.scanner.dot_scan`, ...) drive: a camera that
     sees the scene under projector patterns. :class:`RenderCapture` renders through Mitsuba;
     tests use NumPy captures."""
 

@@ -210,7 +210,7 @@ def scan_export_payload(scan, rig) -> dict[str, Any]:
 
     Parameters
     ----------
-    scan : :class:`simlunar.scanner.scans.CodedScan`
+    scan : :class:`simlunar.scanner.result.CodedScan`
         The scan (its captured frames, decode, cloud and coding); scanned with
         ``keep_frames=True`` (the streaming decoders keep no frame stack otherwise).
     rig : Rig

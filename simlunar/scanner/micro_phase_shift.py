@@ -40,7 +40,7 @@ from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
 from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, scan_inputs
 from simlunar.scanner.fringes import wrapped_phase
 from simlunar.scanner.phase_shift import PhaseDecode, PhaseShiftCoding, PhaseShiftOptions
-from simlunar.scanner.scans import coded_scan
+from simlunar.scanner.result import coded_scan
 
 __all__ = [
     "MicroPhaseShiftCoding",

@@ -43,7 +43,7 @@ from simlunar.registry import option, shared_option
 from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
 from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, render_checked, scan_inputs
 from simlunar.scanner.fringes import fringe_periods, unwrap, wrapped_phase
-from simlunar.scanner.scans import coded_scan
+from simlunar.scanner.result import coded_scan
 
 __all__ = [
     "PhaseDecode",
@@ -337,7 +337,7 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     White and black are rendered first; then every level's shifts (with an even ``steps`` and
     ``inverses="linearity"`` only the first half: the rest are ``white + black - image``),
     each level sensed and decoded before the next. The capture protocol is that of
-    :mod:`simlunar.scanner.scans`.
+    :mod:`simlunar.scanner.gray_code`.
 
     Returns
     -------

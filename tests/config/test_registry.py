@@ -12,7 +12,7 @@ from simlunar.config.terrain import preset_names as shipped_presets
 from simlunar.errors import ConfigError
 from simlunar.metrics import METRICS
 from simlunar.planner import MEASURING, ORACLES, STRATEGIES
-from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.scanner.rescan import SCAN_PLANNERS
 from simlunar.sensors.structured_light import MODES
 
 

@@ -20,9 +20,9 @@ from simlunar.imaging.exr import read_exr
 from simlunar.imaging.sensor import SensorModel
 from simlunar.render.capture import CaptureOptions, RenderCapture
 from simlunar.results import exports
-from simlunar.scanner import rigs, scans
+from simlunar.scanner import rigs
 from simlunar.scanner.codings import make_coding
-from simlunar.scanner.scans import GrayCodeOptions
+from simlunar.scanner.gray_code import GrayCodeOptions, gray_code_scan
 from simlunar.terrain.types import Terrain
 
 pytestmark = pytest.mark.render
@@ -50,7 +50,7 @@ def _capture():
 @pytest.fixture(scope="module")
 def scan(tmp_path_factory):
     rig, cap = _capture()
-    gray = scans.gray_code_scan(cap, rig, GrayCodeOptions(keep_frames=True))
+    gray = gray_code_scan(cap, rig, GrayCodeOptions(keep_frames=True))
     folder = tmp_path_factory.mktemp("export") / "unit0"
     exports.write_scan_export(folder, exports.scan_export_payload(gray, rig))
     return rig, gray, folder
