@@ -45,9 +45,9 @@ def test_an_unknown_name_lists_the_valid_ones_sorted():
         " (did you mean 'mse'?)"
     )
     with pytest.raises(
-        ConfigError, match=r"^study\.modes\[0\]: unknown scan mode 'binary' \(valid: "
+        ConfigError, match=r"^study\.modes\[0\]: unknown scan mode 'laser' \(valid: "
     ):
-        registry.check_scan_mode("binary", "study.modes[0]")
+        registry.check_scan_mode("laser", "study.modes[0]")
     for mode in MODES:
         registry.check_scan_mode(mode, "study.modes[0]")
 
