@@ -39,7 +39,7 @@ from simlunar.registry import option, shared_option
 from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
 from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, scan_inputs
 from simlunar.scanner.fringes import wrapped_phase
-from simlunar.scanner.phase_shift import PhaseDecode, PhaseShiftCoding, PhaseShiftOptions
+from simlunar.scanner.phase_shift import PhaseDecode, coord_scores
 from simlunar.scanner.result import coded_scan
 
 __all__ = [
@@ -274,5 +274,4 @@ class MicroPhaseShiftCoding(WhiteBlackLastCoding):
 
     def truth_scores(self, scan, truth: dict, mask=None) -> dict[str, float]:
         """As the phase shift's: ``coord_err_rate`` and ``coord_rmse_px``."""
-        axes = self.options.axes
-        return PhaseShiftCoding(PhaseShiftOptions(axes=axes)).truth_scores(scan, truth, mask)
+        return coord_scores(scan.decode, truth, mask, rows=self.options.axes == "both")

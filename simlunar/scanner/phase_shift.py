@@ -50,6 +50,7 @@ __all__ = [
     "PhaseDecoder",
     "PhaseShiftCoding",
     "PhaseShiftOptions",
+    "coord_scores",
     "decode",
     "encode",
     "frame_names",
@@ -405,21 +406,29 @@ class PhaseShiftCoding(WhiteBlackLastCoding):
         }
 
     def truth_scores(self, scan, truth: dict, mask=None) -> dict[str, float]:
-        """``coord_err_rate``: fraction of valid camera pixels whose decoded projector column
-        (or row) is more than one pixel off the true one (an unwrapping error), and
-        ``coord_rmse_px``: RMS of the decoded minus the true column over the rest (px).
-        Only pixels lit in the truth and the decode count."""
-        dec = scan.decode
-        m = truth["lit"] & dec.valid & (truth["col"] >= 0)
-        if mask is not None:
-            m &= np.asarray(mask, bool)
-        du = np.abs(dec.u - (truth["col"] + 0.5))
-        bad = du > 1.0
-        if self.options.axes == "both":
-            bad |= np.abs(dec.v - (truth["row"] + 0.5)) > 1.0
-        n = int(m.sum())
-        if n == 0:
-            return {"coord_err_rate": float("nan"), "coord_rmse_px": float("nan")}
-        good = m & ~bad
-        rmse = float(np.sqrt(np.mean(du[good] ** 2))) if good.any() else float("nan")
-        return {"coord_err_rate": float((bad & m).sum() / n), "coord_rmse_px": rmse}
+        """The decoding error against the continuous truth (``truth["uv"]``: where each
+        camera pixel's ray meets the projector image, not the pixel it falls in):
+        ``coord_err_rate``, the fraction of valid camera pixels decoded more than one projector
+        pixel off in u (or v, with rows coded): an unwrapping error; ``coord_rmse_px``, the RMS
+        of decoded minus true u over the rest (projector px). Only pixels lit in the truth and
+        the decode count."""
+        return coord_scores(scan.decode, truth, mask, rows=self.options.axes == "both")
+
+
+def coord_scores(dec, truth: dict, mask=None, *, rows: bool = True) -> dict[str, float]:
+    """:meth:`PhaseShiftCoding.truth_scores` of a decode with ``u``, ``v`` (``rows``: v is
+    coded and scored too)."""
+    tu, tv = truth["uv"][..., 0], truth["uv"][..., 1]
+    m = truth["lit"] & dec.valid & np.isfinite(tu)
+    if mask is not None:
+        m &= np.asarray(mask, bool)
+    du = np.abs(dec.u - tu)
+    bad = du > 1.0
+    if rows:
+        bad |= np.abs(dec.v - tv) > 1.0
+    n = int(m.sum())
+    if n == 0:
+        return {"coord_err_rate": float("nan"), "coord_rmse_px": float("nan")}
+    good = m & ~bad
+    rmse = float(np.sqrt(np.mean(du[good] ** 2))) if good.any() else float("nan")
+    return {"coord_err_rate": float((bad & m).sum() / n), "coord_rmse_px": rmse}
