@@ -39,6 +39,7 @@ from simlunar.config.terrain import (
 )
 from simlunar.geometry import Camera, Intrinsics, OrthoCamera, Pose, rover_mast_camera
 from simlunar.imaging.exposure import auto_exposure_e
+from simlunar.imaging.projector_optics import ProjectorOptics
 from simlunar.imaging.sensor import SensorModel
 from simlunar.planner import COMBINATION, PLACEMENTS, PLANNERS, MapSource
 from simlunar.planner.registry import field_names
@@ -387,6 +388,9 @@ def capture_options(study: ScannerStudyCfg, render: RenderCfg, seed: int) -> Cap
         projector_gamma=study.projector_gamma,
         projector_blur=study.projector_blur_px,
         camera_blur=study.camera_blur_px,
+        optics=None
+        if study.projector_optics is None
+        else ProjectorOptics(**library_values(study.projector_optics)),
         **study.options.capture_opts.model_dump(),
     )
 
