@@ -250,9 +250,9 @@ class ScannerStudyCfg(_Model):
     )
     save_scans: bool = Field(
         False,
-        description="write scans/unit<i>/ per unit: the coded scan's frames (8/16-bit PNG, "
-        "OpenCV order), decoded maps (EXR), point cloud (PLY), OpenCV calibration "
-        "(docs/scanner.md)",
+        description="write scans/unit<i>/<coding>/ per unit and full-field coding: the coded "
+        "scan's frames (8/16-bit PNG, OpenCV order), decoded maps and phase maps (EXR), point "
+        "cloud (PLY), OpenCV calibration (docs/scanner.md)",
     )
     reconstructions: Reconstructions = _reconstructions_field()
 

@@ -405,6 +405,21 @@ class PhaseShiftCoding(WhiteBlackLastCoding):
             "triangulation": str(o.method),
         }
 
+    def phase_maps(self, images, decode: PhaseDecode) -> dict[str, np.ndarray]:
+        """The wrapped phase of every level (``<axis><level>_wrapped``, from the captured
+        ``images`` in stack order) and the absolute phase of the finest
+        (``<axis>_absolute`` = ``2 pi (u + offset) / period``, NaN where unlit), rad, float32."""
+        o = self.options
+        N = int(o.steps)
+        maps, i = {}, 0
+        for axis, n, periods in _axes(o, decode.proj_shape):
+            for level in range(len(periods)):
+                maps[f"{axis}{level}_wrapped"] = wrapped_phase(images[i * N : (i + 1) * N])[0]
+                i += 1
+            x = decode.u if axis == "col" else decode.v
+            maps[f"{axis}_absolute"] = 2 * np.pi * (x + _offset(n, periods)) / periods[-1]
+        return {k: np.asarray(v, np.float32) for k, v in maps.items()}
+
     def truth_scores(self, scan, truth: dict, mask=None) -> dict[str, float]:
         """The decoding error against the continuous truth (``truth["uv"]``: where each
         camera pixel's ray meets the projector image, not the pixel it falls in):
