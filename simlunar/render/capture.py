@@ -184,39 +184,19 @@ class RenderCapture:
         self.blur = float(o.projector_blur)
         self.optics = o.optics
         #: (H, W) thin-lens defocus diameter (projector px) at each projector pixel, or None
-        self.defocus_px = None
-        if o.optics is not None and o.optics.f_number > 0:
-            self.defocus_px = _defocus_map(terrain, rig, o.optics)
+        self.defocus_px = _defocus_map(terrain, rig, o.optics)
         #: (rows, cols) float32 luminance of ``extra_lights`` alone (None without them),
         #: added to every rendered frame
-        self.ambient = None
-        # the white pattern as emitted (the digital all-ones pattern without optics)
-        white = np.ones((1, *self.proj_shape), np.float32)
-        if o.optics is not None:
-            white = self.emitted(white)
-        if extra_lights:
-            sky = TerrainScene(
-                terrain,
-                rig.camera,
-                lights=list(extra_lights),
-                bsdf=bsdf,
-                max_depth=o.max_depth,
-                spp=o.spp,
-                seed=o.seed,
-            )
-            self.ambient = luminance(sky.render()).astype(np.float32)
-            del sky  # one scene in memory at a time (a DLP-size terrain mesh is large)
+        self.ambient = _ambient_image(terrain, rig, extra_lights, bsdf, o)
+        white = self._white()
+        supersample = 1 if o.optics is None else o.optics.supersample
+        light = ProjectorLight(
+            rig.projector, white[0], scale=o.projector_scale, supersample=supersample
+        )
         self.scene = TerrainScene(
             terrain,
             rig.camera,
-            lights=[
-                ProjectorLight(
-                    rig.projector,
-                    white[0],
-                    scale=o.projector_scale,
-                    supersample=1 if o.optics is None else o.optics.supersample,
-                )
-            ],
+            lights=[light],
             bsdf=bsdf,
             max_depth=o.max_depth,
             spp=o.spp,
@@ -249,6 +229,12 @@ class RenderCapture:
             self.sensor = dataclasses.replace(
                 sensor, exposure=self.gain * sensor.max_dn * sensor.gain_e_per_dn
             )
+
+    def _white(self) -> np.ndarray:
+        """(1, ...) the white pattern as emitted (the digital all-ones pattern without
+        optics, so the scene's texture is exactly that of before the optics existed)."""
+        white = np.ones((1, *self.proj_shape), np.float32)
+        return white if self.optics is None else self.emitted(white)
 
     def emitted(self, patterns: np.ndarray) -> np.ndarray:
         """What the projector emits for digital patterns in [0, 1]: through its optics
@@ -349,10 +335,30 @@ class RenderCapture:
         return out
 
 
-def _defocus_map(terrain, rig: Rig, optics: ProjectorOptics) -> np.ndarray:
+def _ambient_image(terrain, rig: Rig, extra_lights, bsdf, o: CaptureOptions):
+    """(rows, cols) float32 luminance of ``extra_lights`` alone in the camera, or None."""
+    if not extra_lights:
+        return None
+    sky = TerrainScene(
+        terrain,
+        rig.camera,
+        lights=list(extra_lights),
+        bsdf=bsdf,
+        max_depth=o.max_depth,
+        spp=o.spp,
+        seed=o.seed,
+    )
+    # one scene in memory at a time (a DLP-size terrain mesh is large): sky goes on return
+    return luminance(sky.render()).astype(np.float32)
+
+
+def _defocus_map(terrain, rig: Rig, optics: ProjectorOptics | None) -> np.ndarray | None:
     """(H, W) defocus disc diameter (projector px) at the depth each projector pixel lights
     (the guide view's ground truth: it is the projector's view); focused at
-    ``optics.focus_distance`` or the median of those depths."""
+    ``optics.focus_distance`` or the median of those depths. None without optics or
+    without an aperture (``f_number`` 0)."""
+    if optics is None or optics.f_number <= 0:
+        return None
     white = np.ones(rig.projector.intrinsics.shape, np.float32)
     scene = TerrainScene(terrain, rig.guide, lights=[ProjectorLight(rig.projector, white)], spp=1)
     depth = np.asarray(scene.ground_truth().depth, np.float64)

@@ -94,3 +94,12 @@ def test_binary_plane_scan_with_subpixel_edges_matches_the_gray_codes():
     rms_b = np.sqrt(np.mean((b.depth[ok] - truth[ok]) ** 2))
     rms_g = np.sqrt(np.mean((g.depth[ok] - truth[ok]) ** 2))
     assert rms_b < 1.2 * rms_g
+
+
+def test_a_binary_scan_is_exported_under_its_own_name():
+    # the gray and binary codes share their coding class: the export names a coding by its
+    # options class too
+    from simlunar.results.exports import _coding_name
+
+    assert _coding_name(make_coding("binary")) == "binary"
+    assert _coding_name(make_coding("gray_code")) == "gray_code"
