@@ -63,8 +63,7 @@ def _setup(cam_size, *, max_depth=3, seed=0, spp=SPP, proj_size=(1024, 768), sca
 
 def bench_gray_code_scan(*, smoke: bool = False) -> dict:
     from simlunar.scanner import gray_code as gc
-    from simlunar.scanner import scans as modes
-    from simlunar.scanner.scans import GrayCodeOptions
+    from simlunar.scanner.gray_code import GrayCodeOptions, gray_code_scan
 
     proj = SMOKE_PROJ if smoke else (1024, 768)
     if smoke:
@@ -74,11 +73,11 @@ def bench_gray_code_scan(*, smoke: bool = False) -> dict:
     cap.render(np.ones((1, proj[1], proj[0]), np.float32))  # warm up: kernels compiled once
     r0 = cap.renders
     t0 = time.perf_counter()
-    ref = modes.gray_code_scan(cap, rig, GrayCodeOptions(inverses="render"))
+    ref = gray_code_scan(cap, rig, GrayCodeOptions(inverses="render"))
     t_ref = time.perf_counter() - t0
     r_ref = cap.renders - r0
     t0 = time.perf_counter()
-    ours = modes.gray_code_scan(cap, rig, GrayCodeOptions(inverses="linearity"))
+    ours = gray_code_scan(cap, rig, GrayCodeOptions(inverses="linearity"))
     t_ours = time.perf_counter() - t0
     r_ours = cap.renders - r0 - r_ref
     both = ref.decode.valid & ours.decode.valid
@@ -100,8 +99,7 @@ def bench_multiplexed_dots(
     n_dots: int = 3000, exact_subset: int = 100, *, smoke: bool = False
 ) -> dict:
     from simlunar.scanner import rigs
-    from simlunar.scanner import scans as modes
-    from simlunar.scanner.scans import DotOptions
+    from simlunar.scanner.dot_scan import DotOptions, dot_scan
     from simlunar.study import scanner as st
 
     # a one-pixel dot covers a quarter of a camera pixel: with few samples per pixel the
@@ -122,13 +120,13 @@ def bench_multiplexed_dots(
     warm[0, H // 2, W // 2] = 1.0
     cap.render(warm)
     t0 = time.perf_counter()
-    multi = modes.dot_scan(
+    multi = dot_scan(
         cap, rig, uv, depth_range=depth_range, options=DotOptions(abs_threshold=ABS_THRESHOLD)
     )
     t_multi = time.perf_counter() - t0
     sub = rng.choice(n_dots, size=exact_subset, replace=False)
     t0 = time.perf_counter()
-    exact = modes.dot_scan(
+    exact = dot_scan(
         cap,
         rig,
         uv[sub],
@@ -298,8 +296,7 @@ def _dlp_worker(mode: str, frames_path: str, smoke: bool = False) -> dict:
     import resource
 
     from simlunar.scanner import gray_code as gc
-    from simlunar.scanner import scans as modes
-    from simlunar.scanner.scans import GrayCodeOptions
+    from simlunar.scanner.gray_code import GrayCodeOptions, gray_code_scan
     from simlunar.scanner.triangulate import Correspondences, depth_at_proj_pixels, triangulate
 
     _warm_up_compiled()
@@ -324,7 +321,7 @@ def _dlp_worker(mode: str, frames_path: str, smoke: bool = False) -> dict:
 
         cap.scene.render_patterns = timed
         t0 = time.perf_counter()
-        g = modes.gray_code_scan(cap, rig, GrayCodeOptions(subpixel=True))
+        g = gray_code_scan(cap, rig, GrayCodeOptions(subpixel=True))
         total = time.perf_counter() - t0 - save_s
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
         # raw frames in render order (white, black, then the bit patterns) for the reference;

@@ -45,7 +45,11 @@ GROUPS = {
          "tests/metrics/test_interior.py", "tests/metrics/test_hazard.py"],
     ),
     "placement": (["planner/placement.py"], ["tests/planner/test_placement.py"]),
-    "gray_code": (["scanner/gray_code.py"], ["tests/scanner/test_gray_code.py"]),
+    "gray_code": (
+        ["scanner/gray_code.py", "scanner/bitcodes.py"],
+        ["tests/scanner/test_gray_code.py", "tests/scanner/test_bitcodes.py",
+         "tests/scanner/test_binary_code.py"],
+    ),
     "lidar": (
         ["lidar/ranging.py", "lidar/detector.py"],
         ["tests/lidar/test_ranging.py", "tests/lidar/test_detector.py"],

@@ -15,7 +15,7 @@ from simlunar.errors import ConfigError
 from simlunar.metrics import METRICS
 from simlunar.planner import MEASURING, ORACLES, STRATEGIES
 from simlunar.registry import did_you_mean, did_you_mean_file
-from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.scanner.rescan import SCAN_PLANNERS
 from simlunar.sensors.structured_light import MODES
 
 __all__ = [
@@ -77,7 +77,7 @@ def check_strategy(name: str, path: str, options: Mapping | None = None) -> None
 def check_scan_planner(name: str, path: str) -> None:
     """A planner of the scanner study: a registered strategy that plans from the guide image
     alone (not an ``oracle_*``, which reads the truth, nor ``sequential``, which asks a sensor
-    back) or one of :data:`simlunar.scanner.scans.SCAN_PLANNERS` (it ranks the gray-code scan)."""
+    back) or one of :data:`simlunar.scanner.rescan.SCAN_PLANNERS` (it ranks the gray-code scan)."""
     if name in ORACLES or name in MEASURING:
         raise ConfigError(
             f"{path}: {name!r} is a planner of the sampling study only (the scanner study "

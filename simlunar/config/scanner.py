@@ -37,9 +37,10 @@ from simlunar.config.studies import (
     _reconstructions_field,
     check_planner_options,
 )
+from simlunar.imaging.projector_optics import ProjectorOptics
 from simlunar.planner import DEFAULT_PLANNER, STRATEGIES
 from simlunar.scanner.codings import CODINGS, DEFAULT_CODING, full_field_codings
-from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.scanner.rescan import SCAN_PLANNERS
 from simlunar.scanner.scheduling import check_spacings
 from simlunar.sensors.structured_light import MODES, mode_coding
 
@@ -47,6 +48,7 @@ __all__ = [
     "CODING_OPTS",
     "CaptureOptsCfg",
     "DotOptsCfg",
+    "ProjectorOpticsCfg",
     "RigCfg",
     "ScannerOptionsCfg",
     "ScannerStudyCfg",
@@ -113,8 +115,14 @@ CODING_OPTS = {
 }
 
 
+#: the projector optics block (``study.projector_optics``), derived from its options class
+ProjectorOpticsCfg = options_model(
+    ProjectorOptics, "ProjectorOpticsCfg", "The projector's optics (docs/scanner.md)."
+)
+
+
 class DotOptsCfg(_Model):
-    """Dot scan options (:func:`simlunar.scanner.scans.dot_scan`)."""
+    """Dot scan options (:func:`simlunar.scanner.dot_scan.dot_scan`)."""
 
     exact: bool = Field(False, description="one dot per frame (reference mode)")
     radius_px: Px = Field(0.0, description="dot radius (projector px); 0 = one pixel")
@@ -228,6 +236,13 @@ class ScannerStudyCfg(_Model):
         description="camera lens point-spread function, Gaussian sigma (camera px; '1 px' or "
         "1; at most a quarter of the camera's smaller side)",
     )
+    projector_optics: ProjectorOpticsCfg | None = Field(
+        None,
+        description="the projector's optics forming every pattern at sub-pixel resolution "
+        "(response and pre-compensation, pixel fill factor, lens PSF, thin-lens defocus; "
+        "defaults: a TI DLP5500 projector; docs/scanner.md); null: each pattern is its pixel "
+        "grid through projector_gamma and projector_blur_px",
+    )
     options: ScannerOptionsCfg = Field(
         default_factory=ScannerOptionsCfg,
         description="rig adjustments (rig), each coding's options "
@@ -235,9 +250,9 @@ class ScannerStudyCfg(_Model):
     )
     save_scans: bool = Field(
         False,
-        description="write scans/unit<i>/ per unit: the coded scan's frames (8/16-bit PNG, "
-        "OpenCV order), decoded maps (EXR), point cloud (PLY), OpenCV calibration "
-        "(docs/scanner.md)",
+        description="write scans/unit<i>/<coding>/ per unit and full-field coding: the coded "
+        "scan's frames (8/16-bit PNG, OpenCV order), decoded maps and phase maps (EXR), point "
+        "cloud (PLY), OpenCV calibration (docs/scanner.md)",
     )
     reconstructions: Reconstructions = _reconstructions_field()
 
@@ -250,6 +265,17 @@ class ScannerStudyCfg(_Model):
             raise ValueError(
                 "save_scans exports the full-field coded scan: modes must include one of "
                 f"{', '.join(full_field_codings())} or ambiguity_enhancement"
+            )
+        return self
+
+    @model_validator(mode="after")
+    def _one_projector_model(self):
+        if self.projector_optics is not None and (
+            self.projector_gamma != 1.0 or self.projector_blur_px != 0.0
+        ):
+            raise ValueError(
+                "projector_optics: replaces projector_gamma and projector_blur_px (leave them "
+                "at 1 and 0; the optics have gamma and psf_sigma)"
             )
         return self
 

@@ -47,6 +47,7 @@ from simlunar.geometry import (
     rover_mast_camera,
 )
 from simlunar.imaging.exposure import auto_exposure_e
+from simlunar.imaging.projector_optics import ProjectorOptics
 from simlunar.imaging.sensor import SensorModel
 from simlunar.planner import COMBINATION, PLACEMENTS, PLANNERS, MapSource
 from simlunar.planner.registry import field_names
@@ -54,7 +55,7 @@ from simlunar.render.capture import CaptureOptions
 from simlunar.render.lights import make_light
 from simlunar.render.materials import make_bsdf
 from simlunar.scanner.codings import CODINGS
-from simlunar.scanner.scans import DotOptions
+from simlunar.scanner.dot_scan import DotOptions
 from simlunar.study.sampling import SamplingStudyOptions
 from simlunar.study.scanner import ScannerStudyOptions
 from simlunar.terrain import generate
@@ -424,7 +425,7 @@ def coding_options(opts) -> dict[str, Any]:
 
 
 def dot_options(opts: DotOptsCfg) -> DotOptions:
-    """:class:`~simlunar.scanner.scans.DotOptions` of a config (``_px`` suffixes dropped)."""
+    """:class:`~simlunar.scanner.dot_scan.DotOptions` of a config (``_px`` suffixes dropped)."""
     return DotOptions(**{k.removesuffix("_px"): v for k, v in opts.model_dump().items()})
 
 
@@ -438,6 +439,9 @@ def capture_options(study: ScannerStudyCfg, render: RenderCfg, seed: int) -> Cap
         projector_gamma=study.projector_gamma,
         projector_blur=study.projector_blur_px,
         camera_blur=study.camera_blur_px,
+        optics=None
+        if study.projector_optics is None
+        else ProjectorOptics(**library_values(study.projector_optics)),
         **study.options.capture_opts.model_dump(),
     )
 

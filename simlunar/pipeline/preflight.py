@@ -47,7 +47,7 @@ from simlunar.planner import check_k
 from simlunar.render.backend import choose_variant
 from simlunar.results.records import unit_label
 from simlunar.scanner.codings import coding_for
-from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.scanner.rescan import SCAN_PLANNERS
 from simlunar.sensors.structured_light import DOT_MODES, mode_coding
 from simlunar.study.scanner import aim_rig_at_terrain
 

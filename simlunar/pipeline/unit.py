@@ -47,7 +47,7 @@ from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
 from simlunar.render.scene import luminance
 from simlunar.results.array_exports import array_export_payload, export_view
-from simlunar.results.exports import scan_export_payload
+from simlunar.results.exports import scans_export_payload
 from simlunar.results.lidar_exports import lidar_export_payload
 from simlunar.results.records import UnitRecord
 from simlunar.sensors.lidar import LidarScene
@@ -463,8 +463,8 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
         "image": np.asarray(guide.image, np.float32),
         "depth": np.where(guide.valid, guide.depth, np.nan).astype(np.float64),
     }
-    # written by the runner into scans/unit<i>/ (results/exports.py)
-    scans = scan_export_payload(res.exported, rig) if s.save_scans else None
+    # written by the runner into scans/unit<i>/<coding>/ (results/exports.py)
+    scans = scans_export_payload(res.coded, rig) if s.save_scans else None
     return UnitRecord(
         rows=[dict(row) for row in res.rows],
         scores={},

@@ -13,13 +13,14 @@ from scipy import ndimage
 from simlunar.geometry import Rig
 from simlunar.imaging.blur import gaussian_blur
 from simlunar.imaging.exposure import AUTO_EXPOSURE_LEVEL, AUTO_EXPOSURE_PERCENTILE
+from simlunar.imaging.projector_optics import ProjectorOptics, defocus_diameter_px, emit
 from simlunar.imaging.sensor import apply_sensor
 from simlunar.progress import advance
 from simlunar.registry import Options, option
 from simlunar.render.lights import ProjectorLight, SunLight
 from simlunar.render.scene import TerrainScene, luminance
 from simlunar.render.sparse import LitTracer
-from simlunar.scanner.triangulate import check_rig, projector_visibility, true_correspondences
+from simlunar.scanner.triangulate import check_rig, projector_visibility, true_projector_uv
 
 __all__ = [
     "EXPOSURE_PERCENTILE",
@@ -39,7 +40,7 @@ EXPOSURE_PERCENTILE = AUTO_EXPOSURE_PERCENTILE
 
 
 class Capture(Protocol):
-    """What the structured-light scans (:mod:`simlunar.scanner.scans`) drive: a camera that
+    """What the structured-light scans (:mod:`simlunar.scanner.gray_code`, :mod:`simlunar.scanner.dot_scan`, ...) drive: a camera that
     sees the scene under projector patterns. :class:`RenderCapture` renders through Mitsuba;
     tests use NumPy captures."""
 
@@ -113,6 +114,22 @@ class CaptureOptions(Options):
         doc="lit only: light paths per lit projector pixel (at pattern value 1)",
         ge=1,
     )
+    #: the projector's optics (response, pixel aperture, lens PSF and defocus) forming every
+    #: pattern's emitted image at sub-pixel resolution
+    #: (:mod:`simlunar.imaging.projector_optics`); None: each pattern is emitted as its pixel
+    #: grid through ``projector_gamma`` and ``projector_blur``, as before the optics existed
+    optics: ProjectorOptics | None = None
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.optics is not None:
+            if self.projector_gamma != 1.0 or self.projector_blur != 0.0:
+                raise ValueError(
+                    "projector optics replace projector_gamma and projector_blur: leave "
+                    "those at 1 and 0 (the optics have gamma and psf_sigma)"
+                )
+            if self.sparse_integrator == "lit":
+                raise ValueError("the lit sparse integrator traces projector pixels: no optics")
 
 
 class RenderCapture:
@@ -165,29 +182,21 @@ class RenderCapture:
         self.proj_shape = rig.projector.intrinsics.shape
         self.gamma = float(o.projector_gamma)
         self.blur = float(o.projector_blur)
+        self.optics = o.optics
+        #: (H, W) thin-lens defocus diameter (projector px) at each projector pixel, or None
+        self.defocus_px = _defocus_map(terrain, rig, o.optics)
         #: (rows, cols) float32 luminance of ``extra_lights`` alone (None without them),
         #: added to every rendered frame
-        self.ambient = None
-        if extra_lights:
-            sky = TerrainScene(
-                terrain,
-                rig.camera,
-                lights=list(extra_lights),
-                bsdf=bsdf,
-                max_depth=o.max_depth,
-                spp=o.spp,
-                seed=o.seed,
-            )
-            self.ambient = luminance(sky.render()).astype(np.float32)
-            del sky  # one scene in memory at a time (a DLP-size terrain mesh is large)
+        self.ambient = _ambient_image(terrain, rig, extra_lights, bsdf, o)
+        white = self._white()
+        supersample = 1 if o.optics is None else o.optics.supersample
+        light = ProjectorLight(
+            rig.projector, white[0], scale=o.projector_scale, supersample=supersample
+        )
         self.scene = TerrainScene(
             terrain,
             rig.camera,
-            lights=[
-                ProjectorLight(
-                    rig.projector, np.ones(self.proj_shape, np.float32), scale=o.projector_scale
-                )
-            ],
+            lights=[light],
             bsdf=bsdf,
             max_depth=o.max_depth,
             spp=o.spp,
@@ -198,7 +207,7 @@ class RenderCapture:
         # calibration frame (not counted as a scan render): sets the exposure, on what the
         # camera sees under the white pattern (with the extra lights: a daylight scan is
         # exposed for projector plus sun)
-        lit = self.scene.render_patterns(np.ones((1, *self.proj_shape), np.float32))
+        lit = self.scene.render_patterns(white)
         if not float(np.percentile(lit, EXPOSURE_PERCENTILE)) > 0:
             raise ValueError(
                 "the camera does not see the projected area: the white frame is "
@@ -221,8 +230,17 @@ class RenderCapture:
                 sensor, exposure=self.gain * sensor.max_dn * sensor.gain_e_per_dn
             )
 
+    def _white(self) -> np.ndarray:
+        """(1, ...) the white pattern as emitted (the digital all-ones pattern without
+        optics, so the scene's texture is exactly that of before the optics existed)."""
+        white = np.ones((1, *self.proj_shape), np.float32)
+        return white if self.optics is None else self.emitted(white)
+
     def emitted(self, patterns: np.ndarray) -> np.ndarray:
-        """What the projector emits for digital patterns in [0, 1]: response then optics blur."""
+        """What the projector emits for digital patterns in [0, 1]: through its optics
+        (``options.optics``: sub-pixel images) or its response then blur, per pixel."""
+        if self.optics is not None:
+            return emit(patterns, self.optics, defocus_px=self.defocus_px)
         p = np.clip(np.asarray(patterns, np.float32), 0.0, 1.0) ** self.gamma
         if self.blur > 0:
             p = np.stack([ndimage.gaussian_filter(x, self.blur, mode="nearest") for x in p])
@@ -317,6 +335,41 @@ class RenderCapture:
         return out
 
 
+def _ambient_image(terrain, rig: Rig, extra_lights, bsdf, o: CaptureOptions):
+    """(rows, cols) float32 luminance of ``extra_lights`` alone in the camera, or None."""
+    if not extra_lights:
+        return None
+    sky = TerrainScene(
+        terrain,
+        rig.camera,
+        lights=list(extra_lights),
+        bsdf=bsdf,
+        max_depth=o.max_depth,
+        spp=o.spp,
+        seed=o.seed,
+    )
+    # one scene in memory at a time (a DLP-size terrain mesh is large): sky goes on return
+    return luminance(sky.render()).astype(np.float32)
+
+
+def _defocus_map(terrain, rig: Rig, optics: ProjectorOptics | None) -> np.ndarray | None:
+    """(H, W) defocus disc diameter (projector px) at the depth each projector pixel lights
+    (the guide view's ground truth: it is the projector's view); focused at
+    ``optics.focus_distance`` or the median of those depths. None without optics or
+    without an aperture (``f_number`` 0)."""
+    if optics is None or optics.f_number <= 0:
+        return None
+    white = np.ones(rig.projector.intrinsics.shape, np.float32)
+    scene = TerrainScene(terrain, rig.guide, lights=[ProjectorLight(rig.projector, white)], spp=1)
+    depth = np.asarray(scene.ground_truth().depth, np.float64)
+    del scene
+    focus = optics.focus_distance
+    if focus is None:
+        focus = float(np.nanmedian(depth))
+    fx = rig.projector.intrinsics.fx
+    return defocus_diameter_px(depth, fx=fx, options=optics, focus=focus)
+
+
 @dataclass(frozen=True, eq=False)
 class GuideView:
     """The co-located guide camera's image and ground truth.
@@ -371,12 +424,18 @@ def render_guide(
 
 
 def camera_truth(capture: RenderCapture, guide: GuideView) -> dict:
-    """Ground truth in the triangulation camera: true projector column/row and projector light.
+    """Ground truth in the triangulation camera: true projector coordinates and projector light.
 
-    Returns a dict with ``col``, ``row`` ((rows, cols) int, -1 where not lit) and ``lit``
-    (the surface point each camera pixel sees is lit directly by the projector).
+    Returns a dict with ``uv`` ((rows, cols, 2) float64: the continuous projector coordinates
+    where each camera pixel centre's ray meets the projector image, pixel centres at
+    ``col + 0.5``; NaN where not lit), ``col``, ``row`` (the pixel it falls in, (rows, cols)
+    int, -1 where not lit) and ``lit`` (the surface point each camera pixel sees is lit
+    directly by the projector).
     """
     gt = capture.scene.ground_truth()
     lit = projector_visibility(gt.position, capture.rig.projector, guide.depth)
-    col, row = true_correspondences(gt.position, capture.rig.projector, lit=lit)
-    return {"col": col, "row": row, "lit": lit, "valid": np.asarray(gt.valid)}
+    uv = true_projector_uv(gt.position, capture.rig.projector, lit=lit)
+    ok = np.isfinite(uv[..., 0])
+    col = np.where(ok, np.floor(np.where(ok, uv[..., 0], 0)), -1).astype(np.int64)
+    row = np.where(ok, np.floor(np.where(ok, uv[..., 1], 0)), -1).astype(np.int64)
+    return {"uv": uv, "col": col, "row": row, "lit": lit, "valid": np.asarray(gt.valid)}

@@ -209,18 +209,32 @@ class ProjectorLight:
         image plane at depth 1 m; at depth z it is ``scale * pattern / z^2`` (no cos^3
         fall-off on such a plane). Mitsuba's ``projector`` delivers ``pi * scale`` there
         (measured, ``tests/render/test_lights.py``), so its ``scale`` is ours / pi.
+    supersample : int
+        1: the pattern is one value per projector pixel, shown as a pixel grid (nearest
+        texture filter). S > 1: the pattern is the emitted image sampled S x S times per
+        projector pixel ((S h, S w), :func:`simlunar.imaging.projector_optics.emit`), shown
+        bilinearly interpolated between its samples.
     """
 
     projector: Projector
     pattern: np.ndarray
     scale: float = 1.0
+    supersample: int = 1
+
+    @property
+    def pattern_shape(self) -> tuple[int, int]:
+        """(rows, cols) of the pattern: the projector's, times ``supersample``."""
+        h, w = self.projector.intrinsics.shape
+        return (h * self.supersample, w * self.supersample)
 
     def __post_init__(self) -> None:
         if not isinstance(self.projector, Projector):
             raise ValueError(
                 f"projector must be a geometry.Projector, got {type(self.projector).__name__}"
             )
-        p = check_pattern(self.pattern, self.projector.intrinsics.shape)
+        if int(self.supersample) != self.supersample or self.supersample < 1:
+            raise ValueError(f"supersample must be a whole number >= 1, got {self.supersample}")
+        p = check_pattern(self.pattern, self.pattern_shape)
         object.__setattr__(self, "pattern", p)
         if not (np.isfinite(self.scale) and self.scale >= 0):
             raise ValueError(f"projector scale must be >= 0, got {self.scale}")
@@ -349,7 +363,7 @@ def emitter_dicts(light, camera, *, index: int = 0) -> dict[str, dict]:
                 "irradiance": {
                     "type": "bitmap",
                     "data": mi.TensorXf(np.ascontiguousarray(light.pattern[..., None])),
-                    "filter_type": "nearest",
+                    "filter_type": "nearest" if light.supersample == 1 else "bilinear",
                     "raw": True,
                     "wrap_mode": "clamp",
                 },

@@ -260,7 +260,7 @@ class TerrainScene:
         """Show ``pattern`` (projector shape (h, w), values >= 0) without reloading the scene."""
         if self.projector is None:
             raise ValueError("pattern: this scene has no ProjectorLight")
-        p = check_pattern(pattern, self.projector.projector.intrinsics.shape)
+        p = check_pattern(pattern, self.projector.pattern_shape)
         self._params[self._pattern_key] = self._mi.TensorXf(np.ascontiguousarray(p[..., None]))
         self._params.update()
         self._pattern = p
@@ -299,7 +299,7 @@ class TerrainScene:
         if self.projector is None:
             raise ValueError("patterns: this scene has no ProjectorLight")
         pats = np.asarray(patterns, np.float32)
-        shape = self.projector.projector.intrinsics.shape
+        shape = self.projector.pattern_shape
         if pats.ndim != 3 or pats.shape[1:] != tuple(shape):
             raise ValueError(
                 f"patterns must have shape (n, {shape[0]}, {shape[1]}), got {pats.shape}"

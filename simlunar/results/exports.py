@@ -1,11 +1,15 @@
 """Scan export: what a full-field coded scan captured, in formats OpenCV pipelines read.
 
 ``study.save_scans: true`` (or ``simlunar run --save-scans``) writes, per unit, a folder
-``scans/unit<i>/`` of the result folder::
+``scans/unit<i>/`` of the result folder with one folder per coding the study scanned
+(``scans/unit<i>/<coding>/``) and a ``manifest.json`` naming them (written last)::
 
     frames8/NN_<name>.png    captured frames, 8-bit grey, in the coding's order
     frames16/NN_<name>.png   the same frames, 16-bit grey
     decode.exr               decoded projector maps: col, row, u, v, valid, lit (float32)
+    phase.exr                fringe codings: the wrapped phase of every level
+                             (<axis><level>_wrapped) and the absolute (unwrapped) phase of the
+                             finest (<axis>_absolute), rad, float32
     cloud.ply                triangulated points (binary PLY, metres, world frame)
     calibration.yml          rig calibration in OpenCV's conventions (cv2.FileStorage)
     manifest.json            coding, frame list and order, thresholds, conventions
@@ -55,6 +59,7 @@ __all__ = [
     "quantize",
     "read_cloud_ply",
     "scan_export_payload",
+    "scans_export_payload",
     "write_calibration_yaml",
     "write_cloud_ply",
     "write_scan_export",
@@ -210,7 +215,7 @@ def scan_export_payload(scan, rig) -> dict[str, Any]:
 
     Parameters
     ----------
-    scan : :class:`simlunar.scanner.scans.CodedScan`
+    scan : :class:`simlunar.scanner.result.CodedScan`
         The scan (its captured frames, decode, cloud and coding); scanned with
         ``keep_frames=True`` (the streaming decoders keep no frame stack otherwise).
     rig : Rig
@@ -243,7 +248,9 @@ def scan_export_payload(scan, rig) -> dict[str, Any]:
     r, c = np.nonzero(dec.valid)
     uv = dec.proj_uv() - 0.5  # OpenCV convention
     valid = np.asarray(dec.valid)
+    phase_maps = getattr(coding, "phase_maps", None)
     return {
+        "phase": {} if phase_maps is None else phase_maps(np.asarray(fr["images"]), dec),
         "frame_names": names,
         "frames8": quantize(frames, 8),
         "frames16": quantize(frames, 16),
@@ -272,7 +279,22 @@ def scan_export_payload(scan, rig) -> dict[str, Any]:
 
 
 def _coding_name(coding) -> str:
-    return next(n for n, e in CODINGS.items() if isinstance(coding, e.target))
+    """The registry name of a coding object: its class and its options' class (two codings
+    may share a class, as the gray and binary codes do)."""
+    return next(
+        n
+        for n, e in CODINGS.items()
+        if isinstance(coding, e.target) and type(coding.options) is e.options
+    )
+
+
+def scans_export_payload(scans, rig) -> dict[str, Any]:
+    """:func:`scan_export_payload` of every coded scan of a study (``scans``: coding name ->
+    CodedScan), for :func:`write_scan_export` (one folder per coding)."""
+    return {
+        "kind": "codings",
+        "codings": {name: scan_export_payload(scan, rig) for name, scan in scans.items()},
+    }
 
 
 def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None = None) -> Path:
@@ -290,6 +312,16 @@ def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None =
     """
     if payload.get("kind") == "lidar":
         return write_lidar_export(folder, payload, unit_key=unit_key)
+    if payload.get("kind") == "codings":
+        folder = Path(folder)
+        for name, one in payload["codings"].items():
+            write_scan_export(folder / name, one)
+        manifest = {"kind": "codings", "codings": list(payload["codings"])}
+        if unit_key is not None:
+            manifest["unit_key"] = unit_key
+        text = json.dumps(manifest, indent=2) + "\n"
+        atomic_write(folder / "manifest.json", lambda tmp: Path(tmp).write_text(text))
+        return folder
     from PIL import Image
 
     folder = Path(folder)
@@ -310,6 +342,12 @@ def write_scan_export(folder, payload: dict[str, Any], *, unit_key: str | None =
         payload["decode"],
         attrs={"convention": "OpenCV: pixel centres at integers", **meta},
     )
+    if payload.get("phase"):
+        write_exr(
+            folder / "phase.exr",
+            payload["phase"],
+            attrs={"convention": "rad; absolute = 2 pi (u + offset) / period, u at col + 0.5"},
+        )
     cl = payload["cloud"]
     write_cloud_ply(folder / "cloud.ply", cl["points"], cl["cam_rc"], cl["proj_uv"])
     write_calibration_yaml(folder / "calibration.yml", payload["calibration"])
@@ -352,13 +390,28 @@ def export_complete(folder, unit_key: str) -> bool:
         return False
     try:
         manifest = json.loads((folder / "manifest.json").read_text())
-        frames = manifest.get("frames")
+        kind = manifest.get("kind")
     except (OSError, ValueError, AttributeError):
         return False
-    if manifest.get("kind") == "lidar":  # results/lidar_exports.py: the files it lists
+    if kind == "codings":  # one complete export per coding
+        names = manifest.get("codings")
+        return isinstance(names, list) and all(
+            isinstance(n, str) and _coding_complete(folder / n) for n in names
+        )
+    if kind == "lidar":  # results/lidar_exports.py: the files it lists
         files = manifest.get("files")
         ok = isinstance(files, list) and all(isinstance(f, str) for f in files)
         return ok and all((folder / f).is_file() for f in files)
+    return _coding_complete(folder)
+
+
+def _coding_complete(folder: Path) -> bool:
+    """Whether one coding's export in ``folder`` has every file its manifest promises."""
+    try:
+        manifest = json.loads((folder / "manifest.json").read_text())
+        frames = manifest.get("frames")
+    except (OSError, ValueError, AttributeError):
+        return False
     if not isinstance(frames, list) or not all(isinstance(f, str) for f in frames):
         return False
     wanted = [folder / name for name in EXPORT_FILES]

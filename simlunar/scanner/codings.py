@@ -22,7 +22,7 @@ A coding class is built from its options object (``Coding(options)``) and has::
     ``decode(frames, proj_shape)``
         The decode of a captured stack in that order (white and black last).
     ``scan(capture, rig, *, keep_frames=False) -> CodedScan``
-        Capture, decode, triangulate (:class:`simlunar.scanner.scans.CodedScan`); the decode has
+        Capture, decode, triangulate (:class:`simlunar.scanner.result.CodedScan`); the decode has
         ``valid``, ``lit``, ``contrast``, ``col``, ``row``, ``proj_shape``, ``proj_uv()`` and
         ``decoded_index()``.
     ``method`` : "plane" or "rays" (how its correspondences are triangulated)
@@ -39,9 +39,10 @@ Adding a coding: its module (patterns, decoder, options class, coding class), on
 from __future__ import annotations
 
 from simlunar.registry import Registry
+from simlunar.scanner.binary_code import BinaryCodeOptions
+from simlunar.scanner.gray_code import GrayCodeOptions, GrayCoding
 from simlunar.scanner.micro_phase_shift import MicroPhaseShiftCoding, MicroPhaseShiftOptions
 from simlunar.scanner.phase_shift import PhaseShiftCoding, PhaseShiftOptions
-from simlunar.scanner.scans import GrayCodeOptions, GrayCoding
 
 __all__ = [
     "CODINGS",
@@ -82,6 +83,16 @@ CODINGS.register(
     yaml_key="micro_phase_opts",
     label="Micro phase shift",
     style=("#6baed6", "h"),
+)
+CODINGS.register(
+    "binary",
+    GrayCoding,
+    BinaryCodeOptions,
+    summary="plain binary code through the gray code's decoder (the gray code's counter-example)",
+    full_field=True,
+    yaml_key="binary_opts",
+    label="Binary code",
+    style=("#9c9ede", "s"),
 )
 
 #: the full-field coding of a scanner whose options name none (the paper's)

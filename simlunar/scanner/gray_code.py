@@ -1,34 +1,63 @@
-"""Binary-reflected gray-code patterns and their decoder (NumPy only).
+"""The bit-plane code's decoder, options, scan and coding: the gray code of the paper and
+OpenCV, and any other :class:`~simlunar.scanner.bitcodes.BitCode` (the options' ``code``).
 
-The stack layout, bit order and decision rules follow OpenCV contrib
-``structured_light.GrayCodePattern`` (its documentation and source), so stacks made
-here decode with OpenCV and the other way round:
+The patterns and the codes are :mod:`simlunar.scanner.bitcodes` (re-exported here). The
+decision rules follow OpenCV contrib ``structured_light.GrayCodePattern`` (its documentation and
+source), so gray-code stacks made here decode with OpenCV and the other way round:
 
-* ``ceil(log2 W)`` column bits, then ``ceil(log2 H)`` row bits, most significant bit first;
-* images are (pattern, inverse) pairs, columns first; white and black frames are separate;
-* a pattern pixel is lit (255) where the gray-code bit of its column (row) is 1;
 * a camera pixel is valid if ``white - black > black_threshold``; a bit is 1 if
   ``pattern > inverse`` and unreliable if ``|pattern - inverse| < white_threshold``;
-* gray to binary by cumulative XOR; a decoded index outside the pattern is invalid.
+* the code word read from the bits names the index (:meth:`BitCode.index`: for the gray code,
+  gray to binary); a decoded index outside the pattern is invalid.
 
 Thresholds are in the units of the images passed in (OpenCV's defaults 40 and 5 are for 8-bit
 images; for float images in [0, 1] use about 40/255 and 5/255).
+
+The scan (:func:`gray_code_scan`) drives any *capture* (the
+:class:`~simlunar.render.capture.Capture` protocol: ``render(patterns)`` noise-free images, one
+render per pattern, and ``sense(images)`` captured frames). Inverse patterns come from
+linearity of light transport (``bits + 2`` renders instead of ``2 * bits + 2``) unless
+``inverses="render"``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from simlunar.registry import Options, option
+from simlunar.scanner.bitcodes import (
+    GRAY,
+    BitCode,
+    bit_planes,
+    encode,
+    frame_names,
+    gray,
+    gray_to_binary,
+    interleave,
+    inverses_by_linearity,
+    num_bits,
+    positive_patterns,
+    white_black,
+)
+from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, render_checked, scan_inputs
+from simlunar.scanner.gray_errors import bit_error_table
+from simlunar.scanner.result import CodedScan, coded_scan
+from simlunar.scanner.subpixel import refine_subpixel_from_diff
+
 __all__ = [
+    "GrayCodeOptions",
+    "GrayCoding",
     "GrayDecode",
     "GrayDecoder",
+    "GrayScan",
     "bit_planes",
     "decode",
     "encode",
     "frame_names",
     "gray",
+    "gray_code_scan",
     "gray_to_binary",
     "interleave",
     "inverses_by_linearity",
@@ -37,142 +66,12 @@ __all__ = [
     "white_black",
 ]
 
+#: how a bit-plane scan obtains the inverse-pattern images, and how it triangulates
+_INVERSES = ("linearity", "render")
+_METHODS = ("plane", "rays")
 
-def num_bits(n: int) -> int:
-    """Bits OpenCV uses for ``n`` columns or rows: ``ceil(log2 n)``.
-
-    Parameters
-    ----------
-    n : int
-        Number of projector columns (or rows), >= 2.
-    """
-    n = int(n)
-    if n < 2:
-        raise ValueError(f"a gray-code pattern needs at least 2 columns and rows, got {n}")
-    return int(np.ceil(np.log2(n)))
-
-
-def gray(values) -> np.ndarray:
-    """Binary-reflected gray code ``x ^ (x >> 1)`` of non-negative integers."""
-    v = np.asarray(values, dtype=np.int64)
-    return v ^ (v >> 1)
-
-
-def gray_to_binary(bits: np.ndarray) -> np.ndarray:
-    """Integers from gray-code bit planes by cumulative XOR.
-
-    Parameters
-    ----------
-    bits : (n_bits, ...) array of 0/1
-        Gray-code bits, most significant first.
-
-    Returns
-    -------
-    (...) int64 array
-    """
-    bits = np.asarray(bits).astype(np.int64)
-    binary = np.bitwise_xor.accumulate(bits, axis=0)
-    n = bits.shape[0]
-    weights = (1 << np.arange(n - 1, -1, -1, dtype=np.int64)).reshape((n,) + (1,) * (bits.ndim - 1))
-    return np.sum(binary * weights, axis=0)
-
-
-def bit_planes(values, n: int) -> np.ndarray:
-    """Gray-code bits of ``values`` as (n, ...) uint8 planes, most significant first."""
-    g = gray(values)
-    out = np.empty((n, *g.shape), np.uint8)
-    for i in range(n):
-        np.bitwise_and(g >> (n - 1 - i), 1, out=out[i], casting="unsafe")
-    return out
-
-
-def encode(width: int, height: int) -> np.ndarray:
-    """Gray-code pattern stack in OpenCV ``GrayCodePattern.generate`` order.
-
-    Parameters
-    ----------
-    width, height : int
-        Projector resolution in pixels (any size >= 2, powers of two not required).
-
-    Returns
-    -------
-    (2 * (num_bits(width) + num_bits(height)), height, width) uint8
-        Values 0 or 255: column (pattern, inverse) pairs MSB first, then row pairs.
-    """
-    ncb, nrb = num_bits(width), num_bits(height)
-    col_bits = bit_planes(np.arange(width), ncb)  # (ncb, W)
-    row_bits = bit_planes(np.arange(height), nrb)  # (nrb, H)
-    out = np.empty((2 * (ncb + nrb), height, width), dtype=np.uint8)
-    out[0 : 2 * ncb : 2] = (col_bits * 255)[:, None, :]
-    out[2 * ncb :: 2] = (row_bits * 255)[:, :, None]
-    out[1::2] = 255 - out[0::2]
-    return out
-
-
-def frame_names(n_col_bits: int, n_row_bits: int) -> list[str]:
-    """Names of the frames in OpenCV ``GrayCodePattern`` order (white, black last).
-
-    ``col3_inv`` is the inverse pattern of column bit 3 (bit 0 is the most significant).
-    """
-    names = []
-    for axis, n in (("col", n_col_bits), ("row", n_row_bits)):
-        for i in range(n):
-            names += [f"{axis}{i}", f"{axis}{i}_inv"]
-    return [*names, "white", "black"]
-
-
-def white_black(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
-    """All-white and all-black uint8 frames of shape (height, width)."""
-    return (np.full((height, width), 255, np.uint8), np.zeros((height, width), np.uint8))
-
-
-def positive_patterns(width: int, height: int) -> np.ndarray:
-    """Only the non-inverted patterns, (num_bits(width) + num_bits(height), height, width) uint8.
-
-    A scan that obtains inverses by linearity of light transport renders these plus white and
-    black: ``bits + 2`` renders instead of ``2 * bits + 2``.
-    """
-    return encode(width, height)[0::2]
-
-
-def inverses_by_linearity(patterns: np.ndarray, white: np.ndarray, black: np.ndarray) -> np.ndarray:
-    """Noise-free images of the inverse patterns from pattern, white and black images.
-
-    Light transport is linear in the projector's emission, and a pattern plus its inverse is the
-    white frame, so ``I(inverse) = I(white) - I(pattern) + I(black)``; the black frame carries any
-    light that is not the projector's (sun, ambient) and would otherwise be counted twice.
-
-    Parameters
-    ----------
-    patterns : (n, rows, cols) float
-    white, black : (rows, cols) float
-
-    Returns
-    -------
-    (n, rows, cols) float
-    """
-    patterns = np.asarray(patterns)
-    if (
-        patterns.ndim != 3
-        or patterns.shape[1:] != np.shape(white)
-        or np.shape(white) != np.shape(black)
-    ):
-        raise ValueError(
-            f"patterns must be (n, rows, cols) matching white/black (rows, cols); got "
-            f"{patterns.shape}, {np.shape(white)}, {np.shape(black)}"
-        )
-    return np.asarray(white)[None] + np.asarray(black)[None] - patterns
-
-
-def interleave(patterns: np.ndarray, inverses: np.ndarray) -> np.ndarray:
-    """(pattern, inverse) pairs as one (2n, rows, cols) stack in OpenCV order."""
-    patterns = np.asarray(patterns)
-    out = np.empty(
-        (2 * patterns.shape[0], *patterns.shape[1:]), dtype=np.result_type(patterns, inverses)
-    )
-    out[0::2] = patterns
-    out[1::2] = inverses
-    return out
+#: the gray-code scan's result (a :class:`CodedScan` whose decode is a ``GrayDecode``)
+GrayScan = CodedScan
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,6 +103,9 @@ class GrayDecode:
     contrast : (rows, cols) float32 or None
         ``white - black`` per camera pixel (frame units): how brightly the projector lights
         what the pixel sees (the ``low_contrast`` rescan planner ranks by it).
+    code : BitCode
+        The code the bits are words of (:data:`~simlunar.scanner.bitcodes.GRAY` unless the
+        scan said otherwise).
     """
 
     col: np.ndarray
@@ -217,6 +119,7 @@ class GrayDecode:
     proj_shape: tuple[int, int]
     subpixel: np.ndarray | None = None
     contrast: np.ndarray | None = None
+    code: BitCode = GRAY
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -226,7 +129,7 @@ class GrayDecode:
         """``(col, row)`` int64 that every camera pixel's bits name, valid or not (``col``
         and ``row`` hold -1 where the pixel is invalid)."""
         ncb = self.n_col_bits
-        return _gray_planes_to_index(self.bits[:ncb]), _gray_planes_to_index(self.bits[ncb:])
+        return self.code.index(self.bits[:ncb]), self.code.index(self.bits[ncb:])
 
     def proj_uv(self) -> np.ndarray:
         """(rows, cols, 2) projector coordinates (u, v); NaN where invalid.
@@ -242,7 +145,7 @@ class GrayDecode:
 
 
 class GrayDecoder:
-    """Streaming gray-code decoder: frames are added as they are captured.
+    """Streaming bit-plane (gray-code) decoder: frames are added as they are captured.
 
     Holds per camera pixel only the decoded bits, their reliability and (for sub-pixel
     refinement) the pattern-minus-inverse signal of each bit, never the frame stack, so a
@@ -260,6 +163,8 @@ class GrayDecoder:
     keep_diff : bool
         Keep each bit's ``pattern - inverse`` signal (float32 for float32 frames, else
         float64) for :func:`simlunar.scanner.subpixel.refine_subpixel_from_diff`.
+    code : BitCode
+        The code of the patterns (the gray code by default).
     """
 
     def __init__(
@@ -270,7 +175,9 @@ class GrayDecoder:
         black_threshold: float = 40.0,
         white_threshold: float = 5.0,
         keep_diff: bool = False,
+        code: BitCode = GRAY,
     ) -> None:
+        self.code = code
         self.proj_shape = (int(proj_shape[0]), int(proj_shape[1]))
         self.cam_shape = (int(cam_shape[0]), int(cam_shape[1]))
         H, W = self.proj_shape
@@ -332,8 +239,8 @@ class GrayDecoder:
             raise ValueError(f"gray-code decode is missing frames: {', '.join(what)}")
         H, W = self.proj_shape
         ncb = self.n_col_bits
-        col = _gray_planes_to_index(self.bits[:ncb])
-        row = _gray_planes_to_index(self.bits[ncb:])
+        col = self.code.index(self.bits[:ncb])
+        row = self.code.index(self.bits[ncb:])
         valid = self.lit & (col < W) & (row < H)
         if require_reliable:
             valid &= np.all(self.reliable, axis=0)
@@ -350,18 +257,8 @@ class GrayDecoder:
             n_row_bits=self.n_row_bits,
             proj_shape=(H, W),
             contrast=self.contrast,
+            code=self.code,
         )
-
-
-def _gray_planes_to_index(planes: np.ndarray) -> np.ndarray:
-    """:func:`gray_to_binary` plane by plane (no (n_bits, ...) int64 temporary)."""
-    binary = np.zeros(planes.shape[1:], np.uint8)
-    out = np.zeros(planes.shape[1:], np.int64)
-    for g in planes:
-        binary ^= g
-        out <<= 1
-        out |= binary
-    return out
 
 
 def decode(
@@ -373,8 +270,9 @@ def decode(
     black_threshold: float = 40.0,
     white_threshold: float = 5.0,
     require_reliable: bool = True,
+    code: BitCode = GRAY,
 ) -> GrayDecode:
-    """Decode a gray-code image stack into per-pixel projector correspondences.
+    """Decode a bit-plane (gray-code) image stack into per-pixel projector correspondences.
 
     Parameters
     ----------
@@ -388,6 +286,8 @@ def decode(
         OpenCV's thresholds, in the units of the images.
     require_reliable : bool
         If True (OpenCV's behaviour) a pixel with any unreliable bit is invalid.
+    code : BitCode
+        The code of the patterns (the gray code by default).
 
     Returns
     -------
@@ -414,8 +314,163 @@ def decode(
         images.shape[1:],
         black_threshold=black_threshold,
         white_threshold=white_threshold,
+        code=code,
     )
     for k in range(ncb + nrb):
         dec.add_pair(k, images[2 * k], images[2 * k + 1])
     dec.add_white_black(white, black)
     return dec.result(require_reliable=require_reliable)
+
+
+@dataclass(frozen=True)
+class GrayCodeOptions(Options):
+    """Options of :func:`gray_code_scan` (OpenCV's decoder conventions).
+
+    ``keep_frames`` keeps the captured stack in ``GrayScan.frames["images"]`` (white and black
+    are always kept); it is not a YAML option: the study sets it when scans are exported.
+    ``code`` is the bit-plane code (not a YAML option either: a coding of its own, as the
+    plain binary code, sets it in its options class).
+    """
+
+    # frames are exposed so the white frame's bright pixels sit at 0.8 of the range
+    # (CaptureOptions.target_level): a threshold at or above it marks every pixel invalid
+    black_threshold: float = option(
+        0.05,
+        doc="OpenCV's validity threshold (frame units; below 0.8, the white level)",
+        ge=0.0,
+        lt=0.8,
+    )
+    white_threshold: float = option(
+        0.01, doc="OpenCV's bit-reliability threshold (frame units; below 0.8)", ge=0.0, lt=0.8
+    )
+    inverses: str = option(
+        "linearity", doc="inverse patterns by linearity of light or rendered", choices=_INVERSES
+    )
+    method: str = option("plane", doc="triangulation: column plane or rays", choices=_METHODS)
+    require_reliable: bool = option(
+        True, doc="a pixel with an unreliable bit is invalid (OpenCV's behaviour)"
+    )
+    subpixel: bool = option(
+        False,
+        doc="sub-pixel stripe-edge refinement of the decoded columns and rows "
+        "(simlunar.scanner.subpixel.refine_subpixel) instead of projector pixel centres",
+    )
+    keep_frames: bool = False
+    code: BitCode = GRAY
+
+
+def gray_code_scan(capture, rig, options: GrayCodeOptions | None = None) -> GrayScan:
+    """Full bit-plane scan (columns and rows) decoded and triangulated; the gray code unless
+    ``options.code`` names another.
+
+    Frames are streamed into a :class:`GrayDecoder` as they are captured: white and black are
+    rendered first, then each bit's pattern (and its inverse, by linearity or rendered) is
+    rendered, sensed and decoded before the next, so memory holds a few frames plus the
+    per-pixel bits, never the whole stack. Frames are sensed in OpenCV stack order (pattern,
+    inverse pairs, then white and black).
+
+    Parameters
+    ----------
+    capture : object with ``render`` and ``sense`` (module docstring)
+    rig : Rig
+    options : GrayCodeOptions, optional
+        Thresholds, inverses, triangulation method, sub-pixel refinement, kept frames, code.
+
+    Returns
+    -------
+    GrayScan
+    """
+    o, (H, W) = scan_inputs(rig, options, GrayCodeOptions)
+    stack = encode(W, H, o.code)
+    n_bits = len(stack) // 2
+    wb_r = render_checked(
+        capture, np.stack([np.ones((H, W), np.float32), np.zeros((H, W), np.float32)])
+    )
+    renders = 2
+    dec = GrayDecoder(
+        (H, W),
+        wb_r.shape[1:],
+        black_threshold=o.black_threshold,
+        white_threshold=o.white_threshold,
+        keep_diff=o.subpixel,
+        code=o.code,
+    )
+    kept = [] if o.keep_frames else None
+    for k in range(n_bits):
+        if o.inverses == "linearity":
+            pat_r = render_checked(capture, stack[2 * k : 2 * k + 1].astype(np.float32) / 255.0)
+            pair_r = np.concatenate([pat_r, inverses_by_linearity(pat_r, wb_r[0], wb_r[1])])
+            renders += 1
+        else:
+            pair_r = render_checked(capture, stack[2 * k : 2 * k + 2].astype(np.float32) / 255.0)
+            renders += 2
+        pair = np.asarray(capture.sense(pair_r))
+        dec.add_pair(k, pair[0], pair[1])
+        if kept is not None:
+            kept.append(pair)
+    white, black = np.asarray(capture.sense(wb_r))
+    dec.add_white_black(white, black)
+    result = dec.result(require_reliable=o.require_reliable)
+    if o.subpixel:
+        result = refine_subpixel_from_diff(result, dec.diff)
+    images = None if kept is None else np.concatenate(kept)
+    return coded_scan(rig, result, white, black, images, renders=renders, coding=GrayCoding(o))
+
+
+def _bits(proj_shape) -> tuple[int, int]:
+    H, W = (int(proj_shape[0]), int(proj_shape[1]))
+    return num_bits(W), num_bits(H)
+
+
+def _frame_names(options: GrayCodeOptions, proj_shape) -> list[str]:
+    return frame_names(*_bits(proj_shape))
+
+
+def _patterns(proj_shape, options: GrayCodeOptions) -> np.ndarray:
+    """(2 bits, H, W) float32 in [0, 1]: :func:`encode` of the options' code."""
+    H, W = (int(proj_shape[0]), int(proj_shape[1]))
+    return encode(W, H, options.code).astype(np.float32) / 255
+
+
+def _decode(images, white, black, *, proj_shape, options: GrayCodeOptions) -> GrayDecode:
+    o = options
+    return decode(
+        images,
+        white,
+        black,
+        proj_shape=proj_shape,
+        black_threshold=o.black_threshold,
+        white_threshold=o.white_threshold,
+        require_reliable=o.require_reliable,
+        code=o.code,
+    )
+
+
+@dataclass
+class GrayCoding(WhiteBlackLastCoding):
+    """A bit-plane code (the gray code unless its options name another) as a coding of
+    :data:`simlunar.scanner.codings.CODINGS`."""
+
+    options: GrayCodeOptions = field(default_factory=GrayCodeOptions)
+    frame_order = "OpenCV GrayCodePattern.generate() order, then white, black"
+    _fns = StackFunctions(_frame_names, _patterns, _decode, gray_code_scan)
+
+    def export_meta(self, decode: GrayDecode) -> dict:
+        o = self.options
+        return {
+            "code": o.code.name,
+            "n_col_bits": int(decode.n_col_bits),
+            "n_row_bits": int(decode.n_row_bits),
+            "black_threshold": float(o.black_threshold),
+            "white_threshold": float(o.white_threshold),
+            "opencv_black_threshold_8bit": round(255 * float(o.black_threshold)),
+            "opencv_white_threshold_8bit": round(255 * float(o.white_threshold)),
+            "inverses": str(o.inverses),
+            "subpixel": bool(o.subpixel),
+            "triangulation": str(o.method),
+        }
+
+    def truth_scores(self, scan: CodedScan, truth: dict, mask=None) -> dict[str, float]:
+        """Bit error rates ``ber_c<i>`` / ``ber_r<i>``
+        (:func:`simlunar.scanner.gray_errors.bit_error_table`)."""
+        return bit_error_table(scan.decode, truth, mask)

@@ -1,16 +1,19 @@
-"""Per-bit errors of a gray-code decode against ground-truth correspondences (NumPy only).
+"""Per-bit errors of a bit-plane (gray-code) decode against ground-truth correspondences (NumPy
+only).
 
-A decoded gray bit is wrong where it differs from the bit of the true projector column (row) of the
+A decoded bit is wrong where it differs from the bit (of the decode's code) of the true
+projector column (row) of the
 surface point a camera pixel sees; bits whose true value changes inside a pixel's neighbourhood are
 left out (:func:`stable_bits`), as their decoded value is a coin toss, not an error of the light
-transport. Bit order and stack layout: :mod:`simlunar.scanner.gray_code`.
+transport. Bit order and stack layout: :mod:`simlunar.scanner.bitcodes`; the decode:
+:class:`simlunar.scanner.gray_code.GrayDecode`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from simlunar.scanner.gray_code import GrayDecode, bit_planes, gray
+from simlunar.scanner.bitcodes import GRAY, BitCode
 
 __all__ = [
     "bit_error_rates",
@@ -21,13 +24,13 @@ __all__ = [
 
 
 def bit_errors(
-    result: GrayDecode, true_col: np.ndarray, true_row: np.ndarray, mask: np.ndarray | None = None
+    result, true_col: np.ndarray, true_row: np.ndarray, mask: np.ndarray | None = None
 ) -> np.ndarray:
     """Per-bit error maps against ground-truth correspondences.
 
     Parameters
     ----------
-    result : GrayDecode
+    result : GrayDecode (its ``code`` spells the true bits)
     true_col, true_row : (rows, cols) int
         True projector column and row of the surface point each camera pixel sees (-1 where the
         point is not lit by the projector).
@@ -49,22 +52,28 @@ def bit_errors(
         mask = result.lit & (true_col >= 0) & (true_row >= 0)
     tb = np.concatenate(
         [
-            bit_planes(np.clip(true_col, 0, None), result.n_col_bits),
-            bit_planes(np.clip(true_row, 0, None), result.n_row_bits),
+            result.code.planes(np.clip(true_col, 0, None), result.n_col_bits),
+            result.code.planes(np.clip(true_row, 0, None), result.n_row_bits),
         ]
     )
     return (tb != result.bits) & mask[None]
 
 
 def stable_bits(
-    true_col: np.ndarray, true_row: np.ndarray, n_col_bits: int, n_row_bits: int, *, margin: int = 1
+    true_col: np.ndarray,
+    true_row: np.ndarray,
+    n_col_bits: int,
+    n_row_bits: int,
+    *,
+    margin: int = 1,
+    code: BitCode = GRAY,
 ) -> np.ndarray:
     """Pixels away from each bit's stripe edges in the camera image.
 
     A camera pixel integrates light over its area, so where the true bit changes inside the
     pixel its decoded value is a coin toss, not an error of the light transport. This is True
     where the true bit is the same over the ``(2 margin + 1)^2`` neighbourhood (and the
-    neighbourhood has true correspondences).
+    neighbourhood has true correspondences). ``code``: the code whose bits are meant (gray).
 
     Returns
     -------
@@ -80,7 +89,7 @@ def stable_bits(
     out = np.empty((n_col_bits + n_row_bits, *true_col.shape), bool)
     k = 0
     for idx, n in ((true_col, n_col_bits), (true_row, n_row_bits)):
-        g = gray(np.clip(idx, 0, None))
+        g = code.words(np.clip(idx, 0, None))
         # a bit is constant over the window iff its OR and its AND over the window agree;
         # both are separable box filters (borders: the edge pixel repeated)
         changes = _box_bitwise(g, margin, np.bitwise_or) ^ _box_bitwise(g, margin, np.bitwise_and)
@@ -108,10 +117,8 @@ def _box_bitwise(a: np.ndarray, margin: int, op) -> np.ndarray:
     return out
 
 
-def bit_error_table(
-    decode: GrayDecode, truth: dict, mask=None, *, edge_margin: int = 1
-) -> dict[str, float]:
-    """Per-bit error rates of a gray-code decode against camera ground truth.
+def bit_error_table(decode, truth: dict, mask=None, *, edge_margin: int = 1) -> dict[str, float]:
+    """Per-bit error rates of a bit-plane decode (a ``GrayDecode``) against camera ground truth.
 
     ``truth`` has the true projector ``col``, ``row`` and ``lit`` per camera pixel
     (:func:`simlunar.render.capture.camera_truth`). ``mask`` (camera (rows, cols) bool)
@@ -130,7 +137,12 @@ def bit_error_table(
     per_bit = np.broadcast_to(m, err.shape)
     if edge_margin > 0:
         per_bit = per_bit & stable_bits(
-            truth["col"], truth["row"], dec.n_col_bits, dec.n_row_bits, margin=edge_margin
+            truth["col"],
+            truth["row"],
+            dec.n_col_bits,
+            dec.n_row_bits,
+            margin=edge_margin,
+            code=dec.code,
         )
     rates = bit_error_rates(err, per_bit)
     names = [f"ber_c{i}" for i in range(dec.n_col_bits)] + [

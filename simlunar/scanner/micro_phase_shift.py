@@ -39,8 +39,8 @@ from simlunar.registry import option, shared_option
 from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
 from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, scan_inputs
 from simlunar.scanner.fringes import wrapped_phase
-from simlunar.scanner.phase_shift import PhaseDecode, PhaseShiftCoding, PhaseShiftOptions
-from simlunar.scanner.scans import coded_scan
+from simlunar.scanner.phase_shift import PhaseDecode, coord_scores
+from simlunar.scanner.result import coded_scan
 
 __all__ = [
     "MicroPhaseShiftCoding",
@@ -272,7 +272,20 @@ class MicroPhaseShiftCoding(WhiteBlackLastCoding):
             "triangulation": str(o.method),
         }
 
+    def phase_maps(self, images, decode: PhaseDecode) -> dict[str, np.ndarray]:
+        """The wrapped phase of the shifted frequency f0 (``<axis>_f0_wrapped``, from the
+        three shifted frames) and its absolute phase ``2 pi f0 u`` (``<axis>_absolute``),
+        rad, float32."""
+        o = self.options
+        f0 = frequencies(o)[0]
+        per = int(o.frequencies) + 2
+        maps = {}
+        for i, (axis, _n) in enumerate(_axes(o, decode.proj_shape)):
+            maps[f"{axis}_f0_wrapped"] = wrapped_phase(images[i * per : i * per + 3])[0]
+            x = decode.u if axis == "col" else decode.v
+            maps[f"{axis}_absolute"] = 2 * np.pi * f0 * x
+        return {k: np.asarray(v, np.float32) for k, v in maps.items()}
+
     def truth_scores(self, scan, truth: dict, mask=None) -> dict[str, float]:
         """As the phase shift's: ``coord_err_rate`` and ``coord_rmse_px``."""
-        axes = self.options.axes
-        return PhaseShiftCoding(PhaseShiftOptions(axes=axes)).truth_scores(scan, truth, mask)
+        return coord_scores(scan.decode, truth, mask, rows=self.options.axes == "both")

@@ -43,13 +43,14 @@ from simlunar.registry import option, shared_option
 from simlunar.scanner._fringe import FRINGE_OPTIONS, check_fringe_options
 from simlunar.scanner.coded import StackFunctions, WhiteBlackLastCoding, render_checked, scan_inputs
 from simlunar.scanner.fringes import fringe_periods, unwrap, wrapped_phase
-from simlunar.scanner.scans import coded_scan
+from simlunar.scanner.result import coded_scan
 
 __all__ = [
     "PhaseDecode",
     "PhaseDecoder",
     "PhaseShiftCoding",
     "PhaseShiftOptions",
+    "coord_scores",
     "decode",
     "encode",
     "frame_names",
@@ -337,7 +338,7 @@ def phase_shift_scan(capture, rig, options: PhaseShiftOptions | None = None):
     White and black are rendered first; then every level's shifts (with an even ``steps`` and
     ``inverses="linearity"`` only the first half: the rest are ``white + black - image``),
     each level sensed and decoded before the next. The capture protocol is that of
-    :mod:`simlunar.scanner.scans`.
+    :mod:`simlunar.scanner.gray_code`.
 
     Returns
     -------
@@ -404,22 +405,45 @@ class PhaseShiftCoding(WhiteBlackLastCoding):
             "triangulation": str(o.method),
         }
 
+    def phase_maps(self, images, decode: PhaseDecode) -> dict[str, np.ndarray]:
+        """The wrapped phase of every level (``<axis><level>_wrapped``, from the captured
+        ``images`` in stack order) and the absolute phase of the finest
+        (``<axis>_absolute`` = ``2 pi (u + offset) / period``, NaN where unlit), rad, float32."""
+        o = self.options
+        N = int(o.steps)
+        maps, i = {}, 0
+        for axis, n, periods in _axes(o, decode.proj_shape):
+            for level in range(len(periods)):
+                maps[f"{axis}{level}_wrapped"] = wrapped_phase(images[i * N : (i + 1) * N])[0]
+                i += 1
+            x = decode.u if axis == "col" else decode.v
+            maps[f"{axis}_absolute"] = 2 * np.pi * (x + _offset(n, periods)) / periods[-1]
+        return {k: np.asarray(v, np.float32) for k, v in maps.items()}
+
     def truth_scores(self, scan, truth: dict, mask=None) -> dict[str, float]:
-        """``coord_err_rate``: fraction of valid camera pixels whose decoded projector column
-        (or row) is more than one pixel off the true one (an unwrapping error), and
-        ``coord_rmse_px``: RMS of the decoded minus the true column over the rest (px).
-        Only pixels lit in the truth and the decode count."""
-        dec = scan.decode
-        m = truth["lit"] & dec.valid & (truth["col"] >= 0)
-        if mask is not None:
-            m &= np.asarray(mask, bool)
-        du = np.abs(dec.u - (truth["col"] + 0.5))
-        bad = du > 1.0
-        if self.options.axes == "both":
-            bad |= np.abs(dec.v - (truth["row"] + 0.5)) > 1.0
-        n = int(m.sum())
-        if n == 0:
-            return {"coord_err_rate": float("nan"), "coord_rmse_px": float("nan")}
-        good = m & ~bad
-        rmse = float(np.sqrt(np.mean(du[good] ** 2))) if good.any() else float("nan")
-        return {"coord_err_rate": float((bad & m).sum() / n), "coord_rmse_px": rmse}
+        """The decoding error against the continuous truth (``truth["uv"]``: where each
+        camera pixel's ray meets the projector image, not the pixel it falls in):
+        ``coord_err_rate``, the fraction of valid camera pixels decoded more than one projector
+        pixel off in u (or v, with rows coded): an unwrapping error; ``coord_rmse_px``, the RMS
+        of decoded minus true u over the rest (projector px). Only pixels lit in the truth and
+        the decode count."""
+        return coord_scores(scan.decode, truth, mask, rows=self.options.axes == "both")
+
+
+def coord_scores(dec, truth: dict, mask=None, *, rows: bool = True) -> dict[str, float]:
+    """:meth:`PhaseShiftCoding.truth_scores` of a decode with ``u``, ``v`` (``rows``: v is
+    coded and scored too)."""
+    tu, tv = truth["uv"][..., 0], truth["uv"][..., 1]
+    m = truth["lit"] & dec.valid & np.isfinite(tu)
+    if mask is not None:
+        m &= np.asarray(mask, bool)
+    du = np.abs(dec.u - tu)
+    bad = du > 1.0
+    if rows:
+        bad |= np.abs(dec.v - tv) > 1.0
+    n = int(m.sum())
+    if n == 0:
+        return {"coord_err_rate": float("nan"), "coord_rmse_px": float("nan")}
+    good = m & ~bad
+    rmse = float(np.sqrt(np.mean(du[good] ** 2))) if good.any() else float("nan")
+    return {"coord_err_rate": float((bad & m).sum() / n), "coord_rmse_px": rmse}

@@ -1,5 +1,6 @@
-"""Sub-pixel stripe-edge refinement of a gray-code decode: the projector column (row) of a camera
-pixel from where the stripe edges between its neighbours fall, instead of the projector pixel
+"""Sub-pixel stripe-edge refinement of a bit-plane (gray-code) decode
+(:class:`simlunar.scanner.gray_code.GrayDecode`): the projector column (row) of a camera pixel
+from where the stripe edges between its neighbours fall, instead of the projector pixel
 centre."""
 
 from __future__ import annotations
@@ -7,20 +8,21 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from simlunar.scanner.gray_code import GrayDecode
-
 __all__ = ["refine_subpixel", "refine_subpixel_from_diff"]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _refine_lines(index, valid, lit, diff, n_bits, max_gap, out):  # pragma: no cover - compiled
+def _refine_lines(
+    index, valid, lit, diff, words, n_bits, max_gap, out
+):  # pragma: no cover - compiled
     """Sub-pixel projector index along each line (row) of 2-D views; writes ``out``.
 
     Stripe edges: an edge follows valid pixel x when the next valid pixel x' on its line is at
     most ``max_gap + 1`` pixels on, every pixel between them is lit (they only failed the
     reliability test, as a pixel straddling a stripe edge does) and the two indices differ by
-    exactly one: consecutive gray codes differ in one bit, whose pattern-minus-inverse signal
-    changes sign across the edge. The first zero crossing of that signal from x to x', linear
+    exactly one: the code words ``words`` of consecutive indices differ in one bit (the gray
+    code; else the most significant bit that differs is used), whose pattern-minus-inverse
+    signal changes sign across the edge. The first zero crossing of that signal from x to x', linear
     between pixel centres, is the edge's camera position; its projector coordinate is the
     boundary ``max(i, i')``. Edges are keyed by their left pixel x.
 
@@ -56,7 +58,7 @@ def _refine_lines(index, valid, lit, diff, n_bits, max_gap, out):  # pragma: no 
             if abs(a - b) != 1:
                 continue
             lo = min(a, b)
-            flip = (lo ^ (lo >> 1)) ^ ((lo + 1) ^ ((lo + 1) >> 1))
+            flip = words[lo] ^ words[lo + 1]
             p = 0
             while flip > 1:
                 flip >>= 1
@@ -96,7 +98,7 @@ def _refine_lines(index, valid, lit, diff, n_bits, max_gap, out):  # pragma: no 
             out[r, x] = min(max(v, lo_v), lo_v + 1 - 1e-9)
 
 
-def _refine_along_rows(index, valid, lit, diff, n_bits, max_gap) -> np.ndarray:
+def _refine_along_rows(index, valid, lit, diff, code, n_bits, max_gap) -> np.ndarray:
     """Sub-pixel projector index per camera pixel along rows of (possibly transposed) views."""
     out = np.empty(index.shape, np.float64)
     _refine_lines(
@@ -104,6 +106,7 @@ def _refine_along_rows(index, valid, lit, diff, n_bits, max_gap) -> np.ndarray:
         np.asarray(valid, np.bool_),
         np.asarray(lit, np.bool_),
         diff,
+        code.table(n_bits),
         int(n_bits),
         int(max_gap),
         out,
@@ -111,7 +114,7 @@ def _refine_along_rows(index, valid, lit, diff, n_bits, max_gap) -> np.ndarray:
     return out
 
 
-def refine_subpixel(result: GrayDecode, images: np.ndarray, *, max_gap: int = 2) -> GrayDecode:
+def refine_subpixel(result, images: np.ndarray, *, max_gap: int = 2):
     """Sub-pixel stripe-edge refinement of a gray-code decode.
 
     Along each camera row, the boundary between projector columns ``c`` and ``c + 1`` is
@@ -149,9 +152,7 @@ def refine_subpixel(result: GrayDecode, images: np.ndarray, *, max_gap: int = 2)
     return refine_subpixel_from_diff(result, diff, max_gap=max_gap)
 
 
-def refine_subpixel_from_diff(
-    result: GrayDecode, diff: np.ndarray, *, max_gap: int = 2
-) -> GrayDecode:
+def refine_subpixel_from_diff(result, diff: np.ndarray, *, max_gap: int = 2):
     """:func:`refine_subpixel` from each bit's ``pattern - inverse`` signal.
 
     Parameters
@@ -179,7 +180,7 @@ def refine_subpixel_from_diff(
     ncb = result.n_col_bits
     sub = np.empty((*result.shape, 2), np.float64)
     sub[..., 0] = _refine_along_rows(
-        result.col, result.valid, result.lit, diff[:ncb], ncb, int(max_gap)
+        result.col, result.valid, result.lit, diff[:ncb], result.code, ncb, int(max_gap)
     )
     # rows are refined along camera columns: transposed views, no copies
     sub[..., 1] = _refine_along_rows(
@@ -187,6 +188,7 @@ def refine_subpixel_from_diff(
         result.valid.T,
         result.lit.T,
         diff[ncb:].transpose(0, 2, 1),
+        result.code,
         result.n_row_bits,
         int(max_gap),
     ).T

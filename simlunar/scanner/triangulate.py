@@ -233,10 +233,12 @@ def epipolar_distance(F: np.ndarray, cam_uv, proj_uv) -> np.ndarray:
     return np.abs(num) / np.hypot(line[..., 0], line[..., 1])
 
 
-def true_correspondences(
+def true_projector_uv(
     positions: np.ndarray, projector: Camera, lit: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Projector column and row of world points (e.g. ground-truth positions seen by a camera).
+) -> np.ndarray:
+    """Continuous projector coordinates (u, v) of world points (e.g. the ground-truth
+    positions seen through camera pixel centres): where each camera pixel's ray meets the
+    projector image, pixel centres at ``(col + 0.5, row + 0.5)``.
 
     Parameters
     ----------
@@ -244,11 +246,12 @@ def true_correspondences(
         World points (NaN where nothing was hit).
     projector : Camera
     lit : (rows, cols) bool, optional
-        Points actually reached by projector light (see :func:`projector_visibility`); others get -1.
+        Points actually reached by projector light (see :func:`projector_visibility`); others
+        get NaN.
 
     Returns
     -------
-    col, row : (rows, cols) int64, -1 where outside the projector or not lit
+    (rows, cols, 2) float64, NaN where outside the projector or not lit
     """
     uv, z = projector.project(positions)
     W, H = projector.intrinsics.width, projector.intrinsics.height
@@ -257,6 +260,20 @@ def true_correspondences(
         ok &= (uv[..., 0] >= 0) & (uv[..., 0] < W) & (uv[..., 1] >= 0) & (uv[..., 1] < H)
     if lit is not None:
         ok &= np.asarray(lit, bool)
+    return np.where(ok[..., None], uv, np.nan).astype(np.float64)
+
+
+def true_correspondences(
+    positions: np.ndarray, projector: Camera, lit: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Projector column and row of world points: :func:`true_projector_uv` floored.
+
+    Returns
+    -------
+    col, row : (rows, cols) int64, -1 where outside the projector or not lit
+    """
+    uv = true_projector_uv(positions, projector, lit)
+    ok = np.isfinite(uv[..., 0])
     col = np.where(ok, np.floor(np.where(ok, uv[..., 0], 0)), -1).astype(np.int64)
     row = np.where(ok, np.floor(np.where(ok, uv[..., 1], 0)), -1).astype(np.int64)
     return col, row
@@ -394,4 +411,5 @@ __all__ = [
     "triangulate_plane",
     "triangulate_rays",
     "true_correspondences",
+    "true_projector_uv",
 ]

@@ -18,7 +18,8 @@ import numpy as np
 from simlunar.geometry import Rig
 from simlunar.render.capture import Capture
 from simlunar.scanner.codings import CODINGS, DEFAULT_CODING, full_field_codings, make_coding
-from simlunar.scanner.scans import CodedScan, DotOptions, DotScan, dot_scan
+from simlunar.scanner.dot_scan import DotOptions, DotScan, dot_scan
+from simlunar.scanner.result import CodedScan
 from simlunar.sensors.base import Acquisition
 
 __all__ = [

@@ -8,7 +8,7 @@ import numpy as np
 from simlunar.geometry import Rig
 from simlunar.render.capture import CaptureOptions, RenderCapture, camera_truth, render_guide
 from simlunar.scanner import gray_errors
-from simlunar.scanner.scans import GrayCodeOptions, GrayScan, gray_code_scan
+from simlunar.scanner.gray_code import GrayCodeOptions, GrayScan, gray_code_scan
 
 __all__ = ["bit_error_table", "interreflection_comparison"]
 

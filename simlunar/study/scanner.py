@@ -31,10 +31,8 @@ from simlunar.render.capture import (
 )
 from simlunar.render.lights import SunLight
 from simlunar.scanner.codings import DEFAULT_CODING, coding_for
-from simlunar.scanner.scans import (
-    CodedScan,
-    DotOptions,
-)
+from simlunar.scanner.dot_scan import DotOptions
+from simlunar.scanner.result import CodedScan
 from simlunar.sensors.structured_light import (
     DOT_MODES,
     MODES,
@@ -113,7 +111,7 @@ class ScannerStudyOptions:
     ----------
     modes : names from :data:`simlunar.sensors.structured_light.MODES`
     planners : planner strategy names (:func:`simlunar.planner.plan`) for the dot modes, or
-        ``"low_contrast"`` (:func:`simlunar.scanner.scans.low_contrast_pixels`: the pixels the
+        ``"low_contrast"`` (:func:`simlunar.scanner.rescan.low_contrast_pixels`: the pixels the
         coded scan saw least lit; ambiguity_enhancement only)
     budget : fraction of guide pixels rescanned / sampled by dots (paper: 0.1)
     trials : planner draws per (mode, planner); the gray-code scan is shared

@@ -12,8 +12,8 @@ from simlunar.features import check_image
 from simlunar.geometry import Rig
 from simlunar.planner import plan, strategy_weights
 from simlunar.render.capture import GuideView
+from simlunar.scanner.rescan import SCAN_PLANNERS, low_contrast_pixels
 from simlunar.scanner.rigs import RIG_PRESETS, rig_preset
-from simlunar.scanner.scans import SCAN_PLANNERS, low_contrast_pixels
 from simlunar.sensors.structured_light import StructuredLight
 
 __all__ = ["aim_rig_at_terrain", "depth_range_from_terrain", "guided_weights"]
@@ -44,7 +44,7 @@ def guided_weights(name: str, image: np.ndarray, opts: Mapping) -> tuple[np.ndar
 
 def _scan_planner(name: str, o, mode: str, guide: GuideView, sensor: StructuredLight):
     """The planner of the guide pixels to rescan: from the guide image, or from the coded
-    scan for a :data:`~simlunar.scanner.scans.SCAN_PLANNERS` planner."""
+    scan for a :data:`~simlunar.scanner.rescan.SCAN_PLANNERS` planner."""
     opts = o.planner_opts.get(name, {})
     if name in SCAN_PLANNERS:
         if mode != "ambiguity_enhancement":

@@ -12,7 +12,7 @@ from simlunar.config.terrain import preset_names as shipped_presets
 from simlunar.errors import ConfigError
 from simlunar.metrics import METRICS
 from simlunar.planner import MEASURING, ORACLES, STRATEGIES
-from simlunar.scanner.scans import SCAN_PLANNERS
+from simlunar.scanner.rescan import SCAN_PLANNERS
 from simlunar.sensors.structured_light import MODES
 
 
@@ -45,9 +45,9 @@ def test_an_unknown_name_lists_the_valid_ones_sorted():
         " (did you mean 'mse'?)"
     )
     with pytest.raises(
-        ConfigError, match=r"^study\.modes\[0\]: unknown scan mode 'binary' \(valid: "
+        ConfigError, match=r"^study\.modes\[0\]: unknown scan mode 'laser' \(valid: "
     ):
-        registry.check_scan_mode("binary", "study.modes[0]")
+        registry.check_scan_mode("laser", "study.modes[0]")
     for mode in MODES:
         registry.check_scan_mode(mode, "study.modes[0]")
 

@@ -154,7 +154,8 @@ def test_option_defaults_are_the_library_defaults():
     from simlunar.imaging.sensor import SensorModel
     from simlunar.render.capture import CaptureOptions
     from simlunar.scanner import rigs
-    from simlunar.scanner.scans import DotOptions, GrayCodeOptions
+    from simlunar.scanner.dot_scan import DotOptions
+    from simlunar.scanner.gray_code import GrayCodeOptions
     from simlunar.study.scanner import aim_rig_at_terrain
 
     # the config's defaults are the library's options dataclasses' defaults

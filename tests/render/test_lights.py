@@ -287,3 +287,32 @@ def test_flash_on_a_lambert_plane_matches_the_irradiance(mi, beam_exponent):
     assert ratio.mean() == pytest.approx(1.0, abs=1e-3)
     np.testing.assert_allclose(img[inner], expected[inner], rtol=0.02)
     assert expected[inner].max() / expected[inner].min() > 1.5
+
+
+def test_a_supersampled_projector_pattern_is_a_bilinear_texture_of_its_multiple_shape():
+    from simlunar.render.lights import emitter_dicts
+
+    proj = Projector(Intrinsics.from_fov(8, 6, 30.0), Pose(np.eye(3), np.zeros(3)))
+    pl = ProjectorLight(proj, np.ones((24, 32)), supersample=4)
+    assert pl.pattern_shape == (24, 32)
+    with pytest.raises(ValueError, match=r"pattern shape \(6, 8\) does not match .*\(24, 32\)"):
+        ProjectorLight(proj, np.ones((6, 8)), supersample=4)
+    with pytest.raises(ValueError, match="supersample must be a whole number >= 1"):
+        ProjectorLight(proj, np.ones((6, 8)), supersample=0)
+    cam = Camera(Intrinsics.from_fov(8, 6, 30.0), Pose(np.eye(3), np.zeros(3)))
+    d = next(iter(emitter_dicts(pl, cam).values()))
+    assert d["irradiance"]["filter_type"] == "bilinear"
+    d1 = next(iter(emitter_dicts(ProjectorLight(proj, np.ones((6, 8))), cam).values()))
+    assert d1["irradiance"]["filter_type"] == "nearest"
+
+
+@pytest.mark.render
+def test_a_supersampled_uniform_pattern_delivers_the_same_irradiance(mi):
+    # the texture's resolution changes nothing but the sampling: a uniform 4x pattern lights
+    # the plane as the 1x one (E = scale * pattern / H^2)
+    t = _plane(albedo=0.8, n=64, spacing=0.05)
+    cam = OrthoCamera.nadir_for_grid(t.shape, t.spacing, t.origin, altitude=4.0)
+    proj = Projector(Intrinsics.from_fov(16, 12, 60.0), Pose.look_at([0, 0, 2.0], [0, 0, 0]))
+    light = ProjectorLight(proj, np.full((48, 64), 0.5, np.float32), scale=5.0, supersample=4)
+    img = TerrainScene(t, cam, lights=[light], max_depth=2, spp=4).render()[..., 0]
+    np.testing.assert_allclose(img[24:40, 20:44], 0.8 * 5.0 * 0.5 / 4.0 / np.pi, rtol=1e-5)

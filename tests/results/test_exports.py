@@ -20,9 +20,9 @@ from simlunar.imaging.exr import read_exr
 from simlunar.imaging.sensor import SensorModel
 from simlunar.render.capture import CaptureOptions, RenderCapture
 from simlunar.results import exports
-from simlunar.scanner import rigs, scans
+from simlunar.scanner import rigs
 from simlunar.scanner.codings import make_coding
-from simlunar.scanner.scans import GrayCodeOptions
+from simlunar.scanner.gray_code import GrayCodeOptions, gray_code_scan
 from simlunar.terrain.types import Terrain
 
 pytestmark = pytest.mark.render
@@ -50,7 +50,7 @@ def _capture():
 @pytest.fixture(scope="module")
 def scan(tmp_path_factory):
     rig, cap = _capture()
-    gray = scans.gray_code_scan(cap, rig, GrayCodeOptions(keep_frames=True))
+    gray = gray_code_scan(cap, rig, GrayCodeOptions(keep_frames=True))
     folder = tmp_path_factory.mktemp("export") / "unit0"
     exports.write_scan_export(folder, exports.scan_export_payload(gray, rig))
     return rig, gray, folder
@@ -235,6 +235,16 @@ def test_opencv_sinusoidal_pattern_computes_the_exported_wrapped_phase(phase_sca
     # fringe, 0.13 projector px at the 8 px period)
     med, p95 = np.median(diff), np.percentile(diff, 95)
     assert med < 0.1 and p95 < 0.3, (med, p95)
+    # the exported phase maps: the finest level's wrapped phase is OpenCV's, and the absolute
+    # phase wraps to it
+    phase = read_exr(folder / "phase.exr")
+    wrapped = phase["col2_wrapped"].astype(np.float64)
+    d_wrapped = np.abs(np.angle(np.exp(1j * (cv_phase[keep] - wrapped[keep]))))
+    assert np.median(d_wrapped) < 0.1 and np.percentile(d_wrapped, 95) < 0.3
+    absolute = phase["col_absolute"].astype(np.float64)
+    np.testing.assert_allclose(np.mod(absolute[keep], 2 * np.pi), ours[keep], atol=1e-4)
+    d_abs = np.abs(np.angle(np.exp(1j * (absolute[keep] - wrapped[keep]))))
+    assert np.median(d_abs) < 0.05
     # the check has teeth: simlunar's half-pixel convention forgotten (u without + 0.5) is
     # 2 pi 0.5 / 8 = 0.39 rad off
     wrong = np.mod(2 * np.pi * (maps["u"].astype(np.float64) + offset) / period, 2 * np.pi)
@@ -275,17 +285,29 @@ def test_run_with_save_scans_writes_one_folder_per_unit(tmp_path):
         *("--set", "study.projector_px=[32, 24]"),
         *("--set", "study.camera_px=[48, 36]"),
         *("--set", "render.spp=1"),
-        *("--set", "study.modes=[gray_code]"),
+        *("--set", "study.modes=[gray_code, phase_shift]"),
         *("--set", "study.metrics=[mse]"),
         *("--set", "sweep={}"),
     ]
     r = CliRunner().invoke(app, args)
     assert r.exit_code == 0, r.output
     unit = out / "scans" / "unit0"
-    assert len(list((unit / "frames8").glob("*.png"))) == 2 * (5 + 5) + 2
-    assert {"decode.exr", "cloud.ply", "calibration.yml", "manifest.json"} <= {
-        p.name for p in unit.iterdir()
-    }
+    # one folder per coding the study scanned, named in the unit's manifest
+    manifest = json.loads((unit / "manifest.json").read_text())
+    assert manifest["codings"] == ["gray_code", "phase_shift"] and manifest["kind"] == "codings"
+    gray, phase = unit / "gray_code", unit / "phase_shift"
+    assert len(list((gray / "frames8").glob("*.png"))) == 2 * (5 + 5) + 2
+    for folder in (gray, phase):
+        assert {"decode.exr", "cloud.ply", "calibration.yml", "manifest.json"} <= {
+            p.name for p in folder.iterdir()
+        }
+    assert not (gray / "phase.exr").exists()
+    # phase shift: the wrapped phase of every level and the absolute phase per axis
+    maps = read_exr(phase / "phase.exr")
+    levels = json.loads((phase / "manifest.json").read_text())["periods_px"]
+    assert set(maps) == {f"col{i}_wrapped" for i in range(len(levels["col"]))} | {
+        f"row{i}_wrapped" for i in range(len(levels["row"]))
+    } | {"col_absolute", "row_absolute"}
     assert "save_scans: true" in (out / "config.yaml").read_text()
 
 
@@ -422,8 +444,8 @@ def test_a_partly_deleted_export_is_restored_and_a_full_disk_is_exit_3(tmp_path,
     r = CliRunner().invoke(app, args)
     assert r.exit_code == 0, r.output
     first = export_tree()
-    (unit / "decode.exr").unlink()
-    sorted((unit / "frames16").glob("*.png"))[3].unlink()
+    (unit / "gray_code" / "decode.exr").unlink()
+    sorted((unit / "gray_code" / "frames16").glob("*.png"))[3].unlink()
 
     def full_disk(self, path):
         raise RuntimeError(
@@ -434,7 +456,9 @@ def test_a_partly_deleted_export_is_restored_and_a_full_disk_is_exit_3(tmp_path,
         m.setattr(OpenEXR.File, "write", full_disk)
         r = CliRunner().invoke(app, args)
     assert r.exit_code == 3, r.output
-    assert r.stderr.splitlines() == [f"error: {unit / 'decode.exr'}: No space left on device"]
+    assert r.stderr.splitlines() == [
+        f"error: {unit / 'gray_code' / 'decode.exr'}: No space left on device"
+    ]
     assert len(list((out / "units").glob("*.json"))) == 1
     r = CliRunner().invoke(app, args)
     assert r.exit_code == 0, r.output

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from simlunar.scanner import coded, rigs
+from simlunar.scanner.gray_code import GrayCodeOptions, GrayCoding
 from simlunar.scanner.micro_phase_shift import MicroPhaseShiftCoding, MicroPhaseShiftOptions
 from simlunar.scanner.phase_shift import PhaseShiftCoding, PhaseShiftOptions
-from simlunar.scanner.scans import GrayCodeOptions, GrayCoding
 
 
 @pytest.fixture

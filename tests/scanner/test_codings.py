@@ -16,7 +16,8 @@ from simlunar.scanner.codings import (
     full_field_codings,
     make_coding,
 )
-from simlunar.scanner.scans import CodedScan, GrayCodeOptions
+from simlunar.scanner.gray_code import GrayCodeOptions
+from simlunar.scanner.result import CodedScan
 from simlunar.sensors.structured_light import DOT_MODES, MODES, mode_coding
 from tests.scanner._synthetic import PlaneCapture
 

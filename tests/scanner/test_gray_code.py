@@ -6,6 +6,10 @@ import numpy as np
 import pytest
 
 from simlunar.scanner import gray_code as gc
+from simlunar.scanner import rigs
+from simlunar.scanner.gray_code import GrayCodeOptions, gray_code_scan
+from simlunar.sensors import StructuredLight, StructuredLightOptions
+from tests.scanner._synthetic import PlaneCapture
 
 
 def test_num_bits_matches_ceil_log2():
@@ -243,3 +247,46 @@ def test_decode_takes_frames_as_nested_lists():
     assert res.valid.all()
     np.testing.assert_array_equal(res.col, c)
     np.testing.assert_array_equal(res.row, r)
+
+
+@pytest.fixture
+def rig():
+    return rigs.moonyard_rig(proj_size=(64, 48), cam_size=(128, 96))
+
+
+@pytest.mark.parametrize("normal", [(0, 0, 1.0), (0.3, -0.2, 1.0)])
+def test_gray_code_scan_of_plane_matches_truth(rig, normal):
+    cap = PlaneCapture(rig, normal, 0.0, noise=0.002)
+    g = gray_code_scan(cap, rig, GrayCodeOptions(black_threshold=0.2, white_threshold=0.05))
+    assert g.renders == 6 + 6 + 2 == cap.renders  # bits + 2 with inverses by linearity
+    truth = cap.true_depth(rig.guide)
+    ok = np.isfinite(g.depth)
+    assert ok.mean() > 0.9
+    # gray code quantises to whole projector columns: one column spans a depth interval of
+    # about dz = z^2 / (f_p * b) along a ray (triangulation depth resolution); the decoded
+    # point sits within half a column of the truth, so |error| <= dz / 2 plus the change of
+    # depth across the guide pixel (half a pixel on the slope), here bounded by dz as well.
+    dz = truth[ok] ** 2 / (rig.projector.intrinsics.fx * rig.baseline)
+    err = np.abs(g.depth[ok] - truth[ok])
+    assert np.all(err <= dz)
+    assert np.median(err / dz) < 0.5
+    ref = gray_code_scan(
+        cap, rig, GrayCodeOptions(black_threshold=0.2, white_threshold=0.05, inverses="render")
+    )
+    assert ref.renders == 2 * 12 + 2
+    np.testing.assert_array_equal(ref.decode.col, g.decode.col)
+
+
+def test_gray_code_mode_measures_the_decoded_pixels(rig):
+    cap = PlaneCapture(rig, (0, 0, 1.0), 0.0)
+    gray = StructuredLightOptions(
+        "gray_code", codings={"gray_code": GrayCodeOptions(black_threshold=0.2)}
+    )
+    sensor = StructuredLight(cap, rig, depth_range=(1.0, 3.0), options=gray)
+    assert not sensor.needs_plan
+    acq = sensor.acquire(None)
+    res = acq.detail
+    assert np.isnan(res.measured).any() and acq.frames == res.renders == 14
+    # the acquisition holds exactly the finite cells of the measured map, row-major
+    np.testing.assert_array_equal(acq.measured_map(), res.measured)
+    assert len(acq.values) == np.isfinite(res.measured).sum()

@@ -4,6 +4,8 @@ synthetic planes (NumPy capture, no Mitsuba)."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -191,3 +193,29 @@ def test_phase_shift_is_a_mode_of_the_scanner_and_runs_under_ambiguity_enhanceme
     assert isinstance(acq.detail.coded.decode, ps.PhaseDecode)
     hit = np.isfinite(acq.detail.dots.depth)
     np.testing.assert_array_equal(acq.detail.measured[hit], acq.detail.dots.depth[hit])
+
+
+def test_decoding_error_is_measured_against_the_continuous_truth():
+    # a decode shifted by a known 0.3 px from the true projector coordinates scores 0.3 px,
+    # not the 1/sqrt(12) = 0.289 px of comparing with the true pixel's centre; 1.2 px off is
+    # an unwrapping error
+    from simlunar.scanner.phase_shift import PhaseDecode, PhaseShiftCoding, coord_scores
+
+    rng = np.random.default_rng(0)
+    uv = np.stack([rng.uniform(0, 64, (30, 40)), rng.uniform(0, 48, (30, 40))], axis=-1)
+    ones = np.ones((30, 40), bool)
+    u = uv[..., 0] + 0.3
+    u[0, :4] += 0.9
+    dec = PhaseDecode(u=u, v=uv[..., 1] - 0.3, valid=ones, lit=ones, modulation=np.ones((30, 40)),
+                      disagreement=np.zeros((30, 40)), contrast=np.ones((30, 40), np.float32),
+                      proj_shape=(48, 64))  # fmt: skip
+    truth = {"uv": uv, "lit": ones}
+    s = coord_scores(dec, truth)
+    assert s["coord_rmse_px"] == pytest.approx(0.3, abs=1e-12)
+    assert s["coord_err_rate"] == 4 / (30 * 40)
+    scan = SimpleNamespace(decode=dec)
+    assert PhaseShiftCoding().truth_scores(scan, truth) == s
+    # rows are scored too: a row off by more than a pixel is an error
+    dec2 = PhaseDecode(**{**dec.__dict__, "v": uv[..., 1] + 1.5})
+    assert coord_scores(dec2, truth)["coord_err_rate"] == 1.0
+    assert coord_scores(dec2, truth, rows=False)["coord_err_rate"] == 4 / (30 * 40)

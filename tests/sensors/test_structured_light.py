@@ -9,6 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from simlunar.scanner.codings import DEFAULT_CODING, full_field_codings
 from simlunar.scanner.rigs import aerial_rig
 from simlunar.sensors import structured_light as sl
 from simlunar.sensors.base import Acquisition
@@ -93,10 +94,6 @@ def test_refusals(scans):
         ValueError, match=r"^unknown scan mode 'laser'; valid: \['ambiguity_enhancement', "
     ):
         sl.StructuredLightOptions(mode="laser")
-    assert sl.MODES == (
-        "gray_code",
-        "phase_shift",
-        "micro_phase_shift",
-        "ambiguity_enhancement",
-        "data_reduction",
-    )
+    # the modes: every full-field coding of the registry, in its order, then the dot modes
+    assert sl.MODES == (*full_field_codings(), "ambiguity_enhancement", "data_reduction")
+    assert sl.MODES[0] == DEFAULT_CODING
