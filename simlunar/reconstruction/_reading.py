@@ -39,6 +39,12 @@ READING_OPTIONS: dict[str, dict] = {
         ge=0, lt=1,
     ),
     "saturation": dict(default=1.0, doc="saturated: image level at or above this", gt=0),
+    "shadow_lit": dict(
+        default=0.02, doc="shadowed too: at or below this fraction of the local lit level, read "
+        "from the sun frame, or from sun / co-located frame where that frame is lit "
+        "(shadow.shadow_mask; 0: off)",
+        ge=0, lt=1,
+    ),
 }  # fmt: skip
 """name -> keywords of :func:`simlunar.registry.option` (``default`` its first argument), for
 :func:`simlunar.registry.shared_option`."""

@@ -98,6 +98,7 @@ class PhotoclinometryOptions(ReadingChecks):
     sigma_pitch: float = shared_option(READING_OPTIONS, "sigma_pitch")
     shadow: float = shared_option(READING_OPTIONS, "shadow")
     saturation: float = shared_option(READING_OPTIONS, "saturation")
+    shadow_lit: float = shared_option(READING_OPTIONS, "shadow_lit")
     heldout_check: bool = option(
         True,
         doc="cap gamma by a check on held-out samples, as the shading reconstruction's: every "
@@ -113,6 +114,7 @@ class PhotoclinometryOptions(ReadingChecks):
             gamma_max=self.gamma_max, share_lo=self.share_lo, share_hi=self.share_hi,
             use_flat=self.use_flat, use_others=False, flat_guard=self.flat_guard,
             sigma_pitch=self.sigma_pitch, shadow=self.shadow, saturation=self.saturation,
+            shadow_lit=self.shadow_lit,
         )  # fmt: skip
 
 
@@ -308,6 +310,8 @@ def photoclinometry(
     lin = linear_field(points_rc, values, shape)
     if guide.shape != lin.shape:
         raise ValueError(f"guide image has shape {guide.shape}, the output grid {lin.shape}")
+    # shadowed pixels (read from the frames alone: shading.shadow_masks) leave the
+    # calibration and the slope equations
     name, image, valid = shading_frames(guide, so, linear=lin)[0]
     cal = calibrate(image, None, None, spacing=guide.spacing, valid=valid, linear=lin,
                     options=so.calibration())  # fmt: skip
@@ -322,6 +326,7 @@ def photoclinometry(
         "gain": cal.gain,
         "cg_iterations": 0,
         "cg_converged": True,
+        "valid_share": float(valid.mean()),
     }
     if gamma == 0.0:
         return Reconstructed(lin.heights, info)

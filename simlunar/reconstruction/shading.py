@@ -86,6 +86,7 @@ from simlunar.reconstruction.calibration import (
 )
 from simlunar.reconstruction.flatfield import flat_field
 from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
+from simlunar.reconstruction.shadow import ShadowOptions, shadow_mask
 from simlunar.registry import option, shared_option
 
 __all__ = [
@@ -99,6 +100,7 @@ __all__ = [
     "heldout_gamma",
     "shading",
     "shading_frames",
+    "shadow_masks",
 ]
 
 
@@ -138,6 +140,7 @@ class ShadingOptions(ReadingChecks):
     sigma_pitch: float = shared_option(READING_OPTIONS, "sigma_pitch")
     shadow: float = shared_option(READING_OPTIONS, "shadow")
     saturation: float = shared_option(READING_OPTIONS, "saturation")
+    shadow_lit: float = shared_option(READING_OPTIONS, "shadow_lit")
     heldout_check: bool = option(
         True,
         doc="cap gamma by a check on held-out samples: every fifth sample is left out, and the "
@@ -180,6 +183,7 @@ def shading_frames(
     linear: LinearField | None = None,
     surface=None,
     flat=None,
+    shadows=None,
 ):
     """The frames the slopes are read from: ``[(name, image, valid), ...]``.
 
@@ -192,16 +196,27 @@ def shading_frames(
     (:func:`denoised_flat`; default: denoised here).
     Without one, the raw sun frames and, for each other sun, the ratio ``sun / sun_j``
     (albedo-free: ``(s1 . n) / (s2 . n)``, linear in the slope to first order, calibrated like
-    any frame). Valid pixels are those neither shadowed nor saturated in the raw sun frames.
+    any frame). Valid pixels are those neither saturated nor shadowed in the raw sun frames:
+    shadowed by the global rule of :func:`.calibration.valid_pixels` or by
+    :func:`shadow_masks` (the frames alone: each sun frame dark where it is under its local
+    lit level, read on ``sun / flat`` where the co-located frame is lit); ``shadows``: those
+    masks already made, one per sun frame (default: made here).
     """
     o = options or ShadingOptions()
     copt = o.calibration()
     suns = [("sun", guide.image)]
     if o.use_others:
         suns += [(f"sun{i + 2}", im) for i, (im, _) in enumerate(guide.others)]
+    use_flat = guide.flat is not None and o.use_flat
+    if use_flat and flat is None:
+        flat = denoised_flat(guide.flat, o.flat_noise)
+    if shadows is None:
+        shadows = shadow_masks(guide, o, flat=flat if use_flat else None)
+    if len(shadows) != len(suns):
+        raise ValueError(f"shadows: {len(shadows)} masks for {len(suns)} sun frames")
+    valid = [valid_pixels(im, copt) & ~sh for (_, im), sh in zip(suns, shadows, strict=True)]
     out = []
-    if guide.flat is not None and o.use_flat:
-        flat = denoised_flat(guide.flat, o.flat_noise) if flat is None else flat
+    if use_flat:
         if guide.flash is not None:
             if linear is None and surface is None:
                 raise ValueError("a flash's flat frame is flat-fielded on the samples: give linear")
@@ -211,10 +226,9 @@ def shading_frames(
         floor = o.flat_guard * med if med > 0 else o.flat_guard
         lit = flat > floor
         den = np.maximum(flat, floor)
-        for name, im in suns:
-            out.append((name, im / den, valid_pixels(im, copt) & lit))
+        for (name, im), v in zip(suns, valid, strict=True):
+            out.append((name, im / den, v & lit))
     else:
-        valid = [valid_pixels(im, copt) for _, im in suns]
         out = [(name, im, v) for (name, im), v in zip(suns, valid, strict=True)]
         # no co-located frame: the ratio of two sun frames cancels albedo too (one slope
         # component, along the difference of the two lights' s_h / s_up)
@@ -224,6 +238,19 @@ def shading_frames(
             ratio = suns[0][1] / np.maximum(im, floor)
             out.append((f"sun/{name}", ratio, valid[0] & v & (im > floor)))
     return out
+
+
+def shadow_masks(guide: Guide, options: ShadingOptions | None = None, *, flat=None) -> list:
+    """One shadow mask per sun frame the reconstruction reads (the guide's image, then its
+    other suns when ``use_others``): :func:`.shadow.shadow_mask` of the frame, with the
+    co-located frame ``flat`` (the guide's, denoised: :func:`denoised_flat`) when given; all
+    False when ``shadow_lit`` is 0. The frames only: no sample, no truth."""
+    o = options or ShadingOptions()
+    suns = [guide.image]
+    if o.use_others:
+        suns += [im for im, _ in guide.others]
+    sopt = ShadowOptions(lit_fraction=o.shadow_lit)
+    return [shadow_mask(im, flat, options=sopt) for im in suns]
 
 
 #: Immerkaer's (1996) noise mask: the difference of two Laplacians, blind to planes and ramps
@@ -359,14 +386,17 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
         raise ValueError(f"guide image has shape {guide.shape}, the output grid {lin.shape}")
     # the co-located frame's denoising reads the frame alone: once for every pass and fold
     flat = denoised_flat(guide.flat, o.flat_noise) if guide.flat is not None else None
-    z_fc, gamma, info = _refined_detail(lin, guide, o, flat)
+    # the shadows are read from the frames alone: once for every pass and fold
+    shadows = shadow_masks(guide, o, flat=flat if o.use_flat else None)
+    z_fc, gamma, info = _refined_detail(lin, guide, o, flat, shadows)
+    info["shadow_share"] = float(shadows[0].mean())
     if z_fc is None:
         return Reconstructed(lin.heights, info)
 
     # the detail is made from the samples (the calibration, the slopes where the image is not
     # read, the flat-field's surface): the check remakes it from the kept samples only
     def remade(keep):
-        field = _refined_detail(keep, guide, o, flat)[0]
+        field = _refined_detail(keep, guide, o, flat, shadows)[0]
         return np.zeros(lin.shape) if field is None else field
 
     checked = remade if o.heldout_check else None
@@ -374,29 +404,31 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     return Reconstructed(z, info)
 
 
-def _refined_detail(lin: LinearField, guide: Guide, o: ShadingOptions, flat=None):
+def _refined_detail(lin: LinearField, guide: Guide, o: ShadingOptions, flat=None, shadows=None):
     """:func:`_shading_detail`, and for a flash's flat frame once more with the flat-field
     computed on the fused surface of the first pass (``flash_refine``): the flash lights
     off-centre cells obliquely (up to ~43 deg from the vertical at the corners of an aerial
     view from 50 m), so its frame keeps a first-order shading of the relief the samples do not
     resolve, which the linear surface's normals cannot divide out and the fused surface's
     mostly can."""
-    z_fc, gamma, info = _shading_detail(lin, guide, o, flat=flat)
+    z_fc, gamma, info = _shading_detail(lin, guide, o, flat=flat, shadows=shadows)
     if z_fc is None or guide.flash is None or not o.flash_refine:
         return z_fc, gamma, info
     fused = blend_detail(lin, z_fc, gamma)
-    z2, gamma2, info2 = _shading_detail(lin, guide, o, surface=fused, flat=flat)
+    z2, gamma2, info2 = _shading_detail(lin, guide, o, surface=fused, flat=flat, shadows=shadows)
     if z2 is None:  # the refined frame reads nothing: keep the first pass
         return z_fc, gamma, info
     info2["flash_refined"] = 1.0
     return z2, gamma2, info2
 
 
-def _shading_detail(lin: LinearField, guide: Guide, o: ShadingOptions, *, surface=None, flat=None):
+def _shading_detail(
+    lin: LinearField, guide: Guide, o: ShadingOptions, *, surface=None, flat=None, shadows=None
+):
     """``(z_fc or None, gamma, info)``: the integrated slope field read from the guide on the
     samples of ``lin``, its weight by the fallback rule and the diagnostics (None when the
     image is not used); a flash's flat is flat-fielded on ``surface`` (default ``lin``'s)."""
-    frames = shading_frames(guide, o, linear=lin, surface=surface, flat=flat)
+    frames = shading_frames(guide, o, linear=lin, surface=surface, flat=flat, shadows=shadows)
     copt = o.calibration()
     cals = [
         calibrate(im, None, None, spacing=guide.spacing, valid=v, linear=lin, options=copt)
