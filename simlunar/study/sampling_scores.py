@@ -64,6 +64,11 @@ class SamplingEvaluator:
         self.region = region
         self.inner = None if inner is None else np.flatnonzero(np.asarray(inner).ravel())
 
+    def warm(self) -> None:
+        """Compile the one-pass kernel now (the protocol calls it before forking workers:
+        a child then never enters Numba's dispatcher lock)."""
+        error_sums(np.zeros(1), np.zeros(1), np.ones((self.rows.shape[0], 1)))
+
     def __call__(self, recon: np.ndarray, acquisition) -> dict[str, float]:
         flat = recon.ravel()
         out = {}
