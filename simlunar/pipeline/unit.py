@@ -50,6 +50,7 @@ from simlunar.results.lidar_exports import lidar_export_payload
 from simlunar.results.records import UnitRecord
 from simlunar.sensors.lidar import LidarScene
 from simlunar.study.lidar import LidarStudyOptions, beam_table, run_lidar_study
+from simlunar.study.reconstruction_spec import parse_reconstructions
 from simlunar.study.sampling import SamplingStudyOptions, run_sampling_study
 from simlunar.study.scanner import (
     ScannerScene,
@@ -321,11 +322,8 @@ def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict):
     image and the extra frames of ``render.guide_frames``, :mod:`simlunar.pipeline.guide`)
     and the unit meta naming its frames; ``(None, {})`` when no configured reconstruction reads
     the image (no extra frame is rendered then: nothing would read it)."""
-    names = [
-        r if isinstance(r, str) else next(iter(r.values())).get("reconstruction", next(iter(r)))
-        for r in cfg.study.reconstructions
-    ]  # a labelled item names its registered reconstruction
-    if not any(RECONSTRUCTIONS[n].meta.get("guided") for n in names):
+    specs = parse_reconstructions(cfg.study.reconstructions)
+    if not any(RECONSTRUCTIONS[s.name].meta.get("guided") for s in specs):
         return None, {}
 
     def develop(radiance, rng):

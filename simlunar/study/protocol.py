@@ -34,6 +34,7 @@ from simlunar.reconstruction import (
     run_reconstruction,
 )
 from simlunar.sensors.base import Acquisition, Sensor
+from simlunar.study.reconstruction_spec import ReconstructionSpec
 
 __all__ = [
     "DEFAULT_RECONSTRUCTION",
@@ -136,8 +137,11 @@ def reconstruction_options(
 
     Parameters
     ----------
-    reconstructions : mapping name -> (options object, mapping of its fields, or None), or a
-        sequence of names; None: ``{"linear": None}`` (the paper's).
+    reconstructions : mapping label -> (options object, mapping of its fields, or None), or a
+        sequence of ``study.reconstructions`` items (names, ``{label: options}`` mappings or
+        :class:`~simlunar.study.reconstruction_spec.ReconstructionSpec`); None: ``{"linear":
+        None}`` (the paper's). A mapping of fields may name its registered reconstruction
+        (``reconstruction``: a label of its own).
     outside : {"nearest", "nan"}
         The ``outside`` policy of ``linear`` when its options do not name one (the studies'
         own ``outside`` option, kept for the callers that set it).
@@ -155,22 +159,23 @@ def reconstruction_options(
             f"{reconstructions!r}"
         )
     if not isinstance(reconstructions, Mapping):
-        names = list(reconstructions)
+        specs = [s if isinstance(s, ReconstructionSpec) else ReconstructionSpec.parse(s)
+                 for s in reconstructions]  # fmt: skip
+        names = [s.label for s in specs]
         if len(set(names)) != len(names):
             raise ValueError(f"reconstructions must be distinct names, got {names}")
-        reconstructions = dict.fromkeys(names)
+        reconstructions = {s.label: s.values() or None for s in specs}
     if not reconstructions:
         raise ValueError("the protocol needs at least one reconstruction")
     out = {}
     for name, opts in reconstructions.items():
-        base = name
         if opts is not None and not isinstance(opts, Mapping):
             base = reconstruction_of(opts)  # an options object names its reconstruction
-        elif isinstance(opts, Mapping) and "reconstruction" in opts:
+        else:
             # a label of its own: {label: {reconstruction: <registered name>, options...}}
-            opts = dict(opts)
-            base = opts.pop("reconstruction")
-            if name in RECONSTRUCTIONS and name != base:
+            spec = ReconstructionSpec.parse({name: opts})
+            base, opts = spec.name, dict(spec.options)
+            if spec.labelled and name in RECONSTRUCTIONS:
                 raise ValueError(
                     f"label {name!r} is the name of another reconstruction; choose another"
                 )
