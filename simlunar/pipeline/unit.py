@@ -24,7 +24,9 @@ from scipy import ndimage
 
 from simlunar.config import lidar_translate, translate
 from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
+from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.schema import ExperimentCfg
+from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.features.learned import pinned_models
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
@@ -253,7 +255,7 @@ def _render_guide(cfg, scene: RenderScene, seeds, timings):
     return image, radiance, result
 
 
-@study_unit("sampling", SamplingStudyOptions, parallel=True)
+@study_unit("sampling", SamplingStudyOptions, parallel=True, config=SamplingStudyCfg)
 def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> UnitRecord:
     """Render the guide view, then the sampling study with the ideal sensor."""
     image, radiance, result = _render_guide(cfg, scene, seeds, timings)
@@ -411,7 +413,7 @@ def _plain_scores(scores) -> dict:
     return {str(m): {str(s): float(v) for s, v in by.items()} for m, by in dict(scores).items()}
 
 
-@study_unit("scanner", ScannerStudyOptions, renders=True)  # one scene per pattern sequence
+@study_unit("scanner", ScannerStudyOptions, renders=True, config=ScannerStudyCfg)
 def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     """The scanner study with the structured-light sensor on a rig aimed at the terrain."""
     s, r = cfg.study, cfg.render
@@ -450,7 +452,7 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     )
 
 
-@study_unit("lidar", LidarStudyOptions)
+@study_unit("lidar", LidarStudyOptions, config=LidarStudyCfg)
 def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     """Render the guide view, then the LIDAR study with the sensor at the guide camera (the
     sun of a sun-lit scene is the LIDAR's background)."""

@@ -41,6 +41,9 @@ def test_every_study_kind_of_the_schema_has_its_unit():
     assert units["sampling"].options is SamplingStudyOptions
     assert units["scanner"].options is ScannerStudyOptions
     assert units["lidar"].options is LidarStudyOptions
+    # each entry names the schema model of its section, whose kind is the entry's name
+    for kind, entry in units.items():
+        assert typing.get_args(entry.meta["config"].model_fields["kind"].annotation) == (kind,)
     # only the sampling study forks workers; only the scanner renders throughout its study
     assert [k for k, e in units.items() if e.meta.get("parallel")] == ["sampling"]
     assert [k for k, e in units.items() if e.meta.get("renders")] == ["scanner"]
