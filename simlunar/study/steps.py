@@ -3,8 +3,8 @@
 A long study is a sequence of sub-steps whose results do not depend on each other's order
 except through a shared random stream (the structured-light capture draws every frame's
 noise from one generator): the sampling study's strategies, the scanner study's coded scans
-and its (scan mode, planner) rescans, the LIDAR study's planners. Each is run through
-:func:`resumable` with a :class:`Steps` store: a finished step is saved with the state of the
+and its (scan mode, planner) rescans, the LIDAR study's planners. Each is kept in a
+:class:`Steps` store (:func:`resumable` for one sub-step): a finished step is saved with the state of the
 shared generators after it, and on a rerun it is loaded instead of computed and the
 generators are set to that state, so the steps after it draw exactly what an uninterrupted
 study draws. Results are therefore bit-identical to an uninterrupted run.
@@ -14,7 +14,8 @@ planners, the LIDAR study's planners) through the one wrapper :class:`ProtocolSt
 step per label, holding the label's tidy rows (made by the kind's row function, see
 :func:`simlunar.study.protocol.outcome_rows`) and what the kind keeps of each outcome; a
 label kept by an earlier run is loaded, the others are run together (a forked pool may run
-them in parallel) and each is kept as soon as its last trial is back.
+them in parallel) and each is kept as soon as its last trial is back. A step an older run
+kept in another form is run again, never misread.
 
 The store decides where the steps live and for which inputs they hold: the pipeline keeps
 them in the unit's working folder under the unit's cache key (a changed configuration or
