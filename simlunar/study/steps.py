@@ -4,10 +4,10 @@ A long study is a sequence of sub-steps whose results do not depend on each othe
 except through a shared random stream (the structured-light capture draws every frame's
 noise from one generator): the sampling study's strategies, the scanner study's coded scans
 and its (scan mode, planner) rescans, the LIDAR study's planners. Each is kept in a
-:class:`Steps` store (:func:`resumable` for one sub-step): a finished step is saved with the state of the
-shared generators after it, and on a rerun it is loaded instead of computed and the
-generators are set to that state, so the steps after it draw exactly what an uninterrupted
-study draws. Results are therefore bit-identical to an uninterrupted run.
+:class:`Steps` store (:func:`resumable` for one sub-step): a finished step is saved with the
+state of the shared generators after it, and on a rerun it is loaded instead of computed and
+the generators are set to that state, so the steps after it draw exactly what an
+uninterrupted study draws. Results are therefore bit-identical to an uninterrupted run.
 
 Every study kind runs its protocol labels (the sampling study's strategies, a scan mode's
 planners, the LIDAR study's planners) through the one wrapper :class:`ProtocolSteps`: one
