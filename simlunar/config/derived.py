@@ -20,6 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
 
 from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.registry import did_you_mean, option_info
+from simlunar.study.reconstruction_spec import ReconstructionSpec, parse_reconstructions
 
 __all__ = [
     "options_model",
@@ -128,22 +129,13 @@ def reconstruction_specs(value) -> list:
         )
     out, seen = [], []
     for item in value:
-        if isinstance(item, Mapping):
-            if len(item) != 1:
-                raise ValueError(
-                    f"an item is one name or one {{name: {{options}}}} mapping, got {dict(item)}"
-                )
-            name, opts = next(iter(item.items()))
-        else:
-            name, opts = item, None
-        if opts is not None and not isinstance(opts, Mapping):
-            raise ValueError(f"{name}: options must be a mapping, got {opts!r}")
+        spec = ReconstructionSpec.parse(item)
+        name, base = spec.label, spec.name
         # {label: {reconstruction: <name>, options}}: a registered reconstruction under a label
         # of its own (the same one twice with other options, e.g. with and without a frame)
-        base = (opts or {}).get("reconstruction", name)
-        if not isinstance(name, str) or not name or (name != base and name in RECONSTRUCTIONS):
+        if spec.labelled and name in RECONSTRUCTIONS:
             raise ValueError(f"label {name!r}: a new name, not another reconstruction's")
-        if not isinstance(base, str) or base not in RECONSTRUCTIONS:
+        if base not in RECONSTRUCTIONS:
             valid = ", ".join(RECONSTRUCTIONS.names())
             raise ValueError(
                 f"unknown reconstruction {base!r}; valid: {valid}"
@@ -152,23 +144,14 @@ def reconstruction_specs(value) -> list:
         if name in seen:
             raise ValueError(f"reconstruction {name!r} is listed twice")
         seen.append(name)
-        values = {k: v for k, v in (opts or {}).items() if k != "reconstruction"}
         plain = validate_options(
-            RECONSTRUCTIONS[base].options, values, name=f"reconstruction {name}"
+            RECONSTRUCTIONS[base].options, spec.options, name=f"reconstruction {name}"
         )
-        if base != name:
-            plain = {"reconstruction": base, **plain}
-        out.append({name: plain} if plain else name)
+        out.append(ReconstructionSpec(name, base, plain).item())
     return out
 
 
 def reconstruction_mapping(specs) -> dict:
-    """``{name: options dict}`` of a validated :func:`reconstruction_specs` list, in order."""
-    out = {}
-    for item in specs:
-        if isinstance(item, Mapping):
-            ((name, opts),) = item.items()
-            out[name] = dict(opts)
-        else:
-            out[item] = {}
-    return out
+    """``{label: options dict}`` of a validated :func:`reconstruction_specs` list, in order
+    (a labelled item's dict names its ``reconstruction``)."""
+    return {spec.label: spec.values() for spec in parse_reconstructions(specs)}

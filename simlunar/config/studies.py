@@ -43,6 +43,7 @@ from simlunar.planner import (
     STRATEGIES,
 )
 from simlunar.reconstruction import RECONSTRUCTIONS
+from simlunar.study.reconstruction_spec import parse_reconstructions
 
 __all__ = [
     "LIDAR_BLOCKS",
@@ -165,7 +166,7 @@ class SamplingStudyCfg(_Model):
 
     def _reconstruction_labels(self) -> list[str]:
         """The labels of ``reconstructions`` (a name, or the one key of a mapping)."""
-        return [r if isinstance(r, str) else next(iter(r)) for r in self.reconstructions]
+        return [spec.label for spec in parse_reconstructions(self.reconstructions)]
 
     @model_validator(mode="after")
     def _options_fit(self) -> SamplingStudyCfg:

@@ -19,7 +19,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["METRICS", "METRIC_NAMES", "depth_gradient_weights", "metric"]
+__all__ = [
+    "METRICS",
+    "METRIC_NAMES",
+    "METRIC_UNITS",
+    "depth_gradient_weights",
+    "metric",
+    "register_metric",
+]
 
 
 def _weighted_mse(err, w):
@@ -56,15 +63,31 @@ def _sal(err, w, truth_w):
     return _weighted_mse(err, w)
 
 
-METRICS: dict[str, Callable] = {
-    "mse": _mse,
-    "rmse": _rmse,
-    "mae": _mae,
-    "grad": _grad,
-    "sal": _sal,
-}
+#: name -> ``fn(err, weights or None, truth_weights()) -> float`` over the evaluated cells
+METRICS: dict[str, Callable] = {}
 #: display names of the metrics (paper spelling), for tables and axis labels
-METRIC_NAMES = {"mse": "MSE", "grad": "GRAD", "sal": "SAL", "rmse": "RMSE", "mae": "MAE"}
+METRIC_NAMES: dict[str, str] = {}
+#: units of the metrics (GRAD and SAL are weighted mean squared errors), for axes and captions
+METRIC_UNITS: dict[str, str] = {}
+
+
+def register_metric(name: str, fn: Callable, *, label: str, unit: str) -> None:
+    """Add a metric: its function (``fn(err, w, truth_w)``: the errors of the evaluated
+    cells, their weights or None, and a callable giving the GRAD weights), display name and
+    unit, declared once; every study kind scores it (``study.metrics``), tables and figures
+    name it. A name registered twice is an error."""
+    if name in METRICS:
+        raise ValueError(f"metric {name!r} is registered twice")
+    METRICS[name] = fn
+    METRIC_NAMES[name] = label
+    METRIC_UNITS[name] = unit
+
+
+register_metric("mse", _mse, label="MSE", unit="m²")
+register_metric("rmse", _rmse, label="RMSE", unit="m")
+register_metric("mae", _mae, label="MAE", unit="m")
+register_metric("grad", _grad, label="GRAD", unit="m²")
+register_metric("sal", _sal, label="SAL", unit="m²")
 
 
 def depth_gradient_weights(truth) -> np.ndarray:

@@ -77,6 +77,7 @@ from simlunar.results.summaries import (
     _write_provenance,
     tables_code,
 )
+from simlunar.study.reconstruction_spec import parse_reconstructions
 
 __all__ = ["ROW_COLUMNS", "RunSummary", "collect_rows", "expand", "run_experiment", "unit_key"]
 
@@ -215,9 +216,7 @@ def _sort_rows(rows: list[dict], config: dict) -> list[dict]:
     study = config.get("study", {})
     strategies = list(study.get("strategies") or [])
     metrics = list(study.get("metrics") or [])
-    recons = [
-        r if isinstance(r, str) else next(iter(r)) for r in study.get("reconstructions") or []
-    ]
+    recons = [spec.label for spec in parse_reconstructions(study.get("reconstructions"))]
 
     def order(seq, v):
         return seq.index(v) if v in seq else len(seq)

@@ -7,10 +7,9 @@ study. Random streams are split per stage from the experiment seed with
 every sweep point of an ablation sees the same terrain and the same sampling trials (common
 random numbers make the comparison sharper).
 
-The study's sensor follows the study kind: a sampling study measures with the ideal sampler
-(:func:`simlunar.study.sampling.run_sampling_study`), a scanner study with the structured-light
-scanner (:func:`simlunar.study.scanner.run_scanner_study`); both are the one protocol of
-:mod:`simlunar.study.protocol`. Config models become library objects in
+The study kind picks the unit's study and sensor (the unit functions of sampling, scanner and
+lidar below, each the one protocol of :mod:`simlunar.study.protocol`, are the entries of
+:data:`simlunar.pipeline.study_kinds.STUDY_UNITS`). Config models become library objects in
 :mod:`simlunar.config.translate`; the library never sees a config object.
 """
 
@@ -25,6 +24,7 @@ from scipy import ndimage
 
 from simlunar.config import lidar_translate, translate
 from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
+from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.features.learned import pinned_models
@@ -42,6 +42,7 @@ from simlunar.pipeline.figure_inputs import (
 from simlunar.pipeline.guide import build_guide
 from simlunar.pipeline.inputs import read_unit_models, verify_inputs
 from simlunar.pipeline.resume import UnitSteps
+from simlunar.pipeline.study_kinds import run_study_unit, study_unit
 from simlunar.progress import reporting, stage
 from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
@@ -51,9 +52,15 @@ from simlunar.results.exports import scans_export_payload
 from simlunar.results.lidar_exports import lidar_export_payload
 from simlunar.results.records import UnitRecord
 from simlunar.sensors.lidar import LidarScene
-from simlunar.study.lidar import beam_table, run_lidar_study
-from simlunar.study.sampling import run_sampling_study
-from simlunar.study.scanner import ScannerScene, aim_rig_at_terrain, run_scanner_study
+from simlunar.study.lidar import LidarStudyOptions, beam_table, run_lidar_study
+from simlunar.study.reconstruction_spec import parse_reconstructions
+from simlunar.study.sampling import SamplingStudyOptions, run_sampling_study
+from simlunar.study.scanner import (
+    ScannerScene,
+    ScannerStudyOptions,
+    aim_rig_at_terrain,
+    run_scanner_study,
+)
 
 __all__ = [
     "CACHE_VERSION",
@@ -235,14 +242,7 @@ def _compute_unit(cfg, steps, study_workers: int) -> dict[str, Any]:
     scene = RenderScene(
         terrain, camera, lights, bsdf, r.spp, int_seed(seeds["render"]), r.max_depth
     )
-    if isinstance(cfg.study, SamplingStudyCfg):
-        record = _sampling_unit(cfg, scene, seeds, timings, steps, study_workers)
-    elif isinstance(cfg.study, LidarStudyCfg):
-        record = _lidar_unit(cfg, scene, seeds, timings, steps)
-    else:
-        # the scanner study renders throughout (one scene per pattern sequence)
-        with RENDER_LOCK:
-            record = _scanner_unit(cfg, scene, seeds, timings, steps)
+    record = run_study_unit(cfg, scene, seeds, timings, steps, workers=study_workers)
     return record.to_dict()
 
 
@@ -260,6 +260,7 @@ def _render_guide(cfg, scene: RenderScene, seeds, timings):
     return image, radiance, result
 
 
+@study_unit("sampling", SamplingStudyOptions, parallel=True, config=SamplingStudyCfg)
 def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> UnitRecord:
     """Render the guide view, then the sampling study with the ideal sensor."""
     image, radiance, result = _render_guide(cfg, scene, seeds, timings)
@@ -344,11 +345,8 @@ def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict, radianc
     image and the extra frames of ``render.guide_frames``, :mod:`simlunar.pipeline.guide`)
     and the unit meta naming its frames; ``(None, {})`` when no configured reconstruction reads
     the image (no extra frame is rendered then: nothing would read it)."""
-    names = [
-        r if isinstance(r, str) else next(iter(r.values())).get("reconstruction", next(iter(r)))
-        for r in cfg.study.reconstructions
-    ]  # a labelled item names its registered reconstruction
-    if not any(RECONSTRUCTIONS[n].meta.get("guided") for n in names):
+    specs = parse_reconstructions(cfg.study.reconstructions)
+    if not any(RECONSTRUCTIONS[s.name].meta.get("guided") for s in specs):
         return None, {}
 
     def develop(rad, rng, reference=None):
@@ -437,6 +435,7 @@ def _plain_scores(scores) -> dict:
     return {str(m): {str(s): float(v) for s, v in by.items()} for m, by in dict(scores).items()}
 
 
+@study_unit("scanner", ScannerStudyOptions, renders=True, config=ScannerStudyCfg)
 def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     """The scanner study with the structured-light sensor on a rig aimed at the terrain."""
     s, r = cfg.study, cfg.render
@@ -475,6 +474,7 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     )
 
 
+@study_unit("lidar", LidarStudyOptions, config=LidarStudyCfg)
 def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     """Render the guide view, then the LIDAR study with the sensor at the guide camera (the
     sun of a sun-lit scene is the LIDAR's background)."""

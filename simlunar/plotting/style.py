@@ -19,7 +19,7 @@ import zlib
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from simlunar.metrics import METRIC_NAMES
+from simlunar.metrics import METRIC_NAMES, METRIC_UNITS  # METRIC_UNITS: re-exported
 from simlunar.render.materials import BSDFS
 from simlunar.scanner.codings import CODINGS
 
@@ -202,9 +202,6 @@ def pair_label(mode: str, planner: str | None) -> str:
     """Label of a scanner row: ``"Ambiguity enhancement / Wavelet"`` (mode alone without planner)."""
     return f"{label(mode)} / {label(planner)}" if planner else label(mode)
 
-
-#: units of the error metrics (GRAD and SAL are weighted mean squared errors)
-METRIC_UNITS = {"mse": "m²", "grad": "m²", "sal": "m²", "rmse": "m", "mae": "m"}
 
 #: readable names of sweep axes (config paths), for axis labels
 AXIS_NAMES = {

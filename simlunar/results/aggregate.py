@@ -19,6 +19,7 @@ import numpy as np
 
 from simlunar.plotting.style import point_title
 from simlunar.results.records import WorkUnit, unit_label
+from simlunar.study.reconstruction_spec import parse_reconstructions
 from simlunar.study.sampling_scores import INTERIOR_SUFFIX, scored_metrics
 from simlunar.study.stats import (
     SamplesSaved,
@@ -100,7 +101,7 @@ def reconstruction_names(study: dict) -> list[str]:
     """The names of a study section's ``reconstructions`` (items a name or ``{name: opts}``),
     ``[linear]`` when it has none."""
     items = study.get("reconstructions") or [BASELINE_RECONSTRUCTION]
-    return [i if isinstance(i, str) else next(iter(i)) for i in items]
+    return [spec.label for spec in parse_reconstructions(items)]
 
 
 def group_points(records: list[dict], *, per_reconstruction: bool = True) -> list[Point]:

@@ -9,6 +9,8 @@ must equal the schema's defaults (a test keeps them so).
 
 from __future__ import annotations
 
+from simlunar.study.reconstruction_spec import parse_reconstructions
+
 __all__ = [
     "EXPORT_ONLY_KEYS",
     "NEW_BSDF_DEFAULTS",
@@ -107,11 +109,9 @@ def reconstruction_versions(study: dict) -> dict:
     from simlunar.reconstruction import RECONSTRUCTIONS
 
     out = {}
-    for item in study.get("reconstructions") or ():
-        name, opts = next(iter(item.items())) if isinstance(item, dict) else (item, None)
-        base = (opts or {}).get("reconstruction", name) if isinstance(opts, dict) else name
-        entry = RECONSTRUCTIONS[base] if isinstance(base, str) and base in RECONSTRUCTIONS else None
+    for spec in parse_reconstructions(study.get("reconstructions")):
+        entry = RECONSTRUCTIONS[spec.name] if spec.name in RECONSTRUCTIONS else None
         version = None if entry is None else entry.meta.get("results_version")
         if version is not None:
-            out[str(base)] = version
+            out[spec.name] = version
     return out

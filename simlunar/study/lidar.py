@@ -17,7 +17,6 @@ every round and the re-pointing between them, so equal-scan-time comparisons are
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -40,11 +39,13 @@ from simlunar.study.lidar_planners import lidar_planners
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
+    light_outcome,
+    outcome_rows,
     reconstruction_options,
     run_protocol,
 )
-from simlunar.study.sampling import _cost, _seeds, sample_count
-from simlunar.study.steps import Steps, resumable
+from simlunar.study.sampling import _seeds, sample_count
+from simlunar.study.steps import ProtocolSteps, Steps
 
 __all__ = [
     "FITS",
@@ -329,42 +330,35 @@ def run_lidar_study(
 
 
 def _run_planners(run, trials: Trials, dens, steps, keep_trial) -> tuple[list, dict, dict]:
-    """Every planner's step (kept in ``steps`` once finished): rows, examples, grids."""
-    rows, examples, grids = [], {}, {}
+    """Every planner's step through the protocol wrapper (kept planners loaded): rows,
+    examples (trial 0 at the largest density, kept whole) and the kept grids."""
+    names = {label: f"lidar planner {label}" + ("" if keep_trial is None else " grids")
+             for label in trials.planners}  # fmt: skip
+    measures = {lb: bool(getattr(p, "measures", False)) for lb, p in trials.planners.items()}
+    top = int(np.argmax(dens))
+
+    def rows(oc) -> list[dict]:
+        return _rows(oc, dens[oc.budget_index], measures[oc.label])
+
+    def keep(oc):
+        return oc if (oc.trial, oc.budget_index) == (0, top) else light_outcome(oc)
+
+    rows_out, examples, grids = [], {}, {}
     per_planner = len(trials.ks) * int(trials.trials)
     with stage("lidar study", total=len(trials.planners) * per_planner,
                unit="acquisitions") as bar:  # fmt: skip
-        for label, planner in trials.planners.items():
-            one = dataclasses.replace(trials, planners={label: planner})
-            step = functools.partial(_planner_step, run, one, dens, bar)
-            (planner_rows, example, planner_grids), loaded = resumable(
-                steps, f"lidar planner {label}" + ("" if keep_trial is None else " grids"), step
-            )
-            rows += planner_rows
-            grids.update(planner_grids)
-            if example is not None:
-                examples[label] = example
-            if loaded:
+        for step in ProtocolSteps(steps, names).run(
+            trials, run, rows=rows, keep=keep, advance=bar.advance
+        ):
+            rows_out += step.rows
+            for oc in step.outcomes:
+                for r, grid in (oc.grids or {}).items():
+                    grids[(oc.label, oc.budget_index, r)] = grid
+                if (oc.trial, oc.budget_index) == (0, top):
+                    examples[oc.label] = oc.acquisition
+            if step.loaded:
                 bar.advance(per_planner)
-    return rows, examples, grids
-
-
-def _planner_step(run, trials: Trials, dens, bar) -> tuple:
-    """The rows of one planner's acquisitions (every density and trial), its example
-    acquisition (trial 0 at the largest density) and its kept grids (``keep_trial``)."""
-    rows, example, grids = [], None, {}
-    top = int(np.argmax(dens))
-    (planner,) = trials.planners.values()
-    measures = bool(getattr(planner, "measures", False))
-    for outcomes in run(trials=trials):
-        for oc in outcomes:
-            rows += _rows(oc, dens[oc.budget_index], measures)
-            for r, grid in (oc.grids or {}).items():
-                grids[(oc.label, oc.budget_index, r)] = grid
-            if oc.trial == 0 and oc.budget_index == top:
-                example = oc.acquisition
-        bar.advance(len(outcomes))
-    return rows, example, grids
+    return rows_out, examples, grids
 
 
 def beam_table(acq: Acquisition) -> np.ndarray:
@@ -418,14 +412,10 @@ def _rows(oc, density: float, measures: bool = False) -> list[dict]:
     ``seconds`` and ``frames`` are every round's)."""
     acq = oc.acquisition
     rounds = {"rounds": int(oc.rounds)} if measures else {}
-    return [
-        {"planner": oc.label, "reconstruction": r, **_cost(oc.recon_info[r]),
-         "density": density, "k": oc.k, "trial": oc.trial, "metric": m,
-         "value": float(v), "seconds": float(acq.seconds), "frames": int(acq.frames),
-         "samples": len(acq.values), **rounds}
-        for r, scores in oc.recon_scores.items()
-        for m, v in scores.items()
-    ]  # fmt: skip
+    cost = {"seconds": float(acq.seconds), "frames": int(acq.frames),
+            "samples": len(acq.values), **rounds}  # fmt: skip
+    middle = {"density": density, "k": oc.k}
+    return outcome_rows(oc, {"planner": oc.label}, middle, cost, value=float)
 
 
 def _rows_of(rows: list[dict], metric: str, reconstruction: str):

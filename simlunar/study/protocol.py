@@ -34,6 +34,7 @@ from simlunar.reconstruction import (
     run_reconstruction,
 )
 from simlunar.sensors.base import Acquisition, Sensor
+from simlunar.study.reconstruction_spec import ReconstructionSpec
 
 __all__ = [
     "DEFAULT_RECONSTRUCTION",
@@ -42,6 +43,7 @@ __all__ = [
     "Trials",
     "guide_cost",
     "light_outcome",
+    "outcome_rows",
     "reconstruction_of",
     "reconstruction_options",
     "run_protocol",
@@ -135,8 +137,11 @@ def reconstruction_options(
 
     Parameters
     ----------
-    reconstructions : mapping name -> (options object, mapping of its fields, or None), or a
-        sequence of names; None: ``{"linear": None}`` (the paper's).
+    reconstructions : mapping label -> (options object, mapping of its fields, or None), or a
+        sequence of ``study.reconstructions`` items (names, ``{label: options}`` mappings or
+        :class:`~simlunar.study.reconstruction_spec.ReconstructionSpec`); None: ``{"linear":
+        None}`` (the paper's). A mapping of fields may name its registered reconstruction
+        (``reconstruction``: a label of its own).
     outside : {"nearest", "nan"}
         The ``outside`` policy of ``linear`` when its options do not name one (the studies'
         own ``outside`` option, kept for the callers that set it).
@@ -154,22 +159,23 @@ def reconstruction_options(
             f"{reconstructions!r}"
         )
     if not isinstance(reconstructions, Mapping):
-        names = list(reconstructions)
+        specs = [s if isinstance(s, ReconstructionSpec) else ReconstructionSpec.parse(s)
+                 for s in reconstructions]  # fmt: skip
+        names = [s.label for s in specs]
         if len(set(names)) != len(names):
             raise ValueError(f"reconstructions must be distinct names, got {names}")
-        reconstructions = dict.fromkeys(names)
+        reconstructions = {s.label: s.values() or None for s in specs}
     if not reconstructions:
         raise ValueError("the protocol needs at least one reconstruction")
     out = {}
     for name, opts in reconstructions.items():
-        base = name
         if opts is not None and not isinstance(opts, Mapping):
             base = reconstruction_of(opts)  # an options object names its reconstruction
-        elif isinstance(opts, Mapping) and "reconstruction" in opts:
+        else:
             # a label of its own: {label: {reconstruction: <registered name>, options...}}
-            opts = dict(opts)
-            base = opts.pop("reconstruction")
-            if name in RECONSTRUCTIONS and name != base:
+            spec = ReconstructionSpec.parse({name: opts})
+            base, opts = spec.name, dict(spec.options)
+            if spec.labelled and name in RECONSTRUCTIONS:
                 raise ValueError(
                     f"label {name!r} is the name of another reconstruction; choose another"
                 )
@@ -211,6 +217,46 @@ def guide_cost(name: str, guide: Guide | None, info: Mapping | None = None) -> t
     return frames, len(frames)
 
 
+def outcome_rows(
+    oc: Outcome,
+    head: Mapping,
+    middle: Mapping,
+    tail: Mapping | None = None,
+    *,
+    metrics: Sequence[str] | None = None,
+    value: Callable | None = None,
+) -> list[dict]:
+    """The tidy rows of one outcome, every study kind's: one per (reconstruction, metric).
+
+    A row is ``head`` (the kind's label columns), ``reconstruction``, the guide frames it read
+    (``guide_frames``, ``+``-joined names, and ``exposures``; only for a reconstruction that
+    read any), ``middle`` (the budget columns), ``trial``, ``metric``, ``value`` and ``tail``
+    (the acquisition's cost columns).
+
+    Parameters
+    ----------
+    metrics : sequence of str, optional
+        The metrics in row order (default: each reconstruction's scores in their order).
+    value : callable, optional
+        Applied to each score (e.g. ``float``); default the score as it is.
+    """
+    rows = []
+    for r, scores in oc.recon_scores.items():
+        cost = _cost_columns(oc.recon_info[r])
+        for m in scores if metrics is None else metrics:
+            v = scores[m] if value is None else value(scores[m])
+            rows.append({**head, "reconstruction": r, **cost, **middle, "trial": oc.trial,
+                         "metric": m, "value": v, **(tail or {})})  # fmt: skip
+    return rows
+
+
+def _cost_columns(info: Mapping) -> dict:
+    """The guide-frame columns of a row: none for a reconstruction that read no frame."""
+    if not info.get("guide_frames"):
+        return {}
+    return {"guide_frames": "+".join(info["guide_frames"]), "exposures": int(info["exposures"])}
+
+
 def run_protocol(
     sensor: Sensor,
     trials: Trials,
@@ -231,7 +277,8 @@ def run_protocol(
     trials : Trials
     evaluate : Evaluate
         Scores of a reconstruction (and of its acquisition: valid fraction, bit errors); called
-        once per reconstruction with its grid.
+        once per reconstruction with its grid. An evaluator with compiled kernels may have a
+        ``warm()`` method: called before workers are forked.
     outside : {"nearest", "nan"}
         Policy of ``linear`` outside the measured cells' convex hull (unless its options in
         ``reconstructions`` name one).
@@ -347,6 +394,9 @@ def _map_tasks(state, tasks, workers):
     # fork shares the arrays with the workers without pickling them
     ctx = multiprocessing.get_context("fork" if "fork" in methods else None)
     _warm_kernels(state["outside"], state["reconstructions"], state["guide"])
+    warm = getattr(state["evaluate"], "warm", None)
+    if warm is not None:  # an evaluator's own compiled kernels
+        warm()
     # concurrent.futures notices a dead worker (multiprocessing.Pool waits for it forever)
     pool = cf.ProcessPoolExecutor(
         min(workers, len(tasks)), mp_context=ctx, initializer=_init_worker, initargs=(state,)

@@ -10,7 +10,7 @@ reconstruction against the true depth.
 
 from __future__ import annotations
 
-import dataclasses
+import functools
 import zlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -19,9 +19,6 @@ import numpy as np
 
 from simlunar.features import check_image
 from simlunar.metrics import METRICS, check_densities
-from simlunar.metrics import samples_for_equal_error as _samples_for_equal_error
-from simlunar.metrics import score as _score
-from simlunar.metrics._fast import error_sums
 from simlunar.metrics.interior import interior_mask, sparsest_pitch
 from simlunar.planner import PAPER_STRATEGIES, check_k
 from simlunar.progress import stage
@@ -30,18 +27,18 @@ from simlunar.sensors.ideal import IdealOptions, IdealSampler
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
-    light_outcome,
+    outcome_rows,
     reconstruction_options,
     run_protocol,
 )
 from simlunar.study.sampling_planners import MeasuringPlanner, study_planners
+from simlunar.study.sampling_result import SamplingStudyResult, study_result
 from simlunar.study.sampling_scores import (
     SCORE_REGIONS,
     SamplingEvaluator,
     scored_metrics,
 )
-from simlunar.study.stats import bootstrap_scores, samples_saved
-from simlunar.study.steps import Steps
+from simlunar.study.steps import LabelStep, ProtocolSteps, Steps
 
 __all__ = [
     "PAPER_STRATEGIES",
@@ -66,141 +63,6 @@ def sample_count(density: float, n: int) -> int:
             f"density {density:g} gives k = {k} < 3 samples on a grid of N = {n} pixels"
         )
     return check_k(k, n)
-
-
-@dataclass
-class SamplingStudyResult:
-    """Outcome of :func:`run_sampling_study`.
-
-    Attributes
-    ----------
-    rows : list of dict
-        Tidy table, one row per (strategy, reconstruction, density, trial, metric): keys
-        strategy, reconstruction, density, k, trial, metric, value and, for a reconstruction
-        that read guide frames, guide_frames ("+"-joined names) and exposures (their count).
-    scores : dict of str -> dict of str -> float
-        metric -> strategy -> score (eq. 4.3) against ``reference``, of the first
-        reconstruction (``linear`` by default); empty if the reference strategy was not run.
-    strategies, metrics : list of str
-        ``metrics``: the scored names (``mse``, ``mse_interior``, ...; see ``score_region``).
-    densities : list of float
-    ks : list of int
-    reference : str
-    rounds : dict of str -> ndarray of int64, shape (densities, trials)
-        Sensor rounds of each measuring (multi-round) label; a one-shot label takes 1.
-    reconstructions : list of str
-        The reconstructions run on every acquisition, in order.
-    info : dict reconstruction -> strategy -> key -> ndarray float64 (densities, trials)
-        The numeric diagnostics each reconstruction reported (e.g. ``shading_share``).
-    grids : dict (strategy, density index, reconstruction) -> ndarray float32 (rows, cols)
-        The reconstructed grids of trial ``keep_trial`` (:func:`run_sampling_study`); empty
-        unless asked for.
-    """
-
-    rows: list[dict]
-    scores: dict[str, dict[str, float]]
-    strategies: list[str]
-    densities: list[float]
-    ks: list[int]
-    metrics: list[str]
-    reference: str = "random"
-    _errors: dict = field(default_factory=dict, repr=False)
-    rounds: dict = field(default_factory=dict)
-    reconstructions: list = field(default_factory=lambda: [DEFAULT_RECONSTRUCTION])
-    info: dict = field(default_factory=dict)
-    grids: dict = field(default_factory=dict, repr=False)
-
-    def errors(
-        self, metric: str, reconstruction: str = DEFAULT_RECONSTRUCTION
-    ) -> dict[str, np.ndarray]:
-        """strategy -> errors of ``reconstruction``, float64 (densities, trials)."""
-        if metric not in self.metrics:
-            raise ValueError(
-                f"metric {metric!r} not in this study; have: {', '.join(self.metrics)}"
-            )
-        if reconstruction not in self.reconstructions:
-            raise ValueError(
-                f"reconstruction {reconstruction!r} not in this study; have: "
-                f"{', '.join(self.reconstructions)}"
-            )
-        return self._errors[reconstruction][metric]
-
-    def mean_errors(
-        self, reconstruction: str = DEFAULT_RECONSTRUCTION
-    ) -> dict[str, dict[str, np.ndarray]]:
-        """metric -> strategy -> mean error per density over trials, float64 (densities,).
-
-        The summary for error-vs-density plots.
-        """
-        return {
-            m: {s: e.mean(axis=1) for s, e in self.errors(m, reconstruction).items()}
-            for m in self.metrics
-        }
-
-    def samples_for_equal_error(
-        self, metric: str = "mse", reconstruction: str = DEFAULT_RECONSTRUCTION
-    ) -> dict[str, np.ndarray]:
-        """Relative samples each strategy needs for the reference's error (see metrics)."""
-        return _samples_for_equal_error(
-            self.errors(metric, reconstruction), self.ks, reference=self.reference
-        )
-
-    def score_intervals(
-        self,
-        metric: str = "mse",
-        *,
-        n_boot: int = 2000,
-        rng=0,
-        reconstruction: str = DEFAULT_RECONSTRUCTION,
-    ):
-        """Scores of ``metric`` with paired bootstrap 95 % intervals over the trials.
-
-        One scene: the interval says how well the trials pin each score down on this terrain
-        (see :func:`simlunar.study.stats.bootstrap_scores`).
-        """
-        errs = self.errors(metric, reconstruction)
-        return bootstrap_scores(
-            errs, self.densities, reference=self.reference, n_boot=n_boot, rng=rng
-        )
-
-    def samples_saved(
-        self,
-        metric: str = "mse",
-        reference: str | None = None,
-        reconstruction: str = DEFAULT_RECONSTRUCTION,
-    ):
-        """Samples ``reference`` (default: the study's) needs for each strategy's mean error,
-        over the strategy's, per density (:func:`simlunar.study.stats.samples_saved`), both
-        reconstructed with ``reconstruction``."""
-        means = {s: e.mean(axis=1) for s, e in self.errors(metric, reconstruction).items()}
-        n = round(self.ks[0] / self.densities[0])
-        return samples_saved(
-            means, self.ks, reference=reference or self.reference, n_pixels=float(n)
-        )
-
-    def reconstruction_saved(
-        self, reconstruction: str, metric: str = "mse", baseline: str = DEFAULT_RECONSTRUCTION
-    ):
-        """Samples ``baseline`` (default ``linear``) needs for ``reconstruction``'s mean error,
-        over ``reconstruction``'s, per strategy (the same layouts: paired) and density.
-
-        Returns
-        -------
-        dict strategy -> SamplesSaved of the two reconstructions (labels ``baseline`` and
-        ``reconstruction``; :func:`simlunar.study.stats.samples_saved`).
-        """
-        n = round(self.ks[0] / self.densities[0])
-        base = self.errors(metric, baseline)
-        other = self.errors(metric, reconstruction)
-        return {
-            s: samples_saved(
-                {baseline: base[s].mean(axis=1), reconstruction: other[s].mean(axis=1)},
-                self.ks,
-                reference=baseline,
-                n_pixels=float(n),
-            )
-            for s in self.strategies
-        }
 
 
 def _check_grid(a, name: str) -> np.ndarray:
@@ -347,6 +209,33 @@ def run_sampling_study(
     and trials. Scores average each strategy's errors over trials before eq. 4.3.
     """
     o = options or SamplingStudyOptions()
+    setup = _setup(o, depth, image, guide, rng=rng, keep_trial=keep_trial)
+    labels = _run_strategies(o, setup, workers=workers, steps=steps, keep_trial=keep_trial)
+    measuring = [s for s, p in setup.trials.planners.items() if isinstance(p, MeasuringPlanner)]
+    return study_result(o, labels, densities=setup.dens, ks=setup.ks, metrics=setup.metrics,
+                        reconstructions=list(setup.recons), measuring=measuring)  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class _Setup:
+    """What a sampling study runs: the checked grids and :class:`Guide`, densities and their
+    sample counts, reconstructions, the ideal sensor, the protocol's trials (planners and
+    seeds), the evaluator and the scored metric names."""
+
+    depth: np.ndarray
+    guide: Guide
+    dens: list
+    ks: list
+    recons: dict
+    sensor: IdealSampler
+    trials: Trials
+    evaluate: SamplingEvaluator
+    metrics: list
+
+
+def _setup(o: SamplingStudyOptions, depth, image, guide, *, rng, keep_trial) -> _Setup:
+    """Check the inputs; build the sensor, the planners (each importance map once), the
+    evaluator (metric weights once) and the seeds of a study."""
     depth, image, guide, dens, recons = _check_inputs(o, depth, image, guide)
     if keep_trial is not None and not 0 <= keep_trial < o.trials:
         raise ValueError(f"keep_trial must be in [0, {o.trials}), got {keep_trial}")
@@ -358,71 +247,37 @@ def run_sampling_study(
         inner = interior_mask(depth.shape, sparsest_pitch(depth.shape, dens))
     evaluate = SamplingEvaluator(depth, image, list(o.metrics), maps_cache, inner, o.score_region)
     base_seed = int(np.random.default_rng(rng).integers(0, 2**63))
-    trials = Trials(planners, ks, int(o.trials), lambda lb, t, di: _seeds(base_seed, lb, t, di))
-    if workers > 1:
-        error_sums(np.zeros(1), np.zeros(1), np.ones((evaluate.rows.shape[0], 1)))  # compile
-    strategies = list(o.strategies)
-    names = scored_metrics(o.metrics, o.score_region)
-    shape = (len(ks), o.trials)
-    errors = {r: {m: {s: np.empty(shape) for s in strategies} for m in names} for r in recons}
-    rounds = {s: np.ones(shape, np.int64) for s in strategies}
-    info: dict = {r: {s: {} for s in strategies} for r in recons}
-    frames: dict = {}
-    grids: dict = {}
+    trials = Trials(planners, ks, int(o.trials), functools.partial(_seeds, base_seed))
+    metrics = scored_metrics(o.metrics, o.score_region)
+    return _Setup(depth, guide, dens, ks, recons, sensor, trials, evaluate, metrics)
 
-    def record(oc) -> None:
-        _record_outcome(oc, errors, info, frames, rounds, shape)
-        for r, grid in (oc.grids or {}).items():
-            grids[(oc.label, oc.budget_index, r)] = grid
 
-    kept = _kept_strategies(steps, strategies, keep_trial)
-    for outcomes in kept.values():
-        for oc in outcomes:
-            record(oc)
-    todo = {s: planners[s] for s in strategies if s not in kept}
-    total, done = len(strategies) * o.trials * len(ks), len(kept) * o.trials * len(ks)
+def _run_strategies(o, setup: _Setup, *, workers: int, steps, keep_trial) -> list[LabelStep]:
+    """Every strategy's step through the protocol wrapper (kept strategies loaded, the others
+    run in parallel over ``workers``), counted as acquisitions."""
+    names = {label: _step_name(label, keep_trial) for label in setup.trials.planners}
+    store = ProtocolSteps(steps, names)
+    run = functools.partial(
+        run_protocol, setup.sensor, evaluate=setup.evaluate, outside=o.outside, workers=workers,
+        reconstructions=setup.recons, guide=setup.guide, keep_trial=keep_trial,
+    )  # fmt: skip
+    rows = functools.partial(_rows, setup.dens, setup.metrics)
+    per_label = len(setup.ks) * int(o.trials)
+    total, done = len(names) * per_label, len(store.kept) * per_label
     with stage("sampling study", total=total, unit="acquisitions", done=done) as bar:
-        finished: dict = {s: [] for s in todo}
-        tasks = iter(())
-        if todo:  # only the strategies no previous run finished
-            tasks = run_protocol(
-                sensor, dataclasses.replace(trials, planners=todo), evaluate,
-                outside=o.outside, workers=workers, reconstructions=recons, guide=guide,
-                keep_trial=keep_trial,
-            )  # fmt: skip
-        for outcomes in tasks:
-            for oc in outcomes:
-                record(oc)
-            label = outcomes[0].label
-            finished[label].append([light_outcome(oc) for oc in outcomes])
-            if steps is not None and len(finished[label]) == o.trials:
-                # every trial of this strategy done: kept, so a rerun starts after it
-                steps.save(_step_name(label, keep_trial), finished.pop(label))
-            done += len(ks)
-            bar.update(done)
-    res = _result(o, strategies, dens, ks, errors, names, list(recons), frames)
-    res.rounds = {s: r for s, r in rounds.items() if isinstance(planners[s], MeasuringPlanner)}
-    res.info = {r: by for r, by in info.items() if any(by.values())}
-    res.grids = grids
-    return res
+        return list(store.run(setup.trials, run, rows=rows, advance=bar.advance))
+
+
+def _rows(dens, metrics, oc) -> list[dict]:
+    """The tidy rows of one outcome: strategy, reconstruction, its guide frames, density, k,
+    trial, metric, value."""
+    middle = {"density": float(dens[oc.budget_index]), "k": oc.k}
+    return outcome_rows(oc, {"strategy": oc.label}, middle, metrics=metrics, value=float)
 
 
 def _step_name(label: str, keep_trial: int | None = None) -> str:
     # a step that kept a trial's grids (an export) is another step than one that did not
     return f"sampling strategy {label}" + ("" if keep_trial is None else f" grids {keep_trial}")
-
-
-def _kept_strategies(steps: Steps | None, strategies, keep_trial: int | None = None) -> dict:
-    """label -> its outcomes (light: no samples), of the strategies a previous run of this
-    study finished (:mod:`simlunar.study.steps`)."""
-    if steps is None:
-        return {}
-    kept = {}
-    for label in strategies:
-        trials = steps.load(_step_name(label, keep_trial))
-        if trials is not None:
-            kept[label] = [oc for outcomes in trials for oc in outcomes]
-    return kept
 
 
 def _check_inputs(o: SamplingStudyOptions, depth, image, guide: Guide | None):
@@ -441,66 +296,9 @@ def _check_inputs(o: SamplingStudyOptions, depth, image, guide: Guide | None):
     return depth, image, guide, dens, recons
 
 
-def _record_outcome(oc, errors: dict, info: dict, frames: dict, rounds: dict, shape) -> None:
-    """One acquisition's scores, diagnostics, guide frames and rounds into the study's tables
-    (cell = (density index, trial))."""
-    cell = (oc.budget_index, oc.trial)
-    for r, scores in oc.recon_scores.items():
-        for m, v in scores.items():
-            errors[r][m][oc.label][cell] = v
-        _record_info(info[r][oc.label], oc.recon_info[r], shape, cell)
-        frames[(r, oc.label, *cell)] = oc.recon_info[r]
-    rounds[oc.label][cell] = oc.rounds
-
-
-def _record_info(acc: dict, info: dict, shape, cell) -> None:
-    """The numeric diagnostics of one reconstruction into ``acc`` (key -> (densities, trials))."""
-    for key, v in info.items():
-        if key in ("guide_frames", "exposures"):
-            continue
-        if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.number)):
-            continue
-        acc.setdefault(key, np.full(shape, np.nan))[cell] = float(v)
-
-
 def _seeds(base: int, label: str, trial: int, density_index: int) -> tuple:
     """(planner, range noise) streams of one (label, trial, density): :func:`_seed` 0 and 1."""
     return (
         _seed(base, label, trial, density_index, 0),
         _seed(base, label, trial, density_index, 1),
-    )
-
-
-def _cost(info: dict) -> dict:
-    """The guide-frame columns of a row: none for a reconstruction that read no frame."""
-    if not info.get("guide_frames"):
-        return {}
-    return {"guide_frames": "+".join(info["guide_frames"]), "exposures": int(info["exposures"])}
-
-
-def _result(o, strategies, dens, ks, errors, names, recons, frames) -> SamplingStudyResult:
-    rows = [
-        {"strategy": label, "reconstruction": r, **_cost(frames[(r, label, di, trial)]),
-         "density": float(dens[di]), "k": k, "trial": trial,
-         "metric": m, "value": float(errors[r][m][label][di, trial])}
-        for label in strategies
-        for r in recons
-        for trial in range(o.trials)
-        for di, k in enumerate(ks)
-        for m in names
-    ]  # fmt: skip
-    first = errors[recons[0]]
-    scores = {}
-    if o.reference in strategies:
-        scores = {m: _score(first[m], dens, reference=o.reference) for m in names}
-    return SamplingStudyResult(
-        rows=rows,
-        scores=scores,
-        strategies=strategies,
-        densities=[float(d) for d in dens],
-        ks=ks,
-        metrics=names,
-        reference=o.reference,
-        _errors=errors,
-        reconstructions=list(recons),
     )

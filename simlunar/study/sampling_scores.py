@@ -3,7 +3,8 @@
 A reconstruction is scored over the full image, the interior (cells farther than the sparsest
 density's pitch from the border, :mod:`simlunar.metrics.interior`) or both; the interior scores
 are named ``<metric>_interior``. The one-pass sums use the definitions of
-:func:`simlunar.metrics.metric`.
+:func:`simlunar.metrics.metric`; a metric they do not cover (any other entry of
+:data:`simlunar.metrics.METRICS`) is computed by :func:`~simlunar.metrics.metric` itself.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from simlunar.features import feature_map
-from simlunar.metrics import depth_gradient_weights
+from simlunar.metrics import depth_gradient_weights, metric
 from simlunar.metrics._fast import error_sums
 
 __all__ = [
@@ -64,6 +65,11 @@ class SamplingEvaluator:
         self.region = region
         self.inner = None if inner is None else np.flatnonzero(np.asarray(inner).ravel())
 
+    def warm(self) -> None:
+        """Compile the one-pass kernel now (the protocol calls it before forking workers:
+        a child then never enters Numba's dispatcher lock)."""
+        error_sums(np.zeros(1), np.zeros(1), np.ones((self.rows.shape[0], 1)))
+
     def __call__(self, recon: np.ndarray, acquisition) -> dict[str, float]:
         flat = recon.ravel()
         out = {}
@@ -86,10 +92,12 @@ class SamplingEvaluator:
                 v = float(np.sqrt(sse / count))
             elif m == "mae":
                 v = sae / count
-            else:
+            elif m in self.names:
                 j = self.names.index(m)
                 if wsum[j] <= 0:
                     raise ValueError(f"metric {m!r} weights sum to zero over the evaluated cells")
                 v = float(wse[j] / wsum[j])
+            else:  # any other metric of METRICS: its own definition, on the same cells
+                v = metric(m, recon[None, :], truth[None, :])
             out[m + suffix] = v
         return out

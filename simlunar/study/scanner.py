@@ -45,18 +45,19 @@ from simlunar.study.depth_scores import score_depth
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
+    light_outcome,
+    outcome_rows,
     reconstruction_of,
     reconstruction_options,
     run_protocol,
 )
-from simlunar.study.sampling import _cost
 from simlunar.study.scanner_setup import (
     _scan_planner,
     aim_rig_at_terrain,
     depth_range_from_terrain,
     guided_weights,
 )
-from simlunar.study.steps import Steps, resumable
+from simlunar.study.steps import ProtocolSteps, Steps, resumable
 
 __all__ = [
     "CAMERA_FRAME",
@@ -291,17 +292,19 @@ def run_scanner_study(
                 capture, scene.rig, depth_range=depth_range, options=options, coded=shared
             )
             trials = _mode_trials(o, mode, sensor, guide, seeds)
-            for label in trials.planners:  # one step per planner (one for a full-field mode)
-                one = dataclasses.replace(trials, planners={label: trials.planners[label]})
-                step = functools.partial(
-                    _mode_step, sensor, one, evaluate, recons, rguide, o.budget, say
-                )
-                name = f"scan mode {mode}" + (f" planner {label}" if label else "")
-                done, _ = resumable(steps, name, step, streams=streams)
-                for planner, trial, trial_rows, detail in done:
-                    rows += trial_rows
+            # one step per planner (one for a full-field mode), through the protocol wrapper
+            names = {lb: f"scan mode {mode}" + (f" planner {lb}" if lb else "")
+                     for lb in trials.planners}  # fmt: skip
+            run = functools.partial(_mode_tasks, sensor, evaluate, recons, rguide, say)
+            row = functools.partial(_rows, mode, sensor.needs_plan, o.budget)
+            store = ProtocolSteps(steps, names, streams=streams)
+            for step in store.run(trials, run, rows=row, keep=_without_samples):
+                rows += step.rows
+                for oc in step.outcomes:
+                    planner = oc.label if sensor.needs_plan else ""
                     # the shared coded scan is not kept with every step: put back
-                    scans[(mode, planner, trial)] = dataclasses.replace(detail, coded=shared)
+                    detail = dataclasses.replace(oc.acquisition.detail, coded=shared)
+                    scans[(mode, planner, oc.trial)] = detail
                 bar.advance()
     return ScannerStudyResult(rows=rows, guide=guide, coded=coded, scans=scans)
 
@@ -314,9 +317,16 @@ def _coded_scan(o: ScannerStudyOptions, name: str, capture, rig: Rig) -> CodedSc
         return coding.scan(capture, rig, keep_frames=o.keep_frames)
 
 
-def _mode_step(sensor, trials: Trials, evaluate, recons, rguide, budget: float, say) -> list:
-    """The trials of one (scan mode, planner): ``(planner, trial, rows, scan detail without
-    its shared coded scan)`` per trial, in order."""
+def _mode_tasks(sensor, evaluate, recons, rguide, say, trials: Trials):
+    """The protocol's tasks of one scan mode's planners, planner by planner (each asked for
+    only when the wrapper reaches it: the capture's noise stream is then where it left it)."""
+    for label, planner in trials.planners.items():
+        one = dataclasses.replace(trials, planners={label: planner})
+        yield from _mode_step(sensor, one, evaluate, recons, rguide, say)
+
+
+def _mode_step(sensor, trials: Trials, evaluate, recons, rguide, say) -> list:
+    """The tasks of one (scan mode, planner): a list of outcomes per trial, in order."""
     out = []
     (label,) = trials.planners
     mode = sensor.options.mode
@@ -327,10 +337,19 @@ def _mode_step(sensor, trials: Trials, evaluate, recons, rguide, budget: float, 
             for oc in outcomes:
                 planner = oc.label if sensor.needs_plan else ""
                 say(f"{mode} / {planner} / trial {oc.trial}" if planner else "")
-                detail = dataclasses.replace(oc.acquisition.detail, coded=None)
-                out.append((planner, oc.trial, _rows(mode, planner, oc, budget), detail))
+            out.append(outcomes)
             bar.advance()
     return out
+
+
+def _without_samples(oc):
+    """What a scan step keeps of an outcome: its scores and cost, and the scan detail
+    without the shared coded scan (put back when the step is read)."""
+    light = light_outcome(oc)
+    detail = dataclasses.replace(oc.acquisition.detail, coded=None)
+    return dataclasses.replace(
+        light, acquisition=dataclasses.replace(light.acquisition, detail=detail)
+    )
 
 
 def scanner_guide(
@@ -446,22 +465,13 @@ class _ScanScores:
         return vals
 
 
-def _rows(mode: str, planner: str, oc, budget: float) -> list[dict]:
-    return [
-        {
-            "mode": mode,
-            "planner": planner,
-            "reconstruction": r,
-            **_cost(oc.recon_info[r]),
-            "budget": budget if planner else 0.0,
-            "trial": oc.trial,
-            "metric": name,
-            "value": v,
-            "renders": oc.acquisition.frames,
-        }
-        for r, scores in oc.recon_scores.items()
-        for name, v in scores.items()
-    ]
+def _rows(mode: str, planned: bool, budget: float, oc) -> list[dict]:
+    """Tidy rows of one outcome: mode, planner ("" for a full-field mode), reconstruction, its
+    guide frames, budget, trial, metric, value, renders."""
+    planner = oc.label if planned else ""
+    middle = {"budget": budget if planner else 0.0}
+    tail = {"renders": oc.acquisition.frames}
+    return outcome_rows(oc, {"mode": mode, "planner": planner}, middle, tail)
 
 
 def summarize(

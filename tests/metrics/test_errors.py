@@ -79,7 +79,8 @@ def test_metric_bad_input(kwargs, match):
 
 
 def test_registry():
-    assert list(METRICS) == ["mse", "rmse", "mae", "grad", "sal"]
+    # the paper's metrics first, in this order (a metric registered later comes after them)
+    assert list(METRICS)[:5] == ["mse", "rmse", "mae", "grad", "sal"]
 
 
 def test_metrics_take_nested_lists_by_hand():
@@ -90,3 +91,38 @@ def test_metrics_take_nested_lists_by_hand():
     assert metric("mse", recon, truth) == pytest.approx(0.25)
     assert metric("rmse", recon, truth) == pytest.approx(0.5)
     assert metric("mae", truth, recon) == pytest.approx(0.25)
+
+
+@pytest.fixture
+def worst_cell():
+    """A metric registered for one test: the largest absolute error (m), removed after it."""
+    from simlunar.metrics import errors
+
+    errors.register_metric(
+        "worst_test", lambda err, w, truth_w: float(np.abs(err).max()), label="WORST", unit="m"
+    )
+    yield "worst_test"
+    for table in (errors.METRICS, errors.METRIC_NAMES, errors.METRIC_UNITS):
+        table.pop("worst_test")
+
+
+def test_a_registered_metric_is_scored_and_named_everywhere(worst_cell):
+    from simlunar.metrics import METRIC_NAMES, METRIC_UNITS, METRICS, register_metric
+    from simlunar.plotting.style import metric_axis
+    from simlunar.study.depth_scores import score_depth
+    from simlunar.study.sampling_scores import SamplingEvaluator
+
+    truth = np.arange(12.0).reshape(3, 4)
+    recon = truth + np.array([[0, 0, 0, 0], [0, -3, 0, 0], [0, 0, 1, 0]])
+    assert metric(worst_cell, recon, truth) == 3.0
+    # the scanner's and LIDAR's scores (truth with holes) and the sampling study's
+    holed = truth.copy()
+    holed[1, 1] = np.nan
+    assert score_depth(recon, holed, metrics=[worst_cell]) == {worst_cell: 1.0}
+    ev = SamplingEvaluator(truth, np.ones((3, 4)), ["mse", worst_cell], {})
+    assert ev(recon, None)[worst_cell] == 3.0
+    assert (METRIC_NAMES[worst_cell], METRIC_UNITS[worst_cell]) == ("WORST", "m")
+    assert metric_axis(worst_cell) == "WORST error (m)"
+    assert list(METRICS)[:5] == ["mse", "rmse", "mae", "grad", "sal"]
+    with pytest.raises(ValueError, match="'mse' is registered twice"):
+        register_metric("mse", METRICS["mse"], label="MSE", unit="m²")

@@ -57,3 +57,23 @@ def test_weights_that_vanish_are_errors():
         SamplingEvaluator(np.ones_like(depth), image, ["grad"], {})
     with pytest.raises(ValueError, match="no finite cell"):
         SamplingEvaluator(depth, image, ["mse"], {})(np.full(depth.shape, np.nan), None)
+
+
+def test_a_metric_beyond_the_one_pass_sums_is_scored_by_its_own_definition(monkeypatch):
+    # a metric registered in METRICS that the one-pass kernel does not know (here the
+    # largest absolute error) is scored by metrics.metric on the same cells: a new metric is
+    # its METRICS entry, with no branch in the study
+    from simlunar.metrics import errors
+
+    monkeypatch.setitem(errors.METRICS, "maxabs", lambda err, w, truth_w: float(np.abs(err).max()))
+    depth, recon, image = _case()
+    inner = np.zeros(depth.shape, bool)
+    inner[3:-3, 4:-4] = True
+    recon = recon.copy()
+    recon[0, 0] += 7.0  # the border's error, out of the interior
+    recon[5, 6] = np.nan  # not evaluated (outside the hull with outside="nan")
+    got = SamplingEvaluator(depth, image, ["mse", "maxabs"], {}, inner, "both")(recon, None)
+    err = np.abs(recon - depth)
+    assert got["maxabs"] == pytest.approx(7.0, abs=0.3) == np.nanmax(err)
+    assert got["maxabs_interior"] == np.nanmax(err[inner]) < 1.0
+    assert got["mse"] == pytest.approx(np.nanmean(err**2), rel=1e-12)

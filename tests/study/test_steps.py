@@ -9,9 +9,10 @@ import pytest
 from scipy import ndimage
 
 from simlunar.progress import reporting
+from simlunar.sensors.base import Acquisition
 from simlunar.study import protocol, sampling
 from simlunar.study.sampling import SamplingStudyOptions, run_sampling_study
-from simlunar.study.steps import MemorySteps, resumable
+from simlunar.study.steps import MemorySteps, ProtocolSteps, resumable
 
 
 def _draws(steps, names, stream, *, stop_at=None, computed=None):
@@ -126,3 +127,73 @@ def test_kept_steps_of_a_parallel_study_arrive_before_it_ends(scene, monkeypatch
     with pytest.raises(KeyboardInterrupt):
         sampling.run_sampling_study(depth, image, OPTS, rng=11, workers=2, steps=steps)
     assert list(steps.saved) == ["sampling strategy random"]
+
+
+# ------------------------------------------------------------- the protocol wrapper itself
+def _fake_run(log: list, stream: np.random.Generator, *, stop_at=None):
+    """A protocol over labels x 2 trials x 2 budgets whose scores draw from one shared stream
+    (as the scanner's frames draw their noise); logs each task it runs."""
+
+    def run(trials: protocol.Trials):
+        for label in trials.planners:
+            for t in range(trials.trials):
+                if (label, t) == stop_at:
+                    raise KeyboardInterrupt
+                log.append((label, t))
+                yield [
+                    protocol.Outcome(label, t, b, k, Acquisition(np.zeros((k, 2)), np.zeros(k),
+                                     (4, 4), frames=k), {"mse": float(stream.normal())})
+                    for b, k in enumerate(trials.ks)
+                ]  # fmt: skip
+
+    return run
+
+
+def _rows(oc):
+    return protocol.outcome_rows(oc, {"label": oc.label}, {"k": oc.k})
+
+
+def _wrapped(steps, log, stream, *, stop_at=None, advance=None):
+    trials = protocol.Trials(dict.fromkeys("abc"), [3, 5], 2, lambda *a: (None, None))
+    store = ProtocolSteps(steps, {lb: f"step {lb}" for lb in "abc"}, streams=(stream,))
+    run = _fake_run(log, stream, stop_at=stop_at)
+    return list(store.run(trials, run, rows=_rows, advance=advance))
+
+
+def test_the_wrapper_keeps_each_label_and_resumes_it_exactly():
+    clean = _wrapped(None, [], np.random.default_rng(5))
+    assert [s.label for s in clean] == ["a", "b", "c"] and not any(s.loaded for s in clean)
+    # rows: one per (reconstruction, metric) of each outcome, trial by trial, budget by budget
+    assert [(r["label"], r["trial"], r["k"]) for r in clean[0].rows] == [
+        ("a", 0, 3), ("a", 0, 5), ("a", 1, 3), ("a", 1, 5)
+    ]  # fmt: skip
+    assert set(clean[0].rows[0]) == {"label", "reconstruction", "k", "trial", "metric", "value"}
+    # what is kept of an outcome: scores and cost, no samples
+    assert all(len(oc.acquisition.values) == 0 for oc in clean[0].outcomes)
+    assert [oc.acquisition.frames for oc in clean[0].outcomes] == [3, 5, 3, 5]
+
+    steps, log = MemorySteps(), []
+    with pytest.raises(KeyboardInterrupt):  # Ctrl-C at b's second trial
+        _wrapped(steps, log, np.random.default_rng(5), stop_at=("b", 1))
+    assert list(steps.saved) == ["step a"]
+    log, acquisitions = [], []
+    resumed = _wrapped(steps, log, np.random.default_rng(5), advance=acquisitions.append)
+    assert log == [("b", 0), ("b", 1), ("c", 0), ("c", 1)] and steps.loads == ["step a"]
+    assert [s.loaded for s in resumed] == [True, False, False]
+    assert acquisitions == [2, 2, 2, 2]  # the tasks run, not the loaded label
+    # the stream is restored after the kept label: b and c draw what they drew uninterrupted
+    assert [s.rows for s in resumed] == [s.rows for s in clean]
+    lost = np.random.default_rng(5)
+    assert [r["value"] for r in clean[1].rows] != list(lost.normal(size=4))
+
+
+def test_a_kept_step_of_another_shape_is_run_again():
+    # a step an older run kept under the same name in another form (a list of trials, no
+    # stream states) is not misread: the label is run again
+    steps, log = MemorySteps(), []
+    steps.save("step a", [[("a", 0)]])
+    steps.save("step b", {"value": [("b", 0, [], None)], "streams": [None]})
+    got = _wrapped(steps, log, np.random.default_rng(5))
+    assert [s.loaded for s in got] == [False, False, False]
+    assert log == [(lb, t) for lb in "abc" for t in range(2)]
+    assert _wrapped(steps, [], np.random.default_rng(5))[0].loaded
