@@ -146,6 +146,8 @@ def options_model(
         unit = info["unit"]
         if info["choices"] is not None:
             kind = Literal[tuple(info["choices"])]
+        if info.get("file") is not None:  # the marker the cache key's file walk reads
+            kind = Annotated[kind, info["file"]]
         if unit == "rad":
             key, kind, unit = f"{key}_deg", Deg, "deg"
             default = math.degrees(default)

@@ -38,6 +38,7 @@ from simlunar.pipeline.inputs import (
     MAX_NAN_FRACTION,
     TerrainFacts,
     check_size,
+    model_inputs,
     read_unit_models,
     terrain_facts,
 )
@@ -409,23 +410,29 @@ def check_score_region(cfg: Any, shape: tuple[int, int]) -> None:
         ) from None
 
 
-def check_models(inputs: dict[str, dict[str, str]], seen: set | None = None) -> None:
-    """Load every learned model a unit names, as the unit will (its record checked and its
-    bytes' hash compared with the record's before unpickling), so a truncated, foreign,
-    renamed or mismatched model file is one line naming it before any render.
+def check_models(
+    inputs: dict[str, dict[str, str]], config: dict[str, Any], seen: set | None = None
+) -> None:
+    """Load every trained model a unit names (every option declared a ``model`` file: the
+    learned map's, the learned reconstruction's), as the unit will (its record checked and its
+    bytes' hash compared with the record's before unpickling), so an absent, truncated,
+    foreign, renamed or mismatched model file is one line naming it before any render or
+    write.
 
-    ``inputs``: the unit's :func:`~simlunar.pipeline.inputs.input_hashes`; ``seen``: the
-    (path, hash) pairs already loaded (a sweep loads each model once).
+    ``inputs``: the unit's :func:`~simlunar.pipeline.inputs.input_hashes`; ``config``: its
+    plain config; ``seen``: the (key, path, hash) triples already loaded (a sweep loads each
+    model once).
     """
     seen = set() if seen is None else seen
-    for key, v in inputs.items():
-        if not key.endswith(".feature_opts.model"):
+    for key in model_inputs(config):
+        v = inputs.get(key)
+        if v is None:
             continue
         rec = inputs.get(f"{key}.json", {})
-        memo = (v["path"], v["sha256"], rec.get("sha256"))
+        memo = (key, v["path"], v["sha256"], rec.get("sha256"))
         if memo in seen:
             continue
-        read_unit_models({key: v, **({f"{key}.json": rec} if rec else {})})
+        read_unit_models({key: v, **({f"{key}.json": rec} if rec else {})}, config)
         seen.add(memo)
 
 
@@ -441,7 +448,7 @@ def check_units(units: list[Any]) -> Preflight:
     for u in units:
         cfg = ExperimentCfg.model_validate(u.config)
         try:
-            check_models(getattr(u, "inputs", None) or {}, checked_models)
+            check_models(getattr(u, "inputs", None) or {}, u.config, checked_models)
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))
