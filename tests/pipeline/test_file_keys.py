@@ -31,7 +31,7 @@ from simlunar.registry import FileOption, Options, file_option, option_info
 
 def _options_classes() -> list[type]:
     """Every options class of the library (imported with the config schema)."""
-    import simlunar.features.learned  # noqa: F401
+    import simlunar.features.learned
     import simlunar.reconstruction.learned  # noqa: F401
 
     out, todo = [], list(Options.__subclasses__())
