@@ -225,13 +225,14 @@ def gdal_files(path: Path) -> list[Path]:
 def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
     """``{key path: {"path": str, "sha256": hex}}`` of :func:`input_files`."""
     out = {}
+    models = model_inputs(config)
     for key, p in input_files(config).items():
         try:
             digest = file_sha256(p)
         except OSError as exc:
             hint = (
                 " (a learned model: make it with `simlunar train <training yaml>`)"
-                if ".feature_opts.model" in key
+                if key in models or key.removesuffix(".json") in models
                 else ""
             )
             raise ConfigError(f"{key}: cannot read {p} ({exc.strerror or exc}){hint}") from None
