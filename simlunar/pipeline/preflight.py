@@ -46,7 +46,7 @@ from simlunar.pipeline.out_paths import check_out_dir, check_out_file
 from simlunar.planner import check_k
 from simlunar.render.backend import choose_variant
 from simlunar.results.records import unit_label
-from simlunar.scanner.codings import coding_for
+from simlunar.scanner.codings import CODINGS, coding_for
 from simlunar.scanner.scans import SCAN_PLANNERS
 from simlunar.sensors.structured_light import DOT_MODES, mode_coding
 from simlunar.study.scanner import aim_rig_at_terrain
@@ -58,6 +58,7 @@ __all__ = [
     "TRANSIENT_CHANNELS",
     "Preflight",
     "check_camera",
+    "check_lidar_options",
     "check_out_dir",
     "check_out_file",
     "check_renderer",
@@ -270,7 +271,10 @@ def check_scanner_budget(s: Any) -> None:
     codings = coding_options(s.options)
     scanned = dict.fromkeys(mode_coding(m, s.coding) for m in s.modes)
     for name in [n for n in scanned if n is not None]:
-        n = coding_for(codings, name).frames((ph, pw))
+        try:  # a coding's rules on the projector's size (a phase that repeats within it)
+            n = coding_for(codings, name).frames((ph, pw))
+        except ValueError as exc:
+            raise ConfigError(f"study.options.{CODINGS[name].meta['yaml_key']}: {exc}") from None
         check_size(
             "study.projector_px",
             f"{n} {name.replace('_', '-')} frames x {per_frame} projector + camera pixels",
@@ -410,6 +414,18 @@ def check_score_region(cfg: Any, shape: tuple[int, int]) -> None:
         ) from None
 
 
+def check_lidar_options(study: Any) -> None:
+    """Build a LIDAR study's library options as the unit will, so a rule of an options class
+    that the schema does not state (a bound of :mod:`simlunar.lidar`'s options, a rule across
+    fields) is one line before any render instead of a traceback in the unit."""
+    from simlunar.config.lidar_translate import lidar_options
+
+    try:
+        lidar_options(study)
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(f"study.options: {' '.join(str(exc).split())}") from None
+
+
 def check_models(
     inputs: dict[str, dict[str, str]], config: dict[str, Any], seen: set | None = None
 ) -> None:
@@ -455,6 +471,7 @@ def check_units(units: list[Any]) -> Preflight:
             check_score_region(cfg, image_shape(cfg.render, f))
             if getattr(cfg.study, "kind", None) == "lidar":
                 check_time_bins(cfg.study, f)
+                check_lidar_options(cfg.study)
             if getattr(cfg.study, "kind", None) == "scanner":
                 check_rig(cfg, f)
         except ConfigError as exc:
