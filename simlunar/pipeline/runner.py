@@ -396,7 +396,16 @@ def _run_locked(run: _Run) -> RunSummary:
     ):
         # nothing changed: the tables stand; provenance adds this rerun's time
         return _rerun(run, previous, records)
-    if todo or stale or not folder_complete(out, keys):
+    # units computed again only for an export they lack (--save-arrays / save_scans on a
+    # finished folder): their numbers are cached and seeded, so the summary and the figures
+    # still describe them and are kept (with --no-figures nothing would draw them again)
+    exports_only = (
+        bool(todo)
+        and not stale
+        and folder_complete(out, keys, ignore=("config.yaml",))
+        and all(cache.load(u.key) is not None and cache.arrays_readable(u.key) for u in todo)
+    )
+    if (todo or stale or not folder_complete(out, keys)) and not exports_only:
         # the folder's summary and figures no longer describe its units: remove them before
         # any unit changes, so an interrupted run never leaves them beside other units
         _invalidate(out)
