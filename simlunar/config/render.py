@@ -7,7 +7,9 @@ from typing import Annotated, Literal
 
 from pydantic import (
     AfterValidator,
+    Discriminator,
     Field,
+    Tag,
     model_validator,
 )
 
@@ -169,8 +171,17 @@ class GuideSunFrameCfg(_Model):
     sun: GuideSunCfg
 
 
+def _frame_tag(v) -> str:
+    """Which guide frame a value is: a name (``camera``) or a mapping (another sun), so a
+    bad sun is reported as its key (``sun.elevation_deg``), not as "should be 'camera'"."""
+    return "camera" if isinstance(v, str) else "sun"
+
+
 #: an extra guide frame: ``camera`` (camera-centred light: nearly pure albedo) or another sun
-GuideFrameCfg = Literal["camera"] | GuideSunFrameCfg
+GuideFrameCfg = Annotated[
+    Annotated[Literal["camera"], Tag("camera")] | Annotated[GuideSunFrameCfg, Tag("sun")],
+    Discriminator(_frame_tag),
+]
 
 
 def _unique_frames(frames: list) -> list:

@@ -77,6 +77,7 @@ from simlunar.results.summaries import (
     _write_provenance,
     tables_code,
 )
+from simlunar.study.protocol import exposure_count
 
 __all__ = ["ROW_COLUMNS", "RunSummary", "collect_rows", "expand", "run_experiment", "unit_key"]
 
@@ -248,6 +249,14 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
         point = {**u.sweep, "terrain_seed": u.terrain_seed}
         cached = records[u.key]["rows"]
         cached = [{"reconstruction": DEFAULT_RECONSTRUCTION, **r} for r in cached]
+        # the exposures a row's frames cost, from the frames it names (records cached before
+        # a derived frame stopped counting as an exposure of its own say so too)
+        cached = [
+            {**r, "exposures": exposure_count(r["guide_frames"])}
+            if isinstance(r.get("guide_frames"), str) and r.get("exposures") not in (None, "")
+            else r
+            for r in cached
+        ]
         for r in _sort_rows(cached, u.config):
             for c in r:
                 if c not in ROW_COLUMNS and c not in extra:

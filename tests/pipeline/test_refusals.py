@@ -14,6 +14,18 @@ PHASE = with_("study", {**SCANNER, "modes": ["phase_shift"]})
 AMBIGUITY_MICRO = with_("study", {**SCANNER, "modes": ["ambiguity_enhancement"], "coding": "micro_phase_shift"})  # fmt: skip
 
 
+SHADED = with_("study.reconstructions", ["linear", "shading"])
+
+
+def guide_sun(**sun) -> dict:
+    return with_("render.guide_frames", [{"sun": {"azimuth_deg": 90, **sun}}], SHADED)
+
+
+def use_flat(recons, frames=None) -> dict:
+    data = with_("study.reconstructions", recons)
+    return data if frames is None else with_("render.guide_frames", frames, data)
+
+
 def lidar(key: str, value) -> dict:
     return with_(f"study.{key}", value, LIDAR_GOOD)
 
@@ -29,6 +41,17 @@ CASES = [
     # a rule across fields of an options class: refused by the schema (the class's own rule)
     Case("micro phase shift rays with columns only", with_("study.options.micro_phase_opts", {"method": "rays", "axes": "cols"}, MICRO), "study.options.micro_phase_opts: method 'rays' needs the row phase: use axes 'both'"),
     Case("phase shift rays with columns only", with_("study.options.phase_opts", {"method": "rays", "axes": "cols"}, PHASE), "study.options.phase_opts: method 'rays' needs the row phase"),
+    # a guide sun out of its range is named as the sun's key (was "Input should be 'camera'")
+    Case("guide sun at elevation 0", guide_sun(elevation_deg=0), "render.guide_frames[0].sun.elevation_deg: Input should be greater than 0"),
+    Case("guide sun below the horizon", guide_sun(elevation_deg=-5), "render.guide_frames[0].sun.elevation_deg: Input should be greater than 0"),
+    Case("guide sun above the zenith", guide_sun(elevation_deg=91), "render.guide_frames[0].sun.elevation_deg: Input should be less than or equal to 90"),
+    Case("guide sun without an azimuth", with_("render.guide_frames", [{"sun": {"elevation_deg": 20}}], SHADED), "render.guide_frames[0].sun.azimuth_deg: Field required"),
+    Case("guide frame a misspelt camera", with_("render.guide_frames", ["cam"], SHADED), "render.guide_frames[0]: Input should be 'camera'"),
+    # use_flat asked for without the co-located frame it divides by (ran sun-only silently)
+    Case("use_flat without a camera frame", use_flat(["linear", {"shading": {"use_flat": True}}]), "study.reconstructions: shading: use_flat: true divides by the co-located frame, but render.guide_frames has no camera frame"),
+    Case("use_flat with a second sun only", use_flat([{"photoclinometry": {"use_flat": True}}], [{"sun": {"elevation_deg": 40, "azimuth_deg": 200}}]), "study.reconstructions: photoclinometry: use_flat: true"),
+    Case("use_flat under a label of its own", use_flat(["linear", {"flat": {"reconstruction": "shading", "use_flat": True}}]), "study.reconstructions: flat: use_flat: true"),
+    Case("use_flat in a scanner study without the flood frame", with_("study.reconstructions", [{"shading": {"use_flat": True}}], with_("study", SCANNER)), "study.reconstructions: shading: use_flat: true"),
 ]  # fmt: skip
 
 
@@ -48,5 +71,8 @@ def test_the_good_neighbours_of_the_cases_pass_the_checks():
         with_("study.options.micro_phase_opts", {"method": "rays", "axes": "both"}, MICRO),
         with_("study.options.phase_opts", {"method": "plane", "axes": "cols"}, PHASE),
         lidar("options.transient.laser_intensity_w_sr", 1e15),
+        guide_sun(elevation_deg=5),
+        use_flat(["linear", {"shading": {"use_flat": True}}], ["camera"]),
+        use_flat(["linear", {"shading": {"use_flat": False}}]),
     ):
         check_units(expand(validate_data(data)))
