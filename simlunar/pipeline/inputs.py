@@ -7,7 +7,6 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-import re
 import types
 import typing
 import zipfile
@@ -82,9 +81,14 @@ def declared_files(config: Mapping[str, Any], model: type | None = None) -> dict
     model derived from an options class), and the options of each item of a
     :class:`~simlunar.config.derived.ComponentList` field (``study.reconstructions``). Nothing
     here names an option: a new file option is in the cache key by its declaration."""
+    return {k: m for k, (m, _) in _declared(config, model).items()}
+
+
+def _declared(config, model=None) -> dict[str, tuple[FileOption, Any]]:
+    """:func:`declared_files` with each option's value."""
     from simlunar.config.schema import ExperimentCfg
 
-    out: dict[str, FileOption] = {}
+    out: dict[str, tuple[FileOption, Any]] = {}
     _walk_model(model or ExperimentCfg, config, "", out)
     return out
 
@@ -102,14 +106,14 @@ def _walk_field(ann, metadata, value, path: str, out: dict) -> None:
     for m in metadata:
         if isinstance(m, FileOption):
             if value not in (None, ""):
-                out[path] = m
+                out[path] = (m, value)
             return
         if isinstance(m, ComponentList):
             for label, cls, opts in m.items(value):
                 for fname, row in option_info(cls).items():
                     marker = file_option(row)
                     if marker is not None and opts.get(fname) not in (None, ""):
-                        out[f"{path}.{label}.{fname}"] = marker
+                        out[f"{path}.{label}.{fname}"] = (marker, opts[fname])
             return
     _walk_type(ann, value, path, out)
 
@@ -132,22 +136,6 @@ def _walk_type(ann, value, path: str, out: dict) -> None:
             _walk_type(args[0], v, f"{path}[{i}]", out)
 
 
-def _config_value(config: Mapping[str, Any], path: str):
-    """The value at a key path of :func:`declared_files` (dots between keys, ``[i]`` items)."""
-    v: Any = config
-    for part in re.findall(r"[^.\[\]]+|\[\d+\]", path):
-        if part.startswith("["):
-            v = v[int(part[1:-1])]
-        elif isinstance(v, Mapping) and part in v:
-            v = v[part]
-        else:  # a label of a ComponentList item: {label: {options}}
-            v = next(
-                (o for o in v if isinstance(o, Mapping) and part in o),
-                {},
-            )[part]
-    return v
-
-
 def input_files(config: dict[str, Any]) -> dict[str, Path]:
     """The files a unit (resolved plain config) reads, by the key path that names them.
 
@@ -158,8 +146,9 @@ def input_files(config: dict[str, Any]) -> dict[str, Path]:
     -> the ``.joblib`` and its ``.json`` record (``<key>.json``).
     """
     out: dict[str, Path] = {}
-    for key, marker in declared_files(config).items():
-        value = _config_value(config, key)
+    for key, (marker, value) in _declared(config).items():
+        if not isinstance(value, (str, os.PathLike)):
+            continue  # not a file name: the schema reports it
         if marker.kind == "preset":
             with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
                 out[key] = preset_path(str(value))

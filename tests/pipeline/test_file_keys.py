@@ -222,6 +222,9 @@ def test_learned_reconstruction_model_is_an_input_under_its_label():
         "study.reconstructions.mine.model": Path("q.joblib"),
         "study.reconstructions.mine.model.json": Path("q.json"),
     }
+    # a label with a dot (a path's separator) still names its own file
+    dotted = {"reconstructions": [{"my.model": {"reconstruction": "learned", "model": "d.joblib"}}]}
+    assert model_files(dotted)["study.reconstructions.my.model.model"] == Path("d.joblib")
     kinds = model_inputs({"study": study})
     assert {m.format for m in kinds.values()} == {"simlunar-learned-reconstruction/1"}
 
@@ -235,6 +238,8 @@ def test_learned_reconstruction_model_is_an_input_under_its_label():
         {"reconstructions": [1, {"a": 1, "b": 2}]},
         {"strategy_options": ["l"]},
         {"strategy_options": {"l": {"feature_opts": "m.joblib"}}},
+        {"reconstructions": [{"learned": {"model": 5}}]},
+        {"strategy_options": {"l": {"feature_opts": {"model": ["a.joblib"]}}}},
     ],
 )
 def test_the_walk_survives_malformed_plain_configs(study):
