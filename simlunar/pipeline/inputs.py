@@ -40,6 +40,10 @@ from simlunar.terrain.io import load_albedo, load_dem
 #: truth, so beyond a few per cent the ground truth is mostly invented and the run stops.
 MAX_NAN_FRACTION = 0.05
 
+#: Largest JSON record of a model file read: records `simlunar train` writes are a few kB
+#: (options, densities, feature names, input hashes); a larger one is no record of it
+MAX_RECORD_BYTES = 16_000_000
+
 #: Smallest grid spacing (m per cell) of a DEM: a micrometre. Below it (a sidecar's 1e-300)
 #: every slope and roughness statistic divides by a number that is no length at all.
 MIN_SPACING_M = 1e-6
@@ -284,7 +288,15 @@ def read_unit_models(
         if digest != v["sha256"]:
             raise _changed(key, path, digest, v["sha256"])
         rec = inputs.get(f"{key}.json")
-        record, rdigest = _bytes_sha256(path.with_suffix(".json"), f"{key}.json")
+        sidecar = path.with_suffix(".json")
+        with contextlib.suppress(OSError):  # an unreadable record is reported just below
+            if sidecar.stat().st_size > MAX_RECORD_BYTES:
+                raise ConfigError(
+                    f"{key}.json: {sidecar} holds {sidecar.stat().st_size / 1e6:.3g} MB; a "
+                    f"model's record is a few kB (at most {MAX_RECORD_BYTES / 1e6:g} MB): not "
+                    "the record `simlunar train` wrote"
+                )
+        record, rdigest = _bytes_sha256(sidecar, f"{key}.json")
         if rec is not None and rdigest != rec["sha256"]:
             raise _changed(f"{key}.json", path.with_suffix(".json"), rdigest, rec["sha256"])
         try:

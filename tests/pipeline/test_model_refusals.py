@@ -108,6 +108,8 @@ CASES = [
     Case("recon record not JSON", RECON, KEY + "models/r.json: not a readable JSON record", setup=recon_files(raw_record="{format: [")),
     Case("recon record empty", RECON, "models/r.json: not a readable JSON record", setup=recon_files(raw_record="")),
     Case("recon record binary", RECON, "models/r.json: not a readable JSON record", setup=recon_files(raw_record=b"\xff\xfe{\x00")),
+    Case("recon record of 20 MB", RECON, "study.reconstructions.learned.model.json: models/r.json holds 20 MB; a model's record is a few kB", setup=recon_files(raw_record=b" " * 20_000_000)),
+    Case("map record of 20 MB", LEARNED, "study.strategy_options.l.feature_opts.model.json: models/m.json holds 20 MB", setup=lambda d: ((d / "models").mkdir(), (d / MODEL).write_bytes(_model_bytes()[0]), (d / "models" / "m.json").write_bytes(b"{" + b" " * 20_000_000 + b"}"))),
     Case("recon record a JSON list", RECON, "not a simlunar-learned-reconstruction/1 model (format None)", setup=recon_files(raw_record="[1, 2]")),
     Case("recon record other feature set", RECON, "trained on another feature set", setup=recon_files(edit=_set("recon_feature_version", 0))),
     Case("recon model a renamed text file, true hash", RECON, KEY + "models/r.joblib: cannot be read back", setup=recon_files(b"name: not a model\n", rehash=True)),
