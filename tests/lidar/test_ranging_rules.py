@@ -43,3 +43,12 @@ def test_the_background_is_read_beyond_three_half_widths_of_the_return_by_hand()
     res = extract_ranges(counts, BINS, pulse=PULSE)
     assert res.returns[0] == 1
     assert res.photons[0] == pytest.approx(window - (2 * HALF + 1) * bg, rel=1e-6)
+
+
+def test_a_histogram_without_a_return_reports_no_range_and_no_photons():
+    # documented: range NaN and photons 0 where no return is detected (a flat background
+    # of 3 counts per bin has none), whatever the background's own counts
+    res = extract_ranges(np.full((2, BINS.count), 3.0), BINS, pulse=PULSE)
+    assert not res.valid.any() and (res.returns == 0).all()
+    assert np.isnan(res.range).all()
+    np.testing.assert_array_equal(res.photons, [0.0, 0.0])
