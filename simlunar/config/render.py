@@ -222,9 +222,15 @@ class HapkeCfg(_BsdfCfg):
     w: float | None = Field(None, gt=0, le=1, description="single-scattering albedo")
     b: float | None = Field(None, ge=0, le=1)
     c: float | None = Field(None, ge=-1, le=1)
-    B0: float | None = Field(None, ge=0)
-    h: float | None = Field(None, gt=0)
+    B0: float | None = Field(
+        None, ge=0, description="shadow-hiding opposition surge amplitude B_S0"
+    )
+    h: float | None = Field(None, gt=0, description="shadow-hiding opposition surge width h_S")
     theta_bar_deg: Deg | None = Field(None, ge=0, le=60)
+    B_C0: float | None = Field(
+        None, ge=0, description="coherent-backscatter opposition surge amplitude (0: none)"
+    )
+    h_C: float | None = Field(None, gt=0, description="coherent-backscatter opposition surge width")
 
 
 #: BSDFs with a hand-written block (their YAML defaults differ from the specs' on purpose:

@@ -22,6 +22,8 @@ cell) and is attached at scene build time as a Mitsuba texture by
   so a Hapke and a Lambert terrain built from the same grid look equally bright when seen and
   lit from straight above; with a number ``w`` the whole surface uses that single-scattering
   albedo and the grid is ignored.
+- ``LunarLambertBSDF`` and ``LROCEmpiricalBSDF``: the grid is the normal albedo (``pi f`` at
+  ``i = e = g = 0``), as for Hapke.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import numpy as np
 
 from simlunar.registry import Registry
 from simlunar.render.mesh import grid_texture
+from simlunar.render.plugins.lroc_empirical import LROCEmpiricalBSDF
 from simlunar.render.plugins.lunar_lambert import LunarLambertBSDF
 from simlunar.render.reference import LUNAR_HAPKE
 
@@ -232,8 +235,9 @@ def sigma_map_from_energy(
 
 @dataclass(frozen=True)
 class HapkeBSDF:
-    """Hapke reflectance (shadow-hiding opposition surge, double Henyey-Greenstein phase
-    function, macroscopic roughness; see :func:`simlunar.render.reference.hapke`).
+    """Hapke reflectance (shadow-hiding and coherent-backscatter opposition surges, double
+    Henyey-Greenstein phase function, macroscopic roughness; see
+    :func:`simlunar.render.reference.hapke`).
 
     Defaults are the lunar values of :data:`simlunar.render.reference.LUNAR_HAPKE` (see there
     for sources and which numbers are unverified).
@@ -248,11 +252,15 @@ class HapkeBSDF:
     c : float
         Backscatter weight parameter in [-1, 1] (backscatter lobe (1 + c)/2).
     B0 : float
-        Opposition surge amplitude, >= 0 (0 disables the surge).
+        Shadow-hiding opposition surge amplitude ``B_S0``, >= 0 (0 disables the surge).
     h : float
-        Opposition surge width, > 0.
+        Shadow-hiding opposition surge width ``h_S``, > 0.
     theta_bar : float
         Mean macroscopic slope in radians, [0, pi/2).
+    B_C0 : float
+        Coherent-backscatter opposition surge amplitude, >= 0 (0, the default, disables it).
+    h_C : float
+        Coherent-backscatter opposition surge width, > 0 (read only when ``B_C0 > 0``).
     """
 
     w: float | None = None
@@ -261,6 +269,8 @@ class HapkeBSDF:
     B0: float = LUNAR_HAPKE.B0
     h: float = LUNAR_HAPKE.h
     theta_bar: float = LUNAR_HAPKE.theta_bar
+    B_C0: float = LUNAR_HAPKE.B_C0
+    h_C: float = LUNAR_HAPKE.h_C
     name = "hapke"
 
     def __post_init__(self) -> None:
@@ -275,6 +285,8 @@ class HapkeBSDF:
             "B0": lambda v: v >= 0.0,
             "h": lambda v: v > 0.0,
             "theta_bar": lambda v: 0.0 <= v < math.pi / 2,
+            "B_C0": lambda v: v >= 0.0,
+            "h_C": lambda v: v > 0.0,
         }
         ranges = {
             "b": "[0, 1)",
@@ -282,6 +294,8 @@ class HapkeBSDF:
             "B0": ">= 0",
             "h": "> 0",
             "theta_bar": "[0, pi/2) radians",
+            "B_C0": ">= 0",
+            "h_C": "> 0",
         }
         for key, ok in checks.items():
             v = _finite(key, getattr(self, key))
@@ -293,6 +307,8 @@ class HapkeBSDF:
         """``hapke`` plugin entry: ``reflectance`` is the normal albedo unless ``w`` is set."""
         d = {"type": "hapke", "b": self.b, "c": self.c, "B0": self.B0, "h": self.h}
         d["theta_bar"] = self.theta_bar
+        if self.B_C0 != 0.0:  # the plugin's default B_C0 = 0 leaves the surge out
+            d.update(B_C0=self.B_C0, h_C=self.h_C)
         if self.w is None:
             d.update(reflectance=reflectance, albedo_mode="normal")
         else:
@@ -317,6 +333,13 @@ BSDFS.register(
     LunarLambertBSDF,
     label="Lunar-Lambert",
     plugin="simlunar.render.plugins.lunar_lambert",
+)
+BSDFS.register(
+    "lroc_empirical",
+    LROCEmpiricalBSDF,
+    LROCEmpiricalBSDF,
+    label="LROC Empirical",
+    plugin="simlunar.render.plugins.lroc_empirical",
 )
 
 

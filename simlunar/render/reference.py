@@ -1,4 +1,5 @@
-"""Pure-NumPy reference BRDFs: Lambert, Oren-Nayar (1994) and Hapke (2002/2012 form).
+"""Pure-NumPy reference BRDFs: Lambert, lunar-Lambert (McEwen 1991), Oren-Nayar (1994), Hapke
+(2002/2012 form) and the LROC Empirical photometric function (ISIS ``lronacpho``).
 
 These are the ground truth the Mitsuba plugins (:mod:`simlunar.render.bsdfs`) are tested
 against, and they can be used on their own (e.g. to shade a DEM analytically).
@@ -23,17 +24,24 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
+    "LROC_EMPIRICAL_B",
+    "LROC_EMPIRICAL_STANDARD_DEG",
     "LUNAR_HAPKE",
     "HapkeParams",
     "hapke",
+    "hapke_coherent_backscatter",
     "hapke_h_function",
     "hapke_normal_albedo",
     "hapke_phase",
     "hapke_w_from_normal_albedo",
     "lambert",
     "local_angles",
+    "lroc_empirical",
+    "lroc_empirical_correction",
+    "lroc_empirical_if",
     "lunar_lambert",
     "oren_nayar",
+    "phase_angle",
 ]
 
 _EPS = 1e-12
@@ -236,11 +244,15 @@ class HapkeParams:
         Lobe weight in [-1, 1]: backscatter lobe weight (1 + c)/2, forward (1 - c)/2
         (Hapke 2012 convention).
     B0 : float
-        Shadow-hiding opposition surge amplitude (>= 0).
+        Shadow-hiding opposition surge amplitude ``B_S0`` (>= 0).
     h : float
-        Shadow-hiding opposition surge angular width (> 0).
+        Shadow-hiding opposition surge angular width ``h_S`` (> 0).
     theta_bar : float
         Mean macroscopic slope angle in radians, [0, pi/2).
+    B_C0 : float
+        Coherent-backscatter opposition surge amplitude (>= 0; 0, the default, leaves it out).
+    h_C : float
+        Coherent-backscatter opposition surge angular width (> 0; no effect when ``B_C0 = 0``).
     """
 
     w: float
@@ -249,6 +261,8 @@ class HapkeParams:
     B0: float
     h: float
     theta_bar: float
+    B_C0: float = 0.0
+    h_C: float = 0.03
 
 
 #: Lunar defaults. Provenance and honesty about each number:
@@ -268,8 +282,18 @@ class HapkeParams:
 #: - ``w = 0.25``: a visible-light lunar single-scattering albedo of the right order
 #:   (unverified). In scenes ``w`` normally comes from the terrain albedo grid instead
 #:   (see :func:`hapke_w_from_normal_albedo`).
+#: - ``B_C0 = 0``: no coherent backscatter, as in the Sato et al. (2014) maps. Hapke, Denevi,
+#:   Sato, Braden & Robinson (2012, "The wavelength dependence of the lunar phase curve as seen
+#:   by the LROC wide-angle camera", JGR 117, E00H15, doi:10.1029/2011JE003916) need it: it is
+#:   nearly 40 % of the highlands' opposition effect in the UV and over 60 % in the red (their
+#:   abstract; their fitted amplitudes and widths were not read here).
+#: - ``h_C = 0.03``: an assumed width (unverified), used only when ``B_C0 > 0``: the coherent
+#:   peak ``B_C`` falls to half at ``tan(g/2) = 0.3568 h_C``, i.e. g = 1.23 deg, of the order of
+#:   the 1.2-3.9 deg widths of the lunar coherent-backscatter peak that Velikodsky et al. (2016,
+#:   Icarus 275, 1-15, "Opposition effect of the Moon from LROC WAC data") report by their own
+#:   definition.
 LUNAR_HAPKE = HapkeParams(
-    w=0.25, b=0.26, c=0.08, B0=1.0, h=0.07, theta_bar=float(np.deg2rad(23.657))
+    w=0.25, b=0.26, c=0.08, B0=1.0, h=0.07, theta_bar=float(np.deg2rad(23.657)), B_C0=0.0, h_C=0.03
 )
 
 
@@ -285,6 +309,22 @@ def hapke_phase(cos_g, b, c) -> np.ndarray:
     back = (1 - b2) / (1 - 2 * b * cg + b2) ** 1.5
     fwd = (1 - b2) / (1 + 2 * b * cg + b2) ** 1.5
     return (1 + c) / 2 * back + (1 - c) / 2 * fwd
+
+
+def hapke_coherent_backscatter(tan_half_g, h_C) -> np.ndarray:
+    """Hapke's coherent-backscatter opposition function ``B_C(g)`` (Hapke 2002, Icarus 157,
+    523, eq. 32; Hapke 2012, "Theory of reflectance and emittance spectroscopy", 2nd ed.)::
+
+        B_C(g) = [1 + (1 - exp(-x)) / x] / [2 (1 + x)^2],   x = tan(g/2) / h_C
+
+    ``B_C(0) = 1`` (the limit ``(1 - exp(-x)) / x -> 1``, used below ``x = 1e-6``) and it
+    falls to 1/2 at ``x = 0.3568``. The reflectance is multiplied by ``1 + B_C0 B_C(g)``.
+    """
+    x = np.asarray(tan_half_g, dtype=np.float64) / h_C
+    small = x < 1e-6
+    xs = np.where(small, 1.0, x)
+    ratio = np.where(small, 1.0 - 0.5 * x, -np.expm1(-xs) / xs)
+    return (1.0 + ratio) / (2.0 * (1.0 + x) ** 2)
 
 
 def hapke_h_function(x, w) -> np.ndarray:
@@ -348,15 +388,20 @@ def _roughness(cos_i, cos_e, cos_psi, theta_bar):
 
 
 def hapke(wi, wo, n, params: HapkeParams = LUNAR_HAPKE) -> np.ndarray:
-    """Hapke BRDF in the form used for the LROC WAC Hapke maps (Sato et al. 2014).
+    """Hapke BRDF in the form used for the LROC WAC Hapke maps (Sato et al. 2014), with the
+    coherent-backscatter opposition effect of Hapke (2002, 2012) as an option.
 
-    Bidirectional reflectance (Hapke 2012, with shadow-hiding opposition effect only, porosity
-    factor K = 1 and the 1984 macroscopic-roughness correction)::
+    Bidirectional reflectance (Hapke 2012, porosity factor K = 1, isotropic multiple
+    scattering ``H H - 1`` and the 1984 macroscopic-roughness correction)::
 
-        r = w/(4 pi) mu0e/(mu0e + mue) [p(g) (1 + B0 B(g)) + H(mu0e) H(mue) - 1] S(i, e, psi)
-        B(g) = 1 / (1 + tan(g/2) / h)
+        r = w/(4 pi) mu0e/(mu0e + mue) [p(g) (1 + B0 B_S(g)) + H(mu0e) H(mue) - 1]
+            * (1 + B_C0 B_C(g)) S(i, e, psi)
+        B_S(g) = 1 / (1 + tan(g/2) / h)                       (shadow hiding, B0 = B_S0)
+        B_C(g) = :func:`hapke_coherent_backscatter` (tan(g/2), h_C)   (coherent backscatter)
 
-    and the BRDF is ``f = r / cos(i)``. ``g`` is the phase angle between ``wi`` and ``wo``
+    and the BRDF is ``f = r / cos(i)``. At zero phase both surges are at their peak
+    (``B_S = B_C = 1``): the single-scattering term gains ``1 + B0`` and the whole reflectance
+    ``1 + B_C0``. With ``B_C0 = 0`` (the default) this is the Sato et al. (2014) form. ``g`` is the phase angle between ``wi`` and ``wo``
     (``cos g = wi . wo``), so the opposition surge peaks when light and viewer coincide
     (camera-centred light). The model is reciprocal. It is not strictly energy conserving:
     the surge adds light, so with ``w = 1`` and a strong backscatter lobe the directional
@@ -370,7 +415,8 @@ def hapke(wi, wo, n, params: HapkeParams = LUNAR_HAPKE) -> np.ndarray:
         ``w`` (single-scattering albedo in [0, 1], a float or a (...) array, e.g.
         ``dataclasses.replace(LUNAR_HAPKE, w=w_grid)``), ``b``, ``c`` (double Henyey-Greenstein,
         :func:`hapke_phase`), ``B0``, ``h`` (opposition surge amplitude >= 0 and width > 0) and
-        ``theta_bar`` (mean macroscopic slope angle in radians).
+        ``theta_bar`` (mean macroscopic slope angle in radians), ``B_C0``, ``h_C``
+        (coherent-backscatter amplitude >= 0 and width > 0).
 
     Returns
     -------
@@ -387,9 +433,10 @@ def hapke(wi, wo, n, params: HapkeParams = LUNAR_HAPKE) -> np.ndarray:
         np.linalg.norm(wi_u + wo_u, axis=-1), 1e-12
     )
     surge = 1.0 + params.B0 / (1.0 + tan_half_g / params.h)
+    coherent = 1.0 + params.B_C0 * hapke_coherent_backscatter(tan_half_g, params.h_C)
     multiple = hapke_h_function(mu0e, w) * hapke_h_function(mue, w) - 1.0
     phase = hapke_phase(cos_g, params.b, params.c)
-    r = w / (4 * np.pi) * mu0e / (mu0e + mue) * (phase * surge + multiple) * S
+    r = w / (4 * np.pi) * mu0e / (mu0e + mue) * (phase * surge + multiple) * coherent * S
     return np.where(up, r / np.maximum(cos_i, 1e-9), 0.0)
 
 
@@ -400,17 +447,20 @@ def hapke_normal_albedo(
     B0=LUNAR_HAPKE.B0,
     h=LUNAR_HAPKE.h,
     theta_bar=LUNAR_HAPKE.theta_bar,
+    B_C0=LUNAR_HAPKE.B_C0,
+    h_C=LUNAR_HAPKE.h_C,
 ) -> np.ndarray:
     """Normal albedo ``pi * f`` at ``i = e = g = 0`` (radiance factor of a surface seen and
     lit from straight above), as a function of the single-scattering albedo ``w``.
 
     At normal incidence the roughness correction gives ``mu0e = mue = chi(theta_bar)`` and
-    ``S = 1``, so ``A_n = w/8 [p(0)(1 + B0) + H(chi)^2 - 1]``; increasing in ``w``.
+    ``S = 1``, so ``A_n = w/8 [p(0)(1 + B0) + H(chi)^2 - 1] (1 + B_C0)``; increasing in ``w``.
     """
-    del h  # B(0) = 1 whatever the width
+    del h, h_C  # B_S(0) = B_C(0) = 1 whatever the widths
     w = np.asarray(w, dtype=np.float64)
     chi = 1.0 / np.sqrt(1.0 + np.pi * np.tan(theta_bar) ** 2)
-    return w / 8.0 * (hapke_phase(1.0, b, c) * (1 + B0) + hapke_h_function(chi, w) ** 2 - 1.0)
+    single = hapke_phase(1.0, b, c) * (1 + B0)
+    return w / 8.0 * (single + hapke_h_function(chi, w) ** 2 - 1.0) * (1 + B_C0)
 
 
 def hapke_w_from_normal_albedo(
@@ -420,6 +470,8 @@ def hapke_w_from_normal_albedo(
     B0=LUNAR_HAPKE.B0,
     h=LUNAR_HAPKE.h,
     theta_bar=LUNAR_HAPKE.theta_bar,
+    B_C0=LUNAR_HAPKE.B_C0,
+    h_C=LUNAR_HAPKE.h_C,
     n_table: int = 4097,
 ) -> np.ndarray:
     """Single-scattering albedo whose Hapke normal albedo equals ``albedo``.
@@ -431,5 +483,115 @@ def hapke_w_from_normal_albedo(
     value give ``w = 1``.
     """
     ws = np.linspace(0.0, 1.0, n_table)
-    an = hapke_normal_albedo(ws, b, c, B0, h, theta_bar)
+    an = hapke_normal_albedo(ws, b, c, B0, h, theta_bar, B_C0, h_C)
     return np.interp(np.asarray(albedo, dtype=np.float64), an, ws)
+
+
+# ---------------------------------------------------------------------------------------------
+# LROC Empirical (USGS ISIS lronacpho)
+
+#: B0..B6 of the LROC Empirical photometric function, algorithm version 2019 (USGS ISIS
+#: ``lronacpho``, ``LROCEmpirical::photometry``; fitted to more than 760 000 LROC NAC image
+#: tiles; the phase angle in degrees, ``Units = Degrees`` in its parameter file)
+LROC_EMPIRICAL_B = (
+    -1.479654495,
+    -0.000083528,
+    0.012964707,
+    -0.237774774,
+    0.556075496,
+    0.663671460,
+    -0.439918609,
+)
+#: lronacpho's photometric standard (IncRef, EmaRef, PhaRef) = (i, e, a) in degrees
+LROC_EMPIRICAL_STANDARD_DEG = (30.0, 0.0, 30.0)
+
+
+def phase_angle(wi, wo) -> np.ndarray:
+    """Phase angle between the directions ``wi`` and ``wo`` (any length; (..., 3)) in radians,
+    as ``2 atan2(|u_i - u_o|, |u_i + u_o|)`` of the unit vectors: accurate near 0, where
+    ``arccos`` of the dot product loses half the digits (the opposition peak lives there)."""
+    ui, uo = _unit(wi), _unit(wo)
+    return 2.0 * np.arctan2(np.linalg.norm(ui - uo, axis=-1), np.linalg.norm(ui + uo, axis=-1))
+
+
+def _lroc_exponent(a_deg, mu, mu0, B) -> np.ndarray:
+    """``B0 + B1 a^2 + B2 a + B3 sqrt(a) + B4 mu + B5 mu0 + B6 mu0^2`` (a in degrees)."""
+    b0, b1, b2, b3, b4, b5, b6 = (float(v) for v in B)
+    a = np.asarray(a_deg, dtype=np.float64)
+    return b0 + b1 * a * a + b2 * a + b3 * np.sqrt(a) + b4 * mu + b5 * mu0 + b6 * mu0 * mu0
+
+
+def lroc_empirical_if(i_deg, e_deg, a_deg, B=LROC_EMPIRICAL_B) -> np.ndarray:
+    """The LROC Empirical photometric function (ISIS ``lronacpho``, version 2019) as written::
+
+        F = mu0 / (mu + mu0) exp(B0 + B1 a^2 + B2 a + B3 sqrt(a) + B4 mu + B5 mu0 + B6 mu0^2)
+
+    with ``mu0 = cos i``, ``mu = cos e`` and every angle in degrees: the I/F of the average
+    lunar terrain the coefficients were fitted to. ``mu0 / (mu + mu0)`` is the
+    Lommel-Seeliger limb darkening; at zero phase (``i = e``) it is 1/2 for every facet.
+
+    Parameters
+    ----------
+    i_deg, e_deg, a_deg : float or array
+        Incidence, emission and phase angles in degrees (``|i - e| <= a <= i + e`` for a real
+        geometry; not checked: the formula is evaluated as given).
+    B : sequence of 7 floats
+        B0..B6 (default :data:`LROC_EMPIRICAL_B`).
+
+    Returns
+    -------
+    float64 array, I/F (dimensionless).
+    """
+    mu0 = np.cos(np.radians(np.asarray(i_deg, dtype=np.float64)))
+    mu = np.cos(np.radians(np.asarray(e_deg, dtype=np.float64)))
+    return mu0 / (mu + mu0) * np.exp(_lroc_exponent(a_deg, mu, mu0, B))
+
+
+def lroc_empirical_correction(i_deg, e_deg, a_deg, B=LROC_EMPIRICAL_B) -> np.ndarray:
+    """lronacpho's correction factor ``F(30, 0, 30) / F(i, e, a)``: an I/F observed at
+    ``(i, e, a)`` times this factor is the I/F at the photometric standard
+    (:data:`LROC_EMPIRICAL_STANDARD_DEG`); 1 at the standard itself."""
+    return lroc_empirical_if(*LROC_EMPIRICAL_STANDARD_DEG, B=B) / lroc_empirical_if(
+        i_deg, e_deg, a_deg, B=B
+    )
+
+
+def lroc_empirical(wi, wo, n, albedo=1.0, B=LROC_EMPIRICAL_B) -> np.ndarray:
+    """The LROC Empirical photometric function as a BRDF, scaled by a normal albedo.
+
+    A facet of normal albedo ``A`` lit by a collimated beam of irradiance ``E`` (normal to the
+    beam) has ``I/F = A F(i, e, a) / F(0, 0, 0)`` (:func:`lroc_empirical_if`): the function's
+    angular shape, normalised so that ``I/F = A`` seen and lit from straight above, as
+    ``A`` is for the other models here (Lambert, lunar-Lambert and Hapke's normal albedo). Its
+    radiance is ``L = E I/F / pi``, so the BRDF ``f = L / (E cos i)`` is::
+
+        f = A / pi * F(i, e, a) / (cos(i) F(0, 0, 0))
+          = A / pi * 2 / (mu + mu0) * exp(X(a, mu, mu0) - X(0, 1, 1))
+
+    with ``X`` the exponent of ``F``: ``B0`` cancels (it sets the absolute I/F of the fitted
+    terrain, which the albedo grid replaces). The phase angle is in degrees (radians in the
+    inputs, converted). The fit is not reciprocal (``B4 != B5``): ``wi`` must point to the
+    light and ``wo`` to the viewer. Its directional albedo is 0.32 A at normal incidence and
+    rises to 0.46 A at grazing light (quadrature), so it conserves energy for every ``A <= 1``.
+
+    Parameters
+    ----------
+    wi, wo, n : (..., 3) arrays
+        See the module conventions (``wi`` towards the light, ``wo`` towards the viewer).
+    albedo : float or (...) array
+        Normal albedo (``pi f`` at ``i = e = a = 0``).
+    B : sequence of 7 floats
+        B0..B6 (default :data:`LROC_EMPIRICAL_B`; B0 has no effect).
+
+    Returns
+    -------
+    (...) float64 array, 1/sr.
+    """
+    cos_i, cos_o, _ = local_angles(wi, wo, n)
+    up = (cos_i > 0) & (cos_o > 0)
+    mu0, mu = np.clip(cos_i, 0.0, 1.0), np.clip(cos_o, 0.0, 1.0)
+    a_deg = np.degrees(phase_angle(wi, wo))
+    shape = np.exp(_lroc_exponent(a_deg, mu, mu0, B) - _lroc_exponent(0.0, 1.0, 1.0, B))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = np.asarray(albedo, np.float64) / np.pi * 2.0 / (mu + mu0) * shape
+    return np.where(up, f, 0.0)

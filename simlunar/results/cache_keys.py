@@ -11,6 +11,7 @@ from __future__ import annotations
 
 __all__ = [
     "EXPORT_ONLY_KEYS",
+    "NEW_BSDF_DEFAULTS",
     "NEW_NESTED_DEFAULTS",
     "NEW_PLANNER_DEFAULTS",
     "NEW_RENDER_DEFAULTS",
@@ -38,6 +39,9 @@ NEW_PLANNER_DEFAULTS = {
 }  # fmt: skip
 #: render keys added after caches existed, with the value that gives the numbers of before
 NEW_RENDER_DEFAULTS = {"guide_frames": []}
+#: BSDF block keys added after caches existed (per ``kind``), with the value that gives the
+#: numbers of before (Hapke's coherent backscatter: unset = none)
+NEW_BSDF_DEFAULTS = {"hapke": {"B_C0": None, "h_C": None}}
 #: keys added inside a planner option section after the table above, with their defaults
 NEW_NESTED_DEFAULTS = {
     "sequential": {"first_round": "uniform"},
@@ -82,8 +86,14 @@ def without_new_defaults(study: dict) -> dict:
 
 def render_without_new_defaults(render: dict) -> dict:
     """The render section less keys added later at the value that changes nothing (no extra
-    guide frames), so the cache keys of earlier runs stay valid."""
-    return {k: v for k, v in render.items() if NEW_RENDER_DEFAULTS.get(k, object()) != v}
+    guide frames; in the BSDF block, :data:`NEW_BSDF_DEFAULTS`), so the cache keys of earlier
+    runs stay valid."""
+    out = {k: v for k, v in render.items() if NEW_RENDER_DEFAULTS.get(k, object()) != v}
+    bsdf = out.get("bsdf")
+    news = NEW_BSDF_DEFAULTS.get(bsdf.get("kind")) if isinstance(bsdf, dict) else None
+    if news:
+        out["bsdf"] = {k: v for k, v in bsdf.items() if news.get(k, object()) != v}
+    return out
 
 
 def reconstruction_versions(study: dict) -> dict:

@@ -90,6 +90,12 @@ def test_bsdfs_take_only_the_keys_the_yaml_sets():
     assert (h.b, h.c, h.B0, h.h) == (default.b, default.c, default.B0, default.h)  # lunar defaults
     on = translate.bsdf(RenderCfg().bsdf)
     assert on.sigma == pytest.approx(math.radians(20))
+    # Hapke's coherent-backscatter surge reaches the spec from the YAML; unset, it is off
+    assert (default.B_C0, default.h_C) == (0.0, 0.03)
+    cb = translate.bsdf(HapkeCfg(kind="hapke", B_C0=0.5, h_C=0.01, B0=0.8, h=0.05))
+    assert (cb.B_C0, cb.h_C, cb.B0, cb.h) == (0.5, 0.01, 0.8, 0.05)
+    with pytest.raises(ValueError, match="greater than 0"):
+        HapkeCfg(kind="hapke", h_C=0.0)
 
 
 def test_sensor_exposure_fixed_or_automatic():

@@ -99,6 +99,24 @@ def test_the_default_reconstructions_keep_the_cache_key_of_before():
     assert other[0].key != a.key
 
 
+def test_hapke_units_keep_their_key_without_the_coherent_backscatter_keys():
+    # the keys B_C0 and h_C came after Hapke caches existed: unset (the surge of before, none)
+    # they leave the key as it was; set, the key changes
+    from simlunar.config.render import HapkeCfg
+    from simlunar.results.cache_keys import NEW_BSDF_DEFAULTS
+
+    unset = HapkeCfg(kind="hapke").model_dump()
+    assert {k: unset[k] for k in NEW_BSDF_DEFAULTS["hapke"]} == NEW_BSDF_DEFAULTS["hapke"]
+    a = expand(cfg(sweep={}, render={"bsdf": {"kind": "hapke"}}))[0]
+    bsdf = a.config["render"]["bsdf"]
+    assert bsdf["B_C0"] is None and bsdf["h_C"] is None
+    old_bsdf = {k: v for k, v in bsdf.items() if k not in ("B_C0", "h_C")}
+    before = {**a.config, "render": {**a.config["render"], "bsdf": old_bsdf}}
+    assert unit_key(before, a.inputs) == a.key
+    surged = expand(cfg(sweep={}, render={"bsdf": {"kind": "hapke", "B_C0": 0.5}}))[0]
+    assert surged.key != a.key
+
+
 def test_a_reconstruction_with_a_results_version_has_it_in_the_key():
     from simlunar.reconstruction import RECONSTRUCTIONS
     from simlunar.results.cache_keys import reconstruction_versions

@@ -27,8 +27,9 @@ def angle_grid():
     return sph(ti, 0.3), sph(to, 0.3 + dp)
 
 
-def eval_plugin(mi, bsdf, wi, wo, uv=None):
-    """bsdf.eval in the local frame (z = normal) -> (n, 3) numpy (f * cos_o)."""
+def eval_plugin(mi, bsdf, wi, wo, uv=None, ctx=None):
+    """bsdf.eval in the local frame (z = normal) -> (n, 3) numpy (f * cos_o); ``ctx`` the
+    BSDF context (default: radiance transport)."""
     import drjit as dr
 
     n = len(wi)
@@ -39,7 +40,8 @@ def eval_plugin(mi, bsdf, wi, wo, uv=None):
     if uv is not None:
         si.uv = mi.Point2f(np.ascontiguousarray(uv.T, dtype=np.float32))
     wo_m = mi.Vector3f(np.ascontiguousarray(wo.T, dtype=np.float32))
-    return np.array(bsdf.eval(mi.BSDFContext(), si, wo_m)).T.astype(np.float64)
+    ctx = mi.BSDFContext() if ctx is None else ctx
+    return np.array(bsdf.eval(ctx, si, wo_m)).T.astype(np.float64)
 
 
 #: float32 unit roundoff (2^-23 = 1.19e-7): the relative size of one ulp
@@ -123,7 +125,7 @@ def test_plugin_zero_below_horizon(mi):
         assert v[0] > 0 and v[1] == 0 and v[2] == 0
 
 
-def _sample(mi, bsdf, theta_i, n=200_000, seed=1):
+def _sample(mi, bsdf, theta_i, n=200_000, seed=1, ctx=None):
     import drjit as dr
 
     rng = np.random.default_rng(seed)
@@ -131,7 +133,8 @@ def _sample(mi, bsdf, theta_i, n=200_000, seed=1):
     si.wi = mi.Vector3f(*(float(x) for x in sph(theta_i)))
     si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
     u = rng.random((3, n)).astype(np.float32)
-    bs, weight = bsdf.sample(mi.BSDFContext(), si, mi.Float(u[0]), mi.Point2f(u[1], u[2]))
+    ctx = mi.BSDFContext() if ctx is None else ctx
+    bs, weight = bsdf.sample(ctx, si, mi.Float(u[0]), mi.Point2f(u[1], u[2]))
     return np.array(bs.wo).T, np.array(bs.pdf), np.array(weight).T
 
 
@@ -245,6 +248,39 @@ def test_hapke_plugin_opposition_surge(mi):
     assert ratio[0.0] < 1.05  # no peak without it
 
 
+def test_hapke_plugin_opposition_surges_match_the_closed_form(mi):
+    """Shadow hiding and coherent backscatter at zero and a few degrees of phase: the plugin
+    (float32) against the closed form written out in tests/render/test_reference.py."""
+    from tests.render.test_reference import SURGE, SURGE_PHASES_DEG, _closed_form_surge, _phase_pair
+
+    k = SURGE
+    spec = make_bsdf("hapke", w=k["w"], b=k["b"], c=k["c"], B0=k["B_S0"], h=k["h_S"],
+                     theta_bar=0.0, B_C0=k["B_C0"], h_C=k["h_C"])  # fmt: skip
+    d = bsdf_dict(spec, 0.5)
+    assert (d["albedo_mode"], d["B_C0"], d["h_C"]) == ("w", k["B_C0"], k["h_C"])
+    bsdf = mi.load_dict(d)
+    plain = mi.load_dict(bsdf_dict(replace(spec, B0=0.0, B_C0=0.0), 0.5))
+    for g_deg in SURGE_PHASES_DEG:
+        wi, wo = (v[None] for v in _phase_pair(g_deg, k["theta"]))
+        got = eval_plugin(mi, bsdf, wi, wo)[0, 0] / wo[0, 2]
+        g = 2 * np.arcsin(np.linalg.norm(wi - wo) / 2)
+        assert got == pytest.approx(_closed_form_surge(g, **k), rel=2e-4), g_deg
+    # at zero phase the whole surge: single scattering x (1 + B_S0), everything x (1 + B_C0)
+    wi = wo = sph(np.array([k["theta"]]))
+    ratio = eval_plugin(mi, bsdf, wi, wo)[0, 0] / eval_plugin(mi, plain, wi, wo)[0, 0]
+    want = _closed_form_surge(0.0, **k) / _closed_form_surge(0.0, **{**k, "B_S0": 0, "B_C0": 0})
+    assert ratio == pytest.approx(want, rel=2e-4)
+    # the shadow-hiding gain acts on the single scattering only, the coherent one on all
+    assert 1 + k["B_C0"] < want < (1 + k["B_C0"]) * (1 + k["B_S0"])
+
+
+def test_hapke_coherent_backscatter_normal_albedo_matches_grid_value(mi):
+    # the normal-albedo table includes (1 + B_C0): pi f(0, 0) is still the grid value
+    bsdf = mi.load_dict(bsdf_dict(make_bsdf("hapke", B_C0=0.6, h_C=0.01), 0.12))
+    v = eval_plugin(mi, bsdf, sph(np.array([0.0])), sph(np.array([0.0])))
+    assert np.pi * v[0, 0] == pytest.approx(0.12, rel=2e-3)
+
+
 def test_reflectance_texture_varies_per_point(mi):
     """An albedo grid as a bitmap texture drives each point (the terrain path)."""
     grid = np.array([[0.05], [0.4]], dtype=np.float32)  # 2 rows x 1 col
@@ -305,12 +341,16 @@ def test_traverse_updates_without_recompiling(mi):
 def test_hapke_traverse_rebuilds_albedo_table(mi):
     bsdf = mi.load_dict(bsdf_dict(make_bsdf("hapke"), 0.12))
     params = mi.traverse(bsdf)
-    for key in ("b", "c", "B0", "h", "theta_bar", "reflectance.value"):
+    for key in ("b", "c", "B0", "h", "theta_bar", "B_C0", "h_C", "reflectance.value"):
         assert key in params
     params["B0"] = 0.0
     params.update()
     v = eval_plugin(mi, bsdf, sph(np.array([0.0])), sph(np.array([0.0])))
     assert np.pi * v[0, 0] == pytest.approx(0.12, rel=2e-3)  # still the grid's normal albedo
+    params["B_C0"] = 0.8  # the coherent surge: the table follows it too
+    params.update()
+    v = eval_plugin(mi, bsdf, sph(np.array([0.0])), sph(np.array([0.0])))
+    assert np.pi * v[0, 0] == pytest.approx(0.12, rel=2e-3)
 
 
 @pytest.mark.parametrize(
@@ -322,6 +362,8 @@ def test_hapke_traverse_rebuilds_albedo_table(mi):
         ({"type": "hapke", "h": 0.0}, "h must be"),
         ({"type": "hapke", "b": 1.2}, "b must be"),
         ({"type": "hapke", "albedo_mode": "x"}, "albedo_mode"),
+        ({"type": "hapke", "h_C": 0.0}, "h_C must be"),
+        ({"type": "hapke", "B_C0": -0.1}, "B_C0 must be"),
     ],
 )
 def test_plugin_errors_name_the_field(mi, d, msg):

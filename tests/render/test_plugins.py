@@ -77,12 +77,29 @@ def test_documented_parameters_are_the_plugins_and_defaults_are_true(mi, name):
     # defaults are printed to 5 significant digits (theta_bar 0.41289 rad)
     np.testing.assert_allclose(b, a, rtol=2e-5)
     # ... which is tight enough to catch a default 5% + 0.05 off: 10x that tolerance at least
-    lit = a > 0
+    # (a parameter that acts only once another leaves its default is checked with that set)
     for p, r in table.items():
         if r["type"] != "string":
-            off = mi.load_dict({"type": name, p: _value(r) * 1.05 + 0.05})
-            rel = np.abs(_eval(mi, off) - a)[lit] / a[lit]
+            context = {"type": name, **_ACTIVE_WITH.get((name, p), {})}
+            base = _eval(mi, mi.load_dict(context))
+            lit = base > 0
+            off = mi.load_dict({**context, p: _value(r) * 1.05 + 0.05})
+            rel = np.abs(_eval(mi, off) - base)[lit] / base[lit]
             assert rel.max() > 10 * 2e-5, p
+
+
+#: (plugin, parameter) -> the other parameters under which it acts (at their defaults it has
+#: no effect: Hapke's coherent-backscatter width needs a surge amplitude)
+_ACTIVE_WITH = {("hapke", "h_C"): {"B_C0": 0.5}}
+
+
+def test_a_gated_parameter_has_no_effect_at_its_gates_defaults(mi):
+    for (name, p), gate in _ACTIVE_WITH.items():
+        row = parameter_table(PLUGINS[name])[p]
+        a = _eval(mi, mi.load_dict({"type": name}))
+        b = _eval(mi, mi.load_dict({"type": name, p: _value(row) * 1.05 + 0.05}))
+        np.testing.assert_array_equal(a, b)
+        assert set(gate) <= set(parameter_table(PLUGINS[name]))
 
 
 def test_the_plugins_are_those_the_bsdf_registry_names():

@@ -387,3 +387,161 @@ def test_oren_nayar_full_at_normal_incidence_hand_value():
     rho = 0.6
     f = R.oren_nayar(np.broadcast_to(N_UP, (4, 3)), sph(0.7, [0.0, 1.0, 2.0, 3.0]), N_UP, rho, 0.5)
     np.testing.assert_allclose(f, (rho * 0.7844828 + rho**2 * 0.1118421) / np.pi, rtol=1e-6)
+
+
+# --- Hapke's coherent-backscatter opposition effect (Hapke 2002 eq. 32, Hapke 2012) ----------
+
+
+def test_coherent_backscatter_function_hand_values():
+    # B_C(x) = [1 + (1 - e^-x)/x] / [2 (1 + x)^2], x = tan(g/2)/h_C, by hand:
+    # x = 0: 1 (the limit (1 - e^-x)/x -> 1); x = 1: (1 + 0.6321206) / 8 = 0.2040151;
+    # x = 0.5: (1 + 0.7869387) / 4.5 = 0.3970975; half height at x = 0.3568470 (root found
+    # with scipy.optimize.brentq)
+    h_C = 0.04
+    got = R.hapke_coherent_backscatter(h_C * np.array([0.0, 1e-9, 0.5, 1.0, 0.3568470]), h_C)
+    np.testing.assert_allclose(got, [1.0, 1.0, 0.3970975, 0.2040151, 0.5], rtol=2e-7)
+    assert np.all(np.diff(R.hapke_coherent_backscatter(np.linspace(0, 1, 50), 0.03)) < 0)
+
+
+def _closed_form_surge(g, *, w, b, c, B_S0, h_S, B_C0, h_C, theta):
+    """f(i = e = theta, g) of the smooth (theta_bar = 0) Hapke model, written out from Hapke
+    (2012): w/(4 pi) mu/(mu + mu) [p(g)(1 + B_S0 B_S) + H(mu)^2 - 1] (1 + B_C0 B_C) / mu, with
+    p the double Henyey-Greenstein function, B_S = 1/(1 + tan(g/2)/h_S) and
+    B_C = [1 + (1 - e^-x)/x] / [2 (1 + x)^2], x = tan(g/2)/h_C (x = 0: 1)."""
+    mu, t = np.cos(theta), np.tan(g / 2)
+    p = (1 + c) / 2 * (1 - b * b) / (1 - 2 * b * np.cos(g) + b * b) ** 1.5 + (1 - c) / 2 * (
+        1 - b * b
+    ) / (1 + 2 * b * np.cos(g) + b * b) ** 1.5
+    bs = 1 / (1 + t / h_S)
+    x = t / h_C
+    bc = np.where(x > 0, (1 + (1 - np.exp(-x)) / np.where(x > 0, x, 1)) / (2 * (1 + x) ** 2), 1)
+    big_h = R.hapke_h_function(mu, w)  # tested against Chandrasekhar's values above
+    return w / (8 * np.pi) * (p * (1 + B_S0 * bs) + big_h**2 - 1) * (1 + B_C0 * bc) / mu
+
+
+SURGE = dict(w=0.3, b=0.26, c=0.08, B_S0=1.2, h_S=0.06, B_C0=0.8, h_C=0.02, theta=np.pi / 6)
+SURGE_PHASES_DEG = [0.0, 0.5, 1.0, 2.0, 5.0]
+
+
+def test_hapke_opposition_surges_match_the_closed_form_at_zero_and_small_phase():
+    k = SURGE
+    params = lunar(w=k["w"], b=k["b"], c=k["c"], B0=k["B_S0"], h=k["h_S"], theta_bar=0.0,
+                   B_C0=k["B_C0"], h_C=k["h_C"])  # fmt: skip
+    for g_deg in SURGE_PHASES_DEG:
+        wi, wo = _phase_pair(g_deg, k["theta"])
+        g = 2 * np.arcsin(np.linalg.norm(wi - wo) / 2)  # the pair's own g (float rounding)
+        assert np.degrees(g) == pytest.approx(g_deg, abs=1e-6)
+        want = _closed_form_surge(g, **k)
+        assert R.hapke(wi, wo, N_UP, params) == pytest.approx(want, rel=1e-9), g_deg
+    # at zero phase both surges are whole: the single-scattering term gains 1 + B_S0 and the
+    # whole reflectance 1 + B_C0; without them it is the plain Hapke value
+    wi = wo = sph(k["theta"])  # exactly zero phase
+    plain = R.hapke(wi, wo, N_UP, dataclasses.replace(params, B0=0.0, B_C0=0.0))
+    only_cb = R.hapke(wi, wo, N_UP, dataclasses.replace(params, B0=0.0))
+    assert only_cb / plain == pytest.approx(1 + k["B_C0"], rel=1e-12)
+    # the coherent peak is narrower than the shadow-hiding one here (h_C < h_S): between 0 and
+    # 5 deg it falls from 1 to B_C at x = tan(2.5 deg)/0.02 = 2.183047, by hand
+    # (1 + (1 - 0.112698)/2.183047) / (2 * 3.183047^2) = 1.406451 / 20.263578 = 0.069408
+    wi5, wo5 = _phase_pair(5.0, k["theta"])
+    cb5 = R.hapke(wi5, wo5, N_UP, params) / R.hapke(wi5, wo5, N_UP, replace_cb0(params))
+    assert cb5 == pytest.approx(1 + k["B_C0"] * 0.069408, rel=1e-6)
+
+
+def replace_cb0(params):
+    return dataclasses.replace(params, B_C0=0.0)
+
+
+def test_coherent_backscatter_default_is_off_and_keeps_the_normal_albedo_match():
+    assert R.LUNAR_HAPKE.B_C0 == 0.0
+    wi, wo = _phase_pair(0.0)
+    assert R.hapke(wi, wo, N_UP) == R.hapke(wi, wo, N_UP, lunar(h_C=0.5))  # width unread
+    # the normal albedo includes the surge: A_n(B_C0) = (1 + B_C0) A_n(0), and the inversion
+    # to w follows it
+    assert R.hapke_normal_albedo(0.3, B_C0=0.7) == pytest.approx(1.7 * R.hapke_normal_albedo(0.3))
+    f0 = R.hapke(sph(0.0), sph(0.0), N_UP, lunar(w=0.3, B_C0=0.7))
+    assert np.pi * f0 == pytest.approx(R.hapke_normal_albedo(0.3, B_C0=0.7), rel=1e-9)
+    w = R.hapke_w_from_normal_albedo(0.12, B_C0=0.7)
+    assert R.hapke_normal_albedo(w, B_C0=0.7) == pytest.approx(0.12, abs=1e-5)
+
+
+# --- LROC Empirical (USGS ISIS lronacpho, 2019 coefficients) -----------------------------------
+
+#: (i, e, a) in degrees -> F, the photometric function as ISIS's LROCEmpirical::photometry
+#: writes it (algorithm version 2019, phase in degrees), evaluated independently of NumPy and
+#: simlunar with Python's decimal module at 40 significant digits (cos by its Taylor series,
+#: Decimal.exp and Decimal.sqrt) and rounded to 13 digits. By hand at the normalisation point
+#: (30, 0, 30): mu0 = 0.8660254, mu = 1, exponent -1.479654495 - 0.075175 + 0.388941
+#: - 1.302352 + 0.556075 + 0.574756 - 0.329939 = -1.667348, exp = 0.188748, times
+#: mu0/(mu + mu0) = 0.4641016: F = 0.0875983.
+LROC_CASES = {
+    (30.0, 0.0, 30.0): 8.759832278886e-02,  # lronacpho's standard geometry
+    (0.0, 0.0, 0.0): 2.483358218223e-01,  # normal geometry: the albedo normalisation
+    (45.0, 30.0, 15.0): 1.009010562848e-01,
+    (60.0, 20.0, 70.0): 3.747956649902e-02,
+    (75.0, 45.0, 100.0): 1.533430469771e-02,
+    (10.0, 10.0, 0.0): 2.470316392594e-01,  # zero phase
+    (85.0, 5.0, 88.0): 5.929693491959e-03,
+    (20.0, 40.0, 45.0): 7.461150856274e-02,
+}
+
+
+def _geometry(i_deg, e_deg, a_deg):
+    """wi, wo over N_UP with incidence i, emission e and phase angle a (the azimuth difference
+    from the spherical law of cosines)."""
+    i, e, a = np.radians([i_deg, e_deg, a_deg])
+    s = np.sin(i) * np.sin(e)
+    cpsi = 1.0 if s == 0 else (np.cos(a) - np.cos(i) * np.cos(e)) / s
+    return sph(i), sph(e, np.arccos(np.clip(cpsi, -1.0, 1.0)))
+
+
+def test_lroc_empirical_reproduces_the_formula_at_hand_computed_geometries():
+    for (i, e, a), want in LROC_CASES.items():
+        assert R.lroc_empirical_if(i, e, a) == pytest.approx(want, rel=1e-10, abs=0), (i, e, a)
+    # lronacpho's correction to the standard geometry is 1 there and F(std) / F elsewhere
+    assert R.lroc_empirical_correction(30.0, 0.0, 30.0) == pytest.approx(1.0, rel=1e-15)
+    assert R.lroc_empirical_correction(60.0, 20.0, 70.0) == pytest.approx(
+        8.759832278886e-02 / 3.747956649902e-02, rel=1e-10
+    )
+
+
+def test_lroc_empirical_brdf_is_the_formula_scaled_to_a_normal_albedo():
+    # pi f cos(i) = I/F = A F(i, e, a) / F(0, 0, 0) at every case (the geometry built from
+    # the angles: the BRDF reads them back from vectors)
+    A, f_normal = 0.17, LROC_CASES[(0.0, 0.0, 0.0)]
+    for (i, e, a), want in LROC_CASES.items():
+        wi, wo = _geometry(i, e, a)
+        assert np.degrees(R.phase_angle(wi, wo)) == pytest.approx(a, abs=1e-9)
+        got = np.pi * R.lroc_empirical(wi, wo, N_UP, A) * np.cos(np.radians(i))
+        assert got == pytest.approx(A * want / f_normal, rel=1e-9), (i, e, a)
+    assert np.pi * R.lroc_empirical(N_UP, N_UP, N_UP, A) == pytest.approx(A, rel=1e-15)
+    # light or viewer below the surface: nothing
+    assert R.lroc_empirical(sph(1.7), N_UP, N_UP, A) == 0.0
+    assert R.lroc_empirical(N_UP, sph(1.7), N_UP, A) == 0.0
+
+
+def test_lroc_empirical_limb_darkening_is_one_half_at_zero_phase():
+    # a = 0 (light at the viewer): mu0 = mu and mu0/(mu + mu0) = 1/2 for every facet, so
+    # F = exp(B0 + (B4 + B5) mu + B6 mu^2) / 2 whatever the slope
+    b0, _, _, _, b4, b5, b6 = R.LROC_EMPIRICAL_B
+    for i in (0.0, 10.0, 35.0, 60.0, 80.0, 89.0):
+        mu = np.cos(np.radians(i))
+        lommel = R.lroc_empirical_if(i, i, 0.0) / np.exp(b0 + (b4 + b5) * mu + b6 * mu * mu)
+        assert lommel == pytest.approx(0.5, rel=1e-14), i
+    # ... so a co-located frame sees little shading: from 0 to 40 deg of slope the radiance
+    # factor falls by 9.8 % where Lambert's falls by 23.4 % (cos 40 = 0.7660444). By hand:
+    # (B4 + B5)(mu - 1) = 1.2197470 * -0.2339556 = -0.2853670, B6 (mu^2 - 1) = -0.4399186 *
+    # -0.4131759 = 0.1817638, exp(-0.1036032) = 0.9015833
+    ratio = R.lroc_empirical_if(40.0, 40.0, 0.0) / R.lroc_empirical_if(0.0, 0.0, 0.0)
+    assert ratio == pytest.approx(0.9015833, rel=1e-6)
+
+
+def test_lroc_empirical_is_not_reciprocal_and_conserves_energy():
+    wi, wo = _geometry(60.0, 20.0, 70.0)
+    # B4 != B5: swapping light and viewer changes the value (why the plugin reads the mode)
+    assert R.lroc_empirical(wi, wo, N_UP) / R.lroc_empirical(wo, wi, N_UP) == pytest.approx(
+        np.exp((0.556075496 - 0.663671460) * (np.cos(np.radians(20)) - np.cos(np.radians(60)))
+               + -0.439918609 * (np.cos(np.radians(60)) ** 2 - np.cos(np.radians(20)) ** 2))
+    )  # fmt: skip
+    for theta_i in (0.0, 0.8, 1.4, 1.5707):
+        albedo = directional_albedo(R.lroc_empirical, theta_i, albedo=1.0)
+        assert 0.3 < albedo < 0.47, theta_i

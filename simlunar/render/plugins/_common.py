@@ -70,7 +70,10 @@ def cosine_bsdf_base(mi) -> type:
 
     Cosine-weighted sampling of the upper hemisphere, ``eval`` = ``_f * cos(theta_o)``,
     ``pdf``, ``eval_pdf``; subclasses define ``_f(si, wo, active)`` (the BRDF without the
-    cosine) and may override ``flags`` and ``lobe`` (diffuse reflection by default).
+    cosine) and may override ``flags`` and ``lobe`` (diffuse reflection by default). A
+    non-reciprocal BRDF overrides ``_value(ctx, si, wo, active)`` instead, which sees the
+    transport mode (in ``Radiance`` mode ``wo`` points to the light and ``si.wi`` to the viewer;
+    in ``Importance`` mode, light tracing, the reverse).
     """
     variant = mi.variant()
     if variant in _BASES:
@@ -91,6 +94,11 @@ def cosine_bsdf_base(mi) -> type:
         def _enabled(self, ctx) -> bool:
             return ctx.is_enabled(self.lobe, 0)
 
+        def _value(self, ctx, si, wo, active):
+            """The BRDF (no cosine) in ``ctx``'s transport mode: ``_f`` for a reciprocal model,
+            whose value is the same in both modes."""
+            return self._f(si, wo, active)
+
         def sample(self, ctx, si, sample1, sample2, active=True):
             cos_i = mi.Frame3f.cos_theta(si.wi)
             bs = dr.zeros(mi.BSDFSample3f)
@@ -104,7 +112,7 @@ def cosine_bsdf_base(mi) -> type:
             bs.sampled_component = mi.UInt32(0)
             active &= bs.pdf > 0
             # f cos / pdf = f * pi for cosine sampling
-            value = self._f(si, bs.wo, active) * math.pi
+            value = self._value(ctx, si, bs.wo, active) * math.pi
             bs.pdf = dr.select(active, bs.pdf, 0.0)
             return bs, dr.select(active, value, 0.0)
 
@@ -119,7 +127,7 @@ def cosine_bsdf_base(mi) -> type:
             if not self._enabled(ctx):
                 return mi.Color3f(0.0)
             cos_o, active = self._both_up(si, wo, active)
-            return dr.select(active, self._f(si, wo, active) * cos_o, 0.0)
+            return dr.select(active, self._value(ctx, si, wo, active) * cos_o, 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
             if not self._enabled(ctx):
@@ -131,7 +139,7 @@ def cosine_bsdf_base(mi) -> type:
             if not self._enabled(ctx):
                 return mi.Color3f(0.0), mi.Float(0.0)
             cos_o, ok = self._both_up(si, wo, active)
-            value = dr.select(ok, self._f(si, wo, ok) * cos_o, 0.0)
+            value = dr.select(ok, self._value(ctx, si, wo, ok) * cos_o, 0.0)
             return value, dr.select(ok, cos_o * INV_PI, 0.0)
 
     _BASES[variant] = CosineBSDF

@@ -3,9 +3,11 @@
 Evaluates exactly the formulas of :func:`simlunar.render.reference.hapke` (the tests compare
 them on an angle grid) in Mitsuba's local shading frame; ``eval`` returns ``f * cos(theta_o)``.
 Double Henyey-Greenstein phase function, shadow-hiding opposition surge
-``B0 / (1 + tan(g/2) / h)``, Hapke (2002) H functions for multiple scattering, Hapke (1984)
-macroscopic roughness. Sampling is cosine-weighted over the upper hemisphere. Lobe: glossy
-reflection, front side only.
+``B0 / (1 + tan(g/2) / h)`` on the single scattering, coherent-backscatter opposition surge
+``1 + B_C0 B_C(g)`` on the whole reflectance (Hapke 2002 eq. 32;
+:func:`simlunar.render.reference.hapke_coherent_backscatter`), Hapke (2002) H functions for
+multiple scattering, Hapke (1984) macroscopic roughness. Sampling is cosine-weighted over the
+upper hemisphere. Lobe: glossy reflection, front side only.
 
 Parameters
 ----------
@@ -24,16 +26,23 @@ name            type              default       unit     meaning
 ``b``           float             0.26          1        Henyey-Greenstein lobe width, [0, 1)
 ``c``           float             0.08          1        backscatter lobe weight (1 + c) / 2,
                                                          [-1, 1]
-``B0``          float             1.0           1        opposition surge amplitude, >= 0
-``h``           float             0.07          1        opposition surge angular width, > 0
+``B0``          float             1.0           1        shadow-hiding opposition surge
+                                                         amplitude B_S0, >= 0
+``h``           float             0.07          1        shadow-hiding opposition surge
+                                                         angular width h_S, > 0
 ``theta_bar``   float             0.41289       radian   mean macroscopic slope (23.657 deg),
                                                          [0, pi/2)
+``B_C0``        float             0.0           1        coherent-backscatter opposition
+                                                         surge amplitude, >= 0 (0: none)
+``h_C``         float             0.03          1        coherent-backscatter opposition
+                                                         surge angular width, > 0
 =============== ================= ============= ======== ===========================================
 
 Defaults are :data:`simlunar.render.reference.LUNAR_HAPKE`. The scalar parameters are opaque
 constants: changing them through ``mi.traverse`` reuses the compiled kernels (the albedo table
 is rebuilt on ``parameters_changed``). ``mi.traverse`` exposes ``reflectance``
-(differentiable) and ``b``, ``c``, ``B0``, ``h``, ``theta_bar`` (not differentiable).
+(differentiable) and ``b``, ``c``, ``B0``, ``h``, ``theta_bar``, ``B_C0``, ``h_C`` (not
+differentiable).
 """
 
 from __future__ import annotations
@@ -133,6 +142,18 @@ def _roughness(mu0, mu, sin_i, sin_e, cpsi, theta_bar):
     return mu0e, mue, shadow
 
 
+def _coherent(tan_half_g, h_c):
+    """Hapke's coherent-backscatter function ``B_C`` (:func:`simlunar.render.reference.
+    hapke_coherent_backscatter`); ``(1 - exp(-x)) / x`` by its series below ``x = 0.01``
+    (float32 cancellation above, series truncation below: both under 1e-5 relative)."""
+    import drjit as dr
+
+    x = tan_half_g / h_c
+    series = 1.0 - x * (0.5 - x * (1.0 / 6.0 - x / 24.0))
+    ratio = dr.select(x < 0.01, series, (1.0 - dr.exp(-x)) / dr.maximum(x, 0.01))
+    return (1.0 + ratio) / (2.0 * dr.square(1.0 + x))
+
+
 def _phase(cos_g, b, c):
     """Double Henyey-Greenstein phase function (:func:`simlunar.render.reference.hapke_phase`)."""
     import drjit as dr
@@ -152,7 +173,7 @@ def _plugin_class(mi, base: type) -> type:
 
         flags = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
         lobe = mi.BSDFFlags.GlossyReflection
-        _keys = ("b", "c", "B0", "h", "theta_bar")
+        _keys = ("b", "c", "B0", "h", "theta_bar", "B_C0", "h_C")
 
         def __init__(self, props):
             super().__init__(props)
@@ -194,7 +215,8 @@ def _plugin_class(mi, base: type) -> type:
             surge = 1.0 + self.B0 / (1.0 + tan_half_g / self.h)
             multiple = _h(mu0e, w) * _h(mue, w) - 1.0
             scale = 0.25 * INV_PI * mu0e / (mu0e + mue) * shadow / mu0
-            return w * scale * (p * surge + multiple)
+            coherent = 1.0 + self.B_C0 * _coherent(tan_half_g, self.h_C)
+            return w * scale * (p * surge + multiple) * coherent
 
         def traverse(self, callback):
             callback.put("reflectance", self.reflectance, mi.ParamFlags.Differentiable)
