@@ -24,6 +24,7 @@ from typing import Any
 
 __all__ = [
     "Entry",
+    "FileOption",
     "Options",
     "Registry",
     "UnknownNameError",
@@ -31,6 +32,7 @@ __all__ = [
     "check_bounds",
     "did_you_mean",
     "did_you_mean_file",
+    "file_option",
     "option",
     "option_docs",
     "option_info",
@@ -84,6 +86,39 @@ class UnknownNameError(ValueError, KeyError):
         return str(self.args[0]) if self.args else ""
 
 
+@dataclass(frozen=True)
+class FileOption:
+    """Marks an option (or a YAML field) whose value names a file a unit reads.
+
+    Declared once, where the option is (``option(..., file="model")`` in an options class,
+    ``Annotated[Path | None, FileOption("dem")]`` in a hand-written config model); the unit's
+    cache key hashes the bytes of every such file, found by walking the declarations
+    (:func:`simlunar.pipeline.inputs.input_files`), so a file replaced at the same path is
+    another input. ``kind`` says which files come with it: ``model`` (a ``.joblib`` and its
+    ``.json`` record beside it), ``dem`` and ``albedo`` (a grid and the files GDAL reads with
+    it), ``preset`` (a preset name, the YAML it resolves to).
+    """
+
+    kind: str
+    #: a model's record format (``simlunar-learned-map/1``): a model file of another format
+    #: (a map's model named as a reconstruction's) is refused before any work
+    format: str | None = None
+
+
+def file_option(info_or_field) -> FileOption | None:
+    """The :class:`FileOption` of a dataclass field, a pydantic ``FieldInfo`` or an
+    :func:`option_info` row, or None when the option names no file."""
+    meta = getattr(info_or_field, "metadata", None)
+    if isinstance(info_or_field, Mapping):  # an option_info row
+        return info_or_field.get("file")
+    if isinstance(meta, Mapping):  # a dataclass field
+        return meta.get("file")
+    for m in meta or ():  # a pydantic FieldInfo: the Annotated metadata
+        if isinstance(m, FileOption):
+            return m
+    return None
+
+
 def option(
     default: Any = dataclasses.MISSING,
     *,
@@ -95,6 +130,7 @@ def option(
     lt: float | None = None,
     choices: tuple | None = None,
     key_unit: str | None = None,
+    file: str | FileOption | None = None,
     default_factory: Callable[[], Any] | Any = dataclasses.MISSING,
 ):
     """A dataclass field with its documentation, unit and bounds written once.
@@ -104,9 +140,13 @@ def option(
     ``fwhm_s`` becomes ``fwhm_ns``, its default and bounds converted by ``config/``, which
     knows the factor). ``ge``/``gt``/``le``/``lt`` are inclusive / exclusive bounds (of each
     element of a tuple) and ``choices`` the allowed values, checked by :func:`check_bounds`.
+    ``file`` marks an option whose value names a file a unit reads, by kind
+    (:class:`FileOption`): its bytes go into the unit's cache key.
     """
     meta = {"doc": doc, "unit": unit, "ge": ge, "gt": gt, "le": le, "lt": lt, "choices": choices,
             "key_unit": key_unit}  # fmt: skip
+    if file is not None:
+        meta["file"] = file if isinstance(file, FileOption) else FileOption(file)
     if default_factory is not dataclasses.MISSING:
         return field(default_factory=default_factory, metadata=meta)
     return field(default=default, metadata=meta)
@@ -127,8 +167,8 @@ def shared_option(table: Mapping[str, Mapping[str, Any]], name: str):
 
 
 def option_info(options_cls) -> dict[str, dict]:
-    """name -> {"default", "doc", "unit", "ge", "gt", "le", "lt", "choices", "key_unit", "type"}
-    of each field of an options dataclass (the input of the derived YAML schema and docs)."""
+    """name -> {"default", "doc", "unit", "ge", "gt", "le", "lt", "choices", "key_unit", "file",
+    "type"} of each field of an options dataclass (the input of the derived YAML schema and docs)."""
     out = {}
     for f in dataclasses.fields(options_cls):
         if f.default is not dataclasses.MISSING:
@@ -137,7 +177,7 @@ def option_info(options_cls) -> dict[str, dict]:
             default = f.default_factory()
         else:
             default = dataclasses.MISSING
-        keys = ("doc", "unit", "ge", "gt", "le", "lt", "choices", "key_unit")
+        keys = ("doc", "unit", "ge", "gt", "le", "lt", "choices", "key_unit", "file")
         meta = {k: f.metadata.get(k) for k in keys}
         out[f.name] = {"default": default, "type": f.type, **meta}
     return out

@@ -64,9 +64,35 @@ def _shipped_models_dir(tmp_path_factory) -> Path:
     model = train_learned_map(pairs, densities=[1 / 16], options=opts, rng=0)
     root = tmp_path_factory.mktemp("work")
     text = "".join(p.read_text() for p in EXPERIMENTS_DIR.glob("*.yaml"))
+    recon = _recon_model_paths()
     for rel in sorted(set(re.findall(r"models/[\w.-]+\.joblib", text))):
-        model.save(root / rel)
+        if rel in recon:  # a learned reconstruction's model: its own format is checked
+            _tiny_recon_model(pairs, opts).save(root / rel)
+        else:
+            model.save(root / rel)
     return root
+
+
+def _recon_model_paths() -> set[str]:
+    """The model files the shipped experiments name as a learned reconstruction's."""
+    from simlunar.config.loading import load_experiment, to_plain
+    from simlunar.pipeline.inputs import _declared
+
+    out = set()
+    for path in EXPERIMENTS_DIR.glob("*.yaml"):
+        plain = to_plain(load_experiment(path))
+        for key, (marker, value) in _declared(plain).items():
+            if marker.kind == "model" and key.startswith("study.reconstructions."):
+                out.add(str(value))
+    return out
+
+
+def _tiny_recon_model(pairs, opts):
+    from simlunar.planner.learning import train_learned_reconstruction
+
+    return train_learned_reconstruction(
+        [(img, z * 4) for img, z in pairs], densities=(1 / 16,), options=opts, rng=0
+    )
 
 
 @pytest.fixture

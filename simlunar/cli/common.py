@@ -27,6 +27,7 @@ __all__ = [
     "EXIT_PIPE",
     "EXIT_USER",
     "closed_stdout",
+    "echo",
     "exit_for",
     "flag",
     "user_errors",
@@ -123,6 +124,16 @@ def exit_for(exc: BaseException) -> typer.Exit:
     if isinstance(exc, (SystemExit, GeneratorExit)):
         raise exc
     return _internal(exc)
+
+
+def echo(message: str = "") -> None:
+    """``typer.echo`` of a line to stdout that survives a reader who went away
+    (``simlunar run ... | head -1``): the first write that finds the pipe closed sends stdout
+    to the null device, and the command goes on with its work (nothing more is printed)."""
+    try:
+        typer.echo(message)
+    except BrokenPipeError:
+        closed_stdout()
 
 
 def closed_stdout() -> typer.Exit:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import typer
 
-from simlunar.cli.common import user_input
+from simlunar.cli.common import echo, user_input
 from simlunar.config import advice, loading
 from simlunar.config.yamlio import parse_set
 from simlunar.errors import SimlunarError
@@ -72,7 +72,7 @@ def run_experiment_command(
             preflight.check_out_dir(out_dir)
             est = estimate.estimate_run(cfg, out_dir, workers=workers or 1, figures=figures)
             for line in est.lines(out_dir):
-                typer.echo(line)
+                echo(line)
             return
         executor = make_executor(workers=workers, scheduler=scheduler)
     if scheduler:
@@ -81,17 +81,17 @@ def run_experiment_command(
     summary = runner.run_experiment(
         cfg, out_dir, executor=executor, progress=progress, figures=figures
     )
-    typer.echo(summary.scores_markdown)
+    echo(summary.scores_markdown)
     for note in summary.notes:
-        typer.echo(note)
-    typer.echo(
+        echo(note)
+    echo(
         f"work units: {summary.units_total} ({summary.units_cached} cached, "
         f"{summary.units_computed} computed) in {summary.elapsed_s:.1f} s"
     )
-    typer.echo(f"results: {out_dir}")
+    echo(f"results: {out_dir}")
     if summary.figures:
-        typer.echo(f"figures: {summary.figures_dir}")
-    typer.echo(f"report: {report.write_report(out_dir)}")
+        echo(f"figures: {summary.figures_dir}")
+    echo(f"report: {report.write_report(out_dir)}")
 
 
 def redraw_figures(results_dir: str, *, pdf: bool, force: bool) -> None:
@@ -110,14 +110,14 @@ def redraw_figures(results_dir: str, *, pdf: bool, force: bool) -> None:
     removed = sorted(set(before) - set(paths) - {fig_dir / "captions.md"})
     kept = [p for p in paths if p not in redrawn]
     if redrawn:
-        typer.echo(f"redrew {len(redrawn)} file(s) in {fig_dir}:")
+        echo(f"redrew {len(redrawn)} file(s) in {fig_dir}:")
         for p in redrawn:
-            typer.echo(f"  {p.name}")
+            echo(f"  {p.name}")
     if kept:
         how = "use --force to redraw them" if not redrawn else "their inputs did not change"
-        typer.echo(f"up to date, not redrawn: {len(kept)} file(s) ({how})")
+        echo(f"up to date, not redrawn: {len(kept)} file(s) ({how})")
     for p in removed:
         if not p.exists():
-            typer.echo(f"removed {p.name} (no longer produced)")
+            echo(f"removed {p.name} (no longer produced)")
     if not paths:
-        typer.echo(f"no figures for {results_dir} (its study draws none)")
+        echo(f"no figures for {results_dir} (its study draws none)")

@@ -14,7 +14,7 @@ import dataclasses
 import functools
 import typing
 from collections.abc import Mapping
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
 
@@ -23,11 +23,38 @@ from simlunar.registry import did_you_mean, option_info
 from simlunar.study.reconstruction_spec import ReconstructionSpec, parse_reconstructions
 
 __all__ = [
+    "ComponentList",
     "options_model",
     "reconstruction_mapping",
     "reconstruction_specs",
     "validate_options",
 ]
+
+
+@dataclasses.dataclass(frozen=True)
+class ComponentList:
+    """Marks a YAML field whose value stays plain after validation: a list of a registry's
+    names or ``{label: {options}}`` mappings (``study.reconstructions``), so that a walk over
+    the declarations (the cache key's files) finds each item's options class."""
+
+    registry: Any
+    #: the options key naming the registered component of an item under a label of its own
+    base_key: str
+
+    def items(self, value) -> list[tuple[str, type, dict]]:
+        """(label, options class, options) of each item of a plain value; items naming no
+        registered component are left out (the validation reports them)."""
+        out = []
+        for item in value if isinstance(value, (list, tuple)) else ():
+            if isinstance(item, Mapping) and len(item) == 1:
+                ((label, opts),) = item.items()
+            else:
+                label, opts = item, None
+            opts = dict(opts) if isinstance(opts, Mapping) else {}
+            base = opts.get(self.base_key, label)
+            if isinstance(base, str) and base in self.registry:
+                out.append((str(label), self.registry[base].options, opts))
+        return out
 
 
 class _OptionsBase(BaseModel):
@@ -85,6 +112,8 @@ def options_model(options_cls: type, name: str | None = None) -> type[BaseModel]
         if info.get("choices") is not None:
             ann = Literal[tuple(info["choices"])]
         bounds = {k: info[k] for k in ("ge", "gt", "le", "lt") if info.get(k) is not None}
+        if info.get("file") is not None:  # the marker the cache key's file walk reads
+            ann = Annotated[ann, info["file"]]
         default = info["default"]
         if default is dataclasses.MISSING:
             fields[fname] = (ann, Field(..., description=_description(info), **bounds))

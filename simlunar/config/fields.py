@@ -21,6 +21,7 @@ from pydantic import (
     Tag,
     create_model,
     model_serializer,
+    model_validator,
 )
 
 from simlunar.config.quantities import parse_fraction, parse_quantity
@@ -134,7 +135,9 @@ def options_model(
     out. An angle (``unit="rad"``) becomes the key ``<name>_deg`` in degrees (default and
     bounds converted; :func:`library_values` converts back). ``extra`` fields (e.g. a
     ``kind`` tag) come first. ``model_dump()`` of the model, through :func:`library_values`,
-    is the keyword set of ``options_cls``.
+    is the keyword set of ``options_cls``; the options class is built from it at validation,
+    so its own rules across fields (``__post_init__``) refuse a YAML block at load, not after
+    the run has started.
     """
     hints = typing.get_type_hints(options_cls)
     fields = dict(extra or {})
@@ -146,6 +149,8 @@ def options_model(
         unit = info["unit"]
         if info["choices"] is not None:
             kind = Literal[tuple(info["choices"])]
+        if info.get("file") is not None:  # the marker the cache key's file walk reads
+            kind = Annotated[kind, info["file"]]
         if unit == "rad":
             key, kind, unit = f"{key}_deg", Deg, "deg"
             default = math.degrees(default)
@@ -153,7 +158,21 @@ def options_model(
         desc = info["doc"] + (f" ({unit})" if unit else "")
         fields[key] = (kind, Field(default, description=desc, **bounds))
     base = base or _Model
-    return create_model(name, __base__=base, __doc__=doc or options_cls.__doc__, **fields)
+
+    def _class_rules(self):
+        try:
+            options_cls(**library_values(self))
+        except TypeError:  # a class the library completes (a required field set at run time)
+            pass
+        return self
+
+    return create_model(
+        name,
+        __base__=base,
+        __doc__=doc or options_cls.__doc__,
+        __validators__={"_class_rules": model_validator(mode="after")(_class_rules)},
+        **fields,
+    )
 
 
 def library_values(model: BaseModel, *, drop=("kind",)) -> dict:

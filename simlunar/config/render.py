@@ -8,7 +8,9 @@ from typing import Annotated, Literal
 from pydantic import (
     AfterValidator,
     BeforeValidator,
+    Discriminator,
     Field,
+    Tag,
     model_validator,
 )
 
@@ -228,10 +230,27 @@ def _ideal_is_camera(value):
     return "camera" if value == "ideal" else value
 
 
+def _frame_tag(v) -> str:
+    """Which guide frame a value is: a name (``camera``), a flash or another sun, so a bad
+    sun or flash is reported as its own key (``sun.elevation_deg``), not as "should be
+    'camera'"."""
+    if isinstance(v, str):
+        return "camera"
+    if isinstance(v, GuideFlashFrameCfg) or (isinstance(v, dict) and "flash" in v):
+        return "flash"
+    return "sun"
+
+
 #: an extra guide frame: ``camera`` or ``ideal`` (the ideal co-located light: at infinity on
 #: the optical axis, nearly pure albedo), a flash on the rig, or another sun
 GuideFrameCfg = Annotated[
-    Literal["camera"] | GuideSunFrameCfg | GuideFlashFrameCfg, BeforeValidator(_ideal_is_camera)
+    Annotated[
+        Annotated[Literal["camera"], Tag("camera")]
+        | Annotated[GuideSunFrameCfg, Tag("sun")]
+        | Annotated[GuideFlashFrameCfg, Tag("flash")],
+        Discriminator(_frame_tag),
+    ],
+    BeforeValidator(_ideal_is_camera),
 ]
 
 

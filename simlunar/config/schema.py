@@ -24,6 +24,7 @@ from pydantic import (
     model_validator,
 )
 
+from simlunar.config.derived import reconstruction_mapping
 from simlunar.config.fields import (  # noqa: F401
     _FRACTION_INPUT,
     _QUANTITY_INPUT,
@@ -200,6 +201,21 @@ class ExperimentCfg(_Model):
                         f"study.{key}: sun needs render.light.kind sun (got "
                         f"{self.render.light.kind})"
                     )
+        return self
+
+    @model_validator(mode="after")
+    def _use_flat_needs_a_flat_frame(self) -> ExperimentCfg:
+        # use_flat: true asked for explicitly reads the co-located (camera) frame; without
+        # one the reconstruction ran sun-only without a word
+        if "camera" in self.render.guide_frames:
+            return self
+        for label, opts in reconstruction_mapping(self.study.reconstructions).items():
+            if opts.get("use_flat") is True:
+                raise ValueError(
+                    f"study.reconstructions: {label}: use_flat: true divides by the "
+                    "co-located frame, but render.guide_frames has no camera frame (add camera "
+                    "to render.guide_frames, or leave use_flat out)"
+                )
         return self
 
     @model_validator(mode="after")

@@ -14,7 +14,7 @@ from pydantic import (
     model_validator,
 )
 
-from simlunar.config.derived import options_model, reconstruction_specs
+from simlunar.config.derived import ComponentList, options_model, reconstruction_specs
 from simlunar.config.fields import (
     Density,
     Metres,
@@ -82,6 +82,7 @@ def _reconstructions_input_type():
 Reconstructions = Annotated[
     list,
     BeforeValidator(reconstruction_specs, json_schema_input_type=_reconstructions_input_type()),
+    ComponentList(RECONSTRUCTIONS, "reconstruction"),
 ]
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 from pathlib import Path
-from typing import ClassVar
+from typing import Annotated, ClassVar
 
 import yaml
 from pydantic import Field, ValidationError, model_validator
@@ -13,7 +13,7 @@ from simlunar.config.fields import Metres, _Model, _partial, _SetKeysModel
 from simlunar.config.messages import format_validation_error
 from simlunar.config.yamlio import load_yaml
 from simlunar.errors import ConfigError
-from simlunar.registry import did_you_mean, did_you_mean_file
+from simlunar.registry import FileOption, did_you_mean, did_you_mean_file
 from simlunar.terrain.sfd import get_law
 
 __all__ = [
@@ -164,13 +164,17 @@ class TerrainOverridesCfg(_SetKeysModel):
 class TerrainCfg(_Model):
     """Terrain: a named preset (``scenes/<name>.yaml``) or a DEM file."""
 
-    preset: str | None = Field(None, description="terrain preset name, e.g. aerial_1, moonyard")
+    preset: Annotated[str | None, FileOption("preset")] = Field(
+        None, description="terrain preset name, e.g. aerial_1, moonyard"
+    )
     scale: float = Field(1.0, gt=0, le=1, description="preset resolution scale (1/8 = small)")
-    file: Path | None = Field(None, description="DEM file (.npy, .tif, .exr); relative to the YAML")
+    file: Annotated[Path | None, FileOption("dem")] = Field(
+        None, description="DEM file (.npy, .tif, .exr); relative to the YAML"
+    )
     spacing_m: Metres | None = Field(
         None, gt=0, description="DEM cell size (m), for a file without georeferencing"
     )
-    albedo_file: Path | None = Field(
+    albedo_file: Annotated[Path | None, FileOption("albedo")] = Field(
         None, description="albedo grid file (.npy, same shape as the DEM), for file"
     )
     albedo: float | None = Field(

@@ -26,7 +26,7 @@ from simlunar.features.maps import (
 )
 from simlunar.features.registry import MAPS, NoMapOptions, feature_map, image_maps, map_options
 from simlunar.features.saliency import saliency
-from simlunar.registry import Options, option
+from simlunar.registry import FileOption, Options, option
 
 
 # ---- maps that need a trained model, apart from the image-only maps ------------------------
@@ -39,6 +39,8 @@ class LearnedMapOptions(Options):
         None,
         doc="learned map: model file (.joblib beside its .json, written by `simlunar train`), "
         "relative to the working folder",
+        # the record format of simlunar.features.learned (not imported here: scikit-learn)
+        file=FileOption("model", "simlunar-learned-map/1"),
     )
     density: float | None = option(None, doc="learned map: the plan's k / N", gt=0, le=1)
 

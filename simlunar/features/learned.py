@@ -34,7 +34,6 @@ import hashlib
 import io
 import json
 import math
-import pickle
 import platform
 import threading
 from collections.abc import Iterator, Mapping
@@ -264,16 +263,11 @@ class LearnedMap(ModelRecord):
         try:
             payload = joblib.load(io.BytesIO(data))
         except (
-            pickle.UnpicklingError,
-            EOFError,
-            ValueError,
-            TypeError,
-            KeyError,
-            AttributeError,
-            ImportError,
-        ) as exc:
+            Exception
+        ) as exc:  # the hash matched: not a pickle (a renamed text file), or another library
+            msg = " ".join(str(exc).split())
             raise ValueError(
-                f"{path}: cannot unpickle the model ({' '.join(str(exc).split()) or type(exc).__name__})"
+                f"{path}: cannot unpickle the model ({type(exc).__name__}: {msg})"
             ) from None
         models = _payload_models(payload, path)
         if sorted(models) != sorted(float(d) for d in meta["densities"]):

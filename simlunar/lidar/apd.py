@@ -23,7 +23,7 @@ import numpy as np
 
 from simlunar.registry import Options, option
 
-__all__ = ["ApdOptions", "apd_waveform"]
+__all__ = ["MAX_COUNT", "POISSON_NORMAL_ABOVE", "ApdOptions", "apd_waveform", "poisson_counts"]
 
 
 @dataclass(frozen=True)
@@ -80,6 +80,28 @@ class ApdOptions(Options):
         return k * m + (1.0 - k) * (2.0 - 1.0 / m)
 
 
+#: mean above which a Poisson count is drawn from its normal limit (relative error of the
+#: approximation below 1e-7; NumPy's Poisson sampler refuses means above ~9e18)
+POISSON_NORMAL_ABOVE = 1e15
+#: most detections one bin may report (an int64 holds 9.2e18): a count that large is a
+#: detector saturated many orders of magnitude over, not a measurement
+MAX_COUNT = 2**62
+
+
+def poisson_counts(mean: np.ndarray, rng) -> np.ndarray:
+    """Poisson draws of ``mean`` (int64): exact up to :data:`POISSON_NORMAL_ABOVE`, the normal
+    limit ``mean + sqrt(mean) N(0, 1)`` above it, capped at :data:`MAX_COUNT`."""
+    mean = np.asarray(mean, float)
+    big = mean > POISSON_NORMAL_ABOVE
+    if not big.any():
+        return rng.poisson(mean)
+    out = rng.poisson(np.where(big, 0.0, mean))
+    m = mean[big]
+    draw = np.rint(m + np.sqrt(m) * rng.standard_normal(m.shape))
+    out[big] = np.minimum(draw, MAX_COUNT).astype(np.int64)
+    return out
+
+
 def apd_waveform(expected: np.ndarray, *, options: ApdOptions, pulses: int, rng=None):
     """Draw an APD's waveform, in photoelectrons, accumulated over ``pulses`` pulses.
 
@@ -122,7 +144,7 @@ def _digitised(expected: np.ndarray, options: ApdOptions, pulses: int, rng) -> n
 def _draw(expected: np.ndarray, options: ApdOptions, pulses: int, rng) -> np.ndarray:
     """The unclipped waveform over ``pulses`` pulses (module docstring)."""
     lam = expected * pulses
-    n = rng.poisson(lam)
+    n = poisson_counts(lam, rng)
     f1 = options.excess_noise - 1.0
     out = n.astype(float)
     if f1 > 0:

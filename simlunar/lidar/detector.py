@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.lidar.apd import ApdOptions, apd_waveform
+from simlunar.lidar.apd import ApdOptions, apd_waveform, poisson_counts
 from simlunar.lidar.spad import spad_counts
 from simlunar.lidar.waveform import TimeBins
 from simlunar.registry import Options, option, shared_option
@@ -154,7 +154,7 @@ def photon_counts(expected: np.ndarray, *, options: DetectorOptions, rng=None) -
     if options.apd is not None:
         return apd_waveform(lam, options=options.apd, pulses=n, rng=rng)
     if options.dead_time_s == 0:
-        return rng.poisson(lam * n)
+        return poisson_counts(lam * n, rng)
     if np.isinf(options.dead_time_s):
         return _first_photon_counts(lam, n, rng)
     raise ValueError(

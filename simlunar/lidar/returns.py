@@ -41,6 +41,11 @@ __all__ = [
 ]
 
 
+#: largest point-laser intensity (W/sr): a 10 kW-peak pulse in a 0.1 mrad beam is ~1e12 W/sr;
+#: far above, the rendered film (float32) and the photon draws overflow
+MAX_LASER_INTENSITY = 1e15
+
+
 @dataclass(frozen=True)
 class TransientOptions(Options):
     """Rendering of time-of-flight returns."""
@@ -62,10 +67,12 @@ class TransientOptions(Options):
     seed: int = option(0, doc="sampler seed", ge=0)
     laser_intensity: float = option(
         1.0,
-        doc="radiant intensity of the point laser; the histograms scale with it",
+        doc="radiant intensity of the point laser; the histograms scale with it (at most "
+        "1e15 W/sr, above the peak intensity of any pulsed laser: the film is float32)",
         unit="W/sr",
         key_unit="W/sr",
         gt=0,
+        le=MAX_LASER_INTENSITY,
     )
     oversample: int = option(
         2,

@@ -35,12 +35,19 @@ from simlunar.lidar.waveform import TimeBins
 __all__ = ["SpadFit", "spad_background", "spad_correct", "spad_counts", "spad_expected"]
 
 
+#: mean photons per pulse above which a histogram is simulated detection by detection
+#: (:func:`_simulate_detections`, cost linear in the detections, at most one per dead time)
+#: instead of photon by photon (cost linear in the photons: a pulse of 1e12 photons, the
+#: schema's cap, would never end). Below it the photon-level draws are kept as they were.
+PHOTON_LEVEL_MAX = 1e4
+
+
 # not cached on disk: numba's np.random in a cached function read wrong draws (a third of the
 # counts) in a process that had run another numba function first (the Lloyd planner), when the
 # cache was written by a process that had not (tests/lidar/test_spad.py after
 # tests/config/test_planners.py); compiling it costs about a second
 @numba.njit(cache=False, nogil=True)
-def _simulate(lam, pulses, dead_bins, seed):  # pragma: no cover - compiled
+def _simulate(lam, pulses, dead_bins, seed, photon_level_max):  # pragma: no cover - compiled
     np.random.seed(seed)  # noqa: NPY002 - numba supports the legacy generator only
     n, m = lam.shape
     out = np.zeros((n, m), np.int64)
@@ -51,6 +58,9 @@ def _simulate(lam, pulses, dead_bins, seed):  # pragma: no cover - compiled
             cum[i + 1] = cum[i] + lam[h, i]
         total = cum[m]
         if total <= 0.0:
+            continue
+        if total > photon_level_max:
+            _simulate_detections(lam[h], pulses, dead_bins, out[h])
             continue
         for _ in range(pulses):
             k = np.random.poisson(total)  # noqa: NPY002
@@ -70,8 +80,41 @@ def _simulate(lam, pulses, dead_bins, seed):  # pragma: no cover - compiled
     return out
 
 
+@numba.njit(cache=False, nogil=True)  # np.random inside: not cached on disk, as _simulate
+def _simulate_detections(lam, pulses, dead_bins, out):  # pragma: no cover - compiled
+    """The same process as the photon-level loop, drawn detection by detection: the arrivals
+    are a Poisson process (memoryless), so the first arrival after the detector re-arms at
+    ``t`` comes after an Exp(1) amount of integrated rate, and the photons of a blind interval
+    need not be drawn at all."""
+    m = lam.shape[0]
+    for _ in range(pulses):
+        t = 0.0
+        j = 0
+        while j < m:
+            e = -np.log(1.0 - np.random.random())  # noqa: NPY002
+            while j < m:
+                seg = (j + 1 - t) * lam[j]
+                if seg >= e and lam[j] > 0.0:
+                    break
+                e -= seg
+                j += 1
+                t = float(j)
+            if j >= m:
+                break
+            t += e / lam[j]
+            out[j] += 1
+            t += dead_bins
+            j = int(t)
+
+
 def spad_counts(
-    expected: np.ndarray, bins: TimeBins, *, dead_time_s: float, pulses: int, rng=None
+    expected: np.ndarray,
+    bins: TimeBins,
+    *,
+    dead_time_s: float,
+    pulses: int,
+    rng=None,
+    photon_level_max: float = PHOTON_LEVEL_MAX,
 ) -> np.ndarray:
     """Event-level simulation of a SPAD histogram (continuous-time dead time).
 
@@ -85,6 +128,9 @@ def spad_counts(
     pulses : int
         Pulses accumulated.
     rng : seed or Generator
+    photon_level_max : float
+        Mean photons per pulse (a histogram's window) above which the detections are drawn
+        one by one (the same process; cost linear in the detections, not the photons).
 
     Returns
     -------
@@ -98,7 +144,7 @@ def spad_counts(
         raise ValueError("expected counts must be >= 0")
     seed = int(np.random.default_rng(rng).integers(0, 2**31 - 1))
     dead = min(dead_time_s / bins.bin_s, 4.0 * bins.count)
-    out = _simulate(lam, int(pulses), float(dead), seed)
+    out = _simulate(lam, int(pulses), float(dead), seed, float(photon_level_max))
     return out.reshape(np.shape(expected))
 
 

@@ -9,6 +9,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import ndimage
 
 from simlunar.planner import DEFAULT_PLANNER, MEASURING, ORACLES, plan, strategy_weights
 from simlunar.reconstruction import reconstruct, run_reconstruction
@@ -203,7 +204,18 @@ def sparse_mesh_render(
     p = plan(DEFAULT_PLANNER, k, weights=energy, rng=rng)
     pts = p.rc  # index coordinates: cell (r, c) sits at (r, c)
     heights = np.asarray(terrain.heights, np.float64)
-    recon = reconstruct(pts, heights[p.rows, p.cols], heights.shape)
+    holes = ~np.isfinite(heights)
+    if holes.any():
+        # a DEM with holes (NaN heights, within the documented share): a sample planned in a
+        # hole reads the nearest cell with a height, and the rebuilt terrain keeps the holes
+        # of the terrain it rebuilds
+        _, (near_r, near_c) = ndimage.distance_transform_edt(holes, return_indices=True)
+        cells = np.unique(near_r[p.rows, p.cols] * heights.shape[1] + near_c[p.rows, p.cols])
+        if len(cells) < 3:  # samples merged into fewer cells than a triangle needs
+            cells = np.unique(np.concatenate([cells, np.flatnonzero(~holes)[:3]]))
+        pts = np.column_stack(np.divmod(cells, heights.shape[1])).astype(np.float64)
+    recon = reconstruct(pts, heights[pts[:, 0].astype(int), pts[:, 1].astype(int)], heights.shape)
+    recon[holes] = np.nan
     sparse = Terrain(recon, terrain.albedo, terrain.spacing, terrain.origin)
     bsdfs = {"sparse_mesh_render": bsdf}
     out = {}

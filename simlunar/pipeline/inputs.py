@@ -7,13 +7,18 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import types
+import typing
 import zipfile
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import BaseModel
 
+from simlunar.config.derived import ComponentList
 from simlunar.config.terrain import PresetError, merged_preset, preset_path
 from simlunar.config.translate import terrain_params
 from simlunar.errors import ConfigError, InputChangedError
@@ -26,6 +31,7 @@ from simlunar.pipeline.limits import (
     grid_file_shape,
     size_limit,
 )
+from simlunar.registry import FileOption, file_option, option_info
 from simlunar.results.store import file_sha256
 from simlunar.terrain.io import load_albedo, load_dem
 
@@ -33,6 +39,10 @@ from simlunar.terrain.io import load_albedo, load_dem
 #: it take the depth of their nearest valid pixel (``pipeline.unit.fill_invalid``) and are scored as
 #: truth, so beyond a few per cent the ground truth is mostly invented and the run stops.
 MAX_NAN_FRACTION = 0.05
+
+#: Largest JSON record of a model file read: records `simlunar train` writes are a few kB
+#: (options, densities, feature names, input hashes); a larger one is no record of it
+MAX_RECORD_BYTES = 16_000_000
 
 #: Smallest grid spacing (m per cell) of a DEM: a micrometre. Below it (a sidecar's 1e-300)
 #: every slope and roughness statistic divides by a number that is no length at all.
@@ -52,11 +62,14 @@ __all__ = [
     "TerrainFacts",
     "check_dem_file",
     "check_size",
+    "declared_files",
     "gdal_files",
     "grid_file_shape",
     "input_files",
     "input_hashes",
+    "model_class",
     "model_files",
+    "model_inputs",
     "read_unit_models",
     "size_limit",
     "terrain_facts",
@@ -64,62 +77,117 @@ __all__ = [
 ]
 
 
+def declared_files(config: Mapping[str, Any], model: type | None = None) -> dict[str, FileOption]:
+    """Every option of a (resolved, plain) config that names a file, by key path, with its
+    :class:`~simlunar.registry.FileOption`: found by walking the config along the declarations
+    of its models (``model``, default :class:`~simlunar.config.schema.ExperimentCfg`): a field
+    annotated with a ``FileOption``, an option declared with ``option(..., file=...)`` (in every
+    model derived from an options class), and the options of each item of a
+    :class:`~simlunar.config.derived.ComponentList` field (``study.reconstructions``). Nothing
+    here names an option: a new file option is in the cache key by its declaration."""
+    return {k: m for k, (m, _) in _declared(config, model).items()}
+
+
+def _declared(config, model=None) -> dict[str, tuple[FileOption, Any]]:
+    """:func:`declared_files` with each option's value."""
+    from simlunar.config.schema import ExperimentCfg
+
+    out: dict[str, tuple[FileOption, Any]] = {}
+    _walk_model(model or ExperimentCfg, config, "", out)
+    return out
+
+
+def _walk_model(model, data, prefix: str, out: dict) -> None:
+    if not isinstance(data, Mapping):
+        return
+    for name, info in model.model_fields.items():
+        key = info.alias or name
+        if key in data:
+            _walk_field(info.annotation, info.metadata, data[key], prefix + key, out)
+
+
+def _walk_field(ann, metadata, value, path: str, out: dict) -> None:
+    for m in metadata:
+        if isinstance(m, FileOption):
+            if value not in (None, ""):
+                out[path] = (m, value)
+            return
+        if isinstance(m, ComponentList):
+            for label, cls, opts in m.items(value):
+                for fname, row in option_info(cls).items():
+                    marker = file_option(row)
+                    if marker is not None and opts.get(fname) not in (None, ""):
+                        out[f"{path}.{label}.{fname}"] = (marker, opts[fname])
+            return
+    _walk_type(ann, value, path, out)
+
+
+def _walk_type(ann, value, path: str, out: dict) -> None:
+    origin = typing.get_origin(ann)
+    args = typing.get_args(ann)
+    if origin is typing.Annotated:
+        _walk_field(args[0], args[1:], value, path, out)
+    elif isinstance(ann, type) and issubclass(ann, BaseModel):
+        _walk_model(ann, value, path + ".", out)
+    elif origin in (typing.Union, types.UnionType):
+        for a in args:  # every member: a key only one of them declares is walked once
+            _walk_type(a, value, path, out)
+    elif origin in (dict, Mapping) and len(args) == 2 and isinstance(value, Mapping):
+        for k, v in value.items():
+            _walk_type(args[1], v, f"{path}.{k}", out)
+    elif origin in (list, tuple) and args and isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            _walk_type(args[0], v, f"{path}[{i}]", out)
+
+
 def input_files(config: dict[str, Any]) -> dict[str, Path]:
     """The files a unit (resolved plain config) reads, by the key path that names them.
 
-    ``terrain.preset`` -> the preset YAML (``scenes/<name>.yaml``), ``terrain.file`` (and the
-    ``.json`` side file of a ``.npy`` DEM when present), ``terrain.albedo_file``; for a raster
-    GDAL reads, every other file it reads (:func:`gdal_files`) as ``terrain.file+<name>``.
+    Every option :func:`declared_files` finds, with the files its kind reads beside it:
+    ``preset`` -> the preset YAML (``scenes/<name>.yaml``); ``dem`` -> the file (and the
+    ``.json`` side file of a ``.npy`` DEM when present); ``albedo`` -> the file; for a raster
+    GDAL reads, every other file it reads (:func:`gdal_files`) as ``<key>+<name>``; ``model``
+    -> the ``.joblib`` and its ``.json`` record (``<key>.json``).
     """
-    t = config.get("terrain") or {}
     out: dict[str, Path] = {}
-    preset = t.get("preset")
-    if preset:
-        with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
-            out["terrain.preset"] = preset_path(str(preset))
-    for key in ("file", "albedo_file"):
-        if t.get(key):
-            out[f"terrain.{key}"] = Path(t[key])
-    dem = out.get("terrain.file")
-    if dem is not None and dem.suffix.lower() == ".npy":
-        side = dem.with_name(dem.name + ".json")
-        if side.is_file():
-            out["terrain.file.json"] = side
-    for key in ("terrain.file", "terrain.albedo_file"):
-        main = out.get(key)
-        if main is not None:
-            for extra in gdal_files(main):
+    for key, (marker, value) in _declared(config).items():
+        if not isinstance(value, (str, os.PathLike)):
+            continue  # not a file name: the schema reports it
+        if marker.kind == "preset":
+            with contextlib.suppress(PresetError):  # a missing preset is reported by the checks
+                out[key] = preset_path(str(value))
+            continue
+        p = Path(value)
+        out[key] = p
+        if marker.kind == "model":
+            out[f"{key}.json"] = p.with_suffix(".json")
+            continue
+        if marker.kind == "dem" and p.suffix.lower() == ".npy":
+            side = p.with_name(p.name + ".json")
+            if side.is_file():
+                out[f"{key}.json"] = side
+        if marker.kind in ("dem", "albedo"):
+            for extra in gdal_files(p):
                 # named relative to the main file, so a moved data folder keeps its keys
-                out[f"{key}+{os.path.relpath(extra, main.parent)}"] = extra
-    out.update(model_files(config.get("study") or {}))
+                out[f"{key}+{os.path.relpath(extra, p.parent)}"] = extra
     return out
+
+
+def model_inputs(config: dict[str, Any]) -> dict[str, FileOption]:
+    """The model files of a unit (:func:`declared_files` of kind ``model``), by key path;
+    each one's record is at ``<key>.json`` in :func:`input_files`."""
+    return {k: m for k, m in declared_files(config).items() if m.kind == "model"}
 
 
 def model_files(study: dict[str, Any]) -> dict[str, Path]:
-    """The learned-model files a study reads: every ``feature_opts.model`` of its planner
-    options (``strategy_options``, the LIDAR study's ``planner_opts``), the ``.joblib`` and its
-    ``.json`` record, by key path. A retrained model at the same path is another input, so its
-    units are computed again; a missing one is reported before any work."""
-    sections = {
-        "study.strategy_options": study.get("strategy_options"),
-        "study.planner_opts": study.get("planner_opts"),
-        "study.options.planner_opts": (study.get("options") or {}).get("planner_opts")
-        if isinstance(study.get("options"), dict)
-        else None,
-    }
-    out: dict[str, Path] = {}
-    for where, opts in sections.items():
-        if not isinstance(opts, dict):
-            continue
-        for label, o in opts.items():
-            model = (
-                ((o or {}).get("feature_opts") or {}).get("model") if isinstance(o, dict) else None
-            )
-            if model:
-                key = f"{where}.{label}.feature_opts.model"
-                out[key] = Path(model)
-                out[f"{key}.json"] = Path(model).with_suffix(".json")
-    return out
+    """The model files a study section reads (every option declared a ``model`` file, e.g. a
+    learned map's ``feature_opts.model`` or the learned reconstruction's ``model``), the
+    ``.joblib`` and its ``.json`` record, by key path. A retrained model at the same path is
+    another input, so its units are computed again; a missing one is reported before any
+    work."""
+    files = input_files({"study": study})
+    keys = model_inputs({"study": study})
+    return {k: p for k, p in files.items() if k in keys or k.removesuffix(".json") in keys}
 
 
 def gdal_files(path: Path) -> list[Path]:
@@ -150,13 +218,14 @@ def gdal_files(path: Path) -> list[Path]:
 def input_hashes(config: dict[str, Any]) -> dict[str, dict[str, str]]:
     """``{key path: {"path": str, "sha256": hex}}`` of :func:`input_files`."""
     out = {}
+    models = model_inputs(config)
     for key, p in input_files(config).items():
         try:
             digest = file_sha256(p)
         except OSError as exc:
             hint = (
                 " (a learned model: make it with `simlunar train <training yaml>`)"
-                if ".feature_opts.model" in key
+                if key in models or key.removesuffix(".json") in models
                 else ""
             )
             raise ConfigError(f"{key}: cannot read {p} ({exc.strerror or exc}){hint}") from None
@@ -183,47 +252,72 @@ def _bytes_sha256(path: Path, key: str) -> tuple[bytes, str]:
     return data, hashlib.sha256(data).hexdigest()
 
 
-def read_unit_models(inputs: dict[str, dict[str, str]]) -> dict[str, tuple[str, Any]]:
-    """The learned models a unit reads, each loaded from the bytes whose SHA-256 its cache key
-    holds (``inputs``: :func:`input_hashes` of the unit, as the run computed them).
+def read_unit_models(
+    inputs: dict[str, dict[str, str]], config: Mapping[str, Any]
+) -> dict[str, tuple[str, Any]]:
+    """The trained models a unit reads (every option of ``config`` declared a ``model`` file,
+    :func:`model_inputs`), each loaded from the bytes whose SHA-256 its cache key holds
+    (``inputs``: :func:`input_hashes` of the unit, as the run computed them).
 
     Each model file and its record are read once; their hashes must equal the run's, so the
     model a unit uses is the content its key names, whatever happens to the files later
-    (:func:`simlunar.features.learned.pinned_models` then keeps the unit from reading them
-    again).
+    (:func:`simlunar.features.learned.pinned_models` then keeps the unit from reading a learned
+    map again). The loader is the model container whose record format the option declares
+    (:class:`~simlunar.features.model_save.ModelRecord`): a model of another kind (a map's
+    model named as a reconstruction's) is refused.
 
     Returns
     -------
     dict
-        model path -> (SHA-256 hex of the model bytes, LearnedMap)
+        model path -> (SHA-256 hex of the model bytes, the loaded container)
 
     Raises
     ------
     InputChangedError
         A model file or its record differs from the run's hash of it (one line naming it).
     ConfigError
-        A model the loader refuses (one line naming the file).
+        A model the loader refuses (one line naming the key and the file).
     """
-    from simlunar.features.learned import LearnedMap
-
     out: dict[str, tuple[str, Any]] = {}
-    for key, v in inputs.items():
-        if not key.endswith(".feature_opts.model"):
+    for key, marker in model_inputs(config).items():
+        v = inputs.get(key)
+        if v is None:
             continue
         path = Path(v["path"])
         data, digest = _bytes_sha256(path, key)
         if digest != v["sha256"]:
             raise _changed(key, path, digest, v["sha256"])
         rec = inputs.get(f"{key}.json")
-        record, rdigest = _bytes_sha256(path.with_suffix(".json"), f"{key}.json")
+        sidecar = path.with_suffix(".json")
+        with contextlib.suppress(OSError):  # an unreadable record is reported just below
+            if sidecar.stat().st_size > MAX_RECORD_BYTES:
+                raise ConfigError(
+                    f"{key}.json: {sidecar} holds {sidecar.stat().st_size / 1e6:.3g} MB; a "
+                    f"model's record is a few kB (at most {MAX_RECORD_BYTES / 1e6:g} MB): not "
+                    "the record `simlunar train` wrote"
+                )
+        record, rdigest = _bytes_sha256(sidecar, f"{key}.json")
         if rec is not None and rdigest != rec["sha256"]:
             raise _changed(f"{key}.json", path.with_suffix(".json"), rdigest, rec["sha256"])
         try:
-            model = LearnedMap.from_bytes(data, record, path=path)
+            model = model_class(marker.format).from_bytes(data, record, path=path)
         except ValueError as exc:
-            raise ConfigError(f"{key}: {exc}") from None
+            raise ConfigError(f"{key}: {' '.join(str(exc).split())}") from None
         out[str(path)] = (digest, model)
     return out
+
+
+def model_class(fmt: str | None):
+    """The model container (a :class:`~simlunar.features.model_save.ModelRecord` subclass)
+    whose record format is ``fmt``: every trained model simlunar loads."""
+    import simlunar.features.learned
+    import simlunar.reconstruction.learned  # noqa: F401  (registers its container)
+    from simlunar.features.model_save import ModelRecord
+
+    for cls in ModelRecord.__subclasses__():
+        if getattr(cls, "FORMAT", None) == fmt:
+            return cls
+    raise TypeError(f"no model container reads the record format {fmt!r}")
 
 
 def verify_inputs(inputs: dict[str, dict[str, str]], *, skip=()) -> None:

@@ -39,6 +39,7 @@ from simlunar.pipeline.inputs import (
     MAX_NAN_FRACTION,
     TerrainFacts,
     check_size,
+    model_inputs,
     read_unit_models,
     terrain_facts,
 )
@@ -46,7 +47,7 @@ from simlunar.pipeline.out_paths import check_out_dir, check_out_file
 from simlunar.planner import check_k
 from simlunar.render.backend import choose_variant
 from simlunar.results.records import unit_label
-from simlunar.scanner.codings import coding_for
+from simlunar.scanner.codings import CODINGS, coding_for
 from simlunar.scanner.rescan import SCAN_PLANNERS
 from simlunar.sensors.structured_light import DOT_MODES, mode_coding
 from simlunar.study.scanner import aim_rig_at_terrain
@@ -58,6 +59,7 @@ __all__ = [
     "TRANSIENT_CHANNELS",
     "Preflight",
     "check_camera",
+    "check_lidar_options",
     "check_out_dir",
     "check_out_file",
     "check_renderer",
@@ -269,7 +271,10 @@ def check_scanner_budget(s: Any) -> None:
     codings = coding_options(s.options)
     scanned = dict.fromkeys(mode_coding(m, s.coding) for m in s.modes)
     for name in [n for n in scanned if n is not None]:
-        n = coding_for(codings, name).frames((ph, pw))
+        try:  # a coding's rules on the projector's size (a phase that repeats within it)
+            n = coding_for(codings, name).frames((ph, pw))
+        except ValueError as exc:
+            raise ConfigError(f"study.options.{CODINGS[name].meta['yaml_key']}: {exc}") from None
         check_size(
             "study.projector_px",
             f"{n} {name.replace('_', '-')} frames x {per_frame} projector + camera pixels",
@@ -409,23 +414,41 @@ def check_score_region(cfg: Any, shape: tuple[int, int]) -> None:
         ) from None
 
 
-def check_models(inputs: dict[str, dict[str, str]], seen: set | None = None) -> None:
-    """Load every learned model a unit names, as the unit will (its record checked and its
-    bytes' hash compared with the record's before unpickling), so a truncated, foreign,
-    renamed or mismatched model file is one line naming it before any render.
+def check_lidar_options(study: Any) -> None:
+    """Build a LIDAR study's library options as the unit will, so a rule of an options class
+    that the schema does not state (a bound of :mod:`simlunar.lidar`'s options, a rule across
+    fields) is one line before any render instead of a traceback in the unit."""
+    from simlunar.config.lidar_translate import lidar_options
 
-    ``inputs``: the unit's :func:`~simlunar.pipeline.inputs.input_hashes`; ``seen``: the
-    (path, hash) pairs already loaded (a sweep loads each model once).
+    try:
+        lidar_options(study)
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(f"study.options: {' '.join(str(exc).split())}") from None
+
+
+def check_models(
+    inputs: dict[str, dict[str, str]], config: dict[str, Any], seen: set | None = None
+) -> None:
+    """Load every trained model a unit names (every option declared a ``model`` file: the
+    learned map's, the learned reconstruction's), as the unit will (its record checked and its
+    bytes' hash compared with the record's before unpickling), so an absent, truncated,
+    foreign, renamed or mismatched model file is one line naming it before any render or
+    write.
+
+    ``inputs``: the unit's :func:`~simlunar.pipeline.inputs.input_hashes`; ``config``: its
+    plain config; ``seen``: the (key, path, hash) triples already loaded (a sweep loads each
+    model once).
     """
     seen = set() if seen is None else seen
-    for key, v in inputs.items():
-        if not key.endswith(".feature_opts.model"):
+    for key in model_inputs(config):
+        v = inputs.get(key)
+        if v is None:
             continue
         rec = inputs.get(f"{key}.json", {})
-        memo = (v["path"], v["sha256"], rec.get("sha256"))
+        memo = (key, v["path"], v["sha256"], rec.get("sha256"))
         if memo in seen:
             continue
-        read_unit_models({key: v, **({f"{key}.json": rec} if rec else {})})
+        read_unit_models({key: v, **({f"{key}.json": rec} if rec else {})}, config)
         seen.add(memo)
 
 
@@ -441,13 +464,14 @@ def check_units(units: list[Any]) -> Preflight:
     for u in units:
         cfg = ExperimentCfg.model_validate(u.config)
         try:
-            check_models(getattr(u, "inputs", None) or {}, checked_models)
+            check_models(getattr(u, "inputs", None) or {}, u.config, checked_models)
             f = terrain_facts(cfg.terrain)
             check_camera(cfg.render, f)
             check_study_sizes(cfg, image_shape(cfg.render, f))
             check_score_region(cfg, image_shape(cfg.render, f))
             if getattr(cfg.study, "kind", None) == "lidar":
                 check_time_bins(cfg.study, f)
+                check_lidar_options(cfg.study)
             if getattr(cfg.study, "kind", None) == "scanner":
                 check_rig(cfg, f)
         except ConfigError as exc:

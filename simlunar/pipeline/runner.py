@@ -77,6 +77,7 @@ from simlunar.results.summaries import (
     _write_provenance,
     tables_code,
 )
+from simlunar.study.protocol import exposure_count
 from simlunar.study.reconstruction_spec import parse_reconstructions
 
 __all__ = ["ROW_COLUMNS", "RunSummary", "collect_rows", "expand", "run_experiment", "unit_key"]
@@ -247,6 +248,14 @@ def collect_rows(units: list[WorkUnit], records: dict[str, dict]) -> tuple[list[
         point = {**u.sweep, "terrain_seed": u.terrain_seed}
         cached = records[u.key]["rows"]
         cached = [{"reconstruction": DEFAULT_RECONSTRUCTION, **r} for r in cached]
+        # the exposures a row's frames cost, from the frames it names (records cached before
+        # a derived frame stopped counting as an exposure of its own say so too)
+        cached = [
+            {**r, "exposures": exposure_count(r["guide_frames"])}
+            if isinstance(r.get("guide_frames"), str) and r.get("exposures") not in (None, "")
+            else r
+            for r in cached
+        ]
         for r in _sort_rows(cached, u.config):
             for c in r:
                 if c not in ROW_COLUMNS and c not in extra:
@@ -395,7 +404,16 @@ def _run_locked(run: _Run) -> RunSummary:
     ):
         # nothing changed: the tables stand; provenance adds this rerun's time
         return _rerun(run, previous, records)
-    if todo or stale or not folder_complete(out, keys):
+    # units computed again only for an export they lack (--save-arrays / save_scans on a
+    # finished folder): their numbers are cached and seeded, so the summary and the figures
+    # still describe them and are kept (with --no-figures nothing would draw them again)
+    exports_only = (
+        bool(todo)
+        and not stale
+        and folder_complete(out, keys, ignore=("config.yaml",))
+        and all(cache.load(u.key) is not None and cache.arrays_readable(u.key) for u in todo)
+    )
+    if (todo or stale or not folder_complete(out, keys)) and not exports_only:
         # the folder's summary and figures no longer describe its units: remove them before
         # any unit changes, so an interrupted run never leaves them beside other units
         _invalidate(out)

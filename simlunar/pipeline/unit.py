@@ -27,7 +27,7 @@ from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
 from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.schema import ExperimentCfg
 from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
-from simlunar.features.learned import pinned_models
+from simlunar.features.learned import LearnedMap, pinned_models
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
 from simlunar.metrics import score as eq43_score
@@ -220,11 +220,14 @@ def compute_unit(
         # the files the run hashed into this unit's cache key must be the ones it reads:
         # models are loaded from the verified bytes (and pinned, never read again); the other
         # files (preset, DEM, albedo) are checked before and after the unit
-        models = read_unit_models(inputs)
-        loaded = {k for k in inputs if k.endswith(".feature_opts.model")}
+        models = read_unit_models(inputs, payload["config"])
+        # learned maps are pinned (never read again); other models are verified before and
+        # after the unit with the other files
+        maps = {p: m for p, m in models.items() if isinstance(m[1], LearnedMap)}
+        loaded = {k for k, v in inputs.items() if v["path"] in maps}
         loaded |= {f"{k}.json" for k in loaded}
         verify_inputs(inputs, skip=loaded)
-        with pinned_models(models):
+        with pinned_models(maps):
             record = _compute_unit(cfg, steps, study_workers)
         verify_inputs(inputs, skip=loaded)
         return record

@@ -86,7 +86,7 @@ from simlunar.reconstruction.learned_features import (
     shading_heights,
 )
 from simlunar.reconstruction.shading import blend_detail, heldout_gamma
-from simlunar.registry import Options, option
+from simlunar.registry import FileOption, Options, option
 
 __all__ = [
     "FORMAT",
@@ -117,6 +117,7 @@ class LearnedReconOptions(Options):
         "",
         doc="model file (.joblib, its .json record beside it) made by `simlunar train` with "
         "target: reconstruction (required)",
+        file=FileOption("model", FORMAT),
     )
     threads: int = option(1, doc="OpenMP threads of the prediction", ge=1, le=64)
     heldout_check: bool = option(
@@ -252,15 +253,33 @@ class LearnedReconstruction(ModelRecord):
         across versions) and a joblib file whose SHA-256 differs from the record's (a
         truncated or replaced file), all before unpickling.
         """
-        path, meta = check_model_file(path)
+        path, _ = check_model_file(path)
+        return cls.from_bytes(path.read_bytes(), path.with_suffix(".json").read_bytes(), path=path)
+
+    @classmethod
+    def from_bytes(cls, data: bytes, record: bytes, *, path) -> LearnedReconstruction:
+        """A model from the bytes of its joblib file and of its JSON record: the record's
+        checks (:func:`check_model_file`) on these bytes, then the unpickling, whose every
+        failure (a text file renamed ``.joblib`` whose record carries its true hash, another
+        library) is a one-line ``ValueError`` naming the file."""
+        import hashlib
+
+        path = Path(path)
+        meta = _record_meta(record, path)
+        check_record_matches(meta, path, hashlib.sha256(data).hexdigest())
+        import io
+
         import joblib
 
         try:
-            payload = joblib.load(path)
-        except Exception as e:  # the hash matched, so this is a library mismatch
-            raise ValueError(f"{path}: cannot be read back ({type(e).__name__}: {e})") from None
+            payload = joblib.load(io.BytesIO(data))
+        except Exception as e:  # the hash matched, so this is a library mismatch or no pickle
+            msg = " ".join(str(e).split())
+            raise ValueError(f"{path}: cannot be read back ({type(e).__name__}: {msg})") from None
         if not isinstance(payload, dict) or payload.get("format") != FORMAT:
             raise ValueError(f"{path}: not a {FORMAT} model file")
+        if not callable(getattr(payload.get("model"), "predict", None)):
+            raise ValueError(f"{path}: its payload holds no regressor (no predict)")
         return cls._loaded(payload["model"], meta)
 
 
@@ -292,8 +311,17 @@ def check_model_file(path) -> tuple[Path, dict]:
     sidecar = path.with_suffix(".json")
     if not path.is_file() or not sidecar.is_file():
         raise ValueError(f"learned reconstruction {path} needs both {path.name} and {sidecar.name}")
+    meta = _record_meta(sidecar.read_bytes(), path)
+    check_record_matches(meta, path, _sha256_file(path))
+    return path, meta
+
+
+def _record_meta(record: bytes, path: Path) -> dict:
+    """The parsed JSON record of the model file ``path``, after the checks of its format and
+    feature set (one-line ``ValueError`` naming the file)."""
+    sidecar = Path(path).with_suffix(".json")
     try:
-        meta = json.loads(sidecar.read_text())
+        meta = json.loads(record.decode("utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as e:
         raise ValueError(f"{sidecar}: not a readable JSON record ({e})") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
@@ -310,8 +338,7 @@ def check_model_file(path) -> tuple[Path, dict]:
             f", image stack {meta.get('feature_set_version')!r}; this simlunar computes "
             f"{RECON_FEATURE_VERSION}, {FEATURE_SET_VERSION}): retrain the model"
         )
-    check_record_matches(meta, path, _sha256_file(path))
-    return path, meta
+    return meta
 
 
 _CACHE: dict[tuple[str, str], LearnedReconstruction] = {}

@@ -15,7 +15,9 @@ planner (strategy) label, density and reconstruction of the unit's trial 0::
 
 ``<density>`` is ``1-64`` for k / N = 1/64 (``0.3`` for a density that is no unit fraction,
 ``all`` for a flash LIDAR without a plan); the manifest names each field exactly, so labels
-holding ``_`` are never ambiguous.
+holding ``_`` are never ambiguous. Characters other than letters, digits, ``_.+-`` become
+``-`` in a file name, so two labels may make one name (``a b`` and ``a-b``): the later one's
+files get ``+2`` (``+3``, ...) after the name, and no file is written twice.
 
 **Quantity and georeference.** For an orthographic nadir view (``render.camera.kind:
 ortho_nadir``, the sampling studies' default), pixel (r, c) looks straight down at terrain
@@ -271,6 +273,17 @@ def write_array_export(folder, payload: dict[str, Any], *, unit_key: str | None 
     truth = np.asarray(payload["truth"], np.float64)
     geo = {"transform": list(transform), "crs": crs or "", "units": "m"}
     files: list[dict] = []
+    used: set[str] = set()
+
+    def unique(stem: str) -> str:
+        # labels that differ only where _safe changes them ("a b", "a-b") would share a file
+        # name: the later one gets "+2", "+3", ... (its labels in the manifest say which)
+        out, n = stem, 1
+        while out in used:
+            n += 1
+            out = f"{stem}+{n}"
+        used.add(out)
+        return out
 
     def pair(stem: str, name: str, grid, labels: dict) -> None:
         tif, exr = f"{stem}.tif", f"{stem}.exr"
@@ -283,6 +296,7 @@ def write_array_export(folder, payload: dict[str, Any], *, unit_key: str | None 
         stem = "_".join(
             (_safe(it["planner"]), density_tag(it["density"]), _safe(it["reconstruction"]))
         )
+        stem = unique(stem)
         labels = {k: it[k] for k in ("planner", "density", "k", "reconstruction", "trial")}
         grid = np.asarray(it["grid"], np.float64)
         pair(f"{stem}_{q}", q, grid, {"what": f"reconstructed {q}", **labels})

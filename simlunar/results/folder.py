@@ -53,7 +53,9 @@ def read_folder_config(path: Path) -> dict:
 
 
 def prune_figures(out: Path, keep) -> list[Path]:
-    """Remove ``figures/*.png|pdf`` not in ``keep`` (figures of another state of the folder)."""
+    """Remove ``figures/*.png|pdf`` not in ``keep`` (figures of another state of the folder),
+    and ``figures/captions.md`` unless kept (captions of figures no longer there would
+    describe what the report does not show)."""
     keep = {Path(p).name for p in keep}
     fig_dir = out / "figures"
     removed = []
@@ -62,6 +64,9 @@ def prune_figures(out: Path, keep) -> list[Path]:
             if p.suffix.lower() in (".png", ".pdf") and p.name not in keep and p.is_file():
                 p.unlink()
                 removed.append(p)
+        captions = fig_dir / "captions.md"
+        if captions.name not in keep and captions.is_file():
+            captions.unlink()
     return removed
 
 
@@ -136,14 +141,20 @@ RESULT_FILES = (
 )  # fmt: skip
 
 
-def folder_complete(out: Path, keys: list[str]) -> bool:
-    """Whether the summary files are present and belong to these units and this config."""
+def folder_complete(out: Path, keys: list[str], *, ignore=()) -> bool:
+    """Whether the summary files are present and belong to these units and this config
+    (``ignore``: files whose digest is not compared, e.g. ``config.yaml`` when only an
+    export flag changed it)."""
     try:
         prov = json.loads((out / "provenance.json").read_text())
         files = prov["files"]
         if prov["unit_keys"] != keys:
             return False
-        return all(file_sha256(out / name) == digest for name, digest in files.items())
+        return all(
+            file_sha256(out / name) == digest
+            for name, digest in files.items()
+            if name not in ignore
+        )
     except (OSError, ValueError, KeyError, TypeError):
         return False
 

@@ -122,6 +122,7 @@ def _check_length(o: MicroPhaseShiftOptions, proj_shape) -> None:
 def frame_names(options: MicroPhaseShiftOptions, proj_shape) -> list[str]:
     """``col_f0_s0..2``, ``col_f1`` ... ``col_f<F-1>``, the same for rows, ``white``,
     ``black``."""
+    _check_length(options, proj_shape)  # a stack that repeats has no names to give
     F = int(options.frequencies)
     names = []
     for axis, _n in _axes(options, proj_shape):

@@ -41,6 +41,7 @@ __all__ = [
     "Outcome",
     "Planner",
     "Trials",
+    "exposure_count",
     "guide_cost",
     "light_outcome",
     "outcome_rows",
@@ -214,7 +215,18 @@ def guide_cost(name: str, guide: Guide | None, info: Mapping | None = None) -> t
     elif isinstance(frames, str):
         frames = tuple(f for f in frames.split("+") if f)
     frames = tuple(str(f) for f in frames)
-    return frames, len(frames)
+    return frames, exposure_count(frames)
+
+
+def exposure_count(frames) -> int:
+    """Camera exposures behind the frames a reconstruction read: the distinct frames named,
+    a derived frame (the ratio ``sun/sun2``) naming the frames it is made of, so it costs no
+    exposure of its own (``sun``, ``sun2`` and ``sun/sun2`` are 2 exposures, not 3).
+
+    ``frames``: names, or one ``+``-joined string (a results row's ``guide_frames``)."""
+    if isinstance(frames, str):
+        frames = frames.split("+")
+    return len({part for f in frames for part in str(f).split("/") if part})
 
 
 def outcome_rows(

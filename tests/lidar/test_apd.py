@@ -113,3 +113,21 @@ def test_the_digitiser_rounds_to_its_steps_with_the_uniform_quantisation_noise()
     assert w.var() == pytest.approx(20.3 + 9.0 + 1.0 / 12.0, rel=0.03)
     with pytest.raises(ValueError, match="bits: a digitiser's resolution needs its full_scale_pe"):
         ApdOptions(bits=12)
+
+
+def test_poisson_counts_exact_below_the_limit_and_normal_above():
+    # below POISSON_NORMAL_ABOVE the draws are NumPy's Poisson draws of the same generator
+    # (so every earlier histogram keeps its numbers); above it, the normal limit
+    from simlunar.lidar.apd import MAX_COUNT, POISSON_NORMAL_ABOVE, poisson_counts
+
+    mean = np.array([0.0, 0.5, 3.0, 1e6])
+    got = poisson_counts(mean, np.random.default_rng(4))
+    np.testing.assert_array_equal(got, np.random.default_rng(4).poisson(mean))
+    # NumPy refuses a mean of 1e20 ("lam value too large"): the normal limit has mean m and
+    # standard deviation sqrt(m) (1e10 here), so 200 draws' mean is within 4 sigma / sqrt(200)
+    m = 1e17
+    draws = poisson_counts(np.full(200, m), np.random.default_rng(5)).astype(float)
+    assert abs(draws.mean() - m) < 4 * np.sqrt(m) / np.sqrt(200)
+    assert 0.7 * np.sqrt(m) < draws.std() < 1.3 * np.sqrt(m)
+    huge = poisson_counts(np.array([1e30, 2.0 * POISSON_NORMAL_ABOVE]), np.random.default_rng(6))
+    assert huge.dtype == np.int64 and huge[0] == MAX_COUNT and huge[1] > POISSON_NORMAL_ABOVE

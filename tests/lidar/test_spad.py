@@ -168,3 +168,55 @@ def test_a_first_photon_receiver_is_corrected_in_a_reading():
     assert bias_raw < -0.01  # early by more than a centimetre
     assert abs(bias_fixed) < 0.2 * abs(bias_raw) and abs(bias_fixed) < 0.003
     assert fixed.photons.mean() / 2000 == pytest.approx(3.0, rel=0.1)
+
+
+def test_constant_rate_drawn_by_detections_matches_the_renewal_formula():
+    # the detection-level draw (used above PHOTON_LEVEL_MAX photons per pulse) is the same
+    # process as the photon-level one: the renewal count of the test above
+    r, dead_bins = 0.5, 4.5
+    mu = dead_bins + 1 / r
+    lam = np.full(BINS.count, r)
+    kw = {"dead_time_s": dead_bins * BINS.bin_s, "photon_level_max": 0.0}
+    h = spad_counts(lam[None], BINS, pulses=4000, rng=1, **kw)
+    want = (BINS.count - 1 / r) / mu + 1 + (1 / r**2 - mu**2) / (2 * mu**2)
+    assert h.sum() / 4000 == pytest.approx(want, rel=0.01)
+    # never two detections closer than the dead time: at a huge rate the first bin fires in
+    # every pulse, then bin 4 (t = 4.5), never bins 1-3
+    one = spad_counts(np.full((1, BINS.count), 1e9), BINS, pulses=7, rng=2, **kw)[0]
+    assert one[0] == 7 and one[1:4].sum() == 0 and one[4] == 7
+
+
+@pytest.mark.parametrize("photons", [0.5, 10.0, 30.0])
+def test_detection_level_draw_matches_the_expected_histogram(photons):
+    lam = photons * _shape() + 0.01
+    pulses = 50_000
+    h = spad_counts(lam[None], BINS, dead_time_s=DEAD, pulses=pulses, rng=7,
+                    photon_level_max=0.0)[0]  # fmt: skip
+    e = spad_expected(lam, BINS, dead_time_s=DEAD, substeps=32) * pulses
+    assert h.sum() == pytest.approx(e.sum(), rel=0.01)
+    big = e > 0.02 * e.max()
+    assert (np.abs(h - e)[big] < 4 * np.sqrt(e[big]) + 0.01 * e[big]).all()
+
+
+def test_the_documented_photon_cap_ends():
+    # a SPAD at the schema's cap (1e12 photons per pulse) used to draw every photon: a hang.
+    # At that rate the detector fires as soon as it is armed: the first detection where the
+    # integrated rate reaches ~1 photon, then one every dead time to the window's end
+    import time
+
+    lam = 1e12 * _shape() + 0.01
+    pulses = 2000
+    t = time.perf_counter()
+    h = spad_counts(lam[None], BINS, dead_time_s=DEAD, pulses=pulses, rng=3)[0]
+    assert time.perf_counter() - t < 20.0
+    dead_bins = DEAD / BINS.bin_s
+    lit = np.flatnonzero(lam >= 1.0)  # bins of the pulse: at least a photon each
+    first = int(np.searchsorted(np.cumsum(lam), 1.0))
+    assert first <= lit[0] + 1
+    # the leading edge fires in (nearly) every pulse; then one detection per dead time
+    # inside the pulse (none can be closer, and the detector is never armed for long)
+    # (unless a background photon, 0.01 per bin, blinded it within a dead time before: 4.5 %)
+    assert h[first - 1 : first + 2].sum() >= 0.94 * pulses
+    in_pulse = h[lit[0] : lit[-1] + 1].sum() / pulses
+    span = lit[-1] + 1 - lit[0]
+    assert np.floor(span / dead_bins) <= in_pulse <= np.ceil(span / dead_bins) + 1

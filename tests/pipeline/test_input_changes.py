@@ -141,21 +141,21 @@ def test_unit_loads_the_model_from_the_bytes_it_hashed(models, tmp_path):
     _install(models["a"], model)
     cfg = {"study": {"strategy_options": {"l": {"feature_opts": {"model": str(model)}}}}}
     inputs = input_hashes(cfg)
-    got = read_unit_models(inputs)
+    got = read_unit_models(inputs, cfg)
     digest, learned_map = got[str(model)]
     assert digest == inputs["study.strategy_options.l.feature_opts.model"]["sha256"]
     assert learned_map.meta["model_sha256"] == digest
     verify_inputs(inputs)
     _install(models["b"], model)
     with pytest.raises(InputChangedError, match=r"feature_opts\.model: .*m\.joblib changed"):
-        read_unit_models(inputs)
+        read_unit_models(inputs, cfg)
     with pytest.raises(InputChangedError, match="changed during the run"):
         verify_inputs(inputs)
     # a record replaced alone is caught too
     _install(models["a"], model)
     shutil.copyfile(models["b"].with_suffix(".json"), model.with_suffix(".json"))
     with pytest.raises(InputChangedError, match=r"model\.json: .*m\.json changed"):
-        read_unit_models(inputs)
+        read_unit_models(inputs, cfg)
 
 
 def test_a_pinned_model_is_used_even_after_its_file_is_replaced(models, tmp_path):

@@ -120,18 +120,19 @@ def test_read_unit_models_checks_hashes_before_loading(tmp_path):
         return {"path": str(p), "sha256": file_sha256(p)}
 
     inputs = {key: entry(model), f"{key}.json": entry(record), "terrain.file": entry(record)}
+    config = {"study": {"strategy_options": {"l": {"feature_opts": {"model": str(model)}}}}}
     # hashes match: the loader refuses the record, in one line naming the key
     with pytest.raises(ConfigError, match=rf"^{key}: ") as err:
-        read_unit_models(inputs)
+        read_unit_models(inputs, config)
     assert "\n" not in str(err.value)
     record.write_text('{"format": 1}')  # the record changed since the run hashed it
     with pytest.raises(InputChangedError, match=rf"^{key}.json: {record} changed during the run"):
-        read_unit_models(inputs)
+        read_unit_models(inputs, config)
     model.write_bytes(b"another model")
     with pytest.raises(InputChangedError, match=rf"^{key}: {model} changed during the run"):
-        read_unit_models(inputs)
+        read_unit_models(inputs, config)
     # units without a model read none
-    assert read_unit_models({"terrain.file": entry(record)}) == {}
+    assert read_unit_models({"terrain.file": entry(record)}, {"terrain": {"file": "x"}}) == {}
 
 
 # --- terrain facts ------------------------------------------------------------------------------
