@@ -32,8 +32,8 @@ def lidar(key: str, value) -> dict:
 
 CASES = [
     # documented bounds that ended in a traceback inside the unit
-    Case("laser intensity 1e300 W/sr", lidar("options.transient.laser_intensity_w_sr", 1e300), "study.options: laser_intensity must be <= 1e+15, got 1e+300"),
-    Case("laser intensity just above the cap", lidar("options.transient.laser_intensity_w_sr", 2e15), "laser_intensity must be <= 1e+15"),
+    Case("laser intensity 1e300 W/sr", lidar("options.transient.laser_intensity_w_sr", 1e300), "study.options.transient.laser_intensity_w_sr: Input should be less than or equal to 1000000000000000"),
+    Case("laser intensity just above the cap", lidar("options.transient.laser_intensity_w_sr", 2e15), "laser_intensity_w_sr: Input should be less than or equal to"),
     # a coding's rule on the projector: the phase repeats within it
     Case("micro phase shift repeating within the projector", with_("study.options.micro_phase_opts", {"frequencies": 3, "band": 0.5, "period_px": 8}, MICRO), "study.options.micro_phase_opts: micro phase shift with 3 frequencies over a band of 0.5 at 8 px repeats every 32 px, shorter than the 256-px projector axis"),
     Case("micro phase shift repeating, scanned by ambiguity enhancement", with_("study.options.micro_phase_opts", {"frequencies": 3, "band": 0.5, "period_px": 8}, AMBIGUITY_MICRO), "study.options.micro_phase_opts: micro phase shift with 3 frequencies"),
