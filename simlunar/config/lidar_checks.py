@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 from simlunar.config.lidar import MAX_BINS
+from simlunar.study.reconstruction_spec import parse_reconstructions
 
 __all__ = ["LIDAR_PLANNER_RULES", "check_lidar_study"]
 
@@ -36,7 +37,7 @@ def _check_planner_rules(study, i: int, label: str, name: str) -> None:
         )
     opts = study.planner_opts.get(label)
     recon = opts.oracle.reconstruction if opts is not None else "linear"
-    labels = [r if isinstance(r, str) else next(iter(r)) for r in study.reconstructions]
+    labels = [spec.label for spec in parse_reconstructions(study.reconstructions)]
     if name == "oracle_greedy" and recon != "linear" and recon not in labels:
         raise ValueError(
             f"study.planner_opts.{label}.oracle.reconstruction: {recon!r} is not one of "
