@@ -150,6 +150,22 @@ def reconstruction_panel_arrays(options, image, depth, density: float, *, guide,
     return out, {"recon_panels": meta}
 
 
+def _sample_points(p, heights: np.ndarray, holes: np.ndarray) -> np.ndarray:
+    """The (n, 2) index coordinates whose heights rebuild the DEM from the plan ``p``.
+
+    Cell (r, c) sits at (r, c). On a DEM with holes (NaN heights, within the documented
+    share) a sample planned in a hole reads the nearest cell with a height, and the rebuilt
+    terrain keeps the holes of the terrain it rebuilds.
+    """
+    if not holes.any():
+        return p.rc
+    _, (near_r, near_c) = ndimage.distance_transform_edt(holes, return_indices=True)
+    cells = np.unique(near_r[p.rows, p.cols] * heights.shape[1] + near_c[p.rows, p.cols])
+    if len(cells) < 3:  # samples merged into fewer cells than a triangle needs
+        cells = np.unique(np.concatenate([cells, np.flatnonzero(~holes)[:3]]))
+    return np.column_stack(np.divmod(cells, heights.shape[1])).astype(np.float64)
+
+
 def sparse_mesh_render(
     scene: RenderScene,
     image,
@@ -202,18 +218,9 @@ def sparse_mesh_render(
         energy = panel_energy(image)
     k = max(3, round(density * image.size))
     p = plan(DEFAULT_PLANNER, k, weights=energy, rng=rng)
-    pts = p.rc  # index coordinates: cell (r, c) sits at (r, c)
     heights = np.asarray(terrain.heights, np.float64)
     holes = ~np.isfinite(heights)
-    if holes.any():
-        # a DEM with holes (NaN heights, within the documented share): a sample planned in a
-        # hole reads the nearest cell with a height, and the rebuilt terrain keeps the holes
-        # of the terrain it rebuilds
-        _, (near_r, near_c) = ndimage.distance_transform_edt(holes, return_indices=True)
-        cells = np.unique(near_r[p.rows, p.cols] * heights.shape[1] + near_c[p.rows, p.cols])
-        if len(cells) < 3:  # samples merged into fewer cells than a triangle needs
-            cells = np.unique(np.concatenate([cells, np.flatnonzero(~holes)[:3]]))
-        pts = np.column_stack(np.divmod(cells, heights.shape[1])).astype(np.float64)
+    pts = _sample_points(p, heights, holes)
     recon = reconstruct(pts, heights[pts[:, 0].astype(int), pts[:, 1].astype(int)], heights.shape)
     recon[holes] = np.nan
     sparse = Terrain(recon, terrain.albedo, terrain.spacing, terrain.origin)

@@ -223,24 +223,7 @@ def build_guide(
             # flash-on and flash-off in daylight: two exposures for the one frame
             flat_frames = (f"{name}_on", f"{name}_off") if frame.flash.daylight else (name,)
             continue
-        if camera:
-            light_cfg = CameraLightCfg(kind="camera")
-            direction = None
-        else:
-            s = frame.sun
-            light_cfg = SunLightCfg(
-                elevation_deg=s.elevation_deg, azimuth_deg=s.azimuth_deg, irradiance=s.irradiance
-            )
-            direction = grid_light(light_cfg.elevation, light_cfg.azimuth) if nadir else None
-        render_ss, sensor_ss = ss.spawn(2)
-        lit = dataclasses.replace(
-            scene,
-            lights=translate.lights(light_cfg, r.ambient_radiance),
-            seed=int(render_ss.generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF),
-        )
-        with lock:
-            result = lit.render()
-        img = np.asarray(develop(luminance(result.image), np.random.default_rng(sensor_ss)))
+        img, direction = _lit_frame(cfg, scene, frame, ss, nadir=nadir, develop=develop, lock=lock)
         frames[name] = img.astype(np.float32)
         if camera:
             flat = img
@@ -259,6 +242,30 @@ def build_guide(
         flat_frames=flat_frames,
     )
     return guide, frames
+
+
+def _lit_frame(cfg, scene, frame, ss, *, nadir: bool, develop, lock):
+    """A camera-centred (``frame`` a str) or sun-lit guide frame: its sensor image and its
+    light direction (None: camera-centred, or a camera that is not the nadir one)."""
+    if isinstance(frame, str):
+        light_cfg = CameraLightCfg(kind="camera")
+        direction = None
+    else:
+        s = frame.sun
+        light_cfg = SunLightCfg(
+            elevation_deg=s.elevation_deg, azimuth_deg=s.azimuth_deg, irradiance=s.irradiance
+        )
+        direction = grid_light(light_cfg.elevation, light_cfg.azimuth) if nadir else None
+    render_ss, sensor_ss = ss.spawn(2)
+    lit = dataclasses.replace(
+        scene,
+        lights=translate.lights(light_cfg, cfg.render.ambient_radiance),
+        seed=int(render_ss.generate_state(1, dtype=np.uint32)[0] & 0x7FFFFFFF),
+    )
+    with lock:
+        result = lit.render()
+    img = np.asarray(develop(luminance(result.image), np.random.default_rng(sensor_ss)))
+    return img, direction
 
 
 def _flash(cfg, scene, flash_cfg, ss, *, develop, lock, radiance):

@@ -13,6 +13,7 @@ from fractions import Fraction
 
 import numpy as np
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter, NullLocator
 
 from simlunar.metrics import METRIC_NAMES
@@ -181,6 +182,42 @@ def ratio_ticks(axis, lo: float, hi: float) -> list[float]:
     return ticks
 
 
+def _density_curve(ax, d, m, sd, style, *, ls, ref: bool, recon: str | None) -> bool:
+    """One strategy's (and reconstruction's) mean error curve and its +- one standard
+    deviation band; True when a band was drawn. ``ref``: the random reference (thicker, on
+    top)."""
+    ax.plot(
+        d,
+        m,
+        marker=style.marker,
+        ms=3,
+        lw=1.5 if ref else 1.1,
+        ls=ls,
+        color=style.colour,
+        # by reconstruction the legend is built apart (an entry per planner and per
+        # reconstruction); the leading "_" keeps a curve's own label out of legends that
+        # gather the artists (shared_legend of a multi-panel figure)
+        label=style.label if recon is None else f"_{style.label}, {label(recon)}",
+        zorder=4 if ref else 2,
+    )
+    if not np.any(sd > 0):
+        return False
+    lo = np.clip(m - sd, np.nanmin(m[m > 0]) * 0.5 if np.any(m > 0) else 1e-12, None)
+    ax.fill_between(d, lo, m + sd, color=style.colour, alpha=0.12, lw=0, zorder=1)
+    return True
+
+
+def _by_reconstruction_legend(st, lines, drawn_s: Sequence[str], drawn_r: Sequence[str]):
+    """Legend handles and labels of a figure by reconstruction: one entry per planner
+    (colour, marker), then one per reconstruction (line style)."""
+    handles = [Line2D([], [], color=st[s].colour, marker=st[s].marker, ms=3, lw=1.1)
+               for s in drawn_s]  # fmt: skip
+    labels = [f"planner: {st[s].label}" for s in drawn_s]
+    handles += [Line2D([], [], color="0.2", lw=1.1, ls=lines[r]) for r in drawn_r]
+    labels += [f"reconstruction: {label(r)}" for r in drawn_r]
+    return handles, labels
+
+
 def error_vs_density(
     rows: Sequence[dict],
     *,
@@ -206,8 +243,6 @@ def error_vs_density(
     each reconstruction. One reconstruction, or none given: the curves of the rows as
     ``where`` selects them, line style by placement.
     """
-    from matplotlib.patches import Patch
-
     fig, ax = new_axes(ax, LEGEND_RIGHT_SIZE)
     if strategies is None:
         strategies = list(dict.fromkeys(r["strategy"] for r in rows))
@@ -231,29 +266,10 @@ def error_vs_density(
         if d.size == 0:
             continue
         all_d += d.tolist()
-        ref = s == REFERENCE
-        c = st[s].colour
-        ls = lines[r] if r is not None else ("--" if ref else st[s].linestyle)
-        ax.plot(
-            d,
-            m,
-            marker=st[s].marker,
-            ms=3,
-            lw=1.5 if ref else 1.1,
-            ls=ls,
-            color=c,
-            # by reconstruction the legend is built below (an entry per planner and per
-            # reconstruction); the leading "_" keeps a curve's own label out of legends that
-            # gather the artists (shared_legend of a multi-panel figure)
-            label=st[s].label if r is None else f"_{st[s].label}, {label(r)}",
-            zorder=4 if ref else 2,
-        )
+        ls = lines[r] if r is not None else ("--" if s == REFERENCE else st[s].linestyle)
+        band |= _density_curve(ax, d, m, sd, st[s], ls=ls, ref=s == REFERENCE, recon=r)
         drawn_s += [s] if s not in drawn_s else []
         drawn_r += [r] if r is not None and r not in drawn_r else []
-        if np.any(sd > 0):
-            lo = np.clip(m - sd, np.nanmin(m[m > 0]) * 0.5 if np.any(m > 0) else 1e-12, None)
-            ax.fill_between(d, lo, m + sd, color=c, alpha=0.12, lw=0, zorder=1)
-            band = True
     if any(
         line.get_ydata().size and np.all(np.asarray(line.get_ydata()) > 0)
         for line in ax.get_lines()
@@ -266,11 +282,7 @@ def error_vs_density(
     if title:
         ax.set_title(title, fontsize=TITLE_PT)
     if by_recon:  # one entry per planner (colour, marker) and per reconstruction (line)
-        handles = [Line2D([], [], color=st[s].colour, marker=st[s].marker, ms=3, lw=1.1)
-                   for s in drawn_s]  # fmt: skip
-        labels = [f"planner: {st[s].label}" for s in drawn_s]
-        handles += [Line2D([], [], color="0.2", lw=1.1, ls=lines[r]) for r in drawn_r]
-        labels += [f"reconstruction: {label(r)}" for r in drawn_r]
+        handles, labels = _by_reconstruction_legend(st, lines, drawn_s, drawn_r)
     else:
         handles, labels = ax.get_legend_handles_labels()
     if band:

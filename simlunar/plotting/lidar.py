@@ -6,6 +6,7 @@ are in :mod:`simlunar.plotting.lidar_tables` (no Matplotlib; re-exported here)."
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from matplotlib.collections import LineCollection
@@ -22,6 +23,7 @@ from simlunar.plotting.style import PLACEMENT_LINES, label, metric_axis, styles
 
 __all__ = [
     "ORDER_CMAP",
+    "RowSelection",
     "error_vs_time",
     "lidar_summary",
     "lidar_tables",
@@ -37,6 +39,22 @@ MAX_SCAN_PLANNERS = 4
 #: what the error bars of :func:`error_vs_time` show, by how many terrain seeds (units) it pools
 BAND_TRIALS = "bars: ±1 s.d. over trials"
 BAND_SEEDS = "bars: 95 % bootstrap interval over terrain seeds"
+
+
+@dataclass(frozen=True)
+class RowSelection:
+    """The rows one :func:`error_vs_time` panel summarises (:func:`lidar_summary`).
+
+    Attributes
+    ----------
+    where : dict, optional
+        Column filters compared as strings (a list value keeps any of its items).
+    by : str, optional
+        A column whose values are separate points of each planner's curve.
+    """
+
+    where: dict | None = None
+    by: str | None = None
 
 
 def waveform(
@@ -98,15 +116,15 @@ def error_vs_time(
     metric: str = "mse",
     x: str = "seconds",
     planners: Sequence[str] | None = None,
-    where: dict | None = None,
-    by: str | None = None,
+    select: RowSelection | None = None,
     title: str = "",
     ax=None,
     reconstructions: Sequence[str] | None = None,
 ):
     """Mean error of each planner against modelled scan time (``x="seconds"``) or the range
     samples measured (``x="samples"``), log-log, with its interval as error bars
-    (:func:`lidar_summary`; ``by`` a column whose values are separate points).
+    (:func:`lidar_summary`; ``select`` the rows it pools and the column whose values are
+    separate points, see :class:`RowSelection`).
 
     With two or more ``reconstructions`` (values of the rows' ``reconstruction`` column,
     ``linear`` for rows without one) each planner gets a curve per reconstruction: colour and
@@ -121,6 +139,7 @@ def error_vs_time(
         ax = fig.add_subplot()
     else:
         fig = ax.figure
+    where, by = (select.where, select.by) if select is not None else (None, None)
     recons = list(reconstructions or [])
     by_recon = len(recons) >= 2
     if by_recon:

@@ -13,15 +13,27 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 
+import matplotlib.pyplot as plt
 import numpy as np
 
 from simlunar.metrics import METRIC_NAMES
 from simlunar.plotting.density import _category_ticks, _sweep_positions, ratio_axis
+from simlunar.plotting.images import (
+    DEPTH_CMAP,
+    _cbar,
+    _extent,
+    _metre_labels,
+    _panel_height,
+    _scatter_samples,
+    _show,
+)
 from simlunar.plotting.layout import (
     LABEL_PT,
+    PAGE_W,
     TICK_PT,
     TITLE_PT,
     legend_outside,
+    new_axes,
     panel_grid,
     shared_legend,
 )
@@ -141,6 +153,17 @@ def _cell(v) -> tuple[float, float, float]:
     return (math.nan if v is None else float(v), math.nan, math.nan)
 
 
+def _error_row(fig, axes, errors: Mapping[str, np.ndarray], *, extent) -> None:
+    """Each reconstruction's error map (its RMS in the title) on one symmetric scale, at the
+    99th percentile of |error| over every map, with one colour bar (m)."""
+    lim = float(np.nanpercentile(np.abs(np.stack(list(errors.values()))), 99)) or 1e-12
+    for ax, (r, err) in zip(axes, errors.items()):
+        rms = float(np.sqrt(np.nanmean(err**2)))
+        im = _show(ax, err, f"{label(r)} - truth\nRMS {rms:.3g} m", cmap="coolwarm",
+                   extent=extent, vmin=-lim, vmax=lim)  # fmt: skip
+    _cbar(fig, im, list(axes), "error (m)")
+
+
 def reconstruction_panels(
     image: np.ndarray,
     truth: np.ndarray,
@@ -181,19 +204,6 @@ def reconstruction_panels(
     -------
     (Figure, ndarray of Axes (2, 1 + len(reconstructions)))
     """
-    import matplotlib.pyplot as plt
-
-    from simlunar.plotting.images import (
-        DEPTH_CMAP,
-        _cbar,
-        _extent,
-        _metre_labels,
-        _panel_height,
-        _scatter_samples,
-        _show,
-    )
-    from simlunar.plotting.layout import PAGE_W
-
     if not reconstructions:
         raise ValueError("reconstruction_panels needs at least one reconstruction")
     names = list(reconstructions)
@@ -207,7 +217,6 @@ def reconstruction_panels(
     truth = np.asarray(truth, float)
     vmin, vmax = float(np.nanmin(truth)), float(np.nanmax(truth))
     errors = {r: np.asarray(reconstructions[r], float) - truth for r in names}
-    lim = float(np.nanpercentile(np.abs(np.stack(list(errors.values()))), 99)) or 1e-12
     im = _show(axes[0, 0], truth, "true depth", cmap=DEPTH_CMAP, extent=ext, vmin=vmin, vmax=vmax)
     for j, r in enumerate(names, start=1):
         _show(axes[0, j], reconstructions[r], label(r), cmap=DEPTH_CMAP, extent=ext,
@@ -219,11 +228,7 @@ def reconstruction_panels(
     _show(axes[1, 0], image, f"{label(planner)} samples{dens}", extent=ext, vmin=0, vmax=top)
     rows, cols = samples
     _scatter_samples(axes[1, 0], rows, cols, spacing_m if ext is not None else None)
-    for j, r in enumerate(names, start=1):
-        rms = float(np.sqrt(np.nanmean(errors[r] ** 2)))
-        im = _show(axes[1, j], errors[r], f"{label(r)} - truth\nRMS {rms:.3g} m", cmap="coolwarm",
-                   extent=ext, vmin=-lim, vmax=lim)  # fmt: skip
-    _cbar(fig, im, axes[1, 1:].tolist(), "error (m)")
+    _error_row(fig, axes[1, 1:], errors, extent=ext)
     if ext is not None:
         flat = list(axes.ravel())
         _metre_labels(flat, left={0, n}, bottom=set(range(n, 2 * n)))
@@ -255,8 +260,6 @@ def reconstruction_saved_by_planner(
     -------
     (Figure, Axes)
     """
-    from simlunar.plotting.layout import new_axes
-
     strategies = list(strategies)
     if not strategies or not reconstructions:
         raise ValueError("reconstruction_saved_by_planner needs strategies and series")

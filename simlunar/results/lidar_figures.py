@@ -5,7 +5,12 @@ image, beams in visiting order, measured depths) (docs/lidar.md)."""
 from __future__ import annotations
 
 from simlunar.plotting.layout import panel_grid
-from simlunar.plotting.lidar import MAX_SCAN_PLANNERS, error_vs_time, scan_figure
+from simlunar.plotting.lidar import (
+    MAX_SCAN_PLANNERS,
+    RowSelection,
+    error_vs_time,
+    scan_figure,
+)
 from simlunar.plotting.style import point_title
 from simlunar.results import captions as captions_text
 from simlunar.results.aggregate import (
@@ -47,8 +52,9 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
                     metric=m,
                     x=x,
                     planners=study.get("planners"),
-                    where={"unit": [rec.get("index", 0) for rec in members]},
-                    by=by,
+                    select=RowSelection(
+                        where={"unit": [rec.get("index", 0) for rec in members]}, by=by
+                    ),
                     title=title if len(groups) > 1 else "",
                     ax=ax,
                     reconstructions=recons if by_recon else None,
