@@ -33,10 +33,10 @@ a non-integer position reads r bilinearly).
 
 **When the image does not help** (option ``heldout_check``, on by default): the residual gets
 the held-out check of the ``shading`` reconstruction
-(:func:`simlunar.reconstruction.shading.heldout_gamma`): every fifth sample is left out, the
+(:func:`simlunar.reconstruction.heldout.heldout_gamma`): every fifth sample is left out, the
 residual is predicted again from the other samples alone, and the least-squares weight of its
 re-anchored detail on the left-out samples (in [0, 1]) weighs the residual inside the samples'
-hull (:func:`simlunar.reconstruction.shading.blend_detail`; linear's nearest fill outside).
+hull (:func:`simlunar.reconstruction.heldout.blend_detail`; linear's nearest fill outside).
 Where one split leaves fewer than 20 samples inside the hull (sparse layouts), the five splits
 are pooled (every sample left out once, five more predictions) instead of falling back to
 linear. Measured on quarter-scale aerial_1 (experiment seed 11, 2 terrains, uniform Lloyd,
@@ -78,6 +78,7 @@ from simlunar.features.model_save import ModelRecord, check_record_matches
 from simlunar.reconstruction._anchor import cell_indices, linear_field
 from simlunar.reconstruction.base import Reconstructed
 from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
+from simlunar.reconstruction.heldout import blend_detail, heldout_gamma
 from simlunar.reconstruction.learned_features import (
     anchor,
     feature_names,
@@ -85,7 +86,6 @@ from simlunar.reconstruction.learned_features import (
     sample_scale,
     shading_heights,
 )
-from simlunar.reconstruction.shading import blend_detail, heldout_gamma
 from simlunar.registry import FileOption, Options, option
 
 __all__ = [
@@ -173,11 +173,11 @@ class LearnedReconstruction(ModelRecord):
             OpenMP threads of the prediction.
         heldout_check : bool
             Weigh the residual by the held-out check of the ``shading`` reconstruction
-            (:func:`simlunar.reconstruction.shading.heldout_gamma`: every fifth sample left
+            (:func:`simlunar.reconstruction.heldout.heldout_gamma`: every fifth sample left
             out, the residual predicted again from the others, and the least-squares weight
             of its re-anchored detail on the left-out samples caps the blend; where one split
             leaves fewer than 20 samples, all five splits are pooled,
-            :func:`simlunar.reconstruction.shading.blend_detail`). Off: the full residual
+            :func:`simlunar.reconstruction.heldout.blend_detail`). Off: the full residual
             (the model as trained; outside the samples' hull too), as before the check.
 
         Returns

@@ -25,7 +25,7 @@ iteration). The result is
 re-anchored exactly on the samples and blended as in :mod:`.shading`:
 ``z = z_lin + gamma * hull * (d - linear_interp(d at the samples))`` with the same fallback
 rule for ``gamma``, capped by the same held-out check (option ``heldout_check``, on by default;
-:func:`simlunar.reconstruction.shading.heldout_gamma`): every fifth sample is left out, ``d`` is
+:func:`simlunar.reconstruction.heldout.heldout_gamma`): every fifth sample is left out, ``d`` is
 solved again anchored on the others, and its least-squares weight on the left-out samples caps
 ``gamma``. Without the check the sun image alone made 0.77x / 0.94x linear's samples on the
 full-resolution aerial_1 / aerial_2 (30 deg sun, 5 terrain seeds), where albedo passes the
@@ -51,13 +51,9 @@ from simlunar.reconstruction._anchor import linear_field
 from simlunar.reconstruction._reading import READING_OPTIONS, ReadingChecks
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import calibrate
+from simlunar.reconstruction.heldout import checked_blend
 from simlunar.reconstruction.integrate import central_gradient
-from simlunar.reconstruction.shading import (
-    ShadingOptions,
-    checked_blend,
-    fallback_gamma,
-    shading_frames,
-)
+from simlunar.reconstruction.shading import ShadingOptions, fallback_gamma, shading_frames
 from simlunar.registry import option, shared_option
 
 __all__ = [

@@ -33,11 +33,12 @@ high sun or camera-centred light the image is mostly albedo, the share falls and
 falls back to the linear reconstruction: never clearly worse than linear, and equal to it when
 the image does not vary. The share is measured at the calibration's blur (half a pitch), not
 at the sub-pitch scales the method adds, so a second check caps ``gamma`` (``heldout_check``, on by
-default, :func:`heldout_gamma`): every fifth sample is left out and the least-squares weight of
-the image's detail that predicts the left-out samples from the others is the largest ``gamma``
-allowed; when one split leaves fewer than 20 held-out samples in the hull (the sparse end) the
-five splits are pooled, and each split's detail is made again from its kept samples only (the
-calibration, the slopes the image does not give and the flat-field all read the samples).
+default, :func:`.heldout.heldout_gamma`): every fifth sample is left out and the least-squares
+weight of the image's detail that predicts the left-out samples from the others is the largest
+``gamma`` allowed; when one split leaves fewer than 20 held-out samples in the hull (the sparse
+end) the five splits are pooled, and each split's detail is made again from its kept samples
+only (the calibration, the slopes the image does not give and the flat-field all read the
+samples).
 On the full-resolution moonyard under its 75 deg sun the share alone let the sun image
 through at sparse densities (held-out share 0.5-0.65 at 1/1024-1/2048) where its detail is
 albedo, 10x linear's MSE; the check finds that and keeps linear. The project measured
@@ -70,12 +71,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from simlunar.reconstruction._anchor import (
-    LinearField,
-    at_points,
-    linear_field,
-    reanchored_detail,
-)
+from simlunar.reconstruction._anchor import LinearField, linear_field
 from simlunar.reconstruction._reading import READING_OPTIONS, ReadingChecks
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import (
@@ -85,19 +81,17 @@ from simlunar.reconstruction.calibration import (
     valid_pixels,
 )
 from simlunar.reconstruction.flatfield import flat_field
+from simlunar.reconstruction.heldout import blend_detail, checked_blend
 from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
 from simlunar.reconstruction.shadow import ShadowOptions, shadow_mask
 from simlunar.registry import option, shared_option
 
 __all__ = [
     "ShadingOptions",
-    "blend_detail",
-    "checked_blend",
     "denoised_flat",
     "fallback_gamma",
     "frame_noise",
     "fuse_slopes",
-    "heldout_gamma",
     "shading",
     "shading_frames",
     "shadow_masks",
@@ -325,30 +319,6 @@ def fuse_slopes(
     return blend_detail(lin, z_fc, gamma)
 
 
-def blend_detail(lin: LinearField, field: np.ndarray, gamma: float) -> np.ndarray:
-    """``z_lin + gamma * hull * (z_a - z_lin)``: ``field`` re-anchored on the samples, weighted
-    by ``gamma`` inside their hull (the linear reconstruction's nearest fill outside)."""
-    return np.where(lin.hull, lin.heights + gamma * reanchored_detail(field, lin), lin.heights)
-
-
-def checked_blend(
-    lin: LinearField, detail, gamma: float, info: dict, *, remade=None, pool_folds=False
-) -> np.ndarray:
-    """:func:`blend_detail` at ``gamma``, first capped by the held-out check of ``remade``
-    (:func:`heldout_gamma`'s ``field``: the detail, or a function of the kept samples that
-    makes it again; None: no check), which records ``heldout_gamma``, ``heldout_samples`` and
-    the capped ``gamma`` in ``info``; the linear heights where the weight is 0."""
-    if remade is not None:
-        g_cv, n_test, r2 = heldout_fit(remade, lin, pool_folds=pool_folds)
-        info["heldout_gamma"], info["heldout_samples"] = g_cv, n_test
-        info["heldout_r2"] = r2
-        gamma = min(gamma, g_cv)
-        info["gamma"] = gamma
-    if gamma == 0.0:
-        return lin.heights
-    return blend_detail(lin, detail, gamma)
-
-
 def _axis_error(direction, light) -> float:
     """Angle (deg, 0-90) between the calibrated direction's axis and the light's azimuth."""
     h = np.asarray(light[:2], dtype=np.float64)
@@ -491,92 +461,3 @@ def _shading_detail(
     sp = guide.spacing
     z_fc = frankot_chellappa(gr * sp, gc * sp, along=along, across_weight=weight)
     return z_fc, gamma, info
-
-
-def heldout_gamma(
-    field, lin: LinearField, *, every: int = 5, pool_folds: bool = False
-) -> tuple[float, int]:
-    """The weight of ``field``'s detail that best predicts held-out samples, in [0, 1].
-
-    Every ``every``-th sample (in row-major order: spread over the grid, no randomness) is
-    left out; the rest are interpolated linearly (``z_tr``) and ``field`` is re-anchored on
-    them (``d = field - interp(field at the kept samples)``). At the left-out samples inside the
-    kept samples' hull, the least-squares ``g`` of ``v - z_tr ~ g d`` says how much of the
-    image's detail is real at this density: about 1 where shading carries the shape between
-    samples, 0 where the detail is albedo (a high sun on a bright-and-dark surface), where it
-    would make the reconstruction worse than linear. The kept samples are 4/5 of all, so the
-    check runs at a 12 % wider pitch: a conservative estimate.
-
-    Parameters
-    ----------
-    field : ndarray, shape (rows, cols), or callable
-        The detail field, or ``field(keep) -> ndarray (rows, cols)`` that makes it from the
-        kept samples only (``keep``: their :class:`LinearField`). A field made from the
-        samples themselves (the learned residual, whose features read the distance to the
-        nearest sample and the samples' own residuals) must be remade without the samples it
-        is checked on, or the check would see them.
-    lin : LinearField
-        The linear reconstruction of all the samples.
-    every : int
-        Every ``every``-th sample is held out.
-    pool_folds : bool
-        When the one split leaves fewer than 20 samples inside the hull (a sparse layout: on
-        250 x 400 cells, 1/1024 and sparser), pool all ``every`` splits (each sample held out
-        once, ``every`` fields made) into one least-squares weight instead of returning 0.
-        Off: one split (every reconstruction that checks pools: ``shading``, ``photoclinometry``,
-        ``learned``).
-
-    Returns
-    -------
-    g : float in [0, 1]
-        0 when fewer than 20 samples are left out inside the hull, or ``d`` vanishes there.
-    n : int
-        The left-out samples used.
-    """
-    g, n, _ = heldout_fit(field, lin, every=every, pool_folds=pool_folds)
-    return g, n
-
-
-def heldout_fit(
-    field, lin: LinearField, *, every: int = 5, pool_folds: bool = False
-) -> tuple[float, int, float]:
-    """:func:`heldout_gamma`'s ``(g, n)`` and the share of the held-out samples' departure
-    from the kept samples' interpolation that ``g`` times the detail explains,
-    ``r2 = 1 - |v - z_tr - g d|^2 / |v - z_tr|^2`` (0 when ``g`` is 0)."""
-    pts = lin.points
-    if len(pts) < 5 * every:
-        return 0.0, 0, 0.0
-    order = np.lexsort((pts[:, 1], pts[:, 0]))
-    parts = [_heldout_split(lin, order, 0, every)]
-    if len(parts[0][1]) < 20 and pool_folds:
-        parts += [_heldout_split(lin, order, f, every) for f in range(1, every)]
-    n = sum(len(tp) for _, tp, _ in parts)
-    if n < 20:
-        return 0.0, n, 0.0
-    num = den = ss = 0.0
-    for keep, tp, tv in parts:
-        if not len(tp):
-            continue
-        resid = tv - at_points(keep.heights, tp)
-        f = field(keep) if callable(field) else field
-        d = at_points(reanchored_detail(f, keep), tp)
-        num += float(d @ resid)
-        den += float(d @ d)
-        ss += float(resid @ resid)
-    if not den > 0:
-        return 0.0, n, 0.0
-    g = float(np.clip(num / den, 0.0, 1.0))
-    r2 = (2.0 * g * num - g * g * den) / ss if ss > 0 else 0.0
-    return g, n, float(r2)
-
-
-def _heldout_split(lin: LinearField, order, start: int, every: int):
-    """``(keep, points, values)``: the kept samples' :class:`LinearField` and the left-out
-    samples (``order[start::every]``) inside its hull."""
-    pts, vals = lin.points, lin.values
-    test = np.zeros(len(pts), bool)
-    test[order[start::every]] = True
-    keep = linear_field(pts[~test], vals[~test], lin.shape)
-    tp = pts[test]
-    inside = at_points(keep.hull.astype(np.float64), tp) > 0.5
-    return keep, tp[inside], vals[test][inside]

@@ -480,7 +480,7 @@ def test_heldout_check_pools_its_splits_on_a_sparse_layout(model, held_out):
     # 64 x 96 cells at 1/96: 64 samples, one split leaves ~13 inside the hull (shading's
     # check returns 0 there); pooled over the five splits the planted relation keeps its gain
     from simlunar.reconstruction._anchor import linear_field
-    from simlunar.reconstruction.shading import heldout_gamma
+    from simlunar.reconstruction.heldout import heldout_gamma
 
     img, z = held_out[0]
     pts, vals = layout(z, 1 / 96, 2)

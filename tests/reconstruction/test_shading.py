@@ -9,7 +9,7 @@ from scipy import ndimage
 
 from simlunar.reconstruction import Guide, ShadingOptions, run_reconstruction
 from simlunar.reconstruction._anchor import linear_field
-from simlunar.reconstruction.shading import blend_detail, checked_blend, fallback_gamma, fuse_slopes
+from simlunar.reconstruction.shading import fallback_gamma, fuse_slopes
 from simlunar.reconstruction.synthetic import jittered_samples, lit_terrain
 
 SHAPE = (192, 256)
@@ -161,25 +161,6 @@ def test_float_sample_positions():
     res = run_reconstruction("shading", fpts, v, SHAPE, guide=Guide(t.image))
     assert np.isfinite(res.heights).all()
     assert _mse(res.heights, t.heights) * 2.0 < _mse(lin, t.heights)
-
-
-def test_checked_blend_caps_gamma_by_the_held_out_samples():
-    t, pts, v = _case(rng=1)
-    lin = linear_field(pts, v, SHAPE)
-    # without a check: the blend at the weight asked, info untouched
-    info = {}
-    out = checked_blend(lin, t.heights, 0.5, info)
-    np.testing.assert_array_equal(out, blend_detail(lin, t.heights, 0.5))
-    assert info == {}
-    # the truth as detail predicts every held-out sample: the weight stays near 1
-    info = {}
-    checked_blend(lin, t.heights, 1.0, info, remade=t.heights)
-    assert info["gamma"] == info["heldout_gamma"] > 0.9 and info["heldout_samples"] > 20
-    # a detail against the surface is refused: the linear heights, gamma 0
-    info = {}
-    out = checked_blend(lin, -t.heights, 1.0, info, remade=-t.heights)
-    assert info["gamma"] == info["heldout_gamma"] == 0.0
-    np.testing.assert_array_equal(out, lin.heights)
 
 
 def test_the_check_pools_folds_at_the_sparse_end():

@@ -72,7 +72,8 @@ def reference_for(d, wi, wo, albedo):
         f = R.lambert(wi, wo, N_UP, albedo)
     else:
         p = {k: d[k] for k in ("b", "c", "B0", "h", "theta_bar")}
-        w = albedo if d["albedo_mode"] == "w" else R.hapke_w_from_normal_albedo(albedo, **p)
+        shape = replace(R.LUNAR_HAPKE, **p)
+        w = albedo if d["albedo_mode"] == "w" else R.hapke_w_from_normal_albedo(albedo, shape)
         f = R.hapke(wi, wo, N_UP, R.HapkeParams(w=w, **p))
     return f * cos_o
 
@@ -240,7 +241,7 @@ def test_hapke_plugin_opposition_surge(mi):
         v10 = eval_plugin(mi, bsdf, *pair(10.0))[0, 0]
         ratio[B0] = v0 / v10
         wi, wo = pair(0.0)
-        w = R.hapke_w_from_normal_albedo(0.12, B0=B0)
+        w = R.hapke_w_from_normal_albedo(0.12, replace(R.LUNAR_HAPKE, B0=B0))
         assert v0 == pytest.approx(
             R.hapke(wi, wo, N_UP, replace(R.LUNAR_HAPKE, w=w, B0=B0))[0] * wo[0, 2], rel=2e-3
         )
@@ -250,8 +251,13 @@ def test_hapke_plugin_opposition_surge(mi):
 
 def test_hapke_plugin_opposition_surges_match_the_closed_form(mi):
     """Shadow hiding and coherent backscatter at zero and a few degrees of phase: the plugin
-    (float32) against the closed form written out in tests/render/test_reference.py."""
-    from tests.render.test_reference import SURGE, SURGE_PHASES_DEG, _closed_form_surge, _phase_pair
+    (float32) against the closed form written out in tests/render/test_reference_hapke.py."""
+    from tests.render.test_reference_hapke import (
+        SURGE,
+        SURGE_PHASES_DEG,
+        _closed_form_surge,
+        _phase_pair,
+    )
 
     k = SURGE
     spec = make_bsdf("hapke", w=k["w"], b=k["b"], c=k["c"], B0=k["B_S0"], h=k["h_S"],

@@ -48,6 +48,7 @@ differentiable).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -193,7 +194,8 @@ def _plugin_class(mi, base: type) -> type:
             p = self._params()
             HapkeBSDF(**p)
             albedo = np.linspace(0.0, 1.0, HAPKE_TABLE_SIZE)
-            self.w_table = mi.Float(ref.hapke_w_from_normal_albedo(albedo, **p).astype(np.float32))
+            w = ref.hapke_w_from_normal_albedo(albedo, replace(ref.LUNAR_HAPKE, **p))
+            self.w_table = mi.Float(w.astype(np.float32))
 
         def _w(self, si, active):
             a = self.reflectance.eval(si, active)
