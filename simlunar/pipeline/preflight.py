@@ -29,8 +29,9 @@ from typing import Any
 import numpy as np
 
 from simlunar.config.lidar import receiver_wh
+from simlunar.config.lidar_translate import lidar_options
+from simlunar.config.scanner_translate import coding_options, rig_kwargs
 from simlunar.config.schema import ExperimentCfg
-from simlunar.config.translate import coding_options, rig_kwargs
 from simlunar.errors import ConfigError, InfrastructureError
 from simlunar.geometry import Camera, Intrinsics, Pose
 from simlunar.metrics.interior import interior_mask, sparsest_pitch
@@ -40,10 +41,10 @@ from simlunar.pipeline.inputs import (
     TerrainFacts,
     check_size,
     model_inputs,
-    read_unit_models,
     terrain_facts,
 )
 from simlunar.pipeline.out_paths import check_out_dir, check_out_file
+from simlunar.pipeline.unit_models import read_unit_models
 from simlunar.planner import check_k
 from simlunar.render.backend import choose_variant
 from simlunar.results.records import unit_label
@@ -418,8 +419,6 @@ def check_lidar_options(study: Any) -> None:
     """Build a LIDAR study's library options as the unit will, so a rule of an options class
     that the schema does not state (a bound of :mod:`simlunar.lidar`'s options, a rule across
     fields) is one line before any render instead of a traceback in the unit."""
-    from simlunar.config.lidar_translate import lidar_options
-
     try:
         lidar_options(study)
     except (ValueError, TypeError) as exc:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from simlunar.config import lidar_translate, translate
+from simlunar.config import lidar_translate, scanner_translate, translate
 from simlunar.config.render import OrthoNadirCfg, SensorCfg, SunLightCfg
 from simlunar.config.scanner import ScannerStudyCfg
 from simlunar.config.schema import ExperimentCfg
@@ -30,7 +30,6 @@ from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.features.learned import LearnedMap, pinned_models
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
-from simlunar.metrics import score as eq43_score
 from simlunar.pipeline.figure_inputs import (
     RENDER_LOCK,
     RenderScene,
@@ -40,9 +39,10 @@ from simlunar.pipeline.figure_inputs import (
     sparse_mesh_render,
 )
 from simlunar.pipeline.guide import build_guide
-from simlunar.pipeline.inputs import read_unit_models, verify_inputs
 from simlunar.pipeline.resume import UnitSteps
 from simlunar.pipeline.study_kinds import run_study_unit, study_unit
+from simlunar.pipeline.study_meta import plain_scores, reconstruction_meta, rounds_meta
+from simlunar.pipeline.unit_models import read_unit_models, verify_inputs
 from simlunar.progress import reporting, stage
 from simlunar.reconstruction import RECONSTRUCTIONS
 from simlunar.render import backend
@@ -315,7 +315,7 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
     exports = _array_exports(cfg, scene, depth, study)
     return UnitRecord(
         rows=[dict(r) for r in study.rows],
-        scores=_plain_scores(study.scores),
+        scores=plain_scores(study.scores),
         arrays=arrays,
         timings=timings,
         meta={
@@ -323,8 +323,8 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
             "spacing_m": scene.terrain.spacing,
             "variant": backend.info().variant,
             "invalid_pixels_filled": n_invalid,
-            **_rounds(study),
-            **_reconstruction_meta(study),
+            **rounds_meta(study),
+            **reconstruction_meta(study),
             **guide_meta,
             **panel_meta,
         },
@@ -365,51 +365,6 @@ def _guide(cfg, scene: RenderScene, image, seeds, timings, arrays: dict, radianc
     return guide, {"guide_frames": list(guide.frames)}
 
 
-def _rounds(study) -> dict:
-    """Sensor rounds of each multi-round label (each round costs sensor time): mean over
-    trials per density, densities in the study's order; nothing for one-shot studies."""
-    if not study.rounds:
-        return {}
-    return {"rounds": {s: r.mean(axis=1).tolist() for s, r in study.rounds.items()}}
-
-
-def _reconstruction_meta(study) -> dict:
-    """With reconstructions besides the first: each one's eq. 4.3 scores (the record's
-    ``scores`` are the first's) and the diagnostics each reported (e.g. ``shading_share``),
-    mean over trials per density (densities in the study's order); nothing for ``linear``
-    alone, so its records are as before."""
-    out: dict = {}
-    others = study.reconstructions[1:]
-    if others and study.reference in study.strategies:
-        out["reconstruction_scores"] = {
-            r: {
-                m: {
-                    s: float(v)
-                    for s, v in eq43_score(
-                        study.errors(m, r), study.densities, reference=study.reference
-                    ).items()
-                }
-                for m in study.metrics
-            }
-            for r in others
-        }
-    if study.info:
-        out["reconstruction_info"] = {
-            r: {s: {k: _trial_means(v) for k, v in keys.items()} for s, keys in by.items()}
-            for r, by in study.info.items()
-        }
-    return out
-
-
-def _trial_means(v: np.ndarray) -> list:
-    """Mean over trials (axis 1) of the finite values per density; None where there is none
-    (a reconstruction that reported the key on no trial of that density)."""
-    ok = np.isfinite(v)
-    n = ok.sum(axis=1)
-    sums = np.where(ok, v, 0.0).sum(axis=1)
-    return [float(s / c) if c else None for s, c in zip(sums, n)]
-
-
 def _figure_arrays(cfg, scene: RenderScene, image, depth, seeds, timings) -> dict:
     """The image panels' arrays and, for a nadir view, the sparse-mesh renders (Fig. 4)."""
     panel_ss, mesh_ss = seeds["panels"].spawn(2)
@@ -433,11 +388,6 @@ def _figure_arrays(cfg, scene: RenderScene, image, depth, seeds, timings) -> dic
     return out
 
 
-def _plain_scores(scores) -> dict:
-    """Scores as {metric: {strategy: float}}."""
-    return {str(m): {str(s): float(v) for s, v in by.items()} for m, by in dict(scores).items()}
-
-
 @study_unit("scanner", ScannerStudyOptions, renders=True, config=ScannerStudyCfg)
 def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     """The scanner study with the structured-light sensor on a rig aimed at the terrain."""
@@ -445,7 +395,7 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
     t = time.perf_counter()
     # the scanner package aims the preset rig at the terrain's centre at the standoff that
     # fits the projection inside it, so every guide pixel sees terrain at any terrain scale
-    rig = aim_rig_at_terrain(scene.terrain, **translate.rig_kwargs(s))
+    rig = aim_rig_at_terrain(scene.terrain, **scanner_translate.rig_kwargs(s))
     # exposure: the auto-exposure rule on the white calibration frame (RenderCapture); the
     # schema refuses a fixed exposure_e for scanner studies
     study_scene = ScannerScene(
@@ -457,7 +407,7 @@ def _scanner_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
         # a daylight scan: the sun (and sky) stay on while the projector scans
         extra_lights=tuple(scene.lights) if s.scan_light == "sun" else (),
     )
-    options = translate.scanner_options(s, r, seed=scene.seed)
+    options = scanner_translate.scanner_options(s, r, seed=scene.seed)
     res = run_scanner_study(study_scene, options, rng=seeds["study"], steps=steps)
     timings["study_s"] = time.perf_counter() - t
     guide = res.guide

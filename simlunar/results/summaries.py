@@ -78,6 +78,7 @@ def _git_commit() -> dict[str, Any]:
 #: modules that write the tables: a change of any of them rewrites the tables of a rerun
 _TABLE_MODULES = (
     "simlunar.pipeline.runner",
+    "simlunar.pipeline.rows",  # the rows of results.csv, their order and columns
     "simlunar.plotting.lidar_tables",  # the LIDAR study's tables
     "simlunar.results.summaries",
     "simlunar.plotting.tables",

@@ -16,7 +16,7 @@ import pytest
 import yaml
 from pydantic import BaseModel
 
-from simlunar.config import render, schema, studies, terrain, translate
+from simlunar.config import render, scanner_translate, schema, studies, terrain, translate
 from simlunar.config import scanner as scanner_cfg
 from simlunar.config.docs import json_schema, schema_model
 from simlunar.config.loading import validate_data
@@ -160,12 +160,12 @@ def test_option_defaults_are_the_library_defaults():
 
     # the config's defaults are the library's options dataclasses' defaults
     # every coding's options block (derived from its registered options class)
-    codings = translate.coding_options(scanner_cfg.ScannerOptionsCfg())
+    codings = scanner_translate.coding_options(scanner_cfg.ScannerOptionsCfg())
     assert codings["gray_code"] == GrayCodeOptions()
     from simlunar.scanner.codings import CODINGS
 
     assert codings == {n: e.options() for n, e in CODINGS.items()}
-    assert translate.dot_options(scanner_cfg.DotOptsCfg()) == DotOptions()
+    assert scanner_translate.dot_options(scanner_cfg.DotOptsCfg()) == DotOptions()
     sparse = {k: v for k, v in vars(CaptureOptions()).items() if k.startswith("sparse_")}
     assert scanner_cfg.CaptureOptsCfg().model_dump() == sparse
     weighted = dataclasses.asdict(RandomDrawOptions())
@@ -272,12 +272,12 @@ def test_translation_converts_units_and_routes_feature_options():
             }
         )
     )
-    rig = translate.rig_kwargs(cfg.study)
+    rig = scanner_translate.rig_kwargs(cfg.study)
     assert rig["cam_fov_x"] == pytest.approx(math.pi / 3)
     assert rig["elevation"] == pytest.approx(1.0)
     assert rig["baseline"] == pytest.approx(0.3)
     assert "distance" not in rig and "fov_x" not in rig  # unset: the preset / fit decides
-    opts = translate.scanner_options(cfg.study, cfg.render)
+    opts = scanner_translate.scanner_options(cfg.study, cfg.render)
     assert opts.dots.radius == 1.5
     assert opts.planner_opts == {
         "wavelet": translate.planner_kwargs("wavelet", cfg.study.options.planner_opts["wavelet"])

@@ -21,11 +21,11 @@ from simlunar.pipeline.inputs import (
     declared_files,
     input_files,
     input_hashes,
-    model_class,
     model_files,
     model_inputs,
 )
 from simlunar.pipeline.runner import unit_key
+from simlunar.pipeline.unit_models import model_class
 from simlunar.registry import FileOption, Options, file_option, option_info
 
 

@@ -14,9 +14,10 @@ import pytest
 from simlunar.config.loading import validate_data
 from simlunar.errors import InputChangedError
 from simlunar.pipeline.executors import LocalPoolExecutor
-from simlunar.pipeline.inputs import input_hashes, read_unit_models, verify_inputs
+from simlunar.pipeline.inputs import input_hashes
 from simlunar.pipeline.runner import expand, run_experiment
 from simlunar.pipeline.unit import compute_unit
+from simlunar.pipeline.unit_models import read_unit_models, verify_inputs
 
 
 def _train(seed: int):

@@ -2,7 +2,7 @@
 no pickle): every case is refused before any render in one line naming the key and the file,
 exit 2, nothing written (no ``config.yaml`` left behind), and no unverified byte unpickled.
 
-Each case breaks one check of :func:`simlunar.pipeline.inputs.read_unit_models` (presence,
+Each case breaks one check of :func:`simlunar.pipeline.unit_models.read_unit_models` (presence,
 size, version, record, hash, payload); the good model passes them all."""
 
 from __future__ import annotations

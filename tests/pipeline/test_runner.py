@@ -20,6 +20,7 @@ from fake_unit import fake_unit
 
 from simlunar.config.schema import ExperimentCfg
 from simlunar.pipeline.executors import LocalPoolExecutor, make_executor
+from simlunar.pipeline.rows import collect_rows
 from simlunar.pipeline.runner import expand, run_experiment, unit_key
 
 HERE = Path(__file__).resolve().parent
@@ -141,8 +142,6 @@ def test_a_reconstruction_with_a_results_version_has_it_in_the_key():
 
 
 def test_cached_rows_without_a_reconstruction_are_linear_rows():
-    from simlunar.pipeline.runner import collect_rows
-
     u = expand(cfg(sweep={}))[0]
     rows = [{"strategy": "grid", "density": 0.5, "k": 2, "trial": 0, "metric": "mse", "value": 1.0}]
     out, columns = collect_rows([u], {u.key: {"rows": rows}})
@@ -374,42 +373,6 @@ def test_the_tables_code_is_the_code_this_process_loaded(monkeypatch):
     before = summaries.tables_code()
     monkeypatch.setattr(summaries, "file_sha256", lambda path: "edited since")
     assert summaries.tables_code() == before
-
-
-def test_results_columns_do_not_depend_on_the_order_of_a_records_keys():
-    """A resumed run mixes cached records (JSON, keys sorted) and fresh ones (the study's
-    order): the CSV columns must be the same either way (a resumed LIDAR sweep wrote them in
-    another order)."""
-    from simlunar.pipeline.runner import collect_rows
-    from simlunar.results.records import WorkUnit
-
-    fresh = {
-        "planner": "random",
-        "k": 4,
-        "seconds": 1.5,
-        "frames": 3,
-        "metric": "mse",
-        "value": 1.0,
-    }
-    cached = dict(sorted(fresh.items()))
-    units = [WorkUnit(0, "a", {"x": 1}, {}), WorkUnit(1, "b", {"x": 2}, {})]
-    cols = []
-    for first, second in ((fresh, cached), (cached, fresh), (cached, cached)):
-        _, c = collect_rows(units, {"a": {"rows": [first]}, "b": {"rows": [second]}})
-        cols.append(c)
-    assert cols[0] == cols[1] == cols[2]
-    # a row without a reconstruction is linear's (rows written before reconstructions existed)
-    assert cols[0] == [
-        "unit",
-        "x",
-        "planner",
-        "reconstruction",
-        "k",
-        "metric",
-        "frames",
-        "seconds",
-        "value",
-    ]
 
 
 def test_every_swept_key_is_a_results_column_named_by_its_path(tmp_path):

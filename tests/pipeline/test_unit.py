@@ -50,10 +50,3 @@ def test_sensor_stage(rng):
     # 8 bits: values on the 1/255 lattice
     np.testing.assert_allclose(noisy * 255, np.round(noisy * 255), atol=1e-4)
     np.testing.assert_array_equal(noisy, sensor_image(rad, SensorCfg(bits=8), rng=1))
-
-
-def test_trial_means_of_reconstruction_info_skip_missing_values():
-    from simlunar.pipeline.unit import _trial_means
-
-    v = np.array([[0.2, 0.4], [np.nan, 0.3], [np.nan, np.nan]])
-    assert _trial_means(v) == [pytest.approx(0.3), pytest.approx(0.3), None]

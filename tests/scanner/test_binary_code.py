@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 
 from simlunar.config.scanner import ScannerOptionsCfg
-from simlunar.config.translate import coding_options
+from simlunar.config.scanner_translate import coding_options
 from simlunar.scanner import gray_code as gc
 from simlunar.scanner import rigs
 from simlunar.scanner.binary_code import BINARY, BinaryCodeOptions

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simlunar.pipeline.runner import collect_rows
+from simlunar.pipeline.rows import collect_rows
 from simlunar.reconstruction import RECONSTRUCTIONS, Guide
 from simlunar.results.records import WorkUnit
 from simlunar.study.protocol import exposure_count, guide_cost
