@@ -65,7 +65,7 @@ def test_spot_in_field_is_the_sampled_spot_s_share(profile, ratio):
     assert share == pytest.approx(np.mean(r < 0.5 * ratio * 1e-3), abs=3e-3)
     if profile == "gaussian" and ratio == 1.0:
         # the rover preset's 1 mrad beam in its 1 mrad field: 1 - e^-2 of the untruncated
-        # beam (the issue's +16 % signal of a receiver that sees the whole spot: 1 / 0.865)
+        # beam (a receiver that saw the whole spot read +16 % signal: 1 / 0.865)
         assert share == pytest.approx((1 - np.exp(-2.0)) / (1 - np.exp(-4.5)), rel=1e-12)
         assert 1 / share == pytest.approx(1.146, abs=0.01)
 

@@ -21,7 +21,7 @@ from simlunar.terrain.types import Terrain
 PERSPECTIVE = {"kind": "perspective", "width": 48, "height": 32, "fov_deg": 40,
                "position_m": [6.0, -4.0, 15.0], "look_at_m": [6.0, -4.2, 0.0]}  # fmt: skip
 STUDIES = {
-    "sampling": ({}, {"strategies": ["random", "wavelet_lloyd"], "densities": ["1/16"],
+    "sampling": ({}, {"strategies": ["random", "wavelet", "wavelet_lloyd"], "densities": ["1/16"],
                       "trials": 1, "metrics": ["mse", "grad"],
                       "reconstructions": ["linear", "shading", "photoclinometry"]}),
     "scanner": ({}, {"kind": "scanner", "modes": ["gray_code", "ambiguity_enhancement"],
@@ -67,7 +67,8 @@ def test_each_study_kind_runs_on_a_dem_with_holes(kind, hole, tmp_path, monkeypa
     figures = {p.name for p in (tmp_path / "out" / "figures").glob("*.png")}
     assert figures
     if kind == "sampling":
-        assert {"sparse_mesh_unit0.png", "panels_unit0.png"} <= figures
+        # the planner panels (of the wavelet plan), the reconstructions' panels, the sparse mesh
+        assert {"sparse_mesh_unit0.png", "panels_unit0.png", "recon_panels_unit0.png"} <= figures
 
 
 def test_the_sparse_mesh_keeps_the_holes_and_reads_no_nan(tmp_path):

@@ -40,7 +40,7 @@ def test_specs_build_by_name():
         specs.make_light("moon")
     with pytest.raises(
         ValueError,
-        match=r"^unknown BSDF 'phong'; valid: lambert, oren_nayar, hapke, lunar_lambert$",
+        match=r"^unknown BSDF 'phong'; valid: lambert, oren_nayar, hapke, lunar_lambert, lroc_empirical$",
     ):
         specs.make_bsdf("phong")
 
