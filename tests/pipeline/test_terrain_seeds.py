@@ -186,9 +186,10 @@ def test_error_vs_density_draws_one_pooled_panel_per_sweep_point(tmp_path, monke
 
     monkeypatch.setattr(F, "error_vs_density", spy)
     PF.write_figures(tmp_path / "r")
+    # every reconstruction on the panel (a line style each), not only the first
     assert drawn[:2] == [
-        ({"unit": [0, 1, 2], "reconstruction": "linear"}, F.BAND_LABEL_SEEDS),
-        ({"unit": [3, 4, 5], "reconstruction": "linear"}, F.BAND_LABEL_SEEDS),
+        ({"unit": [0, 1, 2]}, F.BAND_LABEL_SEEDS),
+        ({"unit": [3, 4, 5]}, F.BAND_LABEL_SEEDS),
     ]
     assert len(drawn) == 2 * 2  # two panels per metric, two metrics
     text = (tmp_path / "r" / "figures" / "captions.md").read_text()
