@@ -10,6 +10,10 @@ import os
 import sys
 from pathlib import Path
 
+# the checkout these tests belong to, ahead of any installed simlunar: run as a script, only this
+# folder is on sys.path, and an editable install made from another checkout (a git worktree
+# sharing one virtual environment) would run that checkout's code in the subprocess
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from fake_unit import fake_unit
