@@ -95,10 +95,16 @@ def local_lit_level(frame, options: ShadowOptions | None = None) -> np.ndarray:
     b = o.block
     nr, nc = -(-rows // b), -(-cols // b)
     padded = np.pad(f, ((0, nr * b - rows), (0, nc * b - cols)), constant_values=np.nan)
-    blocks = padded.reshape(nr, b, nc, b).transpose(0, 2, 1, 3).reshape(nr, nc, b * b)
+    blocks = padded.reshape(nr, b, nc, b).transpose(0, 2, 1, 3).reshape(nr * nc, b * b)
+    # np.nanpercentile loops in Python over the rows as soon as any holds a NaN (the padded
+    # edge blocks always do): the full blocks go through the vectorised np.percentile
+    partial = np.isnan(blocks).any(axis=1)
+    level = np.empty(nr * nc)
+    level[~partial] = np.percentile(blocks[~partial], o.percentile, axis=1)
     with warnings.catch_warnings():  # a block with no finite pixel: level 0
         warnings.simplefilter("ignore", RuntimeWarning)
-        level = np.nan_to_num(np.nanpercentile(blocks, o.percentile, axis=2), nan=0.0)
+        level[partial] = np.nanpercentile(blocks[partial], o.percentile, axis=1)
+    level = np.nan_to_num(level.reshape(nr, nc), nan=0.0)
     # a block whose level is itself at shadow level against the frame's (a shadow wider than
     # a block) takes its nearest lit block's level
     whole = np.nanpercentile(f, o.percentile)
