@@ -96,15 +96,9 @@ def reconstruction_saved_vs_sweep(
             y, lo, hi = cells.T
             dodge = (i - (n - 1) / 2) * (0.006 * float(np.ptp(pos)) if numeric else 0.1)
             x = pos + dodge
-            ax.plot(x, y, marker=st[r].marker, ms=3.5, lw=1.1 if numeric else 0,
-                    ls="-" if numeric else "none", color=st[r].colour,
-                    label=st[r].label)  # fmt: skip
-            ok = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(y)
-            if ok.any():
-                yerr = np.vstack([np.clip(y - lo, 0, None), np.clip(hi - y, 0, None)])
-                ax.errorbar(x[ok], y[ok], yerr=yerr[:, ok], fmt="none", ecolor=st[r].colour,
-                            capsize=1.5, elinewidth=0.7)  # fmt: skip
-            values += [float(v) for v in np.concatenate([y, lo, hi])]
+            values += _points_with_interval(ax, x, y, lo, hi, st[r], capsize=1.5, elinewidth=0.7,
+                                            ms=3.5, lw=1.1 if numeric else 0,
+                                            ls="-" if numeric else "none")  # fmt: skip
         ax.axhline(1.0, color="k", lw=0.6, ls=":")
         if not numeric:
             _category_ticks(ax, pos, xs)
@@ -272,14 +266,8 @@ def reconstruction_saved_by_planner(
         cells = np.array([_cell(saved.get(r, {}).get(s)) for s in strategies], float)
         y, lo, hi = cells.T
         x = pos + (i - (n - 1) / 2) * min(0.6 / n, 0.2)
-        ax.plot(x, y, marker=st[r].marker, ms=4.5, ls="none", color=st[r].colour,
-                label=st[r].label)  # fmt: skip
-        ok = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(y)
-        if ok.any():
-            yerr = np.vstack([np.clip(y - lo, 0, None), np.clip(hi - y, 0, None)])
-            ax.errorbar(x[ok], y[ok], yerr=yerr[:, ok], fmt="none", ecolor=st[r].colour,
-                        capsize=2, elinewidth=0.8)  # fmt: skip
-        values += [float(v) for v in np.concatenate([y, lo, hi])]
+        values += _points_with_interval(ax, x, y, lo, hi, st[r], capsize=2, elinewidth=0.8,
+                                        ms=4.5, ls="none")  # fmt: skip
     ax.axhline(1.0, color="k", lw=0.6, ls=":")
     ax.set_xticks(pos, [label(s) for s in strategies], fontsize=TICK_PT, rotation=30, ha="right")
     ax.set_xlim(pos[0] - 0.6, pos[-1] + 0.6)
@@ -296,3 +284,16 @@ def reconstruction_saved_by_planner(
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=TICK_PT,
               title="reconstruction", title_fontsize=TICK_PT)  # fmt: skip
     return fig, ax
+
+
+def _points_with_interval(ax, x, y, lo, hi, style, *, capsize, elinewidth, **line) -> list:
+    """One reconstruction's points (``line``: the plot's marker size and line keywords) and
+    their interval [lo, hi] as error bars where all three are finite; returns every value
+    drawn, for the axis limits."""
+    ax.plot(x, y, marker=style.marker, color=style.colour, label=style.label, **line)
+    ok = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(y)
+    if ok.any():
+        yerr = np.vstack([np.clip(y - lo, 0, None), np.clip(hi - y, 0, None)])
+        ax.errorbar(x[ok], y[ok], yerr=yerr[:, ok], fmt="none", ecolor=style.colour,
+                    capsize=capsize, elinewidth=elinewidth)  # fmt: skip
+    return [float(v) for v in np.concatenate([y, lo, hi])]
