@@ -18,6 +18,7 @@ tests check). :func:`gaussian_smooth` works in the cosine
 from __future__ import annotations
 
 import os
+import threading
 
 import numba
 import numpy as np
@@ -28,12 +29,23 @@ __all__ = ["central_gradient", "frankot_chellappa", "gaussian_smooth"]
 _WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
+def fft_workers() -> int:
+    """Threads for one scipy.fft transform: ``_WORKERS`` in the main thread, 1 in any other.
+
+    pocketfft stops its thread pool in a ``pthread_atfork`` handler; a threaded transform in one
+    thread while another thread forks fails ("Work item submitted after shutdown") or leaves the
+    forked child deadlocked. ``simlunar run --workers N`` does exactly that (units in threads, each
+    forking its study's workers), so transforms outside the main thread stay single-threaded.
+    """
+    return _WORKERS if threading.current_thread() is threading.main_thread() else 1
+
+
 def _dct(a):
-    return sfft.dctn(a, type=2, norm="ortho", workers=_WORKERS)
+    return sfft.dctn(a, type=2, norm="ortho", workers=fft_workers())
 
 
 def _idct(a):
-    return sfft.idctn(a, type=2, norm="ortho", workers=_WORKERS)
+    return sfft.idctn(a, type=2, norm="ortho", workers=fft_workers())
 
 
 def _freqs(n: int) -> np.ndarray:
@@ -165,10 +177,10 @@ def _solve_quarter(gr, gc, u, w):
     q_rr = u[0] * u[0] + w * t[0] * t[0]
     q_cc = u[1] * u[1] + w * t[1] * t[1]
     q_rc = u[0] * u[1] + w * t[0] * t[1]
-    a = sfft.dst(sfft.dct(gr, type=2, axis=1, workers=_WORKERS), type=2, axis=0,
-                 workers=_WORKERS)  # fmt: skip
-    b = sfft.dct(sfft.dst(gc, type=2, axis=1, workers=_WORKERS), type=2, axis=0,
-                 workers=_WORKERS)  # fmt: skip
+    a = sfft.dst(sfft.dct(gr, type=2, axis=1, workers=fft_workers()), type=2, axis=0,
+                 workers=fft_workers())  # fmt: skip
+    b = sfft.dct(sfft.dst(gc, type=2, axis=1, workers=fft_workers()), type=2, axis=0,
+                 workers=fft_workers())  # fmt: skip
     sr = np.sin(np.pi * np.arange(rows + 1) / rows)
     sc = np.sin(np.pi * np.arange(cols + 1) / cols)
     sr[-1] = 0.0  # sin(pi) exactly
@@ -176,8 +188,8 @@ def _solve_quarter(gr, gc, u, w):
     cc = np.empty((rows, cols))
     ss = np.empty((rows, cols))
     _quarter_modes(a, b, sr, sc, q_rr, q_cc, q_rc, cc, ss)
-    z = sfft.dctn(cc, type=3, workers=_WORKERS)
-    z -= sfft.dstn(ss, type=3, workers=_WORKERS)
+    z = sfft.dctn(cc, type=3, workers=fft_workers())
+    z -= sfft.dstn(ss, type=3, workers=fft_workers())
     z /= 4.0 * rows * cols
     return z
 

@@ -52,7 +52,7 @@ from simlunar.reconstruction._reading import READING_OPTIONS, ReadingChecks
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import calibrate
 from simlunar.reconstruction.heldout import checked_blend
-from simlunar.reconstruction.integrate import central_gradient
+from simlunar.reconstruction.integrate import central_gradient, fft_workers
 from simlunar.reconstruction.shading import ShadingOptions, fallback_gamma, shading_frames
 from simlunar.registry import option, shared_option
 
@@ -268,9 +268,15 @@ def _preconditioner(shape, u, lam_t, shift):
     inv = inv.astype(np.float32)
 
     def apply(x):  # single precision: a preconditioner only has to be close
-        f = sfft.dctn(x.reshape(shape).astype(np.float32), type=2, norm="ortho", workers=2)
+        f = sfft.dctn(
+            x.reshape(shape).astype(np.float32), type=2, norm="ortho", workers=min(2, fft_workers())
+        )
         f *= inv
-        return sfft.idctn(f, type=2, norm="ortho", workers=2).ravel().astype(np.float64)
+        return (
+            sfft.idctn(f, type=2, norm="ortho", workers=min(2, fft_workers()))
+            .ravel()
+            .astype(np.float64)
+        )
 
     n = rows * cols
     return splinalg.LinearOperator((n, n), matvec=apply, dtype=np.float64)
