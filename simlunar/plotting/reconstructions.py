@@ -93,10 +93,9 @@ def reconstruction_saved_vs_sweep(
     for ax, s in zip(axes, strategies):
         for i, r in enumerate(reconstructions):
             cells = np.array([_cell(sv.get(r, {}).get(s)) for _, sv in points], float)
-            y, lo, hi = cells.T
             dodge = (i - (n - 1) / 2) * (0.006 * float(np.ptp(pos)) if numeric else 0.1)
             x = pos + dodge
-            values += _points_with_interval(ax, x, y, lo, hi, st[r], capsize=1.5, elinewidth=0.7,
+            values += _points_with_interval(ax, x, cells, st[r], capsize=1.5, elinewidth=0.7,
                                             ms=3.5, lw=1.1 if numeric else 0,
                                             ls="-" if numeric else "none")  # fmt: skip
         ax.axhline(1.0, color="k", lw=0.6, ls=":")
@@ -264,9 +263,8 @@ def reconstruction_saved_by_planner(
     values: list[float] = [0.8, 1.25]
     for i, r in enumerate(reconstructions):
         cells = np.array([_cell(saved.get(r, {}).get(s)) for s in strategies], float)
-        y, lo, hi = cells.T
         x = pos + (i - (n - 1) / 2) * min(0.6 / n, 0.2)
-        values += _points_with_interval(ax, x, y, lo, hi, st[r], capsize=2, elinewidth=0.8,
+        values += _points_with_interval(ax, x, cells, st[r], capsize=2, elinewidth=0.8,
                                         ms=4.5, ls="none")  # fmt: skip
     ax.axhline(1.0, color="k", lw=0.6, ls=":")
     ax.set_xticks(pos, [label(s) for s in strategies], fontsize=TICK_PT, rotation=30, ha="right")
@@ -286,10 +284,11 @@ def reconstruction_saved_by_planner(
     return fig, ax
 
 
-def _points_with_interval(ax, x, y, lo, hi, style, *, capsize, elinewidth, **line) -> list:
-    """One reconstruction's points (``line``: the plot's marker size and line keywords) and
-    their interval [lo, hi] as error bars where all three are finite; returns every value
-    drawn, for the axis limits."""
+def _points_with_interval(ax, x, cells, style, *, capsize, elinewidth, **line) -> list:
+    """One reconstruction's points (``cells``: rows of value, interval low, interval high;
+    ``line``: the plot's marker size and line keywords) and their interval as error bars where
+    all three are finite; returns every value drawn, for the axis limits."""
+    y, lo, hi = np.asarray(cells, float).T
     ax.plot(x, y, marker=style.marker, color=style.colour, label=style.label, **line)
     ok = np.isfinite(lo) & np.isfinite(hi) & np.isfinite(y)
     if ok.any():
