@@ -47,10 +47,18 @@ share 0.62 at a 30 deg sun (1.73-2.37x fewer samples than linear for equal MSE),
 (1.08x), 0.002 under camera-centred light (1.00x).
 
 **A real flash** (``guide.flash``): its frame is flat-fielded from the rig's geometry on the
-samples' linear surface (:mod:`.flatfield`); optionally once more on the first pass's fused
-surface (``flash_refine``, off: the flash lights off-centre cells obliquely, so its frame keeps
-a first-order shading of the relief the samples miss, but the fused surface's slope across
-the light is linear's and the second pass gained nothing consistent). A co-located frame whose own noise
+samples' linear surface (:mod:`.flatfield`). The flash lights off-centre cells obliquely, so
+the flat-fielded frame keeps a first-order shading of the relief the samples miss, and the
+ratio reads the slope along ``w = b + a k`` per pixel (:func:`.flatfield.flash_relief_gain`),
+not along the sun's ``b``. ``flash_refine`` (off by default: twice the cost) makes a second
+pass: the frame flat-fielded on the first pass's fused surface and its slopes read around
+that surface's along ``w`` (least norm). Measured on the quarter-scale aerial_1 night flash
+(``experiments/fusion_flash_quarter.yaml``, one terrain, 2 trials): samples saved 2.97x ->
+3.76x (ideal light 3.81x); a second pass flat-fielded on the fused surface but read along
+``b`` alone gave 3.04x, and reading ``w`` in both passes 3.50x (the first pass's ``w`` is
+taken around the linear surface, whose slopes miss the detail). A daylight flash blurred by
+``flat_noise`` keeps one pass (its pixel-scale shading is gone: refined, 0.1 / 0.01 x the sun
+read 2.09x / 1.41x against 2.05x / 1.54x). A co-located frame whose own noise
 (:func:`frame_noise`, estimated from the frame alone) exceeds ``flat_noise`` -- a daylight
 flash far weaker than the sun, flash-on minus flash-off -- is blurred down to that level first
 (:func:`denoised_flat`): divided raw, its noise went into every pixel of the ratio with heavy
@@ -81,7 +89,7 @@ from simlunar.reconstruction.calibration import (
     calibrate,
     valid_pixels,
 )
-from simlunar.reconstruction.flatfield import flat_field
+from simlunar.reconstruction.flatfield import flash_relief_gain, flat_field
 from simlunar.reconstruction.heldout import blend_detail, checked_blend
 from simlunar.reconstruction.integrate import central_gradient, frankot_chellappa
 from simlunar.reconstruction.shadow import ShadowOptions, shadow_mask
@@ -151,9 +159,9 @@ class ShadingOptions(ReadingChecks):
     )
     flash_refine: bool = option(
         False,
-        doc="a flash's flat frame: flat-field it again on the first pass's fused surface (its "
-        "oblique light's shading of the relief the samples miss); measured on quarter-scale "
-        "aerial_1 at night: -5 % to +7 % per density, no consistent gain, twice the cost",
+        doc="a flash's flat frame (not blurred by flat_noise): a second pass flat-fielded on "
+        "the first pass's fused surface, its slopes read around that surface's with the "
+        "flash's relief gain per pixel (flatfield.flash_relief_gain); twice the cost",
         choices=(True, False),
     )
 
@@ -308,6 +316,41 @@ def _image_slope(image, valid, cal: Calibration, lin_along, o: ShadingOptions):
     return np.where(valid, p, lin_along)
 
 
+def _flash_slopes(image, valid, cal: Calibration, guide: Guide, o, surface):
+    """Slopes along and across ``cal.direction`` read from a flash ratio flat-fielded on a
+    fused ``surface`` (a flash's second pass, ``flash_refine``).
+
+    The flash lights each cell from its own direction, so the ratio flat-fielded on
+    ``surface`` reads ``a + b . G_f + w . (G - G_f)`` with ``w = b + a k`` per pixel
+    (:func:`.flatfield.flash_relief_gain`; ``G_f`` the fused surface's slope): one slope
+    component, along ``w``, which turns away from ``b`` with the flash's tilt (up to ~0.5
+    |b| at the corners of an aerial view from 50 m under a 30 deg sun). Its least-norm
+    reading ``G - G_f = w (I - a - b . G_f) / |w|^2`` is added to the fused surface's
+    slopes along and across ``u`` (unread pixels keep the fused surface's). ``k = 0`` (a
+    light straight above) reads ``(I - a) / |b|`` along ``u``, as :func:`_image_slope` does.
+    """
+    u = cal.direction
+    t = np.array([-u[1], u[0]])
+    fr, fc = central_gradient(surface)
+    fr /= guide.spacing
+    fc /= guide.spacing
+    k = flash_relief_gain(surface, guide.flash, spacing=guide.spacing)
+    smooth = ndimage.gaussian_filter(image, o.image_sigma, truncate=3.0) if o.image_sigma else image
+    b = cal.b
+    rhs = smooth - cal.a - (b[0] * fr + b[1] * fc)
+    wr = b[0] + cal.a * k[0]
+    wc = b[1] + cal.a * k[1]
+    # |w| >= ~0.46 |b| for a 30 deg sun and a light 43 deg off the vertical; the floor guards
+    # a light along the sun (the ratio then carries no slope)
+    rhs /= np.maximum(wr * wr + wc * wc, 1e-6 * float(b @ b))
+    fused_along = u[0] * fr + u[1] * fc
+    p_s = (fused_along + rhs * (wr * u[0] + wc * u[1])) / o.gain
+    np.clip(p_s, -o.clip, o.clip, out=p_s)
+    p_s = np.where(valid, p_s, fused_along)
+    p_t = t[0] * fr + t[1] * fc + np.where(valid, rhs * (wr * t[0] + wc * t[1]) / o.gain, 0.0)
+    return p_s, p_t
+
+
 def fuse_slopes(
     lin: LinearField, gr, gc, gamma: float, *, spacing=1.0, along=None, across_weight=1.0
 ):
@@ -393,14 +436,18 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
 
 
 def _refined_detail(lin: LinearField, guide: Guide, o: ShadingOptions, flat=None, shadows=None):
-    """:func:`_shading_detail`, and for a flash's flat frame once more with the flat-field
-    computed on the fused surface of the first pass (``flash_refine``): the flash lights
-    off-centre cells obliquely (up to ~43 deg from the vertical at the corners of an aerial
-    view from 50 m), so its frame keeps a first-order shading of the relief the samples do not
-    resolve, which the linear surface's normals cannot divide out and the fused surface's
-    mostly can."""
+    """:func:`_shading_detail`, and for a flash's flat frame once more (``flash_refine``)
+    flat-fielded on the fused surface of the first pass and read around its slopes with the
+    flash's relief gain (:func:`_flash_slopes`): the flash lights off-centre cells obliquely
+    (up to ~43 deg from the vertical at the corners of an aerial view from 50 m), so its frame
+    keeps a first-order shading of the relief the samples do not resolve, which the linear
+    surface's normals cannot divide out, and turns the slope the ratio reads away from the
+    sun's direction. ``flat`` is the co-located frame as read (:func:`denoised_flat`): one
+    blurred to its noise target has lost the pixel-scale shading this pass reads, and keeps
+    the first pass."""
     z_fc, gamma, info = _shading_detail(lin, guide, o, flat=flat, shadows=shadows)
-    if z_fc is None or guide.flash is None or not o.flash_refine:
+    refine = o.flash_refine and o.use_flat and guide.flash is not None
+    if z_fc is None or not refine or flat is None or flat is not guide.flat:
         return z_fc, gamma, info
     fused = blend_detail(lin, z_fc, gamma)
     z2, gamma2, info2 = _shading_detail(lin, guide, o, surface=fused, flat=flat, shadows=shadows)
@@ -471,8 +518,11 @@ def _shading_detail(
         u = cal0.direction
         t = np.array([-u[1], u[0]])
         _, im, v = frames[best]
-        p_s = _image_slope(im, v, cal0, u[0] * lr + u[1] * lc, o)
-        p_t = t[0] * lr + t[1] * lc
+        if surface is not None:  # a flash's second pass (flash_refine)
+            p_s, p_t = _flash_slopes(im, v, cal0, guide, o, surface)
+        else:
+            p_s = _image_slope(im, v, cal0, u[0] * lr + u[1] * lc, o)
+            p_t = t[0] * lr + t[1] * lc
         gr = p_s * u[0] + p_t * t[0]
         gc = p_s * u[1] + p_t * t[1]
     along, weight = (None, 1.0) if stereo else (cal0.direction, o.across_weight)
