@@ -54,11 +54,14 @@ not along the sun's ``b``. ``flash_refine`` (off by default: twice the cost) mak
 pass: the frame flat-fielded on the first pass's fused surface and its slopes read around
 that surface's along ``w`` (least norm). Measured on the quarter-scale aerial_1 night flash
 (``experiments/fusion_flash_quarter.yaml``, one terrain, 2 trials): samples saved 2.97x ->
-3.76x (ideal light 3.81x); a second pass flat-fielded on the fused surface but read along
-``b`` alone gave 3.04x, and reading ``w`` in both passes 3.50x (the first pass's ``w`` is
-taken around the linear surface, whose slopes miss the detail). A daylight flash blurred by
-``flat_noise`` keeps one pass (its pixel-scale shading is gone: refined, 0.1 / 0.01 x the sun
-read 2.09x / 1.41x against 2.05x / 1.54x). A co-located frame whose own noise
+3.76x, daylight at 1.0 x the sun 2.95x -> 3.68x; a second pass flat-fielded on the fused
+surface but read along ``b`` alone 3.04x, read around the fused slopes along ``b`` 3.60x,
+``w`` in both passes 3.50x. It does not close the gap to the ideal light: most of the gain is
+the fused surface's slopes across the light, and the same second pass lifts the ideal frame
+from 3.81x to 4.96x (night flash 0.76 of it; 0.78 with one pass each). A flat blurred by
+``flat_noise`` wider than ``image_sigma`` keeps one pass (its shading at the scale the second
+pass reads is gone; a rule set after seeing the daylight flashes of that experiment, blurred
+1.1 and 11 pixels at 0.1 / 0.01 x the sun, refined 2.09x / 1.41x against 2.05x / 1.54x). A co-located frame whose own noise
 (:func:`frame_noise`, estimated from the frame alone) exceeds ``flat_noise`` -- a daylight
 flash far weaker than the sun, flash-on minus flash-off -- is blurred down to that level first
 (:func:`denoised_flat`): divided raw, its noise went into every pixel of the ratio with heavy
@@ -301,11 +304,16 @@ def denoised_flat(flat, target: float) -> np.ndarray:
     ``nu / target``; unchanged when its noise is at or under ``target`` already. A noisy flat
     (a daylight flash much weaker than the sun: flash-on minus flash-off) would otherwise put
     its noise into every pixel of the ratio, heavy-tailed where the flat nears zero."""
+    return _denoised(flat, target)[0]
+
+
+def _denoised(flat, target: float):
+    """:func:`denoised_flat` and the sigma (pixels) of its blur (0: unchanged)."""
     nu = frame_noise(flat)
     if nu <= target:
-        return flat
+        return flat, 0.0
     sigma = min(nu / (2.0 * math.sqrt(math.pi) * target), max(flat.shape) / 4.0)
-    return ndimage.gaussian_filter(np.asarray(flat, np.float64), sigma, truncate=3.0)
+    return ndimage.gaussian_filter(np.asarray(flat, np.float64), sigma, truncate=3.0), sigma
 
 
 def _image_slope(image, valid, cal: Calibration, lin_along, o: ShadingOptions):
@@ -416,10 +424,12 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     if guide.shape != lin.shape:
         raise ValueError(f"guide image has shape {guide.shape}, the output grid {lin.shape}")
     # the co-located frame's denoising reads the frame alone: once for every pass and fold
-    flat = denoised_flat(guide.flat, o.flat_noise) if guide.flat is not None else None
+    flat, blur = _denoised(guide.flat, o.flat_noise) if guide.flat is not None else (None, 0.0)
+    # a flash's second pass reads the flat's shading at the image's own smoothing scale
+    refine = o.flash_refine and o.use_flat and guide.flash is not None and blur <= o.image_sigma
     # the shadows are read from the frames alone: once for every pass and fold
     shadows = shadow_masks(guide, o, flat=flat if o.use_flat else None)
-    z_fc, gamma, info = _refined_detail(lin, guide, o, flat, shadows)
+    z_fc, gamma, info = _refined_detail(lin, guide, o, flat, shadows, refine=refine)
     info["shadow_share"] = float(shadows[0].mean())
     if z_fc is None:
         return Reconstructed(lin.heights, info)
@@ -427,7 +437,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     # the detail is made from the samples (the calibration, the slopes where the image is not
     # read, the flat-field's surface): the check remakes it from the kept samples only
     def remade(keep):
-        field = _refined_detail(keep, guide, o, flat, shadows)[0]
+        field = _refined_detail(keep, guide, o, flat, shadows, refine=refine)[0]
         return np.zeros(lin.shape) if field is None else field
 
     checked = remade if o.heldout_check else None
@@ -435,19 +445,20 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
     return Reconstructed(z, info)
 
 
-def _refined_detail(lin: LinearField, guide: Guide, o: ShadingOptions, flat=None, shadows=None):
+def _refined_detail(
+    lin: LinearField, guide: Guide, o: ShadingOptions, flat=None, shadows=None, *, refine=False
+):
     """:func:`_shading_detail`, and for a flash's flat frame once more (``flash_refine``)
     flat-fielded on the fused surface of the first pass and read around its slopes with the
     flash's relief gain (:func:`_flash_slopes`): the flash lights off-centre cells obliquely
     (up to ~43 deg from the vertical at the corners of an aerial view from 50 m), so its frame
     keeps a first-order shading of the relief the samples do not resolve, which the linear
     surface's normals cannot divide out, and turns the slope the ratio reads away from the
-    sun's direction. ``flat`` is the co-located frame as read (:func:`denoised_flat`): one
-    blurred to its noise target has lost the pixel-scale shading this pass reads, and keeps
-    the first pass."""
+    sun's direction. ``refine``: whether to (:func:`shading` says so for ``flash_refine``
+    unless :func:`denoised_flat` blurred the flat wider than ``image_sigma``: its shading at
+    the scale this pass reads is gone)."""
     z_fc, gamma, info = _shading_detail(lin, guide, o, flat=flat, shadows=shadows)
-    refine = o.flash_refine and o.use_flat and guide.flash is not None
-    if z_fc is None or not refine or flat is None or flat is not guide.flat:
+    if z_fc is None or not refine:
         return z_fc, gamma, info
     fused = blend_detail(lin, z_fc, gamma)
     z2, gamma2, info2 = _shading_detail(lin, guide, o, surface=fused, flat=flat, shadows=shadows)
