@@ -9,6 +9,7 @@ import numpy as np
 from scipy import ndimage
 
 from simlunar.reconstruction.delaunay import SampleMesh, _check_inputs
+from simlunar.reconstruction.integrate import central_gradient
 
 __all__ = [
     "LinearField",
@@ -51,6 +52,16 @@ class LinearField:
             self.mesh.fill_nearest(heights, covered, mesh_vals)
         self.heights = heights
         self.pitch = sample_pitch(len(pts), shape)
+        self._slopes = None
+
+    def slopes(self) -> tuple[np.ndarray, np.ndarray]:
+        """``integrate.central_gradient(heights)`` (per cell), made once (read-only)."""
+        if self._slopes is None:
+            gr, gc = central_gradient(self.heights)
+            gr.setflags(write=False)
+            gc.setflags(write=False)
+            self._slopes = (gr, gc)
+        return self._slopes
 
     def interpolate(self, at_samples) -> np.ndarray:
         """Linear interpolation of other values at the same samples (same triangles):

@@ -59,7 +59,9 @@ class FlashGeometry(Options):
         return a / np.linalg.norm(a)
 
 
-def flash_falloff(values, geometry: FlashGeometry, *, spacing: float = 1.0) -> np.ndarray:
+def flash_falloff(
+    values, geometry: FlashGeometry, *, spacing: float = 1.0, slopes=None
+) -> np.ndarray:
     """Relative irradiance (max 1) the flash gives a surface of per-cell ``values``.
 
     Parameters
@@ -70,6 +72,8 @@ def flash_falloff(values, geometry: FlashGeometry, *, spacing: float = 1.0) -> n
     geometry : FlashGeometry
     spacing : float
         Cell size (m).
+    slopes : tuple of ndarray, optional
+        ``integrate.central_gradient(values)`` when already made (the same to the bit).
 
     Returns
     -------
@@ -81,7 +85,10 @@ def flash_falloff(values, geometry: FlashGeometry, *, spacing: float = 1.0) -> n
         raise ValueError(f"values must be a (rows, cols) grid, got shape {v.shape}")
     sign = -1.0 if geometry.values == "depth" else 1.0
     up = sign * v
-    gr, gc = central_gradient(up)
+    if slopes is None:
+        gr, gc = central_gradient(up)
+    else:  # central differences of -v are those of v negated, exactly
+        gr, gc = sign * slopes[0], sign * slopes[1]
     a = geometry.axis
     e = _falloff(
         up, gr, gc, float(spacing), geometry.row * spacing, geometry.col * spacing,
@@ -120,10 +127,12 @@ def _falloff(up, gr, gc, s, pr, pc, pu, ar, ac, au, n, cos_cut):  # pragma: no c
     return out
 
 
-def flat_field(flat, values, geometry: FlashGeometry, *, spacing: float = 1.0) -> np.ndarray:
+def flat_field(
+    flat, values, geometry: FlashGeometry, *, spacing: float = 1.0, slopes=None
+) -> np.ndarray:
     """``flat`` divided by :func:`flash_falloff` of ``values`` (0 where the flash gives less
-    than 1e-3 of its maximum: out of the beam, or facing away)."""
-    f = flash_falloff(values, geometry, spacing=spacing)
+    than 1e-3 of its maximum: out of the beam, or facing away); ``slopes``: as there."""
+    f = flash_falloff(values, geometry, spacing=spacing, slopes=slopes)
     out = np.asarray(flat, dtype=np.float64) / np.maximum(f, 1e-3)
     out[f < 1e-3] = 0.0
     return out

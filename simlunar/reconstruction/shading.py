@@ -226,8 +226,12 @@ def shading_frames(
         if guide.flash is not None:
             if linear is None and surface is None:
                 raise ValueError("a flash's flat frame is flat-fielded on the samples: give linear")
-            known = linear.heights if surface is None else surface
-            flat = flat_field(flat, known, guide.flash, spacing=guide.spacing)
+            if surface is None:
+                flat = flat_field(
+                    flat, linear.heights, guide.flash, spacing=guide.spacing, slopes=linear.slopes()
+                )
+            else:
+                flat = flat_field(flat, surface, guide.flash, spacing=guide.spacing)
         med = float(np.median(flat))
         floor = o.flat_guard * med if med > 0 else o.flat_guard
         lit = flat > floor
@@ -510,9 +514,7 @@ def _shading_detail(
     if gamma == 0.0 or cal0.gain == 0.0:
         info["gamma"] = 0.0
         return None, 0.0, info
-    lr, lc = central_gradient(lin.heights)
-    lr /= guide.spacing
-    lc /= guide.spacing
+    lr, lc = (g / guide.spacing for g in lin.slopes())
     if stereo:
         rhs_r = np.zeros(lin.shape)
         rhs_c = np.zeros(lin.shape)

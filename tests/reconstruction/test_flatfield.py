@@ -231,3 +231,20 @@ def test_the_second_pass_reads_the_slope_along_the_flashs_relief_gain(rng):
     p_s, p_t = _flash_slopes(image, valid, cal, guide, o, fused)
     np.testing.assert_allclose(p_s[5:9], (u[0] * fr + u[1] * fc)[5:9], atol=1e-12)
     np.testing.assert_allclose(p_t[5:9], (t[0] * fr + t[1] * fc)[5:9], atol=1e-12)
+
+
+@pytest.mark.parametrize("values", ["height", "depth"])
+def test_the_falloff_from_the_linear_fields_own_slopes_is_the_same_to_the_bit(rng, values):
+    """The flat-field of the samples' linear surface reuses the field's slopes (made once for
+    the slopes the image does not give): the same falloff as its own central differences."""
+    shape = (50, 70)
+    pts = rng.integers(0, 50, size=(60, 2)) * [1, 1.4]
+    lin = linear_field(np.rint(pts), rng.normal(size=60), shape)
+    geo = FlashGeometry(row=20.0, col=30.0, level=-60.0 if values == "depth" else 60.0,
+                        beam_exponent=2.0, values=values)  # fmt: skip
+    flat = rng.gamma(3.0, 1.0, shape)
+    want = flat_field(flat, lin.heights, geo, spacing=0.3)
+    got = flat_field(flat, lin.heights, geo, spacing=0.3, slopes=lin.slopes())
+    np.testing.assert_array_equal(got, want)
+    gr, gc = lin.slopes()
+    assert lin.slopes()[0] is gr and not gr.flags.writeable and not gc.flags.writeable
