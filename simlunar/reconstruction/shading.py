@@ -49,8 +49,8 @@ share 0.62 at a 30 deg sun (1.73-2.37x fewer samples than linear for equal MSE),
 **A real flash** (``guide.flash``): its frame is flat-fielded from the rig's geometry on the
 samples' linear surface (:mod:`.flatfield`). The flash lights off-centre cells obliquely, so
 the flat-fielded frame keeps a first-order shading of the relief the samples miss, and the
-ratio reads the slope along ``w = b + a k`` per pixel (:func:`.flatfield.flash_relief_gain`),
-not along the sun's ``b``. ``flash_refine`` (off by default: twice the cost) makes a second
+ratio answers the slope along ``w = b + a k`` per pixel (:func:`.flatfield.flash_relief_gain`),
+not along the sun's ``b`` (the first pass reads it along ``b``). ``flash_refine`` (off by default: twice the cost) makes a second
 pass: the frame flat-fielded on the first pass's fused surface and its slopes read around
 that surface's along ``w`` (least norm). Measured on the quarter-scale aerial_1 night flash
 (``experiments/fusion_flash_quarter.yaml``, one terrain, 2 trials): samples saved 2.97x ->
@@ -61,8 +61,10 @@ the fused surface's slopes across the light, and the same second pass lifts the 
 from 3.81x to 4.96x (night flash 0.76 of it; 0.78 with one pass each). A flat blurred by
 ``flat_noise`` wider than ``image_sigma`` keeps one pass (its shading at the scale the second
 pass reads is gone; a rule set after seeing the daylight flashes of that experiment, blurred
-1.1 and 11 pixels at 0.1 / 0.01 x the sun, refined 2.09x / 1.41x against 2.05x / 1.54x). A co-located frame whose own noise
-(:func:`frame_noise`, estimated from the frame alone) exceeds ``flat_noise`` -- a daylight
+1.1 and 11 pixels at 0.1 / 0.01 x the sun, refined 2.09x / 1.41x against 2.05x / 1.54x).
+
+A co-located frame whose own noise (:func:`frame_noise`, estimated from the frame alone)
+exceeds ``flat_noise`` -- a daylight
 flash far weaker than the sun, flash-on minus flash-off -- is blurred down to that level first
 (:func:`denoised_flat`): divided raw, its noise went into every pixel of the ratio with heavy
 tails where it nears zero, and the held-out check, which sees the detail at ~1 % of the cells
