@@ -164,9 +164,10 @@ class ShadingOptions(ReadingChecks):
     )
     flash_refine: bool = option(
         False,
-        doc="a flash's flat frame (not blurred by flat_noise): a second pass flat-fielded on "
-        "the first pass's fused surface, its slopes read around that surface's with the "
-        "flash's relief gain per pixel (flatfield.flash_relief_gain); twice the cost",
+        doc="a flash's flat frame (blurred by flat_noise no wider than image_sigma): a second "
+        "pass flat-fielded on the first pass's fused surface, its slopes read around that "
+        "surface's with the flash's relief gain per pixel (flatfield.flash_relief_gain); "
+        "twice the cost",
         choices=(True, False),
     )
 
