@@ -248,3 +248,16 @@ def test_the_falloff_from_the_linear_fields_own_slopes_is_the_same_to_the_bit(rn
     np.testing.assert_array_equal(got, want)
     gr, gc = lin.slopes()
     assert lin.slopes()[0] is gr and not gr.flags.writeable and not gc.flags.writeable
+
+
+def test_a_flat_blurred_wider_than_the_images_smoothing_keeps_one_pass():
+    """flash_refine reads the flat's shading at the image's smoothing scale: a flat whose
+    noise made denoised_flat blur it by more than image_sigma gives the one-pass result; a
+    sharp one does not."""
+    scene, geo, flash = _oblique_flash_scene(4)
+    noisy = flash + np.random.default_rng(0).normal(0, 0.3 * np.median(flash), flash.shape)
+    for frame, same in ((noisy, True), (flash, False)):
+        guide = Guide(scene.image, flat=frame, flash=geo)
+        one = _mse_gain(scene, guide, 4)
+        two = _mse_gain(scene, guide, 4, flash_refine=True)
+        assert bool(one == two) is same
