@@ -31,8 +31,9 @@ RECONSTRUCTIONS.register(
     summary="slope along the sun, anchored",
     guided=True,
     # 2: the held-out check pools its folds at sparse densities and remakes the detail from
-    # the kept samples only (it was checked as made from all of them)
-    results_version=2,
+    # the kept samples only (it was checked as made from all of them); 3: a flash's second
+    # pass (flash_refine) reads around the fused surface's slopes with the relief gain
+    results_version=3,
 )
 RECONSTRUCTIONS.register(
     "photoclinometry",

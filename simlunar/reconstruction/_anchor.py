@@ -8,7 +8,8 @@ import math
 import numpy as np
 from scipy import ndimage
 
-from simlunar.reconstruction.delaunay import _check_inputs, reconstruct
+from simlunar.reconstruction.delaunay import SampleMesh, _check_inputs
+from simlunar.reconstruction.integrate import central_gradient
 
 __all__ = [
     "LinearField",
@@ -36,22 +37,36 @@ class LinearField:
         Cells inside the convex hull (those the triangles cover).
     pitch : float
         ``density^(-1/2)`` cells, density = k / (rows cols).
+    mesh : SampleMesh
+        The samples' triangles, made once: every interpolation at these samples reuses them.
     """
 
     def __init__(self, points_rc, values, shape):
         pts, vals, shape = _check_inputs(points_rc, values, shape)
         self.points, self.values, self.shape = pts, vals, shape
-        inside = reconstruct(pts, vals, shape, outside="nan")
-        self.hull = np.isfinite(inside)
-        if self.hull.all():
-            self.heights = inside
-        else:
-            self.heights = reconstruct(pts, vals, shape, outside="nearest")
+        self.mesh = SampleMesh(pts, shape)
+        # one rasterisation: NaN outside the triangles (the hull), then the nearest fill
+        heights, covered, mesh_vals = self.mesh.rasterised(vals)
+        self.hull = np.isfinite(heights)
+        if not self.hull.all():
+            self.mesh.fill_nearest(heights, covered, mesh_vals)
+        self.heights = heights
         self.pitch = sample_pitch(len(pts), shape)
+        self._slopes = None
+
+    def slopes(self) -> tuple[np.ndarray, np.ndarray]:
+        """``integrate.central_gradient(heights)`` (per cell), made once (read-only)."""
+        if self._slopes is None:
+            gr, gc = central_gradient(self.heights)
+            gr.setflags(write=False)
+            gc.setflags(write=False)
+            self._slopes = (gr, gc)
+        return self._slopes
 
     def interpolate(self, at_samples) -> np.ndarray:
-        """Linear interpolation of other values at the same samples (same triangles)."""
-        return reconstruct(self.points, at_samples, self.shape, outside="nearest")
+        """Linear interpolation of other values at the same samples (same triangles):
+        ``delaunay.reconstruct(points, at_samples, shape, outside="nearest")``."""
+        return self.mesh.interpolate(at_samples, outside="nearest")
 
 
 def linear_field(points_rc, values, shape) -> LinearField:

@@ -26,7 +26,7 @@ import numpy as np
 from simlunar.reconstruction.integrate import central_gradient
 from simlunar.registry import Options, option
 
-__all__ = ["FlashGeometry", "flash_falloff", "flat_field"]
+__all__ = ["FlashGeometry", "flash_falloff", "flash_relief_gain", "flat_field"]
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,9 @@ class FlashGeometry(Options):
         return a / np.linalg.norm(a)
 
 
-def flash_falloff(values, geometry: FlashGeometry, *, spacing: float = 1.0) -> np.ndarray:
+def flash_falloff(
+    values, geometry: FlashGeometry, *, spacing: float = 1.0, slopes=None
+) -> np.ndarray:
     """Relative irradiance (max 1) the flash gives a surface of per-cell ``values``.
 
     Parameters
@@ -70,6 +72,8 @@ def flash_falloff(values, geometry: FlashGeometry, *, spacing: float = 1.0) -> n
     geometry : FlashGeometry
     spacing : float
         Cell size (m).
+    slopes : tuple of ndarray, optional
+        ``integrate.central_gradient(values)`` when already made (the same to the bit).
 
     Returns
     -------
@@ -81,7 +85,10 @@ def flash_falloff(values, geometry: FlashGeometry, *, spacing: float = 1.0) -> n
         raise ValueError(f"values must be a (rows, cols) grid, got shape {v.shape}")
     sign = -1.0 if geometry.values == "depth" else 1.0
     up = sign * v
-    gr, gc = central_gradient(up)
+    if slopes is None:
+        gr, gc = central_gradient(up)
+    else:  # central differences of -v are those of v negated, exactly
+        gr, gc = sign * slopes[0], sign * slopes[1]
     a = geometry.axis
     e = _falloff(
         up, gr, gc, float(spacing), geometry.row * spacing, geometry.col * spacing,
@@ -120,10 +127,62 @@ def _falloff(up, gr, gc, s, pr, pc, pu, ar, ac, au, n, cos_cut):  # pragma: no c
     return out
 
 
-def flat_field(flat, values, geometry: FlashGeometry, *, spacing: float = 1.0) -> np.ndarray:
+def flat_field(
+    flat, values, geometry: FlashGeometry, *, spacing: float = 1.0, slopes=None
+) -> np.ndarray:
     """``flat`` divided by :func:`flash_falloff` of ``values`` (0 where the flash gives less
-    than 1e-3 of its maximum: out of the beam, or facing away)."""
-    f = flash_falloff(values, geometry, spacing=spacing)
+    than 1e-3 of its maximum: out of the beam, or facing away); ``slopes``: as there."""
+    f = flash_falloff(values, geometry, spacing=spacing, slopes=slopes)
     out = np.asarray(flat, dtype=np.float64) / np.maximum(f, 1e-3)
     out[f < 1e-3] = 0.0
+    return out
+
+
+def flash_relief_gain(values, geometry: FlashGeometry, *, spacing: float = 1.0) -> np.ndarray:
+    """How a flat-fielded flash frame still answers the relief ``values`` do not carry.
+
+    :func:`flat_field` divides the frame by the incidence ``L = l . n`` the flash gives the
+    surface ``values`` (``l`` the unit vector to the light, ``n = (-grad up, 1)``); the true
+    surface's steeper or flatter detail leaves ``L_lin / L`` in the frame, which to first
+    order in the values' detail slope ``G_d`` (per metre) is ``1 + k . G_d`` with
+    ``k = sign l_h / L_lin`` (``sign`` -1 for depths, +1 for heights; ``l_h`` the light's
+    horizontal (row, col) components). A ratio ``sun / flat`` then reads
+    ``a + b . G_lin + (b + a k) . G_d`` instead of ``a + b . G``: the light's tilt, up to
+    ~43 deg at the corners of an aerial view from 50 m, changes the slope's gain and direction
+    there. ``k`` is 0 for a light straight above (the ideal co-located light).
+
+    Returns
+    -------
+    ndarray, shape (2, rows, cols)
+        ``k`` (row and column components, per unit of slope); 0 where the flash does not
+        light the surface.
+    """
+    v = np.asarray(values, dtype=np.float64)
+    if v.ndim != 2:
+        raise ValueError(f"values must be a (rows, cols) grid, got shape {v.shape}")
+    sign = -1.0 if geometry.values == "depth" else 1.0
+    up = sign * v
+    gr, gc = central_gradient(up)
+    return _relief_gain(
+        up, gr, gc, float(spacing), geometry.row * spacing, geometry.col * spacing,
+        sign * geometry.level, sign,
+    )  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True)
+def _relief_gain(up, gr, gc, s, pr, pc, pu, sign):  # pragma: no cover - compiled
+    """``k = sign (dr, dc) / (dr mr + dc mc + du)`` per cell, ``(dr, dc, du)`` the light's
+    offset and ``(mr, mc, 1)`` the unnormalised normal (the distance cancels)."""
+    rows, cols = up.shape
+    out = np.zeros((2, rows, cols))
+    for r in range(rows):
+        for c in range(cols):
+            dr = pr - r * s
+            dc = pc - c * s
+            du = pu - up[r, c]
+            den = dr * (-gr[r, c] / s) + dc * (-gc[r, c] / s) + du
+            if den <= 0.0:
+                continue
+            out[0, r, c] = sign * dr / den
+            out[1, r, c] = sign * dc / den
     return out

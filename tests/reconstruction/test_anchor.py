@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from simlunar.reconstruction import reconstruct
 from simlunar.reconstruction._anchor import at_points, linear_field, reanchored_detail, sample_pitch
@@ -34,3 +35,26 @@ def test_at_points_lookup_and_bilinear():
     f = np.arange(12.0).reshape(3, 4)
     np.testing.assert_array_equal(at_points(f, np.array([[1.0, 2.0], [2.0, 3.0]])), [6.0, 11.0])
     np.testing.assert_allclose(at_points(f, np.array([[0.5, 0.5], [1.0, 2.5]])), [2.5, 6.5])
+
+
+def test_the_linear_fields_interpolation_reuses_its_triangles_to_the_bit(rng):
+    """The field's mesh (triangulated once, its nearest fill cached) interpolates any values at
+    its samples exactly as a fresh reconstruction does: unsorted points with a duplicate,
+    inside and outside the hull, and again with other values after the cache is filled."""
+    pts = rng.integers(5, 35, size=(40, 2)).astype(float)
+    pts[7] = pts[3]  # a duplicate position: its values are averaged
+    vals = rng.normal(size=40)
+    lin = linear_field(pts, vals, (40, 40))
+    assert lin.mesh._order is not None and lin.mesh._merge is not None
+    np.testing.assert_array_equal(lin.heights, reconstruct(pts, vals, (40, 40)))
+    for _ in range(3):
+        other = rng.normal(size=40)
+        np.testing.assert_array_equal(lin.interpolate(other), reconstruct(pts, other, (40, 40)))
+        np.testing.assert_array_equal(
+            lin.mesh.interpolate(other, outside="nan"),
+            reconstruct(pts, other, (40, 40), outside="nan"),
+        )
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        lin.interpolate(np.full(40, np.nan))
+    with pytest.raises(ValueError, match="shape"):
+        lin.interpolate(np.zeros(39))

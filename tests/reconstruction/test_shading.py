@@ -216,6 +216,15 @@ def test_frame_noise_reads_white_noise_and_not_ramps():
     assert abs(resid.mean()) < 1e-3 and resid.std() < 0.021 / 2.5
 
 
+def test_the_noise_response_is_ndimages_convolution_to_the_bit(rng):
+    from simlunar.reconstruction.shading import _NOISE_MASK, _noise_response
+
+    for shape, scale in (((3, 3), 1.0), ((5, 8), 1e-3), ((120, 170), 1e4)):
+        f = scale * rng.gamma(2.0, 1.0, shape)
+        want = ndimage.convolve(f, _NOISE_MASK, mode="mirror")[1:-1, 1:-1]
+        np.testing.assert_array_equal(_noise_response(f, _NOISE_MASK), want)
+
+
 @pytest.mark.parametrize("snr", [1.0, 3.0])
 def test_a_noisy_flat_is_denoised_before_the_ratio(snr):
     # a co-located frame buried in noise (a daylight flash much weaker than the sun: its

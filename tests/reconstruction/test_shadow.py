@@ -6,13 +6,20 @@ import inspect
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
 from simlunar.reconstruction import Guide
 from simlunar.reconstruction.calibration import calibrate
 from simlunar.reconstruction.integrate import central_gradient
 from simlunar.reconstruction.photoclinometry import PhotoclinometryOptions, photoclinometry
 from simlunar.reconstruction.shading import ShadingOptions, shading, shading_frames, shadow_masks
-from simlunar.reconstruction.shadow import ShadowOptions, local_lit_level, shadow_mask
+from simlunar.reconstruction.shadow import (
+    ShadowOptions,
+    _bilinear,
+    _block_percentiles,
+    local_lit_level,
+    shadow_mask,
+)
 from simlunar.reconstruction.synthetic import (
     fbm_heights,
     jittered_samples,
@@ -205,3 +212,61 @@ def test_a_shadow_wider_than_the_lit_window_is_masked_whole():
     m = shadow_mask(image)
     assert m[40:100].all() and not m[:40].any() and not m[100:].any()
     np.testing.assert_allclose(local_lit_level(image), 0.3)
+
+
+@pytest.mark.parametrize("block", [2, 5, 16])
+@pytest.mark.parametrize("percentile", [90.0, 50.0, 12.5, 100.0])
+def test_block_percentiles_are_numpys_to_the_bit(rng, block, percentile):
+    """The compiled per-block percentile equals np.percentile on each full block and
+    np.nanpercentile on blocks holding NaN or cut by the grid's edge, bit for bit (ties and a
+    block with no finite pixel included)."""
+    f = np.round(rng.gamma(2.0, 1.0, (37, 43)), 1)  # rounded: many ties
+    f[rng.random(f.shape) < 0.2] = np.nan
+    f[:block, :block] = np.nan  # one block with nothing finite
+    nr, nc = -(-37 // block), -(-43 // block)
+    got = _block_percentiles(f, block, nr, nc, float(np.true_divide(percentile, 100)))
+    for i in range(nr):
+        for j in range(nc):
+            vals = f[i * block : (i + 1) * block, j * block : (j + 1) * block]
+            if np.isnan(vals).all():
+                assert np.isnan(got[i, j])
+                continue
+            want = np.nanpercentile(vals, percentile)
+            finite = vals[np.isfinite(vals)]
+            assert got[i, j] == want == np.percentile(finite, percentile), (i, j)
+
+
+def test_block_level_interpolation_is_map_coordinates_to_the_bit(rng):
+    level = rng.gamma(2.0, 1.0, (7, 11))
+    rows, cols, b = 100, 170, 16
+    rc = np.clip((np.arange(rows) + 0.5) / b - 0.5, 0, 6)
+    cc = np.clip((np.arange(cols) + 0.5) / b - 0.5, 0, 10)
+    rr, cg = np.meshgrid(rc, cc, indexing="ij")
+    want = ndimage.map_coordinates(level, [rr, cg], order=1, mode="nearest")
+    np.testing.assert_array_equal(_bilinear(level, rc, cc), want)
+    one = rng.gamma(2.0, 1.0, (1, 1))  # a frame smaller than a block: one level everywhere
+    z = np.zeros(5)
+    np.testing.assert_array_equal(_bilinear(one, z, z), np.full((5, 5), one[0, 0]))
+
+
+@pytest.mark.parametrize("unlit", [False, True])
+def test_the_sun_frames_own_rule_decides_only_where_the_flash_does_not_light(rng, unlit):
+    """With a flash frame the mask is the ratio's rule where it lights and the sun frame's rule
+    elsewhere (computed only when some pixel is unlit)."""
+    image = rng.gamma(3.0, 1.0, (64, 80))
+    image[rng.random(image.shape) < 0.05] *= 0.001  # shadows
+    flat = 1.0 + rng.gamma(3.0, 1.0, image.shape)
+    if unlit:
+        flat[10:30, 20:50] = 1e-6
+    o = ShadowOptions()
+    med = float(np.median(flat))
+    lit = flat > o.flat_guard * med
+    assert lit.all() != unlit
+    ratio = np.where(lit, image / np.where(lit, flat, 1.0), np.nan)
+    lvl = local_lit_level(image, o)
+    own = (lvl > 0) & (image <= o.lit_fraction * lvl)
+    lvl = local_lit_level(ratio, o)
+    with np.errstate(invalid="ignore"):
+        by_ratio = (lvl > 0) & (ratio <= o.lit_fraction * lvl) & lit
+    assert by_ratio.any() and own.any()
+    np.testing.assert_array_equal(shadow_mask(image, flat, options=o), np.where(lit, by_ratio, own))
