@@ -103,7 +103,7 @@ def landing_metric_names(options: LandingOptions) -> list[str]:
         names += [f"hazard_recall_rock_{_cm(h)}", f"hazard_precision_rock_{_cm(h)}"]
     s = _deg(options.slope_deg)
     names += [f"hazard_recall_slope_{s}", f"hazard_precision_slope_{s}"]
-    return names + ["false_safe_site", "safe_site_called", "height_rms", "slope_rms_deg"]
+    return [*names, "false_safe_site", "safe_site_called", "height_rms", "slope_rms_deg"]
 
 
 def ground_sample_distance(points: np.ndarray) -> float:
@@ -225,8 +225,8 @@ def landing_scores(
     if rec.shape != tru.shape or rec.ndim != 3 or rec.shape[-1] != 3:
         raise ValueError(f"points must be equal (rows, cols, 3) arrays: {rec.shape} {tru.shape}")
     gsd = ground_sample_distance(tru)
-    window = max(3, int(round(options.footprint_m / gsd)) | 1)  # odd, centred
-    base = max(1, int(round(options.footprint_m / (2 * gsd))))
+    window = max(3, round(options.footprint_m / gsd) | 1)  # odd, centred
+    base = max(1, round(options.footprint_m / (2 * gsd)))
     known = np.isfinite(tru).all(-1)
     mt, mr = _maps(tru, options, window, base), _maps(rec, options, window, base)
     out: dict[str, float] = {}

@@ -92,7 +92,7 @@ def test_object_scores_count_objects_not_pixels():
 
 
 def plane(slope_deg):
-    r, c = np.mgrid[0:N, 0:N]
+    _r, c = np.mgrid[0:N, 0:N]
     return np.tan(np.radians(slope_deg)) * (c + 0.5) * S
 
 
