@@ -172,5 +172,5 @@ def test_options_by_sensor_picks_the_study_sensors_options():
 
 
 def test_options_beside_options_by_sensor_must_be_one_of_them():
-    with pytest.raises(ValidationError, match="replaced by options_by_sensor.flash"):
+    with pytest.raises(ValidationError, match=r"replaced by options_by_sensor\.flash"):
         _lidar_study(sensor="flash", options={"instrument": "micromirror_flash"})

@@ -107,10 +107,18 @@ def test_golombek_number_density_integrates_to_its_area_fraction():
         # N(>D) against a quadrature of n(x) = (4 k q / pi) exp(-q x) / x^2
         n_num = quad(lambda x: 4 * k * q / np.pi * np.exp(-q * x) / x**2, d, np.inf)[0]
         assert golombek_rocks(np.array(d), k=k) == pytest.approx(n_num, rel=1e-8)
+
         # the area of the rocks larger than D: F_k(D) = k exp(-q D), from N alone
-        h = 1e-5 * d
-        dn = lambda x: -(golombek_rocks(x + h, k=k) - golombek_rocks(x - h, k=k)) / (2 * h)  # noqa: E731
-        area = quad(lambda x: np.pi * x**2 / 4 * dn(x), d, 60.0, limit=200)[0]
+        def rock_area_density(x, h=1e-5 * d):  # pi x^2 / 4 n(x), n = -dN/dx numerically
+            return (
+                np.pi
+                * x**2
+                / 4
+                * (golombek_rocks(x - h, k=k) - golombek_rocks(x + h, k=k))
+                / (2 * h)
+            )
+
+        area = quad(rock_area_density, d, 60.0, limit=200)[0]
         assert area == pytest.approx(k * np.exp(-q * d), rel=1e-5)
 
 
