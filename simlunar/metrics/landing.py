@@ -54,6 +54,7 @@ from simlunar.registry import Options, option
 __all__ = [
     "LandingOptions",
     "ground_sample_distance",
+    "landing_hazard_maps",
     "landing_metric_names",
     "landing_scores",
     "object_scores",
@@ -199,6 +200,24 @@ def _maps(points, options: LandingOptions, window: int, base: int) -> _Maps:
     return _Maps(rocks, slope, steep)
 
 
+def _pixels(true_points, options: LandingOptions) -> tuple[int, int]:
+    """(relief window, slope half-baseline) in pixels of the footprint in this view."""
+    gsd = ground_sample_distance(true_points)
+    window = max(3, round(options.footprint_m / gsd) | 1)  # odd, centred
+    return window, max(1, round(options.footprint_m / (2 * gsd)))
+
+
+def landing_hazard_maps(
+    points: np.ndarray, true_points: np.ndarray, options: LandingOptions = LandingOptions()
+) -> np.ndarray:
+    """The hazard map the site choice reads (:func:`landing_scores`): rocks of the largest
+    size or slopes above the limit, of ``points`` (a reconstruction's or the truth's), with
+    the footprint in pixels of the true view. (rows, cols) bool."""
+    window, base = _pixels(np.asarray(true_points, float), options)
+    m = _maps(np.asarray(points, float), options, window, base)
+    return m.rocks[int(np.argmax(options.rock_heights_m))] | m.steep
+
+
 def landing_scores(
     recon_points: np.ndarray,
     true_points: np.ndarray,
@@ -224,9 +243,7 @@ def landing_scores(
     rec, tru = np.asarray(recon_points, float), np.asarray(true_points, float)
     if rec.shape != tru.shape or rec.ndim != 3 or rec.shape[-1] != 3:
         raise ValueError(f"points must be equal (rows, cols, 3) arrays: {rec.shape} {tru.shape}")
-    gsd = ground_sample_distance(tru)
-    window = max(3, round(options.footprint_m / gsd) | 1)  # odd, centred
-    base = max(1, round(options.footprint_m / (2 * gsd)))
+    window, base = _pixels(tru, options)
     known = np.isfinite(tru).all(-1)
     mt, mr = _maps(tru, options, window, base), _maps(rec, options, window, base)
     out: dict[str, float] = {}

@@ -459,6 +459,19 @@ def landing_recall(study: dict, reconstruction: str) -> str:
     )
 
 
+def landing_hazards(study: dict) -> str:
+    """Caption of ``landing_hazards_unit<i>``."""
+    land = study.get("landing") or {}
+    big = max(float(h) for h in land.get("rock_heights_m") or [0.3])
+    return (
+        "The guide image, the true hazard map the site choice reads (rocks taller than "
+        f"{round(big * 100)} cm above the median of a {land.get('footprint_m', 4)} m square, "
+        f"or slopes above {land.get('slope_deg', 5)} deg across it) and each planner's and "
+        "reconstruction's map (trial 0, largest density): black found, red missed, blue false "
+        "alarm. Terrain seed 0 of each sweep point."
+    )
+
+
 def lidar_scan(study: dict, planners: list[str], *, densest: float | None = None) -> str:
     """Caption of ``lidar_scan_unit<i>``: one unit's example scans."""
     sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")

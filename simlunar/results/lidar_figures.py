@@ -4,7 +4,7 @@ image, beams in visiting order, measured depths) (docs/lidar.md)."""
 
 from __future__ import annotations
 
-from simlunar.plotting.landing import landing_recall
+from simlunar.plotting.landing import hazard_map_panel, landing_recall
 from simlunar.plotting.landing_tables import landing_columns
 from simlunar.plotting.layout import panel_grid
 from simlunar.plotting.lidar import (
@@ -69,6 +69,36 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
     _landing_figure(res, emit, captions)
     if "dir" in res:
         _scan_figures(res, emit, captions)
+        _hazard_figures(res, emit, captions)
+
+
+def _hazard_figures(res: dict, emit, captions: dict) -> None:
+    """``landing_hazards_unit<i>`` of the first :data:`MAX_PANELS` units of the first terrain
+    seed that kept hazard maps: the guide image, the true hazards and each planner's and
+    reconstruction's (trial 0, largest density)."""
+    config = res["config"]
+    cache = UnitCache(res["dir"])
+    shown = 0
+    for rec in res["units"]:
+        if shown >= MAX_PANELS:
+            break
+        if int((rec.get("sweep") or {}).get("terrain.seed_index", 0) or 0) != 0:
+            continue
+        arrays = cache.load_arrays(rec["key"], strict=True)
+        if "hazards_truth" not in arrays or "image" not in arrays:
+            continue
+        found = {k[len("hazards_"):].replace("__", ", "): v for k, v in arrays.items()
+                 if k.startswith("hazards_") and k != "hazards_truth"}  # fmt: skip
+        own = (rec.get("config") or {}).get("study") or config.get("study", {})
+        sensor = str(own.get("sensor", "")).replace("_", " ")
+        point = point_title(rec.get("sweep") or {})
+        swept = "study.sensor" in (rec.get("sweep") or {})
+        title = f"{config.get('name', '')}: " + (point if swept else f"{sensor} ({point})")
+        fig = hazard_map_panel(arrays["image"], arrays["hazards_truth"], found, title=title)
+        stem = f"landing_hazards_unit{rec.get('index', 0)}"
+        emit(fig, stem)
+        captions[stem] = captions_text.landing_hazards(own)
+        shown += 1
 
 
 def _landing_figure(res: dict, emit, captions: dict) -> None:

@@ -7,6 +7,7 @@ import pytest
 from simlunar.metrics.landing import (
     LandingOptions,
     ground_sample_distance,
+    landing_hazard_maps,
     landing_metric_names,
     landing_scores,
     object_scores,
@@ -166,3 +167,15 @@ def test_bad_options(kw):
 def test_shapes_must_agree():
     with pytest.raises(ValueError, match="equal"):
         landing_scores(points(flat())[:10], points(flat()), OPTS)
+
+
+def test_hazard_map_is_rocks_of_the_largest_size_or_slopes():
+    # a 4 m footprint: a 20 cm rock tilts it by atan(0.2 / 4) = 2.9 deg, a 40 cm one by 5.7
+    wide = LandingOptions(footprint_m=4.0)
+    small = with_rock(flat(), 30, 30, 0.2)  # a 15 cm hazard only: not in the site's map
+    assert not landing_hazard_maps(points(small), points(small), wide).any()
+    big = with_rock(flat(), 30, 30, 0.4)
+    m = landing_hazard_maps(points(big), points(big), wide)
+    assert m[30:32, 30:32].all() and not m[:10].any()
+    steep = landing_hazard_maps(points(plane(6.0)), points(plane(6.0)), OPTS)
+    assert steep[2:-2, 2:-2].all() and not steep[:, :2].any()  # border: slope unknown
