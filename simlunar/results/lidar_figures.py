@@ -82,7 +82,8 @@ def _hazard_figures(res: dict, emit, captions: dict) -> None:
     for rec in res["units"]:
         if shown >= MAX_PANELS:
             break
-        if int((rec.get("sweep") or {}).get("terrain.seed_index", 0) or 0) != 0:
+        terrain = (rec.get("config") or {}).get("terrain") or {}
+        if int(terrain.get("seed_index", 0) or 0) != 0:
             continue
         arrays = cache.load_arrays(rec["key"], strict=True)
         if "hazards_truth" not in arrays or "image" not in arrays:
