@@ -179,3 +179,24 @@ def test_hazard_map_is_rocks_of_the_largest_size_or_slopes():
     assert m[30:32, 30:32].all() and not m[:10].any()
     steep = landing_hazard_maps(points(plane(6.0)), points(plane(6.0)), OPTS)
     assert steep[2:-2, 2:-2].all() and not steep[:, :2].any()  # border: slope unknown
+
+
+def test_an_abort_over_unsafe_ground_is_not_a_false_safe():
+    # every site unsafe in the truth, every site called unsafe: the lander aborts
+    rocky = flat()
+    rocky[::3, ::3] = 0.5
+    got = landing_scores(points(rocky), points(rocky), OPTS)
+    assert got["safe_site_called"] == 0.0
+    assert got["false_safe_site"] == 0.0
+
+
+def test_the_site_is_judged_on_the_largest_rock_size():
+    # a 20 cm rock under the chosen (central) site: a 15 cm hazard, but the site is judged on
+    # 30 cm rocks and 5 deg slopes (the rock tilts a 4 m footprint by 2.9 deg), so it is safe
+    wide = LandingOptions(footprint_m=4.0, site_radius_m=2.0, site_pitch_m=4.0)
+    truth = with_rock(flat(), 31, 31, 0.2)
+    got = landing_scores(points(flat()), points(truth), wide)
+    assert got["hazard_recall_rock_15cm"] == 0.0  # missed, yet
+    assert got["false_safe_site"] == 0.0
+    taller = with_rock(flat(), 31, 31, 0.35)
+    assert landing_scores(points(flat()), points(taller), wide)["false_safe_site"] == 1.0
