@@ -11,7 +11,14 @@ import numpy as np
 
 from simlunar.plotting.lidar_tables import _bootstrap_mean
 
-__all__ = ["LANDING_PREFIXES", "landing_columns", "landing_summary", "landing_tables"]
+__all__ = [
+    "LANDING_PREFIXES",
+    "landing_columns",
+    "landing_summary",
+    "landing_tables",
+    "paired_sign_flip_p",
+    "paired_table",
+]
 
 #: the metric names of the landing scores start with one of these
 LANDING_PREFIXES = (
@@ -126,3 +133,69 @@ def _sort_key(v: str):
         return (0, float(v), "")
     except ValueError:
         return (1, 0.0, v)
+
+
+def paired_sign_flip_p(diffs) -> float:
+    """Two-sided p value of a zero mean paired difference by the exact sign-flip
+    (randomisation) test: the share of the ``2^n`` sign patterns whose mean is at least as far
+    from 0 as the observed one (n <= 16; 1.0 for all-zero differences). With n pairs the
+    smallest p is ``2 / 2^n`` (8 seeds: 0.0078)."""
+    d = np.asarray(diffs, float)
+    d = d[np.isfinite(d)]
+    n = d.size
+    if n == 0 or not np.any(d):
+        return 1.0
+    if n > 16:
+        raise ValueError(f"paired_sign_flip_p: at most 16 pairs (exact), got {n}")
+    signs = 1 - 2 * ((np.arange(2**n)[:, None] >> np.arange(n)) & 1)
+    means = np.abs(signs @ np.abs(d)) / n
+    return float(np.mean(means >= abs(d.mean()) - 1e-12))
+
+
+#: the metrics of the paired table
+PAIRED = ("hazard_recall_rock_", "hazard_recall_slope_", "false_safe_site", "height_rms",
+          "slope_rms_deg")  # fmt: skip
+
+
+def paired_table(
+    rows: Sequence[dict],
+    *,
+    sensor_key: str,
+    light_key: str | None,
+    reference: str = "flash",
+    seed_key: str = "terrain_seed",
+    title: str = "",
+) -> str:
+    """Markdown: per (light, reconstruction, sensor, planner) the mean difference to the
+    ``reference`` sensor under the same light and reconstruction on the same terrain seeds, and
+    its exact sign-flip p value (:func:`paired_sign_flip_p`); "" without the reference or with
+    one seed."""
+    metrics = [m for m in landing_columns(rows) if m.startswith(PAIRED)]
+    vals: dict = defaultdict(list)
+    for r in rows:
+        if str(r["metric"]) in metrics:
+            g = (str(r.get(light_key)) if light_key else "", str(r.get("reconstruction") or
+                 "linear"), str(r.get(sensor_key)), str(r["planner"]))  # fmt: skip
+            vals[(g, str(r["metric"]), str(r.get(seed_key, 0)))].append(float(r["value"]))
+    groups = sorted({k[0] for k in vals}, key=lambda g: tuple(_sort_key(v) for v in g))
+    seeds = sorted({k[2] for k in vals})
+    refs = {(g[0], g[1]): g for g in groups if g[2] == reference}
+    if len(seeds) < 2 or not refs:
+        return ""
+    header = ["sun", "reconstruction", "sensor", "planner",
+              *[f"{_header(m)} - {reference}" for m in metrics]]  # fmt: skip
+    body = []
+    for g in groups:
+        ref = refs.get((g[0], g[1]))
+        if ref is None or g == ref:
+            continue
+        cells = []
+        for m in metrics:
+            d = [np.mean(vals[(g, m, s)]) - np.mean(vals[(ref, m, s)]) for s in seeds
+                 if vals.get((g, m, s)) and vals.get((ref, m, s))]  # fmt: skip
+            cells.append(f"{np.mean(d):+.3g} (p = {paired_sign_flip_p(d):.2g})" if d else "–")
+        body.append([*g, *cells])
+    md = [f"### {title}: paired against the {reference} ({len(seeds)} terrain seeds, exact "
+          "sign-flip p)", "", "| " + " | ".join(header) + " |", "|---" * len(header) + "|"]  # fmt: skip
+    md += ["| " + " | ".join(b) + " |" for b in body]
+    return "\n".join(md) + "\n"

@@ -45,3 +45,31 @@ def test_table_names_sensor_light_and_size():
 def test_no_landing_metric_no_table():
     rows = [r for r in _rows() if r["metric"] == "rmse"]
     assert landing_tables(rows, keys=[], title="t") == ("", "")
+
+
+@pytest.mark.parametrize(
+    "diffs, p",
+    [([1, 2, 3, 4, 5, 6, 7, 8], 2 / 256),  # every sign agrees: 2 of 2^8 patterns as extreme
+     ([1, 2], 0.5), ([3, -1], 1.0), ([0, 0, 0], 1.0), ([], 1.0)],
+)  # fmt: skip
+def test_sign_flip_p_by_hand(diffs, p):
+    from simlunar.plotting.landing_tables import paired_sign_flip_p
+
+    assert paired_sign_flip_p(diffs) == pytest.approx(p)
+
+
+def test_paired_table_differences_on_the_same_seeds():
+    from simlunar.plotting.landing_tables import paired_table
+
+    rows = []
+    for seed in (0, 1, 2):
+        for sensor, recall in (("flash", 0.9), ("steered_beam", 0.5 + 0.1 * seed)):
+            rows.append({"study.sensor": sensor, "terrain_seed": seed, "planner": "none",
+                         "reconstruction": "linear", "metric": "hazard_recall_rock_15cm",
+                         "value": recall, "seconds": 1.0})  # fmt: skip
+    md = paired_table(rows, sensor_key="study.sensor", light_key=None, title="t")
+    # differences -0.4, -0.3, -0.2: mean -0.3, all one sign: p = 2 / 8
+    assert "| steered_beam | none | -0.3 (p = 0.25) |" in md
+    assert "flash | none | -" not in md  # the reference is not compared with itself
+    one_seed = [r for r in rows if r["terrain_seed"] == 0]
+    assert paired_table(one_seed, sensor_key="study.sensor", light_key=None) == ""
