@@ -10,7 +10,7 @@ from pydantic import AfterValidator, Field, PositiveInt
 
 from simlunar.config.fields import Deg, Metres, _Model
 
-__all__ = ["HazardCfg", "MedianWindowPx", "SafeSiteCfg", "SlopeBaselinePx"]
+__all__ = ["HazardCfg", "LandingCfg", "MedianWindowPx", "SafeSiteCfg", "SlopeBaselinePx"]
 
 
 def _odd(v: int) -> int:
@@ -58,3 +58,22 @@ class SafeSiteCfg(_Model):
     max_hazard_fraction: float = Field(
         0.0, ge=0, lt=1, description="a site is safe with at most this share of hazard pixels"
     )
+
+
+class LandingCfg(_Model):
+    """Landing-site scores per hazard size (:class:`simlunar.metrics.landing.LandingOptions`):
+    rock recall / precision per rock height, slope recall / precision across the lander's
+    footprint, the false-safe rate of the chosen site, height and slope RMS (docs/landing.md)."""
+
+    rock_heights_m: list[Annotated[Metres, Field(gt=0)]] = Field(
+        default_factory=lambda: [0.15, 0.30],
+        min_length=1,
+        max_length=8,
+        description="rock hazard sizes: heights above the footprint's median (m)",
+    )
+    slope_deg: Deg = Field(5.0, gt=0, lt=90, description="largest safe slope across the footprint")
+    footprint_m: Metres = Field(
+        4.0, gt=0, description="lander footprint: the slope's baseline and a rock's median window"
+    )
+    site_radius_m: Metres = Field(4.0, gt=0, description="radius of a candidate landing site")
+    site_pitch_m: Metres = Field(8.0, gt=0, description="spacing of the candidate sites")

@@ -21,11 +21,13 @@ from simlunar.lidar.hardware import LidarHardware
 from simlunar.lidar.scan import SteeredBeamOptions, generic_hardware, with_hardware
 from simlunar.lidar.trajectory import PlatformMotion
 from simlunar.metrics.hazard import HazardOptions
+from simlunar.metrics.landing import LandingOptions
 from simlunar.metrics.safe_site import SiteOptions
 from simlunar.study.lidar import LidarStudyOptions, SensorFit
 
 __all__ = [
     "hazard_options",
+    "landing_options",
     "lidar_hardware",
     "lidar_options",
     "lidar_sensor_options",
@@ -109,6 +111,15 @@ def hazard_options(cfg: HazardCfg | None) -> HazardOptions | None:
     return None if cfg is None else HazardOptions(**cfg.model_dump())
 
 
+def landing_options(cfg) -> LandingOptions | None:
+    """:class:`~simlunar.metrics.landing.LandingOptions` of a ``study.landing`` block (None: no
+    landing scores)."""
+    if cfg is None:
+        return None
+    d = cfg.model_dump()
+    return LandingOptions(**{**d, "rock_heights_m": tuple(d["rock_heights_m"])})
+
+
 def lidar_options(study: LidarStudyCfg, *, seed: int = 0) -> LidarStudyOptions:
     """:class:`~simlunar.study.lidar.LidarStudyOptions` of a config (``seed``: the transient
     renderer's sampler seed)."""
@@ -128,5 +139,6 @@ def lidar_options(study: LidarStudyCfg, *, seed: int = 0) -> LidarStudyOptions:
         },
         hazard=hazard_options(study.hazard),
         safe_site=None if study.safe_site is None else SiteOptions(**study.safe_site.model_dump()),
+        landing=landing_options(study.landing),
         reconstructions=reconstruction_mapping(study.reconstructions),
     )

@@ -21,6 +21,7 @@ from simlunar.config.fields import (
     _Model,
     unique_names,
 )
+from simlunar.config.landing import LandingCfg
 from simlunar.config.lidar import HazardCfg, LidarOptionsCfg, LidarPlannerOptsCfg, SafeSiteCfg
 from simlunar.config.planners import (  # noqa: F401 - the schema's planner models live there
     CoefficientsCfg,
@@ -248,10 +249,23 @@ class LidarStudyCfg(_Model):
         description="also score whether the landing site chosen from the reconstruction is "
         "truly safe (safe_site, safe_site_precision, safe_sites_available); null = off",
     )
+    landing: LandingCfg | None = Field(
+        None,
+        description="also score the landing site per hazard size (hazard_recall_rock_<h>cm, "
+        "hazard_recall_slope_<s>deg, their precisions, false_safe_site, safe_site_called, "
+        "height_rms, slope_rms_deg; docs/landing.md); null = off",
+    )
     options: LidarOptionsCfg = Field(
         default_factory=LidarOptionsCfg,
         description="pulse, detector, ranging, transient, and the sensor's own block",
     )
+    options_by_sensor: dict[Literal["steered_beam", "flash", "micromirror_flash"],
+                            LidarOptionsCfg] = Field(
+        default_factory=dict,
+        description="sensor -> its options, used as options when study.sensor names it (so a "
+        "sweep over study.sensor compares sensors each with its own instrument and block); "
+        "options, if also given, must be one of them",
+    )  # fmt: skip
     save_scans: bool = Field(
         False,
         description="write scans/unit<i>/ per unit: each planner's example point cloud (LAZ, "
@@ -269,6 +283,28 @@ class LidarStudyCfg(_Model):
     save_arrays: bool = _save_arrays_field()
 
     _unique = field_validator("planners", "metrics")(unique_names)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _sensor_options(cls, data):
+        """``options`` from ``options_by_sensor`` for the study's sensor (module field doc)."""
+        if not isinstance(data, dict) or not data.get("options_by_sensor"):
+            return data
+        by = data["options_by_sensor"]
+        sensor = data.get("sensor", cls.model_fields["sensor"].default)
+        if not isinstance(by, dict) or sensor not in by:
+            return data
+        if data.get("options") is not None:
+            # a config written back (or a sweep point of another sensor) holds the options of
+            # one of the sensors: replaced; any other options would be silently lost
+            given = LidarOptionsCfg.model_validate(data["options"])
+            known = [LidarOptionsCfg(), *(LidarOptionsCfg.model_validate(v) for v in by.values())]
+            if given not in known:
+                raise ValueError(
+                    f"options: replaced by options_by_sensor.{sensor}; give the sensor's "
+                    "options there only"
+                )
+        return {**data, "options": by[sensor]}
 
     @model_validator(mode="after")
     def _options_fit(self) -> LidarStudyCfg:

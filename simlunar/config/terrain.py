@@ -102,7 +102,11 @@ class RocksCfg(_PopulationCfg):
     """Rock population: cumulative law, diameter range, clustering, albedo contrast."""
 
     enabled: bool = True
-    law: str = Field("intercrater", description="a rock law name or power")
+    law: str = Field(
+        "intercrater",
+        description="a rock law name, power (then coefficient, exponent) or golombek (then "
+        "coefficient = k, the rock area fraction: F(>D) = k exp(-q(k) D))",
+    )
     d_min_m: Metres = Field(0.3, gt=0)
     d_max_m: Metres = Field(3.0, gt=0)
     coefficient: float | None = Field(None, gt=0)

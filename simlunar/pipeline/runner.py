@@ -42,6 +42,7 @@ from simlunar.pipeline.inputs import check_size, input_hashes
 from simlunar.pipeline.resume import compute_missing, kept_message, prune_steps
 from simlunar.pipeline.rows import DEFAULT_RECONSTRUCTION, ROW_COLUMNS, collect_rows
 from simlunar.pipeline.unit import CACHE_VERSION, compute_unit
+from simlunar.plotting.landing_tables import landing_tables, paired_table
 from simlunar.plotting.lidar_tables import lidar_tables
 from simlunar.plotting.scanner_tables import scanner_tables
 from simlunar.results.cache_keys import (
@@ -402,7 +403,15 @@ def _tables(cfg: ExperimentCfg, units, records: dict, rows: list[dict], out: Pat
         for name, group in groups.items():
             title = cfg.name if len(groups) == 1 else f"{cfg.name} -- reconstruction {name}"
             parts.append(_sensor_tables(cfg, units, group, title))
-        return "\n".join(md for md, _ in parts), "\n".join(tex for _, tex in parts)
+        if cfg.study.kind == "lidar":  # the landing scores, every sensor and light in one table
+            keys = [k for k in cfg.sweep if k not in ("seed", "terrain.seed_index")]
+            parts.append(landing_tables(rows, keys=keys, title=cfg.name))
+            light = "render.light.elevation_deg"
+            paired = paired_table(rows, sensor_key="study.sensor",
+                                  light_key=light if light in cfg.sweep else None,
+                                  title=cfg.name) if "study.sensor" in cfg.sweep else ""  # fmt: skip
+            parts.append((paired, ""))
+        return "\n".join(md for md, _ in parts if md), "\n".join(tex for _, tex in parts if tex)
     return _sampling_tables(cfg, units, records, rows, out)
 
 

@@ -30,6 +30,7 @@ from simlunar.config.studies import LidarStudyCfg, SamplingStudyCfg
 from simlunar.features.learned import LearnedMap, pinned_models
 from simlunar.imaging.exposure import auto_gain
 from simlunar.imaging.sensor import apply_sensor
+from simlunar.metrics.landing import landing_hazard_maps
 from simlunar.pipeline.figure_inputs import (
     RENDER_LOCK,
     RenderScene,
@@ -332,6 +333,25 @@ def _sampling_unit(cfg, scene: RenderScene, seeds, timings, steps, workers) -> U
     )
 
 
+def _landing_maps(cfg, scene: RenderScene, depth, result) -> dict:
+    """With ``study.landing``: the hazard maps the site choice reads (uint8, guide view) of
+    the truth (``hazards_truth``) and of each planner's and reconstruction's trial-0 grid at
+    the largest density (``hazards_<planner>__<reconstruction>``), for the hazard-map figure."""
+    opts = lidar_translate.landing_options(cfg.study.landing)
+    if opts is None:
+        return {}
+    truth = scene.camera.unproject_depth(depth)
+    out = {"hazards_truth": landing_hazard_maps(truth, truth, opts).astype(np.uint8)}
+    top = int(np.argmax(result.densities)) if result.densities else 0
+    for (label, d, recon), grid in result.grids.items():
+        if d == top:
+            pts = scene.camera.unproject_depth(np.asarray(grid, float))
+            out[f"hazards_{label}__{recon}"] = landing_hazard_maps(pts, truth, opts).astype(
+                np.uint8
+            )
+    return out
+
+
 def _array_exports(cfg, scene: RenderScene, depth, result) -> dict | None:
     """The ``arrays/unit<i>/`` payload of a sampling or lidar study's ``result`` (its grids,
     densities and ks) when ``study.save_arrays`` is set (written by the runner); else None."""
@@ -446,10 +466,10 @@ def _lidar_unit(cfg, scene: RenderScene, seeds, timings, steps) -> UnitRecord:
             rng=np.random.default_rng(seeds["study"]),
             reconstruction_guide=guide,
             steps=steps,
-            keep_trial=0 if cfg.study.save_arrays else None,
+            keep_trial=0 if cfg.study.save_arrays or cfg.study.landing is not None else None,
         )
     timings["study_s"] = time.perf_counter() - t
-    arrays = {"image": image, "depth": depth, **arrays}
+    arrays = {"image": image, "depth": depth, **arrays, **_landing_maps(cfg, scene, depth, res)}
     for label, acq in res.examples.items():
         # where the example acquisition measured, and what: (row, col, depth) per sample
         arrays[f"samples_{label}"] = np.c_[acq.rc, acq.values].astype(np.float64)

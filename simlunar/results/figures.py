@@ -135,6 +135,7 @@ _DRAWING_MODULES = (
     "simlunar.plotting.reconstructions",
     "simlunar.plotting.scanner",
     "simlunar.plotting.lidar",
+    "simlunar.plotting.landing",
     "simlunar.plotting.style",
     "simlunar.results.figures",
     "simlunar.results.sampling_figures",

@@ -4,6 +4,8 @@ image, beams in visiting order, measured depths) (docs/lidar.md)."""
 
 from __future__ import annotations
 
+from simlunar.plotting.landing import hazard_map_panel, landing_recall
+from simlunar.plotting.landing_tables import landing_columns
 from simlunar.plotting.layout import panel_grid
 from simlunar.plotting.lidar import (
     MAX_SCAN_PLANNERS,
@@ -64,8 +66,61 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
                 m, study, x, len(groups), seeds=seeds, by=by,
                 reconstructions=recons if by_recon else None,
             )  # fmt: skip
+    _landing_figure(res, emit, captions)
     if "dir" in res:
         _scan_figures(res, emit, captions)
+        _hazard_figures(res, emit, captions)
+
+
+def _hazard_figures(res: dict, emit, captions: dict) -> None:
+    """``landing_hazards_unit<i>`` of the first :data:`MAX_PANELS` units of the first terrain
+    seed that kept hazard maps: the guide image, the true hazards and each planner's and
+    reconstruction's (trial 0, largest density)."""
+    config = res["config"]
+    cache = UnitCache(res["dir"])
+    shown = 0
+    for rec in res["units"]:
+        if shown >= MAX_PANELS:
+            break
+        terrain = (rec.get("config") or {}).get("terrain") or {}
+        if int(terrain.get("seed_index", 0) or 0) != 0:
+            continue
+        arrays = cache.load_arrays(rec["key"], strict=True)
+        if "hazards_truth" not in arrays or "image" not in arrays:
+            continue
+        found = {k[len("hazards_"):].replace("__", ", "): v for k, v in arrays.items()
+                 if k.startswith("hazards_") and k != "hazards_truth"}  # fmt: skip
+        own = (rec.get("config") or {}).get("study") or config.get("study", {})
+        sensor = str(own.get("sensor", "")).replace("_", " ")
+        point = point_title(rec.get("sweep") or {})
+        swept = "study.sensor" in (rec.get("sweep") or {})
+        title = f"{config.get('name', '')}: " + (point if swept else f"{sensor} ({point})")
+        fig = hazard_map_panel(arrays["image"], arrays["hazards_truth"], found, title=title)
+        stem = f"landing_hazards_unit{rec.get('index', 0)}"
+        emit(fig, stem)
+        captions[stem] = captions_text.landing_hazards(own)
+        shown += 1
+
+
+def _landing_figure(res: dict, emit, captions: dict) -> None:
+    """``landing_recall`` (with landing scores): per sensor and planner the rock recall per
+    size, the slope recall and the false-safe rate, one panel per light (first
+    reconstruction)."""
+    rows = res["rows"]
+    if not landing_columns(rows):
+        return
+    config = res["config"]
+    study = config.get("study", {})
+    sweep = config.get("sweep") or {}
+    sensor_key = "study.sensor"
+    if sensor_key not in sweep:  # one sensor: its name on every row
+        rows = [{**r, sensor_key: study.get("sensor", "steered_beam")} for r in rows]
+    light_key = "render.light.elevation_deg" if "render.light.elevation_deg" in sweep else None
+    recon = reconstruction_names(study)[0]
+    fig = landing_recall(rows, sensor_key=sensor_key, light_key=light_key, reconstruction=recon,
+                         title=f"{config.get('name', '')}: landing hazards ({recon})")  # fmt: skip
+    emit(fig, "landing_recall")
+    captions["landing_recall"] = captions_text.landing_recall(study, recon)
 
 
 def _scan_figures(res: dict, emit, captions: dict) -> None:
@@ -82,7 +137,8 @@ def _scan_figures(res: dict, emit, captions: dict) -> None:
             continue
         order = [p for p in study.get("planners") or [] if p in beams]
         beams = {p: beams[p] for p in [*order, *[p for p in beams if p not in order]]}
-        sensor = str(study.get("sensor", "steered_beam")).replace("_", " ")
+        own = (rec.get("config") or {}).get("study") or study  # a sweep over study.sensor
+        sensor = str(own.get("sensor", "steered_beam")).replace("_", " ")
         point = point_title(rec.get("sweep") or {})
         densest = _densest(study)
         at = f", k/N = {_fraction(densest)}, trial 0" if densest else ", trial 0"

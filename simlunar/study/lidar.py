@@ -26,6 +26,7 @@ import numpy as np
 from simlunar.features import check_image
 from simlunar.metrics import METRICS
 from simlunar.metrics.hazard import HazardOptions, detection_scores, hazard_map
+from simlunar.metrics.landing import LandingOptions, landing_scores
 from simlunar.metrics.safe_site import SiteOptions, safe_site_scores
 from simlunar.planner import DEFAULT_PLANNER, MEASURING, STRATEGIES
 from simlunar.progress import stage
@@ -145,6 +146,12 @@ class LidarStudyOptions(Options):
         doc="also score whether the landing site chosen from the reconstruction is truly safe "
         "(safe_site, safe_site_precision, safe_sites_available; simlunar.metrics.safe_site)",
     )
+    landing: LandingOptions | None = option(
+        None,
+        doc="also score the landing site per hazard size: rock and slope recall / precision, "
+        "false_safe_site, safe_site_called, height_rms, slope_rms_deg "
+        "(simlunar.metrics.landing)",
+    )
 
     def __post_init__(self):
         super().__post_init__()
@@ -216,10 +223,15 @@ class LidarStudyResult:
 class _Scores:
     """Scores of one reconstruction in the guide view (and its acquisition's yield)."""
 
-    def __init__(self, truth, image, camera, metrics, hazard: HazardOptions | None, site=None):
+    def __init__(
+        self, truth, image, camera, metrics, hazard: HazardOptions | None, site=None, landing=None
+    ):
         self.truth = np.asarray(truth, float)
         self.site = site
-        self.true_points = camera.unproject_depth(self.truth) if site is not None else None
+        self.landing = landing
+        self.true_points = (
+            camera.unproject_depth(self.truth) if site is not None or landing is not None else None
+        )
         self.image = image
         self.camera = camera
         self.metrics = tuple(metrics)
@@ -239,6 +251,9 @@ class _Scores:
         if self.site is not None:
             rec = self.camera.unproject_depth(np.asarray(recon, float))
             out.update(safe_site_scores(rec, self.true_points, self.site))
+        if self.landing is not None:
+            rec = self.camera.unproject_depth(np.asarray(recon, float))
+            out.update(landing_scores(rec, self.true_points, self.landing))
         return out
 
 
@@ -318,7 +333,7 @@ def run_lidar_study(
     p = _study_plan(o, sensor, image, depth, rguide)
     base = int(np.random.default_rng(rng).integers(0, 2**63))
     trials = Trials(p.planners, p.ks, int(o.trials), functools.partial(_seeds, base))
-    evaluate = _Scores(depth, image, scene.camera, o.metrics, o.hazard, o.safe_site)
+    evaluate = _Scores(depth, image, scene.camera, o.metrics, o.hazard, o.safe_site, o.landing)
     recons = reconstruction_options(o.reconstructions, outside=o.outside)
     run = functools.partial(
         run_protocol, sensor, evaluate=evaluate, outside=o.outside, reconstructions=recons,

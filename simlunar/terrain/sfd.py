@@ -9,7 +9,13 @@ https://github.com/NeoGeographyToolkit/synthterrain):
   ``156228 D**-2.389`` (D > 80 m) per km^2;
 - rocks, intercrater plains: ``1e-4 D**-1.75457``; VIPER spec: ``3e-4 D**-2.482``;
   high blockiness (Haworth): ``2e-3 D**-2.6607`` per m^2;
-- ``power``: ``coefficient * D**-exponent`` per m^2 with user values.
+- ``power``: ``coefficient * D**-exponent`` per m^2 with user values;
+- rocks, ``golombek``: the cumulative fractional area model of Golombek & Rapp (1997, JGR 102,
+  E2), made for Mars landing sites and used for lunar ones: the share of the ground covered by
+  rocks larger than ``D`` is ``F_k(D) = k exp(-q D)`` with ``q = 1.79 + 0.152 / k`` (``k`` the
+  total rock area fraction, given as ``coefficient``). With ``n(D) = -dN/dD`` the number
+  density, ``dF = -(pi D^2 / 4) dN``, so ``n(D) = (4 k q / pi) exp(-q D) / D^2`` and
+  ``N(>D) = (4 k q / pi) (exp(-q D) / D - q E1(q D))`` (E1 the exponential integral).
 """
 
 from __future__ import annotations
@@ -18,12 +24,14 @@ from collections.abc import Callable
 from functools import partial
 
 import numpy as np
+from scipy.special import exp1
 
 __all__ = [
     "CRATER_LAWS",
     "ROCK_LAWS",
     "expected_count",
     "get_law",
+    "golombek_rocks",
     "power_law",
     "sample_diameters",
     "viper_craters",
@@ -33,6 +41,14 @@ __all__ = [
 def power_law(d: np.ndarray, *, coefficient: float, exponent: float) -> np.ndarray:
     """Cumulative density ``coefficient * D**-exponent`` (per m^2, D in m)."""
     return coefficient * np.asarray(d, dtype=np.float64) ** (-exponent)
+
+
+def golombek_rocks(d: np.ndarray, *, k: float) -> np.ndarray:
+    """Cumulative density N(>D) per m^2 (D in m) of the Golombek & Rapp (1997) model with total
+    rock area fraction ``k`` (module docstring)."""
+    d = np.asarray(d, dtype=np.float64)
+    q = 1.79 + 0.152 / k
+    return 4.0 * k * q / np.pi * (np.exp(-q * d) / d - q * exp1(q * d))
 
 
 def viper_craters(d: np.ndarray) -> np.ndarray:
@@ -56,13 +72,15 @@ ROCK_LAWS: dict[str, Callable] = {
     "viper": partial(power_law, coefficient=3e-4, exponent=2.482),
     "high_blockiness": partial(power_law, coefficient=2e-3, exponent=2.6607),
     "power": power_law,
+    "golombek": golombek_rocks,
 }
 
 
 def get_law(kind: str, name: str, **params) -> Callable[[np.ndarray], np.ndarray]:
     """Return the cumulative law ``N(>D)`` (per m^2) named ``name`` for ``kind`` craters/rocks.
 
-    ``power`` takes ``coefficient`` (> 0) and ``exponent`` (> 0); the named laws take no
+    ``power`` takes ``coefficient`` (> 0) and ``exponent`` (> 0); ``golombek`` (rocks) takes
+    ``coefficient`` = k, the total rock area fraction in (0, 1); the named laws take no
     parameters. Unknown names raise ``ValueError`` listing the valid ones.
     """
     table = {"craters": CRATER_LAWS, "rocks": ROCK_LAWS}.get(kind)
@@ -78,6 +96,16 @@ def get_law(kind: str, name: str, **params) -> Callable[[np.ndarray], np.ndarray
                     f"{kind}.{key} must be a positive number for the power law, got {v!r}"
                 )
         return partial(power_law, coefficient=float(c), exponent=float(e))
+    if name == "golombek":
+        k = params.get("coefficient")
+        if k is None or not np.isfinite(k) or not 0 < k < 1:
+            raise ValueError(
+                f"{kind}.coefficient must be the rock area fraction k in (0, 1) for the "
+                f"golombek law, got {k!r}"
+            )
+        if params.get("exponent") is not None:
+            raise ValueError(f"{kind} law 'golombek' takes no exponent")
+        return partial(golombek_rocks, k=float(k))
     extra = {k: v for k, v in params.items() if v is not None}
     if extra:
         raise ValueError(f"{kind} law {name!r} takes no parameters, got {sorted(extra)}")

@@ -55,3 +55,18 @@ def test_window_and_baseline_types_bound_both_models(key, kind, edge, value, err
         assert getattr(model(**{key: edge}), key) == edge
         with pytest.raises(ValidationError, match=error):
             model(**{key: value})
+
+
+def test_landing_block_translates_to_the_metric_options():
+    from simlunar.config.landing import LandingCfg
+    from simlunar.config.lidar_translate import landing_options
+    from simlunar.metrics.landing import LandingOptions
+
+    assert landing_options(None) is None
+    assert landing_options(LandingCfg()) == LandingOptions()
+    got = landing_options(LandingCfg(rock_heights_m=["20 cm"], footprint_m="0.006 km"))
+    assert got.rock_heights_m == pytest.approx((0.2,)) and got.footprint_m == pytest.approx(6.0)
+    with pytest.raises(ValidationError, match="greater than 0"):
+        LandingCfg(rock_heights_m=[0.0])
+    with pytest.raises(ValidationError, match="at least 1"):
+        LandingCfg(rock_heights_m=[])

@@ -140,3 +140,37 @@ def test_an_oracle_reads_the_error_of_one_of_the_studys_reconstructions():
                                        "oracle": {"reconstruction": "shading"}}},
     )  # fmt: skip
     assert "oracle_s.oracle.reconstruction: 'shading' is not one of study.reconstructions" in msg
+
+
+# ---- study.options_by_sensor: each sensor of a sweep over study.sensor its own options -----
+
+
+def _lidar_study(**kw):
+    from simlunar.config.studies import LidarStudyCfg
+
+    by = {
+        "flash": {"instrument": "alhat_flash", "flash": {"receiver_px": [32, 32]}},
+        "steered_beam": {"instrument": "lola_beam", "steered_beam": {"pulses_per_point": 2}},
+    }
+    return LidarStudyCfg(kind="lidar", options_by_sensor=by, **kw)
+
+
+def test_options_by_sensor_picks_the_study_sensors_options():
+    flash = _lidar_study(sensor="flash")
+    assert flash.options.instrument == "alhat_flash"
+    assert tuple(flash.options.flash.receiver_px) == (32, 32)
+    beam = _lidar_study(sensor="steered_beam")
+    assert beam.options.instrument == "lola_beam"
+    assert beam.options.steered_beam.pulses_per_point == 2
+    # a sweep point: the flash's validated config with the sensor switched
+    data = flash.model_dump()
+    data["sensor"] = "steered_beam"
+    assert type(flash).model_validate(data).options.instrument == "lola_beam"
+    # a sensor without an entry keeps options
+    mm = _lidar_study(sensor="micromirror_flash")
+    assert mm.options.instrument is None
+
+
+def test_options_beside_options_by_sensor_must_be_one_of_them():
+    with pytest.raises(ValidationError, match=r"replaced by options_by_sensor\.flash"):
+        _lidar_study(sensor="flash", options={"instrument": "micromirror_flash"})

@@ -349,3 +349,18 @@ def test_safe_site_rows_come_beside_the_hazard_scores():
     got = {r["metric"]: r["value"] for r in rows}
     assert {"safe_site", "safe_site_precision", "safe_sites_available"} <= set(got)
     assert got["safe_site"] in (0.0, 1.0) and 0.0 <= got["safe_sites_available"] <= 1.0
+
+
+def test_landing_rows_name_every_hazard_size():
+    from simlunar.metrics.landing import LandingOptions, landing_metric_names
+
+    image, depth = _guide()
+    land = LandingOptions(rock_heights_m=(0.15, 0.3), footprint_m=2.0, site_radius_m=2.0,
+                          site_pitch_m=4.0)  # fmt: skip
+    o = LidarStudyOptions(planners=("grid",), densities=(1 / 4,), trials=1, landing=land)
+    rows = run_lidar_study(_scene(), (image, depth), o, rng=0, sensor=_Timed(depth)).rows
+    got = {r["metric"]: r["value"] for r in rows}
+    assert set(landing_metric_names(land)) <= set(got)
+    assert {"hazard_recall_rock_15cm", "hazard_recall_rock_30cm", "hazard_recall_slope_5deg",
+            "false_safe_site", "height_rms", "slope_rms_deg"} <= set(got)  # fmt: skip
+    assert got["false_safe_site"] in (0.0, 1.0) and got["height_rms"] >= 0.0

@@ -91,3 +91,56 @@ def test_errors_name_the_law_or_field():
         sfd.sample_diameters(law, 1.0, 5.0, 5.0, rng=0)
     with pytest.raises(ValueError, match="d_min_m"):
         sfd.sample_diameters(law, 1.0, -1.0, 5.0, rng=0)
+
+
+# ---- the Golombek & Rapp (1997) cumulative fractional area model ---------------------------
+
+
+def test_golombek_number_density_integrates_to_its_area_fraction():
+    from scipy.integrate import quad
+
+    from simlunar.terrain.sfd import golombek_rocks
+
+    k = 0.07
+    q = 1.79 + 0.152 / k
+    for d in (0.1, 0.3, 1.0):
+        # N(>D) against a quadrature of n(x) = (4 k q / pi) exp(-q x) / x^2
+        n_num = quad(lambda x: 4 * k * q / np.pi * np.exp(-q * x) / x**2, d, np.inf)[0]
+        assert golombek_rocks(np.array(d), k=k) == pytest.approx(n_num, rel=1e-8)
+
+        # the area of the rocks larger than D: F_k(D) = k exp(-q D), from N alone
+        def rock_area_density(x, h=1e-5 * d):  # pi x^2 / 4 n(x), n = -dN/dx numerically
+            return (
+                np.pi
+                * x**2
+                / 4
+                * (golombek_rocks(x - h, k=k) - golombek_rocks(x + h, k=k))
+                / (2 * h)
+            )
+
+        area = quad(rock_area_density, d, 60.0, limit=200)[0]
+        assert area == pytest.approx(k * np.exp(-q * d), rel=1e-5)
+
+
+def test_golombek_sampled_population_covers_its_area_fraction():
+    from simlunar.terrain.sfd import get_law, sample_diameters
+
+    k, area = 0.05, 4.0e4
+    q = 1.79 + 0.152 / k
+    law = get_law("rocks", "golombek", coefficient=k)
+    d = sample_diameters(law, area, 0.1, 3.0, rng=3)
+    covered = np.sum(np.pi * d**2 / 4) / area
+    expected = k * (np.exp(-q * 0.1) - np.exp(-q * 3.0))
+    assert covered == pytest.approx(expected, rel=0.05)
+
+
+@pytest.mark.parametrize(
+    "params, match",
+    [({}, "area fraction"), ({"coefficient": 1.5}, "area fraction"),
+     ({"coefficient": 0.05, "exponent": 2.0}, "no exponent")],
+)  # fmt: skip
+def test_golombek_parameters_checked(params, match):
+    from simlunar.terrain.sfd import get_law
+
+    with pytest.raises(ValueError, match=match):
+        get_law("rocks", "golombek", **params)

@@ -1,0 +1,97 @@
+"""Landing-site figures: hazard recall per sensor and hazard size (one panel per light) and a
+hazard-map panel (truth beside each sensor's reconstruction) (docs/landing.md)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from simlunar.plotting.landing_tables import landing_summary
+
+__all__ = ["hazard_map_panel", "landing_recall"]
+
+
+def _label(metric: str) -> str:
+    if metric == "false_safe_site":
+        return "false-safe site"
+    kind, _, rest = metric.removeprefix("hazard_").partition("_")
+    what, _, size = rest.partition("_")
+    return f"{what} {size} {kind}"
+
+
+def landing_recall(
+    rows: Sequence[dict],
+    *,
+    sensor_key: str,
+    light_key: str | None,
+    reconstruction: str = "linear",
+    title: str = "",
+):
+    """Grouped bars: per (sensor, planner) the mean rock recall per size, slope recall and the
+    false-safe rate of the chosen site, with their 95 % intervals over terrain seeds; one panel
+    per light (``light_key`` values). Returns the figure."""
+    keys = [sensor_key] + ([light_key] if light_key else [])
+    summary = {g: c for g, c in landing_summary(rows, keys=keys).items()
+               if g[len(keys)] == reconstruction}  # fmt: skip
+    recalls = sorted({m for c in summary.values() for m in c if m.startswith("hazard_recall_")})
+    metrics = [*recalls, "false_safe_site"]
+    lights = sorted({g[1] for g in summary}, key=float) if light_key else [""]
+    groups = sorted({(g[0], g[-1]) for g in summary})
+    wide = max(4.2, 1.15 * len(groups) + 1.0)
+    fig, axes = plt.subplots(1, len(lights), figsize=(wide * len(lights), 4.2), squeeze=False,
+                             sharey=True)  # fmt: skip
+    width = 0.8 / len(metrics)
+    colours = plt.get_cmap("tab10")
+    for ax, light in zip(axes[0], lights, strict=True):
+        x = np.arange(len(groups))
+        for j, m in enumerate(metrics):
+            vals, err = [], [[], []]
+            for sensor, planner in groups:
+                g = (sensor, light, reconstruction, planner) if light_key else (
+                    sensor, reconstruction, planner)  # fmt: skip
+                mean, lo, hi = summary.get(g, {}).get(m, (np.nan, np.nan, np.nan))
+                vals.append(mean)
+                err[0].append(mean - lo)
+                err[1].append(hi - mean)
+            ax.bar(x + (j - (len(metrics) - 1) / 2) * width, vals, width, yerr=err, capsize=2,
+                   color=colours(j), label=_label(m))  # fmt: skip
+        ax.set_xticks(x, [f"{s.replace('_', ' ')}\n{p}" for s, p in groups], fontsize=7,
+                      rotation=30, ha="right")  # fmt: skip
+        ax.set_ylim(0, 1.05)
+        ax.set_title(f"sun {light} deg" if light_key else "", fontsize=9)
+        ax.grid(axis="y", alpha=0.3)
+    axes[0][0].set_ylabel("recall / rate")
+    fig.suptitle(title, fontsize=10)
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(metrics), 4), fontsize=8,
+               frameon=False)  # fmt: skip
+    fig.tight_layout(rect=(0, 0.08, 1, 0.95))
+    return fig
+
+
+def hazard_map_panel(image, truth_hazards, found: dict, *, title: str = ""):
+    """The guide image, the true hazard map and each reconstruction's (name -> bool map), the
+    misses red and the false alarms blue over the found hazards in black. Returns the figure."""
+    n = 2 + len(found)
+    fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 2.9))
+    axes[0].imshow(np.asarray(image, float), cmap="gray")
+    axes[0].set_title("guide image", fontsize=8)
+    t = np.asarray(truth_hazards, bool)
+    axes[1].imshow(t, cmap="gray_r", vmin=0, vmax=1)
+    axes[1].set_title("true hazards", fontsize=8)
+    for ax, (name, f) in zip(axes[2:], found.items(), strict=True):
+        f = np.asarray(f, bool)
+        rgb = np.ones((*t.shape, 3))
+        rgb[f & t] = 0.0  # found
+        rgb[t & ~f] = (0.85, 0.1, 0.1)  # missed
+        rgb[f & ~t] = (0.2, 0.4, 0.9)  # false alarm
+        ax.imshow(rgb)
+        ax.set_title(name, fontsize=8)
+    for ax in axes:
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.suptitle(title + "  (black found, red missed, blue false alarm)", fontsize=9)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,52 @@
+"""Landing figures: the bars are the table's means, the hazard panel colours what it says."""
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+from simlunar.plotting.landing import hazard_map_panel, landing_recall
+
+
+def _rows():
+    rows = []
+    for unit, sensor, light, recall in ((0, "flash", 5, 0.2), (1, "flash", 5, 0.6),
+                                        (2, "steered_beam", 45, 1.0)):  # fmt: skip
+        for metric, value in (("hazard_recall_rock_15cm", recall), ("false_safe_site", 1.0)):
+            rows.append({"unit": unit, "study.sensor": sensor, "render.light.elevation_deg": light,
+                         "planner": "none", "reconstruction": "linear", "metric": metric,
+                         "value": value, "seconds": 0.5})  # fmt: skip
+    return rows
+
+
+def test_recall_bars_are_the_means_over_seeds_one_panel_per_light():
+    fig = landing_recall(_rows(), sensor_key="study.sensor",
+                         light_key="render.light.elevation_deg")  # fmt: skip
+    try:
+        axes = [ax for ax in fig.axes if ax.patches]
+        assert [ax.get_title() for ax in axes] == ["sun 5 deg", "sun 45 deg"]
+        heights = [p.get_height() for p in axes[0].patches]
+        # groups (flash, steered_beam) x metrics (rock 15 cm recall, false-safe site)
+        assert heights[0] == pytest.approx(0.4)  # flash at 5 deg: mean of 0.2 and 0.6
+        assert heights[2] == pytest.approx(1.0)  # its false-safe site
+        assert np.isnan(heights[1])  # no steered beam at 5 deg
+        labels = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert labels == ["rock 15cm recall", "false-safe site"]
+    finally:
+        plt.close(fig)
+
+
+def test_hazard_panel_colours_found_missed_and_false_alarms():
+    truth = np.zeros((4, 4), bool)
+    truth[0, 0] = truth[1, 1] = True
+    found = np.zeros_like(truth)
+    found[0, 0] = found[3, 3] = True
+    fig = hazard_map_panel(np.zeros((4, 4)), truth, {"flash, linear": found})
+    try:
+        rgb = fig.axes[2].images[0].get_array()
+        assert tuple(rgb[0, 0]) == (0.0, 0.0, 0.0)  # found
+        assert tuple(rgb[1, 1]) == pytest.approx((0.85, 0.1, 0.1))  # missed
+        assert tuple(rgb[3, 3]) == pytest.approx((0.2, 0.4, 0.9))  # false alarm
+        assert tuple(rgb[2, 2]) == (1.0, 1.0, 1.0)
+        assert fig.axes[2].get_title() == "flash, linear"
+    finally:
+        plt.close(fig)
