@@ -46,7 +46,10 @@ GROUPS = {
          "tests/metrics/test_interior.py", "tests/metrics/test_hazard.py",
          "tests/metrics/test_smallest_valid_inputs.py"],
     ),
-    "placement": (["planner/placement.py"], ["tests/planner/test_placement.py"]),
+    "placement": (
+        ["planner/placement.py"],
+        ["tests/planner/test_placement.py", "tests/planner/test_layout_edges_and_defaults.py"],
+    ),
     "gray_code": (
         ["scanner/gray_code.py", "scanner/bitcodes.py"],
         ["tests/scanner/test_gray_code.py", "tests/scanner/test_bitcodes.py",
