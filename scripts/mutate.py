@@ -53,7 +53,7 @@ GROUPS = {
     "gray_code": (
         ["scanner/gray_code.py", "scanner/bitcodes.py"],
         ["tests/scanner/test_gray_code.py", "tests/scanner/test_bitcodes.py",
-         "tests/scanner/test_binary_code.py"],
+         "tests/scanner/test_binary_code.py", "tests/scanner/test_code_tables_and_frame_levels.py"],
     ),
     "lidar": (
         ["lidar/ranging.py", "lidar/detector.py"],
