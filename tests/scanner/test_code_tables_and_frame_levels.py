@@ -3,11 +3,13 @@ projector's full range), and the stack helpers taking frames as lists."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from simlunar.scanner import bitcodes as bc
-from simlunar.scanner.gray_code import GrayCoding
+from simlunar.scanner.gray_code import GrayCodeOptions, GrayCoding
 
 
 def test_the_gray_table_is_the_binary_reflected_code_and_read_only():
@@ -45,3 +47,14 @@ def test_interleave_takes_the_patterns_as_a_list_of_frames():
     p = [np.full((1, 2), 0.25), np.full((1, 2), 0.5)]
     out = bc.interleave(p, bc.inverses_by_linearity(p, np.ones((1, 2)), np.zeros((1, 2))))
     np.testing.assert_array_equal(out[:, 0, 0], [0.25, 0.75, 0.5, 0.5])
+
+
+def test_the_exported_opencv_thresholds_are_the_frame_thresholds_at_255_full_scale():
+    """OpenCV's decoder takes 8-bit thresholds: a frame-unit threshold t is round(255 t) there
+    (full scale 1.0 is 255, halves rounded to even): 0.7 -> 178.5 -> 178, 0.1 -> 25.5 -> 26."""
+    meta = GrayCoding(GrayCodeOptions(black_threshold=0.7, white_threshold=0.1)).export_meta(
+        SimpleNamespace(n_col_bits=3, n_row_bits=2)
+    )
+    assert meta["opencv_black_threshold_8bit"] == 178
+    assert meta["opencv_white_threshold_8bit"] == 26
+    assert (meta["n_col_bits"], meta["n_row_bits"]) == (3, 2)
