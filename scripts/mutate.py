@@ -57,7 +57,8 @@ GROUPS = {
     ),
     "lidar": (
         ["lidar/ranging.py", "lidar/detector.py"],
-        ["tests/lidar/test_ranging.py", "tests/lidar/test_detector.py"],
+        ["tests/lidar/test_ranging.py", "tests/lidar/test_detector.py",
+         "tests/lidar/test_photon_budget.py"],
     ),
 }  # fmt: skip
 
