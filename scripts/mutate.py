@@ -58,7 +58,7 @@ GROUPS = {
     "lidar": (
         ["lidar/ranging.py", "lidar/detector.py"],
         ["tests/lidar/test_ranging.py", "tests/lidar/test_detector.py",
-         "tests/lidar/test_photon_budget.py"],
+         "tests/lidar/test_photon_budget.py", "tests/lidar/test_sub_bin_position.py"],
     ),
 }  # fmt: skip
 

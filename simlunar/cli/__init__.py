@@ -7,7 +7,7 @@ finished units kept; 130 interrupted (Ctrl-C): one line saying what was kept and
 resume; 1 an internal error (a bug): the traceback and a line asking to report it. A reader
 that closes stdout early (``simlunar render ... | head -1``) stops the printing, not the work:
 every command prints through :func:`~simlunar.cli.common.echo` and ends as it would have
-(141, quiet, only when the pipe broke in a write of click's own, such as ``--help``).
+(141, quiet, only when the pipe broke in a write of click's own: ``--help``).
 
 A command is the function of its name in its module (:data:`COMMANDS`: one module per command
 or group of commands that need the same library), whose top imports Typer and the signature's
