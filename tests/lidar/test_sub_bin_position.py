@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.special import erf
 
-from simlunar.lidar.ranging import _parabola_offset, extract_ranges
+from simlunar.lidar.ranging import RangeOptions, _parabola_offset, extract_ranges
 from simlunar.lidar.waveform import FWHM_PER_SIGMA, PulseOptions, TimeBins
 
 
@@ -46,3 +46,19 @@ def test_a_noise_free_return_is_ranged_exactly_by_the_ml_fit(tau, amplitude, sig
     assert bool(res.valid)
     bin_range = bins.bin_opl / 2  # a bin is half its round-trip path in range
     assert abs(float(res.range) - float(bins.range_of(tau))) < 1e-11 * bin_range
+
+
+@pytest.mark.parametrize(("spike_bin", "kept"), [(0, False), (1, True), (62, True), (63, False)])
+def test_the_edge_guard_keeps_a_return_exactly_at_its_distance_from_the_ends(spike_bin, kept):
+    """A pulse of 0.2 bin (the parabola's vertex alone) in one bin of 64: the return sits at
+    the bin's centre, spike_bin + 0.5. edge_sigma = 7.5 guards 7.5 x 0.2 = 1.5 bins at each
+    end: a return at 1.5 or 62.5 (= 64 - 1.5) is on the guard and kept, one at 0.5 or 63.5 is
+    inside it and dropped."""
+    bins = TimeBins(0.0, 0.3, 64)
+    pulse = PulseOptions(fwhm_s=0.2 * FWHM_PER_SIGMA * bins.bin_s)
+    counts = np.zeros(64)
+    counts[spike_bin] = 100.0
+    res = extract_ranges(counts, bins, pulse=pulse, options=RangeOptions(edge_sigma=7.5))
+    assert bool(res.valid) is kept
+    if kept:
+        assert float(res.range) == pytest.approx(float(bins.range_of(spike_bin + 0.5)), abs=1e-12)
