@@ -38,7 +38,8 @@ ROOT = Path(__file__).resolve().parents[1]
 GROUPS = {
     "reconstruction": (
         ["reconstruction/delaunay.py", "reconstruction/_raster.py"],
-        ["tests/reconstruction/test_delaunay.py", "tests/reconstruction/test_registry_recon.py"],
+        ["tests/reconstruction/test_delaunay.py", "tests/reconstruction/test_registry_recon.py",
+         "tests/reconstruction/test_point_scan_flags.py"],
     ),
     "metrics": (
         ["metrics/errors.py", "metrics/score.py", "metrics/interior.py", "metrics/hazard.py"],
