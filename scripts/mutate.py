@@ -4,6 +4,7 @@ Usage::
 
     python scripts/mutate.py GROUP [--n 40] [--seed 0] [--timeout 120]
     python scripts/mutate.py --list
+    python scripts/mutate.py GROUP --only 6,7,11   # those mutants of the sample (re-check survivors)
 
 A mutant is one edit of one module's syntax tree (``ast``): an arithmetic operator swapped
 (``+`` <-> ``-``, ``*`` <-> ``/``, ...), a comparison swapped (``<`` <-> ``<=``, ``==`` <->
@@ -37,22 +38,28 @@ ROOT = Path(__file__).resolve().parents[1]
 GROUPS = {
     "reconstruction": (
         ["reconstruction/delaunay.py", "reconstruction/_raster.py"],
-        ["tests/reconstruction/test_delaunay.py", "tests/reconstruction/test_registry_recon.py"],
+        ["tests/reconstruction/test_delaunay.py", "tests/reconstruction/test_registry_recon.py",
+         "tests/reconstruction/test_point_scan_flags.py"],
     ),
     "metrics": (
         ["metrics/errors.py", "metrics/score.py", "metrics/interior.py", "metrics/hazard.py"],
         ["tests/metrics/test_errors.py", "tests/metrics/test_score.py",
-         "tests/metrics/test_interior.py", "tests/metrics/test_hazard.py"],
+         "tests/metrics/test_interior.py", "tests/metrics/test_hazard.py",
+         "tests/metrics/test_smallest_valid_inputs.py"],
     ),
-    "placement": (["planner/placement.py"], ["tests/planner/test_placement.py"]),
+    "placement": (
+        ["planner/placement.py"],
+        ["tests/planner/test_placement.py", "tests/planner/test_layout_edges_and_defaults.py"],
+    ),
     "gray_code": (
         ["scanner/gray_code.py", "scanner/bitcodes.py"],
         ["tests/scanner/test_gray_code.py", "tests/scanner/test_bitcodes.py",
-         "tests/scanner/test_binary_code.py"],
+         "tests/scanner/test_binary_code.py", "tests/scanner/test_code_tables_and_frame_levels.py"],
     ),
     "lidar": (
         ["lidar/ranging.py", "lidar/detector.py"],
-        ["tests/lidar/test_ranging.py", "tests/lidar/test_detector.py"],
+        ["tests/lidar/test_ranging.py", "tests/lidar/test_detector.py",
+         "tests/lidar/test_photon_budget.py", "tests/lidar/test_sub_bin_position.py"],
     ),
 }  # fmt: skip
 
@@ -155,8 +162,11 @@ def mutate(tree: ast.AST, kind: str, path) -> tuple[ast.AST, str]:
     return ast.fix_missing_locations(tree), f"line {line}: {what}"
 
 
-def run_group(group: str, n: int, seed: int, timeout: float) -> tuple[int, int, list[str]]:
-    """Mutants of ``group``: (killed, total, survivor descriptions)."""
+def run_group(
+    group: str, n: int, seed: int, timeout: float, only: set[int] | None = None
+) -> tuple[int, int, list[str]]:
+    """Mutants of ``group``: (killed, total, survivor descriptions); ``only``: the 1-based
+    positions in the sample to run (the others are skipped and not counted)."""
     modules, tests = GROUPS[group]
     pool = []
     for rel in modules:
@@ -178,6 +188,8 @@ def run_group(group: str, n: int, seed: int, timeout: float) -> tuple[int, int, 
         if base.returncode != 0:  # a kill must be the mutant's doing
             raise SystemExit(f"{group}: the tests fail without a mutant:\n{base.stdout[-2000:]}")
         for i, (rel, tree, kind, path) in enumerate(sample):
+            if only is not None and i + 1 not in only:
+                continue
             mutant, what = mutate(tree, kind, path)
             target = pkg / rel
             original = target.read_text()
@@ -199,7 +211,11 @@ def run_group(group: str, n: int, seed: int, timeout: float) -> tuple[int, int, 
             print(f"{line} ({time.perf_counter() - t0:.1f} s)", flush=True)
             if not dead:
                 survivors.append(f"{rel} {what}")
-    return killed, len(sample), survivors
+    return (
+        killed,
+        len(sample) if only is None else len(only & set(range(1, len(sample) + 1))),
+        survivors,
+    )
 
 
 def main(argv=None) -> int:
@@ -209,6 +225,9 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--timeout", type=float, default=180.0, help="seconds per mutant's tests")
     ap.add_argument("--list", action="store_true", help="the groups and their sites")
+    ap.add_argument(
+        "--only", default=None, help="comma-separated positions in the sample (1-based) to run"
+    )
     args = ap.parse_args(argv)
     if args.list:
         for g, (mods, tests) in GROUPS.items():
@@ -220,7 +239,8 @@ def main(argv=None) -> int:
         print(f"groups: {', '.join(GROUPS)}", file=sys.stderr)
         return 2
     for g in args.groups:
-        k, total, surv = run_group(g, args.n, args.seed, args.timeout)
+        only = None if args.only is None else {int(i) for i in args.only.split(",")}
+        k, total, surv = run_group(g, args.n, args.seed, args.timeout, only)
         print(f"{g}: {k}/{total} killed ({100 * k / max(total, 1):.0f} %)", flush=True)
         for s in surv:
             print(f"  survivor: {s}", flush=True)

@@ -4,7 +4,10 @@ Exit codes: 0 done; 2 a user error (bad option, config, input file or result fol
 before anything is written, reported as one line ``error: ...`` without a traceback; 3 the
 environment failed during a run (Dask scheduler or workers lost, a write refused): one line,
 finished units kept; 130 interrupted (Ctrl-C): one line saying what was kept and how to
-resume; 1 an internal error (a bug): the traceback and a line asking to report it.
+resume; 1 an internal error (a bug): the traceback and a line asking to report it. A reader
+that closes stdout early (``simlunar render ... | head -1``) stops the printing, not the work:
+every command prints through :func:`~simlunar.cli.common.echo` and ends as it would have
+(141, quiet, only when the pipe broke in a write of click's own: ``--help``).
 
 A command is the function of its name in its module (:data:`COMMANDS`: one module per command
 or group of commands that need the same library), whose top imports Typer and the signature's
@@ -33,6 +36,7 @@ from simlunar.cli.common import (
     EXIT_PIPE,
     EXIT_USER,
     closed_stdout,
+    echo,
     exit_for,
     user_errors,
 )
@@ -130,7 +134,7 @@ app = typer.Typer(
 
 def _version(value: bool) -> None:
     if value:
-        typer.echo(f"simlunar {simlunar.__version__}")
+        echo(f"simlunar {simlunar.__version__}")
         raise typer.Exit()
 
 
@@ -166,7 +170,7 @@ def main() -> None:
         code = app(prog_name="simlunar", standalone_mode=False)
         code = code if isinstance(code, int) else 0
     except cx.NoArgsIsHelpError as exc:
-        typer.echo(exc.ctx.get_help() if exc.ctx else str(exc))
+        echo(exc.ctx.get_help() if exc.ctx else str(exc))
         code = EXIT_USER
     except cx.UsageError as exc:
         # one line (click draws a box of 5-6 lines): the command, the problem, where to look

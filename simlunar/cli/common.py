@@ -2,7 +2,8 @@
 flag.
 
 Exit codes (the table is in :mod:`simlunar.cli`): 0 done, 1 a bug, 2 a user error, 3 the
-environment failed, 130 interrupted, 141 stdout closed early.
+environment failed, 130 interrupted, 141 stdout closed early in a write that is not a
+command's own (a command prints through :func:`echo`, which lets its work finish).
 """
 
 from __future__ import annotations
@@ -35,8 +36,8 @@ __all__ = [
 ]
 
 EXIT_USER, EXIT_INTERNAL, EXIT_INFRA, EXIT_INTERRUPTED = 2, 1, 3, 130
-#: exit code when stdout is closed early (``simlunar run ... | head -1``): quiet, as a shell
-#: reports a program ended by SIGPIPE (128 + 13)
+#: exit code when stdout is found closed outside :func:`echo` (click's ``--help``): quiet, as a
+#: shell reports a program ended by SIGPIPE (128 + 13)
 EXIT_PIPE = 141
 REPORT_URL = "https://github.com/simlunar/simlunar/issues"
 
@@ -129,7 +130,8 @@ def exit_for(exc: BaseException) -> typer.Exit:
 def echo(message: str = "") -> None:
     """``typer.echo`` of a line to stdout that survives a reader who went away
     (``simlunar run ... | head -1``): the first write that finds the pipe closed sends stdout
-    to the null device, and the command goes on with its work (nothing more is printed)."""
+    to the null device, and the command goes on with its work (nothing more is printed) and
+    ends with the exit code it would have had. Every command's stdout line goes through here."""
     try:
         typer.echo(message)
     except BrokenPipeError:

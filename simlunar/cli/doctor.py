@@ -5,9 +5,7 @@ from __future__ import annotations
 import os
 import platform
 
-import typer
-
-from simlunar.cli.common import flag
+from simlunar.cli.common import echo, flag
 
 __all__ = ["doctor"]
 
@@ -24,19 +22,19 @@ def doctor(short: bool = flag("--short", "One line only.")) -> None:
     check_renderer()  # a bad SIMLUNAR_VARIANT in one line
     info = backend.choose_variant()
     if short:
-        typer.echo(f"simlunar doctor: variant {info.variant} ({info.reason})")
+        echo(f"simlunar doctor: variant {info.variant} ({info.reason})")
         return
     vers = backend.versions()
-    typer.echo("simlunar doctor")
+    echo("simlunar doctor")
     for k, v in vers.items():
-        typer.echo(f"  {k:<15} {v}")
-    typer.echo(f"  {'variant':<15} {info.variant}")
-    typer.echo(f"  {'why':<15} {info.reason}")
+        echo(f"  {k:<15} {v}")
+    echo(f"  {'variant':<15} {info.variant}")
+    echo(f"  {'why':<15} {info.reason}")
     for k, v in info.probes.items():
-        typer.echo(f"  {'probe ' + k:<15} {v}")
-    typer.echo(f"  {'libLLVM':<15} {info.libllvm or 'none'}")
-    typer.echo(f"  {'kernel cache':<15} {info.cache_dir}")
-    typer.echo(f"  {'cores':<15} {os.cpu_count()}")
-    typer.echo(f"  {'machine':<15} {platform.machine()} {platform.system()}")
+        echo(f"  {'probe ' + k:<15} {v}")
+    echo(f"  {'libLLVM':<15} {info.libllvm or 'none'}")
+    echo(f"  {'kernel cache':<15} {info.cache_dir}")
+    echo(f"  {'cores':<15} {os.cpu_count()}")
+    echo(f"  {'machine':<15} {platform.machine()} {platform.system()}")
     gpu = "CUDA device present" if backend._cuda_present() else "none"
-    typer.echo(f"  {'GPU':<15} {gpu}")
+    echo(f"  {'GPU':<15} {gpu}")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from simlunar.cli.common import user_input
+from simlunar.cli.common import echo, user_input
 
 __all__ = ["render"]
 
@@ -39,5 +39,5 @@ def render(
     check_camera(cfg.render, terrain_facts(cfg.terrain))
     paths = render_scene(cfg, out_dir)
     for name, path in paths.items():
-        typer.echo(f"{name:<17} {path}")
-    typer.echo(f"rendered {cfg.name} into {out_dir}")
+        echo(f"{name:<17} {path}")
+    echo(f"rendered {cfg.name} into {out_dir}")

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import typer
 
+from simlunar.cli.common import echo
 from simlunar.errors import SimlunarError
 
 __all__ = ["report"]
@@ -25,4 +26,4 @@ def report(
         raise SimlunarError(f"{results_dir}: no such folder")
     with FolderLock(results_dir):  # not while a run writes into the folder
         path = write_report(results_dir)
-    typer.echo(str(path))
+    echo(str(path))

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from simlunar.cli.common import flag
+from simlunar.cli.common import echo, flag
 from simlunar.errors import ConfigError
 
 __all__ = ["schema"]
@@ -39,4 +39,4 @@ def schema(
         Path(out).parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(out, text + "\n")
     else:
-        typer.echo(text)
+        echo(text)

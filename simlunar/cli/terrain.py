@@ -10,7 +10,7 @@ from types import SimpleNamespace
 
 import typer
 
-from simlunar.cli.common import flag, user_input
+from simlunar.cli.common import echo, flag, user_input
 from simlunar.errors import SimlunarError
 
 __all__ = ["terrain"]
@@ -57,11 +57,11 @@ def terrain(
         with user_input():
             dem = io.load_dem(preset)
             side, features = _side_features(preset)
-        typer.echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
+        echo(f"{preset}: {dem.shape[0]} x {dem.shape[1]} cells at {dem.spacing} m")
         if side is not None:
-            typer.echo(f"features: {side}")
+            echo(f"features: {side}")
         for line in stats.terrain_report(dem, **features):
-            typer.echo(line)
+            echo(line)
         return
     if not 0 < scale <= 1:
         raise SimlunarError(f"--scale must lie in (0, 1], got {scale}")
@@ -78,20 +78,20 @@ def terrain(
     res = generate(params, rng=seed)
     t_gen = time.perf_counter() - t0
     rows, cols = res.terrain.shape
-    typer.echo(
+    echo(
         f"{res.params.name}: {rows} x {cols} cells at {res.terrain.spacing} m, "
         f"{len(res.craters)} craters, {len(res.rocks)} rocks, generated in {t_gen:.2f} s"
     )
     if print_stats:
         for line in stats.terrain_report(res.terrain, craters=res.craters, rocks=res.rocks):
-            typer.echo(line)
+            echo(line)
     if out is None:
         return
     files = io.write_terrain_outputs(
         res, out, dem_format=dem_format, mesh_format=None if mesh.lower() == "none" else mesh
     )
     for name, path in files.items():
-        typer.echo(f"{name:<10} {path}")
+        echo(f"{name:<10} {path}")
 
 
 def _side_features(path: str) -> tuple[Path | None, dict]:

@@ -7,7 +7,7 @@ import shlex
 
 import typer
 
-from simlunar.cli.common import user_input
+from simlunar.cli.common import echo, user_input
 from simlunar.errors import SimlunarError
 
 __all__ = ["train"]
@@ -32,6 +32,6 @@ def train(
     if out is not None and not out.endswith(".joblib"):
         raise SimlunarError(f"--out {out}: a learned model file ends in .joblib")
     command = shlex.join(["simlunar", "train", config, *(["--out", out] if out else [])])
-    model, record = train_from_config(cfg, experiments, out=out, command=command, log=typer.echo)
-    typer.echo(f"model:  {model}")
-    typer.echo(f"record: {record}")
+    model, record = train_from_config(cfg, experiments, out=out, command=command, log=echo)
+    echo(f"model:  {model}")
+    echo(f"record: {record}")
