@@ -13,11 +13,13 @@ never from the terrain. The micromirror flash fires as many frames as dots share
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from simlunar.geometry import Camera
+from simlunar.lidar.apd import agc_energy
 from simlunar.lidar.gate import gate_bins, prior_ranges, read_datum
 from simlunar.lidar.hardware import pixel_solid_angles
 from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
@@ -106,8 +108,30 @@ def read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=None
         weight = omega
     bg = 0.0 if frame.sun is None else frame.sun * weight
     hist = frame.histograms * weight[..., None].astype(np.float32)
+    probes = 0
+    if det.apd is not None and det.apd.agc_target is not None:
+        if lit_sr is not None:
+            raise ValueError("apd.agc_target: the micromirror flash has no gain control")
+        det, probes = _gain_control(hist, bg, frame, options, det, rng)
     counts = detect_counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
-    return read_ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
+    res = read_ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
+    return dataclasses.replace(res, probe_pulses=probes)
+
+
+def _gain_control(hist, bg, frame, options: FlashOptions, det, rng):
+    """The detector of a frame whose pulse energy the APD's gain control set
+    (:func:`~simlunar.lidar.apd.agc_energy`: probe pulses fired before the frame, each read
+    in full and discarded) and the number of probe pulses."""
+    energy, probes = float(det.apd.agc_probe_energy), 0
+    one = dataclasses.replace(det, pulses=1)
+    for _ in range(det.apd.agc_max_probes):
+        probe = dataclasses.replace(one, signal_photons=det.signal_photons * energy)
+        w = detect_counts(hist, bg, frame.bins, options.pulse, probe, rng, frame.oversample)
+        probes += 1
+        energy, again = agc_energy(w, energy, options=det.apd)
+        if not again:
+            break
+    return dataclasses.replace(det, signal_photons=det.signal_photons * energy), probes
 
 
 def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> LidarScan:
@@ -122,7 +146,8 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
         points=camera.pose.position + res.range[..., None] * d,
         photons=res.photons,
         order=np.arange(res.range.size).reshape(res.range.shape),
-        seconds=options.detector.pulses / options.pulse_rate_hz,
+        # the gain control's probe pulses fire before the frame's
+        seconds=(options.detector.pulses + res.probe_pulses) / options.pulse_rate_hz,
         frames=1,
         times=np.zeros(res.range.shape),
         returns=res.returns,

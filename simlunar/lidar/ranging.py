@@ -107,12 +107,15 @@ class RangeResult:
         Estimated signal photons of the chosen return (0 where invalid).
     returns : int64
         Number of returns detected.
+    probe_pulses : int
+        Pulses a gain control fired before the reading to set its energy (0 without one).
     """
 
     range: np.ndarray
     valid: np.ndarray
     photons: np.ndarray
     returns: np.ndarray
+    probe_pulses: int = 0
 
 
 def _detection_threshold(mu, width: int, options: RangeOptions, apd, pulses: int):

@@ -276,6 +276,8 @@ def steered_beam_scan(
     rng = np.random.default_rng(rng)
     d = _unit(np.asarray(directions, float))
     det = _beam_detector(capture, options)
+    if det.apd is not None and det.apd.agc_target is not None:
+        raise ValueError("apd.agc_target: a steered beam has no gain control (a flash has)")
     datum, steps = options.gate.datum_z_m, 0
     if not options.gate.altimeter:
         datum = read_datum(options.gate, rng)  # the datum itself unless it has an error
