@@ -24,6 +24,7 @@ __all__ = [
     "loo_residuals",
     "reconstruct",
     "triangulate",
+    "trim_hull",
 ]
 
 OUTSIDE_POLICIES = ("nearest", "nan")
@@ -111,7 +112,43 @@ def _triangulate(pts: np.ndarray, switches: str) -> np.ndarray:
     return np.ascontiguousarray(tris, dtype=np.int32)
 
 
-def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.ndarray:
+def trim_hull(points_rc, tris: np.ndarray, ratio: float) -> np.ndarray:
+    """The triangles left after peeling long hull triangles: a triangle with an edge on the
+    hull whose longest edge exceeds ``ratio`` x the median edge length of the triangulation is
+    removed, and the peeling repeats on the new hull until none is left (``ratio`` <= 0: the
+    triangles unchanged).
+
+    Samples off their lattice by a fraction of a pixel at the border (a moving platform's) make
+    the Delaunay hull fill the border strip with slivers whose longest edge spans many samples;
+    their cells then take the nearest sample's value (``reconstruct``'s outside policy)
+    instead of a value interpolated along the sliver.
+    """
+    if ratio <= 0 or len(tris) == 0:
+        return tris
+    pts = np.asarray(points_rc, dtype=np.float64)
+    t = np.asarray(tris, dtype=np.int64)
+    a, b, c = pts[t[:, 0]], pts[t[:, 1]], pts[t[:, 2]]
+    lengths = np.stack([np.hypot(*(b - a).T), np.hypot(*(c - b).T), np.hypot(*(a - c).T)], 1)
+    limit = ratio * float(np.median(lengths))
+    long = lengths.max(axis=1) > limit
+    alive = np.ones(len(t), bool)
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    _, edge_id, edge_count = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    edge_id = edge_id.reshape(3, len(t)).T  # (m, 3) edge ids of each triangle
+    count = edge_count.copy()
+    while True:
+        on_hull = (count[edge_id] == 1).any(axis=1)
+        peel = alive & long & on_hull
+        if not peel.any():
+            break
+        alive &= ~peel
+        np.subtract.at(count, edge_id[peel].ravel(), 1)
+    return np.ascontiguousarray(tris[alive])
+
+
+def reconstruct(
+    points_rc, values, shape, *, outside: str = "nearest", hull_edge_ratio: float = 0.0
+) -> np.ndarray:
     """Delaunay-linear reconstruction of scattered samples on a (rows, cols) grid.
 
     Coordinate convention: ``points_rc`` are (row, col) *index* coordinates, so the cell (r, c)
@@ -132,6 +169,10 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
         Policy for cells outside the convex hull of the samples: ``"nearest"`` (default) takes
         the value of the nearest sample (Euclidean, ties broken by the k-d tree), ``"nan"`` leaves
         NaN (the metrics then exclude those cells). The same policy applies to every strategy.
+    hull_edge_ratio : float
+        Border treatment (:func:`trim_hull`): hull triangles whose longest edge exceeds this
+        many times the median edge are peeled off and their cells treated as outside; 0 (the
+        default) keeps the whole Delaunay hull.
 
     Returns
     -------
@@ -172,6 +213,7 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
         pts, vals = _merge_duplicates(pts, vals)
     if len(pts) >= 3:
         tris = _triangulate(pts, _triangle_switches(integer, extent))
+        tris = trim_hull(pts, tris, hull_edge_ratio)
     else:
         tris = np.empty((0, 3), dtype=np.int32)
     out = np.full((rows, cols), np.nan)
