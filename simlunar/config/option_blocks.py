@@ -16,6 +16,7 @@ A new field of one of those classes is a new YAML key with nothing written here.
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 import typing
 from collections.abc import Callable, Mapping
@@ -41,6 +42,7 @@ KEY_UNITS: dict[str, tuple[str, float]] = {
     "mm": ("m", 1e-3),
     "urad": ("rad", 1e-6),
     "mrad": ("rad", 1e-3),
+    "deg": ("rad", math.pi / 180.0),
 }
 
 #: fields written in the YAML in another order than the library's: a (rows, cols) array is

@@ -23,7 +23,14 @@ import numpy as np
 
 from simlunar.registry import Options, option
 
-__all__ = ["MAX_COUNT", "POISSON_NORMAL_ABOVE", "ApdOptions", "apd_waveform", "poisson_counts"]
+__all__ = [
+    "MAX_COUNT",
+    "POISSON_NORMAL_ABOVE",
+    "ApdOptions",
+    "agc_energy",
+    "apd_waveform",
+    "poisson_counts",
+]
 
 
 @dataclass(frozen=True)
@@ -68,10 +75,32 @@ class ApdOptions(Options):
         le=24,
     )
 
+    agc_target: float | None = option(
+        None,
+        doc="automatic pulse-energy control (a flash frame): probe pulses set the frame's "
+        "pulse energy so that its brightest return peaks at this share of full_scale_pe "
+        "(simlunar.lidar.apd.agc_energy); each probe costs a pulse; None: every pulse at full "
+        "energy (needs full_scale_pe)",
+        gt=0,
+        le=1,
+    )
+    agc_probe_energy: float = option(
+        1e-3,
+        doc="the first probe pulse's energy as a share of the full pulse energy",
+        gt=0,
+        le=1,
+    )
+    agc_max_probes: int = option(
+        4, doc="most probe pulses per frame (a saturated probe is followed by one 100x weaker)",
+        ge=1, le=32,
+    )  # fmt: skip
+
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.bits is not None and self.full_scale_pe is None:
             raise ValueError("bits: a digitiser's resolution needs its full_scale_pe")
+        if self.agc_target is not None and self.full_scale_pe is None:
+            raise ValueError("agc_target: the gain control needs the digitiser's full_scale_pe")
 
     @property
     def excess_noise(self) -> float:
@@ -79,6 +108,9 @@ class ApdOptions(Options):
         k, m = self.ionisation_ratio, self.gain
         return k * m + (1.0 - k) * (2.0 - 1.0 / m)
 
+
+#: robust standard deviations a gain control's probe peak must exceed to count as a return
+SIGNIFICANT = 8.0
 
 #: mean above which a Poisson count is drawn from its normal limit (relative error of the
 #: approximation below 1e-7; NumPy's Poisson sampler refuses means above ~9e18)
@@ -125,6 +157,32 @@ def apd_waveform(expected: np.ndarray, *, options: ApdOptions, pulses: int, rng=
     if options.full_scale_pe is not None:
         return _digitised(np.asarray(expected, float), options, int(pulses), rng)
     return _draw(np.asarray(expected, float), options, int(pulses), rng)
+
+
+def agc_energy(probe: np.ndarray, energy: float, *, options: ApdOptions):
+    """The pulse energy (a share of the full energy) the gain control sets from one probe
+    pulse's digitised waveforms ``probe`` (..., count) fired at ``energy``, and whether another
+    probe must be fired first.
+
+    The brightest return's peak is ``P = max over readings of (max - median)`` of the probe's
+    waveforms (the median is the background); the digitiser is linear below its full scale
+    ``FS``, so the energy that puts that peak at ``agc_target x FS`` is ``energy x agc_target x
+    FS / P`` (at most 1: a starved receiver gets the full energy). A saturated probe (a bin at
+    ``FS``) only bounds ``P`` from below: the next probe is 100x weaker. A probe whose peak is
+    not significant (under ``SIGNIFICANT`` robust standard deviations of the waveforms, their
+    median absolute deviation x 1.4826) saw no return: the next is 100x stronger, and at the
+    full energy the frame fires at it.
+    """
+    w = np.asarray(probe, float)
+    fs, target = float(options.full_scale_pe), float(options.agc_target)
+    if (w >= fs).any():
+        return energy / 100.0, True
+    med = np.median(w, axis=-1, keepdims=True)
+    noise = 1.4826 * float(np.median(np.abs(w - med)))
+    peak = float((w - med).max())
+    if not peak > max(SIGNIFICANT * noise, 1e-12):
+        return min(energy * 100.0, 1.0), energy < 1.0
+    return float(min(energy * target * fs / peak, 1.0)), False
 
 
 def _digitised(expected: np.ndarray, options: ApdOptions, pulses: int, rng) -> np.ndarray:

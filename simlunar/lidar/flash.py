@@ -13,12 +13,14 @@ never from the terrain. The micromirror flash fires as many frames as dots share
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from simlunar.geometry import Camera
-from simlunar.lidar.gate import gate_bins, plane_ranges
+from simlunar.lidar.apd import agc_energy
+from simlunar.lidar.gate import gate_bins, prior_ranges, read_datum
 from simlunar.lidar.hardware import pixel_solid_angles
 from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
 from simlunar.lidar.waveform import TimeBins
@@ -34,6 +36,10 @@ __all__ = [
     "receiver_rc",
     "receiver_solid_angles",
 ]
+
+
+#: the stream of the gate's datum reading drawn from a flash's render seed
+DATUM_STREAM = 0x6A7E
 
 
 @dataclass(frozen=True)
@@ -53,17 +59,31 @@ class FlashOptions(ReturnOptions):
     )
 
 
-def flash_window(camera: Camera, *, options: FlashOptions) -> TimeBins:
+def flash_window(camera: Camera, *, options: FlashOptions, rng=None) -> TimeBins:
     """The flash receiver's range gate: the ranges where its pixel rays meet the reference
-    plane (``options.gate``), with ``options.margin_m`` on both sides (never the terrain)."""
-    if options.gate.altimeter:
+    plane (``options.gate``), with ``options.margin_m`` on both sides (never the terrain).
+
+    With the gate's prior (``datum_sigma_m``, ``max_slope_rad``;
+    :func:`~simlunar.lidar.gate.prior_ranges`) the plane is the datum as read
+    (:func:`~simlunar.lidar.gate.read_datum`, its error drawn from ``rng``; None: from
+    ``options.transient.seed``, so every frame rendered with these options shares one reading,
+    a bias of the navigation's altitude) and each pixel's window covers the prior's planes
+    through the boresight's footprint.
+    """
+    g = options.gate
+    if g.altimeter:
         raise ValueError("gate.altimeter: a flash takes its reference plane from gate.datum_z_m")
+    if rng is None and g.datum_sigma_m > 0:
+        rng = np.random.default_rng((options.transient.seed, DATUM_STREAM))
+    datum = read_datum(g, rng)
     _, d = camera.rays(camera.pixel_centers().reshape(-1, 2))
-    r = plane_ranges(camera.pose.position, d, datum_z=options.gate.datum_z_m, options=options.gate)
-    r = r[r < options.gate.max_range_m]  # pixels above the plane's horizon are not gated
-    if r.size == 0:
+    lo, hi = prior_ranges(camera.pose.position, d, datum_z=datum, boresight=camera.pose.forward,
+                          options=g)  # fmt: skip
+    keep = lo < g.max_range_m  # pixels above the plane's horizon are not gated
+    if not keep.any():
         raise ValueError("gate: no receiver pixel meets the reference plane within max_range_m")
-    return gate_bins(r, bin_range_m=options.bin_range_m, margin_m=options.margin_m)
+    return gate_bins(lo[keep], far=hi[keep], bin_range_m=options.bin_range_m,
+                     margin_m=options.margin_m)  # fmt: skip
 
 
 def receiver_solid_angles(camera: Camera) -> np.ndarray:
@@ -88,8 +108,30 @@ def read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=None
         weight = omega
     bg = 0.0 if frame.sun is None else frame.sun * weight
     hist = frame.histograms * weight[..., None].astype(np.float32)
+    probes = 0
+    if det.apd is not None and det.apd.agc_target is not None:
+        if lit_sr is not None:
+            raise ValueError("apd.agc_target: the micromirror flash has no gain control")
+        det, probes = _gain_control(hist, bg, frame, options, det, rng)
     counts = detect_counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
-    return read_ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
+    res = read_ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
+    return dataclasses.replace(res, probe_pulses=probes)
+
+
+def _gain_control(hist, bg, frame, options: FlashOptions, det, rng):
+    """The detector of a frame whose pulse energy the APD's gain control set
+    (:func:`~simlunar.lidar.apd.agc_energy`: probe pulses fired before the frame, each read
+    in full and discarded) and the number of probe pulses."""
+    energy, probes = float(det.apd.agc_probe_energy), 0
+    one = dataclasses.replace(det, pulses=1)
+    for _ in range(det.apd.agc_max_probes):
+        probe = dataclasses.replace(one, signal_photons=det.signal_photons * energy)
+        w = detect_counts(hist, bg, frame.bins, options.pulse, probe, rng, frame.oversample)
+        probes += 1
+        energy, again = agc_energy(w, energy, options=det.apd)
+        if not again:
+            break
+    return dataclasses.replace(det, signal_photons=det.signal_photons * energy), probes
 
 
 def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> LidarScan:
@@ -104,7 +146,8 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
         points=camera.pose.position + res.range[..., None] * d,
         photons=res.photons,
         order=np.arange(res.range.size).reshape(res.range.shape),
-        seconds=options.detector.pulses / options.pulse_rate_hz,
+        # the gain control's probe pulses fire before the frame's
+        seconds=(options.detector.pulses + res.probe_pulses) / options.pulse_rate_hz,
         frames=1,
         times=np.zeros(res.range.shape),
         returns=res.returns,

@@ -82,6 +82,22 @@ class RangeOptions(Options):
         "signal-free leading bins, simlunar.lidar.spad.spad_background)",
         choices=("given", "histogram"),
     )
+    spad_min_significance: float = option(
+        0.0,
+        doc="a Geiger-mode receiver's corrected return is kept only where its fit's likelihood "
+        "ratio against the background alone (the dead time's own shape, simlunar.lidar.spad."
+        "spad_correct) reaches this many sigmas; 0 = keep every detected return",
+        ge=0,
+        le=100,
+    )
+    spad_max_sigma_m: float | None = option(
+        None,
+        doc="a Geiger-mode receiver's corrected return is kept only where its fitted range's "
+        "standard error (Fisher information at the fit) is at most this; None = no bound",
+        unit="m",
+        key_unit="mm",
+        gt=0,
+    )
     edge_sigma: float = option(
         0.0,
         doc="reject a return whose position lies within this many timing sigmas (at least one "
@@ -107,12 +123,15 @@ class RangeResult:
         Estimated signal photons of the chosen return (0 where invalid).
     returns : int64
         Number of returns detected.
+    probe_pulses : int
+        Pulses a gain control fired before the reading to set its energy (0 without one).
     """
 
     range: np.ndarray
     valid: np.ndarray
     photons: np.ndarray
     returns: np.ndarray
+    probe_pulses: int = 0
 
 
 def _detection_threshold(mu, width: int, options: RangeOptions, apd, pulses: int):

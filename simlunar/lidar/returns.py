@@ -237,8 +237,24 @@ def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions,
                        sigma_bins=pulse.sigma_bins(bins), background=per_bin[ok])  # fmt: skip
     rng_m, ph = res.range.reshape(-1).copy(), res.photons.reshape(-1).copy()
     rng_m[ok], ph[ok] = fit.range, fit.photons * det.pulses
+    keep = _spad_guards(fit, bins, ranging)
+    valid = res.valid.reshape(-1).copy()
+    gone = np.flatnonzero(ok)[~keep]
+    valid[gone], rng_m[gone], ph[gone] = False, np.nan, 0.0
     return dataclasses.replace(res, range=rng_m.reshape(res.range.shape),
-                               photons=ph.reshape(res.photons.shape))  # fmt: skip
+                               photons=ph.reshape(res.photons.shape),
+                               valid=valid.reshape(res.valid.shape))  # fmt: skip
+
+
+def _spad_guards(fit, bins: TimeBins, ranging) -> np.ndarray:
+    """Which corrected returns the outlier guards keep (``ranging.spad_min_significance``,
+    ``spad_max_sigma_m``)."""
+    keep = np.ones(np.shape(fit.range), bool)
+    if ranging.spad_min_significance > 0:
+        keep &= fit.significance >= ranging.spad_min_significance
+    if ranging.spad_max_sigma_m is not None:
+        keep &= fit.position_sigma * bins.bin_range <= ranging.spad_max_sigma_m
+    return keep
 
 
 def detect_counts(

@@ -27,7 +27,7 @@ from simlunar.geometry import Camera, Pose
 from simlunar.lidar.detector import DetectorOptions
 from simlunar.lidar.flash import FlashOptions
 from simlunar.lidar.footprint import FootprintOptions, spot_in_field
-from simlunar.lidar.gate import GateOptions, plane_ranges
+from simlunar.lidar.gate import GateOptions, plane_ranges, prior_ranges, read_datum
 from simlunar.lidar.hardware import LidarHardware
 from simlunar.lidar.ordering import OrderOptions, order_scan
 from simlunar.lidar.ranging import extract_ranges
@@ -276,8 +276,12 @@ def steered_beam_scan(
     rng = np.random.default_rng(rng)
     d = _unit(np.asarray(directions, float))
     det = _beam_detector(capture, options)
+    if det.apd is not None and det.apd.agc_target is not None:
+        raise ValueError("apd.agc_target: a steered beam has no gain control (a flash has)")
     datum, steps = options.gate.datum_z_m, 0
-    if options.gate.altimeter:
+    if not options.gate.altimeter:
+        datum = read_datum(options.gate, rng)  # the datum itself unless it has an error
+    else:
         bore = d.mean(axis=0) if boresight is None else boresight.forward
         # at t = 0 the platform is at the capture's origin
         at = None if start_s == 0 else trajectory.at(start_s)
@@ -291,10 +295,9 @@ def steered_beam_scan(
     clock = times + start_s  # when each beam fires on the trajectory
     retarget = flight is not None and flight.retarget
     origins, d, fired = _aim(capture.origin, d, clock, trajectory, datum, options.gate, retarget)
-    pred = plane_ranges(
-        capture.origin if origins is None else origins, d, datum_z=datum, options=options.gate
-    )
-    ret = _render_returns(capture, fired, pred, clock, origins, options)
+    pred, margin = _predict(capture.origin if origins is None else origins, d, datum,
+                            boresight.forward, options)  # fmt: skip
+    ret = _render_returns(capture, fired, pred, clock, origins, options, margin)
     ranges, valid, res = _read_returns(ret, det, options, rng)
     if trajectory is None:
         points = capture.origin + ranges[:, None] * d
@@ -379,16 +382,37 @@ def _retarget(origin, d, origins, datum_z, gate) -> np.ndarray:
     return np.where(ok[:, None], out, d)
 
 
-def _render_returns(capture, d, pred, times, origins, options: SteeredBeamOptions):
+def _predict(origin, d, datum: float, boresight, options: SteeredBeamOptions):
+    """Each beam's predicted range (n,) and the margin (m) of its batch's window: the plane's
+    range and ``margin_m``, or with the gate's prior the middle of each beam's interval
+    (:func:`~simlunar.lidar.gate.prior_ranges`) and ``margin_m`` plus the largest half-width
+    (a window of ``window_m`` must hold it: a ``ValueError`` names the least)."""
+    g = options.gate
+    if g.datum_sigma_m == 0 and g.max_slope_rad == 0:
+        return plane_ranges(origin, d, datum_z=datum, options=g), options.margin_m
+    lo, hi = prior_ranges(origin, d, datum_z=datum, boresight=boresight, options=g)
+    half = 0.5 * (hi - lo)
+    margin = options.margin_m + float(half.max())
+    if not options.window_m > 2 * margin:
+        raise ValueError(
+            f"gate prior: window_m must exceed {2 * margin:.3g} m (2 x (margin_m + the "
+            f"prior's largest half-width {half.max():.3g} m)), got {options.window_m}"
+        )
+    return 0.5 * (lo + hi), margin
+
+
+def _render_returns(capture, d, pred, times, origins, options: SteeredBeamOptions, margin=None):
     """The beams' returns (input order), rendered in firing order when the platform moves
-    between launches (``origins`` (n, 3) m at the firing ``times``; None: at rest)."""
+    between launches (``origins`` (n, 3) m at the firing ``times``; None: at rest); windows
+    with ``margin`` (m; None: ``options.margin_m``) either side of the predictions."""
+    margin = options.margin_m if margin is None else margin
     if origins is None:
-        return capture.render_beams(d, pred, margin_m=options.margin_m,
+        return capture.render_beams(d, pred, margin_m=margin,
                                     seed=options.transient.seed)  # fmt: skip
     fire = np.argsort(times, kind="stable")
     inv = np.empty_like(fire)
     inv[fire] = np.arange(len(fire))
-    ret = capture.render_beams(d[fire], pred[fire], margin_m=options.margin_m,
+    ret = capture.render_beams(d[fire], pred[fire], margin_m=margin,
                                seed=options.transient.seed, origins=origins[fire])  # fmt: skip
     return _reorder(ret, inv)
 

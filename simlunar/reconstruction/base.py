@@ -155,13 +155,23 @@ class LinearOptions(Options):
         doc="cells outside the samples' convex hull: the nearest sample's value, or NaN",
         choices=("nearest", "nan"),
     )
+    hull_edge_ratio: float = option(
+        0.0,
+        doc="border treatment: hull triangles whose longest edge exceeds this many times the "
+        "median edge are peeled off and their cells filled as outside (slivers of samples a "
+        "fraction of a pixel off the border; simlunar.reconstruction.delaunay.trim_hull); 0 = "
+        "the whole Delaunay hull",
+        ge=0,
+    )
 
 
 def linear(points_rc, values, shape, *, guide=None, options: LinearOptions | None = None):
     """Delaunay-linear interpolation of the samples (:func:`.delaunay.reconstruct`); the
     guide is not used."""
     o = options or LinearOptions()
-    return Reconstructed(reconstruct(points_rc, values, shape, outside=o.outside))
+    return Reconstructed(
+        reconstruct(points_rc, values, shape, outside=o.outside, hull_edge_ratio=o.hull_edge_ratio)
+    )
 
 
 def run_reconstruction(name, points_rc, values, shape, *, guide=None, options=None):

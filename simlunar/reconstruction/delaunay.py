@@ -25,6 +25,7 @@ __all__ = [
     "loo_residuals",
     "reconstruct",
     "triangulate",
+    "trim_hull",
 ]
 
 OUTSIDE_POLICIES = ("nearest", "nan")
@@ -104,7 +105,43 @@ def _triangulate(pts: np.ndarray, switches: str) -> np.ndarray:
     return np.ascontiguousarray(tris, dtype=np.int32)
 
 
-def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.ndarray:
+def trim_hull(points_rc, tris: np.ndarray, ratio: float) -> np.ndarray:
+    """The triangles left after peeling long hull triangles: a triangle with an edge on the
+    hull whose longest edge exceeds ``ratio`` x the median edge length of the triangulation is
+    removed, and the peeling repeats on the new hull until none is left (``ratio`` <= 0: the
+    triangles unchanged).
+
+    Samples off their lattice by a fraction of a pixel at the border (a moving platform's) make
+    the Delaunay hull fill the border strip with slivers whose longest edge spans many samples;
+    their cells then take the nearest sample's value (``reconstruct``'s outside policy)
+    instead of a value interpolated along the sliver.
+    """
+    if ratio <= 0 or len(tris) == 0:
+        return tris
+    pts = np.asarray(points_rc, dtype=np.float64)
+    t = np.asarray(tris, dtype=np.int64)
+    a, b, c = pts[t[:, 0]], pts[t[:, 1]], pts[t[:, 2]]
+    lengths = np.stack([np.hypot(*(b - a).T), np.hypot(*(c - b).T), np.hypot(*(a - c).T)], 1)
+    limit = ratio * float(np.median(lengths))
+    long = lengths.max(axis=1) > limit
+    alive = np.ones(len(t), bool)
+    edges = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    _, edge_id, edge_count = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    edge_id = edge_id.reshape(3, len(t)).T  # (m, 3) edge ids of each triangle
+    count = edge_count.copy()
+    while True:
+        on_hull = (count[edge_id] == 1).any(axis=1)
+        peel = alive & long & on_hull
+        if not peel.any():
+            break
+        alive &= ~peel
+        np.subtract.at(count, edge_id[peel].ravel(), 1)
+    return np.ascontiguousarray(tris[alive])
+
+
+def reconstruct(
+    points_rc, values, shape, *, outside: str = "nearest", hull_edge_ratio: float = 0.0
+) -> np.ndarray:
     """Delaunay-linear reconstruction of scattered samples on a (rows, cols) grid.
 
     Coordinate convention: ``points_rc`` are (row, col) *index* coordinates, so the cell (r, c)
@@ -125,6 +162,10 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
         Policy for cells outside the convex hull of the samples: ``"nearest"`` (default) takes
         the value of the nearest sample (Euclidean, ties broken by the k-d tree), ``"nan"`` leaves
         NaN (the metrics then exclude those cells). The same policy applies to every strategy.
+    hull_edge_ratio : float
+        Border treatment (:func:`trim_hull`): hull triangles whose longest edge exceeds this
+        many times the median edge are peeled off and their cells treated as outside; 0 (the
+        default) keeps the whole Delaunay hull.
 
     Returns
     -------
@@ -151,7 +192,9 @@ def reconstruct(points_rc, values, shape, *, outside: str = "nearest") -> np.nda
             f"unknown outside policy {outside!r}; valid: {', '.join(OUTSIDE_POLICIES)}"
         )
     pts, vals, shape = _check_inputs(points_rc, values, shape)
-    return SampleMesh(pts, shape).interpolate(vals, outside=outside)
+    return SampleMesh(pts, shape, hull_edge_ratio=hull_edge_ratio).interpolate(
+        vals, outside=outside
+    )
 
 
 class SampleMesh:
@@ -166,9 +209,11 @@ class SampleMesh:
         Sample positions (row, col), as :func:`reconstruct` takes them (checked there).
     shape : tuple of int
         Output grid (rows, cols).
+    hull_edge_ratio : float
+        :func:`reconstruct`'s border treatment (:func:`trim_hull`); 0 keeps the whole hull.
     """
 
-    def __init__(self, points_rc, shape):
+    def __init__(self, points_rc, shape, *, hull_edge_ratio: float = 0.0):
         pts = np.ascontiguousarray(points_rc, dtype=np.float64)
         self.shape = (int(shape[0]), int(shape[1]))
         self.k = len(pts)
@@ -190,6 +235,7 @@ class SampleMesh:
         self.points = pts
         if len(pts) >= 3:
             self.tris = _triangulate(pts, _triangle_switches(integer, extent))
+            self.tris = trim_hull(pts, self.tris, hull_edge_ratio)
         else:
             self.tris = np.empty((0, 3), dtype=np.int32)
         self._nearest = None  # (cells outside the triangles, their nearest sample): geometry

@@ -3,11 +3,13 @@ simulation (one avalanche per photoelectron)."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from simlunar.lidar import PulseOptions, TimeBins, extract_ranges, shape_waveform, splat_paths
-from simlunar.lidar.apd import ApdOptions, apd_waveform
+from simlunar.lidar.apd import ApdOptions, agc_energy, apd_waveform
 
 
 def test_mcintyre_excess_noise_by_hand():
@@ -71,6 +73,8 @@ def test_bad_options():
         ApdOptions(amplifier_noise_pe=-0.1)
     with pytest.raises(ValueError, match="threshold_pe must be a finite number, got nan"):
         ApdOptions(threshold_pe=float("nan"))
+    with pytest.raises(ValueError, match="agc_target: the gain control needs"):
+        ApdOptions(agc_target=0.5)
     from simlunar.lidar import DetectorOptions
 
     with pytest.raises(ValueError, match="no dead time"):
@@ -131,3 +135,92 @@ def test_poisson_counts_exact_below_the_limit_and_normal_above():
     assert 0.7 * np.sqrt(m) < draws.std() < 1.3 * np.sqrt(m)
     huge = poisson_counts(np.array([1e30, 2.0 * POISSON_NORMAL_ABOVE]), np.random.default_rng(6))
     assert huge.dtype == np.int64 and huge[0] == MAX_COUNT and huge[1] > POISSON_NORMAL_ABOVE
+
+
+# --- automatic pulse-energy control --------------------------------------------------------
+
+
+def test_agc_energy_by_hand():
+    # probe waveforms at 1e-3 of the full energy: background 2 pe per bin, the brightest
+    # return 2 + 40 pe at its peak; full scale 1000 pe, target half of it: the frame's energy
+    # is 1e-3 x 0.5 x 1000 / 40 = 0.0125 (the digitiser is linear below its full scale)
+    apd = ApdOptions(full_scale_pe=1000.0, agc_target=0.5)
+    w = np.full((3, 50), 2.0)
+    w[0, 20], w[1, 10] = 42.0, 12.0
+    w += np.random.default_rng(0).normal(0.0, 0.1, w.shape)  # a little noise: significant
+    energy, again = agc_energy(w, 1e-3, options=apd)
+    assert energy == pytest.approx(1e-3 * 0.5 * 1000 / 40.0, rel=0.02) and not again
+    # a saturated probe: the next is 100x weaker
+    w[2, 30] = 1000.0
+    assert agc_energy(w, 1e-3, options=apd) == (1e-5, True)
+    # a probe of noise alone saw no return: 100x stronger, then the full energy and no more
+    noise = 2.0 + np.random.default_rng(1).normal(0.0, 0.5, (3, 50))
+    assert agc_energy(noise, 1e-3, options=apd) == (pytest.approx(0.1), True)
+    assert agc_energy(noise, 1.0, options=apd) == (1.0, False)
+    # a return too weak for the target at full energy gets the full energy
+    weak = np.full((1, 50), 2.0)
+    weak[0, 5] = 202.0
+    assert agc_energy(weak, 1.0, options=apd) == (1.0, False)
+
+
+def _plane_frame(signal, apd, *, pulses=16):
+    """A 8 x 8 flash receiver 50 m over a plane, its rendered returns and options."""
+    from types import SimpleNamespace
+
+    from simlunar.geometry import Camera, Intrinsics, Pose
+    from simlunar.lidar import DetectorOptions
+    from simlunar.lidar.flash import FlashOptions, flash_window
+
+    pose = Pose.look_at([0.0, 0.0, 50.0], [0.0, 0.0, 0.0], up=(0.0, 1.0, 0.0))
+    cam = Camera(Intrinsics.from_fov(8, 8, 10.0), pose)
+    det = DetectorOptions(signal_photons=signal, background_photons_per_s=0.0, pulses=pulses,
+                          apd=apd)  # fmt: skip
+    opts = FlashOptions(detector=det, pulse=PulseOptions(fwhm_s=1e-9), pulse_rate_hz=20.0)
+    bins = flash_window(cam, options=opts)
+    truth = 50.0 / -cam.rays(cam.pixel_centers())[1][..., 2]
+    hist = splat_paths(2.0 * truth[..., None], 1.0, bins.refined(2)).reshape(8, 8, -1)
+    frame = SimpleNamespace(histograms=hist.astype(np.float32), sun=None, bins=bins,
+                            oversample=2, sun_irradiance=1.0)  # fmt: skip
+    return cam, opts, frame, truth
+
+
+def test_agc_puts_a_saturating_return_at_its_target_for_a_probe_pulse():
+    # 2.5e6 photons per pulse into a 1000 pe digitiser: without control every pixel clips
+    # (its photons read ~pulses x full scale per bin); with agc_target 0.5 one probe at 1e-3
+    # of the energy (the brightest peak then ~750 pe, linear) sets the energy to 0.5 x 1000 /
+    # P, P the brightest pixel's noise-free peak per pulse at full energy: the photons read
+    # are that share of the unsaturated receiver's, the frame costs one pulse more
+    from simlunar.lidar.flash import read_flash, receiver_solid_angles
+    from simlunar.lidar.returns import detect_counts
+
+    fs, s = 1000.0, 2.5e6
+    cam, ideal, frame, truth = _plane_frame(s, ApdOptions())
+    w = receiver_solid_angles(cam) / receiver_solid_angles(cam).max()
+    hist = frame.histograms * w[..., None]
+    peak = s * shape_waveform(hist, frame.bins, ideal.pulse, oversample=2).max()
+    energy = 0.5 * fs / peak
+    _, agc, _, _ = _plane_frame(s, ApdOptions(full_scale_pe=fs, bits=12, agc_target=0.5))
+    _, clip, _, _ = _plane_frame(s, ApdOptions(full_scale_pe=fs, bits=12))
+    free = read_flash(frame, cam, options=ideal, rng=0)
+    ctrl = read_flash(frame, cam, options=agc, rng=0)
+    sat = read_flash(frame, cam, options=clip, rng=0)
+    assert ctrl.valid.all() and np.abs(ctrl.ranges - truth).max() < 0.01
+    # the probe (the read's first draw, redrawn here from the same seed) measures the peak
+    # with the APD's noise (7 % at ~750 pe, F = 3.95) and its maximum over the pixels is
+    # biased up: the energy set is agc_energy's of that probe, 0.8-1.0x the noise-free one
+    probe_det = dataclasses.replace(agc.detector, pulses=1, signal_photons=s * 1e-3)
+    probe = detect_counts(hist, 0.0, frame.bins, agc.pulse, probe_det, np.random.default_rng(0),
+                          2)  # fmt: skip
+    set_energy, again = agc_energy(probe, 1e-3, options=agc.detector.apd)
+    assert not again and 0.8 * energy < set_energy <= 1.0 * energy
+    ratio = ctrl.photons / free.photons
+    assert np.median(ratio) == pytest.approx(set_energy, rel=0.03)
+    # without control the waveform clips at the full scale: the photons read are under 1 %
+    # of the return's, whatever it is
+    assert sat.photons.max() < 0.01 * free.photons.min()
+    assert ctrl.seconds == pytest.approx(17 / 20.0) and sat.seconds == pytest.approx(16 / 20.0)
+    # a dim return (the target out of reach at full energy) keeps the full energy
+    _, dim, _, _ = _plane_frame(20.0, ApdOptions(full_scale_pe=fs, agc_target=0.5))
+    _, full, _, _ = _plane_frame(20.0, ApdOptions(full_scale_pe=fs))
+    a, b = (read_flash(frame, cam, options=o, rng=3) for o in (dim, full))
+    assert np.median(a.photons) == pytest.approx(np.median(b.photons), rel=0.1)

@@ -3,13 +3,14 @@ range gate from the reference plane, frames of the micromirror flash, reading a 
 
 from __future__ import annotations
 
+import dataclasses
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from simlunar.geometry import Camera, Intrinsics, Pose
-from simlunar.lidar import DetectorOptions, PulseOptions
+from simlunar.lidar import DetectorOptions, PulseOptions, RangeOptions
 from simlunar.lidar.flash import (
     FlashOptions,
     flash_window,
@@ -130,3 +131,74 @@ def test_read_flash_ranges_a_plane():
     # a fresh read of the same frame draws fresh photon noise
     again = read_flash(frame, cam, options=opts, rng=1)
     assert not np.array_equal(again.photons, scan.photons)
+
+
+def _tilted_frame(cam, opts, *, z0: float, slope_deg: float):
+    """A synthetic frame of the plane ``z = z0 + tan(slope) x`` through ``cam`` in the window
+    ``flash_window`` gives, and the true ranges (paths outside the window are lost, as in the
+    film)."""
+    bins = flash_window(cam, options=opts)
+    d = cam.rays(cam.pixel_centers())[1]
+    truth = (H - z0) / (np.tan(np.radians(slope_deg)) * d[..., 0] - d[..., 2])
+    hist = splat_paths(2.0 * truth[..., None], 1.0, bins.refined(2)).reshape(*cam.shape, -1)
+    frame = SimpleNamespace(
+        histograms=hist.astype(np.float32), sun=None, bins=bins, oversample=2, sun_irradiance=1.0
+    )
+    return frame, truth
+
+
+@pytest.mark.parametrize("z0", [5.0, -5.0])
+def test_a_datum_5m_off_under_a_15deg_slope_is_gated_by_the_prior_or_rejected(z0):
+    # the navigation's datum is z = 0, the ground is a 15 deg slope 5 m above (or below) it,
+    # seen from 50 m through a 32 x 32 receiver of 30 deg with 2 m margins and a 2 ns pulse
+    cam = _nadir(32, 30.0)
+    det = DetectorOptions(signal_photons=200.0, background_photons_per_s=0.0, pulses=8)
+
+    def read(gate, edge_sigma):
+        opts = FlashOptions(detector=det, pulse=PulseOptions(fwhm_s=2e-9), margin_m=2.0,
+                            gate=gate, ranging=RangeOptions(edge_sigma=edge_sigma))  # fmt: skip
+        frame, truth = _tilted_frame(cam, opts, z0=z0, slope_deg=15.0)
+        scan = read_flash(frame, cam, options=opts, rng=0)
+        return scan.valid, np.abs(scan.ranges - truth)
+
+    # the datum taken as exact, every return kept: returns cut by the window's edge are
+    # accepted 0.1 m and more off (the ideal gate's failure)
+    valid, err = read(GateOptions(), 0.0)
+    assert (err[valid] > 0.1).any()
+    # the prior (the datum read with a 2 m error, slopes up to 20 deg) covers the ground: every
+    # pixel measured, none more than 2 cm off
+    prior = GateOptions(datum_sigma_m=2.0, max_slope_rad=np.radians(20.0))
+    valid, err = read(prior, 0.0)
+    assert valid.all() and err.max() < 0.02
+    # an understated prior (0.5 m, no slope) with the edge guard: the cut returns are
+    # rejected, what is kept is within 2 cm
+    for gate in (GateOptions(), GateOptions(datum_sigma_m=0.5)):
+        valid, err = read(gate, 3.0)
+        assert valid.any() and not valid.all() and err[valid].max() < 0.02
+
+
+def test_the_flash_gate_does_not_move_with_the_truth(monkeypatch):
+    # the window a flash is rendered with comes from the pose and the datum as read: the
+    # terrain moved 3 m up (its mean with it) leaves it where it was; the datum's error is
+    # one draw from the render seed (the same window twice, another seed another window)
+    from simlunar.render import flash_lidar
+    from simlunar.terrain.types import Terrain
+
+    seen = []
+
+    def frame(terrain, camera, *, bins, **_):
+        seen.append((float(terrain.heights.mean()), bins.start_opl, bins.count))
+        raise StopIteration
+
+    monkeypatch.setattr(flash_lidar, "flash_frame", frame)
+    cam = _nadir(8, 20.0)
+    flat = np.zeros((16, 16))
+    opts = FlashOptions(gate=GateOptions(datum_sigma_m=1.0, max_slope_rad=np.radians(10.0)))
+    for heights in (flat, flat + 3.0):
+        t = Terrain(heights=heights, albedo=np.full((16, 16), 0.1, np.float32), spacing=1.0)
+        with pytest.raises(StopIteration):
+            flash_lidar.flash_scan(t, cam, options=opts)
+    assert seen[0][0] != seen[1][0] and seen[0][1:] == seen[1][1:]
+    other = dataclasses.replace(opts, transient=dataclasses.replace(opts.transient, seed=1))
+    assert flash_window(cam, options=other).start_opl != seen[0][1]
+    assert flash_window(cam, options=opts).start_opl == seen[0][1]

@@ -220,3 +220,38 @@ def test_the_documented_photon_cap_ends():
     in_pulse = h[lit[0] : lit[-1] + 1].sum() / pulses
     span = lit[-1] + 1 - lit[0]
     assert np.floor(span / dead_bins) <= in_pulse <= np.ceil(span / dead_bins) + 1
+
+
+def test_outlier_guards_drop_false_corrected_returns_and_keep_the_good_ones():
+    # 10 ns dead time under a high background (2e8 photons/s: 0.07 per 5 cm bin and pulse),
+    # 2 signal photons per pulse, 100 pulses, returns at 43-47 m in a 40-50 m window: the
+    # detection takes pile-up ripples for returns and the corrected ranges hold outliers
+    # (> 0.1 m off) metres early. The significance guard (the fit's likelihood ratio against
+    # the dead time's background alone, 5 sigma) cuts them to a third or less and loses no
+    # return that was within 0.1 m; a bound on the fitted range's standard error (5 cm) cuts
+    # them as much, and a 2 cm bound is too tight (it loses good returns: the test can tell)
+    from simlunar.lidar import DetectorOptions, RangeOptions
+    from simlunar.lidar.returns import detect_counts, read_ranges
+
+    bins = TimeBins.for_ranges(40.0, 50.0, 0.05)
+    pulse = PulseOptions(fwhm_s=1e-9, jitter_s=0.1e-9)
+    truth = np.random.default_rng(0).uniform(43.0, 47.0, 200)
+    hist = splat_paths(2 * truth[:, None], 1.0, bins.refined(2))
+    det = DetectorOptions(signal_photons=2.0, background_photons_per_s=2e8, pulses=100,
+                          dead_time_s=10e-9)  # fmt: skip
+    counts = detect_counts(hist, 1.0, bins, pulse, det, np.random.default_rng(1), 2)
+
+    def read(**kw):
+        res = read_ranges(counts, 1.0, bins, pulse, det,
+                          RangeOptions(spad_background="histogram", **kw))  # fmt: skip
+        bad = res.valid & (np.abs(res.range - truth) > 0.1)
+        return res.valid, bad
+
+    valid0, bad0 = read()
+    good0 = valid0 & ~bad0
+    assert bad0.sum() / valid0.sum() > 0.06  # the failure the guards are for
+    for kw in ({"spad_min_significance": 5.0}, {"spad_max_sigma_m": 0.05}):
+        valid, bad = read(**kw)
+        assert bad.sum() <= bad0.sum() / 3 and not (good0 & ~valid).any()
+    valid, _ = read(spad_max_sigma_m=0.02)
+    assert (good0 & ~valid).mean() > 0.1
