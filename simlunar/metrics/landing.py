@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from simlunar.metrics.hazard import _central
 from simlunar.metrics.safe_site import SiteOptions, grid_sites, site_fractions
 from simlunar.registry import Options, option
 
@@ -115,19 +116,6 @@ def ground_sample_distance(points: np.ndarray) -> float:
     if d.size == 0:
         raise ValueError("ground_sample_distance: no two adjacent known points")
     return float(np.median(d))
-
-
-def _central(z: np.ndarray, step: int, axis: int) -> np.ndarray:
-    out = np.full(z.shape, np.nan)
-    n = z.shape[axis]
-    if n <= 2 * step:
-        return out
-    hi = np.take(z, range(2 * step, n), axis=axis)
-    lo = np.take(z, range(0, n - 2 * step), axis=axis)
-    idx = [slice(None)] * z.ndim
-    idx[axis] = slice(step, n - step)
-    out[tuple(idx)] = hi - lo
-    return out
 
 
 def slope_map(points: np.ndarray, baseline_px: int) -> np.ndarray:
