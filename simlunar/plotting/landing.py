@@ -63,7 +63,8 @@ def landing_recall(
         ax.set_title(f"sun {light} deg" if light_key else "", fontsize=9)
         ax.grid(axis="y", alpha=0.3)
     axes[0][0].set_ylabel("recall / rate")
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(f"{title}\nbars: mean over terrain seeds; whiskers: 95 % interval over the seeds",
+                 fontsize=10)  # fmt: skip
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=min(len(metrics), 4), fontsize=8,
                frameon=False)  # fmt: skip
