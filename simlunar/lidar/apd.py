@@ -78,9 +78,9 @@ class ApdOptions(Options):
     agc_target: float | None = option(
         None,
         doc="automatic pulse-energy control (a flash frame): probe pulses set the frame's "
-        "pulse energy so that its brightest return peaks at this share of full_scale_pe "
-        "(simlunar.lidar.apd.agc_energy); each probe costs a pulse; None: every pulse at full "
-        "energy (needs full_scale_pe)",
+        "pulse energy so that its agc_quantile pixel's return peaks at this share of "
+        "full_scale_pe (simlunar.lidar.apd.agc_energy); a background read and each probe "
+        "cost a pulse slot; None: every pulse at full energy (needs full_scale_pe)",
         gt=0,
         le=1,
     )
@@ -94,6 +94,14 @@ class ApdOptions(Options):
         4, doc="most probe pulses per frame (a saturated probe is followed by one 100x weaker)",
         ge=1, le=32,
     )  # fmt: skip
+    agc_quantile: float = option(
+        0.99,
+        doc="which pixel's probe peak the gain control puts at agc_target: this quantile of "
+        "the pixels' peaks, so the brightest (1 - agc_quantile) of them may clip; 1.0: the "
+        "brightest pixel, which a single background photon through the APD's gain can be",
+        gt=0,
+        le=1,
+    )
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -109,7 +117,7 @@ class ApdOptions(Options):
         return k * m + (1.0 - k) * (2.0 - 1.0 / m)
 
 
-#: robust standard deviations a gain control's probe peak must exceed to count as a return
+#: spreads of the background's peaks a gain control's probe peak must exceed to be a return
 SIGNIFICANT = 8.0
 
 #: mean above which a Poisson count is drawn from its normal limit (relative error of the
@@ -159,28 +167,43 @@ def apd_waveform(expected: np.ndarray, *, options: ApdOptions, pulses: int, rng=
     return _draw(np.asarray(expected, float), options, int(pulses), rng)
 
 
-def agc_energy(probe: np.ndarray, energy: float, *, options: ApdOptions):
+def agc_energy(probe: np.ndarray, background: np.ndarray, energy: float, *, options: ApdOptions):
     """The pulse energy (a share of the full energy) the gain control sets from one probe
     pulse's digitised waveforms ``probe`` (..., count) fired at ``energy``, and whether another
-    probe must be fired first.
+    probe must be fired first. ``background`` is the same receiver read for one pulse slot
+    without firing (the sun and dark counts alone, same shape).
 
-    The brightest return's peak is ``P = max over readings of (max - median)`` of the probe's
-    waveforms (the median is the background); the digitiser is linear below its full scale
-    ``FS``, so the energy that puts that peak at ``agc_target x FS`` is ``energy x agc_target x
-    FS / P`` (at most 1: a starved receiver gets the full energy). A saturated probe (a bin at
-    ``FS``) only bounds ``P`` from below: the next probe is 100x weaker. A probe whose peak is
-    not significant (under ``SIGNIFICANT`` robust standard deviations of the waveforms, their
-    median absolute deviation x 1.4826) saw no return: the next is 100x stronger, and at the
-    full energy the frame fires at it.
+    Each pixel's peak is ``max - median`` of its waveform (the median is its background); the
+    probe's peak ``P`` is the ``agc_quantile`` quantile of the pixels' peaks (the next higher
+    pixel's: with fewer than ``1 / (1 - q)`` pixels, the brightest), the background's ``B``
+    the same quantile of its pixels' peaks. The digitiser is linear below its full scale
+    ``FS``, so the energy that puts ``P`` at ``agc_target x FS`` is ``energy x agc_target x FS
+    / P`` (at most 1: a starved receiver gets the full energy). A probe in which more than
+    ``1 - agc_quantile`` of the pixels reach ``FS`` only bounds ``P`` from below: the next
+    probe is 100x weaker. A probe whose ``P - B`` is not significant saw no return: the next is
+    100x stronger, and at the full energy the frame fires at it. Significant means over
+    ``SIGNIFICANT`` times the spread of the background's pixel peaks (their median absolute
+    deviation x 1.4826), and never less than one photoelectron's ``sqrt(F)`` (``F`` the APD's
+    excess noise): under the sun, single background photons multiplied by the gain reach tens
+    of pe somewhere in each pixel, so a probe's peaks are only a return where they stand out
+    of the background's own.
     """
     w = np.asarray(probe, float)
+    w = w.reshape(-1, w.shape[-1])
     fs, target = float(options.full_scale_pe), float(options.agc_target)
-    if (w >= fs).any():
+    q = float(options.agc_quantile)
+    if (w >= fs).any(axis=-1).mean() > 1.0 - q:
         return energy / 100.0, True
-    med = np.median(w, axis=-1, keepdims=True)
-    noise = 1.4826 * float(np.median(np.abs(w - med)))
-    peak = float((w - med).max())
-    if not peak > max(SIGNIFICANT * noise, 1e-12):
+
+    def peaks(x):
+        x = np.asarray(x, float).reshape(-1, x.shape[-1])
+        return x.max(axis=-1) - np.median(x, axis=-1)
+
+    quiet = peaks(background)
+    spread = 1.4826 * float(np.median(np.abs(quiet - np.median(quiet))))
+    noise = max(spread, float(np.sqrt(options.excess_noise)))
+    peak = float(np.quantile(peaks(w), q, method="higher"))
+    if not peak - float(np.quantile(quiet, q, method="higher")) > SIGNIFICANT * noise:
         return min(energy * 100.0, 1.0), energy < 1.0
     return float(min(energy * target * fs / peak, 1.0)), False
 

@@ -120,15 +120,19 @@ def read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=None
 
 def _gain_control(hist, bg, frame, options: FlashOptions, det, rng):
     """The detector of a frame whose pulse energy the APD's gain control set
-    (:func:`~simlunar.lidar.apd.agc_energy`: probe pulses fired before the frame, each read
-    in full and discarded) and the number of probe pulses."""
-    energy, probes = float(det.apd.agc_probe_energy), 0
+    (:func:`~simlunar.lidar.apd.agc_energy`: one pulse slot read without firing, for the
+    background, then probe pulses fired before the frame, each read in full and discarded) and
+    the number of pulse slots the control took."""
     one = dataclasses.replace(det, pulses=1)
+    # the receiver read for one pulse slot without firing: the sun and dark counts alone
+    quiet = dataclasses.replace(one, signal_photons=0.0)
+    background = detect_counts(hist, bg, frame.bins, options.pulse, quiet, rng, frame.oversample)
+    energy, probes = float(det.apd.agc_probe_energy), 1
     for _ in range(det.apd.agc_max_probes):
         probe = dataclasses.replace(one, signal_photons=det.signal_photons * energy)
         w = detect_counts(hist, bg, frame.bins, options.pulse, probe, rng, frame.oversample)
         probes += 1
-        energy, again = agc_energy(w, energy, options=det.apd)
+        energy, again = agc_energy(w, background, energy, options=det.apd)
         if not again:
             break
     return dataclasses.replace(det, signal_photons=det.signal_photons * energy), probes
