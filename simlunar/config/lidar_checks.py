@@ -84,6 +84,13 @@ def check_lidar_study(study) -> None:
             if study.sensor == "flash":
                 raise ValueError(f"{where}: a flash's time is its frames, not a tour")
     o = study.options
+    apd = o.detector.apd
+    if apd is not None and apd.agc_target is not None and study.sensor != "flash":
+        # simlunar.lidar.scan.scan_beams and read_frame refuse it after the render
+        raise ValueError(
+            f"study.options.detector.apd.agc_target: the pulse-energy control is a flash "
+            f"frame's; a {study.sensor} has none (leave agc_target unset)"
+        )
     if study.sensor == "steered_beam":
         sb = o.steered_beam
         # simlunar.lidar.scan.SteeredBeamOptions: window_m > 2 margin_m >= 0 (each

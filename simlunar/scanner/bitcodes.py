@@ -206,8 +206,13 @@ def inverses_by_linearity(patterns: np.ndarray, white: np.ndarray, black: np.nda
 
 
 def interleave(patterns: np.ndarray, inverses: np.ndarray) -> np.ndarray:
-    """(pattern, inverse) pairs as one (2n, rows, cols) stack in OpenCV order."""
-    patterns = np.asarray(patterns)
+    """(pattern, inverse) pairs as one (2n, rows, cols) stack in OpenCV order (arrays or
+    nested lists of the same shape)."""
+    patterns, inverses = np.asarray(patterns), np.asarray(inverses)
+    if patterns.shape != inverses.shape:
+        raise ValueError(
+            f"interleave: patterns {patterns.shape} and inverses {inverses.shape} differ in shape"
+        )
     out = np.empty(
         (2 * patterns.shape[0], *patterns.shape[1:]), dtype=np.result_type(patterns, inverses)
     )

@@ -49,3 +49,12 @@ def test_multi_round_planning_on_a_moving_platform_needs_planned_cells():
     with pytest.raises(ValueError, match="a flash LIDAR measures its receiver pixels"):
         check_lidar_study(study(sensor="flash", planners=["sequential"],
                                 options={"motion": motion}))  # fmt: skip
+
+
+@pytest.mark.parametrize("sensor", ["steered_beam", "micromirror_flash"])
+def test_the_gain_control_is_refused_before_the_render_off_a_flash(sensor):
+    # the library refuses it inside the scan (after the render); the schema names the key
+    apd = {"detector": {"apd": {"full_scale_pe": 1000.0, "agc_target": 0.5}}}
+    with pytest.raises(ValueError, match=rf"apd.agc_target: .* a {sensor} has none"):
+        check_lidar_study(study(sensor=sensor, options=apd))
+    check_lidar_study(study(sensor="flash", options=apd))

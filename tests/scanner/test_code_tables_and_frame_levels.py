@@ -58,3 +58,13 @@ def test_the_exported_opencv_thresholds_are_the_frame_thresholds_at_255_full_sca
     assert meta["opencv_black_threshold_8bit"] == 178
     assert meta["opencv_white_threshold_8bit"] == 26
     assert (meta["n_col_bits"], meta["n_row_bits"]) == (3, 2)
+
+
+def test_interleave_takes_the_inverses_as_a_list_too_and_refuses_a_shape_mismatch():
+    """Inverses captured frame by frame (a list) interleave like an array (they raised a
+    TypeError from numpy's result_type); inverses of another shape are refused by name."""
+    p = [np.full((1, 2), 0.25), np.full((1, 2), 0.5)]
+    out = bc.interleave(p, [np.full((1, 2), 0.75), np.full((1, 2), 0.5)])
+    np.testing.assert_array_equal(out[:, 0, 1], [0.25, 0.75, 0.5, 0.5])
+    with pytest.raises(ValueError, match="differ in shape"):
+        bc.interleave(p, [np.full((1, 2), 0.75)])
