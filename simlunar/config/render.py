@@ -11,6 +11,7 @@ from pydantic import (
     Discriminator,
     Field,
     Tag,
+    WithJsonSchema,
     model_validator,
 )
 
@@ -245,7 +246,12 @@ def _frame_tag(v) -> str:
 #: the optical axis, nearly pure albedo), a flash on the rig, or another sun
 GuideFrameCfg = Annotated[
     Annotated[
-        Annotated[Literal["camera"], Tag("camera")]
+        Annotated[
+            Literal["camera"],
+            Tag("camera"),
+            # the editor schema takes both spellings, as the loader does
+            WithJsonSchema({"type": "string", "enum": ["camera", "ideal"]}),
+        ]
         | Annotated[GuideSunFrameCfg, Tag("sun")]
         | Annotated[GuideFlashFrameCfg, Tag("flash")],
         Discriminator(_frame_tag),

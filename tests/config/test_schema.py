@@ -85,8 +85,12 @@ def test_editor_schema_accepts_the_input_forms_and_rejects_typos():
         figures={"panel_density": "1/32"},
     )
     s.validate(ok)
+    # the co-located frame's two spellings, as the loader takes them
+    for frame in ("camera", "ideal"):
+        s.validate(base(render={"guide_frames": [frame]}))
     for bad in (
         base(render={"light": {"elevation_rad": 0.5}}),
+        base(render={"guide_frames": ["idael"]}),
         scanner(options={"gray_opts": {"subpixle": True}}),
         base(study={"densities": [0.5], "strategy_options": {"x": {"blue_nois": True}}}),
         base(terrain={"preset": "aerial_1", "overrides": {"fractal": {"rms_mm": 1}}}),
