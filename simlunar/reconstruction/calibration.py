@@ -34,7 +34,7 @@ from simlunar.reconstruction._anchor import LinearField, linear_field
 from simlunar.reconstruction.integrate import gaussian_smooth
 from simlunar.registry import Options, option
 
-__all__ = ["Calibration", "CalibrationOptions", "calibrate", "valid_pixels"]
+__all__ = ["Calibration", "CalibrationOptions", "calibrate", "lit_level", "valid_pixels"]
 
 
 @dataclass(frozen=True)
@@ -117,6 +117,27 @@ class Calibration:
         """The held-out share when there is one, else the in-sample share (never above it)."""
         h = self.heldout_share
         return float(self.share if not np.isfinite(h) else min(h, self.share))
+
+
+#: a pixel under this share of a frame's 99th percentile is unlit for :func:`lit_level`
+UNLIT_SHARE = 0.02
+
+
+def lit_level(image) -> float:
+    """A frame's typical lit value: the median of its pixels above ``UNLIT_SHARE`` of its 99th
+    percentile (0 when none is). The plain median where every pixel is lit (then the two are
+    the same number); where a light reaches part of the view only (a flash's beam narrower
+    than the field, most of it black), the median of the whole frame is 0 and every rule
+    relative to it (the flat's guard, the noise estimate) would take the black for the level.
+    """
+    f = np.asarray(image, dtype=np.float64).ravel()
+    ref = float(np.percentile(f if f.size < 100_000 else f[::7], 99.0))
+    if not ref > 0:
+        return 0.0
+    lit = f > UNLIT_SHARE * ref
+    if lit.all():
+        return float(np.median(f))
+    return float(np.median(f[lit])) if lit.any() else 0.0
 
 
 def valid_pixels(image, options: CalibrationOptions | None = None) -> np.ndarray:

@@ -89,9 +89,11 @@ from simlunar.reconstruction._anchor import LinearField, linear_field
 from simlunar.reconstruction._reading import READING_OPTIONS, ReadingChecks
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import (
+    UNLIT_SHARE,
     Calibration,
     CalibrationOptions,
     calibrate,
+    lit_level,
     valid_pixels,
 )
 from simlunar.reconstruction.flatfield import flash_relief_gain, flat_field
@@ -235,7 +237,8 @@ def shading_frames(
                 )
             else:
                 flat = flat_field(flat, surface, guide.flash, spacing=guide.spacing)
-        med = float(np.median(flat))
+        # relative to the lit part: a flash's beam may light part of the view only
+        med = lit_level(flat)
         floor = o.flat_guard * med if med > 0 else o.flat_guard
         lit = flat > floor
         den = np.maximum(flat, floor)
@@ -281,10 +284,16 @@ def frame_noise(image) -> float:
     sun 0.04 / 0.20 / 1.9. Infinite when the median is not positive.
     """
     f = np.asarray(image, dtype=np.float64)
-    med = float(np.median(f))
+    med = lit_level(f)
     if f.shape[0] < 3 or f.shape[1] < 3 or not med > 0:
         return math.inf
     c = _noise_response(f, _NOISE_MASK)
+    if med != float(np.median(f)):
+        # part of the view is unlit (a flash's beam): its black has no noise to measure;
+        # the response where the 3 x 3 window is wholly lit
+        lit = ndimage.binary_erosion(f > UNLIT_SHARE * np.percentile(f, 99.0))[1:-1, 1:-1]
+        if lit.any():
+            c = c[lit]
     return float(1.4826 * np.median(np.abs(c - np.median(c))) / 6.0 / med)
 
 

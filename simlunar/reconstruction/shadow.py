@@ -46,6 +46,7 @@ import numba
 import numpy as np
 from scipy import ndimage
 
+from simlunar.reconstruction.calibration import lit_level
 from simlunar.registry import Options, option
 
 __all__ = ["ShadowOptions", "local_lit_level", "shadow_mask"]
@@ -220,7 +221,7 @@ def shadow_mask(sun, flat=None, *, options: ShadowOptions | None = None) -> np.n
         fl = np.asarray(flat, dtype=np.float64)
         if fl.shape != s.shape:
             raise ValueError(f"flat has shape {fl.shape}, the sun frame {s.shape}")
-        med = float(np.median(fl))
+        med = lit_level(fl)  # the lit part's: a flash's beam may light part of the view
         lit = fl > (o.flat_guard * med if med > 0 else np.inf)
         if lit.any():
             ratio = np.where(lit, s / np.where(lit, fl, 1.0), np.nan)
