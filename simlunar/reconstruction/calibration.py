@@ -34,7 +34,14 @@ from simlunar.reconstruction._anchor import LinearField, linear_field
 from simlunar.reconstruction.integrate import gaussian_smooth
 from simlunar.registry import Options, option
 
-__all__ = ["Calibration", "CalibrationOptions", "calibrate", "lit_level", "valid_pixels"]
+__all__ = [
+    "Calibration",
+    "CalibrationOptions",
+    "calibrate",
+    "lit_level",
+    "lit_mask",
+    "valid_pixels",
+]
 
 
 @dataclass(frozen=True)
@@ -123,18 +130,26 @@ class Calibration:
 UNLIT_SHARE = 0.02
 
 
-def lit_level(image) -> float:
-    """A frame's typical lit value: the median of its pixels above ``UNLIT_SHARE`` of its 99th
-    percentile (0 when none is). The plain median where every pixel is lit (then the two are
+def lit_mask(image) -> np.ndarray:
+    """The frame's lit pixels (bool, its shape): above ``UNLIT_SHARE`` of its 99th percentile
+    (taken over every 7th pixel on large frames); none when that percentile is not positive."""
+    f = np.asarray(image, dtype=np.float64)
+    flat = f.ravel()
+    ref = float(np.percentile(flat if flat.size < 100_000 else flat[::7], 99.0))
+    if not ref > 0:
+        return np.zeros(f.shape, dtype=bool)
+    return f > UNLIT_SHARE * ref
+
+
+def lit_level(image, lit: np.ndarray | None = None) -> float:
+    """A frame's typical lit value: the median of its lit pixels (:func:`lit_mask`, or ``lit``
+    when given; 0 when none is). The plain median where every pixel is lit (then the two are
     the same number); where a light reaches part of the view only (a flash's beam narrower
     than the field, most of it black), the median of the whole frame is 0 and every rule
     relative to it (the flat's guard, the noise estimate) would take the black for the level.
     """
-    f = np.asarray(image, dtype=np.float64).ravel()
-    ref = float(np.percentile(f if f.size < 100_000 else f[::7], 99.0))
-    if not ref > 0:
-        return 0.0
-    lit = f > UNLIT_SHARE * ref
+    f = np.asarray(image, dtype=np.float64)
+    lit = lit_mask(f) if lit is None else lit
     if lit.all():
         return float(np.median(f))
     return float(np.median(f[lit])) if lit.any() else 0.0

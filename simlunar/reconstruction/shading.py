@@ -89,11 +89,11 @@ from simlunar.reconstruction._anchor import LinearField, linear_field
 from simlunar.reconstruction._reading import READING_OPTIONS, ReadingChecks
 from simlunar.reconstruction.base import Guide, Reconstructed
 from simlunar.reconstruction.calibration import (
-    UNLIT_SHARE,
     Calibration,
     CalibrationOptions,
     calibrate,
     lit_level,
+    lit_mask,
     valid_pixels,
 )
 from simlunar.reconstruction.flatfield import flash_relief_gain, flat_field
@@ -284,16 +284,17 @@ def frame_noise(image) -> float:
     sun 0.04 / 0.20 / 1.9. Infinite when the median is not positive.
     """
     f = np.asarray(image, dtype=np.float64)
-    med = lit_level(f)
+    lit = lit_mask(f)
+    med = lit_level(f, lit)
     if f.shape[0] < 3 or f.shape[1] < 3 or not med > 0:
         return math.inf
     c = _noise_response(f, _NOISE_MASK)
-    if med != float(np.median(f)):
+    if not lit.all():
         # part of the view is unlit (a flash's beam): its black has no noise to measure;
         # the response where the 3 x 3 window is wholly lit
-        lit = ndimage.binary_erosion(f > UNLIT_SHARE * np.percentile(f, 99.0))[1:-1, 1:-1]
-        if lit.any():
-            c = c[lit]
+        inner = ndimage.binary_erosion(lit)[1:-1, 1:-1]
+        if inner.any():
+            c = c[inner]
     return float(1.4826 * np.median(np.abs(c - np.median(c))) / 6.0 / med)
 
 

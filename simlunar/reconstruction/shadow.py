@@ -152,28 +152,28 @@ def _block_percentiles(f, b, nr, nc, q):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
+def _linear_weights(x):  # pragma: no cover - compiled
+    """Each coordinate's lower cell and its two linear weights ``(1 - t, t)``."""
+    i0 = np.empty(x.size, np.int64)
+    w = np.empty((x.size, 2))
+    for i in range(x.size):
+        s = np.floor(x[i])
+        t = x[i] - s
+        i0[i] = int(s)
+        w[i, 0] = 1.0 - t
+        w[i, 1] = t
+    return i0, w
+
+
+@numba.njit(cache=True, nogil=True)
 def _bilinear(level, rc, cc):  # pragma: no cover - compiled
     """``level`` at the separable coordinates (``rc[r]``, ``cc[c]``), each within the grid:
     ``scipy.ndimage.map_coordinates(level, ..., order=1, mode="nearest")`` to the bit (its
     terms summed in the same order, each weight product taken as it does)."""
     nr, nc = level.shape
     rows, cols = rc.size, cc.size
-    r0 = np.empty(rows, np.int64)
-    c0 = np.empty(cols, np.int64)
-    wr = np.empty((rows, 2))
-    wc = np.empty((cols, 2))
-    for r in range(rows):
-        s = np.floor(rc[r])
-        x = rc[r] - s
-        r0[r] = int(s)
-        wr[r, 0] = 1.0 - x
-        wr[r, 1] = x
-    for c in range(cols):
-        s = np.floor(cc[c])
-        x = cc[c] - s
-        c0[c] = int(s)
-        wc[c, 0] = 1.0 - x
-        wc[c, 1] = x
+    r0, wr = _linear_weights(rc)
+    c0, wc = _linear_weights(cc)
     out = np.empty((rows, cols))
     for r in range(rows):
         ra = r0[r]
