@@ -413,7 +413,23 @@ def _map_tasks(state, tasks, workers):
     pool = cf.ProcessPoolExecutor(
         min(workers, len(tasks)), mp_context=ctx, initializer=_init_worker, initargs=(state,)
     )
-    return _pool_results(pool, [pool.submit(_worker_task, t) for t in tasks])
+    return _pool_results(pool, _submit_all(pool, tasks))
+
+
+def _worker_died(pool: cf.ProcessPoolExecutor) -> InfrastructureError:
+    _stop(pool)
+    return InfrastructureError(
+        "a study worker process died (killed by the system, e.g. out of memory, or by an operator)"
+    )
+
+
+def _submit_all(pool: cf.ProcessPoolExecutor, tasks) -> list:
+    """Every task's future; a worker that dies while tasks are still being handed out (the pool
+    refuses the rest) is the same one-line error as one that dies later."""
+    try:
+        return [pool.submit(_worker_task, t) for t in tasks]
+    except BrokenProcessPool:
+        raise _worker_died(pool) from None
 
 
 def _pool_results(pool: cf.ProcessPoolExecutor, futures: list) -> Iterator[list[Outcome]]:
@@ -423,11 +439,7 @@ def _pool_results(pool: cf.ProcessPoolExecutor, futures: list) -> Iterator[list[
         for future in futures:
             yield future.result()
     except BrokenProcessPool:
-        _stop(pool)
-        raise InfrastructureError(
-            "a study worker process died (killed by the system, e.g. out of memory, "
-            "or by an operator)"
-        ) from None
+        raise _worker_died(pool) from None
     except BaseException:
         _stop(pool)  # Ctrl-C: the workers ignore SIGINT, so end them instead of waiting
         raise
