@@ -32,8 +32,9 @@ RECONSTRUCTIONS.register(
     guided=True,
     # 2: the held-out check pools its folds at sparse densities and remakes the detail from
     # the kept samples only (it was checked as made from all of them); 3: a flash's second
-    # pass (flash_refine) reads around the fused surface's slopes with the relief gain
-    results_version=3,
+    # pass (flash_refine) reads around the fused surface's slopes with the relief gain; 4: the
+    # detail is limited to detail_clip x the held-out departures' RMS
+    results_version=4,
 )
 RECONSTRUCTIONS.register(
     "photoclinometry",
@@ -41,8 +42,9 @@ RECONSTRUCTIONS.register(
     PhotoclinometryOptions,
     summary="linearised photoclinometry, sparse least squares",
     guided=True,
-    # 2: the held-out check (option heldout_check, on by default) caps gamma
-    results_version=2,
+    # 2: the held-out check (option heldout_check, on by default) caps gamma; 3: the detail is
+    # limited to detail_clip x the held-out departures' RMS
+    results_version=3,
 )
 RECONSTRUCTIONS.register(
     "smoothed", smoothed, SmoothedOptions, summary="image-free control", guided=False

@@ -39,6 +39,12 @@ READING_OPTIONS: dict[str, dict] = {
         ge=0, lt=1,
     ),
     "saturation": dict(default=1.0, doc="saturated: image level at or above this", gt=0),
+    "detail_clip": dict(
+        default=3.0, doc="the image's re-anchored detail is limited to +- this many times the "
+        "RMS of the held-out samples' departure from the kept samples' interpolation (the "
+        "linear error's scale at the density; needs heldout_check; 0: no limit)",
+        ge=0, le=100,
+    ),
     "shadow_lit": dict(
         default=0.02, doc="shadowed too: at or below this fraction of the local lit level, read "
         "from the sun frame, or from sun / co-located frame where that frame is lit "

@@ -95,6 +95,7 @@ class PhotoclinometryOptions(ReadingChecks):
     shadow: float = shared_option(READING_OPTIONS, "shadow")
     saturation: float = shared_option(READING_OPTIONS, "saturation")
     shadow_lit: float = shared_option(READING_OPTIONS, "shadow_lit")
+    detail_clip: float = shared_option(READING_OPTIONS, "detail_clip")
     heldout_check: bool = option(
         True,
         doc="cap gamma by a check on held-out samples, as the shading reconstruction's: every "
@@ -343,7 +344,7 @@ def photoclinometry(
         return _correction(keep, p_s, valid, cal.direction, o)[0]
 
     checked = remade if o.heldout_check else None
-    z = checked_blend(lin, d, gamma, info, remade=checked, pool_folds=True)
+    z = checked_blend(lin, d, gamma, info, remade=checked, pool_folds=True, clip=o.detail_clip)
     return Reconstructed(z, info)
 
 

@@ -151,6 +151,7 @@ class ShadingOptions(ReadingChecks):
     shadow: float = shared_option(READING_OPTIONS, "shadow")
     saturation: float = shared_option(READING_OPTIONS, "saturation")
     shadow_lit: float = shared_option(READING_OPTIONS, "shadow_lit")
+    detail_clip: float = shared_option(READING_OPTIONS, "detail_clip")
     heldout_check: bool = option(
         True,
         doc="cap gamma by a check on held-out samples: every fifth sample is left out, and the "
@@ -458,7 +459,7 @@ def shading(points_rc, values, shape, *, guide: Guide, options: ShadingOptions |
         return np.zeros(lin.shape) if field is None else field
 
     checked = remade if o.heldout_check else None
-    z = checked_blend(lin, z_fc, gamma, info, remade=checked, pool_folds=True)
+    z = checked_blend(lin, z_fc, gamma, info, remade=checked, pool_folds=True, clip=o.detail_clip)
     return Reconstructed(z, info)
 
 
