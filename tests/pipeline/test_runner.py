@@ -125,10 +125,11 @@ def test_a_reconstruction_with_a_results_version_has_it_in_the_key():
     assert RECONSTRUCTIONS["learned"].meta["results_version"] == 2
     recons = ["linear", "shading", {"learned": {"model": "m.joblib"}},
               {"l2": {"reconstruction": "learned", "model": "n.joblib"}}]  # fmt: skip
-    assert reconstruction_versions({"reconstructions": recons}) == {"shading": 3, "learned": 2}
+    assert reconstruction_versions({"reconstructions": recons}) == {"shading": 4, "learned": 2}
     # shading 2: its held-out check pools folds and remakes the detail from the kept samples;
-    # 3: a flash's second pass (flash_refine) reads around the fused surface's slopes
-    assert reconstruction_versions({"reconstructions": ["linear", "shading"]}) == {"shading": 3}
+    # 3: a flash's second pass (flash_refine) reads around the fused surface's slopes; 4: the
+    # detail is limited to detail_clip x the held-out departures' RMS
+    assert reconstruction_versions({"reconstructions": ["linear", "shading"]}) == {"shading": 4}
     assert reconstruction_versions({"reconstructions": ["linear", "smoothed"]}) == {}
     a = expand(cfg(sweep={}))[0]
     config = {**a.config, "study": {**a.config["study"], "reconstructions": recons}}
