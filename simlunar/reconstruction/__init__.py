@@ -33,7 +33,8 @@ RECONSTRUCTIONS.register(
     # 2: the held-out check pools its folds at sparse densities and remakes the detail from
     # the kept samples only (it was checked as made from all of them); 3: a flash's second
     # pass (flash_refine) reads around the fused surface's slopes with the relief gain; 4: the
-    # detail is limited to detail_clip x the held-out departures' RMS
+    # detail is limited to detail_clip x the held-out departures' RMS, and a calibration whose
+    # held-out share cannot be formed is not used
     results_version=4,
 )
 RECONSTRUCTIONS.register(
@@ -43,7 +44,8 @@ RECONSTRUCTIONS.register(
     summary="linearised photoclinometry, sparse least squares",
     guided=True,
     # 2: the held-out check (option heldout_check, on by default) caps gamma; 3: the detail is
-    # limited to detail_clip x the held-out departures' RMS
+    # limited to detail_clip x the held-out departures' RMS, and a calibration whose held-out
+    # share cannot be formed is not used
     results_version=3,
 )
 RECONSTRUCTIONS.register(

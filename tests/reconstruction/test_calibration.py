@@ -103,3 +103,22 @@ def test_valid_pixels_and_options():
     with pytest.raises(ValueError, match="valid has shape"):
         calibrate(np.zeros((4, 4)), [[0, 0], [3, 3], [0, 3]], [0.0, 1.0, 2.0], linear=None,
                   valid=np.ones((5, 5), bool))  # fmt: skip
+
+
+def test_a_fit_whose_held_out_share_cannot_be_formed_is_not_used():
+    # the planted model of the first test, with all but a 40 x 40 corner of the image in shadow
+    # (invalid) and sparse samples: too few blurred cells for the checkerboard check
+    h, _, _ = fbm_heights(SHAPE, beta=4.5, slope_rms=0.2, rng=1)
+    gr, gc = central_gradient(h)
+    image = 0.5 - 0.15 * gr + 0.25 * gc
+    valid = np.zeros(SHAPE, bool)
+    valid[:40, :40] = True
+    pts, v = _samples(h, density=1 / 256)
+    cal = calibrate(image, pts, v, valid=valid)
+    assert cal.gain > 0 and cal.share > 0.5  # the in-sample fit explains the few cells...
+    assert np.isnan(cal.heldout_share)  # ...but cannot be checked
+    assert cal.usable_share == 0.0
+    # checked, the usable share is the held-out one, never above the in-sample one
+    full = calibrate(image, pts, v)
+    assert np.isfinite(full.heldout_share)
+    assert full.usable_share == min(full.heldout_share, full.share)
