@@ -228,3 +228,30 @@ def test_a_failed_save_leaves_the_old_model_and_record_untouched(model, tmp_path
     monkeypatch.setattr(os, "fsync", real)
     other.save(path)  # and a save that works replaces both
     assert LearnedMap.load(path).meta["note"] == "a newer model"
+
+
+def test_a_map_predicted_in_row_chunks_is_the_single_call_s_to_the_bit(model, monkeypatch):
+    from simlunar.features import learned as learned_mod
+
+    img, _ = planted_pair(200)
+    reg = model.model_for(DENSITY)
+    x = image_features(img, pitch=pitch_of(DENSITY)).reshape(-1, len(FEATURE_NAMES))
+    one = reg.predict(x)
+    parts = []
+
+    class Spy:  # records the chunks predicted
+        def predict(self, part):
+            parts.append(len(part))
+            return reg.predict(part)
+
+    monkeypatch.setattr(learned_mod, "PREDICT_CHUNK_ROWS", 1000)
+    for cores in (1, 2, 3):
+        parts.clear()
+        y = learned_mod.predict_rows(Spy(), x, cores=cores)
+        np.testing.assert_array_equal(y, one)
+        # 12 288 rows: one chunk per core (each at least 1000 rows), all rows once
+        assert len(parts) == cores and sum(parts) == len(x)
+    # the map itself: chunked (small threshold) equals one call (large threshold)
+    chunked = model.predict(img, density=DENSITY)
+    monkeypatch.setattr(learned_mod, "PREDICT_CHUNK_ROWS", 10**9)
+    np.testing.assert_array_equal(chunked, model.predict(img, density=DENSITY))
