@@ -95,7 +95,8 @@ def _unit(name: str) -> str:
         ("_deg", "deg"), ("_m", "m"), ("_px", "px"), ("_e", "e-"), ("_ns", "ns"),
         ("_ms", "ms"), ("_mrad", "mrad"), ("_urad", "urad"), ("_uj", "uJ"), ("_nm", "nm"),
         ("_mm", "mm"), ("_hz", "1/s"), ("_per_s", "1/s"),
-        ("_rad_s2", "rad/s²"), ("_rad_s", "rad/s"), ("_w_sr", "W/sr"),
+        ("_rad_s2", "rad/s²"), ("_rad_s", "rad/s"), ("_m_s", "m/s"), ("_w_sr", "W/sr"), ("_s", "s"),
+        ("_j", "J"),
     )  # fmt: skip
     for suffix, unit in units:
         if name.endswith(suffix):

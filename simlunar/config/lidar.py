@@ -14,7 +14,7 @@ import dataclasses
 import math
 from typing import Literal
 
-from pydantic import Field, PositiveInt, model_validator
+from pydantic import Field, model_validator
 
 from simlunar.config.fields import Metres, _Model
 from simlunar.config.landing import HazardCfg, SafeSiteCfg
@@ -35,9 +35,11 @@ from simlunar.lidar.trajectory import Navigation, PlatformMotion
 from simlunar.lidar.waveform import PulseOptions
 from simlunar.sensors.lidar import FlashLidarOptions
 from simlunar.sensors.micromirror import MicromirrorOptions
+from simlunar.study.lidar import SensorFit
 
 __all__ = [
     "BLOCKS",
+    "FIT",
     "MAX_BINS",
     "MAX_PHOTONS",
     "ApdCfg",
@@ -198,19 +200,14 @@ MicromirrorCfg = MICROMIRROR.model
 MotionCfg = MOTION.model
 
 
-class FitCfg(_Model):
-    """A planner fitted to its sensor (:class:`simlunar.study.lidar.SensorFit`)."""
-
-    kind: Literal["scan_time", "receiver"] = Field(
-        "scan_time",
-        description="scan_time: the most samples whose tour (visiting order of the sensor) "
-        "fits the reference planner's scan time at the same density; receiver (micromirror): "
-        "at most `frames` dots per receiver pixel",
-    )
-    reference: str = Field("grid", description="scan_time: the planner label setting the budget")
-    frames: PositiveInt | None = Field(
-        None, le=1024, description="receiver: dots per receiver pixel; none = the least for k"
-    )
+FIT = Block(
+    "FitCfg",
+    "A planner fitted to its sensor (:class:`simlunar.study.lidar.SensorFit`): at the "
+    "reference planner's scan time, within an absolute time or energy budget (sensors side by "
+    "side), or at most some dots per receiver pixel (docs/lidar.md).",
+    (Part("fit", SensorFit, limits={"frames": {"le": 1024}}),),
+)
+FitCfg = FIT.model
 
 
 class LidarPlannerOptsCfg(StrategyOptionsCfg):

@@ -83,6 +83,14 @@ def check_lidar_study(study) -> None:
                 )
             if study.sensor == "flash":
                 raise ValueError(f"{where}: a flash's time is its frames, not a tour")
+        expert = any(getattr(study.options.detector, f"expert_{k}", None) is not None
+                     for k in ("signal_photons", "background_photons_per_s"))  # fmt: skip
+        if fit.kind == "budget" and fit.budget_j is not None and expert:
+            # simlunar.sensors' scan_energy_j refuses it in the unit, after the render
+            raise ValueError(
+                f"{where}.budget_j: an energy budget needs the instrument's pulse energy, and "
+                "the expert photon scales (study.options.detector.expert_*) name none"
+            )
     o = study.options
     apd = o.detector.apd
     if apd is not None and apd.agc_target is not None and study.sensor != "flash":

@@ -9,6 +9,7 @@ import dataclasses
 from simlunar.config.derived import reconstruction_mapping
 from simlunar.config.lidar import (
     BLOCKS,
+    FIT,
     HardwareCfg,
     HazardCfg,
     LidarOptionsCfg,
@@ -23,7 +24,7 @@ from simlunar.lidar.trajectory import PlatformMotion
 from simlunar.metrics.hazard import HazardOptions
 from simlunar.metrics.landing import LandingOptions
 from simlunar.metrics.safe_site import SiteOptions
-from simlunar.study.lidar import LidarStudyOptions, SensorFit
+from simlunar.study.lidar import LidarStudyOptions
 
 __all__ = [
     "hazard_options",
@@ -132,11 +133,7 @@ def lidar_options(study: LidarStudyCfg, *, seed: int = 0) -> LidarStudyOptions:
         metrics=tuple(study.metrics),
         planner_opts={n: planner_kwargs(p.strategy or n, p) for n, p in study.planner_opts.items()},
         strategies={n: p.strategy for n, p in study.planner_opts.items() if p.strategy},
-        fits={
-            n: SensorFit(p.fit.kind, p.fit.reference, p.fit.frames)
-            for n, p in study.planner_opts.items()
-            if p.fit is not None
-        },
+        fits={n: FIT.options(p.fit) for n, p in study.planner_opts.items() if p.fit is not None},
         hazard=hazard_options(study.hazard),
         safe_site=None if study.safe_site is None else SiteOptions(**study.safe_site.model_dump()),
         landing=landing_options(study.landing),

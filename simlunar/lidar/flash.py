@@ -22,7 +22,13 @@ from simlunar.geometry import Camera
 from simlunar.lidar.apd import agc_energy
 from simlunar.lidar.gate import gate_bins, prior_ranges, read_datum
 from simlunar.lidar.hardware import pixel_solid_angles
-from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
+from simlunar.lidar.returns import (
+    LidarScan,
+    ReturnOptions,
+    detect_counts,
+    fired_energy_j,
+    read_ranges,
+)
 from simlunar.lidar.waveform import TimeBins
 from simlunar.registry import option
 
@@ -108,34 +114,37 @@ def read_frame(frame, camera: Camera, options: FlashOptions, rng, *, lit_sr=None
         weight = omega
     bg = 0.0 if frame.sun is None else frame.sun * weight
     hist = frame.histograms * weight[..., None].astype(np.float32)
-    probes = 0
+    probes, fired = 0, None
     if det.apd is not None and det.apd.agc_target is not None:
         if lit_sr is not None:
             raise ValueError("apd.agc_target: the micromirror flash has no gain control")
-        det, probes = _gain_control(hist, bg, frame, options, det, rng)
+        det, probes, fired = _gain_control(hist, bg, frame, options, det, rng)
     counts = detect_counts(hist, bg, frame.bins, options.pulse, det, rng, frame.oversample)
     res = read_ranges(counts, bg, frame.bins, options.pulse, det, options.ranging)
-    return dataclasses.replace(res, probe_pulses=probes)
+    return dataclasses.replace(res, probe_pulses=probes, energy_pulses=fired)
 
 
 def _gain_control(hist, bg, frame, options: FlashOptions, det, rng):
     """The detector of a frame whose pulse energy the APD's gain control set
     (:func:`~simlunar.lidar.apd.agc_energy`: one pulse slot read without firing, for the
-    background, then probe pulses fired before the frame, each read in full and discarded) and
-    the number of pulse slots the control took."""
+    background, then probe pulses fired before the frame, each read in full and discarded), the
+    number of pulse slots the control took and the energy fired, probes and frame, in
+    full-energy pulses."""
     one = dataclasses.replace(det, pulses=1)
     # the receiver read for one pulse slot without firing: the sun and dark counts alone
     quiet = dataclasses.replace(one, signal_photons=0.0)
     background = detect_counts(hist, bg, frame.bins, options.pulse, quiet, rng, frame.oversample)
-    energy, probes = float(det.apd.agc_probe_energy), 1
+    energy, probes, fired = float(det.apd.agc_probe_energy), 1, 0.0
     for _ in range(det.apd.agc_max_probes):
         probe = dataclasses.replace(one, signal_photons=det.signal_photons * energy)
         w = detect_counts(hist, bg, frame.bins, options.pulse, probe, rng, frame.oversample)
         probes += 1
+        fired += energy
         energy, again = agc_energy(w, background, energy, options=det.apd)
         if not again:
             break
-    return dataclasses.replace(det, signal_photons=det.signal_photons * energy), probes
+    fired += det.pulses * energy
+    return dataclasses.replace(det, signal_photons=det.signal_photons * energy), probes, fired
 
 
 def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> LidarScan:
@@ -143,6 +152,7 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
     ``camera``) with fresh photon noise: a frame rendered once serves many noisy reads."""
     rng = np.random.default_rng(rng)
     res = read_frame(frame, camera, options, rng)
+    pulses = options.detector.pulses if res.energy_pulses is None else res.energy_pulses
     _, d = camera.rays(camera.pixel_centers())
     return LidarScan(
         ranges=res.range,
@@ -155,6 +165,7 @@ def read_flash(frame, camera: Camera, *, options: FlashOptions, rng=None) -> Lid
         frames=1,
         times=np.zeros(res.range.shape),
         returns=res.returns,
+        energy_j=fired_energy_j(options, pulses),
     )
 
 

@@ -30,11 +30,13 @@ def flat_scan(s: LidarScan) -> LidarScan:
         s.frames,
         times=_or(s.times, n, 0.0).astype(float),
         returns=_or(s.returns, n).astype(np.int64),
+        energy_j=s.energy_j,
     )
 
 
 def subset_scan(s: LidarScan, keep: np.ndarray) -> LidarScan:
-    """The points of a flat scan where ``keep`` (bool, (n,)) holds; time and frames kept."""
+    """The points of a flat scan where ``keep`` (bool, (n,)) holds; time, frames and energy
+    kept."""
     return LidarScan(
         s.ranges[keep],
         s.valid[keep],
@@ -45,6 +47,7 @@ def subset_scan(s: LidarScan, keep: np.ndarray) -> LidarScan:
         s.frames,
         times=s.times[keep],
         returns=s.returns[keep],
+        energy_j=s.energy_j,
     )
 
 
@@ -61,7 +64,7 @@ def join_scans(scans, gaps_s=None) -> LidarScan:
     -------
     LidarScan
         Flat (n,) arrays in scan order, ``order`` 0..n-1, ``seconds`` the sum of the scans'
-        and the gaps, ``frames`` their sum.
+        and the gaps, ``frames`` and ``energy_j`` their sums.
     """
     gaps = np.zeros(max(len(scans) - 1, 0)) if gaps_s is None else np.asarray(gaps_s, float)
     if len(gaps) != max(len(scans) - 1, 0) or (gaps < 0).any():
@@ -87,4 +90,5 @@ def concat_scans(scans: list[LidarScan], gaps=None) -> LidarScan:
         int(sum(s.frames for s in scans)),
         times=cat([t0 + s.times for t0, s in zip(start, scans)]),
         returns=cat([s.returns for s in scans]),
+        energy_j=float(sum(s.energy_j for s in scans)),
     )

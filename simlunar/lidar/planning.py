@@ -8,7 +8,9 @@ sensors, :mod:`simlunar.study.lidar`):
   budget, the largest sample count ``k`` whose plan, in the sensor's own visiting order
   (a steered beam's nearest-neighbour + 2-opt tour under its steering model, a micromirror's
   frames), fits the budget. With the budget of a reference plan (e.g. the grid's time at the
-  same density) every comparison is at equal scan time.
+  same density) every comparison is at equal scan time. :func:`fit_to_budget` is the same
+  search for an absolute budget from any count (time, laser energy or both): sensors side by
+  side at equal time or equal energy.
 - :func:`receiver_capped_plan` (receiver-aware micromirror): at most ``frames`` dots per
   receiver pixel, so the micromirror fires at most ``frames`` frames (dots sharing a receiver
   pixel need separate frames, :func:`simlunar.lidar.flash.micromirror_frames`). The
@@ -32,6 +34,7 @@ from scipy.spatial import cKDTree
 
 __all__ = [
     "choose_tiles",
+    "fit_to_budget",
     "fit_to_time",
     "receiver_capped_layout",
     "receiver_capped_plan",
@@ -88,15 +91,88 @@ def fit_to_time(
         return at(k_max)
     if at(k_min)[1] > budget_s:
         return at(k_min)
-    lo, hi = k_min, k_max  # at(lo) fits, at(hi) does not
+    return _bisect(at, cache, budget_s, k_min, k_max)
+
+
+def _bisect(at, cache: dict, budget: float, lo: int, hi: int):
+    """Bisection on ``k`` between ``lo`` (its plan fits) and ``hi`` (does not); the largest
+    fitting ``k`` evaluated (``cache``: every plan ``at`` made)."""
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        if at(mid)[1] <= budget_s:
+        if at(mid)[1] <= budget:
             lo = mid
         else:
             hi = mid
-    best = max((k for k, (_, s) in cache.items() if s <= budget_s))
+    best = max((k for k, (_, c) in cache.items() if c <= budget))
     return at(best)
+
+
+def fit_to_budget(
+    place: Callable[[int], np.ndarray],
+    cost: Callable[[np.ndarray], float],
+    budget: float,
+    *,
+    k_start: int,
+    k_max: int,
+) -> tuple[np.ndarray, float]:
+    """The plan of the largest ``k`` in ``[1, k_max]`` whose ``cost`` fits ``budget``,
+    searched from ``k_start``: doubling while the plan fits, halving while it does not, then
+    :func:`fit_to_time`'s bisection between the last count that fits and the first that does
+    not (so a far budget costs a few plans, never the ``k_max`` one unless the budget
+    reaches it).
+
+    Parameters
+    ----------
+    place : callable k -> (k, 2) int rc
+        The planner at ``k`` samples (deterministic for a given ``k``).
+    cost : callable rc -> float
+        The plan's cost (e.g. its scan time in s, or its laser energy in J), growing with ``k``.
+    budget : float
+        The most cost, > 0.
+    k_start, k_max : int
+        First count tried (clipped to ``[1, k_max]``) and the largest.
+
+    Returns
+    -------
+    rc : (k, 2) int
+    cost : float
+        Its cost (over ``budget`` only when even one sample is).
+    """
+    if not (np.isfinite(budget) and budget > 0):
+        raise ValueError(f"budget must be finite and > 0, got {budget}")
+    k_max = int(k_max)
+    if k_max < 1:
+        raise ValueError(f"need k_max >= 1, got {k_max}")
+    cache: dict[int, tuple[np.ndarray, float]] = {}
+
+    def at(k: int) -> tuple[np.ndarray, float]:
+        if k not in cache:
+            rc = place(k)
+            cache[k] = (rc, float(cost(rc)))
+        return cache[k]
+
+    k = min(max(int(k_start), 1), k_max)
+    if at(k)[1] <= budget:
+        lo, hi = k, None
+        while lo < k_max:
+            nxt = min(2 * lo, k_max)
+            if at(nxt)[1] > budget:
+                hi = nxt
+                break
+            lo = nxt
+        if hi is None:
+            return at(lo)
+    else:
+        hi, lo = k, None
+        while hi > 1:
+            nxt = max(hi // 2, 1)
+            if at(nxt)[1] <= budget:
+                lo = nxt
+                break
+            hi = nxt
+        if lo is None:
+            return at(1)
+    return _bisect(at, cache, budget, lo, hi)
 
 
 def receiver_cells(rc: np.ndarray, shape, receiver_shape) -> np.ndarray:

@@ -125,6 +125,10 @@ class RangeResult:
         Number of returns detected.
     probe_pulses : int
         Pulses a gain control fired before the reading to set its energy (0 without one).
+    energy_pulses : float or None
+        The laser energy the reading fired, in full-energy pulses: a gain control's probes and
+        the reading's own pulses each count their share of the full energy (None: the
+        detector's pulses, all at the full energy).
     """
 
     range: np.ndarray
@@ -132,6 +136,7 @@ class RangeResult:
     photons: np.ndarray
     returns: np.ndarray
     probe_pulses: int = 0
+    energy_pulses: float | None = None
 
 
 def _detection_threshold(mu, width: int, options: RangeOptions, apd, pulses: int):

@@ -37,6 +37,7 @@ __all__ = [
     "ReturnOptions",
     "TransientOptions",
     "detect_counts",
+    "fired_energy_j",
     "read_ranges",
 ]
 
@@ -175,6 +176,9 @@ class LidarScan:
         first pulse at that pointing, a flash frame's start.
     returns : (n,) int64 or None
         Returns detected in each sample's histogram (the reported one is ``which``).
+    energy_j : float
+        Laser energy fired (J): every pulse at its energy, a gain control's probes included;
+        0 where the options name no hardware (an expert override has no pulse energy).
     """
 
     ranges: np.ndarray
@@ -187,11 +191,19 @@ class LidarScan:
     timing: ScanTiming | None = None
     times: np.ndarray | None = None
     returns: np.ndarray | None = None
+    energy_j: float = 0.0
 
     def depth(self, camera: Camera) -> np.ndarray:
         """z-depth (m) of :attr:`points` along ``camera``'s optical axis (the guide view's
         depth convention of :class:`~simlunar.geometry.types.GroundTruth`); NaN where invalid."""
         return (self.points - camera.pose.position) @ camera.pose.forward
+
+
+def fired_energy_j(options, pulses: float) -> float:
+    """Laser energy (J) of ``pulses`` full-energy pulses of ``options``' hardware (0 without
+    one: the expert photon scales name no pulse energy)."""
+    hardware = getattr(options, "hardware", None)
+    return 0.0 if hardware is None else float(pulses) * float(hardware.pulse_energy_j)
 
 
 def read_ranges(counts, background, bins: TimeBins, pulse, det: DetectorOptions, ranging):

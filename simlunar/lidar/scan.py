@@ -31,7 +31,13 @@ from simlunar.lidar.gate import GateOptions, plane_ranges, prior_ranges, read_da
 from simlunar.lidar.hardware import LidarHardware
 from simlunar.lidar.ordering import OrderOptions, order_scan
 from simlunar.lidar.ranging import extract_ranges
-from simlunar.lidar.returns import LidarScan, ReturnOptions, detect_counts, read_ranges
+from simlunar.lidar.returns import (
+    LidarScan,
+    ReturnOptions,
+    detect_counts,
+    fired_energy_j,
+    read_ranges,
+)
 from simlunar.lidar.steering import SteeringOptions, point_times, pointing_angles, scan_timing
 from simlunar.lidar.trajectory import Flight, PlatformMotion, place_points, rotate_small
 from simlunar.lidar.waveform import PulseOptions, TimeBins
@@ -315,6 +321,7 @@ def steered_beam_scan(
         timing=timing,
         times=times,
         returns=res.returns,
+        energy_j=fired_energy_j(options, (len(d) + steps) * int(options.steering.pulses_per_point)),
     )
 
 

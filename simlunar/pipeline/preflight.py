@@ -34,6 +34,7 @@ from simlunar.config.scanner_translate import coding_options, rig_kwargs
 from simlunar.config.schema import ExperimentCfg
 from simlunar.errors import ConfigError, InfrastructureError
 from simlunar.geometry import Camera, Intrinsics, Pose
+from simlunar.lidar.gate import prior_ranges
 from simlunar.metrics.interior import interior_mask, sparsest_pitch
 from simlunar.pipeline.inputs import (
     MAX_ABS_COORD_M,
@@ -138,22 +139,8 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
         raise ConfigError(
             f"{key}.look_at_m: equals position_m {pos.tolist()}; the camera has no view direction"
         )
-    up = np.asarray(getattr(cam, "up", (0.0, 0.0, 1.0)), float)
-    fov = getattr(cam, "fov_deg", None)
-    try:
-        if fov is not None:
-            k = Intrinsics.from_fov(int(cam.width), int(cam.height), float(fov))
-        else:
-            k = Intrinsics(cam.fx, cam.fy, cam.cx, cam.cy, int(cam.width), int(cam.height))
-        camera = Camera(k, Pose.look_at(pos, target, up))
-    except ValueError as exc:
-        raise ConfigError(f"{key}: {exc}") from None
-    n_u = min(int(cam.width), 64)
-    n_v = min(int(cam.height), 64)
-    uu, vv = np.meshgrid(
-        np.linspace(0.0, float(cam.width), n_u), np.linspace(0.0, float(cam.height), n_v)
-    )
-    o, d = camera.rays(np.stack([uu, vv], axis=-1).reshape(-1, 2))
+    camera = _perspective_camera(cam, key)
+    o, d = _grid_rays(camera)
     x0, x1, y0, y1 = facts.extent
     lo = np.array([x0, y0, facts.zmin])
     hi = np.array([x1, y1, facts.zmax])
@@ -162,6 +149,60 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
             f"{key}: the camera at {pos.tolist()} looking at {target.tolist()} sees no "
             f"terrain (the terrain spans x [{x0:g}, {x1:g}] m, y [{y0:g}, {y1:g}] m, "
             f"z [{facts.zmin:.3g}, {facts.zmax:.3g}] m)"
+        )
+
+
+def _perspective_camera(cam: Any, key: str) -> Camera:
+    """The :class:`~simlunar.geometry.Camera` of a perspective camera config."""
+    pos = np.asarray(cam.position_m, float)
+    target = np.asarray(cam.look_at_m, float)
+    up = np.asarray(getattr(cam, "up", (0.0, 0.0, 1.0)), float)
+    fov = getattr(cam, "fov_deg", None)
+    try:
+        if fov is not None:
+            k = Intrinsics.from_fov(int(cam.width), int(cam.height), float(fov))
+        else:
+            k = Intrinsics(cam.fx, cam.fy, cam.cx, cam.cy, int(cam.width), int(cam.height))
+        return Camera(k, Pose.look_at(pos, target, up))
+    except ValueError as exc:
+        raise ConfigError(f"{key}: {exc}") from None
+
+
+def _grid_rays(camera: Camera, most: int = 64):
+    """Rays through a grid of at most ``most`` x ``most`` image points, corners included."""
+    h, w = camera.shape
+    uu, vv = np.meshgrid(np.linspace(0.0, float(w), min(w, most)),
+                         np.linspace(0.0, float(h), min(h, most)))  # fmt: skip
+    return camera.rays(np.stack([uu, vv], axis=-1).reshape(-1, 2))
+
+
+def check_gate_prior(cfg: Any, facts: TerrainFacts) -> None:
+    """A steered beam's gate prior (the datum's error, the slope) must fit its window, as the
+    scan requires (:func:`simlunar.lidar.scan.steered_beam_scan` refuses it in the unit, after
+    the guide render): the prior's largest half-width over the guide camera's rays (corners
+    included), on the plane through the terrain's lowest point (the farthest, widest one),
+    plus ``margin_m`` on both sides, within ``window_m``."""
+    s = cfg.study
+    cam = cfg.render.camera
+    if s.sensor != "steered_beam" or getattr(cam, "kind", None) != "perspective":
+        return
+    opts = lidar_options(s).sensor_options
+    g = opts.gate
+    if g.datum_sigma_m == 0 and g.max_slope_rad == 0:
+        return
+    camera = _perspective_camera(cam, "render.camera")
+    _, d = _grid_rays(camera)
+    datum = facts.zmin if g.altimeter else g.datum_z_m
+    lo, hi = prior_ranges(camera.position, d, datum_z=datum, boresight=camera.pose.forward,
+                          options=g)  # fmt: skip
+    half = 0.5 * float(np.max(hi - lo))
+    need = 2.0 * (opts.margin_m + half)
+    if not opts.window_m > need:
+        raise ConfigError(
+            f"study.options.steered_beam.window_m: {opts.window_m:g} m cannot hold the gate "
+            f"prior: it needs more than {need:.3g} m (2 x (margin_m {opts.margin_m:g} m + the "
+            f"prior's largest half-width over the view, {half:.3g} m)); widen window_m or "
+            "narrow gate.max_slope_deg / gate.datum_sigma_m"
         )
 
 
@@ -471,6 +512,7 @@ def check_units(units: list[Any]) -> Preflight:
             if getattr(cfg.study, "kind", None) == "lidar":
                 check_time_bins(cfg.study, f)
                 check_lidar_options(cfg.study)
+                check_gate_prior(cfg, f)
             if getattr(cfg.study, "kind", None) == "scanner":
                 check_rig(cfg, f)
         except ConfigError as exc:

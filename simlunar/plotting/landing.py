@@ -1,4 +1,5 @@
-"""Landing-site figures: hazard recall per sensor and hazard size (one panel per light) and a
+"""Landing-site figures: hazard recall per sensor and hazard size (one panel per light), recall
+against scan time and laser energy (what each sensor buys with its time and energy) and a
 hazard-map panel (truth beside each sensor's reconstruction) (docs/landing.md)."""
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ import numpy as np
 
 from simlunar.plotting.landing_tables import landing_summary
 
-__all__ = ["hazard_map_panel", "landing_recall"]
+__all__ = ["hazard_map_panel", "landing_cost", "landing_recall"]
 
 
 def _label(metric: str) -> str:
@@ -69,6 +70,71 @@ def landing_recall(
     fig.legend(handles, labels, loc="lower center", ncol=min(len(metrics), 4), fontsize=8,
                frameon=False)  # fmt: skip
     fig.tight_layout(rect=(0, 0.08, 1, 0.95))
+    return fig
+
+
+def landing_cost(
+    rows: Sequence[dict],
+    *,
+    sensor_key: str,
+    light_key: str | None,
+    metric: str | None = None,
+    reconstruction: str = "linear",
+    title: str = "",
+):
+    """Recall against cost: per light (a row of panels) the mean ``metric`` (default: the
+    smallest rock size's recall) of each (sensor, planner) against its mean scan time (left)
+    and mean laser energy (right), both log; one colour per sensor, its points joined in order
+    of cost; whiskers: 95 % intervals over terrain seeds. A point whose energy is not priced
+    (NaN or 0) is left out of the energy panel. Returns the figure, or None without the
+    metric."""
+    keys = [sensor_key] + ([light_key] if light_key else [])
+    summary = {g: c for g, c in landing_summary(rows, keys=keys).items()
+               if g[len(keys)] == reconstruction}  # fmt: skip
+    if metric is None:
+        rocks = sorted({m for c in summary.values() for m in c
+                        if m.startswith("hazard_recall_rock_")},
+                       key=lambda m: float(m.rsplit("_", 1)[-1].removesuffix("cm")))  # fmt: skip
+        metric = rocks[0] if rocks else None
+    if metric is None or not any(metric in c for c in summary.values()):
+        return None
+    lights = sorted({g[1] for g in summary}, key=float) if light_key else [""]
+    sensors = sorted({g[0] for g in summary})
+    colours = plt.get_cmap("tab10")
+    fig, axes = plt.subplots(len(lights), 2, figsize=(9.0, 3.4 * len(lights)), squeeze=False,
+                             sharey=True)  # fmt: skip
+    for row, light in zip(axes, lights, strict=True):
+        for ax, cost, xlabel in zip(row, ("seconds", "energy_j"),
+                                    ("scan time (s)", "laser energy (J)"), strict=True):  # fmt: skip
+            for i, sensor in enumerate(sensors):
+                pts = []
+                for g, c in summary.items():
+                    if g[0] != sensor or (light_key and g[1] != light) or metric not in c:
+                        continue
+                    x = c[cost]
+                    if np.isfinite(x) and x > 0:
+                        pts.append((x, *c[metric], g[-1]))
+                if not pts:
+                    continue
+                pts.sort()
+                x, mean, lo, hi = (np.array([p[j] for p in pts]) for j in range(4))
+                ax.errorbar(x, mean, yerr=[mean - lo, hi - mean], marker="o", ms=4, capsize=2,
+                            color=colours(i), label=sensor.replace("_", " "))  # fmt: skip
+                for xi, yi, name in zip(x, mean, [p[4] for p in pts], strict=True):
+                    ax.annotate(name, (xi, yi), fontsize=6, xytext=(3, 3),
+                                textcoords="offset points", color=colours(i))  # fmt: skip
+            ax.set_xscale("log")
+            ax.set_xlabel(xlabel)
+            ax.set_ylim(0, 1.05)
+            ax.grid(alpha=0.3)
+            ax.set_title(f"sun {light} deg" if light_key else "", fontsize=9)
+        row[0].set_ylabel(_label(metric))
+    fig.suptitle(f"{title}\npoints: mean over terrain seeds, one per planner (named); whiskers: "
+                 "95 % interval over the seeds", fontsize=10)  # fmt: skip
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=max(len(labels), 1), fontsize=8,
+               frameon=False)  # fmt: skip
+    fig.tight_layout(rect=(0, 0.05, 1, 0.95))
     return fig
 
 

@@ -1,5 +1,5 @@
 """Landing-site tables (no Matplotlib): per sensor, light, reconstruction and planner the mean
-scan time and every landing score (:mod:`simlunar.metrics.landing`) with its interval over
+scan time, laser energy and every landing score (:mod:`simlunar.metrics.landing`) with its interval over
 terrain seeds, in Markdown and LaTeX (the runner appends them to a LIDAR study's tables)."""
 
 from __future__ import annotations
@@ -58,17 +58,19 @@ def _header(metric: str) -> str:
 
 
 def landing_summary(rows: Sequence[dict], *, keys: Sequence[str]) -> dict:
-    """Per group (the values of ``keys``, then reconstruction and planner): mean scan time and,
-    per landing metric, the mean over terrain seeds (units) with its 95 % bootstrap interval
+    """Per group (the values of ``keys``, then reconstruction and planner): mean scan time, mean
+    laser energy (NaN where the rows do not price it) and, per landing metric, the mean over terrain seeds (units) with its 95 % bootstrap interval
     (the mean over trials first within a unit).
 
     Returns
     -------
-    dict group tuple -> {"seconds": float, "units": int, metric: (mean, lo, hi)}
+    dict group tuple -> {"seconds": float, "energy_j": float, "units": int,
+    metric: (mean, lo, hi)}
     """
     metrics = landing_columns(rows)
     acc: dict = defaultdict(lambda: defaultdict(lambda: defaultdict(list)))
     secs: dict = defaultdict(list)
+    joules: dict = defaultdict(list)
     for r in rows:
         m = str(r["metric"])
         if m not in metrics:
@@ -77,9 +79,10 @@ def landing_summary(rows: Sequence[dict], *, keys: Sequence[str]) -> dict:
              str(r["planner"]))  # fmt: skip
         acc[g][m][str(r.get("unit", 0))].append(float(r["value"]))
         secs[g].append(float(r["seconds"]))
+        joules[g].append(float(r.get("energy_j", np.nan)))
     out = {}
     for g, by_metric in acc.items():
-        cell: dict = {"seconds": float(np.mean(secs[g]))}
+        cell: dict = {"seconds": float(np.mean(secs[g])), "energy_j": float(np.mean(joules[g]))}
         for m, by_unit in by_metric.items():
             per_unit = np.array([np.mean(v) for v in by_unit.values()])
             mean = float(per_unit.mean())
@@ -101,11 +104,12 @@ def landing_tables(
         return "", ""
     summary = landing_summary(rows, keys=keys)
     short = [k.rsplit(".", 1)[-1] for k in keys]
-    header = [*short, "reconstruction", "planner", "scan time (s)", *map(_header, metrics)]
+    header = [*short, "reconstruction", "planner", "scan time (s)", "laser energy (J)",
+              *map(_header, metrics)]  # fmt: skip
     body = []
     for g in sorted(summary, key=lambda g: tuple(_sort_key(v) for v in g)):
         c = summary[g]
-        cells = [*g, f"{c['seconds']:.3g}"]
+        cells = [*g, f"{c['seconds']:.3g}", f"{c['energy_j']:.3g}"]
         for m in metrics:
             if m not in c:
                 cells.append("–")

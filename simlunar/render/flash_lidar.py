@@ -35,7 +35,7 @@ from simlunar.lidar.flash import (
     read_flash,
     read_frame,
 )
-from simlunar.lidar.returns import LidarScan
+from simlunar.lidar.returns import LidarScan, fired_energy_j
 from simlunar.lidar.trajectory import Flight, camera_at, place_points
 from simlunar.render.lights import ProjectorLight
 from simlunar.render.transient import flash_frame
@@ -149,6 +149,7 @@ def micromirror_flash(
         frames=n_frames,
         times=times,
         returns=returns,
+        energy_j=fired_energy_j(options, n_frames * options.detector.pulses),
     )
 
 

@@ -459,6 +459,21 @@ def landing_recall(study: dict, reconstruction: str) -> str:
     )
 
 
+def landing_cost(study: dict, reconstruction: str) -> str:
+    """Caption of ``landing_cost``."""
+    land = study.get("landing") or {}
+    small = min((float(h) for h in land.get("rock_heights_m") or [0.15]), default=0.15)
+    seeds = int(study.get("terrain_seeds", 1) or 1)
+    return (
+        f"What time and energy buy ({reconstruction} reconstruction): recall of the rocks taller "
+        f"than {round(small * 100)} cm against the acquisition's scan time (left) and the laser "
+        "energy it fired (right), both log scales, one row per sun elevation. One point per "
+        "sensor and planner (named beside it; a planner fitted to a budget sits at that "
+        f"budget), mean over {seeds} terrain seed(s); whiskers: 95 % bootstrap interval over "
+        "seeds. A sensor's points are joined in order of cost."
+    )
+
+
 def landing_hazards(study: dict) -> str:
     """Caption of ``landing_hazards_unit<i>``."""
     land = study.get("landing") or {}

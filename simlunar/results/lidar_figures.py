@@ -4,7 +4,7 @@ image, beams in visiting order, measured depths) (docs/lidar.md)."""
 
 from __future__ import annotations
 
-from simlunar.plotting.landing import hazard_map_panel, landing_recall
+from simlunar.plotting.landing import hazard_map_panel, landing_cost, landing_recall
 from simlunar.plotting.landing_tables import landing_columns
 from simlunar.plotting.layout import panel_grid
 from simlunar.plotting.lidar import (
@@ -104,8 +104,8 @@ def _hazard_figures(res: dict, emit, captions: dict) -> None:
 
 def _landing_figure(res: dict, emit, captions: dict) -> None:
     """``landing_recall`` (with landing scores): per sensor and planner the rock recall per
-    size, the slope recall and the false-safe rate, one panel per light (first
-    reconstruction)."""
+    size, the slope recall and the false-safe rate, one panel per light; ``landing_cost``: the
+    smallest rock's recall against scan time and laser energy (first reconstruction)."""
     rows = res["rows"]
     if not landing_columns(rows):
         return
@@ -121,6 +121,11 @@ def _landing_figure(res: dict, emit, captions: dict) -> None:
                          title=f"{config.get('name', '')}: landing hazards ({recon})")  # fmt: skip
     emit(fig, "landing_recall")
     captions["landing_recall"] = captions_text.landing_recall(study, recon)
+    fig = landing_cost(rows, sensor_key=sensor_key, light_key=light_key, reconstruction=recon,
+                       title=f"{config.get('name', '')}: what time and energy buy ({recon})")  # fmt: skip
+    if fig is not None:
+        emit(fig, "landing_cost")
+        captions["landing_cost"] = captions_text.landing_cost(study, recon)
 
 
 def _scan_figures(res: dict, emit, captions: dict) -> None:

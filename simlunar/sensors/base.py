@@ -41,6 +41,8 @@ class Acquisition:
         Frames the sensor captured (renders of a scanner; 0 for the ideal sampler).
     seconds : float
         Acquisition time in seconds where the sensor models it (0 where it does not).
+    energy_j : float
+        Laser energy fired (J) where the sensor models it (0 where it does not).
     detail : object
         The sensor's own record of the acquisition (e.g. a structured-light ``ScanResult``).
     planned : ndarray, shape (n, 2), or None
@@ -55,6 +57,7 @@ class Acquisition:
     seconds: float = 0.0
     detail: Any = None
     planned: np.ndarray | None = None
+    energy_j: float = 0.0
 
     @classmethod
     def from_map(cls, measured: np.ndarray, **kw) -> Acquisition:

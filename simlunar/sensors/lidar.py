@@ -35,7 +35,7 @@ from simlunar.lidar import order_scan, pointing_angles, scan_timing
 from simlunar.lidar.flash import FlashOptions, flash_window, read_flash
 from simlunar.lidar.join import concat_scans, flat_scan, subset_scan
 from simlunar.lidar.planning import choose_tiles, tile_range_scores
-from simlunar.lidar.returns import LidarScan
+from simlunar.lidar.returns import LidarScan, fired_energy_j
 from simlunar.lidar.scan import (
     SteeredBeamOptions,
     guide_directions,
@@ -88,9 +88,20 @@ class LidarScene:
             )
 
 
+def _need_hardware(options, name: str) -> None:
+    """An energy budget needs the pulse energy, which only an instrument's hardware names."""
+    if getattr(options, "hardware", None) is None:
+        raise ValueError(
+            f"an energy budget needs the {name}'s pulse energy: give an instrument or hardware "
+            "(the expert photon scales have none)"
+        )
+
+
 def _to_guide(scan: LidarScan, camera: Camera, rc=None, *, detail=None, **cost) -> Acquisition:
     """The valid points of a scan as guide-view (row, col) and z-depth: at the planned ``rc``
-    (one per sample of ``scan``) or, without a plan, where each point projects."""
+    (one per sample of ``scan``) or, without a plan, where each point projects; its cost
+    (``frames``, ``seconds``, ``energy_j``) the scan's unless ``cost`` gives it."""
+    cost = {"frames": scan.frames, "seconds": scan.seconds, "energy_j": scan.energy_j, **cost}
     valid = np.asarray(scan.valid).ravel()
     if not valid.any():
         raise NothingMeasured("the LIDAR detected no return")
@@ -151,7 +162,7 @@ class SteeredBeam:
             d = guide_directions(cam, rc)
             scan = steered_beam_scan(self.capture, d, options=self.options, rng=rng,
                                      boresight=cam.pose)  # fmt: skip
-            return _to_guide(scan, cam, rc, frames=scan.frames, seconds=scan.seconds)
+            return _to_guide(scan, cam, rc)
         g = np.random.default_rng(rng)
         return self._moving(rc, g, self.trajectory(g), 0.0)
 
@@ -167,7 +178,7 @@ class SteeredBeam:
         scan = steered_beam_scan(self.capture, guide_directions(cam, rc), options=self.options,
                                  rng=rng, boresight=cam.pose, flight=flight)  # fmt: skip
         # a moving beam measures where its points project, not the planned pixels exactly
-        return _to_guide(scan, cam, None, frames=scan.frames, seconds=scan.seconds)
+        return _to_guide(scan, cam, None)
 
     def rounds(self, *, rng=None) -> PlatformRounds:
         """The rounds of one multi-round acquisition, measured one after the other
@@ -192,6 +203,14 @@ class SteeredBeam:
         angles = pointing_angles(guide_directions(cam, rc), cam.pose)
         order = order_scan(angles, steering=o.steering, options=o.order)
         return float(scan_timing(angles, order, options=o.steering).total_s)
+
+    def scan_energy_j(self, rc: np.ndarray) -> float:
+        """Modelled laser energy (J) of scanning guide pixels ``rc`` (k, 2): ``k`` x pulses per
+        point x the hardware's pulse energy (an altimeter's gate steps not counted: what a
+        planner may ask before the scan)."""
+        o = self.options
+        _need_hardware(o, self.name)
+        return fired_energy_j(o, len(rc) * int(o.steering.pulses_per_point))
 
     def repoint_seconds(self, from_rc, to_rc) -> float:
         """Modelled time (s) of re-pointing the beam from guide pixel ``from_rc`` to ``to_rc``

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.lidar.flash import FlashOptions, micromirror_frames
+from simlunar.lidar.returns import fired_energy_j
 from simlunar.lidar.trajectory import Flight, PlatformMotion
 from simlunar.registry import Options, shared_option
 from simlunar.render.flash_lidar import micromirror_flash
@@ -23,6 +24,7 @@ from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import (
     FLASH_SENSOR_OPTIONS,
     LidarScene,
+    _need_hardware,
     _to_guide,
     check_receiver_px,
 )
@@ -82,7 +84,7 @@ class MicromirrorFlash:
             g = np.random.default_rng(rng)
             return self._moving(rc, g, self.trajectory(g), 0.0)
         scan = self._scan(rc, rng)
-        return _to_guide(scan, self.scene.camera, rc, frames=scan.frames, seconds=scan.seconds)
+        return _to_guide(scan, self.scene.camera, rc)
 
     def _scan(self, rc, rng, flight: Flight | None = None):
         """The rendered scan of planned guide pixels ``rc`` (at rest without a ``flight``)."""
@@ -104,7 +106,7 @@ class MicromirrorFlash:
         scan = self._scan(rc, rng, flight)
         # a moving platform's dots land off the planned pixels' points: scored where their
         # points project, as a moving steered beam's
-        return _to_guide(scan, self.scene.camera, None, frames=scan.frames, seconds=scan.seconds)
+        return _to_guide(scan, self.scene.camera, None)
 
     def rounds(self, *, rng=None) -> PlatformRounds:
         """The rounds of one multi-round acquisition, measured one after the other
@@ -112,12 +114,23 @@ class MicromirrorFlash:
         first frame fires when the previous round's last ended; the mirrors switch at once)."""
         return PlatformRounds(self, rng)
 
+    def _frames(self, rc: np.ndarray) -> int:
+        """Frames that light guide pixels ``rc`` (k, 2): the most dots sharing a receiver
+        pixel (:func:`~simlunar.lidar.flash.micromirror_frames`); 0 for none."""
+        if len(rc) == 0:
+            return 0
+        uv = np.asarray(rc, float)[:, ::-1] + 0.5
+        return int(micromirror_frames(uv, self.scene.camera, self.options.receiver_px).max()) + 1
+
     def scan_seconds(self, rc: np.ndarray) -> float:
         """Modelled time (s) of lighting guide pixels ``rc`` (k, 2): frames (the most dots
         sharing a receiver pixel) x pulses / rate; no render (what a planner may ask)."""
         f = self.options.flash
-        if len(rc) == 0:
-            return 0.0
-        uv = np.asarray(rc, float)[:, ::-1] + 0.5
-        frames = int(micromirror_frames(uv, self.scene.camera, self.options.receiver_px).max()) + 1
-        return frames * f.detector.pulses / f.pulse_rate_hz
+        return self._frames(rc) * f.detector.pulses / f.pulse_rate_hz
+
+    def scan_energy_j(self, rc: np.ndarray) -> float:
+        """Modelled laser energy (J) of lighting guide pixels ``rc`` (k, 2): the frames x
+        pulses x the hardware's pulse energy (each frame's pulses spread over its dots)."""
+        f = self.options.flash
+        _need_hardware(f, self.name)
+        return fired_energy_j(f, self._frames(rc) * f.detector.pulses)

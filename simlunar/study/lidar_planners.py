@@ -24,7 +24,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from simlunar.lidar.join import join_scans
-from simlunar.lidar.planning import fit_to_time, receiver_capped_layout, receiver_capped_plan
+from simlunar.lidar.planning import (
+    fit_to_budget,
+    fit_to_time,
+    receiver_capped_layout,
+    receiver_capped_plan,
+)
 from simlunar.planner import MEASURING, ORACLES, PLANNERS, map_of, plan
 from simlunar.sensors.base import Acquisition
 from simlunar.study.protocol import reconstruction_options
@@ -167,6 +172,8 @@ def _fitted(fit, planner, reference, sensor, shape, keep_layout: bool = False) -
                                         frames=fit.frames, rng=rng)  # fmt: skip
 
         return capped
+    if fit.kind == "budget":
+        return _budgeted(fit, planner, sensor, n)
     if not hasattr(sensor, "scan_seconds"):
         raise ValueError(f"a scan-time fit needs a sensor with scan_seconds, not {sensor.name!r}")
 
@@ -177,6 +184,29 @@ def _fitted(fit, planner, reference, sensor, shape, keep_layout: bool = False) -
         return rc
 
     return timed
+
+
+def budget_cost(fit, sensor) -> Callable[[np.ndarray], float]:
+    """A plan's share of a budget fit's budget (<= 1 fits): the larger of its scan time over
+    ``budget_s`` and its laser energy over ``budget_j`` (each where given)."""
+    parts = [(fit.budget_s, "scan_seconds"), (fit.budget_j, "scan_energy_j")]
+    parts = [(b, getattr(sensor, m, None), m) for b, m in parts if b is not None]
+    for _, f, m in parts:
+        if f is None:
+            raise ValueError(f"a budget fit needs a sensor with {m}, not {sensor.name!r}")
+    return lambda rc: max(f(rc) / b for b, f, _ in parts)
+
+
+def _budgeted(fit, planner, sensor, n: int) -> Callable:
+    """The planner at the most samples within ``fit``'s absolute budget
+    (:func:`~simlunar.lidar.planning.fit_to_budget`, searched from the density's count)."""
+    cost = budget_cost(fit, sensor)
+
+    def budgeted(k, rng):
+        rc, _ = fit_to_budget(lambda q: planner(q, rng), cost, 1.0, k_start=int(k), k_max=n)
+        return rc
+
+    return budgeted
 
 
 def planned_values(acq: Acquisition, n: int) -> np.ndarray:
@@ -240,6 +270,7 @@ def merge_rounds(acqs: list[Acquisition], sensor, *, gaps_s=None) -> Acquisition
         seconds=float(sum(a.seconds for a in acqs) + sum(gaps)),
         detail=detail,
         planned=planned,
+        energy_j=float(sum(a.energy_j for a in acqs)),
     )
 
 

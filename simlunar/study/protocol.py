@@ -395,7 +395,8 @@ def light_outcome(o: Outcome) -> Outcome:
 
 
 def _light(acq: Acquisition) -> Acquisition:
-    return Acquisition(np.empty((0, 2)), np.empty(0), acq.shape, acq.frames, acq.seconds)
+    return Acquisition(np.empty((0, 2)), np.empty(0), acq.shape, acq.frames, acq.seconds,
+                       energy_j=acq.energy_j)  # fmt: skip
 
 
 def _map_tasks(state, tasks, workers):

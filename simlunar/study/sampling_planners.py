@@ -179,7 +179,7 @@ class MeasuringPlanner:
 
     def acquire(self, k: int, sensor, plan_rng, sensor_rng) -> tuple[Acquisition, int]:
         gen = np.random.default_rng(sensor_rng)
-        cost = [0, 0.0]
+        cost = [0, 0.0, 0.0]
 
         def measure(rc):
             acq = sensor.acquire(rc, rng=gen)
@@ -187,10 +187,12 @@ class MeasuringPlanner:
                 raise ValueError(f"sensor {sensor.name!r} lost cells: multi-round needs all")
             cost[0] += acq.frames
             cost[1] += acq.seconds
+            cost[2] += acq.energy_j
             return acq.values
 
         sp = self.rounds(k, measure, plan_rng)
-        acq = Acquisition(sp.plan.rc, np.asarray(sp.values), self.shape, cost[0], cost[1])
+        acq = Acquisition(sp.plan.rc, np.asarray(sp.values), self.shape, cost[0], cost[1],
+                          energy_j=cost[2])  # fmt: skip
         return acq, sp.rounds
 
     def rounds(self, k: int, measure, plan_rng, *, missing: str = "raise"):

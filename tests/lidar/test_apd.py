@@ -227,6 +227,13 @@ def test_agc_puts_a_saturating_return_at_its_target_for_a_probe_pulse():
     assert sat.photons.max() < 0.01 * free.photons.min()
     # the control took two pulse slots (the background read and one probe)
     assert ctrl.seconds == pytest.approx(18 / 20.0) and sat.seconds == pytest.approx(16 / 20.0)
+    # and fired the probe's 1e-3 of the full energy, then 16 pulses at the energy it set: the
+    # laser energy in full-energy pulses (the quiet slot fires nothing)
+    from simlunar.lidar.flash import read_frame
+
+    fired = read_frame(frame, cam, agc, np.random.default_rng(0)).energy_pulses
+    assert fired == pytest.approx(1e-3 + 16 * set_energy, rel=1e-12)
+    assert read_frame(frame, cam, clip, np.random.default_rng(0)).energy_pulses is None
     # a dim return (the target out of reach at full energy) keeps the full energy
     _, dim, _, _ = _plane_frame(20.0, ApdOptions(full_scale_pe=fs, agc_target=0.5))
     _, full, _, _ = _plane_frame(20.0, ApdOptions(full_scale_pe=fs))

@@ -7,6 +7,7 @@ import pytest
 
 from simlunar.lidar.planning import (
     choose_tiles,
+    fit_to_budget,
     fit_to_time,
     receiver_capped_plan,
     receiver_cells,
@@ -31,6 +32,28 @@ def test_fit_to_time_takes_the_largest_k_that_fits():
     assert len(rc) == 2 and s > 1.0
     with pytest.raises(ValueError, match="budget_s"):
         fit_to_time(place, len, 0.0, k_max=3)
+
+
+def test_fit_to_budget_finds_the_largest_k_from_any_start_without_placing_k_max():
+    # cost 3 per sample: a budget of 100 holds k = 33 exactly, found from below (k = 1: by
+    # doubling) and from above (k = 5000: by halving); neither search places the whole guide
+    calls = []
+
+    def place(k):
+        calls.append(k)
+        return np.zeros((k, 2), int)
+
+    for start in (1, 33, 40, 5000):
+        calls.clear()
+        rc, c = fit_to_budget(place, lambda rc: 3.0 * len(rc), 100.0, k_start=start, k_max=10_000)
+        assert len(rc) == 33 and c == 99.0
+        assert max(calls) <= max(2 * 33, start) and len(calls) < 20
+    # everything fits: k_max; nothing fits: one sample (over budget, said by its cost)
+    assert len(fit_to_budget(place, lambda rc: 0.0, 1.0, k_start=3, k_max=7)[0]) == 7
+    rc, c = fit_to_budget(place, lambda rc: 5.0 + len(rc), 1.0, k_start=4, k_max=7)
+    assert len(rc) == 1 and c == 6.0
+    with pytest.raises(ValueError, match="budget"):
+        fit_to_budget(place, len, 0.0, k_start=1, k_max=3)
 
 
 def test_fit_to_time_with_a_steered_beam_tour_stays_in_budget():

@@ -14,7 +14,7 @@ def _rows():
                               ("rmse", 9.0)):  # fmt: skip
             rows.append({"unit": unit, "study.sensor": sensor, "render.light.elevation_deg": light,
                          "planner": "none", "reconstruction": "linear", "metric": metric,
-                         "value": value, "seconds": 0.5})  # fmt: skip
+                         "value": value, "seconds": 0.5, "energy_j": 0.1 * (unit + 1)})  # fmt: skip
     return rows
 
 
@@ -29,6 +29,12 @@ def test_summary_means_over_units_with_an_interval():
     assert mean == pytest.approx(0.4)
     assert 0.2 <= lo <= mean <= hi <= 0.6 and hi > lo
     assert s[("steered_beam", "45", "linear", "none")]["hazard_recall_rock_15cm"] == (1.0, 1.0, 1.0)
+    # the laser energy: the mean of the group's rows (0.1 and 0.2 J), NaN where never priced
+    assert s[("flash", "5", "linear", "none")]["energy_j"] == pytest.approx(0.15)
+    old = [{k: v for k, v in r.items() if k != "energy_j"} for r in _rows()]
+    import math
+
+    assert math.isnan(landing_summary(old, keys=keys)[("flash", "5", "linear", "none")]["energy_j"])
 
 
 def test_table_names_sensor_light_and_size():
@@ -37,7 +43,8 @@ def test_table_names_sensor_light_and_size():
     )
     assert "| sensor | elevation_deg | reconstruction | planner |" in md
     assert "rock 15cm recall" in md and "false-safe site" in md and "rmse" not in md.lower()
-    assert "| flash | 5 | linear | none |" in md and "| steered_beam | 45 |" in md
+    assert "| flash | 5 | linear | none | 0.5 | 0.15 |" in md and "| steered_beam | 45 |" in md
+    assert "| scan time (s) | laser energy (J) |" in md
     assert "0.4 [" in md
     assert "steered\\_beam" in tex
 

@@ -149,6 +149,32 @@ def test_steered_beam_ranges_the_planned_pixels(mi):
 
 
 @pytest.mark.render
+def test_a_steered_beam_fires_its_pulses_at_the_instrument_s_energy(mi):
+    # LOLA's 0.54 mJ per beam: 40 points x 4 pulses per point = 160 pulses, 86.4 mJ, priced
+    # before the scan (what a budget fit asks) and counted by it; with the expert photon
+    # scales (no instrument) nothing is counted and no budget can be priced
+    from simlunar.lidar.hardware import INSTRUMENTS
+    from simlunar.lidar.scan import SteeredBeamOptions, with_hardware
+    from simlunar.sensors import LidarScene, SteeredBeam
+
+    base = SteeredBeamOptions(footprint=FootprintOptions(5e-4, samples=8), window_m=4.0,
+                              margin_m=1.0, batch=32,
+                              steering=SteeringOptions(1.0, 10.0, 1e-3, 1000.0, 4))  # fmt: skip
+    opts = with_hardware(base, INSTRUMENTS["lola_beam"])
+    scene = LidarScene(_plane(), _camera(32, 40.0))
+    sensor = SteeredBeam(scene, opts)
+    rc = np.random.default_rng(0).integers(0, 32, (40, 2))
+    assert opts.steering.pulses_per_point == 4
+    assert sensor.scan_energy_j(rc) == pytest.approx(160 * 0.54e-3)
+    acq = sensor.acquire(rc, rng=1)
+    assert acq.frames == 160 and acq.energy_j == pytest.approx(160 * 0.54e-3)
+    expert = SteeredBeam(scene, dataclasses.replace(base, detector=DET))
+    assert expert.acquire(rc, rng=1).energy_j == 0.0
+    with pytest.raises(ValueError, match="an energy budget needs the steered_beam's pulse"):
+        expert.scan_energy_j(rc)
+
+
+@pytest.mark.render
 def test_flash_lidar_with_and_without_revisits(mi):
     from simlunar.lidar.flash import FlashOptions
     from simlunar.render.transient import TransientOptions

@@ -49,6 +49,28 @@ def test_scan_seconds_are_its_frames():
 
 
 @pytest.mark.render
+def test_scan_energy_is_its_frames_pulses_at_the_instrument_s_pulse_energy():
+    # the same 3 frames x 4 pulses at the micromirror preset's 1 mJ: 12 mJ; with the expert
+    # photon scales (no instrument) no pulse energy is known and a budget cannot be priced
+    import dataclasses
+
+    from simlunar.lidar.flash import FlashOptions
+    from simlunar.lidar.hardware import INSTRUMENTS
+    from simlunar.sensors import LidarScene, MicromirrorFlash, MicromirrorOptions
+
+    hw = INSTRUMENTS["micromirror_flash"]
+    det = DetectorOptions(pulses=4)
+    flash = FlashOptions(detector=det, pulse_rate_hz=20.0)
+    rc = np.array([[0, 0], [1, 1], [2, 2], [10, 10], [31, 31]])
+    scene = LidarScene(_plane(), _camera(32, 6.0))
+    with_hw = MicromirrorOptions(dataclasses.replace(flash, hardware=hw), receiver_px=(8, 8))
+    assert MicromirrorFlash(scene, with_hw).scan_energy_j(rc) == pytest.approx(3 * 4 * 1e-3)
+    assert MicromirrorFlash(scene, with_hw).scan_energy_j(np.zeros((0, 2), int)) == 0.0
+    expert = MicromirrorFlash(scene, MicromirrorOptions(flash, receiver_px=(8, 8)))
+    with pytest.raises(ValueError, match="an energy budget needs the micromirror_flash's pulse"):
+        expert.scan_energy_j(rc)
+
+
 def test_micromirror_flash_ranges_the_planned_pixels(mi):
     from simlunar.lidar.flash import FlashOptions
     from simlunar.render.transient import TransientOptions

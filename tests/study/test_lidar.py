@@ -96,7 +96,10 @@ def test_options_refuse_unknown_names():
         (lambda: LidarStudyOptions(trials=0), "trials must be >= 1, got 0"),
         (lambda: LidarStudyOptions(trials=True), "trials must be a finite number, got True"),
         (lambda: LidarStudyOptions(densities=(0.5, 0.0)), r"densities must be in \(0, 1\]"),
-        (lambda: SensorFit("budget"), "kind must be one of 'scan_time', 'receiver', got 'budget'"),
+        (lambda: SensorFit("tour"), "kind must be one of 'scan_time', 'budget', 'receiver'"),
+        (lambda: SensorFit("budget"), "a budget fit needs budget_s, budget_j or both"),
+        (lambda: SensorFit("scan_time", budget_s=1.0), "are for a budget fit, not 'scan_time'"),
+        (lambda: SensorFit("budget", budget_j=0.0), "budget_j must be > 0, got 0.0"),
         (lambda: SensorFit("receiver", frames=0), "frames must be >= 1, got 0"),
     ],
 )

@@ -33,7 +33,8 @@ def _bump():
 class _Beam:
     """A stand-in steered beam: the true depth at the planned cells (NaN-free unless
     ``lost`` names cells it detects no return at), 1 ms per sample, visiting the cells in
-    the plan's order, 0.5 s to re-point between scans; it records what it was asked."""
+    the plan's order, 0.5 s to re-point between scans, 2 mJ of laser energy per sample; it
+    records what it was asked."""
 
     name = "beam"
     needs_plan = True
@@ -56,7 +57,13 @@ class _Beam:
         scan = LidarScan(v, valid, np.zeros((n, 3)), np.ones(n), np.arange(n), 1e-3 * n, n,
                          times=1e-3 * np.arange(n))  # fmt: skip
         return Acquisition(rc[valid], v[valid], self._depth.shape, frames=n, seconds=1e-3 * n,
-                           detail=scan, planned=rc)  # fmt: skip
+                           detail=scan, planned=rc, energy_j=2e-3 * n)  # fmt: skip
+
+    def scan_seconds(self, rc):
+        return 1e-3 * len(rc)
+
+    def scan_energy_j(self, rc):
+        return 2e-3 * len(rc)
 
     def repoint_seconds(self, a, b):
         self.repoints.append((tuple(a), tuple(b)))
@@ -196,6 +203,41 @@ def test_a_study_row_of_sequential_counts_every_round():
     assert s["rounds"] >= 2 and "rounds" not in g
     assert s["seconds"] == pytest.approx(64e-3 + 0.5 * (s["rounds"] - 1))
     assert g["seconds"] == pytest.approx(64e-3)
+    # every round fires its pulses: the energy adds up (2 mJ per sample, 64 samples)
+    assert s["energy_j"] == pytest.approx(64 * 2e-3) and g["energy_j"] == pytest.approx(64 * 2e-3)
+
+
+def test_budget_fits_put_planners_at_equal_time_or_equal_energy_whatever_the_density():
+    # 1 ms and 2 mJ per sample: 20 ms holds 20 samples, 30 mJ 15, both together 15; at 1/16
+    # (64 samples) and 1/64 (16) alike, since the budget is absolute
+    depth = _bump()
+    fits = {"at_time": SensorFit("budget", budget_s=0.02),
+            "at_energy": SensorFit("budget", budget_j=0.03),
+            "at_both": SensorFit("budget", budget_s=0.02, budget_j=0.03)}  # fmt: skip
+    o = LidarStudyOptions(planners=("grid", *fits), densities=(1 / 64, 1 / 16), trials=1,
+                          metrics=("mse",), strategies=dict.fromkeys(fits, "lloyd_uniform"),
+                          fits=fits)  # fmt: skip
+    rows = run_lidar_study(_scene(), (depth.astype(np.float32), depth), o, rng=0,
+                           sensor=_Beam(depth)).rows  # fmt: skip
+    for label, n in (("at_time", 20), ("at_energy", 15), ("at_both", 15)):
+        got = _rows(rows, label)
+        assert [r["samples"] for r in got] == [n, n]
+        assert all(r["energy_j"] == pytest.approx(2e-3 * n) for r in got)
+    assert [r["samples"] for r in _rows(rows, "grid")] == [16, 64]
+
+
+def test_a_budget_fit_refuses_a_sensor_that_cannot_price_it():
+    from simlunar.study.lidar_planners import budget_cost
+
+    class _Timed:
+        name = "timed"
+
+        def scan_seconds(self, rc):
+            return 1.0
+
+    assert budget_cost(SensorFit("budget", budget_s=2.0), _Timed())(np.zeros((3, 2))) == 0.5
+    with pytest.raises(ValueError, match="a budget fit needs a sensor with scan_energy_j"):
+        budget_cost(SensorFit("budget", budget_j=1.0), _Timed())
 
 
 def test_options_refuse_a_fitted_multi_round_planner():
