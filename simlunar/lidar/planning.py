@@ -114,8 +114,9 @@ def fit_to_budget(
     *,
     k_start: int,
     k_max: int,
+    k_min: int = 1,
 ) -> tuple[np.ndarray, float]:
-    """The plan of the largest ``k`` in ``[1, k_max]`` whose ``cost`` fits ``budget``,
+    """The plan of the largest ``k`` in ``[k_min, k_max]`` whose ``cost`` fits ``budget``,
     searched from ``k_start``: doubling while the plan fits, halving while it does not, then
     :func:`fit_to_time`'s bisection between the last count that fits and the first that does
     not (so a far budget costs a few plans, never the ``k_max`` one unless the budget
@@ -129,20 +130,20 @@ def fit_to_budget(
         The plan's cost (e.g. its scan time in s, or its laser energy in J), growing with ``k``.
     budget : float
         The most cost, > 0.
-    k_start, k_max : int
-        First count tried (clipped to ``[1, k_max]``) and the largest.
+    k_start, k_max, k_min : int
+        First count tried (clipped to ``[k_min, k_max]``), the largest and the smallest.
 
     Returns
     -------
     rc : (k, 2) int
     cost : float
-        Its cost (over ``budget`` only when even one sample is).
+        Its cost (over ``budget`` only when even ``k_min`` samples are).
     """
     if not (np.isfinite(budget) and budget > 0):
         raise ValueError(f"budget must be finite and > 0, got {budget}")
-    k_max = int(k_max)
-    if k_max < 1:
-        raise ValueError(f"need k_max >= 1, got {k_max}")
+    k_min, k_max = int(k_min), int(k_max)
+    if not 1 <= k_min <= k_max:
+        raise ValueError(f"need 1 <= k_min <= k_max, got {k_min}, {k_max}")
     cache: dict[int, tuple[np.ndarray, float]] = {}
 
     def at(k: int) -> tuple[np.ndarray, float]:
@@ -151,7 +152,7 @@ def fit_to_budget(
             cache[k] = (rc, float(cost(rc)))
         return cache[k]
 
-    k = min(max(int(k_start), 1), k_max)
+    k = min(max(int(k_start), k_min), k_max)
     if at(k)[1] <= budget:
         lo, hi = k, None
         while lo < k_max:
@@ -164,14 +165,14 @@ def fit_to_budget(
             return at(lo)
     else:
         hi, lo = k, None
-        while hi > 1:
-            nxt = max(hi // 2, 1)
+        while hi > k_min:
+            nxt = max(hi // 2, k_min)
             if at(nxt)[1] <= budget:
                 lo = nxt
                 break
             hi = nxt
         if lo is None:
-            return at(1)
+            return at(k_min)
     return _bisect(at, cache, budget, lo, hi)
 
 

@@ -77,13 +77,17 @@ def strategy_options(strategy: str) -> tuple[str, ...]:
     return planner_options(strategy)
 
 
+#: the fewest samples of a plan (a triangle: the least a reconstruction interpolates)
+MIN_K = 3
+
+
 def check_k(k, n: int) -> int:
     """Validate the sample count against the number of pixels ``n``."""
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
         raise ValueError(f"k must be an integer, got {k!r}")
     k = int(k)
-    if k < 3:
-        raise ValueError(f"k must be >= 3 (a triangle needs three samples), got {k}")
+    if k < MIN_K:
+        raise ValueError(f"k must be >= {MIN_K} (a triangle needs three samples), got {k}")
     if k > n:
         raise ValueError(f"k = {k} exceeds the number of pixels N = {n}")
     return k

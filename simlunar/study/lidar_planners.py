@@ -31,6 +31,7 @@ from simlunar.lidar.planning import (
     receiver_capped_plan,
 )
 from simlunar.planner import MEASURING, ORACLES, PLANNERS, map_of, plan
+from simlunar.planner.strategies import MIN_K
 from simlunar.sensors.base import Acquisition
 from simlunar.study.protocol import reconstruction_options
 from simlunar.study.sampling_planners import (
@@ -199,11 +200,14 @@ def budget_cost(fit, sensor) -> Callable[[np.ndarray], float]:
 
 def _budgeted(fit, planner, sensor, n: int) -> Callable:
     """The planner at the most samples within ``fit``'s absolute budget
-    (:func:`~simlunar.lidar.planning.fit_to_budget`, searched from the density's count)."""
+    (:func:`~simlunar.lidar.planning.fit_to_budget`, searched from the density's count); a
+    budget too small for :data:`~simlunar.planner.strategies.MIN_K` samples gets that plan, over
+    budget (its row's ``seconds`` and ``energy_j`` say by how much)."""
     cost = budget_cost(fit, sensor)
 
     def budgeted(k, rng):
-        rc, _ = fit_to_budget(lambda q: planner(q, rng), cost, 1.0, k_start=int(k), k_max=n)
+        rc, _ = fit_to_budget(lambda q: planner(q, rng), cost, 1.0, k_start=int(k), k_max=n,
+                              k_min=min(MIN_K, n))  # fmt: skip
         return rc
 
     return budgeted

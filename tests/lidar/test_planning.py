@@ -52,6 +52,9 @@ def test_fit_to_budget_finds_the_largest_k_from_any_start_without_placing_k_max(
     assert len(fit_to_budget(place, lambda rc: 0.0, 1.0, k_start=3, k_max=7)[0]) == 7
     rc, c = fit_to_budget(place, lambda rc: 5.0 + len(rc), 1.0, k_start=4, k_max=7)
     assert len(rc) == 1 and c == 6.0
+    # a smallest count: a budget under it gets that plan, over budget
+    rc, c = fit_to_budget(place, lambda rc: 3.0 * len(rc), 5.0, k_start=40, k_max=100, k_min=3)
+    assert len(rc) == 3 and c == 9.0
     with pytest.raises(ValueError, match="budget"):
         fit_to_budget(place, len, 0.0, k_start=1, k_max=3)
 

@@ -224,6 +224,13 @@ def test_budget_fits_put_planners_at_equal_time_or_equal_energy_whatever_the_den
         assert [r["samples"] for r in got] == [n, n]
         assert all(r["energy_j"] == pytest.approx(2e-3 * n) for r in got)
     assert [r["samples"] for r in _rows(rows, "grid")] == [16, 64]
+    # a budget under three samples (the least a plan may have) gets three, over budget
+    o = LidarStudyOptions(planners=("tiny",), densities=(1 / 16,), trials=1, metrics=("mse",),
+                          strategies={"tiny": "lloyd_uniform"},
+                          fits={"tiny": SensorFit("budget", budget_s=0.0015)})  # fmt: skip
+    (r,) = _rows(run_lidar_study(_scene(), (depth.astype(np.float32), depth), o, rng=0,
+                                 sensor=_Beam(depth)).rows, "tiny")  # fmt: skip
+    assert r["samples"] == 3 and r["seconds"] == pytest.approx(3e-3)
 
 
 def test_a_budget_fit_refuses_a_sensor_that_cannot_price_it():
