@@ -184,6 +184,18 @@ class TerrainCfg(_Model):
     albedo: float | None = Field(
         None, ge=0, le=1, description="replace the albedo by this uniform value (ablation)"
     )
+    refine_m: Metres | None = Field(
+        None,
+        gt=0,
+        description="DEM file: resample bilinearly to finer square cells of this size first "
+        "(a 1-5 m DEM resolves no 15 cm rock; no detail is added)",
+    )
+    rocks: RocksCfg | None = Field(
+        None,
+        description="DEM file: rocks stamped on it, a preset's rocks section (e.g. {law: "
+        "golombek, coefficient: 0.07, d_min_m: 0.1}); each terrain seed (seed_index) draws its "
+        "own rocks on the same DEM",
+    )
     overrides: TerrainOverridesCfg = Field(
         default_factory=TerrainOverridesCfg,
         description="preset parameters to change, deep-merged into the preset before its "
@@ -215,8 +227,17 @@ class TerrainCfg(_Model):
                 if exc.key is not None:
                     raise ValueError(f"overrides.{exc.key}: {exc.problem}") from None
                 raise ValueError(f"preset: {exc.problem}") from None
-        if self.file is not None and self.seed_index != 0:
-            raise ValueError("seed_index applies to a preset only (a DEM file has one terrain)")
+        if self.file is None and (self.rocks is not None or self.refine_m is not None):
+            key = "rocks" if self.rocks is not None else "refine_m"
+            raise ValueError(
+                f"{key}: goes with a DEM file (terrain.file); a preset's rocks are "
+                "overrides: {rocks: {...}} and its cells overrides: {grid: {spacing_m: ...}}"
+            )
+        if self.file is not None and self.seed_index != 0 and self.rocks is None:
+            raise ValueError(
+                "seed_index applies to a preset, or to a DEM file with rocks (a DEM file alone "
+                "has one terrain)"
+            )
         # every key set must change the result: a DEM file's keys on a preset (and the
         # preset's scale on a file) would be recorded in config.yaml yet change nothing
         if self.preset is not None and self.spacing_m is not None:

@@ -51,6 +51,7 @@ from simlunar.render.lights import make_light
 from simlunar.render.materials import make_bsdf
 from simlunar.study.sampling import SamplingStudyOptions
 from simlunar.terrain import generate
+from simlunar.terrain.generate import add_rocks, refine
 from simlunar.terrain.io import load_albedo, load_dem
 from simlunar.terrain.params import (
     AlbedoParams,
@@ -145,6 +146,11 @@ def build_terrain(cfg, *, rng):
             terrain = Terrain(
                 terrain.heights, albedo, terrain.spacing, terrain.origin, crs=terrain.crs
             )
+        if cfg.refine_m is not None:
+            terrain = refine(terrain, cfg.refine_m)
+        if cfg.rocks is not None:
+            rocks = RockParams(**_keywords(cfg.rocks))
+            terrain, _ = add_rocks(terrain, rocks, rng=rng)
     if cfg.albedo is not None:
         terrain = Terrain(
             terrain.heights,

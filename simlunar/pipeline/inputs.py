@@ -5,6 +5,7 @@ read from the files' headers and contents before anything is allocated or writte
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import os
 import types
@@ -34,6 +35,7 @@ from simlunar.pipeline.limits import (
 )
 from simlunar.registry import FileOption, file_option, option_info
 from simlunar.results.store import file_sha256
+from simlunar.terrain.generate import refined_shape
 from simlunar.terrain.io import load_albedo, load_dem
 
 #: NaN heights (holes) a DEM may have. Holes leave the terrain mesh open; the rays that miss
@@ -289,6 +291,27 @@ def terrain_facts(t: Any) -> TerrainFacts:
     check_size(
         "terrain.file", f"{t.file}: {facts.rows} x {facts.cols} cells", facts.rows * facts.cols
     )
+    return _refined_facts(t, facts)
+
+
+def _refined_facts(t: Any, facts: TerrainFacts) -> TerrainFacts:
+    """A DEM file's facts after ``terrain.refine_m`` (finer cells over the same extent, as
+    :func:`simlunar.terrain.generate.refine` makes them) and its ``rocks`` (up to their
+    largest diameter above the DEM's highest point)."""
+    refine_m = getattr(t, "refine_m", None)
+    if refine_m is not None:
+        if refine_m > facts.spacing:
+            raise ConfigError(
+                f"terrain.refine_m: {refine_m:g} m is coarser than the DEM's {facts.spacing:g} m "
+                "cells (refine_m makes them finer; resample a DEM coarser with gdalwarp -tr)"
+            )
+        rows, cols = refined_shape((facts.rows, facts.cols), facts.spacing, refine_m)
+        check_size("terrain.refine_m", f"{t.file} refined to {refine_m:g} m: {rows} x {cols} "
+                   "cells", rows * cols)  # fmt: skip
+        facts = dataclasses.replace(facts, rows=rows, cols=cols, spacing=float(refine_m))
+    rocks = getattr(t, "rocks", None)
+    if rocks is not None and rocks.enabled:
+        facts = dataclasses.replace(facts, zmax=facts.zmax + float(rocks.d_max_m))
     return facts
 
 

@@ -14,11 +14,11 @@ import numpy as np
 import simlunar.terrain.sfd as sfd
 from simlunar.terrain.craters import Crater, extent_radii, place_craters, stamp_craters
 from simlunar.terrain.fractal import fbm, undulating_bed
-from simlunar.terrain.params import AlbedoParams, TerrainParams
+from simlunar.terrain.params import AlbedoParams, RockParams, TerrainParams
 from simlunar.terrain.rocks import Rock, place_rocks, stamp_rocks
 from simlunar.terrain.types import Terrain
 
-__all__ = ["TerrainResult", "generate", "make_albedo"]
+__all__ = ["TerrainResult", "add_rocks", "generate", "make_albedo", "refine", "refined_shape"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -215,6 +215,59 @@ def _add_rocks(h, p: TerrainParams, g_rkd, g_rkp, g_rks) -> tuple[list[Rock], np
     rock_factor = np.ones((p.rows, p.cols))
     stamp_rocks(h, rock_factor, rocks, spacing=p.spacing, origin=p.origin, rng=g_rks)
     return rocks, rock_factor
+
+
+def add_rocks(terrain: Terrain, rocks: RockParams, *, rng=None) -> tuple[Terrain, list[Rock]]:
+    """A terrain with ``rocks`` stamped on it as :func:`generate` stamps them (a DEM's
+    surface, which resolves no rocks, given the population of a size-frequency model).
+
+    The diameters are drawn over the terrain's extent widened by the largest rock (so rocks
+    centred just outside show their part inside), placed and stamped with the generator's
+    three rock streams, here the children of ``rng``; the albedo is multiplied by the rocks'
+    factor (``albedo_contrast`` on each rock). NaN heights (nodata) stay NaN. Returns the new
+    terrain (float64 heights, float32 albedo, the same grid and CRS) and the rocks.
+    """
+    if not rocks.enabled:
+        return terrain, []
+    g_rkd, g_rkp, g_rks = _seeds(rng, 3)
+    rows, cols = terrain.shape
+    p = TerrainParams(rows=rows, cols=cols, spacing=float(terrain.spacing),
+                      origin=tuple(map(float, terrain.origin)), rocks=rocks)  # fmt: skip
+    h = np.array(terrain.heights, dtype=np.float64, copy=True)
+    placed, factor = _add_rocks(h, p, g_rkd, g_rkp, g_rks)
+    albedo = (np.asarray(terrain.albedo, np.float64) * factor).astype(np.float32)
+    return Terrain(h, albedo, terrain.spacing, terrain.origin, crs=terrain.crs), placed
+
+
+def refined_shape(shape, spacing: float, finer: float) -> tuple[int, int]:
+    """(rows, cols) of whole cells of ``finer`` m over a grid of ``shape`` cells of
+    ``spacing`` m (:func:`refine`'s grid)."""
+    rows, cols = (int(np.floor(n * spacing / finer + 1e-9)) for n in shape)
+    return rows, cols
+
+
+def refine(terrain: Terrain, spacing: float) -> Terrain:
+    """The terrain on finer square cells of ``spacing`` m over the same extent (as many whole
+    cells as fit), heights and albedo interpolated bilinearly between the old cell centres
+    (clamped at the border; a NaN cell makes its neighbourhood NaN): a DEM's surface made fine
+    enough to carry rocks (:func:`add_rocks`), with no detail it did not have."""
+    from scipy import ndimage
+
+    old = float(terrain.spacing)
+    if not (np.isfinite(spacing) and 0 < spacing <= old):
+        raise ValueError(f"refine: spacing must be in (0, {old:g}] m (finer), got {spacing}")
+    rows, cols = terrain.shape
+    n_r, n_c = refined_shape(terrain.shape, old, spacing)
+    # new cell centres in the old grid's index coordinates (centre of old cell i at i)
+    r = (np.arange(n_r) + 0.5) * spacing / old - 0.5
+    c = (np.arange(n_c) + 0.5) * spacing / old - 0.5
+    rr, cc = np.meshgrid(np.clip(r, 0, rows - 1), np.clip(c, 0, cols - 1), indexing="ij")
+
+    def lerp(a):
+        return ndimage.map_coordinates(np.asarray(a, np.float64), [rr, cc], order=1, mode="nearest")
+
+    return Terrain(lerp(terrain.heights), lerp(terrain.albedo).astype(np.float32), spacing,
+                   terrain.origin, crs=terrain.crs)  # fmt: skip
 
 
 def _nodata_mask(nodata, shape) -> np.ndarray:

@@ -64,3 +64,48 @@ def test_clustered_placement_is_overdispersed_and_uniform_is_poisson():
     heights = np.array([r.height for r in uni])
     assert heights.min() >= 0.25 and heights.max() <= 0.5  # half-buried, D = 1
     assert np.mean([r.albedo_factor for r in uni]) == pytest.approx(1.1, abs=0.01)
+
+
+def test_refine_is_exact_on_a_plane_and_keeps_the_extent():
+    # a tilted plane z = 0.5 x + 0.25 y on 2 m cells, refined to 0.5 m: bilinear interpolation
+    # between cell centres is exact for a plane (inside the outer half cell, which is clamped)
+    from simlunar.terrain.generate import refine
+    from simlunar.terrain.types import Terrain
+
+    rows, cols, sp = 10, 12, 2.0
+    x0, y0 = -6.0, 4.0
+    xc = x0 + (np.arange(cols) + 0.5) * sp
+    yc = y0 - (np.arange(rows) + 0.5) * sp
+    h = 0.5 * xc[None, :] + 0.25 * yc[:, None]
+    t = refine(Terrain(h, np.full(h.shape, 0.1, np.float32), sp, (x0, y0)), 0.5)
+    assert t.shape == (40, 48) and t.spacing == 0.5 and t.origin == (x0, y0)
+    xf = x0 + (np.arange(48) + 0.5) * 0.5
+    yf = y0 - (np.arange(40) + 0.5) * 0.5
+    want = 0.5 * xf[None, :] + 0.25 * yf[:, None]
+    inner = (slice(2, -2), slice(2, -2))
+    assert np.allclose(t.heights[inner], want[inner], atol=1e-12)
+    assert np.allclose(t.albedo, 0.1)
+    with pytest.raises(ValueError, match="finer"):
+        refine(Terrain(h, np.ones_like(h, np.float32), sp, (x0, y0)), 3.0)
+
+
+def test_add_rocks_stamps_the_generator_s_rocks_on_a_given_surface():
+    # rocks of a Golombek population on a flat surface: the same seed the same rocks, the
+    # surface itself untouched, every raised cell a rock's and brighter by its contrast
+    from simlunar.terrain.generate import add_rocks
+    from simlunar.terrain.params import RockParams
+    from simlunar.terrain.types import Terrain
+
+    rocks = RockParams(law="golombek", coefficient=0.07, d_min=0.2, d_max=2.0, albedo_contrast=0.5)
+    flat = Terrain(np.zeros((200, 200)), np.full((200, 200), 0.12, np.float32), 0.1, (0.0, 20.0))
+    a, placed = add_rocks(flat, rocks, rng=5)
+    b, _ = add_rocks(flat, rocks, rng=5)
+    assert np.array_equal(a.heights, b.heights) and len(placed) > 10
+    assert np.array_equal(flat.heights, np.zeros((200, 200)))  # the input is left alone
+    raised = a.heights > 1e-9
+    assert raised.any() and (a.heights >= 0).all()
+    # the rocks' albedo contrast only where they stand
+    assert np.allclose(a.albedo[~raised], 0.12) and (a.albedo[raised] > 0.12).mean() > 0.5
+    # disabled rocks: the terrain itself
+    off = RockParams(enabled=False)
+    assert add_rocks(flat, off, rng=1) == (flat, [])
