@@ -4,7 +4,7 @@ hazard-map panel (truth beside each sensor's reconstruction) (docs/landing.md)."
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -80,14 +80,18 @@ def landing_cost(
     light_key: str | None,
     metric: str | None = None,
     reconstruction: str = "linear",
+    strategies: Mapping[str, str] | None = None,
     title: str = "",
 ):
     """Recall against cost: per light (a row of panels) the mean ``metric`` (default: the
     smallest rock size's recall) of each (sensor, planner) against its mean scan time (left)
-    and mean laser energy (right), both log; one colour per sensor, its points joined in order
-    of cost; whiskers: 95 % intervals over terrain seeds. A point whose energy is not priced
-    (NaN or 0) is left out of the energy panel. Returns the figure, or None without the
-    metric."""
+    and mean laser energy (right), both log. Colour: the sensor; marker: the planner's strategy
+    (``strategies``: label -> strategy, e.g. a budget-fitted ``wavelet_flash_time`` ->
+    ``wavelet``; a label without one is its own), the points of one sensor and strategy joined
+    in order of cost (what more time or energy buys it); whiskers: 95 % intervals over terrain
+    seeds. A point whose energy is not priced (NaN or 0) is left out of the energy panel.
+    Returns the figure, or None without the metric."""
+    strategies = dict(strategies or {})
     keys = [sensor_key] + ([light_key] if light_key else [])
     summary = {g: c for g, c in landing_summary(rows, keys=keys).items()
                if g[len(keys)] == reconstruction}  # fmt: skip
@@ -100,41 +104,41 @@ def landing_cost(
         return None
     lights = sorted({g[1] for g in summary}, key=float) if light_key else [""]
     sensors = sorted({g[0] for g in summary})
+    families = sorted({strategies.get(g[-1], g[-1]) for g in summary})
     colours = plt.get_cmap("tab10")
-    fig, axes = plt.subplots(len(lights), 2, figsize=(9.0, 3.4 * len(lights)), squeeze=False,
-                             sharey=True)  # fmt: skip
+    markers = dict(zip(families, "osD^v<>ph*", strict=False))
+    fig, axes = plt.subplots(len(lights), 2, figsize=(9.0, 3.4 * len(lights) + 0.6),
+                             squeeze=False, sharey=True)  # fmt: skip
     for row, light in zip(axes, lights, strict=True):
         for ax, cost, xlabel in zip(row, ("seconds", "energy_j"),
                                     ("scan time (s)", "laser energy (J)"), strict=True):  # fmt: skip
             for i, sensor in enumerate(sensors):
-                pts = []
-                for g, c in summary.items():
-                    if g[0] != sensor or (light_key and g[1] != light) or metric not in c:
+                for fam in families:
+                    pts = []
+                    for g, c in summary.items():
+                        if (g[0] != sensor or (light_key and g[1] != light) or metric not in c
+                                or strategies.get(g[-1], g[-1]) != fam):  # fmt: skip
+                            continue
+                        if np.isfinite(c[cost]) and c[cost] > 0:
+                            pts.append((c[cost], *c[metric]))
+                    if not pts:
                         continue
-                    x = c[cost]
-                    if np.isfinite(x) and x > 0:
-                        pts.append((x, *c[metric], g[-1]))
-                if not pts:
-                    continue
-                pts.sort()
-                x, mean, lo, hi = (np.array([p[j] for p in pts]) for j in range(4))
-                ax.errorbar(x, mean, yerr=[mean - lo, hi - mean], marker="o", ms=4, capsize=2,
-                            color=colours(i), label=sensor.replace("_", " "))  # fmt: skip
-                for xi, yi, name in zip(x, mean, [p[4] for p in pts], strict=True):
-                    ax.annotate(name, (xi, yi), fontsize=6, xytext=(3, 3),
-                                textcoords="offset points", color=colours(i))  # fmt: skip
+                    x, mean, lo, hi = (np.array(v) for v in zip(*sorted(pts), strict=True))
+                    label = sensor.replace("_", " ") + ("" if fam == "none" else f", {fam}")
+                    ax.errorbar(x, mean, yerr=[mean - lo, hi - mean], marker=markers[fam], ms=5,
+                                capsize=2, color=colours(i), label=label)  # fmt: skip
             ax.set_xscale("log")
             ax.set_xlabel(xlabel)
             ax.set_ylim(0, 1.05)
             ax.grid(alpha=0.3)
             ax.set_title(f"sun {light} deg" if light_key else "", fontsize=9)
         row[0].set_ylabel(_label(metric))
-    fig.suptitle(f"{title}\npoints: mean over terrain seeds, one per planner (named); whiskers: "
-                 "95 % interval over the seeds", fontsize=10)  # fmt: skip
+    fig.suptitle(f"{title}\npoints: means over terrain seeds; lines: a strategy's plans in order "
+                 "of cost; whiskers: 95 % intervals", fontsize=9)  # fmt: skip
     handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=max(len(labels), 1), fontsize=8,
+    fig.legend(handles, labels, loc="lower center", ncol=min(max(len(labels), 1), 4), fontsize=8,
                frameon=False)  # fmt: skip
-    fig.tight_layout(rect=(0, 0.05, 1, 0.95))
+    fig.tight_layout(rect=(0, 0.07, 1, 0.95))
     return fig
 
 

@@ -467,10 +467,10 @@ def landing_cost(study: dict, reconstruction: str) -> str:
     return (
         f"What time and energy buy ({reconstruction} reconstruction): recall of the rocks taller "
         f"than {round(small * 100)} cm against the acquisition's scan time (left) and the laser "
-        "energy it fired (right), both log scales, one row per sun elevation. One point per "
-        "sensor and planner (named beside it; a planner fitted to a budget sits at that "
-        f"budget), mean over {seeds} terrain seed(s); whiskers: 95 % bootstrap interval over "
-        "seeds. A sensor's points are joined in order of cost."
+        "energy it fired (right), both log scales, one row per sun elevation. Colour: the "
+        "sensor; marker: the planner's strategy, its plans (a density, or fitted to a time or "
+        "energy budget) joined in order of cost. Points: mean over "
+        f"{seeds} terrain seed(s); whiskers: 95 % bootstrap interval over seeds."
     )
 
 

@@ -121,7 +121,9 @@ def _landing_figure(res: dict, emit, captions: dict) -> None:
                          title=f"{config.get('name', '')}: landing hazards ({recon})")  # fmt: skip
     emit(fig, "landing_recall")
     captions["landing_recall"] = captions_text.landing_recall(study, recon)
+    labels = {n: (o or {}).get("strategy") for n, o in (study.get("planner_opts") or {}).items()}
     fig = landing_cost(rows, sensor_key=sensor_key, light_key=light_key, reconstruction=recon,
+                       strategies={n: s for n, s in labels.items() if s},
                        title=f"{config.get('name', '')}: what time and energy buy ({recon})")  # fmt: skip
     if fig is not None:
         emit(fig, "landing_cost")

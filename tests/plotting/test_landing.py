@@ -36,38 +36,42 @@ def test_recall_bars_are_the_means_over_seeds_one_panel_per_light():
 
 
 def test_cost_curves_put_each_sensor_s_planners_at_their_time_and_energy():
-    # the flash (one point: 0.13 s, 0.12 J) and a steered beam with two planners at 1 s /
-    # 0.04 J and 0.1 s / 0.004 J; a third beam planner whose energy was never priced (NaN)
+    # the flash (one point: 0.13 s, 0.12 J); a steered beam's lloyd plan at 1 s / 0.04 J and
+    # the same strategy fitted to a 0.1 s budget (0.004 J); its wavelet plan, whose energy was
+    # never priced (NaN)
     rows = []
     for unit in (0, 1):
         for sensor, planner, s, e, recall in (
             ("flash", "none", 0.13, 0.12, 0.6 + 0.1 * unit),
-            ("steered_beam", "dense", 1.0, 0.04, 0.3),
-            ("steered_beam", "sparse", 0.1, 0.004, 0.1),
-            ("steered_beam", "unpriced", 2.0, float("nan"), 0.5),
+            ("steered_beam", "lloyd", 1.0, 0.04, 0.3),
+            ("steered_beam", "lloyd_fast", 0.1, 0.004, 0.1),
+            ("steered_beam", "wavelet", 2.0, float("nan"), 0.5),
         ):
             for m, v in (("hazard_recall_rock_30cm", 0.9), ("hazard_recall_rock_15cm", recall)):
                 rows.append({"unit": unit, "study.sensor": sensor, "planner": planner,
                              "reconstruction": "linear", "metric": m, "value": v, "seconds": s,
                              "energy_j": e})  # fmt: skip
-    fig = landing_cost(rows, sensor_key="study.sensor", light_key=None)
+    fig = landing_cost(rows, sensor_key="study.sensor", light_key=None,
+                       strategies={"lloyd_fast": "lloyd"})  # fmt: skip
     try:
         t_ax, e_ax = fig.axes[:2]
         assert t_ax.get_xscale() == e_ax.get_xscale() == "log"
         assert t_ax.get_ylabel() == "rock 15cm recall"  # the smallest rock by default
         assert (t_ax.get_xlabel(), e_ax.get_xlabel()) == ("scan time (s)", "laser energy (J)")
         lines = {c.get_label(): c.lines[0] for c in t_ax.containers}
-        assert set(lines) == {"flash", "steered beam"}
+        assert set(lines) == {"flash", "steered beam, lloyd", "steered beam, wavelet"}
         x, y = lines["flash"].get_data()
         assert list(x) == [0.13] and list(y) == [pytest.approx(0.65)]
-        # the beam's points in order of time: sparse, dense, unpriced
-        x, y = lines["steered beam"].get_data()
-        assert list(x) == [0.1, 1.0, 2.0] and list(y) == [0.1, 0.3, 0.5]
-        # on the energy axis the unpriced planner is left out
+        # one strategy's plans joined in order of time: the 0.1 s fit, then the 1 s plan
+        x, y = lines["steered beam, lloyd"].get_data()
+        assert list(x) == [0.1, 1.0] and list(y) == [0.1, 0.3]
+        assert (
+            lines["steered beam, lloyd"].get_marker() != lines["steered beam, wavelet"].get_marker()
+        )
+        # on the energy axis the unpriced plan is left out
         e_lines = {c.get_label(): c.lines[0] for c in e_ax.containers}
-        assert list(e_lines["steered beam"].get_data()[0]) == [0.004, 0.04]
-        names = {t.get_text() for t in t_ax.texts}
-        assert {"none", "dense", "sparse", "unpriced"} <= names
+        assert set(e_lines) == {"flash", "steered beam, lloyd"}
+        assert list(e_lines["steered beam, lloyd"].get_data()[0]) == [0.004, 0.04]
     finally:
         plt.close(fig)
     # without a rock recall there is nothing to draw
