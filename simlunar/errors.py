@@ -31,6 +31,12 @@ class NothingMeasuredError(SimlunarError, ValueError):
     doing, reported in one line (exit 2) during the run; finished units are kept."""
 
 
+class PlatformGroundedError(SimlunarError, ValueError):
+    """A moving platform would reach the ground during a scan (a descent too fast or a scan too
+    long for the height it starts at): reported in one line (exit 2) during the run, naming
+    when; finished units are kept."""
+
+
 class InputChangedError(SimlunarError):
     """A file a unit reads changed during the run (after the run hashed it into the unit's
     cache key): the unit is not stored under a key that names other content; the run stops

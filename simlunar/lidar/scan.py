@@ -39,7 +39,13 @@ from simlunar.lidar.returns import (
     read_ranges,
 )
 from simlunar.lidar.steering import SteeringOptions, point_times, pointing_angles, scan_timing
-from simlunar.lidar.trajectory import Flight, PlatformMotion, place_points, rotate_small
+from simlunar.lidar.trajectory import (
+    Flight,
+    PlatformMotion,
+    check_airborne,
+    place_points,
+    rotate_small,
+)
 from simlunar.lidar.waveform import PulseOptions, TimeBins
 from simlunar.registry import Options, option
 
@@ -300,6 +306,8 @@ def steered_beam_scan(
     times = lead + point_times(angles, order, options=options.steering)
     clock = times + start_s  # when each beam fires on the trajectory
     retarget = flight is not None and flight.retarget
+    if trajectory is not None:
+        check_airborne(trajectory, clock, datum, options.gate.min_range_m, what="steered-beam scan")
     origins, d, fired = _aim(capture.origin, d, clock, trajectory, datum, options.gate, retarget)
     pred, margin = _predict(capture.origin if origins is None else origins, d, datum,
                             boresight.forward, options)  # fmt: skip

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simlunar.errors import PlatformGroundedError
 from simlunar.geometry import Camera, Pose
 from simlunar.registry import Options, option, shared_option
 
@@ -38,6 +39,7 @@ __all__ = [
     "PlatformMotion",
     "Trajectory",
     "camera_at",
+    "check_airborne",
     "place_points",
     "rotate_small",
 ]
@@ -160,6 +162,30 @@ class Trajectory(Options):
         """Positions (..., 3) (m) at ``times_s`` (...) (s)."""
         t = np.asarray(times_s, float)[..., None]
         return self.position_m + t * self.velocity_m_s
+
+
+def check_airborne(trajectory: Trajectory, times_s, datum_z: float, clearance_m: float, *,
+                   what: str = "scan") -> None:  # fmt: skip
+    """Refuse a scan whose platform is not at least ``clearance_m`` above the datum plane
+    ``z = datum_z`` at every firing time ``times_s`` (s): a descent that lands (or passes
+    through the ground) before the scan ends.
+
+    Raises
+    ------
+    PlatformGroundedError
+        Naming when the platform reaches the clearance and how long the scan is.
+    """
+    t = np.asarray(times_s, float).ravel()
+    if t.size == 0:
+        return
+    low = trajectory.at(t)[:, 2] - float(datum_z) < clearance_m
+    if low.any():
+        first = float(t[np.argmax(low)])
+        raise PlatformGroundedError(
+            f"the platform descends to within {clearance_m:g} m of the ground (datum z = "
+            f"{datum_z:.3g} m) {first:.3g} s into a {float(t.max()):.3g} s {what}: a scan "
+            "this long needs a slower descent, a higher start or fewer samples"
+        )
 
 
 def rotate_small(vectors: np.ndarray, rotvec: np.ndarray) -> np.ndarray:

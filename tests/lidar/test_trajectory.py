@@ -102,3 +102,19 @@ def test_camera_at_carries_a_device_to_the_pose_at_a_time():
     before = cam.rays(uv)[1]
     after = turned.rays(uv)[1]
     assert after == pytest.approx(rotate_small(before, np.broadcast_to(w, before.shape)), abs=1e-12)
+
+
+def test_a_scan_that_outlasts_the_descent_is_refused_naming_when():
+    # 100 m up at 2 m/s down: 0.1 m above the datum at 49.95 s; beams at 0, 10 and 49.9 s
+    # clear it, one at 49.96 s does not (0.08 m) and is named
+    from simlunar.errors import PlatformGroundedError
+    from simlunar.lidar.trajectory import check_airborne
+
+    t = Trajectory(position_m=(0.0, 0.0, 100.0), velocity_m_s=(0.0, 0.0, -2.0))
+    check_airborne(t, [0.0, 10.0, 49.9], 0.0, 0.1)
+    with pytest.raises(PlatformGroundedError, match=r"0.1 m of the ground .* 50 s into a 60 s"):
+        check_airborne(t, [0.0, 10.0, 49.96, 60.0], 0.0, 0.1)
+    # a datum above the start: grounded at once
+    with pytest.raises(PlatformGroundedError, match="0 s into"):
+        check_airborne(t, [0.0], 150.0, 0.1)
+    check_airborne(t, [], 0.0, 0.1)  # nothing fired, nothing to refuse
