@@ -35,7 +35,7 @@ from simlunar.lidar.trajectory import Navigation, PlatformMotion
 from simlunar.lidar.waveform import PulseOptions
 from simlunar.sensors.lidar import FlashLidarOptions
 from simlunar.sensors.micromirror import MicromirrorOptions
-from simlunar.study.lidar import SensorFit
+from simlunar.study.lidar_planners import SensorFit
 
 __all__ = [
     "BLOCKS",
@@ -202,7 +202,7 @@ MotionCfg = MOTION.model
 
 FIT = Block(
     "FitCfg",
-    "A planner fitted to its sensor (:class:`simlunar.study.lidar.SensorFit`): at the "
+    "A planner fitted to its sensor (:class:`simlunar.study.lidar_planners.SensorFit`): at the "
     "reference planner's scan time, within an absolute time or energy budget (sensors side by "
     "side), or at most some dots per receiver pixel (docs/lidar.md).",
     (Part("fit", SensorFit, limits={"frames": {"le": 1024}}),),

@@ -21,20 +21,15 @@ of the unit's cache key, so a changed DEM is recomputed.
 
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from simlunar.config.lidar import receiver_wh
-from simlunar.config.lidar_translate import lidar_options
 from simlunar.config.scanner_translate import coding_options, rig_kwargs
 from simlunar.config.schema import ExperimentCfg
 from simlunar.errors import ConfigError, InfrastructureError
-from simlunar.geometry import Camera, Intrinsics, Pose
-from simlunar.lidar.gate import prior_ranges
 from simlunar.metrics.interior import interior_mask, sparsest_pitch
 from simlunar.pipeline.inputs import (
     MAX_ABS_COORD_M,
@@ -45,6 +40,7 @@ from simlunar.pipeline.inputs import (
     terrain_facts,
 )
 from simlunar.pipeline.out_paths import check_out_dir, check_out_file
+from simlunar.pipeline.preflight_lidar import check_lidar, grid_rays, perspective_camera
 from simlunar.pipeline.unit_models import read_unit_models
 from simlunar.planner import check_k
 from simlunar.render.backend import choose_variant
@@ -58,17 +54,14 @@ __all__ = [
     "DOT_MODES",
     "MAX_NAN_FRACTION",
     "MIN_SAMPLES",
-    "TRANSIENT_CHANNELS",
     "Preflight",
     "check_camera",
-    "check_lidar_options",
     "check_out_dir",
     "check_out_file",
     "check_renderer",
     "check_rig",
     "check_scanner_budget",
     "check_study_sizes",
-    "check_time_bins",
     "check_units",
     "image_shape",
     "terrain_facts",
@@ -139,8 +132,8 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
         raise ConfigError(
             f"{key}.look_at_m: equals position_m {pos.tolist()}; the camera has no view direction"
         )
-    camera = _perspective_camera(cam, key)
-    o, d = _grid_rays(camera)
+    camera = perspective_camera(cam, key)
+    o, d = grid_rays(camera)
     x0, x1, y0, y1 = facts.extent
     lo = np.array([x0, y0, facts.zmin])
     hi = np.array([x1, y1, facts.zmax])
@@ -149,60 +142,6 @@ def check_camera(render: Any, facts: TerrainFacts, *, key: str = "render.camera"
             f"{key}: the camera at {pos.tolist()} looking at {target.tolist()} sees no "
             f"terrain (the terrain spans x [{x0:g}, {x1:g}] m, y [{y0:g}, {y1:g}] m, "
             f"z [{facts.zmin:.3g}, {facts.zmax:.3g}] m)"
-        )
-
-
-def _perspective_camera(cam: Any, key: str) -> Camera:
-    """The :class:`~simlunar.geometry.Camera` of a perspective camera config."""
-    pos = np.asarray(cam.position_m, float)
-    target = np.asarray(cam.look_at_m, float)
-    up = np.asarray(getattr(cam, "up", (0.0, 0.0, 1.0)), float)
-    fov = getattr(cam, "fov_deg", None)
-    try:
-        if fov is not None:
-            k = Intrinsics.from_fov(int(cam.width), int(cam.height), float(fov))
-        else:
-            k = Intrinsics(cam.fx, cam.fy, cam.cx, cam.cy, int(cam.width), int(cam.height))
-        return Camera(k, Pose.look_at(pos, target, up))
-    except ValueError as exc:
-        raise ConfigError(f"{key}: {exc}") from None
-
-
-def _grid_rays(camera: Camera, most: int = 64):
-    """Rays through a grid of at most ``most`` x ``most`` image points, corners included."""
-    h, w = camera.shape
-    uu, vv = np.meshgrid(np.linspace(0.0, float(w), min(w, most)),
-                         np.linspace(0.0, float(h), min(h, most)))  # fmt: skip
-    return camera.rays(np.stack([uu, vv], axis=-1).reshape(-1, 2))
-
-
-def check_gate_prior(cfg: Any, facts: TerrainFacts) -> None:
-    """A steered beam's gate prior (the datum's error, the slope) must fit its window, as the
-    scan requires (:func:`simlunar.lidar.scan.steered_beam_scan` refuses it in the unit, after
-    the guide render): the prior's largest half-width over the guide camera's rays (corners
-    included), on the plane through the terrain's lowest point (the farthest, widest one),
-    plus ``margin_m`` on both sides, within ``window_m``."""
-    s = cfg.study
-    cam = cfg.render.camera
-    if s.sensor != "steered_beam" or getattr(cam, "kind", None) != "perspective":
-        return
-    opts = lidar_options(s).sensor_options
-    g = opts.gate
-    if g.datum_sigma_m == 0 and g.max_slope_rad == 0:
-        return
-    camera = _perspective_camera(cam, "render.camera")
-    _, d = _grid_rays(camera)
-    datum = facts.zmin if g.altimeter else g.datum_z_m
-    lo, hi = prior_ranges(camera.position, d, datum_z=datum, boresight=camera.pose.forward,
-                          options=g)  # fmt: skip
-    half = 0.5 * float(np.max(hi - lo))
-    need = 2.0 * (opts.margin_m + half)
-    if not opts.window_m > need:
-        raise ConfigError(
-            f"study.options.steered_beam.window_m: {opts.window_m:g} m cannot hold the gate "
-            f"prior: it needs more than {need:.3g} m (2 x (margin_m {opts.margin_m:g} m + the "
-            f"prior's largest half-width over the view, {half:.3g} m)); widen window_m or "
-            "narrow gate.max_slope_deg / gate.datum_sigma_m"
         )
 
 
@@ -265,39 +204,6 @@ def check_study_sizes(cfg: Any, shape: tuple[int, int]) -> None:
                 f"study.{name}: (width, height) must be at least 2 pixels each, got {list(size)}"
             )
     check_scanner_budget(s)
-
-
-#: time-histogram channels the transient film keeps per pixel and bin (mitransient's RGBA)
-TRANSIENT_CHANNELS = 4
-
-
-def check_time_bins(s: Any, facts: TerrainFacts) -> None:
-    """A LIDAR study's transient films (pixels x time bins x channels) against
-    :data:`MAX_FRAME_PIXELS`, before anything is rendered.
-
-    A steered beam renders ``batch`` beams over ``window_m``; a flash receiver covers the
-    terrain's depth span in view, bounded here by the diagonal of its bounding box, plus the
-    margin on both sides (its exact window is known only after the guide render).
-    """
-    o = s.options
-    if s.sensor == "steered_beam":
-        bins = math.ceil(o.steered_beam.window_m / o.bin_range_m)
-        pixels = o.steered_beam.batch
-        what = f"{pixels} beams"
-    else:
-        xmin, xmax, ymin, ymax = facts.extent
-        span = math.hypot(xmax - xmin, ymax - ymin, facts.zmax - facts.zmin)
-        bins = math.ceil((span + 2 * o.margin_m) / o.bin_range_m)
-        w, h = receiver_wh(o, "flash" if s.sensor == "flash" else "micromirror")
-        pixels = w * h
-        what = f"{w} x {h} receiver pixels"
-    ov = o.transient.oversample  # rendered on oversample finer bins (docs/lidar.md)
-    check_size(
-        "study.options.bin_range_m",
-        f"{what} x {bins} time bins x {TRANSIENT_CHANNELS} channels x {ov} (oversampled)",
-        pixels * bins * TRANSIENT_CHANNELS * ov,
-        "SIMLUNAR_MAX_FRAME_PIXELS",
-    )
 
 
 def check_scanner_budget(s: Any) -> None:
@@ -456,16 +362,6 @@ def check_score_region(cfg: Any, shape: tuple[int, int]) -> None:
         ) from None
 
 
-def check_lidar_options(study: Any) -> None:
-    """Build a LIDAR study's library options as the unit will, so a rule of an options class
-    that the schema does not state (a bound of :mod:`simlunar.lidar`'s options, a rule across
-    fields) is one line before any render instead of a traceback in the unit."""
-    try:
-        lidar_options(study)
-    except (ValueError, TypeError) as exc:
-        raise ConfigError(f"study.options: {' '.join(str(exc).split())}") from None
-
-
 def check_models(
     inputs: dict[str, dict[str, str]], config: dict[str, Any], seen: set | None = None
 ) -> None:
@@ -510,9 +406,7 @@ def check_units(units: list[Any]) -> Preflight:
             check_study_sizes(cfg, image_shape(cfg.render, f))
             check_score_region(cfg, image_shape(cfg.render, f))
             if getattr(cfg.study, "kind", None) == "lidar":
-                check_time_bins(cfg.study, f)
-                check_lidar_options(cfg.study)
-                check_gate_prior(cfg, f)
+                check_lidar(cfg, f)
             if getattr(cfg.study, "kind", None) == "scanner":
                 check_rig(cfg, f)
         except ConfigError as exc:

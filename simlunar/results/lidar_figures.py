@@ -15,6 +15,7 @@ from simlunar.plotting.lidar import (
 )
 from simlunar.plotting.style import point_title
 from simlunar.results import captions as captions_text
+from simlunar.results import captions_landing
 from simlunar.results.aggregate import (
     density_panels,
     first_reconstruction_rows,
@@ -98,7 +99,7 @@ def _hazard_figures(res: dict, emit, captions: dict) -> None:
         fig = hazard_map_panel(arrays["image"], arrays["hazards_truth"], found, title=title)
         stem = f"landing_hazards_unit{rec.get('index', 0)}"
         emit(fig, stem)
-        captions[stem] = captions_text.landing_hazards(own)
+        captions[stem] = captions_landing.landing_hazards(own)
         shown += 1
 
 
@@ -120,14 +121,14 @@ def _landing_figure(res: dict, emit, captions: dict) -> None:
     fig = landing_recall(rows, sensor_key=sensor_key, light_key=light_key, reconstruction=recon,
                          title=f"{config.get('name', '')}: landing hazards ({recon})")  # fmt: skip
     emit(fig, "landing_recall")
-    captions["landing_recall"] = captions_text.landing_recall(study, recon)
+    captions["landing_recall"] = captions_landing.landing_recall(study, recon)
     labels = {n: (o or {}).get("strategy") for n, o in (study.get("planner_opts") or {}).items()}
     fig = landing_cost(rows, sensor_key=sensor_key, light_key=light_key, reconstruction=recon,
                        strategies={n: s for n, s in labels.items() if s},
                        title=f"{config.get('name', '')}: what time and energy buy ({recon})")  # fmt: skip
     if fig is not None:
         emit(fig, "landing_cost")
-        captions["landing_cost"] = captions_text.landing_cost(study, recon)
+        captions["landing_cost"] = captions_landing.landing_cost(study, recon)
 
 
 def _scan_figures(res: dict, emit, captions: dict) -> None:

@@ -36,7 +36,7 @@ from simlunar.sensors import SENSORS
 from simlunar.sensors.base import Acquisition
 from simlunar.sensors.lidar import LidarScene
 from simlunar.study.depth_scores import score_depth
-from simlunar.study.lidar_planners import lidar_planners
+from simlunar.study.lidar_planners import FITS, SensorFit, lidar_planners
 from simlunar.study.protocol import (
     DEFAULT_RECONSTRUCTION,
     Trials,
@@ -64,58 +64,6 @@ __all__ = [
 NO_PLAN = "none"
 #: the LIDAR sensors of :data:`simlunar.sensors.SENSORS`
 LIDARS = ("steered_beam", "flash", "micromirror_flash")
-#: the sensor-aware planning rules of :class:`SensorFit`
-FITS = ("scan_time", "budget", "receiver")
-
-
-@dataclass(frozen=True)
-class SensorFit(Options):
-    """A planner label fitted to its sensor (:mod:`simlunar.lidar.planning`).
-
-    ``scan_time`` (tour-aware, any plan-directed LIDAR with a ``scan_seconds``): the largest
-    sample count whose plan, in the sensor's own visiting order, scans within the time of the
-    ``reference`` planner's plan at the same density
-    (:func:`~simlunar.lidar.planning.fit_to_time`; searched over ``k / 4 .. 4 k``).
-    ``budget`` (any plan-directed LIDAR): the largest sample count whose plan scans within
-    ``budget_s`` seconds and fires at most ``budget_j`` joules of laser energy (either or
-    both; :meth:`scan_seconds` / :meth:`scan_energy_j` of the sensor), whatever the density:
-    sensors side by side at equal time or equal energy (searched over ``1 .. N``, the guide's
-    pixels; the density only names the row).
-    ``receiver`` (micromirror flash): at most ``frames`` dots per receiver pixel. A map drawn
-    by the paper's weighted random draw is drawn again under the cap, its map steering where
-    (:func:`~simlunar.lidar.planning.receiver_capped_plan`); every other planner (a Lloyd
-    placement, the grid, uniform Lloyd, ...) keeps its own layout and moves only the dots over
-    the cap, each to the nearest free pixel of a receiver pixel with room
-    (:func:`~simlunar.lidar.planning.receiver_capped_layout`).
-    """
-
-    kind: str = option(
-        "scan_time",
-        doc="scan_time: the most samples whose tour fits the reference planner's scan time at "
-        "the same density; budget: the most within budget_s and / or budget_j; receiver "
-        "(micromirror): at most `frames` dots per receiver pixel",
-        choices=FITS,
-    )
-    reference: str = option(
-        "grid", doc="scan_time: the planner label whose scan time is the budget (in the study)"
-    )
-    frames: int | None = option(
-        None, doc="receiver: most dots per receiver pixel; None = the least that holds k", ge=1
-    )
-    budget_s: float | None = option(
-        None, doc="budget: the scan's time budget; None = no time limit", unit="s", gt=0
-    )
-    budget_j: float | None = option(
-        None, doc="budget: the laser energy budget; None = no energy limit", unit="J", gt=0
-    )
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        given = self.budget_s is not None or self.budget_j is not None
-        if self.kind == "budget" and not given:
-            raise ValueError("a budget fit needs budget_s, budget_j or both")
-        if self.kind != "budget" and given:
-            raise ValueError(f"budget_s / budget_j are for a budget fit, not {self.kind!r}")
 
 
 @dataclass(frozen=True)

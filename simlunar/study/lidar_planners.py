@@ -12,7 +12,7 @@ A label of a LIDAR study plans, from the guide image, the guide pixels the senso
   scan times add up with the re-pointing between them (:func:`merge_rounds`); on a moving
   platform a steered beam's rounds continue its trajectory
   (:class:`~simlunar.sensors.rounds.PlatformRounds`);
-- any of those fitted to the sensor (:class:`~simlunar.study.lidar.SensorFit`).
+- any of those fitted to the sensor (:class:`SensorFit`).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from simlunar.lidar.planning import (
 )
 from simlunar.planner import MEASURING, ORACLES, PLANNERS, map_of, plan
 from simlunar.planner.strategies import MIN_K
+from simlunar.registry import Options, option
 from simlunar.sensors.base import Acquisition
 from simlunar.study.protocol import reconstruction_options
 from simlunar.study.sampling_planners import (
@@ -41,7 +42,69 @@ from simlunar.study.sampling_planners import (
     oracle_reconstruction,
 )
 
-__all__ = ["LidarRounds", "lidar_planners", "merge_rounds", "planned_values"]
+#: the sensor-aware planning rules of :class:`SensorFit`
+FITS = ("scan_time", "budget", "receiver")
+
+
+@dataclass(frozen=True)
+class SensorFit(Options):
+    """A planner label fitted to its sensor (:mod:`simlunar.lidar.planning`).
+
+    ``scan_time`` (tour-aware, any plan-directed LIDAR with a ``scan_seconds``): the largest
+    sample count whose plan, in the sensor's own visiting order, scans within the time of the
+    ``reference`` planner's plan at the same density
+    (:func:`~simlunar.lidar.planning.fit_to_time`; searched over ``k / 4 .. 4 k``).
+    ``budget`` (any plan-directed LIDAR): the largest sample count whose plan scans within
+    ``budget_s`` seconds and fires at most ``budget_j`` joules of laser energy (either or
+    both; :meth:`scan_seconds` / :meth:`scan_energy_j` of the sensor), whatever the density:
+    sensors side by side at equal time or equal energy (searched from the density's count over
+    ``3 .. N``, the guide's pixels; the density only names the row).
+    ``receiver`` (micromirror flash): at most ``frames`` dots per receiver pixel. A map drawn
+    by the paper's weighted random draw is drawn again under the cap, its map steering where
+    (:func:`~simlunar.lidar.planning.receiver_capped_plan`); every other planner (a Lloyd
+    placement, the grid, uniform Lloyd, ...) keeps its own layout and moves only the dots over
+    the cap, each to the nearest free pixel of a receiver pixel with room
+    (:func:`~simlunar.lidar.planning.receiver_capped_layout`).
+    """
+
+    kind: str = option(
+        "scan_time",
+        doc="scan_time: the most samples whose tour fits the reference planner's scan time at "
+        "the same density; budget: the most within budget_s and / or budget_j; receiver "
+        "(micromirror): at most `frames` dots per receiver pixel",
+        choices=FITS,
+    )
+    reference: str = option(
+        "grid", doc="scan_time: the planner label whose scan time is the budget (in the study)"
+    )
+    frames: int | None = option(
+        None, doc="receiver: most dots per receiver pixel; None = the least that holds k", ge=1
+    )
+    budget_s: float | None = option(
+        None, doc="budget: the scan's time budget; None = no time limit", unit="s", gt=0
+    )
+    budget_j: float | None = option(
+        None, doc="budget: the laser energy budget; None = no energy limit", unit="J", gt=0
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        given = self.budget_s is not None or self.budget_j is not None
+        if self.kind == "budget" and not given:
+            raise ValueError("a budget fit needs budget_s, budget_j or both")
+        if self.kind != "budget" and given:
+            raise ValueError(f"budget_s / budget_j are for a budget fit, not {self.kind!r}")
+
+
+__all__ = [
+    "FITS",
+    "LidarRounds",
+    "SensorFit",
+    "budget_cost",
+    "lidar_planners",
+    "merge_rounds",
+    "planned_values",
+]
 
 
 def lidar_planners(o, image, depth, ks, *, sensor, guide=None) -> dict[str, Callable]:
@@ -158,7 +221,7 @@ def _planner(base: str, image, opts: Mapping, ks, cache: dict, *, truth=None, re
 
 
 def _fitted(fit, planner, reference, sensor, shape, keep_layout: bool = False) -> Callable:
-    """A planner fitted to ``sensor`` (:class:`~simlunar.study.lidar.SensorFit`); a receiver
+    """A planner fitted to ``sensor`` (:class:`SensorFit`); a receiver
     fit with ``keep_layout`` moves the planner's own layout under the cap."""
     n = int(shape[0]) * int(shape[1])
     if fit.kind == "receiver":

@@ -244,7 +244,7 @@ class _Paced(_Timed):
 
 
 def test_a_scan_time_fit_scans_within_its_reference_s_time():
-    from simlunar.study.lidar import SensorFit
+    from simlunar.study.lidar_planners import SensorFit
 
     image, depth = _guide()
     o = LidarStudyOptions(
@@ -265,7 +265,7 @@ def test_a_scan_time_fit_scans_within_its_reference_s_time():
 
 def test_a_receiver_fit_keeps_one_dot_per_receiver_pixel():
     from simlunar.lidar.planning import receiver_cells
-    from simlunar.study.lidar import SensorFit
+    from simlunar.study.lidar_planners import SensorFit
 
     image, depth = _guide()
     seen = []
@@ -293,7 +293,7 @@ def test_a_receiver_fit_keeps_a_lloyd_layout_and_moves_only_the_dots_over_the_ca
     # a Lloyd-placed label under a receiver fit: the sensor gets the planner's own layout
     # moved under the cap (receiver_capped_layout), not a redraw inside receiver pixels
     from simlunar.lidar.planning import receiver_capped_layout, receiver_cells
-    from simlunar.study.lidar import SensorFit
+    from simlunar.study.lidar_planners import SensorFit
 
     image, depth = _guide()
     seen = []
