@@ -79,19 +79,25 @@ def fit_to_time(
     k_min, k_max = int(k_min), int(k_max)
     if not 1 <= k_min <= k_max:
         raise ValueError(f"need 1 <= k_min <= k_max, got {k_min}, {k_max}")
-    cache: dict[int, tuple[np.ndarray, float]] = {}
-
-    def at(k: int) -> tuple[np.ndarray, float]:
-        if k not in cache:
-            rc = place(k)
-            cache[k] = (rc, float(scan_seconds(rc)))
-        return cache[k]
-
+    at, cache = _memo(place, scan_seconds)
     if at(k_max)[1] <= budget_s:
         return at(k_max)
     if at(k_min)[1] > budget_s:
         return at(k_min)
     return _bisect(at, cache, budget_s, k_min, k_max)
+
+
+def _memo(place, cost):
+    """``at(k)``: the plan at ``k`` and its cost, each made once (``cache``: k -> both)."""
+    cache: dict[int, tuple[np.ndarray, float]] = {}
+
+    def at(k: int) -> tuple[np.ndarray, float]:
+        if k not in cache:
+            rc = place(k)
+            cache[k] = (rc, float(cost(rc)))
+        return cache[k]
+
+    return at, cache
 
 
 def _bisect(at, cache: dict, budget: float, lo: int, hi: int):
@@ -144,14 +150,7 @@ def fit_to_budget(
     k_min, k_max = int(k_min), int(k_max)
     if not 1 <= k_min <= k_max:
         raise ValueError(f"need 1 <= k_min <= k_max, got {k_min}, {k_max}")
-    cache: dict[int, tuple[np.ndarray, float]] = {}
-
-    def at(k: int) -> tuple[np.ndarray, float]:
-        if k not in cache:
-            rc = place(k)
-            cache[k] = (rc, float(cost(rc)))
-        return cache[k]
-
+    at, cache = _memo(place, cost)
     k = min(max(int(k_start), k_min), k_max)
     if at(k)[1] <= budget:
         lo, hi = k, None
