@@ -42,6 +42,16 @@ from simlunar.study.sampling_planners import (
     oracle_reconstruction,
 )
 
+__all__ = [
+    "FITS",
+    "LidarRounds",
+    "SensorFit",
+    "budget_cost",
+    "lidar_planners",
+    "merge_rounds",
+    "planned_values",
+]
+
 #: the sensor-aware planning rules of :class:`SensorFit`
 FITS = ("scan_time", "budget", "receiver")
 
@@ -94,17 +104,6 @@ class SensorFit(Options):
             raise ValueError("a budget fit needs budget_s, budget_j or both")
         if self.kind != "budget" and given:
             raise ValueError(f"budget_s / budget_j are for a budget fit, not {self.kind!r}")
-
-
-__all__ = [
-    "FITS",
-    "LidarRounds",
-    "SensorFit",
-    "budget_cost",
-    "lidar_planners",
-    "merge_rounds",
-    "planned_values",
-]
 
 
 def lidar_planners(o, image, depth, ks, *, sensor, guide=None) -> dict[str, Callable]:
