@@ -187,14 +187,14 @@ class TerrainCfg(_Model):
     refine_m: Metres | None = Field(
         None,
         gt=0,
-        description="DEM file: resample bilinearly to finer square cells of this size first "
-        "(a 1-5 m DEM resolves no 15 cm rock; no detail is added)",
+        description="with terrain.file: its heights resampled bilinearly to finer square cells "
+        "of this size first (a 1-5 m DEM resolves no 15 cm rock; no detail is added)",
     )
     rocks: RocksCfg | None = Field(
         None,
-        description="DEM file: rocks stamped on it, a preset's rocks section (e.g. {law: "
-        "golombek, coefficient: 0.07, d_min_m: 0.1}); each terrain seed (seed_index) draws its "
-        "own rocks on the same DEM",
+        description="with terrain.file: rocks stamped on its surface, a preset's rocks section "
+        "(e.g. {law: golombek, coefficient: 0.07, d_min_m: 0.1}); each terrain seed "
+        "(seed_index) draws its own rocks on the same surface",
     )
     overrides: TerrainOverridesCfg = Field(
         default_factory=TerrainOverridesCfg,

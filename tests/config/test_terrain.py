@@ -114,7 +114,8 @@ def test_populations_check_their_range_and_law():
          "overrides.craters.d_max_m: the diameter range is empty (40.0 <= d_min_m 50.0)"),
         ({"preset": "aerial_9"}, "preset: unknown terrain preset 'aerial_9'"),
         ({"file": "x.npy", "seed_index": 2},
-         "seed_index applies to a preset only (a DEM file has one terrain)"),
+         "seed_index applies to a preset, or to a DEM file with rocks (a DEM file alone has one "
+         "terrain)"),
         ({"preset": "aerial_1", "spacing_m": 0.5},
          "spacing_m: the cell size of a DEM file (terrain.file) has no effect on a preset"),
         ({"file": "x.npy", "scale": 0.5},
