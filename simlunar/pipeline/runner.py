@@ -48,6 +48,7 @@ from simlunar.plotting.scanner_tables import scanner_tables
 from simlunar.results.cache_keys import (
     reconstruction_versions,
     render_without_new_defaults,
+    terrain_without_new_defaults,
     without_new_defaults,
 )
 from simlunar.results.figures import write_figures_pruned
@@ -106,6 +107,8 @@ def unit_key(config: dict[str, Any], inputs: dict[str, dict[str, str]] | None = 
     if isinstance(terrain, dict) and not terrain.get("seed_index"):
         # realisation 0 is the terrain of runs before seed_index existed: same keys
         relevant["terrain"] = {k: v for k, v in terrain.items() if k != "seed_index"}
+    if isinstance(relevant.get("terrain"), dict):
+        relevant["terrain"] = terrain_without_new_defaults(relevant["terrain"])
     if isinstance(relevant.get("render"), dict):
         relevant["render"] = render_without_new_defaults(relevant["render"])
     study = relevant.get("study")

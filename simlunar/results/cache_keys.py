@@ -18,8 +18,10 @@ __all__ = [
     "NEW_PLANNER_DEFAULTS",
     "NEW_RENDER_DEFAULTS",
     "NEW_STUDY_DEFAULTS",
+    "NEW_TERRAIN_DEFAULTS",
     "reconstruction_versions",
     "render_without_new_defaults",
+    "terrain_without_new_defaults",
     "without_new_defaults",
 ]
 
@@ -45,10 +47,15 @@ NEW_RENDER_DEFAULTS = {"guide_frames": []}
 #: numbers of before (Hapke's coherent backscatter: unset = none)
 NEW_BSDF_DEFAULTS = {"hapke": {"B_C0": None, "h_C": None}}
 #: keys added inside a planner option section after the table above, with their defaults
+#: (a LIDAR planner's ``fit``: the absolute budgets)
 NEW_NESTED_DEFAULTS = {
     "sequential": {"first_round": "uniform"},
     "oracle": {"reconstruction": "linear"},
+    "fit": {"budget_s": None, "budget_j": None},
 }
+#: terrain keys added after caches existed, with the value that gives the terrain of before
+#: (a DEM file as read: not refined, no rocks stamped on it)
+NEW_TERRAIN_DEFAULTS = {"refine_m": None, "rocks": None}
 
 
 def without_new_defaults(study: dict) -> dict:
@@ -84,6 +91,12 @@ def without_new_defaults(study: dict) -> dict:
         planner_opts = {k: strip(v) for k, v in options["planner_opts"].items()}
         out["options"] = {**options, "planner_opts": planner_opts}
     return out
+
+
+def terrain_without_new_defaults(terrain: dict) -> dict:
+    """The terrain section less keys added later at the value that changes nothing
+    (:data:`NEW_TERRAIN_DEFAULTS`), so the cache keys of earlier runs stay valid."""
+    return {k: v for k, v in terrain.items() if NEW_TERRAIN_DEFAULTS.get(k, object()) != v}
 
 
 def render_without_new_defaults(render: dict) -> dict:

@@ -14,7 +14,11 @@ from typing import Any
 from simlunar.config.yamlio import YAMLError, safe_load_text
 from simlunar.errors import ResultFolderError
 from simlunar.results.array_exports import array_export_complete
-from simlunar.results.cache_keys import render_without_new_defaults, without_new_defaults
+from simlunar.results.cache_keys import (
+    render_without_new_defaults,
+    terrain_without_new_defaults,
+    without_new_defaults,
+)
 from simlunar.results.exports import export_complete
 from simlunar.results.md_tables import TABLES_DIR
 from simlunar.results.records import WorkUnit
@@ -98,6 +102,8 @@ def _identity(config: dict) -> dict:
         out["study"] = without_new_defaults(out["study"])
     if isinstance(out.get("render"), dict):
         out["render"] = render_without_new_defaults(out["render"])
+    if isinstance(out.get("terrain"), dict):
+        out["terrain"] = terrain_without_new_defaults(out["terrain"])
     if isinstance(out.get("figures"), dict):
         out["figures"] = {k: v for k, v in out["figures"].items() if k != "formats"}
     return out

@@ -100,6 +100,38 @@ def test_the_default_reconstructions_keep_the_cache_key_of_before():
     assert other[0].key != a.key
 
 
+def test_a_terrain_without_refine_or_rocks_and_a_fit_without_budgets_keep_their_keys():
+    # terrain.refine_m / terrain.rocks and a LIDAR fit's budget_s / budget_j came after caches
+    # existed: at their defaults (None) a unit keys as before and a folder is the same
+    # experiment; set, the key changes
+    from simlunar.config.lidar import FitCfg
+    from simlunar.config.terrain import TerrainCfg
+    from simlunar.results.cache_keys import NEW_NESTED_DEFAULTS, NEW_TERRAIN_DEFAULTS
+    from simlunar.results.folder import _identity
+
+    dumped = TerrainCfg(preset="aerial_1").model_dump()
+    assert {k: dumped[k] for k in NEW_TERRAIN_DEFAULTS} == NEW_TERRAIN_DEFAULTS
+    fit = FitCfg().model_dump()
+    assert {k: fit[k] for k in NEW_NESTED_DEFAULTS["fit"]} == NEW_NESTED_DEFAULTS["fit"]
+    a = expand(cfg(sweep={}))[0]
+    assert a.config["terrain"]["rocks"] is None and a.config["terrain"]["refine_m"] is None
+    old_terrain = {k: v for k, v in a.config["terrain"].items() if k not in NEW_TERRAIN_DEFAULTS}
+    before = {**a.config, "terrain": old_terrain}
+    assert unit_key(before, a.inputs) == a.key
+    assert _identity(before) == _identity(a.config)
+    study = {"kind": "lidar", "planners": ["grid", "timed"], "densities": ["1/64"],
+             "planner_opts": {"timed": {"strategy": "random", "fit": {"kind": "scan_time"}}}}  # fmt: skip
+    lidar = expand(cfg(sweep={}, study=study, render={"camera": {
+        "kind": "perspective", "width": 64, "height": 48, "fov_deg": 40,
+        "position_m": [20.0, -12.0, 30.0], "look_at_m": [20.0, -12.5, 0.0]}}))[0]  # fmt: skip
+    opts = lidar.config["study"]["planner_opts"]["timed"]
+    assert opts["fit"]["budget_s"] is None
+    no_budgets = {k: v for k, v in opts["fit"].items() if k not in ("budget_s", "budget_j")}
+    old_study = {**lidar.config["study"],
+                 "planner_opts": {"timed": {**opts, "fit": no_budgets}}}  # fmt: skip
+    assert unit_key({**lidar.config, "study": old_study}, lidar.inputs) == lidar.key
+
+
 def test_hapke_units_keep_their_key_without_the_coherent_backscatter_keys():
     # the keys B_C0 and h_C came after Hapke caches existed: unset (the surge of before, none)
     # they leave the key as it was; set, the key changes
