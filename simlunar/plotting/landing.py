@@ -40,12 +40,13 @@ def landing_recall(
     metrics = [*recalls, "false_safe_site"]
     lights = sorted({g[1] for g in summary}, key=float) if light_key else [""]
     groups = sorted({(g[0], g[-1]) for g in summary})
-    wide = max(4.2, 1.15 * len(groups) + 1.0)
-    fig, axes = plt.subplots(1, len(lights), figsize=(wide * len(lights), 4.2), squeeze=False,
-                             sharey=True)  # fmt: skip
+    # one row per light, the groups along x: as wide as the groups need, within a page's reach
+    wide = min(16.0, max(5.0, 0.75 * len(groups) + 1.5))
+    tall = 3.0 * len(lights) + 1.6
+    fig, axes = plt.subplots(len(lights), 1, figsize=(wide, tall), squeeze=False, sharex=True)
     width = 0.8 / len(metrics)
     colours = plt.get_cmap("tab10")
-    for ax, light in zip(axes[0], lights, strict=True):
+    for ax, light in zip(axes[:, 0], lights, strict=True):
         x = np.arange(len(groups))
         for j, m in enumerate(metrics):
             vals, err = [], [[], []]
@@ -63,13 +64,14 @@ def landing_recall(
         ax.set_ylim(0, 1.05)
         ax.set_title(f"sun {light} deg" if light_key else "", fontsize=9)
         ax.grid(axis="y", alpha=0.3)
-    axes[0][0].set_ylabel("recall / rate")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("recall / rate")
     fig.suptitle(f"{title}\nbars: mean over terrain seeds; whiskers: 95 % interval over the seeds",
                  fontsize=10)  # fmt: skip
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=min(len(metrics), 4), fontsize=8,
                frameon=False)  # fmt: skip
-    fig.tight_layout(rect=(0, 0.08, 1, 0.95))
+    fig.tight_layout(rect=(0, 0.35 / tall, 1, 1 - 0.55 / tall))
     return fig
 
 
