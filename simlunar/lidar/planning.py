@@ -74,17 +74,23 @@ def fit_to_time(
     seconds : float
         Its modelled scan time (s).
     """
-    if not (np.isfinite(budget_s) and budget_s > 0):
-        raise ValueError(f"budget_s must be finite and > 0, got {budget_s}")
-    k_min, k_max = int(k_min), int(k_max)
-    if not 1 <= k_min <= k_max:
-        raise ValueError(f"need 1 <= k_min <= k_max, got {k_min}, {k_max}")
+    k_min, k_max = _checked("budget_s", budget_s, k_min, k_max)
     at, cache = _memo(place, scan_seconds)
     if at(k_max)[1] <= budget_s:
         return at(k_max)
     if at(k_min)[1] > budget_s:
         return at(k_min)
     return _bisect(at, cache, budget_s, k_min, k_max)
+
+
+def _checked(name: str, budget: float, k_min, k_max) -> tuple[int, int]:
+    """``(k_min, k_max)`` as ints, after checking the budget (finite, > 0) and the range."""
+    if not (np.isfinite(budget) and budget > 0):
+        raise ValueError(f"{name} must be finite and > 0, got {budget}")
+    k_min, k_max = int(k_min), int(k_max)
+    if not 1 <= k_min <= k_max:
+        raise ValueError(f"need 1 <= k_min <= k_max, got {k_min}, {k_max}")
+    return k_min, k_max
 
 
 def _memo(place, cost):
@@ -145,11 +151,7 @@ def fit_to_budget(
     cost : float
         Its cost (over ``budget`` only when even ``k_min`` samples are).
     """
-    if not (np.isfinite(budget) and budget > 0):
-        raise ValueError(f"budget must be finite and > 0, got {budget}")
-    k_min, k_max = int(k_min), int(k_max)
-    if not 1 <= k_min <= k_max:
-        raise ValueError(f"need 1 <= k_min <= k_max, got {k_min}, {k_max}")
+    k_min, k_max = _checked("budget", budget, k_min, k_max)
     at, cache = _memo(place, cost)
     k = min(max(int(k_start), k_min), k_max)
     if at(k)[1] <= budget:
