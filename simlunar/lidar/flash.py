@@ -14,6 +14,7 @@ never from the terrain. The micromirror flash fires as many frames as dots share
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,7 @@ __all__ = [
     "flash_window",
     "micromirror_frames",
     "micromirror_lit_sr",
+    "micromirror_sampling",
     "read_flash",
     "read_frame",
     "receiver_rc",
@@ -175,6 +177,38 @@ def micromirror_lit_sr(camera: Camera) -> float:
     projector's intrinsics = the guide camera's)."""
     k = camera.intrinsics
     return float(k.width * k.height / (k.fx * k.fy))
+
+
+#: the fewest render samples a micromirror's lit guide pixel may get: a receiver pixel's rays
+#: land uniformly over it, so a dot's pixel gets spp / (guide pixels per receiver pixel) on
+#: average and none with probability exp(-that) (a dot without light: a lost or false return)
+MIN_SAMPLES_PER_DOT = 4.0
+
+
+def micromirror_sampling(guide_shape, receiver_shape, spp: int) -> float:
+    """Render samples per lit guide pixel of a micromirror flash: ``spp`` over the guide pixels
+    one receiver pixel covers; ValueError below :data:`MIN_SAMPLES_PER_DOT`.
+
+    Every receiver pixel's ``spp`` rays land uniformly over its ground and only those on the
+    one lit guide pixel carry the dot's return, so with ``n`` guide pixels per receiver pixel
+    a dot is rendered from about ``spp / n`` of them, and from none with probability
+    ``exp(-spp / n)``: a return the Monte Carlo estimate lost, not the sensor (measured on the
+    full-size landing site, 144 guide pixels per receiver pixel at spp 128: 27 % of dots
+    without a return, 18 % ranged on the background alone; docs/lidar.md). About 16 samples
+    per dot give a clean return.
+    """
+    (gh, gw), (rh, rw) = guide_shape, receiver_shape
+    n = (gh * gw) / float(rh * rw)
+    per_dot = float(spp) / n
+    if per_dot < MIN_SAMPLES_PER_DOT:
+        need = math.ceil(MIN_SAMPLES_PER_DOT * n)
+        raise ValueError(
+            f"transient.spp {spp} gives each lit guide pixel {per_dot:.2g} render samples (a "
+            f"{rw} x {rh} receiver pixel covers {n:.3g} of the {gw} x {gh} guide pixels); at "
+            f"least {MIN_SAMPLES_PER_DOT:g} are needed (about 16 for a clean return): spp >= "
+            f"{need}, or a larger receiver_px"
+        )
+    return per_dot
 
 
 def micromirror_frames(pixels: np.ndarray, camera: Camera, receiver_shape) -> np.ndarray:

@@ -15,6 +15,7 @@ from simlunar.config.lidar import receiver_wh
 from simlunar.config.lidar_translate import lidar_options
 from simlunar.errors import ConfigError
 from simlunar.geometry import Camera
+from simlunar.lidar.flash import micromirror_sampling
 from simlunar.lidar.gate import prior_ranges
 from simlunar.pipeline.inputs import TerrainFacts, check_size
 
@@ -23,6 +24,7 @@ __all__ = [
     "check_gate_prior",
     "check_lidar",
     "check_lidar_options",
+    "check_micromirror_sampling",
     "check_time_bins",
     "grid_rays",
     "perspective_camera",
@@ -34,6 +36,7 @@ def check_lidar(cfg: Any, facts: TerrainFacts) -> None:
     check_time_bins(cfg.study, facts)
     check_lidar_options(cfg.study)
     check_gate_prior(cfg, facts)
+    check_micromirror_sampling(cfg)
 
 
 def perspective_camera(cam: Any, key: str) -> Camera:
@@ -124,3 +127,17 @@ def check_gate_prior(cfg: Any, facts: TerrainFacts) -> None:
             f"prior's largest half-width over the view, {half:.3g} m)); widen window_m or "
             "narrow gate.max_slope_deg / gate.datum_sigma_m"
         )
+
+
+def check_micromirror_sampling(cfg: Any) -> None:
+    """A micromirror flash's render samples per lit guide pixel
+    (:func:`~simlunar.lidar.flash.micromirror_sampling`), as its sensor checks them after the
+    guide render: one line before it."""
+    s, cam = cfg.study, cfg.render.camera
+    if s.sensor != "micromirror_flash" or not hasattr(cam, "width"):
+        return  # an orthographic guide view is refused by the sensor itself
+    opts = lidar_options(s).sensor_options
+    try:
+        micromirror_sampling((cam.height, cam.width), opts.receiver_px, opts.flash.transient.spp)
+    except ValueError as exc:
+        raise ConfigError(f"study.options: {exc}") from None

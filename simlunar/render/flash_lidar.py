@@ -38,7 +38,7 @@ from simlunar.lidar.flash import (
 from simlunar.lidar.returns import LidarScan, fired_energy_j
 from simlunar.lidar.trajectory import Flight, camera_at, place_points
 from simlunar.render.lights import ProjectorLight
-from simlunar.render.transient import flash_frame
+from simlunar.render.transient import PatternFrames, flash_frame
 
 __all__ = [
     "flash_scan",
@@ -179,6 +179,7 @@ def _fire_micromirror_frames(
     per_frame = options.detector.pulses / options.pulse_rate_hz
     col = np.clip(np.floor(uv[:, 0] * rw / w).astype(int), 0, rw - 1)
     row = np.clip(np.floor(uv[:, 1] * rh / h).astype(int), 0, rh - 1)
+    frames = None  # at rest: one scene, frame after frame a new pattern (PatternFrames)
     for f in range(n_frames):
         if flight is not None:
             # projector and receiver move together: a dot keeps its receiver pixel
@@ -191,16 +192,13 @@ def _fire_micromirror_frames(
         pattern[
             np.clip(uv[sel, 1].astype(int), 0, h - 1), np.clip(uv[sel, 0].astype(int), 0, w - 1)
         ] = 1.0
-        light = ProjectorLight(projector, pattern, scale=options.transient.laser_intensity)
-        fr = flash_frame(
-            terrain,
-            receiver,
-            bins=bins,
-            options=options.transient,
-            bsdf=scene.get("bsdf"),
-            sun=scene.get("sun"),
-            projector=light,
-        )
+        if frames is None or flight is not None:
+            light = ProjectorLight(projector, pattern, scale=options.transient.laser_intensity)
+            frames = PatternFrames(terrain, receiver, bins=bins, options=options.transient,
+                                   bsdf=scene.get("bsdf"), sun=scene.get("sun"), projector=light)  # fmt: skip
+            fr = frames.render()
+        else:
+            fr = frames.render(pattern)
         res = read_frame(fr, receiver, options, rng, lit_sr=micromirror_lit_sr(camera))
         ranges[sel], photons[sel] = res.range[row[sel], col[sel]], res.photons[row[sel], col[sel]]
         returns[sel], times[sel] = res.returns[row[sel], col[sel]], f * per_frame

@@ -37,12 +37,13 @@ from simlunar.lidar.waveform import TimeBins
 from simlunar.render import backend
 from simlunar.render import beams as _beams
 from simlunar.render.cameras import sensor_dict
-from simlunar.render.lights import emitter_dicts
+from simlunar.render.lights import PROJECTOR_ID, check_pattern, emitter_dicts
 from simlunar.render.mesh import terrain_mesh
 from simlunar.render.scene import LUMINANCE, TerrainScene, _bsdf_dict, luminance
 
 __all__ = [
     "FlashFrame",
+    "PatternFrames",
     "TransientOptions",
     "flash_frame",
     "transient_film",
@@ -191,50 +192,87 @@ def flash_frame(
         Rendered separately as a steady image (:attr:`FlashFrame.sun`).
     projector : ProjectorLight or None
         The laser as a pattern projector (a micromirror array lighting chosen directions,
-        ``scale`` its irradiance) instead of the isotropic point laser.
+        ``scale`` its irradiance) instead of the isotropic point laser; frames that differ by
+        the pattern only: :class:`PatternFrames`.
 
     Returns
     -------
     FlashFrame
     """
+    return PatternFrames(
+        terrain, camera, bins=bins, options=options, bsdf=bsdf, sun=sun, projector=projector
+    ).render()
 
-    if not isinstance(camera, Camera) or camera.aperture_radius > 0:
-        raise ValueError("camera: a flash receiver must be a pinhole geometry.Camera")
-    mi = _mitsuba()
-    h, w = camera.shape
-    sensor = sensor_dict(camera, spp=options.spp)
-    sensor["film"] = transient_film(w, h, bins, options.oversample)
-    scene = {
-        "type": "scene",
-        "sensor": sensor,
-        "integrator": {"type": "transient_path", "max_depth": int(options.max_depth)},
-        **_terrain_entries(mi, terrain, bsdf),
-    }
-    if projector is None:
-        scene.update(_laser(camera.pose.position, options))
-    else:
-        scene.update(emitter_dicts(projector, camera))
-    steady, hist = mi.render(mi.load_dict(scene), spp=options.spp, seed=options.seed)
-    hist = np.asarray(hist, np.float32)  # (rows, cols, bins, channels)
-    hist = (hist[..., :3] @ LUMINANCE).astype(np.float32)
-    steady_l = luminance(np.asarray(steady, np.float32)[..., :3])
-    sun_img = None
-    if sun is not None:
-        ts = TerrainScene(
-            terrain,
-            camera,
-            lights=[sun],
-            bsdf=bsdf,
-            max_depth=options.max_depth,
-            spp=options.spp,
-            seed=options.seed,
+
+class PatternFrames:
+    """Flash frames of one receiver, laser and terrain, loaded once: frame after frame differs
+    by the projector's pattern only (:meth:`render` with a new ``pattern`` swaps the texture
+    through ``mi.traverse``, as :class:`~simlunar.render.scene.TerrainScene` does), and the sun
+    image, which no pattern changes, is rendered once.
+
+    The parameters are :func:`flash_frame`'s; a frame rendered here is the frame
+    :func:`flash_frame` renders with the same pattern (same seed, same sampler).
+    """
+
+    def __init__(
+        self,
+        terrain,
+        camera: Camera,
+        *,
+        bins: TimeBins,
+        options: TransientOptions = TransientOptions(),  # noqa: B008 (frozen)
+        bsdf=None,
+        sun=None,
+        projector=None,
+    ) -> None:
+        if not isinstance(camera, Camera) or camera.aperture_radius > 0:
+            raise ValueError("camera: a flash receiver must be a pinhole geometry.Camera")
+        mi = _mitsuba()
+        h, w = camera.shape
+        sensor = sensor_dict(camera, spp=options.spp)
+        sensor["film"] = transient_film(w, h, bins, options.oversample)
+        scene = {
+            "type": "scene",
+            "sensor": sensor,
+            "integrator": {"type": "transient_path", "max_depth": int(options.max_depth)},
+            **_terrain_entries(mi, terrain, bsdf),
+        }
+        if projector is None:
+            scene.update(_laser(camera.pose.position, options))
+        else:
+            scene.update(emitter_dicts(projector, camera))
+        self._mi, self._scene = mi, mi.load_dict(scene)
+        self._params = mi.traverse(self._scene) if projector is not None else None
+        self.projector, self.bins, self.options = projector, bins, options
+        self._terrain, self._camera, self._bsdf, self._sun = terrain, camera, bsdf, sun
+        self._sun_img: np.ndarray | None = None
+
+    def render(self, pattern: np.ndarray | None = None) -> FlashFrame:
+        """The frame with the projector showing ``pattern`` (its ``pattern_shape``; None: the
+        one shown now)."""
+        mi, o = self._mi, self.options
+        if pattern is not None:
+            if self.projector is None:
+                raise ValueError("pattern: these frames have no projector")
+            p = check_pattern(pattern, self.projector.pattern_shape)
+            self._params[f"{PROJECTOR_ID}.irradiance.data"] = mi.TensorXf(
+                np.ascontiguousarray(p[..., None])
+            )
+            self._params.update()
+        steady, hist = mi.render(self._scene, spp=o.spp, seed=o.seed)
+        hist = np.asarray(hist, np.float32)  # (rows, cols, bins, channels)
+        hist = (hist[..., :3] @ LUMINANCE).astype(np.float32)
+        steady_l = luminance(np.asarray(steady, np.float32)[..., :3])
+        sun = self._sun
+        if sun is not None and self._sun_img is None:
+            ts = TerrainScene(self._terrain, self._camera, lights=[sun], bsdf=self._bsdf,
+                              max_depth=o.max_depth, spp=o.spp, seed=o.seed)  # fmt: skip
+            self._sun_img = luminance(ts.render())
+        return FlashFrame(
+            steady=steady_l,
+            histograms=hist,
+            sun=self._sun_img,
+            bins=self.bins,
+            oversample=o.oversample,
+            sun_irradiance=1.0 if sun is None else float(sun.irradiance),
         )
-        sun_img = luminance(ts.render())
-    return FlashFrame(
-        steady=steady_l,
-        histograms=hist,
-        sun=sun_img,
-        bins=bins,
-        oversample=options.oversample,
-        sun_irradiance=1.0 if sun is None else float(sun.irradiance),
-    )

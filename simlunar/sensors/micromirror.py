@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simlunar.lidar.flash import FlashOptions, micromirror_frames
+from simlunar.lidar.flash import FlashOptions, micromirror_frames, micromirror_sampling
 from simlunar.lidar.returns import fired_energy_j
 from simlunar.lidar.trajectory import Flight, PlatformMotion
 from simlunar.registry import Options, shared_option
@@ -74,6 +74,8 @@ class MicromirrorFlash:
             )
         self.scene = scene
         self.options = options or MicromirrorOptions()
+        o = self.options
+        micromirror_sampling(scene.camera.shape, o.receiver_px, o.flash.transient.spp)
 
     def acquire(self, rc: np.ndarray | None, *, rng=None) -> Acquisition:
         """Light and time the planned guide pixels ``rc`` ((k, 2) int (row, col)); ``rng``:

@@ -202,3 +202,36 @@ def test_the_flash_gate_does_not_move_with_the_truth(monkeypatch):
     other = dataclasses.replace(opts, transient=dataclasses.replace(opts.transient, seed=1))
     assert flash_window(cam, options=other).start_opl != seen[0][1]
     assert flash_window(cam, options=opts).start_opl == seen[0][1]
+
+
+def test_micromirror_sampling_counts_render_samples_per_lit_guide_pixel():
+    # hand case: a 384 x 384 guide over a 32 x 32 receiver: 144 guide pixels per receiver
+    # pixel, so spp 128 gives a dot 128 / 144 = 0.89 samples (refused, naming 4 x 144 = 576);
+    # a 96 x 96 receiver at spp 256: 256 / 16 = 16
+    from simlunar.lidar.flash import MIN_SAMPLES_PER_DOT, micromirror_sampling
+
+    assert micromirror_sampling((384, 384), (96, 96), 256) == pytest.approx(16.0)
+    assert micromirror_sampling((384, 384), (32, 32), 576) == pytest.approx(MIN_SAMPLES_PER_DOT)
+    with pytest.raises(ValueError, match=r"gives each lit guide pixel 0\.89 .* spp >= 576"):
+        micromirror_sampling((384, 384), (32, 32), 128)
+    with pytest.raises(ValueError, match="covers 144 of the 384 x 384"):
+        micromirror_sampling((384, 384), (32, 32), 575)
+
+
+def test_a_micromirror_sensor_refuses_dots_short_of_render_samples():
+    from simlunar.lidar.flash import FlashOptions
+    from simlunar.render.transient import TransientOptions
+    from simlunar.sensors import LidarScene, MicromirrorFlash, MicromirrorOptions
+    from simlunar.terrain import Terrain
+
+    plane = Terrain(heights=np.zeros((8, 8)), albedo=np.full((8, 8), 0.2, np.float32),
+                    spacing=1.0, origin=(-4.0, 4.0))  # fmt: skip
+    cam = Camera(
+        Intrinsics.from_fov(64, 64, 10.0),
+        Pose.look_at([0, 0, 50.0], [0, 0, 0.0], up=(0.0, 1.0, 0.0)),
+    )
+    flash = FlashOptions(transient=TransientOptions(spp=63))
+    with pytest.raises(ValueError, match="spp >= 64"):
+        MicromirrorFlash(LidarScene(plane, cam), MicromirrorOptions(flash, receiver_px=(16, 16)))
+    ok = dataclasses.replace(flash, transient=TransientOptions(spp=64))
+    MicromirrorFlash(LidarScene(plane, cam), MicromirrorOptions(ok, receiver_px=(16, 16)))

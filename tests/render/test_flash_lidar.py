@@ -198,3 +198,36 @@ def test_a_descending_micromirror_placed_from_its_start_is_lifted_by_the_metres_
     d = cam.rays(uv)[1]
     truth_xy = ((H - lift) / -d[:, 2])[:, None] * d[:, :2]
     assert scan.points[:, :2] == pytest.approx(truth_xy, abs=opts.bin_range_m)
+
+
+def test_pattern_frames_render_the_frame_of_a_freshly_loaded_scene(mi):
+    # one scene, patterns swapped through mi.traverse (the micromirror's frames at rest), gives
+    # each pattern's frame exactly as a scene loaded for it alone; the sun image is rendered
+    # once and is the same
+    from simlunar.geometry import Projector
+    from simlunar.lidar import TimeBins
+    from simlunar.render.lights import ProjectorLight, SunLight
+    from simlunar.render.transient import PatternFrames, TransientOptions, flash_frame
+
+    cam = _camera(16, 6.0)
+    receiver = type(cam)(cam.intrinsics.scaled(0.5), cam.pose)
+    bins = TimeBins.for_ranges(45.0, 60.0, 0.05)
+    opts = TransientOptions(spp=64)
+    sun = SunLight(elevation=np.radians(30.0), azimuth=np.radians(90.0), irradiance=1.0)
+    a, b = np.zeros((16, 16), np.float32), np.zeros((16, 16), np.float32)
+    a[2, 3] = a[9, 12] = 1.0
+    b[5, 5] = b[14, 1] = 1.0
+
+    def light(p):
+        return ProjectorLight(Projector(cam.intrinsics, cam.pose), p)
+
+    frames = PatternFrames(_plane(), receiver, bins=bins, options=opts, sun=sun, projector=light(a))
+    first, second = frames.render(), frames.render(b)
+    for got, pattern in ((first, a), (second, b)):
+        fresh = flash_frame(_plane(), receiver, bins=bins, options=opts, sun=sun,
+                            projector=light(pattern))  # fmt: skip
+        np.testing.assert_array_equal(got.histograms, fresh.histograms)
+        np.testing.assert_array_equal(got.sun, fresh.sun)
+    # the two patterns light different receiver pixels
+    assert not np.array_equal(first.steady > 0, second.steady > 0)
+    assert second.sun is first.sun
