@@ -32,6 +32,15 @@ pulse energy set by the gain control's probe pulses (target half the full scale)
 matched filter with the gate-edge guard (3 sigma); ``reference_s`` the same frame read by the
 ideal (unsaturated, uncontrolled) APD. ``render_share`` = render / (render + full read): what a
 frame of the study costs where the render dominates. ``smoke=True``: 16 x 16.
+
+``micromirror_frames``: a micromirror flash over the same scene and sun lighting every pixel of
+a 128 x 128 guide view through a 32 x 32 receiver (16 frames, spp 128: 8 samples per lit guide
+pixel) at rest: ``ours_s`` its scan, the frames sharing one loaded scene
+(:class:`~simlunar.render.transient.PatternFrames`: the pattern swapped, the sun image rendered
+once); ``reference_s`` the same frames each rendered by a freshly loaded scene and sun image
+(:func:`~simlunar.render.transient.flash_frame`, the path before) and read alike;
+``same_ranges`` whether both read every dot identically. ``smoke=True``: 32 x 32 guide, 8 x 8
+receiver.
 """
 
 from __future__ import annotations
@@ -258,4 +267,67 @@ def lidar_receiver(*, smoke: bool = False) -> dict:
     }
 
 
-BENCHMARKS = {"lidar": lidar, "lidar_receiver": lidar_receiver}
+def micromirror_frames(*, smoke: bool = False) -> dict:
+    from unittest import mock
+
+    from simlunar.geometry import Intrinsics
+    from simlunar.lidar import DetectorOptions
+    from simlunar.lidar.flash import FlashOptions
+    from simlunar.render import backend
+    from simlunar.render import flash_lidar as fl
+    from simlunar.render.lights import SunLight
+    from simlunar.render.transient import TransientOptions, flash_frame
+
+    backend.init()
+    px, rx = (32, 8) if smoke else (128, 32)
+    t, pose, fov, Camera = _setup()
+    cam = Camera(Intrinsics.from_fov(px, px, fov), pose)
+    sun = SunLight(elevation=np.radians(20.0), azimuth=np.radians(90.0))
+    det = DetectorOptions(signal_photons=2e7, background_photons_per_s=1e9, pulses=4)
+    opts = FlashOptions(detector=det, transient=TransientOptions(spp=128))
+    rr, cc = np.mgrid[0:px, 0:px]
+    uv = np.c_[cc.ravel(), rr.ravel()] + 0.5  # every guide pixel: (px / rx)^2 frames
+
+    def scan():
+        return fl.micromirror_flash(t, cam, uv, options=opts, receiver_shape=(rx, rx), rng=0,
+                                    scene={"sun": sun})  # fmt: skip
+
+    class _Fresh:
+        """The path before: every frame a freshly loaded scene and sun image."""
+
+        def __init__(self, terrain, camera, **kw):
+            self.args, self.kw = (terrain, camera), kw
+
+        def render(self, pattern=None):
+            kw = dict(self.kw)
+            if pattern is not None:
+                kw["projector"] = fl.ProjectorLight(kw["projector"].projector, pattern,
+                                                    scale=kw["projector"].scale)  # fmt: skip
+            return flash_frame(*self.args, **kw)
+
+    scan()  # warm-up: kernels compiled
+    t0 = time.perf_counter()
+    ours = scan()
+    ours_s = time.perf_counter() - t0
+    with mock.patch.object(fl, "PatternFrames", _Fresh):
+        t0 = time.perf_counter()
+        ref = scan()
+        reference_s = time.perf_counter() - t0
+    return {
+        "reference_s": round(reference_s, 3),
+        "ours_s": round(ours_s, 3),
+        "smoke": smoke,
+        "guide_px": px,
+        "receiver_px": rx,
+        "frames": int(ours.frames),
+        "terrain_cells": int(t.heights.size),
+        "same_ranges": bool(np.array_equal(ours.ranges, ref.ranges, equal_nan=True)),
+        "variant": backend.info().variant,
+    }
+
+
+BENCHMARKS = {
+    "lidar": lidar,
+    "lidar_receiver": lidar_receiver,
+    "micromirror_frames": micromirror_frames,
+}
