@@ -423,7 +423,9 @@ def _sensor_tables(cfg: ExperimentCfg, units, rows: list[dict], title: str):
     if cfg.study.kind == "scanner":
         return scanner_tables(rows, metrics=_names(units, "metrics"), title=title)
     # one table block per sweep point; terrain seeds pooled (their interval in the figures)
-    by = next(iter(cfg.sweep)) if len(cfg.sweep) == 1 else ("unit" if cfg.sweep else None)
+    # (several axes: a block per point of the others, a seed axis's units pooled too)
+    axes = [k for k in cfg.sweep if k not in ("seed", "terrain.seed_index")]
+    by = next(iter(cfg.sweep)) if len(cfg.sweep) == 1 else (axes or None)
     return lidar_tables(rows, metrics=_names(units, "metrics"), title=title, by=by)
 
 

@@ -91,15 +91,23 @@ ORACLE_NOTE = (
 
 
 def lidar_tables(
-    rows: list[dict], *, metrics: Sequence[str], title: str = "", by: str | None = None
+    rows: list[dict],
+    *,
+    metrics: Sequence[str],
+    title: str = "",
+    by: str | Sequence[str] | None = None,
 ) -> tuple[str, str]:
     """Markdown and LaTeX tables of a LIDAR study: per (point, planner, k) the mean scan time
     and the mean of each metric over trials and units (``by``: a column splitting the rows
-    into points, e.g. a sweep axis)."""
+    into points, e.g. a sweep axis, labelled ``column=value``; or several columns, e.g. every
+    axis of a sweep, each point labelled by their last name parts, ``sensor=flash,
+    elevation_deg=5``: the units of a point, its terrain seeds, pooled)."""
     extra = [m for m in ("valid_fraction", "hazard_precision", "hazard_recall", "safe_site")
              if m not in metrics and any(r["metric"] == m for r in rows)]  # fmt: skip
     names = [*metrics, *extra]
-    points = sorted({str(r.get(by)) for r in rows}) if by else [None]
+    cols = [by] if isinstance(by, str) else list(by or [])
+    points = _points(rows, cols) if len(cols) > 1 else sorted({str(r.get(by)) for r in rows})
+    points = points if cols else [None]
     header = [
         "Planner",
         "k",
@@ -108,7 +116,7 @@ def lidar_tables(
     ]
     body = []
     for pt in points:
-        where = {by: pt} if by else None
+        where = dict(zip(cols, pt)) if len(cols) > 1 else ({by: pt} if cols else None)
         sums = {m: lidar_summary(rows, metric=m, where=where) for m in names}
         first = sums[names[0]]
         for planner, d in first.items():
@@ -120,7 +128,7 @@ def lidar_tables(
                         f"{v['value'][i]:.3g}" if v is not None and i < len(v["k"]) else "–"
                     )
                 name = f"{planner} (a bound)" if planner.startswith(ORACLE) else planner
-                label = name if pt is None else f"{by}={pt}: {name}"
+                label = name if pt is None else f"{_point_label(cols, pt)}: {name}"
                 body.append((label, cells))
     md = [f"### {title}: LIDAR study (means over trials and terrain seeds)", "",
           "| " + " | ".join(header) + " |", "|---" + "|---:" * (len(header) - 1) + "|"]  # fmt: skip
@@ -134,3 +142,26 @@ def lidar_tables(
     tex += [" & ".join([lab.replace("_", "\\_"), *c]) + " \\\\" for lab, c in body]
     tex += ["\\bottomrule", "\\end{tabular}", "\\end{table}"]
     return "\n".join(md) + "\n", "\n".join(tex).replace("–", "--") + "\n"
+
+
+def _natural(v: str):
+    """Sort key of a column value: numbers by value before text."""
+    try:
+        return (0, float(v), "")
+    except ValueError:
+        return (1, 0.0, v)
+
+
+def _points(rows: list[dict], cols: list[str]) -> list[tuple[str, ...]]:
+    """The distinct value tuples of ``cols`` in ``rows``, in the order of the columns' values
+    (numbers by value)."""
+    pts = {tuple(str(r.get(c)) for c in cols) for r in rows}
+    return sorted(pts, key=lambda p: tuple(_natural(v) for v in p))
+
+
+def _point_label(cols: list[str], pt) -> str:
+    """``column=value`` of one column; ``name=value, ...`` (a dotted column's last part) of
+    several."""
+    if len(cols) == 1:
+        return f"{cols[0]}={pt}"
+    return ", ".join(f"{c.rsplit('.', 1)[-1]}={v}" for c, v in zip(cols, pt))

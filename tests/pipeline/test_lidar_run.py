@@ -155,7 +155,7 @@ def test_a_descent_study_with_a_moving_micromirror_runs(tmp_path):
                   f"compensation: {compensation}}}")  # fmt: skip
         tiny = [*TINY, "--set", "study.planners=[random]", "--set", "study.densities=[1/16]",
                 "--set", "study.options.micromirror={receiver_px: [8, 8]}",
-                "--set", "study.options.transient={spp: 32}", "--set", motion]  # fmt: skip
+                "--set", "study.options.transient={spp: 64}", "--set", motion]  # fmt: skip
         r = CliRunner().invoke(app, [*args, *tiny, "--no-progress", "--no-figures",
                                      "--save-scans"])  # fmt: skip
         assert r.exit_code == 0, r.output
@@ -223,7 +223,7 @@ def test_multi_round_planning_on_a_descending_micromirror_runs(tmp_path):
               "horizontal_m_s: [1.0, 0.0]}")  # fmt: skip
     tiny = [*TINY, "--set", "study.planners=[sequential]", "--set", "study.densities=[1/16]",
             "--set", "study.options.micromirror={receiver_px: [8, 8]}",
-            "--set", "study.options.transient={spp: 32}", "--set", motion]  # fmt: skip
+            "--set", "study.options.transient={spp: 64}", "--set", motion]  # fmt: skip
     r = CliRunner().invoke(app, [*args, *tiny, "--no-progress", "--no-figures"])
     assert r.exit_code == 0, r.output
     with (out / "results.csv").open() as f:

@@ -62,3 +62,29 @@ def test_oracle_rows_are_labelled_bounds():
     assert "bounds, not planners" in md and "oracle\\_greedy (a bound)" in tex
     plain, _ = lidar_tables(_rows(), metrics=["mse"], title="t")
     assert "(a bound)" not in plain and "bounds, not planners" not in plain
+
+
+def test_a_sweep_of_several_axes_has_a_block_per_point_with_its_seeds_pooled():
+    # two sensors x two suns x two terrain seeds: four blocks named by their values (suns by
+    # value, 5 before 45), each the mean over its two seeds (hand: (1 + 3) / 2 = 2)
+    rows = [
+        {"unit": str(u), "study.sensor": sensor, "render.light.elevation_deg": str(sun),
+         "terrain_seed": str(seed), "planner": "lloyd", "k": "64", "trial": "0",
+         "metric": "mse", "value": str(v + 2 * seed), "seconds": "1"}
+        for u, (sensor, sun, seed, v) in enumerate(
+            (s, e, t, 1.0 + (s == "flash") * 10 + e)
+            for s in ("micromirror_flash", "flash") for e in (45, 5) for t in (0, 1)
+        )
+    ]  # fmt: skip
+    md, _ = lidar_tables(rows, metrics=["mse"], title="t",
+                         by=["study.sensor", "render.light.elevation_deg"])  # fmt: skip
+    lines = [ln for ln in md.splitlines() if ln.startswith("| sensor=")]
+    assert [ln.split(":")[0] for ln in lines] == [
+        "| sensor=flash, elevation_deg=5",
+        "| sensor=flash, elevation_deg=45",
+        "| sensor=micromirror_flash, elevation_deg=5",
+        "| sensor=micromirror_flash, elevation_deg=45",
+    ]
+    # flash under the 5 deg sun: seeds 0 and 1 give 16 and 18, pooled to 17
+    assert lines[0].endswith(": lloyd | 64 | 1 | 17 |")
+    assert "unit=" not in md
