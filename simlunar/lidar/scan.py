@@ -50,6 +50,7 @@ from simlunar.lidar.waveform import PulseOptions, TimeBins
 from simlunar.registry import Options, option
 
 __all__ = [
+    "ALTIMETER_FIRES",
     "HARDWARE_SETS",
     "SteeredBeamOptions",
     "altimeter_datum",
@@ -177,13 +178,23 @@ def guide_directions(camera: Camera, rc: np.ndarray) -> np.ndarray:
     return camera.rays(rc[:, ::-1] + 0.5)[1]
 
 
+#: fires of one altimeter window at most: a detection is kept when a second fire of the window
+#: detects a return within ``margin_m`` of it (a background avalanche does not come back)
+ALTIMETER_FIRES = 3
+
+
 def altimeter_datum(capture, boresight, *, options: SteeredBeamOptions, rng=None, origin=None):
     """Range the boresight and return the plane it meets: ``(datum_z (m), window steps)``.
 
     The beam's window (``options.window_m``) is stepped out from ``gate.min_range_m`` in
     steps of ``window_m - 2 margin_m`` (overlapping by the margins) until a return is
-    detected, up to ``gate.max_range_m``; each step fires ``steering.pulses_per_point``
-    pulses. The plane is horizontal through the measured point (the IMU gives the vertical).
+    detected and confirmed, up to ``gate.max_range_m``; each step fires
+    ``steering.pulses_per_point`` pulses. A detection is confirmed by firing the same window
+    again (at most :data:`ALTIMETER_FIRES` fires in all): two detections within ``margin_m``
+    of each other lock the altimeter on the first; a window whose first fire detects nothing,
+    or whose detections never agree, is passed (a single background avalanche in an empty
+    window, which the first design locked onto, putting the gate tens of metres off). The
+    plane is horizontal through the measured point (the IMU gives the vertical).
 
     Parameters
     ----------
@@ -198,6 +209,12 @@ def altimeter_datum(capture, boresight, *, options: SteeredBeamOptions, rng=None
         Where the altimeter fires from (m; a moving platform at a later round's start,
         rendered through ``capture.render_beams`` with that origin); None = the capture's origin.
 
+    Returns
+    -------
+    datum_z : float
+    steps : int
+        Fires of the window in all (each ``pulses_per_point`` pulses before the scan).
+
     Raises
     ------
     NothingMeasured-like ValueError
@@ -211,14 +228,22 @@ def altimeter_datum(capture, boresight, *, options: SteeredBeamOptions, rng=None
     z0 = capture.origin[2] if origin is None else float(np.asarray(origin, float).reshape(3)[2])
     r0, k = g.min_range_m, 0
     while r0 < g.max_range_m:
-        k += 1
-        hist, bg, start = _altimeter_window(capture, d, r0, origin, options, seed=k)
-        counts = detect_counts(hist, bg, bins, options.pulse, det, rng, capture.oversample)
-        res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging,
-                             apd=det.apd, pulses=det.pulses)  # fmt: skip
-        if res.valid[0]:
+        seen: list[float] = []
+        for _ in range(ALTIMETER_FIRES):
+            k += 1
+            hist, bg, start = _altimeter_window(capture, d, r0, origin, options, seed=k)
+            counts = detect_counts(hist, bg, bins, options.pulse, det, rng, capture.oversample)
+            res = extract_ranges(counts, bins, pulse=options.pulse, options=options.ranging,
+                                 apd=det.apd, pulses=det.pulses)  # fmt: skip
+            if not res.valid[0]:
+                if not seen:
+                    break  # nothing in this window
+                continue
             r = float(res.range[0]) + start
-            return float(z0 + r * d[0, 2]), k
+            agree = [x for x in seen if abs(x - r) <= options.margin_m]
+            if agree:
+                return float(z0 + agree[0] * d[0, 2]), k
+            seen.append(r)
         r0 += step
     raise ValueError(f"altimeter: no return along the boresight within {g.max_range_m} m")
 

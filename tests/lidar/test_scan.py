@@ -293,25 +293,51 @@ def test_steered_scan_on_arrays_reads_the_plane():
 def test_the_altimeter_finds_the_plane_and_its_steps_cost_time():
     # the window (4 m, margins 1 m) steps out in 2 m steps from 0.1 m: step k covers
     # [r0, r0 + 4] m with r0 = 0.1 + 2 (k - 1), so the plane 50 m below the boresight is first
-    # inside in step k = 24 (46.1 to 50.1 m); each step fires pulses_per_point pulses before
-    # the scan starts
+    # inside in step k = 24 (46.1 to 50.1 m), fired twice (the detection confirmed): 23 + 2 =
+    # 25 fires of pulses_per_point pulses each before the scan starts
     opts = _beam_options(gate=GateOptions(altimeter=True))
     cam = _camera(64, 40.0)
     cap = _PlaneCapture(cam.position, opts.window)
     datum, steps = altimeter_datum(cap, [0.0, 0.0, -1.0], options=opts, rng=0)
     assert datum == pytest.approx(0.0, abs=0.1 * opts.bin_range_m)
-    assert steps == 24
+    assert steps == 25
     d = cam.rays(np.random.default_rng(0).uniform(0, 64, (10, 2)))[1]
     scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose)
-    lead = 24 * 4 / 1000.0
+    lead = 25 * 4 / 1000.0
     assert scan.seconds == pytest.approx(scan.timing.total_s + lead)
-    assert scan.frames == (10 + 24) * 4
+    assert scan.frames == (10 + 25) * 4
     assert scan.times.min() == pytest.approx(lead)
     # no plane within the instrument's range: a clear error
     far = _PlaneCapture([0.0, 0.0, 500.0], opts.window)
     near = _beam_options(gate=GateOptions(altimeter=True, max_range_m=100.0))
     with pytest.raises(ValueError, match=r"no return along the boresight within 100\.0 m"):
         altimeter_datum(far, [0.0, 0.0, -1.0], options=near, rng=0)
+
+
+class _SpikeCapture(_PlaneCapture):
+    """The plane, and in the altimeter's first fire only a return 2 m from the sensor: a
+    background avalanche in an empty window (seen at the full-size landing site under the
+    45 deg sun, where the first design locked onto one and gated the scan 48 m off)."""
+
+    def render_batch(self, directions, start_opl, seed=0, origins=None):
+        hist, sun = super().render_batch(directions, start_opl, seed, origins)
+        if seed == self.first_seed:
+            fine = dataclasses.replace(self.window.refined(self.oversample), start_opl=0.0)
+            hist = hist + splat_paths(np.array([[4.0 - float(start_opl)]]), 1.0, fine)
+        return hist.astype(np.float32), sun
+
+
+def test_the_altimeter_passes_a_detection_that_does_not_come_back():
+    # the spike is detected in window 1's first fire, not in its second and third: the window
+    # is passed (3 fires), windows 2-23 are empty (22), window 24 holds the plane (2): 27
+    # fires, and the datum is the plane's, not 48 m (the spike's plane)
+    opts = _beam_options(gate=GateOptions(altimeter=True))
+    cam = _camera(64, 40.0)
+    cap = _SpikeCapture(cam.position, opts.window)
+    cap.first_seed = opts.transient.seed + 7919
+    datum, steps = altimeter_datum(cap, [0.0, 0.0, -1.0], options=opts, rng=0)
+    assert datum == pytest.approx(0.0, abs=0.1 * opts.bin_range_m)
+    assert steps == 27
 
 
 def test_a_moving_platform_s_beams_are_rendered_in_firing_order():
@@ -371,7 +397,7 @@ def test_a_later_round_continues_the_trajectory_from_its_start_time():
 def test_a_later_round_s_altimeter_ranges_from_where_the_platform_is():
     # at t = 5 s of a 2 m/s descent the platform is 40 m above the plane: the altimeter's
     # window (4 m, stepped by 2 m from 0.1 m) first holds 40 m at step k = 19 (36.1 to 40.1 m),
-    # not at the k = 24 of 50 m, and the datum is still the plane z = 0
+    # not at the k = 24 of 50 m, fired twice (20 fires), and the datum is still the plane z = 0
     from simlunar.lidar.trajectory import Flight, Trajectory
 
     opts = _beam_options(gate=GateOptions(altimeter=True))
@@ -379,13 +405,13 @@ def test_a_later_round_s_altimeter_ranges_from_where_the_platform_is():
     cap = _PlaneCapture(cam.position, opts.window)
     datum, steps = altimeter_datum(cap, [0.0, 0.0, -1.0], options=opts, rng=0,
                                    origin=[0.0, 0.0, 40.0])  # fmt: skip
-    assert datum == pytest.approx(0.0, abs=0.1 * opts.bin_range_m) and steps == 19
+    assert datum == pytest.approx(0.0, abs=0.1 * opts.bin_range_m) and steps == 20
     d = cam.rays(np.random.default_rng(0).uniform(0, 64, (10, 2)))[1]
     traj = Trajectory.descent(cam.position, 2.0)
     scan = steered_beam_scan(cap, d, options=opts, rng=1, boresight=cam.pose,
                              flight=Flight(traj, start_s=5.0))  # fmt: skip
-    assert scan.frames == (10 + 19) * 4
-    assert scan.times.min() == pytest.approx(19 * 4 / 1000.0)
+    assert scan.frames == (10 + 20) * 4
+    assert scan.times.min() == pytest.approx(20 * 4 / 1000.0)
     # on the plane up to photon noise (these points scatter by a few mm)
     assert scan.points[:, 2] == pytest.approx(0.0, abs=0.02)
 
