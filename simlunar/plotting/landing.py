@@ -144,11 +144,22 @@ def landing_cost(
     return fig
 
 
+#: the most panels :func:`hazard_map_panel` puts in one row
+PANELS_PER_ROW = 7
+
+
 def hazard_map_panel(image, truth_hazards, found: dict, *, title: str = ""):
     """The guide image, the true hazard map and each reconstruction's (name -> bool map), the
-    misses red and the false alarms blue over the found hazards in black. Returns the figure."""
+    misses red and the false alarms blue over the found hazards in black; at most
+    :data:`PANELS_PER_ROW` panels a row, the rows filled evenly (a full landing unit's 6 plans x
+    2 reconstructions were 14 panels in one row, 27 in wide). Returns the figure."""
     n = 2 + len(found)
-    fig, axes = plt.subplots(1, n, figsize=(2.6 * n, 2.9))
+    rows = -(-n // PANELS_PER_ROW)
+    cols = -(-n // rows)
+    fig, grid = plt.subplots(rows, cols, figsize=(2.6 * cols, 2.9 * rows), squeeze=False)
+    for ax in grid.ravel()[n:]:
+        fig.delaxes(ax)
+    axes = grid.ravel()[:n]
     axes[0].imshow(np.asarray(image, float), cmap="gray")
     axes[0].set_title("guide image", fontsize=8)
     t = np.asarray(truth_hazards, bool)

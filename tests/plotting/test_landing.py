@@ -94,3 +94,24 @@ def test_hazard_panel_colours_found_missed_and_false_alarms():
         assert fig.axes[2].get_title() == "flash, linear"
     finally:
         plt.close(fig)
+
+
+def test_a_hazard_panel_of_many_reconstructions_wraps_into_even_rows():
+    # guide + truth + 12 reconstructions = 14 panels: 2 rows of 7 (was one row of 14); 5
+    # panels stay in one row
+    truth = np.zeros((4, 4), bool)
+    found = {f"plan {i}, linear": truth for i in range(12)}
+    fig = hazard_map_panel(np.zeros((4, 4)), truth, found)
+    try:
+        assert len(fig.axes) == 14
+        rows = sorted({round(ax.get_position().y0, 3) for ax in fig.axes})
+        cols = sorted({round(ax.get_position().x0, 3) for ax in fig.axes})
+        assert len(rows) == 2 and len(cols) == 7
+        assert fig.axes[2].get_title() == "plan 0, linear"
+    finally:
+        plt.close(fig)
+    fig = hazard_map_panel(np.zeros((4, 4)), truth, dict(list(found.items())[:3]))
+    try:
+        assert len({round(ax.get_position().y0, 3) for ax in fig.axes}) == 1
+    finally:
+        plt.close(fig)
