@@ -39,8 +39,8 @@ pixel) at rest: ``ours_s`` its scan, the frames sharing one loaded scene
 (:class:`~simlunar.render.transient.PatternFrames`: the pattern swapped, the sun image rendered
 once); ``reference_s`` the same frames each rendered by a freshly loaded scene and sun image
 (:func:`~simlunar.render.transient.flash_frame`, the path before) and read alike;
-``same_ranges`` whether both read every dot identically. ``smoke=True``: 32 x 32 guide, 8 x 8
-receiver.
+``same_ranges`` whether both read every dot identically. ``smoke=True``: 16 x 16 guide, 8 x 8
+receiver (4 frames).
 """
 
 from __future__ import annotations
@@ -279,7 +279,7 @@ def micromirror_frames(*, smoke: bool = False) -> dict:
     from simlunar.render.transient import TransientOptions, flash_frame
 
     backend.init()
-    px, rx = (32, 8) if smoke else (128, 32)
+    px, rx = (16, 8) if smoke else (128, 32)
     t, pose, fov, Camera = _setup()
     cam = Camera(Intrinsics.from_fov(px, px, fov), pose)
     sun = SunLight(elevation=np.radians(20.0), azimuth=np.radians(90.0))
