@@ -97,8 +97,9 @@ def lidar_tables(
     title: str = "",
     by: str | Sequence[str] | None = None,
 ) -> tuple[str, str]:
-    """Markdown and LaTeX tables of a LIDAR study: per (point, planner, k) the mean scan time
-    and the mean of each metric over trials and units (``by``: a column splitting the rows
+    """Markdown and LaTeX tables of a LIDAR study: per (point, planner, k) the mean measured
+    samples (``k`` is the plan's nominal count: a plan fitted to a budget measures another),
+    the mean scan time and the mean of each metric over trials and units (``by``: a column splitting the rows
     into points, e.g. a sweep axis, labelled ``column=value``; or several columns, e.g. every
     axis of a sweep, each point labelled by their last name parts, ``sensor=flash,
     elevation_deg=5``: the units of a point, its terrain seeds, pooled)."""
@@ -111,6 +112,7 @@ def lidar_tables(
     header = [
         "Planner",
         "k",
+        "samples",
         "scan time (s)",
         *[METRIC_NAMES.get(m, m.replace("_", " ")) for m in names],
     ]
@@ -121,7 +123,7 @@ def lidar_tables(
         first = sums[names[0]]
         for planner, d in first.items():
             for i, k in enumerate(d["k"]):
-                cells = [f"{int(k)}", f"{d['seconds'][i]:.3g}"]
+                cells = [f"{int(k)}", f"{d['samples'][i]:.0f}", f"{d['seconds'][i]:.3g}"]
                 for m in names:
                     v = sums[m].get(planner)
                     cells.append(

@@ -44,7 +44,7 @@ def test_a_tiny_steered_beam_study_runs_end_to_end(tmp_path):
     args = ["run", str(ROOT / "experiments" / "lidar_descent_altimeter.yaml"), "--out", str(out)]
     r = CliRunner().invoke(app, [*args, *TINY, "--no-progress"])
     assert r.exit_code == 0, r.output
-    assert "| Planner | k | scan time (s) | MSE | GRAD | valid fraction |" in r.output
+    assert "| Planner | k | samples | scan time (s) | MSE | GRAD | valid fraction |" in r.output
     with (out / "results.csv").open() as f:
         rows = list(csv.DictReader(f))
     assert {"planner", "k", "seconds", "frames", "samples", "value"} <= set(rows[0])

@@ -36,9 +36,19 @@ def test_lidar_summary_means_times_and_a_band_over_units():
 
 def test_lidar_tables_list_time_and_metrics():
     md, tex = lidar_tables(_rows(), metrics=["mse"], title="t")
-    assert "| Planner | k | scan time (s) | MSE |" in md
-    assert "| grid | 64 | 4 |" in md and "| wavelet | 256 | 24 |" in md
-    assert "\\begin{tabular}{lrrr}" in tex
+    assert "| Planner | k | samples | scan time (s) | MSE |" in md
+    assert "| grid | 64 | 64 | 4 |" in md and "| wavelet | 256 | 256 | 24 |" in md
+    assert "\\begin{tabular}{lrrrr}" in tex
+
+
+def test_a_budget_fitted_plan_shows_its_measured_samples_beside_its_nominal_k():
+    # a plan fitted to a time or energy budget keeps its nominal k (the curve's point) but
+    # measures another count: the table shows both, the mean of the measured one
+    rows = [{"unit": str(u), "planner": "wavelet_flash_energy", "k": "1024", "trial": "0",
+             "metric": "mse", "value": "0.01", "seconds": "2.0", "samples": str(n)}
+            for u, n in ((0, 16379), (1, 16381))]  # fmt: skip
+    md, _ = lidar_tables(rows, metrics=["mse"], title="t")
+    assert "| wavelet_flash_energy | 1024 | 16380 | 2 | 0.01 |" in md
 
 
 def test_a_swept_option_makes_separate_points_of_one_curve():
@@ -58,7 +68,7 @@ def test_oracle_rows_are_labelled_bounds():
               "value": "0.001", "seconds": "3.5"}  # fmt: skip
     rows = [*_rows(), oracle]
     md, tex = lidar_tables(rows, metrics=["mse"], title="t")
-    assert "| oracle_greedy (a bound) | 64 | 3.5 | 0.001 |" in md
+    assert "| oracle_greedy (a bound) | 64 | 64 | 3.5 | 0.001 |" in md
     assert "bounds, not planners" in md and "oracle\\_greedy (a bound)" in tex
     plain, _ = lidar_tables(_rows(), metrics=["mse"], title="t")
     assert "(a bound)" not in plain and "bounds, not planners" not in plain
@@ -86,5 +96,5 @@ def test_a_sweep_of_several_axes_has_a_block_per_point_with_its_seeds_pooled():
         "| sensor=micromirror_flash, elevation_deg=45",
     ]
     # flash under the 5 deg sun: seeds 0 and 1 give 16 and 18, pooled to 17
-    assert lines[0].endswith(": lloyd | 64 | 1 | 17 |")
+    assert lines[0].endswith(": lloyd | 64 | 64 | 1 | 17 |")
     assert "unit=" not in md
