@@ -32,7 +32,10 @@ def landing_recall(
 ):
     """Grouped bars: per (sensor, planner) the mean rock recall per size, slope recall and the
     false-safe rate of the chosen site, with their 95 % intervals over terrain seeds; one panel
-    per light (``light_key`` values). Returns the figure."""
+    per light (``light_key`` values). A black diamond on a recall bar is the mean precision of
+    that hazard (a recall made of false alarms reads as such); a false-safe bar of a group
+    that called no site safe on any seed is replaced by "no safe site" (its 0 would say
+    nothing). Returns the figure."""
     keys = [sensor_key] + ([light_key] if light_key else [])
     summary = {g: c for g, c in landing_summary(rows, keys=keys).items()
                if g[len(keys)] == reconstruction}  # fmt: skip
@@ -54,11 +57,23 @@ def landing_recall(
                 g = (sensor, light, reconstruction, planner) if light_key else (
                     sensor, reconstruction, planner)  # fmt: skip
                 mean, lo, hi = summary.get(g, {}).get(m, (np.nan, np.nan, np.nan))
+                if m == "false_safe_site" and _never_safe(summary.get(g, {})):
+                    mean = lo = hi = np.nan  # no site called safe: no false-safe rate
+                    ax.text(x[len(vals)] + (j - (len(metrics) - 1) / 2) * width, 0.02,
+                            "no safe site", rotation=90, ha="center", va="bottom",
+                            fontsize=6, color=colours(j))  # fmt: skip
                 vals.append(mean)
                 err[0].append(mean - lo)
                 err[1].append(hi - mean)
-            ax.bar(x + (j - (len(metrics) - 1) / 2) * width, vals, width, yerr=err, capsize=2,
-                   color=colours(j), label=_label(m))  # fmt: skip
+            xs = x + (j - (len(metrics) - 1) / 2) * width
+            ax.bar(xs, vals, width, yerr=err, capsize=2, color=colours(j), label=_label(m))
+            if m.startswith("hazard_recall_"):
+                prec = m.replace("hazard_recall_", "hazard_precision_")
+                p = [_mean(summary, (s, light, reconstruction, pl) if light_key else
+                           (s, reconstruction, pl), prec) for s, pl in groups]  # fmt: skip
+                if np.isfinite(p).any():
+                    ax.plot(xs, p, "D", color="black", ms=3, ls="none",
+                            label="precision of that hazard" if j == 0 else None)  # fmt: skip
         ax.set_xticks(x, [f"{s.replace('_', ' ')}\n{p}" for s, p in groups], fontsize=7,
                       rotation=30, ha="right")  # fmt: skip
         ax.set_ylim(0, 1.05)
@@ -66,13 +81,27 @@ def landing_recall(
         ax.grid(axis="y", alpha=0.3)
     for ax in axes[:, 0]:
         ax.set_ylabel("recall / rate")
-    fig.suptitle(f"{title}\nbars: mean over terrain seeds; whiskers: 95 % interval over the seeds",
-                 fontsize=10)  # fmt: skip
+    fig.suptitle(f"{title}\nbars: mean over terrain seeds; whiskers: 95 % interval over the seeds; "
+                 "diamonds: mean precision", fontsize=10)  # fmt: skip
     handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=min(len(metrics), 4), fontsize=8,
+    # the bars' metrics in their order, then the precision marker (matplotlib lists lines first)
+    order = sorted(range(len(labels)), key=lambda i: labels[i].startswith("precision"))
+    handles, labels = [handles[i] for i in order], [labels[i] for i in order]
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 5), fontsize=8,
                frameon=False)  # fmt: skip
     fig.tight_layout(rect=(0, 0.35 / tall, 1, 1 - 0.55 / tall))
     return fig
+
+
+def _mean(summary: dict, group: tuple, metric: str) -> float:
+    """The mean of ``metric`` in ``group`` (NaN when the group has no such metric)."""
+    return summary.get(group, {}).get(metric, (np.nan,))[0]
+
+
+def _never_safe(cells: dict) -> bool:
+    """True when the group called no site safe on any seed (``safe_site_called`` = 0)."""
+    called = cells.get("safe_site_called")
+    return called is not None and called[0] == 0
 
 
 def landing_cost(

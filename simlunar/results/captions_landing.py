@@ -16,7 +16,9 @@ def landing_recall(study: dict, reconstruction: str) -> str:
         f"one panel per sun elevation: recall of the rocks taller than {sizes} (rocks counted "
         f"as objects), recall of the slopes above {land.get('slope_deg', 5)} deg across a "
         f"{land.get('footprint_m', 4)} m footprint (pixels), and the false-safe rate (the "
-        "chosen site called safe but unsafe in the truth). Bars: mean over "
+        'chosen site called safe but unsafe in the truth; "no safe site" where a sensor and '
+        "planner called no site safe on any seed). Black diamonds: the mean precision of the "
+        "hazard under them (a high recall at a low precision is false alarms). Bars: mean over "
         f"{seeds} terrain seed(s); whiskers: 95 % bootstrap interval over seeds."
     )
 

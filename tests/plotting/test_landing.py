@@ -35,6 +35,41 @@ def test_recall_bars_are_the_means_over_seeds_one_panel_per_light():
         plt.close(fig)
 
 
+def test_precision_sits_on_its_recall_bar_and_a_group_that_called_no_site_safe_says_so():
+    # the flash: recall 0.8 at precision 0.9, a site called safe (false-safe 0.5); the
+    # micromirror: recall 0.9 made of false alarms (precision 0.05), no site ever called safe
+    rows = []
+    for unit in (0, 1):
+        for sensor, rec, prec, called, fs in (
+            ("flash", 0.8, 0.9, 1.0, unit * 1.0),
+            ("micromirror_flash", 0.9, 0.05, 0.0, 0.0),
+        ):
+            for metric, value in (
+                ("hazard_recall_rock_15cm", rec),
+                ("hazard_precision_rock_15cm", prec),
+                ("false_safe_site", fs),
+                ("safe_site_called", called),
+            ):
+                rows.append({"unit": f"{sensor}{unit}", "study.sensor": sensor,
+                             "planner": "none", "reconstruction": "linear", "metric": metric,
+                             "value": value, "seconds": 0.5})  # fmt: skip
+    fig = landing_recall(rows, sensor_key="study.sensor", light_key=None)
+    try:
+        ax = fig.axes[0]
+        diamonds = [ln for ln in ax.lines if ln.get_marker() == "D"]
+        assert len(diamonds) == 1
+        assert diamonds[0].get_ydata().tolist() == pytest.approx([0.9, 0.05])
+        heights = [p.get_height() for p in ax.patches]
+        # bars: recall (flash, micromirror), then false-safe (flash, micromirror)
+        assert heights[:3] == pytest.approx([0.8, 0.9, 0.5])
+        assert np.isnan(heights[3])  # no site called safe: no false-safe bar ...
+        assert [t.get_text() for t in ax.texts] == ["no safe site"]  # ... but words
+        labels = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert labels == ["rock 15cm recall", "false-safe site", "precision of that hazard"]
+    finally:
+        plt.close(fig)
+
+
 def test_cost_curves_put_each_sensor_s_planners_at_their_time_and_energy():
     # the flash (one point: 0.13 s, 0.12 J); a steered beam's lloyd plan at 1 s / 0.04 J and
     # the same strategy fitted to a 0.1 s budget (0.004 J); its wavelet plan, whose energy was

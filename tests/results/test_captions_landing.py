@@ -11,6 +11,7 @@ def test_recall_caption_names_every_size_the_slope_and_the_seeds():
     assert "15 cm, 30 cm" in text and "5 deg across a 4.0 m footprint" in text
     assert "shading reconstruction" in text and "8 terrain seed(s)" in text
     assert "95 % bootstrap interval" in text
+    assert "diamonds: the mean precision" in text and "no safe site" in text
 
 
 def test_cost_caption_names_the_smallest_rock_and_both_axes():
