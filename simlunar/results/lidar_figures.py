@@ -4,6 +4,8 @@ image, beams in visiting order, measured depths) (docs/lidar.md)."""
 
 from __future__ import annotations
 
+import itertools
+
 from simlunar.plotting.landing import hazard_map_panel, landing_cost, landing_recall
 from simlunar.plotting.landing_tables import landing_columns
 from simlunar.plotting.layout import panel_grid
@@ -23,7 +25,7 @@ from simlunar.results.aggregate import (
 )
 from simlunar.results.store import UnitCache
 
-__all__ = ["lidar_figures"]
+__all__ = ["hazard_units", "lidar_figures"]
 
 #: at most this many panels (sweep points) per figure
 MAX_PANELS = 6
@@ -73,19 +75,32 @@ def lidar_figures(res: dict, emit, captions: dict) -> None:
         _hazard_figures(res, emit, captions)
 
 
+def hazard_units(records: list[dict]) -> list[dict]:
+    """The units of the first terrain seed in the order their hazard maps are drawn: sensors
+    taken in turn (a sweep's first unit of each sensor, then the second of each, ...), so that
+    the first :data:`MAX_PANELS` show every swept sensor, not the first sensor under every
+    light."""
+    by_sensor: dict[str, list[dict]] = {}
+    for rec in records:
+        terrain = (rec.get("config") or {}).get("terrain") or {}
+        if int(terrain.get("seed_index", 0) or 0) == 0:
+            sensor = str((rec.get("sweep") or {}).get("study.sensor", ""))
+            by_sensor.setdefault(sensor, []).append(rec)
+    turns = itertools.zip_longest(*by_sensor.values())
+    return [rec for turn in turns for rec in turn if rec is not None]
+
+
 def _hazard_figures(res: dict, emit, captions: dict) -> None:
-    """``landing_hazards_unit<i>`` of the first :data:`MAX_PANELS` units of the first terrain
-    seed that kept hazard maps: the guide image, the true hazards and each planner's and
-    reconstruction's (trial 0, largest density)."""
+    """``landing_hazards_unit<i>`` of up to :data:`MAX_PANELS` units of the first terrain
+    seed that kept hazard maps (every swept sensor first, :func:`hazard_units`): the guide
+    image, the true hazards and each planner's and reconstruction's (trial 0, largest
+    density)."""
     config = res["config"]
     cache = UnitCache(res["dir"])
     shown = 0
-    for rec in res["units"]:
+    for rec in hazard_units(res["units"]):
         if shown >= MAX_PANELS:
             break
-        terrain = (rec.get("config") or {}).get("terrain") or {}
-        if int(terrain.get("seed_index", 0) or 0) != 0:
-            continue
         arrays = cache.load_arrays(rec["key"], strict=True)
         if "hazards_truth" not in arrays or "image" not in arrays:
             continue

@@ -7,7 +7,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import pytest
 
-from simlunar.results.lidar_figures import MAX_PANELS, lidar_figures
+from simlunar.results.lidar_figures import MAX_PANELS, hazard_units, lidar_figures
 
 
 @pytest.fixture(autouse=True)
@@ -105,3 +105,25 @@ def test_a_scan_figure_per_unit_from_its_cached_beams(tmp_path):
     cap = captions["lidar_scan_unit0"]
     assert "steered beam scan per planner (Wavelet; Random)" in cap
     assert "visited" in cap and "no range" in cap
+
+
+def test_hazard_maps_take_the_sensors_in_turn_so_the_first_six_show_every_sensor():
+    # 3 sensors x 3 lights x 2 terrain seeds, in sweep order (sensor, light, seed): the first
+    # six of seed 0 in index order would be the flash and the steered beam only
+    records = [
+        {"index": i, "sweep": {"study.sensor": s, "render.light.elevation_deg": e},
+         "config": {"terrain": {"seed_index": seed}}}
+        for i, (s, e, seed) in enumerate(
+            (s, e, seed) for s in ("flash", "steered_beam", "micromirror_flash")
+            for e in (3, 8, 45) for seed in (0, 1)
+        )
+    ]  # fmt: skip
+    order = hazard_units(records)
+    assert len(order) == 9  # seed 0 only
+    first = order[:MAX_PANELS]
+    assert [r["sweep"]["study.sensor"] for r in first[:3]] == [
+        "flash", "steered_beam", "micromirror_flash"]  # fmt: skip
+    assert [r["index"] for r in first] == [0, 6, 12, 2, 8, 14]
+    # one sensor (no sensor axis): the units in their own order
+    one = [{**r, "sweep": {"render.light.elevation_deg": 3}} for r in records[:4]]
+    assert [r["index"] for r in hazard_units(one)] == [0, 2]
