@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.lines import Line2D
 
 from simlunar.plotting.landing_tables import landing_summary
 
@@ -120,7 +121,9 @@ def landing_cost(
     (``strategies``: label -> strategy, e.g. a budget-fitted ``wavelet_flash_time`` ->
     ``wavelet``; a label without one is its own), the points of one sensor and strategy joined
     in order of cost (what more time or energy buys it); whiskers: 95 % intervals over terrain
-    seeds. A point whose energy is not priced (NaN or 0) is left out of the energy panel.
+    seeds; dashed with open markers, the same plans' precision of that hazard (a recall bought
+    with false alarms shows as one). A point whose energy is not priced (NaN or 0) is left out
+    of the energy panel.
     Returns the figure, or None without the metric."""
     strategies = dict(strategies or {})
     keys = [sensor_key] + ([light_key] if light_key else [])
@@ -133,6 +136,7 @@ def landing_cost(
         metric = rocks[0] if rocks else None
     if metric is None or not any(metric in c for c in summary.values()):
         return None
+    precision = metric.replace("hazard_recall_", "hazard_precision_")
     lights = sorted({g[1] for g in summary}, key=float) if light_key else [""]
     sensors = sorted({g[0] for g in summary})
     families = sorted({strategies.get(g[-1], g[-1]) for g in summary})
@@ -151,22 +155,34 @@ def landing_cost(
                                 or strategies.get(g[-1], g[-1]) != fam):  # fmt: skip
                             continue
                         if np.isfinite(c[cost]) and c[cost] > 0:
-                            pts.append((c[cost], *c[metric]))
+                            pts.append((c[cost], *c[metric], c.get(precision, (np.nan,))[0]))
                     if not pts:
                         continue
-                    x, mean, lo, hi = (np.array(v) for v in zip(*sorted(pts), strict=True))
+                    x, mean, lo, hi, prec = (np.array(v) for v in zip(*sorted(pts), strict=True))
                     label = sensor.replace("_", " ") + ("" if fam == "none" else f", {fam}")
                     ax.errorbar(x, mean, yerr=[mean - lo, hi - mean], marker=markers[fam], ms=5,
                                 capsize=2, color=colours(i), label=label)  # fmt: skip
+                    if np.isfinite(prec).any():  # the same plans' precision: dashed, open
+                        ax.plot(x, prec, ls="--", marker=markers[fam], ms=4, mfc="none",
+                                color=colours(i), alpha=0.7, gid="precision")  # fmt: skip
             ax.set_xscale("log")
             ax.set_xlabel(xlabel)
             ax.set_ylim(0, 1.05)
             ax.grid(alpha=0.3)
             ax.set_title(f"sun {light} deg" if light_key else "", fontsize=9)
         row[0].set_ylabel(_label(metric))
+    drawn = any(ln.get_gid() == "precision" for ax in axes.flat for ln in ax.lines)
+    if drawn:
+        for row in axes:
+            row[0].set_ylabel(f"{_label(metric)} / precision")
     fig.suptitle(f"{title}\npoints: means over terrain seeds; lines: a strategy's plans in order "
-                 "of cost; whiskers: 95 % intervals", fontsize=9)  # fmt: skip
+                 "of cost; whiskers: 95 % intervals"
+                 + ("; dashed, open: the same plans' precision" if drawn else ""),
+                 fontsize=9)  # fmt: skip
     handles, labels = axes[0][0].get_legend_handles_labels()
+    if drawn:
+        handles.append(Line2D([], [], ls="--", marker="o", mfc="none", color="grey"))
+        labels.append(_label(precision))
     fig.legend(handles, labels, loc="lower center", ncol=min(max(len(labels), 1), 4), fontsize=8,
                frameon=False)  # fmt: skip
     fig.tight_layout(rect=(0, 0.07, 1, 0.95))

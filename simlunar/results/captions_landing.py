@@ -33,7 +33,9 @@ def landing_cost(study: dict, reconstruction: str) -> str:
         f"than {round(small * 100)} cm against the acquisition's scan time (left) and the laser "
         "energy it fired (right), both log scales, one row per sun elevation. Colour: the "
         "sensor; marker: the planner's strategy, its plans (a density, or fitted to a time or "
-        "energy budget) joined in order of cost. Points: mean over "
+        "energy budget) joined in order of cost; dashed with open markers, the same plans' "
+        "precision of those rocks (a recall bought with false alarms shows as one). Points: "
+        "mean over "
         f"{seeds} terrain seed(s); whiskers: 95 % bootstrap interval over seeds."
     )
 

@@ -114,6 +114,34 @@ def test_cost_curves_put_each_sensor_s_planners_at_their_time_and_energy():
     assert landing_cost(no_rocks, sensor_key="study.sensor", light_key=None) is None
 
 
+def test_cost_curves_carry_each_plan_s_precision_dashed():
+    # two plans of one strategy at 1 s and 2 s: recall 0.3 / 0.8 at precision 0.9 / 0.1 (the
+    # second recall bought with false alarms); the flash has no precision row: no dashed line
+    rows = []
+    for sensor, planner, s, recall, prec in (("micromirror_flash", "lloyd", 1.0, 0.3, 0.9),
+                                             ("micromirror_flash", "lloyd_big", 2.0, 0.8, 0.1),
+                                             ("flash", "none", 0.13, 0.5, None)):  # fmt: skip
+        for m, v in (("hazard_recall_rock_15cm", recall), ("hazard_precision_rock_15cm", prec)):
+            if v is not None:
+                rows.append({"unit": 0, "study.sensor": sensor, "planner": planner,
+                             "reconstruction": "linear", "metric": m, "value": v, "seconds": s,
+                             "energy_j": 0.01 * s})  # fmt: skip
+    fig = landing_cost(rows, sensor_key="study.sensor", light_key=None,
+                       strategies={"lloyd_big": "lloyd"})  # fmt: skip
+    try:
+        t_ax = fig.axes[0]
+        dashed = [ln for ln in t_ax.lines if ln.get_gid() == "precision"]
+        assert len(dashed) == 1 and dashed[0].get_linestyle() == "--"
+        assert list(dashed[0].get_xdata()) == [1.0, 2.0]
+        assert list(dashed[0].get_ydata()) == pytest.approx([0.9, 0.1])
+        labels = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert labels[-1] == "rock 15cm precision"
+        assert t_ax.get_ylabel() == "rock 15cm recall / precision"
+        assert "dashed, open: the same plans' precision" in fig._suptitle.get_text()
+    finally:
+        plt.close(fig)
+
+
 def test_hazard_panel_colours_found_missed_and_false_alarms():
     truth = np.zeros((4, 4), bool)
     truth[0, 0] = truth[1, 1] = True

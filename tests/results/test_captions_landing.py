@@ -18,6 +18,7 @@ def test_cost_caption_names_the_smallest_rock_and_both_axes():
     text = landing_cost({**STUDY, "landing": {"rock_heights_m": [0.5, 0.2]}}, "linear")
     assert "taller than 20 cm" in text  # the smallest of the study's sizes
     assert "scan time (left)" in text and "laser energy it fired (right)" in text
+    assert "dashed with open markers, the same plans' precision" in text
     assert "8 terrain seed(s)" in text
 
 
