@@ -52,26 +52,24 @@ def landing_recall(
     colours = plt.get_cmap("tab10")
     for ax, light in zip(axes[:, 0], lights, strict=True):
         x = np.arange(len(groups))
+        cells = [summary.get((s, light, reconstruction, pl) if light_key else
+                             (s, reconstruction, pl), {}) for s, pl in groups]  # fmt: skip
         for j, m in enumerate(metrics):
+            xs = x + (j - (len(metrics) - 1) / 2) * width
             vals, err = [], [[], []]
-            for sensor, planner in groups:
-                g = (sensor, light, reconstruction, planner) if light_key else (
-                    sensor, reconstruction, planner)  # fmt: skip
-                mean, lo, hi = summary.get(g, {}).get(m, (np.nan, np.nan, np.nan))
-                if m == "false_safe_site" and _never_safe(summary.get(g, {})):
+            for xi, c in zip(xs, cells, strict=True):
+                mean, lo, hi = c.get(m, (np.nan, np.nan, np.nan))
+                if m == "false_safe_site" and _never_safe(c):
                     mean = lo = hi = np.nan  # no site called safe: no false-safe rate
-                    ax.text(x[len(vals)] + (j - (len(metrics) - 1) / 2) * width, 0.02,
-                            "no safe site", rotation=90, ha="center", va="bottom",
+                    ax.text(xi, 0.02, "no safe site", rotation=90, ha="center", va="bottom",
                             fontsize=6, color=colours(j))  # fmt: skip
                 vals.append(mean)
                 err[0].append(mean - lo)
                 err[1].append(hi - mean)
-            xs = x + (j - (len(metrics) - 1) / 2) * width
             ax.bar(xs, vals, width, yerr=err, capsize=2, color=colours(j), label=_label(m))
             if m.startswith("hazard_recall_"):
                 prec = m.replace("hazard_recall_", "hazard_precision_")
-                p = [_mean(summary, (s, light, reconstruction, pl) if light_key else
-                           (s, reconstruction, pl), prec) for s, pl in groups]  # fmt: skip
+                p = [_mean(c, prec) for c in cells]
                 if np.isfinite(p).any():
                     ax.plot(xs, p, "D", color="black", ms=3, ls="none",
                             label="precision of that hazard" if j == 0 else None)  # fmt: skip
@@ -94,9 +92,9 @@ def landing_recall(
     return fig
 
 
-def _mean(summary: dict, group: tuple, metric: str) -> float:
-    """The mean of ``metric`` in ``group`` (NaN when the group has no such metric)."""
-    return summary.get(group, {}).get(metric, (np.nan,))[0]
+def _mean(cells: dict, metric: str) -> float:
+    """The mean of ``metric`` in a group's cells (NaN when the group has no such metric)."""
+    return cells.get(metric, (np.nan,))[0]
 
 
 def _never_safe(cells: dict) -> bool:
@@ -155,7 +153,7 @@ def landing_cost(
                                 or strategies.get(g[-1], g[-1]) != fam):  # fmt: skip
                             continue
                         if np.isfinite(c[cost]) and c[cost] > 0:
-                            pts.append((c[cost], *c[metric], c.get(precision, (np.nan,))[0]))
+                            pts.append((c[cost], *c[metric], _mean(c, precision)))
                     if not pts:
                         continue
                     x, mean, lo, hi, prec = (np.array(v) for v in zip(*sorted(pts), strict=True))
@@ -170,11 +168,15 @@ def landing_cost(
             ax.set_ylim(0, 1.05)
             ax.grid(alpha=0.3)
             ax.set_title(f"sun {light} deg" if light_key else "", fontsize=9)
-        row[0].set_ylabel(_label(metric))
+    _cost_labels(fig, axes, title, metric, precision)
+    return fig
+
+
+def _cost_labels(fig, axes, title: str, metric: str, precision: str) -> None:
+    """The y labels, title and legend of :func:`landing_cost` (the precision's, where drawn)."""
     drawn = any(ln.get_gid() == "precision" for ax in axes.flat for ln in ax.lines)
-    if drawn:
-        for row in axes:
-            row[0].set_ylabel(f"{_label(metric)} / precision")
+    for row in axes:
+        row[0].set_ylabel(_label(metric) + (" / precision" if drawn else ""))
     fig.suptitle(f"{title}\npoints: means over terrain seeds; lines: a strategy's plans in order "
                  "of cost; whiskers: 95 % intervals"
                  + ("; dashed, open: the same plans' precision" if drawn else ""),
@@ -186,7 +188,6 @@ def landing_cost(
     fig.legend(handles, labels, loc="lower center", ncol=min(max(len(labels), 1), 4), fontsize=8,
                frameon=False)  # fmt: skip
     fig.tight_layout(rect=(0, 0.07, 1, 0.95))
-    return fig
 
 
 #: the most panels :func:`hazard_map_panel` puts in one row

@@ -99,8 +99,9 @@ def lidar_tables(
 ) -> tuple[str, str]:
     """Markdown and LaTeX tables of a LIDAR study: per (point, planner, k) the mean measured
     samples (``k`` is the plan's nominal count: a plan fitted to a budget measures another),
-    the mean scan time and the mean of each metric over trials and units (``by``: a column splitting the rows
-    into points, e.g. a sweep axis, labelled ``column=value``; or several columns, e.g. every
+    the mean scan time and the mean of each metric over trials and units (``by``: a column
+    splitting the rows into points, e.g. a sweep axis, labelled ``column=value``; or several
+    columns, e.g. every
     axis of a sweep, each point labelled by their last name parts, ``sensor=flash,
     elevation_deg=5``: the units of a point, its terrain seeds, pooled)."""
     extra = [m for m in ("valid_fraction", "hazard_precision", "hazard_recall", "safe_site")

@@ -39,8 +39,8 @@ class MicromirrorOptions(Options):
 
     Its flash's ``transient.spp`` needs about ``(guide pixels / receiver pixels) x 16`` for a
     clean return (docs/lidar.md); fewer than 4 render samples per lit guide pixel are refused
-    when the sensor is built (:func:`~simlunar.lidar.flash.micromirror_sampling`). On a moving platform (``motion``) frame ``f`` is rendered
-    from the pose at ``f`` x pulses / pulse rate
+    when the sensor is built (:func:`~simlunar.lidar.flash.micromirror_sampling`). On a moving
+    platform (``motion``) frame ``f`` is rendered from the pose at ``f`` x pulses / pulse rate
     (:func:`~simlunar.render.flash_lidar.micromirror_flash`); the mirrors stay the planned
     pixels (``motion.retarget`` is the steered beam's).
     """
